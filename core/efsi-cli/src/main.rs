@@ -1,0 +1,2 @@
+//! The efsi command.
+fn main() {}

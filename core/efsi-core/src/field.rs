@@ -1,0 +1,161 @@
+//! Scalar arrays on the staggered grid, with ghost layers.
+//!
+//! Every [`Field`] has the same padded shape, `(nx+1+2G) × (ny+1+2G)`, whatever its staggering,
+//! so one linear index serves all arrays of a grid and stencils can mix them with fixed
+//! offsets (`±1` along x, `±stride` along y). Which part of the array is interior depends on the
+//! staggering ([`Stagger`]): see the table in [`crate::grid`].
+
+use crate::grid::{G, GHOST, Grid};
+use std::ops::{Index, IndexMut};
+
+/// Where the values of a field live on the MAC grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stagger {
+    /// Cell centres.
+    Cell,
+    /// x-faces (normal velocity u).
+    XFace,
+    /// y-faces (normal velocity v).
+    YFace,
+    /// Cell corners.
+    Corner,
+}
+
+impl Stagger {
+    /// Interior index ranges `(i_end, j_end)` (exclusive) for a grid of `nx × ny` cells.
+    pub fn extent(self, nx: usize, ny: usize) -> (usize, usize) {
+        match self {
+            Stagger::Cell => (nx, ny),
+            Stagger::XFace => (nx + 1, ny),
+            Stagger::YFace => (nx, ny + 1),
+            Stagger::Corner => (nx + 1, ny + 1),
+        }
+    }
+}
+
+/// A padded 2-D array of `f64` covering a grid and its ghost layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    data: Vec<f64>,
+    stride: usize,
+    rows: usize,
+}
+
+impl Field {
+    /// A zero field shaped for `grid`.
+    pub fn zeros(grid: &Grid) -> Self {
+        Self::filled(grid, 0.0)
+    }
+
+    /// A field shaped for `grid` with every entry (ghosts included) set to `value`.
+    pub fn filled(grid: &Grid, value: f64) -> Self {
+        let stride = grid.nx + 1 + 2 * GHOST;
+        let rows = grid.ny + 1 + 2 * GHOST;
+        Field {
+            data: vec![value; stride * rows],
+            stride,
+            rows,
+        }
+    }
+
+    /// Linear index of `(i, j)`; ghosts have negative or past-the-end indices.
+    #[inline(always)]
+    pub fn idx(&self, i: isize, j: isize) -> usize {
+        debug_assert!(i >= -G && (i + G) < self.stride as isize, "i = {i} out of range");
+        debug_assert!(j >= -G && (j + G) < self.rows as isize, "j = {j} out of range");
+        (j + G) as usize * self.stride + (i + G) as usize
+    }
+
+    /// Offset between `(i, j)` and `(i, j+1)` in the linear storage.
+    #[inline(always)]
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// Number of padded rows.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The raw storage, ghosts included.
+    #[inline(always)]
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+
+    /// The raw storage, mutable.
+    #[inline(always)]
+    pub fn data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
+    /// Set every entry (ghosts included) to `value`.
+    pub fn fill(&mut self, value: f64) {
+        self.data.fill(value);
+    }
+
+    /// Copy all values from `other` (same shape).
+    pub fn copy_from(&mut self, other: &Field) {
+        self.data.copy_from_slice(&other.data);
+    }
+
+    /// Maximum of |value| over the interior of the given staggering.
+    pub fn max_abs(&self, stagger: Stagger, nx: usize, ny: usize) -> f64 {
+        let (ie, je) = stagger.extent(nx, ny);
+        let mut m = 0.0f64;
+        for j in 0..je as isize {
+            let row = self.idx(0, j);
+            for v in &self.data[row..row + ie] {
+                m = m.max(v.abs());
+            }
+        }
+        m
+    }
+
+    /// Whether every interior value of the given staggering is finite; else the first bad index.
+    pub fn first_non_finite(&self, stagger: Stagger, nx: usize, ny: usize) -> Option<(usize, usize)> {
+        let (ie, je) = stagger.extent(nx, ny);
+        for j in 0..je {
+            let row = self.idx(0, j as isize);
+            for i in 0..ie {
+                if !self.data[row + i].is_finite() {
+                    return Some((i, j));
+                }
+            }
+        }
+        None
+    }
+}
+
+impl Index<(isize, isize)> for Field {
+    type Output = f64;
+    #[inline(always)]
+    fn index(&self, (i, j): (isize, isize)) -> &f64 {
+        &self.data[self.idx(i, j)]
+    }
+}
+
+impl IndexMut<(isize, isize)> for Field {
+    #[inline(always)]
+    fn index_mut(&mut self, (i, j): (isize, isize)) -> &mut f64 {
+        let k = self.idx(i, j);
+        &mut self.data[k]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Geometry;
+
+    #[test]
+    fn indexing_covers_ghosts() {
+        let g = Grid::new(Geometry::Planar, 3, 2, (0.0, 1.0), (0.0, 1.0));
+        let mut f = Field::zeros(&g);
+        f[(-2, -2)] = 1.0;
+        f[(3 + 2, 2 + 2)] = 2.0;
+        assert_eq!(f.data()[0], 1.0);
+        assert_eq!(*f.data().last().unwrap(), 2.0);
+        assert_eq!(f.idx(0, 1) - f.idx(0, 0), f.stride());
+    }
+}

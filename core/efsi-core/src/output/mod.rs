@@ -1,0 +1,3 @@
+//! Output writers: VTK XML for ParaView, CSV probes and profiles.
+
+pub mod vtk;

@@ -1,0 +1,1 @@
+//! VTK XML RectilinearGrid (`.vtr`) and ParaView collection (`.pvd`) writers.

@@ -1,0 +1,1 @@
+//! Volume-of-fluid PLIC advection of the solid fraction φ_s.
