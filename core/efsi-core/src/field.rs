@@ -34,7 +34,9 @@ impl Stagger {
 }
 
 /// A padded 2-D array of `f64` covering a grid and its ghost layers.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// `Field::default()` is an empty placeholder (no storage), useful with `std::mem::take`.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Field {
     data: Vec<f64>,
     stride: usize,
@@ -61,8 +63,14 @@ impl Field {
     /// Linear index of `(i, j)`; ghosts have negative or past-the-end indices.
     #[inline(always)]
     pub fn idx(&self, i: isize, j: isize) -> usize {
-        debug_assert!(i >= -G && (i + G) < self.stride as isize, "i = {i} out of range");
-        debug_assert!(j >= -G && (j + G) < self.rows as isize, "j = {j} out of range");
+        debug_assert!(
+            i >= -G && (i + G) < self.stride as isize,
+            "i = {i} out of range"
+        );
+        debug_assert!(
+            j >= -G && (j + G) < self.rows as isize,
+            "j = {j} out of range"
+        );
         (j + G) as usize * self.stride + (i + G) as usize
     }
 
@@ -113,7 +121,12 @@ impl Field {
     }
 
     /// Whether every interior value of the given staggering is finite; else the first bad index.
-    pub fn first_non_finite(&self, stagger: Stagger, nx: usize, ny: usize) -> Option<(usize, usize)> {
+    pub fn first_non_finite(
+        &self,
+        stagger: Stagger,
+        nx: usize,
+        ny: usize,
+    ) -> Option<(usize, usize)> {
         let (ie, je) = stagger.extent(nx, ny);
         for j in 0..je {
             let row = self.idx(0, j as isize);

@@ -186,7 +186,10 @@ impl Grid {
 
     /// Total domain volume (per radian in axisymmetric geometry).
     pub fn domain_volume(&self) -> f64 {
-        (0..self.nx as isize).map(|i| self.cell_volume(i)).sum::<f64>() * self.ny as f64
+        (0..self.nx as isize)
+            .map(|i| self.cell_volume(i))
+            .sum::<f64>()
+            * self.ny as f64
     }
 }
 
@@ -212,7 +215,10 @@ mod tests {
         assert!((g.domain_volume() - 2.0 * 2.0 * 3.0 / 2.0).abs() < 1e-13);
         assert_eq!(g.metric.rx(0), 0.0);
         assert_eq!(g.metric.hoop_x(0), 0.0);
-        assert!((g.metric.rc(-1) - g.metric.rc(0)).abs() < 1e-15, "ghost mirrors the axis");
+        assert!(
+            (g.metric.rc(-1) - g.metric.rc(0)).abs() < 1e-15,
+            "ghost mirrors the axis"
+        );
         assert!((g.metric.hoop_x(2) - 1.0 / 0.5).abs() < 1e-15);
     }
 }

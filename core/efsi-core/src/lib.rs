@@ -5,9 +5,27 @@
 //! and scheduler, linear solvers, probes and output writers. No physics stage lives here; the
 //! stages are plugins (crate `efsi-stages`) that attach to the phases named by [`schedule`].
 
+pub mod bc;
+pub mod error;
 pub mod field;
 pub mod grid;
+pub mod ops;
 pub mod output;
+pub mod probes;
+pub mod run;
+pub mod scene;
+pub mod schedule;
+pub mod simulation;
+pub mod solver;
+pub mod state;
 
+pub use bc::BoundarySet;
+pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
+pub use scene::{Scene, SceneError};
+pub use schedule::{
+    FieldId, Phase, Pipeline, Stage, StageError, StagePlugin, StageStats, StepContext,
+};
+pub use simulation::Simulation;
+pub use state::State;

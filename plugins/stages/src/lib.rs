@@ -1,6 +1,23 @@
 //! # efsi-stages
 //!
 //! The sub-steps of one efsi time step (seed Fig. 1), each a plugin that attaches to a phase of
-//! the core scheduler.
+//! the core scheduler ([`efsi_core::schedule`]). [`builtin`] lists them; the scheduler keeps
+//! those a scene needs.
 
+pub mod advection;
+pub mod body_force;
+pub mod projection;
+pub mod viscous;
 pub mod vof;
+
+use efsi_core::StagePlugin;
+
+/// Every stage plugin shipped with efsi.
+pub fn builtin() -> Vec<&'static dyn StagePlugin> {
+    vec![
+        &advection::Advection,
+        &body_force::BodyForce,
+        &viscous::Viscous,
+        &projection::Projection,
+    ]
+}

@@ -1,0 +1,70 @@
+//! The error type of a run, with the process exit code each kind maps to.
+
+use crate::scene::SceneError;
+use crate::schedule::{ScheduleError, StageError};
+use std::path::PathBuf;
+
+/// Anything that stops a run.
+#[derive(Debug, thiserror::Error)]
+pub enum EfsiError {
+    /// The scene is malformed or out of range.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The scene is valid on its own but cannot be run as it is (names the setting).
+    #[error("{path}: {field}: {message}")]
+    Config {
+        /// The scene file.
+        path: PathBuf,
+        /// The setting to change.
+        field: String,
+        /// Why.
+        message: String,
+    },
+    /// The pipeline could not be assembled.
+    #[error("{0}")]
+    Schedule(#[from] ScheduleError),
+    /// A stage failed during the run (non-convergence, non-finite values).
+    #[error("{0}")]
+    Stage(#[from] StageError),
+    /// The step size collapsed below `time.dt_min`.
+    #[error(
+        "unstable run: Δt = {dt:.3e} fell below time.dt_min = {dt_min:.3e} at t = {t:.6e} (step {step}); the velocity is growing without bound — lower time.cfl, or check the scene's forcing"
+    )]
+    Unstable {
+        /// The step size wanted.
+        dt: f64,
+        /// The floor.
+        dt_min: f64,
+        /// Time reached.
+        t: f64,
+        /// Step reached.
+        step: u64,
+    },
+    /// An output could not be written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+impl EfsiError {
+    /// Process exit code: 2 for bad input, 3 for a run that failed numerically, 1 for I/O.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            EfsiError::Scene(_) | EfsiError::Config { .. } | EfsiError::Schedule(_) => 2,
+            EfsiError::Stage(_) | EfsiError::Unstable { .. } => 3,
+            EfsiError::Io { .. } => 1,
+        }
+    }
+
+    /// Wrap an I/O error with its path.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        EfsiError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

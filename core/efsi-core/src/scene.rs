@@ -1,0 +1,874 @@
+//! The scene: one RON file that describes everything a run needs.
+//!
+//! ```ron
+//! Scene(
+//!     name: "lid_driven_cavity_re100",
+//!     geometry: Planar,
+//!     domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+//!     grid: (nx: 64, ny: 64),
+//!     time: (end: 30.0, cfl: 0.5, steady: 1e-8),
+//!     fluid: (density: 1.0, viscosity: 0.01),
+//!     boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+//!     output: (vtk_every: 5.0, profiles: [Line(name: "u_x0.5", from: (0.5, 0.0), to: (0.5, 1.0), points: 129, fields: ["u"])]),
+//! )
+//! ```
+//!
+//! Unknown fields are errors, and every error names the file, the line and column (syntax) or
+//! the field (values out of range) and says what was expected. Optional values may be written
+//! bare (`steady: 1e-8`) thanks to RON's `implicit_some` extension, which the loader enables.
+//! In axisymmetric geometry `x` is the radius r and `y` the axis z; the aliases `r`, `z`,
+//! `r_min`, `r_max`, `z_min`, `z_max` are accepted.
+
+use crate::grid::Geometry;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// An error in a scene: where it is and what was expected.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{path}: cannot read scene: {source}")]
+    Io {
+        /// The scene file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not valid RON, or does not match the scene schema.
+    #[error("{path}:{line}:{column}: {message}")]
+    Syntax {
+        /// The scene file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A value is out of its allowed range or inconsistent with another.
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        /// The scene file.
+        path: PathBuf,
+        /// The offending field, as a path (`fluid.viscosity`).
+        field: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+}
+
+/// A complete scene.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Name of the scene; the default output folder is `out/<name>/`.
+    pub name: String,
+    /// Planar or axisymmetric (default planar).
+    #[serde(default = "default_geometry")]
+    pub geometry: Geometry,
+    /// Extents of the box.
+    pub domain: Domain,
+    /// Cell counts.
+    pub grid: GridSpec,
+    /// Time span and step control.
+    pub time: TimeSpec,
+    /// The fluid's material.
+    pub fluid: Fluid,
+    /// Gravity (acceleration vector; default zero). In axisymmetric geometry it must be along z.
+    #[serde(default)]
+    pub gravity: (f64, f64),
+    /// Initial velocity of the fluid (default at rest).
+    #[serde(default)]
+    pub initial_velocity: InitialVelocity,
+    /// Boundary conditions per side.
+    pub boundaries: Boundaries,
+    /// Physics switches that cannot be inferred.
+    #[serde(default)]
+    pub physics: Physics,
+    /// Numerical parameters of the solvers.
+    #[serde(default)]
+    pub numerics: Numerics,
+    /// What to write and where.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+fn default_geometry() -> Geometry {
+    Geometry::Planar
+}
+
+/// Extents of the box. `x` is r and `y` is z in axisymmetric geometry.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    /// `(min, max)` along x (r).
+    #[serde(alias = "r")]
+    pub x: (f64, f64),
+    /// `(min, max)` along y (z).
+    #[serde(alias = "z")]
+    pub y: (f64, f64),
+}
+
+/// Cell counts.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Cells along x (r).
+    #[serde(alias = "nr")]
+    pub nx: usize,
+    /// Cells along y (z).
+    #[serde(alias = "nz")]
+    pub ny: usize,
+}
+
+/// Time span and step control.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// End time (> 0).
+    pub end: f64,
+    /// Courant number on `Δt·(|u|/dx + |v|/dy)` (default 0.4, in (0, 1]; the advection scheme's
+    /// sufficient TVD bound is 0.5, and the Re = 100 cavity shows limit-cycle noise from 0.45).
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// Largest step allowed (default: no bound beyond the CFL and `end`).
+    #[serde(default)]
+    pub dt_max: Option<f64>,
+    /// Smallest step allowed; a run that needs a smaller one stops with an error (default 1e-12·end).
+    #[serde(default)]
+    pub dt_min: Option<f64>,
+    /// A fixed step instead of the CFL rule (still shortened to land on output times).
+    #[serde(default)]
+    pub fixed_dt: Option<f64>,
+    /// Stop early at steady state: when `max|uⁿ⁺¹ − uⁿ|/Δt` falls below this (velocity/time units).
+    #[serde(default)]
+    pub steady: Option<f64>,
+}
+
+fn default_cfl() -> f64 {
+    0.4
+}
+
+/// A Newtonian fluid.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fluid {
+    /// Density ρ (kg/m³, > 0).
+    pub density: f64,
+    /// Dynamic viscosity μ (Pa·s, ≥ 0).
+    pub viscosity: f64,
+}
+
+/// Initial velocity field.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum InitialVelocity {
+    /// At rest.
+    #[default]
+    Rest,
+    /// Uniform `(u, v)`.
+    Uniform((f64, f64)),
+    /// From the stream function `ψ = a·sin(kx·x)·sin(ky·y)`, `u = ∂ψ/∂y`, `v = −∂ψ/∂x`
+    /// (sampled at cell corners, so the discrete field is exactly divergence-free).
+    SinSinStream {
+        /// Amplitude `a`.
+        amplitude: f64,
+        /// Wave numbers `(kx, ky)`.
+        wavenumbers: (f64, f64),
+    },
+}
+
+/// One of the four sides of the box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Side {
+    /// x = x_min (r = r_min).
+    XMin,
+    /// x = x_max.
+    XMax,
+    /// y = y_min.
+    YMin,
+    /// y = y_max.
+    YMax,
+}
+
+impl Side {
+    /// All sides, in the order x_min, x_max, y_min, y_max.
+    pub const ALL: [Side; 4] = [Side::XMin, Side::XMax, Side::YMin, Side::YMax];
+
+    /// The scene field name of this side.
+    pub fn field_name(self) -> &'static str {
+        match self {
+            Side::XMin => "x_min",
+            Side::XMax => "x_max",
+            Side::YMin => "y_min",
+            Side::YMax => "y_max",
+        }
+    }
+
+    /// The opposite side (the partner of a periodic pair).
+    pub fn opposite(self) -> Side {
+        match self {
+            Side::XMin => Side::XMax,
+            Side::XMax => Side::XMin,
+            Side::YMin => Side::YMax,
+            Side::YMax => Side::YMin,
+        }
+    }
+}
+
+impl fmt::Display for Side {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.field_name())
+    }
+}
+
+/// Boundary conditions on the four sides.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Boundaries {
+    /// Side x = x_min (r_min; the axis when r_min = 0).
+    #[serde(alias = "r_min")]
+    pub x_min: Boundary,
+    /// Side x = x_max.
+    #[serde(alias = "r_max")]
+    pub x_max: Boundary,
+    /// Side y = y_min.
+    #[serde(alias = "z_min")]
+    pub y_min: Boundary,
+    /// Side y = y_max.
+    #[serde(alias = "z_max")]
+    pub y_max: Boundary,
+}
+
+impl Boundaries {
+    /// The condition on `side`.
+    pub fn get(&self, side: Side) -> &Boundary {
+        match side {
+            Side::XMin => &self.x_min,
+            Side::XMax => &self.x_max,
+            Side::YMin => &self.y_min,
+            Side::YMax => &self.y_max,
+        }
+    }
+}
+
+/// A boundary condition on one side.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Boundary {
+    /// Fixed wall: zero velocity.
+    NoSlip,
+    /// Wall moving in its own plane: zero normal velocity, tangential velocity
+    /// `speed · profile(position) · motion(t)`.
+    MovingWall {
+        /// Peak tangential speed (m/s), along +x on y-sides and +y on x-sides.
+        speed: f64,
+        /// Shape along the wall (default uniform).
+        #[serde(default)]
+        profile: WallProfile,
+        /// Dependence on time (default steady).
+        #[serde(default)]
+        motion: WallMotion,
+    },
+    /// Impermeable wall without friction: zero normal velocity and zero tangential stress.
+    FreeSlip,
+    /// The symmetry axis r = 0 of an axisymmetric domain (x_min only).
+    Axis,
+    /// Periodic: the opposite side must be periodic too.
+    Periodic,
+    /// Outflow: zero normal gradient of velocity, zero pressure.
+    Outflow,
+}
+
+/// Shape of a moving wall's velocity along the wall.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum WallProfile {
+    /// The same speed everywhere.
+    #[default]
+    Uniform,
+    /// Seed Eq. (26): `sin²(π s / (2w))` over a ramp of width `w` at each end of the wall
+    /// (s the distance from that end), 1 in between.
+    Sin2Ramp {
+        /// Width of each ramp (m).
+        width: f64,
+    },
+}
+
+/// Dependence of a moving wall's velocity on time.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum WallMotion {
+    /// Constant in time.
+    #[default]
+    Steady,
+    /// `sin(ω t)` (Stokes' oscillating plate; Sugiyama's oscillating Couette flow).
+    Sin {
+        /// Angular frequency ω (rad/s).
+        omega: f64,
+    },
+    /// On for `t < t_off`, then stopped.
+    Until {
+        /// The time the wall stops (s).
+        t_off: f64,
+    },
+}
+
+impl WallProfile {
+    /// Factor at distance `s` along a wall of length `len`.
+    pub fn factor(&self, s: f64, len: f64) -> f64 {
+        match *self {
+            WallProfile::Uniform => 1.0,
+            WallProfile::Sin2Ramp { width } => {
+                let d = s.min(len - s).max(0.0);
+                if d < width {
+                    (std::f64::consts::PI * d / (2.0 * width)).sin().powi(2)
+                } else {
+                    1.0
+                }
+            }
+        }
+    }
+}
+
+impl WallMotion {
+    /// Factor at time `t`.
+    pub fn factor(&self, t: f64) -> f64 {
+        match *self {
+            WallMotion::Steady => 1.0,
+            WallMotion::Sin { omega } => (omega * t).sin(),
+            WallMotion::Until { t_off } => {
+                if t < t_off {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+}
+
+/// Physics switches that the scene cannot imply.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Physics {
+    /// Include the convective term (default true; false gives Stokes flow).
+    #[serde(default = "yes")]
+    pub advection: bool,
+}
+
+impl Default for Physics {
+    fn default() -> Self {
+        Physics { advection: true }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Numerical parameters.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Numerics {
+    /// The pressure projection.
+    #[serde(default)]
+    pub projection: ProjectionParams,
+    /// The implicit viscous step.
+    #[serde(default)]
+    pub viscous: ViscousParams,
+}
+
+/// Parameters of the pressure projection.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProjectionParams {
+    /// Convergence criterion: after projection `max |∇·u|·Δt ≤ tolerance` (dimensionless;
+    /// default 1e-10).
+    #[serde(default = "default_div_tol")]
+    pub tolerance: f64,
+    /// Iteration cap of the preconditioned conjugate gradient (default 10000).
+    #[serde(default = "default_max_iter")]
+    pub max_iterations: usize,
+}
+
+impl Default for ProjectionParams {
+    fn default() -> Self {
+        ProjectionParams {
+            tolerance: default_div_tol(),
+            max_iterations: default_max_iter(),
+        }
+    }
+}
+
+fn default_div_tol() -> f64 {
+    1e-10
+}
+fn default_max_iter() -> usize {
+    10000
+}
+
+/// Parameters of the implicit viscous step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViscousParams {
+    /// Implicitness θ ∈ [0.5, 1]: 1 is backward Euler (the seed's Eq. 12, default), 0.5 is
+    /// Crank–Nicolson.
+    #[serde(default = "one")]
+    pub theta: f64,
+    /// Relative residual at which the conjugate gradient stops (default 1e-12).
+    #[serde(default = "default_visc_tol")]
+    pub tolerance: f64,
+    /// Iteration cap (default 10000).
+    #[serde(default = "default_max_iter")]
+    pub max_iterations: usize,
+}
+
+impl Default for ViscousParams {
+    fn default() -> Self {
+        ViscousParams {
+            theta: 1.0,
+            tolerance: default_visc_tol(),
+            max_iterations: default_max_iter(),
+        }
+    }
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_visc_tol() -> f64 {
+    1e-12
+}
+
+/// What to write and where.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Output folder (default `out/<name>/`; `efsi run --out` overrides).
+    #[serde(default)]
+    pub folder: Option<PathBuf>,
+    /// Write VTK fields every this many seconds of simulated time (and at the start and end).
+    #[serde(default)]
+    pub vtk_every: Option<f64>,
+    /// Sample the probes every this many seconds (default: every step).
+    #[serde(default)]
+    pub probe_every: Option<f64>,
+    /// Probes: one or more columns each in `probes.csv`.
+    #[serde(default)]
+    pub probes: Vec<ProbeSpec>,
+    /// Line profiles, written to `profiles/<name>_t<time>.csv`.
+    #[serde(default)]
+    pub profiles: Vec<ProfileSpec>,
+}
+
+/// A probe: a time series written as columns of `probes.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ProbeSpec {
+    /// A field sampled at a point (bilinear interpolation).
+    Point {
+        /// Column name.
+        name: String,
+        /// Field name (see [`FIELD_NAMES`]).
+        field: String,
+        /// Position.
+        at: (f64, f64),
+    },
+    /// Kinetic energy ½∫ρ|u|² dV (per radian in axisymmetric geometry).
+    KineticEnergy,
+    /// `max |∇·u|` over the cells.
+    MaxDivergence,
+    /// Maximum speed.
+    MaxSpeed,
+}
+
+/// Field names that probes and profiles can sample.
+pub const FIELD_NAMES: &[&str] = &["u", "v", "p", "speed", "density", "viscosity"];
+
+/// A line profile: fields sampled at evenly spaced points of a segment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ProfileSpec {
+    /// The segment `from → to`.
+    Line {
+        /// File stem.
+        name: String,
+        /// Start point.
+        from: (f64, f64),
+        /// End point.
+        to: (f64, f64),
+        /// Number of points (≥ 2), both ends included.
+        points: usize,
+        /// Fields to sample (see [`FIELD_NAMES`]).
+        fields: Vec<String>,
+        /// Times at which to write it (default: only at the end of the run).
+        #[serde(default)]
+        at: Vec<f64>,
+    },
+}
+
+impl ProfileSpec {
+    /// The file stem.
+    pub fn name(&self) -> &str {
+        match self {
+            ProfileSpec::Line { name, .. } => name,
+        }
+    }
+}
+
+impl Scene {
+    /// Read and validate a scene file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scene::from_str_at(&text, path)
+    }
+
+    /// Parse and validate scene text; `path` is used in error messages only.
+    pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let opts = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let scene: Scene = opts.from_str(text).map_err(|e| SceneError::Syntax {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        scene
+            .validate()
+            .map_err(|(field, message)| SceneError::Invalid {
+                path: path.to_path_buf(),
+                field,
+                message,
+            })?;
+        Ok(scene)
+    }
+
+    /// The scene as RON text (what `run.json` and checkpoints record).
+    pub fn to_ron(&self) -> String {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).unwrap_or_default()
+    }
+
+    /// Check ranges and consistency; on failure, the field path and what was expected.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+            Err((field.to_string(), msg.into()))
+        }
+        fn positive(field: &str, v: f64) -> Result<(), (String, String)> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                err(field, format!("must be a finite number > 0, got {v}"))
+            }
+        }
+        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
+            return err("name", "must be a non-empty name without path separators");
+        }
+        for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
+            if !(a.is_finite() && b.is_finite() && b > a) {
+                return err(
+                    f,
+                    format!("must be (min, max) with max > min, got ({a}, {b})"),
+                );
+            }
+        }
+        if self.geometry == Geometry::Axisymmetric && self.domain.x.0 < 0.0 {
+            return err(
+                "domain.x",
+                format!(
+                    "the radius must be ≥ 0 in axisymmetric geometry, got r_min = {}",
+                    self.domain.x.0
+                ),
+            );
+        }
+        if self.grid.nx == 0 {
+            return err("grid.nx", "must be at least 1 cell, got 0");
+        }
+        if self.grid.ny == 0 {
+            return err("grid.ny", "must be at least 1 cell, got 0");
+        }
+        if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
+            return err(
+                "grid",
+                "more than 1e8 cells is beyond a 2-D run on this machine",
+            );
+        }
+        positive("time.end", self.time.end)?;
+        if !(self.time.cfl > 0.0 && self.time.cfl <= 1.0) {
+            return err(
+                "time.cfl",
+                format!("must be in (0, 1], got {}", self.time.cfl),
+            );
+        }
+        for (f, v) in [
+            ("time.dt_max", self.time.dt_max),
+            ("time.dt_min", self.time.dt_min),
+            ("time.fixed_dt", self.time.fixed_dt),
+            ("time.steady", self.time.steady),
+        ] {
+            if let Some(v) = v {
+                positive(f, v)?;
+            }
+        }
+        if let (Some(lo), Some(hi)) = (self.time.dt_min, self.time.dt_max)
+            && lo > hi
+        {
+            return err(
+                "time.dt_min",
+                format!("must not exceed time.dt_max ({hi}), got {lo}"),
+            );
+        }
+        positive("fluid.density", self.fluid.density)?;
+        if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
+            return err(
+                "fluid.viscosity",
+                format!("must be a finite number ≥ 0, got {}", self.fluid.viscosity),
+            );
+        }
+        if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
+            return err("gravity", "must be finite");
+        }
+        if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
+            return err(
+                "gravity",
+                "must be along z (the axis) in axisymmetric geometry: (0, g_z)",
+            );
+        }
+        if let InitialVelocity::Uniform((a, b)) = self.initial_velocity
+            && !(a.is_finite() && b.is_finite())
+        {
+            return err("initial_velocity", "must be finite");
+        }
+        // Boundaries.
+        for side in Side::ALL {
+            let b = self.boundaries.get(side);
+            let f = format!("boundaries.{}", side.field_name());
+            let partner = self.boundaries.get(side.opposite());
+            if *b == Boundary::Periodic && *partner != Boundary::Periodic {
+                return err(
+                    &f,
+                    format!(
+                        "is Periodic but its partner boundaries.{} is {:?}: a periodic side needs a periodic partner",
+                        side.opposite().field_name(),
+                        partner
+                    ),
+                );
+            }
+            if *b == Boundary::Axis {
+                if side != Side::XMin || self.geometry != Geometry::Axisymmetric {
+                    return err(
+                        &f,
+                        "Axis is only allowed on x_min (r_min) of an axisymmetric scene",
+                    );
+                }
+                if self.domain.x.0 != 0.0 {
+                    return err(
+                        &f,
+                        format!("Axis needs r_min = 0, got domain.x.0 = {}", self.domain.x.0),
+                    );
+                }
+            }
+            if let Boundary::MovingWall {
+                speed,
+                profile,
+                motion,
+            } = b
+            {
+                if !speed.is_finite() {
+                    return err(&format!("{f}.speed"), "must be finite");
+                }
+                if let WallProfile::Sin2Ramp { width } = profile {
+                    positive(&format!("{f}.profile.width"), *width)?;
+                }
+                match motion {
+                    WallMotion::Sin { omega } if !omega.is_finite() => {
+                        return err(&format!("{f}.motion.omega"), "must be finite");
+                    }
+                    WallMotion::Until { t_off } if !t_off.is_finite() => {
+                        return err(&format!("{f}.motion.t_off"), "must be finite");
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if self.geometry == Geometry::Axisymmetric
+            && self.domain.x.0 == 0.0
+            && self.boundaries.x_min != Boundary::Axis
+        {
+            return err(
+                "boundaries.x_min",
+                format!(
+                    "r_min = 0 is the axis: expected Axis, got {:?}",
+                    self.boundaries.x_min
+                ),
+            );
+        }
+        // Numerics.
+        let p = &self.numerics.projection;
+        if !(p.tolerance > 0.0 && p.tolerance < 1.0) {
+            return err(
+                "numerics.projection.tolerance",
+                format!("must be in (0, 1), got {}", p.tolerance),
+            );
+        }
+        if p.max_iterations == 0 {
+            return err("numerics.projection.max_iterations", "must be ≥ 1");
+        }
+        let v = &self.numerics.viscous;
+        if !(0.5..=1.0).contains(&v.theta) {
+            return err(
+                "numerics.viscous.theta",
+                format!("must be in [0.5, 1], got {}", v.theta),
+            );
+        }
+        if !(v.tolerance > 0.0 && v.tolerance < 1.0) {
+            return err(
+                "numerics.viscous.tolerance",
+                format!("must be in (0, 1), got {}", v.tolerance),
+            );
+        }
+        // Outputs.
+        let o = &self.output;
+        for (f, v) in [
+            ("output.vtk_every", o.vtk_every),
+            ("output.probe_every", o.probe_every),
+        ] {
+            if let Some(v) = v {
+                positive(f, v)?;
+            }
+        }
+        let inside = |p: (f64, f64)| {
+            p.0 >= self.domain.x.0
+                && p.0 <= self.domain.x.1
+                && p.1 >= self.domain.y.0
+                && p.1 <= self.domain.y.1
+        };
+        let mut names = std::collections::HashSet::new();
+        for (k, probe) in o.probes.iter().enumerate() {
+            if let ProbeSpec::Point { name, field, at } = probe {
+                let f = format!("output.probes[{k}]");
+                if !FIELD_NAMES.contains(&field.as_str()) {
+                    return err(
+                        &format!("{f}.field"),
+                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
+                    );
+                }
+                if !inside(*at) {
+                    return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
+                }
+                if !names.insert(name.clone()) {
+                    return err(
+                        &format!("{f}.name"),
+                        format!("duplicate probe name `{name}`"),
+                    );
+                }
+            }
+        }
+        let mut pnames = std::collections::HashSet::new();
+        for (k, prof) in o.profiles.iter().enumerate() {
+            let ProfileSpec::Line {
+                name,
+                from,
+                to,
+                points,
+                fields,
+                at,
+            } = prof;
+            let f = format!("output.profiles[{k}]");
+            if name.is_empty() || name.contains(['/', '\\']) || !pnames.insert(name.clone()) {
+                return err(
+                    &format!("{f}.name"),
+                    format!("must be a unique file stem, got `{name}`"),
+                );
+            }
+            if *points < 2 {
+                return err(&format!("{f}.points"), format!("must be ≥ 2, got {points}"));
+            }
+            if !inside(*from) || !inside(*to) {
+                return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
+            }
+            for field in fields {
+                if !FIELD_NAMES.contains(&field.as_str()) {
+                    return err(
+                        &format!("{f}.fields"),
+                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
+                    );
+                }
+            }
+            if fields.is_empty() {
+                return err(&format!("{f}.fields"), "must name at least one field");
+            }
+            for t in at {
+                if !(t.is_finite() && *t >= 0.0 && *t <= self.time.end) {
+                    return err(
+                        &format!("{f}.at"),
+                        format!("time {t} is outside [0, time.end]"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = r#"Scene(
+        name: "t",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 8, ny: 8),
+        time: (end: 1.0),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    )"#;
+
+    fn load(s: &str) -> Result<Scene, SceneError> {
+        Scene::from_str_at(s, Path::new("scene.ron"))
+    }
+
+    #[test]
+    fn minimal_scene_loads_with_defaults() {
+        let s = load(MIN).unwrap();
+        assert_eq!(s.time.cfl, 0.4);
+        assert!(s.physics.advection);
+        assert_eq!(s.numerics.projection.tolerance, 1e-10);
+    }
+
+    #[test]
+    fn implicit_some_and_round_trip() {
+        let s = load(&MIN.replace("end: 1.0", "end: 1.0, steady: 1e-6")).unwrap();
+        assert_eq!(s.time.steady, Some(1e-6));
+        let again = load(&s.to_ron()).unwrap();
+        assert_eq!(again.time.steady, Some(1e-6));
+    }
+
+    #[test]
+    fn unknown_field_names_line_and_column() {
+        let e = load(&MIN.replace("density: 1.0,", "density: 1.0, colour: 3,")).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.starts_with("scene.ron:6:"), "{msg}");
+        assert!(msg.contains("colour"), "{msg}");
+    }
+
+    #[test]
+    fn sin2_ramp_matches_seed_eq26() {
+        // Seed Eq. 26 on a 2-long lid: 0.5 sin²(πx/0.6) on [0, 0.3].
+        let p = WallProfile::Sin2Ramp { width: 0.3 };
+        let x: f64 = 0.1;
+        assert!((p.factor(x, 2.0) - (std::f64::consts::PI * x / 0.6).sin().powi(2)).abs() < 1e-15);
+        assert_eq!(p.factor(1.0, 2.0), 1.0);
+        assert!(
+            (p.factor(1.9, 2.0) - (std::f64::consts::PI * (1.9f64 - 2.0) / 0.6).sin().powi(2))
+                .abs()
+                < 1e-15
+        );
+    }
+}

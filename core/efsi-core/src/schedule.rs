@@ -1,0 +1,511 @@
+//! The stage contract and the scheduler.
+//!
+//! One time step is a sequence of **phases** named by the core ([`Phase`], seed Fig. 1).
+//! Physics attaches to them as **stage plugins** ([`StagePlugin`]): each declares its phase,
+//! the fields it reads and writes, optional ordering constraints within its phase, and whether
+//! a scene needs it. [`Pipeline::build`] assembles the pipeline from a scene with only the
+//! stages it needs, checks the declarations once (every field read is provided; stages of one
+//! phase that touch the same field are explicitly ordered), allocates only the declared fields,
+//! and afterwards runs and times the stages. Nobody edits the time-step function to add
+//! physics (STYLE.md §2–3).
+
+use crate::bc::BoundarySet;
+use crate::grid::Grid;
+use crate::scene::Scene;
+use crate::solver::SolveStats;
+use crate::state::State;
+use std::collections::BTreeSet;
+use std::fmt;
+use std::time::{Duration, Instant};
+
+/// The phases of one time step, in execution order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Phase {
+    /// Explicit convective term → V* (seed Eq. 11).
+    Advection,
+    /// Body forces (gravity) → V* (seed Eq. 11).
+    BodyForce,
+    /// Semi-implicit viscous term → V^{n+1/3} (seed Eq. 12); B̃ predictor (Eq. 13).
+    Viscous,
+    /// Semi-implicit elastic term → V^{n+2/3} (seed Eqs. 15–20).
+    Elastic,
+    /// Pressure projection → V^{n+1} (seed Eqs. 21–23), B̃^{n+1} (Eq. 25).
+    Projection,
+    /// Interface transport (VOF PLIC) and material properties (seed Eqs. 4–6).
+    Interface,
+}
+
+impl Phase {
+    /// All phases in order.
+    pub const ALL: [Phase; 6] = [
+        Phase::Advection,
+        Phase::BodyForce,
+        Phase::Viscous,
+        Phase::Elastic,
+        Phase::Projection,
+        Phase::Interface,
+    ];
+}
+
+/// A field a stage may read or write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FieldId {
+    /// Velocity component on x-faces.
+    VelocityX,
+    /// Velocity component on y-faces.
+    VelocityY,
+    /// Pressure.
+    Pressure,
+    /// Density.
+    Density,
+    /// Viscosity.
+    Viscosity,
+    /// Solid volume fraction (allocated only when declared).
+    SolidFraction,
+}
+
+impl FieldId {
+    /// Fields every state has, whatever the pipeline.
+    pub const BASE: [FieldId; 5] = [
+        FieldId::VelocityX,
+        FieldId::VelocityY,
+        FieldId::Pressure,
+        FieldId::Density,
+        FieldId::Viscosity,
+    ];
+
+    /// The name used in messages and outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            FieldId::VelocityX => "u",
+            FieldId::VelocityY => "v",
+            FieldId::Pressure => "pressure",
+            FieldId::Density => "density",
+            FieldId::Viscosity => "viscosity",
+            FieldId::SolidFraction => "solid_fraction",
+        }
+    }
+}
+
+/// Both velocity components, for declarations.
+pub const VELOCITY: [FieldId; 2] = [FieldId::VelocityX, FieldId::VelocityY];
+
+/// What a stage sees of the run besides the state.
+pub struct StepContext<'a> {
+    /// The grid.
+    pub grid: &'a Grid,
+    /// The boundary conditions.
+    pub bc: &'a BoundarySet,
+    /// Time at the start of the step.
+    pub t: f64,
+    /// The step Δt.
+    pub dt: f64,
+    /// Index of this step (0 for the first).
+    pub step: u64,
+}
+
+/// Statistics a stage reports for one run (solver iterations and residual, if any).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageStats {
+    /// The stage's linear solve, if it has one.
+    pub solve: Option<SolveStats>,
+}
+
+/// A stage failed: it names itself and says why.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("stage `{stage}`: {message}")]
+pub struct StageError {
+    /// The stage.
+    pub stage: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// A built stage, run once per time step.
+pub trait Stage: Send {
+    /// Advance the state by this stage's part of the step.
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError>;
+
+    /// Initialise the fields this stage writes, before the first step (default: nothing).
+    fn initialize(
+        &mut self,
+        _grid: &Grid,
+        _bc: &BoundarySet,
+        _state: &mut State,
+    ) -> Result<(), StageError> {
+        Ok(())
+    }
+
+    /// The largest stable Δt for the current state, if this stage limits it (default: none).
+    fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
+        None
+    }
+}
+
+/// A kind of stage: its declarations and a factory.
+pub trait StagePlugin: Sync {
+    /// Unique name (shown by `--print-schedule`, used in timings and errors).
+    fn name(&self) -> &'static str;
+    /// The phase it attaches to.
+    fn phase(&self) -> Phase;
+    /// Fields it reads.
+    fn reads(&self) -> &'static [FieldId];
+    /// Fields it writes.
+    fn writes(&self) -> &'static [FieldId];
+    /// Names of stages of the same phase that must run before it (default: none).
+    fn after(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// Whether `scene` needs this stage.
+    fn needed(&self, scene: &Scene) -> bool;
+    /// Build the stage for a scene; the error says which scene value is unusable.
+    fn build(&self, scene: &Scene, grid: &Grid, bc: &BoundarySet)
+    -> Result<Box<dyn Stage>, String>;
+}
+
+/// The pipeline could not be assembled.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ScheduleError {
+    /// A stage reads a field that nothing provides.
+    #[error("stage `{stage}` reads `{field}`, which no scheduled stage provides")]
+    MissingField {
+        /// The stage.
+        stage: String,
+        /// The field.
+        field: &'static str,
+    },
+    /// Two stages of one phase touch the same field without an ordering between them.
+    #[error(
+        "stages `{a}` and `{b}` of phase {phase:?} both touch `{field}` but neither is declared after the other"
+    )]
+    Ambiguous {
+        /// First stage.
+        a: String,
+        /// Second stage.
+        b: String,
+        /// Their phase.
+        phase: Phase,
+        /// The shared field.
+        field: &'static str,
+    },
+    /// An ordering constraint names a stage that is not in the same phase, or forms a cycle.
+    #[error("stage `{stage}`: ordering constraint on `{other}` cannot be satisfied ({why})")]
+    BadOrder {
+        /// The stage.
+        stage: String,
+        /// The stage it names.
+        other: String,
+        /// Why.
+        why: &'static str,
+    },
+    /// Two plugins share a name.
+    #[error("two stage plugins are named `{0}`")]
+    DuplicateName(String),
+    /// A plugin refused the scene.
+    #[error("stage `{stage}`: {message}")]
+    Build {
+        /// The stage.
+        stage: String,
+        /// Its message.
+        message: String,
+    },
+}
+
+struct Entry {
+    name: &'static str,
+    phase: Phase,
+    reads: &'static [FieldId],
+    writes: &'static [FieldId],
+    stage: Box<dyn Stage>,
+    time: Duration,
+    calls: u64,
+    iterations: u64,
+    last: StageStats,
+}
+
+/// Timing and solver statistics of one stage over a run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StageTiming {
+    /// Stage name.
+    pub name: &'static str,
+    /// Total wall time (s).
+    pub seconds: f64,
+    /// Number of runs.
+    pub calls: u64,
+    /// Total linear-solver iterations.
+    pub iterations: u64,
+}
+
+/// The ordered stages of a run.
+pub struct Pipeline {
+    entries: Vec<Entry>,
+    fields: BTreeSet<FieldId>,
+}
+
+impl Pipeline {
+    /// Assemble the pipeline for `scene` from the available `plugins`, keeping only those the
+    /// scene needs, ordered by phase and by their `after` constraints, and check it.
+    pub fn build(
+        scene: &Scene,
+        grid: &Grid,
+        bc: &BoundarySet,
+        plugins: &[&dyn StagePlugin],
+    ) -> Result<Pipeline, ScheduleError> {
+        let mut names = BTreeSet::new();
+        for p in plugins {
+            if !names.insert(p.name()) {
+                return Err(ScheduleError::DuplicateName(p.name().to_string()));
+            }
+        }
+        let chosen: Vec<&dyn StagePlugin> = plugins
+            .iter()
+            .copied()
+            .filter(|p| p.needed(scene))
+            .collect();
+        let order = Self::order(&chosen)?;
+        // Fields: the base set plus everything written.
+        let mut fields: BTreeSet<FieldId> = FieldId::BASE.into_iter().collect();
+        for p in &chosen {
+            fields.extend(p.writes().iter().copied());
+        }
+        for p in &chosen {
+            for f in p.reads() {
+                if !fields.contains(f) {
+                    return Err(ScheduleError::MissingField {
+                        stage: p.name().to_string(),
+                        field: f.name(),
+                    });
+                }
+            }
+        }
+        let mut entries = Vec::with_capacity(order.len());
+        for p in order {
+            let stage = p
+                .build(scene, grid, bc)
+                .map_err(|message| ScheduleError::Build {
+                    stage: p.name().to_string(),
+                    message,
+                })?;
+            entries.push(Entry {
+                name: p.name(),
+                phase: p.phase(),
+                reads: p.reads(),
+                writes: p.writes(),
+                stage,
+                time: Duration::ZERO,
+                calls: 0,
+                iterations: 0,
+                last: StageStats::default(),
+            });
+        }
+        Ok(Pipeline { entries, fields })
+    }
+
+    /// Order by phase, then topologically by `after` within a phase; reject ambiguity.
+    fn order<'a>(
+        chosen: &[&'a dyn StagePlugin],
+    ) -> Result<Vec<&'a dyn StagePlugin>, ScheduleError> {
+        let mut out = Vec::new();
+        for phase in Phase::ALL {
+            let group: Vec<&dyn StagePlugin> = chosen
+                .iter()
+                .copied()
+                .filter(|p| p.phase() == phase)
+                .collect();
+            for p in &group {
+                for a in p.after() {
+                    if !chosen.iter().any(|q| q.name() == *a) {
+                        continue; // constraint on an absent stage: vacuous
+                    }
+                    if !group.iter().any(|q| q.name() == *a) {
+                        return Err(ScheduleError::BadOrder {
+                            stage: p.name().into(),
+                            other: (*a).into(),
+                            why: "it is in another phase",
+                        });
+                    }
+                }
+            }
+            // Kahn's algorithm, ties broken by name for determinism.
+            let mut done: Vec<&dyn StagePlugin> = Vec::new();
+            let mut left = group.clone();
+            left.sort_by_key(|p| p.name());
+            while !left.is_empty() {
+                let pos = left.iter().position(|p| {
+                    p.after()
+                        .iter()
+                        .all(|a| !left.iter().any(|q| q.name() == *a))
+                });
+                match pos {
+                    Some(k) => done.push(left.remove(k)),
+                    None => {
+                        return Err(ScheduleError::BadOrder {
+                            stage: left[0].name().into(),
+                            other: left[0].after().first().copied().unwrap_or("?").into(),
+                            why: "the constraints form a cycle",
+                        });
+                    }
+                }
+            }
+            // Ambiguity: conflicting access without a (transitive) order.
+            let before = |x: &dyn StagePlugin, y: &dyn StagePlugin| -> bool {
+                // Is x (transitively) required before y?
+                let mut stack = vec![y.name()];
+                let mut seen = BTreeSet::new();
+                while let Some(n) = stack.pop() {
+                    if let Some(s) = group.iter().find(|p| p.name() == n) {
+                        for a in s.after() {
+                            if *a == x.name() {
+                                return true;
+                            }
+                            if seen.insert(*a) {
+                                stack.push(a);
+                            }
+                        }
+                    }
+                }
+                false
+            };
+            for (k, a) in done.iter().enumerate() {
+                for b in &done[k + 1..] {
+                    let conflict = a
+                        .writes()
+                        .iter()
+                        .find(|f| b.writes().contains(f) || b.reads().contains(f))
+                        .or_else(|| b.writes().iter().find(|f| a.reads().contains(f)));
+                    if let Some(f) = conflict
+                        && !before(*a, *b)
+                        && !before(*b, *a)
+                    {
+                        return Err(ScheduleError::Ambiguous {
+                            a: a.name().into(),
+                            b: b.name().into(),
+                            phase,
+                            field: f.name(),
+                        });
+                    }
+                }
+            }
+            out.extend(done);
+        }
+        Ok(out)
+    }
+
+    /// The fields the pipeline uses (the state allocates exactly these).
+    pub fn fields(&self) -> &BTreeSet<FieldId> {
+        &self.fields
+    }
+
+    /// Stage names in execution order.
+    pub fn stage_names(&self) -> Vec<&'static str> {
+        self.entries.iter().map(|e| e.name).collect()
+    }
+
+    /// Initialise every stage's fields (before the first step).
+    pub fn initialize(
+        &mut self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        for e in &mut self.entries {
+            e.stage.initialize(grid, bc, state)?;
+        }
+        Ok(())
+    }
+
+    /// The largest Δt every stage allows, if any stage limits it.
+    pub fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
+        self.entries
+            .iter()
+            .filter_map(|e| e.stage.max_dt(grid, state, cfl))
+            .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))))
+    }
+
+    /// Run every stage once, in order. After each stage the ghosts of what it wrote are
+    /// refreshed (velocity for the end-of-step time `t + Δt`), and what it wrote is checked to
+    /// be finite: a NaN or infinity is reported with the stage, the field and the cell.
+    pub fn run_step(&mut self, ctx: &StepContext, state: &mut State) -> Result<(), StageError> {
+        let (nx, ny) = (ctx.grid.nx, ctx.grid.ny);
+        for e in &mut self.entries {
+            let t0 = Instant::now();
+            let stats = e.stage.run(ctx, state)?;
+            e.time += t0.elapsed();
+            e.calls += 1;
+            if let Some(s) = stats.solve {
+                e.iterations += s.iterations as u64;
+            }
+            e.last = stats;
+            if e.writes
+                .iter()
+                .any(|f| matches!(f, FieldId::VelocityX | FieldId::VelocityY))
+            {
+                ctx.bc
+                    .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+            }
+            if e.writes.contains(&FieldId::Pressure) {
+                ctx.bc.fill_scalar(ctx.grid, &mut state.p, true);
+            }
+            for &f in e.writes {
+                if let Some(field) = state.field(f) {
+                    let stagger = match f {
+                        FieldId::VelocityX => crate::Stagger::XFace,
+                        FieldId::VelocityY => crate::Stagger::YFace,
+                        _ => crate::Stagger::Cell,
+                    };
+                    if let Some((i, j)) = field.first_non_finite(stagger, nx, ny) {
+                        return Err(StageError {
+                            stage: e.name.to_string(),
+                            message: format!(
+                                "produced a non-finite `{}` at cell ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                                f.name(),
+                                ctx.step,
+                                ctx.t,
+                                ctx.dt
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The statistics each stage reported in the last step, in order.
+    pub fn last_stats(&self) -> Vec<(&'static str, StageStats)> {
+        self.entries.iter().map(|e| (e.name, e.last)).collect()
+    }
+
+    /// Accumulated timings per stage.
+    pub fn timings(&self) -> Vec<StageTiming> {
+        self.entries
+            .iter()
+            .map(|e| StageTiming {
+                name: e.name,
+                seconds: e.time.as_secs_f64(),
+                calls: e.calls,
+                iterations: e.iterations,
+            })
+            .collect()
+    }
+}
+
+impl fmt::Display for Pipeline {
+    /// The schedule as `efsi run --print-schedule` prints it.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (k, e) in self.entries.iter().enumerate() {
+            let names = |fs: &[FieldId]| fs.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
+            writeln!(
+                f,
+                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]",
+                k + 1,
+                e.name,
+                format!("{:?}", e.phase),
+                names(e.reads),
+                names(e.writes)
+            )?;
+        }
+        let fields: Vec<_> = self.fields.iter().map(|x| x.name()).collect();
+        write!(f, "fields: {}", fields.join(", "))
+    }
+}

@@ -1,0 +1,238 @@
+//! The model and its stepper: a scene turned into a grid, boundary conditions, a state and a
+//! checked pipeline, advanced one step at a time. The run loop and the outputs are separate
+//! ([`crate::run`]), so tests and the FMU drive a [`Simulation`] directly.
+
+use crate::bc::BoundarySet;
+use crate::error::EfsiError;
+use crate::field::Field;
+use crate::grid::Grid;
+use crate::scene::{Boundary, InitialVelocity, Scene, Side};
+use crate::schedule::{Pipeline, StagePlugin, StepContext};
+use crate::state::State;
+use std::path::{Path, PathBuf};
+
+/// A scene ready to step.
+pub struct Simulation {
+    /// The scene as read.
+    pub scene: Scene,
+    /// Where the scene came from (for messages).
+    pub scene_path: PathBuf,
+    /// The grid.
+    pub grid: Grid,
+    /// The boundary conditions.
+    pub bc: BoundarySet,
+    /// The fields and time.
+    pub state: State,
+    pipeline: Pipeline,
+    previous: Option<(Field, Field)>,
+    last_change: f64,
+    velocity_scale: f64,
+}
+
+impl Simulation {
+    /// Build a simulation from a scene and the available stage plugins.
+    pub fn new(
+        scene: Scene,
+        scene_path: &Path,
+        plugins: &[&dyn StagePlugin],
+    ) -> Result<Self, EfsiError> {
+        let config = |field: &str, message: String| EfsiError::Config {
+            path: scene_path.to_path_buf(),
+            field: field.into(),
+            message,
+        };
+        let grid = Grid::new(
+            scene.geometry,
+            scene.grid.nx,
+            scene.grid.ny,
+            scene.domain.x,
+            scene.domain.y,
+        );
+        let bc = BoundarySet::new(&scene.boundaries, &grid);
+        let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
+        let mut state = State::new(
+            &grid,
+            scene.fluid.density,
+            scene.fluid.viscosity,
+            pipeline.fields(),
+        );
+        // Initial velocity.
+        match &scene.initial_velocity {
+            InitialVelocity::Rest => {}
+            InitialVelocity::Uniform((a, b)) => {
+                state.u.fill(*a);
+                state.v.fill(*b);
+            }
+            InitialVelocity::SinSinStream {
+                amplitude,
+                wavenumbers,
+            } => {
+                if grid.is_axisymmetric() {
+                    return Err(config(
+                        "initial_velocity",
+                        "SinSinStream is a planar stream function; not available in axisymmetric geometry".into(),
+                    ));
+                }
+                let psi = |x: f64, y: f64| {
+                    amplitude * (wavenumbers.0 * x).sin() * (wavenumbers.1 * y).sin()
+                };
+                for j in -1..=grid.ny as isize {
+                    for i in -1..=grid.nx as isize + 1 {
+                        let (x, y0, y1) = (grid.xf(i), grid.yf(j), grid.yf(j + 1));
+                        state.u[(i, j)] = (psi(x, y1) - psi(x, y0)) / grid.dy;
+                    }
+                }
+                for j in -1..=grid.ny as isize + 1 {
+                    for i in -1..=grid.nx as isize {
+                        let (x0, x1, y) = (grid.xf(i), grid.xf(i + 1), grid.yf(j));
+                        state.v[(i, j)] = -(psi(x1, y) - psi(x0, y)) / grid.dx;
+                    }
+                }
+            }
+        }
+        bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
+        bc.fill_scalar(&grid, &mut state.rho, false);
+        bc.fill_scalar(&grid, &mut state.mu, false);
+        let mut pipeline = pipeline;
+        pipeline.initialize(&grid, &bc, &mut state)?;
+        // A velocity scale bounds the first step when the fluid starts at rest.
+        let mut scale = 0.0f64;
+        for side in Side::ALL {
+            if let Boundary::MovingWall { speed, .. } = scene.boundaries.get(side) {
+                scale = scale.max(speed.abs());
+            }
+        }
+        let lx = grid.x1() - grid.x0;
+        let ly = grid.y1() - grid.y0;
+        scale = scale.max((scene.gravity.0.hypot(scene.gravity.1) * lx.max(ly)).sqrt());
+        scale = scale.max(state.u.max_abs(crate::Stagger::XFace, grid.nx, grid.ny));
+        scale = scale.max(state.v.max_abs(crate::Stagger::YFace, grid.nx, grid.ny));
+        if scene.time.fixed_dt.is_none()
+            && scene.time.dt_max.is_none()
+            && (!scene.physics.advection || scale == 0.0)
+        {
+            return Err(config(
+                "time.dt_max",
+                if scene.physics.advection {
+                    "nothing in this scene sets a velocity scale (no moving wall, gravity or initial velocity) \
+                     from which to choose the first step: set time.dt_max or time.fixed_dt"
+                        .into()
+                } else {
+                    "advection is off, so no CFL condition limits the step: set time.dt_max or time.fixed_dt".into()
+                },
+            ));
+        }
+        let previous = scene
+            .time
+            .steady
+            .map(|_| (state.u.clone(), state.v.clone()));
+        Ok(Simulation {
+            scene,
+            scene_path: scene_path.to_path_buf(),
+            grid,
+            bc,
+            state,
+            pipeline,
+            previous,
+            last_change: f64::INFINITY,
+            velocity_scale: scale,
+        })
+    }
+
+    /// The pipeline (for printing, timings and statistics).
+    pub fn pipeline(&self) -> &Pipeline {
+        &self.pipeline
+    }
+
+    /// The Δt for the next step, at most `until − t` (to land on an output time or the end).
+    pub fn next_dt(&self, until: f64) -> Result<f64, EfsiError> {
+        let t = &self.scene.time;
+        let remaining = until - self.state.t;
+        let dt = if let Some(fixed) = t.fixed_dt {
+            fixed
+        } else {
+            let limit = self
+                .pipeline
+                .max_dt(&self.grid, &self.state, t.cfl)
+                .or_else(|| {
+                    (self.scene.physics.advection && self.velocity_scale > 0.0)
+                        .then(|| t.cfl * self.grid.dx.min(self.grid.dy) / self.velocity_scale)
+                });
+            match (limit, t.dt_max) {
+                (Some(a), Some(b)) => a.min(b),
+                (Some(a), None) => a,
+                (None, Some(b)) => b,
+                (None, None) => remaining,
+            }
+        };
+        let dt_min = t.dt_min.unwrap_or(1e-12 * t.end);
+        if !(dt >= dt_min) {
+            return Err(EfsiError::Unstable {
+                dt,
+                dt_min,
+                t: self.state.t,
+                step: self.state.step,
+            });
+        }
+        // Land exactly on `until`; avoid a sliver step just before it.
+        Ok(if dt >= remaining * (1.0 - 1e-9) {
+            remaining
+        } else if dt > 0.5 * remaining {
+            0.5 * remaining
+        } else {
+            dt
+        })
+    }
+
+    /// Advance by one step of size `dt`.
+    pub fn step(&mut self, dt: f64) -> Result<(), EfsiError> {
+        if let Some((pu, pv)) = &mut self.previous {
+            pu.copy_from(&self.state.u);
+            pv.copy_from(&self.state.v);
+        }
+        let ctx = StepContext {
+            grid: &self.grid,
+            bc: &self.bc,
+            t: self.state.t,
+            dt,
+            step: self.state.step,
+        };
+        self.pipeline.run_step(&ctx, &mut self.state)?;
+        self.state.t += dt;
+        self.state.step += 1;
+        self.state.dt_prev = dt;
+        if let Some((pu, pv)) = &self.previous {
+            let (nx, ny) = (self.grid.nx, self.grid.ny);
+            let mut m = 0.0f64;
+            for (a, b) in [(&self.state.u, pu), (&self.state.v, pv)] {
+                for j in 0..=ny as isize {
+                    for i in 0..=nx as isize {
+                        m = m.max((a[(i, j)] - b[(i, j)]).abs());
+                    }
+                }
+            }
+            self.last_change = m / dt;
+        }
+        Ok(())
+    }
+
+    /// Set the time exactly (after landing on an output time, to avoid round-off drift).
+    pub fn snap_time(&mut self, t: f64) {
+        if (self.state.t - t).abs() <= 1e-9 * t.abs().max(1e-300) {
+            self.state.t = t;
+        }
+    }
+
+    /// `max |uⁿ⁺¹ − uⁿ|/Δt` of the last step (infinite before the first or when not tracked).
+    pub fn rate_of_change(&self) -> f64 {
+        self.last_change
+    }
+
+    /// Whether the scene asked to stop at steady state and the flow has reached it.
+    pub fn is_steady(&self) -> bool {
+        self.scene
+            .time
+            .steady
+            .is_some_and(|tol| self.last_change <= tol)
+    }
+}

@@ -1,0 +1,7 @@
+//! Linear solvers: preconditioned conjugate gradient and the preconditioners it uses.
+
+pub mod pcg;
+pub mod stencil5;
+
+pub use pcg::{LinearOperator, Pcg, Preconditioner, SolveStats};
+pub use stencil5::{IncompleteCholesky, Stencil5};
