@@ -1,1 +1,88 @@
-//! Shared helpers for the workspace integration tests.
+//! Shared helpers for the workspace integration tests: building simulations from scene text,
+//! stepping them without outputs, and locating the reference data in `../shared/references`.
+
+use efsi_core::{EfsiError, Scene, Simulation, StagePlugin};
+use std::path::{Path, PathBuf};
+
+/// Parse scene text (panics with the loader's message if it is invalid).
+pub fn scene(text: &str) -> Scene {
+    Scene::from_str_at(text, Path::new("<test>")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A simulation of `text` with all built-in stages.
+pub fn sim(text: &str) -> Simulation {
+    sim_with(text, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A simulation of `text` with the given stage plugins.
+pub fn sim_with(text: &str, plugins: &[&dyn StagePlugin]) -> Result<Simulation, EfsiError> {
+    Simulation::new(scene(text), Path::new("<test>"), plugins)
+}
+
+/// Step `sim` until time `t` (landing on it), calling `each` after every step.
+pub fn run_until(sim: &mut Simulation, t: f64, mut each: impl FnMut(&Simulation, f64)) {
+    while sim.state.t < t * (1.0 - 1e-12) {
+        let dt = sim.next_dt(t).unwrap_or_else(|e| panic!("{e}"));
+        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
+        sim.snap_time(t);
+        each(sim, dt);
+    }
+}
+
+/// Step until steady (the scene's `time.steady`) or `t_max`; returns the time reached.
+pub fn run_to_steady(sim: &mut Simulation, t_max: f64) -> f64 {
+    while sim.state.t < t_max && !sim.is_steady() {
+        let dt = sim.next_dt(t_max).unwrap_or_else(|e| panic!("{e}"));
+        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
+    }
+    sim.state.t
+}
+
+/// A file of the shared reference data (`$EFSI_REFERENCES` or `<workspace>/../shared/references`).
+pub fn reference(rel: &str) -> PathBuf {
+    let base = std::env::var_os("EFSI_REFERENCES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/references"));
+    let p = base.join(rel);
+    assert!(
+        p.exists(),
+        "reference data {} not found (set EFSI_REFERENCES)",
+        p.display()
+    );
+    p
+}
+
+/// Read a CSV with a header (lines starting with `#` skipped) into column-major numbers.
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let header: Vec<String> = lines
+        .next()
+        .expect("header")
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut cols = vec![Vec::new(); header.len()];
+    for l in lines {
+        for (k, v) in l.split(',').enumerate() {
+            cols[k].push(v.trim().parse::<f64>().unwrap_or(f64::NAN));
+        }
+    }
+    (header, cols)
+}
+
+/// Linear interpolation of `(xs, ys)` (xs increasing) at `x`.
+pub fn interp(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let k = xs.partition_point(|&a| a < x).clamp(1, xs.len() - 1);
+    let w = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+    ys[k - 1] * (1.0 - w) + ys[k] * w
+}
+
+/// Observed orders of convergence between successive (h, error) pairs.
+pub fn orders(h: &[f64], e: &[f64]) -> Vec<f64> {
+    (1..h.len())
+        .map(|k| (e[k - 1] / e[k]).ln() / (h[k - 1] / h[k]).ln())
+        .collect()
+}

@@ -30,6 +30,24 @@ pub struct FaceRange {
     pub hi: isize,
 }
 
+/// Which wall speeds to impose when filling velocity ghosts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WallTime {
+    /// The wall speeds at time `t`.
+    At(f64),
+    /// `(1−θ)·w(t0) + θ·w(t1)`: the θ-weighted boundary data of a θ-scheme's explicit part.
+    Blend {
+        /// Start of the step.
+        t0: f64,
+        /// End of the step.
+        t1: f64,
+        /// Weight of the end.
+        theta: f64,
+    },
+    /// Fixed walls (corrections in implicit solves).
+    Homogeneous,
+}
+
 /// The boundary conditions of a run, ready to fill ghosts.
 #[derive(Clone, Debug)]
 pub struct BoundarySet {
@@ -114,13 +132,22 @@ impl BoundarySet {
         t: f64,
         homogeneous: bool,
     ) {
-        let t = if homogeneous { f64::NAN } else { t };
+        let w = if homogeneous {
+            WallTime::Homogeneous
+        } else {
+            WallTime::At(t)
+        };
+        self.fill_velocity_at(grid, u, v, w);
+    }
+
+    /// Fill the velocity ghosts with the wall speeds of `when`.
+    pub fn fill_velocity_at(&self, grid: &Grid, u: &mut Field, v: &mut Field, when: WallTime) {
         // Pass 1: x-sides (u normal, v tangential) over all padded rows.
         self.fill_normal(grid, u, 0);
-        self.fill_tangential(grid, v, 0, t);
+        self.fill_tangential(grid, v, 0, when);
         // Pass 2: y-sides (v normal, u tangential) over all padded columns, corners included.
         self.fill_normal(grid, v, 1);
-        self.fill_tangential(grid, u, 1, t);
+        self.fill_tangential(grid, u, 1, when);
     }
 
     /// Normal component `f` along `axis`: boundary face and ghosts.
@@ -177,8 +204,8 @@ impl BoundarySet {
         }
     }
 
-    /// Tangential component `f` at the sides normal to `axis`; `t` NaN means homogeneous.
-    fn fill_tangential(&self, grid: &Grid, f: &mut Field, axis: usize, t: f64) {
+    /// Tangential component `f` at the sides normal to `axis`.
+    fn fill_tangential(&self, grid: &Grid, f: &mut Field, axis: usize, when: WallTime) {
         let (n, m) = if axis == 0 {
             (grid.nx as isize, grid.ny as isize)
         } else {
@@ -190,9 +217,8 @@ impl BoundarySet {
             (Side::YMin, Side::YMax)
         };
         let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
-        // Position along the wall of transverse index b (tangential unknowns sit at cell centres
-        // of the transverse direction... no: at faces of it). The tangential component along a
-        // side normal to `axis` lives at faces of the transverse direction: s = b·h.
+        // The tangential component along a side normal to `axis` lives at the faces of the
+        // transverse direction: its position along the wall is s = b·h.
         let h = if axis == 0 { grid.dy } else { grid.dx };
         for b in -G..(m + 1 + G) {
             let s = b as f64 * h;
@@ -205,10 +231,13 @@ impl BoundarySet {
                         Boundary::Periodic => f[at(if dir < 0 { ghost + n } else { ghost - n }, b)],
                         Boundary::NoSlip => -f[at(mirror, b)],
                         Boundary::MovingWall { .. } => {
-                            let w = if t.is_nan() {
-                                0.0
-                            } else {
-                                self.wall_speed(side, s, t)
+                            let w = match when {
+                                WallTime::Homogeneous => 0.0,
+                                WallTime::At(t) => self.wall_speed(side, s, t),
+                                WallTime::Blend { t0, t1, theta } => {
+                                    (1.0 - theta) * self.wall_speed(side, s, t0)
+                                        + theta * self.wall_speed(side, s, t1)
+                                }
                             };
                             2.0 * w - f[at(mirror, b)]
                         }

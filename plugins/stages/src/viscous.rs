@@ -16,7 +16,8 @@
 //! the average of the two cells): `(M − θΔt K) δ = Δt K(V*)`, symmetric positive definite, for
 //! both components at once by conjugate gradient with Jacobi preconditioning ("line solves as in
 //! the seed, or better": this solves the coupled system exactly instead of splitting it). `K(V*)`
-//! uses the boundary values at the new time; `δ` obeys the homogeneous conditions
+//! uses the θ-weighted boundary data `θ bⁿ⁺¹ + (1−θ) bⁿ` (K is affine in b, so this is exactly
+//! the θ-scheme's boundary forcing); `δ` obeys the homogeneous conditions
 //! ([`efsi_core::bc`]). Unconditionally stable for θ ∈ [½, 1]; θ = 1 damps the stiff modes of a
 //! very viscous solid, θ = ½ is second-order in time.
 
@@ -24,7 +25,8 @@ use efsi_core::schedule::VELOCITY;
 use efsi_core::solver::{LinearOperator, Pcg, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext, bc::FaceRange,
+    State, StepContext,
+    bc::{FaceRange, WallTime},
 };
 
 /// The viscous stage plugin.
@@ -123,13 +125,13 @@ impl ViscousOperator {
         let mut c = 0;
         for j in 0..g.ny as isize {
             for i in self.ux.lo..self.ux.hi {
-                f(c, true, self.xu.idx(i, j), i);
+                f(c, true, self.mu.idx(i, j), i);
                 c += 1;
             }
         }
         for j in self.vy.lo..self.vy.hi {
             for i in 0..g.nx as isize {
-                f(c, false, self.xv.idx(i, j), i);
+                f(c, false, self.mu.idx(i, j), i);
                 c += 1;
             }
         }
@@ -253,7 +255,14 @@ impl Stage for ViscousStage {
                 }
             }
         }
-        // Right-hand side Δt·K(V*) with the boundary values at the new time (ghosts are current).
+        // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
+        // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing.
+        let when = WallTime::Blend {
+            t0: ctx.t,
+            t1: ctx.t + ctx.dt,
+            theta: self.theta,
+        };
+        ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
         let mut ku = std::mem::take(&mut op.ku);
         let mut kv = std::mem::take(&mut op.kv);
         op.stress_divergence(&state.u, &state.v, &mut ku, &mut kv);
