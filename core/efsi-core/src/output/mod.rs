@@ -1,3 +1,4 @@
 //! Output writers: VTK XML for ParaView, CSV probes and profiles.
 
+pub mod atomic;
 pub mod vtk;
