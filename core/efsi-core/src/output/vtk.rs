@@ -1,37 +1,540 @@
-//! TEMPORARY stub, replaced by the vtk branch.
-#![allow(missing_docs)]
-use crate::grid::Grid;
+//! VTK XML RectilinearGrid (`.vtr`) and ParaView collection (`.pvd`) writers.
+//!
+//! One `.vtr` file holds the cell data of one output time; a [`PvdCollection`] lists the files
+//! with their times so ParaView plays them as a time series. Both are written with
+//! [`write_atomically`], so a reader polling the output folder never sees a half-written file.
+//!
+//! # File layout
+//!
+//! The `.vtr` files use the XML format version 1.0 with `header_type="UInt64"` and *appended
+//! raw* binary data: the XML header names every array with its byte `offset` into the appended
+//! section, which follows the `_` marker as a sequence of blocks, each a little-endian `UInt64`
+//! byte count followed by the little-endian `Float64` payload. Coordinates and cell data are
+//! `Float64`, so values read back bit-exact.
+//!
+//! * Planar grids ([`Geometry::Planar`]) lie in the X–Y plane: extent `0 nx 0 ny 0 0`, X and Y
+//!   the node coordinates, Z = `[0]`.
+//! * Axisymmetric grids put the r–z slice in the X–Z plane: extent `0 nx 0 0 0 ny`, X the radial
+//!   nodes, Y = `[0]`, Z the axial nodes, so ParaView's *Rotational Extrusion* (about Z) revolves
+//!   it directly.
+//!
+//! VTK orders cells with i fastest, then the next non-flat axis, which in both cases is efsi's
+//! row-major `(i, j)` order: cell `(i, j)`, component `c` is at `(j·nx + i)·components + c`.
+//!
+//! The simulation time is stored twice as one-value `Float64` field data: `TIME` (the name VisIt
+//! and many scripts look for, shown in ParaView's spreadsheet and information panels) and
+//! `TimeValue` (the name VTK ≥ 8.2 XML readers recognise as the time step of a lone file, so a
+//! `.vtr` opened without its `.pvd` still carries its time).
+
+use crate::grid::{Geometry, Grid};
+use crate::output::atomic::write_atomically;
+use std::fmt::Write as _;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+
+/// One cell-data array.
+///
+/// `values.len()` must be `nx · ny · components`; cell `(i, j)`, component `c` is at
+/// `(j·nx + i)·components + c`. Scalars have 1 component, vectors 3 (pad the third with zero in
+/// 2-D), symmetric tensors 6 in VTK's order XX, YY, ZZ, XY, YZ, XZ (in axisymmetric output
+/// X is r, Y is θ and Z is z, so the r–z component goes in XZ). The writer only records
+/// `NumberOfComponents`; arranging the components is the caller's job.
+#[derive(Clone, Copy, Debug)]
 pub struct CellArray<'a> {
+    /// Array name as ParaView shows it (`pressure`, `velocity`, `B`, …).
     pub name: &'a str,
+    /// Number of components per cell (≥ 1).
     pub components: usize,
+    /// The values, cell-major: all components of cell 0, then of cell 1, …
     pub values: &'a [f64],
 }
-pub fn write_vtr(
-    _path: &Path,
-    _grid: &Grid,
-    _time: f64,
-    _arrays: &[CellArray],
-) -> std::io::Result<()> {
+
+/// Values converted per `write_all` call when streaming a block (64 KiB of bytes).
+const CHUNK: usize = 8192;
+
+/// An `InvalidInput` error naming the file.
+fn invalid(path: &Path, what: impl std::fmt::Display) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("cannot write {}: {what}", path.display()),
+    )
+}
+
+/// `s` escaped for use inside a double-quoted XML attribute.
+fn xml_attr(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The `WholeExtent`/`Extent` string of `grid`: `0 nx 0 ny 0 0` planar, `0 nx 0 0 0 ny`
+/// axisymmetric.
+pub fn extent_string(grid: &Grid) -> String {
+    match grid.geometry {
+        Geometry::Planar => format!("0 {} 0 {} 0 0", grid.nx, grid.ny),
+        Geometry::Axisymmetric => format!("0 {} 0 0 0 {}", grid.nx, grid.ny),
+    }
+}
+
+/// The X, Y and Z node coordinate arrays of `grid` as written to the `.vtr` file.
+pub fn node_coordinates(grid: &Grid) -> [Vec<f64>; 3] {
+    let xs: Vec<f64> = (0..=grid.nx as isize).map(|i| grid.xf(i)).collect();
+    let ys: Vec<f64> = (0..=grid.ny as isize).map(|j| grid.yf(j)).collect();
+    match grid.geometry {
+        Geometry::Planar => [xs, ys, vec![0.0]],
+        Geometry::Axisymmetric => [xs, vec![0.0], ys],
+    }
+}
+
+/// Write one appended-raw block: the `UInt64` byte count, then the little-endian payload.
+fn write_block(w: &mut impl Write, values: &[f64]) -> io::Result<()> {
+    w.write_all(&(std::mem::size_of_val(values) as u64).to_le_bytes())?;
+    let mut buf = [0u8; 8 * CHUNK];
+    for chunk in values.chunks(CHUNK) {
+        for (b, v) in buf.chunks_exact_mut(8).zip(chunk) {
+            b.copy_from_slice(&v.to_le_bytes());
+        }
+        w.write_all(&buf[..8 * chunk.len()])?;
+    }
     Ok(())
 }
+
+/// Write the cell data `arrays` of `grid` at simulation time `time` to the `.vtr` file `path`
+/// (atomically: see [`write_atomically`]).
+///
+/// Fails with `InvalidInput` (and writes nothing) if `time` is not finite, an array name is empty
+/// or repeated, an array has zero components, or its length is not `nx · ny · components`.
+/// Non-finite cell values are written as they are.
+pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> io::Result<()> {
+    if !time.is_finite() {
+        return Err(invalid(path, format_args!("the time {time} is not finite")));
+    }
+    let cells = grid.nx * grid.ny;
+    for (k, a) in arrays.iter().enumerate() {
+        if a.name.is_empty() {
+            return Err(invalid(
+                path,
+                format_args!("cell array #{k} has an empty name"),
+            ));
+        }
+        if arrays[..k].iter().any(|b| b.name == a.name) {
+            return Err(invalid(
+                path,
+                format_args!("cell array name `{}` is used twice", a.name),
+            ));
+        }
+        if a.components == 0 {
+            return Err(invalid(
+                path,
+                format_args!("cell array `{}` has 0 components", a.name),
+            ));
+        }
+        if a.values.len() != cells * a.components {
+            return Err(invalid(
+                path,
+                format_args!(
+                    "cell array `{}` has {} values, expected {} cells × {} components = {}",
+                    a.name,
+                    a.values.len(),
+                    cells,
+                    a.components,
+                    cells * a.components
+                ),
+            ));
+        }
+    }
+
+    let coords = node_coordinates(grid);
+    let time_block = [time];
+    // Blocks in the order they appear in the appended section.
+    let mut blocks: Vec<&[f64]> = Vec::with_capacity(arrays.len() + 5);
+    blocks.push(&time_block);
+    blocks.push(&time_block);
+    blocks.extend(arrays.iter().map(|a| a.values));
+    blocks.extend(coords.iter().map(|c| c.as_slice()));
+    let mut offsets = Vec::with_capacity(blocks.len());
+    let mut offset = 0u64;
+    for b in &blocks {
+        offsets.push(offset);
+        offset += 8 + std::mem::size_of_val(*b) as u64;
+    }
+    let mut off = offsets.iter();
+
+    let extent = extent_string(grid);
+    let mut h = String::with_capacity(2048 + 160 * arrays.len());
+    // Writing to a String cannot fail.
+    let _ = (|| -> std::fmt::Result {
+        writeln!(h, r#"<?xml version="1.0"?>"#)?;
+        writeln!(
+            h,
+            r#"<VTKFile type="RectilinearGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
+        )?;
+        writeln!(h, r#"  <RectilinearGrid WholeExtent="{extent}">"#)?;
+        writeln!(h, "    <FieldData>")?;
+        for name in ["TIME", "TimeValue"] {
+            writeln!(
+                h,
+                r#"      <DataArray type="Float64" Name="{name}" NumberOfTuples="1" format="appended" offset="{}"/>"#,
+                off.next().unwrap()
+            )?;
+        }
+        writeln!(h, "    </FieldData>")?;
+        writeln!(h, r#"    <Piece Extent="{extent}">"#)?;
+        writeln!(h, "      <PointData>")?;
+        writeln!(h, "      </PointData>")?;
+        writeln!(h, "      <CellData>")?;
+        for a in arrays {
+            writeln!(
+                h,
+                r#"        <DataArray type="Float64" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
+                xml_attr(a.name),
+                a.components,
+                off.next().unwrap()
+            )?;
+        }
+        writeln!(h, "      </CellData>")?;
+        writeln!(h, "      <Coordinates>")?;
+        for name in ["x", "y", "z"] {
+            writeln!(
+                h,
+                r#"        <DataArray type="Float64" Name="{name}" format="appended" offset="{}"/>"#,
+                off.next().unwrap()
+            )?;
+        }
+        writeln!(h, "      </Coordinates>")?;
+        writeln!(h, "    </Piece>")?;
+        writeln!(h, "  </RectilinearGrid>")?;
+        write!(h, r#"  <AppendedData encoding="raw">"#)?;
+        write!(h, "\n   _")
+    })();
+
+    write_atomically(path, |w| {
+        w.write_all(h.as_bytes())?;
+        for b in &blocks {
+            write_block(w, b)?;
+        }
+        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
+    })
+}
+
+/// A ParaView `.pvd` collection: the list of `(time, file)` entries of a time series.
+///
+/// File names are stored as given and should be relative to the `.pvd` file's folder (ParaView
+/// resolves them from there). Every [`add`](Self::add) rewrites the whole `.pvd` atomically, so
+/// the collection on disk is always complete and lists every file written so far.
+#[derive(Clone, Debug)]
 pub struct PvdCollection {
     path: PathBuf,
     entries: Vec<(f64, String)>,
 }
+
 impl PvdCollection {
+    /// An empty collection to be written at `path` (nothing is written until the first
+    /// [`add`](Self::add)).
     pub fn new(path: impl Into<PathBuf>) -> Self {
         PvdCollection {
             path: path.into(),
-            entries: vec![],
+            entries: Vec::new(),
         }
     }
-    pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
-        let _ = &self.path;
-        self.entries.push((time, file.into()));
-        Ok(())
+
+    /// The path of the `.pvd` file.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
+
+    /// Append the entry `(time, file)` and rewrite the `.pvd` file.
+    ///
+    /// A non-finite `time` is refused with `InvalidInput` and not recorded. If rewriting the
+    /// file fails the entry stays recorded (the next successful `add` writes it) and the error
+    /// is returned.
+    pub fn add(&mut self, time: f64, file: &str) -> io::Result<()> {
+        if !time.is_finite() {
+            return Err(invalid(
+                &self.path,
+                format_args!("the time {time} of `{file}` is not finite"),
+            ));
+        }
+        self.entries.push((time, file.to_owned()));
+        self.write()
+    }
+
+    /// The entries recorded so far, in the order they were added.
     pub fn entries(&self) -> &[(f64, String)] {
         &self.entries
+    }
+
+    /// The `.pvd` XML text for the current entries. Times are written with `{:e}`, the shortest
+    /// form that parses back to the same `f64`.
+    pub fn to_xml(&self) -> String {
+        let mut s = String::with_capacity(256 + 96 * self.entries.len());
+        s.push_str("<?xml version=\"1.0\"?>\n");
+        s.push_str(
+            "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+        );
+        s.push_str("  <Collection>\n");
+        for (t, f) in &self.entries {
+            let _ = writeln!(
+                s,
+                r#"    <DataSet timestep="{t:e}" group="" part="0" file="{}"/>"#,
+                xml_attr(f)
+            );
+        }
+        s.push_str("  </Collection>\n</VTKFile>\n");
+        s
+    }
+
+    /// Rewrite the `.pvd` file from the current entries (atomically).
+    pub fn write(&self) -> io::Result<()> {
+        let xml = self.to_xml();
+        write_atomically(&self.path, |w| w.write_all(xml.as_bytes()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("efsi-vtk-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// Attribute `key="…"` of the XML line `line`.
+    fn attr<'a>(line: &'a str, key: &str) -> Option<&'a str> {
+        let pat = format!(" {key}=\"");
+        let start = line.find(&pat)? + pat.len();
+        let len = line[start..].find('"')?;
+        Some(&line[start..start + len])
+    }
+
+    /// Split a `.vtr` file into its XML header (up to and including `_`) and appended bytes.
+    fn split(bytes: &[u8]) -> (String, &[u8]) {
+        let tag = b"<AppendedData encoding=\"raw\">";
+        let at = bytes
+            .windows(tag.len())
+            .position(|w| w == tag)
+            .expect("no AppendedData");
+        let us = at + bytes[at..].iter().position(|&b| b == b'_').unwrap();
+        (
+            String::from_utf8(bytes[..=us].to_vec()).unwrap(),
+            &bytes[us + 1..],
+        )
+    }
+
+    fn read_block(data: &[u8], offset: usize) -> Vec<f64> {
+        let n = u64::from_le_bytes(data[offset..offset + 8].try_into().unwrap()) as usize;
+        assert_eq!(n % 8, 0);
+        data[offset + 8..offset + 8 + n]
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    }
+
+    fn sample(grid: &Grid) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let n = grid.cells();
+        let p: Vec<f64> = (0..n).map(|k| k as f64 * 0.1 - 1.0 / 3.0).collect();
+        let u: Vec<f64> = (0..3 * n).map(|k| (k as f64).sin()).collect();
+        let b: Vec<f64> = (0..6 * n).map(|k| 1.0 + k as f64 / 7.0).collect();
+        (p, u, b)
+    }
+
+    #[test]
+    fn planar_blocks_match_header_and_payload() {
+        let dir = scratch("planar");
+        let grid = Grid::new(Geometry::Planar, 7, 5, (0.0, 1.4), (0.0, 1.0));
+        let (p, u, b) = sample(&grid);
+        let arrays = [
+            CellArray {
+                name: "pressure",
+                components: 1,
+                values: &p,
+            },
+            CellArray {
+                name: "velocity",
+                components: 3,
+                values: &u,
+            },
+            CellArray {
+                name: "B",
+                components: 6,
+                values: &b,
+            },
+        ];
+        let path = dir.join("f.vtr");
+        write_vtr(&path, &grid, 0.125, &arrays).unwrap();
+        let bytes = fs::read(&path).unwrap();
+        let (head, data) = split(&bytes);
+
+        assert!(head.starts_with("<?xml version=\"1.0\"?>\n<VTKFile type=\"RectilinearGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"));
+        assert!(head.contains(r#"<RectilinearGrid WholeExtent="0 7 0 5 0 0">"#));
+        assert!(head.contains(r#"<Piece Extent="0 7 0 5 0 0">"#));
+        for tag in [
+            "FieldData",
+            "CellData",
+            "Coordinates",
+            "Piece",
+            "RectilinearGrid",
+        ] {
+            let open = head.find(&format!("<{tag}")).unwrap();
+            let close = head.find(&format!("</{tag}>")).unwrap();
+            assert!(open < close, "{tag}");
+        }
+        assert!(bytes.ends_with(b"\n  </AppendedData>\n</VTKFile>\n"));
+
+        // Every DataArray's offset points at a block whose byte count matches its payload.
+        let expected: Vec<(&str, Vec<f64>)> = vec![
+            ("TIME", vec![0.125]),
+            ("TimeValue", vec![0.125]),
+            ("pressure", p.clone()),
+            ("velocity", u.clone()),
+            ("B", b.clone()),
+            ("x", (0..=7).map(|i| grid.xf(i)).collect()),
+            ("y", (0..=5).map(|j| grid.yf(j)).collect()),
+            ("z", vec![0.0]),
+        ];
+        let lines: Vec<&str> = head.lines().filter(|l| l.contains("<DataArray")).collect();
+        assert_eq!(lines.len(), expected.len());
+        let mut next = 0usize;
+        for (line, (name, values)) in lines.iter().zip(&expected) {
+            assert_eq!(attr(line, "Name"), Some(*name));
+            assert_eq!(attr(line, "type"), Some("Float64"));
+            assert_eq!(attr(line, "format"), Some("appended"));
+            let offset: usize = attr(line, "offset").unwrap().parse().unwrap();
+            assert_eq!(offset, next, "{name}: blocks are contiguous");
+            let got = read_block(data, offset);
+            assert_eq!(got.len(), values.len(), "{name}");
+            assert!(
+                got.iter()
+                    .zip(values)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+            next = offset + 8 + 8 * values.len();
+        }
+        for (a, c) in arrays.iter().zip(&lines[2..5]) {
+            assert_eq!(
+                attr(c, "NumberOfComponents"),
+                Some(a.components.to_string().as_str())
+            );
+        }
+        // The appended section is exactly the blocks plus the closing tags.
+        assert_eq!(
+            data.len(),
+            next + b"\n  </AppendedData>\n</VTKFile>\n".len()
+        );
+        assert!(!dir.join(".f.vtr.tmp").exists());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn axisymmetric_slice_lies_in_xz_plane() {
+        let dir = scratch("axi");
+        let grid = Grid::new(Geometry::Axisymmetric, 6, 9, (0.0, 0.6), (-0.2, 0.7));
+        let (p, _, _) = sample(&grid);
+        let path = dir.join("a.vtr");
+        let arrays = [CellArray {
+            name: "p",
+            components: 1,
+            values: &p,
+        }];
+        write_vtr(&path, &grid, 2.0, &arrays).unwrap();
+        assert_eq!(extent_string(&grid), "0 6 0 0 0 9");
+        let bytes = fs::read(&path).unwrap();
+        let (head, data) = split(&bytes);
+        assert!(head.contains(r#"WholeExtent="0 6 0 0 0 9""#));
+        assert!(head.contains(r#"<Piece Extent="0 6 0 0 0 9">"#));
+        let offset = |name: &str| -> usize {
+            let line = head
+                .lines()
+                .find(|l| attr(l, "Name") == Some(name))
+                .unwrap();
+            attr(line, "offset").unwrap().parse().unwrap()
+        };
+        assert_eq!(read_block(data, offset("x")), node_coordinates(&grid)[0]);
+        assert_eq!(read_block(data, offset("x")).len(), 7);
+        assert_eq!(read_block(data, offset("y")), vec![0.0]);
+        let z = read_block(data, offset("z"));
+        assert_eq!(z.len(), 10);
+        assert_eq!(z[0], -0.2);
+        assert_eq!(z[9], grid.yf(9));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_input_is_refused_and_writes_nothing() {
+        let dir = scratch("bad");
+        let grid = Grid::new(Geometry::Planar, 3, 2, (0.0, 1.0), (0.0, 1.0));
+        let v = vec![0.0; 6];
+        let path = dir.join("bad.vtr");
+        let one = |name, components, values| CellArray {
+            name,
+            components,
+            values,
+        };
+        let cases: Vec<(f64, Vec<CellArray>)> = vec![
+            (0.0, vec![one("p", 3, &v)]),
+            (0.0, vec![one("p", 0, &v[..0])]),
+            (0.0, vec![one("", 1, &v)]),
+            (0.0, vec![one("p", 1, &v), one("p", 1, &v)]),
+            (f64::NAN, vec![one("p", 1, &v)]),
+        ];
+        for (t, arrays) in cases {
+            let e = write_vtr(&path, &grid, t, &arrays).unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+            assert!(e.to_string().contains("bad.vtr"), "{e}");
+        }
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn names_are_escaped() {
+        assert_eq!(xml_attr(r#"a<b>&"c'"#), "a&lt;b&gt;&amp;&quot;c&apos;");
+    }
+
+    #[test]
+    fn pvd_lists_entries_in_order_with_exact_times() {
+        let dir = scratch("pvd");
+        let path = dir.join("run.pvd");
+        let mut pvd = PvdCollection::new(&path);
+        let times = [0.0, 0.1, 1.0 / 3.0, 2.5e-7, 12345.678901234567];
+        for (k, t) in times.iter().enumerate() {
+            pvd.add(*t, &format!("run_{k:06}.vtr")).unwrap();
+            // The file on disk always lists everything added so far.
+            let text = fs::read_to_string(&path).unwrap();
+            assert_eq!(text.matches("<DataSet").count(), k + 1);
+        }
+        assert!(pvd.add(f64::INFINITY, "x.vtr").is_err());
+        assert_eq!(pvd.entries().len(), times.len());
+        let text = fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\""));
+        assert!(text.ends_with("  </Collection>\n</VTKFile>\n"));
+        let sets: Vec<&str> = text.lines().filter(|l| l.contains("<DataSet")).collect();
+        assert_eq!(sets.len(), times.len());
+        for (k, (line, t)) in sets.iter().zip(&times).enumerate() {
+            let written = attr(line, "timestep").unwrap();
+            assert_eq!(written, format!("{t:e}"));
+            assert_eq!(written.parse::<f64>().unwrap().to_bits(), t.to_bits());
+            assert_eq!(attr(line, "file").unwrap(), format!("run_{k:06}.vtr"));
+            assert_eq!(pvd.entries()[k], (*t, format!("run_{k:06}.vtr")));
+        }
+        let names: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("run.pvd")]);
+        fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,0 +1,111 @@
+//! Writes a small VTK fixture for the independent-reader test (`tests/python/test_vtk_fixture.py`).
+//!
+//! `cargo run -p efsi-core --example vtk_fixture -- OUTDIR` writes, for a planar and an
+//! axisymmetric grid, two `.vtr` files (two output times) with the cell arrays `pressure`
+//! (1 component), `velocity` (3) and `B` (6), one `.pvd` collection per grid, and
+//! `expected.json`, which lists for every file what a reader must find in it: dimensions, extent,
+//! node coordinates and every array's name, component count and values (shortest round-trip
+//! decimal form, so they parse back to the very same `f64`).
+
+use efsi_core::output::vtk::{
+    CellArray, PvdCollection, extent_string, node_coordinates, write_vtr,
+};
+use efsi_core::{Geometry, Grid};
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// Analytic cell-centre fields at time `t`: (pressure, velocity, B), cell-major.
+fn fields(grid: &Grid, t: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let n = grid.cells();
+    let (mut p, mut u, mut b) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(3 * n),
+        Vec::with_capacity(6 * n),
+    );
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            let (x, y) = (grid.xc(i), grid.yc(j));
+            p.push(x.sin() + 2.0 * y + t);
+            u.extend([x.cos() * y + t, x * y - 0.25, -x + y * y]);
+            for c in 0..6 {
+                let c = c as f64;
+                b.push(1.0 + (c + 1.0) * x + c.sqrt() * y.exp() + t / (c + 2.0));
+            }
+        }
+    }
+    (p, u, b)
+}
+
+fn write_case(dir: &Path, stem: &str, grid: &Grid, files: &mut Vec<Value>) -> Value {
+    let mut pvd = PvdCollection::new(dir.join(format!("{stem}.pvd")));
+    for (k, t) in [0.0, 0.1].into_iter().enumerate() {
+        let name = format!("{stem}_{k:04}.vtr");
+        let (p, u, b) = fields(grid, t);
+        let arrays = [
+            CellArray {
+                name: "pressure",
+                components: 1,
+                values: &p,
+            },
+            CellArray {
+                name: "velocity",
+                components: 3,
+                values: &u,
+            },
+            CellArray {
+                name: "B",
+                components: 6,
+                values: &b,
+            },
+        ];
+        write_vtr(&dir.join(&name), grid, t, &arrays).expect("writing the .vtr");
+        pvd.add(t, &name).expect("writing the .pvd");
+
+        let [x, y, z] = node_coordinates(grid);
+        let extent: Vec<usize> = extent_string(grid)
+            .split(' ')
+            .map(|s| s.parse().unwrap())
+            .collect();
+        files.push(json!({
+            "file": name,
+            "geometry": format!("{:?}", grid.geometry),
+            "time": t,
+            "dims": [x.len(), y.len(), z.len()],
+            "extent": extent,
+            "cells": grid.cells(),
+            "x": x,
+            "y": y,
+            "z": z,
+            "arrays": arrays.iter().map(|a| json!({
+                "name": a.name,
+                "components": a.components,
+                "values": a.values,
+            })).collect::<Vec<_>>(),
+        }));
+    }
+    json!({
+        "file": format!("{stem}.pvd"),
+        "entries": pvd.entries().iter().map(|(t, f)| json!({"time": t, "file": f})).collect::<Vec<_>>(),
+    })
+}
+
+fn main() {
+    let Some(out) = std::env::args_os().nth(1) else {
+        eprintln!("usage: vtk_fixture OUTDIR");
+        std::process::exit(2);
+    };
+    let dir = Path::new(&out);
+    std::fs::create_dir_all(dir).expect("creating OUTDIR");
+
+    let planar = Grid::new(Geometry::Planar, 7, 5, (0.0, 1.4), (0.0, 1.0));
+    let axi = Grid::new(Geometry::Axisymmetric, 6, 9, (0.0, 0.6), (-0.2, 0.7));
+    let mut files = Vec::new();
+    let collections = vec![
+        write_case(dir, "planar", &planar, &mut files),
+        write_case(dir, "axisymmetric", &axi, &mut files),
+    ];
+    let expected = json!({ "files": files, "collections": collections });
+    let text = serde_json::to_string_pretty(&expected).expect("serialising expected.json");
+    std::fs::write(dir.join("expected.json"), text + "\n").expect("writing expected.json");
+    println!("wrote the VTK fixture to {}", dir.display());
+}
