@@ -1,0 +1,190 @@
+//! The `efsi` command end to end: bad input is refused with exit code 2 and a message naming
+//! the file and line:column or the field; `check`, `--print-schedule` and `run` outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const GOOD: &str = r#"Scene(
+    name: "tiny_cavity",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8),
+    time: (end: 0.5),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    output: (
+        vtk_every: 0.25,
+        probe_every: 0.1,
+        probes: [Point(name: "u_c", field: "u", at: (0.5, 0.5)), KineticEnergy],
+        profiles: [Line(name: "u_x0.5", from: (0.5, 0.0), to: (0.5, 1.0), points: 11, fields: ["u", "p"])],
+    ),
+)
+"#;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("efsi-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn efsi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_efsi"))
+        .args(args)
+        .output()
+        .expect("run efsi")
+}
+
+fn write_scene(dir: &Path, text: &str) -> String {
+    let p = dir.join("scene.ron");
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+/// Run `efsi check` on a mutated scene: exit code 2 and every `needle` in the message.
+fn refused(name: &str, text: &str, needles: &[&str]) {
+    let d = tmp(name);
+    let path = write_scene(&d, text);
+    for args in [
+        vec!["check", path.as_str()],
+        vec!["run", path.as_str(), "-q"],
+    ] {
+        let out = efsi(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: expected `{n}` in: {err}");
+        }
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn malformed_ron_names_file_line_and_column() {
+    refused(
+        "malformed",
+        &GOOD.replace("grid: (nx: 8, ny: 8),", "grid: (nx: 8 ny: 8),"),
+        &["scene.ron:4:"],
+    );
+}
+
+#[test]
+fn unknown_field_is_named_with_its_position() {
+    refused(
+        "unknown",
+        &GOOD.replace("viscosity: 0.01)", "viscosity: 0.01, temperature: 300.0)"),
+        &["scene.ron:6:", "temperature", "expected"],
+    );
+}
+
+#[test]
+fn negative_viscosity_is_refused_by_name() {
+    refused(
+        "viscosity",
+        &GOOD.replace("viscosity: 0.01", "viscosity: -0.01"),
+        &["fluid.viscosity", "≥ 0", "-0.01"],
+    );
+}
+
+#[test]
+fn zero_cells_is_refused_by_name() {
+    refused(
+        "cells",
+        &GOOD.replace("nx: 8,", "nx: 0,"),
+        &["grid.nx", "at least 1"],
+    );
+}
+
+#[test]
+fn periodic_side_without_partner_is_refused() {
+    refused(
+        "periodic",
+        &GOOD.replace("x_min: NoSlip", "x_min: Periodic"),
+        &["boundaries.x_min", "partner", "boundaries.x_max"],
+    );
+}
+
+#[test]
+fn non_positive_end_time_is_refused() {
+    for end in ["0.0", "-1.0"] {
+        refused(
+            "end",
+            &GOOD.replace("end: 0.5", &format!("end: {end}")),
+            &["time.end", "> 0"],
+        );
+    }
+}
+
+#[test]
+fn missing_scene_file_is_reported() {
+    let out = efsi(&["check", "/nonexistent/scene.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.ron"));
+}
+
+#[test]
+fn check_and_print_schedule() {
+    let d = tmp("check");
+    let path = write_scene(&d, GOOD);
+    let out = efsi(&["check", &path]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("advection → viscous → projection"));
+    let out = efsi(&["run", &path, "--print-schedule"]);
+    let s = String::from_utf8_lossy(&out.stdout);
+    let stages: Vec<&str> = s
+        .lines()
+        .filter(|l| l.contains("phase"))
+        .map(|l| l.split_whitespace().nth(1).unwrap())
+        .collect();
+    assert_eq!(stages, ["advection", "viscous", "projection"]);
+}
+
+#[test]
+fn run_writes_fields_probes_profiles_and_summary() {
+    let d = tmp("run");
+    let path = write_scene(&d, GOOD);
+    let out_dir = d.join("out");
+    let out = efsi(&["run", &path, "--out", out_dir.to_str().unwrap(), "-q"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // VTK: t = 0, 0.25, 0.5 and their collection.
+    let pvd = std::fs::read_to_string(out_dir.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    let vtrs = std::fs::read_dir(out_dir.join("fields")).unwrap().count();
+    assert_eq!(vtrs, 3);
+    // Probes: header and samples at t = 0, 0.1, …, 0.5.
+    let probes = std::fs::read_to_string(out_dir.join("probes.csv")).unwrap();
+    let mut lines = probes.lines();
+    assert_eq!(lines.next().unwrap(), "t,u_c,kinetic_energy");
+    let times: Vec<f64> = lines
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(times.len(), 6, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        assert!((t - 0.1 * k as f64).abs() < 1e-12, "{times:?}");
+    }
+    // Profile at the end, with the lid speed at the top.
+    let prof = std::fs::read_to_string(out_dir.join("profiles/u_x0.5_t0.5.csv")).unwrap();
+    let rows: Vec<&str> = prof.lines().collect();
+    assert_eq!(rows[0], "s,x,y,u,p");
+    assert_eq!(rows.len(), 12);
+    let top_u: f64 = rows[11].split(',').nth(3).unwrap().parse().unwrap();
+    assert!(
+        (top_u - 1.0).abs() < 1e-12,
+        "lid speed on the wall: {top_u}"
+    );
+    // Summary.
+    let json = std::fs::read_to_string(out_dir.join("run.json")).unwrap();
+    for key in [
+        "\"efsi_version\"",
+        "\"scene\"",
+        "\"steps\"",
+        "\"wall_seconds\"",
+        "\"stages\"",
+        "\"projection_tolerance\"",
+    ] {
+        assert!(json.contains(key), "{key} missing from run.json");
+    }
+}

@@ -1,0 +1,139 @@
+//! The scheduler: pipelines assembled from the scene with only the stages it needs, fields
+//! allocated only when declared, and declarations checked at build time.
+
+use efsi_core::schedule::{FieldId, Phase, ScheduleError, Stage, StagePlugin};
+use efsi_core::{BoundarySet, EfsiError, Grid, Scene};
+use efsi_tests::{sim, sim_with};
+
+fn cavity(extra: &str) -> String {
+    format!(
+        r#"Scene(
+        name: "cavity",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 8, ny: 8),
+        time: (end: 1.0, dt_max: 0.01),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+        {extra}
+    )"#
+    )
+}
+
+#[test]
+fn cavity_schedules_exactly_advection_viscous_projection() {
+    let s = sim(&cavity(""));
+    assert_eq!(
+        s.pipeline().stage_names(),
+        ["advection", "viscous", "projection"]
+    );
+    assert!(s.state.phi.is_none(), "no solid: no solid-fraction storage");
+    assert!(!s.pipeline().fields().contains(&FieldId::SolidFraction));
+    let printed = s.pipeline().to_string();
+    assert!(
+        printed.contains("advection")
+            && printed.contains("projection")
+            && !printed.contains("body_force")
+    );
+}
+
+#[test]
+fn stokes_scene_omits_advection_and_gravity_adds_body_force() {
+    let s = sim(&cavity("physics: (advection: false),"));
+    assert_eq!(s.pipeline().stage_names(), ["viscous", "projection"]);
+    let s = sim(&cavity("gravity: (0.0, -9.81),"));
+    assert_eq!(
+        s.pipeline().stage_names(),
+        ["advection", "body_force", "viscous", "projection"]
+    );
+}
+
+struct Dummy {
+    name: &'static str,
+    reads: &'static [FieldId],
+    writes: &'static [FieldId],
+    after: &'static [&'static str],
+}
+struct Noop;
+impl Stage for Noop {
+    fn run(
+        &mut self,
+        _: &efsi_core::StepContext,
+        _: &mut efsi_core::State,
+    ) -> Result<efsi_core::StageStats, efsi_core::StageError> {
+        Ok(Default::default())
+    }
+}
+impl StagePlugin for Dummy {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn phase(&self) -> Phase {
+        Phase::Interface
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        self.reads
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        self.writes
+    }
+    fn after(&self) -> &'static [&'static str] {
+        self.after
+    }
+    fn needed(&self, _: &Scene) -> bool {
+        true
+    }
+    fn build(&self, _: &Scene, _: &Grid, _: &BoundarySet) -> Result<Box<dyn Stage>, String> {
+        Ok(Box::new(Noop))
+    }
+}
+
+#[test]
+fn reading_an_unprovided_field_is_refused_at_build() {
+    let reader = Dummy {
+        name: "reader",
+        reads: &[FieldId::SolidFraction],
+        writes: &[],
+        after: &[],
+    };
+    match sim_with(&cavity(""), &[&reader]) {
+        Err(EfsiError::Schedule(ScheduleError::MissingField { stage, field })) => {
+            assert_eq!((stage.as_str(), field), ("reader", "solid_fraction"));
+        }
+        other => panic!("expected MissingField, got {:?}", other.err()),
+    }
+}
+
+#[test]
+fn unordered_writers_of_one_field_are_ambiguous_and_after_resolves_it() {
+    let a = Dummy {
+        name: "a",
+        reads: &[],
+        writes: &[FieldId::SolidFraction],
+        after: &[],
+    };
+    let b = Dummy {
+        name: "b",
+        reads: &[FieldId::SolidFraction],
+        writes: &[],
+        after: &[],
+    };
+    let err = sim_with(&cavity(""), &[&a, &b]).err().expect("ambiguous");
+    assert!(
+        err.to_string()
+            .contains("neither is declared after the other"),
+        "{err}"
+    );
+    let b2 = Dummy {
+        name: "b",
+        reads: &[FieldId::SolidFraction],
+        writes: &[],
+        after: &["a"],
+    };
+    let s = sim_with(&cavity(""), &[&b2, &a]).unwrap();
+    assert_eq!(
+        s.pipeline().stage_names(),
+        ["a", "b"],
+        "order is data, not registration order"
+    );
+    assert!(s.state.phi.is_some(), "a declared field is allocated");
+}
