@@ -1,1 +1,145 @@
-fn main() {}
+//! Project automation.
+//!
+//! - `cargo xtask test`: everything CI runs — formatting, clippy (warnings are errors), the Rust
+//!   test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
+//!   virtual environment under `target/venv` that it creates on first use.
+//! - `cargo xtask bench [--out DIR]`: the Re = 1000 lid-driven cavity at 128², one thread, for
+//!   ns per cell-step in total and per stage and Poisson iterations per step (a benchmark,
+//!   not a test: timings are never asserted).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("workspace root")
+        .to_path_buf()
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+/// Run a command in the workspace root; Err names it if it fails.
+fn run(mut cmd: Command, what: &str) -> Result<(), String> {
+    eprintln!("==> {what}");
+    let status = cmd
+        .current_dir(root())
+        .status()
+        .map_err(|e| format!("{what}: cannot start: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{what}: failed ({status})"))
+    }
+}
+
+fn python_env() -> Result<PathBuf, String> {
+    let venv = root().join("target/venv");
+    let py = venv.join("bin/python");
+    let stamp = venv.join(".requirements");
+    let req = root().join("tests/python/requirements.txt");
+    let wanted = std::fs::read_to_string(&req).map_err(|e| format!("{}: {e}", req.display()))?;
+    if !py.exists() {
+        let mut c = Command::new("python3");
+        c.args(["-m", "venv"]).arg(&venv);
+        run(c, "create the Python virtual environment (target/venv)")?;
+    }
+    if std::fs::read_to_string(&stamp).ok().as_deref() != Some(wanted.as_str()) {
+        let mut c = Command::new(&py);
+        c.args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
+        .arg(&req);
+        run(
+            c,
+            "install the Python test requirements (vtk, numpy, pytest)",
+        )?;
+        std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
+    }
+    Ok(py)
+}
+
+fn test() -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["fmt", "--all", "--", "--check"]);
+    run(c, "cargo fmt --check")?;
+    let mut c = cargo();
+    c.args([
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--quiet",
+        "--",
+        "-D",
+        "warnings",
+    ]);
+    run(c, "cargo clippy -D warnings")?;
+    let mut c = cargo();
+    c.args(["test", "--workspace", "--all-targets"]);
+    run(c, "cargo test")?;
+    // The binary the Python tests drive, built with the test profile settings (optimised).
+    let mut c = cargo();
+    c.args(["build", "--quiet", "-p", "efsi", "--profile", "test"]);
+    run(c, "build efsi for the Python tests")?;
+    let py = python_env()?;
+    let mut c = Command::new(py);
+    c.args(["-m", "pytest", "-q", "tests/python"])
+        .env("EFSI_BIN", root().join("target/debug/efsi"));
+    run(c, "pytest tests/python")
+}
+
+fn bench(args: &[String]) -> Result<(), String> {
+    let out = args
+        .windows(2)
+        .find(|w| w[0] == "--out")
+        .map(|w| PathBuf::from(&w[1]))
+        .unwrap_or_else(|| root().join("target/bench"));
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "-p", "efsi"]);
+    run(c, "build efsi (release)")?;
+    let scene = root().join("cases/lid_driven_cavity_re1000.ron");
+    let text = std::fs::read_to_string(&scene).map_err(|e| e.to_string())?;
+    // A fixed number of steps' worth of time from rest keeps runs comparable.
+    let text = text
+        .replace("end: 100.0", "end: 2.0")
+        .replace("steady: 1e-6", "dt_max: 1.0");
+    std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
+    let bench_scene = out.join("cavity_re1000_128.ron");
+    std::fs::write(&bench_scene, text).map_err(|e| e.to_string())?;
+    let mut c = Command::new(root().join("target/release/efsi"));
+    c.arg("run")
+        .arg(&bench_scene)
+        .arg("--out")
+        .arg(out.join("cavity_re1000_128"))
+        .arg("-q");
+    c.env("RAYON_NUM_THREADS", "1");
+    run(c, "Re = 1000 cavity, 128², t ∈ [0, 2], one thread")?;
+    eprintln!(
+        "figures: {}",
+        out.join("cavity_re1000_128/run.json").display()
+    );
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("test") => test(),
+        Some("bench") => bench(&args[1..]),
+        _ => Err("usage: cargo xtask <test | bench [--out DIR]>".into()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -166,7 +166,7 @@ impl Simulation {
             }
         };
         let dt_min = t.dt_min.unwrap_or(1e-12 * t.end);
-        if !(dt >= dt_min) {
+        if dt.is_nan() || dt < dt_min {
             return Err(EfsiError::Unstable {
                 dt,
                 dt_min,
