@@ -132,6 +132,9 @@ fn run_scene(
         outcome.wall_seconds * 1e9 / (cells * steps),
         dir.display()
     );
+    if sim.rate_of_change().is_finite() {
+        println!("final max|uⁿ⁺¹ − uⁿ|/Δt = {:.3e}", sim.rate_of_change());
+    }
     println!(
         "{:<16} {:>10} {:>16} {:>14}",
         "stage", "seconds", "ns/cell-step", "iters/step"

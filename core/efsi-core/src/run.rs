@@ -297,6 +297,7 @@ impl Outputs {
             "wall_seconds": outcome.wall_seconds,
             "ns_per_cell_step": outcome.wall_seconds * 1e9 / (cells * steps),
             "projection_tolerance": sim.scene.numerics.projection.tolerance,
+            "final_rate_of_change": if sim.rate_of_change().is_finite() { serde_json::json!(sim.rate_of_change()) } else { serde_json::Value::Null },
             "stages": timings.iter().map(|s| serde_json::json!({
                 "name": s.name,
                 "seconds": s.seconds,

@@ -418,7 +418,7 @@ pub struct ViscousParams {
     /// Crank–Nicolson.
     #[serde(default = "one")]
     pub theta: f64,
-    /// Relative residual at which the conjugate gradient stops (default 1e-12).
+    /// Relative residual at which the conjugate gradient stops (default 1e-9).
     #[serde(default = "default_visc_tol")]
     pub tolerance: f64,
     /// Iteration cap (default 10000).
@@ -440,7 +440,7 @@ fn one() -> f64 {
     1.0
 }
 fn default_visc_tol() -> f64 {
-    1e-12
+    1e-9
 }
 
 /// What to write and where.

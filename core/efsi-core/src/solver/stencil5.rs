@@ -61,25 +61,42 @@ impl Stencil5 {
     /// `y = A x`.
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
         let (nx, ny) = (self.nx, self.ny);
-        for k in 0..self.len() {
-            y[k] = self.diag[k] * x[k];
-        }
+        let (d, e, n) = (&self.diag[..], &self.east[..], &self.north[..]);
+        // Non-wrapping couplings, row by row, branch-free in the interior.
         for j in 0..ny {
-            let row = j * nx;
+            let r = j * nx;
+            for k in r..r + nx {
+                let mut s = d[k] * x[k];
+                if k + 1 < r + nx {
+                    s -= e[k] * x[k + 1];
+                }
+                if k > r {
+                    s -= e[k - 1] * x[k - 1];
+                }
+                if j + 1 < ny {
+                    s -= n[k] * x[k + nx];
+                }
+                if j > 0 {
+                    s -= n[k - nx] * x[k - nx];
+                }
+                y[k] = s;
+            }
+        }
+        // Periodic wrap couplings.
+        if self.periodic_x {
+            for j in 0..ny {
+                let (first, last) = (j * nx, j * nx + nx - 1);
+                let c = e[last];
+                y[last] -= c * x[first];
+                y[first] -= c * x[last];
+            }
+        }
+        if self.periodic_y {
+            let top = (ny - 1) * nx;
             for i in 0..nx {
-                let k = row + i;
-                let e = self.east[k];
-                if e != 0.0 {
-                    let ke = if i + 1 < nx { k + 1 } else { row };
-                    y[k] -= e * x[ke];
-                    y[ke] -= e * x[k];
-                }
-                let nn = self.north[k];
-                if nn != 0.0 {
-                    let kn = if j + 1 < ny { k + nx } else { i };
-                    y[k] -= nn * x[kn];
-                    y[kn] -= nn * x[k];
-                }
+                let c = n[top + i];
+                y[top + i] -= c * x[i];
+                y[i] -= c * x[top + i];
             }
         }
     }
@@ -96,9 +113,13 @@ impl LinearOperator for Stencil5 {
 pub struct IncompleteCholesky {
     nx: usize,
     dinv: Vec<f64>,
-    // Couplings of the factored (non-wrapping) part.
+    // Couplings of the factored (non-wrapping) part, each also indexed from the other cell so
+    // that the sweeps need no boundary tests: `west[k] = east[k−1]` (0 on the first column),
+    // `south[k] = north[k−nx]` (0 on the first row), `east`/`north` 0 on the last column/row.
     east: Vec<f64>,
     north: Vec<f64>,
+    west: Vec<f64>,
+    south: Vec<f64>,
 }
 
 impl IncompleteCholesky {
@@ -115,6 +136,8 @@ impl IncompleteCholesky {
         self.dinv.resize(n, 0.0);
         self.east.resize(n, 0.0);
         self.north.resize(n, 0.0);
+        self.west.resize(n, 0.0);
+        self.south.resize(n, 0.0);
         let mut d = vec![0.0; 0];
         std::mem::swap(&mut d, &mut self.dinv);
         for j in 0..ny {
@@ -122,6 +145,8 @@ impl IncompleteCholesky {
                 let k = j * nx + i;
                 self.east[k] = if i + 1 < nx { a.east[k] } else { 0.0 };
                 self.north[k] = if j + 1 < ny { a.north[k] } else { 0.0 };
+                self.west[k] = if i > 0 { a.east[k - 1] } else { 0.0 };
+                self.south[k] = if j > 0 { a.north[k - nx] } else { 0.0 };
                 let mut dk = a.diag[k];
                 if i > 0 {
                     let e = a.east[k - 1];
@@ -149,28 +174,28 @@ impl Preconditioner for IncompleteCholesky {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let nx = self.nx;
         let n = r.len();
-        let dinv = &self.dinv;
+        let (dinv, w, s, e, no) = (
+            &self.dinv[..],
+            &self.west[..],
+            &self.south[..],
+            &self.east[..],
+            &self.north[..],
+        );
         // Forward: (D̃ + L) w = r.
-        for k in 0..n {
-            let mut s = r[k];
-            if k % nx != 0 {
-                s += self.east[k - 1] * z[k - 1];
-            }
-            if k >= nx {
-                s += self.north[k - nx] * z[k - nx];
-            }
-            z[k] = s * dinv[k];
+        z[0] = r[0] * dinv[0];
+        for k in 1..nx.min(n) {
+            z[k] = (r[k] + w[k] * z[k - 1]) * dinv[k];
+        }
+        for k in nx..n {
+            z[k] = (r[k] + w[k] * z[k - 1] + s[k] * z[k - nx]) * dinv[k];
         }
         // Backward: (D̃ + Lᵀ) z = D̃ w.
-        for k in (0..n).rev() {
-            let mut s = 0.0;
-            if (k + 1) % nx != 0 {
-                s += self.east[k] * z[k + 1];
-            }
-            if k + nx < n {
-                s += self.north[k] * z[k + nx];
-            }
-            z[k] += s * dinv[k];
+        let last_row = n.saturating_sub(nx);
+        for k in (last_row..n.saturating_sub(1)).rev() {
+            z[k] += e[k] * z[k + 1] * dinv[k];
+        }
+        for k in (0..last_row).rev() {
+            z[k] += (e[k] * z[k + 1] + no[k] * z[k + nx]) * dinv[k];
         }
     }
 }
