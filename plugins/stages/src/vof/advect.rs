@@ -255,7 +255,11 @@ impl VofAdvector {
             }
         }
         let mut stats = AdvectStats::default();
-        let order = if step_index % 2 == 0 { [X, Y] } else { [Y, X] };
+        let order = if step_index.is_multiple_of(2) {
+            [X, Y]
+        } else {
+            [Y, X]
+        };
         for d in order {
             let s = match (self.axi, d) {
                 (false, X) => self.sweep::<false, X>(phi, u, dt),
