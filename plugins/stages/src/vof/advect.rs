@@ -198,15 +198,18 @@ impl VofAdvector {
     /// An advector for `grid` with the given sides.
     ///
     /// # Panics
-    /// If [`VofBoundaries::validate`] fails.
+    /// If [`VofBoundaries::validate`] fails (use [`Self::try_new`] to get the message instead).
     pub fn new(grid: &Grid, bounds: VofBoundaries) -> Self {
-        if let Err(e) = bounds.validate(grid) {
-            panic!("{e}");
-        }
+        Self::try_new(grid, bounds).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// An advector for `grid` with the given sides, or why the sides do not fit the grid.
+    pub fn try_new(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
+        bounds.validate(grid)?;
         let ncol = grid.nx + 1 + 2 * G as usize;
         let col = |k: usize| k as isize - G;
         let axi = grid.is_axisymmetric();
-        VofAdvector {
+        Ok(VofAdvector {
             bounds,
             axi,
             nx: grid.nx,
@@ -225,7 +228,7 @@ impl VofAdvector {
                 .collect(),
             r_face: (0..ncol).map(|k| grid.metric.rx(col(k))).collect(),
             r_centre: (0..ncol).map(|k| grid.metric.rc(col(k))).collect(),
-        }
+        })
     }
 
     /// The sides this advector was built with.

@@ -31,6 +31,11 @@
 //! then of order the area of a few such sub-cells, ≲ 1e-10 of the cell. A budget of
 //! [`MAX_SPLITS`] splits per cell bounds the work for pathological shapes (coincident
 //! boundaries), where the error is then larger.
+//!
+//! There is no stability condition (a one-off geometric integration). References: the disk
+//! integrals are elementary; the half-plane uses Scardovelli & Zaleski (2000, J. Comput. Phys.
+//! 164:228); the shapes are those of Zalesak (1979, J. Comput. Phys. 31:335) and Rider & Kothe
+//! (1998, J. Comput. Phys. 141:112).
 
 use super::plic::{half_plane_moments, rect_fraction};
 use efsi_core::{Field, Grid};
