@@ -9,6 +9,7 @@ pub mod bc;
 pub mod error;
 pub mod field;
 pub mod grid;
+pub mod interface;
 pub mod ops;
 pub mod output;
 pub mod probes;

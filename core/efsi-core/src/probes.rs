@@ -31,6 +31,10 @@ pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
         "p" => interpolate(grid, &state.p, (0.5, 0.5), at),
         "density" => interpolate(grid, &state.rho, (0.5, 0.5), at),
         "viscosity" => interpolate(grid, &state.mu, (0.5, 0.5), at),
+        "solid_fraction" => state
+            .phi
+            .as_ref()
+            .map_or(f64::NAN, |f| interpolate(grid, f, (0.5, 0.5), at)),
         _ => f64::NAN,
     }
 }
@@ -42,6 +46,9 @@ pub fn columns(p: &ProbeSpec) -> Vec<String> {
         ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
         ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
         ProbeSpec::MaxSpeed => vec!["max_speed".into()],
+        ProbeSpec::SolidVolume => vec!["solid_volume".into()],
+        ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
+        ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
     }
 }
 
@@ -63,5 +70,53 @@ pub fn evaluate(p: &ProbeSpec, grid: &Grid, state: &State, out: &mut Vec<f64>) {
             }
             out.push(m)
         }
+        ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity => {
+            let Some(phi) = &state.phi else {
+                out.extend(std::iter::repeat_n(f64::NAN, columns(p).len()));
+                return;
+            };
+            let m = solid_moments(grid, state, phi);
+            match p {
+                ProbeSpec::SolidVolume => out.push(m.volume),
+                ProbeSpec::SolidCentroid => out.extend([m.centroid.0, m.centroid.1]),
+                _ => out.extend([m.velocity.0, m.velocity.1]),
+            }
+        }
+    }
+}
+
+/// Volume, centroid and volume-weighted velocity of the solid phase.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolidMoments {
+    /// `∫φ dV` (per radian when axisymmetric).
+    pub volume: f64,
+    /// `∫φ x dV / ∫φ dV`.
+    pub centroid: (f64, f64),
+    /// `∫φ u dV / ∫φ dV` with the cell-centre velocity.
+    pub velocity: (f64, f64),
+}
+
+/// The moments of `phi` over the grid.
+pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
+    let (mut v, mut mx, mut my, mut mu, mut mv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            let w = phi[(i, j)] * grid.cell_volume(i);
+            if w == 0.0 {
+                continue;
+            }
+            let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
+            v += w;
+            mx += w * grid.xc(i);
+            my += w * grid.yc(j);
+            mu += w * a;
+            mv += w * b;
+        }
+    }
+    let inv = if v > 0.0 { 1.0 / v } else { f64::NAN };
+    SolidMoments {
+        volume: v,
+        centroid: (mx * inv, my * inv),
+        velocity: (mu * inv, mv * inv),
     }
 }

@@ -20,6 +20,7 @@
 //! `r_min`, `r_max`, `z_min`, `z_max` are accepted.
 
 use crate::grid::Geometry;
+pub use crate::interface::Shape;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -82,6 +83,10 @@ pub struct Scene {
     /// Initial velocity of the fluid (default at rest).
     #[serde(default)]
     pub initial_velocity: InitialVelocity,
+    /// The solid, if any: its shape at t = 0 and its material (one material; several bodies
+    /// are a `Union` of shapes).
+    #[serde(default)]
+    pub solid: Option<Solid>,
     /// Boundary conditions per side.
     pub boundaries: Boundaries,
     /// Physics switches that cannot be inferred.
@@ -178,6 +183,30 @@ pub enum InitialVelocity {
         /// Wave numbers `(kx, ky)`.
         wavenumbers: (f64, f64),
     },
+}
+
+/// A solid body (or several, as a union of shapes) of one material.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solid {
+    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
+    pub shape: Shape,
+    /// Density ρ_s (kg/m³, > 0).
+    pub density: f64,
+    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
+    #[serde(default)]
+    pub viscosity: Option<f64>,
+    /// Initial velocity of the solid (default: at rest).
+    #[serde(default)]
+    pub velocity: Option<(f64, f64)>,
+}
+
+impl Solid {
+    /// μ_s: the scene's value, or the seed's rule μ_f ρ_s/ρ_f.
+    pub fn viscosity(&self, fluid: &Fluid) -> f64 {
+        self.viscosity
+            .unwrap_or(fluid.viscosity * self.density / fluid.density)
+    }
 }
 
 /// One of the four sides of the box.
@@ -483,10 +512,34 @@ pub enum ProbeSpec {
     MaxDivergence,
     /// Maximum speed.
     MaxSpeed,
+    /// Solid volume `∫φ_s dV` (per radian in axisymmetric geometry); column `solid_volume`.
+    SolidVolume,
+    /// Solid centroid `∫φ_s x dV / ∫φ_s dV`; columns `solid_x`, `solid_y`.
+    SolidCentroid,
+    /// Volume-weighted solid velocity `∫φ_s u dV / ∫φ_s dV`; columns `solid_u`, `solid_v`.
+    SolidVelocity,
+}
+
+impl ProbeSpec {
+    /// Whether the probe needs a solid in the scene.
+    pub fn needs_solid(&self) -> bool {
+        matches!(
+            self,
+            ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity
+        )
+    }
 }
 
 /// Field names that probes and profiles can sample.
-pub const FIELD_NAMES: &[&str] = &["u", "v", "p", "speed", "density", "viscosity"];
+pub const FIELD_NAMES: &[&str] = &[
+    "u",
+    "v",
+    "p",
+    "speed",
+    "density",
+    "viscosity",
+    "solid_fraction",
+];
 
 /// A line profile: fields sampled at evenly spaced points of a segment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -645,6 +698,33 @@ impl Scene {
         {
             return err("initial_velocity", "must be finite");
         }
+        if let Some(solid) = &self.solid {
+            solid
+                .shape
+                .validate()
+                .map_err(|m| ("solid.shape".to_string(), m))?;
+            positive("solid.density", solid.density)?;
+            if let Some(mu) = solid.viscosity
+                && !(mu.is_finite() && mu >= 0.0)
+            {
+                return err(
+                    "solid.viscosity",
+                    format!("must be a finite number ≥ 0, got {mu}"),
+                );
+            }
+            if let Some((a, b)) = solid.velocity
+                && !(a.is_finite() && b.is_finite())
+            {
+                return err("solid.velocity", "must be finite");
+            }
+            if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0)
+            {
+                return err(
+                    "solid.velocity",
+                    "an axisymmetric body can only move along the axis: (0, v_z)",
+                );
+            }
+        }
         // Boundaries.
         for side in Side::ALL {
             let b = self.boundaries.get(side);
@@ -751,6 +831,12 @@ impl Scene {
         };
         let mut names = std::collections::HashSet::new();
         for (k, probe) in o.probes.iter().enumerate() {
+            if probe.needs_solid() && self.solid.is_none() {
+                return err(
+                    &format!("output.probes[{k}]"),
+                    format!("{probe:?} needs a solid, and the scene has none"),
+                );
+            }
             if let ProbeSpec::Point { name, field, at } = probe {
                 let f = format!("output.probes[{k}]");
                 if !FIELD_NAMES.contains(&field.as_str()) {

@@ -443,8 +443,18 @@ impl Pipeline {
                 ctx.bc
                     .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
             }
-            if e.writes.contains(&FieldId::Pressure) {
-                ctx.bc.fill_scalar(ctx.grid, &mut state.p, true);
+            for &f in e.writes {
+                match f {
+                    FieldId::Pressure => ctx.bc.fill_scalar(ctx.grid, &mut state.p, true),
+                    FieldId::Density => ctx.bc.fill_scalar(ctx.grid, &mut state.rho, false),
+                    FieldId::Viscosity => ctx.bc.fill_scalar(ctx.grid, &mut state.mu, false),
+                    FieldId::SolidFraction => {
+                        if let Some(phi) = &mut state.phi {
+                            ctx.bc.fill_scalar(ctx.grid, phi, false);
+                        }
+                    }
+                    FieldId::VelocityX | FieldId::VelocityY => {}
+                }
             }
             for &f in e.writes {
                 if let Some(field) = state.field(f) {

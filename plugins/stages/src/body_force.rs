@@ -3,6 +3,11 @@
 //! Gravity is a uniform acceleration, so the step is exact; it runs after advection, and the
 //! projection removes its gradient part (a hydrostatic pressure) where the density is uniform.
 //! In axisymmetric geometry only the axial component is allowed (the scene checks it).
+//!
+//! **Step limit.** An explicit body force must not move the fluid more than a fraction of a cell
+//! per step: with the convective rate `C = max(|u|/dx + |v|/dy)`, the stage allows
+//! `Δt ≤ CFL · 2 / (C + √(C² + 4|g|/h))` (Kang, Fedkiw & Liu 2000), which equals the advective
+//! limit when `g = 0` and `CFL·√(h/|g|)` from rest.
 
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
@@ -44,6 +49,19 @@ struct BodyForceStage {
 }
 
 impl Stage for BodyForceStage {
+    fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
+        let mut c = 0.0f64;
+        for j in 0..grid.ny as isize {
+            for i in 0..grid.nx as isize {
+                let uu = state.u[(i, j)].abs().max(state.u[(i + 1, j)].abs());
+                let vv = state.v[(i, j)].abs().max(state.v[(i, j + 1)].abs());
+                c = c.max(uu / grid.dx + vv / grid.dy);
+            }
+        }
+        let g = self.g.0.hypot(self.g.1) / grid.dx.min(grid.dy);
+        Some(cfl * 2.0 / (c + (c * c + 4.0 * g).sqrt()))
+    }
+
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
         let ux = ctx.bc.normal_faces(0, grid.nx);

@@ -19,5 +19,6 @@ pub fn builtin() -> Vec<&'static dyn StagePlugin> {
         &body_force::BodyForce,
         &viscous::Viscous,
         &projection::Projection,
+        &vof::Vof,
     ]
 }

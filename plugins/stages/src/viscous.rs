@@ -52,6 +52,10 @@ impl StagePlugin for Viscous {
     }
     fn needed(&self, scene: &Scene) -> bool {
         scene.fluid.viscosity > 0.0
+            || scene
+                .solid
+                .as_ref()
+                .is_some_and(|s| s.viscosity(&scene.fluid) > 0.0)
     }
     fn build(
         &self,

@@ -38,7 +38,7 @@
 //! (1998, J. Comput. Phys. 141:112).
 
 use super::plic::{half_plane_moments, rect_fraction};
-use efsi_core::{Field, Grid};
+use crate::{Field, Grid};
 use serde::{Deserialize, Serialize};
 
 /// Deepest recursive split of a cell crossed by two or more boundaries.
@@ -436,11 +436,11 @@ pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use efsi_core::Geometry;
+    use crate::Geometry;
     use std::f64::consts::PI;
 
     fn total(grid: &Grid, phi: &Field) -> f64 {
-        super::super::advect::phase_volume(grid, phi)
+        super::super::phase_volume(grid, phi)
     }
 
     #[test]
