@@ -1,9 +1,15 @@
 //! Explicit advection of momentum: `V* = Vⁿ − Δt (V·∇V)ⁿ` (seed Eq. 11).
 //!
-//! **Scheme.** Conservative finite-volume form on the staggered control volumes,
-//! `∂u/∂t = −∇·(u ⊗ u)`, which equals `−(u·∇)u` for the divergence-free field the projection
-//! leaves. Each face flux is `a·q` with `a` the advecting velocity interpolated linearly to the
-//! face of the control volume and `q` the advected component reconstructed there by a
+//! **Scheme.** Conservative finite-volume form on the staggered control volumes, transporting
+//! the control volume's mass `m = ρ_f` (the face density, the average of its two cells) and
+//! momentum `m u` with the *same* mass fluxes: `∂m/∂t = −∇·(m a)`, `∂(m u)/∂t = −∇·(m a ⊗ u)`,
+//! then `u = (m u)/m`. With uniform density this is the usual `∂u/∂t = −∇·(u ⊗ u)`; at a
+//! fluid/solid interface with a density ratio of 1000 it keeps the light fluid's velocity from
+//! being advected at full weight into cells that carry mostly solid mass — velocity advection
+//! alone made a dense falling body lose momentum at first order in h (3.8 % of its fall at 64²),
+//! the mass-consistent form removes that (Rudman 1998; Raessi & Pitsch 2012). Each face flux is
+//! `a·m̃·q` with `a` the advecting velocity interpolated linearly to the face of the control
+//! volume and `m̃`, `q` the mass and the advected component reconstructed there by a
 //! **TVD upwind-biased MUSCL interpolation with the van Leer limiter** (van Leer 1974):
 //! `q = q_C + ½ ψ(r)(q_D − q_C)`, `r = (q_C − q_U)/(q_D − q_C)`, `ψ(r) = (r + |r|)/(1 + |r|)`,
 //! where U, C, D are the upwind-upwind, upwind and downwind values. Second-order in space where
@@ -40,7 +46,7 @@ impl StagePlugin for Advection {
         Phase::Advection
     }
     fn reads(&self) -> &'static [FieldId] {
-        &VELOCITY
+        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Density]
     }
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
@@ -55,19 +61,34 @@ impl StagePlugin for Advection {
         _bc: &BoundarySet,
     ) -> Result<Box<dyn Stage>, String> {
         Ok(Box::new(AdvectionStage {
-            du: Field::zeros(grid),
-            dv: Field::zeros(grid),
+            qu: Field::zeros(grid),
+            qv: Field::zeros(grid),
+            mu_: Field::zeros(grid),
+            mv_: Field::zeros(grid),
             u0: Field::zeros(grid),
             v0: Field::zeros(grid),
+            m0u: Field::zeros(grid),
+            m0v: Field::zeros(grid),
+            m1u: Field::zeros(grid),
+            m1v: Field::zeros(grid),
         }))
     }
 }
 
 struct AdvectionStage {
-    du: Field,
-    dv: Field,
+    /// Momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces.
+    qu: Field,
+    qv: Field,
+    /// Mass tendencies `−∇·(m a)`.
+    mu_: Field,
+    mv_: Field,
+    /// Start-of-step velocity and face masses, and the first stage's masses.
     u0: Field,
     v0: Field,
+    m0u: Field,
+    m0v: Field,
+    m1u: Field,
+    m1v: Field,
 }
 
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
@@ -97,80 +118,97 @@ pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> 
     (rate > 0.0).then(|| cfl / rate)
 }
 
+/// Flux `(a m̃, a m̃ q̃)` through a control-volume face with advecting velocity `a`, from the
+/// masses `m` and values `q` of the four control volumes along the flux direction.
+#[inline(always)]
+fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
+    let fm = a * face_value(a, m[0], m[1], m[2], m[3]);
+    (fm, fm * face_value(a, q[0], q[1], q[2], q[3]))
+}
+
 impl AdvectionStage {
-    /// `(du, dv) = −∇·(V ⊗ V)` on the unknown faces of `(u, v)` (ghosts filled).
-    fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field) {
+    /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
+    /// (ghosts filled), on the unknown faces.
+    fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
         let g = ctx.grid;
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
         let s = u.stride();
-        let (ud, vd) = (u.data(), v.data());
+        let (ud, vd, mud, mvd) = (u.data(), v.data(), mu.data(), mv.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
-        let ny = g.ny as isize;
-        let nx = g.nx as isize;
-        // u control volumes: centred on x-faces.
-        let du = self.du.data_mut();
+        let (nx, ny) = (g.nx as isize, g.ny as isize);
+        let at = |d: &[f64], k: usize, o: usize| [d[k - 2 * o], d[k - o], d[k], d[k + o]];
+        // u control volumes, centred on x-faces: east/west faces at cell centres, north/south
+        // faces at corners (v averaged over the two columns).
+        let (qu, muu) = (self.qu.data_mut(), self.mu_.data_mut());
         for j in 0..ny {
             for i in ux.lo..ux.hi {
                 let k = u.idx(i, j);
-                // East/west faces at cell centres i and i-1.
-                let ae = 0.5 * (ud[k] + ud[k + 1]);
-                let aw = 0.5 * (ud[k - 1] + ud[k]);
-                let fe = ae * face_value(ae, ud[k - 1], ud[k], ud[k + 1], ud[k + 2]);
-                let fw = aw * face_value(aw, ud[k - 2], ud[k - 1], ud[k], ud[k + 1]);
-                // North/south faces at corners (i, j+1) and (i, j): v averaged over columns i-1, i.
-                let an = 0.5 * (vd[k - 1 + s] + vd[k + s]);
-                let as_ = 0.5 * (vd[k - 1] + vd[k]);
-                let fn_ = an * face_value(an, ud[k - s], ud[k], ud[k + s], ud[k + 2 * s]);
-                let fs = as_ * face_value(as_, ud[k - 2 * s], ud[k - s], ud[k], ud[k + s]);
                 let r = m.rx(i);
-                du[k] = if r > 0.0 {
-                    -((m.rc(i) * fe - m.rc(i - 1) * fw) / dx / r + (fn_ - fs) / dy)
-                } else {
-                    0.0
-                };
+                if r == 0.0 {
+                    qu[k] = 0.0;
+                    muu[k] = 0.0;
+                    continue;
+                }
+                let (fme, fqe) = flux(
+                    0.5 * (ud[k] + ud[k + 1]),
+                    at(mud, k + 1, 1),
+                    at(ud, k + 1, 1),
+                );
+                let (fmw, fqw) = flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1));
+                let (fmn, fqn) = flux(
+                    0.5 * (vd[k - 1 + s] + vd[k + s]),
+                    at(mud, k + s, s),
+                    at(ud, k + s, s),
+                );
+                let (fms, fqs) = flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s));
+                let (re, rw) = (m.rc(i), m.rc(i - 1));
+                qu[k] = -((re * fqe - rw * fqw) / (dx * r) + (fqn - fqs) / dy);
+                muu[k] = -((re * fme - rw * fmw) / (dx * r) + (fmn - fms) / dy);
             }
         }
-        let dv = self.dv.data_mut();
+        // v control volumes, centred on y-faces: east/west faces at corners (u averaged over
+        // the two rows), north/south faces at cell centres.
+        let (qv, mvv) = (self.qv.data_mut(), self.mv_.data_mut());
         for j in vy.lo..vy.hi {
             for i in 0..nx {
                 let k = v.idx(i, j);
-                // East/west faces at corners (i+1, j), (i, j): u averaged over rows j-1, j.
-                let ae = 0.5 * (ud[k + 1 - s] + ud[k + 1]);
-                let aw = 0.5 * (ud[k - s] + ud[k]);
-                let fe = ae * face_value(ae, vd[k - 1], vd[k], vd[k + 1], vd[k + 2]);
-                let fw = aw * face_value(aw, vd[k - 2], vd[k - 1], vd[k], vd[k + 1]);
-                // North/south faces at cell centres (i, j), (i, j-1).
-                let an = 0.5 * (vd[k] + vd[k + s]);
-                let as_ = 0.5 * (vd[k - s] + vd[k]);
-                let fn_ = an * face_value(an, vd[k - s], vd[k], vd[k + s], vd[k + 2 * s]);
-                let fs = as_ * face_value(as_, vd[k - 2 * s], vd[k - s], vd[k], vd[k + s]);
-                dv[k] = -((m.rx(i + 1) * fe - m.rx(i) * fw) / dx / m.rc(i) + (fn_ - fs) / dy);
+                let (fme, fqe) = flux(
+                    0.5 * (ud[k + 1 - s] + ud[k + 1]),
+                    at(mvd, k + 1, 1),
+                    at(vd, k + 1, 1),
+                );
+                let (fmw, fqw) = flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1));
+                let (fmn, fqn) = flux(
+                    0.5 * (vd[k] + vd[k + s]),
+                    at(mvd, k + s, s),
+                    at(vd, k + s, s),
+                );
+                let (fms, fqs) = flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s));
+                let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
+                qv[k] = -((re * fqe - rw * fqw) / (dx * r) + (fqn - fqs) / dy);
+                mvv[k] = -((re * fme - rw * fmw) / (dx * r) + (fmn - fms) / dy);
             }
         }
     }
+}
 
-    /// `x ← a·x0 + b·(x + Δt·dx)` on the unknown faces (SSP-RK2 stage combination).
-    fn combine(&self, ctx: &StepContext, state: &mut State, a: f64, b: f64) {
-        let g = ctx.grid;
-        let ux = ctx.bc.normal_faces(0, g.nx);
-        let vy = ctx.bc.normal_faces(1, g.ny);
-        let dt = ctx.dt;
-        for j in 0..g.ny as isize {
-            for i in ux.lo..ux.hi {
-                let k = self.du.idx(i, j);
-                let x = &mut state.u.data_mut()[k];
-                *x = a * self.u0.data()[k] + b * (*x + dt * self.du.data()[k]);
-            }
+/// Face masses (densities) from the cell densities, ghosts included.
+fn face_masses(grid: &Grid, rho: &Field, mu: &mut Field, mv: &mut Field) {
+    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+    let g = efsi_core::G;
+    for j in -g..ny + g {
+        for i in 1 - g..nx + 1 + g {
+            mu[(i, j)] = 0.5 * (rho[(i - 1, j)] + rho[(i, j)]);
         }
-        for j in vy.lo..vy.hi {
-            for i in 0..g.nx as isize {
-                let k = self.dv.idx(i, j);
-                let x = &mut state.v.data_mut()[k];
-                *x = a * self.v0.data()[k] + b * (*x + dt * self.dv.data()[k]);
-            }
+        mu[(-g, j)] = mu[(1 - g, j)];
+    }
+    for i in -g..nx + g {
+        for j in 1 - g..ny + 1 + g {
+            mv[(i, j)] = 0.5 * (rho[(i, j - 1)] + rho[(i, j)]);
         }
+        mv[(i, -g)] = mv[(i, 1 - g)];
     }
 }
 
@@ -180,19 +218,74 @@ impl Stage for AdvectionStage {
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        // SSP-RK2 (Heun): V¹ = Vⁿ + Δt L(Vⁿ); V* = ½Vⁿ + ½(V¹ + Δt L(V¹)).
+        // SSP-RK2 (Heun) on (m, m u):
+        //   m¹ = m⁰ + Δt Lm(m⁰, V⁰),  (m u)¹ = m⁰u⁰ + Δt Lq(m⁰, V⁰),  u¹ = (m u)¹/m¹,
+        //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
+        let g = ctx.grid;
+        let dt = ctx.dt;
+        face_masses(g, &state.rho, &mut self.m0u, &mut self.m0v);
         self.u0.copy_from(&state.u);
         self.v0.copy_from(&state.v);
-        let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
-        self.rhs(ctx, &u, &v);
-        (state.u, state.v) = (u, v);
-        self.combine(ctx, state, 0.0, 1.0);
-        ctx.bc
-            .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
-        let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
-        self.rhs(ctx, &u, &v);
-        (state.u, state.v) = (u, v);
-        self.combine(ctx, state, 0.5, 0.5);
+        self.m1u.copy_from(&self.m0u);
+        self.m1v.copy_from(&self.m0v);
+        let ux = ctx.bc.normal_faces(0, g.nx);
+        let vy = ctx.bc.normal_faces(1, g.ny);
+        let (nx, ny) = (g.nx as isize, g.ny as isize);
+        for stage in 0..2 {
+            let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
+            let (m1u, m1v) = (std::mem::take(&mut self.m1u), std::mem::take(&mut self.m1v));
+            self.rhs(ctx, &u, &v, &m1u, &m1v);
+            (state.u, state.v, self.m1u, self.m1v) = (u, v, m1u, m1v);
+            let faces = [
+                (
+                    &mut state.u,
+                    &mut self.m1u,
+                    &self.u0,
+                    &self.m0u,
+                    &self.qu,
+                    &self.mu_,
+                    ux.lo,
+                    ux.hi,
+                    0,
+                    ny,
+                ),
+                (
+                    &mut state.v,
+                    &mut self.m1v,
+                    &self.v0,
+                    &self.m0v,
+                    &self.qv,
+                    &self.mv_,
+                    0,
+                    nx,
+                    vy.lo,
+                    vy.hi,
+                ),
+            ];
+            for (x, m1, x0, m0, q, dm, i0, i1, j0, j1) in faces {
+                for j in j0..j1 {
+                    for i in i0..i1 {
+                        let k = x.idx(i, j);
+                        let (xd, m1d) = (x.data_mut(), m1.data_mut());
+                        // (m, m u) after an Euler step from the current stage values.
+                        let m_e = m1d[k] + dt * dm.data()[k];
+                        let q_e = m1d[k] * xd[k] + dt * q.data()[k];
+                        let (m_new, q_new) = if stage == 0 {
+                            (m_e, q_e)
+                        } else {
+                            let (a, b) = (m0.data()[k], x0.data()[k]);
+                            (0.5 * (a + m_e), 0.5 * (a * b + q_e))
+                        };
+                        m1d[k] = m_new;
+                        xd[k] = q_new / m_new;
+                    }
+                }
+            }
+            if stage == 0 {
+                ctx.bc
+                    .fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+            }
+        }
         Ok(StageStats::default())
     }
 }
