@@ -69,7 +69,7 @@ fn vof_step(c: &mut Criterion) {
         c.bench_function(name, |b| {
             b.iter(|| {
                 k += 1;
-                if k % 512 == 0 {
+                if k.is_multiple_of(512) {
                     phi.copy_from(&phi0);
                 }
                 black_box(adv.step(&grid, &mut phi, &u, &v, dt, k));
