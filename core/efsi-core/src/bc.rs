@@ -48,6 +48,35 @@ pub enum WallTime {
     Homogeneous,
 }
 
+/// The two sides normal to one axis, with the cell counts along (`n`) and across (`m`) it.
+struct Frame {
+    n: isize,
+    m: isize,
+    lo_side: Side,
+    hi_side: Side,
+}
+
+impl Frame {
+    fn new(grid: &Grid, axis: usize) -> Frame {
+        let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+        if axis == 0 {
+            Frame {
+                n: nx,
+                m: ny,
+                lo_side: Side::XMin,
+                hi_side: Side::XMax,
+            }
+        } else {
+            Frame {
+                n: ny,
+                m: nx,
+                lo_side: Side::YMin,
+                hi_side: Side::YMax,
+            }
+        }
+    }
+}
+
 /// The boundary conditions of a run, ready to fill ghosts.
 #[derive(Clone, Debug)]
 pub struct BoundarySet {
@@ -152,16 +181,12 @@ impl BoundarySet {
 
     /// Normal component `f` along `axis`: boundary face and ghosts.
     fn fill_normal(&self, grid: &Grid, f: &mut Field, axis: usize) {
-        let (n, m) = if axis == 0 {
-            (grid.nx as isize, grid.ny as isize)
-        } else {
-            (grid.ny as isize, grid.nx as isize)
-        };
-        let (lo_side, hi_side) = if axis == 0 {
-            (Side::XMin, Side::XMax)
-        } else {
-            (Side::YMin, Side::YMax)
-        };
+        let Frame {
+            n,
+            m,
+            lo_side,
+            hi_side,
+        } = Frame::new(grid, axis);
         // Accessor along the normal direction `a` at transverse position `b`.
         let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
         let lo = self.get(lo_side).clone();
@@ -206,16 +231,12 @@ impl BoundarySet {
 
     /// Tangential component `f` at the sides normal to `axis`.
     fn fill_tangential(&self, grid: &Grid, f: &mut Field, axis: usize, when: WallTime) {
-        let (n, m) = if axis == 0 {
-            (grid.nx as isize, grid.ny as isize)
-        } else {
-            (grid.ny as isize, grid.nx as isize)
-        };
-        let (lo_side, hi_side) = if axis == 0 {
-            (Side::XMin, Side::XMax)
-        } else {
-            (Side::YMin, Side::YMax)
-        };
+        let Frame {
+            n,
+            m,
+            lo_side,
+            hi_side,
+        } = Frame::new(grid, axis);
         let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
         // The tangential component along a side normal to `axis` lives at the faces of the
         // transverse direction: its position along the wall is s = b·h.
@@ -255,16 +276,12 @@ impl BoundarySet {
     /// boundary) at outflow sides, as for the pressure.
     pub fn fill_scalar(&self, grid: &Grid, f: &mut Field, dirichlet_outflow: bool) {
         for axis in 0..2 {
-            let (n, m) = if axis == 0 {
-                (grid.nx as isize, grid.ny as isize)
-            } else {
-                (grid.ny as isize, grid.nx as isize)
-            };
-            let (lo_side, hi_side) = if axis == 0 {
-                (Side::XMin, Side::XMax)
-            } else {
-                (Side::YMin, Side::YMax)
-            };
+            let Frame {
+                n,
+                m,
+                lo_side,
+                hi_side,
+            } = Frame::new(grid, axis);
             let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
             for b in -G..(m + 1 + G) {
                 for (side, first, dir) in [(lo_side, 0isize, -1isize), (hi_side, n - 1, 1)] {
