@@ -3,6 +3,8 @@
 //! - `cargo xtask test`: everything CI runs — formatting, clippy (warnings are errors), the Rust
 //!   test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
 //!   virtual environment under `target/venv` that it creates on first use.
+//! - `cargo xtask ghia DIR RE`: max |deviation| of a finished cavity run's last centreline
+//!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982).
 //! - `cargo xtask bench [--out DIR]`: the Re = 1000 lid-driven cavity at 128², one thread, for
 //!   ns per cell-step in total and per stage and Poisson iterations per step (a benchmark,
 //!   not a test: timings are never asserted).
@@ -128,12 +130,120 @@ fn bench(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
+/// Rows of a CSV (comment lines skipped) as header → values.
+fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut cols = vec![Vec::new(); header.len()];
+    for l in lines {
+        for (k, v) in l.split(',').enumerate().take(header.len()) {
+            cols[k].push(
+                v.trim()
+                    .parse::<f64>()
+                    .map_err(|e| format!("{}: {e}", path.display()))?,
+            );
+        }
+    }
+    Ok((header, cols))
+}
+
+fn column<'a>(
+    h: &[String],
+    c: &'a [Vec<f64>],
+    name: &str,
+    path: &Path,
+) -> Result<&'a [f64], String> {
+    h.iter()
+        .position(|n| n == name)
+        .map(|k| c[k].as_slice())
+        .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+}
+
+/// The profile with the latest time among `DIR/profiles/<stem>_t*.csv`.
+fn last_profile(dir: &Path, stem: &str) -> Result<PathBuf, String> {
+    let prefix = format!("{stem}_t");
+    let mut best: Option<(f64, PathBuf)> = None;
+    for e in
+        std::fs::read_dir(dir.join("profiles")).map_err(|e| format!("{}: {e}", dir.display()))?
+    {
+        let p = e.map_err(|e| e.to_string())?.path();
+        let name = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_string();
+        if let Some(t) = name
+            .strip_prefix(&prefix)
+            .and_then(|r| r.strip_suffix(".csv"))
+            .and_then(|t| t.parse::<f64>().ok())
+            && best.as_ref().is_none_or(|(b, _)| t > *b)
+        {
+            best = Some((t, p));
+        }
+    }
+    best.map(|(_, p)| p)
+        .ok_or_else(|| format!("no {prefix}*.csv in {}", dir.join("profiles").display()))
+}
+
+fn ghia(args: &[String]) -> Result<(), String> {
+    let [dir, re] = args else {
+        return Err("usage: cargo xtask ghia DIR RE".into());
+    };
+    let dir = PathBuf::from(dir);
+    let refs = root().join("../shared/references/ghia1982");
+    for (stem, field, coord, file) in [
+        (
+            "u_x0.5",
+            "u",
+            "y",
+            "ghia1982_u_vertical_centerline_x0.5.csv",
+        ),
+        (
+            "v_y0.5",
+            "v",
+            "x",
+            "ghia1982_v_horizontal_centerline_y0.5.csv",
+        ),
+    ] {
+        let prof = last_profile(&dir, stem)?;
+        let (h, c) = read_csv(&prof)?;
+        let (s, f) = (column(&h, &c, coord, &prof)?, column(&h, &c, field, &prof)?);
+        let rpath = refs.join(file);
+        let (rh, rc) = read_csv(&rpath)?;
+        let (rs, rf) = (
+            column(&rh, &rc, coord, &rpath)?,
+            column(&rh, &rc, &format!("{field}_Re{re}"), &rpath)?,
+        );
+        let mut dev = 0.0f64;
+        for (&x, &want) in rs.iter().zip(rf) {
+            let k = s.partition_point(|&a| a < x).clamp(1, s.len() - 1);
+            let w = (x - s[k - 1]) / (s[k] - s[k - 1]);
+            dev = dev.max((f[k - 1] * (1.0 - w) + f[k] * w - want).abs());
+        }
+        println!(
+            "{}: max |{field} − Ghia| = {dev:.4} over {} points",
+            prof.display(),
+            rs.len()
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("test") => test(),
         Some("bench") => bench(&args[1..]),
-        _ => Err("usage: cargo xtask <test | bench [--out DIR]>".into()),
+        Some("ghia") => ghia(&args[1..]),
+        _ => Err("usage: cargo xtask <test | bench [--out DIR] | ghia DIR RE>".into()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
