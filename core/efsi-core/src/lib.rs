@@ -10,6 +10,7 @@ pub mod error;
 pub mod field;
 pub mod grid;
 pub mod interface;
+pub mod law;
 pub mod ops;
 pub mod output;
 pub mod probes;

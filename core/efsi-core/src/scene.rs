@@ -199,6 +199,26 @@ pub struct Solid {
     /// Initial velocity of the solid (default: at rest).
     #[serde(default)]
     pub velocity: Option<(f64, f64)>,
+    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
+    #[serde(default)]
+    pub law: Option<LawSpec>,
+}
+
+/// A constitutive law named in a scene.
+///
+/// ```ron
+/// law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
+/// law: (name: "plugins/my_law/target/release/libmy_law.so", parameters: {"k": 2.0}),
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LawSpec {
+    /// A shipped law's name (`neo_hookean`, `saint_venant_kirchhoff`, `mooney_rivlin`), or the
+    /// path of a law library (relative paths are relative to the scene file's folder).
+    pub name: String,
+    /// Parameter values by name; the law declares which exist, their units, defaults and ranges.
+    #[serde(default)]
+    pub parameters: std::collections::BTreeMap<String, f64>,
 }
 
 impl Solid {

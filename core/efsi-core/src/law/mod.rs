@@ -1,0 +1,88 @@
+//! Constitutive laws: the elastic stress `τ(B̃)` and its tangent `J = ∂τ/∂B̃`.
+//!
+//! A law sees the modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B` of a cell (seed Eq. 8)
+//! and returns the elastic (extra) stress the momentum equation divides (seed Eqs. 7, 9, 10, 14)
+//! and its derivative (Eq. 16). Laws are evaluated **in batches** of cells, never one call per
+//! cell, because a shipped or user law is a dynamically loaded plugin.
+//!
+//! # Tensor layout
+//!
+//! Deformations are in-plane: the tensors have components 11, 22, 33 and 12 only (13 = 23 = 0).
+//! Direction 1 is x (or r), 2 is y (or z), 3 is out of plane — z in planar (plane strain) and the
+//! hoop direction θ in axisymmetric geometry. A symmetric tensor is stored as
+//! [`Sym`] `= [t11, t22, t33, t12]`, and the tangent as [`Tangent`], row-major
+//! `J[4a + b] = ∂τ_a/∂B̃_b` in that same 4-component representation (the shear component counted
+//! once: `Δτ = J·ΔB̃` holds exactly for symmetric increments).
+
+use std::fmt;
+
+/// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]`.
+pub type Sym = [f64; 4];
+/// Tangent `∂τ_a/∂B̃_b`, row-major over the [`Sym`] components.
+pub type Tangent = [f64; 16];
+
+/// A law failed, or was refused: names the law and says why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LawError {
+    /// The law (its name, or the library path when the name is not known yet).
+    pub law: String,
+    /// What is wrong (the parameter, symbol or check that failed).
+    pub message: String,
+}
+
+impl fmt::Display for LawError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "law `{}`: {}", self.law, self.message)
+    }
+}
+
+impl std::error::Error for LawError {}
+
+/// A hyperelastic law ready to evaluate (built in, or loaded from a plugin library).
+pub trait ConstitutiveLaw: Send + Sync {
+    /// The law's name.
+    fn name(&self) -> &str;
+
+    /// For each cell `k`: `tau[k] = τ(b[k])`, and when `tangent` is given
+    /// `tangent[k] = ∂τ/∂B̃ (b[k])`. Slices have equal lengths.
+    fn evaluate(
+        &self,
+        b: &[Sym],
+        tau: &mut [Sym],
+        tangent: Option<&mut [Tangent]>,
+    ) -> Result<(), LawError>;
+}
+
+/// Neo-Hookean `τ = G B̃` (seed Eq. 9) in plain Rust: a reference for tests of the elastic
+/// stage and of the plugin loader; scenes use the plugin build of the same law.
+#[derive(Clone, Debug)]
+pub struct NeoHookeanReference {
+    /// Shear modulus G (Pa).
+    pub g: f64,
+}
+
+impl ConstitutiveLaw for NeoHookeanReference {
+    fn name(&self) -> &str {
+        "neo_hookean_reference"
+    }
+
+    fn evaluate(
+        &self,
+        b: &[Sym],
+        tau: &mut [Sym],
+        tangent: Option<&mut [Tangent]>,
+    ) -> Result<(), LawError> {
+        for (t, b) in tau.iter_mut().zip(b) {
+            *t = b.map(|x| self.g * x);
+        }
+        if let Some(j) = tangent {
+            for j in j.iter_mut() {
+                *j = [0.0; 16];
+                for a in 0..4 {
+                    j[5 * a] = self.g;
+                }
+            }
+        }
+        Ok(())
+    }
+}
