@@ -30,4 +30,4 @@ pub use schedule::{
     FieldId, Phase, Pipeline, Stage, StageError, StagePlugin, StageStats, StepContext,
 };
 pub use simulation::Simulation;
-pub use state::State;
+pub use state::{Deformation, State};

@@ -98,6 +98,9 @@ pub struct Scene {
     /// What to write and where.
     #[serde(default)]
     pub output: OutputSpec,
+    /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
+    #[serde(skip)]
+    pub source_dir: Option<PathBuf>,
 }
 
 fn default_geometry() -> Geometry {
@@ -600,7 +603,9 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         })?;
-        Scene::from_str_at(&text, path)
+        let mut scene = Scene::from_str_at(&text, path)?;
+        scene.source_dir = path.parent().map(Path::to_path_buf);
+        Ok(scene)
     }
 
     /// Parse and validate scene text; `path` is used in error messages only.

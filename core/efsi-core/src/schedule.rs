@@ -62,6 +62,9 @@ pub enum FieldId {
     Viscosity,
     /// Solid volume fraction (allocated only when declared).
     SolidFraction,
+    /// The modified left Cauchy–Green tensor B̃ and its step-start data (allocated only when
+    /// declared).
+    Deformation,
 }
 
 impl FieldId {
@@ -83,6 +86,7 @@ impl FieldId {
             FieldId::Density => "density",
             FieldId::Viscosity => "viscosity",
             FieldId::SolidFraction => "solid_fraction",
+            FieldId::Deformation => "B",
         }
     }
 }
@@ -453,8 +457,20 @@ impl Pipeline {
                             ctx.bc.fill_scalar(ctx.grid, phi, false);
                         }
                     }
-                    FieldId::VelocityX | FieldId::VelocityY => {}
+                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Deformation => {}
                 }
+            }
+            if e.writes.contains(&FieldId::Deformation)
+                && let Some(d) = &state.deformation
+                && let Some((c, (i, j))) = d.first_non_finite(nx, ny)
+            {
+                return Err(StageError {
+                    stage: e.name.to_string(),
+                    message: format!(
+                        "produced a non-finite B{c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                        ctx.step, ctx.t, ctx.dt
+                    ),
+                });
             }
             for &f in e.writes {
                 if let Some(field) = state.field(f) {

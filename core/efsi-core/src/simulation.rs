@@ -90,6 +90,28 @@ impl Simulation {
                 }
             }
         }
+        // A solid's initial velocity V_s: every face gets φ_f V_s + (1 − φ_f) V_fluid, φ_f the
+        // average fraction of its two cells; the first projection removes the divergence this
+        // leaves at the interface.
+        if let Some(solid) = &scene.solid
+            && let Some((us, vs)) = solid.velocity
+        {
+            let mut phi = Field::zeros(&grid);
+            crate::interface::fill_fraction(&grid, &solid.shape, &mut phi);
+            bc.fill_scalar(&grid, &mut phi, false);
+            for j in 0..grid.ny as isize {
+                for i in 0..=grid.nx as isize {
+                    let f = 0.5 * (phi[(i - 1, j)] + phi[(i, j)]);
+                    state.u[(i, j)] = f * us + (1.0 - f) * state.u[(i, j)];
+                }
+            }
+            for j in 0..=grid.ny as isize {
+                for i in 0..grid.nx as isize {
+                    let f = 0.5 * (phi[(i, j - 1)] + phi[(i, j)]);
+                    state.v[(i, j)] = f * vs + (1.0 - f) * state.v[(i, j)];
+                }
+            }
+        }
         bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
         bc.fill_scalar(&grid, &mut state.rho, false);
         bc.fill_scalar(&grid, &mut state.mu, false);

@@ -30,6 +30,65 @@ pub struct State {
     pub mu: Field,
     /// Solid volume fraction φ_s at cell centres, when a stage declares it.
     pub phi: Option<Field>,
+    /// The deformation tensor B̃, when a stage declares it.
+    pub deformation: Option<Deformation>,
+}
+
+/// The modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B` (seed Eq. 8), staggered like the
+/// stresses it produces: the normal components `b[0] = B̃₁₁`, `b[1] = B̃₂₂`, `b[2] = B̃₃₃` (zz in
+/// plane strain, θθ axisymmetric) at cell centres, the shear `b[3] = B̃₁₂` at cell corners —
+/// so the shear force is a compact stencil with no undamped checkerboard mode.
+///
+/// Seed Eqs. 13, 17 and 24 differ only in the velocity of their implicit part: each is
+/// `B̃ = B̃ⁿ + explicit + (Δt/2) H(V; B̃ⁿ)` with `H(V; B) = L(V)·B + B·L(V)ᵀ` and
+/// `explicit = −Δt (AB2 of ∇·(V B̃)) + (Δt/2) H(Vⁿ; B̃ⁿ)`. The rates at the end of a step are
+/// kept here (`advection`, `advection_prev`, `stretching`) because the next step's elastic
+/// stage runs after the velocity has left Vⁿ.
+#[derive(Clone, Debug)]
+pub struct Deformation {
+    /// B̃ (components 11, 22, 33 at centres; 12 at corners).
+    pub b: [Field; 4],
+    /// B̃ⁿ, at the start of the step.
+    pub start: [Field; 4],
+    /// `∇·(Vⁿ B̃ⁿ)`.
+    pub advection: [Field; 4],
+    /// `∇·(Vⁿ⁻¹ B̃ⁿ⁻¹)`.
+    pub advection_prev: [Field; 4],
+    /// `H(Vⁿ; B̃ⁿ)`.
+    pub stretching: [Field; 4],
+    /// This step's explicit part.
+    pub explicit: [Field; 4],
+}
+
+impl Deformation {
+    /// Zero tensors shaped for `grid`.
+    pub fn zeros(grid: &Grid) -> Self {
+        let z = || std::array::from_fn(|_| Field::zeros(grid));
+        Deformation {
+            b: z(),
+            start: z(),
+            advection: z(),
+            advection_prev: z(),
+            stretching: z(),
+            explicit: z(),
+        }
+    }
+
+    /// The first non-finite component of `b` in the interior: `(component name, (i, j))`.
+    pub fn first_non_finite(&self, nx: usize, ny: usize) -> Option<(&'static str, (usize, usize))> {
+        const NAMES: [&str; 4] = ["11", "22", "33", "12"];
+        for (c, f) in self.b.iter().enumerate() {
+            let st = if c == 3 {
+                crate::Stagger::Corner
+            } else {
+                crate::Stagger::Cell
+            };
+            if let Some(at) = f.first_non_finite(st, nx, ny) {
+                return Some((NAMES[c], at));
+            }
+        }
+        None
+    }
 }
 
 impl State {
@@ -47,6 +106,9 @@ impl State {
             phi: fields
                 .contains(&FieldId::SolidFraction)
                 .then(|| Field::zeros(grid)),
+            deformation: fields
+                .contains(&FieldId::Deformation)
+                .then(|| Deformation::zeros(grid)),
         }
     }
 
@@ -59,6 +121,7 @@ impl State {
             FieldId::Density => Some(&self.rho),
             FieldId::Viscosity => Some(&self.mu),
             FieldId::SolidFraction => self.phi.as_ref(),
+            FieldId::Deformation => self.deformation.as_ref().map(|d| &d.b[0]),
         }
     }
 }

@@ -94,7 +94,7 @@ struct AdvectionStage {
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
 /// with `cm` left of `c0` and `c2` right of `c1`.
 #[inline(always)]
-fn face_value(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
+pub(crate) fn face_value(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     let (up, c, d) = if a >= 0.0 { (cm, c0, c1) } else { (c2, c1, c0) };
     let denom = d - c;
     if denom.abs() < 1e-300 {

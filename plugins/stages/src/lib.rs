@@ -6,6 +6,7 @@
 
 pub mod advection;
 pub mod body_force;
+pub mod elastic;
 pub mod projection;
 pub mod viscous;
 pub mod vof;
@@ -18,7 +19,9 @@ pub fn builtin() -> Vec<&'static dyn StagePlugin> {
         &advection::Advection,
         &body_force::BodyForce,
         &viscous::Viscous,
+        &elastic::Elastic,
         &projection::Projection,
+        &elastic::DeformationUpdate,
         &vof::Vof,
     ]
 }

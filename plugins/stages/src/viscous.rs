@@ -143,39 +143,70 @@ impl ViscousOperator {
 
     /// `(ku, kv) = dV·∇·(2μD(u, v))` on the unknown faces; `u`, `v` with ghosts filled.
     fn stress_divergence(&self, u: &Field, v: &Field, ku: &mut Field, kv: &mut Field) {
-        let g = &self.grid;
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        let s = u.stride();
-        let (ud, vd, mu, mc) = (u.data(), v.data(), self.mu.data(), self.mu_corner.data());
-        let kud = ku.data_mut();
-        for j in 0..g.ny as isize {
-            for i in self.ux.lo..self.ux.hi {
-                let k = u.idx(i, j);
-                let txx_e = 2.0 * mu[k] * (ud[k + 1] - ud[k]) / dx;
-                let txx_w = 2.0 * mu[k - 1] * (ud[k] - ud[k - 1]) / dx;
-                let txy_n =
-                    mc[k + s] * ((ud[k + s] - ud[k]) / dy + (vd[k + s] - vd[k + s - 1]) / dx);
-                let txy_s = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
-                let hoop = m.hoop_x(i);
-                let mu_f = 0.5 * (mu[k - 1] + mu[k]);
-                kud[k] = dy * (m.rc(i) * txx_e - m.rc(i - 1) * txx_w)
-                    + dx * m.rx(i) * (txy_n - txy_s)
-                    - dx * dy * m.rx(i) * 2.0 * mu_f * ud[k] * hoop * hoop;
-            }
+        viscous_divergence(
+            &self.grid,
+            self.ux,
+            self.vy,
+            &self.mu,
+            &self.mu_corner,
+            u,
+            v,
+            ku,
+            kv,
+        );
+    }
+}
+
+/// Corner viscosities: the average of the four cells around each corner.
+pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
+    for j in 0..=grid.ny as isize {
+        for i in 0..=grid.nx as isize {
+            out[(i, j)] =
+                0.25 * (mu[(i - 1, j - 1)] + mu[(i, j - 1)] + mu[(i - 1, j)] + mu[(i, j)]);
         }
-        let kvd = kv.data_mut();
-        for j in self.vy.lo..self.vy.hi {
-            for i in 0..g.nx as isize {
-                let k = v.idx(i, j);
-                let tyy_n = 2.0 * mu[k] * (vd[k + s] - vd[k]) / dy;
-                let tyy_s = 2.0 * mu[k - s] * (vd[k] - vd[k - s]) / dy;
-                let txy_e =
-                    mc[k + 1] * ((ud[k + 1] - ud[k + 1 - s]) / dy + (vd[k + 1] - vd[k]) / dx);
-                let txy_w = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
-                kvd[k] =
-                    dx * m.rc(i) * (tyy_n - tyy_s) + dy * (m.rx(i + 1) * txy_e - m.rx(i) * txy_w);
-            }
+    }
+}
+
+/// `(ku, kv) = dV·∇·(2μD(u, v))` on the unknown faces `ux` × rows, columns × `vy`, with cell
+/// viscosities `mu` and corner viscosities `mc`; `u`, `v` with ghosts filled.
+pub(crate) fn viscous_divergence(
+    g: &Grid,
+    ux: FaceRange,
+    vy: FaceRange,
+    mu: &Field,
+    mc: &Field,
+    u: &Field,
+    v: &Field,
+    ku: &mut Field,
+    kv: &mut Field,
+) {
+    let m = &g.metric;
+    let (dx, dy) = (g.dx, g.dy);
+    let s = u.stride();
+    let (ud, vd, mu, mc) = (u.data(), v.data(), mu.data(), mc.data());
+    let kud = ku.data_mut();
+    for j in 0..g.ny as isize {
+        for i in ux.lo..ux.hi {
+            let k = u.idx(i, j);
+            let txx_e = 2.0 * mu[k] * (ud[k + 1] - ud[k]) / dx;
+            let txx_w = 2.0 * mu[k - 1] * (ud[k] - ud[k - 1]) / dx;
+            let txy_n = mc[k + s] * ((ud[k + s] - ud[k]) / dy + (vd[k + s] - vd[k + s - 1]) / dx);
+            let txy_s = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
+            let hoop = m.hoop_x(i);
+            let mu_f = 0.5 * (mu[k - 1] + mu[k]);
+            kud[k] = dy * (m.rc(i) * txx_e - m.rc(i - 1) * txx_w) + dx * m.rx(i) * (txy_n - txy_s)
+                - dx * dy * m.rx(i) * 2.0 * mu_f * ud[k] * hoop * hoop;
+        }
+    }
+    let kvd = kv.data_mut();
+    for j in vy.lo..vy.hi {
+        for i in 0..g.nx as isize {
+            let k = v.idx(i, j);
+            let tyy_n = 2.0 * mu[k] * (vd[k + s] - vd[k]) / dy;
+            let tyy_s = 2.0 * mu[k - s] * (vd[k] - vd[k - s]) / dy;
+            let txy_e = mc[k + 1] * ((ud[k + 1] - ud[k + 1 - s]) / dy + (vd[k + 1] - vd[k]) / dx);
+            let txy_w = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
+            kvd[k] = dx * m.rc(i) * (tyy_n - tyy_s) + dy * (m.rx(i + 1) * txy_e - m.rx(i) * txy_w);
         }
     }
 }
@@ -217,15 +248,7 @@ impl Stage for ViscousStage {
         op.theta_dt = self.theta * ctx.dt;
         // Cell and corner viscosities, face densities.
         op.mu.copy_from(&state.mu);
-        for j in 0..=g.ny as isize {
-            for i in 0..=g.nx as isize {
-                op.mu_corner[(i, j)] = 0.25
-                    * (state.mu[(i - 1, j - 1)]
-                        + state.mu[(i, j - 1)]
-                        + state.mu[(i - 1, j)]
-                        + state.mu[(i, j)]);
-            }
-        }
+        corner_viscosity(g, &state.mu, &mut op.mu_corner);
         let rho = &state.rho;
         let (mass, diag) = (&mut op.mass, &mut self.diag);
         let (mu, mc) = (&op.mu, &op.mu_corner);

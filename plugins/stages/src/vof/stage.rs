@@ -8,10 +8,8 @@
 //! `ρ = (1 − φ_s) ρ_f + φ_s ρ_s` and `μ = (1 − φ_s) μ_f + φ_s μ_s` (Eqs. 5–6), with the seed's
 //! default `μ_s = μ_f ρ_s/ρ_f` unless the scene sets `solid.viscosity`.
 //!
-//! **Initial state.** φ_s from the exact fractions of the scene's shape, and where the solid is
-//! given an initial velocity `V_s`, every face gets `φ_f V_s + (1 − φ_f) V_fluid` with φ_f the
-//! average fraction of its two cells; the first projection removes the divergence this leaves at
-//! the interface.
+//! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
+//! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
 //!
 //! **Stability.** The split sweeps need a Courant number ≤ ½ per direction (Weymouth & Yue);
 //! next to the axis an outward radial flux can empty up to twice `|u|Δt/Δr` of a cell, so the
@@ -79,7 +77,6 @@ impl StagePlugin for Vof {
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
-            velocity: solid.velocity,
             u_adv: Field::zeros(grid),
             v_adv: Field::zeros(grid),
         }))
@@ -91,7 +88,6 @@ struct VofStage {
     rho: (f64, f64),
     mu: (f64, f64),
     shape: efsi_core::interface::Shape,
-    velocity: Option<(f64, f64)>,
     /// The velocity at the end of the previous step (Vⁿ), then the step average.
     u_adv: Field,
     v_adv: Field,
@@ -120,7 +116,7 @@ impl Stage for VofStage {
     fn initialize(
         &mut self,
         grid: &Grid,
-        bc: &BoundarySet,
+        _bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
         let phi = state.phi.as_mut().ok_or_else(missing)?;
@@ -128,21 +124,6 @@ impl Stage for VofStage {
         self.advector.fill_ghosts(phi);
         let phi = state.phi.take().ok_or_else(missing)?;
         self.mix(&phi, &mut state.rho, &mut state.mu);
-        if let Some((us, vs)) = self.velocity {
-            for j in 0..grid.ny as isize {
-                for i in 0..=grid.nx as isize {
-                    let f = 0.5 * (phi[(i - 1, j)] + phi[(i, j)]);
-                    state.u[(i, j)] = f * us + (1.0 - f) * state.u[(i, j)];
-                }
-            }
-            for j in 0..=grid.ny as isize {
-                for i in 0..grid.nx as isize {
-                    let f = 0.5 * (phi[(i, j - 1)] + phi[(i, j)]);
-                    state.v[(i, j)] = f * vs + (1.0 - f) * state.v[(i, j)];
-                }
-            }
-            bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
-        }
         state.phi = Some(phi);
         self.u_adv.copy_from(&state.u);
         self.v_adv.copy_from(&state.v);

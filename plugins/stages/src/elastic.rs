@@ -1,0 +1,883 @@
+//! The semi-implicit elastic stage (seed Eqs. 13–20) and the end-of-step update of B̃
+//! (seed Eqs. 24–25).
+//!
+//! # Equations
+//!
+//! The solid carries the modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B`, transported by
+//! the upper-convected law (seed Eq. 8), `∂B̃/∂t + ∇·(V B̃) = L B̃ + B̃ Lᵀ` with
+//! `L_ij = ∂V_i/∂x_j` (∇·V = 0), and exerts the elastic stress `τ(B̃)` of a hyperelastic law
+//! ([`efsi_core::law`]). Axisymmetric, the hoop component obeys `∂B̃_θθ/∂t + ∇·(V B̃_θθ) =
+//! 2 (u_r/r) B̃_θθ`, i.e. `L_θθ = u_r/r`, and the force gains the hoop term `−τ_θθ/r` on the
+//! radial momentum — both through the grid's hoop factor, zero in planar geometry.
+//!
+//! # Time discretisation and the derivation of the implicit system
+//!
+//! Write `H(V; B) = L(V)·B + B·L(V)ᵀ`, linear in V. With Adams–Bashforth 2 for the advection and
+//! Crank–Nicolson for the stretching (seed Eq. 13), every intermediate tensor of the step is
+//!
+//! ```text
+//!   B̃(V) = B̃ⁿ + E + (Δt/2) H(V; B̃ⁿ),   E = −Δt [(1 + r/2) Aⁿ − (r/2) Aⁿ⁻¹] + (Δt/2) H(Vⁿ; B̃ⁿ),
+//! ```
+//!
+//! with `A = ∇·(V B̃)` and `r = Δt/Δt_prev`: `B̃^{n+1/3} = B̃(V^{n+1/3})` (Eq. 13),
+//! `B̃^{n+2/3} = B̃(V^{n+2/3})` (Eq. 17 — the seed prints `V^{n+1/3}` there, a typo: otherwise
+//! Eq. 18 would vanish) and `B̃^{n+1} = B̃(V^{n+1})` (Eq. 24). Subtracting,
+//!
+//! ```text
+//!   B̃^{n+2/3} − B̃^{n+1/3} = (Δt/2) H(δ; B̃ⁿ),   δ = V^{n+2/3} − V^{n+1/3}          (Eq. 18, corrected)
+//! ```
+//!
+//! (the seed's Eq. 18 has the two velocities in the opposite order). The seed's elastic momentum
+//! step is trapezoidal (Eq. 15), `ρ δ/Δt = ½ ∇·(τ^{n+1/3} + τ^{n+2/3})`, with the stress
+//! linearised about `B̃^{n+1/3}` by the law's tangent `J = ∂τ/∂B̃` (Eq. 16):
+//! `τ^{n+2/3} = τ^{n+1/3} + J : (Δt/2) H(δ; B̃ⁿ)`. (Its Eq. 19 writes the same `H(V^{n+1/3})`
+//! twice with opposite signs, which would cancel; the two terms are `H(V^{n+2/3})` and
+//! `H(V^{n+1/3})`, whose difference is `H(δ)`.)
+//!
+//! **That trapezoid is only conditionally stable.** For a 1-D shear wave in an inviscid solid
+//! (`u_t = G γ_y`, `γ_t = u_y`, Fourier mode `k`, `s = kΔt√(G/ρ)`), `τ^{n+1/3}` already holds a
+//! full explicit stretching step, and the amplification factor of the seed's step is 0.9975,
+//! 0.77, 1.0, 2.32, 3.39 at s = 0.1, 1, 2, 3, 5: it blows up once `Δt > 2h/(π c)` (we saw it at
+//! 256 cells in the Couette test, where `s_max ≈ 2.9`). The seed's solids have
+//! `μ_s ≈ μ_f ρ_s/ρ_f`, whose viscosity hides this; Sugiyama's Couette test has `μ_s = 0`.
+//! efsi therefore takes the stress at the end of the elastic step,
+//!
+//! ```text
+//!   ρ δ/Δt = ∇·τ^{n+2/3},   τ^{n+2/3} = τ^{n+1/3} + J : (Δt/2) H(δ; B̃ⁿ)
+//!   ⇒  ρ δ/Δt − (Δt/2) ∇·[J : H(δ; B̃ⁿ)] = ∇·τ^{n+1/3},
+//! ```
+//!
+//! with amplification 0.9975, 0.82, 0.58, 0.43, 0.67, 0.98 at s = 0.1, 1, 2, 3, 5, 20: stable
+//! for every Δt, the same damping as the seed's where both are stable (`1 − s²/40` at small s),
+//! and for a neo-Hookean solid near rest (`J = G I`, `B̃ ≈ I`, `H(δ) ≈ 2D(δ)`) the implicit term
+//! is `GΔt ∇·D(δ)`: an extra viscosity `GΔt/2`, which is what keeps stiff solids stable at the
+//! flow's time step. Multiplied by the face volumes the system is
+//! `(M − (Δt²/2) K_J) δ = Δt·vol·∇·τ^{n+1/3}`; `K_J` is not symmetric for a general law, so it
+//! is solved with BiCGSTAB and Jacobi preconditioning. Finally `V^{n+2/3} = V^{n+1/3} + δ` and
+//! `B̃^{n+2/3} = B̃(V^{n+2/3})`; after the projection the [`DeformationUpdate`] stage sets
+//! `B̃^{n+1} = B̃(V^{n+1})` (Eq. 25 ≡ Eq. 24) and the rates `Aⁿ⁺¹`, `H(Vⁿ⁺¹; B̃ⁿ⁺¹)` the next
+//! step needs.
+//!
+//! # Coupling with the viscous step
+//!
+//! The viscous stage has already made `V^{n+1/3}` with an implicit viscous operator `K_v`
+//! (θ-scheme). Where viscosity relaxes faster than a step (`ρh²/μ ≪ Δt`, e.g. the fluid beside
+//! an inviscid solid in Sugiyama's Couette test), splitting the viscous and elastic solves leaves
+//! the elastic increment unrelaxed: the first fluid cell is dragged with the solid at O(1) error,
+//! whatever Δt. The elastic system therefore includes the implicit viscous operator,
+//! `(M − θΔt K_v − (Δt²/2) K_J) δ = Δt·vol·∇·τ^{n+1/3}`: since `K_v V^{n+1/3} + K_v δ =
+//! K_v V^{n+2/3}`, the viscous and elastic stages together are then exactly one coupled implicit
+//! viscous–elastic step.
+//!
+//! # Space discretisation
+//!
+//! Staggered like the viscous stress: `B̃₁₁, B̃₂₂, B̃₃₃` and `τ₁₁, τ₂₂, τ₃₃` at cell centres,
+//! `B̃₁₂`, `τ₁₂` at corners, so `∂τ₁₂/∂y` on a u-face is a compact difference. `L₁₁, L₂₂, L₃₃`
+//! live at centres, `L₁₂ = ∂u/∂y`, `L₂₁ = ∂v/∂x` at corners; a component needed at the other
+//! location is the average of its four neighbours. The law is evaluated in two batches (centres
+//! and corners), with the missing components averaged. Advection `∇·(V B̃)` is conservative with
+//! van Leer limited upwind face values, as the momentum advection.
+//!
+//! # Stability
+//!
+//! Unconditionally stable in the elastic wave speed for the neo-Hookean law at moderate
+//! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
+
+use crate::advection::face_value;
+use crate::viscous::{corner_viscosity, viscous_divergence};
+use efsi_core::interface::fill_fraction;
+use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
+use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats};
+use efsi_core::{
+    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
+    State, StepContext, bc::FaceRange,
+};
+
+fn law_needed(scene: &Scene) -> bool {
+    scene.solid.as_ref().is_some_and(|s| s.law.is_some())
+}
+
+/// The law named by the scene's solid.
+pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
+    let spec = scene
+        .solid
+        .as_ref()
+        .and_then(|s| s.law.as_ref())
+        .ok_or("the solid has no law")?;
+    if spec.name == "neo_hookean_reference" {
+        let g = *spec
+            .parameters
+            .get("G")
+            .ok_or("solid.law.parameters: `G` is required")?;
+        if !(g.is_finite() && g > 0.0) {
+            return Err(format!("solid.law.parameters.G: must be > 0, got {g}"));
+        }
+        return Ok(Box::new(NeoHookeanReference { g }));
+    }
+    Err(format!(
+        "solid.law.name: unknown law `{}` (law plugins are not wired yet)",
+        spec.name
+    ))
+}
+
+/// The elastic stage plugin (phase Elastic).
+pub struct Elastic;
+
+/// The end-of-step B̃ update (phase Projection, after the projection).
+pub struct DeformationUpdate;
+
+impl StagePlugin for Elastic {
+    fn name(&self) -> &'static str {
+        "elastic"
+    }
+    fn phase(&self) -> Phase {
+        Phase::Elastic
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        &[
+            FieldId::VelocityX,
+            FieldId::VelocityY,
+            FieldId::Density,
+            FieldId::Deformation,
+        ]
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Deformation]
+    }
+    fn needed(&self, scene: &Scene) -> bool {
+        law_needed(scene)
+    }
+    fn build(
+        &self,
+        scene: &Scene,
+        grid: &Grid,
+        bc: &BoundarySet,
+    ) -> Result<Box<dyn Stage>, String> {
+        let law = resolve_law(scene)?;
+        let k = Kernels::new(grid, bc);
+        let n = k.nu + k.nv;
+        Ok(Box::new(ElasticStage {
+            law,
+            shape: scene
+                .solid
+                .as_ref()
+                .map(|s| s.shape.clone())
+                .ok_or("no solid")?,
+            tau: std::array::from_fn(|_| Field::zeros(grid)),
+            op: ElasticOperator {
+                k,
+                db: std::array::from_fn(|_| Field::zeros(grid)),
+                mass: vec![0.0; n],
+                c: 0.0,
+                theta_dt: 0.0,
+                mu: Field::zeros(grid),
+                mu_corner: Field::zeros(grid),
+                ku: Field::zeros(grid),
+                kv: Field::zeros(grid),
+            },
+            theta: if crate::viscous::Viscous.needed(scene) {
+                scene.numerics.viscous.theta
+            } else {
+                0.0
+            },
+            rhs: vec![0.0; n],
+            delta: vec![0.0; n],
+            diag: vec![0.0; n],
+            solver: BiCgStab::new(n),
+            tol: 1e-10,
+            max_iter: 5000,
+        }))
+    }
+}
+
+impl StagePlugin for DeformationUpdate {
+    fn name(&self) -> &'static str {
+        "deformation"
+    }
+    fn phase(&self) -> Phase {
+        Phase::Projection
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Deformation]
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        &[FieldId::Deformation]
+    }
+    fn after(&self) -> &'static [&'static str] {
+        &["projection"]
+    }
+    fn needed(&self, scene: &Scene) -> bool {
+        law_needed(scene)
+    }
+    fn build(
+        &self,
+        _scene: &Scene,
+        grid: &Grid,
+        bc: &BoundarySet,
+    ) -> Result<Box<dyn Stage>, String> {
+        Ok(Box::new(DeformationStage {
+            k: Kernels::new(grid, bc),
+        }))
+    }
+}
+
+/// Velocity gradients, stretching, advection, law batches and stress divergence on the
+/// staggered layout.
+struct Kernels {
+    grid: Grid,
+    bc: BoundarySet,
+    ux: FaceRange,
+    vy: FaceRange,
+    nu: usize,
+    nv: usize,
+    /// L₁₁, L₂₂, L₃₃ at centres.
+    lc: [Field; 3],
+    /// L₁₂, L₂₁ at corners.
+    lk: [Field; 2],
+    /// Law batches: centres `i ∈ [−1, nx]`, `j ∈ [−1, ny]`; corners `i ∈ [0, nx]`, `j ∈ [0, ny]`.
+    cb: Vec<Sym>,
+    ct: Vec<Sym>,
+    cj: Vec<Tangent>,
+    kb: Vec<Sym>,
+    kt: Vec<Sym>,
+    kj: Vec<Tangent>,
+}
+
+#[inline(always)]
+fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
+    0.25 * (f[a] + f[b] + f[c] + f[d])
+}
+
+impl Kernels {
+    fn new(grid: &Grid, bc: &BoundarySet) -> Self {
+        let ux = bc.normal_faces(0, grid.nx);
+        let vy = bc.normal_faces(1, grid.ny);
+        let nc = (grid.nx + 2) * (grid.ny + 2);
+        let nk = (grid.nx + 1) * (grid.ny + 1);
+        Kernels {
+            grid: grid.clone(),
+            bc: bc.clone(),
+            ux,
+            vy,
+            nu: (ux.hi - ux.lo) as usize * grid.ny,
+            nv: (vy.hi - vy.lo) as usize * grid.nx,
+            lc: std::array::from_fn(|_| Field::zeros(grid)),
+            lk: std::array::from_fn(|_| Field::zeros(grid)),
+            cb: vec![[0.0; 4]; nc],
+            ct: vec![[0.0; 4]; nc],
+            cj: vec![[0.0; 16]; nc],
+            kb: vec![[0.0; 4]; nk],
+            kt: vec![[0.0; 4]; nk],
+            kj: vec![[0.0; 16]; nk],
+        }
+    }
+
+    fn nxy(&self) -> (isize, isize) {
+        (self.grid.nx as isize, self.grid.ny as isize)
+    }
+
+    /// Batch index of centre `(i, j)`, `i, j ≥ −1`.
+    #[inline(always)]
+    fn ci(&self, i: isize, j: isize) -> usize {
+        ((j + 1) * (self.grid.nx as isize + 2) + i + 1) as usize
+    }
+
+    /// Batch index of corner `(i, j)`, `i, j ≥ 0`.
+    #[inline(always)]
+    fn ki(&self, i: isize, j: isize) -> usize {
+        (j * (self.grid.nx as isize + 1) + i) as usize
+    }
+
+    /// Velocity gradients of `(u, v)` (ghosts filled).
+    fn gradient(&mut self, u: &Field, v: &Field) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (nx, ny) = self.nxy();
+        let s = u.stride();
+        let (ud, vd) = (u.data(), v.data());
+        let [l11, l22, l33] = &mut self.lc;
+        for j in -1..=ny {
+            for i in -1..=nx {
+                let k = u.idx(i, j);
+                l11.data_mut()[k] = (ud[k + 1] - ud[k]) / g.dx;
+                l22.data_mut()[k] = (vd[k + s] - vd[k]) / g.dy;
+                l33.data_mut()[k] = 0.5 * (ud[k] + ud[k + 1]) * m.hoop_c(i);
+            }
+        }
+        let [l12, l21] = &mut self.lk;
+        for j in -1..=ny + 1 {
+            for i in -1..=nx + 1 {
+                let k = u.idx(i, j);
+                l12.data_mut()[k] = (ud[k] - ud[k - s]) / g.dy;
+                l21.data_mut()[k] = (vd[k] - vd[k - 1]) / g.dx;
+            }
+        }
+    }
+
+    /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
+    /// (`base` may be `None` for zero); centres over `[−1, nx] × [−1, ny]`, corners over
+    /// `[0, nx] × [0, ny]`.
+    fn stretch(
+        &self,
+        b: &[Field; 4],
+        a: f64,
+        base: Option<(&[Field; 4], &[Field; 4])>,
+        out: &mut [Field; 4],
+    ) {
+        let (nx, ny) = self.nxy();
+        let s = b[0].stride();
+        let [l11, l22, l33] = [self.lc[0].data(), self.lc[1].data(), self.lc[2].data()];
+        let [l12, l21] = [self.lk[0].data(), self.lk[1].data()];
+        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
+        let base_at =
+            |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
+        for j in -1..=ny {
+            for i in -1..=nx {
+                let k = b[0].idx(i, j);
+                let (c0, c1, c2, c3) = (k, k + 1, k + s, k + s + 1);
+                let l12b12 = 0.25
+                    * (l12[c0] * b12[c0]
+                        + l12[c1] * b12[c1]
+                        + l12[c2] * b12[c2]
+                        + l12[c3] * b12[c3]);
+                let l21b12 = 0.25
+                    * (l21[c0] * b12[c0]
+                        + l21[c1] * b12[c1]
+                        + l21[c2] * b12[c2]
+                        + l21[c3] * b12[c3]);
+                let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
+                let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
+                let h33 = 2.0 * l33[k] * b33[k];
+                for (c, h) in [(0, h11), (1, h22), (2, h33)] {
+                    out[c].data_mut()[k] = base_at(c, k) + a * h;
+                }
+            }
+        }
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = b[3].idx(i, j);
+                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
+                let h12 = avg4(l11, a0, a1, a2, a3) * b12[k]
+                    + l12[k] * avg4(b22, a0, a1, a2, a3)
+                    + avg4(b11, a0, a1, a2, a3) * l21[k]
+                    + b12[k] * avg4(l22, a0, a1, a2, a3);
+                out[3].data_mut()[k] = base_at(3, k) + a * h12;
+            }
+        }
+    }
+
+    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior.
+    fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (nx, ny) = self.nxy();
+        let s = u.stride();
+        let (ud, vd) = (u.data(), v.data());
+        let at = |d: &[f64], k: usize, o: usize| (d[k - 2 * o], d[k - o], d[k], d[k + o]);
+        let fx = |a: f64, d: &[f64], k: usize, o: usize| {
+            let (p, q, r, t) = at(d, k, o);
+            a * face_value(a, p, q, r, t)
+        };
+        for c in 0..3 {
+            let bd = b[c].data();
+            for j in 0..ny {
+                for i in 0..nx {
+                    let k = u.idx(i, j);
+                    // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
+                    let fw = fx(ud[k], bd, k, 1);
+                    let fe = fx(ud[k + 1], bd, k + 1, 1);
+                    let fs = fx(vd[k], bd, k, s);
+                    let fn_ = fx(vd[k + s], bd, k + s, s);
+                    out[c].data_mut()[k] =
+                        (m.rx(i + 1) * fe - m.rx(i) * fw) / (m.rc(i) * g.dx) + (fn_ - fs) / g.dy;
+                }
+            }
+        }
+        let bd = b[3].data();
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = u.idx(i, j);
+                let r = m.rx(i);
+                if r == 0.0 {
+                    out[3].data_mut()[k] = 0.0;
+                    continue;
+                }
+                // The corner's control volume has x-faces at the cell centres i−1, i and y-faces
+                // at the row centres j−1, j; advecting velocities are 4-point averages.
+                let ue = 0.25 * (ud[k] + ud[k + 1] + ud[k - s] + ud[k + 1 - s]);
+                let uw = 0.25 * (ud[k - 1] + ud[k] + ud[k - 1 - s] + ud[k - s]);
+                let vn = 0.25 * (vd[k] + vd[k - 1] + vd[k + s] + vd[k + s - 1]);
+                let vs = 0.25 * (vd[k - s] + vd[k - s - 1] + vd[k] + vd[k - 1]);
+                let fe = fx(ue, bd, k + 1, 1);
+                let fw = fx(uw, bd, k, 1);
+                let fn_ = fx(vn, bd, k + s, s);
+                let fs = fx(vs, bd, k, s);
+                out[3].data_mut()[k] =
+                    (m.rc(i) * fe - m.rc(i - 1) * fw) / (r * g.dx) + (fn_ - fs) / g.dy;
+            }
+        }
+    }
+
+    /// Fill the ghosts of a staggered tensor.
+    fn fill_ghosts(&self, t: &mut [Field; 4]) {
+        for f in t.iter_mut().take(3) {
+            self.bc.fill_scalar(&self.grid, f, false);
+        }
+        self.bc.fill_corner(&self.grid, &mut t[3], true);
+    }
+
+    /// τ (and J if `tangent`) of `b` into the batches and `tau`.
+    fn evaluate(
+        &mut self,
+        law: &dyn ConstitutiveLaw,
+        b: &[Field; 4],
+        tau: &mut [Field; 4],
+        tangent: bool,
+    ) -> Result<(), String> {
+        let (nx, ny) = self.nxy();
+        let s = b[0].stride();
+        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
+        for j in -1..=ny {
+            for i in -1..=nx {
+                let k = b[0].idx(i, j);
+                let q = self.ci(i, j);
+                self.cb[q] = [
+                    b11[k],
+                    b22[k],
+                    b33[k],
+                    avg4(b12, k, k + 1, k + s, k + s + 1),
+                ];
+            }
+        }
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = b[0].idx(i, j);
+                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
+                let q = self.ki(i, j);
+                self.kb[q] = [
+                    avg4(b11, a0, a1, a2, a3),
+                    avg4(b22, a0, a1, a2, a3),
+                    avg4(b33, a0, a1, a2, a3),
+                    b12[k],
+                ];
+            }
+        }
+        law.evaluate(&self.cb, &mut self.ct, tangent.then_some(&mut self.cj[..]))
+            .map_err(|e| e.to_string())?;
+        law.evaluate(&self.kb, &mut self.kt, tangent.then_some(&mut self.kj[..]))
+            .map_err(|e| e.to_string())?;
+        for j in -1..=ny {
+            for i in -1..=nx {
+                let k = b[0].idx(i, j);
+                let t = self.ct[self.ci(i, j)];
+                for c in 0..3 {
+                    tau[c].data_mut()[k] = t[c];
+                }
+            }
+        }
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = b[0].idx(i, j);
+                tau[3].data_mut()[k] = self.kt[self.ki(i, j)][3];
+            }
+        }
+        Ok(())
+    }
+
+    /// `dtau = J·db` with the tangents of the last [`Kernels::evaluate`] (rows 11, 22, 33 at
+    /// centres, 12 at corners; the other components averaged to the location).
+    fn apply_tangent(&self, db: &[Field; 4], dtau: &mut [Field; 4]) {
+        let (nx, ny) = self.nxy();
+        let s = db[0].stride();
+        let [d11, d22, d33, d12] = [db[0].data(), db[1].data(), db[2].data(), db[3].data()];
+        for j in -1..=ny {
+            for i in -1..=nx {
+                let k = db[0].idx(i, j);
+                let x = [
+                    d11[k],
+                    d22[k],
+                    d33[k],
+                    avg4(d12, k, k + 1, k + s, k + s + 1),
+                ];
+                let jm = &self.cj[self.ci(i, j)];
+                for c in 0..3 {
+                    dtau[c].data_mut()[k] = jm[4 * c] * x[0]
+                        + jm[4 * c + 1] * x[1]
+                        + jm[4 * c + 2] * x[2]
+                        + jm[4 * c + 3] * x[3];
+                }
+            }
+        }
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = db[0].idx(i, j);
+                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
+                let x = [
+                    avg4(d11, a0, a1, a2, a3),
+                    avg4(d22, a0, a1, a2, a3),
+                    avg4(d33, a0, a1, a2, a3),
+                    d12[k],
+                ];
+                let jm = &self.kj[self.ki(i, j)];
+                dtau[3].data_mut()[k] =
+                    jm[12] * x[0] + jm[13] * x[1] + jm[14] * x[2] + jm[15] * x[3];
+            }
+        }
+    }
+
+    /// Visit unknown faces in compact order (u first, then v): `f(compact, is_u, linear index)`.
+    #[inline]
+    fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
+        let (nx, ny) = self.nxy();
+        let stride = self.grid.nx + 1 + 2 * efsi_core::GHOST;
+        let idx =
+            |i: isize, j: isize| (j + efsi_core::G) as usize * stride + (i + efsi_core::G) as usize;
+        let mut c = 0;
+        for j in 0..ny {
+            for i in self.ux.lo..self.ux.hi {
+                f(c, true, idx(i, j));
+                c += 1;
+            }
+        }
+        for j in self.vy.lo..self.vy.hi {
+            for i in 0..nx {
+                f(c, false, idx(i, j));
+                c += 1;
+            }
+        }
+    }
+
+    /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
+    fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let s = tau[0].stride();
+        let [t11, t22, t33, t12] = [tau[0].data(), tau[1].data(), tau[2].data(), tau[3].data()];
+        let (nx, ny) = self.nxy();
+        let mut c = 0;
+        for j in 0..ny {
+            for i in self.ux.lo..self.ux.hi {
+                let k = tau[0].idx(i, j);
+                let r = m.rx(i);
+                let t33f = 0.5 * (t33[k - 1] + t33[k]);
+                out[c] = dy * (m.rc(i) * t11[k] - m.rc(i - 1) * t11[k - 1])
+                    + dx * r * (t12[k + s] - t12[k])
+                    - dx * dy * r * m.hoop_x(i) * t33f;
+                c += 1;
+            }
+        }
+        for j in self.vy.lo..self.vy.hi {
+            for i in 0..nx {
+                let k = tau[0].idx(i, j);
+                out[c] = dy * (m.rx(i + 1) * t12[k + 1] - m.rx(i) * t12[k])
+                    + dx * m.rc(i) * (t22[k] - t22[k - s]);
+                c += 1;
+            }
+        }
+    }
+}
+
+struct ElasticStage {
+    law: Box<dyn ConstitutiveLaw>,
+    /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
+    theta: f64,
+    shape: efsi_core::interface::Shape,
+    tau: [Field; 4],
+    op: ElasticOperator,
+    rhs: Vec<f64>,
+    delta: Vec<f64>,
+    diag: Vec<f64>,
+    solver: BiCgStab,
+    tol: f64,
+    max_iter: usize,
+}
+
+/// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
+struct ElasticOperator {
+    k: Kernels,
+    db: [Field; 4],
+    mass: Vec<f64>,
+    /// `Δt²/2`.
+    c: f64,
+    /// `θΔt` of the viscous step (0 without viscosity), and the viscosities it uses.
+    theta_dt: f64,
+    mu: Field,
+    mu_corner: Field,
+    ku: Field,
+    kv: Field,
+}
+
+struct OperatorCtx<'a> {
+    op: &'a mut ElasticOperator,
+    start: &'a [Field; 4],
+    xu: &'a mut Field,
+    xv: &'a mut Field,
+    dtau: &'a mut [Field; 4],
+    f: &'a mut Vec<f64>,
+}
+
+impl LinearOperator for OperatorCtx<'_> {
+    fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+        let op = &mut *self.op;
+        let (xu, xv) = (&mut *self.xu, &mut *self.xv);
+        op.k.for_each(|c, is_u, k| {
+            if is_u {
+                xu.data_mut()[k] = x[c];
+            } else {
+                xv.data_mut()[k] = x[c];
+            }
+        });
+        op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
+        op.k.gradient(xu, xv);
+        op.k.stretch(self.start, 1.0, None, &mut op.db);
+        op.k.apply_tangent(&op.db, self.dtau);
+        op.k.force(self.dtau, self.f);
+        for c in 0..x.len() {
+            y[c] = op.mass[c] * x[c] - op.c * self.f[c];
+        }
+        if op.theta_dt > 0.0 {
+            let k = &op.k;
+            viscous_divergence(
+                &k.grid,
+                k.ux,
+                k.vy,
+                &op.mu,
+                &op.mu_corner,
+                xu,
+                xv,
+                &mut op.ku,
+                &mut op.kv,
+            );
+            let (ku, kv, td) = (&op.ku, &op.kv, op.theta_dt);
+            k.for_each(|c, is_u, q| {
+                y[c] -= td * if is_u { ku.data()[q] } else { kv.data()[q] };
+            });
+        }
+    }
+}
+
+fn missing() -> StageError {
+    StageError {
+        stage: "elastic".into(),
+        message: "B̃ is not allocated".into(),
+    }
+}
+
+fn err(stage: &str, message: String) -> StageError {
+    StageError {
+        stage: stage.into(),
+        message,
+    }
+}
+
+impl Stage for ElasticStage {
+    fn initialize(
+        &mut self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        let mut phi = Field::zeros(grid);
+        fill_fraction(grid, &self.shape, &mut phi);
+        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        for c in 0..3 {
+            for (b, f) in d.b[c].data_mut().iter_mut().zip(phi.data()) {
+                *b = f.clamp(0.0, 1.0).sqrt();
+            }
+        }
+        d.b[3].fill(0.0);
+        let k = &mut self.op.k;
+        k.fill_ghosts(&mut d.b);
+        let _ = bc;
+        k.gradient(&state.u, &state.v);
+        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
+        for c in 0..4 {
+            d.advection_prev[c].copy_from(&d.advection[c]);
+        }
+        k.stretch(&d.b, 1.0, None, &mut d.stretching);
+        Ok(())
+    }
+
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let dt = ctx.dt;
+        let r = if state.dt_prev > 0.0 {
+            dt / state.dt_prev
+        } else {
+            0.0
+        };
+        let mut d = state.deformation.take().ok_or_else(missing)?;
+        // B̃ⁿ and the explicit part E.
+        for c in 0..4 {
+            d.start[c].copy_from(&d.b[c]);
+            let (e, a, ap, h) = (
+                &mut d.explicit[c],
+                &d.advection[c],
+                &d.advection_prev[c],
+                &d.stretching[c],
+            );
+            for (((e, a), ap), h) in e
+                .data_mut()
+                .iter_mut()
+                .zip(a.data())
+                .zip(ap.data())
+                .zip(h.data())
+            {
+                *e = -dt * ((1.0 + 0.5 * r) * a - 0.5 * r * ap) + 0.5 * dt * h;
+            }
+        }
+        let k = &mut self.op.k;
+        // B̃^{n+1/3} = B̃(V^{n+1/3}) and its stress and tangent.
+        k.gradient(&state.u, &state.v);
+        k.stretch(&d.start, 0.5 * dt, Some((&d.start, &d.explicit)), &mut d.b);
+        k.fill_ghosts(&mut d.b);
+        k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
+            .map_err(|m| err("elastic", m))?;
+        // Right-hand side Δt·vol·∇·τ^{n+1/3}, mass and Jacobi diagonal.
+        k.force(&self.tau, &mut self.rhs);
+        let g = ctx.grid;
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let rho = &state.rho;
+        let s = rho.stride();
+        let c2 = 0.5 * dt * dt;
+        self.op.c = c2;
+        self.op.theta_dt = self.theta * dt;
+        if self.theta > 0.0 {
+            self.op.mu.copy_from(&state.mu);
+            corner_viscosity(g, &state.mu, &mut self.op.mu_corner);
+        }
+        let td = self.op.theta_dt;
+        let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
+        let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
+        let cj = &k.cj;
+        let stiff = |i: isize, j: isize| {
+            let jm = &cj[k.ci(i, j)];
+            let b = &k.cb[k.ci(i, j)];
+            jm[0].abs().max(jm[5].abs()).max(jm[15].abs()) * b[0].abs().max(b[1].abs()).max(1e-300)
+        };
+        k.for_each(|c, is_u, q| {
+            let (i, j) = (
+                (q % s) as isize - efsi_core::G,
+                (q / s) as isize - efsi_core::G,
+            );
+            let (w, rf, e) = if is_u {
+                (
+                    m.rx(i) * dx * dy,
+                    0.5 * (rho.data()[q - 1] + rho.data()[q]),
+                    stiff(i - 1, j).max(stiff(i, j)),
+                )
+            } else {
+                (
+                    m.rc(i) * dx * dy,
+                    0.5 * (rho.data()[q - s] + rho.data()[q]),
+                    stiff(i, j - 1).max(stiff(i, j)),
+                )
+            };
+            mass[c] = rf * w;
+            let mv = if td > 0.0 {
+                let md = mu.data();
+                let (a, b) = if is_u {
+                    (md[q - 1], md[q])
+                } else {
+                    (md[q - s], md[q])
+                };
+                let mcd = mc.data();
+                2.0 * a
+                    .max(b)
+                    .max(mcd[q])
+                    .max(if is_u { mcd[q + s] } else { mcd[q + 1] })
+            } else {
+                0.0
+            };
+            diag[c] = mass[c] + (c2 * e + td * mv) * w * (4.0 / (dx * dx) + 4.0 / (dy * dy));
+            rhs[c] *= dt;
+        });
+        let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let stats = if bnorm == 0.0 {
+            SolveStats {
+                iterations: 0,
+                residual: 0.0,
+                converged: true,
+            }
+        } else {
+            self.delta.fill(0.0);
+            let mut xu = Field::zeros(g);
+            let mut xv = Field::zeros(g);
+            let mut dtau: [Field; 4] = std::array::from_fn(|_| Field::zeros(g));
+            let mut f = vec![0.0; self.rhs.len()];
+            let mut ctxop = OperatorCtx {
+                op: &mut self.op,
+                start: &d.start,
+                xu: &mut xu,
+                xv: &mut xv,
+                dtau: &mut dtau,
+                f: &mut f,
+            };
+            let st = self.solver.solve(
+                &mut ctxop,
+                self.diag.as_slice(),
+                &self.rhs,
+                &mut self.delta,
+                self.tol * bnorm,
+                self.max_iter,
+            );
+            if !st.converged {
+                state.deformation = Some(d);
+                return Err(err(
+                    "elastic",
+                    format!(
+                        "BiCGSTAB did not converge in {} iterations (relative residual {:.3e}); reduce the time step",
+                        st.iterations,
+                        st.residual / bnorm
+                    ),
+                ));
+            }
+            let delta = &self.delta;
+            let (u, v) = (&mut state.u, &mut state.v);
+            self.op.k.for_each(|c, is_u, q| {
+                if is_u {
+                    u.data_mut()[q] += delta[c];
+                } else {
+                    v.data_mut()[q] += delta[c];
+                }
+            });
+            SolveStats {
+                residual: st.residual / bnorm,
+                ..st
+            }
+        };
+        // B̃^{n+2/3} = B̃(V^{n+2/3}).
+        let k = &mut self.op.k;
+        k.bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        k.gradient(&state.u, &state.v);
+        k.stretch(&d.start, 0.5 * dt, Some((&d.start, &d.explicit)), &mut d.b);
+        k.fill_ghosts(&mut d.b);
+        state.deformation = Some(d);
+        Ok(StageStats { solve: Some(stats) })
+    }
+}
+
+struct DeformationStage {
+    k: Kernels,
+}
+
+impl Stage for DeformationStage {
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        let k = &mut self.k;
+        // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
+        k.gradient(&state.u, &state.v);
+        k.stretch(
+            &d.start,
+            0.5 * ctx.dt,
+            Some((&d.start, &d.explicit)),
+            &mut d.b,
+        );
+        k.fill_ghosts(&mut d.b);
+        std::mem::swap(&mut d.advection, &mut d.advection_prev);
+        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
+        k.stretch(&d.b, 1.0, None, &mut d.stretching);
+        Ok(StageStats::default())
+    }
+}
