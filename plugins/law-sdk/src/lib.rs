@@ -358,7 +358,11 @@ pub mod testing {
     impl XorShift {
         /// A generator from a seed (0 is replaced by a fixed non-zero seed).
         pub fn new(seed: u64) -> Self {
-            XorShift(if seed == 0 { 0x9E37_79B9_7F4A_7C15 } else { seed })
+            XorShift(if seed == 0 {
+                0x9E37_79B9_7F4A_7C15
+            } else {
+                seed
+            })
         }
 
         /// The next value uniform in `[0, 1)`.
@@ -615,8 +619,9 @@ pub mod __private {
                     &*handle.cast::<L>(),
                     std::slice::from_raw_parts(b.cast::<Sym>(), n_cells),
                     std::slice::from_raw_parts_mut(tau.cast::<Sym>(), n_cells),
-                    (!tangent.is_null())
-                        .then(|| std::slice::from_raw_parts_mut(tangent.cast::<Tangent>(), n_cells)),
+                    (!tangent.is_null()).then(|| {
+                        std::slice::from_raw_parts_mut(tangent.cast::<Tangent>(), n_cells)
+                    }),
                 )
             };
             evaluate_batch(law, b, tau, tangent)
@@ -628,7 +633,11 @@ pub mod __private {
         };
         // SAFETY: `err` is null or writable by the caller's contract.
         unsafe { report(err, &message) };
-        if status == STATUS_OK { STATUS_ERROR } else { status }
+        if status == STATUS_OK {
+            STATUS_ERROR
+        } else {
+            status
+        }
     }
 }
 
@@ -701,7 +710,9 @@ mod tests {
         let p = ParamDecl::new("G", "Pa", "", 1.0).greater_than(0.0);
         assert_eq!(p.range_text(), "(0, ∞)");
         assert!(p.contains(1.0) && !p.contains(0.0) && !p.contains(f64::NAN));
-        let q = ParamDecl::new("x", "", "", 0.5).at_least(0.0).less_than(1.0);
+        let q = ParamDecl::new("x", "", "", 0.5)
+            .at_least(0.0)
+            .less_than(1.0);
         assert_eq!(q.range_text(), "[0, 1)");
         assert!(q.contains(0.0) && !q.contains(1.0));
     }
@@ -712,11 +723,8 @@ mod tests {
         assert_eq!(d.abi_version, ABI_VERSION);
         assert_eq!(d.descriptor_size, efsi_law_abi::DESCRIPTOR_SIZE);
         assert_eq!(d.param_count, 1);
-        let (create, destroy, evaluate) = (
-            d.create.unwrap(),
-            d.destroy.unwrap(),
-            d.evaluate.unwrap(),
-        );
+        let (create, destroy, evaluate) =
+            (d.create.unwrap(), d.destroy.unwrap(), d.evaluate.unwrap());
         let mut err = ErrBuf::new();
 
         // Out of range, wrong count, panic in `new`.
@@ -726,7 +734,11 @@ mod tests {
         let h = unsafe { create([1.0, 2.0].as_ptr(), 2, &mut err) };
         assert!(h.is_null() && err.text().contains("expected 1"));
         let h = unsafe { create([1000.0].as_ptr(), 1, &mut err) };
-        assert!(h.is_null() && err.text().contains("k too large"), "{}", err.text());
+        assert!(
+            h.is_null() && err.text().contains("k too large"),
+            "{}",
+            err.text()
+        );
 
         let h = unsafe { create([2.0].as_ptr(), 1, &mut err) };
         assert!(!h.is_null());
@@ -756,7 +768,11 @@ mod tests {
             )
         };
         assert_eq!(s, STATUS_PANIC);
-        assert!(err.text().contains("b11 = 60 is too large"), "{}", err.text());
+        assert!(
+            err.text().contains("b11 = 60 is too large"),
+            "{}",
+            err.text()
+        );
 
         let nan = [[f64::NAN, 1.0, 1.0, 0.0]];
         let s = unsafe {

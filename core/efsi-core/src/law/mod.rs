@@ -16,6 +16,13 @@
 
 use std::fmt;
 
+pub mod loader;
+
+pub use loader::{
+    FD_TANGENT_TOLERANCE, LawInfo, LoadedLaw, ParamInfo, TangentCheck, check_tangent, describe,
+    list_laws, load_law,
+};
+
 /// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]`.
 pub type Sym = [f64; 4];
 /// Tangent `∂τ_a/∂B̃_b`, row-major over the [`Sym`] components.

@@ -41,8 +41,13 @@ impl HyperelasticLaw for SaintVenantKirchhoff {
     fn parameters() -> &'static [ParamDecl] {
         const P: &[ParamDecl] = &[
             ParamDecl::new("lambda", "Pa", "Lamé's first parameter λ", 4.0e5).at_least(0.0),
-            ParamDecl::new("mu", "Pa", "Lamé's second parameter μ (shear modulus)", 1.0e5)
-                .greater_than(0.0),
+            ParamDecl::new(
+                "mu",
+                "Pa",
+                "Lamé's second parameter μ (shear modulus)",
+                1.0e5,
+            )
+            .greater_than(0.0),
         ];
         P
     }

@@ -22,7 +22,11 @@ impl HyperelasticLaw for Panicking {
     }
 
     fn new(values: &[f64]) -> Result<Self, String> {
-        assert!(values[0] <= 1e12, "G = {} is too stiff for this test law", values[0]);
+        assert!(
+            values[0] <= 1e12,
+            "G = {} is too stiff for this test law",
+            values[0]
+        );
         Ok(Panicking { g: values[0] })
     }
 
