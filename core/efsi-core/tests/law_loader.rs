@@ -394,7 +394,11 @@ fn describe_and_list_the_shipped_laws() {
         .unwrap();
     let text = svk.to_string();
     eprintln!("{text}");
-    assert!(text.contains("lambda") && text.contains("[ Pa]") && text.contains("[0, ∞)"));
+    assert!(
+        text.contains("lambda")
+            && text.contains("lambda     Pa   default 400000")
+            && text.contains("[0, ∞)")
+    );
     let info = describe(&svk.path).unwrap();
     assert_eq!(&info, svk);
     let e = describe(Path::new("/no/such/libefsi_law_x.so")).unwrap_err();

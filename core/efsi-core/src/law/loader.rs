@@ -10,8 +10,8 @@
 //! 1. **Resolve** the name: a name with a path separator or ending in `.so`/`.dylib`/`.dll` is a
 //!    library path (relative to the scene's folder); any other name `X` is a shipped law, the file
 //!    `libefsi_law_X.so` looked up in [`search_dirs`]: `$EFSI_LAW_PATH` (a `:`-separated list),
-//!    the running executable's folder and its parent, then `target/release` and `target/debug` of
-//!    the workspace efsi was built from.
+//!    the running executable's folder, its parent and its `deps` subfolder, then `target/release`
+//!    and `target/debug` of the workspace efsi was built from.
 //! 2. **Open** it and check it: a library, with the entry symbol, built for this ABI version, with
 //!    the descriptor size this efsi expects, and a well-formed parameter table.
 //! 3. **Parameters**: every scene parameter must be declared (else the known ones are listed),
@@ -50,6 +50,15 @@ pub const FD_TANGENT_TOLERANCE: f64 = 1e-5;
 pub const LAW_PATH_ENV: &str = "EFSI_LAW_PATH";
 
 const COMPONENTS: [&str; 4] = ["11", "22", "33", "12"];
+
+/// A number for people: plain between 1e-3 and 1e6, else in exponent form.
+fn number(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
 
 /// One declared parameter of a law.
 #[derive(Clone, Debug, PartialEq)]
@@ -145,17 +154,13 @@ impl fmt::Display for LawInfo {
             writeln!(f, "  no parameters")?;
         }
         for p in &self.parameters {
-            let unit = if p.unit.is_empty() {
-                "-".to_string()
-            } else {
-                p.unit.clone()
-            };
+            let unit = if p.unit.is_empty() { "-" } else { &p.unit };
             writeln!(
                 f,
-                "  {:<10} [{:>3}]  default {:<10}  range {:<12}  {}",
+                "  {:<10} {:<4} default {:<10} range {:<12} {}",
                 p.name,
                 unit,
-                format!("{:e}", p.default),
+                number(p.default),
                 p.range_text(),
                 p.description
             )?;
@@ -487,7 +492,8 @@ pub fn library_file_name(name: &str) -> String {
 }
 
 /// Where shipped laws are looked for, in order: each folder of `$EFSI_LAW_PATH`, the running
-/// executable's folder and its parent (test binaries live in `target/<profile>/deps`), then
+/// executable's folder, its parent (test binaries live in `target/<profile>/deps`) and its
+/// `deps` subfolder (where `cargo test`, unlike `cargo build`, leaves the law libraries), then
 /// `target/release` and `target/debug` of the workspace this efsi was compiled from.
 pub fn search_dirs() -> Vec<PathBuf> {
     let mut dirs = Vec::new();
@@ -501,6 +507,8 @@ pub fn search_dirs() -> Vec<PathBuf> {
         if let Some(parent) = dir.parent() {
             dirs.push(parent.to_path_buf());
         }
+        // `cargo test` builds the law libraries into `target/<profile>/deps` only.
+        dirs.push(dir.join("deps"));
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
