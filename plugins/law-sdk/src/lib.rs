@@ -244,7 +244,7 @@ pub fn defaults<L: HyperelasticLaw>() -> Vec<f64> {
 /// Evaluates `law` over a batch (what the exported `evaluate` does, minus `catch_unwind`).
 ///
 /// Slices must have equal lengths. Returns an ABI status and message on failure: a non-finite
-/// output is [`STATUS_NON_FINITE`](efsi_law_abi::STATUS_NON_FINITE) naming the first bad cell.
+/// output is [`STATUS_NON_FINITE`] naming the first bad cell.
 pub fn evaluate_batch<L: HyperelasticLaw>(
     law: &L,
     b: &[Sym],
