@@ -42,6 +42,14 @@ enum Command {
         /// The scene file (RON).
         scene: PathBuf,
     },
+    /// List the constitutive laws, with their parameters, units, defaults and ranges.
+    ///
+    /// Shows the shipped laws found on the law search path ($EFSI_LAW_PATH, next to efsi, the
+    /// build's target folders) and every law library given.
+    Laws {
+        /// Law libraries to describe as well (e.g. one built from plugins/law-template).
+        paths: Vec<PathBuf>,
+    },
 }
 
 fn load(path: &Path) -> Result<Simulation, EfsiError> {
@@ -71,6 +79,7 @@ fn main() -> ExitCode {
             print_schedule,
             quiet,
         } => run_scene(&scene, out, print_schedule, quiet),
+        Command::Laws { paths } => return list_laws(&paths),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -149,4 +158,34 @@ fn run_scene(
         );
     }
     Ok(())
+}
+
+/// `efsi laws`: describes every law found; exit code 2 if any library could not be read.
+fn list_laws(paths: &[PathBuf]) -> ExitCode {
+    let laws = efsi_core::law::list_laws(paths);
+    if laws.is_empty() {
+        println!(
+            "no laws found; searched: {}",
+            efsi_core::law::loader::search_dirs()
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let mut failed = false;
+    for law in laws {
+        match law {
+            Ok(info) => print!("{info}"),
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    if failed {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
+    }
 }

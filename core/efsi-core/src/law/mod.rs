@@ -13,8 +13,22 @@
 //! [`Sym`] `= [t11, t22, t33, t12]`, and the tangent as [`Tangent`], row-major
 //! `J[4a + b] = ∂τ_a/∂B̃_b` in that same 4-component representation (the shear component counted
 //! once: `Δτ = J·ΔB̃` holds exactly for symmetric increments).
+//!
+//! # Plugins
+//!
+//! [`load_law`] loads the law a scene names from a plugin library (C ABI of `efsi-law-abi`,
+//! written with `efsi-law-sdk`; the shipped laws are in `plugins/laws/`, a template to copy in
+//! `plugins/law-template/`), checks its parameters and its tangent ([`check_tangent`]) and returns
+//! a [`LoadedLaw`]; [`list_laws`] and [`describe`] serve `efsi laws`. See [`loader`].
 
 use std::fmt;
+
+pub mod loader;
+
+pub use loader::{
+    FD_TANGENT_TOLERANCE, LawInfo, LoadedLaw, ParamInfo, TangentCheck, check_tangent, describe,
+    list_laws, load_law,
+};
 
 /// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]`.
 pub type Sym = [f64; 4];
