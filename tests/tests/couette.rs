@@ -14,14 +14,20 @@ fn couette_errors(ny: usize) -> Vec<f64> {
     let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
     scene.grid.ny = ny;
     scene.output = Default::default();
-    let mut sim = Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim =
+        Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"));
     let x = 0.5 * (sim.grid.x0 + sim.grid.x1());
     let mut out = Vec::new();
     for t in TIMES {
         run_until(&mut sim, t, |_, _| {});
         let label = efsi_core::run::time_label(t);
-        let (h, c) = read_csv(&reference(&format!("oscillating_couette/from_rest/u_profile_t_{label}.csv")));
-        let (yi, ui) = (h.iter().position(|n| n == "y").unwrap(), h.iter().position(|n| n == "u").unwrap());
+        let (h, c) = read_csv(&reference(&format!(
+            "oscillating_couette/from_rest/u_profile_t_{label}.csv"
+        )));
+        let (yi, ui) = (
+            h.iter().position(|n| n == "y").unwrap(),
+            h.iter().position(|n| n == "u").unwrap(),
+        );
         let err = c[yi]
             .iter()
             .zip(&c[ui])
@@ -57,7 +63,10 @@ fn couette_64_cells_meets_the_issue_target() {
 #[ignore = "slow (≈ 30 s); measured orders in the hyperelastic issue's closing note"]
 fn couette_converges_at_first_order() {
     let ns = [32, 64, 128];
-    let errs: Vec<f64> = ns.iter().map(|&n| couette_errors(n).into_iter().fold(0.0, f64::max)).collect();
+    let errs: Vec<f64> = ns
+        .iter()
+        .map(|&n| couette_errors(n).into_iter().fold(0.0, f64::max))
+        .collect();
     let h: Vec<f64> = ns.iter().map(|&n| 1.0 / n as f64).collect();
     let p = orders(&h, &errs);
     eprintln!("errors {errs:.4?}, orders {p:.3?}");

@@ -3,6 +3,8 @@
 //! - `cargo xtask test`: everything CI runs — formatting, clippy (warnings are errors), the Rust
 //!   test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
 //!   virtual environment under `target/venv` that it creates on first use.
+//! - `cargo xtask run SCENE [ARGS…]`: build the whole workspace in release (the `efsi` binary
+//!   and the law plugin libraries it loads) and run `efsi run SCENE ARGS…`.
 //! - `cargo xtask ghia DIR RE`: max |deviation| of a finished cavity run's last centreline
 //!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982).
 //! - `cargo xtask bench [--out DIR]`: the Re = 1000 lid-driven cavity at 128², one thread, for
@@ -237,13 +239,31 @@ fn ghia(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
+fn run_scene(args: &[String]) -> Result<(), String> {
+    if args.is_empty() {
+        return Err("usage: cargo xtask run SCENE [efsi run options]".into());
+    }
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "--workspace"]);
+    run(c, "build efsi and the law plugins (release)")?;
+    let mut c = Command::new(root().join("target/release/efsi"));
+    c.arg("run").args(args);
+    let status = c.status().map_err(|e| format!("cannot start efsi: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        std::process::exit(status.code().unwrap_or(1))
+    }
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("test") => test(),
         Some("bench") => bench(&args[1..]),
         Some("ghia") => ghia(&args[1..]),
-        _ => Err("usage: cargo xtask <test | bench [--out DIR] | ghia DIR RE>".into()),
+        Some("run") => run_scene(&args[1..]),
+        _ => Err("usage: cargo xtask <run SCENE | test | bench [--out DIR] | ghia DIR RE>".into()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

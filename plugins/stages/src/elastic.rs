@@ -97,7 +97,9 @@ fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
 }
 
-/// The law named by the scene's solid.
+/// The law named by the scene's solid: the plain-Rust reference neo-Hookean (for tests), or a
+/// plugin library found and checked by [`efsi_core::law::loader::load_law`] (missing file, ABI,
+/// parameters, finite-difference check of the tangent).
 pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
     let spec = scene
         .solid
@@ -114,10 +116,13 @@ pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
         }
         return Ok(Box::new(NeoHookeanReference { g }));
     }
-    Err(format!(
-        "solid.law.name: unknown law `{}` (law plugins are not wired yet)",
-        spec.name
-    ))
+    let dir = scene
+        .source_dir
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from("."));
+    let law =
+        efsi_core::law::loader::load_law(spec, &dir).map_err(|e| format!("solid.law: {e}"))?;
+    Ok(Box::new(law))
 }
 
 /// The elastic stage plugin (phase Elastic).
