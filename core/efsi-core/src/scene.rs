@@ -431,6 +431,42 @@ pub struct Numerics {
     /// The implicit viscous step.
     #[serde(default)]
     pub viscous: ViscousParams,
+    /// The elastic step.
+    #[serde(default)]
+    pub elastic: ElasticParams,
+}
+
+/// Parameters of the elastic step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElasticParams {
+    /// Treat the elastic stress implicitly (default true). `false` makes the elastic force
+    /// explicit — stable only for `Δt ≲ h √(ρ/G)`; it exists to show what the implicit term buys.
+    #[serde(default = "yes")]
+    pub implicit: bool,
+    /// Relative residual at which BiCGSTAB stops (default 1e-10).
+    #[serde(default = "default_elastic_tol")]
+    pub tolerance: f64,
+    /// Iteration cap (default 5000).
+    #[serde(default = "default_elastic_iter")]
+    pub max_iterations: usize,
+}
+
+impl Default for ElasticParams {
+    fn default() -> Self {
+        ElasticParams {
+            implicit: true,
+            tolerance: default_elastic_tol(),
+            max_iterations: default_elastic_iter(),
+        }
+    }
+}
+
+fn default_elastic_tol() -> f64 {
+    1e-10
+}
+fn default_elastic_iter() -> usize {
+    5000
 }
 
 /// Parameters of the pressure projection.
@@ -824,6 +860,16 @@ impl Scene {
         }
         if p.max_iterations == 0 {
             return err("numerics.projection.max_iterations", "must be ≥ 1");
+        }
+        let el = &self.numerics.elastic;
+        if !(el.tolerance > 0.0 && el.tolerance < 1.0) {
+            return err(
+                "numerics.elastic.tolerance",
+                format!("must be in (0, 1), got {}", el.tolerance),
+            );
+        }
+        if el.max_iterations == 0 {
+            return err("numerics.elastic.max_iterations", "must be ≥ 1");
         }
         let v = &self.numerics.viscous;
         if !(0.5..=1.0).contains(&v.theta) {

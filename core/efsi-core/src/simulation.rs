@@ -27,6 +27,9 @@ pub struct Simulation {
     previous: Option<(Field, Field)>,
     last_change: f64,
     velocity_scale: f64,
+    /// The largest moving-wall speed: imposed velocities the CFL condition must respect even
+    /// before the flow has picked them up.
+    wall_speed: f64,
 }
 
 impl Simulation {
@@ -118,12 +121,13 @@ impl Simulation {
         let mut pipeline = pipeline;
         pipeline.initialize(&grid, &bc, &mut state)?;
         // A velocity scale bounds the first step when the fluid starts at rest.
-        let mut scale = 0.0f64;
+        let mut wall_speed = 0.0f64;
         for side in Side::ALL {
             if let Boundary::MovingWall { speed, .. } = scene.boundaries.get(side) {
-                scale = scale.max(speed.abs());
+                wall_speed = wall_speed.max(speed.abs());
             }
         }
+        let mut scale = wall_speed;
         let lx = grid.x1() - grid.x0;
         let ly = grid.y1() - grid.y0;
         scale = scale.max((scene.gravity.0.hypot(scene.gravity.1) * lx.max(ly)).sqrt());
@@ -158,6 +162,7 @@ impl Simulation {
             previous,
             last_change: f64::INFINITY,
             velocity_scale: scale,
+            wall_speed,
         })
     }
 
@@ -180,12 +185,13 @@ impl Simulation {
                     (self.scene.physics.advection && self.velocity_scale > 0.0)
                         .then(|| t.cfl * self.grid.dx.min(self.grid.dy) / self.velocity_scale)
                 });
-            match (limit, t.dt_max) {
-                (Some(a), Some(b)) => a.min(b),
-                (Some(a), None) => a,
-                (None, Some(b)) => b,
-                (None, None) => remaining,
-            }
+            let wall = (self.wall_speed > 0.0)
+                .then(|| t.cfl * self.grid.dx.min(self.grid.dy) / self.wall_speed);
+            [limit, wall, t.dt_max]
+                .into_iter()
+                .flatten()
+                .reduce(f64::min)
+                .unwrap_or(remaining)
         };
         let dt_min = t.dt_min.unwrap_or(1e-12 * t.end);
         if dt.is_nan() || dt < dt_min {

@@ -34,27 +34,33 @@ pub struct State {
     pub deformation: Option<Deformation>,
 }
 
-/// The modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B` (seed Eq. 8), staggered like the
-/// stresses it produces: the normal components `b[0] = B̃₁₁`, `b[1] = B̃₂₂`, `b[2] = B̃₃₃` (zz in
-/// plane strain, θθ axisymmetric) at cell centres, the shear `b[3] = B̃₁₂` at cell corners —
-/// so the shear force is a compact stencil with no undamped checkerboard mode.
+/// The left Cauchy–Green tensor B of the solid, from which the elastic stages form the seed's
+/// modified tensor `B̃ = φ_s^{1/2} B` (Eq. 8) with the current solid fraction. Since φ_s is
+/// materially conserved, B and B̃ obey the same transport law; storing B (the identity in pure
+/// fluid, where it is reset every step) keeps B̃ and the VOF interface consistent — rigid motion
+/// leaves `B̃ = φ_s^{1/2} I` to round-off — whereas advecting B̃ and φ_s with two different
+/// schemes would not.
+///
+/// Staggered like the stresses it produces: `b[0] = B₁₁`, `b[1] = B₂₂`, `b[2] = B₃₃` (zz in
+/// plane strain, θθ axisymmetric) at cell centres, the shear `b[3] = B₁₂` at cell corners — so
+/// the shear force is a compact stencil with no undamped checkerboard mode.
 ///
 /// Seed Eqs. 13, 17 and 24 differ only in the velocity of their implicit part: each is
-/// `B̃ = B̃ⁿ + explicit + (Δt/2) H(V; B̃ⁿ)` with `H(V; B) = L(V)·B + B·L(V)ᵀ` and
-/// `explicit = −Δt (AB2 of ∇·(V B̃)) + (Δt/2) H(Vⁿ; B̃ⁿ)`. The rates at the end of a step are
+/// `B = Bⁿ + explicit + (Δt/2) H(V; Bⁿ)` with `H(V; B) = L(V)·B + B·L(V)ᵀ` and
+/// `explicit = −Δt (AB2 of ∇·(V B)) + (Δt/2) H(Vⁿ; Bⁿ)`. The rates at the end of a step are
 /// kept here (`advection`, `advection_prev`, `stretching`) because the next step's elastic
 /// stage runs after the velocity has left Vⁿ.
 #[derive(Clone, Debug)]
 pub struct Deformation {
-    /// B̃ (components 11, 22, 33 at centres; 12 at corners).
+    /// B (components 11, 22, 33 at centres; 12 at corners).
     pub b: [Field; 4],
-    /// B̃ⁿ, at the start of the step.
+    /// Bⁿ, at the start of the step.
     pub start: [Field; 4],
-    /// `∇·(Vⁿ B̃ⁿ)`.
+    /// `∇·(Vⁿ Bⁿ)`.
     pub advection: [Field; 4],
-    /// `∇·(Vⁿ⁻¹ B̃ⁿ⁻¹)`.
+    /// `∇·(Vⁿ⁻¹ Bⁿ⁻¹)`.
     pub advection_prev: [Field; 4],
-    /// `H(Vⁿ; B̃ⁿ)`.
+    /// `H(Vⁿ; Bⁿ)`.
     pub stretching: [Field; 4],
     /// This step's explicit part.
     pub explicit: [Field; 4],

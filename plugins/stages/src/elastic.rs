@@ -69,6 +69,15 @@
 //! K_v V^{n+2/3}`, the viscous and elastic stages together are then exactly one coupled implicit
 //! viscous–elastic step.
 //!
+//! # B and B̃
+//!
+//! The stage stores B and forms `B̃ = w B`, `w = φ_s^{1/2}` (at corners the average of the four
+//! cells' w), wherever the law or the tangent needs it: B̃ and B obey the same transport law
+//! because φ_s is materially conserved, and this keeps B̃ on the VOF interface (rigid motion
+//! leaves `B̃ = φ^{1/2} I` to round-off). H, the advection and the linear increments above are
+//! written for B; `ΔB̃ = w ΔB`. In pure fluid (`w = 0`) B is reset to I and its rates to zero at
+//! the start of each step.
+//!
 //! # Space discretisation
 //!
 //! Staggered like the viscous stress: `B̃₁₁, B̃₂₂, B̃₃₃` and `τ₁₁, τ₂₂, τ₃₃` at cell centres,
@@ -85,7 +94,6 @@
 
 use crate::advection::face_value;
 use crate::viscous::{corner_viscosity, viscous_divergence};
-use efsi_core::interface::fill_fraction;
 use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats};
 use efsi_core::{
@@ -163,11 +171,6 @@ impl StagePlugin for Elastic {
         let n = k.nu + k.nv;
         Ok(Box::new(ElasticStage {
             law,
-            shape: scene
-                .solid
-                .as_ref()
-                .map(|s| s.shape.clone())
-                .ok_or("no solid")?,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
             op: ElasticOperator {
                 k,
@@ -189,8 +192,9 @@ impl StagePlugin for Elastic {
             delta: vec![0.0; n],
             diag: vec![0.0; n],
             solver: BiCgStab::new(n),
-            tol: 1e-10,
-            max_iter: 5000,
+            tol: scene.numerics.elastic.tolerance,
+            max_iter: scene.numerics.elastic.max_iterations,
+            implicit: scene.numerics.elastic.implicit,
         }))
     }
 }
@@ -239,6 +243,9 @@ struct Kernels {
     lc: [Field; 3],
     /// L₁₂, L₂₁ at corners.
     lk: [Field; 2],
+    /// `φ^{1/2}` at centres and its four-cell average at corners: `B̃ = w B`.
+    w: Field,
+    wc: Field,
     /// Law batches: centres `i ∈ [−1, nx]`, `j ∈ [−1, ny]`; corners `i ∈ [0, nx]`, `j ∈ [0, ny]`.
     cb: Vec<Sym>,
     ct: Vec<Sym>,
@@ -268,6 +275,8 @@ impl Kernels {
             nv: (vy.hi - vy.lo) as usize * grid.nx,
             lc: std::array::from_fn(|_| Field::zeros(grid)),
             lk: std::array::from_fn(|_| Field::zeros(grid)),
+            w: Field::zeros(grid),
+            wc: Field::zeros(grid),
             cb: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
             cj: vec![[0.0; 16]; nc],
@@ -291,6 +300,48 @@ impl Kernels {
     #[inline(always)]
     fn ki(&self, i: isize, j: isize) -> usize {
         (j * (self.grid.nx as isize + 1) + i) as usize
+    }
+
+    /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`
+    /// with ghosts filled.
+    fn set_weights(&mut self, phi: &Field) {
+        let (nx, ny) = self.nxy();
+        let g = efsi_core::G;
+        for j in -g..=ny + g {
+            for i in -g..=nx + g {
+                self.w[(i, j)] = phi[(i, j)].clamp(0.0, 1.0).sqrt();
+            }
+        }
+        for j in 1 - g..=ny + g {
+            for i in 1 - g..=nx + g {
+                self.wc[(i, j)] = 0.25
+                    * (self.w[(i - 1, j - 1)]
+                        + self.w[(i, j - 1)]
+                        + self.w[(i - 1, j)]
+                        + self.w[(i, j)]);
+            }
+        }
+    }
+
+    /// Reset B to the identity, and its rates to zero, where there is no solid (`w = 0`): the
+    /// fluid has no memory of deformation, and B there only enters neighbouring averages and
+    /// fluxes; this keeps it bounded (stale rates would otherwise compound step after step).
+    fn reset_fluid(&self, d: &mut efsi_core::Deformation) {
+        for c in 0..4 {
+            let (wt, one) = if c == 3 {
+                (&self.wc, 0.0)
+            } else {
+                (&self.w, 1.0)
+            };
+            for (k, &w) in wt.data().iter().enumerate() {
+                if w == 0.0 {
+                    d.b[c].data_mut()[k] = one;
+                    d.advection[c].data_mut()[k] = 0.0;
+                    d.advection_prev[c].data_mut()[k] = 0.0;
+                    d.stretching[c].data_mut()[k] = 0.0;
+                }
+            }
+        }
     }
 
     /// Velocity gradients of `(u, v)` (ghosts filled).
@@ -587,7 +638,6 @@ struct ElasticStage {
     law: Box<dyn ConstitutiveLaw>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     theta: f64,
-    shape: efsi_core::interface::Shape,
     tau: [Field; 4],
     op: ElasticOperator,
     rhs: Vec<f64>,
@@ -596,6 +646,8 @@ struct ElasticStage {
     solver: BiCgStab,
     tol: f64,
     max_iter: usize,
+    /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
+    implicit: bool,
 }
 
 /// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
@@ -679,22 +731,17 @@ fn err(stage: &str, message: String) -> StageError {
 impl Stage for ElasticStage {
     fn initialize(
         &mut self,
-        grid: &Grid,
-        bc: &BoundarySet,
+        _grid: &Grid,
+        _bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
-        let mut phi = Field::zeros(grid);
-        fill_fraction(grid, &self.shape, &mut phi);
         let d = state.deformation.as_mut().ok_or_else(missing)?;
         for c in 0..3 {
-            for (b, f) in d.b[c].data_mut().iter_mut().zip(phi.data()) {
-                *b = f.clamp(0.0, 1.0).sqrt();
-            }
+            d.b[c].fill(1.0);
         }
         d.b[3].fill(0.0);
         let k = &mut self.op.k;
         k.fill_ghosts(&mut d.b);
-        let _ = bc;
         k.gradient(&state.u, &state.v);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
         for c in 0..4 {
@@ -712,7 +759,13 @@ impl Stage for ElasticStage {
             0.0
         };
         let mut d = state.deformation.take().ok_or_else(missing)?;
-        // B̃ⁿ and the explicit part E.
+        let phi = state
+            .phi
+            .as_ref()
+            .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
+        self.op.k.set_weights(phi);
+        self.op.k.reset_fluid(&mut d);
+        // Bⁿ and the explicit part E.
         for c in 0..4 {
             d.start[c].copy_from(&d.b[c]);
             let (e, a, ap, h) = (
@@ -745,7 +798,7 @@ impl Stage for ElasticStage {
         let (dx, dy) = (g.dx, g.dy);
         let rho = &state.rho;
         let s = rho.stride();
-        let c2 = 0.5 * dt * dt;
+        let c2 = if self.implicit { 0.5 * dt * dt } else { 0.0 };
         self.op.c = c2;
         self.op.theta_dt = self.theta * dt;
         if self.theta > 0.0 {
