@@ -111,3 +111,20 @@ def test_axisymmetric_slice_in_xz_plane_holds_hagen_poiseuille(tmp_path):
     assert np.abs(vel[:, :, 2] - exact).max() < 2e-3
     assert np.all(vel[:, :, 1] == 0.0)
     assert np.abs(vel[:, :, 0]).max() < 1e-12
+
+
+def test_elastic_run_writes_the_deformation_tensor(tmp_path):
+    """A planar scene with a neo-Hookean layer writes `B` (B̃ = φ^{1/2} B) as a VTK symmetric
+    tensor: B̃ = I in the solid and 0 in the fluid at t = 0; after shearing, B̃_xy ≠ 0 in the
+    solid only."""
+    text = (REPO / "cases/oscillating_couette.ron").read_text()
+    text = text.replace("ny: 64", "ny: 16").replace("end: 4.8", "end: 0.5").replace("vtk_every: 0.4", "vtk_every: 0.5")
+    text = text.replace("at: [0.5, 1.0, 2.0, 2.8, 4.0, 4.8]", "at: [0.5]")
+    out = run(tmp_path, text.replace('name: "oscillating_couette"', 'name: "py_couette"'), "couette")
+    sets = last_dataset(out)
+    b0 = vtk_to_numpy(read_vtr(sets[0][1]).GetCellData().GetArray("B")).reshape(16, 4, 6)
+    assert np.all(b0[:8] == np.array([1, 1, 1, 0, 0, 0]))
+    assert np.all(b0[8:] == 0.0)
+    b1 = vtk_to_numpy(read_vtr(sets[-1][1]).GetCellData().GetArray("B")).reshape(16, 4, 6)
+    assert np.abs(b1[2:8, :, 3]).min() > 1e-3, "sheared solid"
+    assert np.all(b1[8:] == 0.0)

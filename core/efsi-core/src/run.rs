@@ -221,6 +221,32 @@ impl Outputs {
                 }
             }
         }
+        // B̃ = φ^{1/2} B as a VTK symmetric tensor (XX, YY, ZZ, XY, YZ, XZ). Planar: 1 = X,
+        // 2 = Y, 3 = Z. Axisymmetric (r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
+        let mut btilde = Vec::new();
+        if let (Some(d), Some(phi)) = (&state.deformation, &state.phi) {
+            btilde = vec![0.0; 6 * n];
+            let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
+                (0, 2, 1, 5)
+            } else {
+                (0, 1, 2, 3)
+            };
+            for j in 0..ny as isize {
+                for i in 0..nx as isize {
+                    let k = 6 * (j as usize * nx + i as usize);
+                    let w = phi[(i, j)].clamp(0.0, 1.0).sqrt();
+                    let b12 = 0.25
+                        * (d.b[3][(i, j)]
+                            + d.b[3][(i + 1, j)]
+                            + d.b[3][(i, j + 1)]
+                            + d.b[3][(i + 1, j + 1)]);
+                    btilde[k + c11] = w * d.b[0][(i, j)];
+                    btilde[k + c22] = w * d.b[1][(i, j)];
+                    btilde[k + c33] = w * d.b[2][(i, j)];
+                    btilde[k + c12] = w * b12;
+                }
+            }
+        }
         let mut arrays = vec![
             CellArray {
                 name: "velocity",
@@ -233,6 +259,13 @@ impl Outputs {
                 values: &div,
             },
         ];
+        if !btilde.is_empty() {
+            arrays.push(CellArray {
+                name: "B",
+                components: 6,
+                values: &btilde,
+            });
+        }
         for (nm, v) in &scalars {
             arrays.push(CellArray {
                 name: nm,
