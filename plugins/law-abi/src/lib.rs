@@ -280,3 +280,48 @@ mod tests {
         assert!(t.chars().all(|c| c == 'é'));
     }
 }
+
+/// Whether `value` is finite and inside the range `min..max` with the given exclusions — the
+/// one rule the SDK (when a law is created) and the loader (when a scene names parameters) share.
+/// A Rust-level helper: not part of the binary interface, so it does not change [`ABI_VERSION`].
+pub fn range_contains(
+    value: f64,
+    min: f64,
+    max: f64,
+    min_exclusive: bool,
+    max_exclusive: bool,
+) -> bool {
+    let above = if min_exclusive {
+        value > min
+    } else {
+        value >= min
+    };
+    let below = if max_exclusive {
+        value < max
+    } else {
+        value <= max
+    };
+    value.is_finite() && above && below
+}
+
+/// The range in interval notation, e.g. `(0, ∞)` or `[0, 1]` (an infinite end is open).
+pub fn range_text(min: f64, max: f64, min_exclusive: bool, max_exclusive: bool) -> String {
+    let num = |x: f64| {
+        if x == f64::INFINITY {
+            "∞".to_string()
+        } else if x == f64::NEG_INFINITY {
+            "-∞".to_string()
+        } else {
+            format!("{x}")
+        }
+    };
+    let open = min_exclusive || min == f64::NEG_INFINITY;
+    let close = max_exclusive || max == f64::INFINITY;
+    format!(
+        "{}{}, {}{}",
+        if open { "(" } else { "[" },
+        num(min),
+        num(max),
+        if close { ")" } else { "]" }
+    )
+}

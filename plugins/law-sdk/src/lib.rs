@@ -138,45 +138,18 @@ impl ParamDecl {
 
     /// Whether `value` is finite and in the allowed range.
     pub fn contains(&self, value: f64) -> bool {
-        let above = if self.min_exclusive {
-            value > self.min
-        } else {
-            value >= self.min
-        };
-        let below = if self.max_exclusive {
-            value < self.max
-        } else {
-            value <= self.max
-        };
-        value.is_finite() && above && below
+        efsi_law_abi::range_contains(
+            value,
+            self.min,
+            self.max,
+            self.min_exclusive,
+            self.max_exclusive,
+        )
     }
 
-    /// The range in interval notation, e.g. `(0, ∞)`.
+    /// The allowed range in interval notation, e.g. `(0, ∞)`.
     pub fn range_text(&self) -> String {
-        let num = |x: f64| {
-            if x == f64::INFINITY {
-                "∞".to_string()
-            } else if x == f64::NEG_INFINITY {
-                "-∞".to_string()
-            } else {
-                format!("{x}")
-            }
-        };
-        format!(
-            "{}{}, {}{}",
-            if self.min_exclusive || self.min == f64::NEG_INFINITY {
-                "("
-            } else {
-                "["
-            },
-            num(self.min),
-            num(self.max),
-            if self.max_exclusive || self.max == f64::INFINITY {
-                ")"
-            } else {
-                "]"
-            }
-        )
+        efsi_law_abi::range_text(self.min, self.max, self.min_exclusive, self.max_exclusive)
     }
 }
 
