@@ -252,35 +252,6 @@ unsafe impl Sync for LawDescriptor {}
 /// `size_of::<LawDescriptor>()` as a `u32`, the value of [`LawDescriptor::descriptor_size`].
 pub const DESCRIPTOR_SIZE: u32 = std::mem::size_of::<LawDescriptor>() as u32;
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn layout_is_stable_on_64_bit() {
-        if cfg!(target_pointer_width = "64") {
-            assert_eq!(std::mem::size_of::<LawDescriptor>(), 72);
-            assert_eq!(std::mem::size_of::<ParamDesc>(), 56);
-            assert_eq!(std::mem::offset_of!(LawDescriptor, descriptor_size), 4);
-            assert_eq!(std::mem::offset_of!(LawDescriptor, name), 8);
-            assert_eq!(std::mem::offset_of!(LawDescriptor, evaluate), 64);
-        }
-        assert_eq!(std::mem::size_of::<ErrBuf>(), ERR_BUF_CAPACITY);
-    }
-
-    #[test]
-    fn err_buf_truncates_on_char_boundary() {
-        let mut e = ErrBuf::new();
-        e.set("short");
-        assert_eq!(e.text(), "short");
-        let long = "é".repeat(ERR_BUF_CAPACITY);
-        e.set(&long);
-        let t = e.text();
-        assert!(t.len() < ERR_BUF_CAPACITY);
-        assert!(t.chars().all(|c| c == 'é'));
-    }
-}
-
 /// Whether `value` is finite and inside the range `min..max` with the given exclusions — the
 /// one rule the SDK (when a law is created) and the loader (when a scene names parameters) share.
 /// A Rust-level helper: not part of the binary interface, so it does not change [`ABI_VERSION`].
@@ -324,4 +295,33 @@ pub fn range_text(min: f64, max: f64, min_exclusive: bool, max_exclusive: bool) 
         num(max),
         if close { ")" } else { "]" }
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_is_stable_on_64_bit() {
+        if cfg!(target_pointer_width = "64") {
+            assert_eq!(std::mem::size_of::<LawDescriptor>(), 72);
+            assert_eq!(std::mem::size_of::<ParamDesc>(), 56);
+            assert_eq!(std::mem::offset_of!(LawDescriptor, descriptor_size), 4);
+            assert_eq!(std::mem::offset_of!(LawDescriptor, name), 8);
+            assert_eq!(std::mem::offset_of!(LawDescriptor, evaluate), 64);
+        }
+        assert_eq!(std::mem::size_of::<ErrBuf>(), ERR_BUF_CAPACITY);
+    }
+
+    #[test]
+    fn err_buf_truncates_on_char_boundary() {
+        let mut e = ErrBuf::new();
+        e.set("short");
+        assert_eq!(e.text(), "short");
+        let long = "é".repeat(ERR_BUF_CAPACITY);
+        e.set(&long);
+        let t = e.text();
+        assert!(t.len() < ERR_BUF_CAPACITY);
+        assert!(t.chars().all(|c| c == 'é'));
+    }
 }
