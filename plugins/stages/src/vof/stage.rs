@@ -153,10 +153,13 @@ impl Stage for VofStage {
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let mut phi = state.phi.take().ok_or_else(missing)?;
-        // ½(Vⁿ + Vⁿ⁺¹) in place of the stored Vⁿ.
+        // ½(Vⁿ + Vⁿ⁺¹) in place of the stored Vⁿ — except in the first step, whose Vⁿ is the
+        // initial condition, not yet projected (a solid's initial velocity blended into the
+        // fluid's is not solenoidal at the interface): there Vⁿ⁺¹ alone.
+        let w = if ctx.step == 0 { 0.0 } else { 0.5 };
         for (a, b) in [(&mut self.u_adv, &state.u), (&mut self.v_adv, &state.v)] {
             for (x, y) in a.data_mut().iter_mut().zip(b.data()) {
-                *x = 0.5 * (*x + y);
+                *x = w * *x + (1.0 - w) * y;
             }
         }
         let st = self.advector.step(
