@@ -195,6 +195,12 @@ impl StagePlugin for Elastic {
             tol: scene.numerics.elastic.tolerance,
             max_iter: scene.numerics.elastic.max_iterations,
             implicit: scene.numerics.elastic.implicit,
+            scratch: Scratch {
+                xu: Field::zeros(grid),
+                xv: Field::zeros(grid),
+                dtau: std::array::from_fn(|_| Field::zeros(grid)),
+                f: vec![0.0; n],
+            },
         }))
     }
 }
@@ -648,6 +654,16 @@ struct ElasticStage {
     max_iter: usize,
     /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
     implicit: bool,
+    /// Work space of the operator, allocated once.
+    scratch: Scratch,
+}
+
+/// The elastic operator's work space: the increment as fields, Δτ, the force.
+struct Scratch {
+    xu: Field,
+    xv: Field,
+    dtau: [Field; 4],
+    f: Vec<f64>,
 }
 
 /// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
@@ -860,17 +876,14 @@ impl Stage for ElasticStage {
             }
         } else {
             self.delta.fill(0.0);
-            let mut xu = Field::zeros(g);
-            let mut xv = Field::zeros(g);
-            let mut dtau: [Field; 4] = std::array::from_fn(|_| Field::zeros(g));
-            let mut f = vec![0.0; self.rhs.len()];
+            let s = &mut self.scratch;
             let mut ctxop = OperatorCtx {
                 op: &mut self.op,
                 start: &d.start,
-                xu: &mut xu,
-                xv: &mut xv,
-                dtau: &mut dtau,
-                f: &mut f,
+                xu: &mut s.xu,
+                xv: &mut s.xv,
+                dtau: &mut s.dtau,
+                f: &mut s.f,
             };
             let st = self.solver.solve(
                 &mut ctxop,
