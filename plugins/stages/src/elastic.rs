@@ -69,6 +69,16 @@
 //! K_v V^{n+2/3}`, the viscous and elastic stages together are then exactly one coupled implicit
 //! viscous–elastic step.
 //!
+//! # Stress-free reference
+//!
+//! The stage divides `τ(B̃) − τ(φ^{1/2} I)`: the law's stress minus its stress in the undeformed
+//! state. The difference is isotropic — a change of pressure only, which the projection absorbs
+//! (on the MAC metric, axisymmetric hoop term included, the force of `q I` is exactly the discrete
+//! `∇q`) — but the rest stress jumps across the interface (`G φ^{1/2} I` for neo-Hookean,
+//! 1.8e5 Pa for the silicone sphere), and fed through the implicit elastic solve it is smoothed
+//! into a non-gradient field: the sphere was flung at ~10 m/s in its first step. The tangent is
+//! unchanged (the reference does not depend on B).
+//!
 //! # B and B̃
 //!
 //! The stage stores B and forms `B̃ = w B`, `w = φ_s^{1/2}` (at corners the average of the four
@@ -256,6 +266,9 @@ struct Kernels {
     cb: Vec<Sym>,
     ct: Vec<Sym>,
     cj: Vec<Tangent>,
+    /// The stress-free reference `w I` at the centres, and its stress.
+    rb: Vec<Sym>,
+    rt: Vec<Sym>,
     kb: Vec<Sym>,
     kt: Vec<Sym>,
     kj: Vec<Tangent>,
@@ -284,6 +297,8 @@ impl Kernels {
             w: Field::zeros(grid),
             wc: Field::zeros(grid),
             cb: vec![[0.0; 4]; nc],
+            rb: vec![[0.0; 4]; nc],
+            rt: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
             cj: vec![[0.0; 16]; nc],
             kb: vec![[0.0; 4]; nk],
@@ -503,11 +518,13 @@ impl Kernels {
             for i in -1..=nx {
                 let k = b[0].idx(i, j);
                 let q = self.ci(i, j);
+                let w = self.w.data()[k];
+                self.rb[q] = [w, w, w, 0.0];
                 self.cb[q] = [
-                    b11[k],
-                    b22[k],
-                    b33[k],
-                    avg4(b12, k, k + 1, k + s, k + s + 1),
+                    w * b11[k],
+                    w * b22[k],
+                    w * b33[k],
+                    w * avg4(b12, k, k + 1, k + s, k + s + 1),
                 ];
             }
         }
@@ -516,11 +533,12 @@ impl Kernels {
                 let k = b[0].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 let q = self.ki(i, j);
+                let w = self.wc.data()[k];
                 self.kb[q] = [
-                    avg4(b11, a0, a1, a2, a3),
-                    avg4(b22, a0, a1, a2, a3),
-                    avg4(b33, a0, a1, a2, a3),
-                    b12[k],
+                    w * avg4(b11, a0, a1, a2, a3),
+                    w * avg4(b22, a0, a1, a2, a3),
+                    w * avg4(b33, a0, a1, a2, a3),
+                    w * b12[k],
                 ];
             }
         }
@@ -528,6 +546,16 @@ impl Kernels {
             .map_err(|e| e.to_string())?;
         law.evaluate(&self.kb, &mut self.kt, tangent.then_some(&mut self.kj[..]))
             .map_err(|e| e.to_string())?;
+        // Subtract the stress of the stress-free state B = I (B̃ = w I): isotropic, so only a
+        // change of pressure — but it jumps across the interface, and fed through the implicit
+        // solve it would not stay a pure gradient (see "Stress-free reference" in the docs).
+        law.evaluate(&self.rb, &mut self.rt, None)
+            .map_err(|e| e.to_string())?;
+        for (t, r) in self.ct.iter_mut().zip(&self.rt) {
+            for c in 0..3 {
+                t[c] -= r[c];
+            }
+        }
         for j in -1..=ny {
             for i in -1..=nx {
                 let k = b[0].idx(i, j);
@@ -555,11 +583,12 @@ impl Kernels {
         for j in -1..=ny {
             for i in -1..=nx {
                 let k = db[0].idx(i, j);
+                let w = self.w.data()[k];
                 let x = [
-                    d11[k],
-                    d22[k],
-                    d33[k],
-                    avg4(d12, k, k + 1, k + s, k + s + 1),
+                    w * d11[k],
+                    w * d22[k],
+                    w * d33[k],
+                    w * avg4(d12, k, k + 1, k + s, k + s + 1),
                 ];
                 let jm = &self.cj[self.ci(i, j)];
                 for c in 0..3 {
@@ -574,11 +603,12 @@ impl Kernels {
             for i in 0..=nx {
                 let k = db[0].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
+                let w = self.wc.data()[k];
                 let x = [
-                    avg4(d11, a0, a1, a2, a3),
-                    avg4(d22, a0, a1, a2, a3),
-                    avg4(d33, a0, a1, a2, a3),
-                    d12[k],
+                    w * avg4(d11, a0, a1, a2, a3),
+                    w * avg4(d22, a0, a1, a2, a3),
+                    w * avg4(d33, a0, a1, a2, a3),
+                    w * d12[k],
                 ];
                 let jm = &self.kj[self.ki(i, j)];
                 dtau[3].data_mut()[k] =
