@@ -53,7 +53,8 @@
 //! is `GΔt ∇·D(δ)`: an extra viscosity `GΔt/2`, which is what keeps stiff solids stable at the
 //! flow's time step. Multiplied by the face volumes the system is
 //! `(M − (Δt²/2) K_J) δ = Δt·vol·∇·τ^{n+1/3}`; `K_J` is not symmetric for a general law, so it
-//! is solved with BiCGSTAB and Jacobi preconditioning. Finally `V^{n+2/3} = V^{n+1/3} + δ` and
+//! is solved with BiCGSTAB and Jacobi preconditioning, to `‖r‖ ≤ tol · max(‖b‖, ‖M V^{n+1/3}‖)`
+//! (scene `numerics.elastic.tolerance`, default 1e-10). Finally `V^{n+2/3} = V^{n+1/3} + δ` and
 //! `B̃^{n+2/3} = B̃(V^{n+2/3})`; after the projection the [`DeformationUpdate`] stage sets
 //! `B̃^{n+1} = B̃(V^{n+1})` (Eq. 25 ≡ Eq. 24) and the rates `Aⁿ⁺¹`, `H(Vⁿ⁺¹; B̃ⁿ⁺¹)` the next
 //! step needs.
@@ -898,6 +899,18 @@ impl Stage for ElasticStage {
             rhs[c] *= dt;
         });
         let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // Momentum scale ‖M V^{n+1/3}‖: the residual is judged against the larger of it and the
+        // right-hand side, so a body nearly at rest (tiny right-hand side) is not asked for more
+        // digits than its momentum has.
+        let mut pnorm = 0.0;
+        {
+            let (u, v, mass) = (&state.u, &state.v, &self.op.mass);
+            self.op.k.for_each(|c, is_u, q| {
+                let x = mass[c] * if is_u { u.data()[q] } else { v.data()[q] };
+                pnorm += x * x;
+            });
+        }
+        let scale = bnorm.max(pnorm.sqrt());
         let stats = if bnorm == 0.0 {
             SolveStats {
                 iterations: 0,
@@ -920,7 +933,7 @@ impl Stage for ElasticStage {
                 self.diag.as_slice(),
                 &self.rhs,
                 &mut self.delta,
-                self.tol * bnorm,
+                self.tol * scale,
                 self.max_iter,
             );
             if !st.converged {
