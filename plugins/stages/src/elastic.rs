@@ -162,6 +162,8 @@ impl StagePlugin for Elastic {
             FieldId::VelocityX,
             FieldId::VelocityY,
             FieldId::Density,
+            FieldId::Viscosity,
+            FieldId::SolidFraction,
             FieldId::Deformation,
         ]
     }
