@@ -109,7 +109,7 @@ use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext, bc::FaceRange,
+    State, StepContext, bc::UnknownFaces,
 };
 
 fn law_needed(scene: &Scene) -> bool {
@@ -181,7 +181,7 @@ impl StagePlugin for Elastic {
     ) -> Result<Box<dyn Stage>, String> {
         let law = resolve_law(scene)?;
         let k = Kernels::new(grid, bc);
-        let n = k.nu + k.nv;
+        let n = k.faces.len();
         Ok(Box::new(ElasticStage {
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
@@ -254,10 +254,8 @@ impl StagePlugin for DeformationUpdate {
 struct Kernels {
     grid: Grid,
     bc: BoundarySet,
-    ux: FaceRange,
-    vy: FaceRange,
-    nu: usize,
-    nv: usize,
+    /// The unknown faces and their compact order.
+    faces: UnknownFaces,
     /// L₁₁, L₂₂, L₃₃ at centres.
     lc: [Field; 3],
     /// L₁₂, L₂₁ at corners.
@@ -284,17 +282,12 @@ fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
 
 impl Kernels {
     fn new(grid: &Grid, bc: &BoundarySet) -> Self {
-        let ux = bc.normal_faces(0, grid.nx);
-        let vy = bc.normal_faces(1, grid.ny);
         let nc = (grid.nx + 2) * (grid.ny + 2);
         let nk = (grid.nx + 1) * (grid.ny + 1);
         Kernels {
             grid: grid.clone(),
             bc: bc.clone(),
-            ux,
-            vy,
-            nu: (ux.hi - ux.lo) as usize * grid.ny,
-            nv: (vy.hi - vy.lo) as usize * grid.nx,
+            faces: UnknownFaces::new(grid, bc),
             lc: std::array::from_fn(|_| Field::zeros(grid)),
             lk: std::array::from_fn(|_| Field::zeros(grid)),
             w: Field::zeros(grid),
@@ -620,28 +613,6 @@ impl Kernels {
         }
     }
 
-    /// Visit unknown faces in compact order (u first, then v): `f(compact, is_u, linear index)`.
-    #[inline]
-    fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
-        let (nx, ny) = self.nxy();
-        let stride = self.grid.nx + 1 + 2 * efsi_core::GHOST;
-        let idx =
-            |i: isize, j: isize| (j + efsi_core::G) as usize * stride + (i + efsi_core::G) as usize;
-        let mut c = 0;
-        for j in 0..ny {
-            for i in self.ux.lo..self.ux.hi {
-                f(c, true, idx(i, j));
-                c += 1;
-            }
-        }
-        for j in self.vy.lo..self.vy.hi {
-            for i in 0..nx {
-                f(c, false, idx(i, j));
-                c += 1;
-            }
-        }
-    }
-
     /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
     fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
         let g = &self.grid;
@@ -652,7 +623,7 @@ impl Kernels {
         let (nx, ny) = self.nxy();
         let mut c = 0;
         for j in 0..ny {
-            for i in self.ux.lo..self.ux.hi {
+            for i in self.faces.ux.lo..self.faces.ux.hi {
                 let k = tau[0].idx(i, j);
                 let r = m.rx(i);
                 let t33f = 0.5 * (t33[k - 1] + t33[k]);
@@ -662,7 +633,7 @@ impl Kernels {
                 c += 1;
             }
         }
-        for j in self.vy.lo..self.vy.hi {
+        for j in self.faces.vy.lo..self.faces.vy.hi {
             for i in 0..nx {
                 let k = tau[0].idx(i, j);
                 out[c] = dy * (m.rx(i + 1) * t12[k + 1] - m.rx(i) * t12[k])
@@ -727,7 +698,7 @@ impl LinearOperator for OperatorCtx<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
-        op.k.for_each(|c, is_u, k| {
+        op.k.faces.for_each(|c, is_u, k| {
             if is_u {
                 xu.data_mut()[k] = x[c];
             } else {
@@ -746,8 +717,8 @@ impl LinearOperator for OperatorCtx<'_> {
             let k = &op.k;
             viscous_divergence(
                 &k.grid,
-                k.ux,
-                k.vy,
+                k.faces.ux,
+                k.faces.vy,
                 &op.mu,
                 &op.mu_corner,
                 xu,
@@ -756,7 +727,7 @@ impl LinearOperator for OperatorCtx<'_> {
                 &mut op.kv,
             );
             let (ku, kv, td) = (&op.ku, &op.kv, op.theta_dt);
-            k.for_each(|c, is_u, q| {
+            k.faces.for_each(|c, is_u, q| {
                 y[c] -= td * if is_u { ku.data()[q] } else { kv.data()[q] };
             });
         }
@@ -863,7 +834,7 @@ impl Stage for ElasticStage {
             let b = &k.cb[k.ci(i, j)];
             jm[0].abs().max(jm[5].abs()).max(jm[15].abs()) * b[0].abs().max(b[1].abs()).max(1e-300)
         };
-        k.for_each(|c, is_u, q| {
+        k.faces.for_each(|c, is_u, q| {
             let (i, j) = (
                 (q % s) as isize - efsi_core::G,
                 (q / s) as isize - efsi_core::G,
@@ -907,7 +878,7 @@ impl Stage for ElasticStage {
         let mut pnorm = 0.0;
         {
             let (u, v, mass) = (&state.u, &state.v, &self.op.mass);
-            self.op.k.for_each(|c, is_u, q| {
+            self.op.k.faces.for_each(|c, is_u, q| {
                 let x = mass[c] * if is_u { u.data()[q] } else { v.data()[q] };
                 pnorm += x * x;
             });
@@ -951,7 +922,7 @@ impl Stage for ElasticStage {
             }
             let delta = &self.delta;
             let (u, v) = (&mut state.u, &mut state.v);
-            self.op.k.for_each(|c, is_u, q| {
+            self.op.k.faces.for_each(|c, is_u, q| {
                 if is_u {
                     u.data_mut()[q] += delta[c];
                 } else {

@@ -26,7 +26,7 @@ use efsi_core::solver::{LinearOperator, Pcg, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
-    bc::{FaceRange, WallTime},
+    bc::{FaceRange, UnknownFaces, WallTime},
 };
 
 /// The viscous stage plugin.
@@ -63,11 +63,8 @@ impl StagePlugin for Viscous {
         grid: &Grid,
         bc: &BoundarySet,
     ) -> Result<Box<dyn Stage>, String> {
-        let ux = bc.normal_faces(0, grid.nx);
-        let vy = bc.normal_faces(1, grid.ny);
-        let nu = (ux.hi - ux.lo) as usize * grid.ny;
-        let nv = (vy.hi - vy.lo) as usize * grid.nx;
-        let n = nu + nv;
+        let faces = UnknownFaces::new(grid, bc);
+        let n = faces.len();
         Ok(Box::new(ViscousStage {
             theta: scene.numerics.viscous.theta,
             tol: scene.numerics.viscous.tolerance,
@@ -75,8 +72,7 @@ impl StagePlugin for Viscous {
             op: ViscousOperator {
                 grid: grid.clone(),
                 bc: bc.clone(),
-                ux,
-                vy,
+                faces,
                 mu_corner: Field::zeros(grid),
                 mass: vec![0.0; n],
                 theta_dt: 0.0,
@@ -109,8 +105,7 @@ struct ViscousStage {
 struct ViscousOperator {
     grid: Grid,
     bc: BoundarySet,
-    ux: FaceRange,
-    vy: FaceRange,
+    faces: UnknownFaces,
     mu: Field,
     mu_corner: Field,
     mass: Vec<f64>,
@@ -122,31 +117,12 @@ struct ViscousOperator {
 }
 
 impl ViscousOperator {
-    /// Visit unknown faces in compact order: `f(compact index, is_u, linear field index, i)`.
-    #[inline]
-    fn for_each(&self, mut f: impl FnMut(usize, bool, usize, isize)) {
-        let g = &self.grid;
-        let mut c = 0;
-        for j in 0..g.ny as isize {
-            for i in self.ux.lo..self.ux.hi {
-                f(c, true, self.mu.idx(i, j), i);
-                c += 1;
-            }
-        }
-        for j in self.vy.lo..self.vy.hi {
-            for i in 0..g.nx as isize {
-                f(c, false, self.mu.idx(i, j), i);
-                c += 1;
-            }
-        }
-    }
-
     /// `(ku, kv) = dV·∇·(2μD(u, v))` on the unknown faces; `u`, `v` with ghosts filled.
     fn stress_divergence(&self, u: &Field, v: &Field, ku: &mut Field, kv: &mut Field) {
         viscous_divergence(
             &self.grid,
-            self.ux,
-            self.vy,
+            self.faces.ux,
+            self.faces.vy,
             &self.mu,
             &self.mu_corner,
             u,
@@ -217,7 +193,7 @@ impl LinearOperator for ViscousOperator {
         let mut xv = std::mem::take(&mut self.xv);
         let mut ku = std::mem::take(&mut self.ku);
         let mut kv = std::mem::take(&mut self.kv);
-        self.for_each(|c, is_u, k, _| {
+        self.faces.for_each(|c, is_u, k| {
             if is_u {
                 xu.data_mut()[k] = x[c];
             } else {
@@ -228,7 +204,7 @@ impl LinearOperator for ViscousOperator {
             .fill_velocity(&self.grid, &mut xu, &mut xv, 0.0, true);
         self.stress_divergence(&xu, &xv, &mut ku, &mut kv);
         let td = self.theta_dt;
-        self.for_each(|c, is_u, k, _| {
+        self.faces.for_each(|c, is_u, k| {
             let kx = if is_u { ku.data()[k] } else { kv.data()[k] };
             y[c] = self.mass[c] * x[c] - td * kx;
         });
@@ -256,8 +232,7 @@ impl Stage for ViscousStage {
         let s = mu.stride();
         {
             let (mud, mcd, rd) = (mu.data(), mc.data(), rho.data());
-            let ux = op.ux;
-            let vy = op.vy;
+            let (ux, vy) = (op.faces.ux, op.faces.vy);
             let mut c = 0;
             for j in 0..g.ny as isize {
                 for i in ux.lo..ux.hi {
@@ -294,7 +269,7 @@ impl Stage for ViscousStage {
         let mut kv = std::mem::take(&mut op.kv);
         op.stress_divergence(&state.u, &state.v, &mut ku, &mut kv);
         let rhs = &mut self.rhs;
-        op.for_each(|c, is_u, k, _| {
+        op.faces.for_each(|c, is_u, k| {
             rhs[c] = ctx.dt * if is_u { ku.data()[k] } else { kv.data()[k] };
         });
         op.ku = ku;
@@ -332,7 +307,7 @@ impl Stage for ViscousStage {
             }
             let delta = &self.delta;
             let (u, v) = (&mut state.u, &mut state.v);
-            op.for_each(|c, is_u, k, _| {
+            op.faces.for_each(|c, is_u, k| {
                 if is_u {
                     u.data_mut()[k] += delta[c];
                 } else {
