@@ -130,7 +130,9 @@ pub trait Stage: Send {
     /// Advance the state by this stage's part of the step.
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError>;
 
-    /// Initialise the fields this stage writes, before the first step (default: nothing).
+    /// Initialise the fields this stage writes, before the first step (default: nothing). It
+    /// may run more than once (see [`Pipeline::initialize`]) and must set the stage's state
+    /// from the current fields each time.
     fn initialize(
         &mut self,
         _grid: &Grid,
@@ -143,6 +145,12 @@ pub trait Stage: Send {
     /// The largest stable Δt for the current state, if this stage limits it (default: none).
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
         None
+    }
+
+    /// Whether this stage makes the velocity divergence-free (the projection). The pipeline
+    /// also runs such a stage once on the initial velocity, with Δt = 1 (default: no).
+    fn projects(&self) -> bool {
+        false
     }
 }
 
@@ -405,7 +413,13 @@ impl Pipeline {
         self.entries.iter().map(|e| e.name).collect()
     }
 
-    /// Initialise every stage's fields (before the first step).
+    /// Initialise every stage's fields (before the first step), then make the initial velocity
+    /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
+    /// stage that integrates velocity gradients (the elastic stage) would take the spurious
+    /// compression at the interface for deformation. The projecting stage runs once with
+    /// Δt = 1 (its pressure is then reset to zero) and, if the velocity changed, every stage is
+    /// initialised again from the projected velocity (the densities it needs come from the
+    /// first pass).
     pub fn initialize(
         &mut self,
         grid: &Grid,
@@ -414,6 +428,26 @@ impl Pipeline {
     ) -> Result<(), StageError> {
         for e in &mut self.entries {
             e.stage.initialize(grid, bc, state)?;
+        }
+        let before = (state.u.clone(), state.v.clone());
+        let ctx = StepContext {
+            grid,
+            bc,
+            t: 0.0,
+            dt: 1.0,
+            step: 0,
+        };
+        for e in &mut self.entries {
+            if e.stage.projects() {
+                e.stage.run(&ctx, state)?;
+                bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
+                state.p.fill(0.0);
+            }
+        }
+        if state.u.data() != before.0.data() || state.v.data() != before.1.data() {
+            for e in &mut self.entries {
+                e.stage.initialize(grid, bc, state)?;
+            }
         }
         Ok(())
     }

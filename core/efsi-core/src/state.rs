@@ -64,6 +64,10 @@ pub struct Deformation {
     pub stretching: [Field; 4],
     /// This step's explicit part.
     pub explicit: [Field; 4],
+    /// This step's implicit-relaxation divisor of the corner shear `B₁₂` at interface corners
+    /// (1 elsewhere): set by the elastic stage, used again by the end-of-step update. Scratch
+    /// of one step: it is recomputed before use, so it carries no history.
+    pub relax: Field,
 }
 
 impl Deformation {
@@ -77,6 +81,7 @@ impl Deformation {
             advection_prev: z(),
             stretching: z(),
             explicit: z(),
+            relax: Field::zeros(grid),
         }
     }
 

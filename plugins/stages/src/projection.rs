@@ -149,6 +149,10 @@ impl ProjectionStage {
 }
 
 impl Stage for ProjectionStage {
+    fn projects(&self) -> bool {
+        true
+    }
+
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
         let (nx, ny) = (grid.nx, grid.ny);

@@ -133,12 +133,25 @@ impl ViscousOperator {
     }
 }
 
-/// Corner viscosities: the average of the four cells around each corner.
+/// Corner viscosities: the harmonic mean of the four cells around each corner (zero if any is
+/// inviscid). The corner carries the shear stress `μ (∂u/∂y + ∂v/∂x)`; across an interface the
+/// two phases shear in series, whose effective viscosity is the harmonic mean — the arithmetic
+/// mean would let the more viscous phase drag the other along (an O(1) error in the first cell
+/// beside an interface, first order overall).
 pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
     for j in 0..=grid.ny as isize {
         for i in 0..=grid.nx as isize {
-            out[(i, j)] =
-                0.25 * (mu[(i - 1, j - 1)] + mu[(i, j - 1)] + mu[(i - 1, j)] + mu[(i, j)]);
+            let m = [
+                mu[(i - 1, j - 1)],
+                mu[(i, j - 1)],
+                mu[(i - 1, j)],
+                mu[(i, j)],
+            ];
+            out[(i, j)] = if m.iter().all(|&x| x > 0.0) {
+                4.0 / m.iter().map(|x| 1.0 / x).sum::<f64>()
+            } else {
+                0.0
+            };
         }
     }
 }
