@@ -3,7 +3,7 @@
 use crate::field::Field;
 use crate::grid::Grid;
 use crate::ops;
-use crate::scene::ProbeSpec;
+use crate::scene::{ProbeSpec, Side};
 use crate::state::State;
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
@@ -49,6 +49,9 @@ pub fn columns(p: &ProbeSpec) -> Vec<String> {
         ProbeSpec::SolidVolume => vec!["solid_volume".into()],
         ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
         ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
+        ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
+        ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
+        ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
     }
 }
 
@@ -70,6 +73,14 @@ pub fn evaluate(p: &ProbeSpec, grid: &Grid, state: &State, out: &mut Vec<f64>) {
             }
             out.push(m)
         }
+        ProbeSpec::ElasticEnergy => out.push(
+            state
+                .deformation
+                .as_ref()
+                .map_or(f64::NAN, |d| d.elastic_energy),
+        ),
+        ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, *wall)),
+        ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, *wall)),
         ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity => {
             let Some(phi) = &state.phi else {
                 out.extend(std::iter::repeat_n(f64::NAN, columns(p).len()));
@@ -119,4 +130,79 @@ pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
         centroid: (mx * inv, my * inv),
         velocity: (mu * inv, mv * inv),
     }
+}
+
+/// The cells of the first row along `wall`: for each, its index `(i, j)`, its wall-face area
+/// (per radian when axisymmetric) and its distance along the wall from the wall's start.
+fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
+    let m = &grid.metric;
+    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+    match wall {
+        Side::YMin | Side::YMax => {
+            let j = if wall == Side::YMin { 0 } else { ny - 1 };
+            (0..nx)
+                .map(|i| ((i, j), m.rc(i) * grid.dx, (i as f64 + 0.5) * grid.dx))
+                .collect()
+        }
+        Side::XMin | Side::XMax => {
+            let i = if wall == Side::XMin { 0 } else { nx - 1 };
+            let r = if wall == Side::XMin {
+                m.rx(0)
+            } else {
+                m.rx(nx)
+            };
+            (0..ny)
+                .map(|j| ((i, j), r * grid.dy, (j as f64 + 0.5) * grid.dy))
+                .collect()
+        }
+    }
+}
+
+/// See [`ProbeSpec::ContactForce`].
+pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
+    let (Some(phi), Some(d)) = (&state.phi, &state.deformation) else {
+        return f64::NAN;
+    };
+    let cells = wall_cells(grid, wall);
+    let normal = if matches!(wall, Side::YMin | Side::YMax) {
+        1
+    } else {
+        0
+    };
+    let (mut pa, mut na) = (0.0, 0usize);
+    for &(c, _, _) in &cells {
+        if phi[c] <= 0.0 {
+            pa += state.p[c];
+            na += 1;
+        }
+    }
+    let pa = if na > 0 { pa / na as f64 } else { 0.0 };
+    cells
+        .iter()
+        .filter(|(c, _, _)| phi[*c] > 0.0)
+        .map(|&(c, area, _)| (state.p[c] - pa - d.stress[normal][c]) * area)
+        .sum()
+}
+
+/// See [`ProbeSpec::ContactRadius`].
+pub fn contact_radius(grid: &Grid, state: &State, wall: Side) -> f64 {
+    let Some(phi) = &state.phi else {
+        return f64::NAN;
+    };
+    let cells = wall_cells(grid, wall);
+    let mut r = 0.0;
+    for k in 0..cells.len() {
+        let (c, _, s) = cells[k];
+        if phi[c] >= 0.5 {
+            // Where the fraction crosses ½ between this cell and the next (or this cell's edge).
+            r = match cells.get(k + 1) {
+                Some(&(n, _, sn)) if phi[n] < 0.5 => {
+                    s + (phi[c] - 0.5) / (phi[c] - phi[n]) * (sn - s)
+                }
+                Some(_) => continue,
+                None => s + 0.5 * (s - cells[k.saturating_sub(1)].2).abs(),
+            };
+        }
+    }
+    r
 }

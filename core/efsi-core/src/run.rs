@@ -9,6 +9,7 @@
 //! - `run.json`: the scene as read, efsi version, steps, wall time, wall time per stage.
 
 use crate::error::EfsiError;
+use crate::field::Field;
 use crate::grid::Grid;
 use crate::output::vtk::{CellArray, PvdCollection, write_vtr};
 use crate::probes;
@@ -221,31 +222,11 @@ impl Outputs {
                 }
             }
         }
-        // B̃ = φ^{1/2} B as a VTK symmetric tensor (XX, YY, ZZ, XY, YZ, XZ). Planar: 1 = X,
-        // 2 = Y, 3 = Z. Axisymmetric (r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
-        let mut btilde = Vec::new();
+        // B̃ = φ^{1/2} B and the elastic stress as VTK symmetric tensors.
+        let (mut btilde, mut stress) = (Vec::new(), Vec::new());
         if let (Some(d), Some(phi)) = (&state.deformation, &state.phi) {
-            btilde = vec![0.0; 6 * n];
-            let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
-                (0, 2, 1, 5)
-            } else {
-                (0, 1, 2, 3)
-            };
-            for j in 0..ny as isize {
-                for i in 0..nx as isize {
-                    let k = 6 * (j as usize * nx + i as usize);
-                    let w = phi[(i, j)].clamp(0.0, 1.0).sqrt();
-                    let b12 = 0.25
-                        * (d.b[3][(i, j)]
-                            + d.b[3][(i + 1, j)]
-                            + d.b[3][(i, j + 1)]
-                            + d.b[3][(i + 1, j + 1)]);
-                    btilde[k + c11] = w * d.b[0][(i, j)];
-                    btilde[k + c22] = w * d.b[1][(i, j)];
-                    btilde[k + c33] = w * d.b[2][(i, j)];
-                    btilde[k + c12] = w * b12;
-                }
-            }
+            btilde = vtk_tensor(grid, &d.b, Some(phi));
+            stress = vtk_tensor(grid, &d.stress, None);
         }
         let mut arrays = vec![
             CellArray {
@@ -264,6 +245,11 @@ impl Outputs {
                 name: "B",
                 components: 6,
                 values: &btilde,
+            });
+            arrays.push(CellArray {
+                name: "stress",
+                components: 6,
+                values: &stress,
             });
         }
         for (nm, v) in &scalars {
@@ -390,4 +376,30 @@ pub fn run(
     };
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
+}
+
+/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
+/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
+/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
+fn vtk_tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let mut out = vec![0.0; 6 * nx * ny];
+    let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
+        (0, 2, 1, 5)
+    } else {
+        (0, 1, 2, 3)
+    };
+    for j in 0..ny as isize {
+        for i in 0..nx as isize {
+            let k = 6 * (j as usize * nx + i as usize);
+            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
+            let t12 =
+                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
+            out[k + c11] = w * t[0][(i, j)];
+            out[k + c22] = w * t[1][(i, j)];
+            out[k + c33] = w * t[2][(i, j)];
+            out[k + c12] = w * t12;
+        }
+    }
+    out
 }

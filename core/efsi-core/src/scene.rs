@@ -236,12 +236,16 @@ impl Solid {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Side {
     /// x = x_min (r = r_min).
+    #[serde(alias = "RMin")]
     XMin,
     /// x = x_max.
+    #[serde(alias = "RMax")]
     XMax,
     /// y = y_min.
+    #[serde(alias = "ZMin")]
     YMin,
     /// y = y_max.
+    #[serde(alias = "ZMax")]
     YMax,
 }
 
@@ -577,6 +581,24 @@ pub enum ProbeSpec {
     SolidCentroid,
     /// Volume-weighted solid velocity `∫φ_s u dV / ∫φ_s dV`; columns `solid_u`, `solid_v`.
     SolidVelocity,
+    /// Elastic energy stored in the solid, the work of its stress `∫∫ τ:D dV dt` (per radian in
+    /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
+    ElasticEnergy,
+    /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
+    /// wall's cells that hold solid, `p_a` the mean pressure of the wall's pure-fluid cells and
+    /// `τ_nn` the elastic normal stress (the viscous one vanishes on a no-slip wall); per radian
+    /// in axisymmetric geometry (×2π for the whole body). Column `contact_force`.
+    ContactForce {
+        /// The wall (`YMin` is the substrate z = z_min in axisymmetric scenes).
+        wall: Side,
+    },
+    /// The radius (half-width in planar geometry) of the solid's footprint on a wall: the
+    /// distance along the wall from its start to where the first row's solid fraction drops
+    /// through ½ (0 without contact). Column `contact_radius`.
+    ContactRadius {
+        /// The wall.
+        wall: Side,
+    },
 }
 
 impl ProbeSpec {
@@ -584,7 +606,12 @@ impl ProbeSpec {
     pub fn needs_solid(&self) -> bool {
         matches!(
             self,
-            ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity
+            ProbeSpec::SolidVolume
+                | ProbeSpec::SolidCentroid
+                | ProbeSpec::SolidVelocity
+                | ProbeSpec::ElasticEnergy
+                | ProbeSpec::ContactForce { .. }
+                | ProbeSpec::ContactRadius { .. }
         )
     }
 }

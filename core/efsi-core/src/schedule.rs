@@ -148,7 +148,7 @@ pub trait Stage: Send {
     }
 
     /// Whether this stage makes the velocity divergence-free (the projection). The pipeline
-    /// also runs such a stage once on the initial velocity, with Δt = 1 (default: no).
+    /// also runs such a stage once on the initial velocity (default: no).
     fn projects(&self) -> bool {
         false
     }
@@ -416,8 +416,9 @@ impl Pipeline {
     /// Initialise every stage's fields (before the first step), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
-    /// compression at the interface for deformation. The projecting stage runs once with
-    /// Δt = 1 (its pressure is then reset to zero) and, if the velocity changed, every stage is
+    /// compression at the interface for deformation. The projecting stage runs once, with the
+    /// step of Courant number 1 (its pressure is then reset to zero) and, if the velocity
+    /// changed, every stage is
     /// initialised again from the projected velocity (the densities it needs come from the
     /// first pass).
     pub fn initialize(
@@ -430,11 +431,22 @@ impl Pipeline {
             e.stage.initialize(grid, bc, state)?;
         }
         let before = (state.u.clone(), state.v.clone());
+        // The projection's tolerance is on max|∇·u|·Δt: judge it with the step the flow allows
+        // at Courant number 1, not Δt = 1 (which would ask for the divergence to round-off).
+        let speed = state
+            .u
+            .data()
+            .iter()
+            .chain(state.v.data())
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        if speed == 0.0 {
+            return Ok(());
+        }
         let ctx = StepContext {
             grid,
             bc,
             t: 0.0,
-            dt: 1.0,
+            dt: grid.dx.min(grid.dy) / speed,
             step: 0,
         };
         for e in &mut self.entries {

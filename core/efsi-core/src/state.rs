@@ -68,6 +68,15 @@ pub struct Deformation {
     /// (1 elsewhere): set by the elastic stage, used again by the end-of-step update. Scratch
     /// of one step: it is recomputed before use, so it carries no history.
     pub relax: Field,
+    /// The elastic stress `τ(B̃) − τ(φ^{1/2} I)` at the end of the step (the law's stress less
+    /// its stress-free isotropic part, which is pressure), staggered like `b`.
+    pub stress: [Field; 4],
+    /// The elastic energy stored so far: the work of the elastic stress, `∫∫ τ:D dV dt`
+    /// (trapezoidal in time; per radian in axisymmetric geometry). Law-independent: for a
+    /// hyperelastic law it is the strain energy.
+    pub elastic_energy: f64,
+    /// The stress power `∫ τ:D dV` at the end of the last step.
+    pub elastic_power: f64,
 }
 
 impl Deformation {
@@ -82,6 +91,9 @@ impl Deformation {
             stretching: z(),
             explicit: z(),
             relax: Field::zeros(grid),
+            stress: z(),
+            elastic_energy: 0.0,
+            elastic_power: 0.0,
         }
     }
 

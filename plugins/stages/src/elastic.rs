@@ -294,6 +294,7 @@ impl StagePlugin for DeformationUpdate {
     ) -> Result<Box<dyn Stage>, String> {
         let (mu_f, mu_s) = viscosities(scene);
         Ok(Box::new(DeformationStage {
+            law: resolve_law(scene)?,
             k: Kernels::new(grid, bc, mu_f, mu_s),
         }))
     }
@@ -647,6 +648,42 @@ impl Kernels {
                     (m.rc(i) * fe - m.rc(i - 1) * fw) / (r * g.dx) + (fn_ - fs) / g.dy;
             }
         }
+    }
+
+    /// The stress power `∫ τ:D dV` (per radian when axisymmetric) for the gradients of the last
+    /// [`Kernels::gradient`] call: centres carry the normal and hoop components, corners the
+    /// shear `τ₁₂ (L₁₂ + L₂₁)`.
+    fn stress_power(&self, tau: &[Field; 4]) -> f64 {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (nx, ny) = self.nxy();
+        let mut p = 0.0;
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = tau[0].idx(i, j);
+                p += m.rc(i)
+                    * g.dx
+                    * g.dy
+                    * (tau[0].data()[k] * self.lc[0].data()[k]
+                        + tau[1].data()[k] * self.lc[1].data()[k]
+                        + tau[2].data()[k] * self.lc[2].data()[k]);
+            }
+        }
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = tau[0].idx(i, j);
+                // Boundary corners own a half (or quarter) of their control volume.
+                let f = if i == 0 || i == nx { 0.5 } else { 1.0 }
+                    * if j == 0 || j == ny { 0.5 } else { 1.0 };
+                p += f
+                    * m.rx(i)
+                    * g.dx
+                    * g.dy
+                    * tau[3].data()[k]
+                    * (self.lk[0].data()[k] + self.lk[1].data()[k]);
+            }
+        }
+        p
     }
 
     /// Fill the ghosts of a staggered tensor.
@@ -1136,6 +1173,7 @@ impl Stage for ElasticStage {
 }
 
 struct DeformationStage {
+    law: Box<dyn ConstitutiveLaw>,
     k: Kernels,
 }
 
@@ -1161,6 +1199,12 @@ impl Stage for DeformationStage {
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
         k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
+        // The end-of-step stress and the elastic energy (work of the stress, trapezoidal).
+        k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
+            .map_err(|m| err("deformation", m))?;
+        let power = k.stress_power(&d.stress);
+        d.elastic_energy += 0.5 * ctx.dt * (d.elastic_power + power);
+        d.elastic_power = power;
         Ok(StageStats::default())
     }
 }
