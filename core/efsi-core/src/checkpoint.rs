@@ -75,6 +75,15 @@ impl Snapshot {
         self.state.step
     }
 
+    /// The data a stage saved ([`crate::schedule::Stage::save`]), by stage name (None for a
+    /// stage not in the pipeline; empty for a stage that keeps nothing between steps).
+    pub fn stage_data(&self, stage: &str) -> Option<&[f64]> {
+        self.stages
+            .iter()
+            .find(|(n, _)| n == stage)
+            .map(|(_, d)| d.as_slice())
+    }
+
     /// Bytes the snapshot occupies in a checkpoint file (its arrays and stage data).
     pub fn size_bytes(&self) -> usize {
         let arrays: usize = self

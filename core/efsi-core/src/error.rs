@@ -52,7 +52,9 @@ pub enum EfsiError {
     },
     /// A step failed; the state at the start of that step (the last good one) was saved.
     #[error(
-        "{error}\nthe last good state (step {step}, t = {t:.6e}) was saved to {vtk} and to the checkpoint {checkpoint}"
+        "{error}\nthe last good state (step {step}, t = {t:.6e}) was saved {}to the checkpoint {}",
+        vtk.as_ref().map_or(String::new(), |v| format!("to {} and ", v.display())),
+        checkpoint.display()
     )]
     Saved {
         /// What stopped the run.
@@ -61,8 +63,8 @@ pub enum EfsiError {
         step: u64,
         /// Time of the saved state.
         t: f64,
-        /// The VTK file of the saved state (`-` when the scene writes no VTK).
-        vtk: String,
+        /// The VTK file of the saved state (None when the scene writes no VTK).
+        vtk: Option<PathBuf>,
         /// The checkpoint file.
         checkpoint: PathBuf,
     },

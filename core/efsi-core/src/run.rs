@@ -763,11 +763,11 @@ fn save_failure(
     let state = out.state();
     let vtk = if out.vtk_every.is_some() {
         match out.write_fields(&sim.grid, &good.state, &sim.scene.name, "_last_good") {
-            Ok(p) => p.display().to_string(),
+            Ok(p) => Some(p),
             Err(_) => return error,
         }
     } else {
-        "-".to_string()
+        None
     };
     match save_checkpoint(sim, law, state, good, &out.dir) {
         Ok(checkpoint) => EfsiError::Saved {
