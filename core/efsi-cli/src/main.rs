@@ -1,14 +1,24 @@
-//! The `efsi` command: run, check and inspect full-Eulerian FSI scenes.
+//! The `efsi` command: run, resume, check and inspect full-Eulerian FSI scenes.
 //!
-//! Exit codes: 0 success, 1 I/O failure, 2 bad input (scene, settings), 3 a run that failed
-//! numerically (non-convergence, non-finite values, collapsing step).
+//! Exit codes: 0 success, 1 I/O failure (e.g. an output folder that cannot be created, reported
+//! before the first step), 2 bad input (scene, settings, a checkpoint that cannot be resumed —
+//! changed scene or law, corrupt file), 3 a run that failed numerically (non-convergence,
+//! non-finite values, collapsing step; the last good state is saved as VTK and checkpoint),
+//! 130 stopped by SIGINT and 143 by SIGTERM (128 + signal number, the shell convention).
+//!
+//! **Signals.** During `run` and `resume`, SIGINT (Ctrl-C) or SIGTERM ends the run at the end of
+//! the current step: it writes a checkpoint (`DIR/checkpoint/latest.efsick`), leaves the VTK
+//! files, `fields.pvd` and `probes.csv` complete and `run.json` saying `Interrupted`, and exits
+//! with 130 / 143; `efsi resume DIR` continues it. A second signal while stopping exits at once.
 
 use clap::{Parser, Subcommand};
-use efsi_core::run::{Progress, run};
+use efsi_core::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_core::{EfsiError, Scene, Simulation};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize};
 
 #[derive(Parser)]
 #[command(
@@ -33,6 +43,25 @@ enum Command {
         /// Print the assembled stage pipeline and exit without running.
         #[arg(long)]
         print_schedule: bool,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Write a checkpoint to OUT/checkpoint/latest.efsick every T of simulated time (the
+        /// latest only; checkpoints never change Δt). One is also written on SIGINT/SIGTERM and
+        /// when a step fails.
+        #[arg(long, value_name = "T")]
+        checkpoint_every: Option<f64>,
+    },
+    /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
+    ///
+    /// The scene is read again from the file the run started with; a changed scene or law
+    /// library is refused (exit code 2) with the list of what differs.
+    Resume {
+        /// The run's output folder.
+        dir: PathBuf,
+        /// Checkpoint interval (default: the interrupted run's).
+        #[arg(long, value_name = "T")]
+        checkpoint_every: Option<f64>,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -72,17 +101,25 @@ fn main() -> ExitCode {
                 sim.grid.ny,
                 sim.pipeline().stage_names().join(" → ")
             );
+            None
         }),
         Command::Run {
             scene,
             out,
             print_schedule,
             quiet,
-        } => run_scene(&scene, out, print_schedule, quiet),
+            checkpoint_every,
+        } => run_scene(&scene, out, print_schedule, quiet, checkpoint_every),
+        Command::Resume {
+            dir,
+            checkpoint_every,
+            quiet,
+        } => resume_run(&dir, quiet, checkpoint_every),
         Command::Laws { paths } => return list_laws(&paths),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(None) => ExitCode::SUCCESS,
+        Ok(Some(signal)) => ExitCode::from((128 + signal.min(127)) as u8),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
@@ -90,20 +127,37 @@ fn main() -> ExitCode {
     }
 }
 
-fn run_scene(
-    path: &Path,
-    out: Option<PathBuf>,
-    print_schedule: bool,
-    quiet: bool,
-) -> Result<(), EfsiError> {
-    let mut sim = load(path)?;
-    if print_schedule {
-        println!("{}", sim.pipeline());
-        return Ok(());
+/// Run options with a stop flag that SIGINT and SIGTERM set to their number. A second signal
+/// while the first is being handled exits at once (128 + signal).
+fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
+    if let Some(t) = checkpoint_every
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(EfsiError::Config {
+            path: PathBuf::from("--checkpoint-every"),
+            field: "checkpoint_every".into(),
+            message: format!("must be a positive time, got {t}"),
+        });
     }
-    let dir = out
-        .or_else(|| sim.scene.output.folder.clone())
-        .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
+    let stop = Arc::new(AtomicUsize::new(0));
+    let armed = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let registered =
+            signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())
+                .and_then(|_| signal_hook::flag::register(sig, armed.clone()))
+                .and_then(|_| signal_hook::flag::register_usize(sig, stop.clone(), sig as usize));
+        if let Err(e) = registered {
+            return Err(EfsiError::io(format!("signal handler for signal {sig}"), e));
+        }
+    }
+    Ok(RunOptions {
+        checkpoint_every,
+        stop: Some(stop),
+        save_last_good: true,
+    })
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -115,22 +169,72 @@ fn run_scene(
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    bar
+}
+
+fn draw(bar: &ProgressBar, last_draw: &mut f64, p: &Progress) {
+    if p.wall - *last_draw > 0.1 || p.t >= p.end {
+        *last_draw = p.wall;
+        bar.set_position((1000.0 * p.t / p.end).round() as u64);
+        bar.set_message(format!(
+            "t = {:.4e} / {:.4e}  step {}  Δt = {:.3e}",
+            p.t, p.end, p.step, p.dt
+        ));
+    }
+}
+
+fn resume_run(
+    dir: &Path,
+    quiet: bool,
+    checkpoint_every: Option<f64>,
+) -> Result<Option<usize>, EfsiError> {
+    let opts = options(checkpoint_every)?;
+    let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
-    let mut progress = |p: &Progress| {
-        if p.wall - last_draw > 0.1 || p.t >= p.end {
-            last_draw = p.wall;
-            bar.set_position((1000.0 * p.t / p.end).round() as u64);
-            bar.set_message(format!(
-                "t = {:.4e} / {:.4e}  step {}  Δt = {:.3e}",
-                p.t, p.end, p.step, p.dt
-            ));
-        }
-    };
-    let outcome = run(&mut sim, &dir, &mut progress);
+    let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
+    let result = resume(dir, &efsi_stages::builtin(), &opts, &mut progress);
+    bar.finish_and_clear();
+    let (sim, outcome) = result?;
+    Ok(report(&sim, &outcome, dir))
+}
+
+fn run_scene(
+    path: &Path,
+    out: Option<PathBuf>,
+    print_schedule: bool,
+    quiet: bool,
+    checkpoint_every: Option<f64>,
+) -> Result<Option<usize>, EfsiError> {
+    let mut sim = load(path)?;
+    if print_schedule {
+        println!("{}", sim.pipeline());
+        return Ok(None);
+    }
+    let dir = out
+        .or_else(|| sim.scene.output.folder.clone())
+        .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
+    let opts = options(checkpoint_every)?;
+    let bar = progress_bar(quiet);
+    let mut last_draw = 0.0;
+    let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
+    let outcome = run_with(&mut sim, &dir, &opts, &mut progress);
     bar.finish_and_clear();
     let outcome = outcome?;
+    Ok(report(&sim, &outcome, &dir))
+}
+
+/// Print the outcome and the timing table; the signal that stopped the run, if one did.
+fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
     let cells = sim.grid.cells() as f64;
-    let steps = outcome.steps.max(1) as f64;
+    let steps = outcome.steps_this_run.max(1) as f64;
+    if let Some((step, t, version)) = &outcome.resumed_from {
+        let other = if version != env!("CARGO_PKG_VERSION") {
+            format!(" (written by efsi {version})")
+        } else {
+            String::new()
+        };
+        println!("resumed from the checkpoint at step {step}, t = {t:.6e}{other}");
+    }
     println!(
         "{}: {:?} at t = {:.6e} after {} steps in {:.2} s ({:.0} ns per cell-step); outputs in {}",
         sim.scene.name,
@@ -157,7 +261,22 @@ fn run_scene(
             s.iterations as f64 / steps
         );
     }
-    Ok(())
+    match outcome.stop {
+        StopReason::Interrupted { signal } => {
+            let ck = outcome
+                .checkpoint
+                .as_ref()
+                .map_or_else(|| "-".to_string(), |p| p.display().to_string());
+            eprintln!(
+                "stopped by signal {signal} after step {} (t = {:.6e}); checkpoint {ck}; continue with `efsi resume {}`",
+                outcome.steps,
+                outcome.t,
+                dir.display()
+            );
+            Some(signal)
+        }
+        _ => None,
+    }
 }
 
 /// `efsi laws`: describes every law found; exit code 2 if any library could not be read.

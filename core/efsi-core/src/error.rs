@@ -40,6 +40,34 @@ pub enum EfsiError {
         /// Step reached.
         step: u64,
     },
+    /// A checkpoint cannot be read or resumed (corrupt, another format version, written for a
+    /// different scene or law), or a snapshot does not fit the simulation it is restored into.
+    /// `what` is the file (or `snapshot`); the message says what differs.
+    #[error("{what}: {message}")]
+    Checkpoint {
+        /// The checkpoint file, or `snapshot` for an in-memory one.
+        what: String,
+        /// What is wrong or what differs.
+        message: String,
+    },
+    /// A step failed; the state at the start of that step (the last good one) was saved.
+    #[error(
+        "{error}\nthe last good state (step {step}, t = {t:.6e}) was saved {}to the checkpoint {}",
+        vtk.as_ref().map_or(String::new(), |v| format!("to {} and ", v.display())),
+        checkpoint.display()
+    )]
+    Saved {
+        /// What stopped the run.
+        error: Box<EfsiError>,
+        /// Step count of the saved state.
+        step: u64,
+        /// Time of the saved state.
+        t: f64,
+        /// The VTK file of the saved state (None when the scene writes no VTK).
+        vtk: Option<PathBuf>,
+        /// The checkpoint file.
+        checkpoint: PathBuf,
+    },
     /// An output could not be written.
     #[error("{path}: {source}")]
     Io {
@@ -51,12 +79,16 @@ pub enum EfsiError {
 }
 
 impl EfsiError {
-    /// Process exit code: 2 for bad input, 3 for a run that failed numerically, 1 for I/O.
+    /// Process exit code: 2 for bad input (also a checkpoint that cannot be resumed), 3 for a
+    /// run that failed numerically, 1 for I/O. (The CLI exits with 130 / 143 after SIGINT /
+    /// SIGTERM; those are not errors.)
     pub fn exit_code(&self) -> i32 {
         match self {
             EfsiError::Scene(_) | EfsiError::Config { .. } | EfsiError::Schedule(_) => 2,
             EfsiError::Stage(_) | EfsiError::Unstable { .. } => 3,
             EfsiError::Io { .. } => 1,
+            EfsiError::Checkpoint { .. } => 2,
+            EfsiError::Saved { error, .. } => error.exit_code(),
         }
     }
 

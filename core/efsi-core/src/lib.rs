@@ -6,6 +6,7 @@
 //! stages are plugins (crate `efsi-stages`) that attach to the phases named by [`schedule`].
 
 pub mod bc;
+pub mod checkpoint;
 pub mod error;
 pub mod field;
 pub mod grid;
@@ -22,6 +23,7 @@ pub mod solver;
 pub mod state;
 
 pub use bc::BoundarySet;
+pub use checkpoint::{Checkpoint, CheckpointFile, Snapshot};
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};

@@ -4,21 +4,44 @@
 //! A run writes into its output folder:
 //! - `fields/<name>_<step>.vtr` and `fields.pvd` (VTK XML for ParaView; the collection is
 //!   rewritten after each file, so it is valid at every moment of the run);
-//! - `probes.csv`: header `t,<columns…>`, one row per sample, flushed row by row;
+//! - `probes.csv`: header `t,<columns…>`, one row per sample;
 //! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields;
-//! - `run.json`: the scene as read, efsi version, steps, wall time, wall time per stage.
+//! - `run.json`: the scene as read, efsi version, steps, wall time, wall time per stage;
+//! - `checkpoint/latest.efsick`: the latest checkpoint ([`crate::checkpoint`]), written every
+//!   [`RunOptions::checkpoint_every`] of simulated time (at the end of the first step that
+//!   reaches each multiple: checkpoints never change Δt, so a run with them is bit-identical to
+//!   one without), when a stop is requested ([`RunOptions::stop`], set by the CLI on SIGINT /
+//!   SIGTERM) and when a step fails.
+//!
+//! **Nothing half-written.** Every file but `probes.csv` is written to a temporary name and
+//! renamed ([`crate::output::atomic`]). `probes.csv` grows by appends — rewriting it whole for
+//! every row would cost time quadratic in its length — each row one `write` of a complete
+//! line; its header is written atomically, and a resumed run first truncates it to the length
+//! recorded in the checkpoint, so rows are neither duplicated nor lost.
+//!
+//! **A failed step** (a stage error such as a NaN/Inf found after a stage, a solver that did not
+//! converge, a collapsing Δt) stops the run with the error; before that the state at the start
+//! of the failed step — the last good one, kept in memory every step
+//! ([`RunOptions::save_last_good`]) — is written as `fields/<name>_<step>_last_good.vtr` (with a
+//! `.pvd` entry at its time) and as the checkpoint ([`EfsiError::Saved`]).
+//!
+//! [`resume`] continues a run from its latest checkpoint, appending to the same outputs.
 
+use crate::checkpoint::{self, Checkpoint, CheckpointFile, LawIdentity, OutputState};
 use crate::error::EfsiError;
 use crate::field::Field;
 use crate::grid::Grid;
 use crate::output::vtk::{CellArray, PvdCollection, write_vtr};
 use crate::probes;
-use crate::scene::{ProbeSpec, ProfileSpec};
+use crate::scene::{ProbeSpec, ProfileSpec, Scene};
+use crate::schedule::StagePlugin;
 use crate::simulation::Simulation;
 use crate::state::State;
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::fs::{self, File, OpenOptions};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// What the progress display is told after each step.
@@ -43,6 +66,37 @@ pub enum StopReason {
     EndTime,
     /// The flow became steady (`time.steady`).
     Steady,
+    /// A stop was requested ([`RunOptions::stop`]; the CLI's SIGINT / SIGTERM): the run ended
+    /// after a complete step and wrote a checkpoint to resume from.
+    Interrupted {
+        /// The signal number that was stored in the stop flag.
+        signal: usize,
+    },
+}
+
+/// How a run is driven besides its scene.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Write a checkpoint every this much simulated time (default: none; a checkpoint is still
+    /// written when the run is stopped or a step fails).
+    pub checkpoint_every: Option<f64>,
+    /// A flag checked after every step: when it holds a non-zero value (a signal number) the run
+    /// writes a checkpoint and stops with [`StopReason::Interrupted`] (default: none).
+    pub stop: Option<Arc<AtomicUsize>>,
+    /// Keep a copy of the state at the start of every step, to save it if the step fails
+    /// (default: true; one copy of the fields per step, measured < 0.5 % of a step: 0.02 ms against 36 ms
+    /// for a 128² cavity, 0.04 ms against 27 ms for a 64² elastic disk).
+    pub save_last_good: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            checkpoint_every: None,
+            stop: None,
+            save_last_good: true,
+        }
+    }
 }
 
 /// Summary of a finished run.
@@ -58,6 +112,12 @@ pub struct RunOutcome {
     pub stop: StopReason,
     /// The output folder.
     pub out_dir: PathBuf,
+    /// Steps taken in this process (fewer than `steps` after a resume).
+    pub steps_this_run: u64,
+    /// The checkpoint this run resumed from: its step, time and the efsi version that wrote it.
+    pub resumed_from: Option<(u64, f64, String)>,
+    /// The latest checkpoint written, if any.
+    pub checkpoint: Option<PathBuf>,
 }
 
 /// Format a time for file names: shortest decimal, e.g. `0.5`, `30`, `2.8`.
@@ -80,27 +140,67 @@ pub struct Outputs {
     probe_every: Option<f64>,
     probe_count: u64,
     probes: Vec<ProbeSpec>,
-    probe_file: BufWriter<File>,
+    probe_path: PathBuf,
+    probe_file: File,
+    probe_bytes: u64,
     row: Vec<f64>,
     profiles: Vec<(ProfileSpec, Vec<f64>)>,
     end: f64,
+    checkpoint_every: Option<f64>,
+    checkpoint_count: u64,
+}
+
+fn probe_header(probes: &[ProbeSpec]) -> String {
+    let mut header = vec!["t".to_string()];
+    for p in probes {
+        header.extend(probes::columns(p));
+    }
+    header.join(",") + "\n"
+}
+
+/// Create the output folders; fails (naming the folder) if one cannot be made, e.g. a path
+/// through a regular file.
+fn make_dirs(dir: &Path) -> Result<(), EfsiError> {
+    for d in [
+        dir.to_path_buf(),
+        dir.join("fields"),
+        dir.join("profiles"),
+        dir.join("checkpoint"),
+    ] {
+        fs::create_dir_all(&d).map_err(|e| EfsiError::io(&d, e))?;
+    }
+    Ok(())
+}
+
+fn open_append(path: &Path) -> Result<File, EfsiError> {
+    OpenOptions::new()
+        .append(true)
+        .open(path)
+        .map_err(|e| EfsiError::io(path, e))
 }
 
 impl Outputs {
     /// Create the output folder and open the writers (fails before any step if it cannot).
-    pub fn new(sim: &Simulation, dir: &Path) -> Result<Outputs, EfsiError> {
+    /// Checkpoints are due every `checkpoint_every` of simulated time, if given.
+    pub fn new(
+        sim: &Simulation,
+        dir: &Path,
+        checkpoint_every: Option<f64>,
+    ) -> Result<Outputs, EfsiError> {
         let o = &sim.scene.output;
-        for d in [dir.to_path_buf(), dir.join("fields"), dir.join("profiles")] {
-            fs::create_dir_all(&d).map_err(|e| EfsiError::io(&d, e))?;
+        make_dirs(dir)?;
+        // A checkpoint left by an earlier run in this folder must not be resumed into this one.
+        let stale = dir.join(checkpoint::LATEST);
+        match fs::remove_file(&stale) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(EfsiError::io(&stale, e));
+            }
+            _ => {}
         }
-        let path = dir.join("probes.csv");
-        let file = File::create(&path).map_err(|e| EfsiError::io(&path, e))?;
-        let mut probe_file = BufWriter::new(file);
-        let mut header = vec!["t".to_string()];
-        for p in &o.probes {
-            header.extend(probes::columns(p));
-        }
-        writeln!(probe_file, "{}", header.join(",")).map_err(|e| EfsiError::io(&path, e))?;
+        let probe_path = dir.join("probes.csv");
+        let header = probe_header(&o.probes);
+        crate::output::atomic::write_atomically(&probe_path, |w| w.write_all(header.as_bytes()))
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
         let profiles = o
             .profiles
             .iter()
@@ -111,19 +211,133 @@ impl Outputs {
                 (p.clone(), times)
             })
             .collect();
+        // The collection starts empty: a stale one from an earlier run in this folder goes.
+        let pvd = PvdCollection::new(dir.join("fields.pvd"));
+        if o.vtk_every.is_some() {
+            pvd.write()
+                .map_err(|e| EfsiError::io(dir.join("fields.pvd"), e))?;
+        }
         Ok(Outputs {
             dir: dir.to_path_buf(),
             vtk_every: o.vtk_every,
             vtk_count: 0,
-            pvd: PvdCollection::new(dir.join("fields.pvd")),
+            pvd,
             probe_every: o.probe_every,
             probe_count: 0,
             probes: o.probes.clone(),
-            probe_file,
+            probe_file: open_append(&probe_path)?,
+            probe_path,
+            probe_bytes: header.len() as u64,
             row: Vec::new(),
             profiles,
             end: sim.scene.time.end,
+            checkpoint_every,
+            checkpoint_count: 1,
         })
+    }
+
+    /// Reopen the writers of a run that stopped at a checkpoint with bookkeeping `state`:
+    /// `probes.csv` is truncated to its length at the checkpoint (its header must match the
+    /// scene's probes) and `fields.pvd` rewritten with the checkpoint's entries, so what the
+    /// resumed run writes neither duplicates nor loses rows.
+    pub fn resume(
+        sim: &Simulation,
+        dir: &Path,
+        state: &OutputState,
+        checkpoint_every: Option<f64>,
+    ) -> Result<Outputs, EfsiError> {
+        let o = &sim.scene.output;
+        make_dirs(dir)?;
+        let probe_path = dir.join("probes.csv");
+        let header = probe_header(&o.probes);
+        let fail = |message: String| EfsiError::Checkpoint {
+            what: probe_path.display().to_string(),
+            message,
+        };
+        let mut head = Vec::new();
+        File::open(&probe_path)
+            .and_then(|f| f.take(header.len() as u64).read_to_end(&mut head))
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        if head != header.as_bytes() {
+            return Err(fail(format!(
+                "its header is not the scene's `{}`",
+                header.trim_end()
+            )));
+        }
+        let len = fs::metadata(&probe_path)
+            .map_err(|e| EfsiError::io(&probe_path, e))?
+            .len();
+        if len < state.probe_bytes {
+            return Err(fail(format!(
+                "it has {len} bytes, fewer than the {} it had at the checkpoint: rows were lost",
+                state.probe_bytes
+            )));
+        }
+        let file = open_append(&probe_path)?;
+        file.set_len(state.probe_bytes)
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        if state.profile_times.len() != o.profiles.len() {
+            return Err(fail(format!(
+                "the checkpoint records {} profiles, the scene has {}",
+                state.profile_times.len(),
+                o.profiles.len()
+            )));
+        }
+        let profiles = o
+            .profiles
+            .iter()
+            .cloned()
+            .zip(state.profile_times.iter().cloned())
+            .collect();
+        let pvd = PvdCollection::with_entries(dir.join("fields.pvd"), state.pvd.clone());
+        if o.vtk_every.is_some() {
+            pvd.write()
+                .map_err(|e| EfsiError::io(dir.join("fields.pvd"), e))?;
+        }
+        Ok(Outputs {
+            dir: dir.to_path_buf(),
+            vtk_every: o.vtk_every,
+            vtk_count: state.vtk_count,
+            pvd,
+            probe_every: o.probe_every,
+            probe_count: state.probe_count,
+            probes: o.probes.clone(),
+            probe_file: file,
+            probe_path,
+            probe_bytes: state.probe_bytes,
+            row: Vec::new(),
+            profiles,
+            end: sim.scene.time.end,
+            checkpoint_every,
+            checkpoint_count: state.checkpoint_count,
+        })
+    }
+
+    /// The bookkeeping a checkpoint records (see [`Outputs::resume`]).
+    pub fn state(&self) -> OutputState {
+        OutputState {
+            vtk_count: self.vtk_count,
+            probe_count: self.probe_count,
+            probe_bytes: self.probe_bytes,
+            pvd: self.pvd.entries().to_vec(),
+            profile_times: self.profiles.iter().map(|(_, t)| t.clone()).collect(),
+            checkpoint_every: self.checkpoint_every,
+            checkpoint_count: self.checkpoint_count,
+        }
+    }
+
+    /// Whether a periodic checkpoint is due at `t`; if so, counts it.
+    fn checkpoint_due(&mut self, t: f64) -> bool {
+        let Some(e) = self.checkpoint_every else {
+            return false;
+        };
+        if !due(t, self.checkpoint_count as f64 * e) {
+            return false;
+        }
+        while due(t, self.checkpoint_count as f64 * e) {
+            self.checkpoint_count += 1;
+        }
+        true
     }
 
     /// The next time an output is due after `t` (or the end).
@@ -157,11 +371,12 @@ impl Outputs {
                 probes::evaluate(p, &sim.grid, &sim.state, &mut self.row);
             }
             let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
-            let path = self.dir.join("probes.csv");
-            writeln!(self.probe_file, "{}", line.join(",")).map_err(|e| EfsiError::io(&path, e))?;
+            let line = line.join(",") + "\n";
+            // One write of a complete line: a reader never sees half a row.
             self.probe_file
-                .flush()
-                .map_err(|e| EfsiError::io(&path, e))?;
+                .write_all(line.as_bytes())
+                .map_err(|e| EfsiError::io(&self.probe_path, e))?;
+            self.probe_bytes += line.len() as u64;
             if let Some(e) = self.probe_every {
                 while due(t, self.probe_count as f64 * e) {
                     self.probe_count += 1;
@@ -172,7 +387,7 @@ impl Outputs {
             .vtk_every
             .is_some_and(|e| due(t, self.vtk_count as f64 * e));
         if vtk_due || (last && self.vtk_every.is_some()) {
-            self.write_fields(&sim.grid, &sim.state, &sim.scene.name)?;
+            self.write_fields(&sim.grid, &sim.state, &sim.scene.name, "")?;
             if let Some(e) = self.vtk_every {
                 while due(t, self.vtk_count as f64 * e) {
                     self.vtk_count += 1;
@@ -192,7 +407,15 @@ impl Outputs {
         Ok(())
     }
 
-    fn write_fields(&mut self, grid: &Grid, state: &State, name: &str) -> Result<(), EfsiError> {
+    /// Write `state` as `fields/<name>_<step><suffix>.vtr` and add it to the collection;
+    /// returns the file's path.
+    fn write_fields(
+        &mut self,
+        grid: &Grid,
+        state: &State,
+        name: &str,
+        suffix: &str,
+    ) -> Result<PathBuf, EfsiError> {
         let (nx, ny) = (grid.nx, grid.ny);
         let n = nx * ny;
         let mut vel = vec![0.0; 3 * n];
@@ -259,14 +482,14 @@ impl Outputs {
                 values: v,
             });
         }
-        let file = format!("{name}_{:06}.vtr", state.step);
+        let file = format!("{name}_{:06}{suffix}.vtr", state.step);
         let path = self.dir.join("fields").join(&file);
         write_vtr(&path, grid, state.t, &arrays).map_err(|e| EfsiError::io(&path, e))?;
         let rel = format!("fields/{file}");
         self.pvd
             .add(state.t, &rel)
             .map_err(|e| EfsiError::io(self.dir.join("fields.pvd"), e))?;
-        Ok(())
+        Ok(path)
     }
 
     fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<(), EfsiError> {
@@ -304,7 +527,7 @@ impl Outputs {
     pub fn write_summary(&self, sim: &Simulation, outcome: &RunOutcome) -> Result<(), EfsiError> {
         let timings = sim.pipeline().timings();
         let cells = sim.grid.cells() as f64;
-        let steps = outcome.steps.max(1) as f64;
+        let steps = outcome.steps_this_run.max(1) as f64;
         let json = serde_json::json!({
             "efsi_version": env!("CARGO_PKG_VERSION"),
             "scene": serde_json::to_value(&sim.scene).unwrap_or_default(),
@@ -312,6 +535,8 @@ impl Outputs {
             "stop": outcome.stop,
             "t_end": outcome.t,
             "steps": outcome.steps,
+            "steps_this_run": outcome.steps_this_run,
+            "resumed_from_step": outcome.resumed_from.as_ref().map(|r| r.0),
             "cells": sim.grid.cells(),
             "wall_seconds": outcome.wall_seconds,
             "ns_per_cell_step": outcome.wall_seconds * 1e9 / (cells * steps),
@@ -332,26 +557,146 @@ impl Outputs {
     }
 }
 
-/// Run `sim` to its end time (or steady state), writing outputs into `dir`.
+/// Run `sim` to its end time (or steady state), writing outputs into `dir`, with the default
+/// [`RunOptions`].
 pub fn run(
     sim: &mut Simulation,
     dir: &Path,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<RunOutcome, EfsiError> {
+    run_with(sim, dir, &RunOptions::default(), progress)
+}
+
+/// Run `sim` to its end time (or steady state, or a stop request), writing outputs into `dir`.
+pub fn run_with(
+    sim: &mut Simulation,
+    dir: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RunOutcome, EfsiError> {
     let start = Instant::now();
-    let mut out = Outputs::new(sim, dir)?;
+    let mut out = Outputs::new(sim, dir, options.checkpoint_every)?;
+    let law = checkpoint::law_identity(&sim.scene)?;
     out.emit(sim, false)?;
+    drive(sim, &mut out, &law, options, progress, start, None)
+}
+
+/// Continue the run in `dir` from its latest checkpoint (`dir/checkpoint/latest.efsick`),
+/// appending to its outputs. The scene is read again from the file the run was started with
+/// and must be unchanged, and so must the law library; otherwise the error lists what
+/// differs. `options.checkpoint_every` defaults to the interrupted run's. Returns the
+/// simulation (for its timings) and the outcome.
+pub fn resume(
+    dir: &Path,
+    plugins: &[&dyn StagePlugin],
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<(Simulation, RunOutcome), EfsiError> {
+    let start = Instant::now();
+    let path = dir.join(checkpoint::LATEST);
+    let what = path.display().to_string();
+    if !path.is_file() {
+        return Err(EfsiError::Checkpoint {
+            what,
+            message: format!(
+                "no checkpoint to resume from in {} (a run writes one with --checkpoint-every T, when stopped by SIGINT/SIGTERM, or when a step fails)",
+                dir.display()
+            ),
+        });
+    }
+    let file = CheckpointFile::read(&path)?;
+    let scene = Scene::load(&file.scene_path)?;
+    checkpoint::check_resumable(&file, &scene, &what)?;
+    let law = checkpoint::law_identity(&scene)?;
+    let mut sim = Simulation::new(scene, &file.scene_path, plugins)?;
+    let snapshot = file.record.clone().into_snapshot(sim.snapshot(), &what)?;
+    sim.restore(&snapshot)?;
+    let mut options = options.clone();
+    options.checkpoint_every = options.checkpoint_every.or(file.outputs.checkpoint_every);
+    let mut out = Outputs::resume(&sim, dir, &file.outputs, options.checkpoint_every)?;
+    let from = Some((snapshot.step(), snapshot.t(), file.efsi_version.clone()));
+    let outcome = drive(&mut sim, &mut out, &law, &options, progress, start, from)?;
+    Ok((sim, outcome))
+}
+
+/// Write the checkpoint of `snapshot` with the output bookkeeping `outputs`.
+fn save_checkpoint(
+    sim: &Simulation,
+    law: &Option<LawIdentity>,
+    outputs: OutputState,
+    snapshot: crate::checkpoint::Snapshot,
+    dir: &Path,
+) -> Result<PathBuf, EfsiError> {
+    let path = dir.join(checkpoint::LATEST);
+    let c = Checkpoint {
+        efsi_version: env!("CARGO_PKG_VERSION").to_string(),
+        scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
+        scene_ron: sim.scene.to_ron(),
+        law: law.clone(),
+        outputs,
+        snapshot,
+    };
+    c.write(&path)?;
+    Ok(path)
+}
+
+/// The step loop shared by [`run_with`] and [`resume`].
+fn drive(
+    sim: &mut Simulation,
+    out: &mut Outputs,
+    law: &Option<LawIdentity>,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&Progress),
+    start: Instant,
+    resumed_from: Option<(u64, f64, String)>,
+) -> Result<RunOutcome, EfsiError> {
     let end = sim.scene.time.end;
+    let first_step = sim.state.step;
     let mut stop = StopReason::EndTime;
+    let mut last_good = options.save_last_good.then(|| sim.snapshot());
+    let mut latest = None;
+    let stop_signal = || {
+        options
+            .stop
+            .as_ref()
+            .map_or(0, |s| s.load(Ordering::SeqCst))
+    };
     while !due(sim.state.t, end) {
+        let signal = stop_signal();
+        if signal != 0 {
+            latest = Some(save_checkpoint(
+                sim,
+                law,
+                out.state(),
+                sim.snapshot(),
+                &out.dir,
+            )?);
+            stop = StopReason::Interrupted { signal };
+            break;
+        }
         let until = out.next_event(sim.state.t);
         let until = if due(sim.state.t, until) {
             end.min(out.next_event(sim.state.t + 1e-9 * end))
         } else {
             until
         };
-        let dt = sim.next_dt(until)?;
-        sim.step(dt)?;
+        let dt = match sim.next_dt(until) {
+            Ok(dt) => dt,
+            Err(e) => {
+                // Nothing has changed yet: the current state is the last good one.
+                let good = sim.snapshot();
+                return Err(save_failure(sim, out, law, good, e));
+            }
+        };
+        if let Some(s) = &mut last_good {
+            sim.snapshot_into(s);
+        }
+        if let Err(e) = sim.step(dt) {
+            return Err(match last_good.take() {
+                Some(good) => save_failure(sim, out, law, good, e),
+                None => e,
+            });
+        }
         sim.snap_time(until);
         let finished = due(sim.state.t, end) || sim.is_steady();
         out.emit(sim, finished)?;
@@ -362,6 +707,15 @@ pub fn run(
             dt,
             wall: start.elapsed().as_secs_f64(),
         });
+        if out.checkpoint_due(sim.state.t) {
+            latest = Some(save_checkpoint(
+                sim,
+                law,
+                out.state(),
+                sim.snapshot(),
+                &out.dir,
+            )?);
+        }
         if sim.is_steady() {
             stop = StopReason::Steady;
             break;
@@ -372,7 +726,10 @@ pub fn run(
         t: sim.state.t,
         wall_seconds: start.elapsed().as_secs_f64(),
         stop,
-        out_dir: dir.to_path_buf(),
+        out_dir: out.dir.clone(),
+        steps_this_run: sim.state.step - first_step,
+        resumed_from,
+        checkpoint: latest,
     };
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
@@ -402,4 +759,36 @@ fn vtk_tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
         }
     }
     out
+}
+
+/// A step failed with `error`: write the last good state `good` as VTK (when the scene writes
+/// VTK) and as the checkpoint, and return the error with where they went. If saving fails too,
+/// the original error is returned.
+fn save_failure(
+    sim: &Simulation,
+    out: &mut Outputs,
+    law: &Option<LawIdentity>,
+    good: crate::checkpoint::Snapshot,
+    error: EfsiError,
+) -> EfsiError {
+    let (step, t) = (good.step(), good.t());
+    let state = out.state();
+    let vtk = if out.vtk_every.is_some() {
+        match out.write_fields(&sim.grid, &good.state, &sim.scene.name, "_last_good") {
+            Ok(p) => Some(p),
+            Err(_) => return error,
+        }
+    } else {
+        None
+    };
+    match save_checkpoint(sim, law, state, good, &out.dir) {
+        Ok(checkpoint) => EfsiError::Saved {
+            error: Box::new(error),
+            step,
+            t,
+            vtk,
+            checkpoint,
+        },
+        Err(_) => error,
+    }
 }

@@ -152,6 +152,30 @@ pub trait Stage: Send {
     fn projects(&self) -> bool {
         false
     }
+
+    /// The stage's own data that carries from one step to the next and is not in the
+    /// [`State`] (e.g. a previous velocity kept for a time average), flattened to numbers, for
+    /// checkpoints and in-memory snapshots ([`crate::checkpoint`]). Scratch space that every
+    /// step overwrites before reading does not belong here. Default: nothing.
+    ///
+    /// A stage that returns data here must accept it back in [`restore`](Self::restore): a run
+    /// restored from a snapshot must continue bit for bit as if it had never stopped.
+    fn save(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// Take back what [`save`](Self::save) returned (of a stage built from the same scene).
+    /// The default accepts only nothing; the error says what does not fit.
+    fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        if data.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "the stage keeps no state between steps, but the snapshot holds {} values for it",
+                data.len()
+            ))
+        }
+    }
 }
 
 /// A kind of stage: its declarations and a factory.
@@ -539,6 +563,39 @@ impl Pipeline {
                     }
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Each stage's carried-over data ([`Stage::save`]), by name, in execution order.
+    pub fn save_stages(&self) -> Vec<(String, Vec<f64>)> {
+        self.entries
+            .iter()
+            .map(|e| (e.name.to_string(), e.stage.save()))
+            .collect()
+    }
+
+    /// Give each stage back its data ([`Stage::restore`]). `saved` must name the same stages in
+    /// the same order (it does for a pipeline built from the same scene); otherwise, or if a
+    /// stage refuses its data, the error names the stage.
+    pub fn restore_stages(&mut self, saved: &[(String, Vec<f64>)]) -> Result<(), StageError> {
+        let names: Vec<&str> = self.entries.iter().map(|e| e.name).collect();
+        let theirs: Vec<&str> = saved.iter().map(|(n, _)| n.as_str()).collect();
+        if names != theirs {
+            return Err(StageError {
+                stage: "pipeline".into(),
+                message: format!(
+                    "the snapshot was taken with stages [{}], this pipeline has [{}]",
+                    theirs.join(", "),
+                    names.join(", ")
+                ),
+            });
+        }
+        for (e, (_, data)) in self.entries.iter_mut().zip(saved) {
+            e.stage.restore(data).map_err(|message| StageError {
+                stage: e.name.to_string(),
+                message,
+            })?;
         }
         Ok(())
     }

@@ -1,6 +1,8 @@
 //! The model and its stepper: a scene turned into a grid, boundary conditions, a state and a
 //! checked pipeline, advanced one step at a time. The run loop and the outputs are separate
-//! ([`crate::run`]), so tests and the FMU drive a [`Simulation`] directly.
+//! ([`crate::run`]), so tests and the FMU drive a [`Simulation`] directly; its evolving data is
+//! copied out and back with [`Simulation::snapshot`] and [`Simulation::restore`]
+//! ([`crate::checkpoint`]).
 
 use crate::bc::BoundarySet;
 use crate::error::EfsiError;
@@ -180,6 +182,21 @@ impl Simulation {
     /// The pipeline (for printing, timings and statistics).
     pub fn pipeline(&self) -> &Pipeline {
         &self.pipeline
+    }
+
+    pub(crate) fn pipeline_mut(&mut self) -> &mut Pipeline {
+        &mut self.pipeline
+    }
+
+    /// The private stepping data a snapshot carries: the last rate of change and the velocity
+    /// scale. (`previous` is not: [`step`](Self::step) overwrites it before reading it.)
+    pub(crate) fn stepping(&self) -> (f64, f64) {
+        (self.last_change, self.velocity_scale)
+    }
+
+    pub(crate) fn set_stepping(&mut self, last_change: f64, velocity_scale: f64) {
+        self.last_change = last_change;
+        self.velocity_scale = velocity_scale;
     }
 
     /// The Δt for the next step, at most `until − t` (to land on an output time or the end).

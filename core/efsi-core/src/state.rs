@@ -97,6 +97,36 @@ impl Deformation {
         }
     }
 
+    /// Names of the four components, in storage order.
+    pub const COMPONENTS: [&'static str; 4] = ["11", "22", "33", "12"];
+
+    /// The six tensors by name: `b`, `start`, `advection`, `advection_prev`, `stretching`,
+    /// `explicit`.
+    pub fn parts(&self) -> [(&'static str, &[Field; 4]); 7] {
+        [
+            ("b", &self.b),
+            ("start", &self.start),
+            ("advection", &self.advection),
+            ("advection_prev", &self.advection_prev),
+            ("stretching", &self.stretching),
+            ("explicit", &self.explicit),
+            ("stress", &self.stress),
+        ]
+    }
+
+    /// [`parts`](Self::parts), mutable.
+    pub fn parts_mut(&mut self) -> [(&'static str, &mut [Field; 4]); 7] {
+        [
+            ("b", &mut self.b),
+            ("start", &mut self.start),
+            ("advection", &mut self.advection),
+            ("advection_prev", &mut self.advection_prev),
+            ("stretching", &mut self.stretching),
+            ("explicit", &mut self.explicit),
+            ("stress", &mut self.stress),
+        ]
+    }
+
     /// The first non-finite component of `b` in the interior: `(component name, (i, j))`.
     pub fn first_non_finite(&self, nx: usize, ny: usize) -> Option<(&'static str, (usize, usize))> {
         const NAMES: [&str; 4] = ["11", "22", "33", "12"];
@@ -133,6 +163,102 @@ impl State {
                 .contains(&FieldId::Deformation)
                 .then(|| Deformation::zeros(grid)),
         }
+    }
+
+    /// Every stored array with a stable name, in a fixed order: `u`, `v`, `p`, `rho`, `mu`, then
+    /// `phi` and the seven deformation tensors (`B.b.11` … `B.stress.12`) when allocated. What a
+    /// checkpoint saves: with `t`, `step` and `dt_prev` this is the whole state, ghosts included.
+    pub fn arrays(&self) -> Vec<(String, &Field)> {
+        let mut out: Vec<(String, &Field)> = vec![
+            ("u".into(), &self.u),
+            ("v".into(), &self.v),
+            ("p".into(), &self.p),
+            ("rho".into(), &self.rho),
+            ("mu".into(), &self.mu),
+        ];
+        if let Some(phi) = &self.phi {
+            out.push(("phi".into(), phi));
+        }
+        if let Some(d) = &self.deformation {
+            for (part, t) in d.parts() {
+                for (c, f) in Deformation::COMPONENTS.iter().zip(t) {
+                    out.push((format!("B.{part}.{c}"), f));
+                }
+            }
+        }
+        out
+    }
+
+    /// The scalars that carry from step to step besides `t`, `step` and `dt_prev`, with stable
+    /// names: the elastic energy and stress power when a solid has a law. A checkpoint saves
+    /// them with the arrays.
+    pub fn scalars(&self) -> Vec<(&'static str, f64)> {
+        match &self.deformation {
+            Some(d) => vec![
+                ("elastic_energy", d.elastic_energy),
+                ("elastic_power", d.elastic_power),
+            ],
+            None => Vec::new(),
+        }
+    }
+
+    /// [`scalars`](Self::scalars), mutable, same names and order.
+    pub fn scalars_mut(&mut self) -> Vec<(&'static str, &mut f64)> {
+        match &mut self.deformation {
+            Some(d) => vec![
+                ("elastic_energy", &mut d.elastic_energy),
+                ("elastic_power", &mut d.elastic_power),
+            ],
+            None => Vec::new(),
+        }
+    }
+
+    /// [`arrays`](Self::arrays), mutable, same names and order.
+    pub fn arrays_mut(&mut self) -> Vec<(String, &mut Field)> {
+        let mut out: Vec<(String, &mut Field)> = vec![
+            ("u".into(), &mut self.u),
+            ("v".into(), &mut self.v),
+            ("p".into(), &mut self.p),
+            ("rho".into(), &mut self.rho),
+            ("mu".into(), &mut self.mu),
+        ];
+        if let Some(phi) = &mut self.phi {
+            out.push(("phi".into(), phi));
+        }
+        if let Some(d) = &mut self.deformation {
+            for (part, t) in d.parts_mut() {
+                for (c, f) in Deformation::COMPONENTS.iter().zip(t) {
+                    out.push((format!("B.{part}.{c}"), f));
+                }
+            }
+        }
+        out
+    }
+
+    /// Copy `other` into `self` without allocating. Both must hold the same arrays of the same
+    /// shapes (two states of one simulation do); returns whether they did (nothing is copied
+    /// otherwise).
+    pub fn copy_from(&mut self, other: &State) -> bool {
+        let theirs = other.arrays();
+        let mut mine = self.arrays_mut();
+        let fits = mine.len() == theirs.len()
+            && mine
+                .iter()
+                .zip(&theirs)
+                .all(|((a, f), (b, g))| a == b && f.data().len() == g.data().len());
+        if !fits {
+            return false;
+        }
+        for ((_, f), (_, g)) in mine.iter_mut().zip(&theirs) {
+            f.copy_from(g);
+        }
+        self.t = other.t;
+        self.step = other.step;
+        self.dt_prev = other.dt_prev;
+        for ((_, a), (_, b)) in self.scalars_mut().into_iter().zip(other.scalars()) {
+            *a = b;
+        }
+        true
     }
 
     /// The field stored for `id`, if allocated.

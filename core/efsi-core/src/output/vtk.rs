@@ -247,6 +247,15 @@ impl PvdCollection {
         }
     }
 
+    /// A collection at `path` with `entries` already recorded (a resumed run's); nothing is
+    /// written until [`write`](Self::write) or [`add`](Self::add).
+    pub fn with_entries(path: impl Into<PathBuf>, entries: Vec<(f64, String)>) -> Self {
+        PvdCollection {
+            path: path.into(),
+            entries,
+        }
+    }
+
     /// The path of the `.pvd` file.
     pub fn path(&self) -> &Path {
         &self.path

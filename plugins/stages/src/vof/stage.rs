@@ -151,6 +151,25 @@ impl Stage for VofStage {
         (rate > 0.0).then(|| 0.5 / rate)
     }
 
+    /// The end-of-step velocity Vⁿ kept for the next step's average (padded u, then v).
+    fn save(&self) -> Vec<f64> {
+        [self.u_adv.data(), self.v_adv.data()].concat()
+    }
+
+    fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        let n = self.u_adv.data().len();
+        if data.len() != 2 * n {
+            return Err(format!(
+                "expected {} values (the previous velocity on this grid), got {}",
+                2 * n,
+                data.len()
+            ));
+        }
+        self.u_adv.data_mut().copy_from_slice(&data[..n]);
+        self.v_adv.data_mut().copy_from_slice(&data[n..]);
+        Ok(())
+    }
+
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let mut phi = state.phi.take().ok_or_else(missing)?;
         // ½(Vⁿ + Vⁿ⁺¹) in place of the stored Vⁿ — except in the first step, whose Vⁿ is the

@@ -1,0 +1,432 @@
+//! Reliability of a run: snapshots and checkpoints continue a run bit for bit, a resumed run
+//! appends to the same outputs without duplicating or losing rows, unreadable checkpoints are
+//! refused, and a step that blows up stops the run (exit code 3, naming the stage, field and
+//! cell) after saving the last good state as VTK and as a checkpoint.
+
+use efsi_core::checkpoint::{self, CheckpointFile};
+use efsi_core::run::{RunOptions, RunOutcome, StopReason, resume, run_with};
+use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_tests::run_until;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A lid-driven cavity with every kind of output and steadiness tracking on.
+const CAVITY: &str = r#"Scene(
+    name: "cavity",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 16, ny: 16),
+    time: (end: 1.0, cfl: 0.5, steady: 1e-12),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    output: (
+        vtk_every: 0.25,
+        probe_every: 0.05,
+        probes: [Point(name: "u_c", field: "u", at: (0.5, 0.5)), KineticEnergy, MaxDivergence],
+        profiles: [Line(name: "u", from: (0.5, 0.0), to: (0.5, 1.0), points: 17, fields: ["u", "p"], at: [0.5])],
+    ),
+)
+"#;
+
+/// A hyperelastic disk thrown sideways and falling in a box: advection, body force, viscous,
+/// elastic, projection, B update and VOF stages all run.
+const DISK: &str = r#"Scene(
+    name: "disk",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 16, ny: 16),
+    time: (end: 0.15, cfl: 0.4, dt_max: 0.005),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -9.81),
+    solid: (shape: Disk(center: (0.5, 0.6), radius: 0.2), density: 2.0, velocity: (0.5, 0.0),
+            law: (name: "neo_hookean", parameters: {"G": 100.0})),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    output: (
+        vtk_every: 0.05,
+        probe_every: 0.01,
+        probes: [KineticEnergy, SolidVolume, SolidCentroid, SolidVelocity],
+        profiles: [Line(name: "v", from: (0.5, 0.0), to: (0.5, 1.0), points: 17, fields: ["v", "solid_fraction"])],
+    ),
+)
+"#;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("efsi-ckpt-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Write `text` as `dir/scene.ron` and build its simulation.
+fn load(dir: &Path, text: &str) -> Simulation {
+    let path = dir.join("scene.ron");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Run to the end in `dir/a` (with periodic checkpoints); run again in `dir/b`, stopped after
+/// `stop_at` steps and resumed. Returns both simulations and outcomes.
+fn run_twice(
+    dir: &Path,
+    text: &str,
+    stop_at: u64,
+) -> (
+    (Simulation, RunOutcome),
+    (Simulation, RunOutcome, RunOutcome),
+) {
+    let mut a = load(dir, text);
+    let opts = RunOptions {
+        checkpoint_every: Some(0.02),
+        ..RunOptions::default()
+    };
+    let out_a = run_with(&mut a, &dir.join("a"), &opts, &mut |_| {}).unwrap();
+    assert!(dir.join("a").join(checkpoint::LATEST).is_file());
+
+    let mut b = load(dir, text);
+    let flag = Arc::new(AtomicUsize::new(0));
+    let opts = RunOptions {
+        stop: Some(flag.clone()),
+        ..RunOptions::default()
+    };
+    let first = run_with(&mut b, &dir.join("b"), &opts, &mut |p| {
+        if p.step == stop_at {
+            flag.store(2, Ordering::SeqCst);
+        }
+    })
+    .unwrap();
+    assert_eq!(first.stop, StopReason::Interrupted { signal: 2 });
+    assert_eq!(first.steps, stop_at);
+    drop(b);
+    let (b, second) = resume(
+        &dir.join("b"),
+        &efsi_stages::builtin(),
+        &RunOptions::default(),
+        &mut |_| {},
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    ((a, out_a), (b, first, second))
+}
+
+/// Every array of both states, compared bit for bit (ghosts included).
+fn assert_bit_identical(a: &Simulation, b: &Simulation) {
+    assert_eq!(a.state.step, b.state.step);
+    assert_eq!(a.state.t.to_bits(), b.state.t.to_bits());
+    assert_eq!(a.state.dt_prev.to_bits(), b.state.dt_prev.to_bits());
+    let (fa, fb) = (a.state.arrays(), b.state.arrays());
+    assert_eq!(fa.len(), fb.len());
+    for ((name, x), (_, y)) in fa.iter().zip(&fb) {
+        let differ = x
+            .data()
+            .iter()
+            .zip(y.data())
+            .filter(|(p, q)| p.to_bits() != q.to_bits())
+            .count();
+        assert_eq!(differ, 0, "{name}: {differ} values differ");
+    }
+    assert_eq!(
+        a.rate_of_change().to_bits(),
+        b.rate_of_change().to_bits(),
+        "rate of change"
+    );
+}
+
+/// The files of an output folder (relative names, sorted) except run.json and the checkpoint.
+fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for sub in ["", "fields", "profiles"] {
+        for e in std::fs::read_dir(dir.join(sub)).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_file() && p.file_name().unwrap() != "run.json" {
+                let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                out.push((rel, std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn check_resumed_run(name: &str, text: &str, stop_at: u64, steps: u64) {
+    let dir = scratch(name);
+    let ((a, out_a), (b, first, second)) = run_twice(&dir, text, stop_at);
+    assert_eq!(out_a.steps, steps, "{name}: steps of the reference run");
+    assert_eq!(second.steps, steps);
+    assert_eq!(second.steps_this_run, steps - stop_at);
+    assert_eq!(second.resumed_from.as_ref().unwrap().0, first.steps);
+    assert_bit_identical(&a, &b);
+    // The same files, byte for byte: VTK, the collection, probes (no duplicated or lost rows),
+    // profiles.
+    let (oa, ob) = (outputs(&dir.join("a")), outputs(&dir.join("b")));
+    let names = |o: &[(String, Vec<u8>)]| o.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&oa), names(&ob), "{name}");
+    for ((n, x), (_, y)) in oa.iter().zip(&ob) {
+        assert!(x == y, "{name}: {n} differs between the runs");
+    }
+    let json = std::fs::read_to_string(dir.join("b/run.json")).unwrap();
+    assert!(
+        json.contains(&format!("\"resumed_from_step\": {stop_at}")),
+        "{json}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_resumed_cavity_run_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("cavity", CAVITY, 23, 40);
+}
+
+#[test]
+fn a_resumed_fluid_structure_run_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("disk", DISK, 17, 30);
+}
+
+#[test]
+fn snapshot_and_restore_rewind_a_simulation_exactly() {
+    let dir = scratch("snapshot");
+    let mut s = load(&dir, DISK);
+    run_until(&mut s, 0.03, |_, _| {});
+    let snap = s.snapshot();
+    // The VOF stage's previous velocity (padded u and v) is in it; the others keep nothing.
+    let padded = s.state.u.data().len();
+    assert_eq!(snap.stage_data("vof").map(<[f64]>::len), Some(2 * padded));
+    assert_eq!(snap.stage_data("elastic"), Some(&[][..]));
+    assert_eq!(snap.stage_data("body_force"), Some(&[][..]));
+    assert_eq!(snap.stage_data("no_such_stage"), None);
+    assert!(snap.size_bytes() > 30 * 8 * padded);
+    run_until(&mut s, 0.06, |_, _| {});
+    let ahead = s.snapshot();
+    s.restore(&snap).unwrap();
+    assert_eq!(s.state.t, 0.03);
+    run_until(&mut s, 0.06, |_, _| {});
+    let mut again = load(&dir, DISK);
+    again.restore(&ahead).unwrap();
+    assert_bit_identical(&s, &again);
+    // Allocation-free refresh of an existing snapshot.
+    let mut reused = snap.clone();
+    s.snapshot_into(&mut reused);
+    assert_eq!(reused.step(), s.state.step);
+    // A snapshot of another scene does not fit, and the simulation is left untouched.
+    let mut cavity = load(&dir, CAVITY);
+    let before = cavity.snapshot();
+    let e = cavity.restore(&snap).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.to_string().starts_with("snapshot: it holds the fields ["),
+        "{e}"
+    );
+    assert!(e.to_string().contains("phi"), "{e}");
+    assert_eq!(cavity.state.step, before.step());
+}
+
+/// Write a checkpoint of a few steps of the cavity; returns its folder.
+fn cavity_checkpoint(name: &str) -> PathBuf {
+    let dir = scratch(name);
+    let mut s = load(&dir, CAVITY);
+    let flag = Arc::new(AtomicUsize::new(15));
+    let opts = RunOptions {
+        stop: Some(flag),
+        ..RunOptions::default()
+    };
+    // Stopped before the first step: a checkpoint at step 0.
+    let o = run_with(&mut s, &dir.join("out"), &opts, &mut |_| {}).unwrap();
+    assert_eq!(o.stop, StopReason::Interrupted { signal: 15 });
+    assert_eq!(o.steps, 0);
+    dir
+}
+
+fn resume_err(dir: &Path) -> EfsiError {
+    resume(
+        &dir.join("out"),
+        &efsi_stages::builtin(),
+        &RunOptions::default(),
+        &mut |_| {},
+    )
+    .err()
+    .expect("refused")
+}
+
+#[test]
+fn damaged_or_missing_checkpoints_are_refused_with_a_reason() {
+    let dir = cavity_checkpoint("damaged");
+    let path = dir.join("out").join(checkpoint::LATEST);
+    let good = std::fs::read(&path).unwrap();
+    let file = CheckpointFile::read(&path).unwrap();
+    assert_eq!(file.record.step(), 0);
+    assert_eq!(file.outputs.probe_count, 1);
+    assert!(file.scene_ron.contains("cavity"));
+    for (bytes, needle) in [
+        (good[..good.len() - 5].to_vec(), "truncated"),
+        (
+            {
+                let mut b = good.clone();
+                let k = b.len() / 2;
+                b[k] ^= 1;
+                b
+            },
+            "checksum",
+        ),
+        (b"not a checkpoint at all, just text".to_vec(), "EFSICKPT"),
+        (
+            {
+                let mut b = good.clone();
+                b[8] = 9;
+                b
+            },
+            "format version 9",
+        ),
+    ] {
+        std::fs::write(&path, &bytes).unwrap();
+        let e = resume_err(&dir);
+        assert_eq!(e.exit_code(), 2, "{e}");
+        let m = e.to_string();
+        assert!(m.contains("latest.efsick") && m.contains(needle), "{m}");
+    }
+    std::fs::remove_file(&path).unwrap();
+    let e = resume_err(&dir);
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.to_string().contains("no checkpoint to resume from"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_changed_scene_is_refused_naming_what_differs() {
+    let dir = cavity_checkpoint("changed");
+    let scene = dir.join("scene.ron");
+    std::fs::write(
+        &scene,
+        CAVITY
+            .replace("viscosity: 0.01", "viscosity: 0.02")
+            .replace("nx: 16", "nx: 17"),
+    )
+    .unwrap();
+    let e = resume_err(&dir);
+    assert_eq!(e.exit_code(), 2);
+    let m = e.to_string();
+    assert!(m.contains("cannot resume"), "{m}");
+    assert!(m.contains("scene: fluid.viscosity: 0.01 → 0.02"), "{m}");
+    assert!(m.contains("scene: grid.nx: 16 → 17"), "{m}");
+    // Probes of the interrupted run are untouched by the refusal.
+    let probes = std::fs::read_to_string(dir.join("out/probes.csv")).unwrap();
+    assert_eq!(probes.lines().count(), 2, "{probes}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn lost_probe_rows_are_detected_on_resume() {
+    let dir = cavity_checkpoint("lost");
+    std::fs::write(
+        dir.join("out/probes.csv"),
+        "t,u_c,kinetic_energy,max_divergence\n",
+    )
+    .unwrap();
+    let e = resume_err(&dir);
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("rows were lost"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A box whose gravity overflows in the first step: the pipeline's finite check stops the run.
+const OVERFLOW: &str = r#"Scene(
+    name: "overflow",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8),
+    time: (end: 1e11, fixed_dt: 1e10),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -1e300),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    output: (vtk_every: 1e10, probe_every: 1e10, probes: [KineticEnergy]),
+)
+"#;
+
+#[test]
+fn a_non_finite_field_stops_the_run_and_saves_the_last_good_state() {
+    let dir = scratch("overflow");
+    let mut s = load(&dir, OVERFLOW);
+    let out = dir.join("out");
+    let e = run_with(&mut s, &out, &RunOptions::default(), &mut |_| {}).unwrap_err();
+    assert_eq!(e.exit_code(), 3);
+    let m = e.to_string();
+    assert!(
+        m.starts_with(
+            "stage `body_force`: produced a non-finite `v` at cell (0, 1) in step 0 (t = 0.000000e0, Δt = 1.000e10)"
+        ),
+        "{m}"
+    );
+    let EfsiError::Saved {
+        step,
+        vtk,
+        checkpoint: ck,
+        ..
+    } = &e
+    else {
+        panic!("{e:?}")
+    };
+    assert_eq!(*step, 0);
+    assert!(
+        vtk.as_ref()
+            .is_some_and(|v| v.ends_with("fields/overflow_000000_last_good.vtr")),
+        "{vtk:?}"
+    );
+    assert!(
+        m.contains("last good state (step 0, t = 0.000000e0)"),
+        "{m}"
+    );
+    let vtr = std::fs::read(vtk.as_ref().unwrap()).unwrap();
+    assert!(vtr.starts_with(b"<?xml") && vtr.ends_with(b"</VTKFile>\n"));
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert!(
+        pvd.contains(r#"file="fields/overflow_000000_last_good.vtr""#),
+        "{pvd}"
+    );
+    // The checkpoint holds the start of the failed step: finite, at rest.
+    let file = CheckpointFile::read(ck).unwrap();
+    assert_eq!(file.record.step(), 0);
+    let snap = file
+        .record
+        .into_snapshot(load(&dir, OVERFLOW).snapshot(), "test")
+        .unwrap();
+    for (name, f) in snap.state.arrays() {
+        assert!(f.data().iter().all(|x| x.is_finite()), "{name}");
+    }
+    assert_eq!(snap.state.v.max_abs(efsi_core::Stagger::YFace, 8, 8), 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Measured figures for the report: checkpoint size and write/read time of a 128² cavity.
+#[test]
+fn checkpoint_of_a_128_cavity_is_small_and_quick() {
+    let dir = scratch("size");
+    let s = load(&dir, &CAVITY.replace("nx: 16, ny: 16", "nx: 128, ny: 128"));
+    let c = efsi_core::Checkpoint {
+        efsi_version: "test".into(),
+        scene_path: dir.join("scene.ron"),
+        scene_ron: s.scene.to_ron(),
+        law: None,
+        outputs: Default::default(),
+        snapshot: s.snapshot(),
+    };
+    let path = dir.join("c.efsick");
+    let t0 = std::time::Instant::now();
+    c.write(&path).unwrap();
+    let write = t0.elapsed().as_secs_f64();
+    let t0 = std::time::Instant::now();
+    let back = CheckpointFile::read(&path).unwrap();
+    let read = t0.elapsed().as_secs_f64();
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    eprintln!(
+        "128² cavity checkpoint: {bytes} bytes, write {:.2} ms, read {:.2} ms",
+        write * 1e3,
+        read * 1e3
+    );
+    // 5 padded arrays of 133² values, plus the scene.
+    let arrays = 5 * 133 * 133 * 8;
+    assert!(
+        bytes as usize > arrays && (bytes as usize) < arrays + 8192,
+        "{bytes}"
+    );
+    assert_eq!(back.record.step(), 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
