@@ -30,7 +30,7 @@
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
 //! (efsi version, scene path, scene RON, law identity), output bookkeeping, the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
-//! elastic energy and stress power), then named stage
+//! elastic energy), then named stage
 //! data). A 128² cavity checkpoints in ≈ 0.7 MB.
 //!
 //! Files are written atomically ([`crate::output::atomic`]): a reader or a resumed run sees

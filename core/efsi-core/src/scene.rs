@@ -581,7 +581,7 @@ pub enum ProbeSpec {
     SolidCentroid,
     /// Volume-weighted solid velocity `∫φ_s u dV / ∫φ_s dV`; columns `solid_u`, `solid_v`.
     SolidVelocity,
-    /// Elastic energy stored in the solid, the work of its stress `∫∫ τ:D dV dt` (per radian in
+    /// Elastic (strain) energy stored in the solid, `∫ W(B̃) dV` from the law (per radian in
     /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the

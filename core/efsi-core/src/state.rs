@@ -71,12 +71,10 @@ pub struct Deformation {
     /// The elastic stress `τ(B̃) − τ(φ^{1/2} I)` at the end of the step (the law's stress less
     /// its stress-free isotropic part, which is pressure), staggered like `b`.
     pub stress: [Field; 4],
-    /// The elastic energy stored so far: the work of the elastic stress, `∫∫ τ:D dV dt`
-    /// (trapezoidal in time; per radian in axisymmetric geometry). Law-independent: for a
-    /// hyperelastic law it is the strain energy.
+    /// The elastic (strain) energy in the solid at the end of the step, `∫ W dV` (per radian in
+    /// axisymmetric geometry), from the law's stress by integration along the isochoric path
+    /// `exp(s log B)` (see the elastic stage).
     pub elastic_energy: f64,
-    /// The stress power `∫ τ:D dV` at the end of the last step.
-    pub elastic_power: f64,
 }
 
 impl Deformation {
@@ -93,7 +91,6 @@ impl Deformation {
             relax: Field::zeros(grid),
             stress: z(),
             elastic_energy: 0.0,
-            elastic_power: 0.0,
         }
     }
 
@@ -190,14 +187,11 @@ impl State {
     }
 
     /// The scalars that carry from step to step besides `t`, `step` and `dt_prev`, with stable
-    /// names: the elastic energy and stress power when a solid has a law. A checkpoint saves
+    /// names: the elastic energy when a solid has a law. A checkpoint saves
     /// them with the arrays.
     pub fn scalars(&self) -> Vec<(&'static str, f64)> {
         match &self.deformation {
-            Some(d) => vec![
-                ("elastic_energy", d.elastic_energy),
-                ("elastic_power", d.elastic_power),
-            ],
+            Some(d) => vec![("elastic_energy", d.elastic_energy)],
             None => Vec::new(),
         }
     }
@@ -205,10 +199,7 @@ impl State {
     /// [`scalars`](Self::scalars), mutable, same names and order.
     pub fn scalars_mut(&mut self) -> Vec<(&'static str, &mut f64)> {
         match &mut self.deformation {
-            Some(d) => vec![
-                ("elastic_energy", &mut d.elastic_energy),
-                ("elastic_power", &mut d.elastic_power),
-            ],
+            Some(d) => vec![("elastic_energy", &mut d.elastic_energy)],
             None => Vec::new(),
         }
     }

@@ -325,6 +325,9 @@ struct Kernels {
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
     mu_s: f64,
+    /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
+    /// axes (cos, sin), the logarithms of the principal stretches and its volume.
+    energy_cells: Vec<EnergyCell>,
     /// Law batches: centres `i ∈ [−1, nx]`, `j ∈ [−1, ny]`; corners `i ∈ [0, nx]`, `j ∈ [0, ny]`.
     cb: Vec<Sym>,
     ct: Vec<Sym>,
@@ -335,6 +338,14 @@ struct Kernels {
     kb: Vec<Sym>,
     kt: Vec<Sym>,
     kj: Vec<Tangent>,
+}
+
+/// See [`Kernels::strain_energy`].
+type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
+
+/// The volume of the cells of column `i` (per radian when axisymmetric).
+fn m_volume(g: &Grid, i: isize) -> f64 {
+    g.metric.rc(i) * g.dx * g.dy
 }
 
 #[inline(always)]
@@ -360,6 +371,7 @@ impl Kernels {
             rc: Field::zeros(grid),
             mu_f,
             mu_s,
+            energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
             rb: vec![[0.0; 4]; nc],
             rt: vec![[0.0; 4]; nc],
@@ -650,40 +662,88 @@ impl Kernels {
         }
     }
 
-    /// The stress power `∫ τ:D dV` (per radian when axisymmetric) for the gradients of the last
-    /// [`Kernels::gradient`] call: centres carry the normal and hoop components, corners the
-    /// shear `τ₁₂ (L₁₂ + L₂₁)`.
-    fn stress_power(&self, tau: &[Field; 4]) -> f64 {
-        let g = &self.grid;
-        let m = &g.metric;
+    /// The strain energy `∫ W dV` of `b` (per radian when axisymmetric). A law gives only its
+    /// stress, but for an isotropic hyperelastic law `dW = ½ tr(τ B⁻¹ dB)`; along the isochoric
+    /// path `B(s) = exp(s M)`, `M = log B`, this is `W(B) = ½ ∫₀¹ tr(τ(B(s)) M) ds`, taken with
+    /// four-point Gauss–Legendre quadrature — the stress-free reference subtracted, as in the
+    /// momentum equation, so the isotropic part does no work. Exact for neo-Hookean (whose
+    /// integrand is constant along the path) up to the solver's drift of `det B` from 1.
+    fn strain_energy(&mut self, law: &dyn ConstitutiveLaw, b: &[Field; 4]) -> Result<f64, String> {
+        const S: [f64; 4] = [
+            0.069_431_844_202_973_71,
+            0.330_009_478_207_571_9,
+            0.669_990_521_792_428_1,
+            0.930_568_155_797_026_3,
+        ];
+        const WQ: [f64; 4] = [
+            0.173_927_422_568_726_9,
+            0.326_072_577_431_273_1,
+            0.326_072_577_431_273_1,
+            0.173_927_422_568_726_9,
+        ];
         let (nx, ny) = self.nxy();
-        let mut p = 0.0;
+        let g = &self.grid;
+        let s = b[0].stride();
+        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
+        // Per centre: the in-plane eigen-decomposition (cos, sin, λ₁, λ₂) and λ₃ = B₃₃.
+        let mut energy = 0.0;
+        let mut cells = std::mem::take(&mut self.energy_cells);
+        cells.clear();
         for j in 0..ny {
             for i in 0..nx {
-                let k = tau[0].idx(i, j);
-                p += m.rc(i)
-                    * g.dx
-                    * g.dy
-                    * (tau[0].data()[k] * self.lc[0].data()[k]
-                        + tau[1].data()[k] * self.lc[1].data()[k]
-                        + tau[2].data()[k] * self.lc[2].data()[k]);
+                let k = b[0].idx(i, j);
+                let w = self.w.data()[k];
+                if w == 0.0 {
+                    continue;
+                }
+                let (a, d, c) = (b11[k], b22[k], avg4(b12, k, k + 1, k + s, k + s + 1));
+                let theta = 0.5 * (2.0 * c).atan2(a - d);
+                let (cs, sn) = (theta.cos(), theta.sin());
+                let l1 = a * cs * cs + 2.0 * c * cs * sn + d * sn * sn;
+                let l2 = a * sn * sn - 2.0 * c * cs * sn + d * cs * cs;
+                let l3 = b33[k];
+                if !(l1 > 0.0 && l2 > 0.0 && l3 > 0.0) {
+                    // No strain energy is defined (a sliver of an interface cell whose B the
+                    // mixed-cell velocity gradient has spoiled): it contributes nothing.
+                    continue;
+                }
+                cells.push((k, w, cs, sn, l1.ln(), l2.ln(), l3.ln(), m_volume(g, i)));
             }
         }
-        for j in 0..=ny {
-            for i in 0..=nx {
-                let k = tau[0].idx(i, j);
-                // Boundary corners own a half (or quarter) of their control volume.
-                let f = if i == 0 || i == nx { 0.5 } else { 1.0 }
-                    * if j == 0 || j == ny { 0.5 } else { 1.0 };
-                p += f
-                    * m.rx(i)
-                    * g.dx
-                    * g.dy
-                    * tau[3].data()[k]
-                    * (self.lk[0].data()[k] + self.lk[1].data()[k]);
+        for (q, wq) in S.iter().zip(WQ) {
+            for (n, &(_, w, cs, sn, m1, m2, m3, _)) in cells.iter().enumerate() {
+                let (e1, e2, e3) = ((q * m1).exp(), (q * m2).exp(), (q * m3).exp());
+                self.cb[n] = [
+                    w * (e1 * cs * cs + e2 * sn * sn),
+                    w * (e1 * sn * sn + e2 * cs * cs),
+                    w * e3,
+                    w * (e1 - e2) * cs * sn,
+                ];
+                self.rb[n] = [w, w, w, 0.0];
+            }
+            let n = cells.len();
+            law.evaluate(&self.cb[..n], &mut self.ct[..n], None)
+                .map_err(|e| e.to_string())?;
+            law.evaluate(&self.rb[..n], &mut self.rt[..n], None)
+                .map_err(|e| e.to_string())?;
+            for (n, &(_, _, cs, sn, m1, m2, m3, vol)) in cells.iter().enumerate() {
+                let t = self.ct[n];
+                let r = self.rt[n];
+                // M in the grid's axes.
+                let (mm11, mm22, mm12) = (
+                    m1 * cs * cs + m2 * sn * sn,
+                    m1 * sn * sn + m2 * cs * cs,
+                    (m1 - m2) * cs * sn,
+                );
+                let tr = (t[0] - r[0]) * mm11
+                    + (t[1] - r[1]) * mm22
+                    + (t[2] - r[2]) * m3
+                    + 2.0 * t[3] * mm12;
+                energy += 0.5 * wq * tr * vol;
             }
         }
-        p
+        self.energy_cells = cells;
+        Ok(energy)
     }
 
     /// Fill the ghosts of a staggered tensor.
@@ -1199,12 +1259,12 @@ impl Stage for DeformationStage {
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
         k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
-        // The end-of-step stress and the elastic energy (work of the stress, trapezoidal).
+        // The end-of-step stress and the elastic energy.
         k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
             .map_err(|m| err("deformation", m))?;
-        let power = k.stress_power(&d.stress);
-        d.elastic_energy += 0.5 * ctx.dt * (d.elastic_power + power);
-        d.elastic_power = power;
+        d.elastic_energy = k
+            .strain_energy(self.law.as_ref(), &d.b)
+            .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
     }
 }
