@@ -86,3 +86,4 @@ pub fn orders(h: &[f64], e: &[f64]) -> Vec<f64> {
         .map(|k| (e[k - 1] / e[k]).ln() / (h[k - 1] / h[k]).ln())
         .collect()
 }
+pub mod paper;

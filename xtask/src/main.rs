@@ -263,7 +263,12 @@ fn main() -> ExitCode {
         Some("bench") => bench(&args[1..]),
         Some("ghia") => ghia(&args[1..]),
         Some("run") => run_scene(&args[1..]),
-        _ => Err("usage: cargo xtask <run SCENE | test | bench [--out DIR] | ghia DIR RE>".into()),
+        Some("bench-paper") => bench_paper(&args[1..]),
+        _ => Err(
+            "usage: cargo xtask <run SCENE | test | bench [--out DIR] | bench-paper [--quick] \
+             [--case NAME]… [--out DIR] | ghia DIR RE>"
+                .into(),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -271,5 +276,24 @@ fn main() -> ExitCode {
             eprintln!("xtask: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR]`: build the workspace (release,
+/// so the law libraries exist) and run the paper's cases (`tests/src/paper/`). Exits with the
+/// runner's status (1 if a check failed).
+fn bench_paper(args: &[String]) -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "--workspace"]);
+    run(c, "build efsi, the law plugins and bench-paper (release)")?;
+    let mut c = Command::new(root().join("target/release/bench-paper"));
+    c.args(args).current_dir(root());
+    let status = c
+        .status()
+        .map_err(|e| format!("cannot start bench-paper: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        std::process::exit(status.code().unwrap_or(1))
     }
 }

@@ -52,6 +52,7 @@ pub fn columns(p: &ProbeSpec) -> Vec<String> {
         ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
         ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
         ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
+        ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
     }
 }
 
@@ -81,6 +82,10 @@ pub fn evaluate(p: &ProbeSpec, grid: &Grid, state: &State, out: &mut Vec<f64>) {
         ),
         ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, *wall)),
         ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, *wall)),
+        ProbeSpec::SolidExtent { at } => {
+            let (b, t) = solid_extent(grid, state, *at);
+            out.extend([b, t]);
+        }
         ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity => {
             let Some(phi) = &state.phi else {
                 out.extend(std::iter::repeat_n(f64::NAN, columns(p).len()));
@@ -158,10 +163,11 @@ fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
     }
 }
 
-/// See [`ProbeSpec::ContactForce`].
-pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
+/// The contact traction `p − p_a − τ_nn` of each first-row cell along `wall` that holds solid
+/// (NaN where there is none), with the cell's area and position along the wall.
+fn wall_tractions(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)> {
     let (Some(phi), Some(d)) = (&state.phi, &state.deformation) else {
-        return f64::NAN;
+        return Vec::new();
     };
     let cells = wall_cells(grid, wall);
     let normal = if matches!(wall, Side::YMin | Side::YMax) {
@@ -179,30 +185,80 @@ pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
     let pa = if na > 0 { pa / na as f64 } else { 0.0 };
     cells
         .iter()
-        .filter(|(c, _, _)| phi[*c] > 0.0)
-        .map(|&(c, area, _)| (state.p[c] - pa - d.stress[normal][c]) * area)
+        .map(|&(c, area, s)| {
+            let t = if phi[c] > 0.0 {
+                state.p[c] - pa - d.stress[normal][c]
+            } else {
+                f64::NAN
+            };
+            (t, area, s)
+        })
+        .collect()
+}
+
+/// See [`ProbeSpec::ContactForce`].
+pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
+    if state.phi.is_none() || state.deformation.is_none() {
+        return f64::NAN;
+    }
+    wall_tractions(grid, state, wall)
+        .iter()
+        .filter(|(t, _, _)| t.is_finite())
+        .map(|(t, a, _)| t * a)
         .sum()
 }
 
 /// See [`ProbeSpec::ContactRadius`].
 pub fn contact_radius(grid: &Grid, state: &State, wall: Side) -> f64 {
-    let Some(phi) = &state.phi else {
+    if state.phi.is_none() || state.deformation.is_none() {
         return f64::NAN;
+    }
+    let t = wall_tractions(grid, state, wall);
+    let peak = t
+        .iter()
+        .filter(|(t, _, _)| t.is_finite())
+        .fold(0.0f64, |m, (t, _, _)| m.max(*t));
+    if peak <= 0.0 {
+        return 0.0;
+    }
+    let h = if matches!(wall, Side::YMin | Side::YMax) {
+        grid.dx
+    } else {
+        grid.dy
     };
-    let cells = wall_cells(grid, wall);
-    let mut r = 0.0;
-    for k in 0..cells.len() {
-        let (c, _, s) = cells[k];
-        if phi[c] >= 0.5 {
-            // Where the fraction crosses ½ between this cell and the next (or this cell's edge).
-            r = match cells.get(k + 1) {
-                Some(&(n, _, sn)) if phi[n] < 0.5 => {
-                    s + (phi[c] - 0.5) / (phi[c] - phi[n]) * (sn - s)
+    t.iter()
+        .filter(|(t, _, _)| t.is_finite() && *t > 0.01 * peak)
+        .fold(0.0f64, |m, (_, _, s)| m.max(s + 0.5 * h))
+}
+
+/// See [`ProbeSpec::SolidExtent`].
+pub fn solid_extent(grid: &Grid, state: &State, at: f64) -> (f64, f64) {
+    let Some(phi) = &state.phi else {
+        return (f64::NAN, f64::NAN);
+    };
+    let i = (((at - grid.x0) / grid.dx).floor() as isize).clamp(0, grid.nx as isize - 1);
+    let ny = grid.ny as isize;
+    // The longest run of cells holding solid.
+    let (mut best, mut run) = ((0, -1), None::<isize>);
+    for j in 0..=ny {
+        let solid = j < ny && phi[(i, j)] > 1e-6;
+        match (solid, run) {
+            (true, None) => run = Some(j),
+            (false, Some(lo)) => {
+                if j - 1 - lo > best.1 - best.0 {
+                    best = (lo, j - 1);
                 }
-                Some(_) => continue,
-                None => s + 0.5 * (s - cells[k.saturating_sub(1)].2).abs(),
-            };
+                run = None;
+            }
+            _ => {}
         }
     }
-    r
+    if best.1 < best.0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let (lo, hi) = best;
+    let face = |j: isize| grid.y0 + j as f64 * grid.dy;
+    let bottom = face(lo + 1) - phi[(i, lo)].clamp(0.0, 1.0) * grid.dy;
+    let top = face(hi) + phi[(i, hi)].clamp(0.0, 1.0) * grid.dy;
+    (bottom, top)
 }

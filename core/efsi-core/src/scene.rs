@@ -592,12 +592,23 @@ pub enum ProbeSpec {
         /// The wall (`YMin` is the substrate z = z_min in axisymmetric scenes).
         wall: Side,
     },
-    /// The radius (half-width in planar geometry) of the solid's footprint on a wall: the
-    /// distance along the wall from its start to where the first row's solid fraction drops
-    /// through ½ (0 without contact). Column `contact_radius`.
+    /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
+    /// distance along the wall from its start to the outer edge of the last wall cell that
+    /// holds solid and presses on the wall with more than 1 % of the peak contact traction
+    /// (`p − p_a − τ_nn`, as [`ProbeSpec::ContactForce`]); 0 without contact. Judged by
+    /// traction rather than by the solid fraction because a thin air film, thinner than a
+    /// cell, stays under a body pressed on a no-slip wall and carries the load. Column
+    /// `contact_radius`.
     ContactRadius {
         /// The wall.
         wall: Side,
+    },
+    /// The solid's extent along the vertical line `x = at` (the axis in axisymmetric scenes):
+    /// the bottom and top of its longest run of cells holding solid, each placed by the end
+    /// cell's solid fraction (a height function). Columns `solid_bottom`, `solid_top`.
+    SolidExtent {
+        /// The line's abscissa.
+        at: f64,
     },
 }
 
@@ -612,6 +623,7 @@ impl ProbeSpec {
                 | ProbeSpec::ElasticEnergy
                 | ProbeSpec::ContactForce { .. }
                 | ProbeSpec::ContactRadius { .. }
+                | ProbeSpec::SolidExtent { .. }
         )
     }
 }

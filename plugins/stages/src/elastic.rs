@@ -340,6 +340,12 @@ struct Kernels {
     kj: Vec<Tangent>,
 }
 
+/// Cells with less solid than this carry no deformation (B = I, no stress): VOF flotsam and
+/// slivers of an interface whose B the mixed-cell velocity gradient spoils. Their stress,
+/// weighted by `φ^{1/2}`, would act on a face whose mass is the fluid's (`φρ_s ≪ ρ_f` at a
+/// density ratio of 1000), which flung air at tens of m/s as a sphere left the substrate.
+const PHI_MIN: f64 = 1e-3;
+
 /// See [`Kernels::strain_energy`].
 type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
 
@@ -406,7 +412,8 @@ impl Kernels {
         let g = efsi_core::G;
         for j in -g..=ny + g {
             for i in -g..=nx + g {
-                self.w[(i, j)] = phi[(i, j)].clamp(0.0, 1.0).sqrt();
+                let f = phi[(i, j)];
+                self.w[(i, j)] = if f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         }
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);

@@ -1,0 +1,419 @@
+//! The paper's cases (seed §5) as runnable benchmarks: each case runs its scene at several
+//! resolutions, measures its error against a reference, checks the issue's targets and
+//! produces plots and CSV series. `cargo xtask bench-paper` runs them all and writes
+//! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
+//! their checks.
+
+pub mod plot;
+pub mod sphere;
+
+use efsi_core::run::{Progress, run};
+use efsi_core::{EfsiError, Scene, Simulation};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// How a bench-paper run is asked for.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The reduced version (what the test suite runs).
+    pub quick: bool,
+    /// The output folder.
+    pub out: PathBuf,
+    /// Show a progress bar per run.
+    pub progress: bool,
+}
+
+/// One resolution (or setting) of a case: its cost and its figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct Run {
+    /// What distinguishes the run ("35 CPR", "N = 64", "CFL 0.2").
+    pub label: String,
+    /// Cells of the grid.
+    pub cells: usize,
+    /// Time steps taken.
+    pub steps: u64,
+    /// Wall time (s).
+    pub wall_seconds: f64,
+    /// The case's error metric against its reference (see [`Report::error_metric`]).
+    pub error: Option<f64>,
+    /// Other figures of the run, by name.
+    pub metrics: Vec<(String, f64)>,
+    /// Wall time per stage: name, seconds, ns per cell-step, solver iterations per step.
+    pub stages: Vec<(String, f64, f64, f64)>,
+    /// Where its outputs are.
+    pub dir: PathBuf,
+}
+
+impl Run {
+    /// A named metric.
+    pub fn metric(&self, name: &str) -> Option<f64> {
+        self.metrics
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+    }
+}
+
+/// A target of the issue, checked on a run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Check {
+    /// What is checked.
+    pub what: String,
+    /// The measured value, formatted.
+    pub value: String,
+    /// The target, formatted ("≤ 0.005", "∈ [0.5, 1]").
+    pub target: String,
+    /// Whether it is met.
+    pub pass: bool,
+}
+
+impl Check {
+    /// `value ≤ limit`.
+    pub fn at_most(what: impl Into<String>, value: f64, limit: f64, fmt: &str) -> Check {
+        Check {
+            what: what.into(),
+            value: format_num(value, fmt),
+            target: format!("≤ {}", format_num(limit, fmt)),
+            pass: value <= limit,
+        }
+    }
+
+    /// `lo ≤ value ≤ hi`.
+    pub fn within(what: impl Into<String>, value: f64, lo: f64, hi: f64, fmt: &str) -> Check {
+        Check {
+            what: what.into(),
+            value: format_num(value, fmt),
+            target: format!("∈ [{}, {}]", format_num(lo, fmt), format_num(hi, fmt)),
+            pass: (lo..=hi).contains(&value),
+        }
+    }
+}
+
+/// Format a number as `fmt` says: `e` (3 significant digits, scientific), `%` (a fraction as a
+/// percentage), otherwise a fixed number of decimals given by the digit (`"4"`).
+pub fn format_num(x: f64, fmt: &str) -> String {
+    match fmt {
+        "e" => format!("{x:.3e}"),
+        "%" => format!("{:.2} %", 100.0 * x),
+        d => format!("{x:.*}", d.parse().unwrap_or(4)),
+    }
+}
+
+/// A case's report section.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Case name (`sphere_impact`, …).
+    pub name: String,
+    /// Title.
+    pub title: String,
+    /// The reference compared with, and its source.
+    pub reference: String,
+    /// The error metric of [`Run::error`], in words.
+    pub error_metric: String,
+    /// The runs.
+    pub runs: Vec<Run>,
+    /// The issue's targets.
+    pub checks: Vec<Check>,
+    /// Plots: caption and file name (relative to the report).
+    pub plots: Vec<(String, String)>,
+    /// Findings in words.
+    pub notes: Vec<String>,
+    /// The stage pipeline the case's scene assembled.
+    pub schedule: Vec<String>,
+    /// The setting recommended for the speed/accuracy trade, and why.
+    pub recommendation: String,
+}
+
+impl Report {
+    /// Whether every check passes.
+    pub fn passed(&self) -> bool {
+        self.checks.iter().all(|c| c.pass)
+    }
+}
+
+/// A case: its name and how to run it.
+pub struct Case {
+    /// Name, as `--case` takes it.
+    pub name: &'static str,
+    /// Runs the case.
+    pub run: fn(&Options) -> Result<Report, String>,
+}
+
+/// Every case, in report order.
+pub const CASES: &[Case] = &[Case {
+    name: "sphere_impact",
+    run: sphere::run,
+}];
+
+/// The workspace's `cases/` folder.
+pub fn cases_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases")
+}
+
+/// Load a scene of `cases/`.
+pub fn load_case(file: &str) -> Result<(Scene, PathBuf), String> {
+    let path = cases_dir().join(file);
+    let scene = Scene::load(&path).map_err(|e| e.to_string())?;
+    Ok((scene, path))
+}
+
+/// Run `scene` (from `path`) with all outputs into `dir`; returns the finished simulation and
+/// its [`Run`] record (no error or metrics yet).
+pub fn execute(
+    scene: Scene,
+    path: &Path,
+    dir: &Path,
+    label: &str,
+    opts: &Options,
+) -> Result<(Simulation, Run), EfsiError> {
+    let mut sim = Simulation::new(scene, path, &efsi_stages::builtin())?;
+    let cells = sim.grid.nx * sim.grid.ny;
+    let bar = if opts.progress {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{prefix:>28} [{bar:30}] t = {msg} ({elapsed})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_prefix(format!("{} {label}", sim.scene.name));
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let end = sim.scene.time.end;
+    let outcome = run(&mut sim, dir, &mut |p: &Progress| {
+        bar.set_position((1000.0 * p.t / end) as u64);
+        bar.set_message(format!("{:.4e}", p.t));
+    })?;
+    bar.finish_and_clear();
+    let steps = outcome.steps.max(1) as f64;
+    let stages = sim
+        .pipeline()
+        .timings()
+        .iter()
+        .map(|t| {
+            (
+                t.name.to_string(),
+                t.seconds,
+                1e9 * t.seconds / (steps * cells as f64),
+                t.iterations as f64 / steps,
+            )
+        })
+        .collect();
+    let run = Run {
+        label: label.to_string(),
+        cells,
+        steps: outcome.steps,
+        wall_seconds: outcome.wall_seconds,
+        error: None,
+        metrics: Vec::new(),
+        stages,
+        dir: dir.to_path_buf(),
+    };
+    Ok((sim, run))
+}
+
+/// The columns of a run's `probes.csv`, by name.
+pub fn probes(dir: &Path) -> Result<Probes, String> {
+    let path = dir.join("probes.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .ok_or("empty probes.csv")?
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let mut cols = vec![Vec::new(); header.len()];
+    for l in lines {
+        for (k, v) in l.split(',').enumerate() {
+            if k < cols.len() {
+                cols[k].push(v.parse::<f64>().unwrap_or(f64::NAN));
+            }
+        }
+    }
+    Ok(Probes { header, cols })
+}
+
+/// Time series read from `probes.csv`.
+pub struct Probes {
+    header: Vec<String>,
+    cols: Vec<Vec<f64>>,
+}
+
+impl Probes {
+    /// A column (panics-free: an unknown name gives an error).
+    pub fn col(&self, name: &str) -> Result<&[f64], String> {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .map(|k| self.cols[k].as_slice())
+            .ok_or_else(|| format!("probes.csv has no column `{name}`"))
+    }
+}
+
+/// The speed/accuracy table of a case, as Markdown.
+fn trade_table(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| run | cells | steps | wall time (s) | {} |",
+        r.error_metric
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+    for run in &r.runs {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.2} | {} |",
+            run.label,
+            run.cells,
+            run.steps,
+            run.wall_seconds,
+            run.error.map_or("—".into(), |e| format!("{e:.3e}"))
+        );
+    }
+    s
+}
+
+/// Write `REPORT.md` and `summary.json` for `reports` into `opts.out`.
+pub fn write_report(opts: &Options, reports: &[Report], wall: f64) -> Result<(), String> {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# efsi — the paper's cases ({} mode)\n",
+        if opts.quick { "quick" } else { "full" }
+    );
+    let _ = writeln!(
+        md,
+        "Generated by `cargo xtask bench-paper{}` in {:.0} s of wall time. Every figure below is \
+         measured by that command; the CSV series behind each plot are in the case's folder.\n",
+        if opts.quick { " --quick" } else { "" },
+        wall
+    );
+    let _ = writeln!(md, "| case | checks passed |\n|---|---|");
+    for r in reports {
+        let n = r.checks.iter().filter(|c| c.pass).count();
+        let _ = writeln!(md, "| {} | {}/{} |", r.name, n, r.checks.len());
+    }
+    for r in reports {
+        let _ = writeln!(md, "\n## {} — {}\n", r.name, r.title);
+        let _ = writeln!(md, "Reference: {}\n", r.reference);
+        let _ = writeln!(md, "Pipeline: {}\n", r.schedule.join(" → "));
+        let _ = writeln!(
+            md,
+            "### Checks\n\n| check | value | target | |\n|---|---|---|---|"
+        );
+        for c in &r.checks {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} |",
+                c.what,
+                c.value,
+                c.target,
+                if c.pass { "pass" } else { "**FAIL**" }
+            );
+        }
+        let _ = writeln!(md, "\n### Speed and accuracy\n\n{}", trade_table(r));
+        let _ = writeln!(md, "Recommended: {}\n", r.recommendation);
+        if let Some(run) = r.runs.iter().max_by_key(|run| run.cells) {
+            let _ = writeln!(
+                md,
+                "Time per stage ({}):\n\n| stage | s | ns/cell-step | iterations/step |\n|---|---:|---:|---:|",
+                run.label
+            );
+            for (n, s, ns, it) in &run.stages {
+                let _ = writeln!(md, "| {n} | {s:.2} | {ns:.0} | {it:.1} |");
+            }
+            let _ = writeln!(md);
+        }
+        if !r.notes.is_empty() {
+            let _ = writeln!(md, "### Findings\n");
+            for n in &r.notes {
+                let _ = writeln!(md, "- {n}");
+            }
+            let _ = writeln!(md);
+        }
+        for (caption, file) in &r.plots {
+            let _ = writeln!(md, "![{caption}]({file})\n\n*{caption}*\n");
+        }
+    }
+    save(&opts.out.join("REPORT.md"), md.as_bytes())?;
+    let summary = serde_json::json!({
+        "mode": if opts.quick { "quick" } else { "full" },
+        "wall_seconds": wall,
+        "cases": reports,
+        "passed": reports.iter().all(Report::passed),
+    });
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    save(&opts.out.join("summary.json"), text.as_bytes())
+}
+
+/// A label as a folder name: letters, digits, `.` and `-` kept, runs of anything else `_`.
+pub fn slug(label: &str) -> String {
+    let mut out = String::new();
+    for c in label.chars() {
+        if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+            out.push(c);
+        } else if !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    out.trim_matches('_').to_string()
+}
+
+/// Write a file atomically.
+pub fn save(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    use std::io::Write as _;
+    efsi_core::output::atomic::write_atomically(path, |w| w.write_all(bytes))
+        .map_err(|e| e.to_string())
+}
+
+/// Write named series `(label, points)` sharing an x column name as CSV: `series,x,y` rows.
+pub fn save_series(
+    path: &Path,
+    x: &str,
+    y: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), String> {
+    let mut s = format!("series,{x},{y}\n");
+    for (label, pts) in series {
+        for (a, b) in pts {
+            let _ = writeln!(s, "{label},{a:e},{b:e}");
+        }
+    }
+    save(path, s.as_bytes())
+}
+
+/// Run the named cases (all if `names` is empty) and write the report.
+pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
+    for n in names {
+        if !CASES.iter().any(|c| c.name == n) {
+            return Err(format!(
+                "unknown case `{n}`; the cases are {}",
+                CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+    std::fs::create_dir_all(&opts.out).map_err(|e| format!("{}: {e}", opts.out.display()))?;
+    let start = std::time::Instant::now();
+    let mut reports = Vec::new();
+    for case in CASES {
+        if !names.is_empty() && !names.iter().any(|n| n == case.name) {
+            continue;
+        }
+        let t0 = std::time::Instant::now();
+        let report = (case.run)(opts).map_err(|e| format!("case {}: {e}", case.name))?;
+        eprintln!(
+            "{}: {}/{} checks passed ({:.0} s)",
+            case.name,
+            report.checks.iter().filter(|c| c.pass).count(),
+            report.checks.len(),
+            t0.elapsed().as_secs_f64()
+        );
+        reports.push(report);
+    }
+    write_report(opts, &reports, start.elapsed().as_secs_f64())?;
+    Ok(reports)
+}

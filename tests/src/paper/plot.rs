@@ -1,0 +1,142 @@
+//! PNG line plots for the report (plotters, bitmap backend; text with a TrueType font found on
+//! the system — DejaVu Sans where present — registered once).
+
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// The font family name the plots use.
+const FAMILY: &str = "sans-serif";
+
+/// Register a system TrueType font for plot text, once; `false` if none was found (plots are
+/// then skipped and the report says so).
+fn font() -> bool {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        let candidates = [
+            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/TTF/DejaVuSans.ttf",
+            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+        ];
+        for c in candidates {
+            if let Ok(bytes) = std::fs::read(c) {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                if plotters::style::register_font(FAMILY, FontStyle::Normal, bytes).is_ok() {
+                    return true;
+                }
+            }
+        }
+        false
+    })
+}
+
+/// Axis scaling of a plot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scale {
+    /// Linear axes.
+    Linear,
+    /// Logarithmic axes (both), points marked.
+    LogLog,
+}
+
+/// Plot `series` (label, points) as lines into `path` (PNG, 900×600). Returns an error message
+/// if the plot could not be drawn (no font, empty data, I/O).
+pub fn lines(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    scale: Scale,
+) -> Result<(), String> {
+    if !font() {
+        return Err("no TrueType font found for plot text (install fonts-dejavu-core)".into());
+    }
+    let tf = |v: f64| if scale == Scale::LogLog { v.log10() } else { v };
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().copied())
+        .filter(|(x, y)| {
+            x.is_finite() && y.is_finite() && (scale == Scale::Linear || (*x > 0.0 && *y > 0.0))
+        })
+        .map(|(x, y)| (tf(x), tf(y)))
+        .collect();
+    if pts.is_empty() {
+        return Err(format!("{title}: nothing to plot"));
+    }
+    let (mut x0, mut x1, mut y0, mut y1) = pts.iter().fold(
+        (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
+        |(a, b, c, d), (x, y)| (a.min(*x), b.max(*x), c.min(*y), d.max(*y)),
+    );
+    let pad = |lo: &mut f64, hi: &mut f64| {
+        let w = (*hi - *lo).max(1e-12 * hi.abs().max(1.0));
+        *lo -= 0.05 * w;
+        *hi += 0.05 * w;
+    };
+    pad(&mut x0, &mut x1);
+    pad(&mut y0, &mut y1);
+    let draw = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, (FAMILY, 22))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(78)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        let log = scale == Scale::LogLog;
+        let fmt = move |v: &f64| {
+            if log {
+                format!("{:.2e}", 10f64.powf(*v))
+            } else {
+                format!("{v:.3}")
+            }
+        };
+        chart
+            .configure_mesh()
+            .x_desc(if log {
+                format!("{x_label} (log)")
+            } else {
+                x_label.to_string()
+            })
+            .y_desc(if log {
+                format!("{y_label} (log)")
+            } else {
+                y_label.to_string()
+            })
+            .x_label_formatter(&fmt)
+            .y_label_formatter(&fmt)
+            .label_style((FAMILY, 14))
+            .draw()?;
+        for (k, (label, p)) in series.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            let data: Vec<(f64, f64)> = p
+                .iter()
+                .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log || (*x > 0.0 && *y > 0.0)))
+                .map(|(x, y)| (tf(*x), tf(*y)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(data.clone(), color.stroke_width(2)))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+            if log || data.len() < 12 {
+                chart.draw_series(
+                    data.iter()
+                        .map(|&(x, y)| Circle::new((x, y), 4, color.filled())),
+                )?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FAMILY, 14))
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| format!("{}: {e}", path.display()))
+}

@@ -1,0 +1,528 @@
+//! Seed §5.1: the silicone sphere dropped on a rigid substrate (`cases/sphere_impact*.ron`),
+//! against free fall before contact and Hertz's contact estimates
+//! (`../shared/references/hertz_sphere_impact/`).
+
+use super::plot::{Scale, lines};
+use super::{Check, Options, Report, Run, execute, load_case, probes, save_series};
+use efsi_core::Scene;
+use efsi_core::interface::shapes::Shape;
+use std::f64::consts::PI;
+
+/// The sphere's material and initial condition, read from its scene.
+#[derive(Clone, Copy, Debug)]
+struct Sphere {
+    radius: f64,
+    density: f64,
+    shear_modulus: f64,
+    z0: f64,
+    v0: f64,
+    g: f64,
+}
+
+fn sphere_of(scene: &Scene) -> Result<Sphere, String> {
+    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let Shape::Disk { center, radius } = solid.shape else {
+        return Err("the solid is not a disk".into());
+    };
+    let g = solid
+        .law
+        .as_ref()
+        .and_then(|l| l.parameters.get("G").copied())
+        .ok_or("the law has no parameter G")?;
+    Ok(Sphere {
+        radius,
+        density: solid.density,
+        shear_modulus: g,
+        z0: center.1,
+        v0: solid.velocity.map_or(0.0, |v| v.1),
+        g: -scene.gravity.1,
+    })
+}
+
+/// Hertz's quasi-static estimates at impact speed `v` (rigid flat, incompressible sphere,
+/// E* = 4G): maximum approach δ, contact time, peak force, contact radius.
+fn hertz(s: &Sphere, v: f64) -> (f64, f64, f64, f64) {
+    let m = 4.0 / 3.0 * PI * s.radius.powi(3) * s.density;
+    let e_star = 4.0 * s.shear_modulus;
+    let delta = (15.0 * m * v * v / (16.0 * e_star * s.radius.sqrt())).powf(0.4);
+    let tc = 2.9433 * delta / v;
+    let f = 4.0 / 3.0 * e_star * s.radius.sqrt() * delta.powf(1.5);
+    (delta, tc, f, (s.radius * delta).sqrt())
+}
+
+/// What one run of the sphere shows.
+#[derive(Clone, Debug, Default)]
+struct Impact {
+    t: Vec<f64>,
+    z: Vec<f64>,
+    v: Vec<f64>,
+    force: Vec<f64>,
+    /// Max |z − z_free|/z_free before contact.
+    free_fall: f64,
+    t_contact: f64,
+    contact_time: f64,
+    impact_speed: f64,
+    /// 2R minus the least axial height of the solid.
+    compression: f64,
+    /// R minus the lowest centroid height.
+    centroid_drop: f64,
+    peak_force: f64,
+    contact_radius: f64,
+    rebound_speed: f64,
+    volume_drift: f64,
+}
+
+fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
+    let p = probes(&run.dir)?;
+    let t = p.col("t")?.to_vec();
+    let z = p.col("solid_y")?.to_vec();
+    let v = p.col("solid_v")?.to_vec();
+    // Force and energies are per radian: ×2π for the whole sphere.
+    let force: Vec<f64> = p
+        .col("contact_force")?
+        .iter()
+        .map(|f| 2.0 * PI * f)
+        .collect();
+    let radius = p.col("contact_radius")?;
+    let (bottom, top) = (p.col("solid_bottom")?, p.col("solid_top")?);
+    let vol = p.col("solid_volume")?;
+    let peak = force.iter().copied().fold(0.0, f64::max);
+    let on: Vec<usize> = (0..t.len()).filter(|&k| force[k] > 0.02 * peak).collect();
+    let (first, last) = match (on.first(), on.last()) {
+        (Some(&a), Some(_)) if peak > 0.0 => {
+            // The first contiguous contact.
+            let mut b = a;
+            while b + 1 < t.len() && force[b + 1] > 0.02 * peak {
+                b += 1;
+            }
+            (a, b)
+        }
+        _ => {
+            return Err(format!(
+                "{}: the sphere never touched the substrate",
+                run.label
+            ));
+        }
+    };
+    let free_fall = (0..first)
+        .map(|k| {
+            let za = s.z0 + s.v0 * t[k] - 0.5 * s.g * t[k] * t[k];
+            ((z[k] - za) / za).abs()
+        })
+        .fold(0.0, f64::max);
+    let impact_speed = -v[first];
+    let height = (first..=last)
+        .map(|k| top[k] - bottom[k])
+        .fold(f64::MAX, f64::min);
+    let zmin = (first..=last).map(|k| z[k]).fold(f64::MAX, f64::min);
+    let after = last + 1
+        ..t.len()
+            .min(last + 1 + (0.005 / (t[1] - t[0])).ceil() as usize);
+    let rebound_speed = after.map(|k| v[k]).fold(f64::MIN, f64::max);
+    let v0 = vol[0];
+    let volume_drift = vol
+        .iter()
+        .map(|x| ((x - v0) / v0).abs())
+        .fold(0.0, f64::max);
+    Ok(Impact {
+        free_fall,
+        t_contact: t[first],
+        contact_time: t[last] - t[first],
+        impact_speed,
+        compression: 2.0 * s.radius - height,
+        centroid_drop: s.radius - zmin,
+        peak_force: peak,
+        contact_radius: (first..=last).map(|k| radius[k]).fold(0.0, f64::max),
+        rebound_speed,
+        volume_drift,
+        t,
+        z,
+        v,
+        force,
+    })
+}
+
+fn scene_at(
+    file: &str,
+    cpr: f64,
+    cfl: f64,
+    vtk: bool,
+) -> Result<(Scene, std::path::PathBuf), String> {
+    let (mut scene, path) = load_case(file)?;
+    let s = sphere_of(&scene)?;
+    let h = s.radius / cpr;
+    let (lx, ly) = (
+        scene.domain.x.1 - scene.domain.x.0,
+        scene.domain.y.1 - scene.domain.y.0,
+    );
+    scene.grid.nx = (lx / h).round() as usize;
+    scene.grid.ny = (ly / h).round() as usize;
+    scene.time.cfl = cfl;
+    if !vtk {
+        scene.output.vtk_every = None;
+    }
+    Ok((scene, path))
+}
+
+/// Run the case.
+pub fn run(opts: &Options) -> Result<Report, String> {
+    let dir = opts.out.join("sphere_impact");
+    let (cprs, reference_cpr, conditions_cpr, cfls): (&[f64], f64, f64, &[f64]) = if opts.quick {
+        (&[8.0, 10.0, 12.0], 12.0, 10.0, &[0.2])
+    } else {
+        (&[10.0, 20.0, 35.0, 50.0], 50.0, 35.0, &[0.2, 0.8])
+    };
+    let (base, _) = load_case("sphere_impact.ron")?;
+    let sphere = sphere_of(&base)?;
+    let mut runs: Vec<(Run, Impact)> = Vec::new();
+    let mut schedule = Vec::new();
+    let go = |file: &str,
+              cpr: f64,
+              cfl: f64,
+              label: String,
+              vtk: bool|
+     -> Result<(Run, Impact, Vec<String>), String> {
+        let (scene, path) = scene_at(file, cpr, cfl, vtk)?;
+        let s = sphere_of(&scene)?;
+        let rdir = dir.join(super::slug(&label));
+        let (sim, run) = execute(scene, &path, &rdir, &label, opts).map_err(|e| e.to_string())?;
+        let names = sim
+            .pipeline()
+            .stage_names()
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let imp = analyse(&run, &s)?;
+        Ok((run, imp, names))
+    };
+    for &cpr in cprs {
+        let (r, i, names) = go(
+            "sphere_impact.ron",
+            cpr,
+            0.4,
+            format!("{cpr} CPR"),
+            cpr == conditions_cpr,
+        )?;
+        schedule = names;
+        runs.push((r, i));
+    }
+    let mid = if opts.quick { 10.0 } else { 20.0 };
+    for &cfl in cfls {
+        let (r, i, _) = go(
+            "sphere_impact.ron",
+            mid,
+            cfl,
+            format!("{mid} CPR, CFL {cfl}"),
+            false,
+        )?;
+        runs.push((r, i));
+    }
+    let mut conditions = Vec::new();
+    for (file, name) in [
+        ("sphere_impact_case1.ron", "case 1 (61.9 mm, 0.73 m/s)"),
+        ("sphere_impact_case2.ron", "case 2 (58.6 mm, 1.06 m/s)"),
+    ] {
+        let (r, i, _) = go(
+            file,
+            conditions_cpr,
+            0.4,
+            format!("{name} {conditions_cpr} CPR"),
+            false,
+        )?;
+        conditions.push((name.to_string(), r, i));
+    }
+    // Error of each run: the largest distance of its centroid path from the finest run's
+    // (reference_cpr), relative to R.
+    let reference = runs
+        .iter()
+        .find(|(r, _)| r.label == format!("{reference_cpr} CPR"))
+        .map(|(_, i)| i.clone())
+        .ok_or("no reference run")?;
+    for (r, i) in runs.iter_mut() {
+        let e =
+            i.t.iter()
+                .zip(&i.z)
+                .map(|(&t, &z)| (z - interp(&reference.t, &reference.z, t)).abs())
+                .fold(0.0, f64::max)
+                / sphere.radius;
+        r.error = (r.label != format!("{reference_cpr} CPR")).then_some(e);
+        let (dh, th, fh, ah) = hertz(&sphere, i.impact_speed);
+        r.metrics = vec![
+            ("free_fall_error".into(), i.free_fall),
+            ("impact_time_s".into(), i.t_contact),
+            ("impact_speed".into(), i.impact_speed),
+            ("contact_time_s".into(), i.contact_time),
+            ("hertz_contact_time_s".into(), th),
+            ("compression_m".into(), i.compression),
+            ("centroid_drop_m".into(), i.centroid_drop),
+            ("hertz_compression_m".into(), dh),
+            ("peak_force_N".into(), i.peak_force),
+            ("hertz_peak_force_N".into(), fh),
+            ("contact_radius_m".into(), i.contact_radius),
+            ("hertz_contact_radius_m".into(), ah),
+            ("rebound_speed".into(), i.rebound_speed),
+            ("restitution".into(), i.rebound_speed / i.impact_speed),
+            ("volume_drift".into(), i.volume_drift),
+        ];
+    }
+    // Checks, on the run the paper's claims are about (35 CPR; the finest in quick mode).
+    let judge_cpr = if opts.quick { reference_cpr } else { 35.0 };
+    let (jr, ji) = runs
+        .iter()
+        .find(|(r, _)| r.label == format!("{judge_cpr} CPR"))
+        .ok_or("no judged run")?;
+    let m = |n: &str| jr.metric(n).unwrap_or(f64::NAN);
+    let mut checks = vec![
+        Check::at_most(
+            format!(
+                "free fall: max abs(z − z_free)/z_free before contact ({})",
+                jr.label
+            ),
+            m("free_fall_error"),
+            0.005,
+            "%",
+        ),
+        Check::within(
+            format!("restitution e = v_rebound / v_impact ({})", jr.label),
+            m("restitution"),
+            0.5,
+            1.0,
+            "3",
+        ),
+        Check::at_most(
+            "solid volume drift, every run",
+            runs.iter()
+                .map(|(_, i)| i.volume_drift)
+                .chain(conditions.iter().map(|(_, _, i)| i.volume_drift))
+                .fold(0.0, f64::max),
+            1e-10,
+            "e",
+        ),
+    ];
+    if !opts.quick {
+        let rel = |a: f64, b: f64| (a - b) / b;
+        checks.push(Check::within(
+            format!(
+                "contact time vs Hertz {:.2} ms ({})",
+                1e3 * m("hertz_contact_time_s"),
+                jr.label
+            ),
+            rel(m("contact_time_s"), m("hertz_contact_time_s")),
+            -0.15,
+            0.15,
+            "%",
+        ));
+        checks.push(Check::within(
+            format!(
+                "max compression 2R − height vs Hertz {:.2} mm ({})",
+                1e3 * m("hertz_compression_m"),
+                jr.label
+            ),
+            rel(m("compression_m"), m("hertz_compression_m")),
+            -0.15,
+            0.15,
+            "%",
+        ));
+        let r35 = m("rebound_speed");
+        let r50 = runs
+            .iter()
+            .find(|(r, _)| r.label == "50 CPR")
+            .and_then(|(r, _)| r.metric("rebound_speed"))
+            .unwrap_or(f64::NAN);
+        checks.push(Check::at_most(
+            "rebound speed, 35 vs 50 CPR, relative difference",
+            ((r35 - r50) / r50).abs(),
+            0.05,
+            "%",
+        ));
+    }
+    let _ = ji;
+    // Plots and their series.
+    let mut plots = Vec::new();
+    let mut plot = |file: &str,
+                    title: &str,
+                    y: &str,
+                    series: Vec<(String, Vec<(f64, f64)>)>,
+                    scale: Scale,
+                    x: &str,
+                    notes: &mut Vec<String>| {
+        let png = dir.join(format!("{file}.png"));
+        if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, &series) {
+            notes.push(format!("{file}.csv not written: {e}"));
+        }
+        match lines(&png, title, x, y, &series, scale) {
+            Ok(()) => plots.push((title.to_string(), format!("sphere_impact/{file}.png"))),
+            Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
+        }
+    };
+    let mut notes = Vec::new();
+    let by_cpr: Vec<&(Run, Impact)> = runs
+        .iter()
+        .filter(|(r, _)| !r.label.contains("CFL"))
+        .collect();
+    plot(
+        "fig5a_centroid",
+        "Centroid height vs time (seed Fig. 5a)",
+        "z (mm)",
+        by_cpr
+            .iter()
+            .map(|(r, i)| {
+                (
+                    r.label.clone(),
+                    i.t.iter()
+                        .zip(&i.z)
+                        .map(|(t, z)| (1e3 * t, 1e3 * z))
+                        .collect(),
+                )
+            })
+            .collect(),
+        Scale::Linear,
+        "t (ms)",
+        &mut notes,
+    );
+    plot(
+        "fig5b_velocity",
+        "Axial velocity vs time (seed Fig. 5b)",
+        "v (m/s)",
+        by_cpr
+            .iter()
+            .map(|(r, i)| {
+                (
+                    r.label.clone(),
+                    i.t.iter().zip(&i.v).map(|(t, v)| (1e3 * t, *v)).collect(),
+                )
+            })
+            .collect(),
+        Scale::Linear,
+        "t (ms)",
+        &mut notes,
+    );
+    plot(
+        "contact_force",
+        "Contact force on the substrate",
+        "F (N)",
+        by_cpr
+            .iter()
+            .map(|(r, i)| {
+                (
+                    r.label.clone(),
+                    i.t.iter()
+                        .zip(&i.force)
+                        .map(|(t, f)| (1e3 * t, *f))
+                        .collect(),
+                )
+            })
+            .collect(),
+        Scale::Linear,
+        "t (ms)",
+        &mut notes,
+    );
+    let base_run = by_cpr
+        .iter()
+        .find(|(r, _)| r.label == format!("{conditions_cpr} CPR"))
+        .ok_or("no conditions run")?;
+    let mut three = vec![("baseline (57.3 mm, 1.22 m/s)".to_string(), &base_run.1)];
+    for (n, _, i) in &conditions {
+        three.push((n.clone(), i));
+    }
+    plot(
+        "fig7_centroid",
+        "Three initial conditions: centroid height (seed Figs. 7–8a)",
+        "z (mm)",
+        three
+            .iter()
+            .map(|(n, i)| {
+                (
+                    n.clone(),
+                    i.t.iter()
+                        .zip(&i.z)
+                        .map(|(t, z)| (1e3 * t, 1e3 * z))
+                        .collect(),
+                )
+            })
+            .collect(),
+        Scale::Linear,
+        "t (ms)",
+        &mut notes,
+    );
+    plot(
+        "fig8_velocity",
+        "Three initial conditions: axial velocity (seed Figs. 7–8b)",
+        "v (m/s)",
+        three
+            .iter()
+            .map(|(n, i)| {
+                (
+                    n.clone(),
+                    i.t.iter().zip(&i.v).map(|(t, v)| (1e3 * t, *v)).collect(),
+                )
+            })
+            .collect(),
+        Scale::Linear,
+        "t (ms)",
+        &mut notes,
+    );
+    plot(
+        "tradeoff",
+        "Speed vs accuracy: centroid-path error vs wall time",
+        "max abs(z − z_ref) / R",
+        vec![
+            (
+                "cells per radius (CFL 0.4)".into(),
+                by_cpr
+                    .iter()
+                    .filter_map(|(r, _)| r.error.map(|e| (r.wall_seconds, e)))
+                    .collect(),
+            ),
+            (
+                format!("CFL at {mid} CPR"),
+                runs.iter()
+                    .filter(|(r, _)| r.label.contains("CFL") || r.label == format!("{mid} CPR"))
+                    .filter_map(|(r, _)| r.error.map(|e| (r.wall_seconds, e)))
+                    .collect(),
+            ),
+        ],
+        Scale::LogLog,
+        "wall time (s)",
+        &mut notes,
+    );
+    for (n, r, i) in &conditions {
+        notes.push(format!(
+            "{n}: impact at {:.2} ms at {:.3} m/s, rebound {:.3} m/s (e = {:.3}), contact {:.2} ms, {} steps in {:.1} s",
+            1e3 * i.t_contact, i.impact_speed, i.rebound_speed, i.rebound_speed / i.impact_speed,
+            1e3 * i.contact_time, r.steps, r.wall_seconds
+        ));
+    }
+    let j = |n: &str| jr.metric(n).unwrap_or(f64::NAN);
+    notes.insert(0, format!(
+        "{}: impact at {:.2} ms at {:.3} m/s; contact {:.2} ms (Hertz {:.2}); compression 2R − height {:.2} mm (Hertz {:.2}; the centroid drops {:.2} mm below R); peak force {:.1} N (Hertz {:.1}); loaded footprint radius {:.1} mm (Hertz {:.1}); rebound {:.3} m/s, e = {:.3}",
+        jr.label, 1e3 * j("impact_time_s"), j("impact_speed"), 1e3 * j("contact_time_s"), 1e3 * j("hertz_contact_time_s"),
+        1e3 * j("compression_m"), 1e3 * j("hertz_compression_m"), 1e3 * j("centroid_drop_m"), j("peak_force_N"), j("hertz_peak_force_N"),
+        1e3 * j("contact_radius_m"), 1e3 * j("hertz_contact_radius_m"), j("rebound_speed"), j("restitution")
+    ));
+    let mut all: Vec<Run> = runs.into_iter().map(|(r, _)| r).collect();
+    all.extend(conditions.into_iter().map(|(_, r, _)| r));
+    Ok(Report {
+        name: "sphere_impact".into(),
+        title: "silicone sphere impact on a rigid substrate (seed §5.1)".into(),
+        reference: "free fall z₀ + v₀t − gt²/2 before contact; Hertz's quasi-static contact at the measured impact speed (E* = 4G, `../shared/references/hertz_sphere_impact/`); the finest grid for the speed/accuracy trade".into(),
+        error_metric: format!("max abs(z_c − z_c,ref) / R against {reference_cpr} CPR"),
+        runs: all,
+        checks,
+        plots,
+        notes,
+        schedule,
+        recommendation: if opts.quick {
+            "quick mode: see the full report".into()
+        } else {
+            "35 cells per radius at CFL 0.4: the compression and rebound are within the stated tolerances of 50 CPR at a fraction of its cost; 20 CPR for parameter sweeps".into()
+        },
+    })
+}
+
+/// Linear interpolation (xs increasing).
+fn interp(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let k = xs.partition_point(|&a| a < x).clamp(1, xs.len() - 1);
+    let w = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+    ys[k - 1] * (1.0 - w) + ys[k] * w
+}

@@ -1,0 +1,41 @@
+//! The quick versions of the paper's cases (`cargo xtask bench-paper --quick`): every check of
+//! every case must pass.
+
+use efsi_tests::paper::{CASES, Options};
+
+fn quick(name: &str) {
+    let case = CASES.iter().find(|c| c.name == name).expect("case");
+    let out = std::env::temp_dir().join(format!("efsi-paper-quick-{}-{name}", std::process::id()));
+    let opts = Options {
+        quick: true,
+        out: out.clone(),
+        progress: false,
+    };
+    let report = (case.run)(&opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+    for c in &report.checks {
+        eprintln!(
+            "{name}: {} = {} (target {}) {}",
+            c.what,
+            c.value,
+            c.target,
+            if c.pass { "pass" } else { "FAIL" }
+        );
+    }
+    for n in &report.notes {
+        eprintln!("{name}: {n}");
+    }
+    assert!(!report.checks.is_empty(), "{name}: no checks");
+    let failed: Vec<_> = report
+        .checks
+        .iter()
+        .filter(|c| !c.pass)
+        .map(|c| format!("{}: {} (target {})", c.what, c.value, c.target))
+        .collect();
+    assert!(failed.is_empty(), "{name}: failed checks: {failed:?}");
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn sphere_impact_quick() {
+    quick("sphere_impact");
+}
