@@ -39,3 +39,18 @@ fn quick(name: &str) {
 fn sphere_impact_quick() {
     quick("sphere_impact");
 }
+
+#[test]
+fn soft_wall_cavity_quick() {
+    quick("soft_wall_cavity");
+}
+
+#[test]
+fn shear_rectangle_quick() {
+    quick("shear_rectangle");
+}
+
+#[test]
+fn oscillating_couette_quick() {
+    quick("oscillating_couette");
+}

@@ -4,7 +4,10 @@
 //! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
 //! their checks.
 
+pub mod couette;
 pub mod plot;
+pub mod shear_rectangle;
+pub mod soft_wall;
 pub mod sphere;
 
 use efsi_core::run::{Progress, run};
@@ -79,6 +82,16 @@ impl Check {
         }
     }
 
+    /// `value ≥ limit`.
+    pub fn at_least(what: impl Into<String>, value: f64, limit: f64, fmt: &str) -> Check {
+        Check {
+            what: what.into(),
+            value: format_num(value, fmt),
+            target: format!("≥ {}", format_num(limit, fmt)),
+            pass: value >= limit,
+        }
+    }
+
     /// `lo ≤ value ≤ hi`.
     pub fn within(what: impl Into<String>, value: f64, lo: f64, hi: f64, fmt: &str) -> Check {
         Check {
@@ -141,10 +154,24 @@ pub struct Case {
 }
 
 /// Every case, in report order.
-pub const CASES: &[Case] = &[Case {
-    name: "sphere_impact",
-    run: sphere::run,
-}];
+pub const CASES: &[Case] = &[
+    Case {
+        name: "sphere_impact",
+        run: sphere::run,
+    },
+    Case {
+        name: "soft_wall_cavity",
+        run: soft_wall::run,
+    },
+    Case {
+        name: "shear_rectangle",
+        run: shear_rectangle::run,
+    },
+    Case {
+        name: "oscillating_couette",
+        run: couette::run,
+    },
+];
 
 /// The workspace's `cases/` folder.
 pub fn cases_dir() -> PathBuf {

@@ -140,3 +140,48 @@ pub fn lines(
     };
     draw().map_err(|e| format!("{}: {e}", path.display()))
 }
+
+/// Draw a cell field (row-major, `nx × ny`, `values[j * nx + i]` in [0, 1]) over the box
+/// `x ∈ [x0, x1]`, `y ∈ [y0, y1]` as a grey-scale image (1 black) into `path`.
+pub fn field(
+    path: &Path,
+    title: &str,
+    (nx, ny): (usize, usize),
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    values: &[f64],
+) -> Result<(), String> {
+    if !font() {
+        return Err("no TrueType font found for plot text (install fonts-dejavu-core)".into());
+    }
+    let width = 900u32;
+    let height =
+        ((width as f64 - 90.0) * (y1 - y0) / (x1 - x0) + 110.0).clamp(200.0, 1200.0) as u32;
+    let draw =
+        || -> Result<(), Box<dyn std::error::Error>> {
+            let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+            root.fill(&WHITE)?;
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, (FAMILY, 20))
+                .margin(10)
+                .x_label_area_size(36)
+                .y_label_area_size(50)
+                .build_cartesian_2d(x0..x1, y0..y1)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .label_style((FAMILY, 13))
+                .draw()?;
+            let (dx, dy) = ((x1 - x0) / nx as f64, (y1 - y0) / ny as f64);
+            chart.draw_series((0..ny).flat_map(|j| (0..nx).map(move |i| (i, j))).map(
+                |(i, j)| {
+                    let v = values[j * nx + i].clamp(0.0, 1.0);
+                    let c = (255.0 * (1.0 - v)) as u8;
+                    let (xa, ya) = (x0 + i as f64 * dx, y0 + j as f64 * dy);
+                    Rectangle::new([(xa, ya), (xa + dx, ya + dy)], RGBColor(c, c, c).filled())
+                },
+            ))?;
+            root.present()?;
+            Ok(())
+        };
+    draw().map_err(|e| format!("{}: {e}", path.display()))
+}
