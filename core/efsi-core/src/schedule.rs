@@ -437,6 +437,11 @@ impl Pipeline {
         self.entries.iter().map(|e| e.name).collect()
     }
 
+    /// Whether a stage of `phase` runs in this pipeline.
+    pub fn has_phase(&self, phase: Phase) -> bool {
+        self.entries.iter().any(|e| e.phase == phase)
+    }
+
     /// Initialise every stage's fields (before the first step), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
