@@ -505,6 +505,26 @@ pub fn library_dir() -> Option<PathBuf> {
     path.parent().map(Path::to_path_buf)
 }
 
+/// The names of the laws whose libraries are next to this library.
+pub fn shipped_laws() -> Vec<String> {
+    let file = library_file_name("*");
+    let Some((prefix, suffix)) = file.split_once('*') else {
+        return Vec::new();
+    };
+    let mut names: Vec<String> = library_dir()
+        .and_then(|d| std::fs::read_dir(d).ok())
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            Some(name.strip_prefix(prefix)?.strip_suffix(suffix)?.to_string())
+        })
+        .collect();
+    names.sort();
+    names
+}
+
 impl Model {
     /// A model with the default parameters, not yet initialised.
     pub fn new() -> Self {
@@ -589,8 +609,13 @@ impl Model {
     /// parameter and accept the value. Messages name the FMU parameter.
     fn check_law(&self, law: &str) -> Result<(), String> {
         let p = &self.params;
-        let path = resolve_law(law, Path::new("."))
-            .map_err(|e| format!("parameter `law` = \"{}\": no such law: {e}", p.law))?;
+        let path = resolve_law(law, Path::new(".")).map_err(|e| {
+            format!(
+                "parameter `law` = \"{}\": no such law (the FMU ships {}): {e}",
+                p.law,
+                shipped_laws().join(", ")
+            )
+        })?;
         let info = describe(&path).map_err(|e| {
             format!(
                 "parameter `law` = \"{}\": the library is unusable: {e}",
@@ -662,7 +687,7 @@ impl Model {
             start: None,
         };
         run.track_compression(self.params.radius);
-        run.outputs = run.evaluate(self.params.radius);
+        run.outputs = run.evaluate();
         self.run = Some(run);
         self.mode = Mode::Stepping;
         Ok(())
@@ -711,7 +736,7 @@ impl Model {
             run.sim.snap_time(target);
             run.track_compression(radius);
         }
-        run.outputs = run.evaluate(radius);
+        run.outputs = run.evaluate();
         self.notes.push(format!(
             "doStep t = {t} h = {h}: {} solver steps",
             run.sim.state.step - steps
@@ -896,7 +921,6 @@ impl Model {
 
     /// Go back to a state taken from this model (or one with the same parameters).
     pub fn set_state(&mut self, state: &FmuState) -> Result<(), String> {
-        let radius = self.params.radius;
         let run = self
             .run
             .as_mut()
@@ -905,7 +929,7 @@ impl Model {
             .restore(&state.snapshot)
             .map_err(|e| e.to_string())?;
         run.max_compression = state.max_compression;
-        run.outputs = run.evaluate(radius);
+        run.outputs = run.evaluate();
         self.base_acceleration = state.base_acceleration;
         if matches!(self.mode, Mode::Failed | Mode::Terminated) {
             self.mode = Mode::Stepping;
@@ -1006,7 +1030,7 @@ impl Run {
     }
 
     /// The outputs of the current state (whole-body values: efsi's per-radian ones × 2π).
-    fn evaluate(&self, _radius: f64) -> Outputs {
+    fn evaluate(&self) -> Outputs {
         let (grid, state) = (&self.sim.grid, &self.sim.state);
         let m = state
             .phi
