@@ -10,6 +10,11 @@
 //! - `cargo xtask bench [--out DIR]`: the Re = 1000 lid-driven cavity at 128², one thread, for
 //!   ns per cell-step in total and per stage and Poisson iterations per step (a benchmark,
 //!   not a test: timings are never asserted).
+//! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (release) and
+//!   package `target/fmu/sphere_impact.fmu` (FMI 2.0 Co-Simulation) and
+//!   `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation).
+
+mod zip;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -63,11 +68,86 @@ fn python_env() -> Result<PathBuf, String> {
         .arg(&req);
         run(
             c,
-            "install the Python test requirements (vtk, numpy, pytest)",
+            "install the Python test requirements (vtk, numpy, pytest, fmpy)",
         )?;
         std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
     }
     Ok(py)
+}
+
+/// The shipped laws' packages and library stems, packaged beside the FMU library.
+const LAWS: [(&str, &str); 3] = [
+    ("efsi-law-neo-hookean", "efsi_law_neo_hookean"),
+    (
+        "efsi-law-saint-venant-kirchhoff",
+        "efsi_law_saint_venant_kirchhoff",
+    ),
+    ("efsi-law-mooney-rivlin", "efsi_law_mooney_rivlin"),
+];
+
+/// Build (release) and package both FMUs; returns their paths.
+fn fmu() -> Result<[PathBuf; 2], String> {
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "-p", "efsi-fmu"]);
+    for (package, _) in LAWS {
+        c.args(["-p", package]);
+    }
+    run(c, "build the FMU library and the shipped laws (release)")?;
+    let release = root().join("target/release");
+    let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
+    let describe = |what: &str| -> Result<Vec<u8>, String> {
+        let out = Command::new(release.join("efsi-fmu-description"))
+            .arg(what)
+            .output()
+            .map_err(|e| format!("efsi-fmu-description: {e}"))?;
+        if !out.status.success() {
+            return Err(format!("efsi-fmu-description {what}: {}", out.status));
+        }
+        Ok(out.stdout)
+    };
+    let library = read(&release.join("libsphere_impact.so"))?;
+    let laws = LAWS
+        .iter()
+        .map(|(_, stem)| {
+            let name = format!("lib{stem}.so");
+            read(&release.join(&name)).map(|d| (name, d))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let scene = describe("scene")?;
+    let dir = root().join("target/fmu");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut made = Vec::new();
+    for (version, platform, file) in [
+        ("2", "linux64", "sphere_impact.fmu"),
+        ("3", "x86_64-linux", "sphere_impact_fmi3.fmu"),
+    ] {
+        let mut z = zip::Zip::default();
+        let add = |z: &mut zip::Zip, name: &str, data: &[u8]| {
+            z.add(name, data)
+                .map_err(|e| format!("{file}: {name}: {e}"))
+        };
+        add(&mut z, "modelDescription.xml", &describe(version)?)?;
+        add(
+            &mut z,
+            &format!("binaries/{platform}/sphere_impact.so"),
+            &library,
+        )?;
+        for (name, data) in &laws {
+            add(&mut z, &format!("binaries/{platform}/{name}"), data)?;
+        }
+        add(&mut z, "resources/sphere_impact.ron", &scene)?;
+        let path = dir.join(file);
+        std::fs::write(&path, z.finish()).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        eprintln!(
+            "wrote {} (FMI {version}.0 Co-Simulation, {:.1} MB)",
+            path.display(),
+            bytes as f64 / 1e6
+        );
+        made.push(path);
+    }
+    let [a, b] = <[PathBuf; 2]>::try_from(made).map_err(|_| "two FMUs".to_string())?;
+    Ok([a, b])
 }
 
 fn test() -> Result<(), String> {
@@ -92,10 +172,13 @@ fn test() -> Result<(), String> {
     let mut c = cargo();
     c.args(["build", "--quiet", "-p", "efsi", "--profile", "test"]);
     run(c, "build efsi for the Python tests")?;
+    let [fmu2, fmu3] = fmu()?;
     let py = python_env()?;
     let mut c = Command::new(py);
-    c.args(["-m", "pytest", "-q", "tests/python"])
-        .env("EFSI_BIN", root().join("target/debug/efsi"));
+    c.args(["-m", "pytest", "-q", "--durations=5", "tests/python"])
+        .env("EFSI_BIN", root().join("target/debug/efsi"))
+        .env("EFSI_FMU2", fmu2)
+        .env("EFSI_FMU3", fmu3);
     run(c, "pytest tests/python")
 }
 
@@ -264,9 +347,10 @@ fn main() -> ExitCode {
         Some("ghia") => ghia(&args[1..]),
         Some("run") => run_scene(&args[1..]),
         Some("bench-paper") => bench_paper(&args[1..]),
+        Some("fmu") => fmu().map(|_| ()),
         _ => Err(
-            "usage: cargo xtask <run SCENE | test | bench [--out DIR] | bench-paper [--quick] \
-             [--case NAME]… [--out DIR] | ghia DIR RE>"
+            "usage: cargo xtask <run SCENE | test | fmu | bench [--out DIR] | bench-paper \
+             [--quick] [--case NAME]… [--out DIR] | ghia DIR RE>"
                 .into(),
         ),
     };

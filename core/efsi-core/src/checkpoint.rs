@@ -30,7 +30,7 @@
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
 //! (efsi version, scene path, scene RON, law identity), output bookkeeping, the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
-//! elastic energy), then named stage
+//! frame acceleration and the elastic energy), then named stage
 //! data). A 128² cavity checkpoints in ≈ 0.7 MB.
 //!
 //! Files are written atomically ([`crate::output::atomic`]): a reader or a resumed run sees
@@ -345,10 +345,15 @@ impl SnapshotRecord {
             )));
         }
         for (name, v) in template.state.scalars_mut() {
-            let Some((_, x)) = self.scalars.iter().find(|(n, _)| n == name) else {
+            let recorded = self
+                .scalars
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, x)| *x);
+            let Some(x) = recorded.or_else(|| State::scalar_default(name)) else {
                 return Err(fail(format!("the value `{name}` is missing")));
             };
-            *v = *x;
+            *v = x;
         }
         template.state.t = self.t;
         template.state.step = self.step;

@@ -804,6 +804,18 @@ impl Scene {
                 .validate()
                 .map_err(|m| ("solid.shape".to_string(), m))?;
             positive("solid.density", solid.density)?;
+            // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
+            // equation's coefficients 1/ρ span more than floating point resolves.
+            let ratio = solid.density / self.fluid.density;
+            if !(1e-6..=1e6).contains(&ratio) {
+                return err(
+                    "solid.density",
+                    format!(
+                        "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
+                        solid.density, self.fluid.density
+                    ),
+                );
+            }
             if let Some(mu) = solid.viscosity
                 && !(mu.is_finite() && mu >= 0.0)
             {

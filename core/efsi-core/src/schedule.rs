@@ -437,6 +437,11 @@ impl Pipeline {
         self.entries.iter().map(|e| e.name).collect()
     }
 
+    /// Whether a stage of `phase` runs in this pipeline.
+    pub fn has_phase(&self, phase: Phase) -> bool {
+        self.entries.iter().any(|e| e.phase == phase)
+    }
+
     /// Initialise every stage's fields (before the first step), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
@@ -463,7 +468,9 @@ impl Pipeline {
             .iter()
             .chain(state.v.data())
             .fold(0.0f64, |m, x| m.max(x.abs()));
-        if speed == 0.0 {
+        // Below 1e-150 the projection's right-hand side ∇·u/Δt ~ speed² underflows: such a
+        // velocity is rest to floating point, and nothing is projected.
+        if speed < 1e-150 {
             return Ok(());
         }
         let ctx = StepContext {
@@ -478,6 +485,21 @@ impl Pipeline {
                 e.stage.run(&ctx, state)?;
                 bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
                 state.p.fill(0.0);
+                // An initial velocity too large for floating point (e.g. 1e308) projects to
+                // infinities: refuse it here rather than start a run from them.
+                for (f, stagger) in [
+                    (&state.u, crate::Stagger::XFace),
+                    (&state.v, crate::Stagger::YFace),
+                ] {
+                    if let Some((i, j)) = f.first_non_finite(stagger, grid.nx, grid.ny) {
+                        return Err(StageError {
+                            stage: e.name.to_string(),
+                            message: format!(
+                                "projecting the initial velocity produced a non-finite value at cell ({i}, {j}): is the initial velocity finite and of a sensible size?"
+                            ),
+                        });
+                    }
+                }
             }
         }
         if state.u.data() != before.0.data() || state.v.data() != before.1.data() {

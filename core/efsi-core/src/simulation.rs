@@ -277,6 +277,37 @@ impl Simulation {
         Ok(())
     }
 
+    /// Set the acceleration of the grid's frame with respect to an inertial one, from the next
+    /// step on ([`State::frame_acceleration`]: the body force becomes `gravity − a`, so a
+    /// table accelerating upwards at `a` acts like gravity stronger by `a`). Snapshots and
+    /// checkpoints carry it. Refused — nothing changes — when the value is not finite, when
+    /// it has a radial component in axisymmetric geometry, or when no body-force stage runs
+    /// (the body force is scheduled only in scenes with gravity).
+    pub fn set_frame_acceleration(&mut self, a: (f64, f64)) -> Result<(), EfsiError> {
+        let refuse = |message: String| EfsiError::Config {
+            path: self.scene_path.clone(),
+            field: "frame_acceleration".into(),
+            message,
+        };
+        if !(a.0.is_finite() && a.1.is_finite()) {
+            return Err(refuse(format!("must be finite, got ({}, {})", a.0, a.1)));
+        }
+        if self.grid.is_axisymmetric() && a.0 != 0.0 {
+            return Err(refuse(format!(
+                "must be along z in axisymmetric geometry, got a radial component {}",
+                a.0
+            )));
+        }
+        if !self.pipeline.has_phase(crate::Phase::BodyForce) {
+            return Err(refuse(
+                "no body-force stage runs in this scene (it is scheduled only with gravity): give the scene a gravity"
+                    .into(),
+            ));
+        }
+        self.state.frame_acceleration = a;
+        Ok(())
+    }
+
     /// Set the time exactly (after landing on an output time, to avoid round-off drift).
     pub fn snap_time(&mut self, t: f64) {
         if (self.state.t - t).abs() <= 1e-9 * t.abs().max(1e-300) {

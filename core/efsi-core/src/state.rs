@@ -32,6 +32,12 @@ pub struct State {
     pub phi: Option<Field>,
     /// The deformation tensor B̃, when a stage declares it.
     pub deformation: Option<Deformation>,
+    /// Acceleration of the grid's frame with respect to an inertial one (m/s², default zero):
+    /// the body-force stage applies `gravity − frame_acceleration` (d'Alembert), so a frame
+    /// accelerating upwards, like a shaking table, makes everything in it heavier. Set between
+    /// steps with [`crate::Simulation::set_frame_acceleration`] (the FMU's base-acceleration
+    /// input); kept here so snapshots and checkpoints carry it.
+    pub frame_acceleration: (f64, f64),
 }
 
 /// The left Cauchy–Green tensor B of the solid, from which the elastic stages form the seed's
@@ -159,6 +165,7 @@ impl State {
             deformation: fields
                 .contains(&FieldId::Deformation)
                 .then(|| Deformation::zeros(grid)),
+            frame_acceleration: (0.0, 0.0),
         }
     }
 
@@ -187,21 +194,36 @@ impl State {
     }
 
     /// The scalars that carry from step to step besides `t`, `step` and `dt_prev`, with stable
-    /// names: the elastic energy when a solid has a law. A checkpoint saves
-    /// them with the arrays.
+    /// names: the frame acceleration (`frame_acceleration_x`, `_y`), then the elastic energy
+    /// when a solid has a law. A checkpoint saves them with the arrays.
     pub fn scalars(&self) -> Vec<(&'static str, f64)> {
-        match &self.deformation {
-            Some(d) => vec![("elastic_energy", d.elastic_energy)],
-            None => Vec::new(),
+        let mut out = vec![
+            ("frame_acceleration_x", self.frame_acceleration.0),
+            ("frame_acceleration_y", self.frame_acceleration.1),
+        ];
+        if let Some(d) = &self.deformation {
+            out.push(("elastic_energy", d.elastic_energy));
         }
+        out
     }
 
     /// [`scalars`](Self::scalars), mutable, same names and order.
     pub fn scalars_mut(&mut self) -> Vec<(&'static str, &mut f64)> {
-        match &mut self.deformation {
-            Some(d) => vec![("elastic_energy", &mut d.elastic_energy)],
-            None => Vec::new(),
+        let mut out = vec![
+            ("frame_acceleration_x", &mut self.frame_acceleration.0),
+            ("frame_acceleration_y", &mut self.frame_acceleration.1),
+        ];
+        if let Some(d) = &mut self.deformation {
+            out.push(("elastic_energy", &mut d.elastic_energy));
         }
+        out
+    }
+
+    /// The value a scalar of [`scalars`](Self::scalars) takes when a checkpoint does not record
+    /// it: zero frame acceleration (checkpoints written before it existed had none); `None`
+    /// for a scalar that must be recorded.
+    pub fn scalar_default(name: &str) -> Option<f64> {
+        name.starts_with("frame_acceleration_").then_some(0.0)
     }
 
     /// [`arrays`](Self::arrays), mutable, same names and order.

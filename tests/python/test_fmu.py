@@ -1,0 +1,287 @@
+"""The sphere-impact FMUs (FMI 2.0 and FMI 3.0 Co-Simulation) in fmpy.
+
+`cargo xtask test` builds them first (`cargo xtask fmu`) and passes their paths in
+`$EFSI_FMU2` / `$EFSI_FMU3`; the `efsi` binary is `$EFSI_BIN`. Every run here uses a coarse
+grid (6 cells per radius, 14 x 28 cells) and a sphere released 6 mm above the substrate, so
+that it hits within 5 ms; communication steps are powers of two (2^-10 s), so that the times
+fmpy computes and efsi's output times are the same doubles and results compare bit for bit.
+"""
+
+import csv
+import math
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+from fmpy.validation import validate_fmu
+
+REPO = Path(__file__).resolve().parents[2]
+EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
+FMU2 = os.environ.get("EFSI_FMU2", str(REPO / "target/fmu/sphere_impact.fmu"))
+FMU3 = os.environ.get("EFSI_FMU3", str(REPO / "target/fmu/sphere_impact_fmi3.fmu"))
+FMUS = {"fmi2": FMU2, "fmi3": FMU3}
+
+H = 2.0**-10  # communication step (s), exact in binary
+SMALL = {"cells_per_radius": 6, "initial_height": 0.025}
+OUTPUTS = ["height", "velocity", "contact_force", "contact_radius", "max_compression",
+           "kinetic_energy", "elastic_energy", "steps"]
+
+
+@pytest.fixture(scope="module")
+def unzipped():
+    """Each FMU extracted once (simulate_fmu and the slaves accept the folder)."""
+    dirs = {k: extract(p) for k, p in FMUS.items()}
+    yield dirs
+    import shutil
+
+    for d in dirs.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def simulate(path, stop, **kw):
+    start_values = dict(SMALL)
+    start_values.update(kw.pop("start_values", {}))
+    return simulate_fmu(path, stop_time=stop, output_interval=H, start_values=start_values,
+                        output=OUTPUTS, **kw)
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_fmpy_validate_finds_no_problem(version):
+    assert validate_fmu(FMUS[version]) == []
+
+
+def scene(stop, probe_every, radius=0.0192, cells=6, height=0.025, gravity=-9.81, g_modulus=180000.0):
+    """The scene the FMU builds from these parameters, written independently of it."""
+    h = radius / cells
+    nr, nz = round(0.045 / h), round(0.09 / h)
+    return f"""Scene(
+    name: "fmu_equivalent",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 0.045), z: (0.0, 0.09)),
+    grid: (nr: {nr}, nz: {nz}),
+    time: (end: {stop!r}, cfl: 0.4),
+    fluid: (density: 1.2, viscosity: 1.8e-5),
+    gravity: (0.0, {gravity!r}),
+    solid: (
+        shape: Disk(center: (0.0, {height!r}), radius: {radius!r}),
+        density: 1106.0,
+        velocity: (0.0, -1.22),
+        law: (name: "neo_hookean", parameters: {{"G": {g_modulus!r}}}),
+    ),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    output: (probe_every: {probe_every!r},
+             probes: [SolidCentroid, SolidVelocity, ContactForce(wall: YMin),
+                      ContactRadius(wall: YMin), KineticEnergy, ElasticEnergy]),
+)
+"""
+
+
+def efsi_run(tmp_path, text):
+    path = tmp_path / "scene.ron"
+    path.write_text(text)
+    out = tmp_path / "out"
+    # The laws the FMU ships are the release builds (`cargo xtask fmu`): use the same ones.
+    env = dict(os.environ, EFSI_LAW_PATH=str(REPO / "target/release"))
+    subprocess.run([EFSI, "run", str(path), "--out", str(out), "-q"], check=True, env=env)
+    with open(out / "probes.csv") as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_outputs_equal_efsi_run_of_the_same_scene(version, unzipped, tmp_path):
+    stop = 12 * H  # through the impact (contact from ≈ 5 ms)
+    r = simulate(unzipped[version], stop)
+    p = efsi_run(tmp_path, scene(stop, H))
+    assert np.array_equal(r["time"], p["t"])
+    tau = 2.0 * math.pi  # the FMU reports whole-body values, efsi's probes are per radian
+    pairs = [("height", p["solid_y"]), ("velocity", p["solid_v"]),
+             ("contact_force", tau * p["contact_force"]), ("contact_radius", p["contact_radius"]),
+             ("kinetic_energy", tau * p["kinetic_energy"]),
+             ("elastic_energy", tau * p["elastic_energy"])]
+    for name, want in pairs:
+        got = r[name]
+        scale = max(np.abs(want).max(), 1e-300)
+        assert np.abs(got - want).max() <= 1e-12 * scale, name
+        # The same solver, the same steps: in fact bit for bit.
+        assert np.array_equal(got, want), name
+    assert r["contact_force"].max() > 1.0  # the run does reach the impact
+    assert np.all(np.diff(r["steps"]) > 0)
+    # The largest compression is at least what the communication points show.
+    assert np.all(r["max_compression"] >= np.maximum(0.0, 0.0192 - r["height"]) - 1e-15)
+    assert r["max_compression"][-1] > 0.0
+
+
+def constant_input(stop, a):
+    return np.array([(0.0, a), (stop, a)], dtype=[("time", np.float64), ("base_acceleration", np.float64)])
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_base_acceleration_acts_as_stronger_gravity(version, unzipped):
+    """A table accelerating upwards at a: the body force is g − a, i.e. |g| + a."""
+    stop, a = 6 * H, 5.0  # free fall: still above the substrate
+    start = {"initial_height": 0.0573}
+    shaken = simulate(unzipped[version], stop, input=constant_input(stop, a), start_values=start)
+    heavier = simulate(unzipped[version], stop, start_values=dict(start, gravity=-9.81 - a))
+    still = simulate(unzipped[version], stop, start_values=start)
+    for name in OUTPUTS:
+        assert np.array_equal(shaken[name], heavier[name]), name
+    # And it does act: the sphere falls ½ a t² further (less the small buoyancy and drag).
+    dz = still["height"] - shaken["height"]
+    t = shaken["time"]
+    assert dz[-1] == pytest.approx(0.5 * a * t[-1] ** 2, rel=0.05)
+
+
+def slave(version, unzipped, name="sphere", **params):
+    md = read_model_description(unzipped[version])
+    cls = FMU2Slave if version == "fmi2" else FMU3Slave
+    fmu = cls(guid=md.guid, unzipDirectory=unzipped[version],
+              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu.instantiate()
+    if version == "fmi2":
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+    else:
+        fmu.enterInitializationMode(startTime=0.0)
+    for k, v in dict(SMALL, **params).items():
+        if k == "cells_per_radius":
+            (fmu.setInteger if version == "fmi2" else fmu.setInt32)([vr[k]], [v])
+        else:
+            (fmu.setReal if version == "fmi2" else fmu.setFloat64)([vr[k]], [v])
+    fmu.exitInitializationMode()
+    return fmu, vr
+
+
+def read(version, fmu, vr):
+    real = fmu.getReal if version == "fmi2" else fmu.getFloat64
+    count = fmu.getInteger if version == "fmi2" else fmu.getInt64
+    return real([vr[n] for n in OUTPUTS[:-1]]) + count([vr["steps"]])
+
+
+def advance(version, fmu, vr, t, n, h=H, a=None):
+    rows = []
+    for k in range(n):
+        if a is not None:
+            (fmu.setReal if version == "fmi2" else fmu.setFloat64)([vr["base_acceleration"]], [a(k)])
+        fmu.doStep(t, h)
+        t += h
+        rows.append(read(version, fmu, vr))
+    return t, rows
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_save_state_step_restore_replay_is_bitwise(version, unzipped):
+    fmu, vr = slave(version, unzipped)
+    shake = lambda k: 3.0 * math.sin(k)  # noqa: E731  (the input is part of the state)
+    t, _ = advance(version, fmu, vr, 0.0, 4, a=shake)
+    state = fmu.getFMUState()
+    t1, first = advance(version, fmu, vr, t, 6, a=lambda k: shake(k + 4))
+    fmu.setFMUState(state)
+    _, again = advance(version, fmu, vr, t, 6, a=lambda k: shake(k + 4))
+    assert again == first
+    # Through the serialised form (efsi's checkpoint format) too.
+    blob = fmu.serializeFMUState(state)
+    restored = fmu.deserializeFMUState(blob)
+    fmu.setFMUState(restored)
+    _, once_more = advance(version, fmu, vr, t, 6, a=lambda k: shake(k + 4))
+    assert once_more == first
+    fmu.freeFMUState(state)
+    fmu.freeFMUState(restored)
+    assert len(blob) > 100_000  # the fields of a 14 x 28 grid with their ghosts
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_do_step_lands_on_any_communication_point(version, unzipped):
+    fmu, vr = slave(version, unzipped)
+    real = fmu.getReal if version == "fmi2" else fmu.getFloat64
+    t = 0.0
+    for h in [0.0007, 1e-5, 0.00123, 0.0031]:
+        fmu.doStep(t, h)
+        t += h
+        assert real([vr["time"]])[0] == t
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+BAD = [("radius", -0.01), ("cells_per_radius", 0), ("law", "no_such_law"),
+       ("initial_height", 0.01), ("law_parameter", "K")]
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+@pytest.mark.parametrize("name,value", BAD)
+def test_bad_parameter_is_refused_and_named(version, name, value, unzipped):
+    messages = []
+    if version == "fmi2":
+        def logger(env, instance, status, category, message):
+            messages.append(message.decode())
+    else:
+        def logger(env, status, category, message):
+            messages.append(message.decode())
+    with pytest.raises(FMICallException) as e:
+        simulate(unzipped[version], 4 * H, start_values={name: value}, logger=logger)
+    assert e.value.function.endswith("ExitInitializationMode")
+    assert any(f"`{name}`" in m for m in messages), messages
+    # The process survives and the FMU still works.
+    assert simulate(unzipped[version], H)["steps"][-1] > 0
+
+
+def test_two_instances_in_one_process_are_independent(unzipped):
+    a, vra = slave("fmi2", unzipped, name="a")
+    b, vrb = slave("fmi2", unzipped, name="b", initial_velocity=-0.8, law_parameter_value=0.5e6)
+    ta = tb = 0.0
+    rows_a, rows_b = [], []
+    for _ in range(8):  # interleaved
+        ta, ra = advance("fmi2", a, vra, ta, 1)
+        tb, rb = advance("fmi2", b, vrb, tb, 1)
+        rows_a += ra
+        rows_b += rb
+    for f in (a, b):
+        f.terminate()
+        f.freeInstance()
+    alone_a = simulate(unzipped["fmi2"], 8 * H)
+    alone_b = simulate(unzipped["fmi2"], 8 * H,
+                       start_values={"initial_velocity": -0.8, "law_parameter_value": 0.5e6})
+    for k, name in enumerate(OUTPUTS):
+        assert [r[k] for r in rows_a] == list(alone_a[name][1:]), name
+        assert [r[k] for r in rows_b] == list(alone_b[name][1:]), name
+    assert rows_a != rows_b
+
+
+def readme_example():
+    """The co-simulation example of the README's FMU section, as code."""
+    text = (REPO / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    block = next(b for b in blocks if "def cosimulate" in b)
+    namespace = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    return namespace["cosimulate"]
+
+
+def test_readme_cosimulation_with_a_spring_damper_substrate(unzipped):
+    cosimulate = readme_example()
+    stop, h = 16 * H, H / 2
+    soft = cosimulate(unzipped["fmi2"], stop_time=stop, step=h, **SMALL)
+    # A substrate too heavy to move is the fixed substrate of a plain run, bit for bit.
+    rigid = cosimulate(unzipped["fmi2"], stop_time=stop, step=h, mass=1e300, **SMALL)
+    plain = simulate_fmu(unzipped["fmi2"], stop_time=stop, output_interval=h,
+                         start_values=SMALL, output=["height", "contact_force"])
+    assert np.array_equal(rigid["height"], plain["height"][1:])
+    assert np.abs(rigid["x"]).max() < 1e-250
+    # The impact pushes the substrate down (by ≈ 4 mm); the compliant substrate softens the
+    # impact (peak force ≈ 14.4 N against 18.0 N, less compression) and takes energy from the
+    # rebound.
+    assert soft["x"].min() < -2e-3
+    assert soft["force"].max() < 0.9 * rigid["force"].max()
+    assert soft["height"].min() > rigid["height"].min() + 2e-4
+    assert soft["height"][-1] < rigid["height"][-1] - 5e-4
+    assert np.all(np.isfinite(soft["height"]))
