@@ -673,8 +673,9 @@ impl Kernels {
     /// stress, but for an isotropic hyperelastic law `dW = ½ tr(τ B⁻¹ dB)`; along the isochoric
     /// path `B(s) = exp(s M)`, `M = log B`, this is `W(B) = ½ ∫₀¹ tr(τ(B(s)) M) ds`, taken with
     /// four-point Gauss–Legendre quadrature — the stress-free reference subtracted, as in the
-    /// momentum equation, so the isotropic part does no work. Exact for neo-Hookean (whose
-    /// integrand is constant along the path) up to the solver's drift of `det B` from 1.
+    /// momentum equation, so the isotropic part does no work — for the isochoric part of B
+    /// (`M` less its trace over 3): the drift of `det B` from 1 is not strain. Exact for
+    /// neo-Hookean, whose integrand is then `G (tr B̄ − 3)/2` with `B̄ = B / det(B)^{1/3}`.
     fn strain_energy(&mut self, law: &dyn ConstitutiveLaw, b: &[Field; 4]) -> Result<f64, String> {
         const S: [f64; 4] = [
             0.069_431_844_202_973_71,
@@ -714,7 +715,21 @@ impl Kernels {
                     // mixed-cell velocity gradient has spoiled): it contributes nothing.
                     continue;
                 }
-                cells.push((k, w, cs, sn, l1.ln(), l2.ln(), l3.ln(), m_volume(g, i)));
+                // The isochoric part: an incompressible law's energy does not see det B, whose
+                // drift from 1 under the discrete transport would otherwise count as strain
+                // (G·Δ(det B)/2 per volume — the leading term for stiff solids).
+                let (m1, m2, m3) = (l1.ln(), l2.ln(), l3.ln());
+                let mean = (m1 + m2 + m3) / 3.0;
+                cells.push((
+                    k,
+                    w,
+                    cs,
+                    sn,
+                    m1 - mean,
+                    m2 - mean,
+                    m3 - mean,
+                    m_volume(g, i),
+                ));
             }
         }
         for (q, wq) in S.iter().zip(WQ) {
