@@ -39,3 +39,13 @@ fn quick(name: &str) {
 fn sphere_impact_quick() {
     quick("sphere_impact");
 }
+
+#[test]
+fn disk_in_cavity_quick() {
+    quick("disk_in_cavity");
+}
+
+#[test]
+fn oscillating_disk_quick() {
+    quick("oscillating_disk");
+}

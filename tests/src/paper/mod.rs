@@ -4,6 +4,8 @@
 //! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
 //! their checks.
 
+pub mod disk_cavity;
+pub mod oscillating_disk;
 pub mod plot;
 pub mod sphere;
 
@@ -141,10 +143,20 @@ pub struct Case {
 }
 
 /// Every case, in report order.
-pub const CASES: &[Case] = &[Case {
-    name: "sphere_impact",
-    run: sphere::run,
-}];
+pub const CASES: &[Case] = &[
+    Case {
+        name: "sphere_impact",
+        run: sphere::run,
+    },
+    Case {
+        name: "disk_in_cavity",
+        run: disk_cavity::run,
+    },
+    Case {
+        name: "oscillating_disk",
+        run: oscillating_disk::run,
+    },
+];
 
 /// The workspace's `cases/` folder.
 pub fn cases_dir() -> PathBuf {
