@@ -139,7 +139,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     let (grids, end): (&[usize], f64) = if opts.quick {
         (&[16, 24, 32], 9.0)
     } else {
-        (&[32, 48, 64, 128], 20.0)
+        (&[32, 48, 64, 96], 20.0)
     };
     let reference = reference()?;
     let mut runs: Vec<(Run, Path2)> = Vec::new();

@@ -60,7 +60,7 @@ fn analyse(run: &Run) -> Result<History, String> {
         .unwrap_or(0);
     let v0 = vol[0];
     Ok(History {
-        extrema: extrema(&t, &kinetic, 4),
+        extrema: extrema(&t, &kinetic, 2),
         t_elastic_peak: t[k],
         elastic_peak: elastic[k],
         volume_drift: vol
@@ -105,7 +105,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         scene.grid.nx = n;
         scene.grid.ny = n;
         scene.time.end = end;
-        scene.output.probe_every = Some(0.0025);
+        scene.output.probe_every = Some(0.005);
         if opts.quick || n != finest {
             scene.output.vtk_every = None;
         }
