@@ -384,6 +384,25 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         "First kinetic energy minimum ({}): t = {first_min:.4}",
         fr.label
     ));
+    // The cheapest grid whose kinetic energy history is within 5 % of KE(0) of the finest's
+    // and whose elastic energy peaks within 0.01 of the finest's peak time.
+    let recommendation = match plain.iter().find(|(r, h, _)| {
+        r.error.is_some_and(|e| e <= 0.05) && (h.t_elastic_peak - fh.t_elastic_peak).abs() <= 0.01
+    }) {
+        Some((r, h, _)) => format!(
+            "{} at CFL 0.4: the cheapest grid whose KE history is within 5 % of KE(0) of the \
+             finest grid's (error {:.3}) and whose elastic energy peaks within 0.01 of its peak \
+             time (t = {:.4}), in {:.1} s",
+            r.label,
+            r.error.unwrap_or(f64::NAN),
+            h.t_elastic_peak,
+            r.wall_seconds
+        ),
+        None => format!(
+            "no grid coarser than {} is within 5 % of it: use the finest",
+            fr.label
+        ),
+    };
     let all: Vec<Run> = runs.into_iter().map(|(r, _, _)| r).collect();
     Ok(Report {
         name: "oscillating_disk".into(),
@@ -401,9 +420,9 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         notes,
         schedule,
         recommendation: if opts.quick {
-            "quick mode: see the full report".into()
+            format!("quick mode (t ≤ {end}, coarse grids): {recommendation}")
         } else {
-            "see the findings".into()
+            recommendation
         },
     })
 }
