@@ -54,3 +54,13 @@ fn shear_rectangle_quick() {
 fn oscillating_couette_quick() {
     quick("oscillating_couette");
 }
+
+#[test]
+fn disk_in_cavity_quick() {
+    quick("disk_in_cavity");
+}
+
+#[test]
+fn oscillating_disk_quick() {
+    quick("oscillating_disk");
+}

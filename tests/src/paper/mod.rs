@@ -5,6 +5,8 @@
 //! their checks.
 
 pub mod couette;
+pub mod disk_cavity;
+pub mod oscillating_disk;
 pub mod plot;
 pub mod shear_rectangle;
 pub mod soft_wall;
@@ -162,6 +164,14 @@ pub const CASES: &[Case] = &[
     Case {
         name: "soft_wall_cavity",
         run: soft_wall::run,
+    },
+    Case {
+        name: "disk_in_cavity",
+        run: disk_cavity::run,
+    },
+    Case {
+        name: "oscillating_disk",
+        run: oscillating_disk::run,
     },
     Case {
         name: "shear_rectangle",
