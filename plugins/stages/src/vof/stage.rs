@@ -131,23 +131,7 @@ impl Stage for VofStage {
     }
 
     fn max_dt(&self, grid: &Grid, state: &State, _cfl: f64) -> Option<f64> {
-        let m = &grid.metric;
-        let mut rate = 0.0f64;
-        for j in 0..grid.ny as isize {
-            for i in 0..=grid.nx as isize {
-                let axis = if grid.is_axisymmetric() && m.rx(i) < 1.5 * grid.dx {
-                    2.0
-                } else {
-                    1.0
-                };
-                rate = rate.max(axis * state.u[(i, j)].abs() / grid.dx);
-            }
-        }
-        for j in 0..=grid.ny as isize {
-            for i in 0..grid.nx as isize {
-                rate = rate.max(state.v[(i, j)].abs() / grid.dy);
-            }
-        }
+        let rate = courant_rate(grid, &state.u, &state.v);
         (rate > 0.0).then(|| 0.5 / rate)
     }
 
@@ -181,14 +165,39 @@ impl Stage for VofStage {
                 *x = w * *x + (1.0 - w) * y;
             }
         }
-        let st = self.advector.step(
-            ctx.grid,
-            &mut phi,
-            &self.u_adv,
-            &self.v_adv,
-            ctx.dt,
-            ctx.step,
-        );
+        // The step was chosen for the velocity at its start; the velocity it ends with (an
+        // impact, a release) can be faster. Sub-cycle the transport with the same velocity so
+        // each sweep keeps its Courant number ≤ 0.5 (one sub-step, and the same bits, otherwise).
+        let courant = courant_rate(ctx.grid, &self.u_adv, &self.v_adv) * ctx.dt;
+        let n = if courant > 0.5 {
+            (courant / 0.45).ceil() as u64
+        } else {
+            1
+        };
+        if n > MAX_SUBSTEPS {
+            state.phi = Some(phi);
+            return Err(StageError {
+                stage: "vof".into(),
+                message: format!(
+                    "the interface's Courant number is {courant:.3} (Δt = {:.3e}), more than {MAX_SUBSTEPS} sub-steps of 0.45; the velocity is growing without bound — lower time.cfl or time.dt_max",
+                    ctx.dt
+                ),
+            });
+        }
+        let mut st = super::AdvectStats::default();
+        for k in 0..n {
+            let s = self.advector.step(
+                ctx.grid,
+                &mut phi,
+                &self.u_adv,
+                &self.v_adv,
+                ctx.dt / n as f64,
+                ctx.step * n + k,
+            );
+            st.cfl = st.cfl.max(s.cfl);
+            st.max_clipped = st.max_clipped.max(s.max_clipped);
+            st.clipped_volume += s.clipped_volume;
+        }
         self.u_adv.copy_from(&state.u);
         self.v_adv.copy_from(&state.v);
         self.advector.fill_ghosts(&mut phi);
@@ -212,4 +221,30 @@ impl Stage for VofStage {
         );
         Ok(StageStats::default())
     }
+}
+
+/// Sub-steps the interface transport may take in one time step before the stage gives up.
+const MAX_SUBSTEPS: u64 = 64;
+
+/// The interface sweep's Courant number per unit Δt, in its flux form: the largest face volume
+/// flux over its upwind cell's volume, `|u| r_face / (r_upwind dx)` on x-faces (up to twice
+/// `|u|/dx` next to the axis) and `|v|/dy` on y-faces.
+fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
+    let m = &grid.metric;
+    let mut rate = 0.0f64;
+    for j in 0..grid.ny as isize {
+        for i in 0..=grid.nx as isize {
+            let a = u[(i, j)];
+            let up = if a > 0.0 { i - 1 } else { i };
+            let rc = m.rc(up);
+            let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
+            rate = rate.max(f.max(1.0) * a.abs() / grid.dx);
+        }
+    }
+    for j in 0..=grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            rate = rate.max(v[(i, j)].abs() / grid.dy);
+        }
+    }
+    rate
 }
