@@ -11,6 +11,14 @@
 //! files, `fields.pvd` and `probes.csv` complete and `run.json` saying `Interrupted`, and exits
 //! with 130 / 143; `efsi resume DIR` continues it. A second signal while stopping exits at once.
 
+/// `println!` that ignores a closed standard output (`efsi run … | head` must not panic).
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 use clap::{Parser, Subcommand};
 use efsi_core::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_core::{EfsiError, Scene, Simulation};
@@ -90,7 +98,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { scene } => load(&scene).map(|sim| {
-            println!(
+            out!(
                 "{}: ok — {} {}×{} cells, stages: {}",
                 scene.display(),
                 match sim.grid.geometry {
@@ -207,7 +215,7 @@ fn run_scene(
 ) -> Result<Option<usize>, EfsiError> {
     let mut sim = load(path)?;
     if print_schedule {
-        println!("{}", sim.pipeline());
+        out!("{}", sim.pipeline());
         return Ok(None);
     }
     let dir = out
@@ -233,9 +241,9 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
         } else {
             String::new()
         };
-        println!("resumed from the checkpoint at step {step}, t = {t:.6e}{other}");
+        out!("resumed from the checkpoint at step {step}, t = {t:.6e}{other}");
     }
-    println!(
+    out!(
         "{}: {:?} at t = {:.6e} after {} steps in {:.2} s ({:.0} ns per cell-step); outputs in {}",
         sim.scene.name,
         outcome.stop,
@@ -246,14 +254,17 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
         dir.display()
     );
     if sim.rate_of_change().is_finite() {
-        println!("final max|uⁿ⁺¹ − uⁿ|/Δt = {:.3e}", sim.rate_of_change());
+        out!("final max|uⁿ⁺¹ − uⁿ|/Δt = {:.3e}", sim.rate_of_change());
     }
-    println!(
+    out!(
         "{:<16} {:>10} {:>16} {:>14}",
-        "stage", "seconds", "ns/cell-step", "iters/step"
+        "stage",
+        "seconds",
+        "ns/cell-step",
+        "iters/step"
     );
     for s in sim.pipeline().timings() {
-        println!(
+        out!(
             "{:<16} {:>10.3} {:>16.1} {:>14.1}",
             s.name,
             s.seconds,
@@ -283,7 +294,7 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
 fn list_laws(paths: &[PathBuf]) -> ExitCode {
     let laws = efsi_core::law::list_laws(paths);
     if laws.is_empty() {
-        println!(
+        out!(
             "no laws found; searched: {}",
             efsi_core::law::loader::search_dirs()
                 .iter()
@@ -295,7 +306,10 @@ fn list_laws(paths: &[PathBuf]) -> ExitCode {
     let mut failed = false;
     for law in laws {
         match law {
-            Ok(info) => print!("{info}"),
+            Ok(info) => {
+                use std::io::Write as _;
+                let _ = write!(std::io::stdout(), "{info}");
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 failed = true;
