@@ -58,47 +58,42 @@ impl Stencil5 {
         self.diag.is_empty()
     }
 
-    /// `y = A x`.
+    /// `y = A x` (in parallel over rows for large grids; the same bits on any thread count).
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
         let (nx, ny) = (self.nx, self.ny);
         let (d, e, n) = (&self.diag[..], &self.east[..], &self.north[..]);
-        // Non-wrapping couplings, row by row, branch-free in the interior.
-        for j in 0..ny {
+        let (px, py) = (self.periodic_x, self.periodic_y);
+        assert_eq!(x.len(), nx * ny);
+        assert_eq!(y.len(), nx * ny);
+        super::par::for_each_row(y, nx, |j, yr| {
             let r = j * nx;
-            for k in r..r + nx {
+            for (i, yk) in yr.iter_mut().enumerate() {
+                let k = r + i;
                 let mut s = d[k] * x[k];
-                if k + 1 < r + nx {
+                if i + 1 < nx {
                     s -= e[k] * x[k + 1];
+                } else if px {
+                    s -= e[k] * x[r];
                 }
-                if k > r {
+                if i > 0 {
                     s -= e[k - 1] * x[k - 1];
+                } else if px {
+                    s -= e[r + nx - 1] * x[r + nx - 1];
                 }
                 if j + 1 < ny {
                     s -= n[k] * x[k + nx];
+                } else if py {
+                    s -= n[k] * x[i];
                 }
                 if j > 0 {
                     s -= n[k - nx] * x[k - nx];
+                } else if py {
+                    let t = (ny - 1) * nx + i;
+                    s -= n[t] * x[t];
                 }
-                y[k] = s;
+                *yk = s;
             }
-        }
-        // Periodic wrap couplings.
-        if self.periodic_x {
-            for j in 0..ny {
-                let (first, last) = (j * nx, j * nx + nx - 1);
-                let c = e[last];
-                y[last] -= c * x[first];
-                y[first] -= c * x[last];
-            }
-        }
-        if self.periodic_y {
-            let top = (ny - 1) * nx;
-            for i in 0..nx {
-                let c = n[top + i];
-                y[top + i] -= c * x[i];
-                y[i] -= c * x[top + i];
-            }
-        }
+        });
     }
 }
 
