@@ -95,10 +95,7 @@ pub fn for_each_index(rows: usize, row_len: usize, f: impl Fn(usize) + Sync + Se
         (0..rows).for_each(f);
     } else {
         let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
-        (0..rows)
-            .into_par_iter()
-            .with_min_len(min_rows)
-            .for_each(f);
+        (0..rows).into_par_iter().with_min_len(min_rows).for_each(f);
     }
 }
 
@@ -153,7 +150,9 @@ mod tests {
     #[test]
     fn dot_is_the_same_on_one_and_two_threads() {
         let n = 100_003;
-        let a: Vec<f64> = (0..n).map(|k| ((k * 7919) % 1013) as f64 / 17.0 - 20.0).collect();
+        let a: Vec<f64> = (0..n)
+            .map(|k| ((k * 7919) % 1013) as f64 / 17.0 - 20.0)
+            .collect();
         let b: Vec<f64> = (0..n).map(|k| ((k * 10_007) % 997) as f64 / 3.0).collect();
         let run = |t| {
             rayon::ThreadPoolBuilder::new()
