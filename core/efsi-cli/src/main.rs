@@ -36,6 +36,9 @@ enum Command {
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
+        /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Validate a scene (syntax, ranges, the pipeline it needs) without running it.
     Check {
@@ -78,7 +81,22 @@ fn main() -> ExitCode {
             out,
             print_schedule,
             quiet,
-        } => run_scene(&scene, out, print_schedule, quiet),
+            threads,
+        } => {
+            // The run loop runs on a worker of the pool, so the stages' parallel loops start
+            // from inside it (cheaper than injecting each from outside, and allocation-free).
+            let mut pool = rayon::ThreadPoolBuilder::new();
+            if let Some(n) = threads {
+                pool = pool.num_threads(n.max(1));
+            }
+            match pool.build() {
+                Ok(pool) => pool.install(|| run_scene(&scene, out, print_schedule, quiet)),
+                Err(e) => {
+                    eprintln!("error: cannot start the worker threads: {e}");
+                    return ExitCode::from(1);
+                }
+            }
+        }
         Command::Laws { paths } => return list_laws(&paths),
     };
     match result {
