@@ -319,8 +319,11 @@ fn factor(n: usize) -> usize {
 }
 
 /// The coarse matrix of `a` (module docs: half the Galerkin product of the piecewise-constant
-/// aggregation along each coarsened direction), into `c` (reshaped as needed).
-pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5) {
+/// aggregation along each coarsened direction), into `c` (reshaped as needed). The excess of
+/// the diagonal over the couplings is summed over each aggregate and multiplied by
+/// `excess_scale` when both directions are coarsened (½ for Dirichlet faces, 1 for a mass
+/// term).
+pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
     let (nx, ny) = (a.nx, a.ny);
     let (fx, fy) = (factor(nx), factor(ny));
     let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
@@ -332,7 +335,7 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5) {
     // Over-correction: ½ along a coarsened direction (the rediscretised scale), 1 across.
     let sx = if fx == 2 { 0.5 } else { 1.0 };
     let sy = if fy == 2 { 0.5 } else { 1.0 };
-    let se = if fx * fy == 4 { 0.5 } else { 1.0 };
+    let se = if fx * fy == 4 { excess_scale } else { 1.0 };
     c.east.fill(0.0);
     c.north.fill(0.0);
     c.diag.fill(0.0);
@@ -441,6 +444,8 @@ struct Hierarchy {
 #[derive(Debug)]
 pub struct Multigrid {
     sweeps: usize,
+    gamma: usize,
+    excess_scale: f64,
     /// The coarse matrices (levels 1, 2, …).
     mats: Vec<Stencil5>,
     h: RefCell<Hierarchy>,
@@ -452,9 +457,25 @@ impl Multigrid {
     pub fn new(sweeps: usize) -> Self {
         Multigrid {
             sweeps: sweeps.max(1),
+            gamma: 2,
+            excess_scale: 0.5,
             mats: Vec::new(),
             h: RefCell::new(Hierarchy::default()),
         }
+    }
+
+    /// A V-cycle (`false`: one coarse correction per level) instead of the default W-cycle.
+    pub fn with_w_cycle(mut self, w: bool) -> Self {
+        self.gamma = if w { 2 } else { 1 };
+        self
+    }
+
+    /// How the excess of the diagonal over the couplings is carried to a 2 × 2 coarser level:
+    /// ½ of its sum (default; right for Dirichlet faces, like the couplings) or all of it
+    /// (`1.0`, right for a mass or reaction term `M + K`, whose Galerkin mass is exact).
+    pub fn with_excess_scale(mut self, scale: f64) -> Self {
+        self.excess_scale = scale;
+        self
     }
 
     /// Number of levels (1 when the matrix is already at most [`COARSEST_CELLS`]).
@@ -489,7 +510,7 @@ impl Multigrid {
         for l in 1..h.levels.len() {
             let (done, rest) = self.mats.split_at_mut(l - 1);
             let fine = if l == 1 { a } else { &done[l - 2] };
-            coarsen_into(fine, &mut rest[0]);
+            coarsen_into(fine, &mut rest[0], self.excess_scale);
             h.levels[l].load(&rest[0]);
         }
         let Hierarchy { levels, coarsest } = h;
@@ -596,7 +617,7 @@ impl Preconditioner for Multigrid {
                 row[1..=nx].copy_from_slice(&r[j * nx..(j + 1) * nx]);
             });
         }
-        cycle(levels, coarsest, 0, self.sweeps, 2);
+        cycle(levels, coarsest, 0, self.sweeps, self.gamma);
         let l0 = &levels[0];
         let (nx, s) = (l0.nx, l0.s);
         par::for_each_row(z, nx, |j, row| {
@@ -768,7 +789,7 @@ mod tests {
             };
             let a = pressure_matrix(p);
             let mut c = Stencil5::new(1, 1, false, false);
-            coarsen_into(&a, &mut c);
+            coarsen_into(&a, &mut c, 0.5);
             let want = pressure_matrix(Problem { n: 4, ..p });
             for k in 0..16 {
                 assert!(
