@@ -88,6 +88,33 @@ pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64])
     }
 }
 
+/// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
+/// parallel when they are long.
+pub fn for_each_row2(
+    a: &mut [f64],
+    b: &mut [f64],
+    row_len: usize,
+    f: impl Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
+) {
+    assert_eq!(a.len(), b.len());
+    if row_len == 0 {
+        return;
+    }
+    if a.len() < PAR_MIN {
+        a.chunks_mut(row_len)
+            .zip(b.chunks_mut(row_len))
+            .enumerate()
+            .for_each(|(j, (x, y))| f(j, x, y));
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        a.par_chunks_mut(row_len)
+            .zip(b.par_chunks_mut(row_len))
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (x, y))| f(j, x, y));
+    }
+}
+
 /// Run `f(j)` for `j in 0..rows` (rows of `row_len` elements), in parallel when there is
 /// enough work. `f` must only touch data disjoint between rows.
 pub fn for_each_index(rows: usize, row_len: usize, f: impl Fn(usize) + Sync + Send) {
