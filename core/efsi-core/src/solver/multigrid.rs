@@ -66,10 +66,11 @@ struct Level {
     s: usize,
     diag: Vec<f64>,
     dinv: Vec<f64>,
+    /// Coupling to the east neighbour; the west coupling of cell `k` is `ce[k − 1]` (the ghost
+    /// column holds the periodic wrap, or 0).
     ce: Vec<f64>,
-    cw: Vec<f64>,
+    /// Coupling to the north neighbour; the south coupling of `k` is `cn[k − s]`.
     cn: Vec<f64>,
-    cs: Vec<f64>,
     x: Vec<f64>,
     b: Vec<f64>,
     /// The first coarse correction while a W-cycle computes the second.
@@ -88,9 +89,7 @@ impl Level {
             diag: vec![0.0; m],
             dinv: vec![0.0; m],
             ce: vec![0.0; m],
-            cw: vec![0.0; m],
             cn: vec![0.0; m],
-            cs: vec![0.0; m],
             x: vec![0.0; m],
             b: vec![0.0; m],
             t: vec![0.0; m],
@@ -104,39 +103,21 @@ impl Level {
 
     /// Copy the coefficients of `a` (same shape) into the padded layout.
     fn load(&mut self, a: &Stencil5) {
-        let (nx, ny) = (self.nx, self.ny);
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
         for j in 0..ny {
             for i in 0..nx {
                 let k = j * nx + i;
                 let p = self.p(i, j);
-                let w = if i > 0 {
-                    a.east[k - 1]
-                } else if a.periodic_x {
-                    a.east[k + nx - 1]
-                } else {
-                    0.0
-                };
-                let s = if j > 0 {
-                    a.north[k - nx]
-                } else if a.periodic_y {
-                    a.north[k + (ny - 1) * nx]
-                } else {
-                    0.0
-                };
-                let e = if i + 1 < nx || a.periodic_x {
+                self.ce[p] = if i + 1 < nx || a.periodic_x {
                     a.east[k]
                 } else {
                     0.0
                 };
-                let n = if j + 1 < ny || a.periodic_y {
+                self.cn[p] = if j + 1 < ny || a.periodic_y {
                     a.north[k]
                 } else {
                     0.0
                 };
-                self.ce[p] = e;
-                self.cw[p] = w;
-                self.cn[p] = n;
-                self.cs[p] = s;
                 self.diag[p] = a.diag[k];
                 self.dinv[p] = if a.diag[k] > 0.0 {
                     1.0 / a.diag[k]
@@ -144,6 +125,19 @@ impl Level {
                     0.0
                 };
             }
+            // West ghost: the wrap coupling of the row's last cell.
+            self.ce[(j + 1) * s] = if a.periodic_x {
+                a.east[j * nx + nx - 1]
+            } else {
+                0.0
+            };
+        }
+        for i in 0..nx {
+            self.cn[i + 1] = if a.periodic_y {
+                a.north[(ny - 1) * nx + i]
+            } else {
+                0.0
+            };
         }
     }
 
@@ -170,14 +164,7 @@ impl Level {
         self.fill_ghosts();
         let (nx, s) = (self.nx, self.s);
         let xs = SharedSlice::new(&mut self.x);
-        let (b, ce, cw, cn, cs, dinv) = (
-            &self.b[..],
-            &self.ce[..],
-            &self.cw[..],
-            &self.cn[..],
-            &self.cs[..],
-            &self.dinv[..],
-        );
+        let (b, ce, cn, dinv) = (&self.b[..], &self.ce[..], &self.cn[..], &self.dinv[..]);
         par::for_each_index(self.ny, nx, |j| {
             let base = (j + 1) * s + 1;
             let mut k = base + ((colour + j) & 1);
@@ -189,9 +176,9 @@ impl Level {
                 unsafe {
                     let v = (b[k]
                         + ce[k] * xs.get(k + 1)
-                        + cw[k] * xs.get(k - 1)
+                        + ce[k - 1] * xs.get(k - 1)
                         + cn[k] * xs.get(k + s)
-                        + cs[k] * xs.get(k - s))
+                        + cn[k - s] * xs.get(k - s))
                         * dinv[k];
                     xs.set(k, v);
                 }
@@ -206,9 +193,9 @@ impl Level {
         let (x, s) = (&self.x, self.s);
         self.b[k] - self.diag[k] * x[k]
             + self.ce[k] * x[k + 1]
-            + self.cw[k] * x[k - 1]
+            + self.ce[k - 1] * x[k - 1]
             + self.cn[k] * x[k + s]
-            + self.cs[k] * x[k - s]
+            + self.cn[k - s] * x[k - s]
     }
 }
 
@@ -232,7 +219,8 @@ impl Coarsest {
         let singular = (0..lv.ny).all(|j| {
             (0..nx).all(|i| {
                 let p = lv.p(i, j);
-                lv.diag[p] - (lv.ce[p] + lv.cw[p] + lv.cn[p] + lv.cs[p]) <= 1e-12 * lv.diag[p]
+                lv.diag[p] - (lv.ce[p] + lv.ce[p - 1] + lv.cn[p] + lv.cn[p - lv.s])
+                    <= 1e-12 * lv.diag[p]
             })
         });
         let a = &mut self.l;
@@ -244,9 +232,9 @@ impl Coarsest {
                 // Neighbours (with wraps): subtract couplings; periodic self-wraps cancel.
                 let nb = [
                     (lv.ce[p], (i + 1) % nx, j),
-                    (lv.cw[p], (i + nx - 1) % nx, j),
+                    (lv.ce[p - 1], (i + nx - 1) % nx, j),
                     (lv.cn[p], i, (j + 1) % lv.ny),
-                    (lv.cs[p], i, (j + lv.ny - 1) % lv.ny),
+                    (lv.cn[p - lv.s], i, (j + lv.ny - 1) % lv.ny),
                 ];
                 for (c, ii, jj) in nb {
                     if c != 0.0 {

@@ -65,33 +65,45 @@ impl Stencil5 {
         let (px, py) = (self.periodic_x, self.periodic_y);
         assert_eq!(x.len(), nx * ny);
         assert_eq!(y.len(), nx * ny);
+        // Row by row in passes over contiguous slices (they vectorise): diagonal, east, west,
+        // north, south, then the periodic wraps.
         super::par::for_each_row(y, nx, |j, yr| {
             let r = j * nx;
-            for (i, yk) in yr.iter_mut().enumerate() {
-                let k = r + i;
-                let mut s = d[k] * x[k];
-                if i + 1 < nx {
-                    s -= e[k] * x[k + 1];
-                } else if px {
-                    s -= e[k] * x[r];
+            let (xr, dr, er) = (&x[r..r + nx], &d[r..r + nx], &e[r..r + nx]);
+            for ((y, d), x) in yr.iter_mut().zip(dr).zip(xr) {
+                *y = d * x;
+            }
+            for ((y, e), x) in yr[..nx - 1].iter_mut().zip(&er[..nx - 1]).zip(&xr[1..]) {
+                *y -= e * x;
+            }
+            for ((y, e), x) in yr[1..].iter_mut().zip(&er[..nx - 1]).zip(&xr[..nx - 1]) {
+                *y -= e * x;
+            }
+            if j + 1 < ny {
+                let xn = &x[r + nx..r + 2 * nx];
+                for ((y, n), x) in yr.iter_mut().zip(&n[r..r + nx]).zip(xn) {
+                    *y -= n * x;
                 }
-                if i > 0 {
-                    s -= e[k - 1] * x[k - 1];
-                } else if px {
-                    s -= e[r + nx - 1] * x[r + nx - 1];
+            } else if py {
+                for ((y, n), x) in yr.iter_mut().zip(&n[r..r + nx]).zip(&x[..nx]) {
+                    *y -= n * x;
                 }
-                if j + 1 < ny {
-                    s -= n[k] * x[k + nx];
-                } else if py {
-                    s -= n[k] * x[i];
+            }
+            if j > 0 {
+                let (xs, ns) = (&x[r - nx..r], &n[r - nx..r]);
+                for ((y, n), x) in yr.iter_mut().zip(ns).zip(xs) {
+                    *y -= n * x;
                 }
-                if j > 0 {
-                    s -= n[k - nx] * x[k - nx];
-                } else if py {
-                    let t = (ny - 1) * nx + i;
-                    s -= n[t] * x[t];
+            } else if py {
+                let t = (ny - 1) * nx;
+                for ((y, n), x) in yr.iter_mut().zip(&n[t..t + nx]).zip(&x[t..t + nx]) {
+                    *y -= n * x;
                 }
-                *yk = s;
+            }
+            if px {
+                let c = er[nx - 1];
+                yr[nx - 1] -= c * xr[0];
+                yr[0] -= c * xr[nx - 1];
             }
         });
     }
