@@ -890,9 +890,12 @@ mod tests {
         }
     }
 
+    /// The table behind the module docs' figures: MG-PCG iterations for the six problem kinds
+    /// at density ratios 1, 1e2, 1e4 and 64² to 512² (a few seconds; run with
+    /// `cargo test -p efsi-core --lib iteration_table -- --ignored --nocapture`).
     #[test]
     #[ignore]
-    fn explore() {
+    fn iteration_table() {
         for ratio in [1.0, 1e2, 1e4] {
             for n in [64, 128, 256, 512] {
                 let mut line = format!("ratio {ratio:e} n {n}:");
