@@ -84,17 +84,20 @@ fn allocations_after_first_step(text: &str, k: usize) -> usize {
 #[test]
 fn no_allocation_after_the_first_step() {
     // One test function: the counter is global, tests in parallel would pollute it.
+    // The drop also with the block-multigrid viscous preconditioner (default: Jacobi).
+    let drop_mg = DROP.replace(
+        "boundaries:",
+        "numerics: (viscous: (preconditioner: Multigrid)),\n    boundaries:",
+    );
+    let two_phase = ["advection", "body_force", "viscous", "projection", "vof"];
     for (name, text, stages) in [
         (
             "cavity",
             CAVITY,
             &["advection", "viscous", "projection"][..],
         ),
-        (
-            "drop",
-            DROP,
-            &["advection", "body_force", "viscous", "projection", "vof"][..],
-        ),
+        ("drop", DROP, &two_phase[..]),
+        ("drop-mg", &drop_mg, &two_phase[..]),
     ] {
         assert_eq!(sim(text).pipeline().stage_names(), stages);
         let count = |threads| {

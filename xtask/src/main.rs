@@ -9,7 +9,8 @@
 //!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982).
 //! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]`: the
 //!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
-//!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner; default
+//!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
+//!   multigrid viscous one; default
 //!   `cavity128,cavity256,drop128,drop256`), each on one thread and on N (default all), for ns
 //!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
 //!   medians of R runs, written to `DIR/bench.json` (default `target/bench`). A benchmark, not
@@ -105,7 +106,8 @@ fn test() -> Result<(), String> {
 
 /// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`
 /// (axisymmetric drop, ρ 1 in 1e-3, μ 1e-2 in 2e-4, g = 1, box 4 × 4, N², t ∈ [0, 1],
-/// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner.
+/// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner and/or `-vmg`
+/// for the block-multigrid viscous preconditioner.
 struct Case {
     name: String,
     scene: String,
@@ -114,11 +116,18 @@ struct Case {
 }
 
 fn case(name: &str, quick: bool) -> Result<Case, String> {
-    let (base, solver) = match name.strip_suffix("-ic") {
-        Some(b) => (b, "IncompleteCholesky"),
-        None => (name, "Multigrid"),
+    // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
+    // step instead of the default Jacobi).
+    let (rest, viscous) = match name.strip_suffix("-vmg") {
+        Some(b) => (b, "Multigrid"),
+        None => (name, "Jacobi"),
     };
-    let bad = || format!("unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic");
+    let (base, solver) = match rest.strip_suffix("-ic") {
+        Some(b) => (b, "IncompleteCholesky"),
+        None => (rest, "Multigrid"),
+    };
+    let bad =
+        || format!("unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg");
     let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
         (false, n.parse::<usize>().map_err(|_| bad())?)
     } else if let Some(n) = base.strip_prefix("drop") {
@@ -143,7 +152,7 @@ Scene(
     gravity: (0.0, -1.0),
     solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
     boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
-    numerics: (projection: (solver: {solver})),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
     output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
 )
 "#,
@@ -161,7 +170,7 @@ Scene(
     time: (end: {end}, cfl: 0.4, dt_max: 1.0),
     fluid: (density: 1.0, viscosity: 0.001),
     boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
-    numerics: (projection: (solver: {solver})),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
 )
 "#
         )

@@ -17,9 +17,11 @@
 //! both components at once by conjugate gradient ("line solves as in the seed, or better": this
 //! solves the coupled system exactly instead of splitting it), preconditioned by the diagonal
 //! (Jacobi) or by multigrid V-cycles on the u–u and v–v blocks
-//! ([`efsi_core::solver::Multigrid`]; scene `numerics.viscous.preconditioner`, default `Auto`:
-//! multigrid once the diffusion number makes Jacobi's iteration count, ~10√(max diag/mass),
-//! exceed the ~16 iterations the block preconditioner needs at twice the cost each).
+//! ([`efsi_core::solver::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
+//! default, `Multigrid`, or `Auto`, multigrid once the diffusion number makes Jacobi's
+//! iteration count, ~10√(max diag/mass), exceed the ~16 iterations the block preconditioner
+//! needs at twice the cost each). Jacobi keeps a flow uniform along a periodic direction
+//! exactly uniform; the red–black smoother does so only to the solver tolerance.
 //!
 //! **Parallelism.** The operator (scatter, stress divergence, gather) runs over rows in
 //! parallel and CG's reductions have a fixed order: bit-identical on any number of threads. `K(V*)`
