@@ -7,9 +7,14 @@
 //!   and the law plugin libraries it loads) and run `efsi run SCENE ARGS…`.
 //! - `cargo xtask ghia DIR RE`: max |deviation| of a finished cavity run's last centreline
 //!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982).
-//! - `cargo xtask bench [--out DIR]`: the Re = 1000 lid-driven cavity at 128², one thread, for
-//!   ns per cell-step in total and per stage and Poisson iterations per step (a benchmark,
-//!   not a test: timings are never asserted).
+//! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]`: the
+//!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
+//!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
+//!   multigrid viscous one; default
+//!   `cavity128,cavity256,drop128,drop256`), each on one thread and on N (default all), for ns
+//!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
+//!   medians of R runs, written to `DIR/bench.json` (default `target/bench`). A benchmark, not
+//!   a test: timings are never asserted.
 //! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (release) and
 //!   package `target/fmu/sphere_impact.fmu` (FMI 2.0 Co-Simulation) and
 //!   `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation).
@@ -182,36 +187,291 @@ fn test() -> Result<(), String> {
     run(c, "pytest tests/python")
 }
 
+/// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`
+/// (axisymmetric drop, ρ 1 in 1e-3, μ 1e-2 in 2e-4, g = 1, box 4 × 4, N², t ∈ [0, 1],
+/// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner and/or `-vmg`
+/// for the block-multigrid viscous preconditioner.
+struct Case {
+    name: String,
+    scene: String,
+    drop: bool,
+    cells: usize,
+}
+
+fn case(name: &str, quick: bool) -> Result<Case, String> {
+    // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
+    // step instead of the default Jacobi).
+    let (rest, viscous) = match name.strip_suffix("-vmg") {
+        Some(b) => (b, "Multigrid"),
+        None => (name, "Jacobi"),
+    };
+    let (base, solver) = match rest.strip_suffix("-ic") {
+        Some(b) => (b, "IncompleteCholesky"),
+        None => (rest, "Multigrid"),
+    };
+    let bad =
+        || format!("unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg");
+    let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
+        (false, n.parse::<usize>().map_err(|_| bad())?)
+    } else if let Some(n) = base.strip_prefix("drop") {
+        (true, n.parse::<usize>().map_err(|_| bad())?)
+    } else {
+        return Err(bad());
+    };
+    if n < 8 {
+        return Err(bad());
+    }
+    let scene = if drop {
+        let end = if quick { 0.25 } else { 1.0 };
+        format!(
+            r#"// Axisymmetric drop falling from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
+    grid: (nr: {n}, nz: {n}),
+    time: (end: {end}, fixed_dt: {dt:e}),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    gravity: (0.0, -1.0),
+    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
+    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
+)
+"#,
+            dt = 0.5 / n as f64
+        )
+    } else {
+        let end = if quick { 0.5 } else { 2.0 };
+        format!(
+            r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Planar,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: {n}, ny: {n}),
+    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
+    fluid: (density: 1.0, viscosity: 0.001),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
+)
+"#
+        )
+    };
+    Ok(Case {
+        name: name.to_string(),
+        scene,
+        drop,
+        cells: n * n,
+    })
+}
+
+/// One run's figures.
+#[derive(Clone)]
+struct Figures {
+    total: f64,
+    stages: Vec<(String, f64, f64)>,
+    steps: f64,
+    fall: Option<f64>,
+    wall: f64,
+}
+
+fn run_case(c: &Case, threads: usize, out: &Path) -> Result<Figures, String> {
+    let dir = out.join(format!("{}_t{threads}", c.name));
+    let scene = out.join(format!("{}.ron", c.name));
+    std::fs::write(&scene, &c.scene).map_err(|e| e.to_string())?;
+    let mut cmd = Command::new(root().join("target/release/efsi"));
+    cmd.arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&dir)
+        .arg("-q")
+        .arg("--threads")
+        .arg(threads.to_string())
+        .stdout(std::process::Stdio::null());
+    let status = cmd
+        .status()
+        .map_err(|e| format!("cannot start efsi: {e}"))?;
+    if !status.success() {
+        return Err(format!("{}: efsi failed ({status})", c.name));
+    }
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let j: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    let stages = j["stages"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|s| {
+                    (
+                        s["name"].as_str().unwrap_or("?").to_string(),
+                        num(&s["ns_per_cell_step"]),
+                        num(&s["solver_iterations_per_step"]),
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let fall = if c.drop {
+        let p = dir.join("probes.csv");
+        let (h, cols) = read_csv(&p)?;
+        let z = column(&h, &cols, "solid_y", &p)?;
+        Some(z[0] - z[z.len() - 1])
+    } else {
+        None
+    };
+    Ok(Figures {
+        total: num(&j["ns_per_cell_step"]),
+        stages,
+        steps: num(&j["steps"]),
+        fall,
+        wall: num(&j["wall_seconds"]),
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Element-wise medians of several runs of one case.
+fn median_figures(runs: &[Figures]) -> Figures {
+    let mut f = runs[0].clone();
+    f.total = median(runs.iter().map(|r| r.total).collect());
+    f.wall = median(runs.iter().map(|r| r.wall).collect());
+    for (k, s) in f.stages.iter_mut().enumerate() {
+        s.1 = median(runs.iter().map(|r| r.stages[k].1).collect());
+        s.2 = median(runs.iter().map(|r| r.stages[k].2).collect());
+    }
+    f
+}
+
 fn bench(args: &[String]) -> Result<(), String> {
-    let out = args
-        .windows(2)
-        .find(|w| w[0] == "--out")
-        .map(|w| PathBuf::from(&w[1]))
+    let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
+    let quick = args.iter().any(|a| a == "--quick");
+    let out = value("--out")
+        .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target/bench"));
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads: usize = match value("--threads") {
+        Some(t) => t
+            .parse()
+            .map_err(|_| format!("--threads {t}: not a number"))?,
+        None => all,
+    };
+    let repeat: usize = match value("--repeat") {
+        Some(t) => t
+            .parse()
+            .map_err(|_| format!("--repeat {t}: not a number"))?,
+        None => 1,
+    };
+    let names = value("--cases").unwrap_or_else(|| {
+        if quick {
+            "cavity128,drop128".into()
+        } else {
+            "cavity128,cavity256,drop128,drop256".into()
+        }
+    });
+    let cases = names
+        .split(',')
+        .map(|n| case(n.trim(), quick))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut c = cargo();
     c.args(["build", "--quiet", "--release", "-p", "efsi"]);
     run(c, "build efsi (release)")?;
-    let scene = root().join("cases/lid_driven_cavity_re1000.ron");
-    let text = std::fs::read_to_string(&scene).map_err(|e| e.to_string())?;
-    // A fixed number of steps' worth of time from rest keeps runs comparable.
-    let text = text
-        .replace("end: 100.0", "end: 2.0")
-        .replace("steady: 1e-6", "dt_max: 1.0");
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
-    let bench_scene = out.join("cavity_re1000_128.ron");
-    std::fs::write(&bench_scene, text).map_err(|e| e.to_string())?;
-    let mut c = Command::new(root().join("target/release/efsi"));
-    c.arg("run")
-        .arg(&bench_scene)
-        .arg("--out")
-        .arg(out.join("cavity_re1000_128"))
-        .arg("-q");
-    c.env("RAYON_NUM_THREADS", "1");
-    run(c, "Re = 1000 cavity, 128², t ∈ [0, 2], one thread")?;
-    eprintln!(
-        "figures: {}",
-        out.join("cavity_re1000_128/run.json").display()
+    let mut pools = vec![1];
+    if threads != 1 {
+        pools.push(threads);
+    }
+    let mut json = Vec::new();
+    println!(
+        "{:<14} {:>3} {:>6} {:>10} {:>8}  per stage: ns/cell-step (solver iterations/step)",
+        "case", "thr", "steps", "ns/cell·st", "speedup"
     );
+    for c in &cases {
+        // Runs alternate between the pool sizes, so that a load change on the machine affects
+        // both alike and the ratio is measured within one run of the bench.
+        let mut runs: Vec<Vec<Figures>> = vec![Vec::new(); pools.len()];
+        for _ in 0..repeat.max(1) {
+            for (k, &t) in pools.iter().enumerate() {
+                runs[k].push(run_case(c, t, &out)?);
+            }
+        }
+        let base = median_figures(&runs[0]).total;
+        for (k, &t) in pools.iter().enumerate() {
+            let f = median_figures(&runs[k]);
+            let spread = {
+                let v: Vec<f64> = runs[k].iter().map(|r| r.total).collect();
+                let (lo, hi) = v
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                (hi - lo) / f.total
+            };
+            let stages = f
+                .stages
+                .iter()
+                .map(|(n, ns, it)| {
+                    if *it > 0.0 {
+                        format!("{n} {ns:.0} ({it:.1})")
+                    } else {
+                        format!("{n} {ns:.0}")
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            let fall = f
+                .fall
+                .map(|z| {
+                    format!(
+                        "; fall {z:.4} (½gt² = {:.4})",
+                        0.5 * if quick { 0.0625 } else { 1.0 }
+                    )
+                })
+                .unwrap_or_default();
+            println!(
+                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}",
+                c.name,
+                t,
+                f.steps,
+                f.total,
+                base / f.total
+            );
+            json.push(serde_json::json!({
+                "case": c.name,
+                "threads": t,
+                "cells": c.cells,
+                "steps": f.steps,
+                "repeats": runs[k].len(),
+                "ns_per_cell_step": f.total,
+                "ns_per_cell_step_runs": runs[k].iter().map(|r| r.total).collect::<Vec<_>>(),
+                "spread": spread,
+                "speedup_vs_1_thread": base / f.total,
+                "wall_seconds": f.wall,
+                "fall": f.fall,
+                "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({
+                    "name": n, "ns_per_cell_step": ns, "solver_iterations_per_step": it
+                })).collect::<Vec<_>>(),
+            }));
+        }
+    }
+    let path = out.join("bench.json");
+    let text = serde_json::to_string_pretty(&serde_json::json!({
+        "quick": quick,
+        "threads": pools,
+        "cases": json,
+    }))
+    .map_err(|e| e.to_string())?;
+    std::fs::write(&path, text).map_err(|e| e.to_string())?;
+    eprintln!("figures: {}", path.display());
     Ok(())
 }
 
@@ -349,8 +609,9 @@ fn main() -> ExitCode {
         Some("bench-paper") => bench_paper(&args[1..]),
         Some("fmu") => fmu().map(|_| ()),
         _ => Err(
-            "usage: cargo xtask <run SCENE | test | fmu | bench [--out DIR] | bench-paper \
-             [--quick] [--case NAME]… [--out DIR] | ghia DIR RE>"
+            "usage: cargo xtask <run SCENE | test | fmu | bench [--quick] [--cases LIST] \
+             [--threads N] [--repeat R] [--out DIR] | bench-paper [--quick] [--case NAME]… \
+             [--out DIR] | ghia DIR RE>"
                 .into(),
         ),
     };

@@ -59,6 +59,9 @@ enum Command {
         /// when a step fails.
         #[arg(long, value_name = "T")]
         checkpoint_every: Option<f64>,
+        /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
@@ -117,12 +120,35 @@ fn main() -> ExitCode {
             print_schedule,
             quiet,
             checkpoint_every,
-        } => run_scene(&scene, out, print_schedule, quiet, checkpoint_every),
+            threads,
+        } => {
+            // The run loop runs on a worker of the pool, so the stages' parallel loops start
+            // from inside it (cheaper than injecting each from outside, and allocation-free).
+            let mut pool = rayon::ThreadPoolBuilder::new();
+            if let Some(n) = threads {
+                pool = pool.num_threads(n.max(1));
+            }
+            match pool.build() {
+                Ok(pool) => {
+                    pool.install(|| run_scene(&scene, out, print_schedule, quiet, checkpoint_every))
+                }
+                Err(e) => {
+                    eprintln!("error: cannot start the worker threads: {e}");
+                    return ExitCode::from(1);
+                }
+            }
+        }
         Command::Resume {
             dir,
             checkpoint_every,
             quiet,
-        } => resume_run(&dir, quiet, checkpoint_every),
+        } => match rayon::ThreadPoolBuilder::new().build() {
+            Ok(pool) => pool.install(|| resume_run(&dir, quiet, checkpoint_every)),
+            Err(e) => {
+                eprintln!("error: cannot start the worker threads: {e}");
+                return ExitCode::from(1);
+            }
+        },
         Command::Laws { paths } => return list_laws(&paths),
     };
     match result {

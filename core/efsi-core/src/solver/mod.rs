@@ -1,9 +1,13 @@
-//! Linear solvers: preconditioned conjugate gradient and the preconditioners it uses.
+//! Linear solvers: preconditioned conjugate gradient and the preconditioners it uses
+//! (incomplete Cholesky, geometric multigrid), BiCGSTAB, and deterministic parallel loops.
 
 pub mod bicgstab;
+pub mod multigrid;
+pub mod par;
 pub mod pcg;
 pub mod stencil5;
 
 pub use bicgstab::BiCgStab;
+pub use multigrid::Multigrid;
 pub use pcg::{LinearOperator, Pcg, Preconditioner, SolveStats};
 pub use stencil5::{IncompleteCholesky, Stencil5};

@@ -5,6 +5,9 @@
 //! nothing. The caller's stopping rule sees the current residual `r = b − A x`; the recurrence
 //! residual drifts from the true one over many iterations, so when the rule is met the solver
 //! recomputes the true residual with one extra product and continues if it is not met after all.
+//!
+//! Vector updates run in parallel and dot products sum fixed chunks in order
+//! ([`super::par`]), so the iterates do not depend on the number of threads.
 
 /// A symmetric linear operator `y = A x` on vectors of a fixed length.
 pub trait LinearOperator {
@@ -47,23 +50,7 @@ pub struct Pcg {
     q: Vec<f64>,
 }
 
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    // Four partial sums: vectorises and is less sensitive to summation order.
-    let mut s = [0.0f64; 4];
-    let n4 = a.len() / 4 * 4;
-    for k in (0..n4).step_by(4) {
-        s[0] += a[k] * b[k];
-        s[1] += a[k + 1] * b[k + 1];
-        s[2] += a[k + 2] * b[k + 2];
-        s[3] += a[k + 3] * b[k + 3];
-    }
-    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-    for k in n4..a.len() {
-        t += a[k] * b[k];
-    }
-    t
-}
+use super::par::{self, dot};
 
 impl Pcg {
     /// Workspace for systems of `n` unknowns.
@@ -105,9 +92,7 @@ impl Pcg {
         assert_eq!(n, x.len());
         let Pcg { r, z, p, q } = self;
         a.apply(x, q);
-        for k in 0..n {
-            r[k] = b[k] - q[k];
-        }
+        par::for_each_mut(r, |k, r| *r = b[k] - q[k]);
         let mut res = measure(r);
         let mut it = 0;
         if res <= tol {
@@ -128,18 +113,14 @@ impl Pcg {
                 break;
             }
             let alpha = rz / pq;
-            for k in 0..n {
-                x[k] += alpha * p[k];
-                r[k] -= alpha * q[k];
-            }
+            par::for_each_mut(x, |k, x| *x += alpha * p[k]);
+            par::for_each_mut(r, |k, r| *r -= alpha * q[k]);
             it += 1;
             res = measure(r);
             if res <= tol {
                 // Confirm with the true residual.
                 a.apply(x, q);
-                for k in 0..n {
-                    r[k] = b[k] - q[k];
-                }
+                par::for_each_mut(r, |k, r| *r = b[k] - q[k]);
                 res = measure(r);
                 if res <= tol {
                     return SolveStats {
@@ -153,9 +134,7 @@ impl Pcg {
             let rz_new = dot(r, z);
             let beta = rz_new / rz;
             rz = rz_new;
-            for k in 0..n {
-                p[k] = z[k] + beta * p[k];
-            }
+            par::for_each_mut(p, |k, p| *p = z[k] + beta * *p);
         }
         SolveStats {
             iterations: it,

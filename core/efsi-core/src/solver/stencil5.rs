@@ -58,47 +58,54 @@ impl Stencil5 {
         self.diag.is_empty()
     }
 
-    /// `y = A x`.
+    /// `y = A x` (in parallel over rows for large grids; the same bits on any thread count).
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
         let (nx, ny) = (self.nx, self.ny);
         let (d, e, n) = (&self.diag[..], &self.east[..], &self.north[..]);
-        // Non-wrapping couplings, row by row, branch-free in the interior.
-        for j in 0..ny {
+        let (px, py) = (self.periodic_x, self.periodic_y);
+        assert_eq!(x.len(), nx * ny);
+        assert_eq!(y.len(), nx * ny);
+        // Row by row in passes over contiguous slices (they vectorise): diagonal, east, west,
+        // north, south, then the periodic wraps.
+        super::par::for_each_row(y, nx, |j, yr| {
             let r = j * nx;
-            for k in r..r + nx {
-                let mut s = d[k] * x[k];
-                if k + 1 < r + nx {
-                    s -= e[k] * x[k + 1];
-                }
-                if k > r {
-                    s -= e[k - 1] * x[k - 1];
-                }
-                if j + 1 < ny {
-                    s -= n[k] * x[k + nx];
-                }
-                if j > 0 {
-                    s -= n[k - nx] * x[k - nx];
-                }
-                y[k] = s;
+            let (xr, dr, er) = (&x[r..r + nx], &d[r..r + nx], &e[r..r + nx]);
+            for ((y, d), x) in yr.iter_mut().zip(dr).zip(xr) {
+                *y = d * x;
             }
-        }
-        // Periodic wrap couplings.
-        if self.periodic_x {
-            for j in 0..ny {
-                let (first, last) = (j * nx, j * nx + nx - 1);
-                let c = e[last];
-                y[last] -= c * x[first];
-                y[first] -= c * x[last];
+            for ((y, e), x) in yr[..nx - 1].iter_mut().zip(&er[..nx - 1]).zip(&xr[1..]) {
+                *y -= e * x;
             }
-        }
-        if self.periodic_y {
-            let top = (ny - 1) * nx;
-            for i in 0..nx {
-                let c = n[top + i];
-                y[top + i] -= c * x[i];
-                y[i] -= c * x[top + i];
+            for ((y, e), x) in yr[1..].iter_mut().zip(&er[..nx - 1]).zip(&xr[..nx - 1]) {
+                *y -= e * x;
             }
-        }
+            if j + 1 < ny {
+                let xn = &x[r + nx..r + 2 * nx];
+                for ((y, n), x) in yr.iter_mut().zip(&n[r..r + nx]).zip(xn) {
+                    *y -= n * x;
+                }
+            } else if py {
+                for ((y, n), x) in yr.iter_mut().zip(&n[r..r + nx]).zip(&x[..nx]) {
+                    *y -= n * x;
+                }
+            }
+            if j > 0 {
+                let (xs, ns) = (&x[r - nx..r], &n[r - nx..r]);
+                for ((y, n), x) in yr.iter_mut().zip(ns).zip(xs) {
+                    *y -= n * x;
+                }
+            } else if py {
+                let t = (ny - 1) * nx;
+                for ((y, n), x) in yr.iter_mut().zip(&n[t..t + nx]).zip(&x[t..t + nx]) {
+                    *y -= n * x;
+                }
+            }
+            if px {
+                let c = er[nx - 1];
+                yr[nx - 1] -= c * xr[0];
+                yr[0] -= c * xr[nx - 1];
+            }
+        });
     }
 }
 

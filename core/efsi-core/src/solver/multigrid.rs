@@ -1,0 +1,926 @@
+//! Geometric multigrid W-cycle for five-point SPD matrices on the cell grid, used as the
+//! preconditioner of conjugate gradient ("MG-PCG").
+//!
+//! It works from the assembled [`Stencil5`] alone — the diagonal and the east/north couplings,
+//! with periodic wraps — so it serves any symmetric five-point M-matrix (diffusion with a
+//! variable, possibly discontinuous coefficient, planar or r-weighted axisymmetric, Neumann,
+//! periodic and Dirichlet sides), not only the pressure equation.
+//!
+//! **Hierarchy.** Cells are aggregated 2 × 2 (an odd count leaves a last aggregate one cell
+//! wide; a direction of ≤ 2 cells is no longer coarsened) until at most [`COARSEST_CELLS`]
+//! cells remain. The coarse matrix is again five-point: with `P` the piecewise-constant
+//! prolongation (each fine cell takes its aggregate's value) it is the Galerkin product `PᵀAP`
+//! — the coupling of two aggregates is the sum of the fine couplings across their common face,
+//! the excess of the diagonal over the couplings (Dirichlet faces) is summed — scaled by ½
+//! along each coarsened direction. Galerkin keeps the coarse problem faithful to the fine
+//! coefficient at any jump (an aggregate straddling a light and a heavy cell stays strongly
+//! coupled to its light neighbours); the factor ½ is the over-correction that piecewise-constant
+//! aggregation needs (Braess 1995; Notay & Vassilevski 2008): for a constant coefficient `PᵀAP`
+//! is twice the rediscretised coarse operator, so the plain Galerkin correction of a smooth
+//! error would come out half as large as it should. With the factor, a constant coefficient
+//! gives exactly the rediscretised operator, planar and axisymmetric (`Σ r_f dz/dr` over the
+//! two fine faces is `2 r_F dZ/dR`). Measured on random disks of density ratio 1e4: ½ needs
+//! 10 iterations where 0.55 and 0.6 need 12–14 and 14–19, and a coefficient-aware
+//! series-resistance coarsening 45–130.
+//!
+//! **Cycle.** A W-cycle: pre-smoothing by `ν` red–black Gauss–Seidel sweeps (red then black),
+//! restriction of the residual by summing the four children (`R = Pᵀ`), two coarse
+//! corrections (the second from the residual of the first; one next to the coarsest level),
+//! prolongation `P`, then `ν` sweeps in the reverse colour order (black then red) — the
+//! adjoint of the pre-smoother, so the cycle is a symmetric operator; it is positive definite
+//! because the smoother converges and each coarse correction is symmetric positive
+//! semi-definite (Tatebe 1993 for MG-CG). The coarsest system is solved exactly by a dense
+//! Cholesky factor. A V-cycle grows with the number of levels (the piecewise-constant transfer
+//! has orders `m_P + m_R = 2`, not `> 2`): measured at ratio 1e4, 11 → 14 iterations from 64²
+//! to 256², against 10 → 10 for the W-cycle, whose cycle costs ≈ 1.5× a V-cycle's.
+//!
+//! **Singular systems.** Without Dirichlet faces the matrix annihilates constants; residuals
+//! the conjugate gradient hands over then sum to zero, restriction keeps that, and the coarsest
+//! solve pins one unknown (a consistent singular system), so the cycle stays symmetric and
+//! positive definite on the range.
+//!
+//! **Parallelism and determinism.** Sweeps of one colour, residual–restriction and
+//! prolongation run in parallel over rows (rayon) on levels of at least [`par::PAR_MIN`]
+//! cells; each writes disjoint entries from inputs no one writes in that loop, so results are
+//! bit-identical whatever the number of threads.
+//!
+//! **Allocation.** [`Multigrid::setup`] allocates the hierarchy on the first call and reuses it
+//! for later matrices of the same shape; [`Preconditioner::apply`] never allocates.
+
+use super::par::{self, SharedSlice};
+use super::pcg::Preconditioner;
+use super::stencil5::Stencil5;
+use std::cell::RefCell;
+
+/// The hierarchy stops coarsening at this many cells (solved by dense Cholesky).
+pub const COARSEST_CELLS: usize = 64;
+
+/// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
+#[derive(Clone, Debug, Default)]
+struct Level {
+    nx: usize,
+    ny: usize,
+    periodic_x: bool,
+    periodic_y: bool,
+    /// Padded row length `nx + 2`.
+    s: usize,
+    diag: Vec<f64>,
+    dinv: Vec<f64>,
+    /// Coupling to the east neighbour; the west coupling of cell `k` is `ce[k − 1]` (the ghost
+    /// column holds the periodic wrap, or 0).
+    ce: Vec<f64>,
+    /// Coupling to the north neighbour; the south coupling of `k` is `cn[k − s]`.
+    cn: Vec<f64>,
+    x: Vec<f64>,
+    b: Vec<f64>,
+    /// The first coarse correction while a W-cycle computes the second.
+    t: Vec<f64>,
+}
+
+impl Level {
+    fn shape(a: &Stencil5) -> Self {
+        let m = (a.nx + 2) * (a.ny + 2);
+        Level {
+            nx: a.nx,
+            ny: a.ny,
+            periodic_x: a.periodic_x,
+            periodic_y: a.periodic_y,
+            s: a.nx + 2,
+            diag: vec![0.0; m],
+            dinv: vec![0.0; m],
+            ce: vec![0.0; m],
+            cn: vec![0.0; m],
+            x: vec![0.0; m],
+            b: vec![0.0; m],
+            t: vec![0.0; m],
+        }
+    }
+
+    #[inline(always)]
+    fn p(&self, i: usize, j: usize) -> usize {
+        (j + 1) * self.s + i + 1
+    }
+
+    /// Copy the coefficients of `a` (same shape) into the padded layout.
+    fn load(&mut self, a: &Stencil5) {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = j * nx + i;
+                let p = self.p(i, j);
+                self.ce[p] = if i + 1 < nx || a.periodic_x {
+                    a.east[k]
+                } else {
+                    0.0
+                };
+                self.cn[p] = if j + 1 < ny || a.periodic_y {
+                    a.north[k]
+                } else {
+                    0.0
+                };
+                self.diag[p] = a.diag[k];
+                self.dinv[p] = if a.diag[k] > 0.0 {
+                    1.0 / a.diag[k]
+                } else {
+                    0.0
+                };
+            }
+            // West ghost: the wrap coupling of the row's last cell.
+            self.ce[(j + 1) * s] = if a.periodic_x {
+                a.east[j * nx + nx - 1]
+            } else {
+                0.0
+            };
+        }
+        for i in 0..nx {
+            self.cn[i + 1] = if a.periodic_y {
+                a.north[(ny - 1) * nx + i]
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).
+    fn fill_ghosts(&mut self) {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        if self.periodic_x {
+            for j in 1..=ny {
+                self.x[j * s] = self.x[j * s + nx];
+                self.x[j * s + nx + 1] = self.x[j * s + 1];
+            }
+        }
+        if self.periodic_y {
+            let (bot, top) = (s, ny * s);
+            for i in 1..=nx {
+                self.x[i] = self.x[top + i];
+                self.x[(ny + 1) * s + i] = self.x[bot + i];
+            }
+        }
+    }
+
+    /// One red–black Gauss–Seidel sweep: the cells of colour `first` ((i + j) mod 2), then the
+    /// others. The two half-sweeps are fused into one pass over memory (the second colour of
+    /// row j − 1 right after the first colour of row j, Douglas et al. 2000), in chunks of rows
+    /// in parallel: the second colour of each chunk's first and last rows waits for a second
+    /// phase, when the first colour is done everywhere. Every update reads the same values as
+    /// in two separate half-sweeps, so the result is the same bit for bit, whatever the
+    /// chunking and the number of threads.
+    fn sweep(&mut self, first: usize) {
+        self.fill_ghosts();
+        let (nx, ny, s, px) = (self.nx, self.ny, self.s, self.periodic_x);
+        let second = 1 - first;
+        let xs = SharedSlice::new(&mut self.x);
+        let (b, ce, cn, dinv) = (&self.b[..], &self.ce[..], &self.cn[..], &self.dinv[..]);
+        // Update the cells of `colour` in row j, then refresh the row's periodic ghosts.
+        let row = |colour: usize, j: usize| {
+            let base = (j + 1) * s + 1;
+            let mut k = base + ((colour + j) & 1);
+            let end = base + nx;
+            while k < end {
+                // SAFETY: a row update writes only cells of `colour` in row j and reads their
+                // neighbours (the other colour) and row j's ghosts. The phases below never run
+                // two updates concurrently where one writes what the other touches: in phase 1
+                // a chunk updates the second colour only of rows whose neighbour rows are in
+                // the same chunk; in phase 2 only second-colour cells of distinct rows are
+                // written, reading first-colour cells nobody writes.
+                unsafe {
+                    let v = (b[k]
+                        + ce[k] * xs.get(k + 1)
+                        + ce[k - 1] * xs.get(k - 1)
+                        + cn[k] * xs.get(k + s)
+                        + cn[k - s] * xs.get(k - s))
+                        * dinv[k];
+                    xs.set(k, v);
+                }
+                k += 2;
+            }
+            if px {
+                // SAFETY: row j's ghost cells are touched by row j's updates only.
+                unsafe {
+                    xs.set(base - 1, xs.get(base + nx - 1));
+                    xs.set(base + nx, xs.get(base));
+                }
+            }
+        };
+        let threads = rayon::current_num_threads();
+        let chunk = if ny * nx < par::PAR_MIN || threads == 1 {
+            ny
+        } else {
+            ny.div_ceil(2 * threads).max(4)
+        };
+        let chunks = ny.div_ceil(chunk);
+        let phase1 = |c: usize| {
+            let (r0, r1) = (c * chunk, ((c + 1) * chunk).min(ny));
+            for j in r0..r1 {
+                row(first, j);
+                if j >= r0 + 2 {
+                    row(second, j - 1);
+                }
+            }
+        };
+        let phase2 = |c: usize| {
+            let (r0, r1) = (c * chunk, ((c + 1) * chunk).min(ny));
+            row(second, r0);
+            if r1 - 1 > r0 {
+                row(second, r1 - 1);
+            }
+        };
+        par::for_each_index(chunks, chunk * nx, phase1);
+        if self.periodic_y {
+            // The second colour of rows 0 and ny − 1 reads the first colour across the wrap.
+            let x = &mut self.x;
+            for i in 1..=nx {
+                x[i] = x[ny * s + i];
+                x[(ny + 1) * s + i] = x[s + i];
+            }
+        }
+        par::for_each_index(chunks, chunk * nx, phase2);
+    }
+
+    /// `r = b − A x` at padded index `k` (ghosts filled).
+    #[inline(always)]
+    fn residual_at(&self, k: usize) -> f64 {
+        let (x, s) = (&self.x, self.s);
+        self.b[k] - self.diag[k] * x[k]
+            + self.ce[k] * x[k + 1]
+            + self.ce[k - 1] * x[k - 1]
+            + self.cn[k] * x[k + s]
+            + self.cn[k - s] * x[k - s]
+    }
+}
+
+/// Dense Cholesky solve of the coarsest level (one unknown pinned if the matrix is singular).
+#[derive(Clone, Debug, Default)]
+struct Coarsest {
+    m: usize,
+    l: Vec<f64>,
+    y: Vec<f64>,
+    singular_pin: bool,
+}
+
+impl Coarsest {
+    fn factor(&mut self, lv: &Level) {
+        let m = lv.nx * lv.ny;
+        self.m = m;
+        self.l.clear();
+        self.l.resize(m * m, 0.0);
+        self.y.resize(m, 0.0);
+        let nx = lv.nx;
+        let singular = (0..lv.ny).all(|j| {
+            (0..nx).all(|i| {
+                let p = lv.p(i, j);
+                lv.diag[p] - (lv.ce[p] + lv.ce[p - 1] + lv.cn[p] + lv.cn[p - lv.s])
+                    <= 1e-12 * lv.diag[p]
+            })
+        });
+        let a = &mut self.l;
+        for j in 0..lv.ny {
+            for i in 0..nx {
+                let k = j * nx + i;
+                let p = lv.p(i, j);
+                a[k * m + k] += lv.diag[p];
+                // Neighbours (with wraps): subtract couplings; periodic self-wraps cancel.
+                let nb = [
+                    (lv.ce[p], (i + 1) % nx, j),
+                    (lv.ce[p - 1], (i + nx - 1) % nx, j),
+                    (lv.cn[p], i, (j + 1) % lv.ny),
+                    (lv.cn[p - lv.s], i, (j + lv.ny - 1) % lv.ny),
+                ];
+                for (c, ii, jj) in nb {
+                    if c != 0.0 {
+                        a[k * m + jj * nx + ii] -= c;
+                    }
+                }
+            }
+        }
+        if singular {
+            for k in 0..m {
+                a[k] = 0.0;
+                a[k * m] = 0.0;
+            }
+            a[0] = 1.0;
+        }
+        // In-place Cholesky, lower triangle.
+        for c in 0..m {
+            let mut d = a[c * m + c];
+            for k in 0..c {
+                d -= a[c * m + k] * a[c * m + k];
+            }
+            let d = if d > 0.0 { d.sqrt() } else { f64::MIN_POSITIVE };
+            a[c * m + c] = d;
+            for r in c + 1..m {
+                let mut v = a[r * m + c];
+                for k in 0..c {
+                    v -= a[r * m + k] * a[c * m + k];
+                }
+                a[r * m + c] = v / d;
+            }
+        }
+        self.singular_pin = singular;
+    }
+}
+
+impl Coarsest {
+    fn solve(&mut self, lv: &mut Level) {
+        let (m, nx) = (self.m, lv.nx);
+        let (l, y) = (&self.l, &mut self.y);
+        for k in 0..m {
+            y[k] = lv.b[lv.p(k % nx, k / nx)];
+        }
+        if self.singular_pin {
+            y[0] = 0.0;
+        }
+        for r in 0..m {
+            let mut v = y[r];
+            for k in 0..r {
+                v -= l[r * m + k] * y[k];
+            }
+            y[r] = v / l[r * m + r];
+        }
+        for r in (0..m).rev() {
+            let mut v = y[r];
+            for k in r + 1..m {
+                v -= l[k * m + r] * y[k];
+            }
+            y[r] = v / l[r * m + r];
+        }
+        for k in 0..m {
+            let p = lv.p(k % nx, k / nx);
+            lv.x[p] = y[k];
+        }
+    }
+}
+
+/// Cells per aggregate along a direction of `n` cells: 2, or 1 once `n ≤ 2`.
+fn factor(n: usize) -> usize {
+    if n > 2 { 2 } else { 1 }
+}
+
+/// The coarse matrix of `a` (module docs: half the Galerkin product of the piecewise-constant
+/// aggregation along each coarsened direction), into `c` (reshaped as needed). The excess of
+/// the diagonal over the couplings is summed over each aggregate and multiplied by
+/// `excess_scale` when both directions are coarsened (½ for Dirichlet faces, 1 for a mass
+/// term).
+pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
+    let (nx, ny) = (a.nx, a.ny);
+    let (fx, fy) = (factor(nx), factor(ny));
+    let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
+    if c.nx != cx || c.ny != cy || c.len() != cx * cy {
+        *c = Stencil5::new(cx, cy, a.periodic_x, a.periodic_y);
+    }
+    c.periodic_x = a.periodic_x;
+    c.periodic_y = a.periodic_y;
+    // Over-correction: ½ along a coarsened direction (the rediscretised scale), 1 across.
+    let sx = if fx == 2 { 0.5 } else { 1.0 };
+    let sy = if fy == 2 { 0.5 } else { 1.0 };
+    let se = if fx * fy == 4 { excess_scale } else { 1.0 };
+    c.east.fill(0.0);
+    c.north.fill(0.0);
+    c.diag.fill(0.0);
+    for j in 0..ny {
+        let jc = j / fy;
+        for i in 0..nx {
+            let ic = i / fx;
+            let k = j * nx + i;
+            let kc = jc * cx + ic;
+            let last_x = i + 1 == nx;
+            let last_y = j + 1 == ny;
+            let e = if !last_x || a.periodic_x {
+                a.east[k]
+            } else {
+                0.0
+            };
+            let n = if !last_y || a.periodic_y {
+                a.north[k]
+            } else {
+                0.0
+            };
+            // A fine face between two aggregates (or across the periodic wrap) couples them.
+            if last_x || (i + 1) / fx != ic {
+                c.east[kc] += sx * e;
+            }
+            if last_y || (j + 1) / fy != jc {
+                c.north[kc] += sy * n;
+            }
+            let w = if i > 0 {
+                a.east[k - 1]
+            } else if a.periodic_x {
+                a.east[k + nx - 1]
+            } else {
+                0.0
+            };
+            let s = if j > 0 {
+                a.north[k - nx]
+            } else if a.periodic_y {
+                a.north[k + (ny - 1) * nx]
+            } else {
+                0.0
+            };
+            let excess = a.diag[k] - (e + n + w + s);
+            if excess > 1e-12 * a.diag[k] {
+                c.diag[kc] += se * excess;
+            }
+        }
+    }
+    // A periodic direction of one coarse cell couples the cell to itself: no coupling.
+    if cx == 1 {
+        c.east.fill(0.0);
+    }
+    if cy == 1 {
+        c.north.fill(0.0);
+    }
+    for jc in 0..cy {
+        for ic in 0..cx {
+            let kc = jc * cx + ic;
+            let w = if ic > 0 {
+                c.east[kc - 1]
+            } else if a.periodic_x {
+                c.east[kc + cx - 1]
+            } else {
+                0.0
+            };
+            let s = if jc > 0 {
+                c.north[kc - cx]
+            } else if a.periodic_y {
+                c.north[kc + (cy - 1) * cx]
+            } else {
+                0.0
+            };
+            c.diag[kc] += c.east[kc] + c.north[kc] + w + s;
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+struct Hierarchy {
+    levels: Vec<Level>,
+    coarsest: Coarsest,
+}
+
+/// Geometric multigrid W-cycle preconditioner for a [`Stencil5`] (module docs).
+///
+/// ```
+/// use efsi_core::solver::{Multigrid, Pcg, Stencil5};
+/// let n = 32;
+/// let mut a = Stencil5::new(n, n, false, false);
+/// for j in 0..n {
+///     for i in 0..n {
+///         let k = j * n + i;
+///         a.east[k] = if i + 1 < n { 1.0 } else { 0.0 };
+///         a.north[k] = if j + 1 < n { 1.0 } else { 0.0 };
+///         a.diag[k] = 4.0; // Dirichlet all round (ghost at half a cell folded in)
+///     }
+/// }
+/// let mut mg = Multigrid::new(2);
+/// mg.setup(&a);
+/// let b = vec![1.0; n * n];
+/// let mut x = vec![0.0; n * n];
+/// let maxabs = |r: &[f64]| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+/// let st = Pcg::new(n * n).solve(&mut a, &mg, &b, &mut x, 1e-10, 100, maxabs);
+/// assert!(st.converged && st.iterations < 15);
+/// ```
+#[derive(Debug)]
+pub struct Multigrid {
+    sweeps: usize,
+    gamma: usize,
+    excess_scale: f64,
+    /// The coarse matrices (levels 1, 2, …).
+    mats: Vec<Stencil5>,
+    h: RefCell<Hierarchy>,
+}
+
+impl Multigrid {
+    /// A preconditioner with `sweeps` red–black Gauss–Seidel sweeps before and after each
+    /// coarse correction (≥ 1); call [`Multigrid::setup`] before use.
+    pub fn new(sweeps: usize) -> Self {
+        Multigrid {
+            sweeps: sweeps.max(1),
+            gamma: 2,
+            excess_scale: 0.5,
+            mats: Vec::new(),
+            h: RefCell::new(Hierarchy::default()),
+        }
+    }
+
+    /// A V-cycle (`false`: one coarse correction per level) instead of the default W-cycle.
+    pub fn with_w_cycle(mut self, w: bool) -> Self {
+        self.gamma = if w { 2 } else { 1 };
+        self
+    }
+
+    /// How the excess of the diagonal over the couplings is carried to a 2 × 2 coarser level:
+    /// ½ of its sum (default; right for Dirichlet faces, like the couplings) or all of it
+    /// (`1.0`, right for a mass or reaction term `M + K`, whose Galerkin mass is exact).
+    pub fn with_excess_scale(mut self, scale: f64) -> Self {
+        self.excess_scale = scale;
+        self
+    }
+
+    /// Number of levels (1 when the matrix is already at most [`COARSEST_CELLS`]).
+    pub fn levels(&self) -> usize {
+        self.h.borrow().levels.len()
+    }
+
+    /// Build (first call, or a new shape) or refresh the hierarchy for the matrix `a`.
+    /// Allocates only when the shape changes.
+    pub fn setup(&mut self, a: &Stencil5) {
+        let h = self.h.get_mut();
+        let same = h.levels.first().is_some_and(|l| {
+            l.nx == a.nx
+                && l.ny == a.ny
+                && l.periodic_x == a.periodic_x
+                && l.periodic_y == a.periodic_y
+        });
+        if !same {
+            h.levels.clear();
+            self.mats.clear();
+            h.levels.push(Level::shape(a));
+            let (mut nx, mut ny) = (a.nx, a.ny);
+            while nx * ny > COARSEST_CELLS && (nx > 2 || ny > 2) {
+                nx = nx.div_ceil(factor(nx));
+                ny = ny.div_ceil(factor(ny));
+                let m = Stencil5::new(nx, ny, a.periodic_x, a.periodic_y);
+                h.levels.push(Level::shape(&m));
+                self.mats.push(m);
+            }
+        }
+        h.levels[0].load(a);
+        for l in 1..h.levels.len() {
+            let (done, rest) = self.mats.split_at_mut(l - 1);
+            let fine = if l == 1 { a } else { &done[l - 2] };
+            coarsen_into(fine, &mut rest[0], self.excess_scale);
+            h.levels[l].load(&rest[0]);
+        }
+        let Hierarchy { levels, coarsest } = h;
+        coarsest.factor(levels.last().expect("at least one level"));
+    }
+}
+
+/// `c.b = R (f.b − A f.x)`: the residual of the fine level summed over each aggregate.
+fn restrict(f: &Level, c: &mut Level) {
+    let fx = if c.nx < f.nx { 2 } else { 1 };
+    let fy = if c.ny < f.ny { 2 } else { 1 };
+    let (fnx, fny, cnx, cs) = (f.nx, f.ny, c.nx, c.s);
+    par::for_each_row(&mut c.b[cs..(c.ny + 1) * cs], cs, |jc, row| {
+        for ic in 0..cnx {
+            let mut sum = 0.0;
+            for j in fy * jc..(fy * jc + fy).min(fny) {
+                for i in fx * ic..(fx * ic + fx).min(fnx) {
+                    sum += f.residual_at(f.p(i, j));
+                }
+            }
+            row[ic + 1] = sum;
+        }
+    });
+}
+
+/// `f.x += P c.x`: piecewise-constant prolongation of the coarse correction.
+fn prolong(f: &mut Level, c: &Level) {
+    let fx = if c.nx < f.nx { 2 } else { 1 };
+    let fy = if c.ny < f.ny { 2 } else { 1 };
+    let (fnx, fs) = (f.nx, f.s);
+    par::for_each_row(&mut f.x[fs..(f.ny + 1) * fs], fs, |j, row| {
+        let crow = &c.x[c.p(0, j / fy)..];
+        for i in 0..fnx {
+            row[i + 1] += crow[i / fx];
+        }
+    });
+}
+
+/// `levels[l].x ≈ A_l⁻¹ levels[l].b`, from zero: smoothing, `gamma` coarse corrections
+/// (1: V-cycle, 2: W-cycle), smoothing in reverse order.
+fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize, gamma: usize) {
+    let nl = levels.len();
+    if l + 1 == nl {
+        coarsest.solve(&mut levels[l]);
+        return;
+    }
+    {
+        let lv = &mut levels[l];
+        lv.x.fill(0.0);
+        for _ in 0..sweeps {
+            lv.sweep(0);
+        }
+        lv.fill_ghosts();
+        let (f, c) = levels.split_at_mut(l + 1);
+        restrict(&f[l], &mut c[0]);
+    }
+    let g = if l + 2 == nl { 1 } else { gamma };
+    for k in 0..g {
+        if k > 0 {
+            // Next correction from the residual of the current one.
+            let c = &mut levels[l + 1];
+            c.fill_ghosts();
+            let mut t = std::mem::take(&mut c.t);
+            let (cnx, cs) = (c.nx, c.s);
+            par::for_each_row(&mut t[cs..(c.ny + 1) * cs], cs, |j, row| {
+                for i in 0..cnx {
+                    row[i + 1] = c.residual_at(c.p(i, j));
+                }
+            });
+            c.t = t;
+            std::mem::swap(&mut c.b, &mut c.t);
+            std::mem::swap(&mut c.x, &mut c.t);
+        }
+        cycle(levels, coarsest, l + 1, sweeps, gamma);
+        if k > 0 {
+            let c = &mut levels[l + 1];
+            let t = &c.t;
+            par::for_each_mut(&mut c.x, |k, x| *x += t[k]);
+        }
+    }
+    let (f, c) = levels.split_at_mut(l + 1);
+    let lv = &mut f[l];
+    prolong(lv, &c[0]);
+    for _ in 0..sweeps {
+        lv.sweep(1);
+    }
+}
+
+impl Preconditioner for Multigrid {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let mut h = self.h.borrow_mut();
+        let Hierarchy { levels, coarsest } = &mut *h;
+        {
+            let l0 = &mut levels[0];
+            let (nx, s) = (l0.nx, l0.s);
+            assert_eq!(
+                r.len(),
+                nx * l0.ny,
+                "multigrid: vector length ≠ matrix size"
+            );
+            par::for_each_row(&mut l0.b[s..(l0.ny + 1) * s], s, |j, row| {
+                row[1..=nx].copy_from_slice(&r[j * nx..(j + 1) * nx]);
+            });
+        }
+        cycle(levels, coarsest, 0, self.sweeps, self.gamma);
+        let l0 = &levels[0];
+        let (nx, s) = (l0.nx, l0.s);
+        par::for_each_row(z, nx, |j, row| {
+            row.copy_from_slice(&l0.x[(j + 1) * s + 1..(j + 1) * s + 1 + nx]);
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::{IncompleteCholesky, Pcg};
+
+    /// A small deterministic generator (xorshift64*), for reproducible random problems.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Sides: `[x_min, x_max, y_min, y_max]`; `Some(true)` Dirichlet, `Some(false)` Neumann;
+    /// `periodic` pairs override.
+    #[derive(Clone, Copy)]
+    struct Problem {
+        n: usize,
+        axisymmetric: bool,
+        periodic_x: bool,
+        dirichlet_top: bool,
+        ratio: f64,
+        seed: u64,
+    }
+
+    /// The projection's matrix `Σ_f A_f/(ρ_f h)(p_C − p_F)` on the unit square (r ∈ [0, 1]
+    /// with the axis at r = 0 when axisymmetric) for a density of random disks `ratio` times
+    /// heavier than the surroundings.
+    fn pressure_matrix(p: Problem) -> Stencil5 {
+        let (nx, ny) = (p.n, p.n);
+        let h = 1.0 / p.n as f64;
+        let mut rng = Rng(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        let disks: Vec<(f64, f64, f64)> = (0..6)
+            .map(|_| (rng.next(), rng.next(), 0.05 + 0.15 * rng.next()))
+            .collect();
+        let rho = |i: usize, j: usize| {
+            let (x, y) = ((i as f64 + 0.5) * h, (j as f64 + 0.5) * h);
+            if disks
+                .iter()
+                .any(|&(cx, cy, r)| (x - cx).powi(2) + (y - cy).powi(2) < r * r)
+            {
+                p.ratio
+            } else {
+                1.0
+            }
+        };
+        let rf = |i: usize| if p.axisymmetric { i as f64 * h } else { 1.0 };
+        let rc = |i: usize| {
+            if p.axisymmetric {
+                (i as f64 + 0.5) * h
+            } else {
+                1.0
+            }
+        };
+        let mut a = Stencil5::new(nx, ny, p.periodic_x, false);
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = j * nx + i;
+                a.east[k] = if i + 1 < nx || p.periodic_x {
+                    let ie = (i + 1) % nx;
+                    rf(i + 1) / (0.5 * (rho(i, j) + rho(ie, j)))
+                } else {
+                    0.0
+                };
+                a.north[k] = if j + 1 < ny {
+                    rc(i) / (0.5 * (rho(i, j) + rho(i, j + 1)))
+                } else {
+                    0.0
+                };
+            }
+        }
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = j * nx + i;
+                let w = if i > 0 {
+                    a.east[k - 1]
+                } else if p.periodic_x {
+                    a.east[k + nx - 1]
+                } else {
+                    0.0
+                };
+                let s = if j > 0 { a.north[k - nx] } else { 0.0 };
+                let mut d = a.east[k] + a.north[k] + w + s;
+                if p.dirichlet_top && j + 1 == ny {
+                    d += 2.0 * rc(i) / rho(i, j);
+                }
+                a.diag[k] = d;
+            }
+        }
+        a
+    }
+
+    fn maxabs(r: &[f64]) -> f64 {
+        r.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+    }
+
+    /// Right-hand side: random, made consistent (zero sum) when the matrix is singular.
+    fn rhs(p: Problem) -> Vec<f64> {
+        let mut rng = Rng(p.seed + 17);
+        let mut b: Vec<f64> = (0..p.n * p.n).map(|_| rng.next() - 0.5).collect();
+        if !p.dirichlet_top {
+            let mean = b.iter().sum::<f64>() / b.len() as f64;
+            b.iter_mut().for_each(|v| *v -= mean);
+        }
+        b
+    }
+
+    const TOL: f64 = 1e-9;
+
+    fn solve_mg(p: Problem) -> (Vec<f64>, usize) {
+        let mut a = pressure_matrix(p);
+        let b = rhs(p);
+        let mut mg = Multigrid::new(2);
+        mg.setup(&a);
+        let mut x = vec![0.0; b.len()];
+        let tol = TOL * maxabs(&b);
+        let st = Pcg::new(b.len()).solve(&mut a, &mg, &b, &mut x, tol, 500, maxabs);
+        assert!(st.converged, "MG-PCG failed on n = {}: {st:?}", p.n);
+        (x, st.iterations)
+    }
+
+    fn cases(n: usize) -> Vec<Problem> {
+        let mut v = Vec::new();
+        for (k, (axisymmetric, periodic_x, dirichlet_top)) in [
+            (false, false, false),
+            (true, false, false),
+            (false, true, false),
+            (false, false, true),
+            (true, false, true),
+            (false, true, true),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            v.push(Problem {
+                n,
+                axisymmetric,
+                periodic_x,
+                dirichlet_top,
+                ratio: 1e4,
+                seed: 3 + k as u64,
+            });
+        }
+        v
+    }
+
+    #[test]
+    fn coarse_matrix_of_a_constant_coefficient_is_the_rediscretised_one() {
+        // Planar: unit couplings on 8×8 → unit couplings on 4×4; axisymmetric: r_f couplings.
+        for axisymmetric in [false, true] {
+            let p = Problem {
+                n: 8,
+                axisymmetric,
+                periodic_x: false,
+                dirichlet_top: true,
+                ratio: 1.0,
+                seed: 1,
+            };
+            let a = pressure_matrix(p);
+            let mut c = Stencil5::new(1, 1, false, false);
+            coarsen_into(&a, &mut c, 0.5);
+            let want = pressure_matrix(Problem { n: 4, ..p });
+            for k in 0..16 {
+                assert!(
+                    (c.east[k] - want.east[k]).abs() < 1e-12,
+                    "{axisymmetric} e{k}"
+                );
+                assert!((c.north[k] - want.north[k]).abs() < 1e-12 * want.north[k].max(1.0));
+                assert!((c.diag[k] - want.diag[k]).abs() < 1e-12 * want.diag[k]);
+            }
+        }
+    }
+
+    #[test]
+    fn mg_pcg_converges_on_density_jumps_and_matches_ic_pcg() {
+        for p in cases(64) {
+            let (x_mg, it_mg) = solve_mg(p);
+            let mut a = pressure_matrix(p);
+            let b = rhs(p);
+            let mut ic = IncompleteCholesky::new();
+            ic.factor(&a);
+            let mut x_ic = vec![0.0; b.len()];
+            let tol = TOL * maxabs(&b);
+            let st = Pcg::new(b.len()).solve(&mut a, &ic, &b, &mut x_ic, tol, 20000, maxabs);
+            assert!(st.converged);
+            // Singular systems: compare up to the constant.
+            let shift = if p.dirichlet_top {
+                0.0
+            } else {
+                (x_mg.iter().sum::<f64>() - x_ic.iter().sum::<f64>()) / b.len() as f64
+            };
+            let scale = maxabs(&x_ic);
+            let diff = x_mg
+                .iter()
+                .zip(&x_ic)
+                .fold(0.0f64, |m, (a, b)| m.max((a - shift - b).abs()));
+            assert!(
+                diff < 1e-6 * scale,
+                "solutions differ by {diff:e} (scale {scale:e})"
+            );
+            assert!(
+                it_mg * 4 < st.iterations,
+                "MG {it_mg} vs IC {} iterations",
+                st.iterations
+            );
+            assert!(it_mg <= 30, "MG-PCG took {it_mg} iterations");
+        }
+    }
+
+    #[test]
+    fn iterations_grow_less_than_20_percent_from_64_to_256() {
+        for (p64, p256) in cases(64).into_iter().zip(cases(256)) {
+            let (_, i64) = solve_mg(p64);
+            let (_, i256) = solve_mg(p256);
+            assert!(
+                (i256 as f64) < 1.2 * i64 as f64,
+                "{i64} → {i256} iterations (axisymmetric {}, periodic {}, Dirichlet {})",
+                p64.axisymmetric,
+                p64.periodic_x,
+                p64.dirichlet_top
+            );
+        }
+    }
+
+    /// The table behind the module docs' figures: MG-PCG iterations for the six problem kinds
+    /// at density ratios 1, 1e2, 1e4 and 64² to 512² (a few seconds; run with
+    /// `cargo test -p efsi-core --lib iteration_table -- --ignored --nocapture`).
+    #[test]
+    #[ignore]
+    fn iteration_table() {
+        for ratio in [1.0, 1e2, 1e4] {
+            for n in [64, 128, 256, 512] {
+                let mut line = format!("ratio {ratio:e} n {n}:");
+                for mut p in cases(n) {
+                    p.ratio = ratio;
+                    let (_, it) = solve_mg(p);
+                    line += &format!(" {it}");
+                }
+                println!("{line}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_and_two_threads_give_identical_bits() {
+        let p = cases(128)[1];
+        let run = |t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+                .install(|| solve_mg(p))
+        };
+        let ((x1, i1), (x2, i2)) = (run(1), run(2));
+        assert_eq!(i1, i2);
+        assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+}

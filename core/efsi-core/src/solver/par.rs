@@ -1,0 +1,196 @@
+//! Data-parallel loops (rayon) whose results do not depend on the number of threads.
+//!
+//! Every parallel loop here either writes disjoint elements from read-only inputs (bit-identical
+//! to the serial loop by construction) or, for reductions, sums fixed-size chunks and then adds
+//! the chunk sums in order — the same summation tree whatever the pool size, so a solve run on
+//! one thread and on many gives bit-identical iterates.
+
+use rayon::prelude::*;
+
+/// Length of the fixed chunks of a reduction (a multiple of 4).
+pub const REDUCE_CHUNK: usize = 4096;
+
+/// Below this many elements a loop runs serially (a fork costs a few microseconds).
+pub const PAR_MIN: usize = 8192;
+
+/// Four-lane dot product of two equal-length slices (vectorises).
+#[inline]
+fn dot_serial(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let n4 = a.len() / 4 * 4;
+    for k in (0..n4).step_by(4) {
+        s[0] += a[k] * b[k];
+        s[1] += a[k + 1] * b[k + 1];
+        s[2] += a[k + 2] * b[k + 2];
+        s[3] += a[k + 3] * b[k + 3];
+    }
+    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
+    for k in n4..a.len() {
+        t += a[k] * b[k];
+    }
+    t
+}
+
+/// `Σ a_k b_k`, summed in fixed chunks of [`REDUCE_CHUNK`] added in order: the result is the
+/// same bit for bit whatever the number of threads.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    if a.len() < PAR_MIN {
+        return a
+            .chunks(REDUCE_CHUNK)
+            .zip(b.chunks(REDUCE_CHUNK))
+            .map(|(a, b)| dot_serial(a, b))
+            .fold(0.0, |s, v| s + v);
+    }
+    let n = a.len().div_ceil(REDUCE_CHUNK);
+    // At most a few hundred chunk sums: a small stack buffer, folded in order.
+    const MAX: usize = 512;
+    if n <= MAX {
+        let mut parts = [0.0f64; MAX];
+        parts[..n]
+            .par_iter_mut()
+            .zip(a.par_chunks(REDUCE_CHUNK).zip(b.par_chunks(REDUCE_CHUNK)))
+            .for_each(|(p, (a, b))| *p = dot_serial(a, b));
+        parts[..n].iter().fold(0.0, |s, v| s + v)
+    } else {
+        a.chunks(REDUCE_CHUNK * MAX)
+            .zip(b.chunks(REDUCE_CHUNK * MAX))
+            .map(|(a, b)| dot(a, b))
+            .fold(0.0, |s, v| s + v)
+    }
+}
+
+/// Run `f(k, &mut y[k], …)` over the elements of `y`, in parallel when it is long.
+pub fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync + Send) {
+    if y.len() < PAR_MIN {
+        y.iter_mut().enumerate().for_each(|(k, v)| f(k, v));
+    } else {
+        y.par_iter_mut()
+            .enumerate()
+            .with_min_len(PAR_MIN / 2)
+            .for_each(|(k, v)| f(k, v));
+    }
+}
+
+/// Run `f(j, row)` over the rows (`row_len` long) of `y`, in parallel when `y` is long.
+pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64]) + Sync + Send) {
+    if row_len == 0 {
+        return;
+    }
+    if y.len() < PAR_MIN {
+        y.chunks_mut(row_len).enumerate().for_each(|(j, r)| f(j, r));
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        y.par_chunks_mut(row_len)
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, r)| f(j, r));
+    }
+}
+
+/// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
+/// parallel when they are long.
+pub fn for_each_row2(
+    a: &mut [f64],
+    b: &mut [f64],
+    row_len: usize,
+    f: impl Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
+) {
+    assert_eq!(a.len(), b.len());
+    if row_len == 0 {
+        return;
+    }
+    if a.len() < PAR_MIN {
+        a.chunks_mut(row_len)
+            .zip(b.chunks_mut(row_len))
+            .enumerate()
+            .for_each(|(j, (x, y))| f(j, x, y));
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        a.par_chunks_mut(row_len)
+            .zip(b.par_chunks_mut(row_len))
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (x, y))| f(j, x, y));
+    }
+}
+
+/// Run `f(j)` for `j in 0..rows` (rows of `row_len` elements), in parallel when there is
+/// enough work. `f` must only touch data disjoint between rows.
+pub fn for_each_index(rows: usize, row_len: usize, f: impl Fn(usize) + Sync + Send) {
+    if rows * row_len < PAR_MIN {
+        (0..rows).for_each(f);
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
+        (0..rows).into_par_iter().with_min_len(min_rows).for_each(f);
+    }
+}
+
+/// A raw view of a mutable slice that several threads may write at **disjoint** indices while
+/// others read indices nobody writes in the same parallel loop (the red–black Gauss–Seidel
+/// sweep: one colour is written, only the other is read).
+#[derive(Clone, Copy)]
+pub(crate) struct SharedSlice {
+    ptr: *mut f64,
+    len: usize,
+}
+
+// SAFETY: access is through `get`/`set`, whose callers guarantee no element is written by one
+// thread while another reads or writes it.
+unsafe impl Send for SharedSlice {}
+unsafe impl Sync for SharedSlice {}
+
+impl SharedSlice {
+    /// A view of `s` (which must outlive every use of the view).
+    pub(crate) fn new(s: &mut [f64]) -> Self {
+        SharedSlice {
+            ptr: s.as_mut_ptr(),
+            len: s.len(),
+        }
+    }
+    /// Read element `k`.
+    ///
+    /// # Safety
+    /// No other thread writes element `k` during this parallel loop.
+    #[inline(always)]
+    pub(crate) unsafe fn get(self, k: usize) -> f64 {
+        debug_assert!(k < self.len);
+        // SAFETY: in bounds (checked in debug builds) and not concurrently written (caller).
+        unsafe { *self.ptr.add(k) }
+    }
+    /// Write element `k`.
+    ///
+    /// # Safety
+    /// No other thread reads or writes element `k` during this parallel loop.
+    #[inline(always)]
+    pub(crate) unsafe fn set(self, k: usize, v: f64) {
+        debug_assert!(k < self.len);
+        // SAFETY: in bounds (checked in debug builds) and exclusively owned here (caller).
+        unsafe { *self.ptr.add(k) = v }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dot_is_the_same_on_one_and_two_threads() {
+        let n = 100_003;
+        let a: Vec<f64> = (0..n)
+            .map(|k| ((k * 7919) % 1013) as f64 / 17.0 - 20.0)
+            .collect();
+        let b: Vec<f64> = (0..n).map(|k| ((k * 10_007) % 997) as f64 / 3.0).collect();
+        let run = |t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+                .install(|| dot(&a, &b))
+        };
+        let (d1, d2) = (run(1), run(2));
+        assert_eq!(d1.to_bits(), d2.to_bits());
+        let exact: f64 = a.iter().zip(&b).map(|(a, b)| a * b).sum();
+        assert!((d1 - exact).abs() <= 1e-12 * exact.abs());
+    }
+}

@@ -1,0 +1,116 @@
+//! No heap allocation inside a time step after the first: a counting global allocator (this
+//! test binary only) around steps 2..k of a single-fluid cavity (advection, viscous,
+//! projection) and of a two-phase axisymmetric drop without a solid law (advection, body force,
+//! viscous, projection, VOF), at 128² so that the parallel (rayon) paths run, stepped inside a
+//! two-thread and a one-thread pool (as `efsi run` does: called from outside a pool, rayon
+//! queues each job through its global injector, which allocates a block every 63 jobs).
+
+use efsi_tests::sim;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+struct Counting;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+const CAVITY: &str = r#"Scene(
+    name: "cavity",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 128, ny: 128),
+    time: (end: 1.0, cfl: 0.4),
+    fluid: (density: 1.0, viscosity: 1e-3),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+)"#;
+
+const DROP: &str = r#"Scene(
+    name: "drop",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
+    grid: (nr: 128, nz: 128),
+    time: (end: 1.0, fixed_dt: 0.00390625),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    gravity: (0.0, -1.0),
+    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+)"#;
+
+/// Allocations during steps 2..=k, per stage set.
+fn allocations_after_first_step(text: &str, k: usize) -> usize {
+    let mut s = sim(text);
+    let dt = s.next_dt(1.0).unwrap();
+    s.step(dt).unwrap();
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.store(true, Ordering::SeqCst);
+    for _ in 1..k {
+        s.step(dt).unwrap();
+    }
+    COUNTING.store(false, Ordering::SeqCst);
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+#[test]
+fn no_allocation_after_the_first_step() {
+    // One test function: the counter is global, tests in parallel would pollute it.
+    // The drop also with the block-multigrid viscous preconditioner (default: Jacobi).
+    let drop_mg = DROP.replace(
+        "boundaries:",
+        "numerics: (viscous: (preconditioner: Multigrid)),\n    boundaries:",
+    );
+    let two_phase = ["advection", "body_force", "viscous", "projection", "vof"];
+    for (name, text, stages) in [
+        (
+            "cavity",
+            CAVITY,
+            &["advection", "viscous", "projection"][..],
+        ),
+        ("drop", DROP, &two_phase[..]),
+        ("drop-mg", &drop_mg, &two_phase[..]),
+    ] {
+        assert_eq!(sim(text).pipeline().stage_names(), stages);
+        let count = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| allocations_after_first_step(text, 6))
+        };
+        assert_eq!(
+            (count(2), count(1)),
+            (0, 0),
+            "{name}: heap allocations in steps 2..6 (two threads, one thread)"
+        );
+    }
+}
