@@ -1,8 +1,8 @@
 //! Sugiyama's oscillating Couette flow with a neo-Hookean layer (`cases/oscillating_couette.ron`)
 //! against the start-up reference (`../shared/references/oscillating_couette/from_rest/`).
 
-use super::plot::{Scale, lines};
-use super::{Check, Options, Report, Run, execute, load_case, save_series, slug};
+use super::plot::Scale;
+use super::{Check, Options, Report, Run, execute, figure, load_case, slug};
 use crate::{interp, read_csv, reference};
 use efsi_core::scene::ProfileSpec;
 
@@ -145,18 +145,15 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             trade,
         ),
     ] {
-        let _ = save_series(&dir.join(format!("{file}.csv")), x, "error", &series);
-        match lines(
-            &dir.join(format!("{file}.png")),
-            title,
-            x,
-            "max abs(u − u_ref)",
+        figure(
+            &dir,
+            file,
+            (title, x, "max abs(u − u_ref)"),
             &series,
             Scale::LogLog,
-        ) {
-            Ok(()) => plots.push((title.to_string(), format!("oscillating_couette/{file}.png"))),
-            Err(e) => notes.push(format!("plot {file}: {e}")),
-        }
+            &mut plots,
+            &mut notes,
+        );
     }
     Ok(Report {
         name: "oscillating_couette".into(),

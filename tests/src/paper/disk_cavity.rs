@@ -9,8 +9,8 @@
 //! right-most point x_max ≈ 0.70 near t ≈ 6.4 and spirals in towards (0.54, 0.71); the reference
 //! ends near t ≈ 17–20 on that clock (its last points match the third, small turn).
 
-use super::plot::{Scale, lines};
-use super::{Check, Options, Report, Run, execute, load_case, probes, save_series, slug};
+use super::plot::Scale;
+use super::{Check, Options, Report, Run, execute, figure, load_case, probes, slug};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -255,20 +255,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
                     series: Vec<(String, Vec<(f64, f64)>)>,
                     scale: Scale,
                     notes: &mut Vec<String>| {
-        if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, &series) {
-            notes.push(format!("{file}.csv not written: {e}"));
-        }
-        match lines(
-            &dir.join(format!("{file}.png")),
-            title,
-            x,
-            y,
-            &series,
-            scale,
-        ) {
-            Ok(()) => plots.push((title.to_string(), format!("disk_in_cavity/{file}.png"))),
-            Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
-        }
+        figure(&dir, file, (title, x, y), &series, scale, &mut plots, notes);
     };
     let mut paths = vec![("Sugiyama et al. 2011, 1024²".to_string(), reference.clone())];
     paths.extend(runs.iter().map(|(r, a)| {

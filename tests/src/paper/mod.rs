@@ -387,6 +387,30 @@ pub fn write_report(opts: &Options, reports: &[Report], wall: f64) -> Result<(),
     save(&opts.out.join("summary.json"), text.as_bytes())
 }
 
+/// Draw one figure of `case` (under `dir`, which is `<out>/<case>`): `<file>.png` and the CSV
+/// of its series `<file>.csv` beside it. The plot is recorded in `plots` (caption, path relative
+/// to the report); what could not be written becomes a note, so the report says what is missing.
+pub fn figure(
+    dir: &Path,
+    file: &str,
+    (title, x, y): (&str, &str, &str),
+    series: &[(String, Vec<(f64, f64)>)],
+    scale: plot::Scale,
+    plots: &mut Vec<(String, String)>,
+    notes: &mut Vec<String>,
+) {
+    if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, series) {
+        notes.push(format!("{file}.csv not written: {e}"));
+    }
+    let case = dir
+        .file_name()
+        .map_or(String::new(), |c| c.to_string_lossy().into_owned());
+    match plot::lines(&dir.join(format!("{file}.png")), title, x, y, series, scale) {
+        Ok(()) => plots.push((title.to_string(), format!("{case}/{file}.png"))),
+        Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
+    }
+}
+
 /// A label as a folder name: letters, digits, `.` and `-` kept, runs of anything else `_`.
 pub fn slug(label: &str) -> String {
     let mut out = String::new();

@@ -9,8 +9,8 @@
 //! peaks near t = 0.2; the solid volume is conserved. The speed/accuracy error is the kinetic
 //! energy history against the finest grid's.
 
-use super::plot::{Scale, lines};
-use super::{Check, Options, Report, Run, execute, load_case, probes, save_series, slug};
+use super::plot::Scale;
+use super::{Check, Options, Report, Run, execute, figure, load_case, probes, slug};
 use efsi_core::scene::InitialVelocity;
 
 /// The time the seed gives for the largest deformation.
@@ -267,20 +267,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
                     series: Vec<(String, Vec<(f64, f64)>)>,
                     scale: Scale,
                     notes: &mut Vec<String>| {
-        if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, &series) {
-            notes.push(format!("{file}.csv not written: {e}"));
-        }
-        match lines(
-            &dir.join(format!("{file}.png")),
-            title,
-            x,
-            y,
-            &series,
-            scale,
-        ) {
-            Ok(()) => plots.push((title.to_string(), format!("oscillating_disk/{file}.png"))),
-            Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
-        }
+        figure(&dir, file, (title, x, y), &series, scale, &mut plots, notes);
     };
     let series = |f: fn(&History) -> &Vec<f64>| -> Vec<(String, Vec<(f64, f64)>)> {
         runs.iter()

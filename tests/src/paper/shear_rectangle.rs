@@ -2,8 +2,8 @@
 //! sliding plates for t < 4, then released (`cases/shear_rectangle.ron`): the deformation
 //! measure Σ|φ(t) − φ(0)|h²/area peaks near t = 4 and decays; the solid's area is conserved.
 
-use super::plot::{Scale, field, lines};
-use super::{Check, Options, Report, execute, load_case, save_series, slug};
+use super::plot::{Scale, field};
+use super::{Check, Options, Report, execute, figure, load_case, slug};
 use crate::interp;
 
 /// Run the case.
@@ -200,6 +200,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .filter_map(|r| r.error.map(|e| (r.wall_seconds, e)))
             .collect(),
     )];
+    let mut histories = 0;
     for (file, title, x, y, s, scale) in [
         (
             "deformation",
@@ -218,14 +219,11 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             Scale::LogLog,
         ),
     ] {
-        let _ = save_series(&dir.join(format!("{file}.csv")), x, y, &s);
-        match lines(&dir.join(format!("{file}.png")), title, x, y, &s, scale) {
-            Ok(()) => plots.insert(
-                0,
-                (title.to_string(), format!("shear_rectangle/{file}.png")),
-            ),
-            Err(e) => notes.push(format!("plot {file}: {e}")),
-        }
+        // The histories first, before the six shape images.
+        let mut drawn = Vec::new();
+        figure(&dir, file, (title, x, y), &s, scale, &mut drawn, &mut notes);
+        plots.splice(histories..histories, drawn);
+        histories += 1;
     }
     Ok(Report {
         name: "shear_rectangle".into(),

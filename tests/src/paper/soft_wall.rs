@@ -1,8 +1,8 @@
 //! Seed §5.2: the soft wall in a lid-driven cavity (`cases/soft_wall_cavity.ron`), Stokes flow:
 //! steady state by t = 8 and the deformed wall profile converging under refinement.
 
-use super::plot::{Scale, lines};
-use super::{Check, Options, Report, execute, load_case, save_series, slug};
+use super::plot::Scale;
+use super::{Check, Options, Report, execute, figure, load_case, slug};
 use crate::interp;
 
 /// The wall's height `h(x)` per column: the solid fraction summed up each column (a height
@@ -172,18 +172,15 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             Scale::LogLog,
         ),
     ] {
-        let _ = save_series(&dir.join(format!("{file}.csv")), x, y, &series);
-        match lines(
-            &dir.join(format!("{file}.png")),
-            title,
-            x,
-            y,
+        figure(
+            &dir,
+            file,
+            (title, x, y),
             &series,
             scale,
-        ) {
-            Ok(()) => plots.push((title.to_string(), format!("soft_wall_cavity/{file}.png"))),
-            Err(e) => notes.push(format!("plot {file}: {e}")),
-        }
+            &mut plots,
+            &mut notes,
+        );
     }
     Ok(Report {
         name: "soft_wall_cavity".into(),

@@ -2,8 +2,8 @@
 //! against free fall before contact and Hertz's contact estimates
 //! (`../shared/references/hertz_sphere_impact/`).
 
-use super::plot::{Scale, lines};
-use super::{Check, Options, Report, Run, execute, load_case, probes, save_series};
+use super::plot::Scale;
+use super::{Check, Options, Report, Run, execute, figure, load_case, probes};
 use efsi_core::Scene;
 use efsi_core::interface::shapes::Shape;
 use std::f64::consts::PI;
@@ -346,14 +346,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
                     scale: Scale,
                     x: &str,
                     notes: &mut Vec<String>| {
-        let png = dir.join(format!("{file}.png"));
-        if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, &series) {
-            notes.push(format!("{file}.csv not written: {e}"));
-        }
-        match lines(&png, title, x, y, &series, scale) {
-            Ok(()) => plots.push((title.to_string(), format!("sphere_impact/{file}.png"))),
-            Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
-        }
+        figure(&dir, file, (title, x, y), &series, scale, &mut plots, notes);
     };
     let mut notes = Vec::new();
     let by_cpr: Vec<&(Run, Impact)> = runs
