@@ -200,8 +200,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .filter_map(|r| r.error.map(|e| (r.wall_seconds, e)))
             .collect(),
     )];
-    let mut histories = 0;
-    for (file, title, x, y, s, scale) in [
+    for (histories, (file, title, x, y, s, scale)) in [
         (
             "deformation",
             "Shear rectangle: deformation measure vs time",
@@ -218,12 +217,14 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             trade,
             Scale::LogLog,
         ),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         // The histories first, before the six shape images.
         let mut drawn = Vec::new();
         figure(&dir, file, (title, x, y), &s, scale, &mut drawn, &mut notes);
         plots.splice(histories..histories, drawn);
-        histories += 1;
     }
     Ok(Report {
         name: "shear_rectangle".into(),
