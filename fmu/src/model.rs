@@ -196,7 +196,7 @@ pub const VARIABLES: &[Variable] = &[
     var(vr::CONTACT_RADIUS, "contact_radius", Real, Output, Some("m"), None,
         "Radius of the sphere's footprint on the substrate (0 without contact)"),
     var(vr::MAX_COMPRESSION, "max_compression", Real, Output, Some("m"), None,
-        "Largest radius - height so far over every solver step, at least 0"),
+        "Largest loss of the sphere's axial height so far, 2 radius - (top - bottom) on the axis, over every solver step, at least 0"),
     var(vr::KINETIC_ENERGY, "kinetic_energy", Real, Output, Some("J"), None,
         "Kinetic energy of fluid and sphere in the whole domain (2 pi times efsi's per-radian probe)"),
     var(vr::ELASTIC_ENERGY, "elastic_energy", Real, Output, Some("J"), None,
@@ -1018,14 +1018,16 @@ fn unknown(vr: u32, kind: &str) -> String {
 }
 
 impl Run {
-    /// Include the current state in the maximum compression.
+    /// Include the current state in the maximum compression: the loss of the sphere's axial
+    /// height, `2R − (top − bottom)` on the axis — the approach of Hertz's theory. (The
+    /// centroid's drop below R is smaller: the flattened bottom lifts the centroid; at 35 cells
+    /// per radius 2.56 mm against a compression of 3.56 mm.)
     fn track_compression(&mut self, radius: f64) {
-        if let Some(phi) = &self.sim.state.phi {
-            let m = probes::solid_moments(&self.sim.grid, &self.sim.state, phi);
-            let c = radius - m.centroid.1;
-            if c > self.max_compression {
-                self.max_compression = c;
-            }
+        let g = &self.sim.grid;
+        let (bottom, top) = probes::solid_extent(g, &self.sim.state, g.x0 + 0.5 * g.dx);
+        let c = 2.0 * radius - (top - bottom);
+        if c > self.max_compression {
+            self.max_compression = c;
         }
     }
 

@@ -114,9 +114,10 @@ def test_outputs_equal_efsi_run_of_the_same_scene(version, unzipped, tmp_path):
         assert np.array_equal(got, want), name
     assert r["contact_force"].max() > 1.0  # the run does reach the impact
     assert np.all(np.diff(r["steps"]) > 0)
-    # The largest compression is at least what the communication points show.
-    assert np.all(r["max_compression"] >= np.maximum(0.0, 0.0192 - r["height"]) - 1e-15)
-    assert r["max_compression"][-1] > 0.0
+    # The largest compression (loss of axial height) only grows, and exceeds the centroid's
+    # largest drop below R (the flattened bottom lifts the centroid).
+    assert np.all(np.diff(r["max_compression"]) >= 0.0)
+    assert r["max_compression"][-1] >= (0.0192 - r["height"]).max() > 0.0
 
 
 def constant_input(stop, a):
