@@ -5,6 +5,7 @@
 //! two-thread and a one-thread pool (as `efsi run` does: called from outside a pool, rayon
 //! queues each job through its global injector, which allocates a block every 63 jobs).
 
+use efsi_tests::scenes::{CAVITY, DROP};
 use efsi_tests::sim;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -45,27 +46,6 @@ unsafe impl GlobalAlloc for Counting {
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-const CAVITY: &str = r#"Scene(
-    name: "cavity",
-    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-    grid: (nx: 128, ny: 128),
-    time: (end: 1.0, cfl: 0.4),
-    fluid: (density: 1.0, viscosity: 1e-3),
-    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
-)"#;
-
-const DROP: &str = r#"Scene(
-    name: "drop",
-    geometry: Axisymmetric,
-    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
-    grid: (nr: 128, nz: 128),
-    time: (end: 1.0, fixed_dt: 0.00390625),
-    fluid: (density: 1e-3, viscosity: 2e-4),
-    gravity: (0.0, -1.0),
-    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
-    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
-)"#;
 
 /// Allocations during steps 2..=k, per stage set.
 fn allocations_after_first_step(text: &str, k: usize) -> usize {

@@ -3,28 +3,8 @@
 //! (also with the block-multigrid viscous preconditioner), each in a one-thread and a
 //! two-thread rayon pool, compared field by field.
 
+use efsi_tests::scenes::{CAVITY, DROP};
 use efsi_tests::sim;
-
-const CAVITY: &str = r#"Scene(
-    name: "cavity",
-    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-    grid: (nx: 128, ny: 128),
-    time: (end: 1.0, cfl: 0.4),
-    fluid: (density: 1.0, viscosity: 1e-3),
-    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
-)"#;
-
-const DROP: &str = r#"Scene(
-    name: "drop",
-    geometry: Axisymmetric,
-    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
-    grid: (nr: 128, nz: 128),
-    time: (end: 1.0, fixed_dt: 0.00390625),
-    fluid: (density: 1e-3, viscosity: 2e-4),
-    gravity: (0.0, -1.0),
-    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
-    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
-)"#;
 
 /// The raw bits of u, v, p, ρ after `steps` steps on a pool of `threads`.
 fn run(text: &str, threads: usize, steps: usize) -> Vec<Vec<u64>> {

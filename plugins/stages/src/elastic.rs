@@ -349,11 +349,6 @@ const PHI_MIN: f64 = 1e-3;
 /// See [`Kernels::strain_energy`].
 type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
 
-/// The volume of the cells of column `i` (per radian when axisymmetric).
-fn m_volume(g: &Grid, i: isize) -> f64 {
-    g.metric.rc(i) * g.dx * g.dy
-}
-
 #[inline(always)]
 fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
     0.25 * (f[a] + f[b] + f[c] + f[d])
@@ -728,7 +723,7 @@ impl Kernels {
                     m1 - mean,
                     m2 - mean,
                     m3 - mean,
-                    m_volume(g, i),
+                    g.cell_volume(i),
                 ));
             }
         }

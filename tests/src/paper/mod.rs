@@ -254,23 +254,7 @@ pub fn execute(
 
 /// The columns of a run's `probes.csv`, by name.
 pub fn probes(dir: &Path) -> Result<Probes, String> {
-    let path = dir.join("probes.csv");
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .ok_or("empty probes.csv")?
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let mut cols = vec![Vec::new(); header.len()];
-    for l in lines {
-        for (k, v) in l.split(',').enumerate() {
-            if k < cols.len() {
-                cols[k].push(v.parse::<f64>().unwrap_or(f64::NAN));
-            }
-        }
-    }
+    let (header, cols) = crate::try_read_csv(&dir.join("probes.csv"))?;
     Ok(Probes { header, cols })
 }
 

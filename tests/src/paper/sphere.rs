@@ -4,6 +4,7 @@
 
 use super::plot::Scale;
 use super::{Check, Options, Report, Run, execute, figure, load_case, probes};
+use crate::interp;
 use efsi_core::Scene;
 use efsi_core::interface::shapes::Shape;
 use std::f64::consts::PI;
@@ -360,63 +361,20 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         .iter()
         .filter(|(r, _)| !r.label.contains("CFL"))
         .collect();
-    plot(
-        "fig5a_centroid",
-        "Centroid height vs time (seed Fig. 5a)",
-        "z (mm)",
-        by_cpr
-            .iter()
-            .map(|(r, i)| {
-                (
-                    r.label.clone(),
+    // Time histories in ms of one quantity, per labelled run.
+    let history = |runs: &[(String, &Impact)], y: fn(&Impact) -> &[f64], scale: f64| {
+        runs.iter()
+            .map(|(n, i)| {
+                let pts =
                     i.t.iter()
-                        .zip(&i.z)
-                        .map(|(t, z)| (1e3 * t, 1e3 * z))
-                        .collect(),
-                )
+                        .zip(y(i))
+                        .map(|(t, v)| (1e3 * t, scale * v))
+                        .collect();
+                (n.clone(), pts)
             })
-            .collect(),
-        Scale::Linear,
-        "t (ms)",
-        &mut notes,
-    );
-    plot(
-        "fig5b_velocity",
-        "Axial velocity vs time (seed Fig. 5b)",
-        "v (m/s)",
-        by_cpr
-            .iter()
-            .map(|(r, i)| {
-                (
-                    r.label.clone(),
-                    i.t.iter().zip(&i.v).map(|(t, v)| (1e3 * t, *v)).collect(),
-                )
-            })
-            .collect(),
-        Scale::Linear,
-        "t (ms)",
-        &mut notes,
-    );
-    plot(
-        "contact_force",
-        "Contact force on the substrate",
-        "F (N)",
-        by_cpr
-            .iter()
-            .map(|(r, i)| {
-                (
-                    r.label.clone(),
-                    i.t.iter()
-                        .zip(&i.force)
-                        .map(|(t, f)| (1e3 * t, *f))
-                        .collect(),
-                )
-            })
-            .collect(),
-        Scale::Linear,
-        "t (ms)",
-        &mut notes,
-    );
+            .collect::<Vec<(String, Vec<(f64, f64)>)>>()
+    };
+    let cpr: Vec<(String, &Impact)> = by_cpr.iter().map(|(r, i)| (r.label.clone(), i)).collect();
     let base_run = by_cpr
         .iter()
         .find(|(r, _)| r.label == format!("{conditions_cpr} CPR"))
@@ -425,43 +383,58 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     for (n, _, i) in &conditions {
         three.push((n.clone(), i));
     }
-    plot(
-        "fig7_centroid",
-        "Three initial conditions: centroid height (seed Figs. 7–8a)",
-        "z (mm)",
-        three
-            .iter()
-            .map(|(n, i)| {
-                (
-                    n.clone(),
-                    i.t.iter()
-                        .zip(&i.z)
-                        .map(|(t, z)| (1e3 * t, 1e3 * z))
-                        .collect(),
-                )
-            })
-            .collect(),
-        Scale::Linear,
-        "t (ms)",
-        &mut notes,
-    );
-    plot(
-        "fig8_velocity",
-        "Three initial conditions: axial velocity (seed Figs. 7–8b)",
-        "v (m/s)",
-        three
-            .iter()
-            .map(|(n, i)| {
-                (
-                    n.clone(),
-                    i.t.iter().zip(&i.v).map(|(t, v)| (1e3 * t, *v)).collect(),
-                )
-            })
-            .collect(),
-        Scale::Linear,
-        "t (ms)",
-        &mut notes,
-    );
+    for (file, title, y, runs, q, scale) in [
+        (
+            "fig5a_centroid",
+            "Centroid height vs time (seed Fig. 5a)",
+            "z (mm)",
+            &cpr,
+            (|i: &Impact| &i.z[..]) as fn(&Impact) -> &[f64],
+            1e3,
+        ),
+        (
+            "fig5b_velocity",
+            "Axial velocity vs time (seed Fig. 5b)",
+            "v (m/s)",
+            &cpr,
+            |i: &Impact| &i.v[..],
+            1.0,
+        ),
+        (
+            "contact_force",
+            "Contact force on the substrate",
+            "F (N)",
+            &cpr,
+            |i: &Impact| &i.force[..],
+            1.0,
+        ),
+        (
+            "fig7_centroid",
+            "Three initial conditions: centroid height (seed Figs. 7–8a)",
+            "z (mm)",
+            &three,
+            |i: &Impact| &i.z[..],
+            1e3,
+        ),
+        (
+            "fig8_velocity",
+            "Three initial conditions: axial velocity (seed Figs. 7–8b)",
+            "v (m/s)",
+            &three,
+            |i: &Impact| &i.v[..],
+            1.0,
+        ),
+    ] {
+        plot(
+            file,
+            title,
+            y,
+            history(runs, q, scale),
+            Scale::Linear,
+            "t (ms)",
+            &mut notes,
+        );
+    }
     plot(
         "tradeoff",
         "Speed vs accuracy: centroid-path error vs wall time",
@@ -518,11 +491,4 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             "35 cells per radius at CFL 0.4: the compression and rebound are within the stated tolerances of 50 CPR at a fraction of its cost; 20 CPR for parameter sweeps".into()
         },
     })
-}
-
-/// Linear interpolation (xs increasing).
-fn interp(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let k = xs.partition_point(|&a| a < x).clamp(1, xs.len() - 1);
-    let w = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
-    ys[k - 1] * (1.0 - w) + ys[k] * w
 }
