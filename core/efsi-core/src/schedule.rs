@@ -442,7 +442,8 @@ impl Pipeline {
         self.entries.iter().any(|e| e.phase == phase)
     }
 
-    /// Initialise every stage's fields (before the first step), then make the initial velocity
+    /// Initialise every stage's fields (before the first step; the stages writing material
+    /// fields first, see [`Pipeline::initialize_stages`]), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
     /// compression at the interface for deformation. The projecting stage runs once, with the
@@ -456,9 +457,7 @@ impl Pipeline {
         bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
-        for e in &mut self.entries {
-            e.stage.initialize(grid, bc, state)?;
-        }
+        self.initialize_stages(grid, bc, state)?;
         let before = (state.u.clone(), state.v.clone());
         // The projection's tolerance is on max|∇·u|·Δt: judge it with the step the flow allows
         // at Courant number 1, not Δt = 1 (which would ask for the divergence to round-off).
@@ -503,7 +502,30 @@ impl Pipeline {
             }
         }
         if state.u.data() != before.0.data() || state.v.data() != before.1.data() {
-            for e in &mut self.entries {
+            self.initialize_stages(grid, bc, state)?;
+        }
+        Ok(())
+    }
+
+    /// Every stage's [`Stage::initialize`]: first the stages that write the material fields
+    /// (solid fraction, density, viscosity), which the others read, then the rest, each group in
+    /// pipeline order.
+    fn initialize_stages(
+        &mut self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        let material = |e: &Entry| {
+            e.writes.iter().any(|f| {
+                matches!(
+                    f,
+                    FieldId::SolidFraction | FieldId::Density | FieldId::Viscosity
+                )
+            })
+        };
+        for first in [true, false] {
+            for e in self.entries.iter_mut().filter(|e| material(e) == first) {
                 e.stage.initialize(grid, bc, state)?;
             }
         }

@@ -227,7 +227,6 @@ impl StagePlugin for Elastic {
         let n = k.faces.len();
         Ok(Box::new(ElasticStage {
             law,
-            shape: scene.solid.as_ref().map(|s| s.shape.clone()),
             tau: std::array::from_fn(|_| Field::zeros(grid)),
             op: ElasticOperator {
                 k,
@@ -918,8 +917,6 @@ impl Kernels {
 
 struct ElasticStage {
     law: Box<dyn ConstitutiveLaw>,
-    /// The solid's initial shape (the solid fraction is not yet set when the stage initialises).
-    shape: Option<efsi_core::scene::Shape>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     theta: f64,
     tau: [Field; 4],
@@ -1026,8 +1023,8 @@ fn err(stage: &str, message: String) -> StageError {
 impl Stage for ElasticStage {
     fn initialize(
         &mut self,
-        grid: &Grid,
-        bc: &BoundarySet,
+        _grid: &Grid,
+        _bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
         let d = state.deformation.as_mut().ok_or_else(missing)?;
@@ -1037,12 +1034,12 @@ impl Stage for ElasticStage {
         d.b[3].fill(0.0);
         d.relax.fill(1.0);
         let k = &mut self.op.k;
-        if let Some(shape) = &self.shape {
-            let mut phi = Field::zeros(grid);
-            efsi_core::interface::fill_fraction(grid, shape, &mut phi);
-            bc.fill_scalar(grid, &mut phi, false);
-            k.set_weights(&phi);
-        }
+        // The solid fraction is set: the stages writing material fields initialise first.
+        let phi = state
+            .phi
+            .as_ref()
+            .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
+        k.set_weights(phi);
         k.fill_ghosts(&mut d.b);
         k.gradient(&state.u, &state.v);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
