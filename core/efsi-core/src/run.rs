@@ -368,7 +368,7 @@ impl Outputs {
             self.row.clear();
             self.row.push(t);
             for p in &self.probes {
-                probes::evaluate(p, &sim.grid, &sim.state, &mut self.row);
+                probes::evaluate(p, &sim.grid, &sim.state, sim.scene.gravity, &mut self.row);
             }
             let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
             let line = line.join(",") + "\n";
