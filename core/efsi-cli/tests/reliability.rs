@@ -345,6 +345,30 @@ fn resume_refuses_a_changed_scene_or_law_and_accepts_them_restored() {
     let o = efsi(&["resume", out_s, "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("resumed from the checkpoint at step"));
+
+    // `time.end` may move past the checkpoint (the run continues to it), not before it.
+    std::fs::write(&scene, text.replace("end: 0.6", "end: 0.3")).unwrap();
+    let o = efsi(&["resume", out_s, "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("time.end: 0.3 is not after the checkpoint's t"),
+        "{err}"
+    );
+    std::fs::write(&scene, text.replace("end: 0.6", "end: 0.8")).unwrap();
+    let o = efsi(&["resume", out_s, "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let probes = std::fs::read_to_string(out.join("probes.csv")).unwrap();
+    let last: f64 = probes
+        .lines()
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    assert!(
+        (last - 0.8).abs() < 1e-9,
+        "the continued run ends at {last}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 

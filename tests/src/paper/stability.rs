@@ -7,10 +7,10 @@
 //! `cases/sphere_impact.ron` at 8 cells per radius (6 in quick mode), the sphere released
 //! [`GAP`] above the substrate at its scene's 1.22 m/s so that it falls, hits and leaves the
 //! wall within [`END`]; the fluid's density is the solid's divided by the ratio (the solid keeps
-//! its 1106 kg/m³, the fluid its viscosity). The "3 cells across" runs shrink the sphere to a
-//! radius of 1.5 cells on the same grid. Two settings are expected to be refused: a
-//! `time.fixed_dt` above the elastic-wave limit, and a `numerics.elastic.wave_courant` above
-//! its allowed maximum.
+//! its 1106 kg/m³, the fluid its viscosity). The "3 cells across" and "4 cells across" runs
+//! shrink the sphere to a diameter of 3 and 4 cells on the same grid. Expected to be refused:
+//! the solid 3 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
+//! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
 //!
 //! # What "stable" means here
 //! With `E = KE + PE + EE` (kinetic, gravitational potential of the whole domain — fluid
@@ -32,6 +32,7 @@ use super::{Check, Options, Report, Run, execute_built, load_case, probes};
 use efsi_core::interface::shapes::Shape;
 use efsi_core::scene::{MAX_WAVE_COURANT, ProbeSpec};
 use efsi_core::{Scene, Simulation};
+use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use std::path::PathBuf;
 
 /// Shear moduli (Pa).
@@ -40,6 +41,8 @@ const G_VALUES: [f64; 5] = [1e3, 1e5, 1.8e5, 1e7, 1e9];
 const RATIOS: [f64; 4] = [1.0, 10.0, 1e3, 1e4];
 /// CFL numbers.
 const CFLS: [f64; 3] = [0.1, 0.5, 0.9];
+/// Widths of the small solids, in cells: one below [`MIN_CELLS_ACROSS`] (refused), one at it.
+const ACROSS: [f64; 2] = [3.0, 4.0];
 /// Gap between the sphere and the substrate at release (m).
 const GAP: f64 = 0.004;
 /// End time (s): impact at ≈ 3 ms, rebound by ≈ 12 ms for the seed's stiffness.
@@ -59,8 +62,8 @@ struct Setting {
     g: f64,
     ratio: f64,
     cfl: f64,
-    /// A sphere 3 cells across instead of the scene's.
-    small: bool,
+    /// A sphere this many cells across instead of the scene's.
+    across: Option<f64>,
     fixed_dt: Option<f64>,
     wave_courant: Option<f64>,
 }
@@ -71,19 +74,16 @@ impl Setting {
             g,
             ratio,
             cfl,
-            small: false,
+            across: None,
             fixed_dt: None,
             wave_courant: None,
         }
     }
 
     fn label(&self) -> String {
-        let mut s = format!(
-            "G {:.0e}, ratio {:.0e}, CFL {}",
-            self.g, self.ratio, self.cfl
-        );
-        if self.small {
-            s += ", 3 cells across";
+        let mut s = format!("G {:e}, ratio {:e}, CFL {}", self.g, self.ratio, self.cfl);
+        if let Some(n) = self.across {
+            s += &format!(", {n} cells across");
         }
         if let Some(dt) = self.fixed_dt {
             s += &format!(", fixed dt {dt:.0e}");
@@ -164,7 +164,7 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
         return Err("the solid is not a disk".into());
     };
     let h = radius / cpr;
-    let r = if st.small { 1.5 * h } else { radius };
+    let r = st.across.map_or(radius, |n| 0.5 * n * h);
     solid.shape = Shape::Disk {
         center: (0.0, r + GAP),
         radius: r,
@@ -290,12 +290,14 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     }
     let small_ratios: &[f64] = if opts.quick { &[1e3] } else { &RATIOS };
     let mut small_runs = Vec::new();
-    for &ratio in small_ratios {
-        for &g in gs {
-            small_runs.push(Setting {
-                small: true,
-                ..Setting::new(g, ratio, 0.5)
-            });
+    for across in ACROSS {
+        for &ratio in small_ratios {
+            for &g in gs {
+                small_runs.push(Setting {
+                    across: Some(across),
+                    ..Setting::new(g, ratio, 0.5)
+                });
+            }
         }
     }
     let refusals = [
@@ -341,7 +343,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         for &ratio in ratios {
             for &g in gs {
                 let (s, o) = outcome_of(&|s: &Setting| {
-                    !s.small && s.g == g && s.ratio == ratio && s.cfl == cfl
+                    s.across.is_none() && s.g == g && s.ratio == ratio && s.cfl == cfl
                 })
                 .ok_or("a map cell has no run")?;
                 cells.push(cell(&o, steps_of(&s)));
@@ -354,20 +356,24 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             cells,
         });
     }
-    let mut cells = Vec::new();
-    for &ratio in small_ratios {
-        for &g in gs {
-            let (s, o) = outcome_of(&|s: &Setting| s.small && s.g == g && s.ratio == ratio)
+    for across in ACROSS {
+        let mut cells = Vec::new();
+        for &ratio in small_ratios {
+            for &g in gs {
+                let (s, o) = outcome_of(&|s: &Setting| {
+                    s.across == Some(across) && s.g == g && s.ratio == ratio
+                })
                 .ok_or("a map cell has no run")?;
-            cells.push(cell(&o, steps_of(&s)));
+                cells.push(cell(&o, steps_of(&s)));
+            }
         }
+        panels.push(Panel {
+            title: format!("{across} cells across, CFL 0.5"),
+            cols: cols.clone(),
+            rows: small_ratios.iter().map(|r| format!("{r:.0e}")).collect(),
+            cells,
+        });
     }
-    panels.push(Panel {
-        title: "3 cells across, CFL 0.5".into(),
-        cols,
-        rows: small_ratios.iter().map(|r| format!("{r:.0e}")).collect(),
-        cells,
-    });
     let mut plots = Vec::new();
     let mut notes = Vec::new();
     match plot::map(
@@ -437,7 +443,11 @@ pub fn run(opts: &Options) -> Result<Report, String> {
          the motion gained 26 % of the energy budget and the total energy peaked 4.2 budgets \
          above its start; at G = 1e7, 11 % and 0.56."
     ));
-    let expected_refusals = refusals.len();
+    let expected_refusals = refusals.len()
+        + small_runs
+            .iter()
+            .filter(|s| s.across.is_some_and(|n| n < MIN_CELLS_ACROSS))
+            .count();
     let mut checks = vec![
         Check::at_least(
             "runs finished stable or refused (no third outcome)",
@@ -454,7 +464,9 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         ),
     ];
     let names_setting = refused.iter().all(|(s, m)| {
-        if s.fixed_dt.is_some() {
+        if s.across.is_some_and(|n| n < MIN_CELLS_ACROSS) {
+            m.contains("solid.shape") && m.contains("cells across") && m.contains("refine the grid")
+        } else if s.fixed_dt.is_some() {
             m.contains("time.fixed_dt")
                 && m.contains("wave_courant")
                 && m.contains("set time.fixed_dt ≤")
