@@ -228,15 +228,18 @@ pub fn map(
     {
         return Err("a panel's cells do not fill its rows × columns".into());
     }
-    let width = 430 * panels.len() as u32 + 20;
+    // At most three panels to a row.
+    let per_row = panels.len().min(3);
+    let rows = panels.len().div_ceil(per_row);
+    let (width, height) = (430 * per_row as u32 + 20, 420 * rows as u32 + 50);
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
-        let root = BitMapBackend::new(path, (width, 470)).into_drawing_area();
+        let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
         root.fill(&WHITE)?;
         let root = root.titled(title, (FAMILY, 22))?;
         let centred = |size: u32| {
             TextStyle::from((FAMILY, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center))
         };
-        for (area, p) in root.split_evenly((1, panels.len())).iter().zip(panels) {
+        for (area, p) in root.split_evenly((rows, per_row)).iter().zip(panels) {
             let (nc, nr) = (p.cols.len() as f64, p.rows.len() as f64);
             let mut chart = ChartBuilder::on(area)
                 .caption(&p.title, (FAMILY, 17))

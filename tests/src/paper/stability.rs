@@ -339,7 +339,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .find(|(s, _)| pred(s) && s.fixed_dt.is_none() && s.wave_courant.is_none())
             .map(|(s, o)| (*s, o.clone()))
     };
-    let cols: Vec<String> = gs.iter().map(|g| format!("{g:.0e}")).collect();
+    let cols: Vec<String> = gs.iter().map(|g| format!("{g:e}")).collect();
     let mut panels = Vec::new();
     for &cfl in cfls {
         let mut cells = Vec::new();
@@ -415,8 +415,22 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     for f in &failed {
         notes.push(format!("FAILED — {f}"));
     }
+    // One line per kind of refusal (the message of its first setting).
+    let mut kinds: Vec<(String, Vec<String>, String)> = Vec::new();
     for (s, m) in &refused {
-        notes.push(format!("refused — {}: {m}", s.label()));
+        let kind = m.split(':').nth(1).unwrap_or(m).trim().to_string();
+        match kinds.iter_mut().find(|(k, _, _)| *k == kind) {
+            Some((_, labels, _)) => labels.push(s.label()),
+            None => kinds.push((kind, vec![s.label()], m.clone())),
+        }
+    }
+    for (_, labels, m) in &kinds {
+        notes.push(format!(
+            "refused ({} setting{}: {}): {m}",
+            labels.len(),
+            if labels.len() == 1 { "" } else { "s" },
+            labels.join("; ")
+        ));
     }
     let worst = |key: fn(&Figures) -> f64| {
         results
@@ -498,7 +512,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         name: "stability".into(),
         title: format!(
             "Stability at the extremes: the sphere at {cpr} cells per radius over G × ρs/ρf × CFL, \
-             and a solid 3 cells across"
+             and solids 3 and 4 cells across"
         ),
         reference: "issue 8's criteria: finish with finite fields, solid volume kept, energy \
                     bounded by its start plus the work of gravity (walls at rest do no work) — \
