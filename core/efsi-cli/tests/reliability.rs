@@ -440,3 +440,60 @@ fn settings_beyond_the_elastic_wave_limit_are_refused_before_the_run() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// A run that pumps energy in without a single non-finite value — a Saint Venant–Kirchhoff
+/// sphere, whose stiffness turns negative in the interface cells — is stopped by the energy
+/// guard: exit code 3, the message says what grew and what to change, the last good state is
+/// saved.
+#[test]
+fn a_run_gaining_energy_is_stopped_as_unstable() {
+    let d = tmp("energy");
+    let law = law_library("efsi_law_saint_venant_kirchhoff");
+    let scene = d.join("svk_sphere.ron");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"Scene(
+    name: "svk_sphere",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 0.045), z: (0.0, 0.09)),
+    grid: (nr: 19, nz: 38),
+    time: (end: 0.02, cfl: 0.4),
+    fluid: (density: 1.2, viscosity: 1.8e-5),
+    gravity: (0.0, -9.81),
+    solid: (
+        shape: Disk(center: (0.0, 0.0573), radius: 0.0192),
+        density: 1106.0,
+        velocity: (0.0, -1.22),
+        law: (name: "{}", parameters: {{"lambda": 4e5, "mu": 1.8e5}}),
+    ),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    output: (probe_every: 0.0005, probes: [KineticEnergy, PotentialEnergy]),
+)
+"#,
+            law.display()
+        ),
+    )
+    .unwrap();
+    let out = d.join("out");
+    let o = efsi(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    for needle in [
+        "unstable run",
+        "the kinetic + potential energy is",
+        "the scheme is pumping energy in",
+        "lower time.cfl",
+        "the last good state (step",
+    ] {
+        assert!(err.contains(needle), "`{needle}` not in: {err}");
+    }
+    assert!(out.join("checkpoint/latest.efsick").is_file());
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -786,6 +786,7 @@ impl Simulation {
         }
         self.state.copy_from(&snap.state);
         self.set_stepping(snap.last_change, snap.velocity_scale);
+        self.restart_guard();
         Ok(())
     }
 }

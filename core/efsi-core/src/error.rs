@@ -40,6 +40,23 @@ pub enum EfsiError {
         /// Step reached.
         step: u64,
     },
+    /// The motion gained energy that nothing supplied: the scheme is pumping it in (see
+    /// [`crate::simulation::ENERGY_GUARD`]).
+    #[error(
+        "unstable run: at t = {t:.6e} (step {step}) the kinetic + potential energy is {gain:.3e} above its start, more than {limit}× the {supplied:.3e} that the initial motion, the initial strain and gravity can have supplied (energies per radian in axisymmetric geometry): the scheme is pumping energy in — lower time.cfl or numerics.elastic.wave_courant, refine the grid, or check the solid's law (one whose stiffness turns negative, as Saint Venant–Kirchhoff's does in compression, does this)"
+    )]
+    EnergyGrowth {
+        /// Time reached.
+        t: f64,
+        /// Step reached.
+        step: u64,
+        /// Kinetic + potential energy above its start.
+        gain: f64,
+        /// What can have been supplied.
+        supplied: f64,
+        /// The allowed multiple of `supplied`.
+        limit: f64,
+    },
     /// A checkpoint cannot be read or resumed (corrupt, another format version, written for a
     /// different scene or law), or a snapshot does not fit the simulation it is restored into.
     /// `what` is the file (or `snapshot`); the message says what differs.
@@ -85,7 +102,7 @@ impl EfsiError {
     pub fn exit_code(&self) -> i32 {
         match self {
             EfsiError::Scene(_) | EfsiError::Config { .. } | EfsiError::Schedule(_) => 2,
-            EfsiError::Stage(_) | EfsiError::Unstable { .. } => 3,
+            EfsiError::Stage(_) | EfsiError::Unstable { .. } | EfsiError::EnergyGrowth { .. } => 3,
             EfsiError::Io { .. } => 1,
             EfsiError::Checkpoint { .. } => 2,
             EfsiError::Saved { error, .. } => error.exit_code(),

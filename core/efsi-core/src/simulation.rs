@@ -13,6 +13,82 @@ use crate::schedule::{Pipeline, StagePlugin, StepContext};
 use crate::state::State;
 use std::path::{Path, PathBuf};
 
+/// How far the kinetic + potential energy may rise above its start, as a multiple of the energy
+/// the initial motion, the initial strain and gravity can have supplied, before a run is
+/// stopped as unstable ([`EfsiError::EnergyGrowth`]). The stability map's stable runs stayed
+/// below 0.003 of it; a run pumping energy in (a Saint Venant–Kirchhoff sphere at 10 cells per
+/// radius: 800× in 60 ms) passes it within milliseconds, long before a NaN would appear.
+pub const ENERGY_GUARD: f64 = 1.0;
+
+/// The energy guard's record: the start, and the largest release of potential energy so far.
+/// Active only where nothing else supplies energy — no moving wall, no frame acceleration, no
+/// outflow boundary, no gravity along a periodic direction (walls at rest, axes, free-slip
+/// walls and periodic boundaries across gravity supply none).
+#[derive(Clone, Copy, Debug)]
+struct EnergyGuard {
+    /// Kinetic + potential energy at the start.
+    mech0: f64,
+    /// Potential energy at the start.
+    pe0: f64,
+    /// Kinetic + strain energy at the start.
+    supply0: f64,
+    /// The largest drop of potential energy below its start so far.
+    release: f64,
+    /// An absolute allowance for round-off (1e-9 of the energies involved).
+    floor: f64,
+}
+
+impl EnergyGuard {
+    fn energies(grid: &Grid, state: &State, gravity: (f64, f64)) -> (f64, f64, f64) {
+        let ke = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
+        let pe = crate::probes::potential_energy(grid, &state.rho, gravity);
+        let ee = state
+            .deformation
+            .as_ref()
+            .map_or(0.0, |d| d.elastic_energy)
+            .max(0.0);
+        (ke, pe, ee)
+    }
+
+    fn start(grid: &Grid, state: &State, scene: &Scene, wall_speed: f64) -> Option<Self> {
+        if wall_speed != 0.0 || state.frame_acceleration != (0.0, 0.0) {
+            return None;
+        }
+        // Fluid leaving or entering through an outflow, or gravity along a periodic direction
+        // (a flow driven round and round), changes the energy without a potential for it.
+        let b = &scene.boundaries;
+        let open = Side::ALL
+            .iter()
+            .any(|&side| matches!(b.get(side), Boundary::Outflow));
+        let periodic = |side: Side| matches!(b.get(side), Boundary::Periodic);
+        let driven = (periodic(Side::XMin) && scene.gravity.0 != 0.0)
+            || (periodic(Side::YMin) && scene.gravity.1 != 0.0);
+        if open || driven {
+            return None;
+        }
+        let (ke, pe, ee) = Self::energies(grid, state, scene.gravity);
+        let mut mass = 0.0;
+        for j in 0..grid.ny as isize {
+            for i in 0..grid.nx as isize {
+                mass += state.rho[(i, j)] * grid.cell_volume(i);
+            }
+        }
+        let reach =
+            scene.gravity.0.hypot(scene.gravity.1) * (grid.x1() - grid.x0).max(grid.y1() - grid.y0);
+        let floor = (1e-9 * (ke + ee + mass * reach)).max(1e-300);
+        [ke, pe, ee]
+            .iter()
+            .all(|x| x.is_finite())
+            .then_some(EnergyGuard {
+                mech0: ke + pe,
+                pe0: pe,
+                supply0: ke + ee,
+                release: 0.0,
+                floor,
+            })
+    }
+}
+
 /// A scene ready to step.
 pub struct Simulation {
     /// The scene as read.
@@ -32,6 +108,10 @@ pub struct Simulation {
     /// The largest moving-wall speed: imposed velocities the CFL condition must respect even
     /// before the flow has picked them up.
     wall_speed: f64,
+    /// The energy guard: `None` until the first step after construction or a restore (the
+    /// state is public and may be set up by hand in between), then `Some(None)` where something
+    /// supplies energy and the guard is off.
+    guard: Option<Option<EnergyGuard>>,
 }
 
 impl Simulation {
@@ -180,7 +260,13 @@ impl Simulation {
             last_change: f64::INFINITY,
             velocity_scale: scale,
             wall_speed,
+            guard: None,
         })
+    }
+
+    /// Start the energy guard afresh at the next step (after a restore).
+    pub(crate) fn restart_guard(&mut self) {
+        self.guard = None;
     }
 
     /// The pipeline (for printing, timings and statistics).
@@ -257,10 +343,33 @@ impl Simulation {
             dt,
             step: self.state.step,
         };
+        if self.guard.is_none() {
+            self.guard = Some(EnergyGuard::start(
+                &self.grid,
+                &self.state,
+                &self.scene,
+                self.wall_speed,
+            ));
+        }
         self.pipeline.run_step(&ctx, &mut self.state)?;
         self.state.t += dt;
         self.state.step += 1;
         self.state.dt_prev = dt;
+        if let Some(Some(g)) = &mut self.guard {
+            let (ke, pe, _) = EnergyGuard::energies(&self.grid, &self.state, self.scene.gravity);
+            g.release = g.release.max(g.pe0 - pe);
+            let supplied = g.supply0 + g.release;
+            let gain = ke + pe - g.mech0;
+            if gain > ENERGY_GUARD * supplied + g.floor {
+                return Err(EfsiError::EnergyGrowth {
+                    t: self.state.t,
+                    step: self.state.step,
+                    gain,
+                    supplied,
+                    limit: ENERGY_GUARD,
+                });
+            }
+        }
         if let Some((pu, pv)) = &self.previous {
             let (nx, ny) = (self.grid.nx as isize, self.grid.ny as isize);
             let ux = self.bc.normal_faces(0, self.grid.nx);
@@ -309,6 +418,10 @@ impl Simulation {
             ));
         }
         self.state.frame_acceleration = a;
+        if a != (0.0, 0.0) {
+            // An accelerating frame does work the guard does not account for.
+            self.guard = Some(None);
+        }
         Ok(())
     }
 

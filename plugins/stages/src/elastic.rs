@@ -318,6 +318,14 @@ fn wave_limit(scene: &Scene, grid: &Grid, law: &dyn ConstitutiveLaw) -> Result<f
     let mut tangent = [[0.0; 16]];
     law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut tau, Some(&mut tangent))
         .map_err(|e| format!("solid.law: at rest (B = I): {e}"))?;
+    let shear = tangent[0][15];
+    if shear.is_nan() || shear <= 0.0 {
+        return Err(format!(
+            "solid.law: its shear stiffness at rest (∂τ₁₂/∂B̃₁₂ at B̃ = I) is {shear:e} Pa, not \
+             positive: the material has no stable rest state (for Mooney–Rivlin, C1 + C2 must \
+             be > 0)"
+        ));
+    }
     let g0 = (0..4).map(|a| tangent[0][5 * a].abs()).fold(0.0, f64::max);
     if !(g0.is_finite() && g0 > 0.0) {
         return Err(format!(
@@ -1347,5 +1355,80 @@ impl Stage for DeformationStage {
             .strain_energy(self.law.as_ref(), &d.b)
             .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::interface::shapes::Shape;
+    use efsi_core::law::LawError;
+
+    /// A law of negative shear modulus: no stable rest state.
+    struct Negative;
+
+    impl ConstitutiveLaw for Negative {
+        fn name(&self) -> &str {
+            "negative"
+        }
+        fn evaluate(
+            &self,
+            b: &[Sym],
+            tau: &mut [Sym],
+            tangent: Option<&mut [Tangent]>,
+        ) -> Result<(), LawError> {
+            for (t, b) in tau.iter_mut().zip(b) {
+                *t = b.map(|x| -x);
+            }
+            if let Some(j) = tangent {
+                for j in j.iter_mut() {
+                    *j = [0.0; 16];
+                    for a in 0..4 {
+                        j[5 * a] = -1.0;
+                    }
+                }
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn laws_without_a_stable_rest_state_and_fixed_steps_beyond_the_wave_limit_are_refused() {
+        let text = r#"Scene(
+    name: "limits",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 16, ny: 16),
+    time: (end: 1.0, fixed_dt: 0.01),
+    fluid: (density: 1.0, viscosity: 1.0),
+    solid: (shape: Disk(center: (0.5, 0.5), radius: 0.25), density: 4.0,
+            law: (name: "neo_hookean_reference", parameters: {"G": 100.0})),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+)"#;
+        let scene = Scene::from_str_at(text, std::path::Path::new("limits.ron")).unwrap();
+        let grid = Grid::new(scene.geometry, 16, 16, scene.domain.x, scene.domain.y);
+        let e = wave_limit(&scene, &grid, &Negative).unwrap_err();
+        assert!(
+            e.contains("shear stiffness at rest") && e.contains("not positive"),
+            "{e}"
+        );
+        // c = √(100/4) = 5, h = 1/16: the limit is 4·h/c = 0.05; 0.01 passes, 0.1 is refused.
+        let law = NeoHookeanReference { g: 100.0 };
+        let dt = wave_limit(&scene, &grid, &law).unwrap();
+        assert!((dt - 0.05).abs() < 1e-12, "{dt}");
+        let mut fast = scene.clone();
+        fast.time.fixed_dt = Some(0.1);
+        let e = wave_limit(&fast, &grid, &law).unwrap_err();
+        assert!(e.contains("set time.fixed_dt ≤ 5.0000e-2"), "{e}");
+        // A disk 3 cells across is refused; 8 cells across is not.
+        let mut small = scene.clone();
+        small.solid.as_mut().unwrap().shape = Shape::Disk {
+            center: (0.5, 0.5),
+            radius: 1.5 / 16.0,
+        };
+        let e = wave_limit(&small, &grid, &law).unwrap_err();
+        assert!(
+            e.contains("cells across") && e.contains("refine the grid"),
+            "{e}"
+        );
     }
 }
