@@ -255,7 +255,6 @@ impl StagePlugin for Elastic {
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
-                f: vec![0.0; n],
             },
         }))
     }
@@ -324,6 +323,12 @@ struct Kernels {
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
     mu_s: f64,
+    /// The centres holding solid (`w > 0`, within `[−1, nx] × [−1, ny]`) and the corners
+    /// touching them (the only ones with `w_k > 0`), set by [`Kernels::set_weights`]: outside
+    /// them the tangent's stress increment vanishes (it is weighted by `w`, `w_k`), so the
+    /// elastic operator skips them.
+    solid_c: Window,
+    solid_k: Window,
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
     /// axes (cos, sin), the logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
@@ -353,6 +358,44 @@ fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
     0.25 * (f[a] + f[b] + f[c] + f[d])
 }
 
+/// A rectangle of grid points `[i0, i1] × [j0, j1]` (inclusive; empty when `i0 > i1`), of
+/// centres or of corners.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Window {
+    i0: isize,
+    i1: isize,
+    j0: isize,
+    j1: isize,
+}
+
+impl Window {
+    fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
+        Window { i0, i1, j0, j1 }
+    }
+
+    /// No point.
+    const EMPTY: Window = Window {
+        i0: 0,
+        i1: -1,
+        j0: 0,
+        j1: -1,
+    };
+
+    /// The corners `(i, j)` (lower-left of centre `(i, j)`) touching a centre of `self`,
+    /// within `[0, nx] × [0, ny]`.
+    fn corners(self, nx: isize, ny: isize) -> Window {
+        if self.i0 > self.i1 {
+            return Window::EMPTY;
+        }
+        Window::new(
+            self.i0.max(0),
+            (self.i1 + 1).min(nx),
+            self.j0.max(0),
+            (self.j1 + 1).min(ny),
+        )
+    }
+}
+
 impl Kernels {
     fn new(grid: &Grid, bc: &BoundarySet, mu_f: f64, mu_s: f64) -> Self {
         let nc = (grid.nx + 2) * (grid.ny + 2);
@@ -371,6 +414,8 @@ impl Kernels {
             rc: Field::zeros(grid),
             mu_f,
             mu_s,
+            solid_c: Window::EMPTY,
+            solid_k: Window::EMPTY,
             energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
             rb: vec![[0.0; 4]; nc],
@@ -385,6 +430,38 @@ impl Kernels {
 
     fn nxy(&self) -> (isize, isize) {
         (self.grid.nx as isize, self.grid.ny as isize)
+    }
+
+    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the solid's
+    /// centres and corners: one centre more all round (within the batch), and the corners of
+    /// every solid centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
+    fn gradient_windows(&self) -> (Window, Window) {
+        let (nx, ny) = self.nxy();
+        let c = self.solid_c;
+        if c.i0 > c.i1 {
+            return (Window::EMPTY, Window::EMPTY);
+        }
+        (
+            Window::new(
+                (c.i0 - 1).max(-1),
+                (c.i1 + 1).min(nx),
+                (c.j0 - 1).max(-1),
+                (c.j1 + 1).min(ny),
+            ),
+            Window::new(c.i0, c.i1 + 1, c.j0, c.j1 + 1),
+        )
+    }
+
+    /// Every centre of the law batch, `[−1, nx] × [−1, ny]`.
+    fn all_centres(&self) -> Window {
+        let (nx, ny) = self.nxy();
+        Window::new(-1, nx, -1, ny)
+    }
+
+    /// Every corner of the law batch, `[0, nx] × [0, ny]`.
+    fn all_corners(&self) -> Window {
+        let (nx, ny) = self.nxy();
+        Window::new(0, nx, 0, ny)
     }
 
     /// Batch index of centre `(i, j)`, `i, j ≥ −1`.
@@ -410,6 +487,16 @@ impl Kernels {
                 self.w[(i, j)] = if f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         }
+        let mut c = Window::new(nx, -1, ny, -1);
+        for j in -1..=ny {
+            for i in -1..=nx {
+                if self.w[(i, j)] > 0.0 {
+                    c = Window::new(c.i0.min(i), c.i1.max(i), c.j0.min(j), c.j1.max(j));
+                }
+            }
+        }
+        self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
+        self.solid_k = self.solid_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
         for j in 1 - g..=ny + g {
             for i in 1 - g..=nx + g {
@@ -528,16 +615,23 @@ impl Kernels {
         }
     }
 
-    /// Velocity gradients of `(u, v)` (ghosts filled).
+    /// Velocity gradients of `(u, v)` (ghosts filled), everywhere the law batches need them.
     fn gradient(&mut self, u: &Field, v: &Field) {
+        let (nx, ny) = self.nxy();
+        let (c, k) = (self.all_centres(), Window::new(-1, nx + 1, -1, ny + 1));
+        self.gradient_in(u, v, c, k);
+    }
+
+    /// Velocity gradients of `(u, v)` (ghosts filled): `L₁₁, L₂₂, L₃₃` at the centres `cw`,
+    /// `L₁₂, L₂₁` at the corners `kw`.
+    fn gradient_in(&mut self, u: &Field, v: &Field, cw: Window, kw: Window) {
         let g = &self.grid;
         let m = &g.metric;
-        let (nx, ny) = self.nxy();
         let s = u.stride();
         let (ud, vd) = (u.data(), v.data());
         let [l11, l22, l33] = &mut self.lc;
-        for j in -1..=ny {
-            for i in -1..=nx {
+        for j in cw.j0..=cw.j1 {
+            for i in cw.i0..=cw.i1 {
                 let k = u.idx(i, j);
                 l11.data_mut()[k] = (ud[k + 1] - ud[k]) / g.dx;
                 l22.data_mut()[k] = (vd[k + s] - vd[k]) / g.dy;
@@ -545,8 +639,8 @@ impl Kernels {
             }
         }
         let [l12, l21] = &mut self.lk;
-        for j in -1..=ny + 1 {
-            for i in -1..=nx + 1 {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = u.idx(i, j);
                 l12.data_mut()[k] = (ud[k] - ud[k - s]) / g.dy;
                 l21.data_mut()[k] = (vd[k] - vd[k - 1]) / g.dx;
@@ -566,15 +660,31 @@ impl Kernels {
         relax: Option<&Field>,
         out: &mut [Field; 4],
     ) {
-        let (nx, ny) = self.nxy();
+        let (cw, kw) = (self.all_centres(), self.all_corners());
+        self.stretch_in(b, a, base, relax, out, cw, kw);
+    }
+
+    /// [`Kernels::stretch`] at the centres `cw` and the corners `kw` only (the gradients of the
+    /// last [`Kernels::gradient_in`] there).
+    #[allow(clippy::too_many_arguments)]
+    fn stretch_in(
+        &self,
+        b: &[Field; 4],
+        a: f64,
+        base: Option<(&[Field; 4], &[Field; 4])>,
+        relax: Option<&Field>,
+        out: &mut [Field; 4],
+        cw: Window,
+        kw: Window,
+    ) {
         let s = b[0].stride();
         let [l11, l22, l33] = [self.lc[0].data(), self.lc[1].data(), self.lc[2].data()];
         let [l12, l21] = [self.lk[0].data(), self.lk[1].data()];
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
         let base_at =
             |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
-        for j in -1..=ny {
-            for i in -1..=nx {
+        for j in cw.j0..=cw.j1 {
+            for i in cw.i0..=cw.i1 {
                 let k = b[0].idx(i, j);
                 let (c0, c1, c2, c3) = (k, k + 1, k + s, k + s + 1);
                 let l12b12 = 0.25
@@ -595,8 +705,8 @@ impl Kernels {
                 }
             }
         }
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = b[3].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 // The solid's velocity gradient: spin unchanged, shear rate times s.
@@ -843,12 +953,14 @@ impl Kernels {
 
     /// `dtau = J·db` with the tangents of the last [`Kernels::evaluate`] (rows 11, 22, 33 at
     /// centres, 12 at corners; the other components averaged to the location).
+    /// Only at the solid's centres and corners ([`Kernels::solid_c`], `solid_k`): `dtau` is zero
+    /// elsewhere, and there it is left untouched.
     fn apply_tangent(&self, db: &[Field; 4], dtau: &mut [Field; 4]) {
-        let (nx, ny) = self.nxy();
+        let (cw, kw) = (self.solid_c, self.solid_k);
         let s = db[0].stride();
         let [d11, d22, d33, d12] = [db[0].data(), db[1].data(), db[2].data(), db[3].data()];
-        for j in -1..=ny {
-            for i in -1..=nx {
+        for j in cw.j0..=cw.j1 {
+            for i in cw.i0..=cw.i1 {
                 let k = db[0].idx(i, j);
                 let w = self.w.data()[k];
                 let x = [
@@ -866,8 +978,8 @@ impl Kernels {
                 }
             }
         }
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = db[0].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 let w = self.wk.data()[k];
@@ -884,32 +996,71 @@ impl Kernels {
         }
     }
 
-    /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
-    fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
+    /// Volume-weighted `(∇·τ)_x` on the u-face `(i, j)` at linear index `k`.
+    #[inline(always)]
+    fn force_u(&self, tau: &[Field; 4], i: isize, k: usize) -> f64 {
         let g = &self.grid;
         let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
         let s = tau[0].stride();
-        let [t11, t22, t33, t12] = [tau[0].data(), tau[1].data(), tau[2].data(), tau[3].data()];
+        let [t11, t33, t12] = [tau[0].data(), tau[2].data(), tau[3].data()];
+        let r = m.rx(i);
+        let t33f = 0.5 * (t33[k - 1] + t33[k]);
+        g.dy * (m.rc(i) * t11[k] - m.rc(i - 1) * t11[k - 1]) + g.dx * r * (t12[k + s] - t12[k])
+            - g.dx * g.dy * r * m.hoop_x(i) * t33f
+    }
+
+    /// Volume-weighted `(∇·τ)_y` on the v-face `(i, j)` at linear index `k`.
+    #[inline(always)]
+    fn force_v(&self, tau: &[Field; 4], i: isize, k: usize) -> f64 {
+        let g = &self.grid;
+        let m = &g.metric;
+        let s = tau[0].stride();
+        let [t22, t12] = [tau[1].data(), tau[3].data()];
+        g.dy * (m.rx(i + 1) * t12[k + 1] - m.rx(i) * t12[k])
+            + g.dx * m.rc(i) * (t22[k] - t22[k - s])
+    }
+
+    /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
+    fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
         let (nx, ny) = self.nxy();
         let mut c = 0;
         for j in 0..ny {
             for i in self.faces.ux.lo..self.faces.ux.hi {
-                let k = tau[0].idx(i, j);
-                let r = m.rx(i);
-                let t33f = 0.5 * (t33[k - 1] + t33[k]);
-                out[c] = dy * (m.rc(i) * t11[k] - m.rc(i - 1) * t11[k - 1])
-                    + dx * r * (t12[k + s] - t12[k])
-                    - dx * dy * r * m.hoop_x(i) * t33f;
+                out[c] = self.force_u(tau, i, tau[0].idx(i, j));
                 c += 1;
             }
         }
         for j in self.faces.vy.lo..self.faces.vy.hi {
             for i in 0..nx {
-                let k = tau[0].idx(i, j);
-                out[c] = dy * (m.rx(i + 1) * t12[k + 1] - m.rx(i) * t12[k])
-                    + dx * m.rc(i) * (t22[k] - t22[k - s]);
+                out[c] = self.force_v(tau, i, tau[0].idx(i, j));
                 c += 1;
+            }
+        }
+    }
+
+    /// `y −= a·vol·∇·τ` for a `tau` that vanishes outside the solid's centres and corners
+    /// ([`Kernels::solid_c`], `solid_k`): only the unknown faces next to them see a force.
+    fn force_sub(&self, tau: &[Field; 4], a: f64, y: &mut [f64]) {
+        let cw = self.solid_c;
+        if cw.i0 > cw.i1 {
+            return;
+        }
+        let (nx, ny) = self.nxy();
+        let (ux, vy) = (self.faces.ux, self.faces.vy);
+        let nur = (ux.hi - ux.lo) as usize;
+        let nu = self.faces.nu();
+        // u-face (i, j): τ₁₁, τ₃₃ at centres i−1, i; τ₁₂ at corners (i, j), (i, j+1).
+        for j in (cw.j0 - 1).max(0)..=(cw.j1 + 1).min(ny - 1) {
+            for i in cw.i0.max(ux.lo)..=(cw.i1 + 1).min(ux.hi - 1) {
+                let c = j as usize * nur + (i - ux.lo) as usize;
+                y[c] -= a * self.force_u(tau, i, tau[0].idx(i, j));
+            }
+        }
+        // v-face (i, j): τ₂₂ at centres j−1, j; τ₁₂ at corners (i, j), (i+1, j).
+        for j in cw.j0.max(vy.lo)..=(cw.j1 + 1).min(vy.hi - 1) {
+            for i in (cw.i0 - 1).max(0)..=(cw.i1 + 1).min(nx - 1) {
+                let c = nu + (j - vy.lo) as usize * nx as usize + i as usize;
+                y[c] -= a * self.force_v(tau, i, tau[0].idx(i, j));
             }
         }
     }
@@ -933,12 +1084,11 @@ struct ElasticStage {
     scratch: Scratch,
 }
 
-/// The elastic operator's work space: the increment as fields, Δτ, the force.
+/// The elastic operator's work space: the increment as fields, and Δτ (zero outside the solid).
 struct Scratch {
     xu: Field,
     xv: Field,
     dtau: [Field; 4],
-    f: Vec<f64>,
 }
 
 /// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
@@ -963,7 +1113,6 @@ struct OperatorCtx<'a> {
     xu: &'a mut Field,
     xv: &'a mut Field,
     dtau: &'a mut [Field; 4],
-    f: &'a mut Vec<f64>,
 }
 
 impl LinearOperator for OperatorCtx<'_> {
@@ -978,13 +1127,16 @@ impl LinearOperator for OperatorCtx<'_> {
             }
         });
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
-        op.k.gradient(xu, xv);
-        op.k.stretch(self.start, 1.0, None, Some(self.relax), &mut op.db);
+        // The increment's stress lives in the solid: gradients, stretching and tangent there.
+        let (cw, kw) = (op.k.solid_c, op.k.solid_k);
+        let (gc, gk) = op.k.gradient_windows();
+        op.k.gradient_in(xu, xv, gc, gk);
+        op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);
-        op.k.force(self.dtau, self.f);
         for c in 0..x.len() {
-            y[c] = op.mass[c] * x[c] - op.c * self.f[c];
+            y[c] = op.mass[c] * x[c];
         }
+        op.k.force_sub(self.dtau, op.c, y);
         if op.theta_dt > 0.0 {
             let k = &op.k;
             viscous_divergence(
@@ -1187,6 +1339,10 @@ impl Stage for ElasticStage {
         } else {
             self.delta.fill(0.0);
             let s = &mut self.scratch;
+            // The operator writes Δτ in this step's solid only.
+            for f in &mut s.dtau {
+                f.fill(0.0);
+            }
             let mut ctxop = OperatorCtx {
                 op: &mut self.op,
                 start: &d.start,
@@ -1194,7 +1350,6 @@ impl Stage for ElasticStage {
                 xu: &mut s.xu,
                 xv: &mut s.xv,
                 dtau: &mut s.dtau,
-                f: &mut s.f,
             };
             let st = self.solver.solve(
                 &mut ctxop,
