@@ -136,8 +136,10 @@
 //! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
 
 use crate::advection::face_value;
+use crate::block_multigrid::ViscousBlocks;
 use crate::viscous::{corner_viscosity, viscous_divergence};
 use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
+use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -251,6 +253,10 @@ impl StagePlugin for Elastic {
             tol: scene.numerics.elastic.tolerance,
             max_iter: scene.numerics.elastic.max_iterations,
             implicit: scene.numerics.elastic.implicit,
+            preconditioner: scene.numerics.elastic.preconditioner,
+            blocks: ViscousBlocks::new(grid, bc),
+            eta: Field::zeros(grid),
+            eta_k: Field::zeros(grid),
             scratch: Scratch {
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
@@ -996,6 +1002,35 @@ impl Kernels {
         }
     }
 
+    /// `eta += a·G_eff`: the stiffness of the tangent of the last [`Kernels::evaluate`] as the
+    /// viscosity it acts like in the implicit system (module docs: `J : H(δ) ≈ 2 G_eff D(δ)`).
+    /// At a centre `G_eff = ½ (J₁₁₁₁ B̃₁₁ + J₂₂₂₂ B̃₂₂)` (the normal stresses), at a corner
+    /// `G_eff = J₁₂₁₂ ½ (B̃₁₁ + B̃₂₂)` times the interface factors of the shear in series (stress
+    /// `1/κ`, shear rate `s`) and this step's relaxation divisor `relax`; negative values count
+    /// zero.
+    fn stiffness(&self, relax: &Field, a: f64, eta: &mut Field, eta_k: &mut Field) {
+        let (nx, ny) = self.nxy();
+        let c = self.solid_c;
+        for j in c.j0..=c.j1 {
+            for i in c.i0..=c.i1 {
+                let (jm, b) = (&self.cj[self.ci(i, j)], &self.cb[self.ci(i, j)]);
+                let g = 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
+                eta[(i, j)] += a * g.max(0.0);
+            }
+        }
+        let kw = c.corners(nx, ny);
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
+                let q = self.ki(i, j);
+                let (jm, b) = (&self.kj[q], &self.kb[q]);
+                let k = eta_k.idx(i, j);
+                let f = self.ks.data()[k] * self.sf.data()[k] * relax.data()[k];
+                let g = f * jm[15] * 0.5 * (b[0] + b[1]);
+                eta_k.data_mut()[k] += a * g.max(0.0);
+            }
+        }
+    }
+
     /// Volume-weighted `(∇·τ)_x` on the u-face `(i, j)` at linear index `k`.
     #[inline(always)]
     fn force_u(&self, tau: &[Field; 4], i: isize, k: usize) -> f64 {
@@ -1080,6 +1115,12 @@ struct ElasticStage {
     max_iter: usize,
     /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
     implicit: bool,
+    /// Scene `numerics.elastic.preconditioner`, and the block multigrid's effective
+    /// viscosities × Δt at centres and corners (see [`Kernels::stiffness`]).
+    preconditioner: ElasticPreconditioner,
+    blocks: ViscousBlocks,
+    eta: Field,
+    eta_k: Field,
     /// Work space of the operator, allocated once.
     scratch: Scratch,
 }
@@ -1351,14 +1392,43 @@ impl Stage for ElasticStage {
                 xv: &mut s.xv,
                 dtau: &mut s.dtau,
             };
-            let st = self.solver.solve(
-                &mut ctxop,
-                self.diag.as_slice(),
-                &self.rhs,
-                &mut self.delta,
-                self.tol * scale,
-                self.max_iter,
-            );
+            let st = match self.preconditioner {
+                ElasticPreconditioner::Jacobi => self.solver.solve(
+                    &mut ctxop,
+                    self.diag.as_slice(),
+                    &self.rhs,
+                    &mut self.delta,
+                    self.tol * scale,
+                    self.max_iter,
+                ),
+                ElasticPreconditioner::Multigrid => {
+                    // η = θΔt μ + (Δt²/2) G_eff at centres and corners.
+                    let op = &*ctxop.op;
+                    let (e, ek) = (&mut self.eta, &mut self.eta_k);
+                    if op.theta_dt > 0.0 {
+                        let td = op.theta_dt;
+                        for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
+                            *e = td * m;
+                        }
+                        for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
+                            *e = td * m;
+                        }
+                    } else {
+                        e.fill(0.0);
+                        ek.fill(0.0);
+                    }
+                    op.k.stiffness(&d.relax, op.c, e, ek);
+                    self.blocks.setup(g, &op.mass, e, ek);
+                    self.solver.solve(
+                        &mut ctxop,
+                        &self.blocks,
+                        &self.rhs,
+                        &mut self.delta,
+                        self.tol * scale,
+                        self.max_iter,
+                    )
+                }
+            };
             if !st.converged {
                 state.deformation = Some(d);
                 return Err(err(

@@ -5,6 +5,7 @@
 //! those a scene needs.
 
 pub mod advection;
+mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
 pub mod projection;
