@@ -140,7 +140,7 @@ use crate::block_multigrid::ViscousBlocks;
 use crate::viscous::{corner_viscosity, viscous_divergence};
 use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::scene::ElasticPreconditioner;
-use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats};
+use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats, par};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext, bc::UnknownFaces,
@@ -1160,13 +1160,7 @@ impl LinearOperator for OperatorCtx<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
-        op.k.faces.for_each(|c, is_u, k| {
-            if is_u {
-                xu.data_mut()[k] = x[c];
-            } else {
-                xv.data_mut()[k] = x[c];
-            }
-        });
+        scatter(&op.k.faces, x, xu, xv);
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
         let (cw, kw) = (op.k.solid_c, op.k.solid_k);
@@ -1174,12 +1168,8 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.gradient_in(xu, xv, gc, gk);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);
-        for c in 0..x.len() {
-            y[c] = op.mass[c] * x[c];
-        }
-        op.k.force_sub(self.dtau, op.c, y);
+        let k = &op.k;
         if op.theta_dt > 0.0 {
-            let k = &op.k;
             viscous_divergence(
                 &k.grid,
                 k.faces.ux,
@@ -1191,12 +1181,74 @@ impl LinearOperator for OperatorCtx<'_> {
                 &mut op.ku,
                 &mut op.kv,
             );
-            let (ku, kv, td) = (&op.ku, &op.kv, op.theta_dt);
-            k.faces.for_each(|c, is_u, q| {
-                y[c] -= td * if is_u { ku.data()[q] } else { kv.data()[q] };
-            });
         }
+        gather(&k.faces, &op.mass, x, op.theta_dt, &op.ku, &op.kv, y);
+        k.force_sub(self.dtau, op.c, y);
     }
+}
+
+/// Scatter the compact vector `x` (u faces first, then v) into the unknown faces of `u`, `v`,
+/// rows in parallel.
+fn scatter(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
+    let (ux, vy) = (faces.ux, faces.vy);
+    let s = u.stride();
+    let nur = (ux.hi - ux.lo).max(0) as usize;
+    let nx = s - 1 - 2 * efsi_core::GHOST;
+    let nu = faces.nu();
+    if nur > 0 {
+        let rows = nu / nur;
+        let r0 = u.idx(-efsi_core::G, 0);
+        par::for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
+            let o = (efsi_core::G + ux.lo) as usize;
+            row[o..o + nur].copy_from_slice(&x[j * nur..(j + 1) * nur]);
+        });
+    }
+    let rows = (vy.hi - vy.lo).max(0) as usize;
+    let r0 = v.idx(-efsi_core::G, vy.lo);
+    let xv = &x[nu..];
+    par::for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
+        let o = efsi_core::GHOST;
+        row[o..o + nx].copy_from_slice(&xv[j * nx..(j + 1) * nx]);
+    });
+}
+
+/// `y = mass·x − td·(ku, kv)` on the compact unknown faces (`ku`, `kv` not read when
+/// `td = 0`), rows in parallel.
+fn gather(
+    faces: &UnknownFaces,
+    mass: &[f64],
+    x: &[f64],
+    td: f64,
+    ku: &Field,
+    kv: &Field,
+    y: &mut [f64],
+) {
+    let (ux, vy) = (faces.ux, faces.vy);
+    let nur = (ux.hi - ux.lo).max(0) as usize;
+    let nx = ku.stride() - 1 - 2 * efsi_core::GHOST;
+    let nu = faces.nu();
+    let (yu, yv) = y.split_at_mut(nu);
+    let (kud, kvd) = (ku.data(), kv.data());
+    par::for_each_row(yu, nur, |j, row| {
+        let k0 = ku.idx(ux.lo, j as isize);
+        for (i, y) in row.iter_mut().enumerate() {
+            let c = j * nur + i;
+            *y = mass[c] * x[c];
+            if td > 0.0 {
+                *y -= td * kud[k0 + i];
+            }
+        }
+    });
+    par::for_each_row(yv, nx, |jr, row| {
+        let k0 = kv.idx(0, vy.lo + jr as isize);
+        for (i, y) in row.iter_mut().enumerate() {
+            let c = nu + jr * nx + i;
+            *y = mass[c] * x[c];
+            if td > 0.0 {
+                *y -= td * kvd[k0 + i];
+            }
+        }
+    });
 }
 
 fn missing() -> StageError {
