@@ -1195,8 +1195,7 @@ fn scatter(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
     let nur = (ux.hi - ux.lo).max(0) as usize;
     let nx = s - 1 - 2 * efsi_core::GHOST;
     let nu = faces.nu();
-    if nur > 0 {
-        let rows = nu / nur;
+    if let Some(rows) = nu.checked_div(nur) {
         let r0 = u.idx(-efsi_core::G, 0);
         par::for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
             let o = (efsi_core::G + ux.lo) as usize;
