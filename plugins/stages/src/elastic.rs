@@ -137,7 +137,8 @@
 
 use crate::advection::face_value;
 use crate::block_multigrid::ViscousBlocks;
-use crate::viscous::{corner_viscosity, viscous_divergence};
+use crate::viscous::corner_viscosity;
+use crate::viscous_stencil::ViscousStencil;
 use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats, par};
@@ -238,8 +239,7 @@ impl StagePlugin for Elastic {
                 theta_dt: 0.0,
                 mu: Field::zeros(grid),
                 mu_corner: Field::zeros(grid),
-                ku: Field::zeros(grid),
-                kv: Field::zeros(grid),
+                viscous: ViscousStencil::new(grid, UnknownFaces::new(grid, bc)),
             },
             theta: if crate::viscous::Viscous.needed(scene) {
                 scene.numerics.viscous.theta
@@ -1143,8 +1143,8 @@ struct ElasticOperator {
     theta_dt: f64,
     mu: Field,
     mu_corner: Field,
-    ku: Field,
-    kv: Field,
+    /// `θΔt K_v`, its coefficients set each step.
+    viscous: ViscousStencil,
 }
 
 struct OperatorCtx<'a> {
@@ -1168,22 +1168,8 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.gradient_in(xu, xv, gc, gk);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);
-        let k = &op.k;
-        if op.theta_dt > 0.0 {
-            viscous_divergence(
-                &k.grid,
-                k.faces.ux,
-                k.faces.vy,
-                &op.mu,
-                &op.mu_corner,
-                xu,
-                xv,
-                &mut op.ku,
-                &mut op.kv,
-            );
-        }
-        gather(&k.faces, &op.mass, x, op.theta_dt, &op.ku, &op.kv, y);
-        k.force_sub(self.dtau, op.c, y);
+        op.viscous.apply(&op.mass, x, xu, xv, y);
+        op.k.force_sub(self.dtau, op.c, y);
     }
 }
 
@@ -1208,45 +1194,6 @@ fn scatter(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
     par::for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
         let o = efsi_core::GHOST;
         row[o..o + nx].copy_from_slice(&xv[j * nx..(j + 1) * nx]);
-    });
-}
-
-/// `y = mass·x − td·(ku, kv)` on the compact unknown faces (`ku`, `kv` not read when
-/// `td = 0`), rows in parallel.
-fn gather(
-    faces: &UnknownFaces,
-    mass: &[f64],
-    x: &[f64],
-    td: f64,
-    ku: &Field,
-    kv: &Field,
-    y: &mut [f64],
-) {
-    let (ux, vy) = (faces.ux, faces.vy);
-    let nur = (ux.hi - ux.lo).max(0) as usize;
-    let nx = ku.stride() - 1 - 2 * efsi_core::GHOST;
-    let nu = faces.nu();
-    let (yu, yv) = y.split_at_mut(nu);
-    let (kud, kvd) = (ku.data(), kv.data());
-    par::for_each_row(yu, nur, |j, row| {
-        let k0 = ku.idx(ux.lo, j as isize);
-        for (i, y) in row.iter_mut().enumerate() {
-            let c = j * nur + i;
-            *y = mass[c] * x[c];
-            if td > 0.0 {
-                *y -= td * kud[k0 + i];
-            }
-        }
-    });
-    par::for_each_row(yv, nx, |jr, row| {
-        let k0 = kv.idx(0, vy.lo + jr as isize);
-        for (i, y) in row.iter_mut().enumerate() {
-            let c = nu + jr * nx + i;
-            *y = mass[c] * x[c];
-            if td > 0.0 {
-                *y -= td * kvd[k0 + i];
-            }
-        }
     });
 }
 
@@ -1362,6 +1309,9 @@ impl Stage for ElasticStage {
         if self.theta > 0.0 {
             self.op.mu.copy_from(&state.mu);
             corner_viscosity(g, &state.mu, &mut self.op.mu_corner);
+            self.op
+                .viscous
+                .setup(g, self.op.theta_dt, &self.op.mu, &self.op.mu_corner);
         }
         let td = self.op.theta_dt;
         let (mu, mc) = (&self.op.mu, &self.op.mu_corner);

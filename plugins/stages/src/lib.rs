@@ -10,6 +10,7 @@ pub mod body_force;
 pub mod elastic;
 pub mod projection;
 pub mod viscous;
+mod viscous_stencil;
 pub mod vof;
 
 use efsi_core::StagePlugin;
