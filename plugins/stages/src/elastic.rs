@@ -143,9 +143,10 @@ use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats, par};
 use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
+    BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext, bc::UnknownFaces,
 };
+use rayon::prelude::*;
 
 fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
@@ -364,6 +365,73 @@ fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
     0.25 * (f[a] + f[b] + f[c] + f[d])
 }
 
+/// A window kernel with at least this many points runs its rows in parallel.
+const PAR_POINTS: usize = 1024;
+
+/// Run `body(j, rows)` over the rows `j0..=j1` of the fields `a, b, c` (`rows[n]` is row `j` of
+/// the n-th field, ghosts included: point `i` at `i + G`), in parallel when `par`. Each row
+/// writes only its own entries, so the result does not depend on the number of threads.
+fn rows3(
+    [a, b, c]: [&mut Field; 3],
+    (j0, j1): (isize, isize),
+    par: bool,
+    body: impl Fn(isize, [&mut [f64]; 3]) + Sync + Send,
+) {
+    if j0 > j1 {
+        return;
+    }
+    let s = a.stride();
+    let (lo, hi) = (a.idx(-G, j0), a.idx(-G, j1) + s);
+    let (a, b, c) = (
+        &mut a.data_mut()[lo..hi],
+        &mut b.data_mut()[lo..hi],
+        &mut c.data_mut()[lo..hi],
+    );
+    if par {
+        a.par_chunks_mut(s)
+            .zip(b.par_chunks_mut(s))
+            .zip(c.par_chunks_mut(s))
+            .enumerate()
+            .for_each(|(r, ((a, b), c))| body(j0 + r as isize, [a, b, c]));
+    } else {
+        a.chunks_mut(s)
+            .zip(b.chunks_mut(s))
+            .zip(c.chunks_mut(s))
+            .enumerate()
+            .for_each(|(r, ((a, b), c))| body(j0 + r as isize, [a, b, c]));
+    }
+}
+
+/// [`rows3`] for one field.
+fn rows1(
+    a: &mut Field,
+    (j0, j1): (isize, isize),
+    par: bool,
+    body: impl Fn(isize, &mut [f64]) + Sync + Send,
+) {
+    if j0 > j1 {
+        return;
+    }
+    let s = a.stride();
+    let (lo, hi) = (a.idx(-G, j0), a.idx(-G, j1) + s);
+    let a = &mut a.data_mut()[lo..hi];
+    if par {
+        a.par_chunks_mut(s)
+            .enumerate()
+            .for_each(|(r, a)| body(j0 + r as isize, a));
+    } else {
+        a.chunks_mut(s)
+            .enumerate()
+            .for_each(|(r, a)| body(j0 + r as isize, a));
+    }
+}
+
+/// The position of point `i` in a row of [`rows3`] / [`rows1`].
+#[inline(always)]
+fn at(i: isize) -> usize {
+    (i + G) as usize
+}
+
 /// A rectangle of grid points `[i0, i1] × [j0, j1]` (inclusive; empty when `i0 > i1`), of
 /// centres or of corners.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -377,6 +445,20 @@ struct Window {
 impl Window {
     fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
         Window { i0, i1, j0, j1 }
+    }
+
+    /// Number of points.
+    fn points(self) -> usize {
+        if self.i0 > self.i1 || self.j0 > self.j1 {
+            0
+        } else {
+            ((self.i1 - self.i0 + 1) * (self.j1 - self.j0 + 1)) as usize
+        }
+    }
+
+    /// The rows `(j0, j1)`.
+    fn rows(self) -> (isize, isize) {
+        (self.j0, self.j1)
     }
 
     /// No point.
@@ -636,22 +718,33 @@ impl Kernels {
         let s = u.stride();
         let (ud, vd) = (u.data(), v.data());
         let [l11, l22, l33] = &mut self.lc;
-        for j in cw.j0..=cw.j1 {
-            for i in cw.i0..=cw.i1 {
-                let k = u.idx(i, j);
-                l11.data_mut()[k] = (ud[k + 1] - ud[k]) / g.dx;
-                l22.data_mut()[k] = (vd[k + s] - vd[k]) / g.dy;
-                l33.data_mut()[k] = 0.5 * (ud[k] + ud[k + 1]) * m.hoop_c(i);
-            }
-        }
+        rows3(
+            [l11, l22, l33],
+            cw.rows(),
+            cw.points() >= PAR_POINTS,
+            |j, [r11, r22, r33]| {
+                for i in cw.i0..=cw.i1 {
+                    let k = u.idx(i, j);
+                    r11[at(i)] = (ud[k + 1] - ud[k]) / g.dx;
+                    r22[at(i)] = (vd[k + s] - vd[k]) / g.dy;
+                    r33[at(i)] = 0.5 * (ud[k] + ud[k + 1]) * m.hoop_c(i);
+                }
+            },
+        );
+        let par = kw.points() >= PAR_POINTS;
         let [l12, l21] = &mut self.lk;
-        for j in kw.j0..=kw.j1 {
+        rows1(l12, kw.rows(), par, |j, r| {
             for i in kw.i0..=kw.i1 {
                 let k = u.idx(i, j);
-                l12.data_mut()[k] = (ud[k] - ud[k - s]) / g.dy;
-                l21.data_mut()[k] = (vd[k] - vd[k - 1]) / g.dx;
+                r[at(i)] = (ud[k] - ud[k - s]) / g.dy;
             }
-        }
+        });
+        rows1(l21, kw.rows(), par, |j, r| {
+            for i in kw.i0..=kw.i1 {
+                let k = u.idx(i, j);
+                r[at(i)] = (vd[k] - vd[k - 1]) / g.dx;
+            }
+        });
     }
 
     /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
@@ -672,7 +765,6 @@ impl Kernels {
 
     /// [`Kernels::stretch`] at the centres `cw` and the corners `kw` only (the gradients of the
     /// last [`Kernels::gradient_in`] there).
-    #[allow(clippy::too_many_arguments)]
     fn stretch_in(
         &self,
         b: &[Field; 4],
@@ -689,29 +781,35 @@ impl Kernels {
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
         let base_at =
             |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
-        for j in cw.j0..=cw.j1 {
-            for i in cw.i0..=cw.i1 {
-                let k = b[0].idx(i, j);
-                let (c0, c1, c2, c3) = (k, k + 1, k + s, k + s + 1);
-                let l12b12 = 0.25
-                    * (l12[c0] * b12[c0]
-                        + l12[c1] * b12[c1]
-                        + l12[c2] * b12[c2]
-                        + l12[c3] * b12[c3]);
-                let l21b12 = 0.25
-                    * (l21[c0] * b12[c0]
-                        + l21[c1] * b12[c1]
-                        + l21[c2] * b12[c2]
-                        + l21[c3] * b12[c3]);
-                let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
-                let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
-                let h33 = 2.0 * l33[k] * b33[k];
-                for (c, h) in [(0, h11), (1, h22), (2, h33)] {
-                    out[c].data_mut()[k] = base_at(c, k) + a * h;
+        let [o11, o22, o33, o12] = out;
+        rows3(
+            [o11, o22, o33],
+            cw.rows(),
+            cw.points() >= PAR_POINTS,
+            |j, rows| {
+                for i in cw.i0..=cw.i1 {
+                    let k = b[0].idx(i, j);
+                    let (c0, c1, c2, c3) = (k, k + 1, k + s, k + s + 1);
+                    let l12b12 = 0.25
+                        * (l12[c0] * b12[c0]
+                            + l12[c1] * b12[c1]
+                            + l12[c2] * b12[c2]
+                            + l12[c3] * b12[c3]);
+                    let l21b12 = 0.25
+                        * (l21[c0] * b12[c0]
+                            + l21[c1] * b12[c1]
+                            + l21[c2] * b12[c2]
+                            + l21[c3] * b12[c3]);
+                    let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
+                    let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
+                    let h33 = 2.0 * l33[k] * b33[k];
+                    for (c, h) in [(0, h11), (1, h22), (2, h33)] {
+                        rows[c][at(i)] = base_at(c, k) + a * h;
+                    }
                 }
-            }
-        }
-        for j in kw.j0..=kw.j1 {
+            },
+        );
+        rows1(o12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
             for i in kw.i0..=kw.i1 {
                 let k = b[3].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
@@ -722,9 +820,9 @@ impl Kernels {
                     + avg4(b11, a0, a1, a2, a3) * (l21[k] + e)
                     + b12[k] * avg4(l22, a0, a1, a2, a3);
                 let q = relax.map_or(1.0, |r| r.data()[k]);
-                out[3].data_mut()[k] = q * (base_at(3, k) + a * h12);
+                row[at(i)] = q * (base_at(3, k) + a * h12);
             }
-        }
+        });
     }
 
     /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior.
@@ -965,26 +1063,32 @@ impl Kernels {
         let (cw, kw) = (self.solid_c, self.solid_k);
         let s = db[0].stride();
         let [d11, d22, d33, d12] = [db[0].data(), db[1].data(), db[2].data(), db[3].data()];
-        for j in cw.j0..=cw.j1 {
-            for i in cw.i0..=cw.i1 {
-                let k = db[0].idx(i, j);
-                let w = self.w.data()[k];
-                let x = [
-                    w * d11[k],
-                    w * d22[k],
-                    w * d33[k],
-                    w * avg4(d12, k, k + 1, k + s, k + s + 1),
-                ];
-                let jm = &self.cj[self.ci(i, j)];
-                for c in 0..3 {
-                    dtau[c].data_mut()[k] = jm[4 * c] * x[0]
-                        + jm[4 * c + 1] * x[1]
-                        + jm[4 * c + 2] * x[2]
-                        + jm[4 * c + 3] * x[3];
+        let [t11, t22, t33, t12] = dtau;
+        rows3(
+            [t11, t22, t33],
+            cw.rows(),
+            cw.points() >= PAR_POINTS,
+            |j, rows| {
+                for i in cw.i0..=cw.i1 {
+                    let k = db[0].idx(i, j);
+                    let w = self.w.data()[k];
+                    let x = [
+                        w * d11[k],
+                        w * d22[k],
+                        w * d33[k],
+                        w * avg4(d12, k, k + 1, k + s, k + s + 1),
+                    ];
+                    let jm = &self.cj[self.ci(i, j)];
+                    for c in 0..3 {
+                        rows[c][at(i)] = jm[4 * c] * x[0]
+                            + jm[4 * c + 1] * x[1]
+                            + jm[4 * c + 2] * x[2]
+                            + jm[4 * c + 3] * x[3];
+                    }
                 }
-            }
-        }
-        for j in kw.j0..=kw.j1 {
+            },
+        );
+        rows1(t12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
             for i in kw.i0..=kw.i1 {
                 let k = db[0].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
@@ -996,10 +1100,10 @@ impl Kernels {
                     w * d12[k],
                 ];
                 let jm = &self.kj[self.ki(i, j)];
-                dtau[3].data_mut()[k] = self.ks.data()[k]
+                row[at(i)] = self.ks.data()[k]
                     * (jm[12] * x[0] + jm[13] * x[1] + jm[14] * x[2] + jm[15] * x[3]);
             }
-        }
+        });
     }
 
     /// `eta += a·G_eff`: the stiffness of the tangent of the last [`Kernels::evaluate`] as the
