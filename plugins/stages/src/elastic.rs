@@ -53,7 +53,7 @@
 //! is `GΔt ∇·D(δ)`: an extra viscosity `GΔt/2`, which is what keeps stiff solids stable at the
 //! flow's time step. Multiplied by the face volumes the system is
 //! `(M − (Δt²/2) K_J) δ = Δt·vol·∇·τ^{n+1/3}`; `K_J` is not symmetric for a general law, so it
-//! is solved with BiCGSTAB and Jacobi preconditioning, to `‖r‖ ≤ tol · max(‖b‖, ‖M V^{n+1/3}‖)`
+//! is solved with BiCGSTAB (see "Solve" below), to `‖r‖ ≤ tol · max(‖b‖, ‖M V^{n+1/3}‖)`
 //! (scene `numerics.elastic.tolerance`, default 1e-10). Finally `V^{n+2/3} = V^{n+1/3} + δ` and
 //! `B̃^{n+2/3} = B̃(V^{n+2/3})`; after the projection the [`DeformationUpdate`] stage sets
 //! `B̃^{n+1} = B̃(V^{n+1})` (Eq. 25 ≡ Eq. 24) and the rates `Aⁿ⁺¹`, `H(Vⁿ⁺¹; B̃ⁿ⁺¹)` the next
@@ -129,6 +129,26 @@
 //! location is the average of its four neighbours. The law is evaluated in two batches (centres
 //! and corners), with the missing components averaged. Advection `∇·(V B̃)` is conservative with
 //! van Leer limited upwind face values, as the momentum advection.
+//!
+//! # Solve
+//!
+//! BiCGSTAB, right-preconditioned (scene `numerics.elastic.preconditioner`):
+//! - `Multigrid` (default): since the implicit tangent acts like a viscosity `G_eff Δt/2`, the
+//!   SPD approximation `M − vol·∇·(2ηD)` with `η = θΔt μ + (Δt²/2) G_eff` ([`Kernels::stiffness`]:
+//!   `G_eff` from the tangent's diagonal and B̃, and at the interface corners the series
+//!   factors) is preconditioned by one multigrid V-cycle on each of its u–u and v–v blocks
+//!   ([`crate::block_multigrid`]). On the sphere impact at 35 cells per radius: 11.7 iterations
+//!   per step at 1e-10 where Jacobi needs 37.7 (Jacobi's count grows with the elastic wave's
+//!   Courant number `Δt√(G/ρ)/h`, the block multigrid's hardly).
+//! - `Jacobi`: a bound of the diagonal (the mass plus the stiffness over `h²`).
+//!
+//! The increment's stress `J : (w ΔB)` vanishes outside the solid, so the operator computes
+//! gradients, stretching and tangent only over the solid's bounding box (plus the ring the
+//! stencils read) and adds its force only to the faces next to it: the cost of the elastic part
+//! follows the solid's size, not the grid's. The viscous part `θΔt K_v` is applied over the
+//! whole grid from coefficients set once per step ([`crate::viscous_stencil`]). Loops over rows
+//! and BiCGSTAB's reductions run in parallel with fixed results: the iterates are bit-identical
+//! on any number of threads.
 //!
 //! # Stability
 //!
