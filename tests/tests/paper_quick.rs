@@ -64,3 +64,8 @@ fn disk_in_cavity_quick() {
 fn oscillating_disk_quick() {
     quick("oscillating_disk");
 }
+
+#[test]
+fn stability_quick() {
+    quick("stability");
+}

@@ -66,7 +66,8 @@ enum Command {
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
     /// The scene is read again from the file the run started with; a changed scene or law
-    /// library is refused (exit code 2) with the list of what differs.
+    /// library is refused (exit code 2) with the list of what differs — except `time.end`,
+    /// which may be moved past the checkpoint to continue a run beyond its end.
     Resume {
         /// The run's output folder.
         dir: PathBuf,

@@ -345,6 +345,30 @@ fn resume_refuses_a_changed_scene_or_law_and_accepts_them_restored() {
     let o = efsi(&["resume", out_s, "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("resumed from the checkpoint at step"));
+
+    // `time.end` may move past the checkpoint (the run continues to it), not before it.
+    std::fs::write(&scene, text.replace("end: 0.6", "end: 0.3")).unwrap();
+    let o = efsi(&["resume", out_s, "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("time.end: 0.3 is not after the checkpoint's t"),
+        "{err}"
+    );
+    std::fs::write(&scene, text.replace("end: 0.6", "end: 0.8")).unwrap();
+    let o = efsi(&["resume", out_s, "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let probes = std::fs::read_to_string(out.join("probes.csv")).unwrap();
+    let last: f64 = probes
+        .lines()
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    assert!(
+        (last - 0.8).abs() < 1e-9,
+        "the continued run ends at {last}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -355,5 +379,64 @@ fn resume_without_a_checkpoint_says_so() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("no checkpoint to resume from"), "{err}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// The limits of the stability map: a fixed step above the elastic-wave limit and a
+/// `wave_courant` above its maximum are refused before the run (exit code 2), naming the limit
+/// and the setting to change, and nothing is written.
+#[test]
+fn settings_beyond_the_elastic_wave_limit_are_refused_before_the_run() {
+    let d = tmp("wave");
+    let law = law_library("efsi_law_neo_hookean");
+    let stiff = solid_scene(law.to_str().unwrap(), r#""G": 1e9"#);
+    let cases = [
+        (
+            "fixed_dt",
+            stiff.replace("dt_max: 0.01", "fixed_dt: 0.001"),
+            &[
+                "time.fixed_dt",
+                "numerics.elastic.wave_courant",
+                "set time.fixed_dt ≤",
+            ][..],
+        ),
+        (
+            "wave_courant",
+            stiff.replace(
+                "fluid: (",
+                "numerics: (elastic: (wave_courant: 10.0)),\n    fluid: (",
+            ),
+            &["numerics.elastic.wave_courant", "must be in (0, 4]"][..],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let scene = d.join(format!("{name}.ron"));
+        std::fs::write(&scene, text).unwrap();
+        let out = d.join(format!("out_{name}"));
+        let o = efsi(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: `{n}` not in: {err}");
+        }
+        assert!(!out.join("probes.csv").exists(), "{name}: the run started");
+    }
+    // Within the limit the same stiff solid runs (the step is capped, not refused).
+    let scene = d.join("capped.ron");
+    std::fs::write(&scene, stiff.replace("end: 0.6", "end: 0.002")).unwrap();
+    let out = d.join("out_capped");
+    let o = efsi(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -688,13 +688,28 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
 }
 
 /// Check that a checkpoint may resume with `scene` and the law it names now: the scene must
-/// equal the recorded one and the law library must be the same. The error lists what differs.
+/// equal the recorded one except for a later `time.end`, and the law library must be the
+/// same. The error lists what differs.
 pub fn check_resumable(file: &CheckpointFile, scene: &Scene, what: &str) -> Result<(), EfsiError> {
-    let recorded = file.scene()?;
-    let mut diffs: Vec<String> = scene_differences(&recorded, scene)
-        .into_iter()
-        .map(|d| format!("scene: {d}"))
-        .collect();
+    let mut recorded = file.scene()?;
+    let mut diffs = Vec::new();
+    // `time.end` alone may change, to a time after the checkpoint's: a stopped or finished
+    // run continues to a later end (no step before the checkpoint depends on it).
+    if scene.time.end != recorded.time.end {
+        if scene.time.end <= file.record.t {
+            diffs.push(format!(
+                "scene: time.end: {} is not after the checkpoint's t = {:.6e} (time.end may only \
+                 move past it)",
+                scene.time.end, file.record.t
+            ));
+        }
+        recorded.time.end = scene.time.end;
+    }
+    diffs.extend(
+        scene_differences(&recorded, scene)
+            .into_iter()
+            .map(|d| format!("scene: {d}")),
+    );
     if diffs.is_empty() {
         diffs.extend(law_differences(&file.law, &law_identity(scene)?));
     }

@@ -44,6 +44,7 @@ pub fn columns(p: &ProbeSpec) -> Vec<String> {
     match p {
         ProbeSpec::Point { name, .. } => vec![name.clone()],
         ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
+        ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
         ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
         ProbeSpec::MaxSpeed => vec!["max_speed".into()],
         ProbeSpec::SolidVolume => vec!["solid_volume".into()],
@@ -56,13 +57,20 @@ pub fn columns(p: &ProbeSpec) -> Vec<String> {
     }
 }
 
-/// Append the probe's values to `out`.
-pub fn evaluate(p: &ProbeSpec, grid: &Grid, state: &State, out: &mut Vec<f64>) {
+/// Append the probe's values to `out`; `gravity` is the scene's.
+pub fn evaluate(
+    p: &ProbeSpec,
+    grid: &Grid,
+    state: &State,
+    gravity: (f64, f64),
+    out: &mut Vec<f64>,
+) {
     match p {
         ProbeSpec::Point { field, at, .. } => out.push(sample(grid, state, field, *at)),
         ProbeSpec::KineticEnergy => {
             out.push(ops::kinetic_energy(grid, &state.u, &state.v, &state.rho))
         }
+        ProbeSpec::PotentialEnergy => out.push(potential_energy(grid, &state.rho, gravity)),
         ProbeSpec::MaxDivergence => out.push(ops::max_abs_div(grid, &state.u, &state.v)),
         ProbeSpec::MaxSpeed => {
             let mut m = 0.0f64;
@@ -99,6 +107,17 @@ pub fn evaluate(p: &ProbeSpec, grid: &Grid, state: &State, out: &mut Vec<f64>) {
             }
         }
     }
+}
+
+/// `−∫ρ g·x dV` over the cells (per radian in axisymmetric geometry).
+pub fn potential_energy(grid: &Grid, rho: &Field, (gx, gy): (f64, f64)) -> f64 {
+    let mut e = 0.0;
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            e -= rho[(i, j)] * (gx * grid.xc(i) + gy * grid.yc(j)) * grid.cell_volume(i);
+        }
+    }
+    e
 }
 
 /// Volume, centroid and volume-weighted velocity of the solid phase.

@@ -368,7 +368,7 @@ impl Outputs {
             self.row.clear();
             self.row.push(t);
             for p in &self.probes {
-                probes::evaluate(p, &sim.grid, &sim.state, &mut self.row);
+                probes::evaluate(p, &sim.grid, &sim.state, sim.scene.gravity, &mut self.row);
             }
             let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
             let line = line.join(",") + "\n";
@@ -583,8 +583,8 @@ pub fn run_with(
 
 /// Continue the run in `dir` from its latest checkpoint (`dir/checkpoint/latest.efsick`),
 /// appending to its outputs. The scene is read again from the file the run was started with
-/// and must be unchanged, and so must the law library; otherwise the error lists what
-/// differs. `options.checkpoint_every` defaults to the interrupted run's. Returns the
+/// and must be unchanged except for `time.end`, which may move past the checkpoint (to
+/// continue a run), and so must the law library; otherwise the error lists what differs. `options.checkpoint_every` defaults to the interrupted run's. Returns the
 /// simulation (for its timings) and the outcome.
 pub fn resume(
     dir: &Path,

@@ -457,7 +457,22 @@ pub struct ElasticParams {
     /// Preconditioner of BiCGSTAB (default `Multigrid`).
     #[serde(default)]
     pub preconditioner: ElasticPreconditioner,
+    /// The largest elastic-wave Courant number `Δt·c/h` a step may take (default and largest
+    /// allowed: [`MAX_WAVE_COURANT`]), `c = √(G₀/ρ_s)` the solid's shear-wave speed at rest
+    /// (`G₀` the law's stiffness at `B̃ = I`) and `h` the smaller cell side. The elastic step
+    /// is implicit, but the pressure projection after it is not coupled to it: the strain its
+    /// correction leaves in the solid is stored at stiffness G and given back at the next
+    /// step, which pumps energy into stiff solids once `Δt·c/h` passes ≈ 5 (measured by the
+    /// stability map, `cargo xtask bench-paper --case stability`). The time step is capped so;
+    /// a `time.fixed_dt` above the cap is refused.
+    #[serde(default = "default_wave_courant")]
+    pub wave_courant: f64,
 }
+
+/// The largest elastic-wave Courant number `Δt·c/h` allowed (see
+/// [`ElasticParams::wave_courant`]): the largest at which every run of the stability map kept
+/// its energy bounded.
+pub const MAX_WAVE_COURANT: f64 = 4.0;
 
 impl Default for ElasticParams {
     fn default() -> Self {
@@ -466,6 +481,7 @@ impl Default for ElasticParams {
             tolerance: default_elastic_tol(),
             max_iterations: default_elastic_iter(),
             preconditioner: ElasticPreconditioner::default(),
+            wave_courant: default_wave_courant(),
         }
     }
 }
@@ -480,6 +496,10 @@ pub enum ElasticPreconditioner {
     /// viscous operator with an effective viscosity `θΔt μ + (Δt/2) G_eff` (the default).
     #[default]
     Multigrid,
+}
+
+fn default_wave_courant() -> f64 {
+    MAX_WAVE_COURANT
 }
 
 fn default_elastic_tol() -> f64 {
@@ -625,6 +645,11 @@ pub enum ProbeSpec {
     },
     /// Kinetic energy ½∫ρ|u|² dV (per radian in axisymmetric geometry).
     KineticEnergy,
+    /// Gravitational potential energy `−∫ρ g·x dV` of the scene's gravity, measured from the
+    /// origin of coordinates (per radian in axisymmetric geometry); column `potential_energy`.
+    /// With [`ProbeSpec::KineticEnergy`] and [`ProbeSpec::ElasticEnergy`] it makes the total
+    /// mechanical energy, which only walls that move and the frame's acceleration can raise.
+    PotentialEnergy,
     /// `max |∇·u|` over the cells.
     MaxDivergence,
     /// Maximum speed.
@@ -975,6 +1000,16 @@ impl Scene {
         }
         if el.max_iterations == 0 {
             return err("numerics.elastic.max_iterations", "must be ≥ 1");
+        }
+        if !(el.wave_courant > 0.0 && el.wave_courant <= MAX_WAVE_COURANT) {
+            return err(
+                "numerics.elastic.wave_courant",
+                format!(
+                    "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
+                     split projection pumps energy into stiff solids (stability map)",
+                    el.wave_courant
+                ),
+            );
         }
         let v = &self.numerics.viscous;
         if !(0.5..=1.0).contains(&v.theta) {

@@ -46,6 +46,10 @@ impl Simulation {
             field: field.into(),
             message,
         };
+        // Scenes built or changed in code (the paper's cases, tools) get the loader's checks too.
+        scene
+            .validate()
+            .map_err(|(field, message)| config(&field, message))?;
         let grid = Grid::new(
             scene.geometry,
             scene.grid.nx,

@@ -11,6 +11,7 @@ pub mod plot;
 pub mod shear_rectangle;
 pub mod soft_wall;
 pub mod sphere;
+pub mod stability;
 
 use efsi_core::run::{Progress, run};
 use efsi_core::{EfsiError, Scene, Simulation};
@@ -181,6 +182,10 @@ pub const CASES: &[Case] = &[
         name: "oscillating_couette",
         run: couette::run,
     },
+    Case {
+        name: "stability",
+        run: stability::run,
+    },
 ];
 
 /// The workspace's `cases/` folder.
@@ -204,7 +209,18 @@ pub fn execute(
     label: &str,
     opts: &Options,
 ) -> Result<(Simulation, Run), EfsiError> {
-    let mut sim = Simulation::new(scene, path, &efsi_stages::builtin())?;
+    let sim = Simulation::new(scene, path, &efsi_stages::builtin())?;
+    execute_built(sim, dir, label, opts)
+}
+
+/// [`execute`] for a simulation already built (so a caller can tell a scene refused before
+/// the run from a run that failed).
+pub fn execute_built(
+    mut sim: Simulation,
+    dir: &Path,
+    label: &str,
+    opts: &Options,
+) -> Result<(Simulation, Run), EfsiError> {
     let cells = sim.grid.nx * sim.grid.ny;
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(1000);

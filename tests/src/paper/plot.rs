@@ -185,3 +185,107 @@ pub fn field(
         };
     draw().map_err(|e| format!("{}: {e}", path.display()))
 }
+
+/// How a cell of a [`map`] is coloured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tone {
+    /// A run that finished stable (green).
+    Good,
+    /// A run refused before it started (amber).
+    Refused,
+    /// Anything else: a failure (red).
+    Bad,
+}
+
+/// One panel of a [`map`]: a grid of coloured, labelled cells.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// The panel's title.
+    pub title: String,
+    /// Column labels, left to right.
+    pub cols: Vec<String>,
+    /// Row labels, bottom to top.
+    pub rows: Vec<String>,
+    /// The cells, row by row from the bottom: tone and a short text.
+    pub cells: Vec<(Tone, String)>,
+}
+
+/// Draw categorical maps side by side (`x_label` under the columns, `y_label` beside the rows)
+/// into `path` (PNG).
+pub fn map(
+    path: &Path,
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    panels: &[Panel],
+) -> Result<(), String> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    if !font() {
+        return Err("no TrueType font found for plot text (install fonts-dejavu-core)".into());
+    }
+    if panels
+        .iter()
+        .any(|p| p.cells.len() != p.cols.len() * p.rows.len() || p.cells.is_empty())
+    {
+        return Err("a panel's cells do not fill its rows × columns".into());
+    }
+    // At most three panels to a row.
+    let per_row = panels.len().min(3);
+    let rows = panels.len().div_ceil(per_row);
+    let (width, height) = (430 * per_row as u32 + 20, 420 * rows as u32 + 50);
+    let draw = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, (FAMILY, 22))?;
+        let centred = |size: u32| {
+            TextStyle::from((FAMILY, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center))
+        };
+        for (area, p) in root.split_evenly((rows, per_row)).iter().zip(panels) {
+            let (nc, nr) = (p.cols.len() as f64, p.rows.len() as f64);
+            let mut chart = ChartBuilder::on(area)
+                .caption(&p.title, (FAMILY, 17))
+                .margin(8)
+                .build_cartesian_2d(-1.3..nc, -1.0..nr)?;
+            chart.draw_series(p.cells.iter().enumerate().map(|(k, (tone, _))| {
+                let (c, r) = ((k % p.cols.len()) as f64, (k / p.cols.len()) as f64);
+                let colour = match tone {
+                    Tone::Good => RGBColor(150, 215, 150),
+                    Tone::Refused => RGBColor(245, 200, 110),
+                    Tone::Bad => RGBColor(235, 110, 100),
+                };
+                Rectangle::new(
+                    [(c + 0.03, r + 0.03), (c + 0.97, r + 0.97)],
+                    colour.filled(),
+                )
+            }))?;
+            chart.draw_series(p.cells.iter().enumerate().map(|(k, (_, text))| {
+                let (c, r) = ((k % p.cols.len()) as f64, (k / p.cols.len()) as f64);
+                Text::new(text.clone(), (c + 0.5, r + 0.5), centred(12))
+            }))?;
+            chart.draw_series(
+                p.cols
+                    .iter()
+                    .enumerate()
+                    .map(|(c, l)| Text::new(l.clone(), (c as f64 + 0.5, -0.25), centred(13))),
+            )?;
+            chart.draw_series(std::iter::once(Text::new(
+                x_label.to_string(),
+                (nc / 2.0, -0.7),
+                centred(14),
+            )))?;
+            chart.draw_series(
+                p.rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, l)| Text::new(l.clone(), (-0.45, r as f64 + 0.5), centred(13))),
+            )?;
+            chart.draw_series(std::iter::once(Text::new(
+                y_label.to_string(),
+                (-1.0, nr + 0.0 - 0.15),
+                centred(13),
+            )))?;
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| format!("{}: {e}", path.display()))
+}

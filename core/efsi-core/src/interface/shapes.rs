@@ -433,11 +433,71 @@ pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
     }
 }
 
+/// The width of `shape` on `grid` as the hydraulic diameter `4A/P` of its section (x–y, or
+/// r–z): `A = Σ φ dx dy`, `P = Σ |∇φ| dx dy` with φ the cell fractions and central differences
+/// (a boundary of the domain — a wall the solid touches, the axis — is not counted as
+/// perimeter). `2R` for a disk, ≈ `2w` for a long strip of width `w`. `None` if the shape has
+/// no interface on the grid (empty, or filling the domain).
+pub fn section_width(grid: &Grid, shape: &Shape) -> Option<f64> {
+    let mut phi = Field::zeros(grid);
+    fill_fraction(grid, shape, &mut phi);
+    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+    let at = |i: isize, j: isize| phi[(i.clamp(0, nx - 1), j.clamp(0, ny - 1))];
+    let (mut area, mut perimeter) = (0.0, 0.0);
+    for j in 0..ny {
+        for i in 0..nx {
+            area += phi[(i, j)];
+            let gx = (at(i + 1, j) - at(i - 1, j)) / (2.0 * grid.dx);
+            let gy = (at(i, j + 1) - at(i, j - 1)) / (2.0 * grid.dy);
+            perimeter += gx.hypot(gy);
+        }
+    }
+    (perimeter > 0.0).then(|| 4.0 * area / perimeter)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::Geometry;
     use std::f64::consts::PI;
+
+    #[test]
+    fn section_width_is_the_diameter_of_a_disk_and_twice_a_strip() {
+        for (n, cells) in [(64, 3.0), (64, 4.0), (64, 16.0), (128, 40.0)] {
+            let grid = Grid::new(Geometry::Planar, n, n, (0.0, 1.0), (0.0, 1.0));
+            let h = 1.0 / n as f64;
+            let d = cells * h;
+            let s = Shape::Disk {
+                center: (0.5 + 0.3 * h, 0.5 - 0.2 * h),
+                radius: d / 2.0,
+            };
+            let w = section_width(&grid, &s).unwrap();
+            assert!((w / d - 1.0).abs() < 0.08, "{cells} cells: width {}", w / h);
+            let axi = Grid::new(Geometry::Axisymmetric, n / 2, n, (0.0, 0.5), (0.0, 1.0));
+            let s = Shape::Disk {
+                center: (0.0, 0.5 - 0.2 * h),
+                radius: d / 2.0,
+            };
+            let w = section_width(&axi, &s).unwrap();
+            assert!(
+                (w / d - 1.0).abs() < 0.1,
+                "axisymmetric {cells} cells: width {}",
+                w / h
+            );
+        }
+        let grid = Grid::new(Geometry::Planar, 64, 64, (0.0, 1.0), (0.0, 1.0));
+        let strip = Shape::Rectangle {
+            min: (-1.0, 0.4),
+            max: (2.0, 0.5),
+        };
+        let w = section_width(&grid, &strip).unwrap();
+        assert!((w / 0.2 - 1.0).abs() < 1e-9, "strip: {w}");
+        let all = Shape::HalfPlane {
+            normal: (0.0, 1.0),
+            offset: 5.0,
+        };
+        assert_eq!(section_width(&grid, &all), None);
+    }
 
     fn total(grid: &Grid, phi: &Field) -> f64 {
         super::super::phase_volume(grid, phi)
