@@ -118,4 +118,24 @@ pub mod scenes {
     solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
     boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
     )"#;
+
+    /// The sphere impact of `cases/sphere_impact.ron` (35 cells per radius, 82 × 164, the
+    /// neo-Hookean plugin law) released 1.5 cells above the substrate: it touches down within a
+    /// few steps, so the elastic stage's solve, its block multigrid and the contact all run.
+    pub const SPHERE: &str = r#"Scene(
+    name: "sphere",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 0.045), z: (0.0, 0.09)),
+    grid: (nr: 82, nz: 164),
+    time: (end: 0.06, cfl: 0.4),
+    fluid: (density: 1.2, viscosity: 1.8e-5),
+    gravity: (0.0, -9.81),
+    solid: (
+        shape: Disk(center: (0.0, 0.0200), radius: 0.0192),
+        density: 1106.0,
+        velocity: (0.0, -1.22),
+        law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
+    ),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    )"#;
 }

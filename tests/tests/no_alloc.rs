@@ -1,11 +1,13 @@
 //! No heap allocation inside a time step after the first: a counting global allocator (this
 //! test binary only) around steps 2..k of a single-fluid cavity (advection, viscous,
-//! projection) and of a two-phase axisymmetric drop without a solid law (advection, body force,
-//! viscous, projection, VOF), at 128² so that the parallel (rayon) paths run, stepped inside a
+//! projection), of a two-phase axisymmetric drop without a solid law (advection, body force,
+//! viscous, projection, VOF), at 128² so that the parallel (rayon) paths run, and of the sphere
+//! impact touching down (all of those, and the elastic and deformation stages with the plugin
+//! law), stepped inside a
 //! two-thread and a one-thread pool (as `efsi run` does: called from outside a pool, rayon
 //! queues each job through its global injector, which allocates a block every 63 jobs).
 
-use efsi_tests::scenes::{CAVITY, DROP};
+use efsi_tests::scenes::{CAVITY, DROP, SPHERE};
 use efsi_tests::sim;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -70,6 +72,15 @@ fn no_allocation_after_the_first_step() {
         "numerics: (viscous: (preconditioner: Multigrid)),\n    boundaries:",
     );
     let two_phase = ["advection", "body_force", "viscous", "projection", "vof"];
+    let solid = [
+        "advection",
+        "body_force",
+        "viscous",
+        "elastic",
+        "projection",
+        "deformation",
+        "vof",
+    ];
     for (name, text, stages) in [
         (
             "cavity",
@@ -78,6 +89,7 @@ fn no_allocation_after_the_first_step() {
         ),
         ("drop", DROP, &two_phase[..]),
         ("drop-mg", &drop_mg, &two_phase[..]),
+        ("sphere", SPHERE, &solid[..]),
     ] {
         assert_eq!(sim(text).pipeline().stage_names(), stages);
         let count = |threads| {

@@ -1,9 +1,10 @@
 //! Parallel stages give the same bits on one and on two threads: a few steps of the Re = 1000
 //! cavity and of the axisymmetric two-phase drop at 128² (large enough for the parallel paths),
-//! (also with the block-multigrid viscous preconditioner), each in a one-thread and a
-//! two-thread rayon pool, compared field by field.
+//! (also with the block-multigrid viscous preconditioner), and of the sphere impact at 35 cells
+//! per radius touching down (the elastic stage, with its block-multigrid and its Jacobi
+//! preconditioner), each in a one-thread and a two-thread rayon pool, compared field by field.
 
-use efsi_tests::scenes::{CAVITY, DROP};
+use efsi_tests::scenes::{CAVITY, DROP, SPHERE};
 use efsi_tests::sim;
 
 /// The raw bits of u, v, p, ρ after `steps` steps on a pool of `threads`.
@@ -18,7 +19,11 @@ fn run(text: &str, threads: usize, steps: usize) -> Vec<Vec<u64>> {
                 let dt = s.next_dt(1.0).unwrap();
                 s.step(dt).unwrap();
             }
-            [&s.state.u, &s.state.v, &s.state.p, &s.state.rho]
+            let mut fields = vec![&s.state.u, &s.state.v, &s.state.p, &s.state.rho];
+            if let Some(d) = &s.state.deformation {
+                fields.extend(&d.b);
+            }
+            fields
                 .iter()
                 .map(|f| f.data().iter().map(|x| x.to_bits()).collect())
                 .collect()
@@ -32,9 +37,21 @@ fn one_and_two_threads_give_bit_identical_steps() {
         "boundaries:",
         "numerics: (viscous: (preconditioner: Multigrid)),\n    boundaries:",
     );
-    for (name, text) in [("cavity", CAVITY), ("drop", DROP), ("drop-mg", &drop_mg)] {
+    let sphere_jacobi = SPHERE.replace(
+        "boundaries:",
+        "numerics: (elastic: (preconditioner: Jacobi)),\n    boundaries:",
+    );
+    for (name, text) in [
+        ("cavity", CAVITY),
+        ("drop", DROP),
+        ("drop-mg", &drop_mg),
+        ("sphere", SPHERE),
+        ("sphere-jacobi", &sphere_jacobi),
+    ] {
         let (a, b) = (run(text, 1, 8), run(text, 2, 8));
-        for (k, field) in ["u", "v", "p", "rho"].iter().enumerate() {
+        let names = ["u", "v", "p", "rho", "B11", "B22", "B33", "B12"];
+        assert_eq!(a.len(), if name.starts_with("sphere") { 8 } else { 4 });
+        for (k, field) in names.iter().take(a.len()).enumerate() {
             let differ = a[k].iter().zip(&b[k]).filter(|(x, y)| x != y).count();
             assert_eq!(differ, 0, "{name}: {field} differs in {differ} entries");
         }

@@ -10,8 +10,10 @@
 //! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]`: the
 //!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
 //!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
-//!   multigrid viscous one; default
-//!   `cavity128,cavity256,drop128,drop256`), each on one thread and on N (default all), for ns
+//!   multigrid viscous one) and the sphere impact at 35 cells per radius (case `sphere`, the
+//!   whole run of `cases/sphere_impact.ron`; `-ej` for the Jacobi-preconditioned elastic step;
+//!   default `cavity128,cavity256,drop128,drop256,sphere`), each on one thread and on N
+//!   (default all), for ns
 //!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
 //!   medians of R runs, written to `DIR/bench.json` (default `target/bench`). A benchmark, not
 //!   a test: timings are never asserted.
@@ -190,7 +192,9 @@ fn test() -> Result<(), String> {
 /// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`
 /// (axisymmetric drop, ρ 1 in 1e-3, μ 1e-2 in 2e-4, g = 1, box 4 × 4, N², t ∈ [0, 1],
 /// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner and/or `-vmg`
-/// for the block-multigrid viscous preconditioner.
+/// for the block-multigrid viscous preconditioner; or `sphere`, the sphere impact of
+/// `cases/sphere_impact.ron` (35 cells per radius, 82 × 164, the whole run; `--quick` until
+/// t = 0.03), suffix `-ej` for the Jacobi-preconditioned elastic step.
 struct Case {
     name: String,
     scene: String,
@@ -209,8 +213,40 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
         Some(b) => (b, "IncompleteCholesky"),
         None => (rest, "Multigrid"),
     };
-    let bad =
-        || format!("unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg");
+    let bad = || {
+        format!(
+            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
+             optionally -ej"
+        )
+    };
+    if let Some(rest) = name.strip_prefix("sphere") {
+        // The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until
+        // t = 0.03, just after first contact. Suffix -ej: Jacobi-preconditioned elastic step.
+        let elastic = match rest {
+            "" => "Multigrid",
+            "-ej" => "Jacobi",
+            _ => return Err(bad()),
+        };
+        let path = root().join("cases/sphere_impact.ron");
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut scene = text.replace(
+            "numerics: (elastic: (",
+            &format!("numerics: (elastic: (preconditioner: {elastic}, "),
+        );
+        if quick {
+            scene = scene.replace("end: 0.06,", "end: 0.03,");
+        }
+        if !scene.contains("preconditioner") || (quick && !scene.contains("end: 0.03,")) {
+            return Err(format!("{}: not the expected scene layout", path.display()));
+        }
+        return Ok(Case {
+            name: name.to_string(),
+            scene,
+            drop: false,
+            cells: 82 * 164,
+        });
+    }
     let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
         (false, n.parse::<usize>().map_err(|_| bad())?)
     } else if let Some(n) = base.strip_prefix("drop") {
@@ -377,7 +413,7 @@ fn bench(args: &[String]) -> Result<(), String> {
         if quick {
             "cavity128,drop128".into()
         } else {
-            "cavity128,cavity256,drop128,drop256".into()
+            "cavity128,cavity256,drop128,drop256,sphere".into()
         }
     });
     let cases = names
@@ -438,12 +474,13 @@ fn bench(args: &[String]) -> Result<(), String> {
                 })
                 .unwrap_or_default();
             println!(
-                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}",
+                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s",
                 c.name,
                 t,
                 f.steps,
                 f.total,
-                base / f.total
+                base / f.total,
+                f.wall
             );
             json.push(serde_json::json!({
                 "case": c.name,

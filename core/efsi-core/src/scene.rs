@@ -454,6 +454,9 @@ pub struct ElasticParams {
     /// Iteration cap (default 5000).
     #[serde(default = "default_elastic_iter")]
     pub max_iterations: usize,
+    /// Preconditioner of BiCGSTAB (default `Multigrid`).
+    #[serde(default)]
+    pub preconditioner: ElasticPreconditioner,
     /// The largest elastic-wave Courant number `Δt·c/h` a step may take (default and largest
     /// allowed: [`MAX_WAVE_COURANT`]), `c = √(G₀/ρ_s)` the solid's shear-wave speed at rest
     /// (`G₀` the law's stiffness at `B̃ = I`) and `h` the smaller cell side. The elastic step
@@ -477,9 +480,22 @@ impl Default for ElasticParams {
             implicit: true,
             tolerance: default_elastic_tol(),
             max_iterations: default_elastic_iter(),
+            preconditioner: ElasticPreconditioner::default(),
             wave_courant: default_wave_courant(),
         }
     }
+}
+
+/// Preconditioner of the elastic step's BiCGSTAB.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ElasticPreconditioner {
+    /// The diagonal: cheapest per iteration; iterations grow like the elastic wave's Courant
+    /// number `Δt √(G/ρ) / h`.
+    Jacobi,
+    /// Multigrid V-cycles on the u–u and v–v blocks of an SPD approximation of the system, the
+    /// viscous operator with an effective viscosity `θΔt μ + (Δt/2) G_eff` (the default).
+    #[default]
+    Multigrid,
 }
 
 fn default_wave_courant() -> f64 {

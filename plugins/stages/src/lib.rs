@@ -5,10 +5,12 @@
 //! those a scene needs.
 
 pub mod advection;
+mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
 pub mod projection;
 pub mod viscous;
+mod viscous_stencil;
 pub mod vof;
 
 use efsi_core::StagePlugin;

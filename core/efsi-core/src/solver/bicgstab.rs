@@ -4,7 +4,11 @@
 //! The elastic system `M δ − (Δt²/4) ∇·(J : H(δ))` is not symmetric for a general law (its
 //! tangent `J = ∂τ/∂B̃` need not be the second derivative of an energy in the displacement
 //! gradient), so conjugate gradients do not apply. Workspace is allocated once.
+//!
+//! Vector updates run in parallel and dot products sum fixed chunks in order
+//! ([`super::par`]), so the iterates do not depend on the number of threads.
 
+use super::par::{dot, for_each_mut};
 use super::pcg::{LinearOperator, Preconditioner, SolveStats};
 
 /// Reusable BiCGSTAB workspace for systems of one size.
@@ -18,10 +22,6 @@ pub struct BiCgStab {
     t: Vec<f64>,
     ph: Vec<f64>,
     sh: Vec<f64>,
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 impl BiCgStab {
@@ -50,7 +50,6 @@ impl BiCgStab {
         tol: f64,
         max_iter: usize,
     ) -> SolveStats {
-        let n = b.len();
         let BiCgStab {
             r,
             r0,
@@ -62,9 +61,7 @@ impl BiCgStab {
             sh,
         } = self;
         a.apply(x, t);
-        for k in 0..n {
-            r[k] = b[k] - t[k];
-        }
+        for_each_mut(r, |k, r| *r = b[k] - t[k]);
         let mut res = dot(r, r).sqrt();
         if res <= tol {
             return SolveStats {
@@ -88,20 +85,14 @@ impl BiCgStab {
             }
             let beta = (rho_new / rho) * (alpha / omega);
             rho = rho_new;
-            for k in 0..n {
-                p[k] = r[k] + beta * (p[k] - omega * v[k]);
-            }
+            for_each_mut(p, |k, p| *p = r[k] + beta * (*p - omega * v[k]));
             m.apply(p, ph);
             a.apply(ph, v);
             alpha = rho / dot(r0, v);
-            for k in 0..n {
-                s[k] = r[k] - alpha * v[k];
-            }
+            for_each_mut(s, |k, s| *s = r[k] - alpha * v[k]);
             let sn = dot(s, s).sqrt();
             if sn <= tol {
-                for k in 0..n {
-                    x[k] += alpha * ph[k];
-                }
+                for_each_mut(x, |k, x| *x += alpha * ph[k]);
                 return SolveStats {
                     iterations: it,
                     residual: sn,
@@ -112,10 +103,8 @@ impl BiCgStab {
             a.apply(sh, t);
             let tt = dot(t, t);
             omega = if tt > 0.0 { dot(t, s) / tt } else { 0.0 };
-            for k in 0..n {
-                x[k] += alpha * ph[k] + omega * sh[k];
-                r[k] = s[k] - omega * t[k];
-            }
+            for_each_mut(x, |k, x| *x += alpha * ph[k] + omega * sh[k]);
+            for_each_mut(r, |k, r| *r = s[k] - omega * t[k]);
             res = dot(r, r).sqrt();
             if res <= tol {
                 return SolveStats {
