@@ -653,6 +653,33 @@ impl Kernels {
         (j * (self.grid.nx as isize + 1) + i) as usize
     }
 
+    /// A law's error with the cell it names (an entry of the centre batch, or of the corner
+    /// batch if `corner`) turned into the grid's cell (or corner) index and position.
+    fn locate(&self, e: efsi_core::law::LawError, corner: bool) -> String {
+        let Some(q) = e.cell else {
+            return e.to_string();
+        };
+        let g = &self.grid;
+        let text = efsi_core::law::LawError { cell: None, ..e }.to_string();
+        if corner {
+            let w = g.nx + 1;
+            let (i, j) = ((q % w) as isize, (q / w) as isize);
+            format!(
+                "{text} at corner (i, j) = ({i}, {j}), (x, y) = ({:.6e}, {:.6e})",
+                g.xf(i),
+                g.yf(j)
+            )
+        } else {
+            let w = g.nx + 2;
+            let (i, j) = ((q % w) as isize - 1, (q / w) as isize - 1);
+            format!(
+                "{text} in cell (i, j) = ({i}, {j}), centre (x, y) = ({:.6e}, {:.6e})",
+                g.xc(i),
+                g.yc(j)
+            )
+        }
+    }
+
     /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`
     /// with ghosts filled.
     fn set_weights(&mut self, phi: &Field) {
@@ -752,7 +779,7 @@ impl Kernels {
             return Ok(());
         }
         law.evaluate(&self.kb, &mut self.kt, Some(&mut self.kj[..]))
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| self.locate(e, true))?;
         for j in 0..=ny {
             for i in 0..=nx {
                 let k = start[0].idx(i, j);
@@ -1113,9 +1140,9 @@ impl Kernels {
             }
         }
         law.evaluate(&self.cb, &mut self.ct, tangent.then_some(&mut self.cj[..]))
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| self.locate(e, false))?;
         law.evaluate(&self.kb, &mut self.kt, tangent.then_some(&mut self.kj[..]))
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| self.locate(e, true))?;
         // Subtract the stress of the stress-free state B = I (B̃ = w I): isotropic, so only a
         // change of pressure — but it jumps across the interface, and fed through the implicit
         // solve it would not stay a pure gradient (see "Stress-free reference" in the docs).

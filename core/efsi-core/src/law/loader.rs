@@ -248,6 +248,7 @@ impl LoadedLaw {
         LawError {
             law: self.info.name.clone(),
             message,
+            cell: None,
         }
     }
 }
@@ -300,6 +301,22 @@ impl ConstitutiveLaw for LoadedLaw {
         };
         if status != STATUS_OK {
             let text = err.text();
+            if status == STATUS_NON_FINITE {
+                // The SDK says "non-finite stress at cell k (…)": keep k as the batch index.
+                if let Some(at) = text.find(" at cell ") {
+                    let rest = &text[at + 9..];
+                    let digits = rest
+                        .find(|c: char| !c.is_ascii_digit())
+                        .unwrap_or(rest.len());
+                    if let Ok(k) = rest[..digits].parse() {
+                        let message = format!("{}{}", &text[..at], &rest[digits..]);
+                        return Err(LawError {
+                            cell: Some(k),
+                            ..self.error(message)
+                        });
+                    }
+                }
+            }
             return Err(self.error(match status {
                 STATUS_ERROR => format!("evaluate failed: {text}"),
                 STATUS_PANIC => format!("panicked in evaluate: {text}"),
@@ -315,12 +332,14 @@ impl ConstitutiveLaw for LoadedLaw {
             .and_then(|j| j.iter().position(|j| !j.iter().all(|x| x.is_finite())));
         match (bad_tau, bad_j) {
             (None, None) => Ok(()),
-            (Some(k), j) if j.is_none_or(|j| k <= j) => {
-                Err(self.error(format!("non-finite stress at cell {k} (B̃ = {:?})", b[k])))
-            }
-            (_, Some(k)) => {
-                Err(self.error(format!("non-finite tangent at cell {k} (B̃ = {:?})", b[k])))
-            }
+            (Some(k), j) if j.is_none_or(|j| k <= j) => Err(LawError {
+                cell: Some(k),
+                ..self.error(format!("non-finite stress (B̃ = {:?})", b[k]))
+            }),
+            (_, Some(k)) => Err(LawError {
+                cell: Some(k),
+                ..self.error(format!("non-finite tangent (B̃ = {:?})", b[k]))
+            }),
             (Some(_), None) => unreachable!("covered by the guard above"),
         }
     }
@@ -335,6 +354,7 @@ pub fn load_law(spec: &LawSpec, scene_dir: &Path) -> Result<LoadedLaw, LawError>
     let fail = |message: String| LawError {
         law: info.name.clone(),
         message,
+        cell: None,
     };
 
     let mut values: Vec<f64> = info.parameters.iter().map(|p| p.default).collect();
@@ -426,6 +446,7 @@ pub fn describe(path: &Path) -> Result<LawInfo, LawError> {
         return Err(LawError {
             law: label,
             message: format!("library not found: {}", path.display()),
+            cell: None,
         });
     }
     open(path, &label).map(|o| o.info)
@@ -520,6 +541,7 @@ pub fn resolve_law(name: &str, scene_dir: &Path) -> Result<PathBuf, LawError> {
     let fail = |message: String| LawError {
         law: name.to_string(),
         message,
+        cell: None,
     };
     if name.trim().is_empty() {
         return Err(fail("the law's name is empty".to_string()));
@@ -570,6 +592,7 @@ fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
     let fail = |law: &str, message: String| LawError {
         law: law.to_string(),
         message,
+        cell: None,
     };
     // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
     // (the user named it), and the checks below guard the ABI.
@@ -721,6 +744,7 @@ unsafe fn c_text(p: *const c_char, what: &str, law: &str, path: &Path) -> Result
         return Err(LawError {
             law: law.to_string(),
             message: format!("{}: the descriptor's {what} is null", path.display()),
+            cell: None,
         });
     }
     // SAFETY: by the caller's contract.
@@ -728,6 +752,7 @@ unsafe fn c_text(p: *const c_char, what: &str, law: &str, path: &Path) -> Result
     s.to_str().map(str::to_string).map_err(|_| LawError {
         law: law.to_string(),
         message: format!("{}: the descriptor's {what} is not UTF-8", path.display()),
+        cell: None,
     })
 }
 

@@ -42,11 +42,18 @@ pub struct LawError {
     pub law: String,
     /// What is wrong (the parameter, symbol or check that failed).
     pub message: String,
+    /// When an evaluation produced a non-finite value: the index in the batch of the first
+    /// such cell (the caller knows where that cell is on the grid).
+    pub cell: Option<usize>,
 }
 
 impl fmt::Display for LawError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "law `{}`: {}", self.law, self.message)
+        write!(f, "law `{}`: {}", self.law, self.message)?;
+        if let Some(k) = self.cell {
+            write!(f, " at entry {k} of the batch")?;
+        }
+        Ok(())
     }
 }
 
