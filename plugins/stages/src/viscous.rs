@@ -34,7 +34,9 @@ use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::solver::par::{dot, for_each_row, for_each_row2};
-use efsi_core::solver::{LinearOperator, Multigrid, Pcg, Preconditioner, SolveStats, Stencil5};
+use efsi_core::solver::{
+    LinearOperator, Multigrid, Norm, Pcg, Preconditioner, SolveStats, Stencil5,
+};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -616,27 +618,26 @@ impl Stage for ViscousStage {
                     ratio > AUTO_MULTIGRID_RATIO
                 }
             };
-            let measure = |r: &[f64]| dot(r, r).sqrt();
             let st = if use_mg {
                 self.blocks.setup(g, op, &state.mu, &self.diag);
-                self.pcg.solve(
+                self.pcg.solve_norm(
                     op,
                     &self.blocks,
                     rhs,
                     &mut self.delta,
                     tol,
                     self.max_iter,
-                    measure,
+                    Norm::L2,
                 )
             } else {
-                self.pcg.solve(
+                self.pcg.solve_norm(
                     op,
                     self.diag.as_slice(),
                     rhs,
                     &mut self.delta,
                     tol,
                     self.max_iter,
-                    measure,
+                    Norm::L2,
                 )
             };
             if !st.converged {
