@@ -23,6 +23,21 @@
 //! needs at twice the cost each). Jacobi keeps a flow uniform along a periodic direction
 //! exactly uniform; the red–black smoother does so only to the solver tolerance.
 //!
+//! **Initial guess.** `δ/Δt` of the last two steps extrapolated linearly to this one, times
+//! `Δt` (zero in the first step): the stopping rule is unchanged (residual ≤ tolerance ×
+//! ‖right-hand side‖), only fewer iterations reach it — measured 11 → 7.3 per step on the
+//! Re = 1000 cavity at 128², 37.7 → 27.2 on the drop at 128². The history is stage state, kept
+//! in snapshots and checkpoints ([`Stage::save`]), so a resumed run continues bit for bit. A
+//! run that stops at a steady state (`time.steady`) starts every solve from zero: its test
+//! compares successive steps to a tolerance far below the solver's, which only a map without
+//! history reaches (the same inputs give the same bits; with the history the last bits keep
+//! wandering within the solver tolerance, and the Poiseuille tests never became steady).
+//!
+//! **Cost.** The operator is applied from coefficients assembled once per step (see
+//! `ViscousOperator`) in one vectorised pass per component, and conjugate gradient fuses its
+//! vector updates with the residual norm and the Jacobi quotient with its dot product
+//! ([`efsi_core::solver::Pcg::solve_norm`]).
+//!
 //! **Parallelism.** The operator (scatter, stress divergence, gather) runs over rows in
 //! parallel and CG's reductions have a fixed order: bit-identical on any number of threads. `K(V*)`
 //! uses the θ-weighted boundary data `θ bⁿ⁺¹ + (1−θ) bⁿ` (K is affine in b, so this is exactly
@@ -33,7 +48,7 @@
 use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::{dot, for_each_row, for_each_row2};
+use efsi_core::solver::par::{self, dot, for_each_row, for_each_row2};
 use efsi_core::solver::{
     LinearOperator, Multigrid, Norm, Pcg, Preconditioner, SolveStats, Stencil5,
 };
@@ -103,6 +118,12 @@ impl StagePlugin for Viscous {
             rhs: vec![0.0; n],
             delta: vec![0.0; n],
             diag: vec![0.0; n],
+            warm: WarmStart {
+                enabled: scene.time.steady.is_none(),
+                prev: [vec![0.0; n], vec![0.0; n]],
+                prev_dt: [0.0; 2],
+                history: 0,
+            },
             blocks: BlockMultigrid::new(grid, bc),
         }))
     }
@@ -119,6 +140,17 @@ struct ViscousStage {
     delta: Vec<f64>,
     diag: Vec<f64>,
     blocks: BlockMultigrid,
+    warm: WarmStart,
+}
+
+/// The increments `δ` of the last two steps (newest first) and their `Δt`, for the initial
+/// guess; `history` counts the valid ones (0–2).
+struct WarmStart {
+    /// Off in a run that stops at a steady state (module docs).
+    enabled: bool,
+    prev: [Vec<f64>; 2],
+    prev_dt: [f64; 2],
+    history: usize,
 }
 
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
@@ -574,7 +606,91 @@ impl LinearOperator for ViscousOperator {
     }
 }
 
+impl WarmStart {
+    /// The initial guess of `δ`: `δ/Δt` extrapolated linearly in time from the last two steps
+    /// (from the last one alone after one step; zero at first), times this step's `Δt`.
+    fn guess(&self, dt: f64, delta: &mut [f64]) {
+        let [d1, d2] = self.prev_dt;
+        let (c1, c2) = match if self.enabled { self.history } else { 0 } {
+            0 => (0.0, 0.0),
+            1 => (dt / d1, 0.0),
+            _ => {
+                let w = (dt + d1) / (d1 + d2);
+                (dt / d1 * (1.0 + w), -dt / d2 * w)
+            }
+        };
+        let [p1, p2] = &self.prev;
+        par::for_each_chunk(delta, |o, d| {
+            let n = d.len();
+            let (p1, p2) = (&p1[o..o + n], &p2[o..o + n]);
+            for ((d, a), b) in d.iter_mut().zip(p1).zip(p2) {
+                *d = c1 * a + c2 * b;
+            }
+        });
+    }
+
+    /// Keep this step's `δ` (in `delta`) and `Δt` for the next initial guess.
+    fn remember(&mut self, dt: f64, delta: &mut Vec<f64>) {
+        if !self.enabled {
+            return;
+        }
+        let [p1, p2] = &mut self.prev;
+        std::mem::swap(p1, p2);
+        std::mem::swap(p1, delta);
+        self.prev_dt = [dt, self.prev_dt[0]];
+        self.history = (self.history + 1).min(2);
+    }
+}
+
 impl Stage for ViscousStage {
+    /// Forget the warm start's history (a new run starts from zero).
+    fn initialize(
+        &mut self,
+        _grid: &Grid,
+        _bc: &BoundarySet,
+        _state: &mut State,
+    ) -> Result<(), StageError> {
+        self.warm.history = 0;
+        Ok(())
+    }
+
+    /// The warm start's history: `[count, Δt₁, Δt₂]`, then the `count` last increments
+    /// (newest first), so that a restored run continues bit for bit.
+    fn save(&self) -> Vec<f64> {
+        let w = &self.warm;
+        let mut v = Vec::with_capacity(3 + w.history * self.delta.len());
+        v.extend_from_slice(&[w.history as f64, w.prev_dt[0], w.prev_dt[1]]);
+        for p in &w.prev[..w.history] {
+            v.extend_from_slice(p);
+        }
+        v
+    }
+
+    /// Nothing (a snapshot without a history: the next solve starts from zero), or what
+    /// [`save`](Stage::save) wrote.
+    fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        let n = self.delta.len();
+        let w = &mut self.warm;
+        if data.is_empty() {
+            w.history = 0;
+            return Ok(());
+        }
+        let count = data[0] as usize;
+        if data.len() < 3 || count > 2 || data.len() != 3 + count * n {
+            return Err(format!(
+                "expected the viscous warm start ([count ≤ 2, Δt₁, Δt₂] and count × {n} values), \
+                 got {} values",
+                data.len()
+            ));
+        }
+        w.history = count;
+        w.prev_dt = [data[1], data[2]];
+        for (k, p) in w.prev[..count].iter_mut().enumerate() {
+            p.copy_from_slice(&data[3 + k * n..3 + (k + 1) * n]);
+        }
+        Ok(())
+    }
+
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let g = ctx.grid;
         let op = &mut self.op;
@@ -597,13 +713,15 @@ impl Stage for ViscousStage {
         });
         let bnorm = dot(rhs, rhs).sqrt();
         let stats = if bnorm == 0.0 {
+            self.delta.fill(0.0);
+            self.warm.remember(ctx.dt, &mut self.delta);
             SolveStats {
                 iterations: 0,
                 residual: 0.0,
                 converged: true,
             }
         } else {
-            self.delta.fill(0.0);
+            self.warm.guess(ctx.dt, &mut self.delta);
             let tol = self.tol * bnorm;
             let use_mg = match self.preconditioner {
                 ViscousPreconditioner::Jacobi => false,
@@ -653,6 +771,7 @@ impl Stage for ViscousStage {
                 });
             }
             add_compact(&op.faces, &self.delta, &mut state.u, &mut state.v);
+            self.warm.remember(ctx.dt, &mut self.delta);
             SolveStats {
                 residual: st.residual / bnorm,
                 ..st
