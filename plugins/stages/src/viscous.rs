@@ -48,7 +48,7 @@
 use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::{self, dot, for_each_row, for_each_row2};
+use efsi_core::solver::par::{self, dot, for_each_row, for_each_row2, for_each_row_sum};
 use efsi_core::solver::{
     LinearOperator, Multigrid, Norm, Pcg, Preconditioner, SolveStats, Stencil5,
 };
@@ -360,8 +360,9 @@ impl ViscousOperator {
 
     /// `y = d∘x − θΔt K_h^{stencil}(u, v)` on the unknown faces, with `u`, `v` the fields (ghosts
     /// filled) and `x` their compact vector of unknowns, or the fields' own values when `None`
-    /// (rows in parallel; each row writes its own entries).
-    fn stencil(&self, u: &Field, v: &Field, d: &[f64], x: Option<&[f64]>, y: &mut [f64]) {
+    /// (rows in parallel; each row writes its own entries). Returns `x·y`, summed by rows in
+    /// order (the same on any number of threads).
+    fn stencil(&self, u: &Field, v: &Field, d: &[f64], x: Option<&[f64]>, y: &mut [f64]) -> f64 {
         let g = &self.grid;
         let (alpha, beta) = (g.dx / g.dy, g.dy / g.dx);
         let s = u.stride();
@@ -380,8 +381,9 @@ impl ViscousOperator {
             }
             None => (None, None),
         };
+        let mut xy = 0.0;
         if nur > 0 {
-            for_each_row(yu, nur, |j, yr| {
+            xy = for_each_row_sum(yu, nur, |j, yr| {
                 let n = yr.len();
                 let k0 = u.idx(ux.lo, j as isize);
                 let q0 = j * nur;
@@ -406,9 +408,11 @@ impl ViscousOperator {
                     let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
                     yr[c] = dr[c] * xr[c] - k;
                 }
+                let yr = &*yr;
+                par::sum4(n, |c| xr[c] * yr[c])
             });
         }
-        for_each_row(yv, nx, |jr, yr| {
+        xy + for_each_row_sum(yv, nx, |jr, yr| {
             let n = yr.len();
             let k0 = v.idx(0, vy.lo + jr as isize);
             let q0 = jr * nx;
@@ -433,7 +437,9 @@ impl ViscousOperator {
                 let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
                 yr[c] = dr[c] * xr[c] - k;
             }
-        });
+            let yr = &*yr;
+            par::sum4(n, |c| xr[c] * yr[c])
+        })
     }
 }
 
@@ -595,14 +601,20 @@ fn add_compact(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
 
 impl LinearOperator for ViscousOperator {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+        self.apply_dot(x, y);
+    }
+
+    /// The product `x·y` comes from the stencil's own pass.
+    fn apply_dot(&mut self, x: &[f64], y: &mut [f64]) -> f64 {
         let mut xu = std::mem::take(&mut self.xu);
         let mut xv = std::mem::take(&mut self.xv);
         scatter(&self.faces, x, &mut xu, &mut xv);
         self.bc
             .fill_velocity(&self.grid, &mut xu, &mut xv, 0.0, true);
-        self.stencil(&xu, &xv, &self.dm, Some(x), y);
+        let xy = self.stencil(&xu, &xv, &self.dm, Some(x), y);
         self.xu = xu;
         self.xv = xv;
+        xy
     }
 }
 

@@ -193,6 +193,41 @@ pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64])
     }
 }
 
+/// Run `f(j, row) -> partial` over the rows (`row_len` long) of `y`, in parallel when `y` is
+/// long, and return the partials summed in row order (the same bits on any number of
+/// threads): a row loop that also reduces over what it writes, in one pass.
+pub fn for_each_row_sum(
+    y: &mut [f64],
+    row_len: usize,
+    f: impl Fn(usize, &mut [f64]) -> f64 + Sync + Send,
+) -> f64 {
+    if row_len == 0 {
+        return 0.0;
+    }
+    if y.len() < PAR_MIN {
+        return y
+            .chunks_mut(row_len)
+            .enumerate()
+            .fold(0.0, |s, (j, r)| s + f(j, r));
+    }
+    let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+    let mut acc = 0.0;
+    for (b, block) in y.chunks_mut(row_len * MAX_PARTS).enumerate() {
+        let n = block.len().div_ceil(row_len);
+        let mut parts = [0.0f64; MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(block.par_chunks_mut(row_len))
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (p, r))| *p = f(b * MAX_PARTS + j, r));
+        for p in &parts[..n] {
+            acc += p;
+        }
+    }
+    acc
+}
+
 /// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
 /// parallel when they are long.
 pub fn for_each_row2(
