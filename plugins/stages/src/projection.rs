@@ -221,9 +221,10 @@ impl Stage for ProjectionStage {
         let norm = Norm::MaxWeighted(&self.weight);
         let (a, b, x) = (&mut self.a, &self.b, &mut self.x);
         let st = match &self.precond {
-            Precond::Multigrid(mg) => self
-                .pcg
-                .solve_norm(a, mg, b, x, self.tol, self.max_iter, norm),
+            Precond::Multigrid(mg) => {
+                self.pcg
+                    .solve_norm(a, mg, b, x, self.tol, self.max_iter, norm)
+            }
             Precond::IncompleteCholesky(ic) => {
                 self.pcg
                     .solve_norm(a, ic, b, x, self.tol, self.max_iter, norm)

@@ -20,7 +20,8 @@
 //! ([`efsi_core::solver::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
 //! default, `Multigrid`, or `Auto`, multigrid once the diffusion number makes Jacobi's
 //! iteration count, ~10√(max diag/mass), exceed the ~16 iterations the block preconditioner
-//! needs at twice the cost each). Jacobi keeps a flow uniform along a periodic direction
+//! needs at ≈ 4× the cost each — measured on the drop at 256²: 7.7 against 32 ns per cell and
+//! iteration). Jacobi keeps a flow uniform along a periodic direction
 //! exactly uniform; the red–black smoother does so only to the solver tolerance.
 //!
 //! **Initial guess.** `δ/Δt` of the last two steps extrapolated linearly to this one, times
@@ -48,7 +49,7 @@
 use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::{self, dot, for_each_row, for_each_row2, for_each_row_sum};
+use efsi_core::solver::par::{self, dot, for_each_row, for_each_row_sum, for_each_row2};
 use efsi_core::solver::{
     LinearOperator, Multigrid, Norm, Pcg, Preconditioner, SolveStats, Stencil5,
 };
@@ -154,7 +155,7 @@ struct WarmStart {
 }
 
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
-const AUTO_MULTIGRID_RATIO: f64 = 12.0;
+const AUTO_MULTIGRID_RATIO: f64 = 40.0;
 
 /// Preconditioner: multigrid on the two diagonal blocks of `M − θΔt K` (u–u and v–v, each a
 /// five-point matrix on its faces), dropping the u–v coupling of the shear stress.
@@ -578,9 +579,8 @@ fn add_compact(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
     let nur = (ux.hi - ux.lo) as usize;
     let nx = v.stride() - 1 - 2 * efsi_core::GHOST;
     let nu = faces.nu();
-    if nur > 0 {
+    if let Some(ny) = nu.checked_div(nur) {
         let r0 = u.idx(-G, 0);
-        let ny = nu / nur;
         for_each_row(&mut u.data_mut()[r0..r0 + ny * s], s, |j, row| {
             let o = (G + ux.lo) as usize;
             for (a, b) in row[o..o + nur].iter_mut().zip(&x[j * nur..(j + 1) * nur]) {
@@ -740,8 +740,8 @@ impl Stage for ViscousStage {
                 ViscousPreconditioner::Multigrid => true,
                 ViscousPreconditioner::Auto => {
                     // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs
-                    // ~10√κ iterations at 1e-9, at half the block multigrid's cost per
-                    // iteration, which needs ~16: break-even near κ ≈ 11.
+                    // ~10√κ iterations at 1e-9, at a quarter of the block multigrid's cost
+                    // per iteration, which needs ~16: break-even near κ ≈ 40.
                     let ratio = self.diag.iter().zip(&op.mass).fold(0.0f64, |m, (d, ms)| {
                         if *ms > 0.0 { m.max(d / ms) } else { m }
                     });

@@ -250,11 +250,8 @@ impl Level {
         let (ce, cw) = (&self.ce[k0..k0 + n], &self.ce[k0 - 1..k0 - 1 + n]);
         let (cn, cs) = (&self.cn[k0..k0 + n], &self.cn[k0 - s..k0 - s + n]);
         for t in 0..n {
-            out[t] = b[t] - d[t] * xc[t]
-                + ce[t] * xe[t]
-                + cw[t] * xw[t]
-                + cn[t] * xn[t]
-                + cs[t] * xs[t];
+            out[t] =
+                b[t] - d[t] * xc[t] + ce[t] * xe[t] + cw[t] * xw[t] + cn[t] * xn[t] + cs[t] * xs[t];
         }
     }
 }

@@ -94,7 +94,10 @@ pub fn reduce_chunks2(
         let mut parts = [0.0f64; MAX_PARTS];
         parts[..n]
             .par_iter_mut()
-            .zip(a.par_chunks_mut(REDUCE_CHUNK).zip(b.par_chunks_mut(REDUCE_CHUNK)))
+            .zip(
+                a.par_chunks_mut(REDUCE_CHUNK)
+                    .zip(b.par_chunks_mut(REDUCE_CHUNK)),
+            )
             .enumerate()
             .for_each(|(c, (p, (x, y)))| *p = f(s * big + c * REDUCE_CHUNK, x, y));
         for p in &parts[..n] {

@@ -7,7 +7,11 @@
 //! recomputes the true residual with one extra product and continues if it is not met after all.
 //!
 //! Vector updates run in parallel and dot products sum fixed chunks in order
-//! ([`super::par`]), so the iterates do not depend on the number of threads.
+//! ([`super::par`]), so the iterates do not depend on the number of threads. The kernels are
+//! memory-bound, so passes are fused: the iterate and the residual are updated in one pass
+//! that also measures the residual (with a [`Norm`], [`Pcg::solve_norm`]), and operators and
+//! preconditioners may return their dot product from their own pass
+//! ([`LinearOperator::apply_dot`], [`Preconditioner::apply_dot`]; Jacobi does).
 
 /// A symmetric linear operator `y = A x` on vectors of a fixed length.
 pub trait LinearOperator {
