@@ -175,25 +175,36 @@ impl Level {
         // Update the cells of `colour` in row j, then refresh the row's periodic ghosts.
         let row = |colour: usize, j: usize| {
             let base = (j + 1) * s + 1;
-            let mut k = base + ((colour + j) & 1);
+            let o = base + ((colour + j) & 1);
             let end = base + nx;
-            while k < end {
-                // SAFETY: a row update writes only cells of `colour` in row j and reads their
-                // neighbours (the other colour) and row j's ghosts. The phases below never run
-                // two updates concurrently where one writes what the other touches: in phase 1
-                // a chunk updates the second colour only of rows whose neighbour rows are in
-                // the same chunk; in phase 2 only second-colour cells of distinct rows are
-                // written, reading first-colour cells nobody writes.
-                unsafe {
-                    let v = (b[k]
-                        + ce[k] * xs.get(k + 1)
-                        + ce[k - 1] * xs.get(k - 1)
-                        + cn[k] * xs.get(k + s)
-                        + cn[k - s] * xs.get(k - s))
-                        * dinv[k];
-                    xs.set(k, v);
+            if o < end {
+                // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
+                // exactly the length it touches, so that no index needs a bounds check.
+                let cnt = (end - o).div_ceil(2);
+                let len = 2 * cnt - 1;
+                let (b, dinv) = (&b[o..o + len], &dinv[o..o + len]);
+                let (ce, cw) = (&ce[o..o + len], &ce[o - 1..o - 1 + len]);
+                let (cn, cs) = (&cn[o..o + len], &cn[o - s..o - s + len]);
+                for m in 0..cnt {
+                    let t = 2 * m;
+                    let k = o + t;
+                    // SAFETY: a row update writes only cells of `colour` in row j and reads
+                    // their neighbours (the other colour) and row j's ghosts. The phases below
+                    // never run two updates concurrently where one writes what the other
+                    // touches: in phase 1 a chunk updates the second colour only of rows whose
+                    // neighbour rows are in the same chunk; in phase 2 only second-colour
+                    // cells of distinct rows are written, reading first-colour cells nobody
+                    // writes.
+                    unsafe {
+                        let v = (b[t]
+                            + ce[t] * xs.get(k + 1)
+                            + cw[t] * xs.get(k - 1)
+                            + cn[t] * xs.get(k + s)
+                            + cs[t] * xs.get(k - s))
+                            * dinv[t];
+                        xs.set(k, v);
+                    }
                 }
-                k += 2;
             }
             if px {
                 // SAFETY: row j's ghost cells are touched by row j's updates only.
