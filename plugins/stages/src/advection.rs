@@ -33,7 +33,7 @@
 //! its own faces, so results are bit-identical on any number of threads.
 
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::for_each_row2;
+use efsi_core::solver::par::{copy, for_each_row, for_each_row2, max_over_rows};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -132,16 +132,17 @@ fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
 }
 
-/// Largest stable Δt of the explicit convective term at Courant number `cfl`.
+/// Largest stable Δt of the explicit convective term at Courant number `cfl` (rows in
+/// parallel; a maximum, so the same on any thread count).
 pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> {
-    let mut rate = 0.0f64;
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
+    let rate = max_over_rows(grid.ny, grid.nx, 0.0, |j| {
+        let j = j as isize;
+        (0..grid.nx as isize).fold(0.0f64, |rate, i| {
             let uu = u[(i, j)].abs().max(u[(i + 1, j)].abs());
             let vv = v[(i, j)].abs().max(v[(i, j + 1)].abs());
-            rate = rate.max(uu / grid.dx + vv / grid.dy);
-        }
-    }
+            rate.max(uu / grid.dx + vv / grid.dy)
+        })
+    });
     (rate > 0.0).then(|| cfl / rate)
 }
 
@@ -283,22 +284,27 @@ impl AdvectionStage {
     }
 }
 
-/// Face masses (densities) from the cell densities, ghosts included.
-fn face_masses(grid: &Grid, rho: &Field, mu: &mut Field, mv: &mut Field) {
-    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-    let g = efsi_core::G;
-    for j in -g..ny + g {
-        for i in 1 - g..nx + 1 + g {
-            mu[(i, j)] = 0.5 * (rho[(i - 1, j)] + rho[(i, j)]);
+/// Face masses (densities) from the cell densities, ghosts included (rows in parallel): on
+/// u-faces every padded row but the last, columns 1.. and column 0 a copy of column 1; on
+/// v-faces every padded row from the second, row 0 a copy of row 1, all columns but the last.
+fn face_masses(rho: &Field, mu: &mut Field, mv: &mut Field) {
+    let s = rho.stride();
+    let rows = rho.rows();
+    let r = rho.data();
+    for_each_row(&mut mu.data_mut()[..(rows - 1) * s], s, |j, row| {
+        let rr = &r[j * s..(j + 1) * s];
+        for c in 1..s {
+            row[c] = 0.5 * (rr[c - 1] + rr[c]);
         }
-        mu[(-g, j)] = mu[(1 - g, j)];
-    }
-    for i in -g..nx + g {
-        for j in 1 - g..ny + 1 + g {
-            mv[(i, j)] = 0.5 * (rho[(i, j - 1)] + rho[(i, j)]);
+        row[0] = row[1];
+    });
+    for_each_row(mv.data_mut(), s, |j, row| {
+        let j = j.max(1);
+        let (lo, hi) = (&r[(j - 1) * s..j * s], &r[j * s..(j + 1) * s]);
+        for c in 0..s - 1 {
+            row[c] = 0.5 * (lo[c] + hi[c]);
         }
-        mv[(i, -g)] = mv[(i, 1 - g)];
-    }
+    });
 }
 
 impl Stage for AdvectionStage {
@@ -312,11 +318,11 @@ impl Stage for AdvectionStage {
         //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
         let dt = ctx.dt;
-        face_masses(g, &state.rho, &mut self.m0u, &mut self.m0v);
-        self.u0.copy_from(&state.u);
-        self.v0.copy_from(&state.v);
-        self.m1u.copy_from(&self.m0u);
-        self.m1v.copy_from(&self.m0v);
+        face_masses(&state.rho, &mut self.m0u, &mut self.m0v);
+        copy(self.u0.data_mut(), state.u.data());
+        copy(self.v0.data_mut(), state.v.data());
+        copy(self.m1u.data_mut(), self.m0u.data());
+        copy(self.m1v.data_mut(), self.m0v.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);

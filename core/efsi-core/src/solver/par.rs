@@ -258,6 +258,36 @@ pub fn for_each_row2(
     }
 }
 
+/// `max(init, max_j f(j))` for `j in 0..rows` (rows of `row_len` elements), in parallel when
+/// there is enough work; a maximum does not depend on the order, so neither on the number of
+/// threads.
+pub fn max_over_rows(
+    rows: usize,
+    row_len: usize,
+    init: f64,
+    f: impl Fn(usize) -> f64 + Sync + Send,
+) -> f64 {
+    if rows * row_len < PAR_MIN {
+        (0..rows).map(f).fold(init, f64::max)
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
+        (0..rows)
+            .into_par_iter()
+            .with_min_len(min_rows)
+            .map(f)
+            .reduce(|| init, f64::max)
+    }
+}
+
+/// `dst ← src` (equal lengths), in parallel chunks when long.
+pub fn copy(dst: &mut [f64], src: &[f64]) {
+    assert_eq!(dst.len(), src.len());
+    for_each_chunk(dst, |o, d| {
+        let n = d.len();
+        d.copy_from_slice(&src[o..o + n]);
+    });
+}
+
 /// Run `f(j)` for `j in 0..rows` (rows of `row_len` elements), in parallel when there is
 /// enough work. `f` must only touch data disjoint between rows.
 pub fn for_each_index(rows: usize, row_len: usize, f: impl Fn(usize) + Sync + Send) {
