@@ -588,7 +588,7 @@ impl Default for ViscousParams {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ViscousPreconditioner {
     /// Each step, `Multigrid` where the diffusion number makes Jacobi slow (the largest
-    /// diagonal-to-mass ratio of the system above 12), else `Jacobi`.
+    /// diagonal-to-mass ratio of the system above 40), else `Jacobi`.
     Auto,
     /// The diagonal (the default): cheapest per iteration; iterations grow like
     /// `√(1 + 8 μΔt/(ρh²))`. It keeps a flow that is uniform along a periodic direction
@@ -597,8 +597,8 @@ pub enum ViscousPreconditioner {
     #[default]
     Jacobi,
     /// Multigrid V-cycles on the u–u and v–v blocks (the u–v shear coupling left to CG):
-    /// ≈ 16 iterations whatever the grid and the diffusion number, at about twice Jacobi's
-    /// cost per iteration.
+    /// ≈ 16 iterations whatever the grid and the diffusion number, at about four times
+    /// Jacobi's cost per iteration.
     Multigrid,
 }
 

@@ -33,7 +33,7 @@
 //! its own faces, so results are bit-identical on any number of threads.
 
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::for_each_row2;
+use efsi_core::solver::par::{copy, for_each_row, for_each_row2, max_over_rows};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -75,6 +75,10 @@ impl StagePlugin for Advection {
             m0v: Field::zeros(grid),
             m1u: Field::zeros(grid),
             m1v: Field::zeros(grid),
+            fxm: Field::zeros(grid),
+            fxq: Field::zeros(grid),
+            fym: Field::zeros(grid),
+            fyq: Field::zeros(grid),
         }))
     }
 }
@@ -93,6 +97,11 @@ struct AdvectionStage {
     m0v: Field,
     m1u: Field,
     m1v: Field,
+    /// Mass and momentum fluxes through the control volumes' x- and y-faces (scratch).
+    fxm: Field,
+    fxq: Field,
+    fym: Field,
+    fyq: Field,
 }
 
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
@@ -109,16 +118,31 @@ pub(crate) fn face_value(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     c + 0.5 * psi * denom
 }
 
-/// Largest stable Δt of the explicit convective term at Courant number `cfl`.
+/// [`face_value`] in van Leer's harmonic form, one division instead of two and no branch on
+/// the data: with `p = q_C − q_U` and `q = q_D − q_C`, `½ψ(p/q)·q = pq/(p + q)` where
+/// `pq > 0`, else 0 — the same limiter, rounded differently.
+#[inline(always)]
+fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
+    let pos = a >= 0.0;
+    let up = if pos { cm } else { c2 };
+    let c = if pos { c0 } else { c1 };
+    let d = if pos { c1 } else { c0 };
+    let (p, q) = (c - up, d - c);
+    let pq = p * q;
+    c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
+}
+
+/// Largest stable Δt of the explicit convective term at Courant number `cfl` (rows in
+/// parallel; a maximum, so the same on any thread count).
 pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> {
-    let mut rate = 0.0f64;
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
+    let rate = max_over_rows(grid.ny, grid.nx, 0.0, |j| {
+        let j = j as isize;
+        (0..grid.nx as isize).fold(0.0f64, |rate, i| {
             let uu = u[(i, j)].abs().max(u[(i + 1, j)].abs());
             let vv = v[(i, j)].abs().max(v[(i, j + 1)].abs());
-            rate = rate.max(uu / grid.dx + vv / grid.dy);
-        }
-    }
+            rate.max(uu / grid.dx + vv / grid.dy)
+        })
+    });
     (rate > 0.0).then(|| cfl / rate)
 }
 
@@ -126,13 +150,15 @@ pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> 
 /// masses `m` and values `q` of the four control volumes along the flux direction.
 #[inline(always)]
 fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
-    let fm = a * face_value(a, m[0], m[1], m[2], m[3]);
-    (fm, fm * face_value(a, q[0], q[1], q[2], q[3]))
+    let fm = a * limited(a, m[0], m[1], m[2], m[3]);
+    (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
 }
 
 impl AdvectionStage {
     /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
-    /// (ghosts filled), on the unknown faces.
+    /// (ghosts filled), on the unknown faces. Each face flux of the control volumes is computed
+    /// once (into `fx*`, `fy*`, rows in parallel) and then differenced (rows in parallel): each
+    /// loop writes its own entries, so the result is bit-identical on any thread count.
     fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
         let g = ctx.grid;
         let m = &g.metric;
@@ -143,92 +169,142 @@ impl AdvectionStage {
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);
         let at = |d: &[f64], k: usize, o: usize| [d[k - 2 * o], d[k - o], d[k], d[k + o]];
-        // u control volumes, centred on x-faces: east/west faces at cell centres, north/south
-        // faces at corners (v averaged over the two columns).
-        // Rows in parallel: each writes its own entries (bit-identical on any thread count).
-        let r0 = u.idx(-efsi_core::G, 0);
+        let row0 = |j: isize| u.idx(-efsi_core::G, j);
+        // u control volumes, centred on x-faces: east/west faces at cell centres (the flux
+        // through the centre left of face k is stored at k), north/south faces at corners
+        // (v averaged over the two columns; the flux below face k stored at k).
+        let r0 = row0(0);
         let n = ny as usize * s;
+        for_each_row2(
+            &mut self.fxm.data_mut()[r0..r0 + n],
+            &mut self.fxq.data_mut()[r0..r0 + n],
+            s,
+            |jr, fm, fq| {
+                let k0 = r0 + jr * s;
+                for i in ux.lo..=ux.hi {
+                    let c = (i + efsi_core::G) as usize;
+                    let k = k0 + c;
+                    (fm[c], fq[c]) = flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1));
+                }
+            },
+        );
+        let n1 = (ny + 1) as usize * s;
+        for_each_row2(
+            &mut self.fym.data_mut()[r0..r0 + n1],
+            &mut self.fyq.data_mut()[r0..r0 + n1],
+            s,
+            |jr, fm, fq| {
+                let k0 = r0 + jr * s;
+                for i in ux.lo..ux.hi {
+                    let c = (i + efsi_core::G) as usize;
+                    let k = k0 + c;
+                    (fm[c], fq[c]) = flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s));
+                }
+            },
+        );
+        let (fxm, fxq, fym, fyq) = (
+            self.fxm.data(),
+            self.fxq.data(),
+            self.fym.data(),
+            self.fyq.data(),
+        );
         let (qu, muu) = (
             &mut self.qu.data_mut()[r0..r0 + n],
             &mut self.mu_.data_mut()[r0..r0 + n],
         );
         for_each_row2(qu, muu, s, |jr, qu, muu| {
-            let j = jr as isize;
+            let k0 = r0 + jr * s;
             for i in ux.lo..ux.hi {
-                let k = u.idx(i, j);
-                let c = k - r0 - jr * s;
+                let c = (i + efsi_core::G) as usize;
+                let k = k0 + c;
                 let r = m.rx(i);
                 if r == 0.0 {
                     qu[c] = 0.0;
                     muu[c] = 0.0;
                     continue;
                 }
-                let (fme, fqe) = flux(
-                    0.5 * (ud[k] + ud[k + 1]),
-                    at(mud, k + 1, 1),
-                    at(ud, k + 1, 1),
-                );
-                let (fmw, fqw) = flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1));
-                let (fmn, fqn) = flux(
-                    0.5 * (vd[k - 1 + s] + vd[k + s]),
-                    at(mud, k + s, s),
-                    at(ud, k + s, s),
-                );
-                let (fms, fqs) = flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s));
                 let (re, rw) = (m.rc(i), m.rc(i - 1));
-                qu[c] = -((re * fqe - rw * fqw) / (dx * r) + (fqn - fqs) / dy);
-                muu[c] = -((re * fme - rw * fmw) / (dx * r) + (fmn - fms) / dy);
+                qu[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
+                muu[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
             }
         });
         // v control volumes, centred on y-faces: east/west faces at corners (u averaged over
-        // the two columns), north/south faces at cell centres.
+        // the two rows; the flux left of face k stored at k), north/south faces at cell
+        // centres (the flux below face k stored at k).
         let rows = (vy.hi - vy.lo).max(0) as usize;
-        let r0 = v.idx(-efsi_core::G, vy.lo);
+        let r0 = row0(vy.lo);
+        let n = rows * s;
+        for_each_row2(
+            &mut self.fxm.data_mut()[r0..r0 + n],
+            &mut self.fxq.data_mut()[r0..r0 + n],
+            s,
+            |jr, fm, fq| {
+                let k0 = r0 + jr * s;
+                for i in 0..=nx {
+                    let c = (i + efsi_core::G) as usize;
+                    let k = k0 + c;
+                    (fm[c], fq[c]) = flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1));
+                }
+            },
+        );
+        let n1 = (rows + 1) * s;
+        for_each_row2(
+            &mut self.fym.data_mut()[r0..r0 + n1],
+            &mut self.fyq.data_mut()[r0..r0 + n1],
+            s,
+            |jr, fm, fq| {
+                let k0 = r0 + jr * s;
+                for i in 0..nx {
+                    let c = (i + efsi_core::G) as usize;
+                    let k = k0 + c;
+                    (fm[c], fq[c]) = flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s));
+                }
+            },
+        );
+        let (fxm, fxq, fym, fyq) = (
+            self.fxm.data(),
+            self.fxq.data(),
+            self.fym.data(),
+            self.fyq.data(),
+        );
         let (qv, mvv) = (
-            &mut self.qv.data_mut()[r0..r0 + rows * s],
-            &mut self.mv_.data_mut()[r0..r0 + rows * s],
+            &mut self.qv.data_mut()[r0..r0 + n],
+            &mut self.mv_.data_mut()[r0..r0 + n],
         );
         for_each_row2(qv, mvv, s, |jr, qv, mvv| {
-            let j = vy.lo + jr as isize;
+            let k0 = r0 + jr * s;
             for i in 0..nx {
-                let k = v.idx(i, j);
-                let c = k - r0 - jr * s;
-                let (fme, fqe) = flux(
-                    0.5 * (ud[k + 1 - s] + ud[k + 1]),
-                    at(mvd, k + 1, 1),
-                    at(vd, k + 1, 1),
-                );
-                let (fmw, fqw) = flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1));
-                let (fmn, fqn) = flux(
-                    0.5 * (vd[k] + vd[k + s]),
-                    at(mvd, k + s, s),
-                    at(vd, k + s, s),
-                );
-                let (fms, fqs) = flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s));
+                let c = (i + efsi_core::G) as usize;
+                let k = k0 + c;
                 let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
-                qv[c] = -((re * fqe - rw * fqw) / (dx * r) + (fqn - fqs) / dy);
-                mvv[c] = -((re * fme - rw * fmw) / (dx * r) + (fmn - fms) / dy);
+                qv[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
+                mvv[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
             }
         });
     }
 }
 
-/// Face masses (densities) from the cell densities, ghosts included.
-fn face_masses(grid: &Grid, rho: &Field, mu: &mut Field, mv: &mut Field) {
-    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-    let g = efsi_core::G;
-    for j in -g..ny + g {
-        for i in 1 - g..nx + 1 + g {
-            mu[(i, j)] = 0.5 * (rho[(i - 1, j)] + rho[(i, j)]);
+/// Face masses (densities) from the cell densities, ghosts included (rows in parallel): on
+/// u-faces every padded row but the last, columns 1.. and column 0 a copy of column 1; on
+/// v-faces every padded row from the second, row 0 a copy of row 1, all columns but the last.
+fn face_masses(rho: &Field, mu: &mut Field, mv: &mut Field) {
+    let s = rho.stride();
+    let rows = rho.rows();
+    let r = rho.data();
+    for_each_row(&mut mu.data_mut()[..(rows - 1) * s], s, |j, row| {
+        let rr = &r[j * s..(j + 1) * s];
+        for c in 1..s {
+            row[c] = 0.5 * (rr[c - 1] + rr[c]);
         }
-        mu[(-g, j)] = mu[(1 - g, j)];
-    }
-    for i in -g..nx + g {
-        for j in 1 - g..ny + 1 + g {
-            mv[(i, j)] = 0.5 * (rho[(i, j - 1)] + rho[(i, j)]);
+        row[0] = row[1];
+    });
+    for_each_row(mv.data_mut(), s, |j, row| {
+        let j = j.max(1);
+        let (lo, hi) = (&r[(j - 1) * s..j * s], &r[j * s..(j + 1) * s]);
+        for c in 0..s - 1 {
+            row[c] = 0.5 * (lo[c] + hi[c]);
         }
-        mv[(i, -g)] = mv[(i, 1 - g)];
-    }
+    });
 }
 
 impl Stage for AdvectionStage {
@@ -242,11 +318,11 @@ impl Stage for AdvectionStage {
         //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
         let dt = ctx.dt;
-        face_masses(g, &state.rho, &mut self.m0u, &mut self.m0v);
-        self.u0.copy_from(&state.u);
-        self.v0.copy_from(&state.v);
-        self.m1u.copy_from(&self.m0u);
-        self.m1v.copy_from(&self.m0v);
+        face_masses(&state.rho, &mut self.m0u, &mut self.m0v);
+        copy(self.u0.data_mut(), state.u.data());
+        copy(self.v0.data_mut(), state.v.data());
+        copy(self.m1u.data_mut(), self.m0u.data());
+        copy(self.m1v.data_mut(), self.m0v.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);

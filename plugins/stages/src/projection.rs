@@ -28,7 +28,7 @@
 
 use efsi_core::scene::{Boundary, PressureSolver, Side};
 use efsi_core::solver::par::{for_each_mut, for_each_row};
-use efsi_core::solver::{IncompleteCholesky, Multigrid, Pcg, Stencil5};
+use efsi_core::solver::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext, ops,
@@ -218,20 +218,16 @@ impl Stage for ProjectionStage {
             let mean = self.b.iter().sum::<f64>() / self.b.len() as f64;
             self.b.iter_mut().for_each(|b| *b -= mean);
         }
-        let w = &self.weight;
-        let measure = |r: &[f64]| {
-            r.iter()
-                .zip(w)
-                .fold(0.0f64, |m, (r, w)| m.max((r * w).abs()))
-        };
+        let norm = Norm::MaxWeighted(&self.weight);
         let (a, b, x) = (&mut self.a, &self.b, &mut self.x);
         let st = match &self.precond {
-            Precond::Multigrid(mg) => self
-                .pcg
-                .solve(a, mg, b, x, self.tol, self.max_iter, measure),
+            Precond::Multigrid(mg) => {
+                self.pcg
+                    .solve_norm(a, mg, b, x, self.tol, self.max_iter, norm)
+            }
             Precond::IncompleteCholesky(ic) => {
                 self.pcg
-                    .solve(a, ic, b, x, self.tol, self.max_iter, measure)
+                    .solve_norm(a, ic, b, x, self.tol, self.max_iter, norm)
             }
         };
         if !st.converged {

@@ -9,5 +9,5 @@ pub mod stencil5;
 
 pub use bicgstab::BiCgStab;
 pub use multigrid::Multigrid;
-pub use pcg::{LinearOperator, Pcg, Preconditioner, SolveStats};
+pub use pcg::{LinearOperator, Norm, Pcg, Preconditioner, SolveStats};
 pub use stencil5::{IncompleteCholesky, Stencil5};

@@ -175,25 +175,36 @@ impl Level {
         // Update the cells of `colour` in row j, then refresh the row's periodic ghosts.
         let row = |colour: usize, j: usize| {
             let base = (j + 1) * s + 1;
-            let mut k = base + ((colour + j) & 1);
+            let o = base + ((colour + j) & 1);
             let end = base + nx;
-            while k < end {
-                // SAFETY: a row update writes only cells of `colour` in row j and reads their
-                // neighbours (the other colour) and row j's ghosts. The phases below never run
-                // two updates concurrently where one writes what the other touches: in phase 1
-                // a chunk updates the second colour only of rows whose neighbour rows are in
-                // the same chunk; in phase 2 only second-colour cells of distinct rows are
-                // written, reading first-colour cells nobody writes.
-                unsafe {
-                    let v = (b[k]
-                        + ce[k] * xs.get(k + 1)
-                        + ce[k - 1] * xs.get(k - 1)
-                        + cn[k] * xs.get(k + s)
-                        + cn[k - s] * xs.get(k - s))
-                        * dinv[k];
-                    xs.set(k, v);
+            if o < end {
+                // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
+                // exactly the length it touches, so that no index needs a bounds check.
+                let cnt = (end - o).div_ceil(2);
+                let len = 2 * cnt - 1;
+                let (b, dinv) = (&b[o..o + len], &dinv[o..o + len]);
+                let (ce, cw) = (&ce[o..o + len], &ce[o - 1..o - 1 + len]);
+                let (cn, cs) = (&cn[o..o + len], &cn[o - s..o - s + len]);
+                for m in 0..cnt {
+                    let t = 2 * m;
+                    let k = o + t;
+                    // SAFETY: a row update writes only cells of `colour` in row j and reads
+                    // their neighbours (the other colour) and row j's ghosts. The phases below
+                    // never run two updates concurrently where one writes what the other
+                    // touches: in phase 1 a chunk updates the second colour only of rows whose
+                    // neighbour rows are in the same chunk; in phase 2 only second-colour
+                    // cells of distinct rows are written, reading first-colour cells nobody
+                    // writes.
+                    unsafe {
+                        let v = (b[t]
+                            + ce[t] * xs.get(k + 1)
+                            + cw[t] * xs.get(k - 1)
+                            + cn[t] * xs.get(k + s)
+                            + cs[t] * xs.get(k - s))
+                            * dinv[t];
+                        xs.set(k, v);
+                    }
                 }
-                k += 2;
             }
             if px {
                 // SAFETY: row j's ghost cells are touched by row j's updates only.
@@ -238,15 +249,21 @@ impl Level {
         par::for_each_index(chunks, chunk * nx, phase2);
     }
 
-    /// `r = b − A x` at padded index `k` (ghosts filled).
+    /// `out[t] = (b − A x)[k0 + t]` for a run of cells of one row (ghosts filled), over slices (it
+    /// vectorises).
     #[inline(always)]
-    fn residual_at(&self, k: usize) -> f64 {
-        let (x, s) = (&self.x, self.s);
-        self.b[k] - self.diag[k] * x[k]
-            + self.ce[k] * x[k + 1]
-            + self.ce[k - 1] * x[k - 1]
-            + self.cn[k] * x[k + s]
-            + self.cn[k - s] * x[k - s]
+    fn residual_run(&self, k0: usize, out: &mut [f64]) {
+        let (n, s) = (out.len(), self.s);
+        let x = &self.x[k0 - s..k0 + s + n];
+        let (xc, xe, xw) = (&x[s..s + n], &x[s + 1..s + 1 + n], &x[s - 1..s - 1 + n]);
+        let (xn, xs) = (&x[2 * s..2 * s + n], &x[..n]);
+        let (b, d) = (&self.b[k0..k0 + n], &self.diag[k0..k0 + n]);
+        let (ce, cw) = (&self.ce[k0..k0 + n], &self.ce[k0 - 1..k0 - 1 + n]);
+        let (cn, cs) = (&self.cn[k0..k0 + n], &self.cn[k0 - s..k0 - s + n]);
+        for t in 0..n {
+            out[t] =
+                b[t] - d[t] * xc[t] + ce[t] * xe[t] + cw[t] * xw[t] + cn[t] * xn[t] + cs[t] * xs[t];
+        }
     }
 }
 
@@ -557,20 +574,43 @@ impl Multigrid {
     }
 }
 
-/// `c.b = R (f.b − A f.x)`: the residual of the fine level summed over each aggregate.
+/// Cells per block of a row in [`restrict`] (even).
+const RUN: usize = 64;
+
+/// `c.b = R (f.b − A f.x)`: the residual of the fine level summed over each aggregate, fine row
+/// by fine row in the order (i, j) of the children — runs of residuals computed over slices,
+/// then added pairwise (the same sums, in the same order, as one child at a time).
 fn restrict(f: &Level, c: &mut Level) {
     let fx = if c.nx < f.nx { 2 } else { 1 };
     let fy = if c.ny < f.ny { 2 } else { 1 };
     let (fnx, fny, cnx, cs) = (f.nx, f.ny, c.nx, c.s);
     par::for_each_row(&mut c.b[cs..(c.ny + 1) * cs], cs, |jc, row| {
-        for ic in 0..cnx {
-            let mut sum = 0.0;
-            for j in fy * jc..(fy * jc + fy).min(fny) {
-                for i in fx * ic..(fx * ic + fx).min(fnx) {
-                    sum += f.residual_at(f.p(i, j));
+        let out = &mut row[1..=cnx];
+        out.fill(0.0);
+        let mut r = [0.0f64; RUN];
+        for j in fy * jc..(fy * jc + fy).min(fny) {
+            let base = f.p(0, j);
+            let mut i0 = 0;
+            while i0 < fnx {
+                let len = (fnx - i0).min(RUN);
+                let r = &mut r[..len];
+                f.residual_run(base + i0, r);
+                if fx == 2 {
+                    let o = &mut out[i0 / 2..];
+                    let pairs = len / 2;
+                    for (m, o) in o[..pairs].iter_mut().enumerate() {
+                        *o = *o + r[2 * m] + r[2 * m + 1];
+                    }
+                    if len % 2 == 1 {
+                        o[pairs] += r[len - 1];
+                    }
+                } else {
+                    for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
+                        *o += r;
+                    }
                 }
+                i0 += len;
             }
-            row[ic + 1] = sum;
         }
     });
 }
@@ -582,8 +622,17 @@ fn prolong(f: &mut Level, c: &Level) {
     let (fnx, fs) = (f.nx, f.s);
     par::for_each_row(&mut f.x[fs..(f.ny + 1) * fs], fs, |j, row| {
         let crow = &c.x[c.p(0, j / fy)..];
-        for i in 0..fnx {
-            row[i + 1] += crow[i / fx];
+        let row = &mut row[1..=fnx];
+        if fx == 2 {
+            for (pair, cx) in row.chunks_mut(2).zip(crow) {
+                for x in pair {
+                    *x += cx;
+                }
+            }
+        } else {
+            for (x, cx) in row.iter_mut().zip(crow) {
+                *x += cx;
+            }
         }
     });
 }
@@ -615,9 +664,7 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
             let mut t = std::mem::take(&mut c.t);
             let (cnx, cs) = (c.nx, c.s);
             par::for_each_row(&mut t[cs..(c.ny + 1) * cs], cs, |j, row| {
-                for i in 0..cnx {
-                    row[i + 1] = c.residual_at(c.p(i, j));
-                }
+                c.residual_run(c.p(0, j), &mut row[1..=cnx]);
             });
             c.t = t;
             std::mem::swap(&mut c.b, &mut c.t);
@@ -627,7 +674,12 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
         if k > 0 {
             let c = &mut levels[l + 1];
             let t = &c.t;
-            par::for_each_mut(&mut c.x, |k, x| *x += t[k]);
+            par::for_each_chunk(&mut c.x, |o, x| {
+                let n = x.len();
+                for (x, t) in x.iter_mut().zip(&t[o..o + n]) {
+                    *x += t;
+                }
+            });
         }
     }
     let (f, c) = levels.split_at_mut(l + 1);

@@ -60,6 +60,114 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
+/// Largest number of chunk partials a reduction keeps on the stack at once.
+const MAX_PARTS: usize = 512;
+
+/// `f(offset, a_chunk, b_chunk)` over the fixed chunks of [`REDUCE_CHUNK`] elements of two
+/// equal-length slices (in parallel when they are long), each returning a partial result;
+/// the partials are folded in chunk order, `combine(…combine(combine(init, p₀), p₁)…)`. The
+/// chunks and the fold do not depend on the number of threads, so neither does the result.
+/// This fuses an element-wise update with a reduction over its results (one pass over
+/// memory instead of two).
+pub fn reduce_chunks2(
+    a: &mut [f64],
+    b: &mut [f64],
+    init: f64,
+    f: impl Fn(usize, &mut [f64], &mut [f64]) -> f64 + Sync + Send,
+    combine: impl Fn(f64, f64) -> f64,
+) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let mut acc = init;
+    if a.len() < PAR_MIN {
+        for (c, (x, y)) in a
+            .chunks_mut(REDUCE_CHUNK)
+            .zip(b.chunks_mut(REDUCE_CHUNK))
+            .enumerate()
+        {
+            acc = combine(acc, f(c * REDUCE_CHUNK, x, y));
+        }
+        return acc;
+    }
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    for (s, (a, b)) in a.chunks_mut(big).zip(b.chunks_mut(big)).enumerate() {
+        let n = a.len().div_ceil(REDUCE_CHUNK);
+        let mut parts = [0.0f64; MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(
+                a.par_chunks_mut(REDUCE_CHUNK)
+                    .zip(b.par_chunks_mut(REDUCE_CHUNK)),
+            )
+            .enumerate()
+            .for_each(|(c, (p, (x, y)))| *p = f(s * big + c * REDUCE_CHUNK, x, y));
+        for p in &parts[..n] {
+            acc = combine(acc, *p);
+        }
+    }
+    acc
+}
+
+/// [`reduce_chunks2`] over one slice.
+pub fn reduce_chunks(
+    a: &mut [f64],
+    init: f64,
+    f: impl Fn(usize, &mut [f64]) -> f64 + Sync + Send,
+    combine: impl Fn(f64, f64) -> f64,
+) -> f64 {
+    let mut acc = init;
+    if a.len() < PAR_MIN {
+        for (c, x) in a.chunks_mut(REDUCE_CHUNK).enumerate() {
+            acc = combine(acc, f(c * REDUCE_CHUNK, x));
+        }
+        return acc;
+    }
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    for (s, a) in a.chunks_mut(big).enumerate() {
+        let n = a.len().div_ceil(REDUCE_CHUNK);
+        let mut parts = [0.0f64; MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(a.par_chunks_mut(REDUCE_CHUNK))
+            .enumerate()
+            .for_each(|(c, (p, x))| *p = f(s * big + c * REDUCE_CHUNK, x));
+        for p in &parts[..n] {
+            acc = combine(acc, *p);
+        }
+    }
+    acc
+}
+
+/// Four-lane sum of `f(k)` for `k in 0..n` (vectorises when `f` does), for the partials of
+/// [`reduce_chunks`] and [`reduce_chunks2`].
+#[inline(always)]
+pub fn sum4(n: usize, f: impl Fn(usize) -> f64) -> f64 {
+    let mut s = [0.0f64; 4];
+    let n4 = n / 4 * 4;
+    for k in (0..n4).step_by(4) {
+        s[0] += f(k);
+        s[1] += f(k + 1);
+        s[2] += f(k + 2);
+        s[3] += f(k + 3);
+    }
+    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
+    for k in n4..n {
+        t += f(k);
+    }
+    t
+}
+
+/// Run `f(offset, y_chunk)` over chunks of `y` (in parallel when it is long): an element-wise
+/// loop whose body the compiler sees whole (it vectorises, unlike a closure per element).
+pub fn for_each_chunk(y: &mut [f64], f: impl Fn(usize, &mut [f64]) + Sync + Send) {
+    if y.len() < PAR_MIN {
+        f(0, y);
+    } else {
+        y.par_chunks_mut(REDUCE_CHUNK)
+            .enumerate()
+            .for_each(|(c, x)| f(c * REDUCE_CHUNK, x));
+    }
+}
+
 /// Run `f(k, &mut y[k], …)` over the elements of `y`, in parallel when it is long.
 pub fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync + Send) {
     if y.len() < PAR_MIN {
@@ -88,6 +196,41 @@ pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64])
     }
 }
 
+/// Run `f(j, row) -> partial` over the rows (`row_len` long) of `y`, in parallel when `y` is
+/// long, and return the partials summed in row order (the same bits on any number of
+/// threads): a row loop that also reduces over what it writes, in one pass.
+pub fn for_each_row_sum(
+    y: &mut [f64],
+    row_len: usize,
+    f: impl Fn(usize, &mut [f64]) -> f64 + Sync + Send,
+) -> f64 {
+    if row_len == 0 {
+        return 0.0;
+    }
+    if y.len() < PAR_MIN {
+        return y
+            .chunks_mut(row_len)
+            .enumerate()
+            .fold(0.0, |s, (j, r)| s + f(j, r));
+    }
+    let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+    let mut acc = 0.0;
+    for (b, block) in y.chunks_mut(row_len * MAX_PARTS).enumerate() {
+        let n = block.len().div_ceil(row_len);
+        let mut parts = [0.0f64; MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(block.par_chunks_mut(row_len))
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (p, r))| *p = f(b * MAX_PARTS + j, r));
+        for p in &parts[..n] {
+            acc += p;
+        }
+    }
+    acc
+}
+
 /// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
 /// parallel when they are long.
 pub fn for_each_row2(
@@ -113,6 +256,36 @@ pub fn for_each_row2(
             .with_min_len(min_rows)
             .for_each(|(j, (x, y))| f(j, x, y));
     }
+}
+
+/// `max(init, max_j f(j))` for `j in 0..rows` (rows of `row_len` elements), in parallel when
+/// there is enough work; a maximum does not depend on the order, so neither on the number of
+/// threads.
+pub fn max_over_rows(
+    rows: usize,
+    row_len: usize,
+    init: f64,
+    f: impl Fn(usize) -> f64 + Sync + Send,
+) -> f64 {
+    if rows * row_len < PAR_MIN {
+        (0..rows).map(f).fold(init, f64::max)
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
+        (0..rows)
+            .into_par_iter()
+            .with_min_len(min_rows)
+            .map(f)
+            .reduce(|| init, f64::max)
+    }
+}
+
+/// `dst ← src` (equal lengths), in parallel chunks when long.
+pub fn copy(dst: &mut [f64], src: &[f64]) {
+    assert_eq!(dst.len(), src.len());
+    for_each_chunk(dst, |o, d| {
+        let n = d.len();
+        d.copy_from_slice(&src[o..o + n]);
+    });
 }
 
 /// Run `f(j)` for `j in 0..rows` (rows of `row_len` elements), in parallel when there is

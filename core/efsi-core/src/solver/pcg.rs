@@ -7,26 +7,113 @@
 //! recomputes the true residual with one extra product and continues if it is not met after all.
 //!
 //! Vector updates run in parallel and dot products sum fixed chunks in order
-//! ([`super::par`]), so the iterates do not depend on the number of threads.
+//! ([`super::par`]), so the iterates do not depend on the number of threads. The kernels are
+//! memory-bound, so passes are fused: the iterate and the residual are updated in one pass
+//! that also measures the residual (with a [`Norm`], [`Pcg::solve_norm`]), and operators and
+//! preconditioners may return their dot product from their own pass
+//! ([`LinearOperator::apply_dot`], [`Preconditioner::apply_dot`]; Jacobi does).
 
 /// A symmetric linear operator `y = A x` on vectors of a fixed length.
 pub trait LinearOperator {
     /// `y ← A x`.
     fn apply(&mut self, x: &[f64], y: &mut [f64]);
+
+    /// `y ← A x`, returning `x·y` summed in an order that does not depend on the number of
+    /// threads. Default: [`apply`](Self::apply), then [`par::dot`]; an operator may fuse the
+    /// product into its own pass.
+    fn apply_dot(&mut self, x: &[f64], y: &mut [f64]) -> f64 {
+        self.apply(x, y);
+        dot(x, y)
+    }
 }
 
 /// A symmetric positive definite preconditioner `z = M⁻¹ r`.
 pub trait Preconditioner {
     /// `z ← M⁻¹ r`.
     fn apply(&self, r: &[f64], z: &mut [f64]);
+
+    /// `z ← M⁻¹ r`, returning `r·z` summed in an order that does not depend on the number of
+    /// threads. Default: [`apply`](Self::apply), then [`par::dot`].
+    fn apply_dot(&self, r: &[f64], z: &mut [f64]) -> f64 {
+        self.apply(r, z);
+        dot(r, z)
+    }
 }
 
 /// Diagonal (Jacobi) preconditioning.
 impl Preconditioner for [f64] {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
-        for ((z, r), d) in z.iter_mut().zip(r).zip(self) {
-            *z = r / d;
+        par::for_each_chunk(z, |o, z| {
+            let (r, d) = (&r[o..o + z.len()], &self[o..o + z.len()]);
+            for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
+                *z = r / d;
+            }
+        });
+    }
+
+    /// One pass: the quotient and the product together.
+    fn apply_dot(&self, r: &[f64], z: &mut [f64]) -> f64 {
+        par::reduce_chunks(
+            z,
+            0.0,
+            |o, z| {
+                let n = z.len();
+                let (r, d) = (&r[o..o + n], &self[o..o + n]);
+                for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
+                    *z = r / d;
+                }
+                let z = &*z;
+                par::sum4(n, |k| r[k] * z[k])
+            },
+            |a, b| a + b,
+        )
+    }
+}
+
+/// A residual measure the solver computes in the same pass as its vector update
+/// ([`Pcg::solve_norm`]); the same on any number of threads.
+#[derive(Clone, Copy, Debug)]
+pub enum Norm<'a> {
+    /// The Euclidean norm `‖r‖₂` (squares summed in fixed chunks, in order).
+    L2,
+    /// The weighted maximum `max_k |w_k r_k|`.
+    MaxWeighted(&'a [f64]),
+}
+
+impl Norm<'_> {
+    /// The partial of the chunk `r` starting at element `o`.
+    #[inline(always)]
+    fn chunk(&self, o: usize, r: &[f64]) -> f64 {
+        match self {
+            Norm::L2 => par::sum4(r.len(), |k| r[k] * r[k]),
+            Norm::MaxWeighted(w) => r
+                .iter()
+                .zip(&w[o..o + r.len()])
+                .fold(0.0f64, |m, (r, w)| m.max((r * w).abs())),
         }
+    }
+    fn combine(&self, a: f64, b: f64) -> f64 {
+        match self {
+            Norm::L2 => a + b,
+            Norm::MaxWeighted(_) => a.max(b),
+        }
+    }
+    fn finish(&self, v: f64) -> f64 {
+        match self {
+            Norm::L2 => v.sqrt(),
+            Norm::MaxWeighted(_) => v,
+        }
+    }
+
+    /// The measure of `r`.
+    pub fn of(&self, r: &[f64]) -> f64 {
+        let v = r
+            .chunks(par::REDUCE_CHUNK)
+            .enumerate()
+            .fold(0.0, |acc, (c, r)| {
+                self.combine(acc, self.chunk(c * par::REDUCE_CHUNK, r))
+            });
+        self.finish(v)
     }
 }
 
@@ -87,13 +174,52 @@ impl Pcg {
         max_iter: usize,
         measure: impl Fn(&[f64]) -> f64,
     ) -> SolveStats {
+        self.run(a, m, b, x, tol, max_iter, Measure::Closure(&measure))
+    }
+
+    /// [`solve`](Self::solve) with a [`Norm`] as the measure, computed in the same pass as
+    /// the update of the iterate and the residual (one sweep over memory fewer per
+    /// iteration).
+    pub fn solve_norm<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+        &mut self,
+        a: &mut A,
+        m: &M,
+        b: &[f64],
+        x: &mut [f64],
+        tol: f64,
+        max_iter: usize,
+        norm: Norm,
+    ) -> SolveStats {
+        self.run(a, m, b, x, tol, max_iter, Measure::Norm(norm))
+    }
+
+    fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+        &mut self,
+        a: &mut A,
+        m: &M,
+        b: &[f64],
+        x: &mut [f64],
+        tol: f64,
+        max_iter: usize,
+        measure: Measure,
+    ) -> SolveStats {
         let n = b.len();
         assert_eq!(n, self.r.len());
         assert_eq!(n, x.len());
         let Pcg { r, z, p, q } = self;
-        a.apply(x, q);
-        par::for_each_mut(r, |k, r| *r = b[k] - q[k]);
-        let mut res = measure(r);
+        // r = b − A x and its measure.
+        let true_residual = |a: &mut A, x: &[f64], r: &mut [f64], q: &mut [f64]| {
+            a.apply(x, q);
+            let q = &*q;
+            par::for_each_chunk(r, |o, r| {
+                let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
+                for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
+                    *r = b - q;
+                }
+            });
+            measure.of(r)
+        };
+        let mut res = true_residual(a, x, r, q);
         let mut it = 0;
         if res <= tol {
             return SolveStats {
@@ -102,26 +228,56 @@ impl Pcg {
                 converged: true,
             };
         }
-        m.apply(r, z);
+        let mut rz = m.apply_dot(r, z);
         p.copy_from_slice(z);
-        let mut rz = dot(r, z);
         while it < max_iter {
-            a.apply(p, q);
-            let pq = dot(p, q);
+            let pq = a.apply_dot(p, q);
             if pq <= 0.0 || !pq.is_finite() {
                 // Breakdown: p is in the null space (singular system) or the operator is not SPD.
                 break;
             }
             let alpha = rz / pq;
-            par::for_each_mut(x, |k, x| *x += alpha * p[k]);
-            par::for_each_mut(r, |k, r| *r -= alpha * q[k]);
+            // x += α p, r −= α q, and the measure of r, in one pass.
+            let (pv, qv) = (&*p, &*q);
+            let update = |o: usize, x: &mut [f64], r: &mut [f64]| {
+                let n = x.len();
+                let (p, q) = (&pv[o..o + n], &qv[o..o + n]);
+                for (x, p) in x.iter_mut().zip(p) {
+                    *x += alpha * p;
+                }
+                for (r, q) in r.iter_mut().zip(q) {
+                    *r -= alpha * q;
+                }
+            };
+            res = match measure {
+                Measure::Norm(nm) => nm.finish(par::reduce_chunks2(
+                    x,
+                    r,
+                    0.0,
+                    |o, x, r| {
+                        update(o, x, r);
+                        nm.chunk(o, r)
+                    },
+                    |a, b| nm.combine(a, b),
+                )),
+                Measure::Closure(f) => {
+                    par::reduce_chunks2(
+                        x,
+                        r,
+                        0.0,
+                        |o, x, r| {
+                            update(o, x, r);
+                            0.0
+                        },
+                        |a, _| a,
+                    );
+                    f(r)
+                }
+            };
             it += 1;
-            res = measure(r);
             if res <= tol {
                 // Confirm with the true residual.
-                a.apply(x, q);
-                par::for_each_mut(r, |k, r| *r = b[k] - q[k]);
-                res = measure(r);
+                res = true_residual(a, x, r, q);
                 if res <= tol {
                     return SolveStats {
                         iterations: it,
@@ -130,16 +286,37 @@ impl Pcg {
                     };
                 }
             }
-            m.apply(r, z);
-            let rz_new = dot(r, z);
+            let rz_new = m.apply_dot(r, z);
             let beta = rz_new / rz;
             rz = rz_new;
-            par::for_each_mut(p, |k, p| *p = z[k] + beta * *p);
+            let z = &*z;
+            par::for_each_chunk(p, |o, p| {
+                let z = &z[o..o + p.len()];
+                for (p, z) in p.iter_mut().zip(z) {
+                    *p = z + beta * *p;
+                }
+            });
         }
         SolveStats {
             iterations: it,
             residual: res,
             converged: res <= tol,
+        }
+    }
+}
+
+/// The stopping measure: a caller's function of the whole residual, or a fusable [`Norm`].
+#[derive(Clone, Copy)]
+enum Measure<'a> {
+    Closure(&'a dyn Fn(&[f64]) -> f64),
+    Norm(Norm<'a>),
+}
+
+impl Measure<'_> {
+    fn of(&self, r: &[f64]) -> f64 {
+        match self {
+            Measure::Closure(f) => f(r),
+            Measure::Norm(n) => n.of(r),
         }
     }
 }
