@@ -56,7 +56,7 @@ use efsi_core::solver::{
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
-    bc::{FaceRange, UnknownFaces, WallTime},
+    bc::{UnknownFaces, WallTime},
 };
 
 /// The viscous stage plugin.
@@ -495,57 +495,6 @@ pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
             };
         }
     }
-}
-
-/// `(ku, kv) = dV·∇·(2μD(u, v))` on the unknown faces `ux` × rows, columns × `vy`, with cell
-/// viscosities `mu` and corner viscosities `mc`; `u`, `v` with ghosts filled.
-pub(crate) fn viscous_divergence(
-    g: &Grid,
-    ux: FaceRange,
-    vy: FaceRange,
-    mu: &Field,
-    mc: &Field,
-    u: &Field,
-    v: &Field,
-    ku: &mut Field,
-    kv: &mut Field,
-) {
-    let m = &g.metric;
-    let (dx, dy) = (g.dx, g.dy);
-    let s = u.stride();
-    let (ud, vd, mu, mc) = (u.data(), v.data(), mu.data(), mc.data());
-    // Rows in parallel; each row writes its own entries (bit-identical on any thread count).
-    let r0 = u.idx(-G, 0);
-    let ny = g.ny;
-    for_each_row(&mut ku.data_mut()[r0..r0 + ny * s], s, |j, row| {
-        let jj = j as isize;
-        for i in ux.lo..ux.hi {
-            let k = u.idx(i, jj);
-            let txx_e = 2.0 * mu[k] * (ud[k + 1] - ud[k]) / dx;
-            let txx_w = 2.0 * mu[k - 1] * (ud[k] - ud[k - 1]) / dx;
-            let txy_n = mc[k + s] * ((ud[k + s] - ud[k]) / dy + (vd[k + s] - vd[k + s - 1]) / dx);
-            let txy_s = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
-            let hoop = m.hoop_x(i);
-            let mu_f = 0.5 * (mu[k - 1] + mu[k]);
-            row[k - r0 - j * s] = dy * (m.rc(i) * txx_e - m.rc(i - 1) * txx_w)
-                + dx * m.rx(i) * (txy_n - txy_s)
-                - dx * dy * m.rx(i) * 2.0 * mu_f * ud[k] * hoop * hoop;
-        }
-    });
-    let rows = (vy.hi - vy.lo).max(0) as usize;
-    let r0 = v.idx(-G, vy.lo);
-    for_each_row(&mut kv.data_mut()[r0..r0 + rows * s], s, |jr, row| {
-        let j = vy.lo + jr as isize;
-        for i in 0..g.nx as isize {
-            let k = v.idx(i, j);
-            let tyy_n = 2.0 * mu[k] * (vd[k + s] - vd[k]) / dy;
-            let tyy_s = 2.0 * mu[k - s] * (vd[k] - vd[k - s]) / dy;
-            let txy_e = mc[k + 1] * ((ud[k + 1] - ud[k + 1 - s]) / dy + (vd[k + 1] - vd[k]) / dx);
-            let txy_w = mc[k] * ((ud[k] - ud[k - s]) / dy + (vd[k] - vd[k - 1]) / dx);
-            row[k - r0 - jr * s] =
-                dx * m.rc(i) * (tyy_n - tyy_s) + dy * (m.rx(i + 1) * txy_e - m.rx(i) * txy_w);
-        }
-    });
 }
 
 /// Scatter the compact vector `x` (u faces first, then v) into the fields' unknown faces,
