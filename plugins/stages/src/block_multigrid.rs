@@ -21,6 +21,15 @@
 use efsi_core::solver::{Multigrid, Preconditioner, Stencil5};
 use efsi_core::{BoundarySet, Field, Grid, bc::UnknownFaces};
 
+/// Where the blocks' diagonals come from (see [`ViscousBlocks::setup`]).
+#[derive(Clone, Copy)]
+pub(crate) enum Diagonal<'a> {
+    /// The mass of each unknown; the diagonal is it plus the row's couplings.
+    FromMass(&'a [f64]),
+    /// The diagonal itself.
+    Given(&'a [f64]),
+}
+
 /// Multigrid on the u–u and v–v blocks of `M − K_η` (see the module docs).
 pub(crate) struct ViscousBlocks {
     faces: UnknownFaces,
@@ -55,9 +64,18 @@ impl ViscousBlocks {
         b
     }
 
-    /// Assemble the blocks of `diag(mass) − K_η` for the cell coefficients `eta` and the
-    /// corner coefficients `eta_k` (both ≥ 0, viscosity × time), then refresh the hierarchies.
-    pub(crate) fn setup(&mut self, g: &Grid, mass: &[f64], eta: &Field, eta_k: &Field) {
+    /// Assemble the blocks of `diag(mass) − K_η` for the cell coefficients `scale·eta` and the
+    /// corner coefficients `scale·eta_k` (both ≥ 0, viscosity × time), then refresh the
+    /// hierarchies. The blocks' diagonals are the mass plus the row's couplings, or `diagonal`
+    /// itself when given (the viscous stage passes its operator's, wall terms exact).
+    pub(crate) fn setup(
+        &mut self,
+        g: &Grid,
+        diagonal: Diagonal,
+        eta: &Field,
+        eta_k: &Field,
+        scale: f64,
+    ) {
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
         let (e, ek) = (eta.data(), eta_k.data());
@@ -72,15 +90,20 @@ impl ViscousBlocks {
                 let kc = j * nur + c;
                 // u(i) – u(i+1) through the normal stress at cell i; u(j) – u(j+1) through the
                 // shear stress at corner (i, j+1).
-                let east = dy * m.rc(i) * 2.0 * e[k] / dx;
-                let west = dy * m.rc(i - 1) * 2.0 * e[k - 1] / dx;
-                let north = dx * m.rx(i) * ek[k + s] / dy;
-                let south = dx * m.rx(i) * ek[k] / dy;
-                let h = m.hoop_x(i);
-                let hoop = dx * dy * m.rx(i) * (e[k - 1] + e[k]) * h * h;
+                let east = scale * dy * m.rc(i) * 2.0 * e[k] / dx;
+                let north = scale * dx * m.rx(i) * ek[k + s] / dy;
                 self.au.east[kc] = if c + 1 < nur || px { east } else { 0.0 };
                 self.au.north[kc] = if j + 1 < ny || py { north } else { 0.0 };
-                self.au.diag[kc] = mass[kc] + east + west + north + south + hoop;
+                self.au.diag[kc] = match diagonal {
+                    Diagonal::Given(d) => d[kc],
+                    Diagonal::FromMass(mass) => {
+                        let west = scale * dy * m.rc(i - 1) * 2.0 * e[k - 1] / dx;
+                        let south = scale * dx * m.rx(i) * ek[k] / dy;
+                        let h = m.hoop_x(i);
+                        let hoop = scale * dx * dy * m.rx(i) * (e[k - 1] + e[k]) * h * h;
+                        mass[kc] + east + west + north + south + hoop
+                    }
+                };
             }
         }
         let nu = nur * ny;
@@ -91,13 +114,18 @@ impl ViscousBlocks {
                 let k = eta.idx(i as isize, j);
                 let kc = jr * nx + i;
                 let ii = i as isize;
-                let east = dy * m.rx(ii + 1) * ek[k + 1] / dx;
-                let west = dy * m.rx(ii) * ek[k] / dx;
-                let north = dx * m.rc(ii) * 2.0 * e[k] / dy;
-                let south = dx * m.rc(ii) * 2.0 * e[k - s] / dy;
+                let east = scale * dy * m.rx(ii + 1) * ek[k + 1] / dx;
+                let north = scale * dx * m.rc(ii) * 2.0 * e[k] / dy;
                 self.av.east[kc] = if i + 1 < nx || px { east } else { 0.0 };
                 self.av.north[kc] = if jr + 1 < nvr || py { north } else { 0.0 };
-                self.av.diag[kc] = mass[nu + kc] + east + west + north + south;
+                self.av.diag[kc] = match diagonal {
+                    Diagonal::Given(d) => d[nu + kc],
+                    Diagonal::FromMass(mass) => {
+                        let west = scale * dy * m.rx(ii) * ek[k] / dx;
+                        let south = scale * dx * m.rc(ii) * 2.0 * e[k - s] / dy;
+                        mass[nu + kc] + east + west + north + south
+                    }
+                };
             }
         }
         if !self.au.is_empty() {

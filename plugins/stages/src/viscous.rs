@@ -46,13 +46,12 @@
 //! ([`efsi_core::bc`]). Unconditionally stable for θ ∈ [½, 1]; θ = 1 damps the stiff modes of a
 //! very viscous solid, θ = ½ is second-order in time.
 
+use crate::block_multigrid::{Diagonal, ViscousBlocks};
 use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::solver::par::{self, dot, for_each_row, for_each_row_sum, for_each_row2};
-use efsi_core::solver::{
-    LinearOperator, Multigrid, Norm, Pcg, Preconditioner, SolveStats, Stencil5,
-};
+use efsi_core::solver::{LinearOperator, Norm, Pcg, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -125,7 +124,7 @@ impl StagePlugin for Viscous {
                 prev_dt: [0.0; 2],
                 history: 0,
             },
-            blocks: BlockMultigrid::new(grid, bc),
+            blocks: ViscousBlocks::new(grid, bc),
         }))
     }
 }
@@ -140,7 +139,8 @@ struct ViscousStage {
     rhs: Vec<f64>,
     delta: Vec<f64>,
     diag: Vec<f64>,
-    blocks: BlockMultigrid,
+    /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept.
+    blocks: ViscousBlocks,
     warm: WarmStart,
 }
 
@@ -156,104 +156,6 @@ struct WarmStart {
 
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
 const AUTO_MULTIGRID_RATIO: f64 = 40.0;
-
-/// Preconditioner: multigrid on the two diagonal blocks of `M − θΔt K` (u–u and v–v, each a
-/// five-point matrix on its faces), dropping the u–v coupling of the shear stress.
-struct BlockMultigrid {
-    au: Stencil5,
-    av: Stencil5,
-    mu: Multigrid,
-    mv: Multigrid,
-}
-
-impl BlockMultigrid {
-    fn new(grid: &Grid, bc: &BoundarySet) -> Self {
-        let faces = UnknownFaces::new(grid, bc);
-        let nur = (faces.ux.hi - faces.ux.lo) as usize;
-        let nvr = (faces.vy.hi - faces.vy.lo) as usize;
-        // V(1,1) with the mass carried whole to the coarse levels. Measured on the drop at 128²:
-        // 15.9 iterations; V(2,2) 15.4 and W-cycles 15.4–15.9 at up to 1.5× the cost (the
-        // dropped u–v coupling, not the block solve, sets the count); the halved excess 19.7.
-        let mg = || Multigrid::new(1).with_w_cycle(false).with_excess_scale(1.0);
-        let mut b = BlockMultigrid {
-            au: Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1)),
-            av: Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1)),
-            mu: mg(),
-            mv: mg(),
-        };
-        // Allocate the hierarchies now: `Auto` may first choose multigrid in a later step,
-        // which must not allocate.
-        b.mu.setup(&b.au);
-        b.mv.setup(&b.av);
-        b
-    }
-
-    /// The two blocks from the cell and corner viscosities and the diagonal `diag` of the full
-    /// matrix; then the multigrid hierarchies.
-    fn setup(&mut self, g: &Grid, op: &ViscousOperator, mu: &Field, diag: &[f64]) {
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        let td = op.theta_dt;
-        let (mu, mc, muf) = (mu.data(), op.mu_corner.data(), mu);
-        let s = muf.stride();
-        let (ux, vy) = (op.faces.ux, op.faces.vy);
-        let (nur, nx, ny) = (self.au.nx, g.nx, g.ny);
-        let (px, py) = (self.au.periodic_x, self.au.periodic_y);
-        for j in 0..ny {
-            for c in 0..nur {
-                let i = ux.lo + c as isize;
-                let k = muf.idx(i, j as isize);
-                let kc = j * nur + c;
-                // u(i) – u(i+1) through the normal stress at cell i; u(j) – u(j+1) through the
-                // shear stress at corner (i, j+1).
-                self.au.east[kc] = if c + 1 < nur || px {
-                    td * dy * m.rc(i) * 2.0 * mu[k] / dx
-                } else {
-                    0.0
-                };
-                self.au.north[kc] = if j + 1 < ny || py {
-                    td * dx * m.rx(i) * mc[k + s] / dy
-                } else {
-                    0.0
-                };
-                self.au.diag[kc] = diag[kc];
-            }
-        }
-        let nu = nur * ny;
-        let nvr = self.av.ny;
-        for jr in 0..nvr {
-            let j = vy.lo + jr as isize;
-            for i in 0..nx {
-                let k = muf.idx(i as isize, j);
-                let kc = jr * nx + i;
-                self.av.east[kc] = if i + 1 < nx || px {
-                    td * dy * m.rx(i as isize + 1) * mc[k + 1] / dx
-                } else {
-                    0.0
-                };
-                self.av.north[kc] = if jr + 1 < nvr || py {
-                    td * dx * m.rc(i as isize) * 2.0 * mu[k] / dy
-                } else {
-                    0.0
-                };
-                self.av.diag[kc] = diag[nu + kc];
-            }
-        }
-        // The diagonal of the full matrix bounds the block's couplings (it counts the wall
-        // terms too), so each block is a diagonally dominant M-matrix.
-        self.mu.setup(&self.au);
-        self.mv.setup(&self.av);
-    }
-}
-
-impl Preconditioner for BlockMultigrid {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
-        let nu = self.au.len();
-        let (zu, zv) = z.split_at_mut(nu);
-        self.mu.apply(&r[..nu], zu);
-        self.mv.apply(&r[nu..], zv);
-    }
-}
 
 /// `y = M x − θΔt K_h x` on the compact vector of unknown faces (u first, then v).
 ///
@@ -698,7 +600,13 @@ impl Stage for ViscousStage {
                 }
             };
             let st = if use_mg {
-                self.blocks.setup(g, op, &state.mu, &self.diag);
+                self.blocks.setup(
+                    g,
+                    Diagonal::Given(&self.diag),
+                    &state.mu,
+                    &op.mu_corner,
+                    op.theta_dt,
+                );
                 self.pcg.solve_norm(
                     op,
                     &self.blocks,

@@ -340,42 +340,36 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .map(|(s, o)| (*s, o.clone()))
     };
     let cols: Vec<String> = gs.iter().map(|g| format!("{g:e}")).collect();
+    // One panel: G across, density ratio up, the settings `pick` selects.
+    let panel =
+        |title: String, rows: &[f64], pick: &dyn Fn(&Setting) -> bool| -> Result<Panel, String> {
+            let mut cells = Vec::new();
+            for &ratio in rows {
+                for &g in gs {
+                    let (s, o) = outcome_of(&|s: &Setting| pick(s) && s.g == g && s.ratio == ratio)
+                        .ok_or("a map cell has no run")?;
+                    cells.push(cell(&o, steps_of(&s)));
+                }
+            }
+            Ok(Panel {
+                title,
+                cols: cols.clone(),
+                rows: rows.iter().map(|r| format!("{r:.0e}")).collect(),
+                cells,
+            })
+        };
     let mut panels = Vec::new();
     for &cfl in cfls {
-        let mut cells = Vec::new();
-        for &ratio in ratios {
-            for &g in gs {
-                let (s, o) = outcome_of(&|s: &Setting| {
-                    s.across.is_none() && s.g == g && s.ratio == ratio && s.cfl == cfl
-                })
-                .ok_or("a map cell has no run")?;
-                cells.push(cell(&o, steps_of(&s)));
-            }
-        }
-        panels.push(Panel {
-            title: format!("sphere, CFL {cfl}"),
-            cols: cols.clone(),
-            rows: ratios.iter().map(|r| format!("{r:.0e}")).collect(),
-            cells,
-        });
+        panels.push(panel(format!("sphere, CFL {cfl}"), ratios, &|s| {
+            s.across.is_none() && s.cfl == cfl
+        })?);
     }
     for across in ACROSS {
-        let mut cells = Vec::new();
-        for &ratio in small_ratios {
-            for &g in gs {
-                let (s, o) = outcome_of(&|s: &Setting| {
-                    s.across == Some(across) && s.g == g && s.ratio == ratio
-                })
-                .ok_or("a map cell has no run")?;
-                cells.push(cell(&o, steps_of(&s)));
-            }
-        }
-        panels.push(Panel {
-            title: format!("{across} cells across, CFL 0.5"),
-            cols: cols.clone(),
-            rows: small_ratios.iter().map(|r| format!("{r:.0e}")).collect(),
-            cells,
-        });
+        panels.push(panel(
+            format!("{across} cells across, CFL 0.5"),
+            small_ratios,
+            &|s| s.across == Some(across),
+        )?);
     }
     let mut plots = Vec::new();
     let mut notes = Vec::new();
