@@ -128,16 +128,35 @@ impl Field {
         ny: usize,
     ) -> Option<(usize, usize)> {
         let (ie, je) = stagger.extent(nx, ny);
-        for j in 0..je {
-            let row = self.idx(0, j as isize);
-            for i in 0..ie {
-                if !self.data[row + i].is_finite() {
-                    return Some((i, j));
-                }
-            }
+        let row = |j: usize| {
+            let k = self.idx(0, j as isize);
+            &self.data[k..k + ie]
+        };
+        // The common case, all finite, in one vectorised pass over rows in parallel; only a
+        // field that fails it is searched for its first bad value.
+        let bad = crate::solver::par::max_over_rows(je, ie, 0.0, |j| {
+            if all_finite(row(j)) { 0.0 } else { 1.0 }
+        });
+        if bad == 0.0 {
+            return None;
         }
-        None
+        (0..je).find_map(|j| row(j).iter().position(|v| !v.is_finite()).map(|i| (i, j)))
     }
+}
+
+/// Whether every value of `x` is finite: `v − v` is 0 for a finite `v` and NaN otherwise, so a
+/// four-lane sum of it (which vectorises, unlike a loop that can stop early) is 0 exactly when
+/// all are.
+fn all_finite(x: &[f64]) -> bool {
+    let mut s = [0.0f64; 4];
+    let mut chunks = x.chunks_exact(4);
+    for c in &mut chunks {
+        for l in 0..4 {
+            s[l] += c[l] - c[l];
+        }
+    }
+    let tail = chunks.remainder().iter().fold(0.0, |a, v| a + (v - v));
+    (s[0] + s[1]) + (s[2] + s[3]) + tail == 0.0
 }
 
 impl Index<(isize, isize)> for Field {
@@ -170,5 +189,24 @@ mod tests {
         assert_eq!(f.data()[0], 1.0);
         assert_eq!(*f.data().last().unwrap(), 2.0);
         assert_eq!(f.idx(0, 1) - f.idx(0, 0), f.stride());
+    }
+
+    #[test]
+    fn first_non_finite_finds_the_first_bad_value_of_the_interior() {
+        // Large enough for the parallel path; ghosts are not checked.
+        let g = Grid::new(Geometry::Planar, 130, 90, (0.0, 1.0), (0.0, 1.0));
+        let mut f = Field::filled(&g, 1.5);
+        f[(-1, 3)] = f64::NAN;
+        f[(131, 3)] = f64::INFINITY;
+        assert_eq!(f.first_non_finite(Stagger::Cell, 130, 90), None);
+        f[(130, 7)] = f64::NEG_INFINITY;
+        assert_eq!(f.first_non_finite(Stagger::Cell, 130, 90), None);
+        assert_eq!(f.first_non_finite(Stagger::XFace, 130, 90), Some((130, 7)));
+        for (i, j) in [(129, 60), (5, 60), (0, 2)] {
+            f[(i, j)] = f64::NAN;
+            assert_eq!(f.first_non_finite(Stagger::Cell, 130, 90), Some((i as usize, j as usize)));
+        }
+        assert!(all_finite(&[1.0, -2.0, f64::MAX, 0.0, 3.0]));
+        assert!(!all_finite(&[1.0, -2.0, f64::MAX, 0.0, f64::INFINITY]));
     }
 }

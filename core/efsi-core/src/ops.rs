@@ -50,11 +50,13 @@ pub fn centre_velocity(u: &Field, v: &Field, i: isize, j: isize) -> (f64, f64) {
     )
 }
 
-/// Kinetic energy `½∫ρ|u|² dV` (per radian when axisymmetric), with face-centred quadrature.
+/// Kinetic energy `½∫ρ|u|² dV` (per radian when axisymmetric), with face-centred quadrature;
+/// rows in parallel, summed in row order (the same bits on any number of threads).
 pub fn kinetic_energy(grid: &Grid, u: &Field, v: &Field, rho: &Field) -> f64 {
     let m = &grid.metric;
-    let mut e = 0.0;
-    for j in 0..grid.ny as isize {
+    let [e] = crate::solver::par::sum_rows(grid.ny, grid.nx, |j| {
+        let j = j as isize;
+        let mut e = 0.0;
         for i in 0..grid.nx as isize {
             // Half of each of the cell's four faces belongs to it.
             let eu =
@@ -62,6 +64,7 @@ pub fn kinetic_energy(grid: &Grid, u: &Field, v: &Field, rho: &Field) -> f64 {
             let ev = 0.5 * m.rc(i) * (v[(i, j)].powi(2) + v[(i, j + 1)].powi(2)) / 2.0;
             e += rho[(i, j)] * (eu + ev) * grid.dx * grid.dy;
         }
-    }
+        [e]
+    });
     e
 }

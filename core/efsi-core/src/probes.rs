@@ -110,13 +110,16 @@ pub fn evaluate(
 }
 
 /// `−∫ρ g·x dV` over the cells (per radian in axisymmetric geometry).
+/// Rows in parallel, summed in row order (the same bits on any number of threads).
 pub fn potential_energy(grid: &Grid, rho: &Field, (gx, gy): (f64, f64)) -> f64 {
-    let mut e = 0.0;
-    for j in 0..grid.ny as isize {
+    let [e] = crate::solver::par::sum_rows(grid.ny, grid.nx, |j| {
+        let j = j as isize;
+        let mut e = 0.0;
         for i in 0..grid.nx as isize {
             e -= rho[(i, j)] * (gx * grid.xc(i) + gy * grid.yc(j)) * grid.cell_volume(i);
         }
-    }
+        [e]
+    });
     e
 }
 
@@ -131,23 +134,26 @@ pub struct SolidMoments {
     pub velocity: (f64, f64),
 }
 
-/// The moments of `phi` over the grid.
+/// The moments of `phi` over the grid (rows in parallel, summed in row order: the same bits
+/// on any number of threads).
 pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
-    let (mut v, mut mx, mut my, mut mu, mut mv) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for j in 0..grid.ny as isize {
+    let [v, mx, my, mu, mv] = crate::solver::par::sum_rows(grid.ny, grid.nx, |j| {
+        let j = j as isize;
+        let mut s = [0.0; 5];
         for i in 0..grid.nx as isize {
             let w = phi[(i, j)] * grid.cell_volume(i);
             if w == 0.0 {
                 continue;
             }
             let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
-            v += w;
-            mx += w * grid.xc(i);
-            my += w * grid.yc(j);
-            mu += w * a;
-            mv += w * b;
+            s[0] += w;
+            s[1] += w * grid.xc(i);
+            s[2] += w * grid.yc(j);
+            s[3] += w * a;
+            s[4] += w * b;
         }
-    }
+        s
+    });
     let inv = if v > 0.0 { 1.0 / v } else { f64::NAN };
     SolidMoments {
         volume: v,

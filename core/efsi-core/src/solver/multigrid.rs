@@ -976,3 +976,61 @@ mod tests {
         assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
     }
 }
+
+#[cfg(test)]
+mod timing_tmp {
+    use super::*;
+    #[test]
+    #[ignore]
+    fn level_timing() {
+        let n = 256;
+        let mut a = Stencil5::new(n, n, false, false);
+        for j in 0..n {
+            for i in 0..n {
+                let k = j * n + i;
+                a.east[k] = if i + 1 < n { 1.0 } else { 0.0 };
+                a.north[k] = if j + 1 < n { 1.0 } else { 0.0 };
+                a.diag[k] = 4.0;
+            }
+        }
+        for t in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+            let a = a.clone();
+            pool.install(move || {
+                let mut mg = Multigrid::new(2);
+                mg.setup(&a);
+                let mut h = mg.h.borrow_mut();
+                let nl = h.levels.len();
+                for l in 0..nl - 1 {
+                    let reps = 200;
+                    let t0 = std::time::Instant::now();
+                    for _ in 0..reps {
+                        h.levels[l].sweep(0);
+                    }
+                    let ts = t0.elapsed().as_secs_f64() / reps as f64;
+                    let t0 = std::time::Instant::now();
+                    for _ in 0..reps {
+                        let (f, c) = h.levels.split_at_mut(l + 1);
+                        restrict(&f[l], &mut c[0]);
+                    }
+                    let tr = t0.elapsed().as_secs_f64() / reps as f64;
+                    let t0 = std::time::Instant::now();
+                    for _ in 0..reps {
+                        let (f, c) = h.levels.split_at_mut(l + 1);
+                        prolong(&mut f[l], &c[0]);
+                    }
+                    let tp = t0.elapsed().as_secs_f64() / reps as f64;
+                    println!("t{t} level {l} ({} cells): sweep {:.1} us restrict {:.1} prolong {:.1}", h.levels[l].nx * h.levels[l].ny, ts * 1e6, tr * 1e6, tp * 1e6);
+                }
+                drop(h);
+                let r = vec![1.0; n * n];
+                let mut z = vec![0.0; n * n];
+                let t0 = std::time::Instant::now();
+                for _ in 0..50 {
+                    mg.apply(&r, &mut z);
+                }
+                println!("t{t} cycle {:.1} us", t0.elapsed().as_secs_f64() / 50.0 * 1e6);
+            });
+        }
+    }
+}

@@ -258,6 +258,99 @@ pub fn for_each_row2(
     }
 }
 
+/// Run `f(j, row, &mut out[j])` over the rows (`row_len` long) of `y`, in parallel when `y` is
+/// long: each row also writes its own partial result (`out` holds one per row), which the
+/// caller folds in row order — a reduction, or several at once, whose result does not depend
+/// on the number of threads.
+pub fn for_each_row_with<T: Send>(
+    y: &mut [f64],
+    row_len: usize,
+    out: &mut [T],
+    f: impl Fn(usize, &mut [f64], &mut T) + Sync + Send,
+) {
+    if row_len == 0 {
+        return;
+    }
+    assert_eq!(out.len(), y.len().div_ceil(row_len), "one partial per row");
+    if y.len() < PAR_MIN {
+        y.chunks_mut(row_len)
+            .zip(out.iter_mut())
+            .enumerate()
+            .for_each(|(j, (r, o))| f(j, r, o));
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        y.par_chunks_mut(row_len)
+            .zip(out.par_iter_mut())
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (r, o))| f(j, r, o));
+    }
+}
+
+/// [`for_each_row_with`] over the rows of two equal-length slices: `f(j, a_row, b_row,
+/// &mut out[j])`.
+pub fn for_each_row2_with<T: Send>(
+    a: &mut [f64],
+    b: &mut [f64],
+    row_len: usize,
+    out: &mut [T],
+    f: impl Fn(usize, &mut [f64], &mut [f64], &mut T) + Sync + Send,
+) {
+    assert_eq!(a.len(), b.len());
+    if row_len == 0 {
+        return;
+    }
+    assert_eq!(out.len(), a.len().div_ceil(row_len), "one partial per row");
+    if a.len() < PAR_MIN {
+        a.chunks_mut(row_len)
+            .zip(b.chunks_mut(row_len))
+            .zip(out.iter_mut())
+            .enumerate()
+            .for_each(|(j, ((x, y), o))| f(j, x, y, o));
+    } else {
+        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        a.par_chunks_mut(row_len)
+            .zip(b.par_chunks_mut(row_len))
+            .zip(out.par_iter_mut())
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, ((x, y), o))| f(j, x, y, o));
+    }
+}
+
+/// `Σ_j f(j)` for `j in 0..rows` (rows of `row_len` elements), component-wise for `N`
+/// sums at once, in parallel when there is enough work: each row's partials are added in row
+/// order, so the result is the same bit for bit on any number of threads.
+pub fn sum_rows<const N: usize>(
+    rows: usize,
+    row_len: usize,
+    f: impl Fn(usize) -> [f64; N] + Sync + Send,
+) -> [f64; N] {
+    let mut acc = [0.0f64; N];
+    let mut add = |p: [f64; N]| {
+        for (a, v) in acc.iter_mut().zip(p) {
+            *a += v;
+        }
+    };
+    if rows * row_len < PAR_MIN {
+        (0..rows).for_each(|j| add(f(j)));
+        return acc;
+    }
+    let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
+    const BLOCK: usize = 256;
+    let mut parts = [[0.0f64; N]; BLOCK];
+    for b in (0..rows).step_by(BLOCK) {
+        let n = BLOCK.min(rows - b);
+        parts[..n]
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, p)| *p = f(b + j));
+        parts[..n].iter().for_each(|p| add(*p));
+    }
+    acc
+}
+
 /// `max(init, max_j f(j))` for `j in 0..rows` (rows of `row_len` elements), in parallel when
 /// there is enough work; a maximum does not depend on the order, so neither on the number of
 /// threads.
@@ -365,5 +458,29 @@ mod tests {
         assert_eq!(d1.to_bits(), d2.to_bits());
         let exact: f64 = a.iter().zip(&b).map(|(a, b)| a * b).sum();
         assert!((d1 - exact).abs() <= 1e-12 * exact.abs());
+    }
+
+    #[test]
+    fn row_sums_are_the_same_on_one_and_two_threads() {
+        let (rows, len) = (700, 300);
+        let f = |j: usize| {
+            let r = (0..len).fold(0.0, |a, i| a + ((i * 31 + j * 17) % 101) as f64 / 7.0);
+            [r, -0.5 * r, 1.0]
+        };
+        let run = |t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+                .install(|| sum_rows(rows, len, f))
+        };
+        let (a, b) = (run(1), run(2));
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        let serial = (0..rows).fold([0.0; 3], |s, j| {
+            let p = f(j);
+            [s[0] + p[0], s[1] + p[1], s[2] + p[2]]
+        });
+        assert_eq!(a, serial, "row partials added in row order");
+        assert_eq!(a[2], rows as f64);
     }
 }

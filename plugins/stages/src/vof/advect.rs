@@ -72,6 +72,7 @@ pub use efsi_core::interface::phase_volume;
 use efsi_core::interface::plic::{
     axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal,
 };
+use efsi_core::solver::par;
 use efsi_core::{Field, G, Grid};
 
 /// What a side of the domain does to the transported fraction.
@@ -169,6 +170,11 @@ impl AdvectStats {
 }
 
 /// The VOF PLIC advection kernel: owns its scratch arrays (allocated once in [`Self::new`]).
+///
+/// Every pass of a sweep (indicator, reconstruction, face fluxes, update) runs over rows in
+/// parallel ([`par`]); each row writes only its own entries and its own partial statistics,
+/// which are folded in row order, so the result is the same bit for bit on any number of
+/// threads.
 #[derive(Clone, Debug)]
 pub struct VofAdvector {
     bounds: VofBoundaries,
@@ -179,20 +185,68 @@ pub struct VofAdvector {
     dy: f64,
     /// Frozen indicator `c_c = [φⁿ > ½]`.
     cc: Field,
-    /// PLIC line per cell: normal x, normal y, α (cell-local coordinates).
-    lnx: Field,
-    lny: Field,
-    lal: Field,
+    /// PLIC line per padded cell, interleaved: normal x, normal y, α (cell-local coordinates).
+    lines: Vec<f64>,
     /// Phase flux `F` and volume flux `U` per face of the current sweep.
     flux: Field,
     vflux: Field,
     /// Net volume outflux per cell summed over the sweeps of the step (`∇·u Δt V`, ≈ 0).
     divsum: Field,
+    /// Per padded row: the partial statistics of the current pass.
+    rows: Vec<RowStats>,
     /// Per padded column (`i + G`): `1/V`, the radius of the left edge, the face radius.
     inv_vol: Vec<f64>,
     r_left: Vec<f64>,
     r_face: Vec<f64>,
     r_centre: Vec<f64>,
+}
+
+/// One row's share of a pass's statistics (folded in row order).
+#[derive(Clone, Copy, Debug, Default)]
+struct RowStats {
+    cfl: f64,
+    max_clipped: f64,
+    /// Clipped volume (update pass) or the row's room `Σ φ(1 − φ) V` (give-back pass).
+    volume: f64,
+}
+
+/// What the flux pass reads of the cell geometry and the reconstructed lines.
+struct Slab<'a> {
+    dx: f64,
+    dy: f64,
+    lines: &'a [f64],
+    r_left: &'a [f64],
+}
+
+impl Slab<'_> {
+    /// Fraction (r-weighted in axisymmetric geometry) of the fluxed slab of the upwind cell
+    /// `ku` (column `iu`) below its line; `w` is the slab width, `pos` whether the flow is
+    /// towards `+d` (slab at the high side of the cell).
+    #[inline(always)]
+    fn fraction<const AXI: bool, const D: u8>(&self, ku: usize, iu: isize, w: f64, pos: bool) -> f64 {
+        let (dx, dy) = (self.dx, self.dy);
+        let (mx, my, al) = (
+            self.lines[3 * ku],
+            self.lines[3 * ku + 1],
+            self.lines[3 * ku + 2],
+        );
+        // Slab origin in cell-local coordinates and its size.
+        let (ox, oy, sw, sh) = match (D, pos) {
+            (X, true) => (dx - w, 0.0, w, dy),
+            (X, false) => (0.0, 0.0, w, dy),
+            (_, true) => (0.0, dy - w, dx, w),
+            (_, false) => (0.0, 0.0, dx, w),
+        };
+        let a = al - mx * ox - my * oy;
+        if AXI {
+            let r0 = self.r_left[(iu + G) as usize] + ox;
+            let (area, m1) = half_plane_moments(mx, my, a, sw, sh);
+            let slab = (r0 + 0.5 * sw) * sw * sh;
+            ((r0 * area + m1) / slab).clamp(0.0, 1.0)
+        } else {
+            rect_fraction(mx, my, a, sw, sh)
+        }
+    }
 }
 
 /// The sweep directions (const-generic parameter of the kernels).
@@ -214,6 +268,8 @@ impl VofAdvector {
         let ncol = grid.nx + 1 + 2 * G as usize;
         let col = |k: usize| k as isize - G;
         let axi = grid.is_axisymmetric();
+        let cc = Field::zeros(grid);
+        let (cells, rows) = (cc.data().len(), cc.rows());
         Ok(VofAdvector {
             bounds,
             axi,
@@ -221,13 +277,12 @@ impl VofAdvector {
             ny: grid.ny,
             dx: grid.dx,
             dy: grid.dy,
-            cc: Field::zeros(grid),
-            lnx: Field::zeros(grid),
-            lny: Field::zeros(grid),
-            lal: Field::zeros(grid),
+            cc,
+            lines: vec![0.0; 3 * cells],
             flux: Field::zeros(grid),
             vflux: Field::zeros(grid),
             divsum: Field::zeros(grid),
+            rows: vec![RowStats::default(); rows],
             inv_vol: (0..ncol).map(|k| 1.0 / grid.cell_volume(col(k))).collect(),
             r_left: (0..ncol)
                 .map(|k| if axi { grid.xf(col(k)) } else { 0.0 })
@@ -257,12 +312,16 @@ impl VofAdvector {
     ) -> AdvectStats {
         debug_assert!(grid.nx == self.nx && grid.ny == self.ny, "grid mismatch");
         debug_assert_eq!(phi.stride(), self.cc.stride());
-        for j in 0..self.ny as isize {
-            let k0 = phi.idx(0, j);
-            for k in k0..k0 + self.nx {
-                self.cc.data_mut()[k] = if phi.data()[k] > 0.5 { 1.0 } else { 0.0 };
+        let (nx, ny, s) = (self.nx, self.ny, phi.stride());
+        let src = phi.data();
+        par::for_each_row(self.cc.data_mut(), s, |jp, row| {
+            if (GU..GU + ny).contains(&jp) {
+                let o = jp * s + GU;
+                for (c, f) in row[GU..GU + nx].iter_mut().zip(&src[o..o + nx]) {
+                    *c = if *f > 0.5 { 1.0 } else { 0.0 };
+                }
             }
-        }
+        });
         let mut stats = AdvectStats::default();
         let order = if step_index.is_multiple_of(2) {
             [X, Y]
@@ -311,7 +370,7 @@ impl VofAdvector {
         }
     }
 
-    /// Reconstruct the PLIC line of every cut cell in `[i0,i1) × [j0,j1)`.
+    /// Reconstruct the PLIC line of every cut cell in `[i0,i1) × [j0,j1)`, rows in parallel.
     fn reconstruct<const AXI: bool>(
         &mut self,
         phi: &Field,
@@ -323,9 +382,15 @@ impl VofAdvector {
         let s = phi.stride();
         let (dx, dy) = (self.dx, self.dy);
         let c = phi.data();
-        for j in j0..j1 {
-            let k0 = phi.idx(i0, j);
-            for (n, k) in (k0..k0 + (i1 - i0) as usize).enumerate() {
+        let r_left = &self.r_left;
+        par::for_each_row(&mut self.lines, 3 * s, |jp, row| {
+            let j = jp as isize - G;
+            if j < j0 || j >= j1 {
+                return;
+            }
+            for i in i0..i1 {
+                let il = (i + G) as usize;
+                let k = jp * s + il;
                 let f = c[k];
                 if f <= 0.0 || f >= 1.0 {
                     continue;
@@ -337,51 +402,13 @@ impl VofAdvector {
                 ];
                 let (mx, my) = youngs_normal(&b, dx, dy);
                 let alpha = if AXI {
-                    let i = i0 + n as isize;
-                    axi_alpha(mx, my, f, self.r_left[(i + G) as usize], dx, dy)
+                    axi_alpha(mx, my, f, r_left[il], dx, dy)
                 } else {
                     rect_alpha(mx, my, f, dx, dy)
                 };
-                self.lnx.data_mut()[k] = mx;
-                self.lny.data_mut()[k] = my;
-                self.lal.data_mut()[k] = alpha;
+                row[3 * il..3 * il + 3].copy_from_slice(&[mx, my, alpha]);
             }
-        }
-    }
-
-    /// Fraction (r-weighted in axisymmetric geometry) of the fluxed slab of the upwind cell `ku`
-    /// (column `iu`) below its line; `w` is the slab width, `pos` whether the flow is towards
-    /// `+d` (slab at the high side of the cell).
-    #[inline(always)]
-    fn slab_fraction<const AXI: bool, const D: u8>(
-        &self,
-        ku: usize,
-        iu: isize,
-        w: f64,
-        pos: bool,
-    ) -> f64 {
-        let (dx, dy) = (self.dx, self.dy);
-        let (mx, my, al) = (
-            self.lnx.data()[ku],
-            self.lny.data()[ku],
-            self.lal.data()[ku],
-        );
-        // Slab origin in cell-local coordinates and its size.
-        let (ox, oy, sw, sh) = match (D, pos) {
-            (X, true) => (dx - w, 0.0, w, dy),
-            (X, false) => (0.0, 0.0, w, dy),
-            (_, true) => (0.0, dy - w, dx, w),
-            (_, false) => (0.0, 0.0, dx, w),
-        };
-        let a = al - mx * ox - my * oy;
-        if AXI {
-            let r0 = self.r_left[(iu + G) as usize] + ox;
-            let (area, m1) = half_plane_moments(mx, my, a, sw, sh);
-            let slab = (r0 + 0.5 * sw) * sw * sh;
-            ((r0 * area + m1) / slab).clamp(0.0, 1.0)
-        } else {
-            rect_fraction(mx, my, a, sw, sh)
-        }
+        });
     }
 
     /// One sweep along `D` with the face velocity `vel` (u for x, v for y). The `last` sweep of
@@ -420,124 +447,169 @@ impl VofAdvector {
         }
 
         // Face fluxes; face (i, j) shares the linear index of cell (i, j) (its high neighbour).
-        let mut cfl = 0.0f64;
         let (fi1, fj1) = if D == X { (nx + 1, ny) } else { (nx, ny + 1) };
-        for j in 0..fj1 {
-            for i in 0..fi1 {
-                let k = phi.idx(i, j);
-                let p = if D == X { i } else { j };
-                let (mut big_u, mut big_f) = (0.0, 0.0);
-                let closed = (p == 0 && lo_side == VofSide::Closed)
-                    || (p == nd && hi_side == VofSide::Closed);
-                if p == nd && periodic {
-                    let k0 = if D == X { phi.idx(0, j) } else { phi.idx(i, 0) };
-                    self.vflux.data_mut()[k] = self.vflux.data()[k0];
-                    self.flux.data_mut()[k] = self.flux.data()[k0];
-                    continue;
+        let slab = Slab {
+            dx,
+            dy,
+            lines: &self.lines,
+            r_left: &self.r_left,
+        };
+        let (r_face, r_centre, inv_vol) = (&self.r_face, &self.r_centre, &self.inv_vol);
+        let c = phi.data();
+        let v = vel.data();
+        par::for_each_row2_with(
+            self.vflux.data_mut(),
+            self.flux.data_mut(),
+            s,
+            &mut self.rows,
+            |jp, urow, frow, st| {
+                *st = RowStats::default();
+                let j = jp as isize - G;
+                // The high periodic face of a y sweep is the low one: copied below.
+                if j < 0 || j >= fj1 || (D == Y && j == nd && periodic) {
+                    return;
                 }
-                let sv = vel.data()[k] * dt;
-                if !closed && sv != 0.0 {
-                    let pos = sv > 0.0;
-                    let (ku, iu) = if !pos {
-                        (k, i)
-                    } else if D == X {
-                        (k - o, i - 1)
-                    } else {
-                        (k - o, i)
-                    };
-                    let ci = (i + G) as usize;
-                    let (area, w) = if D == X {
-                        let rf = self.r_face[ci];
-                        let w = if AXI {
-                            let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
-                            2.0 * rf * sv.abs() / (rf + disc.sqrt())
-                        } else {
-                            sv.abs()
-                        };
-                        (rf * dy, w.min(dx))
-                    } else {
-                        (self.r_centre[ci] * dx, sv.abs().min(dy))
-                    };
-                    big_u = area * sv;
-                    if big_u != 0.0 {
-                        cfl = cfl.max(big_u.abs() * self.inv_vol[(iu + G) as usize]);
-                        let c = phi.data()[ku];
-                        let frac = if c <= 0.0 {
-                            0.0
-                        } else if c >= 1.0 {
-                            1.0
-                        } else {
-                            self.slab_fraction::<AXI, D>(ku, iu, w, pos)
-                        };
-                        big_f = big_u * frac;
+                for i in 0..fi1 {
+                    let il = (i + G) as usize;
+                    let k = jp * s + il;
+                    let p = if D == X { i } else { j };
+                    let (mut big_u, mut big_f) = (0.0, 0.0);
+                    let closed = (p == 0 && lo_side == VofSide::Closed)
+                        || (p == nd && hi_side == VofSide::Closed);
+                    if D == X && p == nd && periodic {
+                        urow[il] = urow[GU];
+                        frow[il] = frow[GU];
+                        continue;
                     }
+                    let sv = v[k] * dt;
+                    if !closed && sv != 0.0 {
+                        let pos = sv > 0.0;
+                        let (ku, iu) = if !pos {
+                            (k, i)
+                        } else if D == X {
+                            (k - o, i - 1)
+                        } else {
+                            (k - o, i)
+                        };
+                        let (area, w) = if D == X {
+                            let rf = r_face[il];
+                            let w = if AXI {
+                                let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
+                                2.0 * rf * sv.abs() / (rf + disc.sqrt())
+                            } else {
+                                sv.abs()
+                            };
+                            (rf * dy, w.min(dx))
+                        } else {
+                            (r_centre[il] * dx, sv.abs().min(dy))
+                        };
+                        big_u = area * sv;
+                        if big_u != 0.0 {
+                            st.cfl = st.cfl.max(big_u.abs() * inv_vol[(iu + G) as usize]);
+                            let cu = c[ku];
+                            let frac = if cu <= 0.0 {
+                                0.0
+                            } else if cu >= 1.0 {
+                                1.0
+                            } else {
+                                slab.fraction::<AXI, D>(ku, iu, w, pos)
+                            };
+                            big_f = big_u * frac;
+                        }
+                    }
+                    urow[il] = big_u;
+                    frow[il] = big_f;
                 }
-                self.vflux.data_mut()[k] = big_u;
-                self.flux.data_mut()[k] = big_f;
-            }
+            },
+        );
+        if D == Y && periodic {
+            let (top, bot) = (phi.idx(0, ny), phi.idx(0, 0));
+            let n = nx as usize;
+            self.vflux.data_mut().copy_within(bot..bot + n, top);
+            self.flux.data_mut().copy_within(bot..bot + n, top);
         }
+        let cfl = self.rows.iter().fold(0.0f64, |m, r| m.max(r.cfl));
 
         // Update and clip.
+        let (f, uu, cc) = (self.flux.data(), self.vflux.data(), self.cc.data());
+        par::for_each_row2_with(
+            phi.data_mut(),
+            self.divsum.data_mut(),
+            s,
+            &mut self.rows,
+            |jp, crow, drow, st| {
+                *st = RowStats::default();
+                let j = jp as isize - G;
+                if j < 0 || j >= ny {
+                    return;
+                }
+                for i in 0..nx {
+                    let il = (i + G) as usize;
+                    let k = jp * s + il;
+                    let iv = inv_vol[il];
+                    let d = uu[k + o] - uu[k];
+                    let mut val = crow[il] + (f[k] - f[k + o] + cc[k] * d) * iv;
+                    if last {
+                        // Only the projection's residual (a volume change below 1e-8 of the
+                        // cell per step): a genuinely compressing field keeps W&Y's
+                        // treatment, which keeps a full cell full.
+                        let net = (drow[il] + d) * iv;
+                        if net.abs() <= 1e-8 {
+                            val -= cc[k] * net;
+                        }
+                    } else {
+                        drow[il] = d;
+                    }
+                    debug_assert!(val.is_finite(), "VOF: non-finite φ at ({i}, {j})");
+                    let clipped = val.clamp(0.0, 1.0);
+                    if clipped != val {
+                        st.max_clipped = st.max_clipped.max((clipped - val).abs());
+                        st.volume += (clipped - val) / iv;
+                        val = clipped;
+                    }
+                    crow[il] = val;
+                }
+            },
+        );
         let mut st = AdvectStats {
             cfl,
             ..Default::default()
         };
-        let (f, uu, cc) = (self.flux.data(), self.vflux.data(), self.cc.data());
-        for j in 0..ny {
-            let k0 = phi.idx(0, j);
-            let c = phi.data_mut();
-            for i in 0..nx {
-                let k = k0 + i as usize;
-                let iv = self.inv_vol[(i + G) as usize];
-                let d = uu[k + o] - uu[k];
-                let mut val = c[k] + (f[k] - f[k + o] + cc[k] * d) * iv;
-                if last {
-                    // Only the projection's residual (a volume change below 1e-8 of the cell
-                    // per step): a genuinely compressing field keeps W&Y's treatment, which
-                    // keeps a full cell full.
-                    let net = (self.divsum.data()[k] + d) * iv;
-                    if net.abs() <= 1e-8 {
-                        val -= cc[k] * net;
-                    }
-                } else {
-                    self.divsum.data_mut()[k] = d;
-                }
-                debug_assert!(val.is_finite(), "VOF: non-finite φ at ({i}, {j})");
-                let clipped = val.clamp(0.0, 1.0);
-                if clipped != val {
-                    st.max_clipped = st.max_clipped.max((clipped - val).abs());
-                    st.clipped_volume += (clipped - val) / iv;
-                    val = clipped;
-                }
-                c[k] = val;
-            }
+        for r in &self.rows {
+            st.max_clipped = st.max_clipped.max(r.max_clipped);
+            st.clipped_volume += r.volume;
         }
         // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
         // thousands of cells and steps: 3e-9 of the soft wall's volume over its run): to the
         // interface cells, in proportion to their room `φ(1 − φ)`.
         if st.clipped_volume != 0.0 {
-            let mut room = 0.0;
-            for j in 0..ny {
-                let k0 = phi.idx(0, j);
-                for i in 0..nx {
-                    let c = phi.data()[k0 + i as usize];
-                    room += c * (1.0 - c) / self.inv_vol[(i + G) as usize];
-                }
-            }
-            if room > 0.0 {
-                let scale = st.clipped_volume / room;
-                for j in 0..ny {
-                    let k0 = phi.idx(0, j);
-                    for i in 0..nx {
-                        let c = &mut phi.data_mut()[k0 + i as usize];
-                        *c -= scale * *c * (1.0 - *c);
+            let interior = |jp: usize| (GU..GU + ny as usize).contains(&jp);
+            par::for_each_row_with(phi.data_mut(), s, &mut self.rows, |jp, crow, st| {
+                st.volume = 0.0;
+                if interior(jp) {
+                    for (c, iv) in crow[GU..GU + nx as usize].iter().zip(&inv_vol[GU..]) {
+                        st.volume += c * (1.0 - c) / iv;
                     }
                 }
+            });
+            let room = self.rows.iter().fold(0.0, |a, r| a + r.volume);
+            if room > 0.0 {
+                let scale = st.clipped_volume / room;
+                par::for_each_row(phi.data_mut(), s, |jp, crow| {
+                    if interior(jp) {
+                        for c in &mut crow[GU..GU + nx as usize] {
+                            *c -= scale * *c * (1.0 - *c);
+                        }
+                    }
+                });
             }
         }
         st
     }
 }
+
+/// The ghost width as an index offset.
+const GU: usize = G as usize;
 
 #[cfg(test)]
 mod tests {

@@ -28,6 +28,7 @@
 use super::advect::{VofAdvector, VofBoundaries, VofSide};
 use efsi_core::interface::fill_fraction;
 use efsi_core::scene::{Boundary, Side};
+use efsi_core::solver::par::{self, REDUCE_CHUNK};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -103,10 +104,14 @@ impl VofStage {
     fn mix(&self, phi: &Field, rho: &mut Field, mu: &mut Field) {
         let (rf, rs) = self.rho;
         let (mf, ms) = self.mu;
-        for ((r, m), f) in rho.data_mut().iter_mut().zip(mu.data_mut()).zip(phi.data()) {
-            *r = (1.0 - f) * rf + f * rs;
-            *m = (1.0 - f) * mf + f * ms;
-        }
+        let phi = phi.data();
+        par::for_each_row2(rho.data_mut(), mu.data_mut(), REDUCE_CHUNK, |c, r, m| {
+            let o = c * REDUCE_CHUNK;
+            for ((r, m), f) in r.iter_mut().zip(m).zip(&phi[o..]) {
+                *r = (1.0 - f) * rf + f * rs;
+                *m = (1.0 - f) * mf + f * ms;
+            }
+        });
     }
 }
 
@@ -161,9 +166,12 @@ impl Stage for VofStage {
         // fluid's is not solenoidal at the interface): there Vⁿ⁺¹ alone.
         let w = if ctx.step == 0 { 0.0 } else { 0.5 };
         for (a, b) in [(&mut self.u_adv, &state.u), (&mut self.v_adv, &state.v)] {
-            for (x, y) in a.data_mut().iter_mut().zip(b.data()) {
-                *x = w * *x + (1.0 - w) * y;
-            }
+            let b = b.data();
+            par::for_each_chunk(a.data_mut(), |o, a| {
+                for (x, y) in a.iter_mut().zip(&b[o..]) {
+                    *x = w * *x + (1.0 - w) * y;
+                }
+            });
         }
         // The step was chosen for the velocity at its start; the velocity it ends with (an
         // impact, a release) can be faster. Sub-cycle the transport with the same velocity so
@@ -198,8 +206,8 @@ impl Stage for VofStage {
             st.max_clipped = st.max_clipped.max(s.max_clipped);
             st.clipped_volume += s.clipped_volume;
         }
-        self.u_adv.copy_from(&state.u);
-        self.v_adv.copy_from(&state.v);
+        par::copy(self.u_adv.data_mut(), state.u.data());
+        par::copy(self.v_adv.data_mut(), state.v.data());
         self.advector.fill_ghosts(&mut phi);
         self.mix(&phi, &mut state.rho, &mut state.mu);
         state.phi = Some(phi);
@@ -231,20 +239,21 @@ const MAX_SUBSTEPS: u64 = 64;
 /// `|u|/dx` next to the axis) and `|v|/dy` on y-faces.
 fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
     let m = &grid.metric;
-    let mut rate = 0.0f64;
-    for j in 0..grid.ny as isize {
-        for i in 0..=grid.nx as isize {
-            let a = u[(i, j)];
+    let (nx, ny) = (grid.nx, grid.ny);
+    let rate_u = par::max_over_rows(ny, nx + 1, 0.0, |j| {
+        let mut rate = 0.0f64;
+        for i in 0..=nx as isize {
+            let a = u[(i, j as isize)];
             let up = if a > 0.0 { i - 1 } else { i };
             let rc = m.rc(up);
             let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
-            rate = rate.max(f.max(1.0) * a.abs() / grid.dx);
+            rate = rate.max(f.max(1.0) * a.abs());
         }
-    }
-    for j in 0..=grid.ny as isize {
-        for i in 0..grid.nx as isize {
-            rate = rate.max(v[(i, j)].abs() / grid.dy);
-        }
-    }
-    rate
+        rate
+    });
+    let rate_v = par::max_over_rows(ny + 1, nx, 0.0, |j| {
+        let k = v.idx(0, j as isize);
+        v.data()[k..k + nx].iter().fold(0.0f64, |r, a| r.max(a.abs()))
+    });
+    (rate_u / grid.dx).max(rate_v / grid.dy)
 }
