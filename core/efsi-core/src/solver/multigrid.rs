@@ -1,4 +1,4 @@
-//! Geometric multigrid W-cycle for five-point SPD matrices on the cell grid, used as the
+//! Geometric multigrid (W-cycle on the fine levels) for five-point SPD matrices on the cell grid, used as the
 //! preconditioner of conjugate gradient ("MG-PCG").
 //!
 //! It works from the assembled [`Stencil5`] alone — the diagonal and the east/north couplings,
@@ -34,6 +34,15 @@
 //! has orders `m_P + m_R = 2`, not `> 2`): measured at ratio 1e4, 11 → 14 iterations from 64²
 //! to 256², against 10 → 10 for the W-cycle, whose cycle costs ≈ 1.5× a V-cycle's.
 //!
+//! The two corrections are made on the finest [`W_LEVELS`] = 2 levels only; below them the
+//! cycle is a V-cycle. A full W-cycle visits level `l` 2^l times, and the coarse levels (below
+//! [`par::PAR_MIN`] cells) run serially: on a 256² grid they were ≈ 30 % of a cycle on one
+//! thread and ≈ 40 % on two. With the V below level 2 they are visited 4 times, and the
+//! iterations are those of the full W-cycle — the `iteration_table` test over the six problem
+//! kinds at ratios 1, 1e2, 1e4 from 64² to 512² gives the same counts everywhere but one
+//! (10 instead of 11 at 512²); a W on the finest level alone needed up to 11 where the full
+//! W-cycle needs 10.
+//!
 //! **Singular systems.** Without Dirichlet faces the matrix annihilates constants; residuals
 //! the conjugate gradient hands over then sum to zero, restriction keeps that, and the coarsest
 //! solve pins one unknown (a consistent singular system), so the cycle stays symmetric and
@@ -41,8 +50,12 @@
 //!
 //! **Parallelism and determinism.** Sweeps of one colour, residual–restriction and
 //! prolongation run in parallel over rows (rayon) on levels of at least [`par::PAR_MIN`]
-//! cells; each writes disjoint entries from inputs no one writes in that loop, so results are
-//! bit-identical whatever the number of threads.
+//! cells (the restriction counts the fine cells it reads), and so does the set-up (loading the
+//! finest level, coarsening by coarse rows); each writes disjoint entries from inputs no one
+//! writes in that loop, and every coarse entry sums its children in the same order, so results
+//! are bit-identical whatever the number of threads. (Splitting the 4096-cell level too was
+//! tried: on this 2-core VM the median cycle got slower — a join on a level that small costs
+//! more than half its sweep whenever the other core is not immediately free.)
 //!
 //! **Allocation.** [`Multigrid::setup`] allocates the hierarchy on the first call and reuses it
 //! for later matrices of the same shape; [`Preconditioner::apply`] never allocates.
@@ -54,6 +67,10 @@ use std::cell::RefCell;
 
 /// The hierarchy stops coarsening at this many cells (solved by dense Cholesky).
 pub const COARSEST_CELLS: usize = 64;
+
+/// The W-cycle makes two coarse corrections on this many of the finest levels and one (a
+/// V-cycle) below them (module docs: "Cycle").
+pub const W_LEVELS: usize = 2;
 
 /// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
 #[derive(Clone, Debug, Default)]
@@ -101,44 +118,47 @@ impl Level {
         (j + 1) * self.s + i + 1
     }
 
-    /// Copy the coefficients of `a` (same shape) into the padded layout.
+    /// Copy the coefficients of `a` (same shape) into the padded layout: row copies in
+    /// parallel, one array at a time (they vectorise).
     fn load(&mut self, a: &Stencil5) {
         let (nx, ny, s) = (self.nx, self.ny, self.s);
-        for j in 0..ny {
-            for i in 0..nx {
-                let k = j * nx + i;
-                let p = self.p(i, j);
-                self.ce[p] = if i + 1 < nx || a.periodic_x {
-                    a.east[k]
-                } else {
-                    0.0
-                };
-                self.cn[p] = if j + 1 < ny || a.periodic_y {
-                    a.north[k]
-                } else {
-                    0.0
-                };
-                self.diag[p] = a.diag[k];
-                self.dinv[p] = if a.diag[k] > 0.0 {
-                    1.0 / a.diag[k]
-                } else {
-                    0.0
-                };
+        let (px, py) = (a.periodic_x, a.periodic_y);
+        let rows = s..(ny + 1) * s;
+        par::for_each_row(&mut self.ce[rows.clone()], s, |j, row| {
+            let src = &a.east[j * nx..(j + 1) * nx];
+            row[1..=nx].copy_from_slice(src);
+            // The closed east side has no coupling; the west ghost holds the wrap coupling.
+            if !px {
+                row[nx] = 0.0;
             }
-            // West ghost: the wrap coupling of the row's last cell.
-            self.ce[(j + 1) * s] = if a.periodic_x {
-                a.east[j * nx + nx - 1]
+            row[0] = if px { src[nx - 1] } else { 0.0 };
+        });
+        par::for_each_row(&mut self.cn[rows.clone()], s, |j, row| {
+            if j + 1 < ny || py {
+                row[1..=nx].copy_from_slice(&a.north[j * nx..(j + 1) * nx]);
             } else {
-                0.0
-            };
-        }
+                row[1..=nx].fill(0.0);
+            }
+        });
         for i in 0..nx {
-            self.cn[i + 1] = if a.periodic_y {
+            self.cn[i + 1] = if py {
                 a.north[(ny - 1) * nx + i]
             } else {
                 0.0
             };
         }
+        par::for_each_row2(
+            &mut self.diag[rows.clone()],
+            &mut self.dinv[rows],
+            s,
+            |j, d, di| {
+                let src = &a.diag[j * nx..(j + 1) * nx];
+                d[1..=nx].copy_from_slice(src);
+                for (di, d) in di[1..=nx].iter_mut().zip(src) {
+                    *di = if *d > 0.0 { 1.0 / d } else { 0.0 };
+                }
+            },
+        );
     }
 
     /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).
@@ -392,81 +412,115 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
     let sx = if fx == 2 { 0.5 } else { 1.0 };
     let sy = if fy == 2 { 0.5 } else { 1.0 };
     let se = if fx * fy == 4 { excess_scale } else { 1.0 };
-    c.east.fill(0.0);
-    c.north.fill(0.0);
-    c.diag.fill(0.0);
-    for j in 0..ny {
-        let jc = j / fy;
-        for i in 0..nx {
-            let ic = i / fx;
-            let k = j * nx + i;
-            let kc = jc * cx + ic;
-            let last_x = i + 1 == nx;
-            let last_y = j + 1 == ny;
-            let e = if !last_x || a.periodic_x {
-                a.east[k]
-            } else {
-                0.0
-            };
-            let n = if !last_y || a.periodic_y {
-                a.north[k]
-            } else {
-                0.0
-            };
-            // A fine face between two aggregates (or across the periodic wrap) couples them.
-            if last_x || (i + 1) / fx != ic {
-                c.east[kc] += sx * e;
-            }
-            if last_y || (j + 1) / fy != jc {
-                c.north[kc] += sy * n;
-            }
-            let w = if i > 0 {
-                a.east[k - 1]
-            } else if a.periodic_x {
-                a.east[k + nx - 1]
-            } else {
-                0.0
-            };
-            let s = if j > 0 {
-                a.north[k - nx]
-            } else if a.periodic_y {
-                a.north[k + (ny - 1) * nx]
-            } else {
-                0.0
-            };
-            let excess = a.diag[k] - (e + n + w + s);
-            if excess > 1e-12 * a.diag[k] {
-                c.diag[kc] += se * excess;
+    // i / fx as a shift (fx is 1 or 2): an integer division per cell cost more than the rest.
+    let lx = fx.trailing_zeros();
+    // Coarse rows in parallel. Each fine row's couplings and excesses are computed in runs
+    // (they vectorise), then added to the coarse row's sums fine row by fine row, child by
+    // child — every coarse entry sums its children in the order (j, i), so the sums do not
+    // depend on the number of threads.
+    let (ce, cn, cd) = (
+        SharedSlice::new(&mut c.east),
+        SharedSlice::new(&mut c.north),
+        SharedSlice::new(&mut c.diag),
+    );
+    par::for_each_index(cy, fy * nx, |jc| {
+        let row0 = jc * cx;
+        for kc in row0..row0 + cx {
+            // SAFETY: coarse row jc writes only its own entries (here and below).
+            unsafe {
+                ce.set(kc, 0.0);
+                cn.set(kc, 0.0);
+                cd.set(kc, 0.0);
             }
         }
-    }
-    // A periodic direction of one coarse cell couples the cell to itself: no coupling.
-    if cx == 1 {
-        c.east.fill(0.0);
-    }
-    if cy == 1 {
-        c.north.fill(0.0);
-    }
-    for jc in 0..cy {
-        for ic in 0..cx {
+        let j1 = (fy * jc + fy).min(ny);
+        let (mut e, mut n, mut x) = ([0.0f64; RUN], [0.0f64; RUN], [0.0f64; RUN]);
+        for j in fy * jc..j1 {
+            let last_y = j + 1 == ny;
+            let north_face = j + 1 == j1 && cy > 1;
+            let mut i0 = 0;
+            while i0 < nx {
+                let len = (nx - i0).min(RUN);
+                let k0 = j * nx + i0;
+                let (e, n, x) = (&mut e[..len], &mut n[..len], &mut x[..len]);
+                e.copy_from_slice(&a.east[k0..k0 + len]);
+                if i0 + len == nx && !a.periodic_x {
+                    e[len - 1] = 0.0;
+                }
+                if last_y && !a.periodic_y {
+                    n.fill(0.0);
+                } else {
+                    n.copy_from_slice(&a.north[k0..k0 + len]);
+                }
+                for t in 0..len {
+                    let k = k0 + t;
+                    let i = i0 + t;
+                    let w = if i > 0 {
+                        a.east[k - 1]
+                    } else if a.periodic_x {
+                        a.east[k + nx - 1]
+                    } else {
+                        0.0
+                    };
+                    let s = if j > 0 {
+                        a.north[k - nx]
+                    } else if a.periodic_y {
+                        a.north[k + (ny - 1) * nx]
+                    } else {
+                        0.0
+                    };
+                    let excess = a.diag[k] - (e[t] + n[t] + w + s);
+                    x[t] = if excess > 1e-12 * a.diag[k] {
+                        se * excess
+                    } else {
+                        0.0
+                    };
+                }
+                for t in 0..len {
+                    let i = i0 + t;
+                    let kc = row0 + (i >> lx);
+                    // A fine face between two aggregates (or across the periodic wrap)
+                    // couples them; a periodic direction of one coarse cell couples the cell
+                    // to itself: no coupling.
+                    let east_face = (i + 1 == nx || (i + 1) >> lx != i >> lx) && cx > 1;
+                    // SAFETY: as above.
+                    unsafe {
+                        if east_face {
+                            ce.set(kc, ce.get(kc) + sx * e[t]);
+                        }
+                        if north_face {
+                            cn.set(kc, cn.get(kc) + sy * n[t]);
+                        }
+                        if x[t] != 0.0 {
+                            cd.set(kc, cd.get(kc) + x[t]);
+                        }
+                    }
+                }
+                i0 += len;
+            }
+        }
+    });
+    let (east, north) = (&c.east, &c.north);
+    par::for_each_row(&mut c.diag, cx, |jc, row| {
+        for (ic, d) in row.iter_mut().enumerate() {
             let kc = jc * cx + ic;
             let w = if ic > 0 {
-                c.east[kc - 1]
+                east[kc - 1]
             } else if a.periodic_x {
-                c.east[kc + cx - 1]
+                east[kc + cx - 1]
             } else {
                 0.0
             };
             let s = if jc > 0 {
-                c.north[kc - cx]
+                north[kc - cx]
             } else if a.periodic_y {
-                c.north[kc + (cy - 1) * cx]
+                north[kc + (cy - 1) * cx]
             } else {
                 0.0
             };
-            c.diag[kc] += c.east[kc] + c.north[kc] + w + s;
+            *d += east[kc] + north[kc] + w + s;
         }
-    }
+    });
 }
 
 #[derive(Clone, Debug, Default)]
@@ -584,7 +638,8 @@ fn restrict(f: &Level, c: &mut Level) {
     let fx = if c.nx < f.nx { 2 } else { 1 };
     let fy = if c.ny < f.ny { 2 } else { 1 };
     let (fnx, fny, cnx, cs) = (f.nx, f.ny, c.nx, c.s);
-    par::for_each_row(&mut c.b[cs..(c.ny + 1) * cs], cs, |jc, row| {
+    // A coarse row sums `fy` fine rows: split the loop by the fine work.
+    par::for_each_row_weighted(&mut c.b[cs..(c.ny + 1) * cs], cs, fy * f.s, |jc, row| {
         let out = &mut row[1..=cnx];
         out.fill(0.0);
         let mut r = [0.0f64; RUN];
@@ -655,7 +710,7 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
         let (f, c) = levels.split_at_mut(l + 1);
         restrict(&f[l], &mut c[0]);
     }
-    let g = if l + 2 == nl { 1 } else { gamma };
+    let g = if l + 2 == nl || l >= W_LEVELS { 1 } else { gamma };
     for k in 0..g {
         if k > 0 {
             // Next correction from the residual of the current one.
@@ -974,63 +1029,5 @@ mod tests {
         let ((x1, i1), (x2, i2)) = (run(1), run(2));
         assert_eq!(i1, i2);
         assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
-    }
-}
-
-#[cfg(test)]
-mod timing_tmp {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn level_timing() {
-        let n = 256;
-        let mut a = Stencil5::new(n, n, false, false);
-        for j in 0..n {
-            for i in 0..n {
-                let k = j * n + i;
-                a.east[k] = if i + 1 < n { 1.0 } else { 0.0 };
-                a.north[k] = if j + 1 < n { 1.0 } else { 0.0 };
-                a.diag[k] = 4.0;
-            }
-        }
-        for t in [1, 2] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
-            let a = a.clone();
-            pool.install(move || {
-                let mut mg = Multigrid::new(2);
-                mg.setup(&a);
-                let mut h = mg.h.borrow_mut();
-                let nl = h.levels.len();
-                for l in 0..nl - 1 {
-                    let reps = 200;
-                    let t0 = std::time::Instant::now();
-                    for _ in 0..reps {
-                        h.levels[l].sweep(0);
-                    }
-                    let ts = t0.elapsed().as_secs_f64() / reps as f64;
-                    let t0 = std::time::Instant::now();
-                    for _ in 0..reps {
-                        let (f, c) = h.levels.split_at_mut(l + 1);
-                        restrict(&f[l], &mut c[0]);
-                    }
-                    let tr = t0.elapsed().as_secs_f64() / reps as f64;
-                    let t0 = std::time::Instant::now();
-                    for _ in 0..reps {
-                        let (f, c) = h.levels.split_at_mut(l + 1);
-                        prolong(&mut f[l], &c[0]);
-                    }
-                    let tp = t0.elapsed().as_secs_f64() / reps as f64;
-                    println!("t{t} level {l} ({} cells): sweep {:.1} us restrict {:.1} prolong {:.1}", h.levels[l].nx * h.levels[l].ny, ts * 1e6, tr * 1e6, tp * 1e6);
-                }
-                drop(h);
-                let r = vec![1.0; n * n];
-                let mut z = vec![0.0; n * n];
-                let t0 = std::time::Instant::now();
-                for _ in 0..50 {
-                    mg.apply(&r, &mut z);
-                }
-                println!("t{t} cycle {:.1} us", t0.elapsed().as_secs_f64() / 50.0 * 1e6);
-            });
-        }
     }
 }

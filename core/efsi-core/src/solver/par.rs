@@ -182,13 +182,26 @@ pub fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync + Send) {
 
 /// Run `f(j, row)` over the rows (`row_len` long) of `y`, in parallel when `y` is long.
 pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64]) + Sync + Send) {
+    for_each_row_weighted(y, row_len, row_len, f);
+}
+
+/// [`for_each_row`] for rows that each cost `work` element operations, which decides whether
+/// (and how finely) to split the loop: a coarse row that sums several fine rows is worth more
+/// than its length.
+pub fn for_each_row_weighted(
+    y: &mut [f64],
+    row_len: usize,
+    work: usize,
+    f: impl Fn(usize, &mut [f64]) + Sync + Send,
+) {
     if row_len == 0 {
         return;
     }
-    if y.len() < PAR_MIN {
+    let rows = y.len().div_ceil(row_len);
+    if rows * work < PAR_MIN {
         y.chunks_mut(row_len).enumerate().for_each(|(j, r)| f(j, r));
     } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+        let min_rows = (PAR_MIN / 2).div_ceil(work.max(1)).max(1);
         y.par_chunks_mut(row_len)
             .enumerate()
             .with_min_len(min_rows)
