@@ -746,8 +746,7 @@ impl Simulation {
             snap.state = self.state.clone();
         }
         (snap.last_change, snap.velocity_scale) = self.stepping();
-        let stages = self.pipeline().save_stages();
-        snap.stages = stages;
+        self.pipeline().save_stages_into(&mut snap.stages);
     }
 
     /// Put a snapshot back: the simulation continues exactly as the one it was taken from

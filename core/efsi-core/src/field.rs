@@ -102,9 +102,9 @@ impl Field {
         self.data.fill(value);
     }
 
-    /// Copy all values from `other` (same shape).
+    /// Copy all values from `other` (same shape); in parallel chunks on large grids.
     pub fn copy_from(&mut self, other: &Field) {
-        self.data.copy_from_slice(&other.data);
+        crate::solver::par::copy(&mut self.data, &other.data);
     }
 
     /// Maximum of |value| over the interior of the given staggering.

@@ -164,6 +164,13 @@ pub trait Stage: Send {
         Vec::new()
     }
 
+    /// [`save`](Self::save) into `out` (its previous contents replaced), reusing its
+    /// allocation: the run loop snapshots the state before every step, so a stage that keeps
+    /// data should override this too (default: `*out = self.save()`).
+    fn save_into(&self, out: &mut Vec<f64>) {
+        *out = self.save();
+    }
+
     /// Take back what [`save`](Self::save) returned (of a stage built from the same scene).
     /// The default accepts only nothing; the error says what does not fit.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
@@ -617,6 +624,21 @@ impl Pipeline {
             .iter()
             .map(|e| (e.name.to_string(), e.stage.save()))
             .collect()
+    }
+
+    /// [`save_stages`](Self::save_stages) into `out`, reusing its allocations when it already
+    /// holds this pipeline's stages (no heap allocation from the second call on, for stages
+    /// that implement [`Stage::save_into`]).
+    pub fn save_stages_into(&self, out: &mut Vec<(String, Vec<f64>)>) {
+        let same = out.len() == self.entries.len()
+            && out.iter().zip(&self.entries).all(|((n, _), e)| n == e.name);
+        if !same {
+            *out = self.save_stages();
+            return;
+        }
+        for ((_, data), e) in out.iter_mut().zip(&self.entries) {
+            e.stage.save_into(data);
+        }
     }
 
     /// Give each stage back its data ([`Stage::restore`]). `saved` must name the same stages in

@@ -252,26 +252,56 @@ impl State {
     /// shapes (two states of one simulation do); returns whether they did (nothing is copied
     /// otherwise).
     pub fn copy_from(&mut self, other: &State) -> bool {
-        let theirs = other.arrays();
-        let mut mine = self.arrays_mut();
-        let fits = mine.len() == theirs.len()
-            && mine
-                .iter()
-                .zip(&theirs)
-                .all(|((a, f), (b, g))| a == b && f.data().len() == g.data().len());
+        let fits = self.phi.is_some() == other.phi.is_some()
+            && self.deformation.is_some() == other.deformation.is_some()
+            && self
+                .fields()
+                .zip(other.fields())
+                .all(|(f, g)| f.data().len() == g.data().len());
         if !fits {
             return false;
         }
-        for ((_, f), (_, g)) in mine.iter_mut().zip(&theirs) {
+        for (f, g) in self.fields_mut().zip(other.fields()) {
             f.copy_from(g);
         }
         self.t = other.t;
         self.step = other.step;
         self.dt_prev = other.dt_prev;
-        for ((_, a), (_, b)) in self.scalars_mut().into_iter().zip(other.scalars()) {
-            *a = b;
+        self.frame_acceleration = other.frame_acceleration;
+        if let (Some(d), Some(e)) = (&mut self.deformation, &other.deformation) {
+            d.elastic_energy = e.elastic_energy;
         }
         true
+    }
+
+    /// The arrays of [`arrays`](Self::arrays), same order, without their names (no allocation).
+    fn fields(&self) -> impl Iterator<Item = &Field> {
+        [&self.u, &self.v, &self.p, &self.rho, &self.mu]
+            .into_iter()
+            .chain(self.phi.iter())
+            .chain(
+                self.deformation
+                    .iter()
+                    .flat_map(|d| d.parts().into_iter().flat_map(|(_, t)| t.iter())),
+            )
+    }
+
+    /// [`fields`](Self::fields), mutable.
+    fn fields_mut(&mut self) -> impl Iterator<Item = &mut Field> {
+        [
+            &mut self.u,
+            &mut self.v,
+            &mut self.p,
+            &mut self.rho,
+            &mut self.mu,
+        ]
+        .into_iter()
+        .chain(self.phi.iter_mut())
+        .chain(
+            self.deformation
+                .iter_mut()
+                .flat_map(|d| d.parts_mut().into_iter().flat_map(|(_, t)| t.iter_mut())),
+        )
     }
 
     /// The field stored for `id`, if allocated.

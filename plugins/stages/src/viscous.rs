@@ -520,13 +520,20 @@ impl Stage for ViscousStage {
     /// The warm start's history: `[count, Δt₁, Δt₂]`, then the `count` last increments
     /// (newest first), so that a restored run continues bit for bit.
     fn save(&self) -> Vec<f64> {
-        let w = &self.warm;
-        let mut v = Vec::with_capacity(3 + w.history * self.delta.len());
-        v.extend_from_slice(&[w.history as f64, w.prev_dt[0], w.prev_dt[1]]);
-        for p in &w.prev[..w.history] {
-            v.extend_from_slice(p);
-        }
+        let mut v = Vec::new();
+        self.save_into(&mut v);
         v
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        let w = &self.warm;
+        out.clear();
+        // Room for the longest history at once: no reallocation as the history fills up.
+        out.reserve(3 + w.prev.len() * self.delta.len());
+        out.extend_from_slice(&[w.history as f64, w.prev_dt[0], w.prev_dt[1]]);
+        for p in &w.prev[..w.history] {
+            out.extend_from_slice(p);
+        }
     }
 
     /// Nothing (a snapshot without a history: the next solve starts from zero), or what

@@ -142,7 +142,15 @@ impl Stage for VofStage {
 
     /// The end-of-step velocity Vⁿ kept for the next step's average (padded u, then v).
     fn save(&self) -> Vec<f64> {
-        [self.u_adv.data(), self.v_adv.data()].concat()
+        let mut v = Vec::new();
+        self.save_into(&mut v);
+        v
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend_from_slice(self.u_adv.data());
+        out.extend_from_slice(self.v_adv.data());
     }
 
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
