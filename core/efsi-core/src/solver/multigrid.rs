@@ -266,7 +266,8 @@ impl Level {
                 x[(ny + 1) * s + i] = x[s + i];
             }
         }
-        par::for_each_index(chunks, chunk * nx, phase2);
+        // Phase 2 touches two rows per chunk: split only when that is worth a fork.
+        par::for_each_index(chunks, 2 * nx, phase2);
     }
 
     /// `out[t] = (b − A x)[k0 + t]` for a run of cells of one row (ghosts filled), over slices (it
