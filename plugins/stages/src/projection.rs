@@ -79,6 +79,9 @@ impl StagePlugin for Projection {
             b: vec![0.0; n],
             x: vec![0.0; n],
             weight: vec![0.0; n],
+            weight_dt: f64::NAN,
+            rx: (0..=grid.nx as isize).map(|i| grid.metric.rx(i)).collect(),
+            rc: (0..grid.nx as isize).map(|i| grid.metric.rc(i)).collect(),
         }))
     }
 }
@@ -98,6 +101,11 @@ struct ProjectionStage {
     b: Vec<f64>,
     x: Vec<f64>,
     weight: Vec<f64>,
+    /// The Δt the weights were computed for (they change only with it).
+    weight_dt: f64,
+    /// Per column: the face radii `r_f` (`nx + 1`) and the cell radii `r_c` (`nx`).
+    rx: Vec<f64>,
+    rc: Vec<f64>,
 }
 
 impl ProjectionStage {
@@ -198,16 +206,28 @@ impl Stage for ProjectionStage {
         }
         // Right-hand side, the residual weights Δt²/dV and the initial guess.
         let (u, v, p) = (&state.u, &state.v, &state.p);
+        // −(net volume outflux)/Δt, as `ops::net_outflux` computes it, over slices (it
+        // vectorises).
+        let (rx, rc, s) = (&self.rx, &self.rc, u.stride());
+        let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
         for_each_row(&mut self.b, nx, |j, row| {
-            for (i, b) in row.iter_mut().enumerate() {
-                *b = -ops::net_outflux(grid, u, v, i as isize, j as isize) / dt;
+            let k0 = u.idx(0, j as isize);
+            let (uw, ue) = (&ud[k0..k0 + nx], &ud[k0 + 1..k0 + 1 + nx]);
+            let (vs, vn) = (&vd[k0..k0 + nx], &vd[k0 + s..k0 + s + nx]);
+            let (rw, re) = (&rx[..nx], &rx[1..=nx]);
+            for i in 0..nx {
+                let out = (re[i] * ue[i] - rw[i] * uw[i]) * dy + rc[i] * (vn[i] - vs[i]) * dx;
+                row[i] = -out / dt;
             }
         });
-        for_each_row(&mut self.weight, nx, |_, row| {
-            for (i, w) in row.iter_mut().enumerate() {
-                *w = dt * dt / grid.cell_volume(i as isize);
-            }
-        });
+        if dt != self.weight_dt {
+            for_each_row(&mut self.weight, nx, |_, row| {
+                for (i, w) in row.iter_mut().enumerate() {
+                    *w = dt * dt / grid.cell_volume(i as isize);
+                }
+            });
+            self.weight_dt = dt;
+        }
         for_each_row(&mut self.x, nx, |j, row| {
             for (i, x) in row.iter_mut().enumerate() {
                 *x = p[(i as isize, j as isize)];
@@ -260,21 +280,29 @@ impl Stage for ProjectionStage {
         let cy = dt / grid.dy;
         let base = p.idx(0, 0);
         let ud = &mut state.u.data_mut()[base..base + ny * s];
+        let (lo, hi) = (ux.lo.max(0) as usize, ux.hi.max(0) as usize);
         for_each_row(ud, s, |j, row| {
-            let r0 = base + j * s;
-            for i in ux.lo..ux.hi {
-                let (c, k) = (i as usize, r0 + i as usize);
-                row[c] -= cx * (pd[k] - pd[k - 1]) / (0.5 * (rd[k] + rd[k - 1]));
+            if hi <= lo {
+                return;
+            }
+            // Over slices (it vectorises): faces lo..hi of row j.
+            let k = base + j * s + lo;
+            let n = hi - lo;
+            let (pe, pw) = (&pd[k..k + n], &pd[k - 1..k - 1 + n]);
+            let (re, rw) = (&rd[k..k + n], &rd[k - 1..k - 1 + n]);
+            for (t, u) in row[lo..hi].iter_mut().enumerate() {
+                *u -= cx * (pe[t] - pw[t]) / (0.5 * (re[t] + rw[t]));
             }
         });
         let v0 = p.idx(0, vy.lo);
         let vrows = (vy.hi - vy.lo).max(0) as usize;
         let vd = &mut state.v.data_mut()[v0..v0 + vrows * s];
         for_each_row(vd, s, |j, row| {
-            let r0 = v0 + j * s;
-            for i in 0..nx {
-                let k = r0 + i;
-                row[i] -= cy * (pd[k] - pd[k - s]) / (0.5 * (rd[k] + rd[k - s]));
+            let k = v0 + j * s;
+            let (pn, ps) = (&pd[k..k + nx], &pd[k - s..k - s + nx]);
+            let (rn, rs) = (&rd[k..k + nx], &rd[k - s..k - s + nx]);
+            for (i, v) in row[..nx].iter_mut().enumerate() {
+                *v -= cy * (pn[i] - ps[i]) / (0.5 * (rn[i] + rs[i]));
             }
         });
         if cfg!(debug_assertions) {
