@@ -144,7 +144,7 @@ impl Field {
     }
 }
 
-/// Whether every value of `x` is finite: `v − v` is 0 for a finite `v` and NaN otherwise, so a
+/// Whether every value of `x` is finite: `0·v` is ±0 for a finite `v` and NaN otherwise, so a
 /// four-lane sum of it (which vectorises, unlike a loop that can stop early) is 0 exactly when
 /// all are.
 fn all_finite(x: &[f64]) -> bool {
@@ -152,10 +152,10 @@ fn all_finite(x: &[f64]) -> bool {
     let mut chunks = x.chunks_exact(4);
     for c in &mut chunks {
         for l in 0..4 {
-            s[l] += c[l] - c[l];
+            s[l] += c[l] * 0.0;
         }
     }
-    let tail = chunks.remainder().iter().fold(0.0, |a, v| a + (v - v));
+    let tail = chunks.remainder().iter().fold(0.0, |a, v| a + v * 0.0);
     (s[0] + s[1]) + (s[2] + s[3]) + tail == 0.0
 }
 
@@ -204,7 +204,10 @@ mod tests {
         assert_eq!(f.first_non_finite(Stagger::XFace, 130, 90), Some((130, 7)));
         for (i, j) in [(129, 60), (5, 60), (0, 2)] {
             f[(i, j)] = f64::NAN;
-            assert_eq!(f.first_non_finite(Stagger::Cell, 130, 90), Some((i as usize, j as usize)));
+            assert_eq!(
+                f.first_non_finite(Stagger::Cell, 130, 90),
+                Some((i as usize, j as usize))
+            );
         }
         assert!(all_finite(&[1.0, -2.0, f64::MAX, 0.0, 3.0]));
         assert!(!all_finite(&[1.0, -2.0, f64::MAX, 0.0, f64::INFINITY]));

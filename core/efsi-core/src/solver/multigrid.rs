@@ -141,11 +141,7 @@ impl Level {
             }
         });
         for i in 0..nx {
-            self.cn[i + 1] = if py {
-                a.north[(ny - 1) * nx + i]
-            } else {
-                0.0
-            };
+            self.cn[i + 1] = if py { a.north[(ny - 1) * nx + i] } else { 0.0 };
         }
         par::for_each_row2(
             &mut self.diag[rows.clone()],
@@ -618,14 +614,37 @@ impl Multigrid {
             }
         }
         h.levels[0].load(a);
-        for l in 1..h.levels.len() {
-            let (done, rest) = self.mats.split_at_mut(l - 1);
-            let fine = if l == 1 { a } else { &done[l - 2] };
-            coarsen_into(fine, &mut rest[0], self.excess_scale);
-            h.levels[l].load(&rest[0]);
-        }
+        let excess = self.excess_scale;
         let Hierarchy { levels, coarsest } = h;
-        coarsest.factor(levels.last().expect("at least one level"));
+        let n = levels.len();
+        // Levels coarsened from a serial-sized one, and the Cholesky factor, with a second
+        // thread kept awake for what follows.
+        let first_serial = (1..n)
+            .find(|&l| levels[l - 1].nx * levels[l - 1].ny < par::PAR_MIN)
+            .unwrap_or(n);
+        coarsen_levels(a, &mut self.mats, levels, 1..first_serial, excess);
+        let mats = &mut self.mats;
+        par::serial_warm(|| {
+            coarsen_levels(a, mats, levels, first_serial..n, excess);
+            coarsest.factor(levels.last().expect("at least one level"));
+        });
+    }
+}
+
+/// Levels `range` of the hierarchy from their finer neighbours (`a` is level 0's matrix,
+/// `mats[l − 1]` level l's).
+fn coarsen_levels(
+    a: &Stencil5,
+    mats: &mut [Stencil5],
+    levels: &mut [Level],
+    range: std::ops::Range<usize>,
+    excess_scale: f64,
+) {
+    for l in range {
+        let (done, rest) = mats.split_at_mut(l - 1);
+        let fine = if l == 1 { a } else { &done[l - 2] };
+        coarsen_into(fine, &mut rest[0], excess_scale);
+        levels[l].load(&rest[0]);
     }
 }
 
@@ -711,7 +730,11 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
         let (f, c) = levels.split_at_mut(l + 1);
         restrict(&f[l], &mut c[0]);
     }
-    let g = if l + 2 == nl || l >= W_LEVELS { 1 } else { gamma };
+    let g = if l + 2 == nl || l >= W_LEVELS {
+        1
+    } else {
+        gamma
+    };
     for k in 0..g {
         if k > 0 {
             // Next correction from the residual of the current one.
@@ -726,7 +749,13 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
             std::mem::swap(&mut c.b, &mut c.t);
             std::mem::swap(&mut c.x, &mut c.t);
         }
-        cycle(levels, coarsest, l + 1, sweeps, gamma);
+        let serial = |lv: &Level| lv.nx * lv.ny < par::PAR_MIN;
+        if serial(&levels[l + 1]) && !serial(&levels[l]) {
+            // The serial coarse levels: keep a second thread awake for the sweeps after them.
+            par::serial_warm(|| cycle(levels, coarsest, l + 1, sweeps, gamma));
+        } else {
+            cycle(levels, coarsest, l + 1, sweeps, gamma);
+        }
         if k > 0 {
             let c = &mut levels[l + 1];
             let t = &c.t;

@@ -223,7 +223,13 @@ impl Slab<'_> {
     /// `ku` (column `iu`) below its line; `w` is the slab width, `pos` whether the flow is
     /// towards `+d` (slab at the high side of the cell).
     #[inline(always)]
-    fn fraction<const AXI: bool, const D: u8>(&self, ku: usize, iu: isize, w: f64, pos: bool) -> f64 {
+    fn fraction<const AXI: bool, const D: u8>(
+        &self,
+        ku: usize,
+        iu: isize,
+        w: f64,
+        pos: bool,
+    ) -> f64 {
         let (dx, dy) = (self.dx, self.dy);
         let (mx, my, al) = (
             self.lines[3 * ku],

@@ -261,7 +261,9 @@ fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
     });
     let rate_v = par::max_over_rows(ny + 1, nx, 0.0, |j| {
         let k = v.idx(0, j as isize);
-        v.data()[k..k + nx].iter().fold(0.0f64, |r, a| r.max(a.abs()))
+        v.data()[k..k + nx]
+            .iter()
+            .fold(0.0f64, |r, a| r.max(a.abs()))
     });
     (rate_u / grid.dx).max(rate_v / grid.dy)
 }
