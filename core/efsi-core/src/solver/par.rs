@@ -107,6 +107,54 @@ pub fn reduce_chunks2(
     acc
 }
 
+/// [`reduce_chunks2`] over three equal-length slices, with a pair of partials per chunk
+/// (two reductions in one pass), folded in chunk order.
+pub fn reduce_chunks3(
+    a: &mut [f64],
+    b: &mut [f64],
+    c: &mut [f64],
+    init: (f64, f64),
+    f: impl Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> (f64, f64) + Sync + Send,
+    combine: impl Fn((f64, f64), (f64, f64)) -> (f64, f64),
+) -> (f64, f64) {
+    assert!(a.len() == b.len() && a.len() == c.len());
+    let mut acc = init;
+    if a.len() < PAR_MIN {
+        for (k, ((x, y), z)) in a
+            .chunks_mut(REDUCE_CHUNK)
+            .zip(b.chunks_mut(REDUCE_CHUNK))
+            .zip(c.chunks_mut(REDUCE_CHUNK))
+            .enumerate()
+        {
+            acc = combine(acc, f(k * REDUCE_CHUNK, x, y, z));
+        }
+        return acc;
+    }
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    for (s, ((a, b), c)) in a
+        .chunks_mut(big)
+        .zip(b.chunks_mut(big))
+        .zip(c.chunks_mut(big))
+        .enumerate()
+    {
+        let n = a.len().div_ceil(REDUCE_CHUNK);
+        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(
+                a.par_chunks_mut(REDUCE_CHUNK)
+                    .zip(b.par_chunks_mut(REDUCE_CHUNK))
+                    .zip(c.par_chunks_mut(REDUCE_CHUNK)),
+            )
+            .enumerate()
+            .for_each(|(k, (p, ((x, y), z)))| *p = f(s * big + k * REDUCE_CHUNK, x, y, z));
+        for p in &parts[..n] {
+            acc = combine(acc, *p);
+        }
+    }
+    acc
+}
+
 /// [`reduce_chunks2`] over one slice.
 pub fn reduce_chunks(
     a: &mut [f64],
