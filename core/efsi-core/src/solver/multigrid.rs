@@ -452,21 +452,7 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
                 for t in 0..len {
                     let k = k0 + t;
                     let i = i0 + t;
-                    let w = if i > 0 {
-                        a.east[k - 1]
-                    } else if a.periodic_x {
-                        a.east[k + nx - 1]
-                    } else {
-                        0.0
-                    };
-                    let s = if j > 0 {
-                        a.north[k - nx]
-                    } else if a.periodic_y {
-                        a.north[k + (ny - 1) * nx]
-                    } else {
-                        0.0
-                    };
-                    let excess = a.diag[k] - (e[t] + n[t] + w + s);
+                    let excess = a.diag[k] - (e[t] + n[t] + a.west(k, i) + a.south(k, j));
                     x[t] = if excess > 1e-12 * a.diag[k] {
                         se * excess
                     } else {
@@ -497,27 +483,15 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
             }
         }
     });
-    let (east, north) = (&c.east, &c.north);
-    par::for_each_row(&mut c.diag, cx, |jc, row| {
+    let mut diag = std::mem::take(&mut c.diag);
+    let cc = &*c;
+    par::for_each_row(&mut diag, cx, |jc, row| {
         for (ic, d) in row.iter_mut().enumerate() {
             let kc = jc * cx + ic;
-            let w = if ic > 0 {
-                east[kc - 1]
-            } else if a.periodic_x {
-                east[kc + cx - 1]
-            } else {
-                0.0
-            };
-            let s = if jc > 0 {
-                north[kc - cx]
-            } else if a.periodic_y {
-                north[kc + (cy - 1) * cx]
-            } else {
-                0.0
-            };
-            *d += east[kc] + north[kc] + w + s;
+            *d += cc.east[kc] + cc.north[kc] + cc.west(kc, ic) + cc.south(kc, jc);
         }
     });
+    c.diag = diag;
 }
 
 #[derive(Clone, Debug, Default)]

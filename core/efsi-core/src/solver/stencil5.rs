@@ -48,6 +48,31 @@ impl Stencil5 {
         }
     }
 
+    /// The coupling of cell `k` (in column `i`) to its west neighbour: the east coupling of
+    /// the cell to its west, across the periodic wrap in the first column, 0 at a closed side.
+    #[inline(always)]
+    pub fn west(&self, k: usize, i: usize) -> f64 {
+        if i > 0 {
+            self.east[k - 1]
+        } else if self.periodic_x {
+            self.east[k + self.nx - 1]
+        } else {
+            0.0
+        }
+    }
+
+    /// The coupling of cell `k` (in row `j`) to its south neighbour (as [`west`](Self::west)).
+    #[inline(always)]
+    pub fn south(&self, k: usize, j: usize) -> f64 {
+        if j > 0 {
+            self.north[k - self.nx]
+        } else if self.periodic_y {
+            self.north[k + (self.ny - 1) * self.nx]
+        } else {
+            0.0
+        }
+    }
+
     /// Number of unknowns.
     pub fn len(&self) -> usize {
         self.diag.len()
