@@ -15,8 +15,9 @@
 //!   default `cavity128,cavity256,drop128,drop256,sphere`), each on one thread and on N
 //!   (default all), for ns
 //!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
-//!   medians of R runs, written to `DIR/bench.json` (default `target/bench`). A benchmark, not
-//!   a test: timings are never asserted.
+//!   medians of R runs (the 1- and N-thread runs alternate; the speed-up of each pair is
+//!   printed as a range and kept in the JSON), written to `DIR/bench.json` (default
+//!   `target/bench`). A benchmark, not a test: timings are never asserted.
 //! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (release) and
 //!   package `target/fmu/sphere_impact.fmu` (FMI 2.0 Co-Simulation) and
 //!   `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation).
@@ -464,6 +465,21 @@ fn bench(args: &[String]) -> Result<(), String> {
                 })
                 .collect::<Vec<_>>()
                 .join(", ");
+            // The speed-up of each alternating pair of runs: on a VM whose second core comes
+            // and goes, their spread says how far to trust the ratio of the medians.
+            let pairs: Vec<f64> = runs[0]
+                .iter()
+                .zip(&runs[k])
+                .map(|(a, b)| a.total / b.total)
+                .collect();
+            let pair_note = if k > 0 && pairs.len() > 1 {
+                let (lo, hi) = pairs
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                format!(" (pairs {lo:.2}–{hi:.2}×)")
+            } else {
+                String::new()
+            };
             let fall = f
                 .fall
                 .map(|z| {
@@ -474,7 +490,7 @@ fn bench(args: &[String]) -> Result<(), String> {
                 })
                 .unwrap_or_default();
             println!(
-                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s",
+                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{pair_note}",
                 c.name,
                 t,
                 f.steps,
@@ -492,6 +508,7 @@ fn bench(args: &[String]) -> Result<(), String> {
                 "ns_per_cell_step_runs": runs[k].iter().map(|r| r.total).collect::<Vec<_>>(),
                 "spread": spread,
                 "speedup_vs_1_thread": base / f.total,
+                "speedup_pairs": pairs,
                 "wall_seconds": f.wall,
                 "fall": f.fall,
                 "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({

@@ -1,7 +1,8 @@
 //! Kernels of the pressure solve on the variable-density Poisson matrix of a heavy disk
-//! (density ratio 1000) in a closed box: the five-point product, one multigrid W-cycle, one
-//! IC(0) application, the multigrid setup, and whole MG-PCG and IC-PCG solves to 1e-10, at 128²
-//! and 256², on the current rayon pool (`RAYON_NUM_THREADS=1` for one thread).
+//! (density ratio 1000) in a closed box: the five-point product, one multigrid cycle
+//! (`multigrid_w_cycle`: W on the two finest levels, V below), one IC(0) application, the
+//! multigrid setup, and whole MG-PCG and IC-PCG solves to 1e-10, at 128² and 256², on the
+//! current rayon pool (`RAYON_NUM_THREADS=1` for one thread).
 //!
 //! `cargo bench -p efsi-core --bench poisson`; figure of merit: time per call (per cell with
 //! the throughput shown).
