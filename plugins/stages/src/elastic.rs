@@ -701,13 +701,13 @@ impl Kernels {
     /// with ghosts filled.
     fn set_weights(&mut self, phi: &Field) {
         let (nx, ny) = self.nxy();
-        let g = efsi_core::G;
-        for j in -g..=ny + g {
-            for i in -g..=nx + g {
-                let f = phi[(i, j)];
-                self.w[(i, j)] = if f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
+        // Every entry, ghosts included (one padded shape for all fields), in parallel chunks.
+        let pd = phi.data();
+        par::for_each_chunk(self.w.data_mut(), |o, w| {
+            for (w, f) in w.iter_mut().zip(&pd[o..]) {
+                *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
-        }
+        });
         let mut c = Window::new(nx, -1, ny, -1);
         for j in -1..=ny {
             for i in -1..=nx {
@@ -719,6 +719,7 @@ impl Kernels {
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
         self.solid_k = self.solid_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
+        let g = efsi_core::G;
         for j in 1 - g..=ny + g {
             for i in 1 - g..=nx + g {
                 self.wc[(i, j)] = 0.25
@@ -958,7 +959,9 @@ impl Kernels {
         });
     }
 
-    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior.
+    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior;
+    /// rows in parallel (each writes only its own entries: the same bits on any number of
+    /// threads).
     fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
         let g = &self.grid;
         let m = &g.metric;
@@ -970,28 +973,37 @@ impl Kernels {
             let (p, q, r, t) = at(d, k, o);
             a * face_value(a, p, q, r, t)
         };
+        let gu = efsi_core::G as usize;
         for c in 0..3 {
             let bd = b[c].data();
-            for j in 0..ny {
+            par::for_each_row(out[c].data_mut(), s, |jp, row| {
+                let j = jp as isize - efsi_core::G;
+                if j < 0 || j >= ny {
+                    return;
+                }
                 for i in 0..nx {
-                    let k = u.idx(i, j);
+                    let k = jp * s + gu + i as usize;
                     // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
                     let fw = fx(ud[k], bd, k, 1);
                     let fe = fx(ud[k + 1], bd, k + 1, 1);
                     let fs = fx(vd[k], bd, k, s);
                     let fn_ = fx(vd[k + s], bd, k + s, s);
-                    out[c].data_mut()[k] =
+                    row[gu + i as usize] =
                         (m.rx(i + 1) * fe - m.rx(i) * fw) / (m.rc(i) * g.dx) + (fn_ - fs) / g.dy;
                 }
-            }
+            });
         }
         let bd = b[3].data();
-        for j in 0..=ny {
+        par::for_each_row(out[3].data_mut(), s, |jp, row| {
+            let j = jp as isize - efsi_core::G;
+            if j < 0 || j > ny {
+                return;
+            }
             for i in 0..=nx {
-                let k = u.idx(i, j);
+                let (k, o) = (jp * s + gu + i as usize, gu + i as usize);
                 let r = m.rx(i);
                 if r == 0.0 {
-                    out[3].data_mut()[k] = 0.0;
+                    row[o] = 0.0;
                     continue;
                 }
                 // The corner's control volume has x-faces at the cell centres i−1, i and y-faces
@@ -1004,10 +1016,9 @@ impl Kernels {
                 let fw = fx(uw, bd, k, 1);
                 let fn_ = fx(vn, bd, k + s, s);
                 let fs = fx(vs, bd, k, s);
-                out[3].data_mut()[k] =
-                    (m.rc(i) * fe - m.rc(i - 1) * fw) / (r * g.dx) + (fn_ - fs) / g.dy;
+                row[o] = (m.rc(i) * fe - m.rc(i - 1) * fw) / (r * g.dx) + (fn_ - fs) / g.dy;
             }
-        }
+        });
     }
 
     /// The strain energy `∫ W dV` of `b` (per radian when axisymmetric). A law gives only its
