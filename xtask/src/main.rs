@@ -1,7 +1,7 @@
 //! Project automation.
 //!
-//! - `cargo xtask test`: everything CI runs — formatting, clippy (warnings are errors), the Rust
-//!   test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
+//! - `cargo xtask test`: everything CI runs — formatting, clippy and rustdoc (warnings are
+//!   errors), the Rust test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
 //!   virtual environment under `target/venv` that it creates on first use.
 //! - `cargo xtask run SCENE [ARGS…]`: build the whole workspace in release (the `efsi` binary
 //!   and the law plugin libraries it loads) and run `efsi run SCENE ARGS…`.
@@ -173,6 +173,11 @@ fn test() -> Result<(), String> {
         "warnings",
     ]);
     run(c, "cargo clippy -D warnings")?;
+    // The API docs build without a warning (broken or private intra-doc links).
+    let mut c = cargo();
+    c.args(["doc", "--workspace", "--no-deps", "--quiet"])
+        .env("RUSTDOCFLAGS", "-D warnings");
+    run(c, "cargo doc -D warnings")?;
     let mut c = cargo();
     c.args(["test", "--workspace", "--all-targets"]);
     run(c, "cargo test")?;

@@ -45,7 +45,7 @@ enum Command {
     Run {
         /// The scene file (RON).
         scene: PathBuf,
-        /// Output folder (default: the scene's output.folder, else out/<scene name>/).
+        /// Output folder (default: the scene's output.folder, else out/{scene name}/).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Print the assembled stage pipeline and exit without running.

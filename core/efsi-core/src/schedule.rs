@@ -450,7 +450,7 @@ impl Pipeline {
     }
 
     /// Initialise every stage's fields (before the first step; the stages writing material
-    /// fields first, see [`Pipeline::initialize_stages`]), then make the initial velocity
+    /// fields first, see `Pipeline::initialize_stages`), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
     /// compression at the interface for deformation. The projecting stage runs once, with the

@@ -134,10 +134,10 @@
 //!
 //! BiCGSTAB, right-preconditioned (scene `numerics.elastic.preconditioner`):
 //! - `Multigrid`: since the implicit tangent acts like a viscosity `G_eff Δt/2`, the
-//!   SPD approximation `M − vol·∇·(2ηD)` with `η = θΔt μ + (Δt²/2) G_eff` ([`Kernels::stiffness`]:
+//!   SPD approximation `M − vol·∇·(2ηD)` with `η = θΔt μ + (Δt²/2) G_eff` (`Kernels::stiffness`:
 //!   `G_eff` from the tangent's diagonal and B̃, and at the interface corners the series
 //!   factors) is preconditioned by one multigrid V-cycle on each of its u–u and v–v blocks
-//!   ([`crate::block_multigrid`]). On the sphere impact at 35 cells per radius: 11.7 iterations
+//!   (`block_multigrid`). On the sphere impact at 35 cells per radius: 11.7 iterations
 //!   per step at 1e-10 where Jacobi needs 37.7 (Jacobi's count grows with the elastic wave's
 //!   Courant number `Δt√(G/ρ)/h`, the block multigrid's hardly).
 //! - `Jacobi`: a bound of the diagonal (the mass plus the stiffness over `h²`).
@@ -150,7 +150,7 @@
 //! gradients, stretching and tangent only over the solid's bounding box (plus the ring the
 //! stencils read) and adds its force only to the faces next to it: the cost of the elastic part
 //! follows the solid's size, not the grid's. The viscous part `θΔt K_v` is applied over the
-//! whole grid from coefficients set once per step ([`crate::viscous_stencil`]). Loops over rows
+//! whole grid from coefficients set once per step (`viscous_stencil`). Loops over rows
 //! and BiCGSTAB's reductions run in parallel with fixed results: the iterates are bit-identical
 //! on any number of threads.
 //!

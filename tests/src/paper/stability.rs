@@ -5,8 +5,8 @@
 //!
 //! # The runs
 //! `cases/sphere_impact.ron` at 8 cells per radius (6 in quick mode), the sphere released
-//! [`GAP`] above the substrate at its scene's 1.22 m/s so that it falls, hits and leaves the
-//! wall within [`END`]; the fluid's density is the solid's divided by the ratio (the solid keeps
+//! `GAP` above the substrate at its scene's 1.22 m/s so that it falls, hits and leaves the
+//! wall within `END`; the fluid's density is the solid's divided by the ratio (the solid keeps
 //! its 1106 kg/m³, the fluid its viscosity). The "3 cells across" and "4 cells across" runs
 //! shrink the sphere to a diameter of 3 and 4 cells on the same grid. Expected to be refused:
 //! the solid 3 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
@@ -18,7 +18,7 @@
 //! energy budget `E_b = KE(0) + max_t (PE(0) − PE(t))` (what the initial motion and gravity
 //! can release):
 //! - the run reaches its end time with every field finite (the NaN guard stops it otherwise);
-//! - the solid volume drifts by at most [`VOLUME`];
+//! - the solid volume drifts by at most `VOLUME`;
 //! - the motion never gains energy: `KE + PE ≤ KE(0) + PE(0) + MECH_GAIN·E_b` throughout;
 //! - nothing is gained over the run: `E ≤ E(0) + TOTAL_END·E_b` at the end.
 //!
