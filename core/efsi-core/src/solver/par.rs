@@ -440,7 +440,8 @@ pub fn max_over_rows(
 /// sweep (100 µs on one thread, 52 µs on two back to back) took 94 µs on two threads after
 /// a 50 µs serial pause. This is the "active wait" that OpenMP runtimes apply between
 /// parallel regions, for the stretches where it pays (the multigrid's serial coarse levels).
-/// On one thread it is just `f()`.
+/// The spinning thread yields every few dozen rounds, so that on an oversubscribed machine it
+/// does not take the core from the thread doing `f`. On one thread it is just `f()`.
 pub fn serial_warm<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     if rayon::current_num_threads() < 2 {
         return f();
@@ -453,8 +454,16 @@ pub fn serial_warm<R: Send>(f: impl FnOnce() -> R + Send) -> R {
             r
         },
         || {
+            // Spin, yielding now and then: on an oversubscribed machine (more threads than
+            // free cores) the thread doing the work gets the core instead.
+            let mut n = 0u32;
             while !done.load(std::sync::atomic::Ordering::Acquire) {
-                std::hint::spin_loop();
+                n = n.wrapping_add(1);
+                if n.is_multiple_of(64) {
+                    std::thread::yield_now();
+                } else {
+                    std::hint::spin_loop();
+                }
             }
         },
     );
