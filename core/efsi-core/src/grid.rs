@@ -60,6 +60,16 @@ impl Metric {
     pub fn rx(&self, i: isize) -> f64 {
         self.rx[(i + G) as usize]
     }
+    /// [`rc`](Self::rc) of columns `0..n`, as a slice (for loops that vectorise).
+    #[inline(always)]
+    pub fn rc_row(&self, n: usize) -> &[f64] {
+        &self.rc[GHOST..GHOST + n]
+    }
+    /// [`rx`](Self::rx) of columns `0..n`, as a slice (for loops that vectorise).
+    #[inline(always)]
+    pub fn rx_row(&self, n: usize) -> &[f64] {
+        &self.rx[GHOST..GHOST + n]
+    }
     /// Hoop factor at cell centres: `1/r_c` (axisymmetric) or 0 (planar).
     #[inline(always)]
     pub fn hoop_c(&self, i: isize) -> f64 {

@@ -173,20 +173,19 @@ impl State {
     /// `phi` and the seven deformation tensors (`B.b.11` … `B.stress.12`) when allocated. What a
     /// checkpoint saves: with `t`, `step` and `dt_prev` this is the whole state, ghosts included.
     pub fn arrays(&self) -> Vec<(String, &Field)> {
-        let mut out: Vec<(String, &Field)> = vec![
-            ("u".into(), &self.u),
-            ("v".into(), &self.v),
-            ("p".into(), &self.p),
-            ("rho".into(), &self.rho),
-            ("mu".into(), &self.mu),
-        ];
-        if let Some(phi) = &self.phi {
-            out.push(("phi".into(), phi));
+        self.array_names().into_iter().zip(self.fields()).collect()
+    }
+
+    /// The names of [`arrays`](Self::arrays), in its order.
+    fn array_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = ["u", "v", "p", "rho", "mu"].map(String::from).into();
+        if self.phi.is_some() {
+            out.push("phi".into());
         }
         if let Some(d) = &self.deformation {
-            for (part, t) in d.parts() {
-                for (c, f) in Deformation::COMPONENTS.iter().zip(t) {
-                    out.push((format!("B.{part}.{c}"), f));
+            for (part, _) in d.parts() {
+                for c in Deformation::COMPONENTS {
+                    out.push(format!("B.{part}.{c}"));
                 }
             }
         }
@@ -228,24 +227,10 @@ impl State {
 
     /// [`arrays`](Self::arrays), mutable, same names and order.
     pub fn arrays_mut(&mut self) -> Vec<(String, &mut Field)> {
-        let mut out: Vec<(String, &mut Field)> = vec![
-            ("u".into(), &mut self.u),
-            ("v".into(), &mut self.v),
-            ("p".into(), &mut self.p),
-            ("rho".into(), &mut self.rho),
-            ("mu".into(), &mut self.mu),
-        ];
-        if let Some(phi) = &mut self.phi {
-            out.push(("phi".into(), phi));
-        }
-        if let Some(d) = &mut self.deformation {
-            for (part, t) in d.parts_mut() {
-                for (c, f) in Deformation::COMPONENTS.iter().zip(t) {
-                    out.push((format!("B.{part}.{c}"), f));
-                }
-            }
-        }
-        out
+        self.array_names()
+            .into_iter()
+            .zip(self.fields_mut())
+            .collect()
     }
 
     /// Copy `other` into `self` without allocating. Both must hold the same arrays of the same
@@ -274,7 +259,8 @@ impl State {
         true
     }
 
-    /// The arrays of [`arrays`](Self::arrays), same order, without their names (no allocation).
+    /// The arrays of [`arrays`](Self::arrays), without their names (no allocation): the one
+    /// place that fixes their order.
     fn fields(&self) -> impl Iterator<Item = &Field> {
         [&self.u, &self.v, &self.p, &self.rho, &self.mu]
             .into_iter()

@@ -80,8 +80,6 @@ impl StagePlugin for Projection {
             x: vec![0.0; n],
             weight: vec![0.0; n],
             weight_dt: f64::NAN,
-            rx: (0..=grid.nx as isize).map(|i| grid.metric.rx(i)).collect(),
-            rc: (0..grid.nx as isize).map(|i| grid.metric.rc(i)).collect(),
         }))
     }
 }
@@ -103,9 +101,6 @@ struct ProjectionStage {
     weight: Vec<f64>,
     /// The Δt the weights were computed for (they change only with it).
     weight_dt: f64,
-    /// Per column: the face radii `r_f` (`nx + 1`) and the cell radii `r_c` (`nx`).
-    rx: Vec<f64>,
-    rc: Vec<f64>,
 }
 
 impl ProjectionStage {
@@ -208,7 +203,11 @@ impl Stage for ProjectionStage {
         let (u, v, p) = (&state.u, &state.v, &state.p);
         // −(net volume outflux)/Δt, as `ops::net_outflux` computes it, over slices (it
         // vectorises).
-        let (rx, rc, s) = (&self.rx, &self.rc, u.stride());
+        let (rx, rc, s) = (
+            grid.metric.rx_row(nx + 1),
+            grid.metric.rc_row(nx),
+            u.stride(),
+        );
         let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
         for_each_row(&mut self.b, nx, |j, row| {
             let k0 = u.idx(0, j as isize);

@@ -113,6 +113,11 @@ impl Level {
         }
     }
 
+    /// Whether the level is below [`par::PAR_MIN`] cells, so its sweeps run on one thread.
+    fn is_serial(&self) -> bool {
+        self.nx * self.ny < par::PAR_MIN
+    }
+
     #[inline(always)]
     fn p(&self, i: usize, j: usize) -> usize {
         (j + 1) * self.s + i + 1
@@ -231,7 +236,7 @@ impl Level {
             }
         };
         let threads = rayon::current_num_threads();
-        let chunk = if ny * nx < par::PAR_MIN || threads == 1 {
+        let chunk = if self.is_serial() || threads == 1 {
             ny
         } else {
             ny.div_ceil(2 * threads).max(4)
@@ -593,9 +598,7 @@ impl Multigrid {
         let n = levels.len();
         // Levels coarsened from a serial-sized one, and the Cholesky factor, with a second
         // thread kept awake for what follows.
-        let first_serial = (1..n)
-            .find(|&l| levels[l - 1].nx * levels[l - 1].ny < par::PAR_MIN)
-            .unwrap_or(n);
+        let first_serial = (1..n).find(|&l| levels[l - 1].is_serial()).unwrap_or(n);
         coarsen_levels(a, &mut self.mats, levels, 1..first_serial, excess);
         let mats = &mut self.mats;
         par::serial_warm(|| {
@@ -723,8 +726,7 @@ fn cycle(levels: &mut [Level], coarsest: &mut Coarsest, l: usize, sweeps: usize,
             std::mem::swap(&mut c.b, &mut c.t);
             std::mem::swap(&mut c.x, &mut c.t);
         }
-        let serial = |lv: &Level| lv.nx * lv.ny < par::PAR_MIN;
-        if serial(&levels[l + 1]) && !serial(&levels[l]) {
+        if levels[l + 1].is_serial() && !levels[l].is_serial() {
             // The serial coarse levels: keep a second thread awake for the sweeps after them.
             par::serial_warm(|| cycle(levels, coarsest, l + 1, sweeps, gamma));
         } else {

@@ -214,8 +214,8 @@ impl Stage for VofStage {
             st.max_clipped = st.max_clipped.max(s.max_clipped);
             st.clipped_volume += s.clipped_volume;
         }
-        par::copy(self.u_adv.data_mut(), state.u.data());
-        par::copy(self.v_adv.data_mut(), state.v.data());
+        self.u_adv.copy_from(&state.u);
+        self.v_adv.copy_from(&state.v);
         self.advector.fill_ghosts(&mut phi);
         self.mix(&phi, &mut state.rho, &mut state.mu);
         state.phi = Some(phi);
