@@ -1,5 +1,6 @@
 //! Shared helpers for the workspace integration tests: building simulations from scene text,
-//! stepping them without outputs, and locating the reference data in `../shared/references`.
+//! stepping them without outputs, and locating the reference data the repository carries in
+//! `tests/references/`.
 
 use efsi_core::{EfsiError, Scene, Simulation, StagePlugin};
 use std::path::{Path, PathBuf};
@@ -38,18 +39,44 @@ pub fn run_to_steady(sim: &mut Simulation, t_max: f64) -> f64 {
     sim.state.t
 }
 
-/// A file of the shared reference data (`$EFSI_REFERENCES` or `<workspace>/../shared/references`).
+/// The folder of the reference data the repository carries (`tests/references/`).
+pub fn references_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("references")
+}
+
+/// The workspace root (the folder of the top-level `Cargo.toml`).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("the tests crate sits in the workspace")
+        .to_path_buf()
+}
+
+/// A file of the reference data, `rel` relative to [`references_dir`]. Panics if it is missing
+/// or if `rel` resolves to a file outside the repository (a test must never depend on data a
+/// clone of the repository does not carry).
 pub fn reference(rel: &str) -> PathBuf {
-    let base = std::env::var_os("EFSI_REFERENCES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/references"));
-    let p = base.join(rel);
-    assert!(
-        p.exists(),
-        "reference data {} not found (set EFSI_REFERENCES)",
-        p.display()
-    );
-    p
+    try_reference(rel).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`reference`] with the failure as an error.
+pub fn try_reference(rel: &str) -> Result<PathBuf, String> {
+    let p = references_dir().join(rel);
+    let canonical = p
+        .canonicalize()
+        .map_err(|e| format!("reference data {}: {e}", p.display()))?;
+    let root = workspace_root()
+        .canonicalize()
+        .map_err(|e| format!("workspace root: {e}"))?;
+    if !canonical.starts_with(&root) {
+        return Err(format!(
+            "reference data {} resolves to {}, outside the repository {}",
+            p.display(),
+            canonical.display(),
+            root.display()
+        ));
+    }
+    Ok(canonical)
 }
 
 /// Read a CSV with a header (lines starting with `#` skipped) into column-major numbers.

@@ -602,7 +602,7 @@ fn ghia(args: &[String]) -> Result<(), String> {
         return Err("usage: cargo xtask ghia DIR RE".into());
     };
     let dir = PathBuf::from(dir);
-    let refs = root().join("../shared/references/ghia1982");
+    let refs = root().join("tests/references/ghia1982");
     for (stem, field, coord, file) in [
         (
             "u_x0.5",

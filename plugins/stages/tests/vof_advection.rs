@@ -1,6 +1,6 @@
 //! The VOF PLIC stage on the classic advection benchmarks, without Navier–Stokes (STYLE §11).
 //!
-//! Set-up as in `shared/references/vof_advection/README.md`, so the L1 errors compare apples to
+//! Set-up as in `tests/references/vof_advection/README.md`, so the L1 errors compare apples to
 //! apples with Basilisk's Youngs-normal runs:
 //! - unit square, initial fractions from the exact shape;
 //! - face velocities from a **vertex** stream function, `u = −ψ_y`, `v = ψ_x` as one-sided
@@ -31,7 +31,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 /// Reference L1 errors `E1` of Basilisk's PLIC VOF with **Youngs** normals, hard-coded from
-/// `shared/references/vof_advection/vof_plic_errors_basilisk.csv` (column `E1_sum_abs_df_h2`,
+/// `tests/references/vof_advection/vof_plic_errors_basilisk.csv` (column `E1_sum_abs_df_h2`,
 /// rows `normals = youngs`).
 mod reference {
     /// `zalesak_slotted_disk_T1, youngs, N = 100`.

@@ -1,5 +1,5 @@
 //! Sugiyama's oscillating Couette flow with a neo-Hookean layer (`cases/oscillating_couette.ron`)
-//! against the start-up reference (`../shared/references/oscillating_couette/from_rest/`).
+//! against the start-up reference (`tests/references/oscillating_couette/from_rest/`).
 
 use super::plot::Scale;
 use super::{Check, Options, Report, Run, execute, figure, load_case, slug};
@@ -158,7 +158,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     Ok(Report {
         name: "oscillating_couette".into(),
         title: "Sugiyama's oscillating Couette flow, neo-Hookean layer, μ_s = 0".into(),
-        reference: "the start-up-from-rest solution of `../shared/references/oscillating_couette/from_rest/` (1D FE, 801 nodes), at the grid's u points".into(),
+        reference: "the start-up-from-rest solution of `tests/references/oscillating_couette/from_rest/` (1D FE, 801 nodes), at the grid's u points".into(),
         error_metric: "max abs(u − u_ref), t = 2, 2.8, 4, 4.8".into(),
         runs,
         checks,

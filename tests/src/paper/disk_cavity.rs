@@ -1,7 +1,7 @@
 //! Seed §5.3 (after Zhao, Freund & Moser 2008 and Sugiyama et al. 2011): a neo-Hookean disk
 //! carried round the lid-driven cavity (`cases/disk_in_cavity.ron`), against the centroid path
 //! Sugiyama et al. computed on a 1024² grid
-//! (`../shared/references/disk_in_cavity/lid_cavity_disk_centroid_Sugiyama2011_1024.csv`).
+//! (`tests/references/disk_in_cavity/lid_cavity_disk_centroid_Sugiyama2011_1024.csv`).
 //!
 //! The reference path has no time stamps, so paths are compared by shape: the mean, over the
 //! simulated centroid samples, of their distance to the reference polyline. The path loops
@@ -12,25 +12,15 @@
 use super::plot::Scale;
 use super::{Check, Options, Report, Run, execute, figure, load_case, probes, slug};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
 
-/// The reference file, relative to the shared references.
+/// The reference file, relative to `tests/references/`.
 const REFERENCE: &str = "disk_in_cavity/lid_cavity_disk_centroid_Sugiyama2011_1024.csv";
 /// The right-most centroid position of the reference path (its largest x, 0.70212).
 const X_MAX_REF: f64 = 0.702;
 
 /// The reference centroid path (x, y), in order.
 fn reference() -> Result<Vec<(f64, f64)>, String> {
-    let base = std::env::var_os("EFSI_REFERENCES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/references"));
-    let path = base.join(REFERENCE);
-    if !path.exists() {
-        return Err(format!(
-            "reference {} not found (set EFSI_REFERENCES)",
-            path.display()
-        ));
-    }
+    let path = crate::try_reference(REFERENCE)?;
     let (header, cols) = crate::read_csv(&path);
     if header.len() < 2 || cols[0].len() < 2 {
         return Err(format!("{}: expected columns x, y", path.display()));
@@ -350,7 +340,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         title: "neo-Hookean disk in the lid-driven cavity (seed §5.3)".into(),
         reference:
             "the centroid path of Sugiyama et al. 2011 on a 1024² grid (73 digitized points, \
-                    no time stamps; `../shared/references/disk_in_cavity/`)"
+                    no time stamps; `tests/references/disk_in_cavity/`)"
                 .into(),
         error_metric: format!(
             "mean distance of the centroid samples (every 0.02, t ≤ {end}) to the published path"

@@ -1,6 +1,6 @@
 //! Seed §5.1: the silicone sphere dropped on a rigid substrate (`cases/sphere_impact*.ron`),
 //! against free fall before contact and Hertz's contact estimates
-//! (`../shared/references/hertz_sphere_impact/`).
+//! (`tests/references/hertz_sphere_impact/`).
 
 use super::plot::Scale;
 use super::{Check, Options, Report, Run, execute, figure, load_case, probes};
@@ -478,7 +478,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     Ok(Report {
         name: "sphere_impact".into(),
         title: "silicone sphere impact on a rigid substrate (seed §5.1)".into(),
-        reference: "free fall z₀ + v₀t − gt²/2 before contact; Hertz's quasi-static contact at the measured impact speed (E* = 4G, `../shared/references/hertz_sphere_impact/`); the finest grid for the speed/accuracy trade".into(),
+        reference: "free fall z₀ + v₀t − gt²/2 before contact; Hertz's quasi-static contact at the measured impact speed (E* = 4G, `tests/references/hertz_sphere_impact/`); the finest grid for the speed/accuracy trade".into(),
         error_metric: format!("max abs(z_c − z_c,ref) / R against {reference_cpr} CPR"),
         runs: all,
         checks,
