@@ -8,10 +8,17 @@
 //! directional derivatives, asynchronous steps (`fmi2CancelStep`, the other status queries).
 
 use crate::description::token;
-use crate::instance::{Instance, slice, slice_mut, text, with_instance};
+use crate::instance::{Instance, slice, slice_mut, state_slot, text, with_instance};
 use crate::log::{Fmi2Logger, Logger, Status, c_string, guard};
-use crate::model::{FmuState, Model};
+use crate::machine::Version;
+use crate::model::{Fault, Model};
+use crate::state::FmuState;
 use std::ffi::{c_char, c_int, c_void};
+
+/// FMI 2.0 defines `fmi2Discard` for steps only: a setter's refusal is an `fmi2Error`.
+fn as_error(f: Fault) -> Fault {
+    Fault::error(f.message)
+}
 
 /// `fmi2Component`.
 pub type Component = *mut c_void;
@@ -50,23 +57,27 @@ pub extern "C" fn fmi2GetVersion() -> *const c_char {
     c"2.0".as_ptr()
 }
 
-/// `fmi2SetDebugLogging`: informational messages on or off (categories are not filtered).
+/// `fmi2SetDebugLogging`: the named log categories (all when none is named) on or off; an
+/// unknown category is an error.
 ///
 /// # Safety
-/// `c` must be an instance of this library.
+/// `c` must be an instance of this library; `categories` `n_categories` C strings.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetDebugLogging(
     c: Component,
     logging_on: c_int,
-    _n_categories: usize,
-    _categories: *const *const c_char,
+    n_categories: usize,
+    categories: *const *const c_char,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetDebugLogging", |i| {
-            i.log.debug = logging_on == FMI2_TRUE;
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SetDebugLogging", |i| {
+        let names = unsafe { slice(categories, n_categories) }?
+            .iter()
+            .map(|p| unsafe { text(*p) }.map(|t| t.into_owned()))
+            .collect::<Option<Vec<_>>>()
+            .ok_or("a null category name")?;
+        i.log.set_categories(logging_on == FMI2_TRUE, &names)?;
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2Instantiate`: a Co-Simulation instance with the default parameters, or null (logged)
@@ -91,12 +102,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
             let name = unsafe { text(instance_name) }
                 .unwrap_or_default()
                 .to_string();
-            let log = Logger {
-                instance_name: c_string(&name),
-                fmi2: callbacks.and_then(|f| f.logger.map(|l| (l, f.component_environment))),
-                fmi3: None,
-                debug: logging_on == FMI2_TRUE,
-            };
+            let mut log = Logger::new(&name, logging_on == FMI2_TRUE);
+            log.fmi2 = callbacks.and_then(|f| f.logger.map(|l| (l, f.component_environment)));
             if fmu_type != FMI2_CO_SIMULATION {
                 log.error("fmi2Instantiate: this FMU supports Co-Simulation only");
                 return std::ptr::null_mut();
@@ -109,39 +116,23 @@ pub unsafe extern "C" fn fmi2Instantiate(
                 ));
                 return std::ptr::null_mut();
             }
-            Instance {
-                model: Model::new(),
-                log,
-                strings: Vec::new(),
-            }
-            .into_raw()
+            Instance::new(Model::new(), log, Version::Fmi2).register()
         },
         |_| std::ptr::null_mut(),
     )
 }
 
-/// `fmi2FreeInstance`.
-///
-/// # Safety
-/// `c` must be null or an instance of this library, not used afterwards.
+/// `fmi2FreeInstance`: frees the instance and its FMU states; an unknown or already freed
+/// handle is ignored.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeInstance(c: Component) {
-    if c.is_null() {
-        return;
-    }
-    // SAFETY: the instance was made by Box::into_raw in fmi2Instantiate.
-    guard(
-        || drop(unsafe { Box::from_raw(c as *mut Instance) }),
-        |_| (),
-    );
+pub extern "C" fn fmi2FreeInstance(c: Component) {
+    guard(|| crate::instance::free(c), |_| ());
 }
 
-/// `fmi2SetupExperiment`: start and optional stop time (the tolerance is not used).
-///
-/// # Safety
-/// `c` must be an instance of this library.
+/// `fmi2SetupExperiment`: start and optional stop time (the tolerance is not used). A
+/// `fmi2DoStep` past the stop time is refused.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetupExperiment(
+pub extern "C" fn fmi2SetupExperiment(
     c: Component,
     _tolerance_defined: c_int,
     _tolerance: f64,
@@ -149,74 +140,55 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stop_time_defined: c_int,
     stop_time: f64,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetupExperiment", |i| {
-            let stop = (stop_time_defined == FMI2_TRUE).then_some(stop_time);
-            i.model
-                .setup_experiment(start_time, stop)
-                .map(|_| Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SetupExperiment", |i| {
+        let stop = (stop_time_defined == FMI2_TRUE).then_some(stop_time);
+        i.model.setup_experiment(start_time, stop)?;
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2EnterInitializationMode`.
-///
-/// # Safety
-/// `c` must be an instance of this library.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2EnterInitializationMode(c: Component) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2EnterInitializationMode", |i| {
-            i.model.enter_initialization().map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2EnterInitializationMode(c: Component) -> c_int {
+    with_instance(c, "fmi2EnterInitializationMode", |i| {
+        i.model.enter_initialization();
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2ExitInitializationMode`: checks the parameters (a bad one is named in the log) and
 /// builds the simulation.
-///
-/// # Safety
-/// `c` must be an instance of this library.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2ExitInitializationMode(c: Component) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2ExitInitializationMode", |i| {
-            i.model.exit_initialization().map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2ExitInitializationMode(c: Component) -> c_int {
+    with_instance(c, "fmi2ExitInitializationMode", |i| {
+        i.model.exit_initialization()?;
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2Terminate`.
-///
-/// # Safety
-/// `c` must be an instance of this library.
+/// `fmi2Terminate`: after initialisation, once.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2Terminate(c: Component) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2Terminate", |i| {
-            i.model.terminate().map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2Terminate(c: Component) -> c_int {
+    with_instance(c, "fmi2Terminate", |i| {
+        i.model.terminate();
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2Reset`: back to the instantiated state with the default parameters.
-///
-/// # Safety
-/// `c` must be an instance of this library.
+/// `fmi2Reset`: back to the instantiated state with the default parameters (the instance's
+/// FMU states stay valid).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2Reset(c: Component) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2Reset", |i| {
-            i.model.reset();
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2Reset(c: Component) -> c_int {
+    with_instance(c, "fmi2Reset", |i| {
+        i.model.reset();
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2GetReal`.
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements.
+/// `vr` and `value` arrays of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetReal(
     c: Component,
@@ -224,21 +196,19 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut f64,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetReal", |i| {
-            let (vr, out) = (slice(vr, nvr)?, slice_mut(value, nvr)?);
-            for (r, o) in vr.iter().zip(out) {
-                *o = i.model.get_real(*r)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2GetReal", |i| {
+        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(value, nvr)?) };
+        for (r, o) in vr.iter().zip(out) {
+            *o = i.model.get_real(*r)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2GetInteger` (`steps` saturates at the 32-bit maximum).
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements.
+/// `vr` and `value` arrays of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetInteger(
     c: Component,
@@ -246,24 +216,22 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut c_int,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetInteger", |i| {
-            let (vr, out) = (slice(vr, nvr)?, slice_mut(value, nvr)?);
-            for (r, o) in vr.iter().zip(out) {
-                *o = i
-                    .model
-                    .get_integer(*r)?
-                    .clamp(c_int::MIN as i64, c_int::MAX as i64) as c_int;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2GetInteger", |i| {
+        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(value, nvr)?) };
+        for (r, o) in vr.iter().zip(out) {
+            *o = i
+                .model
+                .get_integer(*r)?
+                .clamp(c_int::MIN as i64, c_int::MAX as i64) as c_int;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2GetBoolean`: the model has no Boolean variables.
 ///
 /// # Safety
-/// `c` an instance; `vr` an array of `nvr` elements.
+/// `vr` an array of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetBoolean(
     c: Component,
@@ -271,20 +239,24 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     _value: *mut c_int,
 ) -> c_int {
-    unsafe { with_instance(c, "fmi2GetBoolean", |_| no_booleans(slice(vr, nvr)?)) }
+    with_instance(c, "fmi2GetBoolean", |_| {
+        no_booleans(unsafe { slice(vr, nvr) }?)
+    })
 }
 
-fn no_booleans(vr: &[u32]) -> Result<Status, String> {
+fn no_booleans(vr: &[u32]) -> Result<Status, Fault> {
     match vr.first() {
         None => Ok(Status::Ok),
-        Some(r) => Err(format!("no Boolean variable has the value reference {r}")),
+        Some(r) => Err(Fault::error(format!(
+            "no Boolean variable has the value reference {r}"
+        ))),
     }
 }
 
 /// `fmi2GetString`: the pointers stay valid until the next call on this instance.
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements.
+/// `vr` and `value` arrays of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetString(
     c: Component,
@@ -292,25 +264,24 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut *const c_char,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetString", |i| {
-            let (vr, out) = (slice(vr, nvr)?, slice_mut(value, nvr)?);
-            i.strings = vr
-                .iter()
-                .map(|r| i.model.get_string(*r).map(c_string))
-                .collect::<Result<_, _>>()?;
-            for (s, o) in i.strings.iter().zip(out) {
-                *o = s.as_ptr();
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2GetString", |i| {
+        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(value, nvr)?) };
+        i.strings = vr
+            .iter()
+            .map(|r| i.model.get_string(*r).map(|s| c_string(&s)))
+            .collect::<Result<_, _>>()?;
+        for (s, o) in i.strings.iter().zip(out) {
+            *o = s.as_ptr();
+        }
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2SetReal`: parameters before initialisation ends, the input at any time.
+/// `fmi2SetReal`: parameters before initialisation ends, the input at any time; a value
+/// outside the variable's range is refused.
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements.
+/// `vr` and `value` arrays of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetReal(
     c: Component,
@@ -318,20 +289,19 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const f64,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetReal", |i| {
-            for (r, v) in slice(vr, nvr)?.iter().zip(slice(value, nvr)?) {
-                i.model.set_real(*r, *v)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SetReal", |i| {
+        let (vr, value) = unsafe { (slice(vr, nvr)?, slice(value, nvr)?) };
+        for (r, v) in vr.iter().zip(value) {
+            i.model.set_real(*r, *v).map_err(as_error)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2SetInteger`.
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements.
+/// `vr` and `value` arrays of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetInteger(
     c: Component,
@@ -339,20 +309,19 @@ pub unsafe extern "C" fn fmi2SetInteger(
     nvr: usize,
     value: *const c_int,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetInteger", |i| {
-            for (r, v) in slice(vr, nvr)?.iter().zip(slice(value, nvr)?) {
-                i.model.set_integer(*r, *v as i64)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SetInteger", |i| {
+        let (vr, value) = unsafe { (slice(vr, nvr)?, slice(value, nvr)?) };
+        for (r, v) in vr.iter().zip(value) {
+            i.model.set_integer(*r, *v as i64).map_err(as_error)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2SetBoolean`: the model has no Boolean variables.
 ///
 /// # Safety
-/// `c` an instance; `vr` an array of `nvr` elements.
+/// `vr` an array of `nvr` elements.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetBoolean(
     c: Component,
@@ -360,13 +329,15 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     _value: *const c_int,
 ) -> c_int {
-    unsafe { with_instance(c, "fmi2SetBoolean", |_| no_booleans(slice(vr, nvr)?)) }
+    with_instance(c, "fmi2SetBoolean", |_| {
+        no_booleans(unsafe { slice(vr, nvr) }?)
+    })
 }
 
 /// `fmi2SetString`.
 ///
 /// # Safety
-/// `c` an instance; `vr` and `value` arrays of `nvr` elements, the strings NUL-terminated.
+/// `vr` and `value` arrays of `nvr` elements, the strings NUL-terminated.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetString(
     c: Component,
@@ -374,95 +345,77 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const *const c_char,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetString", |i| {
-            for (r, v) in slice(vr, nvr)?.iter().zip(slice(value, nvr)?) {
-                let s = text(*v).ok_or("a null string")?;
-                i.model.set_string(*r, &s)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SetString", |i| {
+        let (vr, value) = unsafe { (slice(vr, nvr)?, slice(value, nvr)?) };
+        for (r, v) in vr.iter().zip(value) {
+            let s = unsafe { text(*v) }.ok_or("a null string")?;
+            i.model.set_string(*r, &s).map_err(as_error)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2GetFMUstate`: a new state, or `*state` overwritten when it is one already.
-///
-/// # Safety
-/// `c` an instance; `state` points to null or to a state of this library.
+/// `fmi2GetFMUstate`: a new state when `*state` is null, else `*state` (one of this
+/// instance's states) overwritten.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetFMUstate", |i| {
-            let slot = state.as_mut().ok_or("a null FMU state pointer")?;
-            match (*slot as *mut FmuState).as_mut() {
-                Some(s) => i.model.get_state_into(s)?,
-                None => *slot = Box::into_raw(Box::new(i.model.get_state()?)) as FmuStatePtr,
-            }
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2GetFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
+    with_instance(c, "fmi2GetFMUstate", |i| {
+        let slot = state_slot(state)?;
+        if slot.is_null() {
+            let s = i.model.get_state()?;
+            *slot = i.add_state(s) as FmuStatePtr;
+        } else {
+            i.refresh_state(*slot)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2SetFMUstate`.
-///
-/// # Safety
-/// `c` an instance; `state` a state of this library.
+/// `fmi2SetFMUstate`: any state of this instance, in any mode (also before initialisation).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: Component, state: FmuStatePtr) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SetFMUstate", |i| {
-            let s = (state as *const FmuState)
-                .as_ref()
-                .ok_or("a null FMU state")?;
-            i.model.set_state(s).map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2SetFMUstate(c: Component, state: FmuStatePtr) -> c_int {
+    with_instance(c, "fmi2SetFMUstate", |i| {
+        let s = i.state(state)?.clone();
+        i.model.set_state(&s)?;
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2FreeFMUstate`: frees `*state` and sets it to null.
-///
-/// # Safety
-/// `c` an instance; `state` points to null or to a state of this library.
+/// `fmi2FreeFMUstate`: frees `*state` (a state of this instance) and sets it to null; null is
+/// nothing to free.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2FreeFMUstate", |_| {
-            if let Some(slot) = state.as_mut()
-                && !slot.is_null()
-            {
-                drop(Box::from_raw(*slot as *mut FmuState));
-                *slot = std::ptr::null_mut();
-            }
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi2FreeFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
+    with_instance(c, "fmi2FreeFMUstate", |i| {
+        let slot = state_slot(state)?;
+        if !slot.is_null() {
+            i.remove_state(*slot)?;
+            *slot = std::ptr::null_mut();
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2SerializedFMUstateSize`.
 ///
 /// # Safety
-/// `c` an instance; `state` a state of this library; `size` writable.
+/// `size` writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: Component,
     state: FmuStatePtr,
     size: *mut usize,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SerializedFMUstateSize", |i| {
-            let s = (state as *mut FmuState)
-                .as_mut()
-                .ok_or("a null FMU state")?;
-            *size.as_mut().ok_or("a null size pointer")? = i.model.serialize(s)?.len();
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SerializedFMUstateSize", |i| {
+        let n = i.state_mut(state)?.serialize(&token()).len();
+        *unsafe { size.as_mut() }.ok_or("a null size pointer")? = n;
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2SerializeFMUstate`: `size` must be what `fmi2SerializedFMUstateSize` said.
 ///
 /// # Safety
-/// `c` an instance; `state` a state of this library; `bytes` `size` writable bytes.
+/// `bytes` `size` writable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: Component,
@@ -470,28 +423,24 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     bytes: *mut c_char,
     size: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2SerializeFMUstate", |i| {
-            let s = (state as *mut FmuState)
-                .as_mut()
-                .ok_or("a null FMU state")?;
-            let data = i.model.serialize(s)?;
-            if data.len() != size {
-                return Err(format!(
-                    "the buffer has {size} bytes, the state {} (ask fmi2SerializedFMUstateSize)",
-                    data.len()
-                ));
-            }
-            slice_mut(bytes as *mut u8, size)?.copy_from_slice(data);
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2SerializeFMUstate", |i| {
+        let data = i.state_mut(state)?.serialize(&token());
+        if data.len() != size {
+            return Err(Fault::error(format!(
+                "the buffer has {size} bytes, the state {} (ask fmi2SerializedFMUstateSize)",
+                data.len()
+            )));
+        }
+        unsafe { slice_mut(bytes as *mut u8, size) }?.copy_from_slice(data);
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi2DeSerializeFMUstate`: refuses a state of an instance with other parameters.
+/// `fmi2DeSerializeFMUstate`: a state serialised by any instance of this FMU's build (another
+/// process or extraction too); into a new state when `*state` is null, else into `*state`.
 ///
 /// # Safety
-/// `c` an instance; `bytes` `size` readable bytes; `state` writable.
+/// `bytes` `size` readable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: Component,
@@ -499,31 +448,27 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut FmuStatePtr,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2DeSerializeFMUstate", |i| {
-            let s = i.model.deserialize(slice(bytes as *const u8, size)?)?;
-            let slot = state.as_mut().ok_or("a null FMU state pointer")?;
-            if !slot.is_null() {
-                drop(Box::from_raw(*slot as *mut FmuState));
-            }
-            *slot = Box::into_raw(Box::new(s)) as FmuStatePtr;
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2DeSerializeFMUstate", |i| {
+        let s = FmuState::deserialize(unsafe { slice(bytes as *const u8, size) }?, &token())?;
+        let slot = state_slot(state)?;
+        if slot.is_null() {
+            *slot = i.add_state(s) as FmuStatePtr;
+        } else {
+            *i.state_mut(*slot)? = s;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 macro_rules! unsupported {
     ($name:ident, $why:literal, ($($arg:ident : $ty:ty),*)) => {
         #[doc = concat!("`", stringify!($name), "`: not supported (", $why, "); returns `fmi2Error`.")]
-        ///
-        /// # Safety
-        /// `c` must be an instance of this library.
         #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(c: Component, $($arg: $ty),*) -> c_int {
+        pub extern "C" fn $name(c: Component, $($arg: $ty),*) -> c_int {
             $(let _ = $arg;)*
-            unsafe {
-                with_instance(c, stringify!($name), |_| Err(concat!("not supported: ", $why).into()))
-            }
+            with_instance(c, stringify!($name), |_| {
+                Err(Fault::error(concat!("not supported: ", $why)))
+            })
         }
     };
 }
@@ -543,64 +488,63 @@ unsupported!(fmi2GetIntegerStatus, "no integer status is defined",
 unsupported!(fmi2GetStringStatus, "steps are synchronous: no pending status",
     (kind: c_int, value: *mut *const c_char));
 
-/// `fmi2DoStep`: advance by `h` with as many solver steps as needed, landing on `t + h`.
-///
-/// # Safety
-/// `c` must be an instance of this library.
+/// `fmi2DoStep`: advance by `h` with as many solver steps as needed (at most
+/// `max_solver_steps_per_step`), landing on `t + h`. A step refused or failed with the
+/// instance put back at `t` returns `fmi2Discard` (the instance is then in *stepFailed*:
+/// `fmi2GetRealStatus(fmi2LastSuccessfulTime)` says `t`; set an FMU state to go on, or
+/// terminate).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DoStep(
+pub extern "C" fn fmi2DoStep(
     c: Component,
     current_communication_point: f64,
     communication_step_size: f64,
     _no_set_fmu_state_prior_to_current_point: c_int,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2DoStep", |i| {
-            i.model
-                .do_step(current_communication_point, communication_step_size)
-                .map(|_| Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2DoStep", |i| {
+        let r = i
+            .model
+            .do_step(current_communication_point, communication_step_size);
+        if matches!(&r, Err(f) if f.status == Status::Discard) {
+            i.model.enter_step_discarded();
+        }
+        r.map(|_| Status::Ok)
+    })
 }
 
 /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime` is the model's time.
 ///
 /// # Safety
-/// `c` an instance; `value` writable.
+/// `value` writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetRealStatus(c: Component, kind: c_int, value: *mut f64) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetRealStatus", |i| {
-            if kind != FMI2_LAST_SUCCESSFUL_TIME {
-                return Err(format!(
-                    "status kind {kind}: only fmi2LastSuccessfulTime is defined"
-                ));
-            }
-            *value.as_mut().ok_or("a null value pointer")? = i.model.time();
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2GetRealStatus", |i| {
+        if kind != FMI2_LAST_SUCCESSFUL_TIME {
+            return Err(Fault::error(format!(
+                "status kind {kind}: only fmi2LastSuccessfulTime is defined"
+            )));
+        }
+        *unsafe { value.as_mut() }.ok_or("a null value pointer")? = i.model.time();
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi2GetBooleanStatus`: `fmi2Terminated` is always false (the model never ends a run).
 ///
 /// # Safety
-/// `c` an instance; `value` writable.
+/// `value` writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetBooleanStatus(
     c: Component,
     kind: c_int,
     value: *mut c_int,
 ) -> c_int {
-    unsafe {
-        with_instance(c, "fmi2GetBooleanStatus", |_| {
-            if kind != FMI2_TERMINATED {
-                return Err(format!(
-                    "status kind {kind}: only fmi2Terminated is defined"
-                ));
-            }
-            *value.as_mut().ok_or("a null value pointer")? = 0;
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(c, "fmi2GetBooleanStatus", |_| {
+        if kind != FMI2_TERMINATED {
+            return Err(Fault::error(format!(
+                "status kind {kind}: only fmi2Terminated is defined"
+            )));
+        }
+        *unsafe { value.as_mut() }.ok_or("a null value pointer")? = 0;
+        Ok(Status::Ok)
+    })
 }

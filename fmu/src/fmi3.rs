@@ -9,9 +9,12 @@
 //! derivatives and configuration mode are not supported.
 
 use crate::description::token;
-use crate::instance::{Instance, slice, slice_mut, text, with_instance};
+use crate::instance::{Instance, slice, slice_mut, state_slot, text, with_instance};
 use crate::log::{Fmi3Logger, Logger, Status, c_string, guard};
-use crate::model::{FmuState, Model};
+use crate::machine::Version;
+use crate::model::{Fault, Model};
+use crate::params::{Kind, variable};
+use crate::state::FmuState;
 use std::ffi::{c_char, c_int, c_void};
 
 /// `fmi3Instance`.
@@ -26,23 +29,27 @@ pub extern "C" fn fmi3GetVersion() -> *const c_char {
     c"3.0".as_ptr()
 }
 
-/// `fmi3SetDebugLogging`: informational messages on or off (categories are not filtered).
+/// `fmi3SetDebugLogging`: the named log categories (all when none is named) on or off; an
+/// unknown category is an error.
 ///
 /// # Safety
-/// `instance` must be an instance of this library.
+/// `categories` `n_categories` C strings.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetDebugLogging(
     instance: Fmi3Instance,
     logging_on: bool,
-    _n_categories: usize,
-    _categories: *const *const c_char,
+    n_categories: usize,
+    categories: *const *const c_char,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetDebugLogging", |i| {
-            i.log.debug = logging_on;
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3SetDebugLogging", |i| {
+        let names = unsafe { slice(categories, n_categories) }?
+            .iter()
+            .map(|p| unsafe { text(*p) }.map(|t| t.into_owned()))
+            .collect::<Option<Vec<_>>>()
+            .ok_or("a null category name")?;
+        i.log.set_categories(logging_on, &names)?;
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3InstantiateCoSimulation`: an instance with the default parameters, or null (logged)
@@ -70,12 +77,8 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             let name = unsafe { text(instance_name) }
                 .unwrap_or_default()
                 .to_string();
-            let log = Logger {
-                instance_name: c_string(&name),
-                fmi2: None,
-                fmi3: log_message.map(|l| (l, instance_environment)),
-                debug: logging_on,
-            };
+            let mut log = Logger::new(&name, logging_on);
+            log.fmi3 = log_message.map(|l| (l, instance_environment));
             let t = unsafe { text(instantiation_token) }.unwrap_or_default();
             if t != token() {
                 log.error(&format!(
@@ -88,12 +91,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
                 log.error("fmi3InstantiateCoSimulation: this FMU has no event mode (hasEventMode is false)");
                 return std::ptr::null_mut();
             }
-            Instance {
-                model: Model::new(),
-                log,
-                strings: Vec::new(),
-            }
-            .into_raw()
+            Instance::new(Model::new(), log, Version::Fmi3).register()
         },
         |_| std::ptr::null_mut(),
     )
@@ -155,28 +153,17 @@ pub extern "C" fn fmi3InstantiateScheduledExecution(
     refuse_instantiate(log_message, instance_environment, "Scheduled Execution")
 }
 
-/// `fmi3FreeInstance`.
-///
-/// # Safety
-/// `instance` must be null or an instance of this library, not used afterwards.
+/// `fmi3FreeInstance`: frees the instance and its FMU states; an unknown or already freed
+/// handle is ignored.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3FreeInstance(instance: Fmi3Instance) {
-    if instance.is_null() {
-        return;
-    }
-    // SAFETY: made by Box::into_raw in fmi3InstantiateCoSimulation.
-    guard(
-        || drop(unsafe { Box::from_raw(instance as *mut Instance) }),
-        |_| (),
-    );
+pub extern "C" fn fmi3FreeInstance(instance: Fmi3Instance) {
+    guard(|| crate::instance::free(instance), |_| ());
 }
 
-/// `fmi3EnterInitializationMode`: start and optional stop time (the tolerance is not used).
-///
-/// # Safety
-/// `instance` must be an instance of this library.
+/// `fmi3EnterInitializationMode`: start and optional stop time (the tolerance is not used). A
+/// `fmi3DoStep` past the stop time is refused.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterInitializationMode(
+pub extern "C" fn fmi3EnterInitializationMode(
     instance: Fmi3Instance,
     _tolerance_defined: bool,
     _tolerance: f64,
@@ -184,61 +171,51 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
     stop_time_defined: bool,
     stop_time: f64,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3EnterInitializationMode", |i| {
-            i.model
-                .setup_experiment(start_time, stop_time_defined.then_some(stop_time))?;
-            i.model.enter_initialization().map(|_| Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3EnterInitializationMode", |i| {
+        i.model
+            .setup_experiment(start_time, stop_time_defined.then_some(stop_time))?;
+        i.model.enter_initialization();
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3ExitInitializationMode`: checks the parameters (a bad one is named in the log) and
 /// builds the simulation; the instance is then in step mode.
-///
-/// # Safety
-/// `instance` must be an instance of this library.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: Fmi3Instance) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3ExitInitializationMode", |i| {
-            i.model.exit_initialization().map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3ExitInitializationMode(instance: Fmi3Instance) -> c_int {
+    with_instance(instance, "fmi3ExitInitializationMode", |i| {
+        i.model.exit_initialization()?;
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3Terminate`.
-///
-/// # Safety
-/// `instance` must be an instance of this library.
+/// `fmi3Terminate`: after initialisation, once.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3Terminate(instance: Fmi3Instance) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3Terminate", |i| {
-            i.model.terminate().map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3Terminate(instance: Fmi3Instance) -> c_int {
+    with_instance(instance, "fmi3Terminate", |i| {
+        i.model.terminate();
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3Reset`: back to the instantiated state with the default parameters.
-///
-/// # Safety
-/// `instance` must be an instance of this library.
+/// `fmi3Reset`: back to the instantiated state with the default parameters (the instance's
+/// FMU states stay valid).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3Reset(instance: Fmi3Instance) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3Reset", |i| {
-            i.model.reset();
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3Reset(instance: Fmi3Instance) -> c_int {
+    with_instance(instance, "fmi3Reset", |i| {
+        i.model.reset();
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3DoStep`: advance by `h` with as many solver steps as needed, landing on `t + h`; never
-/// returns early, never asks for event handling or termination.
+/// `fmi3DoStep`: advance by `h` with as many solver steps as needed (at most
+/// `max_solver_steps_per_step`), landing on `t + h`; never returns early, never asks for event
+/// handling or termination. A step refused or failed with the instance put back at `t` returns
+/// `fmi3Discard` with `lastSuccessfulTime = t`: the instance stays in step mode and may step
+/// again (with a shorter step or other inputs) or set an FMU state.
 ///
 /// # Safety
-/// `instance` an instance; the four out-pointers writable.
+/// The four out-pointers writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3DoStep(
     instance: Fmi3Instance,
@@ -250,28 +227,32 @@ pub unsafe extern "C" fn fmi3DoStep(
     early_return: *mut bool,
     last_successful_time: *mut f64,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3DoStep", |i| {
-            let r = i
-                .model
-                .do_step(current_communication_point, communication_step_size);
-            for flag in [event_handling_needed, terminate_simulation, early_return] {
-                if let Some(f) = flag.as_mut() {
-                    *f = false;
-                }
-            }
-            if let Some(t) = last_successful_time.as_mut() {
-                *t = i.model.time();
-            }
-            r.map(|_| Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3DoStep", |i| {
+        let (Some(e), Some(t), Some(r), Some(last)) = (unsafe {
+            (
+                event_handling_needed.as_mut(),
+                terminate_simulation.as_mut(),
+                early_return.as_mut(),
+                last_successful_time.as_mut(),
+            )
+        }) else {
+            return Err(Fault::error(
+                "a null pointer among eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime",
+            ));
+        };
+        let result = i
+            .model
+            .do_step(current_communication_point, communication_step_size);
+        (*e, *t, *r) = (false, false, false);
+        *last = i.model.time();
+        result.map(|_| Status::Ok)
+    })
 }
 
 /// `fmi3GetFloat64`.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values, `values` `n_values` writable values.
+/// `vr` `nvr` values, `values` `n_values` writable values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFloat64(
     instance: Fmi3Instance,
@@ -280,22 +261,21 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     values: *mut f64,
     n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3GetFloat64", |i| {
-            let (vr, out) = (slice(vr, nvr)?, slice_mut(values, n_values)?);
-            check_counts(nvr, n_values)?;
-            for (r, o) in vr.iter().zip(out) {
-                *o = i.model.get_real(*r)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3GetFloat64", |i| {
+        check_counts(nvr, n_values)?;
+        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
+        for (r, o) in vr.iter().zip(out) {
+            *o = i.model.get_real(*r)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3SetFloat64`: parameters before initialisation ends, the input at any time.
+/// `fmi3SetFloat64`: parameters before initialisation ends, the input at any time; a value
+/// outside the variable's range is refused with `fmi3Discard` (nothing changes).
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values, `values` `n_values` values.
+/// `vr` `nvr` values, `values` `n_values` values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetFloat64(
     instance: Fmi3Instance,
@@ -304,24 +284,23 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     values: *const f64,
     n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetFloat64", |i| {
-            check_counts(nvr, n_values)?;
-            for (r, v) in slice(vr, nvr)?.iter().zip(slice(values, n_values)?) {
-                i.model.set_real(*r, *v)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3SetFloat64", |i| {
+        check_counts(nvr, n_values)?;
+        let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
+        for (r, v) in vr.iter().zip(values) {
+            i.model.set_real(*r, *v)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
-fn check_counts(nvr: usize, n_values: usize) -> Result<(), String> {
+fn check_counts(nvr: usize, n_values: usize) -> Result<(), Fault> {
     if nvr == n_values {
         Ok(())
     } else {
-        Err(format!(
+        Err(Fault::error(format!(
             "{nvr} value references but {n_values} values (the model has scalar variables only)"
-        ))
+        )))
     }
 }
 
@@ -330,7 +309,7 @@ macro_rules! integers {
         #[doc = concat!("`", stringify!($get), "`.")]
         ///
         /// # Safety
-        /// `instance` an instance; `vr` `nvr` values, `values` `n_values` writable values.
+        /// `vr` `nvr` values, `values` `n_values` writable values.
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $get(
             instance: Fmi3Instance,
@@ -339,24 +318,22 @@ macro_rules! integers {
             values: *mut $ty,
             n_values: usize,
         ) -> c_int {
-            unsafe {
-                with_instance(instance, stringify!($get), |i| {
-                    check_counts(nvr, n_values)?;
-                    let (vr, out) = (slice(vr, nvr)?, slice_mut(values, n_values)?);
-                    for (r, o) in vr.iter().zip(out) {
-                        check_kind(*r, $kind)?;
-                        let v = i.model.get_integer(*r)?;
-                        *o = <$ty>::try_from(v).map_err(|_| format!("{v} does not fit"))?;
-                    }
-                    Ok(Status::Ok)
-                })
-            }
+            with_instance(instance, stringify!($get), |i| {
+                check_counts(nvr, n_values)?;
+                let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
+                for (r, o) in vr.iter().zip(out) {
+                    check_kind(*r, $kind)?;
+                    let v = i.model.get_integer(*r)?;
+                    *o = <$ty>::try_from(v).map_err(|_| format!("{v} does not fit"))?;
+                }
+                Ok(Status::Ok)
+            })
         }
 
-        #[doc = concat!("`", stringify!($set), "`.")]
+        #[doc = concat!("`", stringify!($set), "`: out of the variable's range: `fmi3Discard`.")]
         ///
         /// # Safety
-        /// `instance` an instance; `vr` `nvr` values, `values` `n_values` values.
+        /// `vr` `nvr` values, `values` `n_values` values.
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $set(
             instance: Fmi3Instance,
@@ -365,40 +342,41 @@ macro_rules! integers {
             values: *const $ty,
             n_values: usize,
         ) -> c_int {
-            unsafe {
-                with_instance(instance, stringify!($set), |i| {
-                    check_counts(nvr, n_values)?;
-                    for (r, v) in slice(vr, nvr)?.iter().zip(slice(values, n_values)?) {
-                        check_kind(*r, $kind)?;
-                        i.model.set_integer(*r, *v as i64)?;
-                    }
-                    Ok(Status::Ok)
-                })
-            }
+            with_instance(instance, stringify!($set), |i| {
+                check_counts(nvr, n_values)?;
+                let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
+                for (r, v) in vr.iter().zip(values) {
+                    check_kind(*r, $kind)?;
+                    i.model.set_integer(*r, *v as i64)?;
+                }
+                Ok(Status::Ok)
+            })
         }
     };
 }
 
-fn check_kind(vr: ValueReference, kind: crate::model::Kind) -> Result<(), String> {
-    match crate::model::variable(vr) {
+fn check_kind(vr: ValueReference, kind: Kind) -> Result<(), Fault> {
+    match variable(vr) {
         Some(v) if v.kind == kind => Ok(()),
-        Some(v) => Err(format!(
+        Some(v) => Err(Fault::error(format!(
             "`{}` (value reference {vr}) is a {:?} variable, not {kind:?}",
             v.name, v.kind
-        )),
-        None => Err(format!("no {kind:?} variable has the value reference {vr}")),
+        ))),
+        None => Err(Fault::error(format!(
+            "no {kind:?} variable has the value reference {vr}"
+        ))),
     }
 }
 
-integers!(fmi3GetInt32, fmi3SetInt32, i32, crate::model::Kind::Int32);
-integers!(fmi3GetInt64, fmi3SetInt64, i64, crate::model::Kind::Int64);
+integers!(fmi3GetInt32, fmi3SetInt32, i32, Kind::Int32);
+integers!(fmi3GetInt64, fmi3SetInt64, i64, Kind::Int64);
 
 macro_rules! no_variables {
     ($get:ident, $set:ident, $ty:ty, $what:literal) => {
         #[doc = concat!("`", stringify!($get), "`: the model has no ", $what, " variables.")]
         ///
         /// # Safety
-        /// `instance` an instance; `vr` `nvr` values.
+        /// `vr` `nvr` values.
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $get(
             instance: Fmi3Instance,
@@ -407,17 +385,15 @@ macro_rules! no_variables {
             _values: *mut $ty,
             _n_values: usize,
         ) -> c_int {
-            unsafe {
-                with_instance(instance, stringify!($get), |_| {
-                    none_of(slice(vr, nvr)?, $what)
-                })
-            }
+            with_instance(instance, stringify!($get), |_| {
+                none_of(unsafe { slice(vr, nvr) }?, $what)
+            })
         }
 
         #[doc = concat!("`", stringify!($set), "`: the model has no ", $what, " variables.")]
         ///
         /// # Safety
-        /// `instance` an instance; `vr` `nvr` values.
+        /// `vr` `nvr` values.
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $set(
             instance: Fmi3Instance,
@@ -426,19 +402,19 @@ macro_rules! no_variables {
             _values: *const $ty,
             _n_values: usize,
         ) -> c_int {
-            unsafe {
-                with_instance(instance, stringify!($set), |_| {
-                    none_of(slice(vr, nvr)?, $what)
-                })
-            }
+            with_instance(instance, stringify!($set), |_| {
+                none_of(unsafe { slice(vr, nvr) }?, $what)
+            })
         }
     };
 }
 
-fn none_of(vr: &[ValueReference], what: &str) -> Result<Status, String> {
+fn none_of(vr: &[ValueReference], what: &str) -> Result<Status, Fault> {
     match vr.first() {
         None => Ok(Status::Ok),
-        Some(r) => Err(format!("no {what} variable has the value reference {r}")),
+        Some(r) => Err(Fault::error(format!(
+            "no {what} variable has the value reference {r}"
+        ))),
     }
 }
 
@@ -454,7 +430,7 @@ no_variables!(fmi3GetBoolean, fmi3SetBoolean, bool, "Boolean");
 /// `fmi3GetString`: the pointers stay valid until the next call on this instance.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values, `values` `n_values` writable pointers.
+/// `vr` `nvr` values, `values` `n_values` writable pointers.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetString(
     instance: Fmi3Instance,
@@ -463,26 +439,24 @@ pub unsafe extern "C" fn fmi3GetString(
     values: *mut *const c_char,
     n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3GetString", |i| {
-            check_counts(nvr, n_values)?;
-            let (vr, out) = (slice(vr, nvr)?, slice_mut(values, n_values)?);
-            i.strings = vr
-                .iter()
-                .map(|r| i.model.get_string(*r).map(c_string))
-                .collect::<Result<_, _>>()?;
-            for (s, o) in i.strings.iter().zip(out) {
-                *o = s.as_ptr();
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3GetString", |i| {
+        check_counts(nvr, n_values)?;
+        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
+        i.strings = vr
+            .iter()
+            .map(|r| i.model.get_string(*r).map(|s| c_string(&s)))
+            .collect::<Result<_, _>>()?;
+        for (s, o) in i.strings.iter().zip(out) {
+            *o = s.as_ptr();
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3SetString`.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values, `values` `n_values` NUL-terminated strings.
+/// `vr` `nvr` values, `values` `n_values` NUL-terminated strings.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetString(
     instance: Fmi3Instance,
@@ -491,22 +465,21 @@ pub unsafe extern "C" fn fmi3SetString(
     values: *const *const c_char,
     n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetString", |i| {
-            check_counts(nvr, n_values)?;
-            for (r, v) in slice(vr, nvr)?.iter().zip(slice(values, n_values)?) {
-                let s = text(*v).ok_or("a null string")?;
-                i.model.set_string(*r, &s)?;
-            }
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3SetString", |i| {
+        check_counts(nvr, n_values)?;
+        let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
+        for (r, v) in vr.iter().zip(values) {
+            let s = unsafe { text(*v) }.ok_or("a null string")?;
+            i.model.set_string(*r, &s)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3GetBinary`: the model has no Binary variables.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values.
+/// `vr` `nvr` values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetBinary(
     instance: Fmi3Instance,
@@ -516,17 +489,15 @@ pub unsafe extern "C" fn fmi3GetBinary(
     _values: *mut *const u8,
     _n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3GetBinary", |_| {
-            none_of(slice(vr, nvr)?, "Binary")
-        })
-    }
+    with_instance(instance, "fmi3GetBinary", |_| {
+        none_of(unsafe { slice(vr, nvr) }?, "Binary")
+    })
 }
 
 /// `fmi3SetBinary`: the model has no Binary variables.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values.
+/// `vr` `nvr` values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetBinary(
     instance: Fmi3Instance,
@@ -536,17 +507,15 @@ pub unsafe extern "C" fn fmi3SetBinary(
     _values: *const *const u8,
     _n_values: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetBinary", |_| {
-            none_of(slice(vr, nvr)?, "Binary")
-        })
-    }
+    with_instance(instance, "fmi3SetBinary", |_| {
+        none_of(unsafe { slice(vr, nvr) }?, "Binary")
+    })
 }
 
 /// `fmi3GetClock`: the model has no clocks.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values.
+/// `vr` `nvr` values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetClock(
     instance: Fmi3Instance,
@@ -554,17 +523,15 @@ pub unsafe extern "C" fn fmi3GetClock(
     nvr: usize,
     _values: *mut bool,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3GetClock", |_| {
-            none_of(slice(vr, nvr)?, "Clock")
-        })
-    }
+    with_instance(instance, "fmi3GetClock", |_| {
+        none_of(unsafe { slice(vr, nvr) }?, "Clock")
+    })
 }
 
 /// `fmi3SetClock`: the model has no clocks.
 ///
 /// # Safety
-/// `instance` an instance; `vr` `nvr` values.
+/// `vr` `nvr` values.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetClock(
     instance: Fmi3Instance,
@@ -572,94 +539,72 @@ pub unsafe extern "C" fn fmi3SetClock(
     nvr: usize,
     _values: *const bool,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetClock", |_| {
-            none_of(slice(vr, nvr)?, "Clock")
-        })
-    }
+    with_instance(instance, "fmi3SetClock", |_| {
+        none_of(unsafe { slice(vr, nvr) }?, "Clock")
+    })
 }
 
-/// `fmi3GetFMUState`: a new state, or `*state` overwritten when it is one already.
-///
-/// # Safety
-/// `instance` an instance; `state` points to null or to a state of this library.
+/// `fmi3GetFMUState`: a new state when `*state` is null, else `*state` (one of this
+/// instance's states) overwritten.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetFMUState(instance: Fmi3Instance, state: *mut FmuStatePtr) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3GetFMUState", |i| {
-            let slot = state.as_mut().ok_or("a null FMU state pointer")?;
-            match (*slot as *mut FmuState).as_mut() {
-                Some(s) => i.model.get_state_into(s)?,
-                None => *slot = Box::into_raw(Box::new(i.model.get_state()?)) as FmuStatePtr,
-            }
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3GetFMUState(instance: Fmi3Instance, state: *mut FmuStatePtr) -> c_int {
+    with_instance(instance, "fmi3GetFMUState", |i| {
+        let slot = state_slot(state)?;
+        if slot.is_null() {
+            let s = i.model.get_state()?;
+            *slot = i.add_state(s) as FmuStatePtr;
+        } else {
+            i.refresh_state(*slot)?;
+        }
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3SetFMUState`.
-///
-/// # Safety
-/// `instance` an instance; `state` a state of this library.
+/// `fmi3SetFMUState`: any state of this instance, in any mode (also before initialisation).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFMUState(instance: Fmi3Instance, state: FmuStatePtr) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SetFMUState", |i| {
-            let s = (state as *const FmuState)
-                .as_ref()
-                .ok_or("a null FMU state")?;
-            i.model.set_state(s).map(|_| Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3SetFMUState(instance: Fmi3Instance, state: FmuStatePtr) -> c_int {
+    with_instance(instance, "fmi3SetFMUState", |i| {
+        let s = i.state(state)?.clone();
+        i.model.set_state(&s)?;
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3FreeFMUState`: frees `*state` and sets it to null.
-///
-/// # Safety
-/// `instance` an instance; `state` points to null or to a state of this library.
+/// `fmi3FreeFMUState`: frees `*state` (a state of this instance) and sets it to null; null is
+/// nothing to free.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3FreeFMUState(
-    instance: Fmi3Instance,
-    state: *mut FmuStatePtr,
-) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3FreeFMUState", |_| {
-            if let Some(slot) = state.as_mut()
-                && !slot.is_null()
-            {
-                drop(Box::from_raw(*slot as *mut FmuState));
-                *slot = std::ptr::null_mut();
-            }
-            Ok(Status::Ok)
-        })
-    }
+pub extern "C" fn fmi3FreeFMUState(instance: Fmi3Instance, state: *mut FmuStatePtr) -> c_int {
+    with_instance(instance, "fmi3FreeFMUState", |i| {
+        let slot = state_slot(state)?;
+        if !slot.is_null() {
+            i.remove_state(*slot)?;
+            *slot = std::ptr::null_mut();
+        }
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3SerializedFMUStateSize`.
 ///
 /// # Safety
-/// `instance` an instance; `state` a state of this library; `size` writable.
+/// `size` writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     instance: Fmi3Instance,
     state: FmuStatePtr,
     size: *mut usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SerializedFMUStateSize", |i| {
-            let s = (state as *mut FmuState)
-                .as_mut()
-                .ok_or("a null FMU state")?;
-            *size.as_mut().ok_or("a null size pointer")? = i.model.serialize(s)?.len();
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3SerializedFMUStateSize", |i| {
+        let n = i.state_mut(state)?.serialize(&token()).len();
+        *unsafe { size.as_mut() }.ok_or("a null size pointer")? = n;
+        Ok(Status::Ok)
+    })
 }
 
 /// `fmi3SerializeFMUState`: `size` must be what `fmi3SerializedFMUStateSize` said.
 ///
 /// # Safety
-/// `instance` an instance; `state` a state of this library; `bytes` `size` writable bytes.
+/// `bytes` `size` writable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SerializeFMUState(
     instance: Fmi3Instance,
@@ -667,28 +612,24 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     bytes: *mut u8,
     size: usize,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3SerializeFMUState", |i| {
-            let s = (state as *mut FmuState)
-                .as_mut()
-                .ok_or("a null FMU state")?;
-            let data = i.model.serialize(s)?;
-            if data.len() != size {
-                return Err(format!(
-                    "the buffer has {size} bytes, the state {} (ask fmi3SerializedFMUStateSize)",
-                    data.len()
-                ));
-            }
-            slice_mut(bytes, size)?.copy_from_slice(data);
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3SerializeFMUState", |i| {
+        let data = i.state_mut(state)?.serialize(&token());
+        if data.len() != size {
+            return Err(Fault::error(format!(
+                "the buffer has {size} bytes, the state {} (ask fmi3SerializedFMUStateSize)",
+                data.len()
+            )));
+        }
+        unsafe { slice_mut(bytes, size) }?.copy_from_slice(data);
+        Ok(Status::Ok)
+    })
 }
 
-/// `fmi3DeserializeFMUState`: refuses a state of an instance with other parameters.
+/// `fmi3DeserializeFMUState`: a state serialised by any instance of this FMU's build (another
+/// process or extraction too); into a new state when `*state` is null, else into `*state`.
 ///
 /// # Safety
-/// `instance` an instance; `bytes` `size` readable bytes; `state` writable.
+/// `bytes` `size` readable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3DeserializeFMUState(
     instance: Fmi3Instance,
@@ -696,33 +637,27 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     state: *mut FmuStatePtr,
 ) -> c_int {
-    unsafe {
-        with_instance(instance, "fmi3DeserializeFMUState", |i| {
-            let s = i.model.deserialize(slice(bytes, size)?)?;
-            let slot = state.as_mut().ok_or("a null FMU state pointer")?;
-            if !slot.is_null() {
-                drop(Box::from_raw(*slot as *mut FmuState));
-            }
-            *slot = Box::into_raw(Box::new(s)) as FmuStatePtr;
-            Ok(Status::Ok)
-        })
-    }
+    with_instance(instance, "fmi3DeserializeFMUState", |i| {
+        let s = FmuState::deserialize(unsafe { slice(bytes, size) }?, &token())?;
+        let slot = state_slot(state)?;
+        if slot.is_null() {
+            *slot = i.add_state(s) as FmuStatePtr;
+        } else {
+            *i.state_mut(*slot)? = s;
+        }
+        Ok(Status::Ok)
+    })
 }
 
 macro_rules! unsupported {
     ($name:ident, $why:literal, ($($arg:ident : $ty:ty),*)) => {
         #[doc = concat!("`", stringify!($name), "`: not supported (", $why, "); returns `fmi3Error`.")]
-        ///
-        /// # Safety
-        /// `instance` must be an instance of this library.
         #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(instance: Fmi3Instance, $($arg: $ty),*) -> c_int {
+        pub extern "C" fn $name(instance: Fmi3Instance, $($arg: $ty),*) -> c_int {
             $(let _ = $arg;)*
-            unsafe {
-                with_instance(instance, stringify!($name), |_| {
-                    Err(concat!("not supported: ", $why).into())
-                })
-            }
+            with_instance(instance, stringify!($name), |_| {
+                Err(Fault::error(concat!("not supported: ", $why)))
+            })
         }
     };
 }

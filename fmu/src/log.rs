@@ -27,6 +27,22 @@ pub type Fmi2Logger =
 /// FMI 3.0's logger: `(instanceEnvironment, status, category, message)`.
 pub type Fmi3Logger = unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char);
 
+/// The log categories the model descriptions declare, with what each carries.
+pub const CATEGORIES: [(&str, &str); 3] = [
+    (
+        "logStatusError",
+        "Errors: refused calls and parameters, illegal call sequences, failed steps that leave the instance in the Error state",
+    ),
+    (
+        "logStatusDiscard",
+        "Communication steps refused with the instance kept at their start (fmi3Discard / fmi2Discard)",
+    ),
+    (
+        "logInfo",
+        "The grid and stages at initialisation, solver steps per communication step",
+    ),
+];
+
 /// Where an instance's messages go.
 pub struct Logger {
     /// The instance name (FMI 2.0 passes it with every message).
@@ -35,8 +51,8 @@ pub struct Logger {
     pub fmi2: Option<(Fmi2Logger, *mut c_void)>,
     /// The FMI 3.0 callback and its environment.
     pub fmi3: Option<(Fmi3Logger, *mut c_void)>,
-    /// Whether informational messages are wanted (errors and warnings always go out).
-    pub debug: bool,
+    /// Which of [`CATEGORIES`] are on (errors go out whatever this says).
+    pub enabled: [bool; 3],
 }
 
 /// A C string of `s`, with interior NULs replaced.
@@ -45,9 +61,46 @@ pub fn c_string(s: &str) -> CString {
 }
 
 impl Logger {
-    /// Send `message` (errors and warnings always; other statuses only with debug logging on).
+    /// A logger with debug logging `on` or off: errors and discarded steps are reported
+    /// either way, informational messages only when it is on.
+    pub fn new(instance_name: &str, on: bool) -> Self {
+        Logger {
+            instance_name: c_string(instance_name),
+            fmi2: None,
+            fmi3: None,
+            enabled: [true, true, on],
+        }
+    }
+
+    /// `fmi2SetDebugLogging` / `fmi3SetDebugLogging`: turn the named categories (all of them
+    /// when none is named) on or off. An unknown category is refused, naming the known ones.
+    pub fn set_categories(&mut self, on: bool, names: &[String]) -> Result<(), String> {
+        let mut picked = Vec::new();
+        for n in names {
+            let k = CATEGORIES.iter().position(|(c, _)| c == n).ok_or_else(|| {
+                format!(
+                    "unknown log category `{n}`; this FMU has: {}",
+                    CATEGORIES.map(|(c, _)| c).join(", ")
+                )
+            })?;
+            picked.push(k);
+        }
+        if names.is_empty() {
+            picked = (0..CATEGORIES.len()).collect();
+        }
+        for k in picked {
+            self.enabled[k] = on;
+        }
+        Ok(())
+    }
+
+    /// Send `message` in `category`: errors always, other messages when their category is on.
     pub fn log(&self, status: Status, category: &str, message: &str) {
-        if matches!(status, Status::Ok) && !self.debug {
+        let on = CATEGORIES
+            .iter()
+            .position(|(c, _)| *c == category)
+            .is_some_and(|k| self.enabled[k]);
+        if status != Status::Error && status != Status::Fatal && !on {
             return;
         }
         let category = c_string(category);

@@ -18,9 +18,10 @@
 //!   medians of R runs (the 1- and N-thread runs alternate; the speed-up of each pair is
 //!   printed as a range and kept in the JSON), written to `DIR/bench.json` (default
 //!   `target/bench`). A benchmark, not a test: timings are never asserted.
-//! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (release) and
-//!   package `target/fmu/sphere_impact.fmu` (FMI 2.0 Co-Simulation) and
-//!   `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation).
+//! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (profile
+//!   `fmu-release`: release code, stripped) and package `target/fmu/sphere_impact.fmu` (FMI
+//!   2.0 Co-Simulation) and `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation), with
+//!   their documentation and licence.
 
 mod zip;
 
@@ -93,15 +94,29 @@ const LAWS: [(&str, &str); 3] = [
     ("efsi-law-mooney-rivlin", "efsi_law_mooney_rivlin"),
 ];
 
-/// Build (release) and package both FMUs; returns their paths.
+/// The cargo profile the FMUs' libraries are built with (release code, stripped; see the
+/// workspace's Cargo.toml) and its output folder under `target/`.
+const FMU_PROFILE: &str = "fmu-release";
+
+/// Build (profile [`FMU_PROFILE`]) and package both FMUs; returns their paths.
 fn fmu() -> Result<[PathBuf; 2], String> {
     let mut c = cargo();
-    c.args(["build", "--quiet", "--release", "-p", "efsi-fmu"]);
+    c.args([
+        "build",
+        "--quiet",
+        "--profile",
+        FMU_PROFILE,
+        "-p",
+        "efsi-fmu",
+    ]);
     for (package, _) in LAWS {
         c.args(["-p", package]);
     }
-    run(c, "build the FMU library and the shipped laws (release)")?;
-    let release = root().join("target/release");
+    run(
+        c,
+        "build the FMU library and the shipped laws (stripped release)",
+    )?;
+    let release = root().join("target").join(FMU_PROFILE);
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
     let describe = |what: &str| -> Result<Vec<u8>, String> {
         let out = Command::new(release.join("efsi-fmu-description"))
@@ -122,6 +137,8 @@ fn fmu() -> Result<[PathBuf; 2], String> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let scene = describe("scene")?;
+    let documentation = describe("doc")?;
+    let license = describe("license")?;
     let dir = root().join("target/fmu");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut made = Vec::new();
@@ -144,13 +161,16 @@ fn fmu() -> Result<[PathBuf; 2], String> {
             add(&mut z, &format!("binaries/{platform}/{name}"), data)?;
         }
         add(&mut z, "resources/sphere_impact.ron", &scene)?;
+        add(&mut z, "documentation/index.html", &documentation)?;
+        add(&mut z, "documentation/licenses/license.txt", &license)?;
         let path = dir.join(file);
         std::fs::write(&path, z.finish()).map_err(|e| format!("{}: {e}", path.display()))?;
         let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
         eprintln!(
-            "wrote {} (FMI {version}.0 Co-Simulation, {:.1} MB)",
+            "wrote {} (FMI {version}.0 Co-Simulation, {:.2} MB; library {:.2} MB)",
             path.display(),
-            bytes as f64 / 1e6
+            bytes as f64 / 1e6,
+            library.len() as f64 / 1e6
         );
         made.push(path);
     }
