@@ -12,13 +12,17 @@ import math
 import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave
+from ctypes import byref
+
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+from fmpy.logging import addLoggerProxy
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
@@ -32,6 +36,22 @@ H = 2.0**-10  # communication step (s), exact in binary
 SMALL = {"cells_per_radius": 6, "initial_height": 0.025}
 OUTPUTS = ["height", "velocity", "contact_force", "contact_radius", "max_compression",
            "kinetic_energy", "elastic_energy", "steps"]
+
+
+@pytest.fixture(autouse=True)
+def fmpy_logger_proxy():
+    """fmpy formats FMI 2.0 messages (a variadic callback) in a native proxy that remembers only
+    the last Python logger registered (`fmpy.logging.addLoggerProxy`): once a test's own logger
+    is garbage-collected, the next message to fmpy's default callbacks jumps to freed memory.
+    After each test, point the proxy at a logger that lives as long as the module."""
+    yield
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+    addLoggerProxy(byref(callbacks))
+    KEPT_CALLBACKS.append(callbacks)
+
+
+KEPT_CALLBACKS = []
 
 
 @pytest.fixture(scope="module")
@@ -153,7 +173,7 @@ def slave(version, unzipped, name="sphere", **params):
     else:
         fmu.enterInitializationMode(startTime=0.0)
     for k, v in dict(SMALL, **params).items():
-        if k == "cells_per_radius":
+        if isinstance(v, int):
             (fmu.setInteger if version == "fmi2" else fmu.setInt32)([vr[k]], [v])
         else:
             (fmu.setReal if version == "fmi2" else fmu.setFloat64)([vr[k]], [v])
@@ -293,3 +313,235 @@ def test_readme_cosimulation_with_a_spring_damper_substrate(unzipped):
     assert soft["height"].min() > rigid["height"].min() + 2e-4
     assert soft["height"][-1] < rigid["height"][-1] - 5e-4
     assert np.all(np.isfinite(soft["height"]))
+
+
+# --- Misuse and failure, as an importer meets them (issue 18) ---------------------------------
+
+
+def real_get(version, fmu):
+    return fmu.getReal if version == "fmi2" else fmu.getFloat64
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_a_refused_step_keeps_the_instance_at_its_start(version, unzipped):
+    """A doStep over the work bound returns Discard with nothing changed: FMI 3.0 steps on from
+    there; FMI 2.0 (stepFailed) goes on after an FMU state is set."""
+    fmu, vr = slave(version, unzipped, max_solver_steps_per_step=5)
+    t, _ = advance(version, fmu, vr, 0.0, 2)
+    state = fmu.getFMUState()
+    before = read(version, fmu, vr)
+    with pytest.raises(FMICallException) as e:
+        fmu.doStep(t, 0.02)
+    assert e.value.status == 2  # discard
+    assert read(version, fmu, vr) == before
+    assert real_get(version, fmu)([vr["time"]])[0] == t
+    if version == "fmi2":
+        with pytest.raises(FMICallException):  # not in stepFailed
+            fmu.doStep(t, H)
+        fmu.setFMUState(state)
+    t2, rows = advance(version, fmu, vr, t, 2)
+    assert rows[-1][-1] > before[-1]
+    fmu.freeFMUState(state)
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_serialised_state_sets_into_another_extraction_before_initialisation(version, tmp_path):
+    """Every importer extracts to a fresh folder: a state serialised by one extraction sets into
+    an instance of another, in Instantiated mode, and the run continues bit for bit."""
+    first, second = extract(FMUS[version], tmp_path / "a"), extract(FMUS[version], tmp_path / "b")
+    a, vra = slave(version, {version: first}, name="a")
+    t, _ = advance(version, a, vra, 0.0, 3, a=lambda k: 2.0 * k)
+    blob = a.serializeFMUState(a.getFMUState())
+    assert str(first).encode() not in bytes(blob)
+    _, want = advance(version, a, vra, t, 5)
+    md = read_model_description(second)
+    cls = FMU2Slave if version == "fmi2" else FMU3Slave
+    b = cls(guid=md.guid, unzipDirectory=second, modelIdentifier=md.coSimulation.modelIdentifier,
+            instanceName="b")
+    b.instantiate()
+    b.setFMUState(b.deserializeFMUState(blob))  # default parameters until now: the state brings its own
+    _, got = advance(version, b, vra, t, 5)
+    assert got == want
+    for f in (a, b):
+        f.terminate()
+        f.freeInstance()
+
+
+CHILD = r'''
+import ctypes, sys
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2FMUstate
+from fmpy.fmi3 import FMU3Slave, fmi3FMUState
+
+version, path = sys.argv[1], sys.argv[2]
+md = read_model_description(path)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+cls = FMU2Slave if version == "fmi2" else FMU3Slave
+messages = []
+if version == "fmi2":
+    def logger(env, instance, status, category, message):
+        messages.append(message.decode())
+else:
+    def logger(env, status, category, message):
+        messages.append(message.decode())
+fmu = cls(guid=md.guid, unzipDirectory=path, modelIdentifier=md.coSimulation.modelIdentifier,
+          instanceName="child")
+if version == "fmi2":
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.logging import addLoggerProxy
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    addLoggerProxy(ctypes.byref(callbacks))
+    fmu.instantiate(callbacks=callbacks)
+else:
+    fmu.instantiate(logMessage=logger)
+(fmu.setInteger if version == "fmi2" else fmu.setInt32)([vr["cells_per_radius"]], [4])
+if version == "fmi2":
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+else:
+    fmu.enterInitializationMode(startTime=0.0)
+fmu.exitInitializationMode()
+fmu.doStep(0.0, 2.0**-10)
+Free = getattr(fmu, "fmi2FreeFMUstate" if version == "fmi2" else "fmi3FreeFMUState")
+State = fmi2FMUstate if version == "fmi2" else fmi3FMUState
+
+
+def status(call):
+    try:
+        call()
+        return 0
+    except FMICallException as e:
+        return e.status
+
+
+state = fmu.getFMUState()
+# The state handle passed by value where its address is meant (seen in the wild).
+print("by-value", status(lambda: Free(fmu.component, ctypes.cast(state, ctypes.POINTER(State)))))
+print("message", messages[-1])
+fmu.setFMUState(state)
+# A pointer to something that is not a state.
+junk = State(0xdeadbeef)
+print("foreign", status(lambda: Free(fmu.component, ctypes.byref(junk))))
+fmu.setFMUState(state)
+# Freed twice through a copy of the handle.
+copy = State(state.value)
+fmu.freeFMUState(state)
+print("twice", status(lambda: Free(fmu.component, ctypes.byref(copy))))
+# An instance freed twice, then used.
+component = fmu.component
+FreeInstance = getattr(fmu, "fmi2FreeInstance" if version == "fmi2" else "fmi3FreeInstance")
+FreeInstance(component)
+FreeInstance(component)
+DoStep = getattr(fmu, "fmi2DoStep" if version == "fmi2" else "fmi3DoStep")
+if version == "fmi2":
+    print("after-free", status(lambda: DoStep(component, 0.0, 1e-3, 1)))
+else:
+    b = ctypes.c_bool()
+    d = ctypes.c_double()
+    print("after-free", status(lambda: DoStep(component, 0.0, 1e-3, True, ctypes.byref(b),
+                                              ctypes.byref(b), ctypes.byref(b), ctypes.byref(d))))
+print("alive")
+'''
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_importer_mistakes_are_errors_not_crashes(version, unzipped):
+    """The mistakes that used to crash the importer — a state passed by value, a foreign pointer,
+    a state freed twice, an instance freed twice and used afterwards — each return Error and the
+    process lives on. Run in a child process, so a crash fails this test instead of pytest."""
+    r = subprocess.run([sys.executable, "-c", CHILD, version, str(unzipped[version])],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    out = dict(line.split(" ", 1) for line in r.stdout.splitlines() if " " in line)
+    assert out["by-value"] == "3"
+    assert "passed where the address of a variable holding one is expected" in out["message"]
+    assert out["foreign"] == "3"
+    assert out["twice"] == "3"
+    assert out["after-free"] == "3"
+    assert r.stdout.rstrip().endswith("alive")
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_model_description_declares_dependencies_ranges_units_and_provenance(version):
+    md = read_model_description(FMUS[version])
+    assert md.generationTool.startswith("efsi-fmu ")
+    assert md.generationDateAndTime and md.license and md.copyright and md.author
+    variables = {v.name: v for v in md.modelVariables}
+    # No output depends directly on the input: no algebraic loop for an importer to break.
+    assert md.outputs and all(u.dependencies == [] for u in md.outputs)
+    for name, lo, hi in [("base_acceleration", -1000.0, 1000.0), ("initial_velocity", -100.0, 100.0),
+                         ("cells_per_radius", 2, 300), ("max_solver_steps_per_step", 1, 10**9)]:
+        assert (float(variables[name].min), float(variables[name].max)) == (lo, hi), name
+    assert variables["law_parameter_value"].unit == "Pa"
+    import zipfile
+    names = zipfile.ZipFile(FMUS[version]).namelist()
+    assert "documentation/index.html" in names
+    assert "documentation/licenses/license.txt" in names
+    # Stripped: the whole FMU well under 4 MB.
+    assert os.path.getsize(FMUS[version]) < 4e6
+
+
+# --- A second importer: Ecos (ecospy, its own FMI loader fmi4c) ----------------------------------
+
+
+@pytest.fixture(scope="module")
+def ecos():
+    try:
+        import ecospy
+        from ecospy.lib import EcosLib
+    except OSError as e:  # its library links Intel TBB
+        pytest.fail(f"ecospy's library does not load ({e}): install Debian's libtbb12 (.ci/run does)")
+    EcosLib.set_log_level("warn")
+    return ecospy
+
+
+def ecos_run(ecospy, path, h, n, params, a):
+    """The FMU in Ecos: fixed steps h (Ecos advances its clock by t += h), the input a(k) set
+    before step k; the outputs after each step."""
+    ss = ecospy.EcosSimulationStructure()
+    ss.add_model("sphere", str(path))
+    ss.add_parameter_set("p", {f"sphere::{k}": v for k, v in params.items()})
+    rows = []
+    with ecospy.EcosSimulation(structure=ss, step_size=h) as sim:
+        sim.init(parameter_set="p")
+        for k in range(n):
+            sim.set_real("sphere::base_acceleration", a(k))
+            sim.step()
+            rows.append(tuple(sim.get_real(f"sphere::{o}") for o in OUTPUTS[:-1])
+                        + (sim.get_integer("sphere::steps"), sim.get_time()))
+        sim.terminate()
+    return rows
+
+
+def fmpy_run(version, unzipped, h, n, params, a):
+    """The same calls through fmpy's low-level classes: doStep(t, h) with t += h."""
+    fmu, vr = slave(version, unzipped, **params)
+    t, rows = 0.0, []
+    for k in range(n):
+        (fmu.setReal if version == "fmi2" else fmu.setFloat64)([vr["base_acceleration"]], [a(k)])
+        fmu.doStep(t, h)
+        t += h
+        rows.append(tuple(read(version, fmu, vr)) + (t,))
+    fmu.terminate()
+    fmu.freeInstance()
+    return rows
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+@pytest.mark.parametrize("h", [1e-3, 2.0**-10], ids=["1ms", "2pow-10s"])
+def test_two_importers_agree_bit_for_bit(version, h, ecos, unzipped):
+    """70 ms of the sphere (the FMU's default parameters, 10 cells per radius: impact and
+    rebound), a shaking substrate as input, in fmpy and in Ecos: the same outputs, bit for bit."""
+    n = math.ceil(0.07 / h)
+    params = {"cells_per_radius": 10, "initial_height": 0.0573}
+    a = lambda k: 20.0 * math.sin(0.3 * k)  # noqa: E731
+    in_ecos = ecos_run(ecos, FMUS[version], h, n, params, a)
+    in_fmpy = fmpy_run(version, unzipped, h, n, params, a)
+    assert in_ecos == in_fmpy
+    force = [r[OUTPUTS.index("contact_force")] for r in in_fmpy]
+    velocity = [r[OUTPUTS.index("velocity")] for r in in_fmpy]
+    assert max(force) > 5.0 and velocity[-1] > 0.3  # it hits, and is on its way up by 70 ms

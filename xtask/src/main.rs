@@ -77,7 +77,7 @@ fn python_env() -> Result<PathBuf, String> {
         .arg(&req);
         run(
             c,
-            "install the Python test requirements (vtk, numpy, pytest, fmpy)",
+            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy)",
         )?;
         std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
     }
