@@ -22,11 +22,11 @@
 //! shortened the way `efsi run` shortens them to land on an output time
 //! ([`Simulation::next_dt`]), so any communication step lands exactly.
 
-use efsi_core::checkpoint::{self, Checkpoint, OutputState};
-use efsi_core::law::loader::{describe, library_file_name, resolve_law};
-use efsi_core::probes;
 use efsi_core::scene::Side;
 use efsi_core::{Scene, Simulation, Snapshot};
+use efsi_laws_host::loader::{describe, library_file_name, resolve_law};
+use efsi_run::checkpoint::{self, Checkpoint, OutputState};
+use efsi_run::probes;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 

@@ -4,7 +4,8 @@
 //! so a Rust test can receive them); FMI 2.0 for FMU states.
 
 use efsi_core::scene::Side;
-use efsi_core::{Scene, Simulation, probes};
+use efsi_core::{Scene, Simulation};
+use efsi_run::probes;
 use libloading::{Library, Symbol};
 use sphere_impact::Params;
 use sphere_impact::model::vr;
