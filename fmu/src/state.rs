@@ -21,7 +21,7 @@ use crate::machine::Mode;
 use crate::params::{Causality, Kind, Params, VARIABLES, vr};
 use crate::stepping::{Run, RunIdentity, SCENE_LABEL};
 use efsi_core::Snapshot;
-use efsi_core::checkpoint::{self, Checkpoint, CheckpointFile, OutputState};
+use efsi_run::checkpoint::{self, Checkpoint, CheckpointFile, OutputState};
 use std::sync::Arc;
 
 const MAGIC: &[u8; 8] = b"EFSIFMU2";

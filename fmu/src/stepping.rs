@@ -12,11 +12,11 @@
 //! else into one rebuilt from the same scene. Only when neither works is the instance broken.
 
 use crate::params::Params;
-use efsi_core::checkpoint::{LawIdentity, law_identity};
-use efsi_core::law::loader::{describe, library_file_name};
-use efsi_core::probes;
 use efsi_core::scene::Side;
 use efsi_core::{Scene, Simulation, Snapshot};
+use efsi_laws_host::loader::{describe, library_file_name};
+use efsi_run::checkpoint::{LawIdentity, law_identity};
+use efsi_run::probes;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -10,7 +10,8 @@
 //! instead of ending the test run.
 
 use efsi_core::scene::Side;
-use efsi_core::{Scene, Simulation, probes};
+use efsi_core::{Scene, Simulation};
+use efsi_run::probes;
 use libloading::{Library, Symbol};
 use sphere_impact::Params;
 use sphere_impact::params::vr;

@@ -1,6 +1,6 @@
 """Independent-reader test of efsi's VTK output.
 
-Runs the `vtk_fixture` example of efsi-core, which writes planar and axisymmetric `.vtr` files,
+Runs the `vtk_fixture` example of efsi-run, which writes planar and axisymmetric `.vtr` files,
 their `.pvd` collections and `expected.json`, then reads every file back with the official VTK
 library (not with efsi's own code) and checks it against `expected.json` bit for bit.
 
@@ -28,7 +28,7 @@ REPO = Path(__file__).resolve().parents[2]
 def fixture_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("vtk_fixture")
     subprocess.run(
-        ["cargo", "run", "-q", "-p", "efsi-core", "--example", "vtk_fixture", "--", str(out)],
+        ["cargo", "run", "-q", "-p", "efsi-run", "--example", "vtk_fixture", "--", str(out)],
         cwd=REPO,
         check=True,
     )

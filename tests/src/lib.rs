@@ -59,7 +59,7 @@ pub fn reference(rel: &str) -> PathBuf {
     try_reference(rel).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// [`reference`] with the failure as an error.
+/// [`reference()`] with the failure as an error.
 pub fn try_reference(rel: &str) -> Result<PathBuf, String> {
     let p = references_dir().join(rel);
     let canonical = p

@@ -2,8 +2,8 @@
 //! resolution (the full-resolution comparison is `cargo xtask bench-paper`, and the figures
 //! are in the foundation issue's closing note).
 
-use efsi_core::probes::sample;
 use efsi_core::{Scene, Simulation};
+use efsi_run::probes::sample;
 use efsi_tests::{interp, read_csv, reference, run_to_steady};
 use std::path::Path;
 

@@ -3,9 +3,9 @@
 //! refused, and a step that blows up stops the run (exit code 3, naming the stage, field and
 //! cell) after saving the last good state as VTK and as a checkpoint.
 
-use efsi_core::checkpoint::{self, CheckpointFile};
-use efsi_core::run::{RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_run::checkpoint::{self, CheckpointFile};
+use efsi_run::run::{RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_tests::run_until;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -400,7 +400,7 @@ fn a_non_finite_field_stops_the_run_and_saves_the_last_good_state() {
 fn checkpoint_of_a_128_cavity_is_small_and_quick() {
     let dir = scratch("size");
     let s = load(&dir, &CAVITY.replace("nx: 16, ny: 16", "nx: 128, ny: 128"));
-    let c = efsi_core::Checkpoint {
+    let c = efsi_run::Checkpoint {
         efsi_version: "test".into(),
         scene_path: dir.join("scene.ron"),
         scene_ron: s.scene.to_ron(),

@@ -2,7 +2,7 @@
 //! input): a constant one is exactly a change of gravity, it travels with snapshots and
 //! checkpoints, and it is refused where it could not act.
 
-use efsi_core::checkpoint::{self, Checkpoint, OutputState};
+use efsi_run::checkpoint::{self, Checkpoint, OutputState};
 use efsi_tests::{run_until, sim};
 
 /// A heavy viscous disk (no law: VOF, body force, viscous, projection stages) falling in a box.

@@ -13,7 +13,7 @@
 //! the issue allows for drag.
 
 use efsi_core::interface::phase_volume;
-use efsi_core::probes::solid_moments;
+use efsi_run::probes::solid_moments;
 use efsi_tests::sim;
 
 struct Fall {

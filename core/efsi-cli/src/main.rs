@@ -20,8 +20,8 @@ macro_rules! out {
 }
 
 use clap::{Parser, Subcommand};
-use efsi_core::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -319,11 +319,11 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
 
 /// `efsi laws`: describes every law found; exit code 2 if any library could not be read.
 fn list_laws(paths: &[PathBuf]) -> ExitCode {
-    let laws = efsi_core::law::list_laws(paths);
+    let laws = efsi_laws_host::list_laws(paths);
     if laws.is_empty() {
         out!(
             "no laws found; searched: {}",
-            efsi_core::law::loader::search_dirs()
+            efsi_laws_host::loader::search_dirs()
                 .iter()
                 .map(|d| d.display().to_string())
                 .collect::<Vec<_>>()

@@ -224,7 +224,7 @@ fn a_law_returning_nan_stops_the_run_naming_the_law() {
     assert!(out.join(&vtk).is_file());
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
     assert!(pvd.contains(&format!(r#"file="{vtk}""#)), "{pvd}");
-    let file = efsi_core::CheckpointFile::read(&out.join("checkpoint/latest.efsick")).unwrap();
+    let file = efsi_run::CheckpointFile::read(&out.join("checkpoint/latest.efsick")).unwrap();
     assert_eq!(file.record.step(), step);
     let scene = file.scene().unwrap();
     let sim = efsi_core::Simulation::new(scene, &file.scene_path, &efsi_stages::builtin()).unwrap();

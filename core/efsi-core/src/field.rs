@@ -104,7 +104,7 @@ impl Field {
 
     /// Copy all values from `other` (same shape); in parallel chunks on large grids.
     pub fn copy_from(&mut self, other: &Field) {
-        crate::solver::par::copy(&mut self.data, &other.data);
+        efsi_linalg::par::copy(&mut self.data, &other.data);
     }
 
     /// Maximum of |value| over the interior of the given staggering.
@@ -134,7 +134,7 @@ impl Field {
         };
         // The common case, all finite, in one vectorised pass over rows in parallel; only a
         // field that fails it is searched for its first bad value.
-        let bad = crate::solver::par::max_over_rows(je, ie, 0.0, |j| {
+        let bad = efsi_linalg::par::max_over_rows(je, ie, 0.0, |j| {
             if all_finite(row(j)) { 0.0 } else { 1.0 }
         });
         if bad == 0.0 {

@@ -543,7 +543,7 @@ impl Default for ProjectionParams {
 /// How the pressure equation is solved: conjugate gradient with one of two preconditioners.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PressureSolver {
-    /// Geometric multigrid W-cycle (`efsi_core::solver::Multigrid`): iterations independent
+    /// Geometric multigrid W-cycle (`efsi_linalg::Multigrid`): iterations independent
     /// of the grid size and of density ratios up to 1e4 (the default).
     #[default]
     Multigrid,

@@ -12,8 +12,8 @@
 use crate::bc::BoundarySet;
 use crate::grid::Grid;
 use crate::scene::Scene;
-use crate::solver::SolveStats;
 use crate::state::State;
+use efsi_linalg::SolveStats;
 use std::collections::BTreeSet;
 use std::fmt;
 use std::time::{Duration, Instant};
@@ -155,7 +155,7 @@ pub trait Stage: Send {
 
     /// The stage's own data that carries from one step to the next and is not in the
     /// [`State`] (e.g. a previous velocity kept for a time average), flattened to numbers, for
-    /// checkpoints and in-memory snapshots ([`crate::checkpoint`]). Scratch space that every
+    /// checkpoints and in-memory snapshots ([`crate::snapshot`]). Scratch space that every
     /// step overwrites before reading does not belong here. Default: nothing.
     ///
     /// A stage that returns data here must accept it back in [`restore`](Self::restore): a run

@@ -1,8 +1,8 @@
 //! The model and its stepper: a scene turned into a grid, boundary conditions, a state and a
 //! checked pipeline, advanced one step at a time. The run loop and the outputs are separate
-//! ([`crate::run`]), so tests and the FMU drive a [`Simulation`] directly; its evolving data is
-//! copied out and back with [`Simulation::snapshot`] and [`Simulation::restore`]
-//! ([`crate::checkpoint`]).
+//! (crate `efsi-run`), so tests and the FMU drive a [`Simulation`] directly; its evolving data
+//! is copied out and back with [`Simulation::snapshot`] and [`Simulation::restore`]
+//! ([`crate::snapshot`]).
 
 use crate::bc::BoundarySet;
 use crate::error::EfsiError;
@@ -41,7 +41,7 @@ struct EnergyGuard {
 impl EnergyGuard {
     fn energies(grid: &Grid, state: &State, gravity: (f64, f64)) -> (f64, f64, f64) {
         let ke = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-        let pe = crate::probes::potential_energy(grid, &state.rho, gravity);
+        let pe = crate::ops::potential_energy(grid, &state.rho, gravity);
         let ee = state
             .deformation
             .as_ref()

@@ -90,11 +90,11 @@ pub const PARAM_MIN_EXCLUSIVE: u32 = 1;
 pub const PARAM_MAX_EXCLUSIVE: u32 = 2;
 
 /// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]` (identical to
-/// `efsi_core::law::Sym`).
+/// `efsi_laws_host::Sym`).
 pub type Sym = [f64; 4];
 
 /// Tangent `∂τ_a/∂B̃_b`, row-major over the [`Sym`] components, shear counted once (identical
-/// to `efsi_core::law::Tangent`).
+/// to `efsi_laws_host::Tangent`).
 pub type Tangent = [f64; 16];
 
 /// The type of the entry symbol [`ENTRY_SYMBOL`]: returns a pointer to the library's descriptor,

@@ -33,11 +33,11 @@
 //! its own faces, so results are bit-identical on any number of threads.
 
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::{copy, for_each_row, for_each_row2, max_over_rows};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
+use efsi_linalg::par::{copy, for_each_row, for_each_row2, max_over_rows};
 
 /// The advection stage plugin.
 pub struct Advection;

@@ -14,12 +14,12 @@
 //!
 //! **Cycle.** One multigrid V(1,1)-cycle per block ([`Multigrid`], the mass carried whole to the
 //! coarse levels): symmetric positive definite, so it serves conjugate gradients as well as
-//! BiCGSTAB. Rows run in parallel with fixed results ([`efsi_core::solver::par`]): the same bits
+//! BiCGSTAB. Rows run in parallel with fixed results ([`efsi_linalg::par`]): the same bits
 //! on any number of threads. [`ViscousBlocks::new`] allocates the hierarchies; later set-ups and
 //! applications allocate nothing.
 
-use efsi_core::solver::{Multigrid, Preconditioner, Stencil5};
 use efsi_core::{BoundarySet, Field, Grid, bc::UnknownFaces};
+use efsi_linalg::{Multigrid, Preconditioner, Stencil5};
 
 /// Where the blocks' diagonals come from (see [`ViscousBlocks::setup`]).
 #[derive(Clone, Copy)]

@@ -15,11 +15,11 @@
 //! advective limit when `g − a = 0` and `CFL·√(h/|g − a|)` from rest.
 
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par;
 use efsi_core::{
     BoundarySet, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext,
 };
+use efsi_linalg::par;
 
 /// The body-force stage plugin.
 pub struct BodyForce;

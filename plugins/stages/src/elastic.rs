@@ -6,7 +6,7 @@
 //! The solid carries the modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B`, transported by
 //! the upper-convected law (seed Eq. 8), `∂B̃/∂t + ∇·(V B̃) = L B̃ + B̃ Lᵀ` with
 //! `L_ij = ∂V_i/∂x_j` (∇·V = 0), and exerts the elastic stress `τ(B̃)` of a hyperelastic law
-//! ([`efsi_core::law`]). Axisymmetric, the hoop component obeys `∂B̃_θθ/∂t + ∇·(V B̃_θθ) =
+//! ([`efsi_laws_host`]). Axisymmetric, the hoop component obeys `∂B̃_θθ/∂t + ∇·(V B̃_θθ) =
 //! 2 (u_r/r) B̃_θθ`, i.e. `L_θθ = u_r/r`, and the force gains the hoop term `−τ_θθ/r` on the
 //! radial momentum — both through the grid's hoop factor, zero in planar geometry.
 //!
@@ -163,13 +163,13 @@ use crate::advection::face_value;
 use crate::block_multigrid::{Diagonal, ViscousBlocks};
 use crate::viscous::corner_viscosity;
 use crate::viscous_stencil::ViscousStencil;
-use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
 use efsi_core::scene::ElasticPreconditioner;
-use efsi_core::solver::{BiCgStab, LinearOperator, SolveStats, par};
 use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext, bc::UnknownFaces,
 };
+use efsi_laws_host::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
+use efsi_linalg::{BiCgStab, LinearOperator, SolveStats, par};
 use rayon::prelude::*;
 
 fn law_needed(scene: &Scene) -> bool {
@@ -187,7 +187,7 @@ fn viscosities(scene: &Scene) -> (f64, f64) {
 }
 
 /// The law named by the scene's solid: the plain-Rust reference neo-Hookean (for tests), or a
-/// plugin library found and checked by [`efsi_core::law::loader::load_law`] (missing file, ABI,
+/// plugin library found and checked by [`efsi_laws_host::load_law`] (missing file, ABI,
 /// parameters, finite-difference check of the tangent).
 pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
     let spec = scene
@@ -209,8 +209,8 @@ pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
         .source_dir
         .clone()
         .unwrap_or_else(|| std::path::PathBuf::from("."));
-    let law =
-        efsi_core::law::loader::load_law(spec, &dir).map_err(|e| format!("solid.law: {e}"))?;
+    let law = efsi_laws_host::load_law(&spec.name, &spec.parameters, &dir)
+        .map_err(|e| format!("solid.law: {e}"))?;
     Ok(Box::new(law))
 }
 
@@ -672,12 +672,12 @@ impl Kernels {
 
     /// A law's error with the cell it names (an entry of the centre batch, or of the corner
     /// batch if `corner`) turned into the grid's cell (or corner) index and position.
-    fn locate(&self, e: efsi_core::law::LawError, corner: bool) -> String {
+    fn locate(&self, e: efsi_laws_host::LawError, corner: bool) -> String {
         let Some(q) = e.cell else {
             return e.to_string();
         };
         let g = &self.grid;
-        let text = efsi_core::law::LawError { cell: None, ..e }.to_string();
+        let text = efsi_laws_host::LawError { cell: None, ..e }.to_string();
         if corner {
             let w = g.nx + 1;
             let (i, j) = ((q % w) as isize, (q / w) as isize);

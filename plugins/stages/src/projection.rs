@@ -5,13 +5,13 @@
 //! average of the two cells (so the density stays inside the divergence, smooth across the
 //! interface, as the seed asks). Finite-volume form per cell, axisymmetric through the face radii:
 //! `Σ_f (A_f/(ρ_f h)) (p_C − p_F) = −(Σ_f A_f V_f·n)/Δt`, a symmetric positive (semi-)definite
-//! five-point system ([`efsi_core::solver::Stencil5`]). Walls contribute no flux (homogeneous
+//! five-point system ([`efsi_linalg::Stencil5`]). Walls contribute no flux (homogeneous
 //! Neumann), periodic sides wrap, outflow sides fix p = 0 on the boundary face. Without an
 //! outflow side the system is singular (p up to a constant): the right-hand side is projected on
 //! the range (zero sum) and the mean pressure set to zero.
 //!
 //! **Solver.** Conjugate gradient warm-started from the previous pressure, preconditioned by
-//! the geometric multigrid W-cycle of [`efsi_core::solver::Multigrid`] (default: iterations
+//! the geometric multigrid W-cycle of [`efsi_linalg::Multigrid`] (default: iterations
 //! independent of the grid and of density ratios up to 1e4) or, as the seed, by incomplete
 //! Cholesky IC(0) (scene `numerics.projection.solver: Multigrid | IncompleteCholesky`). It stops when the divergence the correction would
 //! leave satisfies `max_cells |∇·V^{n+1}|·Δt ≤ tol` (dimensionless: the relative volume change
@@ -27,12 +27,12 @@
 //! after the first step.
 
 use efsi_core::scene::{Boundary, PressureSolver, Side};
-use efsi_core::solver::par::{for_each_mut, for_each_row};
-use efsi_core::solver::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext, ops,
 };
+use efsi_linalg::par::{for_each_mut, for_each_row};
+use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
 
 /// The projection stage plugin.
 pub struct Projection;

@@ -17,7 +17,7 @@
 //! both components at once by conjugate gradient ("line solves as in the seed, or better": this
 //! solves the coupled system exactly instead of splitting it), preconditioned by the diagonal
 //! (Jacobi) or by multigrid V-cycles on the u–u and v–v blocks
-//! ([`efsi_core::solver::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
+//! ([`efsi_linalg::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
 //! default, `Multigrid`, or `Auto`, multigrid once the diffusion number makes Jacobi's
 //! iteration count, ~10√(max diag/mass), exceed the ~16 iterations the block preconditioner
 //! needs at ≈ 4× the cost each — measured on the drop at 256²: 7.7 against 32 ns per cell and
@@ -37,7 +37,7 @@
 //! **Cost.** The operator is applied from coefficients assembled once per step (see
 //! `ViscousOperator`) in one vectorised pass per component, and conjugate gradient fuses its
 //! vector updates with the residual norm and the Jacobi quotient with its dot product
-//! ([`efsi_core::solver::Pcg::solve_norm`]).
+//! ([`efsi_linalg::Pcg::solve_norm`]).
 //!
 //! **Parallelism.** The operator (scatter, stress divergence, gather) runs over rows in
 //! parallel and CG's reductions have a fixed order: bit-identical on any number of threads. `K(V*)`
@@ -50,13 +50,13 @@ use crate::block_multigrid::{Diagonal, ViscousBlocks};
 use efsi_core::G;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
-use efsi_core::solver::par::{self, dot, for_each_row, for_each_row_sum, for_each_row2};
-use efsi_core::solver::{LinearOperator, Norm, Pcg, SolveStats};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
     bc::{UnknownFaces, WallTime},
 };
+use efsi_linalg::par::{self, dot, for_each_row, for_each_row_sum, for_each_row2};
+use efsi_linalg::{LinearOperator, Norm, Pcg, SolveStats};
 
 /// The viscous stage plugin.
 pub struct Viscous;

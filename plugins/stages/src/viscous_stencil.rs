@@ -19,8 +19,8 @@
 //! The apply runs over rows in parallel, each row writing its own entries: bit-identical on any
 //! number of threads.
 
-use efsi_core::solver::par;
 use efsi_core::{Field, Grid, bc::UnknownFaces};
+use efsi_linalg::par;
 
 /// `θΔt K_v` on the compact unknown faces, coefficients set once per step.
 pub(crate) struct ViscousStencil {

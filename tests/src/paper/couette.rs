@@ -12,7 +12,7 @@ const TIMES: [f64; 4] = [2.0, 2.8, 4.0, 4.8];
 fn errors(run: &Run) -> Result<Vec<f64>, String> {
     let mut out = Vec::new();
     for t in TIMES {
-        let label = efsi_core::run::time_label(t);
+        let label = efsi_run::run::time_label(t);
         let (rh, rc) = read_csv(&reference(&format!(
             "oscillating_couette/from_rest/u_profile_t_{label}.csv"
         )));

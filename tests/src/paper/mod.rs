@@ -13,8 +13,8 @@ pub mod soft_wall;
 pub mod sphere;
 pub mod stability;
 
-use efsi_core::run::{Progress, run};
 use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_run::run::{Progress, run};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -427,7 +427,7 @@ pub fn slug(label: &str) -> String {
 /// Write a file atomically.
 pub fn save(path: &Path, bytes: &[u8]) -> Result<(), String> {
     use std::io::Write as _;
-    efsi_core::output::atomic::write_atomically(path, |w| w.write_all(bytes))
+    efsi_run::output::atomic::write_atomically(path, |w| w.write_all(bytes))
         .map_err(|e| e.to_string())
 }
 

@@ -82,7 +82,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
                         .collect();
                     let file = format!(
                         "shape_t{}.png",
-                        efsi_core::run::time_label(instants[next_image])
+                        efsi_run::run::time_label(instants[next_image])
                     );
                     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
                     match field(

@@ -72,8 +72,8 @@ pub use efsi_core::interface::phase_volume;
 use efsi_core::interface::plic::{
     axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal,
 };
-use efsi_core::solver::par;
 use efsi_core::{Field, G, Grid};
+use efsi_linalg::par;
 
 /// What a side of the domain does to the transported fraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

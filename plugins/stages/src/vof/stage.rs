@@ -28,11 +28,11 @@
 use super::advect::{VofAdvector, VofBoundaries, VofSide};
 use efsi_core::interface::fill_fraction;
 use efsi_core::scene::{Boundary, Side};
-use efsi_core::solver::par::{self, REDUCE_CHUNK};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
+use efsi_linalg::par::{self, REDUCE_CHUNK};
 
 /// The VOF stage plugin.
 pub struct Vof;

@@ -1,20 +1,29 @@
 //! The law-plugin loader against real plugin libraries: the shipped laws, the test-only
 //! plugins (wrong tangent, panicking, broken descriptor) and the law template built from a copy.
 //!
-//! The libraries are built by `cargo build --workspace`, and by `cargo test -p efsi-core` too
-//! (efsi-core lists them as dev-dependencies, so cargo builds them into `target/<profile>/deps`
-//! next to this test binary, which is on the loader's search path).
+//! The libraries are built by `cargo build --workspace`, and by `cargo test -p efsi-laws-host`
+//! too (efsi-laws-host lists them as dev-dependencies, so cargo builds them into
+//! `target/<profile>/deps` next to this test binary, which is on the loader's search path).
 
-use efsi_core::law::loader::{LAW_PATH_ENV, library_file_name, resolve_law, search_dirs};
-use efsi_core::law::{
+use efsi_laws_host::loader::{LAW_PATH_ENV, library_file_name, resolve_law, search_dirs};
+use efsi_laws_host::{
     ConstitutiveLaw, FD_TANGENT_TOLERANCE, LawError, LoadedLaw, Sym, Tangent, describe, list_laws,
-    load_law,
 };
-use efsi_core::scene::LawSpec;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
+
+/// A law as a scene names it: its name and parameter values.
+struct LawSpec {
+    name: String,
+    parameters: BTreeMap<String, f64>,
+}
+
+/// [`efsi_laws_host::load_law`] of `spec`.
+fn load_law(spec: &LawSpec, dir: &Path) -> Result<LoadedLaw, LawError> {
+    efsi_laws_host::load_law(&spec.name, &spec.parameters, dir)
+}
 
 /// A law spec from a name and `(parameter, value)` pairs.
 fn spec(name: &str, params: &[(&str, f64)]) -> LawSpec {
@@ -91,7 +100,7 @@ fn shipped_laws_load_by_name_and_pass_the_tangent_check() {
 #[test]
 fn neo_hookean_plugin_matches_the_reference_law() {
     let law = load("neo_hookean", &[("G", 2.5e5)]).unwrap();
-    let reference = efsi_core::law::NeoHookeanReference { g: 2.5e5 };
+    let reference = efsi_laws_host::NeoHookeanReference { g: 2.5e5 };
     let (tau, j) = eval(&law, &STATES).unwrap();
     let (tau_r, j_r) = eval(&reference, &STATES).unwrap();
     assert_eq!(tau, tau_r);
@@ -122,7 +131,7 @@ fn saint_venant_kirchhoff_equals_mooney_rivlin_with_eq_10_coefficients() {
         ],
     )
     .unwrap();
-    let states = efsi_core::law::loader::tangent_check_states();
+    let states = efsi_laws_host::loader::tangent_check_states();
     let (t1, j1) = eval(&svk, &states).unwrap();
     let (t2, j2) = eval(&mr, &states).unwrap();
     for k in 0..states.len() {
@@ -410,7 +419,7 @@ fn describe_and_list_the_shipped_laws() {
 #[test]
 fn batches_of_many_cells_and_threads() {
     let law = std::sync::Arc::new(load("mooney_rivlin", &[("C2", 1e4), ("C3", 2e4)]).unwrap());
-    let states = efsi_core::law::loader::tangent_check_states();
+    let states = efsi_laws_host::loader::tangent_check_states();
     let b: Vec<Sym> = (0..10_000).map(|k| states[k % states.len()]).collect();
     let (tau, j) = eval(&*law, &b).unwrap();
     let handles: Vec<_> = (0..2)

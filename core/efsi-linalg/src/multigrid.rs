@@ -508,7 +508,7 @@ struct Hierarchy {
 /// Geometric multigrid W-cycle preconditioner for a [`Stencil5`] (module docs).
 ///
 /// ```
-/// use efsi_core::solver::{Multigrid, Pcg, Stencil5};
+/// use efsi_linalg::{Multigrid, Pcg, Stencil5};
 /// let n = 32;
 /// let mut a = Stencil5::new(n, n, false, false);
 /// for j in 0..n {
@@ -779,7 +779,7 @@ impl Preconditioner for Multigrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::{IncompleteCholesky, Pcg};
+    use crate::{IncompleteCholesky, Pcg};
 
     /// A small deterministic generator (xorshift64*), for reproducible random problems.
     struct Rng(u64);
@@ -1005,7 +1005,7 @@ mod tests {
 
     /// The table behind the module docs' figures: MG-PCG iterations for the six problem kinds
     /// at density ratios 1, 1e2, 1e4 and 64² to 512² (a few seconds; run with
-    /// `cargo test -p efsi-core --lib iteration_table -- --ignored --nocapture`).
+    /// `cargo test -p efsi-linalg --lib iteration_table -- --ignored --nocapture`).
     #[test]
     #[ignore]
     fn iteration_table() {

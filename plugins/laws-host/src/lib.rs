@@ -1,4 +1,6 @@
-//! Constitutive laws: the elastic stress `τ(B̃)` and its tangent `J = ∂τ/∂B̃`.
+//! # efsi-laws-host
+//!
+//! Hosting constitutive laws: the elastic stress `τ(B̃)` and its tangent `J = ∂τ/∂B̃`.
 //!
 //! A law sees the modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B` of a cell (seed Eq. 8)
 //! and returns the elastic (extra) stress the momentum equation divides (seed Eqs. 7, 9, 10, 14)

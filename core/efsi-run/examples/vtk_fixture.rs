@@ -1,16 +1,14 @@
 //! Writes a small VTK fixture for the independent-reader test (`tests/python/test_vtk_fixture.py`).
 //!
-//! `cargo run -p efsi-core --example vtk_fixture -- OUTDIR` writes, for a planar and an
+//! `cargo run -p efsi-run --example vtk_fixture -- OUTDIR` writes, for a planar and an
 //! axisymmetric grid, two `.vtr` files (two output times) with the cell arrays `pressure`
 //! (1 component), `velocity` (3) and `B` (6), one `.pvd` collection per grid, and
 //! `expected.json`, which lists for every file what a reader must find in it: dimensions, extent,
 //! node coordinates and every array's name, component count and values (shortest round-trip
 //! decimal form, so they parse back to the very same `f64`).
 
-use efsi_core::output::vtk::{
-    CellArray, PvdCollection, extent_string, node_coordinates, write_vtr,
-};
 use efsi_core::{Geometry, Grid};
+use efsi_run::output::vtk::{CellArray, PvdCollection, extent_string, node_coordinates, write_vtr};
 use serde_json::{Value, json};
 use std::path::Path;
 

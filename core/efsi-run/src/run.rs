@@ -28,15 +28,15 @@
 //! [`resume`] continues a run from its latest checkpoint, appending to the same outputs.
 
 use crate::checkpoint::{self, Checkpoint, CheckpointFile, LawIdentity, OutputState};
-use crate::error::EfsiError;
-use crate::field::Field;
-use crate::grid::Grid;
 use crate::output::vtk::{CellArray, PvdCollection, write_vtr};
 use crate::probes;
-use crate::scene::{ProbeSpec, ProfileSpec, Scene};
-use crate::schedule::StagePlugin;
-use crate::simulation::Simulation;
-use crate::state::State;
+use efsi_core::error::EfsiError;
+use efsi_core::field::Field;
+use efsi_core::grid::Grid;
+use efsi_core::scene::{ProbeSpec, ProfileSpec, Scene};
+use efsi_core::schedule::StagePlugin;
+use efsi_core::simulation::Simulation;
+use efsi_core::state::State;
 use std::fs::{self, File, OpenOptions};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -433,10 +433,10 @@ impl Outputs {
         for j in 0..ny as isize {
             for i in 0..nx as isize {
                 let k = j as usize * nx + i as usize;
-                let (a, b) = crate::ops::centre_velocity(&state.u, &state.v, i, j);
+                let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
                 vel[3 * k] = a;
                 vel[3 * k + vy] = b;
-                div[k] = crate::ops::div(grid, &state.u, &state.v, i, j);
+                div[k] = efsi_core::ops::div(grid, &state.u, &state.v, i, j);
                 scalars[0].1.push(state.p[(i, j)]);
                 scalars[1].1.push(state.rho[(i, j)]);
                 scalars[2].1.push(state.mu[(i, j)]);
@@ -624,7 +624,7 @@ fn save_checkpoint(
     sim: &Simulation,
     law: &Option<LawIdentity>,
     outputs: OutputState,
-    snapshot: crate::checkpoint::Snapshot,
+    snapshot: efsi_core::Snapshot,
     dir: &Path,
 ) -> Result<PathBuf, EfsiError> {
     let path = dir.join(checkpoint::LATEST);
@@ -768,7 +768,7 @@ fn save_failure(
     sim: &Simulation,
     out: &mut Outputs,
     law: &Option<LawIdentity>,
-    good: crate::checkpoint::Snapshot,
+    good: efsi_core::Snapshot,
     error: EfsiError,
 ) -> EfsiError {
     let (step, t) = (good.step(), good.t());

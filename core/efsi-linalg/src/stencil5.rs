@@ -235,7 +235,7 @@ impl Preconditioner for IncompleteCholesky {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::Pcg;
+    use crate::Pcg;
 
     fn laplacian(nx: usize, ny: usize, px: bool) -> Stencil5 {
         let mut a = Stencil5::new(nx, ny, px, false);

@@ -5,7 +5,8 @@
 //! table (name, unit, default, allowed range) and `create` / `destroy` / `evaluate` functions.
 //! Laws written in Rust use `efsi-law-sdk`; the shipped ones live in `plugins/laws/`.
 //!
-//! [`load_law`] turns a scene's [`LawSpec`] into a [`LoadedLaw`] (a [`ConstitutiveLaw`]):
+//! [`load_law`] turns the law a scene names (its name and parameter values) into a
+//! [`LoadedLaw`] (a [`ConstitutiveLaw`]):
 //!
 //! 1. **Resolve** the name: a name with a path separator or ending in `.so`/`.dylib`/`.dll` is a
 //!    library path (relative to the scene's folder); any other name `X` is a shipped law, the file
@@ -24,14 +25,14 @@
 //! Evaluation is one plugin call per batch of cells; a status other than success, a panic in the
 //! plugin, or a non-finite output becomes a [`LawError`] naming the law (and the first bad cell).
 
-use super::{ConstitutiveLaw, LawError, Sym, Tangent};
-use crate::scene::LawSpec;
+use crate::{ConstitutiveLaw, LawError, Sym, Tangent};
 use efsi_law_abi::{
     ABI_VERSION, CRATE_VERSION, DESCRIPTOR_SIZE, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NAME,
     EntryFn, ErrBuf, EvaluateFn, LawDescriptor, PARAM_MAX_EXCLUSIVE, PARAM_MIN_EXCLUSIVE,
     ParamDesc, STATUS_ERROR, STATUS_INVALID_ARGUMENT, STATUS_NON_FINITE, STATUS_OK, STATUS_PANIC,
 };
 use libloading::Library;
+use std::collections::BTreeMap;
 use std::ffi::{CStr, c_char, c_void};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -345,11 +346,16 @@ impl ConstitutiveLaw for LoadedLaw {
     }
 }
 
-/// Loads the law a scene names (see the module docs for the resolution and the checks).
-/// `scene_dir` is the scene file's folder: relative library paths are relative to it.
-pub fn load_law(spec: &LawSpec, scene_dir: &Path) -> Result<LoadedLaw, LawError> {
-    let path = resolve_law(&spec.name, scene_dir)?;
-    let opened = open(&path, &spec.name)?;
+/// Loads the law a scene names, `name` with the parameter values `parameters` (see the module
+/// docs for the resolution and the checks). `scene_dir` is the scene file's folder: relative
+/// library paths are relative to it.
+pub fn load_law(
+    name: &str,
+    parameters: &BTreeMap<String, f64>,
+    scene_dir: &Path,
+) -> Result<LoadedLaw, LawError> {
+    let path = resolve_law(name, scene_dir)?;
+    let opened = open(&path, name)?;
     let info = opened.info;
     let fail = |message: String| LawError {
         law: info.name.clone(),
@@ -358,7 +364,7 @@ pub fn load_law(spec: &LawSpec, scene_dir: &Path) -> Result<LoadedLaw, LawError>
     };
 
     let mut values: Vec<f64> = info.parameters.iter().map(|p| p.default).collect();
-    for (name, &value) in &spec.parameters {
+    for (name, &value) in parameters {
         let Some(k) = info.parameters.iter().position(|p| &p.name == name) else {
             let known = info
                 .parameters
@@ -904,7 +910,7 @@ impl XorShift {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::law::NeoHookeanReference;
+    use crate::NeoHookeanReference;
 
     #[test]
     fn reference_law_passes_the_tangent_check() {

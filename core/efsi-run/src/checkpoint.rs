@@ -1,26 +1,11 @@
-//! Snapshots and checkpoints: everything that determines the steps after a given one.
+//! Checkpoint files: a [`Snapshot`] on disk, with what a resumed run must check and continue.
 //!
-//! Two layers, kept apart:
-//!
-//! - [`Snapshot`] is the **in-memory** copy of a [`Simulation`]'s evolving data, taken with
-//!   [`Simulation::snapshot`] (or [`Simulation::snapshot_into`], allocation-free) and put back
-//!   with [`Simulation::restore`]. It is what an FMU's get/set FMU state needs, and what the run
-//!   loop keeps of the start of every step so that a failed step can save the last good state.
-//!   It holds: every [`State`] array with its ghosts (velocity, pressure — the projection's warm
-//!   start —, density, viscosity, solid fraction, the seven deformation tensors (the end-of-step stress among them) including the
-//!   Adams–Bashforth previous advection term), time, step count and previous Δt; the
-//!   simulation's private stepping data (the last rate of change, which decides steadiness, and
-//!   the velocity scale of the first step); and each stage's carried-over data
-//!   ([`crate::schedule::Stage::save`], e.g. the VOF stage's previous velocity). The
-//!   simulation's `previous` velocity is not in it: every step overwrites it before reading it.
-//!   Restoring a snapshot into a simulation built from the same scene continues the run **bit
-//!   for bit** as if it had never stopped.
-//!
-//! - A **checkpoint file** ([`Checkpoint`], [`encode`], [`decode`]) is a snapshot plus what a
-//!   resumed run must check and continue: the scene (canonical RON), the law library's identity
-//!   ([`LawIdentity`]: name, ABI version, parameter table, size and hash of the file), the run
-//!   loop's output bookkeeping ([`OutputState`]) and the efsi version. `efsi resume` refuses a
-//!   checkpoint whose scene or law differs from the current ones and says what differs.
+//! A **checkpoint file** ([`Checkpoint`], [`encode`], [`decode`]) is a snapshot (the
+//! in-memory copy of a [`Simulation`](efsi_core::Simulation)'s evolving data, see [`efsi_core::snapshot`]) plus the
+//! scene (canonical RON), the law library's identity ([`LawIdentity`]: name, ABI version,
+//! parameter table, size and hash of the file), the run loop's output bookkeeping
+//! ([`OutputState`]) and the efsi version. `efsi resume` refuses a checkpoint whose scene or law
+//! differs from the current ones and says what differs.
 //!
 //! # File format (version [`FORMAT_VERSION`])
 //!
@@ -37,11 +22,11 @@
 //! the previous complete checkpoint or the new complete one, never a torn one; a truncated or
 //! corrupted file fails its length or checksum test with a clear message.
 
-use crate::error::EfsiError;
-use crate::law::loader::{describe, resolve_law};
-use crate::scene::Scene;
-use crate::simulation::Simulation;
-use crate::state::State;
+use efsi_core::Snapshot;
+use efsi_core::error::EfsiError;
+use efsi_core::scene::Scene;
+use efsi_core::state::State;
+use efsi_laws_host::loader::{describe, resolve_law};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -51,51 +36,6 @@ pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 pub const FORMAT_VERSION: u32 = 2;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
-
-/// The evolving data of a [`Simulation`], in memory (see the module docs for what it holds).
-#[derive(Clone, Debug)]
-pub struct Snapshot {
-    /// Time, step count, Δt of the previous step and every field, ghosts included.
-    pub state: State,
-    /// `max |uⁿ⁺¹ − uⁿ|/Δt` of the last step (decides steadiness).
-    pub(crate) last_change: f64,
-    /// The velocity scale that bounds a step when nothing else does.
-    pub(crate) velocity_scale: f64,
-    /// Each stage's carried-over data, by stage name, in pipeline order.
-    pub(crate) stages: Vec<(String, Vec<f64>)>,
-}
-
-impl Snapshot {
-    /// Simulated time of the snapshot.
-    pub fn t(&self) -> f64 {
-        self.state.t
-    }
-
-    /// Steps completed at the snapshot.
-    pub fn step(&self) -> u64 {
-        self.state.step
-    }
-
-    /// The data a stage saved ([`crate::schedule::Stage::save`]), by stage name (None for a
-    /// stage not in the pipeline; empty for a stage that keeps nothing between steps).
-    pub fn stage_data(&self, stage: &str) -> Option<&[f64]> {
-        self.stages
-            .iter()
-            .find(|(n, _)| n == stage)
-            .map(|(_, d)| d.as_slice())
-    }
-
-    /// Bytes the snapshot occupies in a checkpoint file (its arrays and stage data).
-    pub fn size_bytes(&self) -> usize {
-        let arrays: usize = self
-            .state
-            .arrays()
-            .iter()
-            .map(|(_, f)| 8 * f.data().len())
-            .sum();
-        arrays + self.stages.iter().map(|(_, d)| 8 * d.len()).sum::<usize>()
-    }
-}
 
 /// What identifies the law library a scene uses, to refuse resuming with another one.
 #[derive(Clone, Debug, PartialEq)]
@@ -137,7 +77,7 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
         .source_dir
         .clone()
         .unwrap_or_else(|| PathBuf::from("."));
-    let refuse = |e: crate::law::LawError| EfsiError::Config {
+    let refuse = |e: efsi_laws_host::LawError| EfsiError::Config {
         path: dir.clone(),
         field: "solid.law".into(),
         message: e.to_string(),
@@ -313,7 +253,7 @@ impl SnapshotRecord {
     }
 
     /// Fill `template` (a snapshot of the simulation it will be restored into, e.g. from
-    /// [`Simulation::snapshot`]) with the recorded values. Every array of the template must be
+    /// [`Simulation::snapshot`](efsi_core::Simulation::snapshot)) with the recorded values. Every array of the template must be
     /// recorded with the same length, and no other; the error names the first that is not.
     pub fn into_snapshot(self, mut template: Snapshot, what: &str) -> Result<Snapshot, EfsiError> {
         let fail = |message: String| EfsiError::Checkpoint {
@@ -725,67 +665,4 @@ pub fn check_resumable(file: &CheckpointFile, scene: &Scene, what: &str) -> Resu
             diffs.join("\n  ")
         ),
     })
-}
-
-impl Simulation {
-    /// A copy of everything that determines the steps after this one (see [`Snapshot`]).
-    pub fn snapshot(&self) -> Snapshot {
-        let (last_change, velocity_scale) = self.stepping();
-        Snapshot {
-            state: self.state.clone(),
-            last_change,
-            velocity_scale,
-            stages: self.pipeline().save_stages(),
-        }
-    }
-
-    /// [`snapshot`](Self::snapshot) into an existing snapshot of this simulation, reusing its
-    /// storage (what the run loop does before every step).
-    pub fn snapshot_into(&self, snap: &mut Snapshot) {
-        if !snap.state.copy_from(&self.state) {
-            snap.state = self.state.clone();
-        }
-        (snap.last_change, snap.velocity_scale) = self.stepping();
-        self.pipeline().save_stages_into(&mut snap.stages);
-    }
-
-    /// Put a snapshot back: the simulation continues exactly as the one it was taken from
-    /// would have. The snapshot must come from a simulation of the same scene (same fields,
-    /// grid and stages); otherwise nothing changes and the error says what does not fit.
-    pub fn restore(&mut self, snap: &Snapshot) -> Result<(), EfsiError> {
-        let fail = |message: String| EfsiError::Checkpoint {
-            what: "snapshot".into(),
-            message,
-        };
-        let names: Vec<String> = self.state.arrays().into_iter().map(|(n, _)| n).collect();
-        let theirs: Vec<String> = snap.state.arrays().into_iter().map(|(n, _)| n).collect();
-        if names != theirs {
-            return Err(fail(format!(
-                "it holds the fields [{}], this simulation [{}]",
-                theirs.join(", "),
-                names.join(", ")
-            )));
-        }
-        let same_shape = self
-            .state
-            .arrays()
-            .iter()
-            .zip(snap.state.arrays())
-            .all(|((_, f), (_, g))| f.data().len() == g.data().len());
-        if !same_shape {
-            return Err(fail(
-                "its fields are shaped for another grid than this simulation's".into(),
-            ));
-        }
-        // A stage that refuses its data leaves the others as they were.
-        let before = self.pipeline().save_stages();
-        if let Err(e) = self.pipeline_mut().restore_stages(&snap.stages) {
-            let _ = self.pipeline_mut().restore_stages(&before);
-            return Err(fail(e.to_string()));
-        }
-        self.state.copy_from(&snap.state);
-        self.set_stepping(snap.last_change, snap.velocity_scale);
-        self.restart_guard();
-        Ok(())
-    }
 }

@@ -4,11 +4,11 @@
 //! multigrid setup, and whole MG-PCG and IC-PCG solves to 1e-10, at 128² and 256², on the
 //! current rayon pool (`RAYON_NUM_THREADS=1` for one thread).
 //!
-//! `cargo bench -p efsi-core --bench poisson`; figure of merit: time per call (per cell with
+//! `cargo bench -p efsi-linalg --bench poisson`; figure of merit: time per call (per cell with
 //! the throughput shown).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use efsi_core::solver::{IncompleteCholesky, Multigrid, Pcg, Preconditioner, Stencil5};
+use efsi_linalg::{IncompleteCholesky, Multigrid, Pcg, Preconditioner, Stencil5};
 use std::hint::black_box;
 
 /// `Σ_f (h/(ρ_f h))(p_C − p_F)` on the unit square, a disk of density 1000 in fluid of density 1.

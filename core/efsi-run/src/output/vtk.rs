@@ -26,8 +26,8 @@
 //! `TimeValue` (the name VTK ≥ 8.2 XML readers recognise as the time step of a lone file, so a
 //! `.vtr` opened without its `.pvd` still carries its time).
 
-use crate::grid::{Geometry, Grid};
 use crate::output::atomic::write_atomically;
+use efsi_core::grid::{Geometry, Grid};
 use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};

@@ -1,10 +1,10 @@
 //! Sampling fields at points and along lines, and the time-series probes of `probes.csv`.
 
-use crate::field::Field;
-use crate::grid::Grid;
-use crate::ops;
-use crate::scene::{ProbeSpec, Side};
-use crate::state::State;
+use efsi_core::field::Field;
+use efsi_core::grid::Grid;
+use efsi_core::ops::{self, potential_energy};
+use efsi_core::scene::{ProbeSpec, Side};
+use efsi_core::state::State;
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).
@@ -20,7 +20,7 @@ pub fn interpolate(grid: &Grid, f: &Field, (ox, oy): (f64, f64), (x, y): (f64, f
         + wy * ((1.0 - wx) * f[(i0, j0 + 1)] + wx * f[(i0 + 1, j0 + 1)])
 }
 
-/// A named field sampled at a point (names from [`crate::scene::FIELD_NAMES`]).
+/// A named field sampled at a point (names from [`efsi_core::scene::FIELD_NAMES`]).
 pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
     let u = || interpolate(grid, &state.u, (0.0, 0.5), at);
     let v = || interpolate(grid, &state.v, (0.5, 0.0), at);
@@ -109,20 +109,6 @@ pub fn evaluate(
     }
 }
 
-/// `−∫ρ g·x dV` over the cells (per radian in axisymmetric geometry).
-/// Rows in parallel, summed in row order (the same bits on any number of threads).
-pub fn potential_energy(grid: &Grid, rho: &Field, (gx, gy): (f64, f64)) -> f64 {
-    let [e] = crate::solver::par::sum_rows(grid.ny, grid.nx, |j| {
-        let j = j as isize;
-        let mut e = 0.0;
-        for i in 0..grid.nx as isize {
-            e -= rho[(i, j)] * (gx * grid.xc(i) + gy * grid.yc(j)) * grid.cell_volume(i);
-        }
-        [e]
-    });
-    e
-}
-
 /// Volume, centroid and volume-weighted velocity of the solid phase.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolidMoments {
@@ -137,7 +123,7 @@ pub struct SolidMoments {
 /// The moments of `phi` over the grid (rows in parallel, summed in row order: the same bits
 /// on any number of threads).
 pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
-    let [v, mx, my, mu, mv] = crate::solver::par::sum_rows(grid.ny, grid.nx, |j| {
+    let [v, mx, my, mu, mv] = efsi_linalg::par::sum_rows(grid.ny, grid.nx, |j| {
         let j = j as isize;
         let mut s = [0.0; 5];
         for i in 0..grid.nx as isize {

@@ -1,12 +1,10 @@
 //! Stress + tangent evaluation of a law, through the plugin ABI versus compiled in, in batches
 //! of 4096 cells (the size the elastic stage uses for a 64² grid), and one cell per call.
 //!
-//! `cargo bench -p efsi-core --bench law`; figure of merit: ns per cell.
+//! `cargo bench -p efsi-laws-host --bench law`; figure of merit: ns per cell.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use efsi_core::law::loader::load_law;
-use efsi_core::law::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
-use efsi_core::scene::LawSpec;
+use efsi_laws_host::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent, load_law};
 use std::hint::black_box;
 
 fn states(n: usize) -> Vec<Sym> {
@@ -19,11 +17,9 @@ fn states(n: usize) -> Vec<Sym> {
 }
 
 fn bench(c: &mut Criterion) {
-    let spec = LawSpec {
-        name: "neo_hookean".into(),
-        parameters: [("G".to_string(), 1e5)].into_iter().collect(),
-    };
-    let plugin = load_law(&spec, std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let parameters = [("G".to_string(), 1e5)].into_iter().collect();
+    let plugin = load_law("neo_hookean", &parameters, std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
     let native = NeoHookeanReference { g: 1e5 };
     let n = 4096;
     let b = states(n);

@@ -1,0 +1,13 @@
+//! # efsi-run
+//!
+//! Running an efsi [`Simulation`](efsi_core::Simulation): the run loop with its outputs
+//! ([`run`]: VTK and `.pvd`, probes, profiles, `run.json`, landing on output times), the
+//! writers ([`output`]: VTK XML, atomic files), the probes' definitions ([`probes`]) and the
+//! checkpoint file with resume ([`checkpoint`]). The CLI, the FMU and other drivers use them.
+
+pub mod checkpoint;
+pub mod output;
+pub mod probes;
+pub mod run;
+
+pub use checkpoint::{Checkpoint, CheckpointFile};
