@@ -545,3 +545,62 @@ def test_two_importers_agree_bit_for_bit(version, h, ecos, unzipped):
     force = [r[OUTPUTS.index("contact_force")] for r in in_fmpy]
     velocity = [r[OUTPUTS.index("velocity")] for r in in_fmpy]
     assert max(force) > 5.0 and velocity[-1] > 0.3  # it hits, and is on its way up by 70 ms
+
+
+# --- FMI compatibility information: the reference result (FMI Cross-Check layout) ---------------
+
+COMPAT = REPO / "fmu" / "compat"
+
+
+def read_opt(path):
+    return {k.strip(): float(v) for k, v in (line.split(",") for line in path.read_text().splitlines() if line.strip())}
+
+
+def reference_input(times):
+    """The substrate's acceleration of the reference run: still for 10 ms, then shaken at 40 Hz
+    with 50 m/s² (about 5 g)."""
+    return [0.0 if t < 0.01 else 50.0 * math.sin(2 * math.pi * 40.0 * (t - 0.01)) for t in times]
+
+
+REFERENCE_OUTPUTS = ["height", "velocity", "contact_force", "contact_radius", "max_compression",
+                     "kinetic_energy", "elastic_energy", "steps"]
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_reference_result_is_reproduced(version):
+    """`fmu/compat/sphere_impact/`: the run of `_ref.opt` with the input `_in.csv` gives
+    `_ref.csv` — the reference result an importer compares with (FMI Cross-Check layout: at most
+    10 variables). `EFSI_UPDATE_FMU_REFERENCE=1` writes the files from the FMI 2.0 run."""
+    folder = COMPAT / "sphere_impact"
+    update = os.environ.get("EFSI_UPDATE_FMU_REFERENCE") == "1" and version == "fmi2"
+    if update:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "sphere_impact_ref.opt").write_text(
+            "StartTime, 0.0\nStopTime, 0.07\nStepSize, 0.001\nRelTol, 1e-06\n")
+        times = [k * 0.001 for k in range(71)]
+        with open(folder / "sphere_impact_in.csv", "w") as f:
+            f.write('"time","base_acceleration"\n')
+            for t, a in zip(times, reference_input(times)):
+                f.write(f"{t!r},{a!r}\n")
+    opt = read_opt(folder / "sphere_impact_ref.opt")
+    with open(folder / "sphere_impact_in.csv") as f:
+        rows = list(csv.reader(f))
+    signal = np.array([tuple(float(x) for x in r) for r in rows[1:]],
+                      dtype=[("time", np.float64), ("base_acceleration", np.float64)])
+    r = simulate_fmu(FMUS[version], start_time=opt["StartTime"], stop_time=opt["StopTime"],
+                     output_interval=opt["StepSize"], input=signal, output=REFERENCE_OUTPUTS)
+    if update:
+        with open(folder / "sphere_impact_ref.csv", "w") as f:
+            f.write(",".join(f'"{n}"' for n in ["time"] + REFERENCE_OUTPUTS) + "\n")
+            for row in r:
+                f.write(",".join(repr(float(x)) if n != "steps" else str(int(x))
+                                 for n, x in zip(["time"] + REFERENCE_OUTPUTS, row)) + "\n")
+    with open(folder / "sphere_impact_ref.csv") as f:
+        ref = list(csv.DictReader(f))
+    assert len(ref[0]) <= 10 and len(ref) == len(r)
+    for name in ["time"] + REFERENCE_OUTPUTS:
+        want = np.array([float(row[name]) for row in ref])
+        assert np.array_equal(r[name], want), (
+            f"{name} differs from fmu/compat/sphere_impact/sphere_impact_ref.csv; if the change is "
+            "meant, regenerate it: EFSI_UPDATE_FMU_REFERENCE=1 and run this test")
+    assert r["contact_force"].max() > 5.0

@@ -174,6 +174,14 @@ fn fmu() -> Result<[PathBuf; 2], String> {
         );
         made.push(path);
     }
+    // The reference result (FMI Cross-Check layout) beside the FMUs.
+    let compat = root().join("fmu/compat/sphere_impact");
+    for e in std::fs::read_dir(&compat).map_err(|e| format!("{}: {e}", compat.display()))? {
+        let p = e.map_err(|e| e.to_string())?.path();
+        if let Some(name) = p.file_name() {
+            std::fs::copy(&p, dir.join(name)).map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+    }
     let [a, b] = <[PathBuf; 2]>::try_from(made).map_err(|_| "two FMUs".to_string())?;
     Ok([a, b])
 }
