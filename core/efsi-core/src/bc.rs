@@ -20,6 +20,8 @@
 use crate::field::Field;
 use crate::grid::{G, Grid};
 use crate::scene::{Boundaries, Boundary, Side};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Range of updatable (unknown) normal faces along one direction: `lo..hi`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,21 +140,55 @@ impl Frame {
 }
 
 /// The boundary conditions of a run, ready to fill ghosts.
+///
+/// A moving wall's speed is an input that may change between steps
+/// ([`BoundarySet::set_wall_speed`], e.g. an FMU's lid-speed input): the speeds live in one cell
+/// shared by every copy of the set, so the copies stages keep follow the change.
 #[derive(Clone, Debug)]
 pub struct BoundarySet {
     sides: [Boundary; 4],
     lx: f64,
     ly: f64,
+    /// Each side's moving-wall speed as `f64` bits (the scene's until set).
+    speeds: Arc<[AtomicU64; 4]>,
 }
 
 impl BoundarySet {
     /// From the scene's boundary conditions.
     pub fn new(b: &Boundaries, grid: &Grid) -> Self {
+        let sides = Side::ALL.map(|s| b.get(s).clone());
+        let speeds = Arc::new(sides.clone().map(|b| {
+            AtomicU64::new(match b {
+                Boundary::MovingWall { speed, .. } => speed.to_bits(),
+                _ => 0f64.to_bits(),
+            })
+        }));
         BoundarySet {
-            sides: Side::ALL.map(|s| b.get(s).clone()),
+            sides,
             lx: grid.x1() - grid.x0,
             ly: grid.y1() - grid.y0,
+            speeds,
         }
+    }
+
+    /// The speed of the moving wall on `side` (its profile and motion multiply it), if the side
+    /// is one.
+    pub fn moving_wall_speed(&self, side: Side) -> Option<f64> {
+        matches!(self.get(side), Boundary::MovingWall { .. })
+            .then(|| f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed)))
+    }
+
+    /// Set the speed of the moving wall on `side` from the next fill on, for this set and every
+    /// copy of it. Refused for a side that is not a moving wall or a speed that is not finite.
+    pub fn set_wall_speed(&self, side: Side, speed: f64) -> Result<(), String> {
+        if !matches!(self.get(side), Boundary::MovingWall { .. }) {
+            return Err(format!("{side:?} is not a moving wall"));
+        }
+        if !speed.is_finite() {
+            return Err(format!("the wall speed must be finite, got {speed}"));
+        }
+        self.speeds[side as usize].store(speed.to_bits(), Ordering::Relaxed);
+        Ok(())
     }
 
     /// The condition on `side`.
@@ -195,15 +231,14 @@ impl BoundarySet {
     fn wall_speed(&self, side: Side, s: f64, t: f64) -> f64 {
         match self.get(side) {
             Boundary::MovingWall {
-                speed,
-                profile,
-                motion,
+                profile, motion, ..
             } => {
                 let len = if matches!(side, Side::XMin | Side::XMax) {
                     self.ly
                 } else {
                     self.lx
                 };
+                let speed = f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed));
                 speed * profile.factor(s, len) * motion.factor(t)
             }
             _ => 0.0,

@@ -425,6 +425,31 @@ impl Simulation {
         Ok(())
     }
 
+    /// Set the speed of the moving wall on `side` from the next step on (its profile and
+    /// motion still multiply it; [`BoundarySet::set_wall_speed`]): an input that changes between
+    /// steps, such as an FMU's lid speed. The step limit that keeps the CFL condition on the
+    /// walls follows it; a wall set moving turns the energy guard off (it does work the guard
+    /// does not account for). Snapshots do not carry it: who sets it sets it again after a
+    /// restore. Refused — nothing changes — for a side that is not a moving wall or a speed
+    /// that is not finite.
+    pub fn set_wall_speed(&mut self, side: Side, speed: f64) -> Result<(), EfsiError> {
+        self.bc
+            .set_wall_speed(side, speed)
+            .map_err(|message| EfsiError::Config {
+                path: self.scene_path.clone(),
+                field: format!("boundaries.{}.speed", side.field_name()),
+                message,
+            })?;
+        self.wall_speed = Side::ALL
+            .iter()
+            .filter_map(|&s| self.bc.moving_wall_speed(s))
+            .fold(0.0, |m: f64, v| m.max(v.abs()));
+        if speed != 0.0 {
+            self.guard = Some(None);
+        }
+        Ok(())
+    }
+
     /// Set the time exactly (after landing on an output time, to avoid round-off drift).
     pub fn snap_time(&mut self, t: f64) {
         if (self.state.t - t).abs() <= 1e-9 * t.abs().max(1e-300) {
