@@ -8,7 +8,7 @@
 //! step from the step size the solver would take, and counted while stepping) is refused. A
 //! refused or failed step — the bound, a solver that fails (a law returning NaN, a solver that
 //! does not converge, a collapsing Δt), even a panic inside the solver — puts back the state of
-//! its start, bit for bit ([`Run::recover`]): into the same simulation when it takes it back,
+//! its start, bit for bit: into the same simulation when it takes it back,
 //! else into one rebuilt from the same scene. Only when neither works is the instance broken.
 
 use crate::params::Params;
