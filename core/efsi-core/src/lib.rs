@@ -14,6 +14,7 @@ pub mod interface;
 pub mod law;
 pub mod ops;
 pub mod output;
+pub mod overrides;
 pub mod probes;
 pub mod run;
 pub mod scene;
@@ -27,6 +28,7 @@ pub use checkpoint::{Checkpoint, CheckpointFile, Snapshot};
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
+pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{
     FieldId, Phase, Pipeline, Stage, StageError, StagePlugin, StageStats, StepContext,
