@@ -950,6 +950,7 @@ impl Model {
                 efsi_version: env!("CARGO_PKG_VERSION").to_string(),
                 scene_path: run.sim.scene_path.clone(),
                 scene_ron: run.sim.scene.to_ron(),
+                overrides: run.sim.scene.overrides.clone(),
                 law: None,
                 outputs: OutputState::default(),
                 snapshot: state.snapshot.clone(),

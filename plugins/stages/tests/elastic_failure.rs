@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 /// `libefsi_test_law_nan.so`, built next to this test (`target/<profile>/deps` or its parent).
 fn nan_law() -> PathBuf {
     let file =
-        efsi_core::law::loader::library_file_name("*").replace("efsi_law_*", "efsi_test_law_nan");
+        efsi_laws_host::loader::library_file_name("*").replace("efsi_law_*", "efsi_test_law_nan");
     let exe = std::env::current_exe().unwrap();
     let deps = exe.parent().unwrap();
     [deps.to_path_buf(), deps.parent().unwrap().to_path_buf()]
