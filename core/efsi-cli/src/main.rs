@@ -42,8 +42,8 @@ struct Cli {
 /// Changes to the scene file's settings, shared by `run` and `check`.
 #[derive(clap::Args)]
 struct SceneOverrides {
-    /// Set a scene setting by its path, e.g. grid.nx=128, solid.law.parameters.G=1e6,
-    /// solid.shape.radius=0.02, output.probes[2].at=(0.5,0.5) (VALUE is RON; a string setting
+    /// Set a scene setting by its path, e.g. `grid.nx=128`, `solid.law.parameters.G=1e6`,
+    /// `solid.shape.radius=0.02`, `output.probes[2].at=(0.5,0.5)` (VALUE is RON; a string setting
     /// takes it unquoted). A setting absent from the file is added. Repeatable, applied in order.
     #[arg(long = "set", value_name = "PATH=VALUE", value_parser = Override::parse)]
     set: Vec<Override>,
