@@ -192,6 +192,7 @@ impl FmuState {
                         efsi_version: env!("CARGO_PKG_VERSION").to_string(),
                         scene_path: SCENE_LABEL.into(),
                         scene_ron: identity.scene_ron.clone(),
+                        overrides: Vec::new(),
                         law: identity.law.clone(),
                         outputs: OutputState::default(),
                         snapshot: (**snapshot).clone(),

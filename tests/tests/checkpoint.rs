@@ -404,6 +404,7 @@ fn checkpoint_of_a_128_cavity_is_small_and_quick() {
         efsi_version: "test".into(),
         scene_path: dir.join("scene.ron"),
         scene_ron: s.scene.to_ron(),
+        overrides: s.scene.overrides.clone(),
         law: None,
         outputs: Default::default(),
         snapshot: s.snapshot(),

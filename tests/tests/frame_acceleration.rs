@@ -49,6 +49,7 @@ fn frame_acceleration_travels_with_snapshots_and_checkpoints() {
         efsi_version: "test".into(),
         scene_path: "<test>".into(),
         scene_ron: s.scene.to_ron(),
+        overrides: s.scene.overrides.clone(),
         law: None,
         outputs: OutputState::default(),
         snapshot: snap,

@@ -20,7 +20,7 @@ macro_rules! out {
 }
 
 use clap::{Parser, Subcommand};
-use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_core::{EfsiError, Override, Scene, Simulation};
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -39,12 +39,36 @@ struct Cli {
     command: Command,
 }
 
+/// Changes to the scene file's settings, shared by `run` and `check`.
+#[derive(clap::Args)]
+struct SceneOverrides {
+    /// Set a scene setting by its path, e.g. `grid.nx=128`, `solid.law.parameters.G=1e6`,
+    /// `solid.shape.radius=0.02`, `output.probes[2].at=(0.5,0.5)` (VALUE is RON; a string setting
+    /// takes it unquoted). A setting absent from the file is added. Repeatable, applied in order.
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = Override::parse)]
+    set: Vec<Override>,
+    /// Multiply every grid dimension by F (rounded), keeping the domain: the speed/accuracy
+    /// knob. Applied after the --set options.
+    #[arg(long, value_name = "F")]
+    refine: Option<f64>,
+}
+
+impl SceneOverrides {
+    fn list(self) -> Vec<Override> {
+        let mut list = self.set;
+        list.extend(self.refine.map(Override::Refine));
+        list
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene: VTK fields, probes, profiles and run.json in the output folder.
     Run {
         /// The scene file (RON).
         scene: PathBuf,
+        #[command(flatten)]
+        overrides: SceneOverrides,
         /// Output folder (default: the scene's output.folder, else out/{scene name}/).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -65,8 +89,8 @@ enum Command {
     },
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
-    /// The scene is read again from the file the run started with; a changed scene or law
-    /// library is refused (exit code 2) with the list of what differs — except `time.end`,
+    /// The scene is read again from the file the run started with, with the run's --set and
+    /// --refine applied again; a changed scene or law library is refused (exit code 2) with the list of what differs — except `time.end`,
     /// which may be moved past the checkpoint to continue a run beyond its end.
     Resume {
         /// The run's output folder.
@@ -82,6 +106,8 @@ enum Command {
     Check {
         /// The scene file (RON).
         scene: PathBuf,
+        #[command(flatten)]
+        overrides: SceneOverrides,
     },
     /// List the constitutive laws, with their parameters, units, defaults and ranges.
     ///
@@ -93,15 +119,15 @@ enum Command {
     },
 }
 
-fn load(path: &Path) -> Result<Simulation, EfsiError> {
-    let scene = Scene::load(path)?;
+fn load(path: &Path, overrides: &[Override]) -> Result<Simulation, EfsiError> {
+    let scene = Scene::load_with(path, overrides)?;
     Simulation::new(scene, path, &efsi_stages::builtin())
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Check { scene } => load(&scene).map(|sim| {
+        Command::Check { scene, overrides } => load(&scene, &overrides.list()).map(|sim| {
             out!(
                 "{}: ok — {} {}×{} cells, stages: {}",
                 scene.display(),
@@ -117,6 +143,7 @@ fn main() -> ExitCode {
         }),
         Command::Run {
             scene,
+            overrides,
             out,
             print_schedule,
             quiet,
@@ -130,9 +157,16 @@ fn main() -> ExitCode {
                 pool = pool.num_threads(n.max(1));
             }
             match pool.build() {
-                Ok(pool) => {
-                    pool.install(|| run_scene(&scene, out, print_schedule, quiet, checkpoint_every))
-                }
+                Ok(pool) => pool.install(|| {
+                    run_scene(
+                        &scene,
+                        &overrides.list(),
+                        out,
+                        print_schedule,
+                        quiet,
+                        checkpoint_every,
+                    )
+                }),
                 Err(e) => {
                     eprintln!("error: cannot start the worker threads: {e}");
                     return ExitCode::from(1);
@@ -235,12 +269,13 @@ fn resume_run(
 
 fn run_scene(
     path: &Path,
+    overrides: &[Override],
     out: Option<PathBuf>,
     print_schedule: bool,
     quiet: bool,
     checkpoint_every: Option<f64>,
 ) -> Result<Option<usize>, EfsiError> {
-    let mut sim = load(path)?;
+    let mut sim = load(path, overrides)?;
     if print_schedule {
         out!("{}", sim.pipeline());
         return Ok(None);

@@ -13,6 +13,7 @@ pub mod field;
 pub mod grid;
 pub mod interface;
 pub mod ops;
+pub mod overrides;
 pub mod scene;
 pub mod schedule;
 pub mod simulation;
@@ -23,6 +24,7 @@ pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
+pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{
     FieldId, Phase, Pipeline, Stage, StageError, StagePlugin, StageStats, StepContext,

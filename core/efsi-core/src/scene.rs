@@ -58,6 +58,17 @@ pub enum SceneError {
         /// What is wrong and what was expected.
         message: String,
     },
+    /// An override ([`crate::overrides`]: `efsi run --set`, `--refine`, [`Scene::set`]) that
+    /// cannot be applied, or whose value the scene refuses.
+    #[error("{path}: {setting}: {message}")]
+    Override {
+        /// The scene file (or `scene `name`` for a scene in memory).
+        path: PathBuf,
+        /// The override, as `set PATH=VALUE` or `refine F`.
+        setting: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
 }
 
 /// A complete scene.
@@ -101,6 +112,10 @@ pub struct Scene {
     /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
     #[serde(skip)]
     pub source_dir: Option<PathBuf>,
+    /// The overrides applied to the file's settings, in order ([`crate::overrides`]; set by
+    /// [`Scene::load_with`], [`Scene::set`], …): the scene is the file's with these applied.
+    #[serde(skip)]
+    pub overrides: Vec<crate::overrides::Override>,
 }
 
 fn default_geometry() -> Geometry {
@@ -755,36 +770,26 @@ impl ProfileSpec {
 }
 
 impl Scene {
-    /// Read and validate a scene file.
+    /// Read and validate a scene file (with overrides: [`Scene::load_with`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut scene = Scene::from_str_at(&text, path)?;
-        scene.source_dir = path.parent().map(Path::to_path_buf);
-        Ok(scene)
+        Scene::load_with(path, &[])
     }
 
     /// Parse and validate scene text; `path` is used in error messages only.
     pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::from_str_with(text, path, &[])
+    }
+
+    /// Parse scene text without validating it (syntax and types only).
+    pub(crate) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let opts = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let scene: Scene = opts.from_str(text).map_err(|e| SceneError::Syntax {
+        opts.from_str(text).map_err(|e| SceneError::Syntax {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,
             message: e.code.to_string(),
-        })?;
-        scene
-            .validate()
-            .map_err(|(field, message)| SceneError::Invalid {
-                path: path.to_path_buf(),
-                field,
-                message,
-            })?;
-        Ok(scene)
+        })
     }
 
     /// The scene as RON text (what `run.json` and checkpoints record).

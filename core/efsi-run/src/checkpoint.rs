@@ -2,7 +2,8 @@
 //!
 //! A **checkpoint file** ([`Checkpoint`], [`encode`], [`decode`]) is a snapshot (the
 //! in-memory copy of a [`Simulation`](efsi_core::Simulation)'s evolving data, see [`efsi_core::snapshot`]) plus the
-//! scene (canonical RON), the law library's identity ([`LawIdentity`]: name, ABI version,
+//! scene (canonical RON) and the overrides applied to its file ([`efsi_core::overrides`], applied
+//! again on resume), the law library's identity ([`LawIdentity`]: name, ABI version,
 //! parameter table, size and hash of the file), the run loop's output bookkeeping
 //! ([`OutputState`]) and the efsi version. `efsi resume` refuses a checkpoint whose scene or law
 //! differs from the current ones and says what differs.
@@ -13,7 +14,8 @@
 //! length, `u64` checksum of the payload (64-bit FNV-1a over 8-byte words), then the payload.
 //! In the payload a string is a `u64` byte length and UTF-8 bytes, an array of `f64` a `u64`
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
-//! (efsi version, scene path, scene RON, law identity), output bookkeeping, the snapshot
+//! (efsi version, scene path, scene RON, the overrides applied to the scene file as RON, law
+//! identity), output bookkeeping, the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
 //! frame acceleration and the elastic energy), then named stage
 //! data). A 128² cavity checkpoints in ≈ 0.7 MB.
@@ -24,6 +26,7 @@
 
 use efsi_core::Snapshot;
 use efsi_core::error::EfsiError;
+use efsi_core::overrides::Override;
 use efsi_core::scene::Scene;
 use efsi_core::state::State;
 use efsi_laws_host::loader::{describe, resolve_law};
@@ -33,7 +36,7 @@ use std::path::{Path, PathBuf};
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 /// The version of the file layout this efsi reads and writes.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
 
@@ -219,6 +222,8 @@ pub struct Checkpoint {
     pub scene_path: PathBuf,
     /// The scene as run, in canonical RON ([`Scene::to_ron`]).
     pub scene_ron: String,
+    /// The overrides applied to the scene file ([`Scene::overrides`]), applied again on resume.
+    pub overrides: Vec<Override>,
     /// The law library in use, if the scene has a solid law.
     pub law: Option<LawIdentity>,
     /// Output bookkeeping of the run loop.
@@ -315,6 +320,8 @@ pub struct CheckpointFile {
     pub scene_path: PathBuf,
     /// The scene as run, in canonical RON.
     pub scene_ron: String,
+    /// The overrides applied to the scene file.
+    pub overrides: Vec<Override>,
     /// The law library in use.
     pub law: Option<LawIdentity>,
     /// Output bookkeeping of the run loop.
@@ -463,6 +470,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     w.str(&c.efsi_version);
     w.str(&c.scene_path.display().to_string());
     w.str(&c.scene_ron);
+    w.str(&ron::to_string(&c.overrides).unwrap_or_default());
     match &c.law {
         None => w.u32(0),
         Some(l) => {
@@ -561,6 +569,8 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
         let efsi_version = r.str()?;
         let scene_path = PathBuf::from(r.str()?);
         let scene_ron = r.str()?;
+        let overrides = ron::from_str(&r.str()?)
+            .map_err(|e| format!("the recorded overrides cannot be read: {e}"))?;
         let law = match r.u32()? {
             0 => None,
             _ => Some(LawIdentity {
@@ -610,6 +620,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
             efsi_version,
             scene_path,
             scene_ron,
+            overrides,
             law,
             outputs,
             record: SnapshotRecord {

@@ -6,7 +6,8 @@
 //!   rewritten after each file, so it is valid at every moment of the run);
 //! - `probes.csv`: header `t,<columns…>`, one row per sample;
 //! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields;
-//! - `run.json`: the scene as read, efsi version, steps, wall time, wall time per stage;
+//! - `run.json`: the effective scene (the file's with the overrides applied) and the
+//!   overrides (`set PATH=VALUE`, `refine F`), efsi version, steps, wall time, wall time per stage;
 //! - `checkpoint/latest.efsick`: the latest checkpoint ([`crate::checkpoint`]), written every
 //!   [`RunOptions::checkpoint_every`] of simulated time (at the end of the first step that
 //!   reaches each multiple: checkpoints never change Δt, so a run with them is bit-identical to
@@ -532,6 +533,7 @@ impl Outputs {
             "efsi_version": env!("CARGO_PKG_VERSION"),
             "scene": serde_json::to_value(&sim.scene).unwrap_or_default(),
             "scene_path": sim.scene_path.display().to_string(),
+            "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
             "stop": outcome.stop,
             "t_end": outcome.t,
             "steps": outcome.steps,
@@ -582,8 +584,8 @@ pub fn run_with(
 }
 
 /// Continue the run in `dir` from its latest checkpoint (`dir/checkpoint/latest.efsick`),
-/// appending to its outputs. The scene is read again from the file the run was started with
-/// and must be unchanged except for `time.end`, which may move past the checkpoint (to
+/// appending to its outputs. The scene is read again from the file the run was started with,
+/// with the overrides it was started with applied again, and must be unchanged except for `time.end`, which may move past the checkpoint (to
 /// continue a run), and so must the law library; otherwise the error lists what differs. `options.checkpoint_every` defaults to the interrupted run's. Returns the
 /// simulation (for its timings) and the outcome.
 pub fn resume(
@@ -605,7 +607,7 @@ pub fn resume(
         });
     }
     let file = CheckpointFile::read(&path)?;
-    let scene = Scene::load(&file.scene_path)?;
+    let scene = Scene::load_with(&file.scene_path, &file.overrides)?;
     checkpoint::check_resumable(&file, &scene, &what)?;
     let law = checkpoint::law_identity(&scene)?;
     let mut sim = Simulation::new(scene, &file.scene_path, plugins)?;
@@ -632,6 +634,7 @@ fn save_checkpoint(
         efsi_version: env!("CARGO_PKG_VERSION").to_string(),
         scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
         scene_ron: sim.scene.to_ron(),
+        overrides: sim.scene.overrides.clone(),
         law: law.clone(),
         outputs,
         snapshot,
