@@ -282,6 +282,49 @@ impl Scene {
         Ok(())
     }
 
+    /// The value of the setting at `path` (with the scene's defaults filled in): a number, a
+    /// string (an enum's unit variant by its name), a boolean, or RON text for anything else
+    /// (a struct, tuple, list or `None`). What an FMU shows as a parameter's start value.
+    pub fn get(&self, path: &str) -> Result<OverrideValue, SceneError> {
+        let fail = |message: String| SceneError::Override {
+            path: PathBuf::from(format!("scene `{}`", self.name)),
+            setting: format!("get {path}"),
+            message,
+        };
+        let segs = parse_path(path).map_err(fail)?;
+        let text = self.to_ron();
+        let root =
+            parse_ron(&text).map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
+        let node = match locate(&root, &segs, &text).map_err(fail)? {
+            Found::Node(n) => n,
+            Found::Missing { .. } => {
+                return Err(fail(format!("the scene has no setting {}", show(&segs))));
+            }
+        };
+        let raw = &text[node.start..node.end];
+        let inner = match &node.kind {
+            Kind::Tuple(Some(n), items) if n == "Some" && items.len() == 1 => &items[0],
+            _ => node,
+        };
+        let atom_text = &text[inner.start..inner.end];
+        Ok(match inner.atom() {
+            Some(Atom::Int) => atom_text
+                .parse()
+                .map(OverrideValue::Int)
+                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
+            Some(Atom::Float) => atom_text
+                .parse()
+                .map(OverrideValue::Float)
+                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
+            Some(Atom::Bool) => OverrideValue::Bool(atom_text == "true"),
+            Some(Atom::Str) => ron::from_str::<String>(atom_text)
+                .map(OverrideValue::Str)
+                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
+            Some(Atom::Ident) if atom_text != "None" => OverrideValue::Str(atom_text.into()),
+            _ => OverrideValue::Ron(raw.into()),
+        })
+    }
+
     fn refine_grid(&mut self, f: f64) -> Result<(), String> {
         if !(f.is_finite() && f > 0.0) {
             return Err(format!("the factor must be a finite number > 0, got {f}"));
@@ -1112,6 +1155,33 @@ mod tests {
         for bad in ["", "a..b", "a[x]", "a[1", "a[1]b", ".a"] {
             assert!(parse_path(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn settings_are_read_by_path_with_their_defaults() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/sphere_impact.ron");
+        let scene = Scene::load(&path).unwrap();
+        let get = |p: &str| scene.get(p).unwrap();
+        assert_eq!(get("grid.nr"), OverrideValue::Int(82));
+        assert_eq!(get("solid.shape.radius"), OverrideValue::Float(0.0192));
+        assert_eq!(get("solid.shape.center[1]"), OverrideValue::Float(0.0573));
+        assert_eq!(get("solid.velocity[1]"), OverrideValue::Float(-1.22));
+        assert_eq!(get("gravity.1"), OverrideValue::Float(-9.81));
+        assert_eq!(
+            get("solid.law.name"),
+            OverrideValue::Str("neo_hookean".into())
+        );
+        assert_eq!(get("solid.law.parameters.G"), OverrideValue::Float(0.18e6));
+        // A default the file leaves out, an enum's unit variant, a struct.
+        assert_eq!(get("time.cfl"), OverrideValue::Float(0.4));
+        assert_eq!(
+            get("numerics.projection.solver"),
+            OverrideValue::Str("Multigrid".into())
+        );
+        assert!(matches!(get("grid"), OverrideValue::Ron(_)));
+        let e = scene.get("solid.law.parameters.K").unwrap_err().to_string();
+        assert!(e.contains("no setting solid.law.parameters.K"), "{e}");
+        assert!(scene.get("grid..nx").is_err());
     }
 
     #[test]
