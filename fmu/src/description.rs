@@ -1,8 +1,8 @@
-//! What `cargo xtask fmu` packages besides the library: the `modelDescription.xml` of both FMUs,
-//! `documentation/index.html` and the licence, all generated from the one variable table
-//! ([`crate::params::VARIABLES`]) so the XML, the documentation and the code cannot drift
-//! apart. The GUID / instantiation token is a hash of that table and the crate version, and
-//! instantiation refuses another one.
+//! What `cargo xtask fmu` packages besides the library and the scene: the `modelDescription.xml`
+//! of both FMUs, `documentation/index.html` and the licence, all generated from the FMU's spec
+//! ([`crate::spec::Spec::variables`]) so the XML, the documentation and the code cannot drift
+//! apart. The GUID / instantiation token is a hash of the spec and the crate version
+//! ([`Spec::token`]), and instantiation refuses another one.
 //!
 //! The model structure declares that no output depends directly on the input at the same
 //! communication point (`dependencies=""`: the base acceleration acts through the next
@@ -11,17 +11,20 @@
 //! knowns). Ranged parameters and the input carry `min`/`max`.
 
 use crate::log::CATEGORIES;
-use crate::params::{Causality, Kind, VARIABLES, Variable};
+use crate::spec::{Causality, Kind, Spec, Variable};
 use std::fmt::Write;
 
-/// The model identifier: the library is `binaries/<platform>/sphere_impact.so`.
-pub const MODEL_IDENTIFIER: &str = "sphere_impact";
-
-const DESCRIPTION: &str = "Axisymmetric impact of a hyperelastic sphere on a no-slip substrate in a viscous fluid (Esmailzadeh & Passandideh-Fard 2014, section 5.1), solved by efsi (full-Eulerian FSI). Contact force and energies are whole-body values: 2 pi times efsi's per-radian probes.";
+fn model_description(spec: &Spec) -> String {
+    format!(
+        "The efsi scene `{}` (full-Eulerian fluid-structure interaction), run by efsi's solver; the outputs are the scene's probes as efsi run writes them to probes.csv (per radian in axisymmetric scenes).",
+        spec.name
+    )
+}
 
 /// The licence the FMU is distributed under (the workspace's).
 pub const LICENSE: &str = env!("CARGO_PKG_LICENSE");
 
+/// Base units of the units a variable may name (others are declared without base units).
 const UNITS: &[(&str, &str)] = &[
     ("m", r#"m="1""#),
     ("s", r#"s="1""#),
@@ -32,38 +35,9 @@ const UNITS: &[(&str, &str)] = &[
     ("Pa.s", r#"kg="1" m="-1" s="-1""#),
     ("N", r#"kg="1" m="1" s="-2""#),
     ("J", r#"kg="1" m="2" s="-2""#),
+    ("N/m", r#"kg="1" s="-2""#),
+    ("J/m", r#"kg="1" m="1" s="-2""#),
 ];
-
-fn fnv(seed: u64, text: &str) -> u64 {
-    let mut h = seed;
-    for b in text.bytes() {
-        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-/// The FMI 2.0 GUID and FMI 3.0 instantiation token: `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`
-/// from a hash of the variable table and the crate version.
-pub fn token() -> String {
-    let mut text = format!("sphere_impact {}", env!("CARGO_PKG_VERSION"));
-    for v in VARIABLES {
-        let _ = write!(
-            text,
-            "|{} {} {:?} {:?} {:?} {:?} {:?} {:?}",
-            v.vr, v.name, v.kind, v.causality, v.unit, v.start, v.min, v.max
-        );
-    }
-    let a = fnv(0xcbf2_9ce4_8422_2325, &text);
-    let b = fnv(a ^ 0x9e37_79b9_7f4a_7c15, &text);
-    format!(
-        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        a & 0xffff,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
-}
 
 /// `s` with the XML special characters escaped.
 fn escape(s: &str) -> String {
@@ -124,13 +98,13 @@ fn generated_at() -> String {
     date_time(seconds)
 }
 
-fn header(out: &mut String, version: &str, token_attribute: &str) {
+fn header(out: &mut String, spec: &Spec, version: &str, token_attribute: &str) {
     let _ = write!(
         out,
         r#"<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription
   fmiVersion="{version}"
-  modelName="sphere_impact"
+  modelName="{name}"
   {token_attribute}="{token}"
   description="{description}"
   author="the efsi developers"
@@ -140,17 +114,32 @@ fn header(out: &mut String, version: &str, token_attribute: &str) {
   generationDateAndTime="{date}"
   version="{crate_version}"
   variableNamingConvention="flat""#,
-        token = token(),
-        description = escape(DESCRIPTION),
+        name = escape(&spec.name),
+        token = spec.token(),
+        description = escape(&model_description(spec)),
         crate_version = env!("CARGO_PKG_VERSION"),
         date = generated_at(),
     );
 }
 
-fn units_categories_experiment(out: &mut String) {
+fn units_categories_experiment(out: &mut String, vars: &[Variable], step: f64, stop: f64) {
+    let mut units: Vec<&str> = vars.iter().filter_map(|v| v.unit.as_deref()).collect();
+    units.sort_unstable();
+    units.dedup();
     out.push_str("  <UnitDefinitions>\n");
-    for (name, base) in UNITS {
-        let _ = writeln!(out, r#"    <Unit name="{name}"><BaseUnit {base}/></Unit>"#);
+    for name in units {
+        match UNITS.iter().find(|(u, _)| *u == name) {
+            Some((_, base)) => {
+                let _ = writeln!(
+                    out,
+                    r#"    <Unit name="{}"><BaseUnit {base}/></Unit>"#,
+                    escape(name)
+                );
+            }
+            None => {
+                let _ = writeln!(out, r#"    <Unit name="{}"/>"#, escape(name));
+            }
+        }
     }
     out.push_str("  </UnitDefinitions>\n  <LogCategories>\n");
     for (name, what) in CATEGORIES {
@@ -160,11 +149,23 @@ fn units_categories_experiment(out: &mut String) {
             escape(what)
         );
     }
-    out.push_str(
+    let _ = writeln!(
+        out,
         r#"  </LogCategories>
-  <DefaultExperiment startTime="0" stopTime="0.07" stepSize="0.001"/>
-"#,
+  <DefaultExperiment startTime="0" stopTime="{stop:?}" stepSize="{step:?}"/>"#
     );
+}
+
+/// The default experiment: the scene's end, in steps of its probe interval (or a hundredth of
+/// the end).
+fn experiment(spec: &Spec) -> (f64, f64) {
+    match spec.parsed_scene() {
+        Ok(s) => (
+            s.output.probe_every.unwrap_or(s.time.end / 100.0),
+            s.time.end,
+        ),
+        Err(_) => (1.0, 100.0),
+    }
 }
 
 /// ` min="…" max="…"` for a ranged variable.
@@ -183,15 +184,15 @@ fn range(v: &Variable) -> String {
     s
 }
 
-/// `modelDescription.xml` of the FMI 2.0 Co-Simulation FMU.
-pub fn fmi2() -> String {
+/// `modelDescription.xml` of the FMI 2.0 Co-Simulation FMU of `spec` (variables `vars`).
+pub fn fmi2(spec: &Spec, vars: &[Variable]) -> String {
     let mut out = String::new();
-    header(&mut out, "2.0", "guid");
+    header(&mut out, spec, "2.0", "guid");
     out.push_str("\n  numberOfEventIndicators=\"0\">\n");
     let _ = writeln!(
         out,
         r#"  <CoSimulation
-    modelIdentifier="{MODEL_IDENTIFIER}"
+    modelIdentifier="{identifier}"
     canHandleVariableCommunicationStepSize="true"
     canInterpolateInputs="false"
     maxOutputDerivativeOrder="0"
@@ -200,12 +201,14 @@ pub fn fmi2() -> String {
     canNotUseMemoryManagementFunctions="true"
     canGetAndSetFMUstate="true"
     canSerializeFMUstate="true"
-    providesDirectionalDerivative="false"/>"#
+    providesDirectionalDerivative="false"/>"#,
+        identifier = spec.identifier()
     );
-    units_categories_experiment(&mut out);
+    let (step, stop) = experiment(spec);
+    units_categories_experiment(&mut out, vars, step, stop);
     out.push_str("  <ModelVariables>\n");
     let mut outputs = Vec::new();
-    for (k, v) in VARIABLES.iter().enumerate() {
+    for (k, v) in vars.iter().enumerate() {
         let initial = match v.causality {
             Causality::Parameter => r#" initial="exact""#,
             Causality::Output => r#" initial="calculated""#,
@@ -221,8 +224,12 @@ pub fn fmi2() -> String {
         };
         let start = v
             .start
+            .as_deref()
             .map_or(String::new(), |s| format!(r#" start="{}""#, escape(s)));
-        let unit = v.unit.map_or(String::new(), |u| format!(r#" unit="{u}""#));
+        let unit = v
+            .unit
+            .as_deref()
+            .map_or(String::new(), |u| format!(r#" unit="{}""#, escape(u)));
         let range = match v.kind {
             Kind::Real | Kind::Int32 => range(v),
             _ => String::new(),
@@ -235,11 +242,11 @@ pub fn fmi2() -> String {
       <{element}{start}{unit}{range}/>
     </ScalarVariable>"#,
             index = k + 1,
-            name = v.name,
+            name = escape(&v.name),
             vr = v.vr,
             causality = causality(v),
             variability = variability(v),
-            description = escape(v.description),
+            description = escape(&v.description),
         );
     }
     out.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
@@ -254,15 +261,15 @@ pub fn fmi2() -> String {
     out
 }
 
-/// `modelDescription.xml` of the FMI 3.0 Co-Simulation FMU.
-pub fn fmi3() -> String {
+/// `modelDescription.xml` of the FMI 3.0 Co-Simulation FMU of `spec` (variables `vars`).
+pub fn fmi3(spec: &Spec, vars: &[Variable]) -> String {
     let mut out = String::new();
-    header(&mut out, "3.0", "instantiationToken");
+    header(&mut out, spec, "3.0", "instantiationToken");
     out.push_str(">\n");
     let _ = writeln!(
         out,
         r#"  <CoSimulation
-    modelIdentifier="{MODEL_IDENTIFIER}"
+    modelIdentifier="{identifier}"
     canHandleVariableCommunicationStepSize="true"
     canGetAndSetFMUState="true"
     canSerializeFMUState="true"
@@ -272,12 +279,14 @@ pub fn fmi3() -> String {
     maxOutputDerivativeOrder="0"
     hasEventMode="false"
     providesIntermediateUpdate="false"
-    canReturnEarlyAfterIntermediateUpdate="false"/>"#
+    canReturnEarlyAfterIntermediateUpdate="false"/>"#,
+        identifier = spec.identifier()
     );
-    units_categories_experiment(&mut out);
+    let (step, stop) = experiment(spec);
+    units_categories_experiment(&mut out, vars, step, stop);
     out.push_str("  <ModelVariables>\n");
     let mut outputs = Vec::new();
-    for v in VARIABLES {
+    for v in vars {
         if v.causality == Causality::Output {
             outputs.push(v.vr);
         }
@@ -292,16 +301,19 @@ pub fn fmi3() -> String {
         } else {
             ""
         };
-        let unit = v.unit.map_or(String::new(), |u| format!(r#" unit="{u}""#));
+        let unit = v
+            .unit
+            .as_deref()
+            .map_or(String::new(), |u| format!(r#" unit="{}""#, escape(u)));
         let attributes = format!(
             r#"name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}"{initial}"#,
-            name = v.name,
+            name = escape(&v.name),
             vr = v.vr,
             causality = causality(v),
             variability = variability(v),
         );
-        let description = escape(v.description);
-        match (v.kind, v.start) {
+        let description = escape(&v.description);
+        match (v.kind, v.start.as_deref()) {
             (Kind::String, Some(s)) => {
                 let _ = writeln!(
                     out,
@@ -339,9 +351,9 @@ pub fn fmi3() -> String {
 
 /// `documentation/index.html`: what the model is, its variables (from the table) and how it
 /// steps and refuses.
-pub fn documentation() -> String {
+pub fn documentation(spec: &Spec, vars: &[Variable]) -> String {
     let mut rows = String::new();
-    for v in VARIABLES {
+    for v in vars {
         let range = match (v.min, v.max) {
             (None, None) => String::new(),
             (a, b) => format!(
@@ -353,19 +365,19 @@ pub fn documentation() -> String {
         let _ = writeln!(
             rows,
             "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            v.name,
+            escape(&v.name),
             causality(v),
-            v.unit.unwrap_or(""),
-            escape(v.start.unwrap_or("")),
+            escape(v.unit.as_deref().unwrap_or("")),
+            escape(v.start.as_deref().unwrap_or("")),
             range,
-            escape(v.description)
+            escape(&v.description)
         );
     }
     format!(
         r#"<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>sphere_impact</title></head>
+<html lang="en"><head><meta charset="utf-8"><title>{name}</title></head>
 <body>
-<h1>sphere_impact {version}</h1>
+<h1>{name} (efsi {version})</h1>
 <p>{description}</p>
 <p>Generated by efsi-fmu {version}. Licence: {LICENSE} (<a href="licenses/license.txt">licenses/license.txt</a>).</p>
 <h2>Variables</h2>
@@ -383,20 +395,23 @@ is set or it is reset. Values outside a variable's range are refused.</p>
 <h2>FMU states</h2>
 <p>FMU states can be got, set (in any mode) and serialised; serialised states carry no path of
 the extraction folder and set into any instance of this build.</p>
-<h2>Laws</h2>
-<p>The hyperelastic laws are the libraries in this FMU's <code>binaries/</code> folder, chosen by
-name with the <code>law</code> parameter; nothing outside the FMU is searched.</p>
+<h2>Scene</h2>
+<p>The scene is <code>resources/scene.ron</code>; each parameter is one of its settings by its path
+(the syntax of <code>efsi run --set</code>), applied when initialisation ends. A solid's law is
+a library in this FMU's <code>binaries/</code> folder, chosen by name; nothing outside the FMU is
+searched.</p>
 </body></html>
 "#,
         version = env!("CARGO_PKG_VERSION"),
-        description = escape(DESCRIPTION),
+        name = escape(&spec.name),
+        description = escape(&model_description(spec)),
     )
 }
 
 /// `documentation/licenses/license.txt`.
 pub fn license() -> String {
     format!(
-        r#"sphere_impact FMU (efsi {version}) — licence: {LICENSE}
+        r#"efsi scene FMU (efsi {version}) — licence: {LICENSE}
 
 The FMU's library, the law libraries in binaries/ and this documentation are part of efsi and
 are dual-licensed under the MIT licence or the Apache License, Version 2.0
@@ -429,33 +444,6 @@ OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SO
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn token_is_a_guid() {
-        let t = token();
-        assert_eq!(t.len(), 38, "{t}");
-        assert!(t.starts_with('{') && t.ends_with('}'));
-        assert_eq!(t.matches('-').count(), 4);
-    }
-
-    #[test]
-    fn descriptions_list_every_variable_once() {
-        for xml in [fmi2(), fmi3()] {
-            for v in VARIABLES {
-                assert_eq!(
-                    xml.matches(&format!("name=\"{}\"", v.name)).count(),
-                    1,
-                    "{}",
-                    v.name
-                );
-            }
-            assert!(xml.contains(&token()));
-            // Outputs do not feed through from the input.
-            assert_eq!(xml.matches(r#"dependencies="""#).count(), 8);
-            assert!(xml.contains(r#"min="-1000.0" max="1000.0""#));
-        }
-        assert!(documentation().contains("max_solver_steps_per_step"));
-    }
 
     #[test]
     fn dates_are_civil_utc() {

@@ -7,11 +7,10 @@
 //! get, set, free, serialise and deserialise. Not supported: input or output derivatives,
 //! directional derivatives, asynchronous steps (`fmi2CancelStep`, the other status queries).
 
-use crate::description::token;
 use crate::instance::{Instance, slice, slice_mut, state_slot, text, with_instance};
 use crate::log::{Fmi2Logger, Logger, Status, c_string, guard};
 use crate::machine::Version;
-use crate::model::{Fault, Model};
+use crate::model::Fault;
 use crate::state::FmuState;
 use std::ffi::{c_char, c_int, c_void};
 
@@ -109,14 +108,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
                 return std::ptr::null_mut();
             }
             let guid = unsafe { text(fmu_guid) }.unwrap_or_default();
-            if guid != token() {
-                log.error(&format!(
-                    "fmi2Instantiate: the GUID {guid} is not this library's {} (a modelDescription.xml of another build?)",
-                    token()
-                ));
-                return std::ptr::null_mut();
+            match crate::spec::packaged_model(&guid) {
+                Ok(model) => Instance::new(model, log, Version::Fmi2).register(),
+                Err(e) => {
+                    log.error(&format!("fmi2Instantiate: {e}"));
+                    std::ptr::null_mut()
+                }
             }
-            Instance::new(Model::new(), log, Version::Fmi2).register()
         },
         |_| std::ptr::null_mut(),
     )
@@ -406,7 +404,8 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     size: *mut usize,
 ) -> c_int {
     with_instance(c, "fmi2SerializedFMUstateSize", |i| {
-        let n = i.state_mut(state)?.serialize(&token()).len();
+        let token = i.model.spec().token();
+        let n = i.state_mut(state)?.serialize(&token).len();
         *unsafe { size.as_mut() }.ok_or("a null size pointer")? = n;
         Ok(Status::Ok)
     })
@@ -424,7 +423,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> c_int {
     with_instance(c, "fmi2SerializeFMUstate", |i| {
-        let data = i.state_mut(state)?.serialize(&token());
+        let token = i.model.spec().token();
+        let data = i.state_mut(state)?.serialize(&token);
         if data.len() != size {
             return Err(Fault::error(format!(
                 "the buffer has {size} bytes, the state {} (ask fmi2SerializedFMUstateSize)",
@@ -449,7 +449,10 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     state: *mut FmuStatePtr,
 ) -> c_int {
     with_instance(c, "fmi2DeSerializeFMUstate", |i| {
-        let s = FmuState::deserialize(unsafe { slice(bytes as *const u8, size) }?, &token())?;
+        let s = FmuState::deserialize(
+            unsafe { slice(bytes as *const u8, size) }?,
+            &i.model.spec().token(),
+        )?;
         let slot = state_slot(state)?;
         if slot.is_null() {
             *slot = i.add_state(s) as FmuStatePtr;

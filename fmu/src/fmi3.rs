@@ -8,12 +8,11 @@
 //! Execution instances are refused; the other variable types hold no variables; clocks,
 //! derivatives and configuration mode are not supported.
 
-use crate::description::token;
 use crate::instance::{Instance, slice, slice_mut, state_slot, text, with_instance};
 use crate::log::{Fmi3Logger, Logger, Status, c_string, guard};
 use crate::machine::Version;
 use crate::model::{Fault, Model};
-use crate::params::{Kind, variable};
+use crate::spec::Kind;
 use crate::state::FmuState;
 use std::ffi::{c_char, c_int, c_void};
 
@@ -80,18 +79,17 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             let mut log = Logger::new(&name, logging_on);
             log.fmi3 = log_message.map(|l| (l, instance_environment));
             let t = unsafe { text(instantiation_token) }.unwrap_or_default();
-            if t != token() {
-                log.error(&format!(
-                    "fmi3InstantiateCoSimulation: the instantiation token {t} is not this library's {} (a modelDescription.xml of another build?)",
-                    token()
-                ));
-                return std::ptr::null_mut();
-            }
             if event_mode_used {
                 log.error("fmi3InstantiateCoSimulation: this FMU has no event mode (hasEventMode is false)");
                 return std::ptr::null_mut();
             }
-            Instance::new(Model::new(), log, Version::Fmi3).register()
+            match crate::spec::packaged_model(&t) {
+                Ok(model) => Instance::new(model, log, Version::Fmi3).register(),
+                Err(e) => {
+                    log.error(&format!("fmi3InstantiateCoSimulation: {e}"));
+                    std::ptr::null_mut()
+                }
+            }
         },
         |_| std::ptr::null_mut(),
     )
@@ -322,7 +320,7 @@ macro_rules! integers {
                 check_counts(nvr, n_values)?;
                 let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
                 for (r, o) in vr.iter().zip(out) {
-                    check_kind(*r, $kind)?;
+                    check_kind(&i.model, *r, $kind)?;
                     let v = i.model.get_integer(*r)?;
                     *o = <$ty>::try_from(v).map_err(|_| format!("{v} does not fit"))?;
                 }
@@ -346,7 +344,7 @@ macro_rules! integers {
                 check_counts(nvr, n_values)?;
                 let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
                 for (r, v) in vr.iter().zip(values) {
-                    check_kind(*r, $kind)?;
+                    check_kind(&i.model, *r, $kind)?;
                     i.model.set_integer(*r, *v as i64)?;
                 }
                 Ok(Status::Ok)
@@ -355,8 +353,8 @@ macro_rules! integers {
     };
 }
 
-fn check_kind(vr: ValueReference, kind: Kind) -> Result<(), Fault> {
-    match variable(vr) {
+fn check_kind(model: &Model, vr: ValueReference, kind: Kind) -> Result<(), Fault> {
+    match model.variable(vr) {
         Some(v) if v.kind == kind => Ok(()),
         Some(v) => Err(Fault::error(format!(
             "`{}` (value reference {vr}) is a {:?} variable, not {kind:?}",
@@ -595,7 +593,8 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     size: *mut usize,
 ) -> c_int {
     with_instance(instance, "fmi3SerializedFMUStateSize", |i| {
-        let n = i.state_mut(state)?.serialize(&token()).len();
+        let token = i.model.spec().token();
+        let n = i.state_mut(state)?.serialize(&token).len();
         *unsafe { size.as_mut() }.ok_or("a null size pointer")? = n;
         Ok(Status::Ok)
     })
@@ -613,7 +612,8 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     size: usize,
 ) -> c_int {
     with_instance(instance, "fmi3SerializeFMUState", |i| {
-        let data = i.state_mut(state)?.serialize(&token());
+        let token = i.model.spec().token();
+        let data = i.state_mut(state)?.serialize(&token);
         if data.len() != size {
             return Err(Fault::error(format!(
                 "the buffer has {size} bytes, the state {} (ask fmi3SerializedFMUStateSize)",
@@ -638,7 +638,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     state: *mut FmuStatePtr,
 ) -> c_int {
     with_instance(instance, "fmi3DeserializeFMUState", |i| {
-        let s = FmuState::deserialize(unsafe { slice(bytes, size) }?, &token())?;
+        let s = FmuState::deserialize(unsafe { slice(bytes, size) }?, &i.model.spec().token())?;
         let slot = state_slot(state)?;
         if slot.is_null() {
             *slot = i.add_state(s) as FmuStatePtr;

@@ -1,16 +1,11 @@
-//! The sphere-impact model both FMI interfaces drive: its life cycle, parameters and input,
+//! The model both FMI interfaces drive: a scene FMU's life cycle, parameters and inputs,
 //! outputs, communication steps and FMU states.
 //!
-//! **No second implementation of physics.** The parameters ([`crate::params`]) fill in a RON
-//! scene that is parsed and validated by efsi's scene loader and run by the same
-//! [`efsi_core::Simulation`] and stage plugins as `efsi run` ([`crate::stepping`]); `efsi run`
-//! of the scene [`Params::scene_ron`] writes (see `fmu/sphere_impact.ron` for the defaults)
-//! gives the FMU's outputs bit for bit at the communication points.
-//!
-//! **The input** `base_acceleration` a is the substrate's (the grid frame's) acceleration along
-//! z, positive upwards, set with [`efsi_core::Simulation::set_frame_acceleration`]: the body
-//! force becomes `gravity − a`, so a table accelerating upwards at a acts like a gravity
-//! stronger by a.
+//! **No second implementation of physics.** The packaged scene, with the parameters' values
+//! applied as overrides ([`crate::spec`]), is parsed and validated by efsi's scene loader and
+//! run by the same [`efsi_core::Simulation`] and stage plugins as `efsi run`
+//! ([`crate::stepping`]); the outputs are its probes. `efsi run` of the same scene, with its
+//! probes at the communication points, gives the FMU's outputs bit for bit.
 //!
 //! **Refusals.** A call that cannot be carried out returns a [`Fault`]: `Discard` when nothing
 //! changed and the importer may go on (a value outside its declared range; a communication
@@ -21,13 +16,11 @@
 
 use crate::log::Status;
 use crate::machine::Mode;
-use crate::params::{Causality, Kind, Params, variable, vr};
+use crate::spec::{Causality, Kind, Spec, VR_MAX_STEPS, VR_STEPS, VR_TIME, Variable};
 use crate::state::{FmuState, Simulated, restore_into};
-use crate::stepping::{Outputs, Run, StepFailure};
-
-/// The scene's end time when the importer gives no stop time (s); it only sets the smallest
-/// step allowed (10⁻¹² of it).
-pub const DEFAULT_END: f64 = 0.07;
+use crate::stepping::{Run, StepFailure};
+use efsi_core::overrides::OverrideValue;
+use std::sync::Arc;
 
 /// A refused call: its status (`Discard` or `Error`) and what to tell the importer.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,11 +66,24 @@ pub fn due(t: f64, event: f64) -> bool {
     t >= event - 1e-9 * event.abs().max(1e-12)
 }
 
+/// The values an importer sets: the parameters (in the spec's order), the step bound and the
+/// inputs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Values {
+    /// The parameters' values.
+    pub params: Vec<OverrideValue>,
+    /// `max_solver_steps_per_step`.
+    pub max_steps: i64,
+    /// The inputs' values.
+    pub inputs: Vec<f64>,
+}
+
 /// The model behind one FMU instance.
 pub struct Model {
-    /// The parameters (settable until initialisation ends).
-    pub params: Params,
-    base_acceleration: f64,
+    spec: Arc<Spec>,
+    vars: Arc<Vec<Variable>>,
+    start_values: Values,
+    values: Values,
     mode: Mode,
     start_time: f64,
     stop_time: Option<f64>,
@@ -86,34 +92,88 @@ pub struct Model {
     pub notes: Vec<String>,
 }
 
-impl Default for Model {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-fn unknown(vr: u32, kind: &str) -> Fault {
-    Fault::error(match variable(vr) {
-        Some(v) => format!(
-            "`{}` (value reference {vr}) is not a {kind} variable",
-            v.name
-        ),
-        None => format!("no {kind} variable has the value reference {vr}"),
-    })
+/// Where a value reference points.
+enum Slot {
+    Time,
+    MaxSteps,
+    Parameter(usize),
+    Input(usize),
+    Output(usize),
+    Steps,
 }
 
 impl Model {
-    /// A model with the default parameters, not yet initialised.
-    pub fn new() -> Self {
-        Model {
-            params: Params::default(),
-            base_acceleration: 0.0,
+    /// A model of `spec` with its start values, not yet initialised.
+    pub fn new(spec: Arc<Spec>) -> Result<Self, String> {
+        let vars = Arc::new(spec.variables()?);
+        let start = |v: &Variable| -> OverrideValue {
+            let s = v.start.clone().unwrap_or_default();
+            match v.kind {
+                Kind::Real => OverrideValue::Float(s.parse().unwrap_or(f64::NAN)),
+                Kind::Int32 | Kind::Int64 => OverrideValue::Int(s.parse().unwrap_or(0)),
+                Kind::String => OverrideValue::Str(s),
+            }
+        };
+        let params = vars
+            .iter()
+            .filter(|v| v.causality == Causality::Parameter && v.vr != VR_MAX_STEPS)
+            .map(start)
+            .collect();
+        let inputs = vars
+            .iter()
+            .filter(|v| v.causality == Causality::Input)
+            .map(|v| {
+                v.start
+                    .as_deref()
+                    .and_then(|s| s.parse().ok())
+                    .unwrap_or(0.0)
+            })
+            .collect();
+        let start_values = Values {
+            params,
+            max_steps: crate::spec::DEFAULT_MAX_SOLVER_STEPS as i64,
+            inputs,
+        };
+        Ok(Model {
+            spec,
+            vars,
+            values: start_values.clone(),
+            start_values,
             mode: Mode::Instantiated,
             start_time: 0.0,
             stop_time: None,
             run: None,
             notes: Vec::new(),
-        }
+        })
+    }
+
+    /// The spec.
+    pub fn spec(&self) -> &Spec {
+        &self.spec
+    }
+
+    /// The variable with value reference `vr`.
+    pub fn variable(&self, vr: u32) -> Option<&Variable> {
+        self.vars.iter().find(|v| v.vr == vr)
+    }
+
+    fn slot(&self, vr: u32) -> Option<Slot> {
+        let v = self.variable(vr)?;
+        let k = |c: Causality| {
+            self.vars
+                .iter()
+                .filter(|w| w.causality == c && w.vr != VR_MAX_STEPS && w.vr != VR_STEPS)
+                .position(|w| w.vr == vr)
+        };
+        Some(match (vr, v.causality) {
+            (VR_TIME, _) => Slot::Time,
+            (VR_MAX_STEPS, _) => Slot::MaxSteps,
+            (VR_STEPS, _) => Slot::Steps,
+            (_, Causality::Parameter) => Slot::Parameter(k(Causality::Parameter)?),
+            (_, Causality::Input) => Slot::Input(k(Causality::Input)?),
+            (_, Causality::Output) => Slot::Output(k(Causality::Output)?),
+            _ => return None,
+        })
     }
 
     /// The life-cycle mode.
@@ -131,9 +191,13 @@ impl Model {
         self.mode = Mode::StepDiscarded;
     }
 
-    /// Back to the state after instantiation (default parameters, no simulation).
+    /// Back to the state after instantiation (start values, no simulation).
     pub fn reset(&mut self) {
-        *self = Model::new();
+        self.values = self.start_values.clone();
+        self.mode = Mode::Instantiated;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.run = None;
     }
 
     /// Record the experiment's start and optional stop time.
@@ -163,13 +227,22 @@ impl Model {
     /// The simulation of the current parameters, built if there is none for them (before
     /// initialisation ends, to compute outputs on request, and when it ends).
     fn ensure_run(&mut self) -> Result<&mut Run, Fault> {
-        if !self.run.as_ref().is_some_and(|r| r.params == self.params) {
-            let end = self.stop_time.unwrap_or(self.start_time + DEFAULT_END);
-            let run = Run::build(&self.params, self.start_time, end, self.base_acceleration)?;
-            let (nr, nz) = self.params.grid();
+        if !self
+            .run
+            .as_ref()
+            .is_some_and(|r| r.params == self.values.params)
+        {
+            let run = Run::build(
+                &self.spec,
+                &self.values.params,
+                self.start_time,
+                &self.values.inputs,
+            )?;
             self.notes.push(format!(
-                "sphere_impact: grid {nr} x {nz}, law {}, stages {}",
-                self.params.law,
+                "{}: grid {} x {}, stages {}",
+                self.spec.name,
+                run.sim.grid.nx,
+                run.sim.grid.ny,
                 run.sim.pipeline().stage_names().join(", ")
             ));
             self.run = Some(run);
@@ -179,8 +252,8 @@ impl Model {
             .ok_or_else(|| Fault::error("no simulation"))
     }
 
-    /// Leave initialisation mode: check the parameters and build the simulation. A refused
-    /// parameter is named in the error.
+    /// Leave initialisation mode: apply the parameters to the scene and build the simulation.
+    /// A refused parameter is named in the error.
     pub fn exit_initialization(&mut self) -> Result<(), Fault> {
         self.ensure_run()?;
         self.mode = Mode::Step;
@@ -191,7 +264,7 @@ impl Model {
     /// model's time) by `h > 0`, landing exactly on `t + h` (see [`crate::stepping`]).
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Fault> {
         let stop = self.stop_time;
-        let max_steps = self.params.max_solver_steps_per_step.max(1) as u64;
+        let max_steps = self.values.max_steps.max(1) as u64;
         let run = self
             .run
             .as_mut()
@@ -232,6 +305,8 @@ impl Model {
             self.notes.push(format!(
                 "the simulation did not take back the state of t = {t} ({why}): it was rebuilt from its scene and given that state"
             ));
+            // A rebuilt simulation has the scene's wall speeds: give it the inputs again.
+            run.apply_inputs(&self.spec, &self.values.inputs)?;
         }
         match result {
             Ok(n) => {
@@ -264,37 +339,38 @@ impl Model {
         }
     }
 
-    /// The outputs: computed from the parameters before initialisation ends.
-    fn outputs(&mut self) -> Result<Outputs, Fault> {
+    /// The run whose outputs are read: built from the parameters before initialisation ends.
+    fn outputs_run(&mut self) -> Result<&mut Run, Fault> {
         match self.mode {
-            Mode::Instantiated | Mode::Initialization => Ok(self.ensure_run()?.outputs),
-            _ => self.run.as_ref().map(|r| r.outputs).ok_or_else(|| {
+            Mode::Instantiated | Mode::Initialization => self.ensure_run(),
+            _ => self.run.as_mut().ok_or_else(|| {
                 Fault::error("no outputs: the simulation failed and could not be put back")
             }),
         }
     }
 
+    fn unknown(&self, vr: u32, kind: &str) -> Fault {
+        Fault::error(match self.variable(vr) {
+            Some(v) => format!(
+                "`{}` (value reference {vr}) is not a {kind} variable",
+                v.name
+            ),
+            None => format!("no {kind} variable has the value reference {vr}"),
+        })
+    }
+
     /// A real variable's value.
     pub fn get_real(&mut self, vr: u32) -> Result<f64, Fault> {
-        let o = match variable(vr) {
-            Some(v) if v.causality == Causality::Output && v.kind == Kind::Real => {
-                self.outputs()?
-            }
-            _ => Outputs::default(),
-        };
-        let p = &mut self.params;
-        Ok(match vr {
-            vr::TIME => return Ok(self.time()),
-            vr::BASE_ACCELERATION => self.base_acceleration,
-            vr::HEIGHT => o.height,
-            vr::VELOCITY => o.velocity,
-            vr::CONTACT_FORCE => o.contact_force,
-            vr::CONTACT_RADIUS => o.contact_radius,
-            vr::MAX_COMPRESSION => o.max_compression,
-            vr::KINETIC_ENERGY => o.kinetic_energy,
-            vr::ELASTIC_ENERGY => o.elastic_energy,
-            _ => *p.real_mut(vr).ok_or_else(|| unknown(vr, "real"))?,
-        })
+        match self.slot(vr) {
+            Some(Slot::Time) => Ok(self.time()),
+            Some(Slot::Parameter(k)) => match &self.values.params[k] {
+                OverrideValue::Float(x) => Ok(*x),
+                _ => Err(self.unknown(vr, "real")),
+            },
+            Some(Slot::Input(k)) => Ok(self.values.inputs[k]),
+            Some(Slot::Output(k)) => Ok(self.outputs_run()?.outputs[k]),
+            _ => Err(self.unknown(vr, "real")),
+        }
     }
 
     /// A parameter may be set only before initialisation ends.
@@ -307,30 +383,27 @@ impl Model {
         }
     }
 
-    /// Set a real parameter (before initialisation ends) or the input (any time). A value
+    /// Set a real parameter (before initialisation ends) or an input (any time). A value
     /// outside the variable's range is refused (`Discard`: nothing changes).
     pub fn set_real(&mut self, vr: u32, value: f64) -> Result<(), Fault> {
-        let v = variable(vr)
+        let v = self
+            .variable(vr)
             .filter(|v| v.kind == Kind::Real)
-            .ok_or_else(|| unknown(vr, "real"))?;
-        match v.causality {
-            Causality::Input => {
+            .cloned()
+            .ok_or_else(|| self.unknown(vr, "real"))?;
+        match self.slot(vr) {
+            Some(Slot::Input(k)) => {
                 v.check_range(value).map_err(Fault::discard)?;
                 if let Some(run) = &mut self.run {
-                    run.sim
-                        .set_frame_acceleration((0.0, value))
-                        .map_err(|e| Fault::error(e.to_string()))?;
+                    run.apply_input(&v.name, value)?;
                 }
-                self.base_acceleration = value;
+                self.values.inputs[k] = value;
                 Ok(())
             }
-            Causality::Parameter => {
-                self.configurable(v.name)?;
+            Some(Slot::Parameter(k)) => {
+                self.configurable(&v.name)?;
                 v.check_range(value).map_err(Fault::discard)?;
-                *self
-                    .params
-                    .real_mut(vr)
-                    .ok_or_else(|| unknown(vr, "real"))? = value;
+                self.values.params[k] = OverrideValue::Float(value);
                 Ok(())
             }
             _ => Err(Fault::error(format!(
@@ -347,71 +420,83 @@ impl Model {
 
     /// An integer variable's value.
     pub fn get_integer(&mut self, vr: u32) -> Result<i64, Fault> {
-        if vr == vr::STEPS {
-            return Ok(self.outputs()?.steps as i64);
+        match self.slot(vr) {
+            Some(Slot::Steps) => Ok(self.outputs_run()?.sim.state.step as i64),
+            Some(Slot::MaxSteps) => Ok(self.values.max_steps),
+            Some(Slot::Parameter(k)) => match &self.values.params[k] {
+                OverrideValue::Int(i) => Ok(*i),
+                _ => Err(self.unknown(vr, "integer")),
+            },
+            _ => Err(self.unknown(vr, "integer")),
         }
-        self.params
-            .integer_mut(vr)
-            .map(|x| *x as i64)
-            .ok_or_else(|| unknown(vr, "integer"))
     }
 
     /// Set an integer parameter (before initialisation ends); out of range: `Discard`.
     pub fn set_integer(&mut self, vr: u32, value: i64) -> Result<(), Fault> {
-        let v = variable(vr).ok_or_else(|| unknown(vr, "integer"))?;
-        if v.causality != Causality::Parameter {
-            return Err(Fault::error(format!(
-                "`{}` is an output: it cannot be set",
+        let v = self
+            .variable(vr)
+            .cloned()
+            .ok_or_else(|| self.unknown(vr, "integer"))?;
+        if v.causality != Causality::Parameter || v.kind != Kind::Int32 {
+            return Err(if v.causality == Causality::Output {
+                Fault::error(format!("`{}` is an output: it cannot be set", v.name))
+            } else {
+                self.unknown(vr, "integer")
+            });
+        }
+        self.configurable(&v.name)?;
+        v.check_range(value as f64).map_err(Fault::discard)?;
+        if i32::try_from(value).is_err() {
+            return Err(Fault::discard(format!(
+                "parameter `{}` = {value}: out of the 32-bit range",
                 v.name
             )));
         }
-        self.configurable(v.name)?;
-        v.check_range(value as f64).map_err(Fault::discard)?;
-        let slot = self
-            .params
-            .integer_mut(vr)
-            .ok_or_else(|| unknown(vr, "integer"))?;
-        *slot = i32::try_from(value).map_err(|_| {
-            Fault::discard(format!(
-                "parameter `{}` = {value}: out of the 32-bit range",
-                v.name
-            ))
-        })?;
+        match self.slot(vr) {
+            Some(Slot::MaxSteps) => self.values.max_steps = value,
+            Some(Slot::Parameter(k)) => self.values.params[k] = OverrideValue::Int(value),
+            _ => return Err(self.unknown(vr, "integer")),
+        }
         Ok(())
     }
 
     /// A string variable's value.
     pub fn get_string(&mut self, vr: u32) -> Result<String, Fault> {
-        self.params
-            .string_mut(vr)
-            .map(|s| s.clone())
-            .ok_or_else(|| unknown(vr, "string"))
+        match self.slot(vr) {
+            Some(Slot::Parameter(k)) => match &self.values.params[k] {
+                OverrideValue::Str(s) => Ok(s.clone()),
+                _ => Err(self.unknown(vr, "string")),
+            },
+            _ => Err(self.unknown(vr, "string")),
+        }
     }
 
     /// Set a string parameter (before initialisation ends).
     pub fn set_string(&mut self, vr: u32, value: &str) -> Result<(), Fault> {
-        let name = variable(vr).map_or("?", |v| v.name);
-        if self.params.string_mut(vr).is_none() {
-            return Err(unknown(vr, "string"));
+        let Some(Slot::Parameter(k)) = self.slot(vr) else {
+            return Err(self.unknown(vr, "string"));
+        };
+        if !matches!(self.values.params[k], OverrideValue::Str(_)) {
+            return Err(self.unknown(vr, "string"));
         }
-        self.configurable(name)?;
-        if let Some(slot) = self.params.string_mut(vr) {
-            *slot = value.to_string();
-        }
+        let name = self
+            .vars
+            .iter()
+            .find(|v| v.vr == vr)
+            .map(|v| v.name.clone());
+        self.configurable(&name.unwrap_or_default())?;
+        self.values.params[k] = OverrideValue::Str(value.to_string());
         Ok(())
     }
 
     /// A copy of the current state (in any mode but `Error`).
     pub fn get_state(&self) -> Result<FmuState, Fault> {
-        let simulated = self.simulated()?;
         Ok(FmuState {
             mode: self.mode,
             start_time: self.start_time,
             stop_time: self.stop_time,
-            params: self.params.clone(),
-            base_acceleration: self.base_acceleration,
-            max_compression: self.run.as_ref().map_or(0.0, |r| r.max_compression),
-            simulated,
+            values: self.values.clone(),
+            simulated: self.simulated()?,
             serialized: None,
         })
     }
@@ -447,167 +532,51 @@ impl Model {
         into.mode = self.mode;
         into.start_time = self.start_time;
         into.stop_time = self.stop_time;
-        into.params.clone_from(&self.params);
-        into.base_acceleration = self.base_acceleration;
-        into.max_compression = self.run.as_ref().map_or(0.0, |r| r.max_compression);
+        into.values.clone_from(&self.values);
         into.serialized = None;
         Ok(())
     }
 
-    /// Put a state back, in any mode (see [`crate::state`]): its parameters, input, mode and
-    /// simulation; the instance keeps its own stop time if it has one. On failure nothing
-    /// changes.
+    /// Put a state back, in any mode (see [`crate::state`]): its values, mode and simulation;
+    /// the instance keeps its own stop time if it has one. On failure nothing changes.
     pub fn set_state(&mut self, s: &FmuState) -> Result<(), Fault> {
+        if s.values.params.len() != self.values.params.len()
+            || s.values.inputs.len() != self.values.inputs.len()
+        {
+            return Err(Fault::error("the state belongs to another FMU"));
+        }
         let stop = self.stop_time.or(s.stop_time);
         match &s.simulated {
             None => self.run = None,
             Some(simulated) => {
-                let reuse = self.run.as_ref().is_some_and(|r| r.params == s.params);
+                let reuse = self
+                    .run
+                    .as_ref()
+                    .is_some_and(|r| r.params == s.values.params);
                 let mut run = match self.run.take() {
                     Some(r) if reuse => r,
                     other => {
                         self.run = other;
-                        let end = stop.unwrap_or(s.start_time + DEFAULT_END);
-                        Run::build(&s.params, s.start_time, end, s.base_acceleration)
+                        Run::build(&self.spec, &s.values.params, s.start_time, &s.values.inputs)
                             .map_err(|e| format!("the state's parameters: {e}"))?
                     }
                 };
-                if let Err(e) = restore_into(&mut run, simulated) {
+                let restored = restore_into(&mut run, simulated)
+                    .and_then(|_| run.apply_inputs(&self.spec, &s.values.inputs));
+                if let Err(e) = restored {
                     if reuse {
                         self.run = Some(run);
                     }
                     return Err(Fault::error(e));
                 }
-                run.max_compression = s.max_compression;
                 run.outputs = run.evaluate();
                 self.run = Some(run);
             }
         }
-        self.params.clone_from(&s.params);
-        self.base_acceleration = s.base_acceleration;
+        self.values.clone_from(&s.values);
         self.mode = s.mode;
         self.start_time = s.start_time;
         self.stop_time = stop;
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::params::VARIABLES;
-    use efsi_core::Scene;
-    use std::path::Path;
-
-    #[test]
-    fn start_values_are_the_defaults() {
-        let mut m = Model::new();
-        for v in VARIABLES {
-            let Some(start) = v.start else { continue };
-            match v.kind {
-                Kind::Real => assert_eq!(
-                    m.get_real(v.vr).unwrap(),
-                    start.parse::<f64>().unwrap(),
-                    "{}",
-                    v.name
-                ),
-                Kind::Int32 | Kind::Int64 => assert_eq!(
-                    m.get_integer(v.vr).unwrap(),
-                    start.parse::<i64>().unwrap(),
-                    "{}",
-                    v.name
-                ),
-                Kind::String => assert_eq!(m.get_string(v.vr).unwrap(), start, "{}", v.name),
-            }
-            if let (Some(lo), Some(hi), Kind::Real) = (v.min, v.max, v.kind) {
-                let x: f64 = start.parse().unwrap();
-                assert!(lo <= x && x <= hi, "{}", v.name);
-            }
-        }
-    }
-
-    #[test]
-    fn value_references_are_unique() {
-        for (k, a) in VARIABLES.iter().enumerate() {
-            assert!(
-                VARIABLES[k + 1..]
-                    .iter()
-                    .all(|b| b.vr != a.vr && b.name != a.name),
-                "{}",
-                a.name
-            );
-        }
-    }
-
-    #[test]
-    fn default_grid_is_the_seed_scene_at_ten_cells_per_radius() {
-        assert_eq!(Params::default().grid(), (23, 47));
-        let p = Params {
-            cells_per_radius: 6,
-            ..Params::default()
-        };
-        assert_eq!(p.grid(), (14, 28));
-    }
-
-    /// `fmu/sphere_impact.ron` is the scene of the default parameters, for `efsi run`.
-    #[test]
-    fn shipped_scene_is_the_default_parameters_scene() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("sphere_impact.ron");
-        let shipped = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(
-            shipped,
-            Params::default().scene_ron("neo_hookean", 0.07, 0.001)
-        );
-        Scene::from_str_at(&shipped, &path).unwrap();
-    }
-
-    #[test]
-    fn bad_parameters_are_named() {
-        type Change = fn(&mut Params);
-        let cases: [(Change, &str); 9] = [
-            (|p| p.radius = -0.01, "`radius`"),
-            (|p| p.cells_per_radius = 0, "`cells_per_radius`"),
-            (|p| p.initial_height = 0.01, "`initial_height`"),
-            (|p| p.gravity = 0.0, "`gravity`"),
-            (|p| p.cfl = 1.5, "`cfl`"),
-            (|p| p.fluid_viscosity = f64::NAN, "`fluid_viscosity`"),
-            (
-                |p| p.initial_velocity = -1220.0,
-                "`initial_velocity` = -1220 m/s: outside its range [-100, 100] m/s",
-            ),
-            (|p| p.law = "/tmp/libefsi_law_x.so".into(), "`law`"),
-            (
-                |p| p.max_solver_steps_per_step = 0,
-                "`max_solver_steps_per_step`",
-            ),
-        ];
-        for (change, name) in cases {
-            let mut p = Params::default();
-            change(&mut p);
-            let e = p.check().unwrap_err();
-            assert!(e.contains(name), "{e}");
-        }
-        assert_eq!(Params::default().check(), Ok(()));
-    }
-
-    #[test]
-    fn out_of_range_values_are_discarded_and_change_nothing() {
-        let mut m = Model::new();
-        let e = m.set_real(vr::BASE_ACCELERATION, 1e12).unwrap_err();
-        assert_eq!(e.status, Status::Discard);
-        assert!(
-            e.message
-                .contains("input `base_acceleration` = 1000000000000 m/s2: outside its range [-1000, 1000] m/s2"),
-            "{}",
-            e.message
-        );
-        assert_eq!(m.get_real(vr::BASE_ACCELERATION).unwrap(), 0.0);
-        let e = m.set_real(vr::INITIAL_VELOCITY, -1220.0).unwrap_err();
-        assert_eq!(e.status, Status::Discard);
-        assert_eq!(m.params.initial_velocity, -1.22);
-        assert_eq!(
-            m.set_real(vr::HEIGHT, 1.0).unwrap_err().status,
-            Status::Error
-        );
     }
 }

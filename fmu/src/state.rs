@@ -2,25 +2,26 @@
 //! and their serialised form.
 //!
 //! A state is everything the instance's future depends on: the life-cycle mode, the start and
-//! stop time, the parameters and the input, and — after initialisation — the simulation's
-//! snapshot and the model's running maximum of the compression. Setting a state therefore
+//! stop time, the parameters and the inputs, and — after initialisation — the simulation's
+//! snapshot. Setting a state therefore
 //! works in any mode, also before initialisation (FMI allows it in Instantiated mode): when the
 //! instance has no simulation for the state's parameters, one is built from them first.
 //!
 //! **Serialised form** (little-endian): the magic `EFSIFMU2`, a `u32` layout version, the
-//! instantiation token (a state of another build of the FMU is refused), the mode, start and
-//! stop time, each parameter and input by name, the maximum compression, then — after
+//! instantiation token (a state of another FMU or build is refused), the mode, start and
+//! stop time, the step bound, each parameter and input, then — after
 //! initialisation — the snapshot in efsi's checkpoint format with the scene and the law's
 //! identity. Nothing in it depends on where the FMU was extracted: the scene names the law by
 //! its library's file name and the law is identified by name, ABI version, parameter table,
 //! size and content hash, so a state serialised by one extraction (or process, or machine)
-//! sets into another. The stop time may differ (it changes no result); any other difference
-//! of scene or law is refused, naming it.
+//! sets into another, whatever its stop time (the stop time is not part of the scene); any
+//! difference of scene or law is refused, naming it.
 
 use crate::machine::Mode;
-use crate::params::{Causality, Kind, Params, VARIABLES, vr};
+use crate::model::Values;
 use crate::stepping::{Run, RunIdentity, SCENE_LABEL};
 use efsi_core::Snapshot;
+use efsi_core::overrides::OverrideValue;
 use efsi_run::checkpoint::{self, Checkpoint, CheckpointFile, OutputState};
 use std::sync::Arc;
 
@@ -55,12 +56,8 @@ pub struct FmuState {
     pub start_time: f64,
     /// Stop time, if the importer gave one.
     pub stop_time: Option<f64>,
-    /// The parameters.
-    pub params: Params,
-    /// The input.
-    pub base_acceleration: f64,
-    /// The running maximum of the compression.
-    pub max_compression: f64,
+    /// The parameters, the step bound and the inputs.
+    pub values: Values,
     /// The simulation, after initialisation.
     pub simulated: Option<Simulated>,
     /// The serialised form, computed on demand (FMI asks for the size, then the bytes).
@@ -154,36 +151,33 @@ impl FmuState {
             w.0.push(mode_code(self.mode));
             w.f64(self.start_time);
             w.f64(self.stop_time.unwrap_or(f64::NAN));
-            let mut params = self.params.clone();
-            let settable: Vec<_> = VARIABLES
-                .iter()
-                .filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input))
-                .collect();
-            w.0.extend_from_slice(&(settable.len() as u64).to_le_bytes());
-            for v in settable {
-                w.bytes(v.name.as_bytes());
-                match v.kind {
-                    Kind::String => {
-                        let s = params.string_mut(v.vr).cloned().unwrap_or_default();
+            let v = &self.values;
+            w.f64(v.max_steps as f64);
+            w.0.extend_from_slice(&(v.params.len() as u64).to_le_bytes());
+            for p in &v.params {
+                match p {
+                    OverrideValue::Str(s) => {
                         w.0.push(1);
                         w.bytes(s.as_bytes());
                     }
-                    Kind::Int32 | Kind::Int64 => {
-                        w.0.push(0);
-                        w.f64(params.integer_mut(v.vr).map_or(f64::NAN, |x| *x as f64));
+                    OverrideValue::Int(i) => {
+                        w.0.push(2);
+                        w.0.extend_from_slice(&i.to_le_bytes());
                     }
-                    Kind::Real => {
+                    OverrideValue::Float(x) => {
                         w.0.push(0);
-                        let x = if v.vr == vr::BASE_ACCELERATION {
-                            self.base_acceleration
-                        } else {
-                            params.real_mut(v.vr).map_or(f64::NAN, |x| *x)
-                        };
-                        w.f64(x);
+                        w.f64(*x);
+                    }
+                    other => {
+                        w.0.push(1);
+                        w.bytes(other.to_string().as_bytes());
                     }
                 }
             }
-            w.f64(self.max_compression);
+            w.0.extend_from_slice(&(v.inputs.len() as u64).to_le_bytes());
+            for x in &v.inputs {
+                w.f64(*x);
+            }
             match &self.simulated {
                 None => w.0.push(0),
                 Some(Simulated::Live { snapshot, identity }) => {
@@ -216,7 +210,7 @@ impl FmuState {
         let what = "serialised FMU state";
         if bytes.len() < 12 || &bytes[..8] != MAGIC {
             return Err(format!(
-                "not a serialised sphere_impact FMU state (no {} header)",
+                "not a serialised efsi FMU state (no {} header)",
                 String::from_utf8_lossy(MAGIC)
             ));
         }
@@ -237,37 +231,29 @@ impl FmuState {
         let start_time = r.f64()?;
         let stop = r.f64()?;
         let stop_time = (!stop.is_nan()).then_some(stop);
-        let mut params = Params::default();
-        let mut base_acceleration = 0.0;
-        let n = u64::from_le_bytes(r.take(8)?.try_into().unwrap_or([0; 8]));
-        for _ in 0..n {
-            let name = r.str()?;
-            let v = VARIABLES
-                .iter()
-                .find(|v| v.name == name)
-                .ok_or_else(|| format!("the {what} has a variable `{name}` this FMU has not"))?;
-            match r.u8()? {
-                1 => {
-                    let s = r.str()?;
-                    *params
-                        .string_mut(v.vr)
-                        .ok_or_else(|| format!("`{name}` is not a string parameter"))? = s;
+        let max_steps = r.f64()? as i64;
+        let count = |r: &mut Reader| -> Result<usize, String> {
+            let n = u64::from_le_bytes(r.take(8)?.try_into().unwrap_or([0; 8]));
+            usize::try_from(n)
+                .ok()
+                .filter(|&n| n <= bytes.len())
+                .ok_or_else(|| format!("the {what} is damaged (a count of {n})"))
+        };
+        let mut params = Vec::new();
+        for _ in 0..count(&mut r)? {
+            params.push(match r.u8()? {
+                0 => OverrideValue::Float(r.f64()?),
+                1 => OverrideValue::Str(r.str()?),
+                2 => {
+                    OverrideValue::Int(i64::from_le_bytes(r.take(8)?.try_into().unwrap_or([0; 8])))
                 }
-                _ => {
-                    let x = r.f64()?;
-                    if v.vr == vr::BASE_ACCELERATION {
-                        base_acceleration = x;
-                    } else if let Some(p) = params.real_mut(v.vr) {
-                        *p = x;
-                    } else if let Some(p) = params.integer_mut(v.vr) {
-                        *p = x as i32;
-                    } else {
-                        return Err(format!("`{name}` is not a parameter"));
-                    }
-                }
-            }
+                _ => return Err(format!("the {what} is damaged (a value tag)")),
+            });
         }
-        let max_compression = r.f64()?;
+        let mut inputs = Vec::new();
+        for _ in 0..count(&mut r)? {
+            inputs.push(r.f64()?);
+        }
         let simulated = match r.u8()? {
             0 => None,
             1 => {
@@ -290,9 +276,11 @@ impl FmuState {
             mode,
             start_time,
             stop_time,
-            params,
-            base_acceleration,
-            max_compression,
+            values: Values {
+                params,
+                max_steps,
+                inputs,
+            },
             simulated,
             serialized: Some(bytes.to_vec()),
         })
@@ -331,25 +319,4 @@ pub fn restore_into(run: &mut Run, simulated: &Simulated) -> Result<(), String> 
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::Model;
-
-    #[test]
-    fn serialised_states_read_back() {
-        let mut m = Model::new();
-        m.params.cells_per_radius = 4;
-        m.enter_initialization();
-        m.exit_initialization().unwrap();
-        m.do_step(0.0, 1e-3).unwrap();
-        let mut s = m.get_state().unwrap();
-        let bytes = s.serialize("token").to_vec();
-        let back = FmuState::deserialize(&bytes, "token").unwrap();
-        assert_eq!(back.params, m.params);
-        let e = FmuState::deserialize(&bytes, "other").unwrap_err();
-        assert!(e.contains("another build"), "{e}");
-    }
 }

@@ -10,41 +10,23 @@
 //! does not converge, a collapsing Δt), even a panic inside the solver — puts back the state of
 //! its start, bit for bit: into the same simulation when it takes it back,
 //! else into one rebuilt from the same scene. Only when neither works is the instance broken.
+//!
+//! **The scene** is the packaged one with the parameters' values applied as overrides; its law
+//! is looked up by name in the FMU's binaries folder and nowhere else; the inputs are given to
+//! the simulation after it is built and after every restore (they are not part of a snapshot
+//! for the wall speeds). The outputs are the scene's probes, evaluated as `efsi run` evaluates
+//! them for `probes.csv`.
 
-use crate::params::Params;
-use efsi_core::scene::Side;
-use efsi_core::{Scene, Simulation, Snapshot};
+use crate::spec::{InputTarget, Spec, input_target};
+use efsi_core::overrides::OverrideValue;
+use efsi_core::{Simulation, Snapshot};
 use efsi_laws_host::loader::{describe, library_file_name};
 use efsi_run::checkpoint::{LawIdentity, law_identity};
-use efsi_run::probes;
-use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// The label standing for the scene file in messages and serialised states (the scene is
-/// generated from the parameters, it has no file).
-pub const SCENE_LABEL: &str = "<sphere_impact FMU parameters>";
-
-/// The outputs at the current time.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Outputs {
-    /// Centroid height (m).
-    pub height: f64,
-    /// Axial velocity (m/s).
-    pub velocity: f64,
-    /// Contact force, whole body (N).
-    pub contact_force: f64,
-    /// Contact radius (m).
-    pub contact_radius: f64,
-    /// Largest compression so far (m).
-    pub max_compression: f64,
-    /// Kinetic energy, whole domain (J).
-    pub kinetic_energy: f64,
-    /// Elastic energy, whole body (J).
-    pub elastic_energy: f64,
-    /// Solver steps.
-    pub steps: u64,
-}
+/// The label standing for the scene file in messages and serialised states.
+pub const SCENE_LABEL: &str = "resources/scene.ron";
 
 /// What a run's scene is, for serialised states: the scene as RON (no absolute path in it: the
 /// law is a library file name relative to the FMU's binaries folder) and the law library's
@@ -62,12 +44,14 @@ pub struct RunIdentity {
 pub struct Run {
     /// The simulation.
     pub sim: Simulation,
-    /// The largest compression so far (m).
-    pub max_compression: f64,
-    /// The outputs of the current state.
-    pub outputs: Outputs,
-    /// The parameters it was built from.
-    pub params: Params,
+    /// The outputs of the current state (the spec's outputs, in order).
+    pub outputs: Vec<f64>,
+    /// The parameter values it was built from.
+    pub params: Vec<OverrideValue>,
+    /// For each output, its column among the scene's probe columns.
+    columns: Vec<usize>,
+    /// The probe row (reused).
+    row: Vec<f64>,
     /// The scene and law, for serialised states.
     pub identity: Arc<RunIdentity>,
     /// The state at the start of the current communication step (reused storage).
@@ -130,104 +114,115 @@ fn law_dir() -> Result<PathBuf, String> {
     })
 }
 
-/// Check the law and its parameter against the library in the FMU's binaries folder: it must
-/// be there, declare the parameter as a modulus in Pa and accept the value. Messages name the
-/// FMU parameter. Returns the library's file name.
-fn check_law(p: &Params, dir: &Path) -> Result<String, String> {
-    let file = library_file_name(&p.law);
-    let path = dir.join(&file);
-    if !path.is_file() {
+/// Point the scene's law at its library in the FMU's binaries folder (`dir`), and nowhere
+/// else: the scene names a law by its name; its library `libefsi_law_<name>.so` must be in
+/// `dir`. Returns the library's file name.
+fn law_in_fmu(scene: &mut efsi_core::Scene, dir: &Path) -> Result<Option<String>, String> {
+    let Some(law) = scene.solid.as_mut().and_then(|s| s.law.as_mut()) else {
+        return Ok(None);
+    };
+    let plain = !law.name.is_empty()
+        && law
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if !plain {
         return Err(format!(
-            "parameter `law` = \"{}\": no such law in the FMU (its binaries folder has: {})",
-            p.law,
+            "solid.law.name = \"{}\": must be a plain law name (letters, digits, `_`, `-`): laws are looked up by name in the FMU's binaries folder only (it has: {})",
+            law.name,
             shipped_laws().join(", ")
         ));
     }
-    let info = describe(&path).map_err(|e| {
-        format!(
-            "parameter `law` = \"{}\": the library is unusable: {e}",
-            p.law
-        )
-    })?;
-    let Some(param) = info.parameters.iter().find(|q| q.name == p.law_parameter) else {
+    let file = library_file_name(&law.name);
+    if !dir.join(&file).is_file() {
         return Err(format!(
-            "parameter `law_parameter` = \"{}\": the law `{}` has no such parameter; it has: {}",
-            p.law_parameter,
-            info.name,
-            info.parameters
-                .iter()
-                .map(|q| q.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    };
-    if param.unit != "Pa" {
-        return Err(format!(
-            "parameter `law_parameter` = \"{}\": the law `{}`'s parameter is in `{}`, but law_parameter_value is in Pa (name a modulus)",
-            p.law_parameter,
-            info.name,
-            if param.unit.is_empty() {
-                "no unit"
-            } else {
-                &param.unit
-            }
+            "solid.law.name = \"{}\": no such law in the FMU (its binaries folder has: {})",
+            law.name,
+            shipped_laws().join(", ")
         ));
     }
-    if !param.contains(p.law_parameter_value) {
-        return Err(format!(
-            "parameter `law_parameter_value` = {} Pa: out of the range {} of the law `{}`'s parameter `{}`",
-            p.law_parameter_value,
-            param.range_text(),
-            info.name,
-            param.name,
-        ));
-    }
-    Ok(file)
+    describe(&dir.join(&file)).map_err(|e| format!("solid.law.name = \"{}\": {e}", law.name))?;
+    law.name = file.clone();
+    scene.source_dir = Some(dir.to_path_buf());
+    Ok(Some(file))
 }
 
 impl Run {
-    /// Check `params`, build their scene and its simulation from `start` (the scene ends at
-    /// `end`), with the frame acceleration `base_acceleration`.
+    /// Build the scene of `spec` with the parameter values `params` and its simulation from
+    /// `start`, with the inputs' values. (The scene keeps its own end time: it sets only the
+    /// solver's smallest step; the importer's stop time is checked by the model.)
     pub fn build(
-        params: &Params,
+        spec: &Spec,
+        params: &[OverrideValue],
         start: f64,
-        end: f64,
-        base_acceleration: f64,
+        inputs: &[f64],
     ) -> Result<Run, String> {
-        params.check()?;
-        let dir = law_dir()?;
-        let file = check_law(params, &dir)?;
-        let text = params.scene_ron(&file, end - start, 0.001);
+        let values: Vec<(String, OverrideValue)> = spec
+            .parameters
+            .iter()
+            .map(|p| p.name.clone())
+            .zip(params.iter().cloned())
+            .collect();
+        let mut scene = spec.scene_with(&values)?;
+        let file = law_in_fmu(&mut scene, &law_dir()?)?;
         let label = Path::new(SCENE_LABEL);
-        let mut scene = Scene::from_str_at(&text, label)
-            .map_err(|e| format!("the parameters make an invalid scene: {e}\n{text}"))?;
-        // The law is a file name, resolved in the FMU's binaries folder.
-        scene.source_dir = Some(dir);
-        let mut sim = Simulation::new(scene, label, &efsi_stages::builtin())
+        let sim = Simulation::new(scene, label, &efsi_stages::builtin())
             .map_err(|e| format!("the simulation could not be set up: {e}"))?;
-        sim.set_frame_acceleration((0.0, base_acceleration))
-            .map_err(|e| format!("input `base_acceleration`: {e}"))?;
-        sim.state.t = start;
         let mut law = law_identity(&sim.scene).map_err(|e| e.to_string())?;
-        if let Some(l) = &mut law {
-            l.library = file;
+        if let (Some(l), Some(f)) = (&mut law, file) {
+            l.library = f;
         }
         let identity = Arc::new(RunIdentity {
             scene_ron: sim.scene.to_ron(),
             law,
         });
+        let all = crate::spec::probe_columns(&sim.scene);
+        let columns = spec
+            .outputs
+            .iter()
+            .map(|o| {
+                all.iter()
+                    .position(|c| *c == o.name)
+                    .ok_or_else(|| format!("output `{}`: no such probe column", o.name))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let mut run = Run {
             sim,
-            max_compression: 0.0,
-            outputs: Outputs::default(),
-            params: params.clone(),
+            outputs: Vec::new(),
+            params: params.to_vec(),
+            columns,
+            row: Vec::new(),
             identity,
             start: None,
             rebuilt: None,
         };
-        run.track_compression();
+        run.sim.state.t = start;
+        run.apply_inputs(spec, inputs)?;
         run.outputs = run.evaluate();
         Ok(run)
+    }
+
+    /// Give the simulation the inputs' values (after a build or a restore).
+    pub fn apply_inputs(&mut self, spec: &Spec, inputs: &[f64]) -> Result<(), String> {
+        for (port, &value) in spec.inputs.iter().zip(inputs) {
+            self.apply_input(&port.name, value)?;
+        }
+        Ok(())
+    }
+
+    /// Give the simulation one input's value.
+    pub fn apply_input(&mut self, name: &str, value: f64) -> Result<(), String> {
+        match input_target(name) {
+            Some(InputTarget::BaseAcceleration) => self
+                .sim
+                .set_frame_acceleration((0.0, value))
+                .map_err(|e| format!("input `{name}`: {e}")),
+            Some(InputTarget::WallSpeed(side)) => self
+                .sim
+                .set_wall_speed(side, value)
+                .map_err(|e| format!("input `{name}`: {e}")),
+            None => Err(format!("`{name}` is not an input")),
+        }
     }
 
     /// The smallest solver step the scene allows (`time.dt_min`, by default 10⁻¹² of its end).
@@ -248,7 +243,6 @@ impl Run {
             Some(s) => self.sim.snapshot_into(s),
             None => self.start = Some(self.sim.snapshot()),
         }
-        let compression = self.max_compression;
         let first = self.sim.state.step;
         let result = crate::log::guard(
             || self.solver_steps(target, max_steps),
@@ -259,17 +253,14 @@ impl Run {
                 self.outputs = self.evaluate();
                 Ok(self.sim.state.step - first)
             }
-            Err(e) => {
-                self.max_compression = compression;
-                match self.recover() {
-                    Ok(()) => Err(StepFailure::Discarded(format!(
-                        "{e}; the instance is back at t = {t} exactly, its state before this call"
-                    ))),
-                    Err(r) => Err(StepFailure::Broken(format!(
-                        "{e}; and the state at t = {t} could not be put back ({r})"
-                    ))),
-                }
-            }
+            Err(e) => match self.recover() {
+                Ok(()) => Err(StepFailure::Discarded(format!(
+                    "{e}; the instance is back at t = {t} exactly, its state before this call"
+                ))),
+                Err(r) => Err(StepFailure::Broken(format!(
+                    "{e}; and the state at t = {t} could not be put back ({r})"
+                ))),
+            },
         }
     }
 
@@ -302,7 +293,6 @@ impl Run {
             }
             taken += 1;
             self.sim.snap_time(target);
-            self.track_compression();
         }
         Ok(())
     }
@@ -328,40 +318,18 @@ impl Run {
         Ok(())
     }
 
-    /// Include the current state in the maximum compression: the loss of the sphere's axial
-    /// height, `2R − (top − bottom)` on the axis — the approach of Hertz's theory. (The
-    /// centroid's drop below R is smaller: the flattened bottom lifts the centroid; at 35 cells
-    /// per radius 2.56 mm against a compression of 3.56 mm.)
-    pub fn track_compression(&mut self) {
-        let g = &self.sim.grid;
-        let (bottom, top) = probes::solid_extent(g, &self.sim.state, g.x0 + 0.5 * g.dx);
-        let c = 2.0 * self.params.radius - (top - bottom);
-        if c > self.max_compression {
-            self.max_compression = c;
+    /// The outputs of the current state: the scene's probes, the spec's columns of them.
+    pub fn evaluate(&mut self) -> Vec<f64> {
+        self.row.clear();
+        for p in &self.sim.scene.output.probes {
+            efsi_run::probes::evaluate(
+                p,
+                &self.sim.grid,
+                &self.sim.state,
+                self.sim.scene.gravity,
+                &mut self.row,
+            );
         }
-    }
-
-    /// The outputs of the current state (whole-body values: efsi's per-radian ones × 2π).
-    pub fn evaluate(&self) -> Outputs {
-        let (grid, state) = (&self.sim.grid, &self.sim.state);
-        let m = state
-            .phi
-            .as_ref()
-            .map(|phi| probes::solid_moments(grid, state, phi));
-        Outputs {
-            height: m.map_or(f64::NAN, |m| m.centroid.1),
-            velocity: m.map_or(f64::NAN, |m| m.velocity.1),
-            contact_force: TAU * probes::contact_force(grid, state, Side::YMin),
-            contact_radius: probes::contact_radius(grid, state, Side::YMin),
-            max_compression: self.max_compression,
-            kinetic_energy: TAU
-                * efsi_core::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho),
-            elastic_energy: TAU
-                * state
-                    .deformation
-                    .as_ref()
-                    .map_or(f64::NAN, |d| d.elastic_energy),
-            steps: state.step,
-        }
+        self.columns.iter().map(|&k| self.row[k]).collect()
     }
 }

@@ -18,10 +18,11 @@
 //!   medians of R runs (the 1- and N-thread runs alternate; the speed-up of each pair is
 //!   printed as a range and kept in the JSON), written to `DIR/bench.json` (default
 //!   `target/bench`). A benchmark, not a test: timings are never asserted.
-//! - `cargo xtask fmu`: build the sphere-impact FMU library and the shipped laws (profile
-//!   `fmu-release`: release code, stripped) and package `target/fmu/sphere_impact.fmu` (FMI
-//!   2.0 Co-Simulation) and `target/fmu/sphere_impact_fmi3.fmu` (FMI 3.0 Co-Simulation), with
-//!   their documentation and licence.
+//! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
+//!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
+//!   laws (profile `fmu-release`: release code, stripped) and package the scene as
+//!   `target/fmu/<name>.fmu` (FMI 2.0 Co-Simulation) and `target/fmu/<name>_fmi3.fmu` (FMI 3.0),
+//!   with their documentation and licence; without a scene, the sphere impact.
 
 mod zip;
 
@@ -98,8 +99,13 @@ const LAWS: [(&str, &str); 3] = [
 /// workspace's Cargo.toml) and its output folder under `target/`.
 const FMU_PROFILE: &str = "fmu-release";
 
-/// Build (profile [`FMU_PROFILE`]) and package both FMUs; returns their paths.
-fn fmu() -> Result<[PathBuf; 2], String> {
+/// `cargo xtask fmu [SCENE [FLAGS…]]`: build the FMU library and the shipped laws (profile
+/// [`FMU_PROFILE`]) and package the scene as `target/fmu/<name>.fmu` (FMI 2.0) and
+/// `target/fmu/<name>_fmi3.fmu` (FMI 3.0); without a scene, the sphere-impact FMU. The flags
+/// (`--parameter PATH[=UNIT]`, `--input NAME[=UNIT]`, `--output PROBE[=UNIT]`,
+/// `--range NAME=MIN..MAX`) are checked against the scene by `efsi-fmu-package`. Returns the
+/// two FMUs' paths.
+fn fmu(args: &[String]) -> Result<[PathBuf; 2], String> {
     let mut c = cargo();
     c.args([
         "build",
@@ -118,17 +124,20 @@ fn fmu() -> Result<[PathBuf; 2], String> {
     )?;
     let release = root().join("target").join(FMU_PROFILE);
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
-    let describe = |what: &str| -> Result<Vec<u8>, String> {
-        let out = Command::new(release.join("efsi-fmu-description"))
-            .arg(what)
-            .output()
-            .map_err(|e| format!("efsi-fmu-description: {e}"))?;
-        if !out.status.success() {
-            return Err(format!("efsi-fmu-description {what}: {}", out.status));
-        }
-        Ok(out.stdout)
-    };
-    let library = read(&release.join("libsphere_impact.so"))?;
+    let dir = root().join("target/fmu");
+    let staging = dir.join(".staging");
+    let _ = std::fs::remove_dir_all(&staging);
+    let mut c = Command::new(release.join("efsi-fmu-package"));
+    c.arg(&staging);
+    if args.is_empty() {
+        c.arg("sphere");
+    } else {
+        c.args(args);
+    }
+    run(c, "check the FMU's interface against its scene")?;
+    let identifier = String::from_utf8(read(&staging.join("identifier"))?)
+        .map_err(|_| "identifier: not UTF-8".to_string())?;
+    let library = read(&release.join("libefsi_fmu.so"))?;
     let laws = LAWS
         .iter()
         .map(|(_, stem)| {
@@ -136,34 +145,35 @@ fn fmu() -> Result<[PathBuf; 2], String> {
             read(&release.join(&name)).map(|d| (name, d))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let scene = describe("scene")?;
-    let documentation = describe("doc")?;
-    let license = describe("license")?;
-    let dir = root().join("target/fmu");
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut made = Vec::new();
     for (version, platform, file) in [
-        ("2", "linux64", "sphere_impact.fmu"),
-        ("3", "x86_64-linux", "sphere_impact_fmi3.fmu"),
+        ("2", "linux64", format!("{identifier}.fmu")),
+        ("3", "x86_64-linux", format!("{identifier}_fmi3.fmu")),
     ] {
         let mut z = zip::Zip::default();
-        let add = |z: &mut zip::Zip, name: &str, data: &[u8]| {
+        let mut add = |name: &str, data: &[u8]| {
             z.add(name, data)
                 .map_err(|e| format!("{file}: {name}: {e}"))
         };
-        add(&mut z, "modelDescription.xml", &describe(version)?)?;
         add(
-            &mut z,
-            &format!("binaries/{platform}/sphere_impact.so"),
-            &library,
+            "modelDescription.xml",
+            &read(&staging.join(format!("modelDescription-{version}.xml")))?,
         )?;
+        add(&format!("binaries/{platform}/{identifier}.so"), &library)?;
         for (name, data) in &laws {
-            add(&mut z, &format!("binaries/{platform}/{name}"), data)?;
+            add(&format!("binaries/{platform}/{name}"), data)?;
         }
-        add(&mut z, "resources/sphere_impact.ron", &scene)?;
-        add(&mut z, "documentation/index.html", &documentation)?;
-        add(&mut z, "documentation/licenses/license.txt", &license)?;
-        let path = dir.join(file);
+        add("resources/fmu.ron", &read(&staging.join("fmu.ron"))?)?;
+        add("resources/scene.ron", &read(&staging.join("scene.ron"))?)?;
+        add(
+            "documentation/index.html",
+            &read(&staging.join("index.html"))?,
+        )?;
+        add(
+            "documentation/licenses/license.txt",
+            &read(&staging.join("license.txt"))?,
+        )?;
+        let path = dir.join(&file);
         std::fs::write(&path, z.finish()).map_err(|e| format!("{}: {e}", path.display()))?;
         let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
         eprintln!(
@@ -174,12 +184,14 @@ fn fmu() -> Result<[PathBuf; 2], String> {
         );
         made.push(path);
     }
-    // The reference result (FMI Cross-Check layout) beside the FMUs.
-    let compat = root().join("fmu/compat/sphere_impact");
-    for e in std::fs::read_dir(&compat).map_err(|e| format!("{}: {e}", compat.display()))? {
-        let p = e.map_err(|e| e.to_string())?.path();
-        if let Some(name) = p.file_name() {
-            std::fs::copy(&p, dir.join(name)).map_err(|e| format!("{}: {e}", p.display()))?;
+    // The reference result (FMI Cross-Check layout) beside the FMUs, where there is one.
+    let compat = root().join("fmu/compat").join(&identifier);
+    if let Ok(entries) = std::fs::read_dir(&compat) {
+        for e in entries {
+            let p = e.map_err(|e| e.to_string())?.path();
+            if let Some(name) = p.file_name() {
+                std::fs::copy(&p, dir.join(name)).map_err(|e| format!("{}: {e}", p.display()))?;
+            }
         }
     }
     let [a, b] = <[PathBuf; 2]>::try_from(made).map_err(|_| "two FMUs".to_string())?;
@@ -213,13 +225,31 @@ fn test() -> Result<(), String> {
     let mut c = cargo();
     c.args(["build", "--quiet", "-p", "efsi", "--profile", "test"]);
     run(c, "build efsi for the Python tests")?;
-    let [fmu2, fmu3] = fmu()?;
+    // The sphere impact, and two scenes packaged as they are: the oscillating Couette flow
+    // with the wall's speed amplitude as a parameter, the disk in a cavity with the lid's speed
+    // as an input.
+    let [fmu2, _] = fmu(&[])?;
+    let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    fmu(&strings(&[
+        "cases/oscillating_couette.ron",
+        "--parameter",
+        "boundaries.y_max.speed=m/s",
+        "--output",
+        "u_interface=m/s",
+    ]))?;
+    fmu(&strings(&[
+        "cases/disk_in_cavity.ron",
+        "--input",
+        "boundaries.y_max.speed=m/s",
+    ]))?;
     let py = python_env()?;
     let mut c = Command::new(py);
     c.args(["-m", "pytest", "-q", "--durations=5", "tests/python"])
         .env("EFSI_BIN", root().join("target/debug/efsi"))
-        .env("EFSI_FMU2", fmu2)
-        .env("EFSI_FMU3", fmu3);
+        .env(
+            "EFSI_FMU_DIR",
+            fmu2.parent().map(Path::to_path_buf).unwrap_or_default(),
+        );
     run(c, "pytest tests/python")
 }
 
@@ -694,9 +724,9 @@ fn main() -> ExitCode {
         Some("ghia") => ghia(&args[1..]),
         Some("run") => run_scene(&args[1..]),
         Some("bench-paper") => bench_paper(&args[1..]),
-        Some("fmu") => fmu().map(|_| ()),
+        Some("fmu") => fmu(&args[1..]).map(|_| ()),
         _ => Err(
-            "usage: cargo xtask <run SCENE | test | fmu | bench [--quick] [--cases LIST] \
+            "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--cases LIST] \
              [--threads N] [--repeat R] [--out DIR] | bench-paper [--quick] [--case NAME]… \
              [--out DIR] | ghia DIR RE>"
                 .into(),

@@ -1,0 +1,634 @@
+//! What a scene FMU is: an efsi scene and the interface chosen for it when it was packaged
+//! (`cargo xtask fmu SCENE --parameter PATH[=UNIT] … --input NAME[=UNIT] … --output
+//! PROBE[=UNIT] … --range NAME=MIN..MAX …`), carried in the FMU as `resources/fmu.ron`.
+//!
+//! - **Parameters** are scene settings by their path, with the syntax of `efsi run --set`
+//!   ([`efsi_core::overrides`]): `solid.law.parameters.G`, `boundaries.y_max.speed`,
+//!   `solid.shape.center[1]`. Their start values are the scene's; they are applied as overrides
+//!   to the scene when initialisation ends, so a bad value is refused by the scene loader's own
+//!   checks, naming the setting.
+//! - **Inputs** are the settings a running simulation takes between steps: `base_acceleration`
+//!   (the grid frame's acceleration along y — z in axisymmetric scenes —; the body force becomes
+//!   gravity − a) and `boundaries.<side>.speed` of a moving wall.
+//! - **Outputs** are the scene's probe columns (`efsi run`'s `probes.csv` header), by name; with
+//!   no `--output`, all of them.
+//! - `max_solver_steps_per_step` (the bound on work per communication step) and the solver
+//!   step count `steps` are always there.
+//!
+//! The variables and their value references are derived from the spec
+//! ([`Spec::variables`]); the instantiation token is a hash of the spec (scene text included)
+//! and the crate version.
+
+use efsi_core::Scene;
+use efsi_core::overrides::{Override, OverrideValue};
+use efsi_core::scene::{Boundary, Side};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write;
+use std::path::Path;
+
+/// The type of a model variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Kind {
+    /// A real number (FMI 2.0 `Real`, FMI 3.0 `Float64`).
+    Real,
+    /// A 32-bit integer (FMI 2.0 `Integer`, FMI 3.0 `Int32`).
+    Int32,
+    /// A count (FMI 2.0 `Integer`, saturated; FMI 3.0 `Int64`).
+    Int64,
+    /// A string.
+    String,
+}
+
+/// The causality of a model variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Causality {
+    /// Time.
+    Independent,
+    /// Set before initialisation, fixed afterwards.
+    Parameter,
+    /// Set by the importer at any time.
+    Input,
+    /// Computed by the model.
+    Output,
+}
+
+/// One variable of the model description.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Variable {
+    /// Value reference.
+    pub vr: u32,
+    /// Name (a scene path, an input's name or a probe column).
+    pub name: String,
+    /// Type.
+    pub kind: Kind,
+    /// Causality.
+    pub causality: Causality,
+    /// Unit, if any.
+    pub unit: Option<String>,
+    /// Start value as written in the model description (parameters and inputs).
+    pub start: Option<String>,
+    /// The smallest value accepted (inclusive), if bounded below.
+    pub min: Option<f64>,
+    /// The largest value accepted (inclusive), if bounded above.
+    pub max: Option<f64>,
+    /// Description.
+    pub description: String,
+}
+
+impl Variable {
+    /// Refuse `value` outside `[min, max]` (or not finite): the message names the variable,
+    /// the value and the range.
+    pub fn check_range(&self, value: f64) -> Result<(), String> {
+        let inside = value.is_finite()
+            && self.min.is_none_or(|m| value >= m)
+            && self.max.is_none_or(|m| value <= m);
+        if inside {
+            return Ok(());
+        }
+        let unit = self
+            .unit
+            .as_deref()
+            .map_or(String::new(), |u| format!(" {u}"));
+        let bound = |b: Option<f64>| b.map_or("unbounded".to_string(), |b| format!("{b}"));
+        Err(format!(
+            "{} `{}` = {value}{unit}: outside its range [{}, {}]{unit}",
+            match self.causality {
+                Causality::Input => "input",
+                _ => "parameter",
+            },
+            self.name,
+            bound(self.min),
+            bound(self.max),
+        ))
+    }
+}
+
+/// A parameter, input or output as packaged.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Port {
+    /// Its name: a scene path, an input name, a probe column.
+    pub name: String,
+    /// Its unit, if given.
+    pub unit: Option<String>,
+    /// The range accepted (`--range`), if given.
+    pub range: (Option<f64>, Option<f64>),
+}
+
+/// A scene FMU's definition (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Spec {
+    /// The model's name and identifier (the scene's name).
+    pub name: String,
+    /// The scene as packaged (RON text).
+    pub scene: String,
+    /// Parameters: scene paths.
+    pub parameters: Vec<Port>,
+    /// Inputs.
+    pub inputs: Vec<Port>,
+    /// Outputs: probe columns.
+    pub outputs: Vec<Port>,
+}
+
+/// What an input acts on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InputTarget {
+    /// The frame's acceleration along y (z).
+    BaseAcceleration,
+    /// A moving wall's speed.
+    WallSpeed(Side),
+}
+
+/// The input named `name`, if it is one (`base_acceleration`, `boundaries.<side>.speed`).
+pub fn input_target(name: &str) -> Option<InputTarget> {
+    if name == "base_acceleration" {
+        return Some(InputTarget::BaseAcceleration);
+    }
+    let side = name.strip_prefix("boundaries.")?.strip_suffix(".speed")?;
+    let canonical = efsi_core::overrides::FIELD_ALIASES
+        .iter()
+        .find(|(a, _)| *a == side)
+        .map_or(side, |(_, c)| c);
+    Side::ALL
+        .into_iter()
+        .find(|s| s.field_name() == canonical)
+        .map(InputTarget::WallSpeed)
+}
+
+/// The value reference of the time.
+pub const VR_TIME: u32 = 0;
+/// The value reference of `max_solver_steps_per_step`.
+pub const VR_MAX_STEPS: u32 = 1;
+/// The value reference of `steps`.
+pub const VR_STEPS: u32 = 3000;
+const VR_PARAMETERS: u32 = 2;
+const VR_INPUTS: u32 = 1000;
+const VR_OUTPUTS: u32 = 2000;
+/// The default bound on solver steps per communication step.
+pub const DEFAULT_MAX_SOLVER_STEPS: i32 = 10_000;
+
+impl Spec {
+    /// A spec from the command line's flags, checked against the scene at `path`: every
+    /// parameter path exists (its start value read from the scene), every input is one the
+    /// scene can take, every output a probe column of the scene, every range names one of them.
+    pub fn from_args(path: &Path, args: &[String]) -> Result<Spec, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let scene = Scene::from_str_at(&text, path).map_err(|e| e.to_string())?;
+        let mut spec = Spec {
+            name: scene.name.clone(),
+            scene: text,
+            parameters: Vec::new(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+        };
+        let port = |arg: &str| {
+            let (name, unit) = match arg.split_once('=') {
+                Some((n, u)) => (n.trim(), Some(u.trim().to_string())),
+                None => (arg.trim(), None),
+            };
+            Port {
+                name: name.to_string(),
+                unit,
+                range: (None, None),
+            }
+        };
+        let mut ranges = Vec::new();
+        let mut k = 0;
+        while k < args.len() {
+            let flag = args[k].as_str();
+            let value = args
+                .get(k + 1)
+                .ok_or_else(|| format!("{flag}: a value is missing"))?;
+            match flag {
+                "--parameter" => spec.parameters.push(port(value)),
+                "--input" => spec.inputs.push(port(value)),
+                "--output" => spec.outputs.push(port(value)),
+                "--range" => ranges.push(value.clone()),
+                _ => {
+                    return Err(format!(
+                        "unknown flag `{flag}`: expected --parameter PATH[=UNIT], --input NAME[=UNIT], --output PROBE[=UNIT], --range NAME=MIN..MAX"
+                    ));
+                }
+            }
+            k += 2;
+        }
+        let columns = probe_columns(&scene);
+        if spec.outputs.is_empty() {
+            spec.outputs = columns
+                .iter()
+                .map(|c| Port {
+                    name: c.clone(),
+                    unit: None,
+                    range: (None, None),
+                })
+                .collect();
+        }
+        for o in &spec.outputs {
+            if !columns.contains(&o.name) {
+                return Err(format!(
+                    "--output {}: the scene has no probe column of that name; it has: {}",
+                    o.name,
+                    columns.join(", ")
+                ));
+            }
+        }
+        for p in &spec.parameters {
+            scene_value(&scene, &p.name).map_err(|e| format!("--parameter {}: {e}", p.name))?;
+        }
+        for i in &spec.inputs {
+            check_input(&scene, &i.name).map_err(|e| format!("--input {}: {e}", i.name))?;
+        }
+        for r in ranges {
+            let (name, bounds) = r
+                .split_once('=')
+                .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
+            let (lo, hi) = bounds
+                .split_once("..")
+                .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
+            let num = |s: &str| -> Result<Option<f64>, String> {
+                let s = s.trim();
+                if s.is_empty() {
+                    return Ok(None);
+                }
+                s.parse()
+                    .map(Some)
+                    .map_err(|_| format!("--range {r}: `{s}` is not a number"))
+            };
+            let range = (num(lo)?, num(hi)?);
+            let target = spec
+                .parameters
+                .iter_mut()
+                .chain(spec.inputs.iter_mut())
+                .find(|p| p.name == name.trim())
+                .ok_or_else(|| format!("--range {r}: no parameter or input `{name}`"))?;
+            target.range = range;
+        }
+        let mut names: Vec<&str> = spec
+            .parameters
+            .iter()
+            .chain(&spec.inputs)
+            .chain(&spec.outputs)
+            .map(|p| p.name.as_str())
+            .collect();
+        names.sort_unstable();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return Err(format!("`{}` is named twice", w[0]));
+        }
+        Ok(spec)
+    }
+
+    /// The model identifier (the library is `binaries/<platform>/<identifier>.so`): the name
+    /// with anything but letters, digits and `_` replaced by `_`.
+    pub fn identifier(&self) -> String {
+        self.name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect()
+    }
+
+    /// The spec as RON (`resources/fmu.ron`).
+    pub fn to_ron(&self) -> String {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).unwrap_or_default()
+    }
+
+    /// A spec from `resources/fmu.ron`.
+    pub fn from_ron(text: &str) -> Result<Spec, String> {
+        ron::from_str(text).map_err(|e| format!("resources/fmu.ron: {e}"))
+    }
+
+    /// The parsed scene as packaged.
+    pub fn parsed_scene(&self) -> Result<Scene, String> {
+        Scene::from_str_at(&self.scene, Path::new("resources/scene.ron")).map_err(|e| e.to_string())
+    }
+
+    /// Every variable, in model-description order: time, `max_solver_steps_per_step`, the
+    /// parameters, the inputs, the outputs, `steps`.
+    pub fn variables(&self) -> Result<Vec<Variable>, String> {
+        let scene = self.parsed_scene()?;
+        let mut v = vec![
+            Variable {
+                vr: VR_TIME,
+                name: "time".into(),
+                kind: Kind::Real,
+                causality: Causality::Independent,
+                unit: Some("s".into()),
+                start: None,
+                min: None,
+                max: None,
+                description: "Simulation time".into(),
+            },
+            Variable {
+                vr: VR_MAX_STEPS,
+                name: "max_solver_steps_per_step".into(),
+                kind: Kind::Int32,
+                causality: Causality::Parameter,
+                unit: None,
+                start: Some(DEFAULT_MAX_SOLVER_STEPS.to_string()),
+                min: Some(1.0),
+                max: Some(1e9),
+                description: "The most solver steps one communication step may take; a step that needs more is refused (Discard) with the state of its start kept".into(),
+            },
+        ];
+        for (k, p) in self.parameters.iter().enumerate() {
+            let (kind, start) = match scene_value(&scene, &p.name)? {
+                OverrideValue::Int(i) => (Kind::Int32, i.to_string()),
+                OverrideValue::Float(x) => (Kind::Real, format!("{x:?}")),
+                OverrideValue::Str(s) => (Kind::String, s),
+                other => {
+                    return Err(format!(
+                        "parameter `{}`: {other} is not a number or a string",
+                        p.name
+                    ));
+                }
+            };
+            v.push(Variable {
+                vr: VR_PARAMETERS + k as u32,
+                name: p.name.clone(),
+                kind,
+                causality: Causality::Parameter,
+                unit: p.unit.clone(),
+                start: Some(start),
+                min: p.range.0,
+                max: p.range.1,
+                description: format!("The scene setting `{}`", p.name),
+            });
+        }
+        for (k, i) in self.inputs.iter().enumerate() {
+            let start = match input_target(&i.name) {
+                Some(InputTarget::WallSpeed(side)) => match scene.boundaries.get(side) {
+                    Boundary::MovingWall { speed, .. } => *speed,
+                    _ => 0.0,
+                },
+                _ => 0.0,
+            };
+            v.push(Variable {
+                vr: VR_INPUTS + k as u32,
+                name: i.name.clone(),
+                kind: Kind::Real,
+                causality: Causality::Input,
+                unit: i.unit.clone(),
+                start: Some(format!("{start:?}")),
+                min: i.range.0,
+                max: i.range.1,
+                description: match input_target(&i.name) {
+                    Some(InputTarget::BaseAcceleration) => "Acceleration of the grid's frame along y (z), positive up: the body force is gravity - base_acceleration".into(),
+                    _ => format!("Speed of the moving wall `{}` (its profile and motion multiply it)", i.name),
+                },
+            });
+        }
+        for (k, o) in self.outputs.iter().enumerate() {
+            v.push(Variable {
+                vr: VR_OUTPUTS + k as u32,
+                name: o.name.clone(),
+                kind: Kind::Real,
+                causality: Causality::Output,
+                unit: o.unit.clone(),
+                start: None,
+                min: None,
+                max: None,
+                description: format!(
+                    "The scene's probe column `{}` (as in efsi run's probes.csv)",
+                    o.name
+                ),
+            });
+        }
+        v.push(Variable {
+            vr: VR_STEPS,
+            name: "steps".into(),
+            kind: Kind::Int64,
+            causality: Causality::Output,
+            unit: None,
+            start: None,
+            min: None,
+            max: None,
+            description: "Solver steps taken since the start".into(),
+        });
+        Ok(v)
+    }
+
+    /// The FMI 2.0 GUID and FMI 3.0 instantiation token: a hash of the spec and the crate
+    /// version, as `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
+    pub fn token(&self) -> String {
+        let text = format!("efsi-fmu {}\n{}", env!("CARGO_PKG_VERSION"), self.to_ron());
+        let a = fnv(0xcbf2_9ce4_8422_2325, &text);
+        let b = fnv(a ^ 0x9e37_79b9_7f4a_7c15, &text);
+        format!(
+            "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+            a >> 32,
+            (a >> 16) & 0xffff,
+            a & 0xffff,
+            b >> 48,
+            b & 0xffff_ffff_ffff
+        )
+    }
+
+    /// The scene with the parameters' values applied (as overrides, in order).
+    pub fn scene_with(&self, values: &[(String, OverrideValue)]) -> Result<Scene, String> {
+        let overrides: Vec<Override> = values
+            .iter()
+            .map(|(p, v)| Override::set(p.clone(), v.clone()))
+            .collect();
+        Scene::from_str_with(&self.scene, Path::new("resources/scene.ron"), &overrides)
+            .map_err(|e| e.to_string())
+    }
+}
+
+fn fnv(seed: u64, text: &str) -> u64 {
+    let mut h = seed;
+    for b in text.bytes() {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The probe columns of a scene, in `probes.csv` order (time excluded).
+pub fn probe_columns(scene: &Scene) -> Vec<String> {
+    scene
+        .output
+        .probes
+        .iter()
+        .flat_map(efsi_run::probes::columns)
+        .collect()
+}
+
+/// The value of the setting at `path` in `scene` (with its defaults).
+pub fn scene_value(scene: &Scene, path: &str) -> Result<OverrideValue, String> {
+    scene.get(path).map_err(|e| e.to_string())
+}
+
+/// Whether the scene can take the input `name`.
+fn check_input(scene: &Scene, name: &str) -> Result<(), String> {
+    match input_target(name) {
+        None => Err("not an input: expected base_acceleration or boundaries.<side>.speed".into()),
+        Some(InputTarget::BaseAcceleration) if scene.gravity == (0.0, 0.0) => Err(
+            "the frame's acceleration acts through the body force, which runs only with gravity: give the scene a gravity"
+                .into(),
+        ),
+        Some(InputTarget::WallSpeed(side))
+            if !matches!(scene.boundaries.get(side), Boundary::MovingWall { .. }) =>
+        {
+            let mut s = String::new();
+            let _ = write!(s, "{} is not a moving wall in the scene", side.field_name());
+            Err(s)
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The spec packaged with the library this code was loaded from (`resources/fmu.ron` of the
+/// FMU, two folders above `binaries/<platform>/`), and a model of it when `token` is its
+/// instantiation token.
+pub fn packaged_model(token: &str) -> Result<crate::model::Model, String> {
+    let dir = crate::stepping::library_dir()
+        .ok_or("the FMU library cannot find its own folder (dladdr failed)")?;
+    let path = dir
+        .parent()
+        .and_then(Path::parent)
+        .map(|root| root.join("resources").join("fmu.ron"))
+        .ok_or("the FMU library is not in binaries/<platform>/ of an FMU")?;
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let spec = Spec::from_ron(&text)?;
+    if token != spec.token() {
+        return Err(format!(
+            "the instantiation token / GUID {token} is not this FMU's {} (a modelDescription.xml of another build?)",
+            spec.token()
+        ));
+    }
+    crate::model::Model::new(std::sync::Arc::new(spec))
+}
+
+/// The sphere-impact FMU (`cargo xtask fmu` without a scene): the scene
+/// `fmu/sphere_impact.ron` and these flags.
+pub const SPHERE: &[&str] = &[
+    "--parameter",
+    "solid.shape.radius=m",
+    "--range",
+    "solid.shape.radius=0..0.045",
+    "--parameter",
+    "solid.shape.center[1]=m",
+    "--range",
+    "solid.shape.center[1]=0..0.09",
+    "--parameter",
+    "solid.velocity[1]=m/s",
+    "--range",
+    "solid.velocity[1]=-100..100",
+    "--parameter",
+    "solid.density=kg/m3",
+    "--range",
+    "solid.density=1..25000",
+    "--parameter",
+    "solid.law.name",
+    "--parameter",
+    "solid.law.parameters.G=Pa",
+    "--range",
+    "solid.law.parameters.G=0..1e10",
+    "--parameter",
+    "fluid.density=kg/m3",
+    "--range",
+    "fluid.density=0.01..25000",
+    "--parameter",
+    "fluid.viscosity=Pa.s",
+    "--range",
+    "fluid.viscosity=0..1e4",
+    "--parameter",
+    "gravity.1=m/s2",
+    "--range",
+    "gravity.1=-100..100",
+    "--parameter",
+    "grid.nr",
+    "--range",
+    "grid.nr=1..1000",
+    "--parameter",
+    "grid.nz",
+    "--range",
+    "grid.nz=1..2000",
+    "--parameter",
+    "time.cfl",
+    "--range",
+    "time.cfl=0..1",
+    "--input",
+    "base_acceleration=m/s2",
+    "--range",
+    "base_acceleration=-1000..1000",
+    "--output",
+    "solid_y=m",
+    "--output",
+    "solid_v=m/s",
+    "--output",
+    "contact_force=N",
+    "--output",
+    "contact_radius=m",
+    "--output",
+    "kinetic_energy=J",
+    "--output",
+    "elastic_energy=J",
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(a: &[&str]) -> Vec<String> {
+        a.iter().map(|s| s.to_string()).collect()
+    }
+
+    fn sphere() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("sphere_impact.ron")
+    }
+
+    #[test]
+    fn the_sphere_spec_reads_its_start_values_from_the_scene() {
+        let spec = Spec::from_args(&sphere(), &args(SPHERE)).unwrap();
+        let vars = spec.variables().unwrap();
+        let get = |n: &str| vars.iter().find(|v| v.name == n).unwrap().clone();
+        assert_eq!(get("solid.shape.radius").start.as_deref(), Some("0.0192"));
+        assert_eq!(get("grid.nr").kind, Kind::Int32);
+        assert_eq!(get("grid.nr").start.as_deref(), Some("23"));
+        assert_eq!(get("solid.law.name").kind, Kind::String);
+        assert_eq!(get("base_acceleration").causality, Causality::Input);
+        assert_eq!(
+            (get("solid.velocity[1]").min, get("solid.velocity[1]").max),
+            (Some(-100.0), Some(100.0))
+        );
+        assert_eq!(get("contact_force").causality, Causality::Output);
+        // Value references are unique; the token changes with the spec.
+        for (k, a) in vars.iter().enumerate() {
+            assert!(
+                vars[k + 1..]
+                    .iter()
+                    .all(|b| b.vr != a.vr && b.name != a.name)
+            );
+        }
+        let mut other = spec.clone();
+        other.outputs.pop();
+        assert_ne!(other.token(), spec.token());
+        assert_eq!(Spec::from_ron(&spec.to_ron()).unwrap(), spec);
+    }
+
+    #[test]
+    fn bad_interfaces_are_refused_by_name() {
+        let cases: [(&[&str], &str); 6] = [
+            (
+                &["--output", "nothing"],
+                "no probe column of that name; it has: solid_x",
+            ),
+            (&["--input", "grid.nr"], "not an input"),
+            (
+                &["--input", "boundaries.x_min.speed"],
+                "x_min is not a moving wall",
+            ),
+            (
+                &["--parameter", "solid.law.parameters.K"],
+                "no setting solid.law.parameters.K",
+            ),
+            (
+                &["--range", "nothing=0..1"],
+                "no parameter or input `nothing`",
+            ),
+            (&["--wrong", "x"], "unknown flag `--wrong`"),
+        ];
+        for (a, needle) in cases {
+            let e = Spec::from_args(&sphere(), &args(a)).unwrap_err();
+            assert!(e.contains(needle), "{a:?}: {e}");
+        }
+    }
+}
