@@ -1489,20 +1489,37 @@ impl Stage for ElasticStage {
         Ok(())
     }
 
+    /// Takes B̃ out of the state for the step and puts it back on every exit, failed or not:
+    /// a failed step leaves the state complete, so the run loop (or an FMU) can restore the
+    /// step's start into it.
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let mut d = state.deformation.take().ok_or_else(missing)?;
+        let result = self.advance(ctx, state, &mut d);
+        state.deformation = Some(d);
+        result
+    }
+}
+
+impl ElasticStage {
+    /// One elastic step with B̃ (`d`) held outside the state.
+    fn advance(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        d: &mut efsi_core::Deformation,
+    ) -> Result<StageStats, StageError> {
         let dt = ctx.dt;
         let r = if state.dt_prev > 0.0 {
             dt / state.dt_prev
         } else {
             0.0
         };
-        let mut d = state.deformation.take().ok_or_else(missing)?;
         let phi = state
             .phi
             .as_ref()
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         self.op.k.set_weights(phi);
-        self.op.k.reset_fluid(&mut d);
+        self.op.k.reset_fluid(d);
         // Bⁿ and the explicit part E.
         for c in 0..4 {
             d.start[c].copy_from(&d.b[c]);
@@ -1680,7 +1697,6 @@ impl Stage for ElasticStage {
                 }
             };
             if !st.converged {
-                state.deformation = Some(d);
                 return Err(err(
                     "elastic",
                     format!(
@@ -1716,7 +1732,6 @@ impl Stage for ElasticStage {
             &mut d.b,
         );
         k.fill_ghosts(&mut d.b);
-        state.deformation = Some(d);
         Ok(StageStats { solve: Some(stats) })
     }
 }
