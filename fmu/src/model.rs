@@ -18,12 +18,13 @@
 //! z, positive upwards, set with [`Simulation::set_frame_acceleration`]: the body force becomes
 //! `gravity − a`, so a table accelerating upwards at a acts like a gravity stronger by a.
 //!
-//! **Stepping.** [`Model::do_step`] advances from t to t + h with the solver's own steps,
-//! shortened the way `efsi run` shortens them to land on an output time
-//! ([`Simulation::next_dt`]), so any communication step lands exactly.
+//! **Stepping.** [`Model::do_step`] advances from t to t + h with
+//! [`Simulation::advance_to`], the stepping `efsi run` lands on its output times with, so any
+//! communication step lands exactly and a communication grid gives the numbers of `efsi run`
+//! with output times on that grid.
 
 use efsi_core::scene::Side;
-use efsi_core::{Scene, Simulation, Snapshot};
+use efsi_core::{Advance, Flow, Rollback, Scene, Simulation, Snapshot, StepInfo};
 use efsi_laws_host::loader::{describe, library_file_name, resolve_law};
 use efsi_run::checkpoint::{self, Checkpoint, OutputState};
 use efsi_run::probes;
@@ -482,11 +483,6 @@ impl Default for Model {
     }
 }
 
-/// `t` has reached `event` (the run loop's rule, to land on communication points the same way).
-fn due(t: f64, event: f64) -> bool {
-    t >= event - 1e-9 * event.abs().max(1e-12)
-}
-
 /// The folder of the library this code was loaded from (the FMU's `binaries/<platform>/`), via
 /// `dladdr` on one of its own functions.
 pub fn library_dir() -> Option<PathBuf> {
@@ -715,26 +711,24 @@ impl Model {
         }
         // The importer's clock is the reference: absorb round-off between the two.
         run.sim.state.t = t;
-        match &mut run.start {
-            Some(s) => run.sim.snapshot_into(s),
-            None => run.start = Some(run.sim.snapshot()),
-        }
         let compression = run.max_compression;
         let target = t + h;
         let steps = run.sim.state.step;
-        while !due(run.sim.state.t, target) {
-            let result = run.sim.next_dt(target).and_then(|dt| run.sim.step(dt));
-            if let Err(e) = result {
-                if let Some(s) = &run.start {
-                    let _ = run.sim.restore(s);
-                }
-                run.max_compression = compression;
-                return Err(format!(
-                    "the solver failed between t = {t} and {target}: {e} (the state at t = {t} was put back)"
-                ));
-            }
-            run.sim.snap_time(target);
-            run.track_compression(radius);
+        let max_compression = &mut run.max_compression;
+        let mut track = |sim: &mut Simulation, _: &StepInfo| {
+            raise(max_compression, compression_of(sim, radius));
+            Ok(Flow::Continue)
+        };
+        let control = Advance {
+            rollback: Rollback::Call(&mut run.start),
+            on_step: Some(&mut track),
+            ..Advance::default()
+        };
+        if let Err(e) = run.sim.advance_to(target, control) {
+            run.max_compression = compression;
+            return Err(format!(
+                "the solver failed between t = {t} and {target}: {e} (the state at t = {t} was put back)"
+            ));
         }
         run.outputs = run.evaluate();
         self.notes.push(format!(
@@ -1008,6 +1002,23 @@ impl Model {
 
 const SERIAL_MAGIC: &[u8; 8] = b"EFSIFMU1";
 
+/// The compression of the sphere of radius `radius` in `sim`: the loss of its axial height,
+/// `2R − (top − bottom)` on the axis — the approach of Hertz's theory. (The centroid's drop
+/// below R is smaller: the flattened bottom lifts the centroid; at 35 cells per radius 2.56 mm
+/// against a compression of 3.56 mm.)
+fn compression_of(sim: &Simulation, radius: f64) -> f64 {
+    let g = &sim.grid;
+    let (bottom, top) = probes::solid_extent(g, &sim.state, g.x0 + 0.5 * g.dx);
+    2.0 * radius - (top - bottom)
+}
+
+/// `max = c` if `c` is larger (a NaN compression changes nothing).
+fn raise(max: &mut f64, c: f64) {
+    if c > *max {
+        *max = c;
+    }
+}
+
 fn unknown(vr: u32, kind: &str) -> String {
     match variable(vr) {
         Some(v) => format!(
@@ -1019,17 +1030,9 @@ fn unknown(vr: u32, kind: &str) -> String {
 }
 
 impl Run {
-    /// Include the current state in the maximum compression: the loss of the sphere's axial
-    /// height, `2R − (top − bottom)` on the axis — the approach of Hertz's theory. (The
-    /// centroid's drop below R is smaller: the flattened bottom lifts the centroid; at 35 cells
-    /// per radius 2.56 mm against a compression of 3.56 mm.)
+    /// Include the current state in the maximum compression ([`compression_of`]).
     fn track_compression(&mut self, radius: f64) {
-        let g = &self.sim.grid;
-        let (bottom, top) = probes::solid_extent(g, &self.sim.state, g.x0 + 0.5 * g.dx);
-        let c = 2.0 * radius - (top - bottom);
-        if c > self.max_compression {
-            self.max_compression = c;
-        }
+        raise(&mut self.max_compression, compression_of(&self.sim, radius));
     }
 
     /// The outputs of the current state (whole-body values: efsi's per-radian ones × 2π).
