@@ -19,6 +19,7 @@ use crate::machine::Mode;
 use crate::spec::{Causality, Kind, Spec, VR_MAX_STEPS, VR_STEPS, VR_TIME, Variable};
 use crate::state::{FmuState, Simulated, restore_into};
 use crate::stepping::{Run, StepFailure};
+use efsi_core::due;
 use efsi_core::overrides::OverrideValue;
 use std::sync::Arc;
 
@@ -59,11 +60,6 @@ impl From<&str> for Fault {
     fn from(message: &str) -> Self {
         Fault::error(message)
     }
-}
-
-/// `t` has reached `event` (the run loop's rule, to land on communication points the same way).
-pub fn due(t: f64, event: f64) -> bool {
-    t >= event - 1e-9 * event.abs().max(1e-12)
 }
 
 /// The values an importer sets: the parameters (in the spec's order), the step bound and the

@@ -19,7 +19,7 @@
 
 use crate::spec::{InputTarget, Spec, input_target};
 use efsi_core::overrides::OverrideValue;
-use efsi_core::{Simulation, Snapshot};
+use efsi_core::{Advance, AdvanceError, EfsiError, Simulation, Snapshot};
 use efsi_laws_host::loader::{describe, library_file_name};
 use efsi_run::checkpoint::{LawIdentity, law_identity};
 use std::path::{Path, PathBuf};
@@ -264,7 +264,9 @@ impl Run {
         }
     }
 
-    /// The solver steps of one communication step (the bound checked before and during).
+    /// The solver steps of one communication step: [`Simulation::advance_to`] with the bound
+    /// (judged first from the step size the solver would take); the rollback is
+    /// [`advance`](Self::advance)'s, which kept the call's start before anything ran.
     fn solver_steps(&mut self, target: f64, max_steps: u64) -> Result<(), String> {
         let t = self.sim.state.t;
         let dt = self
@@ -277,24 +279,23 @@ impl Run {
                 "the communication step from t = {t} to {target} needs about {needed} solver steps of {dt:.3e} s, more than max_solver_steps_per_step = {max_steps}: take shorter communication steps or raise max_solver_steps_per_step"
             ));
         }
-        let mut taken = 0u64;
-        while !crate::model::due(self.sim.state.t, target) {
-            if taken == max_steps {
-                return Err(format!(
-                    "the communication step from t = {t} to {target} took max_solver_steps_per_step = {max_steps} solver steps and reached only t = {}: take shorter communication steps or raise max_solver_steps_per_step",
-                    self.sim.state.t
-                ));
-            }
-            let result = self.sim.next_dt(target).and_then(|dt| self.sim.step(dt));
-            if let Err(e) = result {
-                return Err(format!(
-                    "the solver failed between t = {t} and {target}: {e}"
-                ));
-            }
-            taken += 1;
-            self.sim.snap_time(target);
+        let control = Advance {
+            max_steps: Some(max_steps),
+            ..Advance::default()
+        };
+        match self.sim.advance_to(target, control) {
+            Ok(_) => Ok(()),
+            Err(AdvanceError::Failed {
+                error: EfsiError::StepBudget { .. },
+                ..
+            }) => Err(format!(
+                "the communication step from t = {t} to {target} took max_solver_steps_per_step = {max_steps} solver steps and reached only t = {}: take shorter communication steps or raise max_solver_steps_per_step",
+                self.sim.state.t
+            )),
+            Err(e) => Err(format!(
+                "the solver failed between t = {t} and {target}: {e}"
+            )),
         }
-        Ok(())
     }
 
     /// Put the state of the current communication step's start back: into this simulation, or

@@ -2,7 +2,7 @@
 //! stepping them without outputs, and locating the reference data the repository carries in
 //! `tests/references/`.
 
-use efsi_core::{EfsiError, Scene, Simulation, StagePlugin};
+use efsi_core::{Advance, EfsiError, Flow, Scene, Simulation, StagePlugin, StepInfo};
 use std::path::{Path, PathBuf};
 
 /// Parse scene text (panics with the loader's message if it is invalid).
@@ -20,14 +20,18 @@ pub fn sim_with(text: &str, plugins: &[&dyn StagePlugin]) -> Result<Simulation, 
     Simulation::new(scene(text), Path::new("<test>"), plugins)
 }
 
-/// Step `sim` until time `t` (landing on it), calling `each` after every step.
+/// Step `sim` until time `t` (landing on it, [`Simulation::advance_to`]), calling `each` with
+/// the simulation and Δt after every step.
 pub fn run_until(sim: &mut Simulation, t: f64, mut each: impl FnMut(&Simulation, f64)) {
-    while sim.state.t < t * (1.0 - 1e-12) {
-        let dt = sim.next_dt(t).unwrap_or_else(|e| panic!("{e}"));
-        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
-        sim.snap_time(t);
-        each(sim, dt);
-    }
+    let mut hook = |sim: &mut Simulation, step: &StepInfo| {
+        each(sim, step.dt);
+        Ok(Flow::Continue)
+    };
+    let control = Advance {
+        on_step: Some(&mut hook),
+        ..Advance::default()
+    };
+    sim.advance_to(t, control).unwrap_or_else(|e| panic!("{e}"));
 }
 
 /// Step until steady (the scene's `time.steady`) or `t_max`; returns the time reached.

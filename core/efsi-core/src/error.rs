@@ -57,6 +57,30 @@ pub enum EfsiError {
         /// The allowed multiple of `supplied`.
         limit: f64,
     },
+    /// A time to advance to was refused (not finite, or before the simulation's time); nothing
+    /// changed.
+    #[error("cannot advance to t = {target:e}: {why} (the simulation is at t = {t:.6e})")]
+    Target {
+        /// The time asked for.
+        target: f64,
+        /// The simulation's time.
+        t: f64,
+        /// Why it was refused.
+        why: &'static str,
+    },
+    /// A call of [`crate::Simulation::advance_to`] took as many solver steps as it was allowed
+    /// without reaching its target.
+    #[error(
+        "the step budget of the call ran out: {steps} solver steps reached t = {t:.6e}, short of the target t = {target:.6e}"
+    )]
+    StepBudget {
+        /// The steps taken (the budget).
+        steps: u64,
+        /// Time reached.
+        t: f64,
+        /// The target.
+        target: f64,
+    },
     /// A checkpoint cannot be read or resumed (corrupt, another format version, written for a
     /// different scene or law), or a snapshot does not fit the simulation it is restored into.
     /// `what` is the file (or `snapshot`); the message says what differs.
@@ -104,7 +128,8 @@ impl EfsiError {
             EfsiError::Scene(_) | EfsiError::Config { .. } | EfsiError::Schedule(_) => 2,
             EfsiError::Stage(_) | EfsiError::Unstable { .. } | EfsiError::EnergyGrowth { .. } => 3,
             EfsiError::Io { .. } => 1,
-            EfsiError::Checkpoint { .. } => 2,
+            EfsiError::Checkpoint { .. } | EfsiError::Target { .. } => 2,
+            EfsiError::StepBudget { .. } => 3,
             EfsiError::Saved { error, .. } => error.exit_code(),
         }
     }

@@ -7,6 +7,7 @@
 //! linear solvers and the parallel loops are in `efsi-linalg`, the law plugins' host in
 //! `efsi-laws-host`, the run loop, outputs, probes and checkpoints in `efsi-run`.
 
+pub mod advance;
 pub mod bc;
 pub mod error;
 pub mod field;
@@ -20,6 +21,7 @@ pub mod simulation;
 pub mod snapshot;
 pub mod state;
 
+pub use advance::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
 pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};

@@ -38,11 +38,12 @@ use efsi_core::scene::{ProbeSpec, ProfileSpec, Scene};
 use efsi_core::schedule::StagePlugin;
 use efsi_core::simulation::Simulation;
 use efsi_core::state::State;
+use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
 use std::fs::{self, File, OpenOptions};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::AtomicUsize;
 use std::time::Instant;
 
 /// What the progress display is told after each step.
@@ -126,10 +127,6 @@ pub fn time_label(t: f64) -> String {
     let s = format!("{:.6}", t);
     let s = s.trim_end_matches('0').trim_end_matches('.');
     s.to_string()
-}
-
-fn due(t: f64, event: f64) -> bool {
-    t >= event - 1e-9 * event.abs().max(1e-12)
 }
 
 /// The writers of one run.
@@ -658,70 +655,72 @@ fn drive(
     let mut stop = StopReason::EndTime;
     let mut last_good = options.save_last_good.then(|| sim.snapshot());
     let mut latest = None;
-    let stop_signal = || {
-        options
-            .stop
-            .as_ref()
-            .map_or(0, |s| s.load(Ordering::SeqCst))
-    };
     while !due(sim.state.t, end) {
-        let signal = stop_signal();
-        if signal != 0 {
-            latest = Some(save_checkpoint(
-                sim,
-                law,
-                out.state(),
-                sim.snapshot(),
-                &out.dir,
-            )?);
-            stop = StopReason::Interrupted { signal };
-            break;
-        }
         let until = out.next_event(sim.state.t);
         let until = if due(sim.state.t, until) {
             end.min(out.next_event(sim.state.t + 1e-9 * end))
         } else {
             until
         };
-        let dt = match sim.next_dt(until) {
-            Ok(dt) => dt,
-            Err(e) => {
-                // Nothing has changed yet: the current state is the last good one.
-                let good = sim.snapshot();
-                return Err(save_failure(sim, out, law, good, e));
-            }
-        };
-        if let Some(s) = &mut last_good {
-            sim.snapshot_into(s);
-        }
-        if let Err(e) = sim.step(dt) {
-            return Err(match last_good.take() {
-                Some(good) => save_failure(sim, out, law, good, e),
-                None => e,
+        // After every step: the outputs due, the progress, a periodic checkpoint; a steady
+        // flow ends the run.
+        let mut each = |sim: &mut Simulation, step: &StepInfo| -> Result<Flow, EfsiError> {
+            let finished = due(sim.state.t, end) || sim.is_steady();
+            out.emit(sim, finished)?;
+            progress(&Progress {
+                t: sim.state.t,
+                end,
+                step: sim.state.step,
+                dt: step.dt,
+                wall: start.elapsed().as_secs_f64(),
             });
-        }
-        sim.snap_time(until);
-        let finished = due(sim.state.t, end) || sim.is_steady();
-        out.emit(sim, finished)?;
-        progress(&Progress {
-            t: sim.state.t,
-            end,
-            step: sim.state.step,
-            dt,
-            wall: start.elapsed().as_secs_f64(),
-        });
-        if out.checkpoint_due(sim.state.t) {
-            latest = Some(save_checkpoint(
-                sim,
-                law,
-                out.state(),
-                sim.snapshot(),
-                &out.dir,
-            )?);
-        }
-        if sim.is_steady() {
-            stop = StopReason::Steady;
-            break;
+            if out.checkpoint_due(sim.state.t) {
+                latest = Some(save_checkpoint(
+                    sim,
+                    law,
+                    out.state(),
+                    sim.snapshot(),
+                    &out.dir,
+                )?);
+            }
+            Ok(if sim.is_steady() {
+                Flow::Stop
+            } else {
+                Flow::Continue
+            })
+        };
+        let control = Advance {
+            stop: options.stop.as_deref(),
+            rollback: match &mut last_good {
+                Some(_) => Rollback::Step(&mut last_good),
+                None => Rollback::None,
+            },
+            on_step: Some(&mut each),
+            ..Advance::default()
+        };
+        match sim.advance_to(until, control) {
+            Ok(Advanced::Reached) => {}
+            Ok(Advanced::Halted) => {
+                stop = StopReason::Steady;
+                break;
+            }
+            Ok(Advanced::Stopped { signal }) => {
+                latest = Some(save_checkpoint(
+                    sim,
+                    law,
+                    out.state(),
+                    sim.snapshot(),
+                    &out.dir,
+                )?);
+                stop = StopReason::Interrupted { signal };
+                break;
+            }
+            // The simulation is back at the start of the failed step: the last good state.
+            Err(AdvanceError::Failed { error, good: true }) => {
+                let good = sim.snapshot();
+                return Err(save_failure(sim, out, law, good, error));
+            }
+            Err(e) => return Err(e.into()),
         }
     }
     let outcome = RunOutcome {
