@@ -700,3 +700,58 @@ def test_disk_in_a_cavity_fmu_with_the_lid_speed_as_an_input(fmu, ecos, tmp_path
     in_fmpy = fmpy_scene(path, h, n, {}, shaken, outputs)
     assert ecos_scene(ecos, path, h, n, {}, shaken, outputs) == in_fmpy
     assert in_fmpy[-1][outputs.index("kinetic_energy")] != r[-1][outputs.index("kinetic_energy")]
+
+
+# The reference results of the scene FMUs (FMI Cross-Check layout, like the sphere's).
+SCENE_REFERENCES = {
+    # model: (stop, step, input (name, function of t) or None, outputs, start values)
+    "oscillating_couette": (0.5, 2.0**-7, None, ["u_interface", "steps"], {}),
+    "disk_in_cavity": (0.125, 2.0**-5,
+                       ("boundaries.y_max.speed", lambda t: 1.0 if t < 0.0625 else 1.5),
+                       ["solid_x", "solid_y", "solid_u", "solid_v", "kinetic_energy",
+                        "elastic_energy", "steps"], {}),
+}
+
+
+@pytest.mark.parametrize("suffix", ["", "_fmi3"])
+@pytest.mark.parametrize("model", sorted(SCENE_REFERENCES))
+def test_scene_fmu_reference_results_are_reproduced(model, suffix):
+    """`fmu/compat/<model>/`: `_ref.opt`, `_in.csv` (where the FMU has an input) and
+    `_ref.csv`, reproduced bit for bit by both FMUs in fmpy. `EFSI_UPDATE_FMU_REFERENCE=1`
+    writes them from the FMI 2.0 run (start values: the FMU's, i.e. the scene's)."""
+    stop, step, inp, outputs, start = SCENE_REFERENCES[model]
+    folder = COMPAT / model
+    update = os.environ.get("EFSI_UPDATE_FMU_REFERENCE") == "1" and suffix == ""
+    n = round(stop / step)
+    times = [k * step for k in range(n + 1)]
+    if update:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"{model}_ref.opt").write_text(
+            f"StartTime, 0.0\nStopTime, {stop!r}\nStepSize, {step!r}\nRelTol, 1e-06\n")
+        if inp:
+            with open(folder / f"{model}_in.csv", "w") as f:
+                f.write(f'"time","{inp[0]}"\n')
+                for t in times:
+                    f.write(f"{t!r},{inp[1](t)!r}\n")
+    opt = read_opt(folder / f"{model}_ref.opt")
+    signal = None
+    if inp:
+        with open(folder / f"{model}_in.csv") as f:
+            rows = list(csv.reader(f))
+        signal = np.array([tuple(float(x) for x in r) for r in rows[1:]],
+                          dtype=[("time", np.float64), (inp[0], np.float64)])
+    r = simulate_fmu(FMU_DIR / f"{model}{suffix}.fmu", start_time=opt["StartTime"],
+                     stop_time=opt["StopTime"], output_interval=opt["StepSize"], input=signal,
+                     start_values=start, output=outputs)
+    if update:
+        with open(folder / f"{model}_ref.csv", "w") as f:
+            f.write(",".join(f'"{n}"' for n in ["time"] + outputs) + "\n")
+            for row in r:
+                f.write(",".join(repr(float(x)) if n != "steps" else str(int(x))
+                                 for n, x in zip(["time"] + outputs, row)) + "\n")
+    with open(folder / f"{model}_ref.csv") as f:
+        ref = list(csv.DictReader(f))
+    assert len(ref[0]) <= 10 and len(ref) == len(r)
+    for name in ["time"] + outputs:
+        want = np.array([float(row[name]) for row in ref])
+        assert np.array_equal(r[name], want), f"{name} differs from fmu/compat/{model}/{model}_ref.csv"
