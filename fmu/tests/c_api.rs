@@ -470,6 +470,40 @@ fn fmi3_refuses_a_bad_parameter_and_names_it_then_is_in_the_error_state() {
     f.do_step(0.0, H);
 }
 
+/// `refine` is `efsi run --refine`: refine = 0.6 on the default 23 × 47 grid is the 14 × 28
+/// grid (rounded), bit for bit; outside its range it is refused by name.
+#[test]
+fn the_refine_parameter_scales_the_grid_as_efsi_run_refine() {
+    let fmu = Extracted::new();
+    let by_grid = Fmi3::new(&fmu);
+    assert_eq!(by_grid.setup(None, 0.0192), OK, "{}", by_grid.last());
+    let by_refine = Fmi3::new(&fmu);
+    assert_eq!(by_refine.set_real(vr("refine"), 20.0), DISCARD);
+    assert!(
+        by_refine
+            .last()
+            .contains("parameter `refine` = 20: outside its range [0.1, 10]"),
+        "{}",
+        by_refine.last()
+    );
+    assert_eq!(by_refine.set_real(vr("refine"), 0.6), OK);
+    assert_eq!(by_refine.set_real(vr("solid.shape.center[1]"), 0.025), OK);
+    assert_eq!(by_refine.enter_init(None), OK);
+    assert_eq!(
+        by_refine.call("fmi3ExitInitializationMode"),
+        OK,
+        "{}",
+        by_refine.last()
+    );
+    for k in 0..3 {
+        by_grid.do_step(k as f64 * H, H);
+        by_refine.do_step(k as f64 * H, H);
+        assert_eq!(by_refine.reals(&outputs()), by_grid.reals(&outputs()));
+        assert_eq!(by_refine.steps(), by_grid.steps());
+    }
+    assert!(by_grid.steps() > 0);
+}
+
 #[test]
 fn a_null_or_unknown_instance_is_an_error_not_a_crash() {
     let fmu = Extracted::new();
