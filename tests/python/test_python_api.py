@@ -192,6 +192,13 @@ def test_write_vtk_is_efsi_runs_file(tmp_path):
     assert np.array_equal(p, sim.field("p")[0].ravel())
     with pytest.raises(efsi.EfsiError):
         sim.write_vtk(path)  # a file, not a folder
+    # A folder holding outputs is refused, as efsi run refuses it, unless told to replace them.
+    sim.advance_to(0.35)
+    with pytest.raises(efsi.EfsiError, match="--overwrite|overwrite"):
+        sim.write_vtk(tmp_path / "out")
+    assert path.is_file()
+    again = Path(sim.write_vtk(tmp_path / "out", overwrite=True))
+    assert again.is_file() and not path.is_file()
 
 
 def test_an_unstable_run_raises_unstable_error_with_stage_field_and_cell():
