@@ -88,6 +88,10 @@ enum Command {
         /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Replace the outputs of an earlier run in the output folder (run.json, probes.csv,
+        /// fields.pvd, VTK files, profiles, its checkpoint); without it such a folder is refused.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
@@ -149,6 +153,18 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Run a scene over a grid of settings as Dask tasks: `efsi sweep SCENE --grid PATH=V1,V2 …
+    /// [--scheduler ADDRESS] [--out FILE]`.
+    ///
+    /// Runs `python -m efsi sweep` of the efsi Python package (the interpreter: $EFSI_PYTHON,
+    /// else python3), which prints the table and writes it as CSV or Parquet; `--help` there
+    /// lists the options. Without --scheduler the runs go to a LocalCluster on this machine.
+    #[command(disable_help_flag = true)]
+    Sweep {
+        /// The scene file and the sweep's options, passed on.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 0..)]
+        args: Vec<std::ffi::OsString>,
+    },
 }
 
 fn load(path: &Path, overrides: &[Override]) -> Result<Simulation, EfsiError> {
@@ -181,6 +197,7 @@ fn main() -> ExitCode {
             quiet,
             checkpoint_every,
             threads,
+            overwrite,
         } => {
             // The run loop runs on a worker of the pool, so the stages' parallel loops start
             // from inside it (cheaper than injecting each from outside, and allocation-free).
@@ -197,6 +214,7 @@ fn main() -> ExitCode {
                         print_schedule,
                         quiet,
                         checkpoint_every,
+                        overwrite,
                     )
                 }),
                 Err(e) => {
@@ -247,6 +265,7 @@ fn main() -> ExitCode {
             check: false,
         } => return list_laws(&paths),
         Command::Laws { paths, check: true } => return check_laws(&paths),
+        Command::Sweep { args } => return sweep(&args),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,
@@ -260,7 +279,7 @@ fn main() -> ExitCode {
 
 /// Run options with a stop flag that SIGINT and SIGTERM set to their number. A second signal
 /// while the first is being handled exits at once (128 + signal).
-fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
+fn options(checkpoint_every: Option<f64>, overwrite: bool) -> Result<RunOptions, EfsiError> {
     if let Some(t) = checkpoint_every
         && !(t.is_finite() && t > 0.0)
     {
@@ -285,6 +304,7 @@ fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
         checkpoint_every,
         stop: Some(stop),
         save_last_good: true,
+        overwrite,
     })
 }
 
@@ -319,7 +339,7 @@ fn resume_run(
     quiet: bool,
     checkpoint_every: Option<f64>,
 ) -> Result<Option<usize>, EfsiError> {
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, false)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
@@ -336,6 +356,7 @@ fn run_scene(
     print_schedule: bool,
     quiet: bool,
     checkpoint_every: Option<f64>,
+    overwrite: bool,
 ) -> Result<Option<usize>, EfsiError> {
     let mut sim = load(path, overrides)?;
     if print_schedule {
@@ -345,7 +366,7 @@ fn run_scene(
     let dir = out
         .or_else(|| sim.scene.output.folder.clone())
         .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, overwrite)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
@@ -464,6 +485,35 @@ fn check_laws(paths: &[PathBuf]) -> ExitCode {
         ExitCode::from(2)
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+/// `efsi sweep`: hand over to the Python package's `python -m efsi sweep` (exit code 2 if the
+/// interpreter cannot be started).
+fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
+    let python = std::env::var_os("EFSI_PYTHON").unwrap_or_else(|| "python3".into());
+    let mut c = std::process::Command::new(&python);
+    c.args(["-m", "efsi", "sweep"]).args(args);
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt as _;
+        let e = c.exec();
+        eprintln!(
+            "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+            Path::new(&python).display()
+        );
+        ExitCode::from(2)
+    }
+    #[cfg(not(unix))]
+    match c.status() {
+        Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
+        Err(e) => {
+            eprintln!(
+                "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+                Path::new(&python).display()
+            );
+            ExitCode::from(2)
+        }
     }
 }
 
