@@ -115,6 +115,12 @@ enum Command {
         #[command(flatten)]
         overrides: SceneOverrides,
     },
+    /// Describe a run's VTK files: format, axes, units and every array (location, components
+    /// in file order, meaning, unit), from the `vtk` section of DIR/run.json.
+    DescribeOutput {
+        /// The run's output folder.
+        dir: PathBuf,
+    },
     /// Plot a run without ParaView: PNGs of the probe time series and of a field.
     ///
     /// Writes OUT/probes.png (every probes.csv column against time) and
@@ -252,6 +258,18 @@ fn main() -> ExitCode {
                     for f in files {
                         out!("wrote {}", f.display());
                     }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Command::DescribeOutput { dir } => {
+            return match describe_output(&dir) {
+                Ok(text) => {
+                    out!("{text}");
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
@@ -436,6 +454,50 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
         }
         _ => None,
     }
+}
+
+/// `efsi describe-output DIR`: the `vtk` section of `DIR/run.json` as text.
+fn describe_output(dir: &Path) -> Result<String, String> {
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let vtk = json.get("vtk").ok_or_else(|| {
+        format!(
+            "{}: no `vtk` section (written by an older efsi?)",
+            path.display()
+        )
+    })?;
+    let s = |v: &serde_json::Value| v.as_str().map_or_else(|| v.to_string(), str::to_string);
+    let mut out = format!(
+        "VTK files of {}: {} arrays, compression {}, point data {}\n",
+        dir.display(),
+        s(&vtk["precision"]),
+        s(&vtk["compression"]),
+        vtk["point_data"]
+    );
+    if let Some(notes) = vtk["field_data"].as_object() {
+        for (k, v) in notes {
+            out.push_str(&format!("{k}: {}\n", s(v)));
+        }
+    }
+    for a in vtk["arrays"].as_array().into_iter().flatten() {
+        let components: Vec<String> = a["components"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(s)
+            .collect();
+        out.push_str(&format!(
+            "\n{} ({}; {}) [{}]\n  {}\n",
+            s(&a["name"]),
+            s(&a["location"]),
+            components.join(", "),
+            s(&a["unit"]),
+            s(&a["meaning"])
+        ));
+    }
+    Ok(out.trim_end().to_string())
 }
 
 /// `efsi laws --check`: the tangent check of each library in `paths` (every law found if

@@ -252,3 +252,35 @@ fn profile_past_a_steady_stop_is_written_at_the_end_and_reported() {
         assert!(err.contains(&format!("warning: {want}")), "{err}");
     }
 }
+
+/// `efsi describe-output DIR` prints run.json's description of the VTK files: axes, units and
+/// each array with its components and unit; a folder without run.json is refused.
+#[test]
+fn describe_output_documents_every_array() {
+    let d = tmp("describe");
+    let path = write_scene(&d, GOOD);
+    let out_dir = d.join("out");
+    let o = efsi(&["run", &path, "--out", out_dir.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = efsi(&["describe-output", out_dir.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{text}");
+    for needle in [
+        "Float64 arrays, compression None, point data false",
+        "geometry: planar: X = x, Y = y",
+        "units: the scene's units",
+        "velocity (cell; u_x, u_y, 0) [m/s]",
+        "pressure (cell; p) [Pa]",
+        "divergence (cell; ∇·u) [1/s]",
+    ] {
+        assert!(text.contains(needle), "`{needle}` missing from:\n{text}");
+    }
+    // No solid: no solid_fraction, B or stress.
+    assert!(
+        !text.contains("\nsolid_fraction (") && !text.contains("\nB ("),
+        "{text}"
+    );
+    let o = efsi(&["describe-output", d.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("run.json"));
+}
