@@ -19,6 +19,8 @@ macro_rules! out {
     }};
 }
 
+mod plot;
+
 use clap::{Parser, Subcommand};
 use efsi_core::{EfsiError, Override, Scene, Simulation};
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
@@ -113,13 +115,49 @@ enum Command {
         #[command(flatten)]
         overrides: SceneOverrides,
     },
+    /// Describe a run's VTK files: format, axes, units and every array (location, components
+    /// in file order, meaning, unit), from the `vtk` section of DIR/run.json.
+    DescribeOutput {
+        /// The run's output folder.
+        dir: PathBuf,
+    },
+    /// Plot a run without ParaView: PNGs of the probe time series and of a field.
+    ///
+    /// Writes OUT/probes.png (every probes.csv column against time) and
+    /// OUT/FIELD_tTIME.png (a cell field at an output time, colour-mapped, with the solid's
+    /// φ = ½ contour over it when the run has a solid).
+    Plot {
+        /// The run's output folder.
+        dir: PathBuf,
+        /// The field (a VTK array: velocity, pressure, solid_fraction, B, stress, …; default
+        /// solid_fraction with a solid, else pressure).
+        #[arg(long)]
+        field: Option<String>,
+        /// The component of a vector or tensor field (default: a vector's magnitude, a
+        /// tensor's XX component).
+        #[arg(long)]
+        component: Option<usize>,
+        /// The output time to plot (the nearest written; default the last).
+        #[arg(long, value_name = "T")]
+        time: Option<f64>,
+        /// Where the PNGs go (default DIR/plots).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// List the constitutive laws, with their parameters, units, defaults and ranges.
     ///
     /// Shows the shipped laws found on the law search path ($EFSI_LAW_PATH, next to efsi, the
     /// build's target folders) and every law library given.
+    ///
+    /// With --check, runs the tangent check (the one every law passes when loaded: the tangent
+    /// against central differences of the stress at 26 deformed states, default parameters) on
+    /// each library given, or on every law found if none is; exit code 2 if a law fails it.
     Laws {
         /// Law libraries to describe as well (e.g. one built from plugins/law-template).
         paths: Vec<PathBuf>,
+        /// Run the tangent check on the libraries instead of describing them.
+        #[arg(long)]
+        check: bool,
     },
     /// Run a scene over a grid of settings as Dask tasks: `efsi sweep SCENE --grid PATH=V1,V2 …
     /// [--scheduler ADDRESS] [--out FILE]`.
@@ -202,7 +240,49 @@ fn main() -> ExitCode {
                 return ExitCode::from(1);
             }
         },
-        Command::Laws { paths } => return list_laws(&paths),
+        Command::Plot {
+            dir,
+            field,
+            component,
+            time,
+            out,
+        } => {
+            let out = out.unwrap_or_else(|| dir.join("plots"));
+            let request = plot::FieldRequest {
+                field,
+                component,
+                time,
+            };
+            return match plot::plot(&dir, &out, &request) {
+                Ok(files) => {
+                    for f in files {
+                        out!("wrote {}", f.display());
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Command::DescribeOutput { dir } => {
+            return match describe_output(&dir) {
+                Ok(text) => {
+                    out!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Command::Laws {
+            paths,
+            check: false,
+        } => return list_laws(&paths),
+        Command::Laws { paths, check: true } => return check_laws(&paths),
         Command::Sweep { args } => return sweep(&args),
     };
     match result {
@@ -339,6 +419,9 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
     if sim.rate_of_change().is_finite() {
         out!("final max|uⁿ⁺¹ − uⁿ|/Δt = {:.3e}", sim.rate_of_change());
     }
+    for w in &outcome.warnings {
+        eprintln!("warning: {w}");
+    }
     out!(
         "{:<16} {:>10} {:>16} {:>14}",
         "stage",
@@ -370,6 +453,100 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
             Some(signal)
         }
         _ => None,
+    }
+}
+
+/// `efsi describe-output DIR`: the `vtk` section of `DIR/run.json` as text.
+fn describe_output(dir: &Path) -> Result<String, String> {
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let vtk = json.get("vtk").ok_or_else(|| {
+        format!(
+            "{}: no `vtk` section (written by an older efsi?)",
+            path.display()
+        )
+    })?;
+    let s = |v: &serde_json::Value| v.as_str().map_or_else(|| v.to_string(), str::to_string);
+    let mut out = format!(
+        "VTK files of {}: {} arrays, compression {}, point data {}\n",
+        dir.display(),
+        s(&vtk["precision"]),
+        s(&vtk["compression"]),
+        vtk["point_data"]
+    );
+    if let Some(notes) = vtk["field_data"].as_object() {
+        for (k, v) in notes {
+            out.push_str(&format!("{k}: {}\n", s(v)));
+        }
+    }
+    for a in vtk["arrays"].as_array().into_iter().flatten() {
+        let components: Vec<String> = a["components"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(s)
+            .collect();
+        out.push_str(&format!(
+            "\n{} ({}; {}) [{}]\n  {}\n",
+            s(&a["name"]),
+            s(&a["location"]),
+            components.join(", "),
+            s(&a["unit"]),
+            s(&a["meaning"])
+        ));
+    }
+    Ok(out.trim_end().to_string())
+}
+
+/// `efsi laws --check`: the tangent check of each library in `paths` (every law found if
+/// none); exit code 2 if a law fails it or cannot be checked.
+fn check_laws(paths: &[PathBuf]) -> ExitCode {
+    let mut libraries = paths.to_vec();
+    let mut failed = false;
+    if libraries.is_empty() {
+        for law in efsi_laws_host::list_laws(&[]) {
+            match law {
+                Ok(info) => libraries.push(info.path),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    failed = true;
+                }
+            }
+        }
+    }
+    if libraries.is_empty() && !failed {
+        eprintln!("error: no laws found to check");
+        return ExitCode::from(2);
+    }
+    for path in &libraries {
+        match efsi_laws_host::check_library(path) {
+            Ok((info, check)) if check.passed() => {
+                out!(
+                    "{} ({}): tangent check passed — {check}",
+                    info.name,
+                    path.display()
+                );
+            }
+            Ok((info, check)) => {
+                eprintln!(
+                    "error: {} ({}): tangent check FAILED — {check}",
+                    info.name,
+                    path.display()
+                );
+                failed = true;
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    if failed {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
     }
 }
 

@@ -647,6 +647,9 @@ pub struct OutputSpec {
     /// Write VTK fields every this many seconds of simulated time (and at the start and end).
     #[serde(default)]
     pub vtk_every: Option<f64>,
+    /// What the VTK files hold and how: fields, precision, compression, point data.
+    #[serde(default)]
+    pub vtk: VtkOptions,
     /// Sample the probes every this many seconds (default: every step).
     #[serde(default)]
     pub probe_every: Option<f64>,
@@ -656,6 +659,61 @@ pub struct OutputSpec {
     /// Line profiles, written to `profiles/<name>_t<time>.csv`.
     #[serde(default)]
     pub profiles: Vec<ProfileSpec>,
+}
+
+/// The arrays a VTK file can hold, by name (`output.vtk.fields`): `velocity`, `pressure`,
+/// `density`, `viscosity`, `divergence` always; `solid_fraction` with a solid; `B` (that is
+/// B̃ = φ^{1/2} B) and `stress` (the elastic extra stress) with a solid that has a law. The
+/// README's output section documents each one's location, components, meaning and unit.
+pub const VTK_FIELDS: &[&str] = &[
+    "velocity",
+    "pressure",
+    "density",
+    "viscosity",
+    "divergence",
+    "solid_fraction",
+    "B",
+    "stress",
+];
+
+/// How the VTK field files are written (`output.vtk`); the defaults write every array as
+/// `Float64` cell data, uncompressed (bit-exact values).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VtkOptions {
+    /// The arrays to write, by name (see [`VTK_FIELDS`]); default: every array the scene has.
+    #[serde(default)]
+    pub fields: Option<Vec<String>>,
+    /// The floating-point type of the arrays (coordinates and time stay `Float64`).
+    #[serde(default)]
+    pub precision: VtkPrecision,
+    /// Compression of the appended binary data.
+    #[serde(default)]
+    pub compression: VtkCompression,
+    /// Also write each array as point data, at the grid's nodes (each node the mean of the
+    /// cells around it), beside the cell data — for smooth contours and surfaces.
+    #[serde(default)]
+    pub point_data: bool,
+}
+
+/// The floating-point type of VTK arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkPrecision {
+    /// 8 bytes per value, the simulation's values exactly.
+    #[default]
+    Float64,
+    /// 4 bytes per value, rounded to single precision (≈ 7 significant digits).
+    Float32,
+}
+
+/// Compression of VTK's appended binary data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkCompression {
+    /// Raw blocks.
+    #[default]
+    None,
+    /// zlib (deflate), VTK's `vtkZLibDataCompressor`: every VTK/ParaView reader opens it.
+    Zlib,
 }
 
 /// A probe: a time series written as columns of `probes.csv`.
@@ -692,20 +750,24 @@ pub enum ProbeSpec {
     /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
-    /// wall's cells that hold solid, `p_a` the mean pressure of the wall's pure-fluid cells and
-    /// `τ_nn` the elastic normal stress (the viscous one vanishes on a no-slip wall); per radian
-    /// in axisymmetric geometry (×2π for the whole body). Column `contact_force`.
+    /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
+    /// column `contact_force`. A contact cell is a cell of the first row along the wall that
+    /// holds a solid fraction φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less
+    /// carries no deformation) and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean
+    /// pressure of the row's other cells, `τ_nn` the elastic normal stress (the viscous one
+    /// vanishes on a no-slip wall). The criterion is absolute: a trace of solid (φ ≈ 1e-18)
+    /// left by the interface advection is no contact, and without a contact cell — before
+    /// touch-down, after lift-off — the probe is exactly 0. A body pressed on a no-slip wall
+    /// keeps a thin air film, thinner than a cell, under it: the film carries the load, so a
+    /// partly filled cell counts.
     ContactForce {
         /// The wall (`YMin` is the substrate z = z_min in axisymmetric scenes).
         wall: Side,
     },
     /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
-    /// distance along the wall from its start to the outer edge of the last wall cell that
-    /// holds solid and presses on the wall with more than 1 % of the peak contact traction
-    /// (`p − p_a − τ_nn`, as [`ProbeSpec::ContactForce`]); 0 without contact. Judged by
-    /// traction rather than by the solid fraction because a thin air film, thinner than a
-    /// cell, stays under a body pressed on a no-slip wall and carries the load. Column
-    /// `contact_radius`.
+    /// distance along the wall from its start to the outer edge of the last contact cell (as
+    /// defined at [`ProbeSpec::ContactForce`]: φ ≥ 1e-3 and pressing on the wall); exactly 0
+    /// without one. Column `contact_radius`.
     ContactRadius {
         /// The wall.
         wall: Side,
@@ -1076,6 +1138,39 @@ impl Scene {
                 }
             }
         }
+        if let Some(fields) = &o.vtk.fields {
+            let law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
+            if fields.is_empty() {
+                return err(
+                    "output.vtk.fields",
+                    "must name at least one field (leave it out for all of them)",
+                );
+            }
+            for (k, f) in fields.iter().enumerate() {
+                let at = format!("output.vtk.fields[{k}]");
+                if !VTK_FIELDS.contains(&f.as_str()) {
+                    return err(
+                        &at,
+                        format!("unknown field `{f}`, expected one of {VTK_FIELDS:?}"),
+                    );
+                }
+                if fields[..k].contains(f) {
+                    return err(&at, format!("`{f}` is listed twice"));
+                }
+                if f == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &at,
+                        "`solid_fraction` needs a solid, and the scene has none",
+                    );
+                }
+                if (f == "B" || f == "stress") && !law {
+                    return err(
+                        &at,
+                        format!("`{f}` needs a solid with a law, and the scene has none"),
+                    );
+                }
+            }
+        }
         let inside = |p: (f64, f64)| {
             p.0 >= self.domain.x.0
                 && p.0 <= self.domain.x.1
@@ -1221,6 +1316,56 @@ mod tests {
         let msg = e.to_string();
         assert!(msg.starts_with("scene.ron:6:"), "{msg}");
         assert!(msg.contains("colour"), "{msg}");
+    }
+
+    #[test]
+    fn vtk_options_load_round_trip_and_are_checked_by_name() {
+        let with = |vtk: &str| {
+            load(&MIN.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (vtk_every: 0.5, vtk: {vtk}),"),
+            ))
+        };
+        let s = with(r#"(fields: ["velocity", "pressure"], precision: Float32, compression: Zlib, point_data: true)"#)
+            .unwrap();
+        let v = &s.output.vtk;
+        assert_eq!(
+            v.fields.as_deref(),
+            Some(&["velocity".to_string(), "pressure".to_string()][..])
+        );
+        assert_eq!(
+            (v.precision, v.compression, v.point_data),
+            (VtkPrecision::Float32, VtkCompression::Zlib, true)
+        );
+        assert_eq!(&load(&s.to_ron()).unwrap().output.vtk, v);
+        // The defaults: every array, Float64, raw, cell data only.
+        assert_eq!(load(MIN).unwrap().output.vtk, VtkOptions::default());
+        for (vtk, needles) in [
+            (
+                r#"(fields: ["velocity", "temperature"])"#,
+                &["output.vtk.fields[1]", "unknown field `temperature`"][..],
+            ),
+            (
+                r#"(fields: ["pressure", "pressure"])"#,
+                &["output.vtk.fields[1]", "listed twice"],
+            ),
+            (r#"(fields: [])"#, &["output.vtk.fields", "at least one"]),
+            (
+                r#"(fields: ["solid_fraction"])"#,
+                &["output.vtk.fields[0]", "needs a solid"],
+            ),
+            (
+                r#"(fields: ["B"])"#,
+                &["output.vtk.fields[0]", "needs a solid with a law"],
+            ),
+            (r#"(precision: Float16)"#, &["Float16"]),
+            (r#"(compression: Gzip)"#, &["Gzip"]),
+        ] {
+            let e = with(vtk).unwrap_err().to_string();
+            for n in needles {
+                assert!(e.contains(n), "{vtk}: expected `{n}` in: {e}");
+            }
+        }
     }
 
     #[test]

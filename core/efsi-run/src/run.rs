@@ -5,9 +5,13 @@
 //! - `fields/<name>_<step>.vtr` and `fields.pvd` (VTK XML for ParaView; the collection is
 //!   rewritten after each file, so it is valid at every moment of the run);
 //! - `probes.csv`: header `t,<columns…>`, one row per sample;
-//! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields;
+//! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields,
+//!   at each of the profile's `at` times, or at the end if it has none; a run that ends (end
+//!   time or steady state) before some of them writes the profile at its end instead and says
+//!   so ([`RunOutcome::warnings`], `run.json`'s `warnings`);
 //! - `run.json`: the effective scene (the file's with the overrides applied) and the
-//!   overrides (`set PATH=VALUE`, `refine F`), efsi version, steps, wall time, wall time per stage;
+//!   overrides (`set PATH=VALUE`, `refine F`), efsi version, steps, wall time, wall time per
+//!   stage, warnings;
 //! - `checkpoint/latest.efsick`: the latest checkpoint ([`crate::checkpoint`]), written every
 //!   [`RunOptions::checkpoint_every`] of simulated time (at the end of the first step that
 //!   reaches each multiple: checkpoints never change Δt, so a run with them is bit-identical to
@@ -30,10 +34,9 @@
 
 use crate::checkpoint::{self, Checkpoint, CheckpointFile, LawIdentity, OutputState};
 use crate::lock::FolderLock;
-use crate::output::vtk::{CellArray, PvdCollection, write_vtr};
+use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
 use crate::probes;
 use efsi_core::error::EfsiError;
-use efsi_core::field::Field;
 use efsi_core::grid::Grid;
 use efsi_core::scene::{ProbeSpec, ProfileSpec, Scene};
 use efsi_core::schedule::StagePlugin;
@@ -125,6 +128,8 @@ pub struct RunOutcome {
     pub resumed_from: Option<(u64, f64, String)>,
     /// The latest checkpoint written, if any.
     pub checkpoint: Option<PathBuf>,
+    /// What the user should know about the outputs ([`Outputs::warnings`]).
+    pub warnings: Vec<String>,
 }
 
 /// Format a time for file names: shortest decimal, e.g. `0.5`, `30`, `2.8`.
@@ -138,6 +143,7 @@ pub fn time_label(t: f64) -> String {
 pub struct Outputs {
     dir: PathBuf,
     vtk_every: Option<f64>,
+    vtk: efsi_core::scene::VtkOptions,
     vtk_count: u64,
     pvd: PvdCollection,
     probe_every: Option<f64>,
@@ -151,6 +157,7 @@ pub struct Outputs {
     end: f64,
     checkpoint_every: Option<f64>,
     checkpoint_count: u64,
+    warnings: Vec<String>,
     run_id: String,
     /// The bookkeeping at the start of the latest [`Outputs::emit`] (see [`Outputs::state_before_emit`]).
     mark: Mark,
@@ -335,6 +342,7 @@ impl Outputs {
         Ok(Outputs {
             dir: dir.to_path_buf(),
             vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
             vtk_count: 0,
             pvd,
             probe_every: o.probe_every,
@@ -348,6 +356,7 @@ impl Outputs {
             end: sim.scene.time.end,
             checkpoint_every,
             checkpoint_count: 1,
+            warnings: Vec::new(),
             run_id: new_run_id(dir),
             mark: Mark::default(),
             _lock: lock,
@@ -416,6 +425,7 @@ impl Outputs {
         Ok(Outputs {
             dir: dir.to_path_buf(),
             vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
             vtk_count: state.vtk_count,
             pvd,
             probe_every: o.probe_every,
@@ -429,6 +439,7 @@ impl Outputs {
             end: sim.scene.time.end,
             checkpoint_every,
             checkpoint_count: state.checkpoint_count,
+            warnings: Vec::new(),
             run_id: state.run_id.clone(),
             mark: Mark::default(),
             _lock: lock,
@@ -556,6 +567,21 @@ impl Outputs {
                     self.mark.popped.push((k, tt));
                 }
             }
+            // The run ends (at its end time or a steady state) before some of the profile's
+            // times: the profile is written now instead, and the run says so.
+            if last && !self.profiles[k].1.is_empty() {
+                let missed = std::mem::take(&mut self.profiles[k].1);
+                self.mark.popped.extend(missed.iter().map(|&tt| (k, tt)));
+                let file = self.write_profile(k, sim)?;
+                let ProfileSpec::Line { name, .. } = &self.profiles[k].0;
+                let times: Vec<String> = missed.iter().map(|&x| time_label(x)).collect();
+                self.warnings.push(format!(
+                    "profile `{name}`: the run ended at t = {} before its time(s) {}; written at the end instead: {}",
+                    time_label(t),
+                    times.join(", "),
+                    file.display()
+                ));
+            }
         }
         Ok(())
     }
@@ -569,75 +595,26 @@ impl Outputs {
         name: &str,
         suffix: &str,
     ) -> Result<PathBuf, EfsiError> {
-        let (nx, ny) = (grid.nx, grid.ny);
-        let n = nx * ny;
-        let mut vel = vec![0.0; 3 * n];
-        let mut div = vec![0.0; n];
-        let mut scalars: Vec<(&str, Vec<f64>)> = vec![
-            ("pressure", Vec::with_capacity(n)),
-            ("density", Vec::with_capacity(n)),
-            ("viscosity", Vec::with_capacity(n)),
-        ];
-        if state.phi.is_some() {
-            scalars.push(("solid_fraction", Vec::with_capacity(n)));
-        }
-        // Axisymmetric output is the r–z slice in the X–Z plane (u_z goes to the Z component).
-        let vy = if grid.is_axisymmetric() { 2 } else { 1 };
-        for j in 0..ny as isize {
-            for i in 0..nx as isize {
-                let k = j as usize * nx + i as usize;
-                let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
-                vel[3 * k] = a;
-                vel[3 * k + vy] = b;
-                div[k] = efsi_core::ops::div(grid, &state.u, &state.v, i, j);
-                scalars[0].1.push(state.p[(i, j)]);
-                scalars[1].1.push(state.rho[(i, j)]);
-                scalars[2].1.push(state.mu[(i, j)]);
-                if let Some(phi) = &state.phi {
-                    scalars[3].1.push(phi[(i, j)]);
-                }
-            }
-        }
-        // B̃ = φ^{1/2} B and the elastic stress as VTK symmetric tensors.
-        let (mut btilde, mut stress) = (Vec::new(), Vec::new());
-        if let (Some(d), Some(phi)) = (&state.deformation, &state.phi) {
-            btilde = vtk_tensor(grid, &d.b, Some(phi));
-            stress = vtk_tensor(grid, &d.stress, None);
-        }
-        let mut arrays = vec![
-            CellArray {
-                name: "velocity",
-                components: 3,
-                values: &vel,
-            },
-            CellArray {
-                name: "divergence",
-                components: 1,
-                values: &div,
-            },
-        ];
-        if !btilde.is_empty() {
-            arrays.push(CellArray {
-                name: "B",
-                components: 6,
-                values: &btilde,
-            });
-            arrays.push(CellArray {
-                name: "stress",
-                components: 6,
-                values: &stress,
-            });
-        }
-        for (nm, v) in &scalars {
-            arrays.push(CellArray {
-                name: nm,
-                components: 1,
-                values: v,
-            });
-        }
+        let options = &self.vtk;
+        let data = crate::output::fields::arrays(grid, state, options);
+        let arrays: Vec<CellArray> = data
+            .iter()
+            .map(|(name, components, values)| CellArray {
+                name,
+                components: *components,
+                values,
+            })
+            .collect();
+        let format = VtrFormat {
+            precision: options.precision,
+            compression: options.compression,
+            point_data: options.point_data,
+        };
+        let notes = crate::output::fields::notes(grid.geometry);
         let file = format!("{name}_{:06}{suffix}.vtr", state.step);
         let path = self.dir.join("fields").join(&file);
-        write_vtr(&path, grid, state.t, &arrays).map_err(|e| EfsiError::io(&path, e))?;
+        write_vtr_with(&path, grid, state.t, &arrays, &format, &notes)
+            .map_err(|e| EfsiError::io(&path, e))?;
         let rel = format!("fields/{file}");
         self.pvd
             .add(state.t, &rel)
@@ -645,7 +622,8 @@ impl Outputs {
         Ok(path)
     }
 
-    fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<(), EfsiError> {
+    /// Write profile `k` at the simulation's time; returns the file's path.
+    fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<PathBuf, EfsiError> {
         let ProfileSpec::Line {
             name,
             from,
@@ -673,7 +651,14 @@ impl Outputs {
             text.push('\n');
         }
         crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| EfsiError::io(&path, e))
+            .map_err(|e| EfsiError::io(&path, e))?;
+        Ok(path)
+    }
+
+    /// What the outputs have to tell the user about this run (a profile written at the end
+    /// instead of at its times), in the order it happened; also in `run.json`'s `warnings`.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// Write `run.json` for a finished or stopped run.
@@ -707,6 +692,8 @@ impl Outputs {
             "scene_path": sim.scene_path.display().to_string(),
             "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
             "stop": stop,
+            "warnings": self.warnings,
+            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk),
             "t_end": sim.state.t,
             "steps": sim.state.step,
             "steps_this_run": steps_this_run,
@@ -992,6 +979,7 @@ fn drive(
         steps_this_run: sim.state.step - first_step,
         resumed_from,
         checkpoint: latest,
+        warnings: out.warnings().to_vec(),
     };
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
@@ -1015,32 +1003,6 @@ fn failed(
         start.elapsed().as_secs_f64(),
     );
     error
-}
-
-/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
-/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
-/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
-fn vtk_tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut out = vec![0.0; 6 * nx * ny];
-    let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
-        (0, 2, 1, 5)
-    } else {
-        (0, 1, 2, 3)
-    };
-    for j in 0..ny as isize {
-        for i in 0..nx as isize {
-            let k = 6 * (j as usize * nx + i as usize);
-            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
-            let t12 =
-                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
-            out[k + c11] = w * t[0][(i, j)];
-            out[k + c22] = w * t[1][(i, j)];
-            out[k + c33] = w * t[2][(i, j)];
-            out[k + c12] = w * t12;
-        }
-    }
-    out
 }
 
 /// A step failed with `error`: write the last good state `good` as VTK (when the scene writes

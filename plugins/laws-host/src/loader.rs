@@ -355,7 +355,64 @@ pub fn load_law(
     scene_dir: &Path,
 ) -> Result<LoadedLaw, LawError> {
     let path = resolve_law(name, scene_dir)?;
-    let opened = open(&path, name)?;
+    let mut law = instantiate(&path, name, parameters)?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check at load failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    if !check.passed() {
+        let (a, b) = check.worst_entry;
+        return Err(law.error(format!(
+            "refused: its tangent disagrees with finite differences of its stress ({}): at B̃ = {:?}, ∂τ{}/∂B̃{} is {:.6e} but the stress gives {:.6e} — relative error {:.3e} > tolerance {FD_TANGENT_TOLERANCE:e}; fix the law's tangent (or its stress)",
+            describe_values(&law.info, &law.values),
+            check.worst_state,
+            COMPONENTS[a],
+            COMPONENTS[b],
+            check.tangent,
+            check.finite_difference,
+            check.worst_relative_error,
+        )));
+    }
+    law.check = Some(check);
+    Ok(law)
+}
+
+/// The tangent check of the law in the library at `path`, created with its default parameters
+/// (`efsi laws --check`): the law's description and the check's outcome, passed or not
+/// ([`TangentCheck::passed`]). An error if the library cannot be loaded, the law cannot be
+/// created or cannot evaluate the check's states.
+pub fn check_library(path: &Path) -> Result<(LawInfo, TangentCheck), LawError> {
+    let label = path.display().to_string();
+    if !path.is_file() {
+        return Err(LawError {
+            law: label,
+            message: format!("library not found: {}", path.display()),
+            cell: None,
+        });
+    }
+    let law = instantiate(path, &label, &BTreeMap::new())?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    Ok((law.info.clone(), check))
+}
+
+/// Open the library at `path` (named `name` in errors) and create its law with `parameters`
+/// (by name, checked against the declared ranges; defaults for the others), without the
+/// tangent check.
+fn instantiate(
+    path: &Path,
+    name: &str,
+    parameters: &BTreeMap<String, f64>,
+) -> Result<LoadedLaw, LawError> {
+    let opened = open(path, name)?;
     let info = opened.info;
     let fail = |message: String| LawError {
         law: info.name.clone(),
@@ -412,7 +469,7 @@ pub fn load_law(
             err.text()
         )));
     };
-    let mut law = LoadedLaw {
+    Ok(LoadedLaw {
         info,
         values,
         handle,
@@ -420,29 +477,7 @@ pub fn load_law(
         destroy_fn: opened.destroy,
         check: None,
         _library: opened.library,
-    };
-    let check = check_tangent(&law).map_err(|e| {
-        law.error(format!(
-            "tangent check at load failed ({}): {}",
-            describe_values(&law.info, &law.values),
-            e.message
-        ))
-    })?;
-    if !check.passed() {
-        let (a, b) = check.worst_entry;
-        return Err(law.error(format!(
-            "refused: its tangent disagrees with finite differences of its stress ({}): at B̃ = {:?}, ∂τ{}/∂B̃{} is {:.6e} but the stress gives {:.6e} — relative error {:.3e} > tolerance {FD_TANGENT_TOLERANCE:e}; fix the law's tangent (or its stress)",
-            describe_values(&law.info, &law.values),
-            check.worst_state,
-            COMPONENTS[a],
-            COMPONENTS[b],
-            check.tangent,
-            check.finite_difference,
-            check.worst_relative_error,
-        )));
-    }
-    law.check = Some(check);
-    Ok(law)
+    })
 }
 
 /// Reads a law library's name and parameter table without creating the law (`efsi laws`).
