@@ -20,13 +20,17 @@
 //!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
 //!   medians of R runs (the 1- and N-thread runs alternate; the speed-up of each pair is
 //!   printed as a range and kept in the JSON), written to `DIR/bench.json` (default
-//!   `target/bench`). A benchmark, not a test: timings are never asserted.
+//!   `target/bench`). A benchmark, not a test: timings are never asserted. With `--roofline`
+//!   it also measures the machine's triad bandwidth and prints, per case and stage, the bytes
+//!   per cell-step of a compulsory-traffic model, the achieved bandwidth and its fraction of the
+//!   limit ([`roofline`]).
 //! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
 //!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
 //!   laws (profile `fmu-release`: release code, stripped) and package the scene as
 //!   `target/fmu/<name>.fmu` (FMI 2.0 Co-Simulation) and `target/fmu/<name>_fmi3.fmu` (FMI 3.0),
 //!   with their documentation and licence; without a scene, the sphere impact.
 
+mod roofline;
 mod zip;
 
 use std::path::{Path, PathBuf};
@@ -500,6 +504,7 @@ fn median_figures(runs: &[Figures]) -> Figures {
 fn bench(args: &[String]) -> Result<(), String> {
     let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
     let quick = args.iter().any(|a| a == "--quick");
+    let with_roofline = args.iter().any(|a| a == "--roofline");
     let out = value("--out")
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target/bench"));
@@ -535,7 +540,21 @@ fn bench(args: &[String]) -> Result<(), String> {
     if threads != 1 {
         pools.push(threads);
     }
+    // The bandwidth limits, measured in this run (main memory, last-level cache) per pool size.
+    let limits: Vec<(f64, f64)> = if with_roofline {
+        pools.iter().map(|&t| roofline::limits(t)).collect()
+    } else {
+        Vec::new()
+    };
+    for (&t, (mem, llc)) in pools.iter().zip(&limits) {
+        println!(
+            "triad, {t} thread(s): main memory {:.1} GB/s, last-level cache {:.1} GB/s",
+            mem / 1e9,
+            llc / 1e9
+        );
+    }
     let mut json = Vec::new();
+    let mut rows = Vec::new();
     println!(
         "{:<14} {:>3} {:>6} {:>10} {:>8}  per stage: ns/cell-step (solver iterations/step)",
         "case", "thr", "steps", "ns/cell·st", "speedup"
@@ -604,7 +623,47 @@ fn bench(args: &[String]) -> Result<(), String> {
                 base / f.total,
                 f.wall
             );
+            let roof = limits.get(k).map(|&(mem, llc)| {
+                let per_stage: Vec<serde_json::Value> = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, ns, it)| {
+                        let m = roofline::model(n)?;
+                        let b = roofline::bytes(m, *it);
+                        let bw = b / (ns * 1e-9);
+                        rows.push((c.name.clone(), t, n.clone(), *ns, b, bw, bw / mem, bw / llc));
+                        Some(serde_json::json!({
+                            "name": n, "bytes_per_cell_step": b, "achieved_bytes_per_s": bw,
+                            "fraction_of_memory_triad": bw / mem,
+                            "fraction_of_cache_triad": bw / llc,
+                        }))
+                    })
+                    .collect();
+                let total_bytes: f64 = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, _, it)| roofline::model(n).map(|m| roofline::bytes(m, *it)))
+                    .sum();
+                let bw = total_bytes / (f.total * 1e-9);
+                rows.push((
+                    c.name.clone(),
+                    t,
+                    "total".into(),
+                    f.total,
+                    total_bytes,
+                    bw,
+                    bw / mem,
+                    bw / llc,
+                ));
+                serde_json::json!({
+                    "memory_triad_bytes_per_s": mem, "cache_triad_bytes_per_s": llc,
+                    "bytes_per_cell_step": total_bytes, "achieved_bytes_per_s": bw,
+                    "fraction_of_memory_triad": bw / mem, "fraction_of_cache_triad": bw / llc,
+                    "stages": per_stage,
+                })
+            });
             json.push(serde_json::json!({
+                "roofline": roof,
                 "case": c.name,
                 "threads": t,
                 "cells": c.cells,
@@ -623,10 +682,28 @@ fn bench(args: &[String]) -> Result<(), String> {
             }));
         }
     }
+    if with_roofline {
+        println!(
+            "\nroofline (compulsory traffic model: xtask/src/roofline.rs)\n{:<14} {:>3} {:<12} {:>10} {:>10} {:>8} {:>8} {:>8}",
+            "case", "thr", "stage", "ns/cell·st", "B/cell·st", "GB/s", "of mem", "of LLC"
+        );
+        for (case, t, stage, ns, b, bw, fm, fc) in &rows {
+            println!(
+                "{case:<14} {t:>3} {stage:<12} {ns:>10.1} {b:>10.0} {:>8.2} {:>7.0}% {:>7.0}%",
+                bw / 1e9,
+                100.0 * fm,
+                100.0 * fc
+            );
+        }
+    }
     let path = out.join("bench.json");
     let text = serde_json::to_string_pretty(&serde_json::json!({
         "quick": quick,
         "threads": pools,
+        "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
+            "stage": m.stage, "values_per_cell_step": m.fixed,
+            "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
+        })).collect::<Vec<_>>(),
         "cases": json,
     }))
     .map_err(|e| e.to_string())?;
@@ -831,7 +908,7 @@ fn main() -> ExitCode {
         Some("bench-paper") => bench_paper(&args[1..]),
         Some("fmu") => fmu(&args[1..]).map(|_| ()),
         _ => Err(
-            "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--cases LIST] \
+            "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--roofline] [--cases LIST] \
              [--threads N] [--repeat R] [--out DIR] | bench-paper [--quick] [--case NAME]… \
              [--out DIR] | ghia DIR RE>"
                 .into(),
