@@ -1,8 +1,9 @@
 //! Project automation.
 //!
 //! - `cargo xtask test`: everything CI runs — formatting, clippy and rustdoc (warnings are
-//!   errors), the Rust test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
-//!   virtual environment under `target/venv` that it creates on first use.
+//!   errors), the Rust test suite, and the Python tests (VTK files read back by the official `vtk` wheel,
+//!   the FMUs, the `efsi` Python package built by maturin and installed there, sweeps on a local
+//!   Dask cluster) in a virtual environment under `target/venv` that it creates on first use.
 //! - `cargo xtask run SCENE [ARGS…]`: build the whole workspace in release (the `efsi` binary
 //!   and the law plugin libraries it loads) and run `efsi run SCENE ARGS…`.
 //! - `cargo xtask ghia DIR RE`: max |deviation| of a finished cavity run's last centreline
@@ -78,7 +79,7 @@ fn python_env() -> Result<PathBuf, String> {
         .arg(&req);
         run(
             c,
-            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy)",
+            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy, maturin, dask, pandas, pyarrow)",
         )?;
         std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
     }
@@ -243,6 +244,7 @@ fn test() -> Result<(), String> {
         "boundaries.y_max.speed=m/s",
     ]))?;
     let py = python_env()?;
+    install_python_package(&py)?;
     let mut c = Command::new(py);
     c.args(["-m", "pytest", "-q", "--durations=5", "tests/python"])
         .env("EFSI_BIN", root().join("target/debug/efsi"))
@@ -251,6 +253,45 @@ fn test() -> Result<(), String> {
             fmu2.parent().map(Path::to_path_buf).unwrap_or_default(),
         );
     run(c, "pytest tests/python")
+}
+
+/// Build the `efsi` Python package's wheel (python/, maturin with the test profile's settings:
+/// optimised, debug assertions on; its dependencies are the Rust suite's) into
+/// `target/wheels` and install it into the venv of `py`, replacing an earlier one.
+fn install_python_package(py: &Path) -> Result<(), String> {
+    let wheels = root().join("target/wheels");
+    let _ = std::fs::remove_dir_all(&wheels);
+    let mut c = Command::new(py);
+    c.args([
+        "-m",
+        "maturin",
+        "build",
+        "--quiet",
+        "--profile",
+        "test",
+        "-m",
+    ])
+    .arg(root().join("python/Cargo.toml"))
+    .arg("--out")
+    .arg(&wheels);
+    run(c, "build the efsi Python package (maturin)")?;
+    let wheel = std::fs::read_dir(&wheels)
+        .map_err(|e| format!("{}: {e}", wheels.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "whl"))
+        .ok_or_else(|| format!("{}: maturin left no wheel", wheels.display()))?;
+    let mut c = Command::new(py);
+    c.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+        "--no-deps",
+        "--force-reinstall",
+    ])
+    .arg(&wheel);
+    run(c, "install the efsi Python package into target/venv")
 }
 
 /// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`

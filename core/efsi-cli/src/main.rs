@@ -121,6 +121,18 @@ enum Command {
         /// Law libraries to describe as well (e.g. one built from plugins/law-template).
         paths: Vec<PathBuf>,
     },
+    /// Run a scene over a grid of settings as Dask tasks: `efsi sweep SCENE --grid PATH=V1,V2 …
+    /// [--scheduler ADDRESS] [--out FILE]`.
+    ///
+    /// Runs `python -m efsi sweep` of the efsi Python package (the interpreter: $EFSI_PYTHON,
+    /// else python3), which prints the table and writes it as CSV or Parquet; `--help` there
+    /// lists the options. Without --scheduler the runs go to a LocalCluster on this machine.
+    #[command(disable_help_flag = true)]
+    Sweep {
+        /// The scene file and the sweep's options, passed on.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 0..)]
+        args: Vec<std::ffi::OsString>,
+    },
 }
 
 fn load(path: &Path, overrides: &[Override]) -> Result<Simulation, EfsiError> {
@@ -191,6 +203,7 @@ fn main() -> ExitCode {
             }
         },
         Command::Laws { paths } => return list_laws(&paths),
+        Command::Sweep { args } => return sweep(&args),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,
@@ -357,6 +370,35 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
             Some(signal)
         }
         _ => None,
+    }
+}
+
+/// `efsi sweep`: hand over to the Python package's `python -m efsi sweep` (exit code 2 if the
+/// interpreter cannot be started).
+fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
+    let python = std::env::var_os("EFSI_PYTHON").unwrap_or_else(|| "python3".into());
+    let mut c = std::process::Command::new(&python);
+    c.args(["-m", "efsi", "sweep"]).args(args);
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt as _;
+        let e = c.exec();
+        eprintln!(
+            "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+            Path::new(&python).display()
+        );
+        ExitCode::from(2)
+    }
+    #[cfg(not(unix))]
+    match c.status() {
+        Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
+        Err(e) => {
+            eprintln!(
+                "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+                Path::new(&python).display()
+            );
+            ExitCode::from(2)
+        }
     }
 }
 
