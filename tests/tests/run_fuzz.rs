@@ -360,6 +360,9 @@ fn one_case(
         Ok(s) => s,
         Err(e) => {
             prop_assert!(e.exit_code() == 2 || e.exit_code() == 3, "{}\n{}", e, text);
+            if std::env::var_os("EFSI_RUN_FUZZ_SHOW").is_some() {
+                eprintln!("not built: {e}");
+            }
             tally.borrow_mut().refused_by_simulation += 1;
             let _ = std::fs::remove_dir_all(&case);
             return Ok(());
@@ -378,6 +381,9 @@ fn one_case(
         Ok(o) => o,
         Err(e) => {
             prop_assert!(e.exit_code() != 1, "an I/O error: {}\n{}", e, text);
+            if std::env::var_os("EFSI_RUN_FUZZ_SHOW").is_some() {
+                eprintln!("run failed: {e}\n{text}");
+            }
             let mut t = tally.borrow_mut();
             if e.exit_code() == 3 {
                 t.failed_numerically += 1;
@@ -665,6 +671,17 @@ fn defects_found_by_the_fuzzers_stay_fixed() {
     .to_string();
     assert!(
         e.contains("solid.shape: Disk: center must be finite, got (NaN, 0.5)"),
+        "{e}"
+    );
+    // A fluid of viscosity 1e308 ran into a conjugate gradient "not converged in 0 iterations
+    // (relative residual NaN)": the viscous coefficients overflowed.
+    let text = base("Disk(center: (0.5, 0.5), radius: 0.2)")
+        .replace("viscosity: 0.01", "viscosity: 1e308");
+    let e = Scene::from_str_at(&text, Path::new("r.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("fluid.viscosity: 1e308 makes the diffusion number μ·time.end/(ρh²)"),
         "{e}"
     );
     // Seeds 2 and 3 of the mutation fuzzer gave the same inputs (`Rng(seed | 1)`): covered by

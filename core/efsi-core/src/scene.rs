@@ -774,6 +774,10 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// The largest diffusion number μ·time.end/(ρh²) a scene may reach (1e200): far beyond any
+/// physical scene, and low enough that the viscous system's products stay finite.
+pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
+
 /// Field names that probes and profiles can sample.
 pub const FIELD_NAMES: &[&str] = &[
     "u",
@@ -973,8 +977,45 @@ impl Scene {
         if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
             return err(
                 "fluid.viscosity",
-                format!("must be a finite number ≥ 0, got {}", self.fluid.viscosity),
+                format!(
+                    "must be a finite number ≥ 0, got {}",
+                    num(self.fluid.viscosity)
+                ),
             );
+        }
+        // The viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end: beyond
+        // MAX_DIFFUSION_NUMBER their products overflow, and the solver starts from a NaN residual.
+        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        let mut viscous = vec![("fluid.viscosity", self.fluid.viscosity, self.fluid.density)];
+        if let Some(sd) = &self.solid
+            && let Some(mu) = sd.viscosity
+        {
+            viscous.push(("solid.viscosity", mu, sd.density));
+        }
+        for (f, mu, rho) in viscous {
+            let d = mu * self.time.end / (rho * h * h);
+            if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
+                         viscous system's coefficients would overflow",
+                        num(mu),
+                        num(d),
+                        MAX_DIFFUSION_NUMBER
+                    ),
+                );
+            }
+            if !d.is_finite() && mu.is_finite() && rho > 0.0 {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) overflow",
+                        num(mu)
+                    ),
+                );
+            }
         }
         if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
             return err("gravity", "must be finite");
