@@ -2,7 +2,7 @@
 //! (seed Eq. 12; θ = 1 backward Euler as the seed, θ = ½ Crank–Nicolson).
 //!
 //! **Operator.** `K(V) = vol·∇·(2μD)`, `D = ½(∇V + ∇Vᵀ)`, the one viscous operator of
-//! [`crate::viscous_operator`] (shared with the elastic stage and the block multigrid): normal
+//! `viscous_operator` (shared with the elastic stage and the block multigrid): normal
 //! stresses at cell centres with the cell viscosity, shear at corners with the harmonic mean of
 //! the four cells' viscosities, the hoop term in axisymmetric geometry; symmetric negative
 //! semi-definite, the full components u and v coupled through `∇Vᵀ` and variable μ.
