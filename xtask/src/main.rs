@@ -435,6 +435,8 @@ fn run_case(c: &Case, threads: usize, out: &Path) -> Result<Figures, String> {
         .arg("-q")
         .arg("--threads")
         .arg(threads.to_string())
+        // Repeats and reruns replace the case's earlier outputs.
+        .arg("--overwrite")
         .stdout(std::process::Stdio::null());
     let status = cmd
         .status()

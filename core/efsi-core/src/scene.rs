@@ -782,6 +782,24 @@ pub enum ProbeSpec {
 }
 
 impl ProbeSpec {
+    /// The probe's column names in `probes.csv`, in order.
+    pub fn columns(&self) -> Vec<String> {
+        match self {
+            ProbeSpec::Point { name, .. } => vec![name.clone()],
+            ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
+            ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
+            ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
+            ProbeSpec::MaxSpeed => vec!["max_speed".into()],
+            ProbeSpec::SolidVolume => vec!["solid_volume".into()],
+            ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
+            ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
+            ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
+            ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
+            ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
+            ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
+        }
+    }
+
     /// Whether the probe needs a solid in the scene.
     pub fn needs_solid(&self) -> bool {
         matches!(
@@ -796,6 +814,31 @@ impl ProbeSpec {
         )
     }
 }
+
+/// How deep values may nest in a scene file (RON's default, which keeps the reader off the
+/// end of its stack).
+pub const RECURSION_LIMIT: usize = 128;
+
+/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// The most points a line profile may have: a 100 000-line CSV file per output time, finer
+/// than any grid this solver runs (at most 1e4 cells across).
+pub const MAX_PROFILE_POINTS: usize = 100_000;
+
+/// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
+/// digits).
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// The largest diffusion number μ·time.end/(ρh²) a scene may reach (1e200): far beyond any
+/// physical scene, and low enough that the viscous system's products stay finite.
+pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
 
 /// Field names that probes and profiles can sample.
 pub const FIELD_NAMES: &[&str] = &[
@@ -854,11 +897,19 @@ impl Scene {
     pub(crate) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let opts = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        // A byte-order mark some editors put first is not part of the scene.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         opts.from_str(text).map_err(|e| SceneError::Syntax {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,
-            message: e.code.to_string(),
+            message: match e.code {
+                ron::Error::ExceededRecursionLimit => format!(
+                    "nested deeper than the scene reader allows ({RECURSION_LIMIT} levels): \
+                     flatten the shape (e.g. one Union of many shapes rather than Unions of Unions)"
+                ),
+                code => code.to_string(),
+            },
         })
     }
 
@@ -876,7 +927,10 @@ impl Scene {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                err(field, format!("must be a finite number > 0, got {v}"))
+                err(
+                    field,
+                    format!("must be a finite number > 0, got {}", num(v)),
+                )
             }
         }
         // The name is a folder (`out/<name>/`) and a file stem: nothing that leaves the folder,
@@ -928,7 +982,7 @@ impl Scene {
         if !(self.time.cfl > 0.0 && self.time.cfl <= 1.0) {
             return err(
                 "time.cfl",
-                format!("must be in (0, 1], got {}", self.time.cfl),
+                format!("must be in (0, 1], got {}", num(self.time.cfl)),
             );
         }
         for (f, v) in [
@@ -946,15 +1000,84 @@ impl Scene {
         {
             return err(
                 "time.dt_min",
-                format!("must not exceed time.dt_max ({hi}), got {lo}"),
+                format!("must not exceed time.dt_max ({}), got {}", num(hi), num(lo)),
+            );
+        }
+        let floor = self.time.dt_min_or_default();
+        for (f, v) in [
+            ("time.dt_max", self.time.dt_max),
+            ("time.fixed_dt", self.time.fixed_dt),
+        ] {
+            if let Some(v) = v
+                && v < floor
+                && self.time.dt_min.is_none()
+            {
+                return err(
+                    f,
+                    format!(
+                        "{} is below time.dt_min's default 1e-12·time.end = {}: every step would \
+                         be refused; set time.dt_min too",
+                        num(v),
+                        num(floor)
+                    ),
+                );
+            }
+        }
+        if let (Some(lo), Some(fixed)) = (self.time.dt_min, self.time.fixed_dt)
+            && fixed < lo
+        {
+            return err(
+                "time.fixed_dt",
+                format!(
+                    "{} is below time.dt_min = {}: every step would be refused",
+                    num(fixed),
+                    num(lo)
+                ),
             );
         }
         positive("fluid.density", self.fluid.density)?;
         if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
             return err(
                 "fluid.viscosity",
-                format!("must be a finite number ≥ 0, got {}", self.fluid.viscosity),
+                format!(
+                    "must be a finite number ≥ 0, got {}",
+                    num(self.fluid.viscosity)
+                ),
             );
+        }
+        // The viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end: beyond
+        // MAX_DIFFUSION_NUMBER their products overflow, and the solver starts from a NaN residual.
+        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        let mut viscous = vec![("fluid.viscosity", self.fluid.viscosity, self.fluid.density)];
+        if let Some(sd) = &self.solid
+            && let Some(mu) = sd.viscosity
+        {
+            viscous.push(("solid.viscosity", mu, sd.density));
+        }
+        for (f, mu, rho) in viscous {
+            let d = mu * self.time.end / (rho * h * h);
+            if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
+                         viscous system's coefficients would overflow",
+                        num(mu),
+                        num(d),
+                        MAX_DIFFUSION_NUMBER
+                    ),
+                );
+            }
+            if !d.is_finite() && mu.is_finite() && rho > 0.0 {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) overflow",
+                        num(mu)
+                    ),
+                );
+            }
         }
         if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
             return err("gravity", "must be finite");
@@ -1074,23 +1197,29 @@ impl Scene {
             );
         }
         // Numerics.
+        // A relative tolerance below the unit round-off can never be met.
+        let tolerance = |f: &str, tol: f64| {
+            if (f64::EPSILON..1.0).contains(&tol) {
+                Ok(())
+            } else {
+                err(
+                    f,
+                    format!(
+                        "must be in [{:e}, 1) (a relative residual below the unit round-off \
+                         cannot be reached), got {}",
+                        f64::EPSILON,
+                        num(tol)
+                    ),
+                )
+            }
+        };
         let p = &self.numerics.projection;
-        if !(p.tolerance > 0.0 && p.tolerance < 1.0) {
-            return err(
-                "numerics.projection.tolerance",
-                format!("must be in (0, 1), got {}", p.tolerance),
-            );
-        }
+        tolerance("numerics.projection.tolerance", p.tolerance)?;
         if p.max_iterations == 0 {
             return err("numerics.projection.max_iterations", "must be ≥ 1");
         }
         let el = &self.numerics.elastic;
-        if !(el.tolerance > 0.0 && el.tolerance < 1.0) {
-            return err(
-                "numerics.elastic.tolerance",
-                format!("must be in (0, 1), got {}", el.tolerance),
-            );
-        }
+        tolerance("numerics.elastic.tolerance", el.tolerance)?;
         if el.max_iterations == 0 {
             return err("numerics.elastic.max_iterations", "must be ≥ 1");
         }
@@ -1111,11 +1240,9 @@ impl Scene {
                 format!("must be in [0.5, 1], got {}", v.theta),
             );
         }
-        if !(v.tolerance > 0.0 && v.tolerance < 1.0) {
-            return err(
-                "numerics.viscous.tolerance",
-                format!("must be in (0, 1), got {}", v.tolerance),
-            );
+        tolerance("numerics.viscous.tolerance", v.tolerance)?;
+        if v.max_iterations == 0 {
+            return err("numerics.viscous.max_iterations", "must be ≥ 1");
         }
         // Outputs.
         let o = &self.output;
@@ -1177,16 +1304,69 @@ impl Scene {
                 && p.1 >= self.domain.y.0
                 && p.1 <= self.domain.y.1
         };
-        let mut names = std::collections::HashSet::new();
+        // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
+        let mut columns: std::collections::HashMap<String, usize> =
+            [("t".to_string(), usize::MAX)].into_iter().collect();
+        let has_law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
         for (k, probe) in o.probes.iter().enumerate() {
+            let f = format!("output.probes[{k}]");
             if probe.needs_solid() && self.solid.is_none() {
                 return err(
-                    &format!("output.probes[{k}]"),
+                    &f,
                     format!("{probe:?} needs a solid, and the scene has none"),
                 );
             }
-            if let ProbeSpec::Point { name, field, at } = probe {
-                let f = format!("output.probes[{k}]");
+            if *probe == ProbeSpec::ElasticEnergy && !has_law {
+                return err(
+                    &f,
+                    "ElasticEnergy needs a solid with a law (solid.law), and this solid has none",
+                );
+            }
+            if let ProbeSpec::SolidExtent { at } = probe
+                && !(at.is_finite() && *at >= self.domain.x.0 && *at <= self.domain.x.1)
+            {
+                return err(
+                    &format!("{f}.at"),
+                    format!(
+                        "x = {} is outside the domain's [{}, {}]",
+                        num(*at),
+                        num(self.domain.x.0),
+                        num(self.domain.x.1)
+                    ),
+                );
+            }
+            for c in probe.columns() {
+                if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
+                    return err(
+                        &format!("{f}.name"),
+                        format!(
+                            "must be a non-empty CSV column name without commas, quotes or \
+                             control characters, got {c:?}"
+                        ),
+                    );
+                }
+                if let Some(&other) = columns.get(&c) {
+                    let first = if other == usize::MAX {
+                        "the time column".to_string()
+                    } else {
+                        format!("output.probes[{other}]")
+                    };
+                    return err(
+                        &f,
+                        format!(
+                            "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
+                        ),
+                    );
+                }
+                columns.insert(c, k);
+            }
+            if let ProbeSpec::Point { field, at, .. } = probe {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.field"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
                 if !FIELD_NAMES.contains(&field.as_str()) {
                     return err(
                         &format!("{f}.field"),
@@ -1195,12 +1375,6 @@ impl Scene {
                 }
                 if !inside(*at) {
                     return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
-                }
-                if !names.insert(name.clone()) {
-                    return err(
-                        &format!("{f}.name"),
-                        format!("duplicate probe name `{name}`"),
-                    );
                 }
             }
         }
@@ -1221,13 +1395,22 @@ impl Scene {
                     format!("must be a unique file stem, got `{name}`"),
                 );
             }
-            if *points < 2 {
-                return err(&format!("{f}.points"), format!("must be ≥ 2, got {points}"));
+            if !(2..=MAX_PROFILE_POINTS).contains(points) {
+                return err(
+                    &format!("{f}.points"),
+                    format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
+                );
             }
             if !inside(*from) || !inside(*to) {
                 return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
             }
             for field in fields {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.fields"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
                 if !FIELD_NAMES.contains(&field.as_str()) {
                     return err(
                         &format!("{f}.fields"),

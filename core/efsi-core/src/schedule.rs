@@ -548,10 +548,22 @@ impl Pipeline {
 
     /// The largest Δt every stage allows, if any stage limits it.
     pub fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
+        self.limiting_stage(grid, state, cfl).map(|(_, dt)| dt)
+    }
+
+    /// The stage whose step limit is the smallest, with that limit (None if no stage limits Δt).
+    pub fn limiting_stage(
+        &self,
+        grid: &Grid,
+        state: &State,
+        cfl: f64,
+    ) -> Option<(&'static str, f64)> {
         self.entries
             .iter()
-            .filter_map(|e| e.stage.max_dt(grid, state, cfl))
-            .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))))
+            .filter_map(|e| e.stage.max_dt(grid, state, cfl).map(|d| (e.name, d)))
+            .fold(None, |m: Option<(&'static str, f64)>, d| {
+                Some(m.map_or(d, |m| if d.1 < m.1 { d } else { m }))
+            })
     }
 
     /// Run every stage once, in order. After each stage the ghosts of what it wrote are

@@ -18,7 +18,7 @@
 //! identity), output bookkeeping (ending with the run's identity), the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
 //! frame acceleration and the elastic energy), then named stage
-//! data). A 128² cavity checkpoints in ≈ 0.7 MB.
+//! data, then the energy guard's record). A 128² cavity checkpoints in ≈ 0.7 MB.
 //!
 //! Files are written atomically ([`crate::output::atomic`]): a reader or a resumed run sees
 //! the previous complete checkpoint or the new complete one, never a torn one; a truncated or
@@ -248,6 +248,7 @@ pub struct SnapshotRecord {
     arrays: Vec<(String, Vec<f64>)>,
     scalars: Vec<(String, f64)>,
     stages: Vec<(String, Vec<f64>)>,
+    guard: Vec<f64>,
 }
 
 impl SnapshotRecord {
@@ -310,6 +311,7 @@ impl SnapshotRecord {
         template.last_change = self.last_change;
         template.velocity_scale = self.velocity_scale;
         template.stages = self.stages;
+        template.guard = self.guard;
         Ok(template)
     }
 }
@@ -529,6 +531,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
         w.str(name);
         w.f64s(data);
     }
+    w.f64s(&s.guard);
     let payload = w.0;
     let mut out = Vec::with_capacity(28 + payload.len());
     out.extend_from_slice(MAGIC);
@@ -616,6 +619,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
         let stages = (0..r.len(16)?)
             .map(|_| Ok((r.str()?, r.f64s()?)))
             .collect::<Result<_, String>>()?;
+        let guard = r.f64s()?;
         if r.at != payload.len() {
             return Err(format!(
                 "{} unexpected bytes after the data",
@@ -638,6 +642,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
                 arrays,
                 scalars,
                 stages,
+                guard,
             },
         })
     })()

@@ -41,20 +41,7 @@ pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
 
 /// Column names of a probe in `probes.csv`.
 pub fn columns(p: &ProbeSpec) -> Vec<String> {
-    match p {
-        ProbeSpec::Point { name, .. } => vec![name.clone()],
-        ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
-        ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
-        ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
-        ProbeSpec::MaxSpeed => vec!["max_speed".into()],
-        ProbeSpec::SolidVolume => vec!["solid_volume".into()],
-        ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
-        ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
-        ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
-        ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
-        ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
-        ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
-    }
+    p.columns()
 }
 
 /// Append the probe's values to `out`; `gravity` is the scene's.

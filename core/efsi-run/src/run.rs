@@ -30,7 +30,23 @@
 //! ([`RunOptions::save_last_good`]) — is written as `fields/<name>_<step>_last_good.vtr` (with a
 //! `.pvd` entry at its time) and as the checkpoint ([`EfsiError::Saved`]).
 //!
-//! [`resume`] continues a run from its latest checkpoint, appending to the same outputs.
+//! **An output that cannot be written** (a full disk, a path blocked) after a good step stops the
+//! run the same way: the state at the start of that step is saved as the checkpoint, with the
+//! output bookkeeping as it was before that step's outputs, so a resume writes them again. A
+//! `probes.csv` append that fails part-way is cut back to the last whole row. Every failure is
+//! recorded in `run.json` (`"stop": {"Failed": {"error", "exit_code"}}`), as far as it can
+//! still be written.
+//!
+//! **One run per folder.** A run holds the folder's lock ([`crate::lock`]) while it writes;
+//! `run.json` is written at the start (`"stop": "Running"`) with the run's identity (`run_id`),
+//! which its checkpoints record too. A folder holding an earlier run's outputs is refused unless
+//! [`RunOptions::overwrite`].
+//!
+//! **Intervals.** Output and checkpoint intervals are at least `time.dt_min` (validated), and
+//! the number of events due at a time is computed, not counted one period at a time.
+//!
+//! [`resume`] continues a run from its latest checkpoint, appending to the same outputs, after
+//! checking that the checkpoint's run is the folder's (its `run.json`).
 
 use crate::checkpoint::{self, Checkpoint, CheckpointFile, LawIdentity, OutputState};
 use crate::lock::FolderLock;

@@ -483,10 +483,10 @@ fn instantiate(
 /// Reads a law library's name and parameter table without creating the law (`efsi laws`).
 pub fn describe(path: &Path) -> Result<LawInfo, LawError> {
     let label = path.display().to_string();
-    if !path.is_file() {
+    if let Some(message) = not_a_library_file(path) {
         return Err(LawError {
             law: label,
-            message: format!("library not found: {}", path.display()),
+            message,
             cell: None,
         });
     }
@@ -577,6 +577,25 @@ fn is_path(name: &str) -> bool {
         || [".so", ".dylib", ".dll"].iter().any(|e| name.ends_with(e))
 }
 
+/// Why `path` cannot be a law library file, if it cannot: absent, a folder, a device.
+fn not_a_library_file(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Some(format!("library not found: {}", path.display()))
+        }
+        Err(e) => Some(format!("cannot read the library {}: {e}", path.display())),
+        Ok(m) if m.is_dir() => Some(format!(
+            "{} is a folder, not a law library file",
+            path.display()
+        )),
+        Ok(m) if !m.is_file() => Some(format!(
+            "{} is not a regular file (a device or a pipe), not a law library",
+            path.display()
+        )),
+        Ok(_) => None,
+    }
+}
+
 /// The library file a scene's law name refers to (see the module docs).
 pub fn resolve_law(name: &str, scene_dir: &Path) -> Result<PathBuf, LawError> {
     let fail = |message: String| LawError {
@@ -591,14 +610,12 @@ pub fn resolve_law(name: &str, scene_dir: &Path) -> Result<PathBuf, LawError> {
         let path = scene_dir.join(name);
         // An absolute path, so that the dynamic loader does not search its own paths.
         let path = std::path::absolute(&path).unwrap_or(path);
-        return if path.is_file() {
-            Ok(path)
-        } else {
-            Err(fail(format!(
-                "library not found: {} (a relative law path is relative to the scene's folder {})",
-                path.display(),
+        return match not_a_library_file(&path) {
+            None => Ok(path),
+            Some(m) => Err(fail(format!(
+                "{m} (a relative law path is relative to the scene's folder {})",
                 scene_dir.display()
-            )))
+            ))),
         };
     }
     let file = library_file_name(name);
@@ -638,9 +655,11 @@ fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
     // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
     // (the user named it), and the checks below guard the ABI.
     let library = unsafe { Library::new(path) }.map_err(|e| {
+        // The loader's own words (`dlerror`) are the error's source, not its summary.
+        let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
         fail(
             &law,
-            format!("{} is not a loadable library: {e}", path.display()),
+            format!("{} is not a loadable library: {why}", path.display()),
         )
     })?;
     // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.

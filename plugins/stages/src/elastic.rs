@@ -1697,9 +1697,15 @@ impl ElasticStage {
                 return Err(err(
                     "elastic",
                     format!(
-                        "BiCGSTAB did not converge in {} iterations (relative residual {:.3e}); reduce the time step",
+                        "BiCGSTAB did not converge in {} iterations, the limit numerics.elastic.max_iterations (relative residual {:.3e} > numerics.elastic.tolerance {:.1e}); {}",
                         st.iterations,
-                        st.residual / bnorm
+                        st.residual / bnorm,
+                        self.tol,
+                        if self.max_iter < 20 {
+                            "raise numerics.elastic.max_iterations"
+                        } else {
+                            "raise numerics.elastic.max_iterations or reduce the time step"
+                        }
                     ),
                 ));
             }

@@ -109,3 +109,37 @@ pub fn assert_csv_whole(dir: &Path) -> usize {
     }
     rows
 }
+
+/// A law plugin library built with the workspace, by library name.
+pub fn law_library(lib: &str) -> PathBuf {
+    let file = format!(
+        "{}{lib}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    );
+    let bin = Path::new(env!("CARGO_BIN_EXE_efsi")).parent().unwrap();
+    [bin.to_path_buf(), bin.join("deps")]
+        .iter()
+        .map(|d| d.join(&file))
+        .find(|p| p.is_file())
+        .unwrap_or_else(|| panic!("{file} not built next to {}", bin.display()))
+}
+
+/// A small box with an elastic block whose law is `law` (a library path) with `params`.
+pub fn solid_scene(law: &str, params: &str) -> String {
+    format!(
+        r#"Scene(
+    name: "solid",
+    domain: (x: (0.0, 0.0625), y: (0.0, 1.0)),
+    grid: (nx: 4, ny: 16),
+    time: (end: 0.6, dt_max: 0.01),
+    fluid: (density: 1.0, viscosity: 1.0),
+    solid: (shape: HalfPlane(normal: (0.0, 1.0), offset: 0.5), density: 1.0, viscosity: 0.0,
+            law: (name: "{law}", parameters: {{{params}}})),
+    boundaries: (x_min: Periodic, x_max: Periodic, y_min: NoSlip,
+                 y_max: MovingWall(speed: 1.0, motion: Sin(omega: 3.141592653589793))),
+    output: (probe_every: 0.05, probes: [KineticEnergy]),
+)
+"#
+    )
+}
