@@ -258,6 +258,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     output: OutputSpec {
                         folder: None,
                         vtk_every,
+                        vtk: Default::default(),
                         probe_every,
                         probes,
                         profiles,
