@@ -160,9 +160,9 @@ fn guarded<T>(py: Python<'_>, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
     }
 }
 
-/// A Python value as an override value: bool, int, float or str (a str is RON text when it is
-/// not a plain word, so `"(0.5, 0.5)"` and `"Disk(center: (0, 0), radius: 1)"` work as on the
-/// command line, and `"IncompleteCholesky"` or a law name as a string).
+/// A Python value as an override value: bool, int, float, or str taken as the command line's
+/// RON text (`"(0.5, 0.5)"`, `"Disk(center: (0, 0), radius: 1)"`, `"None"`,
+/// `"IncompleteCholesky"`; a string setting takes it unquoted, as `--set` does).
 fn override_value(v: &Bound<'_, PyAny>) -> PyResult<OverrideValue> {
     if v.is_instance_of::<PyBool>() {
         return Ok(OverrideValue::Bool(v.extract()?));
@@ -174,15 +174,7 @@ fn override_value(v: &Bound<'_, PyAny>) -> PyResult<OverrideValue> {
         return Ok(OverrideValue::Float(v.extract()?));
     }
     if v.is_instance_of::<PyString>() {
-        let s: String = v.extract()?;
-        let plain = s
-            .chars()
-            .all(|c| c.is_alphanumeric() || c == '_' || c == '-');
-        return Ok(if plain {
-            OverrideValue::Str(s)
-        } else {
-            OverrideValue::Ron(s)
-        });
+        return Ok(OverrideValue::Ron(v.extract()?));
     }
     // numpy scalars and other numbers.
     if let Ok(x) = v.extract::<f64>() {

@@ -75,7 +75,7 @@ def test_scene_overrides_are_the_cli_paths():
     assert (scene.get("grid.nx"), scene.get("grid.nz")) == (41, 82)  # 82 × 164 halved; alias nz
     assert scene.overrides == [
         "set solid.law.parameters.G=1000000.0",
-        'set numerics.projection.solver="IncompleteCholesky"',
+        "set numerics.projection.solver=IncompleteCholesky",
         "set solid.shape.center=(0.0, 0.05)",
         "refine 0.5",
     ]
