@@ -86,6 +86,10 @@ enum Command {
         /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Replace the outputs of an earlier run in the output folder (run.json, probes.csv,
+        /// fields.pvd, VTK files, profiles, its checkpoint); without it such a folder is refused.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
@@ -161,6 +165,7 @@ fn main() -> ExitCode {
             quiet,
             checkpoint_every,
             threads,
+            overwrite,
         } => {
             // The run loop runs on a worker of the pool, so the stages' parallel loops start
             // from inside it (cheaper than injecting each from outside, and allocation-free).
@@ -177,6 +182,7 @@ fn main() -> ExitCode {
                         print_schedule,
                         quiet,
                         checkpoint_every,
+                        overwrite,
                     )
                 }),
                 Err(e) => {
@@ -211,7 +217,7 @@ fn main() -> ExitCode {
 
 /// Run options with a stop flag that SIGINT and SIGTERM set to their number. A second signal
 /// while the first is being handled exits at once (128 + signal).
-fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
+fn options(checkpoint_every: Option<f64>, overwrite: bool) -> Result<RunOptions, EfsiError> {
     if let Some(t) = checkpoint_every
         && !(t.is_finite() && t > 0.0)
     {
@@ -236,6 +242,7 @@ fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
         checkpoint_every,
         stop: Some(stop),
         save_last_good: true,
+        overwrite,
     })
 }
 
@@ -270,7 +277,7 @@ fn resume_run(
     quiet: bool,
     checkpoint_every: Option<f64>,
 ) -> Result<Option<usize>, EfsiError> {
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, false)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
@@ -287,6 +294,7 @@ fn run_scene(
     print_schedule: bool,
     quiet: bool,
     checkpoint_every: Option<f64>,
+    overwrite: bool,
 ) -> Result<Option<usize>, EfsiError> {
     let mut sim = load(path, overrides)?;
     if print_schedule {
@@ -296,7 +304,7 @@ fn run_scene(
     let dir = out
         .or_else(|| sim.scene.output.folder.clone())
         .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, overwrite)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);

@@ -174,6 +174,14 @@ fn default_cfl() -> f64 {
     0.4
 }
 
+impl TimeSpec {
+    /// The smallest step allowed: `dt_min`, else 1e-12·`end`. It also bounds the output and
+    /// checkpoint intervals from below (a shorter interval would force shorter steps).
+    pub fn dt_min_or_default(&self) -> f64 {
+        self.dt_min.unwrap_or(1e-12 * self.end)
+    }
+}
+
 /// A Newtonian fluid.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -809,8 +817,21 @@ impl Scene {
                 err(field, format!("must be a finite number > 0, got {v}"))
             }
         }
-        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
-            return err("name", "must be a non-empty name without path separators");
+        // The name is a folder (`out/<name>/`) and a file stem: nothing that leaves the folder,
+        // names it again or breaks a line.
+        if self.name.trim().is_empty()
+            || self.name.contains(['/', '\\'])
+            || self.name.chars().any(char::is_control)
+            || self.name.trim_matches('.').is_empty()
+        {
+            return err(
+                "name",
+                format!(
+                    "must be a non-empty name without path separators or control characters, \
+                     and not `.` or `..` (it names the output folder out/<name>/), got {:?}",
+                    self.name
+                ),
+            );
         }
         for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
             if !(a.is_finite() && b.is_finite() && b > a) {
@@ -1036,12 +1057,23 @@ impl Scene {
         }
         // Outputs.
         let o = &self.output;
+        let dt_min = self.time.dt_min_or_default();
         for (f, v) in [
             ("output.vtk_every", o.vtk_every),
             ("output.probe_every", o.probe_every),
         ] {
             if let Some(v) = v {
                 positive(f, v)?;
+                if v < dt_min {
+                    return err(
+                        f,
+                        format!(
+                            "must be at least time.dt_min = {dt_min:e} (the smallest step; by \
+                             default 1e-12·time.end), got {v:e}: shorter intervals would force \
+                             shorter steps"
+                        ),
+                    );
+                }
             }
         }
         let inside = |p: (f64, f64)| {

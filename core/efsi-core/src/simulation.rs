@@ -311,7 +311,7 @@ impl Simulation {
                 .reduce(f64::min)
                 .unwrap_or(remaining)
         };
-        let dt_min = t.dt_min.unwrap_or(1e-12 * t.end);
+        let dt_min = t.dt_min_or_default();
         if dt.is_nan() || dt < dt_min {
             return Err(EfsiError::Unstable {
                 dt,

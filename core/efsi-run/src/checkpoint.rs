@@ -15,7 +15,7 @@
 //! In the payload a string is a `u64` byte length and UTF-8 bytes, an array of `f64` a `u64`
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
 //! (efsi version, scene path, scene RON, the overrides applied to the scene file as RON, law
-//! identity), output bookkeeping, the snapshot
+//! identity), output bookkeeping (ending with the run's identity), the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
 //! frame acceleration and the elastic energy), then named stage
 //! data). A 128² cavity checkpoints in ≈ 0.7 MB.
@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 /// The version of the file layout this efsi reads and writes.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
 
@@ -211,6 +211,10 @@ pub struct OutputState {
     pub checkpoint_every: Option<f64>,
     /// Checkpoints due so far.
     pub checkpoint_count: u64,
+    /// The identity of the run that wrote the outputs (also in its `run.json`): a resume
+    /// refuses a checkpoint whose run is not the one of the folder it is resumed in. Empty
+    /// where no output folder belongs to the snapshot (an FMU's state).
+    pub run_id: String,
 }
 
 /// A checkpoint: a [`Snapshot`] and what a resumed run checks and continues.
@@ -502,6 +506,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     }
     w.f64(opt(o.checkpoint_every));
     w.u64(o.checkpoint_count);
+    w.str(&o.run_id);
     w.f64(s.state.t);
     w.u64(s.state.step);
     w.f64(s.state.dt_prev);
@@ -598,6 +603,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
             profile_times,
             checkpoint_every: unopt(r.f64()?),
             checkpoint_count: r.u64()?,
+            run_id: r.str()?,
         };
         let (t, step, dt_prev, last_change, velocity_scale) =
             (r.f64()?, r.u64()?, r.f64()?, r.f64()?, r.f64()?);
