@@ -739,17 +739,20 @@ impl PySimulation {
         })
     }
 
-    /// Write the current state with efsi run's VTK writer into `dir`: `fields/<name>_<step>.vtr`
-    /// (velocity, divergence, pressure, density, viscosity, solid fraction, B and stress) added
-    /// to `fields.pvd`, and `probes.csv` with the current row. Returns the `.vtr` file's path.
-    fn write_vtk(&self, py: Python<'_>, dir: PathBuf) -> PyResult<PathBuf> {
+    /// Write the current state with efsi run's writer into the folder `dir`:
+    /// `fields/<name>_<step>.vtr` (velocity, divergence, pressure, density, viscosity, solid
+    /// fraction, B and stress) listed in `fields.pvd`, and `probes.csv` with the current row.
+    /// A folder holding earlier outputs is refused (`efsi.SceneError`, as `efsi run` refuses
+    /// it) unless `overwrite`, which replaces them. Returns the `.vtr` file's path.
+    #[pyo3(signature = (dir, overwrite = false))]
+    fn write_vtk(&self, py: Python<'_>, dir: PathBuf, overwrite: bool) -> PyResult<PathBuf> {
         guarded(py, || {
             let mut d = self.lock();
             let sim = &mut d.sim;
             let keep = sim.scene.output.clone();
             sim.scene.output.vtk_every = Some(f64::MAX);
             sim.scene.output.profiles.clear();
-            let written = write_now(sim, &dir);
+            let written = write_now(sim, &dir, overwrite);
             sim.scene.output = keep;
             written.map_err(|e| efsi_err(py, e))
         })
@@ -766,8 +769,8 @@ impl PySimulation {
 
 /// Write the current state of `sim` into `dir` with efsi-run's outputs (the scene's output
 /// settings already made to write VTK now).
-fn write_now(sim: &Simulation, dir: &Path) -> Result<PathBuf, EfsiError> {
-    let mut out = efsi_run::run::Outputs::new(sim, dir, None)?;
+fn write_now(sim: &Simulation, dir: &Path, overwrite: bool) -> Result<PathBuf, EfsiError> {
+    let mut out = efsi_run::run::Outputs::new(sim, dir, None, overwrite)?;
     out.emit(sim, false)?;
     let file = dir
         .join("fields")

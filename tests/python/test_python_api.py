@@ -192,6 +192,12 @@ def test_write_vtk_is_efsi_runs_file(tmp_path):
     assert np.array_equal(p, sim.field("p")[0].ravel())
     with pytest.raises(efsi.EfsiError):
         sim.write_vtk(path)  # a file, not a folder
+    # A folder with earlier outputs is refused, as efsi run refuses it, unless overwrite.
+    sim.advance_to(0.4)
+    with pytest.raises(efsi.SceneError, match="holds the outputs of an earlier run"):
+        sim.write_vtk(tmp_path / "out")
+    later = Path(sim.write_vtk(tmp_path / "out", overwrite=True))
+    assert later.is_file() and not path.exists()
 
 
 def test_an_unstable_run_raises_unstable_error_with_stage_field_and_cell():
