@@ -317,3 +317,23 @@ def test_ctrl_c_stops_at_a_step_boundary_and_the_run_goes_on_identically():
     rows = sim.probes(frame=False)
     assert int(final[1]) == sim.steps
     assert final[3:] == [rows[c][-1].hex() for c in rows] + [str(len(rows["t"]))]
+
+
+def test_a_simulation_advancing_in_another_thread_is_busy_not_deadlocked():
+    import threading
+
+    sim = efsi.Simulation(efsi.Scene.from_str(LONG))
+    worker = threading.Thread(target=sim.advance_to, args=(2.0,))
+    worker.start()
+    deadline = time.monotonic() + 60
+    busy = None
+    while worker.is_alive() and time.monotonic() < deadline:
+        try:
+            sim.time
+        except RuntimeError as e:
+            busy = str(e)
+            break
+        time.sleep(0.001)
+    worker.join()
+    assert busy == "the simulation is busy: advance_to is running on it in another thread"
+    assert sim.time == 2.0
