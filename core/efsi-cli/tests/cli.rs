@@ -136,6 +136,12 @@ fn check_and_print_schedule() {
         .map(|l| l.split_whitespace().nth(1).unwrap())
         .collect();
     assert_eq!(stages, ["advection", "viscous", "projection"]);
+    // Each stage names the type that implements it.
+    assert!(
+        s.contains("(efsi_stages::viscous::Viscous)")
+            && s.contains("(efsi_stages::projection::Projection)"),
+        "{s}"
+    );
 }
 
 #[test]

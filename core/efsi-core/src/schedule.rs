@@ -189,6 +189,11 @@ pub trait Stage: Send {
 pub trait StagePlugin: Sync {
     /// Unique name (shown by `--print-schedule`, used in timings and errors).
     fn name(&self) -> &'static str;
+    /// Where the plugin is implemented: its type's path (`crate::module::Type`), shown by
+    /// `--print-schedule` so a reader finds the code of each stage.
+    fn source(&self) -> &'static str {
+        std::any::type_name::<Self>()
+    }
     /// The phase it attaches to.
     fn phase(&self) -> Phase;
     /// Fields it reads.
@@ -256,6 +261,7 @@ pub enum ScheduleError {
 
 struct Entry {
     name: &'static str,
+    source: &'static str,
     phase: Phase,
     reads: &'static [FieldId],
     writes: &'static [FieldId],
@@ -331,6 +337,7 @@ impl Pipeline {
                 })?;
             entries.push(Entry {
                 name: p.name(),
+                source: p.source(),
                 phase: p.phase(),
                 reads: p.reads(),
                 writes: p.writes(),
@@ -692,12 +699,13 @@ impl fmt::Display for Pipeline {
             let names = |fs: &[FieldId]| fs.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
             writeln!(
                 f,
-                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]",
+                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]  ({})",
                 k + 1,
                 e.name,
                 format!("{:?}", e.phase),
                 names(e.reads),
-                names(e.writes)
+                names(e.writes),
+                e.source
             )?;
         }
         let fields: Vec<_> = self.fields.iter().map(|x| x.name()).collect();
