@@ -31,20 +31,39 @@ def main(argv=None):
         "--grid",
         action="append",
         type=_grid_option,
-        required=True,
         metavar="PATH=V1,V2",
         help="a setting's values (the paths of efsi run --set; `refine` for --refine); repeat for a product",
+    )
+    parser.add_argument(
+        "--runs",
+        metavar="FILE",
+        help="the runs as a JSON list of objects {PATH: VALUE, …} instead of --grid",
+    )
+    parser.add_argument(
+        "--save-probes",
+        metavar="DIR",
+        help="write each run's probe rows to DIR/<run>/probes.csv (column probes_dir)",
     )
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler's address (default: a LocalCluster)")
     parser.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     parser.add_argument("--serial", action="store_true", help="run in this process, one after the other (no Dask)")
     parser.add_argument("--until", type=float, help="stop each run at this time (default: the scene's end)")
-    parser.add_argument("--out", default="sweep.csv", help="the table: .csv or .parquet (default sweep.csv)")
+    parser.add_argument("--out", default="sweep.csv", help="the table: .csv, .parquet or .json (default sweep.csv)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    if bool(args.grid) == bool(args.runs):
+        parser.error("give either --grid PATH=V1,V2 … or --runs FILE")
 
     from . import SceneError, Scene
-    from .sweeps import final_probes, sweep
+    from .sweeps import SaveProbes, final_probes, sweep
+
+    if args.runs:
+        import json
+
+        with open(args.runs) as f:
+            grid = json.load(f)
+    else:
+        grid = dict(args.grid)
 
     try:
         scene = Scene.load(args.scene)
@@ -61,9 +80,9 @@ def main(argv=None):
     try:
         table = sweep(
             scene,
-            dict(args.grid),
+            grid,
             client=client,
-            summary=final_probes,
+            summary=SaveProbes(args.save_probes) if args.save_probes else final_probes,
             until=args.until,
             out=args.out,
             progress=not args.quiet,
@@ -72,10 +91,11 @@ def main(argv=None):
     finally:
         if client:
             client.close()
-    import pandas
+    if not args.quiet:
+        import pandas
 
-    with pandas.option_context("display.max_columns", None, "display.width", 200):
-        print(table.to_string(index=False))
+        with pandas.option_context("display.max_columns", None, "display.width", 200):
+            print(table.to_string(index=False))
     print(f"wrote {args.out}")
     return 0
 

@@ -24,7 +24,7 @@ runs are tasks, so a worker lost mid-sweep has its tasks run again elsewhere by 
 result depends only on its settings, so every way gives the same numbers.
 
 Progress is Dask's progress bar (``progress=False`` for none); ``out`` writes the table as CSV
-(``.csv``) or Parquet (``.parquet``, needs pyarrow).
+(``.csv``), Parquet (``.parquet``, needs pyarrow) or JSON records (``.json``).
 """
 
 import itertools
@@ -53,6 +53,31 @@ def final_probes(sim):
     """A summary: the last probe row's values, as ``final_<column>``."""
     rows = sim.probes(frame=False)
     return {f"final_{c}": float(v[-1]) for c, v in rows.items() if c != "t" and len(v)}
+
+
+class SaveProbes:
+    """A summary that writes each run's probe rows (those of ``efsi run``'s ``probes.csv``, the
+    same format) to ``<folder>/<run id>/probes.csv`` and returns that run folder as
+    ``probes_dir``, with the final probe values (:func:`final_probes`). For clusters that share
+    the folder with the caller (a LocalCluster; a cluster's shared file system)."""
+
+    def __init__(self, folder):
+        self.folder = os.path.abspath(os.fspath(folder))
+
+    def __call__(self, sim):
+        import uuid
+
+        import numpy as np
+
+        rows = sim.probes(frame=False)
+        run = os.path.join(self.folder, uuid.uuid4().hex)
+        os.makedirs(run, exist_ok=True)
+        table = np.column_stack([rows[c] for c in rows])
+        with open(os.path.join(run, "probes.csv"), "w") as f:
+            f.write(",".join(rows) + "\n")
+            for r in table:
+                f.write(",".join(f"{v:.17e}" for v in r) + "\n")
+        return {"probes_dir": run, **final_probes(sim)}
 
 
 def _scene(scene):
@@ -167,11 +192,13 @@ def _on_dask(scene, todo, client, summary, until, progress, workers, threads_per
 
 
 def write(table, path):
-    """Write the table as CSV (``.csv``) or Parquet (``.parquet``)."""
+    """Write the table as CSV (``.csv``), Parquet (``.parquet``) or JSON records (``.json``)."""
     path = os.fspath(path)
     if path.endswith(".parquet"):
         table.to_parquet(path, index=False)
+    elif path.endswith(".json"):
+        table.to_json(path, orient="records", double_precision=15)
     elif path.endswith(".csv"):
         table.to_csv(path, index=False)
     else:
-        raise ValueError(f"sweep: {path}: the output must end in .csv or .parquet")
+        raise ValueError(f"sweep: {path}: the output must end in .csv, .parquet or .json")

@@ -28,13 +28,13 @@ use efsi_core::{
     Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Scene, Simulation, Snapshot,
     Stagger, StepInfo, due,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyFloat, PyInt, PyString};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard};
+use std::sync::{Condvar, Mutex, MutexGuard, TryLockError};
 use std::time::Duration;
 
 /// The stop flag's value when a Python signal handler raised (SIGINT's number, as the CLI).
@@ -160,9 +160,9 @@ fn guarded<T>(py: Python<'_>, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
     }
 }
 
-/// A Python value as an override value: bool, int, float or str (a str is RON text when it is
-/// not a plain word, so `"(0.5, 0.5)"` and `"Disk(center: (0, 0), radius: 1)"` work as on the
-/// command line, and `"IncompleteCholesky"` or a law name as a string).
+/// A Python value as an override value: bool, int, float, or str taken as the command line's
+/// RON text (`"(0.5, 0.5)"`, `"Disk(center: (0, 0), radius: 1)"`, `"None"`,
+/// `"IncompleteCholesky"`; a string setting takes it unquoted, as `--set` does).
 fn override_value(v: &Bound<'_, PyAny>) -> PyResult<OverrideValue> {
     if v.is_instance_of::<PyBool>() {
         return Ok(OverrideValue::Bool(v.extract()?));
@@ -174,15 +174,7 @@ fn override_value(v: &Bound<'_, PyAny>) -> PyResult<OverrideValue> {
         return Ok(OverrideValue::Float(v.extract()?));
     }
     if v.is_instance_of::<PyString>() {
-        let s: String = v.extract()?;
-        let plain = s
-            .chars()
-            .all(|c| c.is_alphanumeric() || c == '_' || c == '-');
-        return Ok(if plain {
-            OverrideValue::Str(s)
-        } else {
-            OverrideValue::Ron(s)
-        });
+        return Ok(OverrideValue::Ron(v.extract()?));
     }
     // numpy scalars and other numbers.
     if let Ok(x) = v.extract::<f64>() {
@@ -555,10 +547,18 @@ struct PySimulation {
 }
 
 impl PySimulation {
-    fn lock(&self) -> MutexGuard<'_, Driver> {
-        // A panic is caught while the lock is held; the state is then still one of a complete
-        // step or the failed step's, as after any error.
-        self.driver.lock().unwrap_or_else(|p| p.into_inner())
+    /// The simulation, unless `advance_to` is running on it in another Python thread (waiting
+    /// for it while holding the GIL would deadlock: that call needs the GIL to return).
+    fn lock(&self) -> PyResult<MutexGuard<'_, Driver>> {
+        match self.driver.try_lock() {
+            Ok(d) => Ok(d),
+            // A panic is caught while the lock is held; the state is then still one of a
+            // complete step or the failed step's, as after any error.
+            Err(TryLockError::Poisoned(p)) => Ok(p.into_inner()),
+            Err(TryLockError::WouldBlock) => Err(PyRuntimeError::new_err(
+                "the simulation is busy: advance_to is running on it in another thread",
+            )),
+        }
     }
 }
 
@@ -590,7 +590,7 @@ impl PySimulation {
     /// `KeyboardInterrupt`; a failed step raises `efsi.UnstableError` (the state is then the
     /// failing stage's).
     fn advance_to(&self, py: Python<'_>, t: f64) -> PyResult<bool> {
-        let mut driver = self.lock();
+        let mut driver = self.lock()?;
         let driver: &mut Driver = &mut driver;
         let stop = AtomicUsize::new(0);
         let mut raised: Option<PyErr> = None;
@@ -637,36 +637,36 @@ impl PySimulation {
 
     /// Simulated time.
     #[getter]
-    fn time(&self) -> f64 {
-        self.lock().sim.state.t
+    fn time(&self) -> PyResult<f64> {
+        Ok(self.lock()?.sim.state.t)
     }
 
     /// Steps taken.
     #[getter]
-    fn steps(&self) -> u64 {
-        self.lock().sim.state.step
+    fn steps(&self) -> PyResult<u64> {
+        Ok(self.lock()?.sim.state.step)
     }
 
     /// Whether the flow has become steady (`time.steady`).
     #[getter]
-    fn steady(&self) -> bool {
-        self.lock().steady
+    fn steady(&self) -> PyResult<bool> {
+        Ok(self.lock()?.steady)
     }
 
     /// The scene's end time.
     #[getter]
-    fn end(&self) -> f64 {
-        self.lock().recorder.end
+    fn end(&self) -> PyResult<f64> {
+        Ok(self.lock()?.recorder.end)
     }
 
     /// The scene being run (a copy).
     #[getter]
-    fn scene(&self) -> PyScene {
-        let d = self.lock();
-        PyScene {
+    fn scene(&self) -> PyResult<PyScene> {
+        let d = self.lock()?;
+        Ok(PyScene {
             scene: d.sim.scene.clone(),
             path: d.sim.scene_path.clone(),
-        }
+        })
     }
 
     /// A field's interior values: `(values, rows, columns, x, y)` with `values` the
@@ -674,7 +674,7 @@ impl PySimulation {
     /// coordinates where they live (cell centres; faces for `u` along x and `v` along y).
     /// Names: `u`, `v`, `p`, `density`, `viscosity`, `solid_fraction`.
     fn _field<'py>(&self, py: Python<'py>, name: &str) -> PyResult<FieldData<'py>> {
-        let d = self.lock();
+        let d = self.lock()?;
         let (grid, state) = (&d.sim.grid, &d.sim.state);
         let (field, stagger) = match name {
             "u" => (Some(&state.u), Stagger::XFace),
@@ -718,26 +718,26 @@ impl PySimulation {
 
     /// The probe rows recorded so far (those `efsi run` writes to `probes.csv`): the column
     /// names and the rows' values, row after row.
-    fn _probes(&self) -> (Vec<String>, Vec<f64>) {
-        let d = self.lock();
-        (d.recorder.columns.clone(), d.recorder.rows.clone())
+    fn _probes(&self) -> PyResult<(Vec<String>, Vec<f64>)> {
+        let d = self.lock()?;
+        Ok((d.recorder.columns.clone(), d.recorder.rows.clone()))
     }
 
     /// Save the state (and the probe rows recorded so far) to come back to with `restore`.
-    fn snapshot(&self) -> PySnapshot {
-        let d = self.lock();
-        PySnapshot {
+    fn snapshot(&self) -> PyResult<PySnapshot> {
+        let d = self.lock()?;
+        Ok(PySnapshot {
             snapshot: d.sim.snapshot(),
             recorder: d.recorder.clone(),
             steady: d.steady,
-        }
+        })
     }
 
     /// Go back to a snapshot of this simulation: its state, time and probe rows. Raises
     /// `efsi.SceneError` when the snapshot is of another scene.
     fn restore(&self, py: Python<'_>, snapshot: &PySnapshot) -> PyResult<()> {
         guarded(py, || {
-            let mut d = self.lock();
+            let mut d = self.lock()?;
             d.sim
                 .restore(&snapshot.snapshot)
                 .map_err(|e| efsi_err(py, e))?;
@@ -747,15 +747,15 @@ impl PySimulation {
         })
     }
 
-    /// Write the current state with efsi run's VTK writer into `dir`: `fields/<name>_<step>.vtr`
-    /// (velocity, divergence, pressure, density, viscosity, solid fraction, B and stress) added
-    /// to `fields.pvd`, and `probes.csv` with the current row. Returns the `.vtr` file's path.
-    /// A folder that holds a run's outputs already is refused (`efsi.EfsiError`, as `efsi run`),
-    /// unless `overwrite`, which removes them first.
+    /// Write the current state with efsi run's writer into the folder `dir`:
+    /// `fields/<name>_<step>.vtr` (velocity, divergence, pressure, density, viscosity, solid
+    /// fraction, B and stress) listed in `fields.pvd`, and `probes.csv` with the current row.
+    /// A folder holding earlier outputs is refused (`efsi.SceneError`, as `efsi run` refuses
+    /// it) unless `overwrite`, which replaces them. Returns the `.vtr` file's path.
     #[pyo3(signature = (dir, overwrite = false))]
     fn write_vtk(&self, py: Python<'_>, dir: PathBuf, overwrite: bool) -> PyResult<PathBuf> {
         guarded(py, || {
-            let mut d = self.lock();
+            let mut d = self.lock()?;
             let sim = &mut d.sim;
             let keep = sim.scene.output.clone();
             sim.scene.output.vtk_every = Some(f64::MAX);
@@ -767,11 +767,13 @@ impl PySimulation {
     }
 
     fn __repr__(&self) -> String {
-        let d = self.lock();
-        format!(
-            "efsi.Simulation({:?}, t = {:e}, step {})",
-            d.sim.scene.name, d.sim.state.t, d.sim.state.step
-        )
+        match self.lock() {
+            Ok(d) => format!(
+                "efsi.Simulation({:?}, t = {:e}, step {})",
+                d.sim.scene.name, d.sim.state.t, d.sim.state.step
+            ),
+            Err(_) => "efsi.Simulation(advancing)".into(),
+        }
     }
 }
 

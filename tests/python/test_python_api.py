@@ -75,7 +75,7 @@ def test_scene_overrides_are_the_cli_paths():
     assert (scene.get("grid.nx"), scene.get("grid.nz")) == (41, 82)  # 82 × 164 halved; alias nz
     assert scene.overrides == [
         "set solid.law.parameters.G=1000000.0",
-        'set numerics.projection.solver="IncompleteCholesky"',
+        "set numerics.projection.solver=IncompleteCholesky",
         "set solid.shape.center=(0.0, 0.05)",
         "refine 0.5",
     ]
@@ -192,13 +192,12 @@ def test_write_vtk_is_efsi_runs_file(tmp_path):
     assert np.array_equal(p, sim.field("p")[0].ravel())
     with pytest.raises(efsi.EfsiError):
         sim.write_vtk(path)  # a file, not a folder
-    # A folder holding outputs is refused, as efsi run refuses it, unless told to replace them.
-    sim.advance_to(0.35)
-    with pytest.raises(efsi.EfsiError, match="--overwrite|overwrite"):
+    # A folder with earlier outputs is refused, as efsi run refuses it, unless overwrite.
+    sim.advance_to(0.4)
+    with pytest.raises(efsi.SceneError, match="holds the outputs of an earlier run"):
         sim.write_vtk(tmp_path / "out")
-    assert path.is_file()
-    again = Path(sim.write_vtk(tmp_path / "out", overwrite=True))
-    assert again.is_file() and not path.is_file()
+    later = Path(sim.write_vtk(tmp_path / "out", overwrite=True))
+    assert later.is_file() and not path.exists()
 
 
 def test_an_unstable_run_raises_unstable_error_with_stage_field_and_cell():
@@ -318,3 +317,23 @@ def test_ctrl_c_stops_at_a_step_boundary_and_the_run_goes_on_identically():
     rows = sim.probes(frame=False)
     assert int(final[1]) == sim.steps
     assert final[3:] == [rows[c][-1].hex() for c in rows] + [str(len(rows["t"]))]
+
+
+def test_a_simulation_advancing_in_another_thread_is_busy_not_deadlocked():
+    import threading
+
+    sim = efsi.Simulation(efsi.Scene.from_str(LONG))
+    worker = threading.Thread(target=sim.advance_to, args=(2.0,))
+    worker.start()
+    deadline = time.monotonic() + 60
+    busy = None
+    while worker.is_alive() and time.monotonic() < deadline:
+        try:
+            sim.time
+        except RuntimeError as e:
+            busy = str(e)
+            break
+        time.sleep(0.001)
+    worker.join()
+    assert busy == "the simulation is busy: advance_to is running on it in another thread"
+    assert sim.time == 2.0

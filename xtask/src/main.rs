@@ -261,25 +261,17 @@ fn test() -> Result<(), String> {
     run(c, "pytest tests/python")
 }
 
-/// Build the `efsi` Python package's wheel (python/, maturin with the test profile's settings:
-/// optimised, debug assertions on; its dependencies are the Rust suite's) into
-/// `target/wheels` and install it into the venv of `py`, replacing an earlier one.
+/// Build the `efsi` Python package's wheel (python/, maturin, release: `--profile test` would
+/// make `cargo rustc` build the test harness instead of the module) into `target/wheels` and
+/// install it into the venv of `py`, replacing an earlier one.
 fn install_python_package(py: &Path) -> Result<(), String> {
     let wheels = root().join("target/wheels");
     let _ = std::fs::remove_dir_all(&wheels);
     let mut c = Command::new(py);
-    c.args([
-        "-m",
-        "maturin",
-        "build",
-        "--quiet",
-        "--profile",
-        "test",
-        "-m",
-    ])
-    .arg(root().join("python/Cargo.toml"))
-    .arg("--out")
-    .arg(&wheels);
+    c.args(["-m", "maturin", "build", "--quiet", "--release", "-m"])
+        .arg(root().join("python/Cargo.toml"))
+        .arg("--out")
+        .arg(&wheels);
     run(c, "build the efsi Python package (maturin)")?;
     let wheel = std::fs::read_dir(&wheels)
         .map_err(|e| format!("{}: {e}", wheels.display()))?
