@@ -1,0 +1,569 @@
+//! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
+//! each failure naming the setting's path and what was expected.
+
+use crate::grid::Geometry;
+use crate::scene::*;
+
+/// A failed check: the setting's path and the message.
+type Checked = Result<(), (String, String)>;
+
+fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+    Err((field.to_string(), msg.into()))
+}
+
+fn positive(field: &str, v: f64) -> Checked {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        err(
+            field,
+            format!("must be a finite number > 0, got {}", num(v)),
+        )
+    }
+}
+
+impl Scene {
+    /// Check ranges and consistency, section by section; on failure, the field path and what
+    /// was expected.
+    pub fn validate(&self) -> Checked {
+        self.validate_name()?;
+        self.validate_domain_and_grid()?;
+        self.validate_time()?;
+        self.validate_materials()?;
+        self.validate_boundaries()?;
+        self.validate_numerics()?;
+        self.validate_output()
+    }
+
+    /// The scene's name: a folder (`out/<name>/`) and a file stem.
+    fn validate_name(&self) -> Checked {
+        // The name is a folder (`out/<name>/`) and a file stem: nothing that leaves the folder,
+        // names it again or breaks a line.
+        if self.name.trim().is_empty()
+            || self.name.contains(['/', '\\'])
+            || self.name.chars().any(char::is_control)
+            || self.name.trim_matches('.').is_empty()
+        {
+            return err(
+                "name",
+                format!(
+                    "must be a non-empty name without path separators or control characters, \
+                     and not `.` or `..` (it names the output folder out/<name>/), got {:?}",
+                    self.name
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// The domain and the grid.
+    fn validate_domain_and_grid(&self) -> Checked {
+        for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
+            if !(a.is_finite() && b.is_finite() && b > a) {
+                return err(
+                    f,
+                    format!("must be (min, max) with max > min, got ({a}, {b})"),
+                );
+            }
+        }
+        if self.geometry == Geometry::Axisymmetric && self.domain.x.0 < 0.0 {
+            return err(
+                "domain.x",
+                format!(
+                    "the radius must be ≥ 0 in axisymmetric geometry, got r_min = {}",
+                    self.domain.x.0
+                ),
+            );
+        }
+        if self.grid.nx == 0 {
+            return err("grid.nx", "must be at least 1 cell, got 0");
+        }
+        if self.grid.ny == 0 {
+            return err("grid.ny", "must be at least 1 cell, got 0");
+        }
+        if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
+            return err(
+                "grid",
+                "more than 1e8 cells is beyond a 2-D run on this machine",
+            );
+        }
+        Ok(())
+    }
+
+    /// The time settings.
+    fn validate_time(&self) -> Checked {
+        positive("time.end", self.time.end)?;
+        if !(self.time.cfl > 0.0 && self.time.cfl <= 1.0) {
+            return err(
+                "time.cfl",
+                format!("must be in (0, 1], got {}", num(self.time.cfl)),
+            );
+        }
+        for (f, v) in [
+            ("time.dt_max", self.time.dt_max),
+            ("time.dt_min", self.time.dt_min),
+            ("time.fixed_dt", self.time.fixed_dt),
+            ("time.steady", self.time.steady),
+        ] {
+            if let Some(v) = v {
+                positive(f, v)?;
+            }
+        }
+        if let (Some(lo), Some(hi)) = (self.time.dt_min, self.time.dt_max)
+            && lo > hi
+        {
+            return err(
+                "time.dt_min",
+                format!("must not exceed time.dt_max ({}), got {}", num(hi), num(lo)),
+            );
+        }
+        let floor = self.time.dt_min_or_default();
+        for (f, v) in [
+            ("time.dt_max", self.time.dt_max),
+            ("time.fixed_dt", self.time.fixed_dt),
+        ] {
+            if let Some(v) = v
+                && v < floor
+                && self.time.dt_min.is_none()
+            {
+                return err(
+                    f,
+                    format!(
+                        "{} is below time.dt_min's default 1e-12·time.end = {}: every step would \
+                         be refused; set time.dt_min too",
+                        num(v),
+                        num(floor)
+                    ),
+                );
+            }
+        }
+        if let (Some(lo), Some(fixed)) = (self.time.dt_min, self.time.fixed_dt)
+            && fixed < lo
+        {
+            return err(
+                "time.fixed_dt",
+                format!(
+                    "{} is below time.dt_min = {}: every step would be refused",
+                    num(fixed),
+                    num(lo)
+                ),
+            );
+        }
+        positive("fluid.density", self.fluid.density)?;
+        Ok(())
+    }
+
+    /// The fluid, gravity, the initial velocity and the solid.
+    fn validate_materials(&self) -> Checked {
+        if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
+            return err(
+                "fluid.viscosity",
+                format!(
+                    "must be a finite number ≥ 0, got {}",
+                    num(self.fluid.viscosity)
+                ),
+            );
+        }
+        // The viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end: beyond
+        // MAX_DIFFUSION_NUMBER their products overflow, and the solver starts from a NaN residual.
+        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        let mut viscous = vec![("fluid.viscosity", self.fluid.viscosity, self.fluid.density)];
+        if let Some(sd) = &self.solid
+            && let Some(mu) = sd.viscosity
+        {
+            viscous.push(("solid.viscosity", mu, sd.density));
+        }
+        for (f, mu, rho) in viscous {
+            let d = mu * self.time.end / (rho * h * h);
+            if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
+                         viscous system's coefficients would overflow",
+                        num(mu),
+                        num(d),
+                        MAX_DIFFUSION_NUMBER
+                    ),
+                );
+            }
+            if !d.is_finite() && mu.is_finite() && rho > 0.0 {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) overflow",
+                        num(mu)
+                    ),
+                );
+            }
+        }
+        if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
+            return err("gravity", "must be finite");
+        }
+        if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
+            return err(
+                "gravity",
+                "must be along z (the axis) in axisymmetric geometry: (0, g_z)",
+            );
+        }
+        if let InitialVelocity::Uniform((a, b)) = self.initial_velocity
+            && !(a.is_finite() && b.is_finite())
+        {
+            return err("initial_velocity", "must be finite");
+        }
+        if let Some(solid) = &self.solid {
+            solid
+                .shape
+                .validate()
+                .map_err(|m| ("solid.shape".to_string(), m))?;
+            positive("solid.density", solid.density)?;
+            // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
+            // equation's coefficients 1/ρ span more than floating point resolves.
+            let ratio = solid.density / self.fluid.density;
+            if !(1e-6..=1e6).contains(&ratio) {
+                return err(
+                    "solid.density",
+                    format!(
+                        "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
+                        solid.density, self.fluid.density
+                    ),
+                );
+            }
+            if let Some(mu) = solid.viscosity
+                && !(mu.is_finite() && mu >= 0.0)
+            {
+                return err(
+                    "solid.viscosity",
+                    format!("must be a finite number ≥ 0, got {mu}"),
+                );
+            }
+            if let Some((a, b)) = solid.velocity
+                && !(a.is_finite() && b.is_finite())
+            {
+                return err("solid.velocity", "must be finite");
+            }
+            if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0)
+            {
+                return err(
+                    "solid.velocity",
+                    "an axisymmetric body can only move along the axis: (0, v_z)",
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The boundary conditions.
+    fn validate_boundaries(&self) -> Checked {
+        // Boundaries.
+        for side in Side::ALL {
+            let b = self.boundaries.get(side);
+            let f = format!("boundaries.{}", side.field_name());
+            let partner = self.boundaries.get(side.opposite());
+            if *b == Boundary::Periodic && *partner != Boundary::Periodic {
+                return err(
+                    &f,
+                    format!(
+                        "is Periodic but its partner boundaries.{} is {:?}: a periodic side needs a periodic partner",
+                        side.opposite().field_name(),
+                        partner
+                    ),
+                );
+            }
+            if *b == Boundary::Axis {
+                if side != Side::XMin || self.geometry != Geometry::Axisymmetric {
+                    return err(
+                        &f,
+                        "Axis is only allowed on x_min (r_min) of an axisymmetric scene",
+                    );
+                }
+                if self.domain.x.0 != 0.0 {
+                    return err(
+                        &f,
+                        format!("Axis needs r_min = 0, got domain.x.0 = {}", self.domain.x.0),
+                    );
+                }
+            }
+            if let Boundary::MovingWall {
+                speed,
+                profile,
+                motion,
+            } = b
+            {
+                if !speed.is_finite() {
+                    return err(&format!("{f}.speed"), "must be finite");
+                }
+                if let WallProfile::Sin2Ramp { width } = profile {
+                    positive(&format!("{f}.profile.width"), *width)?;
+                }
+                match motion {
+                    WallMotion::Sin { omega } if !omega.is_finite() => {
+                        return err(&format!("{f}.motion.omega"), "must be finite");
+                    }
+                    WallMotion::Until { t_off } if !t_off.is_finite() => {
+                        return err(&format!("{f}.motion.t_off"), "must be finite");
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if self.geometry == Geometry::Axisymmetric
+            && self.domain.x.0 == 0.0
+            && self.boundaries.x_min != Boundary::Axis
+        {
+            return err(
+                "boundaries.x_min",
+                format!(
+                    "r_min = 0 is the axis: expected Axis, got {:?}",
+                    self.boundaries.x_min
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// The numerics' settings.
+    fn validate_numerics(&self) -> Checked {
+        // Numerics.
+        // A relative tolerance below the unit round-off can never be met.
+        let tolerance = |f: &str, tol: f64| {
+            if (f64::EPSILON..1.0).contains(&tol) {
+                Ok(())
+            } else {
+                err(
+                    f,
+                    format!(
+                        "must be in [{:e}, 1) (a relative residual below the unit round-off \
+                         cannot be reached), got {}",
+                        f64::EPSILON,
+                        num(tol)
+                    ),
+                )
+            }
+        };
+        let p = &self.numerics.projection;
+        tolerance("numerics.projection.tolerance", p.tolerance)?;
+        if p.max_iterations == 0 {
+            return err("numerics.projection.max_iterations", "must be ≥ 1");
+        }
+        let el = &self.numerics.elastic;
+        tolerance("numerics.elastic.tolerance", el.tolerance)?;
+        if el.max_iterations == 0 {
+            return err("numerics.elastic.max_iterations", "must be ≥ 1");
+        }
+        if !(el.wave_courant > 0.0 && el.wave_courant <= MAX_WAVE_COURANT) {
+            return err(
+                "numerics.elastic.wave_courant",
+                format!(
+                    "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
+                     split projection pumps energy into stiff solids (stability map)",
+                    el.wave_courant
+                ),
+            );
+        }
+        let v = &self.numerics.viscous;
+        if !(0.5..=1.0).contains(&v.theta) {
+            return err(
+                "numerics.viscous.theta",
+                format!("must be in [0.5, 1], got {}", v.theta),
+            );
+        }
+        tolerance("numerics.viscous.tolerance", v.tolerance)?;
+        if v.max_iterations == 0 {
+            return err("numerics.viscous.max_iterations", "must be ≥ 1");
+        }
+        Ok(())
+    }
+
+    /// The outputs: intervals, VTK options, probes and profiles.
+    fn validate_output(&self) -> Checked {
+        // Outputs.
+        let o = &self.output;
+        let dt_min = self.time.dt_min_or_default();
+        for (f, v) in [
+            ("output.vtk_every", o.vtk_every),
+            ("output.probe_every", o.probe_every),
+        ] {
+            if let Some(v) = v {
+                positive(f, v)?;
+                if v < dt_min {
+                    return err(
+                        f,
+                        format!(
+                            "must be at least time.dt_min = {dt_min:e} (the smallest step; by \
+                             default 1e-12·time.end), got {v:e}: shorter intervals would force \
+                             shorter steps"
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(fields) = &o.vtk.fields {
+            let law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
+            if fields.is_empty() {
+                return err(
+                    "output.vtk.fields",
+                    "must name at least one field (leave it out for all of them)",
+                );
+            }
+            for (k, f) in fields.iter().enumerate() {
+                let at = format!("output.vtk.fields[{k}]");
+                if !VTK_FIELDS.contains(&f.as_str()) {
+                    return err(
+                        &at,
+                        format!("unknown field `{f}`, expected one of {VTK_FIELDS:?}"),
+                    );
+                }
+                if fields[..k].contains(f) {
+                    return err(&at, format!("`{f}` is listed twice"));
+                }
+                if f == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &at,
+                        "`solid_fraction` needs a solid, and the scene has none",
+                    );
+                }
+                if (f == "B" || f == "stress") && !law {
+                    return err(
+                        &at,
+                        format!("`{f}` needs a solid with a law, and the scene has none"),
+                    );
+                }
+            }
+        }
+        let inside = |p: (f64, f64)| {
+            p.0 >= self.domain.x.0
+                && p.0 <= self.domain.x.1
+                && p.1 >= self.domain.y.0
+                && p.1 <= self.domain.y.1
+        };
+        // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
+        let mut columns: std::collections::HashMap<String, usize> =
+            [("t".to_string(), usize::MAX)].into_iter().collect();
+        let has_law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
+        for (k, probe) in o.probes.iter().enumerate() {
+            let f = format!("output.probes[{k}]");
+            if probe.needs_solid() && self.solid.is_none() {
+                return err(
+                    &f,
+                    format!("{probe:?} needs a solid, and the scene has none"),
+                );
+            }
+            if *probe == ProbeSpec::ElasticEnergy && !has_law {
+                return err(
+                    &f,
+                    "ElasticEnergy needs a solid with a law (solid.law), and this solid has none",
+                );
+            }
+            if let ProbeSpec::SolidExtent { at } = probe
+                && !(at.is_finite() && *at >= self.domain.x.0 && *at <= self.domain.x.1)
+            {
+                return err(
+                    &format!("{f}.at"),
+                    format!(
+                        "x = {} is outside the domain's [{}, {}]",
+                        num(*at),
+                        num(self.domain.x.0),
+                        num(self.domain.x.1)
+                    ),
+                );
+            }
+            for c in probe.columns() {
+                if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
+                    return err(
+                        &format!("{f}.name"),
+                        format!(
+                            "must be a non-empty CSV column name without commas, quotes or \
+                             control characters, got {c:?}"
+                        ),
+                    );
+                }
+                if let Some(&other) = columns.get(&c) {
+                    let first = if other == usize::MAX {
+                        "the time column".to_string()
+                    } else {
+                        format!("output.probes[{other}]")
+                    };
+                    return err(
+                        &f,
+                        format!(
+                            "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
+                        ),
+                    );
+                }
+                columns.insert(c, k);
+            }
+            if let ProbeSpec::Point { field, at, .. } = probe {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.field"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
+                if !FIELD_NAMES.contains(&field.as_str()) {
+                    return err(
+                        &format!("{f}.field"),
+                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
+                    );
+                }
+                if !inside(*at) {
+                    return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
+                }
+            }
+        }
+        let mut pnames = std::collections::HashSet::new();
+        for (k, prof) in o.profiles.iter().enumerate() {
+            let ProfileSpec::Line {
+                name,
+                from,
+                to,
+                points,
+                fields,
+                at,
+            } = prof;
+            let f = format!("output.profiles[{k}]");
+            if name.is_empty() || name.contains(['/', '\\']) || !pnames.insert(name.clone()) {
+                return err(
+                    &format!("{f}.name"),
+                    format!("must be a unique file stem, got `{name}`"),
+                );
+            }
+            if !(2..=MAX_PROFILE_POINTS).contains(points) {
+                return err(
+                    &format!("{f}.points"),
+                    format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
+                );
+            }
+            if !inside(*from) || !inside(*to) {
+                return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
+            }
+            for field in fields {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.fields"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
+                if !FIELD_NAMES.contains(&field.as_str()) {
+                    return err(
+                        &format!("{f}.fields"),
+                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
+                    );
+                }
+            }
+            if fields.is_empty() {
+                return err(&format!("{f}.fields"), "must name at least one field");
+            }
+            for t in at {
+                if !(t.is_finite() && *t >= 0.0 && *t <= self.time.end) {
+                    return err(
+                        &format!("{f}.at"),
+                        format!("time {t} is outside [0, time.end]"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
