@@ -7,6 +7,15 @@
 use crate::field::Field;
 use crate::grid::Grid;
 
+/// The density on the face between two cells of densities `a` and `b`: their arithmetic mean.
+/// The one face-density rule of every stage: the mass of a momentum control volume (advection,
+/// viscous and elastic steps) and `1/ρ_f` in the pressure equation and its correction — the
+/// density stays inside the divergence, smooth across an interface (seed Eqs. 21–23).
+#[inline(always)]
+pub fn face_density(a: f64, b: f64) -> f64 {
+    0.5 * (a + b)
+}
+
 /// `∇·u` at cell `(i, j)`: `(r_{i+1} u_{i+1} − r_i u_i)/(r_c dx) + (v_{j+1} − v_j)/dy`.
 #[inline(always)]
 pub fn div(grid: &Grid, u: &Field, v: &Field, i: isize, j: isize) -> f64 {

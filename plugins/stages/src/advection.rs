@@ -295,7 +295,7 @@ fn face_masses(rho: &Field, mu: &mut Field, mv: &mut Field) {
     for_each_row(&mut mu.data_mut()[..(rows - 1) * s], s, |j, row| {
         let rr = &r[j * s..(j + 1) * s];
         for c in 1..s {
-            row[c] = 0.5 * (rr[c - 1] + rr[c]);
+            row[c] = efsi_core::ops::face_density(rr[c - 1], rr[c]);
         }
         row[0] = row[1];
     });

@@ -164,6 +164,7 @@
 use crate::advection::face_value;
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::{Coefficients, CompactFaces};
+use efsi_core::ops::face_density;
 use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -1581,13 +1582,13 @@ impl ElasticStage {
             let (w, rf, e) = if is_u {
                 (
                     m.rx(i) * dx * dy,
-                    0.5 * (rho.data()[q - 1] + rho.data()[q]),
+                    face_density(rho.data()[q - 1], rho.data()[q]),
                     stiff(i - 1, j).max(stiff(i, j)),
                 )
             } else {
                 (
                     m.rc(i) * dx * dy,
-                    0.5 * (rho.data()[q - s] + rho.data()[q]),
+                    face_density(rho.data()[q - s], rho.data()[q]),
                     stiff(i, j - 1).max(stiff(i, j)),
                 )
             };

@@ -119,7 +119,7 @@ impl ProjectionStage {
                 let ii = i as isize;
                 *e = if i + 1 < nx || px {
                     let ie = if i + 1 < nx { ii + 1 } else { 0 };
-                    m.rx(ii + 1) * dy / (0.5 * (rho[(ii, jj)] + rho[(ie, jj)]) * dx)
+                    m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
                 } else {
                     0.0
                 };
@@ -131,7 +131,7 @@ impl ProjectionStage {
                 let ii = i as isize;
                 *n = if j + 1 < ny || py {
                     let jn = if j + 1 < ny { jj + 1 } else { 0 };
-                    m.rc(ii) * dx / (0.5 * (rho[(ii, jj)] + rho[(ii, jn)]) * dy)
+                    m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
                 } else {
                     0.0
                 };
@@ -290,7 +290,7 @@ impl Stage for ProjectionStage {
             let (pe, pw) = (&pd[k..k + n], &pd[k - 1..k - 1 + n]);
             let (re, rw) = (&rd[k..k + n], &rd[k - 1..k - 1 + n]);
             for (t, u) in row[lo..hi].iter_mut().enumerate() {
-                *u -= cx * (pe[t] - pw[t]) / (0.5 * (re[t] + rw[t]));
+                *u -= cx * (pe[t] - pw[t]) / ops::face_density(re[t], rw[t]);
             }
         });
         let v0 = p.idx(0, vy.lo);
@@ -301,7 +301,7 @@ impl Stage for ProjectionStage {
             let (pn, ps) = (&pd[k..k + nx], &pd[k - s..k - s + nx]);
             let (rn, rs) = (&rd[k..k + nx], &rd[k - s..k - s + nx]);
             for (i, v) in row[..nx].iter_mut().enumerate() {
-                *v -= cy * (pn[i] - ps[i]) / (0.5 * (rn[i] + rs[i]));
+                *v -= cy * (pn[i] - ps[i]) / ops::face_density(rn[i], rs[i]);
             }
         });
         if cfg!(debug_assertions) {

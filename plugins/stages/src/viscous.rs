@@ -43,6 +43,7 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::{Coefficients, CompactFaces};
+use efsi_core::ops::face_density;
 use efsi_core::scene::ViscousPreconditioner;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
@@ -193,7 +194,7 @@ impl ViscousSystem {
                 for (c, (ms, dm)) in ms.iter_mut().zip(dms.iter_mut()).enumerate() {
                     let i = ux.lo + c as isize;
                     let k = idx(i, j as isize);
-                    *ms = 0.5 * (rd[k - 1] + rd[k]) * m.rx(i) * dx * dy;
+                    *ms = face_density(rd[k - 1], rd[k]) * m.rx(i) * dx * dy;
                     *dm = *ms + hoop[j * nur + c];
                 }
             });
@@ -202,7 +203,7 @@ impl ViscousSystem {
             let j = vy.lo + jr as isize;
             for (i, (ms, dm)) in ms.iter_mut().zip(dms.iter_mut()).enumerate() {
                 let k = idx(i as isize, j);
-                *ms = 0.5 * (rd[k - s] + rd[k]) * m.rc(i as isize) * dx * dy;
+                *ms = face_density(rd[k - s], rd[k]) * m.rc(i as isize) * dx * dy;
                 *dm = *ms;
             }
         });
