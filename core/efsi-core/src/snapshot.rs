@@ -69,7 +69,8 @@ impl Simulation {
     /// A copy of everything that determines the steps after this one (see [`Snapshot`]).
     pub fn snapshot(&self) -> Snapshot {
         let (last_change, velocity_scale) = self.stepping();
-        let mut guard = Vec::new();
+        // Room for the longest record: snapshots taken into this one later never allocate.
+        let mut guard = Vec::with_capacity(6);
         self.guard_record_into(&mut guard);
         Snapshot {
             state: self.state.clone(),
