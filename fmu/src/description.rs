@@ -37,6 +37,10 @@ const UNITS: &[(&str, &str)] = &[
     ("J", r#"kg="1" m="2" s="-2""#),
     ("N/m", r#"kg="1" s="-2""#),
     ("J/m", r#"kg="1" m="1" s="-2""#),
+    // Per radian: the probes of axisymmetric scenes (×2π for the whole body or domain).
+    ("N/rad", r#"kg="1" m="1" s="-2" rad="-1""#),
+    ("J/rad", r#"kg="1" m="2" s="-2" rad="-1""#),
+    ("m3/rad", r#"m="3" rad="-1""#),
 ];
 
 /// `s` with the XML special characters escaped.

@@ -12,6 +12,9 @@
 //!   gravity − a) and `boundaries.<side>.speed` of a moving wall.
 //! - **Outputs** are the scene's probe columns (`efsi run`'s `probes.csv` header), by name; with
 //!   no `--output`, all of them.
+//! - [`REFINE`] (`--parameter refine`) is the one parameter that is not a setting: the grid's
+//!   refinement factor (`efsi run --refine F`, [`Override::Refine`]), start value 1 — the
+//!   speed/accuracy knob, applied after the settings.
 //! - `max_solver_steps_per_step` (the bound on work per communication step) and the solver
 //!   step count `steps` are always there.
 //!
@@ -153,6 +156,10 @@ pub fn input_target(name: &str) -> Option<InputTarget> {
         .find(|s| s.field_name() == canonical)
         .map(InputTarget::WallSpeed)
 }
+
+/// The name of the grid-refinement parameter (`--parameter refine`): every grid dimension
+/// multiplied by its value, keeping the domain, after the settings are applied.
+pub const REFINE: &str = "refine";
 
 /// The value reference of the time.
 pub const VR_TIME: u32 = 0;
@@ -349,7 +356,11 @@ impl Spec {
                 start: Some(start),
                 min: p.range.0,
                 max: p.range.1,
-                description: format!("The scene setting `{}`", p.name),
+                description: if p.name == REFINE {
+                    "Grid refinement: every grid dimension multiplied by this factor (rounded), the domain kept, as efsi run --refine".into()
+                } else {
+                    format!("The scene setting `{}`", p.name)
+                },
             });
         }
         for (k, i) in self.inputs.iter().enumerate() {
@@ -423,10 +434,18 @@ impl Spec {
 
     /// The scene with the parameters' values applied (as overrides, in order).
     pub fn scene_with(&self, values: &[(String, OverrideValue)]) -> Result<Scene, String> {
-        let overrides: Vec<Override> = values
-            .iter()
-            .map(|(p, v)| Override::set(p.clone(), v.clone()))
-            .collect();
+        let mut overrides = Vec::with_capacity(values.len());
+        for (p, v) in values {
+            overrides.push(if p == REFINE {
+                match v {
+                    OverrideValue::Float(f) => Override::Refine(*f),
+                    OverrideValue::Int(i) => Override::Refine(*i as f64),
+                    other => return Err(format!("parameter `{REFINE}`: {other} is not a number")),
+                }
+            } else {
+                Override::set(p.clone(), v.clone())
+            });
+        }
         Scene::from_str_with(&self.scene, Path::new("resources/scene.ron"), &overrides)
             .map_err(|e| e.to_string())
     }
@@ -450,8 +469,11 @@ pub fn probe_columns(scene: &Scene) -> Vec<String> {
         .collect()
 }
 
-/// The value of the setting at `path` in `scene` (with its defaults).
+/// The value of the setting at `path` in `scene` (with its defaults); [`REFINE`]'s is 1.
 pub fn scene_value(scene: &Scene, path: &str) -> Result<OverrideValue, String> {
+    if path == REFINE {
+        return Ok(OverrideValue::Float(1.0));
+    }
     scene.get(path).map_err(|e| e.to_string())
 }
 
@@ -542,6 +564,10 @@ pub const SPHERE: &[&str] = &[
     "--range",
     "grid.nz=1..2000",
     "--parameter",
+    "refine",
+    "--range",
+    "refine=0.1..10",
+    "--parameter",
     "time.cfl",
     "--range",
     "time.cfl=0..1",
@@ -554,13 +580,13 @@ pub const SPHERE: &[&str] = &[
     "--output",
     "solid_v=m/s",
     "--output",
-    "contact_force=N",
+    "contact_force=N/rad",
     "--output",
     "contact_radius=m",
     "--output",
-    "kinetic_energy=J",
+    "kinetic_energy=J/rad",
     "--output",
-    "elastic_energy=J",
+    "elastic_energy=J/rad",
 ];
 
 #[cfg(test)]

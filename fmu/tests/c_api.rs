@@ -470,6 +470,40 @@ fn fmi3_refuses_a_bad_parameter_and_names_it_then_is_in_the_error_state() {
     f.do_step(0.0, H);
 }
 
+/// `refine` is `efsi run --refine`: refine = 0.6 on the default 23 × 47 grid is the 14 × 28
+/// grid (rounded), bit for bit; outside its range it is refused by name.
+#[test]
+fn the_refine_parameter_scales_the_grid_as_efsi_run_refine() {
+    let fmu = Extracted::new();
+    let by_grid = Fmi3::new(&fmu);
+    assert_eq!(by_grid.setup(None, 0.0192), OK, "{}", by_grid.last());
+    let by_refine = Fmi3::new(&fmu);
+    assert_eq!(by_refine.set_real(vr("refine"), 20.0), DISCARD);
+    assert!(
+        by_refine
+            .last()
+            .contains("parameter `refine` = 20: outside its range [0.1, 10]"),
+        "{}",
+        by_refine.last()
+    );
+    assert_eq!(by_refine.set_real(vr("refine"), 0.6), OK);
+    assert_eq!(by_refine.set_real(vr("solid.shape.center[1]"), 0.025), OK);
+    assert_eq!(by_refine.enter_init(None), OK);
+    assert_eq!(
+        by_refine.call("fmi3ExitInitializationMode"),
+        OK,
+        "{}",
+        by_refine.last()
+    );
+    for k in 0..3 {
+        by_grid.do_step(k as f64 * H, H);
+        by_refine.do_step(k as f64 * H, H);
+        assert_eq!(by_refine.reals(&outputs()), by_grid.reals(&outputs()));
+        assert_eq!(by_refine.steps(), by_grid.steps());
+    }
+    assert!(by_grid.steps() > 0);
+}
+
 #[test]
 fn a_null_or_unknown_instance_is_an_error_not_a_crash() {
     let fmu = Extracted::new();
@@ -549,11 +583,34 @@ fn serialised_states_move_between_extractions_and_set_before_initialisation() {
 /// B̃ missing and the restore ignored.
 #[test]
 fn a_step_failing_in_the_elastic_stage_keeps_the_last_good_state() {
-    let fmu = Extracted::with_laws(&[("efsi_test_law_nan", "test_nan")]);
-    let f = Fmi3::new(&fmu);
-    assert_eq!(f.set_string(vr("solid.law.name"), "test_nan"), OK);
     // Soft: the sphere flattens until b11 passes the law's limit (1.7) and its stress is NaN.
-    assert_eq!(f.set_real(vr("solid.law.parameters.G"), 2000.0), OK);
+    a_failing_law_leaves_the_last_good_state(
+        ("efsi_test_law_nan", "test_nan"),
+        2000.0,
+        "stage `elastic`: law `test_nan`: non-finite stress",
+    );
+}
+
+/// The same with a law that panics (past b11 = 10, which a very soft sphere reaches at
+/// t ≈ 40 ms): the panic is caught in the law's library, the step is `Discard`, the model time
+/// stays at the step's start and retries and states work — the failure that used to advance
+/// the time past the failed step and refuse every retry.
+#[test]
+fn a_step_whose_law_panics_keeps_the_last_good_state() {
+    a_failing_law_leaves_the_last_good_state(
+        ("efsi_test_law_panic", "test_panic"),
+        50.0,
+        "stage `elastic`: law `test_panic`: panicked in evaluate: b11 = ",
+    );
+}
+
+/// Step the sphere with the law `(library stem, name)` of shear modulus `g` until a step
+/// fails with `expected` in its message, then check the instance is at its last good state.
+fn a_failing_law_leaves_the_last_good_state(law: (&str, &str), g: f64, expected: &str) {
+    let fmu = Extracted::with_laws(&[law]);
+    let f = Fmi3::new(&fmu);
+    assert_eq!(f.set_string(vr("solid.law.name"), law.1), OK);
+    assert_eq!(f.set_real(vr("solid.law.parameters.G"), g), OK);
     assert_eq!(f.setup(None, 0.0192), OK, "{}", f.last());
     let mut t = 0.0;
     let mut good = std::ptr::null_mut();
@@ -574,7 +631,7 @@ fn a_step_failing_in_the_elastic_stage_keeps_the_last_good_state() {
     let message = f.last();
     assert!(
         message.contains("the solver failed between t = ")
-            && message.contains("stage `elastic`: law `test_nan`: non-finite stress")
+            && message.contains(expected)
             && message.contains(&format!("the instance is back at t = {t} exactly")),
         "{message}"
     );

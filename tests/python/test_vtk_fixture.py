@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkCommonCore import vtkCommand, vtkDoubleArray
+from vtkmodules.vtkCommonCore import vtkCommand, vtkDoubleArray, vtkFloatArray
 from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
 from vtkmodules.vtkIOXML import vtkXMLRectilinearGridReader
 
@@ -76,7 +76,8 @@ def assert_bit_equal(got, want, what):
 def test_fixture_lists_both_geometries(expected):
     geometries = {f["geometry"] for f in expected["files"]}
     assert geometries == {"Planar", "Axisymmetric"}
-    assert len(expected["files"]) == 4
+    assert len(expected["files"]) == 10
+    assert sum(f["float32"] and f["zlib"] and f["point_data"] for f in expected["files"]) == 6
 
 
 def test_vtr_grid_and_arrays(fixture_dir, expected):
@@ -101,16 +102,54 @@ def test_vtr_grid_and_arrays(fixture_dir, expected):
         cd = grid.GetCellData()
         got_names = [cd.GetArrayName(k) for k in range(cd.GetNumberOfArrays())]
         assert got_names == [a["name"] for a in f["arrays"]], name
-        assert grid.GetPointData().GetNumberOfArrays() == 0, name
+        pd = grid.GetPointData()
+        assert pd.GetNumberOfArrays() == (len(f["arrays"]) if f["point_data"] else 0), name
         for a in f["arrays"]:
             arr = cd.GetArray(a["name"])
             what = f"{name}: {a['name']}"
-            assert isinstance(arr, vtkDoubleArray), what
             assert arr.GetNumberOfComponents() == a["components"], what
             assert arr.GetNumberOfTuples() == f["cells"], what
             got = vtk_to_numpy(arr).reshape(f["cells"], a["components"])
             want = as_f64(a["values"]).reshape(f["cells"], a["components"])
-            assert_bit_equal(got, want, what)
+            if f["float32"]:
+                # Float32: the values rounded to single precision, exactly.
+                assert isinstance(arr, vtkFloatArray), what
+                assert got.dtype == np.float32, what
+                assert np.array_equal(got.view(np.uint32), want.astype(np.float32).view(np.uint32)), what
+            else:
+                assert isinstance(arr, vtkDoubleArray), what
+                assert_bit_equal(got, want, what)
+            if f["point_data"]:
+                # Each node: the mean of the (up to four) cells around it.
+                nx, ny = (d - 1 for d in f["dims"] if d > 1)
+                cells = want.reshape(ny, nx, a["components"])
+                padded = np.full((ny + 2, nx + 2, a["components"]), np.nan)
+                padded[1:-1, 1:-1] = cells
+                around = np.stack([padded[:-1, :-1], padded[:-1, 1:], padded[1:, :-1], padded[1:, 1:]])
+                nodes = np.nanmean(around, axis=0).reshape(-1, a["components"])
+                parr = pd.GetArray(a["name"])
+                assert parr.GetNumberOfComponents() == a["components"], what
+                got_p = vtk_to_numpy(parr).reshape(-1, a["components"])
+                assert np.allclose(got_p, nodes, rtol=1e-6, atol=1e-6), what
+
+
+def test_vtr_text_field_data(fixture_dir, expected):
+    """The geometry and units notes come back as one-tuple string arrays."""
+    for f in expected["files"]:
+        fd = read_vtr(fixture_dir / f["file"]).GetOutput().GetFieldData()
+        for note in f["notes"]:
+            arr = fd.GetAbstractArray(note["name"])
+            assert arr is not None, f"{f['file']}: no {note['name']}"
+            assert arr.GetNumberOfTuples() == 1
+            assert arr.GetValue(0) == note["text"], f["file"]
+        if f["geometry"] == "Axisymmetric" and f["notes"]:
+            assert "X = r" in fd.GetAbstractArray("geometry").GetValue(0)
+
+
+def test_zlib_files_name_the_compressor(fixture_dir, expected):
+    for f in expected["files"]:
+        header = (fixture_dir / f["file"]).read_bytes()[:300]
+        assert (b'compressor="vtkZLibDataCompressor"' in header) == f["zlib"], f["file"]
 
 
 def test_vtr_time(fixture_dir, expected):

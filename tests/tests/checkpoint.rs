@@ -431,3 +431,69 @@ fn checkpoint_of_a_128_cavity_is_small_and_quick() {
     assert_eq!(back.record.step(), 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The energy guard's baseline is part of the checkpoint: a run pumping energy in (a Saint
+/// Venant–Kirchhoff sphere, whose stiffness turns negative in compression) stopped halfway to
+/// the guard's verdict and resumed is stopped at the same step with the same figures as the
+/// uninterrupted run (issue 20 item 12; the baseline used to restart at the resume, which moved
+/// or removed the verdict).
+#[test]
+fn the_energy_guard_judges_a_resumed_run_as_the_uninterrupted_one() {
+    const SVK: &str = r#"Scene(
+    name: "svk_sphere",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 0.045), z: (0.0, 0.09)),
+    grid: (nr: 19, nz: 38),
+    time: (end: 0.02, cfl: 0.4),
+    fluid: (density: 1.2, viscosity: 1.8e-5),
+    gravity: (0.0, -9.81),
+    solid: (
+        shape: Disk(center: (0.0, 0.0573), radius: 0.0192),
+        density: 1106.0,
+        velocity: (0.0, -1.22),
+        law: (name: "saint_venant_kirchhoff", parameters: {"lambda": 4e5, "mu": 1.8e5}),
+    ),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    output: (probe_every: 0.0005, probes: [KineticEnergy, PotentialEnergy]),
+)
+"#;
+    let dir = scratch("guard");
+    let verdict = |e: EfsiError| match e {
+        EfsiError::Saved { error, step, .. } => match *error {
+            EfsiError::EnergyGrowth { .. } => (step, error.to_string()),
+            other => panic!("not the energy guard: {other}"),
+        },
+        other => panic!("not a saved failure: {other}"),
+    };
+    let mut a = load(&dir, SVK);
+    let whole =
+        verdict(run_with(&mut a, &dir.join("a"), &RunOptions::default(), &mut |_| {}).unwrap_err());
+    assert!(whole.0 > 4, "the guard fires at step {}", whole.0);
+    let stop_at = whole.0 / 2;
+    let mut b = load(&dir, SVK);
+    let flag = Arc::new(AtomicUsize::new(0));
+    let opts = RunOptions {
+        stop: Some(flag.clone()),
+        ..RunOptions::default()
+    };
+    let first = run_with(&mut b, &dir.join("b"), &opts, &mut |p| {
+        if p.step == stop_at {
+            flag.store(2, Ordering::SeqCst);
+        }
+    })
+    .unwrap();
+    assert_eq!(first.steps, stop_at);
+    let resumed = resume(
+        &dir.join("b"),
+        &efsi_stages::builtin(),
+        &RunOptions::default(),
+        &mut |_| {},
+    );
+    let resumed = verdict(
+        resumed
+            .err()
+            .expect("the resumed run must be stopped by the guard"),
+    );
+    assert_eq!(resumed, whole);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,12 +1,15 @@
 //! Project automation.
 //!
 //! - `cargo xtask test`: everything CI runs — formatting, clippy and rustdoc (warnings are
-//!   errors), the Rust test suite, and the Python tests (VTK files read back by the official `vtk` wheel) in a
-//!   virtual environment under `target/venv` that it creates on first use.
+//!   errors), the Rust test suite, and the Python tests (VTK files read back by the official `vtk` wheel,
+//!   the FMUs, the `efsi` Python package built by maturin and installed there, sweeps on a local
+//!   Dask cluster) in a virtual environment under `target/venv` that it creates on first use.
 //! - `cargo xtask run SCENE [ARGS…]`: build the whole workspace in release (the `efsi` binary
 //!   and the law plugin libraries it loads) and run `efsi run SCENE ARGS…`.
 //! - `cargo xtask ghia DIR RE`: max |deviation| of a finished cavity run's last centreline
-//!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982).
+//!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982); refuses a
+//!   run whose Reynolds number (`ρ U L / μ` of the scene in `DIR/run.json`) is not `RE`, and names
+//!   the Reynolds numbers the reference has when it has no column for `RE`.
 //! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]`: the
 //!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
 //!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
@@ -17,13 +20,17 @@
 //!   per cell-step in total and per stage, solver iterations per step and the drop's fall;
 //!   medians of R runs (the 1- and N-thread runs alternate; the speed-up of each pair is
 //!   printed as a range and kept in the JSON), written to `DIR/bench.json` (default
-//!   `target/bench`). A benchmark, not a test: timings are never asserted.
+//!   `target/bench`). A benchmark, not a test: timings are never asserted. With `--roofline`
+//!   it also measures the machine's triad bandwidth and prints, per case and stage, the bytes
+//!   per cell-step of a compulsory-traffic model, the achieved bandwidth and its fraction of the
+//!   limit ([`roofline`]).
 //! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
 //!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
 //!   laws (profile `fmu-release`: release code, stripped) and package the scene as
 //!   `target/fmu/<name>.fmu` (FMI 2.0 Co-Simulation) and `target/fmu/<name>_fmi3.fmu` (FMI 3.0),
 //!   with their documentation and licence; without a scene, the sphere impact.
 
+mod roofline;
 mod zip;
 
 use std::path::{Path, PathBuf};
@@ -78,7 +85,7 @@ fn python_env() -> Result<PathBuf, String> {
         .arg(&req);
         run(
             c,
-            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy)",
+            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy, maturin, dask, pandas, pyarrow)",
         )?;
         std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
     }
@@ -243,6 +250,7 @@ fn test() -> Result<(), String> {
         "boundaries.y_max.speed=m/s",
     ]))?;
     let py = python_env()?;
+    install_python_package(&py)?;
     let mut c = Command::new(py);
     c.args(["-m", "pytest", "-q", "--durations=5", "tests/python"])
         .env("EFSI_BIN", root().join("target/debug/efsi"))
@@ -251,6 +259,37 @@ fn test() -> Result<(), String> {
             fmu2.parent().map(Path::to_path_buf).unwrap_or_default(),
         );
     run(c, "pytest tests/python")
+}
+
+/// Build the `efsi` Python package's wheel (python/, maturin, release: `--profile test` would
+/// make `cargo rustc` build the test harness instead of the module) into `target/wheels` and
+/// install it into the venv of `py`, replacing an earlier one.
+fn install_python_package(py: &Path) -> Result<(), String> {
+    let wheels = root().join("target/wheels");
+    let _ = std::fs::remove_dir_all(&wheels);
+    let mut c = Command::new(py);
+    c.args(["-m", "maturin", "build", "--quiet", "--release", "-m"])
+        .arg(root().join("python/Cargo.toml"))
+        .arg("--out")
+        .arg(&wheels);
+    run(c, "build the efsi Python package (maturin)")?;
+    let wheel = std::fs::read_dir(&wheels)
+        .map_err(|e| format!("{}: {e}", wheels.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "whl"))
+        .ok_or_else(|| format!("{}: maturin left no wheel", wheels.display()))?;
+    let mut c = Command::new(py);
+    c.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+        "--no-deps",
+        "--force-reinstall",
+    ])
+    .arg(&wheel);
+    run(c, "install the efsi Python package into target/venv")
 }
 
 /// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`
@@ -388,6 +427,8 @@ fn run_case(c: &Case, threads: usize, out: &Path) -> Result<Figures, String> {
         .arg("-q")
         .arg("--threads")
         .arg(threads.to_string())
+        // Repeats and reruns replace the case's earlier outputs.
+        .arg("--overwrite")
         .stdout(std::process::Stdio::null());
     let status = cmd
         .status()
@@ -457,6 +498,7 @@ fn median_figures(runs: &[Figures]) -> Figures {
 fn bench(args: &[String]) -> Result<(), String> {
     let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
     let quick = args.iter().any(|a| a == "--quick");
+    let with_roofline = args.iter().any(|a| a == "--roofline");
     let out = value("--out")
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target/bench"));
@@ -492,7 +534,21 @@ fn bench(args: &[String]) -> Result<(), String> {
     if threads != 1 {
         pools.push(threads);
     }
+    // The bandwidth limits, measured in this run (main memory, last-level cache) per pool size.
+    let limits: Vec<(f64, f64)> = if with_roofline {
+        pools.iter().map(|&t| roofline::limits(t)).collect()
+    } else {
+        Vec::new()
+    };
+    for (&t, (mem, llc)) in pools.iter().zip(&limits) {
+        println!(
+            "triad, {t} thread(s): main memory {:.1} GB/s, last-level cache {:.1} GB/s",
+            mem / 1e9,
+            llc / 1e9
+        );
+    }
     let mut json = Vec::new();
+    let mut rows = Vec::new();
     println!(
         "{:<14} {:>3} {:>6} {:>10} {:>8}  per stage: ns/cell-step (solver iterations/step)",
         "case", "thr", "steps", "ns/cell·st", "speedup"
@@ -561,7 +617,47 @@ fn bench(args: &[String]) -> Result<(), String> {
                 base / f.total,
                 f.wall
             );
+            let roof = limits.get(k).map(|&(mem, llc)| {
+                let per_stage: Vec<serde_json::Value> = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, ns, it)| {
+                        let m = roofline::model(n)?;
+                        let b = roofline::bytes(m, *it);
+                        let bw = b / (ns * 1e-9);
+                        rows.push((c.name.clone(), t, n.clone(), *ns, b, bw, bw / mem, bw / llc));
+                        Some(serde_json::json!({
+                            "name": n, "bytes_per_cell_step": b, "achieved_bytes_per_s": bw,
+                            "fraction_of_memory_triad": bw / mem,
+                            "fraction_of_cache_triad": bw / llc,
+                        }))
+                    })
+                    .collect();
+                let total_bytes: f64 = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, _, it)| roofline::model(n).map(|m| roofline::bytes(m, *it)))
+                    .sum();
+                let bw = total_bytes / (f.total * 1e-9);
+                rows.push((
+                    c.name.clone(),
+                    t,
+                    "total".into(),
+                    f.total,
+                    total_bytes,
+                    bw,
+                    bw / mem,
+                    bw / llc,
+                ));
+                serde_json::json!({
+                    "memory_triad_bytes_per_s": mem, "cache_triad_bytes_per_s": llc,
+                    "bytes_per_cell_step": total_bytes, "achieved_bytes_per_s": bw,
+                    "fraction_of_memory_triad": bw / mem, "fraction_of_cache_triad": bw / llc,
+                    "stages": per_stage,
+                })
+            });
             json.push(serde_json::json!({
+                "roofline": roof,
                 "case": c.name,
                 "threads": t,
                 "cells": c.cells,
@@ -580,10 +676,28 @@ fn bench(args: &[String]) -> Result<(), String> {
             }));
         }
     }
+    if with_roofline {
+        println!(
+            "\nroofline (compulsory traffic model: xtask/src/roofline.rs)\n{:<14} {:>3} {:<12} {:>10} {:>10} {:>8} {:>8} {:>8}",
+            "case", "thr", "stage", "ns/cell·st", "B/cell·st", "GB/s", "of mem", "of LLC"
+        );
+        for (case, t, stage, ns, b, bw, fm, fc) in &rows {
+            println!(
+                "{case:<14} {t:>3} {stage:<12} {ns:>10.1} {b:>10.0} {:>8.2} {:>7.0}% {:>7.0}%",
+                bw / 1e9,
+                100.0 * fm,
+                100.0 * fc
+            );
+        }
+    }
     let path = out.join("bench.json");
     let text = serde_json::to_string_pretty(&serde_json::json!({
         "quick": quick,
         "threads": pools,
+        "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
+            "stage": m.stage, "values_per_cell_step": m.fixed,
+            "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
+        })).collect::<Vec<_>>(),
         "cases": json,
     }))
     .map_err(|e| e.to_string())?;
@@ -626,15 +740,73 @@ fn column<'a>(
     h.iter()
         .position(|n| n == name)
         .map(|k| c[k].as_slice())
-        .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+        .ok_or_else(|| {
+            format!(
+                "{}: no column `{name}`; the columns are: {}",
+                path.display(),
+                h.join(", ")
+            )
+        })
+}
+
+/// The Reynolds number `ρ U L / μ` of a cavity run, from the effective scene its `run.json`
+/// records: `U` the speed of its moving wall, `L` the domain's length along that wall.
+fn run_reynolds(run_json: &serde_json::Value) -> Result<f64, String> {
+    let scene = &run_json["scene"];
+    let num = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .ok_or_else(|| format!("run.json has no number at scene.{what}"))
+    };
+    let rho = num(&scene["fluid"]["density"], "fluid.density")?;
+    let mu = num(&scene["fluid"]["viscosity"], "fluid.viscosity")?;
+    let mut lids = Vec::new();
+    for (side, axis) in [
+        ("x_min", "y"),
+        ("x_max", "y"),
+        ("y_min", "x"),
+        ("y_max", "x"),
+    ] {
+        if let Some(w) = scene["boundaries"][side].get("MovingWall") {
+            let speed = num(&w["speed"], &format!("boundaries.{side}.speed"))?;
+            let d = &scene["domain"][axis];
+            let length = num(&d[1], &format!("domain.{axis}[1]"))?
+                - num(&d[0], &format!("domain.{axis}[0]"))?;
+            lids.push((side, speed, length));
+        }
+    }
+    match lids.as_slice() {
+        [(_, speed, length)] => Ok(rho * speed.abs() * length / mu),
+        [] => Err("the run's scene has no moving wall: not a lid-driven cavity".into()),
+        _ => Err(format!(
+            "the run's scene has {} moving walls ({}): not a lid-driven cavity",
+            lids.len(),
+            lids.iter().map(|l| l.0).collect::<Vec<_>>().join(", ")
+        )),
+    }
+}
+
+/// Check that the run in `dir` is at the Reynolds number `re` (within 1e-6 relative).
+fn check_reynolds(dir: &Path, re: f64) -> Result<(), String> {
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let run_re = run_reynolds(&json).map_err(|e| format!("{}: {e}", path.display()))?;
+    if (run_re - re).abs() > 1e-6 * re.abs() {
+        return Err(format!(
+            "{}: the run is at Re = ρ U L / μ = {run_re} (from its scene), not {re}",
+            path.display()
+        ));
+    }
+    Ok(())
 }
 
 /// The profile with the latest time among `DIR/profiles/<stem>_t*.csv`.
 fn last_profile(dir: &Path, stem: &str) -> Result<PathBuf, String> {
     let prefix = format!("{stem}_t");
     let mut best: Option<(f64, PathBuf)> = None;
-    for e in
-        std::fs::read_dir(dir.join("profiles")).map_err(|e| format!("{}: {e}", dir.display()))?
+    for e in std::fs::read_dir(dir.join("profiles"))
+        .map_err(|e| format!("{}: {e}", dir.join("profiles").display()))?
     {
         let p = e.map_err(|e| e.to_string())?.path();
         let name = p
@@ -660,6 +832,10 @@ fn ghia(args: &[String]) -> Result<(), String> {
         return Err("usage: cargo xtask ghia DIR RE".into());
     };
     let dir = PathBuf::from(dir);
+    let re_value: f64 = re
+        .parse()
+        .map_err(|_| format!("RE must be a number, got `{re}`"))?;
+    check_reynolds(&dir, re_value)?;
     let refs = root().join("tests/references/ghia1982");
     for (stem, field, coord, file) in [
         (
@@ -682,7 +858,7 @@ fn ghia(args: &[String]) -> Result<(), String> {
         let (rh, rc) = read_csv(&rpath)?;
         let (rs, rf) = (
             column(&rh, &rc, coord, &rpath)?,
-            column(&rh, &rc, &format!("{field}_Re{re}"), &rpath)?,
+            column(&rh, &rc, &format!("{field}_Re{re_value}"), &rpath)?,
         );
         let mut dev = 0.0f64;
         for (&x, &want) in rs.iter().zip(rf) {
@@ -726,7 +902,7 @@ fn main() -> ExitCode {
         Some("bench-paper") => bench_paper(&args[1..]),
         Some("fmu") => fmu(&args[1..]).map(|_| ()),
         _ => Err(
-            "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--cases LIST] \
+            "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--roofline] [--cases LIST] \
              [--threads N] [--repeat R] [--out DIR] | bench-paper [--quick] [--case NAME]… \
              [--out DIR] | ghia DIR RE>"
                 .into(),
@@ -757,5 +933,68 @@ fn bench_paper(args: &[String]) -> Result<(), String> {
         Ok(())
     } else {
         std::process::exit(status.code().unwrap_or(1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cavity_json(viscosity: f64, lid: &str) -> serde_json::Value {
+        serde_json::json!({"scene": {
+            "fluid": {"density": 1.0, "viscosity": viscosity},
+            "domain": {"x": [0.0, 2.0], "y": [0.0, 1.0]},
+            "boundaries": {"x_min": "NoSlip", "x_max": "NoSlip", "y_min": "NoSlip",
+                           lid: {"MovingWall": {"speed": -0.5, "profile": "Uniform", "motion": "Steady"}}},
+        }})
+    }
+
+    #[test]
+    fn ghia_checks_the_runs_reynolds_number() {
+        // ρ |U| L / μ with L the lid's length (x for a lid on y_max).
+        assert_eq!(run_reynolds(&cavity_json(0.01, "y_max")), Ok(100.0));
+        assert_eq!(run_reynolds(&cavity_json(0.01, "x_max")), Ok(50.0));
+        let mut no_lid = cavity_json(0.01, "y_max");
+        no_lid["scene"]["boundaries"]["y_max"] = "NoSlip".into();
+        assert!(
+            run_reynolds(&no_lid)
+                .unwrap_err()
+                .contains("no moving wall")
+        );
+        let dir = std::env::temp_dir().join(format!("xtask-ghia-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("run.json"),
+            cavity_json(0.001, "y_max").to_string(),
+        )
+        .unwrap();
+        assert_eq!(check_reynolds(&dir, 1000.0), Ok(()));
+        let e = check_reynolds(&dir, 100.0).unwrap_err();
+        assert!(e.contains("the run is at Re = ρ U L / μ = 1000"), "{e}");
+        assert!(e.contains("not 100"), "{e}");
+        // A Reynolds number the reference has no column for: the columns it has are listed.
+        std::fs::write(
+            dir.join("run.json"),
+            cavity_json(0.0025, "y_max").to_string(),
+        )
+        .unwrap();
+        let e = ghia(&[dir.display().to_string(), "400".into()]).unwrap_err();
+        assert!(e.contains("profiles: No such file"), "{e}");
+        let profiles = dir.join("profiles");
+        std::fs::create_dir_all(&profiles).unwrap();
+        std::fs::write(
+            profiles.join("u_x0.5_t1.csv"),
+            "s,x,y,u\n0,0.5,0,0\n1,0.5,1,1\n",
+        )
+        .unwrap();
+        let e = ghia(&[dir.display().to_string(), "400".into()]).unwrap_err();
+        assert!(e.contains("no column `u_Re400`"), "{e}");
+        assert!(
+            e.contains("the columns are: grid_point, y, u_Re100, u_Re1000"),
+            "{e}"
+        );
+        let e = ghia(&[dir.display().to_string(), "fast".into()]).unwrap_err();
+        assert!(e.contains("RE must be a number, got `fast`"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -19,6 +19,8 @@ macro_rules! out {
     }};
 }
 
+mod plot;
+
 use clap::{Parser, Subcommand};
 use efsi_core::{EfsiError, Override, Scene, Simulation};
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
@@ -86,6 +88,10 @@ enum Command {
         /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Replace the outputs of an earlier run in the output folder (run.json, probes.csv,
+        /// fields.pvd, VTK files, profiles, its checkpoint); without it such a folder is refused.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Continue a run from the latest checkpoint in its output folder, appending to its outputs.
     ///
@@ -109,13 +115,61 @@ enum Command {
         #[command(flatten)]
         overrides: SceneOverrides,
     },
+    /// Describe a run's VTK files: format, axes, units and every array (location, components
+    /// in file order, meaning, unit), from the `vtk` section of DIR/run.json.
+    DescribeOutput {
+        /// The run's output folder.
+        dir: PathBuf,
+    },
+    /// Plot a run without ParaView: PNGs of the probe time series and of a field.
+    ///
+    /// Writes OUT/probes.png (every probes.csv column against time) and
+    /// OUT/FIELD_tTIME.png (a cell field at an output time, colour-mapped, with the solid's
+    /// φ = ½ contour over it when the run has a solid).
+    Plot {
+        /// The run's output folder.
+        dir: PathBuf,
+        /// The field (a VTK array: velocity, pressure, solid_fraction, B, stress, …; default
+        /// solid_fraction with a solid, else pressure).
+        #[arg(long)]
+        field: Option<String>,
+        /// The component of a vector or tensor field (default: a vector's magnitude, a
+        /// tensor's XX component).
+        #[arg(long)]
+        component: Option<usize>,
+        /// The output time to plot (the nearest written; default the last).
+        #[arg(long, value_name = "T")]
+        time: Option<f64>,
+        /// Where the PNGs go (default DIR/plots).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// List the constitutive laws, with their parameters, units, defaults and ranges.
     ///
     /// Shows the shipped laws found on the law search path ($EFSI_LAW_PATH, next to efsi, the
     /// build's target folders) and every law library given.
+    ///
+    /// With --check, runs the tangent check (the one every law passes when loaded: the tangent
+    /// against central differences of the stress at 26 deformed states, default parameters) on
+    /// each library given, or on every law found if none is; exit code 2 if a law fails it.
     Laws {
         /// Law libraries to describe as well (e.g. one built from plugins/law-template).
         paths: Vec<PathBuf>,
+        /// Run the tangent check on the libraries instead of describing them.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Run a scene over a grid of settings as Dask tasks: `efsi sweep SCENE --grid PATH=V1,V2 …
+    /// [--scheduler ADDRESS] [--out FILE]`.
+    ///
+    /// Runs `python -m efsi sweep` of the efsi Python package (the interpreter: $EFSI_PYTHON,
+    /// else python3), which prints the table and writes it as CSV or Parquet; `--help` there
+    /// lists the options. Without --scheduler the runs go to a LocalCluster on this machine.
+    #[command(disable_help_flag = true)]
+    Sweep {
+        /// The scene file and the sweep's options, passed on.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 0..)]
+        args: Vec<std::ffi::OsString>,
     },
 }
 
@@ -149,6 +203,7 @@ fn main() -> ExitCode {
             quiet,
             checkpoint_every,
             threads,
+            overwrite,
         } => {
             // The run loop runs on a worker of the pool, so the stages' parallel loops start
             // from inside it (cheaper than injecting each from outside, and allocation-free).
@@ -165,6 +220,7 @@ fn main() -> ExitCode {
                         print_schedule,
                         quiet,
                         checkpoint_every,
+                        overwrite,
                     )
                 }),
                 Err(e) => {
@@ -184,7 +240,50 @@ fn main() -> ExitCode {
                 return ExitCode::from(1);
             }
         },
-        Command::Laws { paths } => return list_laws(&paths),
+        Command::Plot {
+            dir,
+            field,
+            component,
+            time,
+            out,
+        } => {
+            let out = out.unwrap_or_else(|| dir.join("plots"));
+            let request = plot::FieldRequest {
+                field,
+                component,
+                time,
+            };
+            return match plot::plot(&dir, &out, &request) {
+                Ok(files) => {
+                    for f in files {
+                        out!("wrote {}", f.display());
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Command::DescribeOutput { dir } => {
+            return match describe_output(&dir) {
+                Ok(text) => {
+                    out!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Command::Laws {
+            paths,
+            check: false,
+        } => return list_laws(&paths),
+        Command::Laws { paths, check: true } => return check_laws(&paths),
+        Command::Sweep { args } => return sweep(&args),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,
@@ -198,7 +297,7 @@ fn main() -> ExitCode {
 
 /// Run options with a stop flag that SIGINT and SIGTERM set to their number. A second signal
 /// while the first is being handled exits at once (128 + signal).
-fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
+fn options(checkpoint_every: Option<f64>, overwrite: bool) -> Result<RunOptions, EfsiError> {
     if let Some(t) = checkpoint_every
         && !(t.is_finite() && t > 0.0)
     {
@@ -223,6 +322,7 @@ fn options(checkpoint_every: Option<f64>) -> Result<RunOptions, EfsiError> {
         checkpoint_every,
         stop: Some(stop),
         save_last_good: true,
+        overwrite,
     })
 }
 
@@ -257,7 +357,7 @@ fn resume_run(
     quiet: bool,
     checkpoint_every: Option<f64>,
 ) -> Result<Option<usize>, EfsiError> {
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, false)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
@@ -274,6 +374,7 @@ fn run_scene(
     print_schedule: bool,
     quiet: bool,
     checkpoint_every: Option<f64>,
+    overwrite: bool,
 ) -> Result<Option<usize>, EfsiError> {
     let mut sim = load(path, overrides)?;
     if print_schedule {
@@ -283,7 +384,7 @@ fn run_scene(
     let dir = out
         .or_else(|| sim.scene.output.folder.clone())
         .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
-    let opts = options(checkpoint_every)?;
+    let opts = options(checkpoint_every, overwrite)?;
     let bar = progress_bar(quiet);
     let mut last_draw = 0.0;
     let mut progress = |p: &Progress| draw(&bar, &mut last_draw, p);
@@ -318,6 +419,9 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
     if sim.rate_of_change().is_finite() {
         out!("final max|uⁿ⁺¹ − uⁿ|/Δt = {:.3e}", sim.rate_of_change());
     }
+    for w in &outcome.warnings {
+        eprintln!("warning: {w}");
+    }
     out!(
         "{:<16} {:>10} {:>16} {:>14}",
         "stage",
@@ -349,6 +453,129 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
             Some(signal)
         }
         _ => None,
+    }
+}
+
+/// `efsi describe-output DIR`: the `vtk` section of `DIR/run.json` as text.
+fn describe_output(dir: &Path) -> Result<String, String> {
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let vtk = json.get("vtk").ok_or_else(|| {
+        format!(
+            "{}: no `vtk` section (written by an older efsi?)",
+            path.display()
+        )
+    })?;
+    let s = |v: &serde_json::Value| v.as_str().map_or_else(|| v.to_string(), str::to_string);
+    let mut out = format!(
+        "VTK files of {}: {} arrays, compression {}, point data {}\n",
+        dir.display(),
+        s(&vtk["precision"]),
+        s(&vtk["compression"]),
+        vtk["point_data"]
+    );
+    if let Some(notes) = vtk["field_data"].as_object() {
+        for (k, v) in notes {
+            out.push_str(&format!("{k}: {}\n", s(v)));
+        }
+    }
+    for a in vtk["arrays"].as_array().into_iter().flatten() {
+        let components: Vec<String> = a["components"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(s)
+            .collect();
+        out.push_str(&format!(
+            "\n{} ({}; {}) [{}]\n  {}\n",
+            s(&a["name"]),
+            s(&a["location"]),
+            components.join(", "),
+            s(&a["unit"]),
+            s(&a["meaning"])
+        ));
+    }
+    Ok(out.trim_end().to_string())
+}
+
+/// `efsi laws --check`: the tangent check of each library in `paths` (every law found if
+/// none); exit code 2 if a law fails it or cannot be checked.
+fn check_laws(paths: &[PathBuf]) -> ExitCode {
+    let mut libraries = paths.to_vec();
+    let mut failed = false;
+    if libraries.is_empty() {
+        for law in efsi_laws_host::list_laws(&[]) {
+            match law {
+                Ok(info) => libraries.push(info.path),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    failed = true;
+                }
+            }
+        }
+    }
+    if libraries.is_empty() && !failed {
+        eprintln!("error: no laws found to check");
+        return ExitCode::from(2);
+    }
+    for path in &libraries {
+        match efsi_laws_host::check_library(path) {
+            Ok((info, check)) if check.passed() => {
+                out!(
+                    "{} ({}): tangent check passed — {check}",
+                    info.name,
+                    path.display()
+                );
+            }
+            Ok((info, check)) => {
+                eprintln!(
+                    "error: {} ({}): tangent check FAILED — {check}",
+                    info.name,
+                    path.display()
+                );
+                failed = true;
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    if failed {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+/// `efsi sweep`: hand over to the Python package's `python -m efsi sweep` (exit code 2 if the
+/// interpreter cannot be started).
+fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
+    let python = std::env::var_os("EFSI_PYTHON").unwrap_or_else(|| "python3".into());
+    let mut c = std::process::Command::new(&python);
+    c.args(["-m", "efsi", "sweep"]).args(args);
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt as _;
+        let e = c.exec();
+        eprintln!(
+            "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+            Path::new(&python).display()
+        );
+        ExitCode::from(2)
+    }
+    #[cfg(not(unix))]
+    match c.status() {
+        Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
+        Err(e) => {
+            eprintln!(
+                "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+                Path::new(&python).display()
+            );
+            ExitCode::from(2)
+        }
     }
 }
 

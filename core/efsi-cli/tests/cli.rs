@@ -136,6 +136,12 @@ fn check_and_print_schedule() {
         .map(|l| l.split_whitespace().nth(1).unwrap())
         .collect();
     assert_eq!(stages, ["advection", "viscous", "projection"]);
+    // Each stage names the type that implements it.
+    assert!(
+        s.contains("(efsi_stages::viscous::Viscous)")
+            && s.contains("(efsi_stages::projection::Projection)"),
+        "{s}"
+    );
 }
 
 #[test]
@@ -187,4 +193,100 @@ fn run_writes_fields_probes_profiles_and_summary() {
     ] {
         assert!(json.contains(key), "{key} missing from run.json");
     }
+}
+
+/// A profile's `at` times are written when reached; when the run stops at a steady state before
+/// some of them, the profile is written at the end instead, and the run says so on stderr and in
+/// `run.json`.
+#[test]
+fn profile_past_a_steady_stop_is_written_at_the_end_and_reported() {
+    for case in ["end", "steady"] {
+        let d = tmp(&format!("late-profile-{case}"));
+        let time = if case == "end" {
+            "time: (end: 0.5)"
+        } else {
+            // Steady from the first step (the flow changes by far less than 1e9 per unit
+            // time): the run stops at t = Δt.
+            "time: (end: 5.0, steady: 1e9)"
+        };
+        let at = if case == "end" {
+            "[0.5, 0.2]"
+        } else {
+            "[0.2, 0.7, 5.0]"
+        };
+        let text = GOOD.replace("time: (end: 0.5)", time).replace(
+            "points: 11, fields: [\"u\", \"p\"])",
+            &format!("points: 11, fields: [\"u\", \"p\"], at: {at})"),
+        );
+        let path = write_scene(&d, &text);
+        let out_dir = d.join("out");
+        let out = efsi(&["run", &path, "--out", out_dir.to_str().unwrap(), "-q"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{case}: {err}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out_dir.join("run.json")).unwrap())
+                .unwrap();
+        let t_end = json["t_end"].as_f64().unwrap();
+        let mut files: Vec<String> = std::fs::read_dir(out_dir.join("profiles"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        files.sort();
+        let warnings = json["warnings"].as_array().unwrap();
+        if case == "end" {
+            assert_eq!(json["stop"], "EndTime");
+            assert_eq!(files, ["u_x0.5_t0.2.csv", "u_x0.5_t0.5.csv"]);
+            assert!(warnings.is_empty(), "{warnings:?}");
+            assert!(!err.contains("warning"), "{err}");
+            continue;
+        }
+        assert_eq!(json["stop"], "Steady");
+        assert!(t_end < 0.2, "steady at {t_end}");
+        let label = efsi_run::run::time_label(t_end);
+        assert_eq!(files, [format!("u_x0.5_t{label}.csv")]);
+        let rows = std::fs::read_to_string(out_dir.join(format!("profiles/u_x0.5_t{label}.csv")))
+            .unwrap()
+            .lines()
+            .count();
+        assert_eq!(rows, 12);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let w = warnings[0].as_str().unwrap();
+        let want = format!(
+            "profile `u_x0.5`: the run ended at t = {label} before its time(s) 0.2, 0.7, 5; written at the end instead"
+        );
+        assert!(w.starts_with(&want), "{w}");
+        assert!(err.contains(&format!("warning: {want}")), "{err}");
+    }
+}
+
+/// `efsi describe-output DIR` prints run.json's description of the VTK files: axes, units and
+/// each array with its components and unit; a folder without run.json is refused.
+#[test]
+fn describe_output_documents_every_array() {
+    let d = tmp("describe");
+    let path = write_scene(&d, GOOD);
+    let out_dir = d.join("out");
+    let o = efsi(&["run", &path, "--out", out_dir.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = efsi(&["describe-output", out_dir.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{text}");
+    for needle in [
+        "Float64 arrays, compression None, point data false",
+        "geometry: planar: X = x, Y = y",
+        "units: the scene's units",
+        "velocity (cell; u_x, u_y, 0) [m/s]",
+        "pressure (cell; p) [Pa]",
+        "divergence (cell; ∇·u) [1/s]",
+    ] {
+        assert!(text.contains(needle), "`{needle}` missing from:\n{text}");
+    }
+    // No solid: no solid_fraction, B or stress.
+    assert!(
+        !text.contains("\nsolid_fraction (") && !text.contains("\nB ("),
+        "{text}"
+    );
+    let o = efsi(&["describe-output", d.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("run.json"));
 }

@@ -220,6 +220,17 @@ fn a_law_returning_nan_stops_the_run_naming_the_law() {
     let at = err.find("the last good state (step ").expect(&err) + 26;
     let step: u64 = err[at..].split(',').next().unwrap().parse().unwrap();
     assert!(step > 10, "the law should fail after some shearing: {err}");
+    // run.json says why the run stopped.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(json["stop"]["Failed"]["exit_code"], 3, "{json}");
+    assert!(
+        json["stop"]["Failed"]["error"]
+            .as_str()
+            .unwrap()
+            .contains("law `test_nan`: non-finite stress"),
+        "{json}"
+    );
     let vtk = format!("fields/solid_{step:06}_last_good.vtr");
     assert!(out.join(&vtk).is_file());
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();

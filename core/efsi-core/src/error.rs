@@ -28,13 +28,15 @@ pub enum EfsiError {
     Stage(#[from] StageError),
     /// The step size collapsed below `time.dt_min`.
     #[error(
-        "unstable run: Δt = {dt:.3e} fell below time.dt_min = {dt_min:.3e} at t = {t:.6e} (step {step}); the velocity is growing without bound — lower time.cfl, or check the scene's forcing"
+        "unstable run: Δt = {dt:.3e} fell below time.dt_min = {dt_min:.3e} at t = {t:.6e} (step {step}); {cause}"
     )]
     Unstable {
         /// The step size wanted.
         dt: f64,
         /// The floor.
         dt_min: f64,
+        /// Which limit set Δt, what it depends on, and what to change.
+        cause: String,
         /// Time reached.
         t: f64,
         /// Step reached.

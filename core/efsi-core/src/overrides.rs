@@ -218,9 +218,33 @@ impl Scene {
     /// override ([`SceneError::Override`]).
     pub fn load_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let io = |source| SceneError::Io {
             path: path.to_path_buf(),
             source,
+        };
+        // Read at most one byte past the cap: `/dev/zero` or a huge file is refused, not read.
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| {
+                use std::io::Read;
+                f.take(crate::scene::MAX_SCENE_BYTES + 1)
+                    .read_to_end(&mut bytes)
+            })
+            .map_err(io)?;
+        if bytes.len() as u64 > crate::scene::MAX_SCENE_BYTES {
+            return Err(io(std::io::Error::other(format!(
+                "larger than {} MiB: not a scene file",
+                crate::scene::MAX_SCENE_BYTES >> 20
+            ))));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "not UTF-8 text (invalid byte at offset {})",
+                    e.utf8_error().valid_up_to()
+                ),
+            ))
         })?;
         let mut scene = Scene::from_str_with(&text, path, overrides)?;
         scene.source_dir = path.parent().map(Path::to_path_buf);

@@ -174,6 +174,14 @@ fn default_cfl() -> f64 {
     0.4
 }
 
+impl TimeSpec {
+    /// The smallest step allowed: `dt_min`, else 1e-12·`end`. It also bounds the output and
+    /// checkpoint intervals from below (a shorter interval would force shorter steps).
+    pub fn dt_min_or_default(&self) -> f64 {
+        self.dt_min.unwrap_or(1e-12 * self.end)
+    }
+}
+
 /// A Newtonian fluid.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -639,6 +647,9 @@ pub struct OutputSpec {
     /// Write VTK fields every this many seconds of simulated time (and at the start and end).
     #[serde(default)]
     pub vtk_every: Option<f64>,
+    /// What the VTK files hold and how: fields, precision, compression, point data.
+    #[serde(default)]
+    pub vtk: VtkOptions,
     /// Sample the probes every this many seconds (default: every step).
     #[serde(default)]
     pub probe_every: Option<f64>,
@@ -648,6 +659,61 @@ pub struct OutputSpec {
     /// Line profiles, written to `profiles/<name>_t<time>.csv`.
     #[serde(default)]
     pub profiles: Vec<ProfileSpec>,
+}
+
+/// The arrays a VTK file can hold, by name (`output.vtk.fields`): `velocity`, `pressure`,
+/// `density`, `viscosity`, `divergence` always; `solid_fraction` with a solid; `B` (that is
+/// B̃ = φ^{1/2} B) and `stress` (the elastic extra stress) with a solid that has a law. The
+/// README's output section documents each one's location, components, meaning and unit.
+pub const VTK_FIELDS: &[&str] = &[
+    "velocity",
+    "pressure",
+    "density",
+    "viscosity",
+    "divergence",
+    "solid_fraction",
+    "B",
+    "stress",
+];
+
+/// How the VTK field files are written (`output.vtk`); the defaults write every array as
+/// `Float64` cell data, uncompressed (bit-exact values).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VtkOptions {
+    /// The arrays to write, by name (see [`VTK_FIELDS`]); default: every array the scene has.
+    #[serde(default)]
+    pub fields: Option<Vec<String>>,
+    /// The floating-point type of the arrays (coordinates and time stay `Float64`).
+    #[serde(default)]
+    pub precision: VtkPrecision,
+    /// Compression of the appended binary data.
+    #[serde(default)]
+    pub compression: VtkCompression,
+    /// Also write each array as point data, at the grid's nodes (each node the mean of the
+    /// cells around it), beside the cell data — for smooth contours and surfaces.
+    #[serde(default)]
+    pub point_data: bool,
+}
+
+/// The floating-point type of VTK arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkPrecision {
+    /// 8 bytes per value, the simulation's values exactly.
+    #[default]
+    Float64,
+    /// 4 bytes per value, rounded to single precision (≈ 7 significant digits).
+    Float32,
+}
+
+/// Compression of VTK's appended binary data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkCompression {
+    /// Raw blocks.
+    #[default]
+    None,
+    /// zlib (deflate), VTK's `vtkZLibDataCompressor`: every VTK/ParaView reader opens it.
+    Zlib,
 }
 
 /// A probe: a time series written as columns of `probes.csv`.
@@ -684,20 +750,24 @@ pub enum ProbeSpec {
     /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
-    /// wall's cells that hold solid, `p_a` the mean pressure of the wall's pure-fluid cells and
-    /// `τ_nn` the elastic normal stress (the viscous one vanishes on a no-slip wall); per radian
-    /// in axisymmetric geometry (×2π for the whole body). Column `contact_force`.
+    /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
+    /// column `contact_force`. A contact cell is a cell of the first row along the wall that
+    /// holds a solid fraction φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less
+    /// carries no deformation) and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean
+    /// pressure of the row's other cells, `τ_nn` the elastic normal stress (the viscous one
+    /// vanishes on a no-slip wall). The criterion is absolute: a trace of solid (φ ≈ 1e-18)
+    /// left by the interface advection is no contact, and without a contact cell — before
+    /// touch-down, after lift-off — the probe is exactly 0. A body pressed on a no-slip wall
+    /// keeps a thin air film, thinner than a cell, under it: the film carries the load, so a
+    /// partly filled cell counts.
     ContactForce {
         /// The wall (`YMin` is the substrate z = z_min in axisymmetric scenes).
         wall: Side,
     },
     /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
-    /// distance along the wall from its start to the outer edge of the last wall cell that
-    /// holds solid and presses on the wall with more than 1 % of the peak contact traction
-    /// (`p − p_a − τ_nn`, as [`ProbeSpec::ContactForce`]); 0 without contact. Judged by
-    /// traction rather than by the solid fraction because a thin air film, thinner than a
-    /// cell, stays under a body pressed on a no-slip wall and carries the load. Column
-    /// `contact_radius`.
+    /// distance along the wall from its start to the outer edge of the last contact cell (as
+    /// defined at [`ProbeSpec::ContactForce`]: φ ≥ 1e-3 and pressing on the wall); exactly 0
+    /// without one. Column `contact_radius`.
     ContactRadius {
         /// The wall.
         wall: Side,
@@ -718,6 +788,25 @@ pub enum ProbeSpec {
 }
 
 impl ProbeSpec {
+    /// The probe's column names in `probes.csv`, in order.
+    pub fn columns(&self) -> Vec<String> {
+        match self {
+            ProbeSpec::Point { name, .. } => vec![name.clone()],
+            ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
+            ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
+            ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
+            ProbeSpec::MaxSpeed => vec!["max_speed".into()],
+            ProbeSpec::SolidVolume => vec!["solid_volume".into()],
+            ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
+            ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
+            ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
+            ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
+            ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
+            ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
+            ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
+        }
+    }
+
     /// Whether the probe needs a solid in the scene.
     pub fn needs_solid(&self) -> bool {
         matches!(
@@ -733,6 +822,31 @@ impl ProbeSpec {
         )
     }
 }
+
+/// How deep values may nest in a scene file (RON's default, which keeps the reader off the
+/// end of its stack).
+pub const RECURSION_LIMIT: usize = 128;
+
+/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// The most points a line profile may have: a 100 000-line CSV file per output time, finer
+/// than any grid this solver runs (at most 1e4 cells across).
+pub const MAX_PROFILE_POINTS: usize = 100_000;
+
+/// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
+/// digits).
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// The largest diffusion number μ·time.end/(ρh²) a scene may reach (1e200): far beyond any
+/// physical scene, and low enough that the viscous system's products stay finite.
+pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
 
 /// Field names that probes and profiles can sample.
 pub const FIELD_NAMES: &[&str] = &[
@@ -791,11 +905,19 @@ impl Scene {
     pub(crate) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let opts = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        // A byte-order mark some editors put first is not part of the scene.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         opts.from_str(text).map_err(|e| SceneError::Syntax {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,
-            message: e.code.to_string(),
+            message: match e.code {
+                ron::Error::ExceededRecursionLimit => format!(
+                    "nested deeper than the scene reader allows ({RECURSION_LIMIT} levels): \
+                     flatten the shape (e.g. one Union of many shapes rather than Unions of Unions)"
+                ),
+                code => code.to_string(),
+            },
         })
     }
 
@@ -813,11 +935,27 @@ impl Scene {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                err(field, format!("must be a finite number > 0, got {v}"))
+                err(
+                    field,
+                    format!("must be a finite number > 0, got {}", num(v)),
+                )
             }
         }
-        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
-            return err("name", "must be a non-empty name without path separators");
+        // The name is a folder (`out/<name>/`) and a file stem: nothing that leaves the folder,
+        // names it again or breaks a line.
+        if self.name.trim().is_empty()
+            || self.name.contains(['/', '\\'])
+            || self.name.chars().any(char::is_control)
+            || self.name.trim_matches('.').is_empty()
+        {
+            return err(
+                "name",
+                format!(
+                    "must be a non-empty name without path separators or control characters, \
+                     and not `.` or `..` (it names the output folder out/<name>/), got {:?}",
+                    self.name
+                ),
+            );
         }
         for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
             if !(a.is_finite() && b.is_finite() && b > a) {
@@ -852,7 +990,7 @@ impl Scene {
         if !(self.time.cfl > 0.0 && self.time.cfl <= 1.0) {
             return err(
                 "time.cfl",
-                format!("must be in (0, 1], got {}", self.time.cfl),
+                format!("must be in (0, 1], got {}", num(self.time.cfl)),
             );
         }
         for (f, v) in [
@@ -870,15 +1008,84 @@ impl Scene {
         {
             return err(
                 "time.dt_min",
-                format!("must not exceed time.dt_max ({hi}), got {lo}"),
+                format!("must not exceed time.dt_max ({}), got {}", num(hi), num(lo)),
+            );
+        }
+        let floor = self.time.dt_min_or_default();
+        for (f, v) in [
+            ("time.dt_max", self.time.dt_max),
+            ("time.fixed_dt", self.time.fixed_dt),
+        ] {
+            if let Some(v) = v
+                && v < floor
+                && self.time.dt_min.is_none()
+            {
+                return err(
+                    f,
+                    format!(
+                        "{} is below time.dt_min's default 1e-12·time.end = {}: every step would \
+                         be refused; set time.dt_min too",
+                        num(v),
+                        num(floor)
+                    ),
+                );
+            }
+        }
+        if let (Some(lo), Some(fixed)) = (self.time.dt_min, self.time.fixed_dt)
+            && fixed < lo
+        {
+            return err(
+                "time.fixed_dt",
+                format!(
+                    "{} is below time.dt_min = {}: every step would be refused",
+                    num(fixed),
+                    num(lo)
+                ),
             );
         }
         positive("fluid.density", self.fluid.density)?;
         if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
             return err(
                 "fluid.viscosity",
-                format!("must be a finite number ≥ 0, got {}", self.fluid.viscosity),
+                format!(
+                    "must be a finite number ≥ 0, got {}",
+                    num(self.fluid.viscosity)
+                ),
             );
+        }
+        // The viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end: beyond
+        // MAX_DIFFUSION_NUMBER their products overflow, and the solver starts from a NaN residual.
+        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        let mut viscous = vec![("fluid.viscosity", self.fluid.viscosity, self.fluid.density)];
+        if let Some(sd) = &self.solid
+            && let Some(mu) = sd.viscosity
+        {
+            viscous.push(("solid.viscosity", mu, sd.density));
+        }
+        for (f, mu, rho) in viscous {
+            let d = mu * self.time.end / (rho * h * h);
+            if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
+                         viscous system's coefficients would overflow",
+                        num(mu),
+                        num(d),
+                        MAX_DIFFUSION_NUMBER
+                    ),
+                );
+            }
+            if !d.is_finite() && mu.is_finite() && rho > 0.0 {
+                return err(
+                    f,
+                    format!(
+                        "{} makes the diffusion number μ·time.end/(ρh²) overflow",
+                        num(mu)
+                    ),
+                );
+            }
         }
         if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
             return err("gravity", "must be finite");
@@ -998,23 +1205,29 @@ impl Scene {
             );
         }
         // Numerics.
+        // A relative tolerance below the unit round-off can never be met.
+        let tolerance = |f: &str, tol: f64| {
+            if (f64::EPSILON..1.0).contains(&tol) {
+                Ok(())
+            } else {
+                err(
+                    f,
+                    format!(
+                        "must be in [{:e}, 1) (a relative residual below the unit round-off \
+                         cannot be reached), got {}",
+                        f64::EPSILON,
+                        num(tol)
+                    ),
+                )
+            }
+        };
         let p = &self.numerics.projection;
-        if !(p.tolerance > 0.0 && p.tolerance < 1.0) {
-            return err(
-                "numerics.projection.tolerance",
-                format!("must be in (0, 1), got {}", p.tolerance),
-            );
-        }
+        tolerance("numerics.projection.tolerance", p.tolerance)?;
         if p.max_iterations == 0 {
             return err("numerics.projection.max_iterations", "must be ≥ 1");
         }
         let el = &self.numerics.elastic;
-        if !(el.tolerance > 0.0 && el.tolerance < 1.0) {
-            return err(
-                "numerics.elastic.tolerance",
-                format!("must be in (0, 1), got {}", el.tolerance),
-            );
-        }
+        tolerance("numerics.elastic.tolerance", el.tolerance)?;
         if el.max_iterations == 0 {
             return err("numerics.elastic.max_iterations", "must be ≥ 1");
         }
@@ -1035,20 +1248,62 @@ impl Scene {
                 format!("must be in [0.5, 1], got {}", v.theta),
             );
         }
-        if !(v.tolerance > 0.0 && v.tolerance < 1.0) {
-            return err(
-                "numerics.viscous.tolerance",
-                format!("must be in (0, 1), got {}", v.tolerance),
-            );
+        tolerance("numerics.viscous.tolerance", v.tolerance)?;
+        if v.max_iterations == 0 {
+            return err("numerics.viscous.max_iterations", "must be ≥ 1");
         }
         // Outputs.
         let o = &self.output;
+        let dt_min = self.time.dt_min_or_default();
         for (f, v) in [
             ("output.vtk_every", o.vtk_every),
             ("output.probe_every", o.probe_every),
         ] {
             if let Some(v) = v {
                 positive(f, v)?;
+                if v < dt_min {
+                    return err(
+                        f,
+                        format!(
+                            "must be at least time.dt_min = {dt_min:e} (the smallest step; by \
+                             default 1e-12·time.end), got {v:e}: shorter intervals would force \
+                             shorter steps"
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(fields) = &o.vtk.fields {
+            let law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
+            if fields.is_empty() {
+                return err(
+                    "output.vtk.fields",
+                    "must name at least one field (leave it out for all of them)",
+                );
+            }
+            for (k, f) in fields.iter().enumerate() {
+                let at = format!("output.vtk.fields[{k}]");
+                if !VTK_FIELDS.contains(&f.as_str()) {
+                    return err(
+                        &at,
+                        format!("unknown field `{f}`, expected one of {VTK_FIELDS:?}"),
+                    );
+                }
+                if fields[..k].contains(f) {
+                    return err(&at, format!("`{f}` is listed twice"));
+                }
+                if f == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &at,
+                        "`solid_fraction` needs a solid, and the scene has none",
+                    );
+                }
+                if (f == "B" || f == "stress") && !law {
+                    return err(
+                        &at,
+                        format!("`{f}` needs a solid with a law, and the scene has none"),
+                    );
+                }
             }
         }
         let inside = |p: (f64, f64)| {
@@ -1057,16 +1312,69 @@ impl Scene {
                 && p.1 >= self.domain.y.0
                 && p.1 <= self.domain.y.1
         };
-        let mut names = std::collections::HashSet::new();
+        // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
+        let mut columns: std::collections::HashMap<String, usize> =
+            [("t".to_string(), usize::MAX)].into_iter().collect();
+        let has_law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
         for (k, probe) in o.probes.iter().enumerate() {
+            let f = format!("output.probes[{k}]");
             if probe.needs_solid() && self.solid.is_none() {
                 return err(
-                    &format!("output.probes[{k}]"),
+                    &f,
                     format!("{probe:?} needs a solid, and the scene has none"),
                 );
             }
-            if let ProbeSpec::Point { name, field, at } = probe {
-                let f = format!("output.probes[{k}]");
+            if *probe == ProbeSpec::ElasticEnergy && !has_law {
+                return err(
+                    &f,
+                    "ElasticEnergy needs a solid with a law (solid.law), and this solid has none",
+                );
+            }
+            if let ProbeSpec::SolidExtent { at } = probe
+                && !(at.is_finite() && *at >= self.domain.x.0 && *at <= self.domain.x.1)
+            {
+                return err(
+                    &format!("{f}.at"),
+                    format!(
+                        "x = {} is outside the domain's [{}, {}]",
+                        num(*at),
+                        num(self.domain.x.0),
+                        num(self.domain.x.1)
+                    ),
+                );
+            }
+            for c in probe.columns() {
+                if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
+                    return err(
+                        &format!("{f}.name"),
+                        format!(
+                            "must be a non-empty CSV column name without commas, quotes or \
+                             control characters, got {c:?}"
+                        ),
+                    );
+                }
+                if let Some(&other) = columns.get(&c) {
+                    let first = if other == usize::MAX {
+                        "the time column".to_string()
+                    } else {
+                        format!("output.probes[{other}]")
+                    };
+                    return err(
+                        &f,
+                        format!(
+                            "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
+                        ),
+                    );
+                }
+                columns.insert(c, k);
+            }
+            if let ProbeSpec::Point { field, at, .. } = probe {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.field"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
                 if !FIELD_NAMES.contains(&field.as_str()) {
                     return err(
                         &format!("{f}.field"),
@@ -1075,12 +1383,6 @@ impl Scene {
                 }
                 if !inside(*at) {
                     return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
-                }
-                if !names.insert(name.clone()) {
-                    return err(
-                        &format!("{f}.name"),
-                        format!("duplicate probe name `{name}`"),
-                    );
                 }
             }
         }
@@ -1101,13 +1403,22 @@ impl Scene {
                     format!("must be a unique file stem, got `{name}`"),
                 );
             }
-            if *points < 2 {
-                return err(&format!("{f}.points"), format!("must be ≥ 2, got {points}"));
+            if !(2..=MAX_PROFILE_POINTS).contains(points) {
+                return err(
+                    &format!("{f}.points"),
+                    format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
+                );
             }
             if !inside(*from) || !inside(*to) {
                 return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
             }
             for field in fields {
+                if field == "solid_fraction" && self.solid.is_none() {
+                    return err(
+                        &format!("{f}.fields"),
+                        "solid_fraction needs a solid, and the scene has none",
+                    );
+                }
                 if !FIELD_NAMES.contains(&field.as_str()) {
                     return err(
                         &format!("{f}.fields"),
@@ -1196,6 +1507,56 @@ mod tests {
         let msg = e.to_string();
         assert!(msg.starts_with("scene.ron:6:"), "{msg}");
         assert!(msg.contains("colour"), "{msg}");
+    }
+
+    #[test]
+    fn vtk_options_load_round_trip_and_are_checked_by_name() {
+        let with = |vtk: &str| {
+            load(&MIN.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (vtk_every: 0.5, vtk: {vtk}),"),
+            ))
+        };
+        let s = with(r#"(fields: ["velocity", "pressure"], precision: Float32, compression: Zlib, point_data: true)"#)
+            .unwrap();
+        let v = &s.output.vtk;
+        assert_eq!(
+            v.fields.as_deref(),
+            Some(&["velocity".to_string(), "pressure".to_string()][..])
+        );
+        assert_eq!(
+            (v.precision, v.compression, v.point_data),
+            (VtkPrecision::Float32, VtkCompression::Zlib, true)
+        );
+        assert_eq!(&load(&s.to_ron()).unwrap().output.vtk, v);
+        // The defaults: every array, Float64, raw, cell data only.
+        assert_eq!(load(MIN).unwrap().output.vtk, VtkOptions::default());
+        for (vtk, needles) in [
+            (
+                r#"(fields: ["velocity", "temperature"])"#,
+                &["output.vtk.fields[1]", "unknown field `temperature`"][..],
+            ),
+            (
+                r#"(fields: ["pressure", "pressure"])"#,
+                &["output.vtk.fields[1]", "listed twice"],
+            ),
+            (r#"(fields: [])"#, &["output.vtk.fields", "at least one"]),
+            (
+                r#"(fields: ["solid_fraction"])"#,
+                &["output.vtk.fields[0]", "needs a solid"],
+            ),
+            (
+                r#"(fields: ["B"])"#,
+                &["output.vtk.fields[0]", "needs a solid with a law"],
+            ),
+            (r#"(precision: Float16)"#, &["Float16"]),
+            (r#"(compression: Gzip)"#, &["Gzip"]),
+        ] {
+            let e = with(vtk).unwrap_err().to_string();
+            for n in needles {
+                assert!(e.contains(n), "{vtk}: expected `{n}` in: {e}");
+            }
+        }
     }
 
     #[test]

@@ -189,6 +189,11 @@ pub trait Stage: Send {
 pub trait StagePlugin: Sync {
     /// Unique name (shown by `--print-schedule`, used in timings and errors).
     fn name(&self) -> &'static str;
+    /// Where the plugin is implemented: its type's path (`crate::module::Type`), shown by
+    /// `--print-schedule` so a reader finds the code of each stage.
+    fn source(&self) -> &'static str {
+        std::any::type_name::<Self>()
+    }
     /// The phase it attaches to.
     fn phase(&self) -> Phase;
     /// Fields it reads.
@@ -256,6 +261,7 @@ pub enum ScheduleError {
 
 struct Entry {
     name: &'static str,
+    source: &'static str,
     phase: Phase,
     reads: &'static [FieldId],
     writes: &'static [FieldId],
@@ -331,6 +337,7 @@ impl Pipeline {
                 })?;
             entries.push(Entry {
                 name: p.name(),
+                source: p.source(),
                 phase: p.phase(),
                 reads: p.reads(),
                 writes: p.writes(),
@@ -541,10 +548,22 @@ impl Pipeline {
 
     /// The largest Δt every stage allows, if any stage limits it.
     pub fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
+        self.limiting_stage(grid, state, cfl).map(|(_, dt)| dt)
+    }
+
+    /// The stage whose step limit is the smallest, with that limit (None if no stage limits Δt).
+    pub fn limiting_stage(
+        &self,
+        grid: &Grid,
+        state: &State,
+        cfl: f64,
+    ) -> Option<(&'static str, f64)> {
         self.entries
             .iter()
-            .filter_map(|e| e.stage.max_dt(grid, state, cfl))
-            .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))))
+            .filter_map(|e| e.stage.max_dt(grid, state, cfl).map(|d| (e.name, d)))
+            .fold(None, |m: Option<(&'static str, f64)>, d| {
+                Some(m.map_or(d, |m| if d.1 < m.1 { d } else { m }))
+            })
     }
 
     /// Run every stage once, in order. After each stage the ghosts of what it wrote are
@@ -692,12 +711,13 @@ impl fmt::Display for Pipeline {
             let names = |fs: &[FieldId]| fs.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
             writeln!(
                 f,
-                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]",
+                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]  ({})",
                 k + 1,
                 e.name,
                 format!("{:?}", e.phase),
                 names(e.reads),
-                names(e.writes)
+                names(e.writes),
+                e.source
             )?;
         }
         let fields: Vec<_> = self.fields.iter().map(|x| x.name()).collect();

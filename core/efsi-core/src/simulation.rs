@@ -114,6 +114,48 @@ pub struct Simulation {
     guard: Option<Option<EnergyGuard>>,
 }
 
+/// Memory a run needs per grid cell, ghost layers included (bytes): the fields, the stages'
+/// work arrays and the solvers' hierarchies, from the peak resident size of runs on large grids
+/// (fluid only, and with an elastic solid).
+pub const BYTES_PER_CELL: (f64, f64) = (790.0, 2800.0);
+
+/// Refuse a scene whose estimated memory (cells with ghost layers × [`BYTES_PER_CELL`]) exceeds
+/// the memory the machine has available now (`MemAvailable` of `/proc/meminfo`; no check where
+/// that cannot be read), before anything is allocated.
+fn check_memory(scene: &Scene, grid: &Grid) -> Result<(), String> {
+    let padded =
+        ((grid.nx + 1 + 2 * crate::grid::GHOST) * (grid.ny + 1 + 2 * crate::grid::GHOST)) as f64;
+    let per_cell = if scene.solid.is_some() {
+        BYTES_PER_CELL.1
+    } else {
+        BYTES_PER_CELL.0
+    };
+    let need = padded * per_cell;
+    let Some(available) = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        m.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+            .map(|kb| kb * 1024.0)
+    }) else {
+        return Ok(());
+    };
+    if need <= available {
+        return Ok(());
+    }
+    Err(format!(
+        "the run needs about {:.1} GB ({padded:.3e} cells with ghost layers × ≈ {per_cell} B{}), \
+         more than the {:.1} GB of memory available: use a coarser grid (e.g. --refine {:.2})",
+        need / 1e9,
+        if scene.solid.is_some() {
+            " with a solid"
+        } else {
+            ""
+        },
+        available / 1e9,
+        (available / need).sqrt() * 0.9
+    ))
+}
+
 impl Simulation {
     /// Build a simulation from a scene and the available stage plugins.
     pub fn new(
@@ -137,6 +179,7 @@ impl Simulation {
             scene.domain.x,
             scene.domain.y,
         );
+        check_memory(&scene, &grid).map_err(|m| config("grid", m))?;
         let bc = BoundarySet::new(&scene.boundaries, &grid);
         let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
         let mut state = State::new(
@@ -217,6 +260,21 @@ impl Simulation {
         bc.fill_scalar(&grid, &mut state.mu, false);
         let mut pipeline = pipeline;
         pipeline.initialize(&grid, &bc, &mut state)?;
+        // A solid that covers no cell (outside the domain, far below a cell, an empty
+        // intersection) would leave a run without one, its probes NaN.
+        if scene.solid.is_some()
+            && let Some(phi) = &state.phi
+            && (0..grid.ny as isize).all(|j| (0..grid.nx as isize).all(|i| phi[(i, j)] <= 0.0))
+        {
+            return Err(config(
+                "solid.shape",
+                format!(
+                    "covers no cell of the {}×{} grid (outside the domain, much smaller than a \
+                     cell of {:e} × {:e}, or empty): the run would have no solid",
+                    grid.nx, grid.ny, grid.dx, grid.dy
+                ),
+            ));
+        }
         // A velocity scale bounds the first step when the fluid starts at rest.
         let mut wall_speed = 0.0f64;
         for side in Side::ALL {
@@ -264,9 +322,38 @@ impl Simulation {
         })
     }
 
-    /// Start the energy guard afresh at the next step (after a restore).
-    pub(crate) fn restart_guard(&mut self) {
-        self.guard = None;
+    /// The energy guard's record, for a snapshot: empty before the guard starts (the first
+    /// step), `[0]` when it is off, `[1, mech0, pe0, supply0, release, floor]` when it is on.
+    pub(crate) fn guard_record_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        match &self.guard {
+            None => {}
+            Some(None) => out.push(0.0),
+            Some(Some(g)) => out.extend([1.0, g.mech0, g.pe0, g.supply0, g.release, g.floor]),
+        }
+    }
+
+    /// Put the energy guard back from a record of [`Self::guard_record_into`], so that its
+    /// verdict does not depend on where a run was stopped and resumed; a record that does not
+    /// fit starts it afresh at the next step. Off while something supplies energy now (a moving
+    /// wall, a frame acceleration).
+    pub(crate) fn set_guard_record(&mut self, r: &[f64]) {
+        self.guard = match r {
+            [x] if *x == 0.0 => Some(None),
+            [x, mech0, pe0, supply0, release, floor] if *x == 1.0 => Some(Some(EnergyGuard {
+                mech0: *mech0,
+                pe0: *pe0,
+                supply0: *supply0,
+                release: *release,
+                floor: *floor,
+            })),
+            _ => None,
+        };
+        if self.guard.is_some()
+            && (self.wall_speed != 0.0 || self.state.frame_acceleration != (0.0, 0.0))
+        {
+            self.guard = Some(None);
+        }
     }
 
     /// The pipeline (for printing, timings and statistics).
@@ -293,29 +380,77 @@ impl Simulation {
     pub fn next_dt(&self, until: f64) -> Result<f64, EfsiError> {
         let t = &self.scene.time;
         let remaining = until - self.state.t;
-        let dt = if let Some(fixed) = t.fixed_dt {
-            fixed
+        let h = self.grid.dx.min(self.grid.dy);
+        // Each candidate limit with what sets it (for the message when Δt collapses).
+        let (dt, cause) = if let Some(fixed) = t.fixed_dt {
+            (fixed, "time.fixed_dt".to_string())
         } else {
-            let limit = self
+            let stage = self
                 .pipeline
-                .max_dt(&self.grid, &self.state, t.cfl)
-                .or_else(|| {
-                    (self.scene.physics.advection && self.velocity_scale > 0.0)
-                        .then(|| t.cfl * self.grid.dx.min(self.grid.dy) / self.velocity_scale)
+                .limiting_stage(&self.grid, &self.state, t.cfl)
+                .map(|(name, d)| {
+                    (
+                        d,
+                        format!(
+                            "the stability limit of the stage `{name}` (time.cfl = {}{})",
+                            crate::scene::num(t.cfl),
+                            if name == "elastic" {
+                                ", numerics.elastic.wave_courant and the solid's stiffness: the elastic wave speed"
+                            } else {
+                                ", and the velocity it sees"
+                            }
+                        ),
+                    )
                 });
-            let wall = (self.wall_speed > 0.0)
-                .then(|| t.cfl * self.grid.dx.min(self.grid.dy) / self.wall_speed);
-            [limit, wall, t.dt_max]
+            let advective =
+                (self.scene.physics.advection && self.velocity_scale > 0.0).then(|| {
+                    (
+                        t.cfl * h / self.velocity_scale,
+                        format!(
+                            "the advective CFL limit time.cfl·h/|u| (time.cfl = {}, |u| = {:.3e})",
+                            crate::scene::num(t.cfl),
+                            self.velocity_scale
+                        ),
+                    )
+                });
+            let wall = (self.wall_speed > 0.0).then(|| {
+                (
+                    t.cfl * h / self.wall_speed,
+                    format!(
+                        "the moving wall's CFL limit (time.cfl = {}, wall speed {:.3e})",
+                        crate::scene::num(t.cfl),
+                        self.wall_speed
+                    ),
+                )
+            });
+            let dt_max = t.dt_max.map(|d| (d, "time.dt_max".to_string()));
+            [stage.or(advective), wall, dt_max]
                 .into_iter()
                 .flatten()
-                .reduce(f64::min)
-                .unwrap_or(remaining)
+                .reduce(|a, b| if b.0 < a.0 { b } else { a })
+                .unwrap_or((remaining, "the time left".to_string()))
         };
-        let dt_min = t.dt_min.unwrap_or(1e-12 * t.end);
+        let dt_min = t.dt_min_or_default();
         if dt.is_nan() || dt < dt_min {
+            let floor = if t.dt_min.is_some() {
+                "time.dt_min as set".to_string()
+            } else {
+                format!(
+                    "the default 1e-12·time.end, time.end = {}",
+                    crate::scene::num(t.end)
+                )
+            };
+            let velocity = cause.contains("|u|") || cause.contains("velocity it sees");
+            let advice = if velocity && t.cfl >= 1e-3 {
+                "if the velocity is growing without bound, lower time.cfl or check the scene's \
+                 forcing; if the scene is right, set time.dt_min lower"
+            } else {
+                "set time.dt_min lower, or change the setting named"
+            };
             return Err(EfsiError::Unstable {
                 dt,
                 dt_min,
+                cause: format!("Δt was set by {cause}; time.dt_min is {floor}: {advice}"),
                 t: self.state.t,
                 step: self.state.step,
             });

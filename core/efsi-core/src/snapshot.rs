@@ -9,7 +9,7 @@
 //! the deformation tensors), time, step count and previous Δt; the simulation's private
 //! stepping data (the last rate of change, which decides steadiness, and the velocity scale of
 //! the first step); and each stage's carried-over data ([`crate::schedule::Stage::save`], e.g.
-//! the VOF stage's previous velocity). The simulation's `previous` velocity is not in it: every
+//! the VOF stage's previous velocity); the energy guard's baseline. The simulation's `previous` velocity is not in it: every
 //! step overwrites it before reading it. Restoring a snapshot into a simulation built from the
 //! same scene continues the run **bit for bit** as if it had never stopped.
 
@@ -28,6 +28,9 @@ pub struct Snapshot {
     pub velocity_scale: f64,
     /// Each stage's carried-over data, by stage name, in pipeline order.
     pub stages: Vec<(String, Vec<f64>)>,
+    /// The energy guard's record (its baseline energies; empty before the first step), so that
+    /// a restored run judges energy growth against the same start as the run it continues.
+    pub guard: Vec<f64>,
 }
 
 impl Snapshot {
@@ -66,11 +69,14 @@ impl Simulation {
     /// A copy of everything that determines the steps after this one (see [`Snapshot`]).
     pub fn snapshot(&self) -> Snapshot {
         let (last_change, velocity_scale) = self.stepping();
+        let mut guard = Vec::new();
+        self.guard_record_into(&mut guard);
         Snapshot {
             state: self.state.clone(),
             last_change,
             velocity_scale,
             stages: self.pipeline().save_stages(),
+            guard,
         }
     }
 
@@ -82,6 +88,7 @@ impl Simulation {
         }
         (snap.last_change, snap.velocity_scale) = self.stepping();
         self.pipeline().save_stages_into(&mut snap.stages);
+        self.guard_record_into(&mut snap.guard);
     }
 
     /// Put a snapshot back: the simulation continues exactly as the one it was taken from
@@ -120,7 +127,7 @@ impl Simulation {
         }
         self.state.copy_from(&snap.state);
         self.set_stepping(snap.last_change, snap.velocity_scale);
-        self.restart_guard();
+        self.set_guard_record(&snap.guard);
         Ok(())
     }
 }

@@ -15,10 +15,10 @@
 //! In the payload a string is a `u64` byte length and UTF-8 bytes, an array of `f64` a `u64`
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
 //! (efsi version, scene path, scene RON, the overrides applied to the scene file as RON, law
-//! identity), output bookkeeping, the snapshot
+//! identity), output bookkeeping (ending with the run's identity), the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
 //! frame acceleration and the elastic energy), then named stage
-//! data). A 128² cavity checkpoints in ≈ 0.7 MB.
+//! data, then the energy guard's record). A 128² cavity checkpoints in ≈ 0.7 MB.
 //!
 //! Files are written atomically ([`crate::output::atomic`]): a reader or a resumed run sees
 //! the previous complete checkpoint or the new complete one, never a torn one; a truncated or
@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 /// The version of the file layout this efsi reads and writes.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
 
@@ -211,6 +211,10 @@ pub struct OutputState {
     pub checkpoint_every: Option<f64>,
     /// Checkpoints due so far.
     pub checkpoint_count: u64,
+    /// The identity of the run that wrote the outputs (also in its `run.json`): a resume
+    /// refuses a checkpoint whose run is not the one of the folder it is resumed in. Empty
+    /// where no output folder belongs to the snapshot (an FMU's state).
+    pub run_id: String,
 }
 
 /// A checkpoint: a [`Snapshot`] and what a resumed run checks and continues.
@@ -244,6 +248,7 @@ pub struct SnapshotRecord {
     arrays: Vec<(String, Vec<f64>)>,
     scalars: Vec<(String, f64)>,
     stages: Vec<(String, Vec<f64>)>,
+    guard: Vec<f64>,
 }
 
 impl SnapshotRecord {
@@ -306,6 +311,7 @@ impl SnapshotRecord {
         template.last_change = self.last_change;
         template.velocity_scale = self.velocity_scale;
         template.stages = self.stages;
+        template.guard = self.guard;
         Ok(template)
     }
 }
@@ -502,6 +508,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     }
     w.f64(opt(o.checkpoint_every));
     w.u64(o.checkpoint_count);
+    w.str(&o.run_id);
     w.f64(s.state.t);
     w.u64(s.state.step);
     w.f64(s.state.dt_prev);
@@ -524,6 +531,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
         w.str(name);
         w.f64s(data);
     }
+    w.f64s(&s.guard);
     let payload = w.0;
     let mut out = Vec::with_capacity(28 + payload.len());
     out.extend_from_slice(MAGIC);
@@ -598,6 +606,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
             profile_times,
             checkpoint_every: unopt(r.f64()?),
             checkpoint_count: r.u64()?,
+            run_id: r.str()?,
         };
         let (t, step, dt_prev, last_change, velocity_scale) =
             (r.f64()?, r.u64()?, r.f64()?, r.f64()?, r.f64()?);
@@ -610,6 +619,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
         let stages = (0..r.len(16)?)
             .map(|_| Ok((r.str()?, r.f64s()?)))
             .collect::<Result<_, String>>()?;
+        let guard = r.f64s()?;
         if r.at != payload.len() {
             return Err(format!(
                 "{} unexpected bytes after the data",
@@ -632,6 +642,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
                 arrays,
                 scalars,
                 stages,
+                guard,
             },
         })
     })()

@@ -3,9 +3,11 @@
 //! Running an efsi [`Simulation`](efsi_core::Simulation): the run loop with its outputs
 //! ([`run`]: VTK and `.pvd`, probes, profiles, `run.json`, landing on output times), the
 //! writers ([`output`]: VTK XML, atomic files), the probes' definitions ([`probes`]) and the
-//! checkpoint file with resume ([`checkpoint`]). The CLI, the FMU and other drivers use them.
+//! checkpoint file with resume ([`checkpoint`]), the lock that keeps an output folder to one
+//! process ([`lock`]). The CLI, the FMU and other drivers use them.
 
 pub mod checkpoint;
+pub mod lock;
 pub mod output;
 pub mod probes;
 pub mod run;

@@ -41,21 +41,7 @@ pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
 
 /// Column names of a probe in `probes.csv`.
 pub fn columns(p: &ProbeSpec) -> Vec<String> {
-    match p {
-        ProbeSpec::Point { name, .. } => vec![name.clone()],
-        ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
-        ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
-        ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
-        ProbeSpec::MaxSpeed => vec!["max_speed".into()],
-        ProbeSpec::SolidVolume => vec!["solid_volume".into()],
-        ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
-        ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
-        ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
-        ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
-        ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
-        ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
-        ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
-    }
+    p.columns()
 }
 
 /// Append the probe's values to `out`; `gravity` is the scene's.
@@ -182,9 +168,16 @@ fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
     }
 }
 
-/// The contact traction `p − p_a − τ_nn` of each first-row cell along `wall` that holds solid
-/// (NaN where there is none), with the cell's area and position along the wall.
-fn wall_tractions(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)> {
+/// The smallest solid fraction of a wall cell that can be in contact — the elastic stage's own
+/// threshold: a cell holding less carries no deformation, so no elastic stress to press with.
+/// Absolute, so a trace of solid left by the interface advection (φ ≈ 1e-18) never counts.
+pub const CONTACT_MIN_SOLID_FRACTION: f64 = 1e-3;
+
+/// The contact cells along `wall` — [`ProbeSpec::ContactForce`]'s definition, shared by both
+/// contact probes: each first-row cell holding at least [`CONTACT_MIN_SOLID_FRACTION`] of solid
+/// and pressing on the wall (`p − p_a − τ_nn > 0`, with `p_a` the mean pressure of the row's
+/// other cells, or 0 if there are none), as (traction, wall-face area, position along the wall).
+fn contact_cells(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)> {
     let (Some(phi), Some(d)) = (&state.phi, &state.deformation) else {
         return Vec::new();
     };
@@ -194,9 +187,10 @@ fn wall_tractions(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)
     } else {
         0
     };
+    let solid = |c: (isize, isize)| phi[c] >= CONTACT_MIN_SOLID_FRACTION;
     let (mut pa, mut na) = (0.0, 0usize);
     for &(c, _, _) in &cells {
-        if phi[c] <= 0.0 {
+        if !solid(c) {
             pa += state.p[c];
             na += 1;
         }
@@ -204,49 +198,35 @@ fn wall_tractions(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)
     let pa = if na > 0 { pa / na as f64 } else { 0.0 };
     cells
         .iter()
-        .map(|&(c, area, s)| {
-            let t = if phi[c] > 0.0 {
-                state.p[c] - pa - d.stress[normal][c]
-            } else {
-                f64::NAN
-            };
-            (t, area, s)
-        })
+        .filter(|&&(c, _, _)| solid(c))
+        .map(|&(c, area, s)| (state.p[c] - pa - d.stress[normal][c], area, s))
+        .filter(|&(t, _, _)| t > 0.0)
         .collect()
 }
 
-/// See [`ProbeSpec::ContactForce`].
+/// See [`ProbeSpec::ContactForce`]: exactly 0 when no cell is in contact.
 pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
     if state.phi.is_none() || state.deformation.is_none() {
         return f64::NAN;
     }
-    wall_tractions(grid, state, wall)
+    // Summed from +0.0 (an empty `Sum` of f64 is −0.0).
+    contact_cells(grid, state, wall)
         .iter()
-        .filter(|(t, _, _)| t.is_finite())
-        .map(|(t, a, _)| t * a)
-        .sum()
+        .fold(0.0, |f, (t, a, _)| f + t * a)
 }
 
-/// See [`ProbeSpec::ContactRadius`].
+/// See [`ProbeSpec::ContactRadius`]: exactly 0 when no cell is in contact.
 pub fn contact_radius(grid: &Grid, state: &State, wall: Side) -> f64 {
     if state.phi.is_none() || state.deformation.is_none() {
         return f64::NAN;
-    }
-    let t = wall_tractions(grid, state, wall);
-    let peak = t
-        .iter()
-        .filter(|(t, _, _)| t.is_finite())
-        .fold(0.0f64, |m, (t, _, _)| m.max(*t));
-    if peak <= 0.0 {
-        return 0.0;
     }
     let h = if matches!(wall, Side::YMin | Side::YMax) {
         grid.dx
     } else {
         grid.dy
     };
-    t.iter()
-        .filter(|(t, _, _)| t.is_finite() && *t > 0.01 * peak)
+    contact_cells(grid, state, wall)
+        .iter()
         .fold(0.0f64, |m, (_, _, s)| m.max(s + 0.5 * h))
 }
 

@@ -5,9 +5,13 @@
 //! - `fields/<name>_<step>.vtr` and `fields.pvd` (VTK XML for ParaView; the collection is
 //!   rewritten after each file, so it is valid at every moment of the run);
 //! - `probes.csv`: header `t,<columns…>`, one row per sample;
-//! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields;
+//! - `profiles/<name>_t<time>.csv`: the coordinate along the line `s`, `x`, `y`, then the fields,
+//!   at each of the profile's `at` times, or at the end if it has none; a run that ends (end
+//!   time or steady state) before some of them writes the profile at its end instead and says
+//!   so ([`RunOutcome::warnings`], `run.json`'s `warnings`);
 //! - `run.json`: the effective scene (the file's with the overrides applied) and the
-//!   overrides (`set PATH=VALUE`, `refine F`), efsi version, steps, wall time, wall time per stage;
+//!   overrides (`set PATH=VALUE`, `refine F`), efsi version, steps, wall time, wall time per
+//!   stage, warnings;
 //! - `checkpoint/latest.efsick`: the latest checkpoint ([`crate::checkpoint`]), written every
 //!   [`RunOptions::checkpoint_every`] of simulated time (at the end of the first step that
 //!   reaches each multiple: checkpoints never change Δt, so a run with them is bit-identical to
@@ -26,13 +30,29 @@
 //! ([`RunOptions::save_last_good`]) — is written as `fields/<name>_<step>_last_good.vtr` (with a
 //! `.pvd` entry at its time) and as the checkpoint ([`EfsiError::Saved`]).
 //!
-//! [`resume`] continues a run from its latest checkpoint, appending to the same outputs.
+//! **An output that cannot be written** (a full disk, a path blocked) after a good step stops the
+//! run the same way: the state at the start of that step is saved as the checkpoint, with the
+//! output bookkeeping as it was before that step's outputs, so a resume writes them again. A
+//! `probes.csv` append that fails part-way is cut back to the last whole row. Every failure is
+//! recorded in `run.json` (`"stop": {"Failed": {"error", "exit_code"}}`), as far as it can
+//! still be written.
+//!
+//! **One run per folder.** A run holds the folder's lock ([`crate::lock`]) while it writes;
+//! `run.json` is written at the start (`"stop": "Running"`) with the run's identity (`run_id`),
+//! which its checkpoints record too. A folder holding an earlier run's outputs is refused unless
+//! [`RunOptions::overwrite`].
+//!
+//! **Intervals.** Output and checkpoint intervals are at least `time.dt_min` (validated), and
+//! the number of events due at a time is computed, not counted one period at a time.
+//!
+//! [`resume`] continues a run from its latest checkpoint, appending to the same outputs, after
+//! checking that the checkpoint's run is the folder's (its `run.json`).
 
 use crate::checkpoint::{self, Checkpoint, CheckpointFile, LawIdentity, OutputState};
-use crate::output::vtk::{CellArray, PvdCollection, write_vtr};
+use crate::lock::FolderLock;
+use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
 use crate::probes;
 use efsi_core::error::EfsiError;
-use efsi_core::field::Field;
 use efsi_core::grid::Grid;
 use efsi_core::scene::{ProbeSpec, ProfileSpec, Scene};
 use efsi_core::schedule::StagePlugin;
@@ -89,6 +109,9 @@ pub struct RunOptions {
     /// (default: true; one copy of the fields per step, measured < 0.5 % of a step: 0.02 ms against 36 ms
     /// for a 128² cavity, 0.04 ms against 27 ms for a 64² elastic disk).
     pub save_last_good: bool,
+    /// Replace the outputs of an earlier run in the output folder (default: false — a folder
+    /// that holds a run's outputs is refused, see [`run_with`]).
+    pub overwrite: bool,
 }
 
 impl Default for RunOptions {
@@ -97,6 +120,7 @@ impl Default for RunOptions {
             checkpoint_every: None,
             stop: None,
             save_last_good: true,
+            overwrite: false,
         }
     }
 }
@@ -120,6 +144,8 @@ pub struct RunOutcome {
     pub resumed_from: Option<(u64, f64, String)>,
     /// The latest checkpoint written, if any.
     pub checkpoint: Option<PathBuf>,
+    /// What the user should know about the outputs ([`Outputs::warnings`]).
+    pub warnings: Vec<String>,
 }
 
 /// Format a time for file names: shortest decimal, e.g. `0.5`, `30`, `2.8`.
@@ -133,6 +159,7 @@ pub fn time_label(t: f64) -> String {
 pub struct Outputs {
     dir: PathBuf,
     vtk_every: Option<f64>,
+    vtk: efsi_core::scene::VtkOptions,
     vtk_count: u64,
     pvd: PvdCollection,
     probe_every: Option<f64>,
@@ -146,6 +173,124 @@ pub struct Outputs {
     end: f64,
     checkpoint_every: Option<f64>,
     checkpoint_count: u64,
+    warnings: Vec<String>,
+    run_id: String,
+    /// The bookkeeping at the start of the latest [`Outputs::emit`] (see [`Outputs::state_before_emit`]).
+    mark: Mark,
+    _lock: FolderLock,
+}
+
+/// What [`Outputs::emit`] changes, as it was before the call: what a checkpoint of the state
+/// before the step must record.
+#[derive(Default)]
+struct Mark {
+    vtk_count: u64,
+    probe_count: u64,
+    probe_bytes: u64,
+    pvd_len: usize,
+    checkpoint_count: u64,
+    /// Profile times written by the call: (profile, time).
+    popped: Vec<(usize, f64)>,
+}
+
+/// The number of events of period `every` due by time `t` ([`due`]), at least `count`: the
+/// smallest `n ≥ count` whose event `n·every` is not yet due. Computed, not counted, so that a
+/// period tiny against `t` costs nothing.
+fn events_due(t: f64, every: f64, count: u64) -> u64 {
+    // `due(t, x)` holds for x ≤ t / (1 − 1e-9) (x not tiny): start there, then correct the
+    // rounding by single steps.
+    let mut n = (t / (every * (1.0 - 1e-9))).floor().max(0.0) as u64;
+    n = n.saturating_add(1).max(count);
+    while n > count && !due(t, (n - 1) as f64 * every) {
+        n -= 1;
+    }
+    while due(t, n as f64 * every) {
+        n += 1;
+    }
+    n
+}
+
+/// The files of a run's outputs present in `dir` (what makes it hold a run).
+fn earlier_outputs(dir: &Path) -> Result<Vec<PathBuf>, EfsiError> {
+    let mut found: Vec<PathBuf> = ["run.json", "probes.csv", "fields.pvd", checkpoint::LATEST]
+        .iter()
+        .map(|f| dir.join(f))
+        .filter(|p| p.is_file())
+        .collect();
+    for (sub, ext) in [("fields", "vtr"), ("profiles", "csv")] {
+        let d = dir.join(sub);
+        for e in fs::read_dir(&d).map_err(|e| EfsiError::io(&d, e))? {
+            let p = e.map_err(|e| EfsiError::io(&d, e))?.path();
+            if p.extension().is_some_and(|x| x == ext) && p.is_file() {
+                found.push(p);
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// Refuse a folder holding an earlier run's outputs `old` (describing them), or remove them if
+/// `overwrite`.
+fn replace_earlier_run(dir: &Path, old: &[PathBuf], overwrite: bool) -> Result<(), EfsiError> {
+    if old.is_empty() {
+        return Ok(());
+    }
+    if overwrite {
+        for p in old {
+            fs::remove_file(p).map_err(|e| EfsiError::io(p, e))?;
+        }
+        return Ok(());
+    }
+    let latest = dir.join(checkpoint::LATEST);
+    let vtk = old
+        .iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "vtr"))
+        .count();
+    let mut what: Vec<String> = ["run.json", "probes.csv", "fields.pvd"]
+        .iter()
+        .filter(|f| old.contains(&dir.join(f)))
+        .map(|f| f.to_string())
+        .collect();
+    if vtk > 0 {
+        what.push(format!("{vtk} VTK files"));
+    }
+    let resume = if old.contains(&latest) {
+        let at = CheckpointFile::read(&latest).map_or(String::new(), |c| {
+            format!(" at step {}, t = {:.6e}", c.record.step(), c.record.t())
+        });
+        what.push(format!("a checkpoint{at}"));
+        format!("`efsi resume {}` continues it; ", dir.display())
+    } else {
+        String::new()
+    };
+    Err(EfsiError::Config {
+        path: dir.to_path_buf(),
+        field: "output folder".into(),
+        message: format!(
+            "holds the outputs of an earlier run ({}): {resume}--overwrite replaces them, --out \
+             chooses another folder",
+            what.join(", ")
+        ),
+    })
+}
+
+/// A new run's identity: a hash of the clock, the process and the folder.
+fn new_run_id(dir: &Path) -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let mut bytes = nanos.to_le_bytes().to_vec();
+    bytes.extend_from_slice(&std::process::id().to_le_bytes());
+    let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    bytes.extend_from_slice(dir.as_os_str().as_encoded_bytes());
+    format!("{:016x}", checkpoint::fnv1a(&bytes))
+}
+
+/// The run identity recorded in `dir/run.json`, if any.
+fn recorded_run_id(dir: &Path) -> Option<String> {
+    let text = fs::read_to_string(dir.join("run.json")).ok()?;
+    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+    Some(json.get("run_id")?.as_str()?.to_string())
 }
 
 fn probe_header(probes: &[ProbeSpec]) -> String {
@@ -184,17 +329,12 @@ impl Outputs {
         sim: &Simulation,
         dir: &Path,
         checkpoint_every: Option<f64>,
+        overwrite: bool,
     ) -> Result<Outputs, EfsiError> {
         let o = &sim.scene.output;
         make_dirs(dir)?;
-        // A checkpoint left by an earlier run in this folder must not be resumed into this one.
-        let stale = dir.join(checkpoint::LATEST);
-        match fs::remove_file(&stale) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(EfsiError::io(&stale, e));
-            }
-            _ => {}
-        }
+        let lock = FolderLock::acquire(dir)?;
+        replace_earlier_run(dir, &earlier_outputs(dir)?, overwrite)?;
         let probe_path = dir.join("probes.csv");
         let header = probe_header(&o.probes);
         crate::output::atomic::write_atomically(&probe_path, |w| w.write_all(header.as_bytes()))
@@ -218,6 +358,7 @@ impl Outputs {
         Ok(Outputs {
             dir: dir.to_path_buf(),
             vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
             vtk_count: 0,
             pvd,
             probe_every: o.probe_every,
@@ -231,6 +372,10 @@ impl Outputs {
             end: sim.scene.time.end,
             checkpoint_every,
             checkpoint_count: 1,
+            warnings: Vec::new(),
+            run_id: new_run_id(dir),
+            mark: Mark::default(),
+            _lock: lock,
         })
     }
 
@@ -243,6 +388,7 @@ impl Outputs {
         dir: &Path,
         state: &OutputState,
         checkpoint_every: Option<f64>,
+        lock: FolderLock,
     ) -> Result<Outputs, EfsiError> {
         let o = &sim.scene.output;
         make_dirs(dir)?;
@@ -295,6 +441,7 @@ impl Outputs {
         Ok(Outputs {
             dir: dir.to_path_buf(),
             vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
             vtk_count: state.vtk_count,
             pvd,
             probe_every: o.probe_every,
@@ -308,6 +455,10 @@ impl Outputs {
             end: sim.scene.time.end,
             checkpoint_every,
             checkpoint_count: state.checkpoint_count,
+            warnings: Vec::new(),
+            run_id: state.run_id.clone(),
+            mark: Mark::default(),
+            _lock: lock,
         })
     }
 
@@ -321,7 +472,24 @@ impl Outputs {
             profile_times: self.profiles.iter().map(|(_, t)| t.clone()).collect(),
             checkpoint_every: self.checkpoint_every,
             checkpoint_count: self.checkpoint_count,
+            run_id: self.run_id.clone(),
         }
+    }
+
+    /// The bookkeeping as it was before the latest [`Outputs::emit`]: what a checkpoint of the
+    /// state at the start of the latest step records (its outputs are written again on resume).
+    pub fn state_before_emit(&self) -> OutputState {
+        let m = &self.mark;
+        let mut s = self.state();
+        s.vtk_count = m.vtk_count;
+        s.probe_count = m.probe_count;
+        s.probe_bytes = m.probe_bytes;
+        s.pvd.truncate(m.pvd_len);
+        s.checkpoint_count = m.checkpoint_count;
+        for &(k, t) in m.popped.iter().rev() {
+            s.profile_times[k].insert(0, t);
+        }
+        s
     }
 
     /// Whether a periodic checkpoint is due at `t`; if so, counts it.
@@ -332,9 +500,7 @@ impl Outputs {
         if !due(t, self.checkpoint_count as f64 * e) {
             return false;
         }
-        while due(t, self.checkpoint_count as f64 * e) {
-            self.checkpoint_count += 1;
-        }
+        self.checkpoint_count = events_due(t, e, self.checkpoint_count);
         true
     }
 
@@ -358,6 +524,12 @@ impl Outputs {
     /// Write whatever is due at the simulation's current time (everything, if `last`).
     pub fn emit(&mut self, sim: &Simulation, last: bool) -> Result<(), EfsiError> {
         let t = sim.state.t;
+        self.mark.vtk_count = self.vtk_count;
+        self.mark.probe_count = self.probe_count;
+        self.mark.probe_bytes = self.probe_bytes;
+        self.mark.pvd_len = self.pvd.entries().len();
+        self.mark.checkpoint_count = self.checkpoint_count;
+        self.mark.popped.clear();
         let probe_due = match self.probe_every {
             Some(e) => due(t, self.probe_count as f64 * e),
             None => true,
@@ -370,15 +542,26 @@ impl Outputs {
             }
             let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
             let line = line.join(",") + "\n";
-            // One write of a complete line: a reader never sees half a row.
-            self.probe_file
-                .write_all(line.as_bytes())
-                .map_err(|e| EfsiError::io(&self.probe_path, e))?;
+            // One write of a complete line: a reader never sees half a row. A write that fails
+            // part-way (a full disk, a file size limit) is undone to the last whole row.
+            if let Err(e) = self.probe_file.write_all(line.as_bytes()) {
+                let undone = self.probe_file.set_len(self.probe_bytes).map_or_else(
+                    |u| format!("; removing the partial row failed too: {u}"),
+                    |_| {
+                        format!(
+                            "; the file ends with its last whole row ({} bytes)",
+                            self.probe_bytes
+                        )
+                    },
+                );
+                return Err(EfsiError::io(
+                    &self.probe_path,
+                    std::io::Error::new(e.kind(), format!("{e}{undone}")),
+                ));
+            }
             self.probe_bytes += line.len() as u64;
             if let Some(e) = self.probe_every {
-                while due(t, self.probe_count as f64 * e) {
-                    self.probe_count += 1;
-                }
+                self.probe_count = events_due(t, e, self.probe_count);
             }
         }
         let vtk_due = self
@@ -387,9 +570,7 @@ impl Outputs {
         if vtk_due || (last && self.vtk_every.is_some()) {
             self.write_fields(&sim.grid, &sim.state, &sim.scene.name, "")?;
             if let Some(e) = self.vtk_every {
-                while due(t, self.vtk_count as f64 * e) {
-                    self.vtk_count += 1;
-                }
+                self.vtk_count = events_due(t, e, self.vtk_count);
             }
         }
         for k in 0..self.profiles.len() {
@@ -398,8 +579,24 @@ impl Outputs {
             if is_due || at_end {
                 self.write_profile(k, sim)?;
                 while self.profiles[k].1.first().is_some_and(|&tt| due(t, tt)) {
-                    self.profiles[k].1.remove(0);
+                    let tt = self.profiles[k].1.remove(0);
+                    self.mark.popped.push((k, tt));
                 }
+            }
+            // The run ends (at its end time or a steady state) before some of the profile's
+            // times: the profile is written now instead, and the run says so.
+            if last && !self.profiles[k].1.is_empty() {
+                let missed = std::mem::take(&mut self.profiles[k].1);
+                self.mark.popped.extend(missed.iter().map(|&tt| (k, tt)));
+                let file = self.write_profile(k, sim)?;
+                let ProfileSpec::Line { name, .. } = &self.profiles[k].0;
+                let times: Vec<String> = missed.iter().map(|&x| time_label(x)).collect();
+                self.warnings.push(format!(
+                    "profile `{name}`: the run ended at t = {} before its time(s) {}; written at the end instead: {}",
+                    time_label(t),
+                    times.join(", "),
+                    file.display()
+                ));
             }
         }
         Ok(())
@@ -414,75 +611,26 @@ impl Outputs {
         name: &str,
         suffix: &str,
     ) -> Result<PathBuf, EfsiError> {
-        let (nx, ny) = (grid.nx, grid.ny);
-        let n = nx * ny;
-        let mut vel = vec![0.0; 3 * n];
-        let mut div = vec![0.0; n];
-        let mut scalars: Vec<(&str, Vec<f64>)> = vec![
-            ("pressure", Vec::with_capacity(n)),
-            ("density", Vec::with_capacity(n)),
-            ("viscosity", Vec::with_capacity(n)),
-        ];
-        if state.phi.is_some() {
-            scalars.push(("solid_fraction", Vec::with_capacity(n)));
-        }
-        // Axisymmetric output is the r–z slice in the X–Z plane (u_z goes to the Z component).
-        let vy = if grid.is_axisymmetric() { 2 } else { 1 };
-        for j in 0..ny as isize {
-            for i in 0..nx as isize {
-                let k = j as usize * nx + i as usize;
-                let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
-                vel[3 * k] = a;
-                vel[3 * k + vy] = b;
-                div[k] = efsi_core::ops::div(grid, &state.u, &state.v, i, j);
-                scalars[0].1.push(state.p[(i, j)]);
-                scalars[1].1.push(state.rho[(i, j)]);
-                scalars[2].1.push(state.mu[(i, j)]);
-                if let Some(phi) = &state.phi {
-                    scalars[3].1.push(phi[(i, j)]);
-                }
-            }
-        }
-        // B̃ = φ^{1/2} B and the elastic stress as VTK symmetric tensors.
-        let (mut btilde, mut stress) = (Vec::new(), Vec::new());
-        if let (Some(d), Some(phi)) = (&state.deformation, &state.phi) {
-            btilde = vtk_tensor(grid, &d.b, Some(phi));
-            stress = vtk_tensor(grid, &d.stress, None);
-        }
-        let mut arrays = vec![
-            CellArray {
-                name: "velocity",
-                components: 3,
-                values: &vel,
-            },
-            CellArray {
-                name: "divergence",
-                components: 1,
-                values: &div,
-            },
-        ];
-        if !btilde.is_empty() {
-            arrays.push(CellArray {
-                name: "B",
-                components: 6,
-                values: &btilde,
-            });
-            arrays.push(CellArray {
-                name: "stress",
-                components: 6,
-                values: &stress,
-            });
-        }
-        for (nm, v) in &scalars {
-            arrays.push(CellArray {
-                name: nm,
-                components: 1,
-                values: v,
-            });
-        }
+        let options = &self.vtk;
+        let data = crate::output::fields::arrays(grid, state, options);
+        let arrays: Vec<CellArray> = data
+            .iter()
+            .map(|(name, components, values)| CellArray {
+                name,
+                components: *components,
+                values,
+            })
+            .collect();
+        let format = VtrFormat {
+            precision: options.precision,
+            compression: options.compression,
+            point_data: options.point_data,
+        };
+        let notes = crate::output::fields::notes(grid.geometry);
         let file = format!("{name}_{:06}{suffix}.vtr", state.step);
         let path = self.dir.join("fields").join(&file);
-        write_vtr(&path, grid, state.t, &arrays).map_err(|e| EfsiError::io(&path, e))?;
+        write_vtr_with(&path, grid, state.t, &arrays, &format, &notes)
+            .map_err(|e| EfsiError::io(&path, e))?;
         let rel = format!("fields/{file}");
         self.pvd
             .add(state.t, &rel)
@@ -490,7 +638,8 @@ impl Outputs {
         Ok(path)
     }
 
-    fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<(), EfsiError> {
+    /// Write profile `k` at the simulation's time; returns the file's path.
+    fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<PathBuf, EfsiError> {
         let ProfileSpec::Line {
             name,
             from,
@@ -518,27 +667,56 @@ impl Outputs {
             text.push('\n');
         }
         crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| EfsiError::io(&path, e))
+            .map_err(|e| EfsiError::io(&path, e))?;
+        Ok(path)
     }
 
-    /// Write `run.json`.
+    /// What the outputs have to tell the user about this run (a profile written at the end
+    /// instead of at its times), in the order it happened; also in `run.json`'s `warnings`.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Write `run.json` for a finished or stopped run.
     pub fn write_summary(&self, sim: &Simulation, outcome: &RunOutcome) -> Result<(), EfsiError> {
+        self.write_run_json(
+            sim,
+            serde_json::to_value(outcome.stop).unwrap_or_default(),
+            outcome.steps_this_run,
+            outcome.resumed_from.as_ref().map(|r| r.0),
+            outcome.wall_seconds,
+        )
+    }
+
+    /// Write `run.json` with `stop` saying how the run stands (`"Running"` while it runs, the
+    /// [`StopReason`] at its end, `{"Failed": {"error": …}}` after a failed step or output).
+    fn write_run_json(
+        &self,
+        sim: &Simulation,
+        stop: serde_json::Value,
+        steps_this_run: u64,
+        resumed_from_step: Option<u64>,
+        wall_seconds: f64,
+    ) -> Result<(), EfsiError> {
         let timings = sim.pipeline().timings();
         let cells = sim.grid.cells() as f64;
-        let steps = outcome.steps_this_run.max(1) as f64;
+        let steps = steps_this_run.max(1) as f64;
         let json = serde_json::json!({
+            "run_id": self.run_id,
             "efsi_version": env!("CARGO_PKG_VERSION"),
             "scene": serde_json::to_value(&sim.scene).unwrap_or_default(),
             "scene_path": sim.scene_path.display().to_string(),
             "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
-            "stop": outcome.stop,
-            "t_end": outcome.t,
-            "steps": outcome.steps,
-            "steps_this_run": outcome.steps_this_run,
-            "resumed_from_step": outcome.resumed_from.as_ref().map(|r| r.0),
+            "stop": stop,
+            "warnings": self.warnings,
+            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk),
+            "t_end": sim.state.t,
+            "steps": sim.state.step,
+            "steps_this_run": steps_this_run,
+            "resumed_from_step": resumed_from_step,
             "cells": sim.grid.cells(),
-            "wall_seconds": outcome.wall_seconds,
-            "ns_per_cell_step": outcome.wall_seconds * 1e9 / (cells * steps),
+            "wall_seconds": wall_seconds,
+            "ns_per_cell_step": wall_seconds * 1e9 / (cells * steps),
             "projection_tolerance": sim.scene.numerics.projection.tolerance,
             "final_rate_of_change": if sim.rate_of_change().is_finite() { serde_json::json!(sim.rate_of_change()) } else { serde_json::Value::Null },
             "stages": timings.iter().map(|s| serde_json::json!({
@@ -567,6 +745,12 @@ pub fn run(
 }
 
 /// Run `sim` to its end time (or steady state, or a stop request), writing outputs into `dir`.
+///
+/// The folder belongs to this run while it writes there ([`crate::lock`]): another process
+/// writing a run in it is refused. A folder that holds an earlier run's outputs (`run.json`,
+/// `probes.csv`, `fields.pvd`, VTK files, profiles, a checkpoint) is refused too, naming them,
+/// unless [`RunOptions::overwrite`], which removes them first. `run.json` is written at the
+/// start (`"stop": "Running"`) with the run's identity, which its checkpoints record too.
 pub fn run_with(
     sim: &mut Simulation,
     dir: &Path,
@@ -574,10 +758,29 @@ pub fn run_with(
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<RunOutcome, EfsiError> {
     let start = Instant::now();
-    let mut out = Outputs::new(sim, dir, options.checkpoint_every)?;
+    check_checkpoint_every(sim, options.checkpoint_every)?;
     let law = checkpoint::law_identity(&sim.scene)?;
+    let mut out = Outputs::new(sim, dir, options.checkpoint_every, options.overwrite)?;
+    out.write_run_json(sim, serde_json::json!("Running"), 0, None, 0.0)?;
     out.emit(sim, false)?;
     drive(sim, &mut out, &law, options, progress, start, None)
+}
+
+/// A checkpoint interval must be at least the scene's smallest step (`time.dt_min`, default
+/// 1e-12·`time.end`): below it, checkpoints could not be told apart from one step to the next.
+fn check_checkpoint_every(sim: &Simulation, every: Option<f64>) -> Result<(), EfsiError> {
+    let Some(e) = every else { return Ok(()) };
+    let floor = sim.scene.time.dt_min_or_default();
+    if e.is_finite() && e >= floor {
+        return Ok(());
+    }
+    Err(EfsiError::Config {
+        path: PathBuf::from("--checkpoint-every"),
+        field: "checkpoint_every".into(),
+        message: format!(
+            "must be a time of at least time.dt_min = {floor:e} (the smallest step), got {e:e}"
+        ),
+    })
 }
 
 /// Continue the run in `dir` from its latest checkpoint (`dir/checkpoint/latest.efsick`),
@@ -594,6 +797,11 @@ pub fn resume(
     let start = Instant::now();
     let path = dir.join(checkpoint::LATEST);
     let what = path.display().to_string();
+    let lock = if dir.is_dir() {
+        Some(FolderLock::acquire(dir)?)
+    } else {
+        None
+    };
     if !path.is_file() {
         return Err(EfsiError::Checkpoint {
             what,
@@ -604,6 +812,31 @@ pub fn resume(
         });
     }
     let file = CheckpointFile::read(&path)?;
+    match recorded_run_id(dir) {
+        Some(id) if id == file.outputs.run_id => {}
+        recorded => {
+            let folder = match recorded {
+                Some(id) => format!("this folder's run.json is of run {id}"),
+                None => format!(
+                    "{} is missing or names no run",
+                    dir.join("run.json").display()
+                ),
+            };
+            return Err(EfsiError::Checkpoint {
+                what,
+                message: format!(
+                    "cannot resume: the checkpoint was written by run {} and {folder}, so the \
+                     outputs here are not the ones it continues (a checkpoint copied from \
+                     another run's folder?); resume in the folder it was written in",
+                    if file.outputs.run_id.is_empty() {
+                        "(none)"
+                    } else {
+                        &file.outputs.run_id
+                    }
+                ),
+            });
+        }
+    }
     let scene = Scene::load_with(&file.scene_path, &file.overrides)?;
     checkpoint::check_resumable(&file, &scene, &what)?;
     let law = checkpoint::law_identity(&scene)?;
@@ -612,8 +845,19 @@ pub fn resume(
     sim.restore(&snapshot)?;
     let mut options = options.clone();
     options.checkpoint_every = options.checkpoint_every.or(file.outputs.checkpoint_every);
-    let mut out = Outputs::resume(&sim, dir, &file.outputs, options.checkpoint_every)?;
+    check_checkpoint_every(&sim, options.checkpoint_every)?;
+    let Some(lock) = lock else {
+        return Err(EfsiError::io(dir, std::io::ErrorKind::NotFound.into()));
+    };
+    let mut out = Outputs::resume(&sim, dir, &file.outputs, options.checkpoint_every, lock)?;
     let from = Some((snapshot.step(), snapshot.t(), file.efsi_version.clone()));
+    out.write_run_json(
+        &sim,
+        serde_json::json!("Running"),
+        0,
+        Some(snapshot.step()),
+        0.0,
+    )?;
     let outcome = drive(&mut sim, &mut out, &law, &options, progress, start, from)?;
     Ok((sim, outcome))
 }
@@ -705,22 +949,41 @@ fn drive(
                 break;
             }
             Ok(Advanced::Stopped { signal }) => {
-                latest = Some(save_checkpoint(
-                    sim,
-                    law,
-                    out.state(),
-                    sim.snapshot(),
-                    &out.dir,
-                )?);
+                match save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir) {
+                    Ok(c) => latest = Some(c),
+                    Err(error) => return Err(failed(sim, out, start, first_step, error)),
+                }
                 stop = StopReason::Interrupted { signal };
                 break;
             }
             // The simulation is back at the start of the failed step: the last good state.
             Err(AdvanceError::Failed { error, good: true }) => {
                 let good = sim.snapshot();
-                return Err(save_failure(sim, out, law, good, error));
+                let error = save_failure(sim, out, law, good, error);
+                return Err(failed(sim, out, start, first_step, error));
             }
-            Err(e) => return Err(e.into()),
+            // An output or a checkpoint could not be written after a good step: save the state
+            // at the start of that step, whose outputs a resume writes again.
+            Err(AdvanceError::Hook(error)) => {
+                let error = match last_good.take() {
+                    Some(good) => {
+                        let (step, t) = (good.step(), good.t());
+                        match save_checkpoint(sim, law, out.state_before_emit(), good, &out.dir) {
+                            Ok(checkpoint) => EfsiError::Saved {
+                                error: Box::new(error),
+                                step,
+                                t,
+                                vtk: None,
+                                checkpoint,
+                            },
+                            Err(_) => error,
+                        }
+                    }
+                    None => error,
+                };
+                return Err(failed(sim, out, start, first_step, error));
+            }
+            Err(e) => return Err(failed(sim, out, start, first_step, e.into())),
         }
     }
     let outcome = RunOutcome {
@@ -732,35 +995,30 @@ fn drive(
         steps_this_run: sim.state.step - first_step,
         resumed_from,
         checkpoint: latest,
+        warnings: out.warnings().to_vec(),
     };
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
 }
 
-/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
-/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
-/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
-fn vtk_tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut out = vec![0.0; 6 * nx * ny];
-    let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
-        (0, 2, 1, 5)
-    } else {
-        (0, 1, 2, 3)
-    };
-    for j in 0..ny as isize {
-        for i in 0..nx as isize {
-            let k = 6 * (j as usize * nx + i as usize);
-            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
-            let t12 =
-                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
-            out[k + c11] = w * t[0][(i, j)];
-            out[k + c22] = w * t[1][(i, j)];
-            out[k + c33] = w * t[2][(i, j)];
-            out[k + c12] = w * t12;
-        }
-    }
-    out
+/// The run failed with `error`: record it in `run.json` (as far as that can still be written)
+/// and return it.
+fn failed(
+    sim: &Simulation,
+    out: &Outputs,
+    start: Instant,
+    first_step: u64,
+    error: EfsiError,
+) -> EfsiError {
+    let stop = serde_json::json!({ "Failed": { "error": error.to_string(), "exit_code": error.exit_code() } });
+    let _ = out.write_run_json(
+        sim,
+        stop,
+        sim.state.step.saturating_sub(first_step),
+        None,
+        start.elapsed().as_secs_f64(),
+    );
+    error
 }
 
 /// A step failed with `error`: write the last good state `good` as VTK (when the scene writes
@@ -792,5 +1050,44 @@ fn save_failure(
             checkpoint,
         },
         Err(_) => error,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The counter as the loop `while due(t, n·e) { n += 1 }` would leave it.
+    fn counted(t: f64, e: f64, mut n: u64) -> u64 {
+        while due(t, n as f64 * e) {
+            n += 1;
+        }
+        n
+    }
+
+    #[test]
+    fn events_due_equals_counting_and_costs_nothing_for_tiny_periods() {
+        for (t, e, n) in [
+            (0.0, 0.1, 0),
+            (0.0, 0.1, 1),
+            (0.3, 0.1, 1),
+            (0.30000000000000004, 0.1, 2),
+            (0.29999999999, 0.1, 1),
+            (1.0, 0.25, 3),
+            (40.0, 2.0, 0),
+            (1e-3, 1e-7, 5),
+            (7.0, 3.0, 9),
+        ] {
+            assert_eq!(
+                events_due(t, e, n),
+                counted(t, e, n),
+                "t = {t}, e = {e}, n = {n}"
+            );
+        }
+        // 1e12 events due at once: computed, not counted.
+        let t0 = Instant::now();
+        let n = events_due(1.0, 1e-12, 1);
+        assert!(t0.elapsed().as_secs_f64() < 0.01);
+        assert!(due(1.0, (n - 1) as f64 * 1e-12) && !due(1.0, n as f64 * 1e-12));
     }
 }

@@ -28,8 +28,8 @@ use std::fmt;
 pub mod loader;
 
 pub use loader::{
-    FD_TANGENT_TOLERANCE, LawInfo, LoadedLaw, ParamInfo, TangentCheck, check_tangent, describe,
-    list_laws, load_law,
+    FD_TANGENT_TOLERANCE, LawInfo, LoadedLaw, ParamInfo, TangentCheck, check_library,
+    check_tangent, describe, list_laws, load_law,
 };
 
 /// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]`.

@@ -355,7 +355,64 @@ pub fn load_law(
     scene_dir: &Path,
 ) -> Result<LoadedLaw, LawError> {
     let path = resolve_law(name, scene_dir)?;
-    let opened = open(&path, name)?;
+    let mut law = instantiate(&path, name, parameters)?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check at load failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    if !check.passed() {
+        let (a, b) = check.worst_entry;
+        return Err(law.error(format!(
+            "refused: its tangent disagrees with finite differences of its stress ({}): at B̃ = {:?}, ∂τ{}/∂B̃{} is {:.6e} but the stress gives {:.6e} — relative error {:.3e} > tolerance {FD_TANGENT_TOLERANCE:e}; fix the law's tangent (or its stress)",
+            describe_values(&law.info, &law.values),
+            check.worst_state,
+            COMPONENTS[a],
+            COMPONENTS[b],
+            check.tangent,
+            check.finite_difference,
+            check.worst_relative_error,
+        )));
+    }
+    law.check = Some(check);
+    Ok(law)
+}
+
+/// The tangent check of the law in the library at `path`, created with its default parameters
+/// (`efsi laws --check`): the law's description and the check's outcome, passed or not
+/// ([`TangentCheck::passed`]). An error if the library cannot be loaded, the law cannot be
+/// created or cannot evaluate the check's states.
+pub fn check_library(path: &Path) -> Result<(LawInfo, TangentCheck), LawError> {
+    let label = path.display().to_string();
+    if !path.is_file() {
+        return Err(LawError {
+            law: label,
+            message: format!("library not found: {}", path.display()),
+            cell: None,
+        });
+    }
+    let law = instantiate(path, &label, &BTreeMap::new())?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    Ok((law.info.clone(), check))
+}
+
+/// Open the library at `path` (named `name` in errors) and create its law with `parameters`
+/// (by name, checked against the declared ranges; defaults for the others), without the
+/// tangent check.
+fn instantiate(
+    path: &Path,
+    name: &str,
+    parameters: &BTreeMap<String, f64>,
+) -> Result<LoadedLaw, LawError> {
+    let opened = open(path, name)?;
     let info = opened.info;
     let fail = |message: String| LawError {
         law: info.name.clone(),
@@ -412,7 +469,7 @@ pub fn load_law(
             err.text()
         )));
     };
-    let mut law = LoadedLaw {
+    Ok(LoadedLaw {
         info,
         values,
         handle,
@@ -420,38 +477,16 @@ pub fn load_law(
         destroy_fn: opened.destroy,
         check: None,
         _library: opened.library,
-    };
-    let check = check_tangent(&law).map_err(|e| {
-        law.error(format!(
-            "tangent check at load failed ({}): {}",
-            describe_values(&law.info, &law.values),
-            e.message
-        ))
-    })?;
-    if !check.passed() {
-        let (a, b) = check.worst_entry;
-        return Err(law.error(format!(
-            "refused: its tangent disagrees with finite differences of its stress ({}): at B̃ = {:?}, ∂τ{}/∂B̃{} is {:.6e} but the stress gives {:.6e} — relative error {:.3e} > tolerance {FD_TANGENT_TOLERANCE:e}; fix the law's tangent (or its stress)",
-            describe_values(&law.info, &law.values),
-            check.worst_state,
-            COMPONENTS[a],
-            COMPONENTS[b],
-            check.tangent,
-            check.finite_difference,
-            check.worst_relative_error,
-        )));
-    }
-    law.check = Some(check);
-    Ok(law)
+    })
 }
 
 /// Reads a law library's name and parameter table without creating the law (`efsi laws`).
 pub fn describe(path: &Path) -> Result<LawInfo, LawError> {
     let label = path.display().to_string();
-    if !path.is_file() {
+    if let Some(message) = not_a_library_file(path) {
         return Err(LawError {
             law: label,
-            message: format!("library not found: {}", path.display()),
+            message,
             cell: None,
         });
     }
@@ -542,6 +577,25 @@ fn is_path(name: &str) -> bool {
         || [".so", ".dylib", ".dll"].iter().any(|e| name.ends_with(e))
 }
 
+/// Why `path` cannot be a law library file, if it cannot: absent, a folder, a device.
+fn not_a_library_file(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Some(format!("library not found: {}", path.display()))
+        }
+        Err(e) => Some(format!("cannot read the library {}: {e}", path.display())),
+        Ok(m) if m.is_dir() => Some(format!(
+            "{} is a folder, not a law library file",
+            path.display()
+        )),
+        Ok(m) if !m.is_file() => Some(format!(
+            "{} is not a regular file (a device or a pipe), not a law library",
+            path.display()
+        )),
+        Ok(_) => None,
+    }
+}
+
 /// The library file a scene's law name refers to (see the module docs).
 pub fn resolve_law(name: &str, scene_dir: &Path) -> Result<PathBuf, LawError> {
     let fail = |message: String| LawError {
@@ -556,14 +610,12 @@ pub fn resolve_law(name: &str, scene_dir: &Path) -> Result<PathBuf, LawError> {
         let path = scene_dir.join(name);
         // An absolute path, so that the dynamic loader does not search its own paths.
         let path = std::path::absolute(&path).unwrap_or(path);
-        return if path.is_file() {
-            Ok(path)
-        } else {
-            Err(fail(format!(
-                "library not found: {} (a relative law path is relative to the scene's folder {})",
-                path.display(),
+        return match not_a_library_file(&path) {
+            None => Ok(path),
+            Some(m) => Err(fail(format!(
+                "{m} (a relative law path is relative to the scene's folder {})",
                 scene_dir.display()
-            )))
+            ))),
         };
     }
     let file = library_file_name(name);
@@ -603,9 +655,11 @@ fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
     // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
     // (the user named it), and the checks below guard the ABI.
     let library = unsafe { Library::new(path) }.map_err(|e| {
+        // The loader's own words (`dlerror`) are the error's source, not its summary.
+        let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
         fail(
             &law,
-            format!("{} is not a loadable library: {e}", path.display()),
+            format!("{} is not a loadable library: {why}", path.display()),
         )
     })?;
     // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.

@@ -1,4 +1,5 @@
-//! Explicit advection of momentum: `V* = Vⁿ − Δt (V·∇V)ⁿ` (seed Eq. 11).
+//! Explicit advection of momentum: `V* = Vⁿ − Δt (V·∇V)` (seed Eq. 11, there with forward Euler;
+//! here the two-stage SSP Runge–Kutta method in time).
 //!
 //! **Scheme.** Conservative finite-volume form on the staggered control volumes, transporting
 //! the control volume's mass `m = ρ_f` (the face density, the average of its two cells) and
@@ -13,8 +14,9 @@
 //! **TVD upwind-biased MUSCL interpolation with the van Leer limiter** (van Leer 1974):
 //! `q = q_C + ½ ψ(r)(q_D − q_C)`, `r = (q_C − q_U)/(q_D − q_C)`, `ψ(r) = (r + |r|)/(1 + |r|)`,
 //! where U, C, D are the upwind-upwind, upwind and downwind values. Second-order in space where
-//! the field is smooth, first-order and bounded (no new extrema) at steep gradients. Forward
-//! Euler in time, as the seed.
+//! the field is smooth, first-order and bounded (no new extrema) at steep gradients. In time,
+//! SSP-RK2 (Heun: two Euler stages of the mass and momentum, averaged; Shu & Osher 1988), which
+//! keeps each Euler stage's TVD bound and is second-order.
 //!
 //! **Axisymmetric form.** With x = r, `(u·∇u)_r = (1/r)∂(r u u)/∂r + ∂(w u)/∂z` and
 //! `(u·∇u)_z = (1/r)∂(r u w)/∂r + ∂(w w)/∂z` (no swirl, so no `u_θ²/r` term): fluxes through
@@ -25,9 +27,8 @@
 //! **Stability.** Each Euler stage with a TVD limiter of `ψ ≤ 2` is TVD for
 //! `Δt (|u|/dx + |v|/dy) ≤ ½`; the stage limits Δt to `CFL · min(1 / (|u|/dx + |v|/dy))` with
 //! the scene's CFL (default 0.4). Measured: the Re = 100 cavity at 64² settles to a steady state
-//! at CFL 0.4 and keeps a limit cycle (kinetic energy wandering by ~10 %) from CFL 0.45 on, with
-//! forward Euler and SSP-RK2 alike — the flux form with interpolated advecting velocities falls a
-//! little short of the scalar bound.
+//! at CFL 0.4 and keeps a limit cycle (kinetic energy wandering by ~10 %) from CFL 0.45 on — the
+//! flux form with interpolated advecting velocities falls a little short of the scalar bound.
 //!
 //! **Parallelism.** Tendencies and updates run over rows in parallel (rayon); each row writes
 //! its own faces, so results are bit-identical on any number of threads.

@@ -129,7 +129,7 @@
 //!
 //! so at such a corner the law sees the solid's own B, its shear stress counts `1/κ = a/(aκ)`,
 //! the viscous stage's corner viscosity is the harmonic mean (see
-//! `viscous::corner_viscosity`), and B₁₂ is stretched by the solid's velocity gradient — shear
+//! `viscous_operator::corner_viscosity`), and B₁₂ is stretched by the solid's velocity gradient — shear
 //! rate `2D/(aκ)` — less a relaxation `r τ_e` (`r = (1 − a)/(μ_f aκ)`): the fluid's share of a
 //! sustained shear. The solid's gradient differs from the corner's only in the derivative
 //! across the interface (the velocity is continuous along it, and so are its derivatives along
@@ -195,7 +195,9 @@
 //! gradients, stretching and tangent only over the solid's bounding box (plus the ring the
 //! stencils read) and adds its force only to the faces next to it: the cost of the elastic part
 //! follows the solid's size, not the grid's. The viscous part `θΔt K_v` is applied over the
-//! whole grid from coefficients set once per step (`viscous_stencil`). Loops over rows
+//! whole grid by the one viscous operator (`viscous_operator`, coefficients set once per step),
+//! the block multigrid preconditioner takes its blocks from the same operator with the
+//! effective viscosities `η`. Loops over rows
 //! and BiCGSTAB's reductions run in parallel with fixed results: the iterates are bit-identical
 //! on any number of threads.
 //!
@@ -205,9 +207,8 @@
 //! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
 
 use crate::advection::face_value;
-use crate::block_multigrid::{Diagonal, ViscousBlocks};
-use crate::viscous::corner_viscosity;
-use crate::viscous_stencil::ViscousStencil;
+use crate::block_multigrid::ViscousBlocks;
+use crate::viscous_operator::{Coefficients, CompactFaces};
 use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -309,7 +310,8 @@ impl StagePlugin for Elastic {
                 theta_dt: 0.0,
                 mu: Field::zeros(grid),
                 mu_corner: Field::zeros(grid),
-                viscous: ViscousStencil::new(grid, UnknownFaces::new(grid, bc)),
+                viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
+                dm: vec![0.0; n],
             },
             theta: if crate::viscous::Viscous.needed(scene) {
                 scene.numerics.viscous.theta
@@ -340,6 +342,9 @@ impl StagePlugin for Elastic {
             blocks: ViscousBlocks::new(grid, bc),
             eta: Field::zeros(grid),
             eta_k: Field::zeros(grid),
+            eta_coefficients: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
+            eta_dm: vec![0.0; n],
+            eta_diag: vec![0.0; n],
             scratch: Scratch {
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
@@ -1522,6 +1527,10 @@ struct ElasticStage {
     blocks: ViscousBlocks,
     eta: Field,
     eta_k: Field,
+    /// `K_η` of those, and the mass plus its hoop term and the diagonal of `M − K_η`.
+    eta_coefficients: Coefficients,
+    eta_dm: Vec<f64>,
+    eta_diag: Vec<f64>,
     /// Work space of the operator, allocated once.
     scratch: Scratch,
 }
@@ -1544,8 +1553,10 @@ struct ElasticOperator {
     theta_dt: f64,
     mu: Field,
     mu_corner: Field,
-    /// `θΔt K_v`, its coefficients set each step.
-    viscous: ViscousStencil,
+    /// `θΔt K_v`, its coefficients set each step (zero without viscosity).
+    viscous: Coefficients,
+    /// `mass` plus the hoop term of `θΔt K_v`.
+    dm: Vec<f64>,
 }
 
 struct OperatorCtx<'a> {
@@ -1561,7 +1572,7 @@ impl LinearOperator for OperatorCtx<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
-        scatter(&op.k.faces, x, xu, xv);
+        op.k.faces.scatter(x, xu, xv);
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
         let (cw, kw) = (op.k.solid_c, op.k.solid_k);
@@ -1569,33 +1580,9 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.gradient_in(xu, xv, gc, gk);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);
-        op.viscous.apply(&op.mass, x, xu, xv, y);
+        op.viscous.apply(xu, xv, &op.dm, Some(x), y);
         op.k.force_sub(self.dtau, op.c, y);
     }
-}
-
-/// Scatter the compact vector `x` (u faces first, then v) into the unknown faces of `u`, `v`,
-/// rows in parallel.
-fn scatter(faces: &UnknownFaces, x: &[f64], u: &mut Field, v: &mut Field) {
-    let (ux, vy) = (faces.ux, faces.vy);
-    let s = u.stride();
-    let nur = (ux.hi - ux.lo).max(0) as usize;
-    let nx = s - 1 - 2 * efsi_core::GHOST;
-    let nu = faces.nu();
-    if let Some(rows) = nu.checked_div(nur) {
-        let r0 = u.idx(-efsi_core::G, 0);
-        par::for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
-            let o = (efsi_core::G + ux.lo) as usize;
-            row[o..o + nur].copy_from_slice(&x[j * nur..(j + 1) * nur]);
-        });
-    }
-    let rows = (vy.hi - vy.lo).max(0) as usize;
-    let r0 = v.idx(-efsi_core::G, vy.lo);
-    let xv = &x[nu..];
-    par::for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
-        let o = efsi_core::GHOST;
-        row[o..o + nx].copy_from_slice(&xv[j * nx..(j + 1) * nx]);
-    });
 }
 
 fn missing() -> StageError {
@@ -1726,10 +1713,9 @@ impl ElasticStage {
         self.op.theta_dt = self.theta * dt;
         if self.theta > 0.0 {
             self.op.mu.copy_from(&state.mu);
-            corner_viscosity(g, &state.mu, &mut self.op.mu_corner);
             self.op
                 .viscous
-                .setup(g, self.op.theta_dt, &self.op.mu, &self.op.mu_corner);
+                .set_viscosity(g, &state.mu, self.op.theta_dt, &mut self.op.mu_corner);
         }
         let td = self.op.theta_dt;
         let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
@@ -1780,6 +1766,12 @@ impl ElasticStage {
             rhs[c] *= dt;
         });
         let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+        {
+            let op = &mut self.op;
+            for ((dm, m), h) in op.dm.iter_mut().zip(&op.mass).zip(op.viscous.hoop()) {
+                *dm = m + h;
+            }
+        }
         // Momentum scale ‖M V^{n+1/3}‖: the residual is judged against the larger of it and the
         // right-hand side, so a body nearly at rest (tiny right-hand side) is not asked for more
         // digits than its momentum has.
@@ -1839,8 +1831,13 @@ impl ElasticStage {
                         ek.fill(0.0);
                     }
                     op.k.stiffness(&d.relax, op.c, e, ek);
-                    self.blocks
-                        .setup(g, Diagonal::FromMass(&op.mass), e, ek, 1.0);
+                    let pre = &mut self.eta_coefficients;
+                    pre.set(g, e, ek, 1.0);
+                    for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
+                        *dm = m + h;
+                    }
+                    pre.diagonal(&self.eta_dm, &mut self.eta_diag);
+                    self.blocks.setup(pre, &self.eta_diag);
                     self.solver.solve(
                         &mut ctxop,
                         &self.blocks,
@@ -1855,9 +1852,15 @@ impl ElasticStage {
                 return Err(err(
                     "elastic",
                     format!(
-                        "BiCGSTAB did not converge in {} iterations (relative residual {:.3e}); reduce the time step",
+                        "BiCGSTAB did not converge in {} iterations, the limit numerics.elastic.max_iterations (relative residual {:.3e} > numerics.elastic.tolerance {:.1e}); {}",
                         st.iterations,
-                        st.residual / bnorm
+                        st.residual / bnorm,
+                        self.tol,
+                        if self.max_iter < 20 {
+                            "raise numerics.elastic.max_iterations"
+                        } else {
+                            "raise numerics.elastic.max_iterations or reduce the time step"
+                        }
                     ),
                 ));
             }

@@ -10,7 +10,7 @@ pub mod body_force;
 pub mod elastic;
 pub mod projection;
 pub mod viscous;
-mod viscous_stencil;
+mod viscous_operator;
 pub mod vof;
 
 use efsi_core::StagePlugin;

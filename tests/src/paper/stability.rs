@@ -32,6 +32,17 @@
 //! rebound, while the mechanical energy shows no gain — which is what a pumping instability
 //! shows first.
 
+//!
+//! # Where the runs are made
+//! Through an efsi sweep (`python -m efsi sweep --runs …`, the Python package's Dask sweep)
+//! when the Python of `EFSI_PYTHON` (else `python3`) has the efsi package and Dask's
+//! distributed scheduler: each setting is a run of `cases/sphere_impact.ron` with overrides,
+//! a task on a LocalCluster of one worker per core or on the Dask scheduler at
+//! `EFSI_SWEEP_SCHEDULER`, and its probe rows come back as files judged here. Otherwise, or
+//! with `EFSI_SWEEP=serial`, one after the other in this process. The map is the same either
+//! way (the same scenes, the same steps); the sweep's report has no per-stage timings and names
+//! a refused setting's override.
+
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Report, Run, execute_built, load_case, probes};
 use efsi_core::interface::shapes::Shape;
@@ -275,6 +286,167 @@ fn attempt(
     }
 }
 
+/// The Python that runs the map as an efsi sweep (`EFSI_PYTHON`, else `python3`), if it has
+/// the efsi package and Dask's distributed scheduler and `EFSI_SWEEP` is not `serial`; `None`:
+/// the runs are made one after the other in this process.
+fn sweep_python() -> Option<std::ffi::OsString> {
+    if std::env::var("EFSI_SWEEP").is_ok_and(|v| v == "serial") {
+        return None;
+    }
+    let python = std::env::var_os("EFSI_PYTHON").unwrap_or_else(|| "python3".into());
+    let usable = std::process::Command::new(&python)
+        .args(["-c", "import efsi, distributed"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    usable.then_some(python)
+}
+
+/// The overrides of `cases/sphere_impact.ron` that make the scene of [`scene_for`], as JSON
+/// (a number, or RON text).
+fn overrides_for(st: &Setting, cpr: f64) -> Result<serde_json::Value, String> {
+    let (scene, _) = scene_for(st, cpr)?;
+    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let Shape::Disk { center, radius } = solid.shape else {
+        return Err("the solid is not a disk".into());
+    };
+    let mut o = serde_json::Map::new();
+    let mut put = |k: &str, v: serde_json::Value| {
+        o.insert(k.to_string(), v);
+    };
+    put(
+        "solid.shape",
+        format!(
+            "Disk(center: ({:?}, {:?}), radius: {radius:?})",
+            center.0, center.1
+        )
+        .into(),
+    );
+    put("solid.law.parameters.G", st.g.into());
+    put("fluid.density", scene.fluid.density.into());
+    put("grid.nx", scene.grid.nx.into());
+    put("grid.ny", scene.grid.ny.into());
+    put("time.end", END.into());
+    put("time.cfl", st.cfl.into());
+    if let Some(dt) = st.fixed_dt {
+        put("time.fixed_dt", dt.into());
+    }
+    if let Some(w) = st.wave_courant {
+        put("numerics.elastic.wave_courant", w.into());
+    }
+    put("output.vtk_every", "None".into());
+    put("output.probe_every", "None".into());
+    put(
+        "output.probes",
+        "[SolidVolume, SolidCentroid, SolidVelocity, KineticEnergy, PotentialEnergy, ElasticEnergy]"
+            .into(),
+    );
+    Ok(serde_json::Value::Object(o))
+}
+
+/// Make the runs of `settings` as one efsi sweep (`python -m efsi sweep --runs … --save-probes
+/// …`: Dask tasks on a LocalCluster of one worker per core, or on the scheduler at
+/// `EFSI_SWEEP_SCHEDULER`), then judge each from its probe rows as [`attempt`] does. Returns
+/// what [`attempt`] returns, per setting in order (no per-stage timings: the runs were made
+/// elsewhere).
+fn through_sweep(
+    python: &std::ffi::OsStr,
+    settings: &[Setting],
+    cpr: f64,
+    dir: &std::path::Path,
+) -> Result<Vec<(Outcome, Option<Run>)>, String> {
+    let (_, scene_path) = load_case("sphere_impact.ron")?;
+    let sweep = dir.join("sweep");
+    let _ = std::fs::remove_dir_all(&sweep);
+    std::fs::create_dir_all(&sweep).map_err(|e| format!("{}: {e}", sweep.display()))?;
+    let list = settings
+        .iter()
+        .map(|st| overrides_for(st, cpr))
+        .collect::<Result<Vec<_>, _>>()?;
+    let runs_file = sweep.join("runs.json");
+    std::fs::write(&runs_file, serde_json::Value::Array(list).to_string())
+        .map_err(|e| format!("{}: {e}", runs_file.display()))?;
+    let table_file = sweep.join("table.json");
+    let mut c = std::process::Command::new(python);
+    c.args(["-m", "efsi", "sweep"])
+        .arg(&scene_path)
+        .arg("--runs")
+        .arg(&runs_file)
+        .arg("--save-probes")
+        .arg(sweep.join("probes"))
+        .arg("--out")
+        .arg(&table_file)
+        .arg("-q")
+        .stdout(std::process::Stdio::null());
+    if let Some(a) = std::env::var_os("EFSI_SWEEP_SCHEDULER") {
+        c.arg("--scheduler").arg(a);
+    }
+    let status = c
+        .status()
+        .map_err(|e| format!("cannot start {}: {e}", python.to_string_lossy()))?;
+    if !status.success() {
+        return Err(format!("efsi sweep of the stability map failed ({status})"));
+    }
+    let text = std::fs::read_to_string(&table_file)
+        .map_err(|e| format!("{}: {e}", table_file.display()))?;
+    let rows: Vec<serde_json::Value> = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    if rows.len() != settings.len() {
+        return Err(format!(
+            "{}: {} rows for {} settings",
+            table_file.display(),
+            rows.len(),
+            settings.len()
+        ));
+    }
+    Ok(settings
+        .iter()
+        .zip(&rows)
+        .map(|(st, row)| {
+            let outcome = row["outcome"].as_str().unwrap_or("failed: no outcome");
+            if let Some(m) = outcome.strip_prefix("refused: ") {
+                return (Outcome::Refused(m.to_string()), None);
+            }
+            if outcome != "ok" {
+                let m = outcome.split_once(": ").map_or(outcome, |(_, m)| m);
+                return (Outcome::Failed(format!("the run failed: {m}")), None);
+            }
+            let rdir = std::path::PathBuf::from(row["probes_dir"].as_str().unwrap_or_default());
+            let (nx, ny) = (
+                row["grid.nx"].as_u64().unwrap_or(0) as usize,
+                row["grid.ny"].as_u64().unwrap_or(0) as usize,
+            );
+            let mut run = Run {
+                label: st.label(),
+                cells: nx * ny,
+                steps: row["steps"].as_u64().unwrap_or(0),
+                wall_seconds: row["wall_time"].as_f64().unwrap_or(f64::NAN),
+                error: None,
+                metrics: Vec::new(),
+                stages: Vec::new(),
+                dir: rdir.clone(),
+            };
+            match figures(&rdir) {
+                Ok(f) => {
+                    run.metrics = vec![
+                        ("mech_gain".into(), f.mech_gain),
+                        ("total_peak".into(), f.total_peak),
+                        ("total_end".into(), f.total_end),
+                        ("volume_drift".into(), f.volume),
+                    ];
+                    run.error = Some(f.mech_gain.max(0.0));
+                    let outcome = match f.verdict() {
+                        None => Outcome::Stable(f),
+                        Some(why) => Outcome::Failed(why),
+                    };
+                    (outcome, Some(run))
+                }
+                Err(e) => (Outcome::Failed(format!("probes: {e}")), Some(run)),
+            }
+        })
+        .collect())
+}
+
 /// Run the case.
 pub fn run(opts: &Options) -> Result<Report, String> {
     let dir = opts.out.join("stability");
@@ -315,8 +487,20 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     ];
     let mut results = Vec::new();
     let mut runs = Vec::new();
-    for st in grid_runs.iter().chain(&small_runs).chain(&refusals) {
-        let (outcome, run) = attempt(st, cpr, &dir, opts);
+    let settings: Vec<Setting> = grid_runs
+        .iter()
+        .chain(&small_runs)
+        .chain(&refusals)
+        .copied()
+        .collect();
+    let attempts = match sweep_python() {
+        Some(python) => through_sweep(&python, &settings, cpr, &dir)?,
+        None => settings
+            .iter()
+            .map(|st| attempt(st, cpr, &dir, opts))
+            .collect(),
+    };
+    for (st, (outcome, run)) in settings.iter().zip(attempts) {
         if let Some(r) = run {
             runs.push(r);
         }

@@ -153,8 +153,13 @@ impl Shape {
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
         match self {
             Shape::Disk { center, radius } => {
-                if !fin(&[center.0, center.1, *radius]) || *radius <= 0.0 {
-                    return Err(format!("Disk: radius must be finite and > 0, got {radius}"));
+                if !fin(&[center.0, center.1]) {
+                    return Err(format!("Disk: center must be finite, got {center:?}"));
+                }
+                if !radius.is_finite() || *radius <= 0.0 {
+                    return Err(format!(
+                        "Disk: radius must be finite and > 0, got {radius:e}"
+                    ));
                 }
             }
             Shape::Rectangle { min, max } => {

@@ -1,4 +1,6 @@
 //! Output writers: VTK XML for ParaView, CSV probes and profiles.
 
 pub mod atomic;
+pub mod fields;
+pub mod read;
 pub mod vtk;

@@ -21,6 +21,15 @@
 //! VTK orders cells with i fastest, then the next non-flat axis, which in both cases is efsi's
 //! row-major `(i, j)` order: cell `(i, j)`, component `c` is at `(j·nx + i)·components + c`.
 //!
+//! [`write_vtr_with`] writes the same layout with options ([`VtrFormat`]): the arrays as
+//! `Float32` instead of `Float64`; the appended data compressed with zlib — VTK's
+//! `vtkZLibDataCompressor`: the `VTKFile` element names the compressor and every block becomes a
+//! header of `UInt64`s (number of blocks, uncompressed block size, size of the last partial
+//! block or 0, each block's compressed size) followed by the deflated blocks of at most
+//! [`ZLIB_BLOCK`] bytes; each cell array also written as point data, at the nodes, each node
+//! the mean of the (up to four) cells around it; and text field data (one-tuple `String`
+//! arrays, ASCII) such as the geometry and the units. Coordinates and the time stay `Float64`.
+//!
 //! The simulation time is stored twice as one-value `Float64` field data: `TIME` (the name VisIt
 //! and many scripts look for, shown in ParaView's spreadsheet and information panels) and
 //! `TimeValue` (the name VTK ≥ 8.2 XML readers recognise as the time step of a lone file, so a
@@ -28,6 +37,7 @@
 
 use crate::output::atomic::write_atomically;
 use efsi_core::grid::{Geometry, Grid};
+pub use efsi_core::scene::{VtkCompression, VtkPrecision};
 use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -49,8 +59,101 @@ pub struct CellArray<'a> {
     pub values: &'a [f64],
 }
 
-/// Values converted per `write_all` call when streaming a block (64 KiB of bytes).
-const CHUNK: usize = 8192;
+/// The uncompressed size of a zlib block (VTK's default, 32 KiB).
+pub const ZLIB_BLOCK: usize = 1 << 15;
+
+/// How [`write_vtr_with`] stores the arrays; the default is [`write_vtr`]'s: `Float64` cell
+/// data, raw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VtrFormat {
+    /// The type of the cell (and point) arrays.
+    pub precision: VtkPrecision,
+    /// Compression of every appended block.
+    pub compression: VtkCompression,
+    /// Also write every cell array as point data (node values: the mean of adjacent cells).
+    pub point_data: bool,
+}
+
+/// The cell values of `values` (`components` per cell) averaged to the nodes: node `(i, j)`,
+/// `i` fastest, is the mean of the cells `(i − 1 … i, j − 1 … j)` inside the grid.
+pub fn cells_to_points(grid: &Grid, values: &[f64], components: usize) -> Vec<f64> {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let mut out = vec![0.0; (nx + 1) * (ny + 1) * components];
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let o = (j * (nx + 1) + i) * components;
+            let mut n = 0.0;
+            for cj in j.saturating_sub(1)..(j + 1).min(ny) {
+                for ci in i.saturating_sub(1)..(i + 1).min(nx) {
+                    let c = (cj * nx + ci) * components;
+                    for k in 0..components {
+                        out[o + k] += values[c + k];
+                    }
+                    n += 1.0;
+                }
+            }
+            for k in 0..components {
+                out[o + k] /= n;
+            }
+        }
+    }
+    out
+}
+
+/// One appended block as it goes into the file: raw (`UInt64` byte count, then the
+/// little-endian values) or zlib-compressed (see the module docs), the values as `Float64` or,
+/// if `float32`, rounded to `Float32`.
+fn encode_block(values: &[f64], float32: bool, compression: VtkCompression) -> io::Result<Vec<u8>> {
+    let width = if float32 { 4 } else { 8 };
+    let mut payload = Vec::with_capacity(width * values.len());
+    for v in values {
+        if float32 {
+            payload.extend_from_slice(&(*v as f32).to_le_bytes());
+        } else {
+            payload.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    match compression {
+        VtkCompression::None => {
+            let mut out = Vec::with_capacity(8 + payload.len());
+            out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+            out.extend_from_slice(&payload);
+            Ok(out)
+        }
+        VtkCompression::Zlib => {
+            let blocks: Vec<&[u8]> = payload.chunks(ZLIB_BLOCK).collect();
+            let last = payload.len() % ZLIB_BLOCK;
+            let mut compressed = Vec::with_capacity(blocks.len());
+            for b in &blocks {
+                let mut z =
+                    flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+                z.write_all(b)?;
+                compressed.push(z.finish()?);
+            }
+            let mut out = Vec::new();
+            for h in [blocks.len(), ZLIB_BLOCK, last] {
+                out.extend_from_slice(&(h as u64).to_le_bytes());
+            }
+            for c in &compressed {
+                out.extend_from_slice(&(c.len() as u64).to_le_bytes());
+            }
+            for c in &compressed {
+                out.extend_from_slice(c);
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// A VTK XML ASCII `String` value: each byte as a number, then the terminating 0.
+fn ascii_string(s: &str) -> String {
+    let mut out = String::with_capacity(4 * s.len() + 1);
+    for b in s.bytes() {
+        let _ = write!(out, "{b} ");
+    }
+    out.push('0');
+    out
+}
 
 /// An `InvalidInput` error naming the file.
 fn invalid(path: &Path, what: impl std::fmt::Display) -> io::Error {
@@ -95,26 +198,27 @@ pub fn node_coordinates(grid: &Grid) -> [Vec<f64>; 3] {
     }
 }
 
-/// Write one appended-raw block: the `UInt64` byte count, then the little-endian payload.
-fn write_block(w: &mut impl Write, values: &[f64]) -> io::Result<()> {
-    w.write_all(&(std::mem::size_of_val(values) as u64).to_le_bytes())?;
-    let mut buf = [0u8; 8 * CHUNK];
-    for chunk in values.chunks(CHUNK) {
-        for (b, v) in buf.chunks_exact_mut(8).zip(chunk) {
-            b.copy_from_slice(&v.to_le_bytes());
-        }
-        w.write_all(&buf[..8 * chunk.len()])?;
-    }
-    Ok(())
-}
-
 /// Write the cell data `arrays` of `grid` at simulation time `time` to the `.vtr` file `path`
-/// (atomically: see [`write_atomically`]).
+/// (atomically: see [`write_atomically`]), as `Float64`, raw: [`write_vtr_with`] with the
+/// default [`VtrFormat`] and no text field data.
 ///
 /// Fails with `InvalidInput` (and writes nothing) if `time` is not finite, an array name is empty
 /// or repeated, an array has zero components, or its length is not `nx · ny · components`.
 /// Non-finite cell values are written as they are.
 pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> io::Result<()> {
+    write_vtr_with(path, grid, time, arrays, &VtrFormat::default(), &[])
+}
+
+/// [`write_vtr`] with the arrays stored as `format` says, and the text field data `notes`
+/// (`(name, text)`: one-tuple `String` arrays beside `TIME`, e.g. the geometry and the units).
+pub fn write_vtr_with(
+    path: &Path,
+    grid: &Grid,
+    time: f64,
+    arrays: &[CellArray],
+    format: &VtrFormat,
+    notes: &[(&str, &str)],
+) -> io::Result<()> {
     if !time.is_finite() {
         return Err(invalid(path, format_args!("the time {time} is not finite")));
     }
@@ -152,31 +256,62 @@ pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> i
             ));
         }
     }
+    for (k, (name, _)) in notes.iter().enumerate() {
+        if name.is_empty()
+            || notes[..k].iter().any(|n| n.0 == *name)
+            || *name == "TIME"
+            || *name == "TimeValue"
+        {
+            return Err(invalid(
+                path,
+                format_args!("field data name `{name}` is empty, repeated or reserved"),
+            ));
+        }
+    }
 
     let coords = node_coordinates(grid);
     let time_block = [time];
-    // Blocks in the order they appear in the appended section.
-    let mut blocks: Vec<&[f64]> = Vec::with_capacity(arrays.len() + 5);
-    blocks.push(&time_block);
-    blocks.push(&time_block);
-    blocks.extend(arrays.iter().map(|a| a.values));
-    blocks.extend(coords.iter().map(|c| c.as_slice()));
-    let mut offsets = Vec::with_capacity(blocks.len());
+    let points: Vec<Vec<f64>> = if format.point_data {
+        arrays
+            .iter()
+            .map(|a| cells_to_points(grid, a.values, a.components))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let float32 = format.precision == VtkPrecision::Float32;
+    let array_type = if float32 { "Float32" } else { "Float64" };
+    // Blocks in the order they appear in the appended section: (values, as Float32).
+    let mut blocks: Vec<(&[f64], bool)> = Vec::with_capacity(2 * arrays.len() + 5);
+    blocks.push((&time_block, false));
+    blocks.push((&time_block, false));
+    blocks.extend(points.iter().map(|p| (p.as_slice(), float32)));
+    blocks.extend(arrays.iter().map(|a| (a.values, float32)));
+    blocks.extend(coords.iter().map(|c| (c.as_slice(), false)));
+    let encoded = blocks
+        .iter()
+        .map(|(v, f32)| encode_block(v, *f32, format.compression))
+        .collect::<io::Result<Vec<_>>>()?;
+    let mut offsets = Vec::with_capacity(encoded.len());
     let mut offset = 0u64;
-    for b in &blocks {
+    for b in &encoded {
         offsets.push(offset);
-        offset += 8 + std::mem::size_of_val(*b) as u64;
+        offset += b.len() as u64;
     }
     let mut off = offsets.iter();
 
     let extent = extent_string(grid);
-    let mut h = String::with_capacity(2048 + 160 * arrays.len());
+    let compressor = match format.compression {
+        VtkCompression::None => "",
+        VtkCompression::Zlib => r#" compressor="vtkZLibDataCompressor""#,
+    };
+    let mut h = String::with_capacity(2048 + 320 * arrays.len());
     // Writing to a String cannot fail.
     let _ = (|| -> std::fmt::Result {
         writeln!(h, r#"<?xml version="1.0"?>"#)?;
         writeln!(
             h,
-            r#"<VTKFile type="RectilinearGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
+            r#"<VTKFile type="RectilinearGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"{compressor}>"#
         )?;
         writeln!(h, r#"  <RectilinearGrid WholeExtent="{extent}">"#)?;
         writeln!(h, "    <FieldData>")?;
@@ -187,15 +322,34 @@ pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> i
                 off.next().unwrap()
             )?;
         }
+        for (name, text) in notes {
+            writeln!(
+                h,
+                r#"      <DataArray type="String" Name="{}" NumberOfTuples="1" format="ascii">{}</DataArray>"#,
+                xml_attr(name),
+                ascii_string(text)
+            )?;
+        }
         writeln!(h, "    </FieldData>")?;
         writeln!(h, r#"    <Piece Extent="{extent}">"#)?;
         writeln!(h, "      <PointData>")?;
+        if format.point_data {
+            for a in arrays {
+                writeln!(
+                    h,
+                    r#"        <DataArray type="{array_type}" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
+                    xml_attr(a.name),
+                    a.components,
+                    off.next().unwrap()
+                )?;
+            }
+        }
         writeln!(h, "      </PointData>")?;
         writeln!(h, "      <CellData>")?;
         for a in arrays {
             writeln!(
                 h,
-                r#"        <DataArray type="Float64" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
+                r#"        <DataArray type="{array_type}" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
                 xml_attr(a.name),
                 a.components,
                 off.next().unwrap()
@@ -219,8 +373,8 @@ pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> i
 
     write_atomically(path, |w| {
         w.write_all(h.as_bytes())?;
-        for b in &blocks {
-            write_block(w, b)?;
+        for b in &encoded {
+            w.write_all(b)?;
         }
         w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
     })

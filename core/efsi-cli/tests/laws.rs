@@ -1,0 +1,86 @@
+//! `efsi laws --check`: the load-time tangent check run on the libraries given, with a non-zero
+//! exit code for a law that fails it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn efsi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_efsi"))
+        .args(args)
+        .output()
+        .expect("run efsi")
+}
+
+/// A law plugin library built with the workspace, by library name.
+fn law_library(lib: &str) -> PathBuf {
+    let file = format!(
+        "{}{lib}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    );
+    let bin = Path::new(env!("CARGO_BIN_EXE_efsi")).parent().unwrap();
+    [bin.to_path_buf(), bin.join("deps")]
+        .iter()
+        .map(|d| d.join(&file))
+        .find(|p| p.is_file())
+        .unwrap_or_else(|| panic!("{file} not built next to {}", bin.display()))
+}
+
+/// The worst relative error a `--check` line reports.
+fn worst_error(line: &str) -> f64 {
+    let rest = line
+        .split("worst relative error ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no error figure in: {line}"));
+    rest.split_whitespace().next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn laws_check_passes_a_good_law_and_fails_a_wrong_tangent() {
+    let good = law_library("efsi_law_neo_hookean");
+    let wrong = law_library("efsi_test_law_wrong_tangent");
+
+    let o = efsi(&["laws", "--check", good.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.starts_with("neo_hookean ("), "{out}");
+    assert!(out.contains("tangent check passed"), "{out}");
+    assert!(out.contains("over 26 states (0 skipped)"), "{out}");
+    assert!(worst_error(&out) < 1e-8, "{out}");
+
+    // A failing law among good ones: every library is checked, the exit code is 2.
+    let o = efsi(&[
+        "laws",
+        "--check",
+        good.to_str().unwrap(),
+        wrong.to_str().unwrap(),
+    ]);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(2), "{out}{err}");
+    assert!(
+        out.contains("neo_hookean (") && out.contains("passed"),
+        "{out}"
+    );
+    assert!(
+        err.contains("test_wrong_tangent (") && err.contains("tangent check FAILED"),
+        "{err}"
+    );
+    assert!(worst_error(&err) > 1e-5, "{err}");
+
+    // A library that does not exist is an error naming it, exit code 2.
+    let o = efsi(&["laws", "--check", "/nonexistent/libefsi_law_x.so"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("library not found: /nonexistent/libefsi_law_x.so"),
+        "{err}"
+    );
+}

@@ -1,0 +1,282 @@
+//! Reading back what efsi wrote (for `efsi plot`): its `.vtr` files — any [`VtrFormat`]:
+//! `Float64` or `Float32`, raw or zlib-compressed — and its `.pvd` collections. This reads
+//! efsi's own layout (one piece, appended data, `UInt64` headers), not every VTK file.
+//!
+//! [`VtrFormat`]: crate::output::vtk::VtrFormat
+
+use std::io::{self, Read};
+use std::path::{Path, PathBuf};
+
+/// An array of a `.vtr` file, as `f64` whatever its type in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadArray {
+    /// Its name.
+    pub name: String,
+    /// Components per tuple.
+    pub components: usize,
+    /// The values, tuple-major.
+    pub values: Vec<f64>,
+}
+
+/// The content of a `.vtr` file written by efsi.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VtrData {
+    /// The simulation time (`TIME`).
+    pub time: f64,
+    /// The X, Y and Z node coordinates.
+    pub coordinates: [Vec<f64>; 3],
+    /// The cell arrays.
+    pub cells: Vec<ReadArray>,
+    /// The point arrays (empty unless written with point data).
+    pub points: Vec<ReadArray>,
+}
+
+impl VtrData {
+    /// The cell array `name`, if the file has it.
+    pub fn cell(&self, name: &str) -> Option<&ReadArray> {
+        self.cells.iter().find(|a| a.name == name)
+    }
+
+    /// The number of cells along the two non-flat axes `(n1, n2)`: X–Y for a planar file, X–Z
+    /// for an axisymmetric one (cells are stored with the first fastest).
+    pub fn shape(&self) -> (usize, usize) {
+        let n = |c: &Vec<f64>| c.len().saturating_sub(1);
+        let [x, y, z] = &self.coordinates;
+        if y.len() == 1 {
+            (n(x), n(z))
+        } else {
+            (n(x), n(y))
+        }
+    }
+}
+
+fn bad(path: &Path, what: impl std::fmt::Display) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!("{}: {what}", path.display()),
+    )
+}
+
+/// Attribute `key="…"` of an XML tag's text.
+fn attr<'a>(tag: &'a str, key: &str) -> Option<&'a str> {
+    let pat = format!(" {key}=\"");
+    let start = tag.find(&pat)? + pat.len();
+    let len = tag[start..].find('"')?;
+    Some(&tag[start..start + len])
+}
+
+/// Read the `.vtr` file at `path`.
+pub fn read_vtr(path: &Path) -> io::Result<VtrData> {
+    let bytes = std::fs::read(path)?;
+    let marker = b"<AppendedData encoding=\"raw\">";
+    let at = bytes
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or_else(|| bad(path, "no appended data (not a file efsi wrote)"))?;
+    let underscore = at
+        + bytes[at..]
+            .iter()
+            .position(|&b| b == b'_')
+            .ok_or_else(|| bad(path, "no `_` marker"))?;
+    let head = std::str::from_utf8(&bytes[..at]).map_err(|_| bad(path, "header not UTF-8"))?;
+    let data = &bytes[underscore + 1..];
+    let zlib = head.contains("compressor=\"vtkZLibDataCompressor\"");
+    if !head.contains("header_type=\"UInt64\"") {
+        return Err(bad(path, "only UInt64 block headers are read"));
+    }
+    let (mut time, mut coordinates, mut cells, mut points) = (
+        f64::NAN,
+        [Vec::new(), Vec::new(), Vec::new()],
+        Vec::new(),
+        Vec::new(),
+    );
+    let mut section = "";
+    for line in head.lines() {
+        let l = line.trim_start();
+        for s in ["<FieldData", "<PointData", "<CellData", "<Coordinates"] {
+            if l.starts_with(s) {
+                section = s;
+            }
+        }
+        if !l.starts_with("<DataArray") || attr(l, "format") != Some("appended") {
+            continue;
+        }
+        let name = attr(l, "Name").ok_or_else(|| bad(path, "an array without a name"))?;
+        let width = match attr(l, "type") {
+            Some("Float64") => 8,
+            Some("Float32") => 4,
+            t => {
+                return Err(bad(
+                    path,
+                    format_args!("array `{name}`: type {t:?} not read"),
+                ));
+            }
+        };
+        let offset: usize = attr(l, "offset")
+            .and_then(|o| o.parse().ok())
+            .ok_or_else(|| bad(path, format_args!("array `{name}`: no offset")))?;
+        let components: usize = attr(l, "NumberOfComponents")
+            .map_or(Some(1), |c| c.parse().ok())
+            .ok_or_else(|| bad(path, format_args!("array `{name}`: bad component count")))?;
+        let raw = block(data, offset, zlib)
+            .map_err(|e| bad(path, format_args!("array `{name}`: {e}")))?;
+        let values: Vec<f64> = if width == 8 {
+            raw.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                .collect()
+        } else {
+            raw.chunks_exact(4)
+                .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
+                .collect()
+        };
+        let array = ReadArray {
+            name: name.to_string(),
+            components,
+            values,
+        };
+        match section {
+            "<FieldData" if name == "TIME" => {
+                time = array.values.first().copied().unwrap_or(f64::NAN)
+            }
+            "<PointData" => points.push(array),
+            "<CellData" => cells.push(array),
+            "<Coordinates" => {
+                let k = match name {
+                    "x" => 0,
+                    "y" => 1,
+                    _ => 2,
+                };
+                coordinates[k] = array.values;
+            }
+            _ => {}
+        }
+    }
+    Ok(VtrData {
+        time,
+        coordinates,
+        cells,
+        points,
+    })
+}
+
+/// The payload of the block at `offset` of the appended section.
+fn block(data: &[u8], offset: usize, zlib: bool) -> Result<Vec<u8>, String> {
+    let word = |k: usize| -> Result<usize, String> {
+        let s = offset + 8 * k;
+        data.get(s..s + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()) as usize)
+            .ok_or_else(|| "truncated block header".to_string())
+    };
+    if !zlib {
+        let n = word(0)?;
+        return data
+            .get(offset + 8..offset + 8 + n)
+            .map(<[u8]>::to_vec)
+            .ok_or_else(|| "truncated block".into());
+    }
+    let (blocks, size, last) = (word(0)?, word(1)?, word(2)?);
+    let mut at = offset + 8 * (3 + blocks);
+    let mut out = Vec::with_capacity(blocks * size);
+    for k in 0..blocks {
+        let c = word(3 + k)?;
+        let chunk = data.get(at..at + c).ok_or("truncated compressed block")?;
+        let before = out.len();
+        flate2::read::ZlibDecoder::new(chunk)
+            .read_to_end(&mut out)
+            .map_err(|e| format!("zlib: {e}"))?;
+        let want = if k + 1 == blocks && last != 0 {
+            last
+        } else {
+            size
+        };
+        if out.len() - before != want {
+            return Err(format!(
+                "block {k} inflates to {} bytes, not {want}",
+                out.len() - before
+            ));
+        }
+        at += c;
+    }
+    Ok(out)
+}
+
+/// The `(time, file)` entries of the `.pvd` collection at `path`, the files resolved against
+/// its folder.
+pub fn read_pvd(path: &Path) -> io::Result<Vec<(f64, PathBuf)>> {
+    let text = std::fs::read_to_string(path)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut out = Vec::new();
+    for l in text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("<DataSet"))
+    {
+        let t = attr(l, "timestep")
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| bad(path, format_args!("a DataSet without a time: {l}")))?;
+        let f = attr(l, "file")
+            .ok_or_else(|| bad(path, format_args!("a DataSet without a file: {l}")))?;
+        out.push((t, dir.join(f)));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::vtk::{CellArray, VtkCompression, VtkPrecision, VtrFormat, write_vtr_with};
+    use efsi_core::{Geometry, Grid};
+
+    /// What the writer wrote, the reader reads: every format, both geometries, zlib blocks
+    /// full and partial.
+    #[test]
+    fn reads_back_every_format() {
+        let dir = std::env::temp_dir().join(format!("efsi-read-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for geometry in [Geometry::Planar, Geometry::Axisymmetric] {
+            // 96 × 64 cells × 6 components: 147 456 bytes as Float32, 4.5 zlib blocks.
+            let grid = Grid::new(geometry, 96, 64, (0.0, 1.5), (-0.5, 0.5));
+            let n = grid.cells();
+            let p: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin()).collect();
+            let b: Vec<f64> = (0..6 * n).map(|k| 1.0 + (k % 7) as f64 / 3.0).collect();
+            let arrays = [
+                CellArray {
+                    name: "pressure",
+                    components: 1,
+                    values: &p,
+                },
+                CellArray {
+                    name: "B",
+                    components: 6,
+                    values: &b,
+                },
+            ];
+            for precision in [VtkPrecision::Float64, VtkPrecision::Float32] {
+                for compression in [VtkCompression::None, VtkCompression::Zlib] {
+                    let format = VtrFormat {
+                        precision,
+                        compression,
+                        point_data: true,
+                    };
+                    let path = dir.join("f.vtr");
+                    write_vtr_with(&path, &grid, 0.25, &arrays, &format, &[("units", "SI")])
+                        .unwrap();
+                    let r = read_vtr(&path).unwrap();
+                    let what = format!("{geometry:?} {format:?}");
+                    assert_eq!(r.time, 0.25, "{what}");
+                    assert_eq!(r.shape(), (96, 64), "{what}");
+                    assert_eq!(r.points.len(), 2, "{what}");
+                    for (a, want) in [("pressure", &p), ("B", &b)] {
+                        let got = &r.cell(a).unwrap().values;
+                        let want: Vec<f64> = if precision == VtkPrecision::Float32 {
+                            want.iter().map(|&v| v as f32 as f64).collect()
+                        } else {
+                            want.clone()
+                        };
+                        assert_eq!(got, &want, "{what} {a}");
+                    }
+                }
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

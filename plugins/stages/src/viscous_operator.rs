@@ -1,0 +1,543 @@
+//! The one discretisation of `K_η = vol·∇·(2η D)` on the MAC grid, shared by the viscous stage,
+//! the elastic stage's implicit system and the block multigrid preconditioner of both.
+//!
+//! **Operator.** `D = ½(∇V + ∇Vᵀ)`; normal stresses `2η ∂u/∂x`, `2η ∂v/∂y` at cell centres with
+//! the cell coefficient `η`, shear `η_k (∂u/∂y + ∂v/∂x)` at corners with the corner coefficient
+//! `η_k`, their divergence on the staggered control volumes, and in axisymmetric geometry
+//! (x = r) the hoop term `−2η u_r/r²` on the u-faces; the radius factors come from the grid's
+//! metric (zero hoop factor in planar geometry). `η` is an effective viscosity times a time:
+//! `θΔt μ` for the viscous step, `θΔt μ + (Δt²/2) G_eff` for the elastic step's preconditioner
+//! (see [`crate::elastic`]). The corner coefficient of a viscosity is the harmonic mean of the
+//! four cells' ([`corner_viscosity`]).
+//!
+//! **Coefficients**, assembled once per step ([`Coefficients`]): `a_c = 2η_c r_c Δy/Δx` on
+//! cells for the u-equation's normal stress, `b_c = 2η_c r_c Δx/Δy` for the v-equation's, one
+//! corner weight `g = r η_k`, and the hoop term `h = η_f r ΔxΔy χ²` (the two cells' sum
+//! `η_f`, hoop factor `χ = 1/r`) per unknown u-face. Per u-face `(i, j)`:
+//!
+//! ```text
+//!   (K u)_ij = a_i (u_{i+1} − u_i) − a_{i−1} (u_i − u_{i−1})
+//!            + g_{j+1} (α (u_{j+1} − u_j) + (v_{i,j+1} − v_{i−1,j+1}))
+//!            − g_j     (α (u_j − u_{j−1}) + (v_{ij} − v_{i−1,j}))     − h u_ij,     α = Δx/Δy,
+//! ```
+//!
+//! and per v-face the transposed pattern with `b` and `β = Δy/Δx`. The coefficient of `v` in a
+//! u-row is that of `u` in the v-row: `−K` is symmetric (positive semi-definite, the gradient of
+//! the dissipation `Σ 2η D:D dV`) by construction with walls, periodic sides and the axis; the
+//! zero-gradient ghosts of an `Outflow` side make the rows of the faces beside it non-symmetric
+//! (a test checks both statements on a dense copy of the matrix).
+//!
+//! **Products.** [`Coefficients::apply`] computes `y = d∘x − K(u, v)` on the compact unknown
+//! faces in one vectorised pass per component, rows in parallel, and returns `x·y` summed by rows
+//! in order: bit-identical on any number of threads. [`Coefficients::diagonal`] gives the
+//! matrix's diagonal, [`Coefficients::blocks`] its u–u and v–v blocks as five-point stencils for
+//! the block multigrid ([`crate::block_multigrid`]).
+
+use efsi_core::{Field, G, Grid, bc::UnknownFaces};
+use efsi_linalg::Stencil5;
+use efsi_linalg::par::{self, for_each_row, for_each_row_sum, for_each_row2};
+
+/// The coefficients of `K_η` (see the module docs) for one grid and its unknown faces.
+pub(crate) struct Coefficients {
+    faces: UnknownFaces,
+    /// `Δx/Δy`, `Δy/Δx`.
+    alpha: f64,
+    beta: f64,
+    nx: usize,
+    /// Normal-stress coefficients of the u- and v-equations at cells.
+    cxx: Field,
+    cyy: Field,
+    /// Corner weights `r η_k`.
+    gc: Field,
+    /// The hoop term of each unknown face (zero on v-faces and in planar geometry).
+    hoop: Vec<f64>,
+}
+
+impl Coefficients {
+    /// Zero coefficients (`K = 0`) for `grid` and its unknown `faces`.
+    pub(crate) fn new(grid: &Grid, faces: UnknownFaces) -> Self {
+        Coefficients {
+            hoop: vec![0.0; faces.len()],
+            faces,
+            alpha: grid.dx / grid.dy,
+            beta: grid.dy / grid.dx,
+            nx: grid.nx,
+            cxx: Field::zeros(grid),
+            cyy: Field::zeros(grid),
+            gc: Field::zeros(grid),
+        }
+    }
+
+    /// The hoop term per unknown face (compact; zero on v-faces).
+    pub(crate) fn hoop(&self) -> &[f64] {
+        &self.hoop
+    }
+
+    /// The coefficients of `scale·K_μ` for the cell viscosities `mu` (ghosts filled); the
+    /// corner viscosities ([`corner_viscosity`]) are written to `corner`. Rows in parallel.
+    pub(crate) fn set_viscosity(&mut self, g: &Grid, mu: &Field, scale: f64, corner: &mut Field) {
+        corner_viscosity(g, mu, corner);
+        self.set(g, mu, corner, scale);
+    }
+
+    /// The coefficients of `scale·K_η` for the cell coefficients `eta` (ghosts filled) and the
+    /// corner coefficients `eta_k`. Rows in parallel.
+    pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let s = eta.stride();
+        let ed = eta.data();
+        let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
+        {
+            let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
+            for_each_row2(cxx, cyy, s, |jr, cx, cy| {
+                let row = &ed[jr * s..(jr + 1) * s];
+                for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
+                    let r = m.rc(c as isize - G);
+                    *cx = ax * r * e;
+                    *cy = ay * r * e;
+                }
+            });
+        }
+        let r0 = eta.idx(-G, 0);
+        let rows = g.ny + 1;
+        let ekd = &eta_k.data()[r0..r0 + rows * s];
+        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
+            let er = &ekd[jr * s..(jr + 1) * s];
+            for i in 0..=g.nx as isize {
+                let c = (i + G) as usize;
+                gr[c] = scale * m.rx(i) * er[c];
+            }
+        });
+        let ux = self.faces.ux;
+        let nur = (ux.hi - ux.lo).max(0) as usize;
+        let nu = self.faces.nu();
+        let hoop = &mut self.hoop[..nu];
+        if nur > 0 {
+            for_each_row(hoop, nur, |j, hs| {
+                for (c, h) in hs.iter_mut().enumerate() {
+                    let i = ux.lo + c as isize;
+                    let k = eta.idx(i, j as isize);
+                    let x = m.hoop_x(i);
+                    *h = scale * dx * dy * m.rx(i) * (ed[k - 1] + ed[k]) * x * x;
+                }
+            });
+        }
+    }
+
+    /// `dm` plus the sum of every coupling of each row into `diag`, where `dm` holds the mass
+    /// plus the hoop term ([`hoop`](Self::hoop)) of each unknown face: the diagonal of
+    /// `diag(dm) − K` away from the boundaries; beside a wall the wall's coupling counts once
+    /// whatever its ghost rule (a reflected no-slip ghost doubles it in the matrix), which keeps
+    /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Rows in parallel.
+    pub(crate) fn diagonal(&self, dm: &[f64], diag: &mut [f64]) {
+        let (ux, vy) = (self.faces.ux, self.faces.vy);
+        let nur = (ux.hi - ux.lo).max(0) as usize;
+        let nu = self.faces.nu();
+        let nx = self.nx;
+        let s = self.cxx.stride();
+        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (alpha, beta) = (self.alpha, self.beta);
+        let (dm_u, dm_v) = dm.split_at(nu);
+        let (dg_u, dg_v) = diag.split_at_mut(nu);
+        let idx = |i: isize, j: isize| self.cxx.idx(i, j);
+        if nur > 0 {
+            for_each_row(dg_u, nur, |j, dgs| {
+                for (c, dg) in dgs.iter_mut().enumerate() {
+                    let k = idx(ux.lo + c as isize, j as isize);
+                    *dg = dm_u[j * nur + c] + (cxx[k] + cxx[k - 1]) + alpha * (gd[k + s] + gd[k]);
+                }
+            });
+        }
+        for_each_row(dg_v, nx, |jr, dgs| {
+            let j = vy.lo + jr as isize;
+            for (i, dg) in dgs.iter_mut().enumerate() {
+                let k = idx(i as isize, j);
+                *dg = dm_v[jr * nx + i] + (cyy[k] + cyy[k - s]) + beta * (gd[k + 1] + gd[k]);
+            }
+        });
+    }
+
+    /// The u–u and v–v blocks of `diag(d) − K` — `d` the full diagonal ([`diagonal`](Self::diagonal))
+    /// — as five-point stencils (couplings `≥ 0`, zero across a closed boundary).
+    pub(crate) fn blocks(&self, diag: &[f64], au: &mut Stencil5, av: &mut Stencil5) {
+        let (ux, vy) = (self.faces.ux, self.faces.vy);
+        let nur = au.nx;
+        let nx = self.nx;
+        let s = self.cxx.stride();
+        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (px, py) = (au.periodic_x, au.periodic_y);
+        let ny = au.ny;
+        for j in 0..ny {
+            for c in 0..nur {
+                let k = self.cxx.idx(ux.lo + c as isize, j as isize);
+                let kc = j * nur + c;
+                au.east[kc] = if c + 1 < nur || px { cxx[k] } else { 0.0 };
+                au.north[kc] = if j + 1 < ny || py {
+                    self.alpha * gd[k + s]
+                } else {
+                    0.0
+                };
+                au.diag[kc] = diag[kc];
+            }
+        }
+        let nu = nur * ny;
+        let nvr = av.ny;
+        for jr in 0..nvr {
+            let j = vy.lo + jr as isize;
+            for i in 0..nx {
+                let k = self.cxx.idx(i as isize, j);
+                let kc = jr * nx + i;
+                av.east[kc] = if i + 1 < nx || px {
+                    self.beta * gd[k + 1]
+                } else {
+                    0.0
+                };
+                av.north[kc] = if jr + 1 < nvr || py { cyy[k] } else { 0.0 };
+                av.diag[kc] = diag[nu + kc];
+            }
+        }
+    }
+
+    /// `y = d∘x − K(u, v)` on the unknown faces, with `u`, `v` the fields (ghosts filled) and `x`
+    /// their compact vector of unknowns, or the fields' own values when `None` (rows in
+    /// parallel; each row writes its own entries). Returns `x·y`, summed by rows in order (the
+    /// same on any number of threads).
+    pub(crate) fn apply(
+        &self,
+        u: &Field,
+        v: &Field,
+        d: &[f64],
+        x: Option<&[f64]>,
+        y: &mut [f64],
+    ) -> f64 {
+        let (alpha, beta) = (self.alpha, self.beta);
+        let s = u.stride();
+        let (ud, vd) = (u.data(), v.data());
+        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (ux, vy) = (self.faces.ux, self.faces.vy);
+        let nur = (ux.hi - ux.lo).max(0) as usize;
+        let nu = self.faces.nu();
+        let nx = self.nx;
+        let (yu, yv) = y.split_at_mut(nu);
+        let (du, dv) = d.split_at(nu);
+        let (xu, xv) = match x {
+            Some(x) => {
+                let (a, b) = x.split_at(nu);
+                (Some(a), Some(b))
+            }
+            None => (None, None),
+        };
+        let mut xy = 0.0;
+        if nur > 0 {
+            xy = for_each_row_sum(yu, nur, |j, yr| {
+                let n = yr.len();
+                let k0 = u.idx(ux.lo, j as isize);
+                let q0 = j * nur;
+                let uc = &ud[k0..k0 + n];
+                let ue = &ud[k0 + 1..k0 + 1 + n];
+                let uw = &ud[k0 - 1..k0 - 1 + n];
+                let un = &ud[k0 + s..k0 + s + n];
+                let us = &ud[k0 - s..k0 - s + n];
+                let vc = &vd[k0..k0 + n];
+                let vw = &vd[k0 - 1..k0 - 1 + n];
+                let vn = &vd[k0 + s..k0 + s + n];
+                let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
+                let ac = &cxx[k0..k0 + n];
+                let aw = &cxx[k0 - 1..k0 - 1 + n];
+                let gs = &gd[k0..k0 + n];
+                let gn = &gd[k0 + s..k0 + s + n];
+                let dr = &du[q0..q0 + n];
+                let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
+                for c in 0..n {
+                    let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
+                    let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
+                    let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+                    yr[c] = dr[c] * xr[c] - k;
+                }
+                let yr = &*yr;
+                par::sum4(n, |c| xr[c] * yr[c])
+            });
+        }
+        xy + for_each_row_sum(yv, nx, |jr, yr| {
+            let n = yr.len();
+            let k0 = v.idx(0, vy.lo + jr as isize);
+            let q0 = jr * nx;
+            let vc = &vd[k0..k0 + n];
+            let ve = &vd[k0 + 1..k0 + 1 + n];
+            let vw = &vd[k0 - 1..k0 - 1 + n];
+            let vn = &vd[k0 + s..k0 + s + n];
+            let vs = &vd[k0 - s..k0 - s + n];
+            let uc = &ud[k0..k0 + n];
+            let us = &ud[k0 - s..k0 - s + n];
+            let ue = &ud[k0 + 1..k0 + 1 + n];
+            let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
+            let bc = &cyy[k0..k0 + n];
+            let bs = &cyy[k0 - s..k0 - s + n];
+            let gw = &gd[k0..k0 + n];
+            let ge = &gd[k0 + 1..k0 + 1 + n];
+            let dr = &dv[q0..q0 + n];
+            let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
+            for c in 0..n {
+                let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
+                let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
+                let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
+                yr[c] = dr[c] * xr[c] - k;
+            }
+            let yr = &*yr;
+            par::sum4(n, |c| xr[c] * yr[c])
+        })
+    }
+}
+
+/// Corner viscosities: the harmonic mean of the four cells around each corner (zero if any is
+/// inviscid), corner rows in parallel. The corner carries the shear stress
+/// `μ (∂u/∂y + ∂v/∂x)`; across an interface the two phases shear in series, whose effective
+/// viscosity is the harmonic mean — the arithmetic mean would let the more viscous phase drag
+/// the other along (an O(1) error in the first cell beside an interface, first order overall).
+pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
+    let s = mu.stride();
+    let r0 = mu.idx(-G, 0);
+    let rows = grid.ny + 1;
+    let mud = mu.data();
+    let nx = grid.nx as isize;
+    for_each_row(&mut out.data_mut()[r0..r0 + rows * s], s, |jr, mr| {
+        let k0 = r0 + jr * s;
+        for i in 0..=nx {
+            let c = (i + G) as usize;
+            let k = k0 + c;
+            let q = [mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]];
+            mr[c] = if q.iter().all(|&x| x > 0.0) {
+                4.0 / q.iter().map(|x| 1.0 / x).sum::<f64>()
+            } else {
+                0.0
+            };
+        }
+    });
+}
+
+/// Compact vectors of unknown faces (u faces first, then v, rows in order) and the fields they
+/// live in: scatter and accumulate, rows in parallel.
+pub(crate) trait CompactFaces {
+    /// Write the compact vector `x` into the unknown faces of `u`, `v`.
+    fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field);
+    /// `u, v += x` on the unknown faces.
+    fn add(&self, x: &[f64], u: &mut Field, v: &mut Field);
+}
+
+impl CompactFaces for UnknownFaces {
+    fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field) {
+        each_face_row(self, x, u, v, |a, b| a.copy_from_slice(b));
+    }
+
+    fn add(&self, x: &[f64], u: &mut Field, v: &mut Field) {
+        each_face_row(self, x, u, v, |a, b| {
+            for (a, b) in a.iter_mut().zip(b) {
+                *a += b;
+            }
+        });
+    }
+}
+
+/// `f(field row's unknown faces, x's row)` for every row of u- then v-faces, in parallel.
+fn each_face_row(
+    faces: &UnknownFaces,
+    x: &[f64],
+    u: &mut Field,
+    v: &mut Field,
+    f: impl Fn(&mut [f64], &[f64]) + Sync + Send,
+) {
+    let (ux, vy) = (faces.ux, faces.vy);
+    let s = u.stride();
+    let nur = (ux.hi - ux.lo).max(0) as usize;
+    let nx = s - 1 - 2 * efsi_core::GHOST;
+    let nu = faces.nu();
+    if let Some(rows) = nu.checked_div(nur) {
+        let r0 = u.idx(-G, 0);
+        let o = (G + ux.lo) as usize;
+        for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
+            f(&mut row[o..o + nur], &x[j * nur..(j + 1) * nur]);
+        });
+    }
+    let rows = (vy.hi - vy.lo).max(0) as usize;
+    let r0 = v.idx(-G, vy.lo);
+    let xv = &x[nu..];
+    let o = efsi_core::GHOST;
+    for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
+        f(&mut row[o..o + nx], &xv[j * nx..(j + 1) * nx]);
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::BoundarySet;
+    use efsi_core::grid::Geometry;
+    use efsi_core::scene::{Boundaries, Boundary};
+
+    /// A 7 × 5 grid in `geometry` and its boundaries (x_min, x_max, y_min, y_max).
+    fn setup(geometry: Geometry, sides: [Boundary; 4]) -> (Grid, BoundarySet) {
+        let grid = Grid::new(geometry, 7, 5, (0.0, 1.0), (0.0, 0.6));
+        let [x_min, x_max, y_min, y_max] = sides;
+        let b = Boundaries {
+            x_min,
+            x_max,
+            y_min,
+            y_max,
+        };
+        let bc = BoundarySet::new(&b, &grid);
+        (grid, bc)
+    }
+
+    /// A viscosity field varying over three decades, ghosts included.
+    fn viscosity(grid: &Grid) -> Field {
+        let mut mu = Field::zeros(grid);
+        let n = mu.data().len();
+        for (k, m) in mu.data_mut().iter_mut().enumerate() {
+            *m = 10f64.powf(3.0 * ((k * 7919) % n) as f64 / n as f64 - 1.5);
+        }
+        mu
+    }
+
+    /// The dense matrix of `diag(dm) − K` on the compact unknowns, column by column.
+    fn matrix(grid: &Grid, bc: &BoundarySet, k: &Coefficients, dm: &[f64]) -> Vec<Vec<f64>> {
+        let faces = UnknownFaces::new(grid, bc);
+        let n = faces.len();
+        let (mut u, mut v) = (Field::zeros(grid), Field::zeros(grid));
+        let mut cols = Vec::new();
+        for c in 0..n {
+            let mut x = vec![0.0; n];
+            x[c] = 1.0;
+            u.fill(0.0);
+            v.fill(0.0);
+            faces.scatter(&x, &mut u, &mut v);
+            bc.fill_velocity(grid, &mut u, &mut v, 0.0, true);
+            let mut y = vec![0.0; n];
+            let xy = k.apply(&u, &v, dm, Some(&x), &mut y);
+            assert_eq!(xy, y[c]);
+            cols.push(y);
+        }
+        cols
+    }
+
+    fn check(geometry: Geometry, sides: [Boundary; 4]) {
+        let label = format!("{geometry:?} {sides:?}");
+        let (grid, bc) = setup(geometry, sides);
+        let faces = UnknownFaces::new(&grid, &bc);
+        let n = faces.len();
+        let mut mu = viscosity(&grid);
+        bc.fill_scalar(&grid, &mut mu, false);
+        let mut k = Coefficients::new(&grid, faces);
+        let mut corner = Field::zeros(&grid);
+        k.set_viscosity(&grid, &mu, 0.3, &mut corner);
+        let dm: Vec<f64> = k.hoop().iter().map(|h| 1.0 + h).collect();
+        let a = matrix(&grid, &bc, &k, &dm);
+        let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        // Beside an outflow side (x_max here) the zero-gradient ghosts make the rows of its
+        // last column of faces non-symmetric; everywhere else the matrix is symmetric.
+        let (ux, vy) = (faces.ux, faces.vy);
+        let nur = (ux.hi - ux.lo) as usize;
+        let nvr = (vy.hi - vy.lo) as usize;
+        let outflow = matches!(bc.get(efsi_core::scene::Side::XMax), Boundary::Outflow);
+        let last_column = |c: usize| {
+            outflow
+                && if c < faces.nu() {
+                    c % nur == nur - 1
+                } else {
+                    (c - faces.nu()) % grid.nx == grid.nx - 1
+                }
+        };
+        for i in (0..n).filter(|&i| !last_column(i)) {
+            for j in (0..n).filter(|&j| !last_column(j)) {
+                assert!(
+                    (a[i][j] - a[j][i]).abs() <= 1e-13 * scale,
+                    "{label}: A[{i}][{j}] = {} but A[{j}][{i}] = {}",
+                    a[i][j],
+                    a[j][i]
+                );
+            }
+        }
+        // The diagonal is the matrix's own away from the boundaries, and the blocks' couplings
+        // are the matrix's entries.
+        let mut diag = vec![0.0; n];
+        k.diagonal(&dm, &mut diag);
+        let inner = |a: usize, n: usize| a >= 1 && a + 2 <= n;
+        let mut checked = 0;
+        for c in 0..n {
+            let interior = if c < faces.nu() {
+                inner(c % nur, nur) && inner(c / nur, grid.ny)
+            } else {
+                let q = c - faces.nu();
+                inner(q % grid.nx, grid.nx) && inner(q / grid.nx, nvr)
+            };
+            if interior {
+                assert!(
+                    (diag[c] - a[c][c]).abs() <= 1e-13 * scale,
+                    "{label}: diagonal {c}"
+                );
+                checked += 1;
+            }
+            assert!(diag[c] >= a[c][c] - 1e-13 * scale || c >= faces.nu() || !interior);
+        }
+        assert!(checked >= 10, "{label}: {checked} interior rows");
+        let mut au = Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1));
+        let mut av = Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1));
+        k.blocks(&diag, &mut au, &mut av);
+        let nu = faces.nu();
+        let wrap = |c: usize, n: usize| if c + 1 < n { c + 1 } else { 0 };
+        for j in 0..grid.ny {
+            for c in 0..nur {
+                let q = j * nur + c;
+                if au.east[q] != 0.0 {
+                    let e = j * nur + wrap(c, nur);
+                    assert!((au.east[q] + a[q][e]).abs() <= 1e-13 * scale, "u east {q}");
+                }
+                if au.north[q] != 0.0 {
+                    let nq = wrap(j, grid.ny) * nur + c;
+                    assert!(
+                        (au.north[q] + a[q][nq]).abs() <= 1e-13 * scale,
+                        "u north {q}"
+                    );
+                }
+            }
+        }
+        for jr in 0..nvr {
+            for i in 0..grid.nx {
+                let q = nu + jr * grid.nx + i;
+                if av.east[q - nu] != 0.0 {
+                    let e = nu + jr * grid.nx + wrap(i, grid.nx);
+                    assert!(
+                        (av.east[q - nu] + a[q][e]).abs() <= 1e-13 * scale,
+                        "v east {q}"
+                    );
+                }
+                if av.north[q - nu] != 0.0 {
+                    let nq = nu + wrap(jr, nvr) * grid.nx + i;
+                    assert!(
+                        (av.north[q - nu] + a[q][nq]).abs() <= 1e-13 * scale,
+                        "v north {q}"
+                    );
+                }
+            }
+        }
+        // Positive definite with a positive mass: xᵀAx > 0 for a few vectors.
+        for seed in 1..5u64 {
+            let x: Vec<f64> = (0..n)
+                .map(|c| ((c as u64 * 2654435761 + seed * 97) % 1000) as f64 / 500.0 - 1.0)
+                .collect();
+            let q: f64 = (0..n)
+                .map(|i| x[i] * (0..n).map(|j| a[j][i] * x[j]).sum::<f64>())
+                .sum();
+            assert!(q > 0.0);
+        }
+    }
+
+    #[test]
+    fn the_matrix_is_symmetric_and_its_diagonal_and_blocks_are_its_own() {
+        use Boundary::*;
+        check(Geometry::Planar, [NoSlip, NoSlip, NoSlip, NoSlip]);
+        check(Geometry::Planar, [Periodic, Periodic, NoSlip, FreeSlip]);
+        check(Geometry::Planar, [NoSlip, Outflow, Periodic, Periodic]);
+        check(Geometry::Axisymmetric, [Axis, NoSlip, NoSlip, FreeSlip]);
+    }
+}

@@ -1,0 +1,107 @@
+"""``python -m efsi sweep SCENE --grid PATH=v1,v2 … [--scheduler ADDRESS]`` (what
+``efsi sweep`` runs): a sweep from the command line; the table is printed and written to
+``--out`` (CSV or Parquet), the summary of each run being its final probe values."""
+
+import argparse
+import sys
+
+
+def _value(text):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _grid_option(text):
+    path, sep, values = text.partition("=")
+    if not sep or not path.strip() or not values.strip():
+        raise argparse.ArgumentTypeError(
+            f"`{text}`: expected PATH=V1,V2,… (e.g. solid.law.parameters.G=1e5,1e6 or refine=0.5,1)"
+        )
+    return path.strip(), [_value(v.strip()) for v in values.split(",")]
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="efsi sweep", description="Run a scene over a grid of settings on Dask.")
+    parser.add_argument("scene", help="the scene file (RON)")
+    parser.add_argument(
+        "--grid",
+        action="append",
+        type=_grid_option,
+        metavar="PATH=V1,V2",
+        help="a setting's values (the paths of efsi run --set; `refine` for --refine); repeat for a product",
+    )
+    parser.add_argument(
+        "--runs",
+        metavar="FILE",
+        help="the runs as a JSON list of objects {PATH: VALUE, …} instead of --grid",
+    )
+    parser.add_argument(
+        "--save-probes",
+        metavar="DIR",
+        help="write each run's probe rows to DIR/<run>/probes.csv (column probes_dir)",
+    )
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler's address (default: a LocalCluster)")
+    parser.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
+    parser.add_argument("--serial", action="store_true", help="run in this process, one after the other (no Dask)")
+    parser.add_argument("--until", type=float, help="stop each run at this time (default: the scene's end)")
+    parser.add_argument("--out", default="sweep.csv", help="the table: .csv, .parquet or .json (default sweep.csv)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    if bool(args.grid) == bool(args.runs):
+        parser.error("give either --grid PATH=V1,V2 … or --runs FILE")
+
+    from . import SceneError, Scene
+    from .sweeps import SaveProbes, final_probes, sweep
+
+    if args.runs:
+        import json
+
+        with open(args.runs) as f:
+            grid = json.load(f)
+    else:
+        grid = dict(args.grid)
+
+    try:
+        scene = Scene.load(args.scene)
+    except SceneError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    client = None
+    if args.serial:
+        client = False
+    elif args.scheduler:
+        from distributed import Client
+
+        client = Client(args.scheduler)
+    try:
+        table = sweep(
+            scene,
+            grid,
+            client=client,
+            summary=SaveProbes(args.save_probes) if args.save_probes else final_probes,
+            until=args.until,
+            out=args.out,
+            progress=not args.quiet,
+            workers=args.workers,
+        )
+    finally:
+        if client:
+            client.close()
+    if not args.quiet:
+        import pandas
+
+        with pandas.option_context("display.max_columns", None, "display.width", 200):
+            print(table.to_string(index=False))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "sweep":
+        sys.exit(main(sys.argv[2:]))
+    print("usage: python -m efsi sweep SCENE --grid PATH=V1,V2 … (see python -m efsi sweep --help)", file=sys.stderr)
+    sys.exit(2)

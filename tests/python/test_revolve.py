@@ -1,0 +1,87 @@
+"""`tools/paraview_revolve.py` with the official VTK wheel (no ParaView): the sphere impact at
+15 cells per radius, its t = 0 output mirrored and its phi = 1/2 surface revolved; the surface
+must enclose the sphere's volume 4/3 pi R^3 within 2 %."""
+
+import importlib.util
+import math
+import os
+import subprocess
+from pathlib import Path
+
+from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkMassProperties
+from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
+
+REPO = Path(__file__).resolve().parents[2]
+EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
+R = 0.0192  # cases/sphere_impact.ron
+
+
+def load_tool():
+    spec = importlib.util.spec_from_file_location("paraview_revolve",
+                                                  REPO / "tools/paraview_revolve.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_revolved_sphere_encloses_its_volume(tmp_path):
+    out = tmp_path / "sphere"
+    # 15 cells per radius (35 × 15/35), a few steps: the t = 0 output is the initial sphere.
+    subprocess.run([EFSI, "run", str(REPO / "cases/sphere_impact.ron"), "--refine",
+                    str(15 / 35), "--set", "time.end=0.0005", "--out", str(out), "-q"],
+                   check=True)
+    tool = load_tool()
+    slices, surfaces = tool.process(out, tmp_path / "revolved", time=0.0, resolution=128)
+    entries = tool.read_pvd(surfaces)
+    assert [t for t, _ in entries] == [0.0]
+
+    reader = vtkXMLPolyDataReader()
+    reader.SetFileName(str(entries[0][1]))
+    reader.Update()
+    surface = reader.GetOutput()
+    assert surface.GetPointData().GetArray("pressure") is not None, "arrays carried"
+    # Closed: no boundary edges.
+    edges = vtkFeatureEdges()
+    edges.SetInputData(surface)
+    edges.BoundaryEdgesOn()
+    edges.FeatureEdgesOff()
+    edges.ManifoldEdgesOff()
+    edges.NonManifoldEdgesOff()
+    edges.Update()
+    assert edges.GetOutput().GetNumberOfCells() == 0, "the revolved surface has holes"
+    mass = vtkMassProperties()
+    mass.SetInputData(surface)
+    mass.Update()
+    exact = 4.0 / 3.0 * math.pi * R**3
+    volume = mass.GetVolume()
+    print(f"revolved phi = 1/2 volume {volume:.6e} m^3 vs 4/3 pi R^3 = {exact:.6e} "
+          f"({100 * (volume / exact - 1):+.3f} %)")
+    assert abs(volume / exact - 1.0) < 0.02
+    # The extent is the sphere's: radius R about the axis.
+    x0, x1, y0, y1, z0, z1 = surface.GetBounds()
+    assert abs(x1 - R) < 0.05 * R and abs(x0 + R) < 0.05 * R and abs(y1 - R) < 0.05 * R
+
+    # The mirrored slice covers r in [-0.045, 0.045] with the cell data.
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(tool.read_pvd(slices)[0][1]))
+    reader.Update()
+    grid = reader.GetOutput()
+    bx0, bx1 = grid.GetBounds()[:2]
+    assert abs(bx0 + 0.045) < 1e-6 and abs(bx1 - 0.045) < 1e-6  # float32 points
+    assert grid.GetCellData().GetArray("solid_fraction") is not None
+    assert grid.GetNumberOfCells() == 2 * 35 * 70
+
+
+def test_command_line(tmp_path):
+    """The script's command line (as pvpython or python runs it) writes both collections."""
+    out = tmp_path / "sphere"
+    subprocess.run([EFSI, "run", str(REPO / "cases/sphere_impact.ron"), "--refine", "0.2",
+                    "--set", "time.end=0.0005", "--out", str(out), "-q"], check=True)
+    import sys
+    r = subprocess.run([sys.executable, str(REPO / "tools/paraview_revolve.py"), str(out),
+                        "--resolution", "16"], capture_output=True, text=True, check=True)
+    assert "surface.pvd" in r.stdout, r.stdout
+    assert (out / "revolved/slice.pvd").is_file() and (out / "revolved/surface.pvd").is_file()
+    bad = subprocess.run([sys.executable, str(REPO / "tools/paraview_revolve.py"), str(out),
+                          "--resolution", "2"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--resolution must be at least 3" in bad.stderr

@@ -1,0 +1,166 @@
+//! `cargo xtask bench --roofline`: how close each stage comes to the machine's memory bandwidth.
+//!
+//! **The limit** is measured in the same run: the STREAM triad `a = b + s·c` over arrays far
+//! larger than the caches (3 × 128 MiB: main memory) and over arrays that fit in the last-level
+//! cache (3 × 512 KiB), on one thread and on the bench's thread count, best of 10 passes, counting
+//! 24 bytes per element as STREAM does (the write-allocate read not counted).
+//!
+//! **The traffic** of a stage is a model of its *compulsory* memory traffic per cell and step:
+//! each array the stage's kernels must stream counted once per pass, 8 bytes per value, a
+//! velocity-like vector counted as two values per cell (one u- and one v-face). A stage's bytes
+//! per cell-step are `8 (F + I·k)` with `F` the values streamed once per step, `I` those streamed
+//! per solver iteration and `k` the measured iterations per step ([`MODELS`] states `F` and `I`
+//! for each stage, with the passes they count). Anything a kernel reads twice from memory, or
+//! stencils whose neighbours miss the cache, is traffic the model does not count: the achieved
+//! bandwidth `bytes / time` is a lower bound, and its fraction of the triad bandwidth says how
+//! far the stage is from being limited by memory traffic alone (near 1: only fewer passes or
+//! fewer bytes can make it faster; far below 1: latency, arithmetic, reductions or serial parts
+//! dominate).
+
+use std::time::Instant;
+
+/// The traffic model of one stage: values per cell streamed once per step and per iteration.
+pub struct Model {
+    /// The stage's name as in `run.json`.
+    pub stage: &'static str,
+    /// Values per cell streamed once per step.
+    pub fixed: f64,
+    /// Values per cell streamed per solver iteration.
+    pub per_iteration: f64,
+    /// What the counts are.
+    pub passes: &'static str,
+}
+
+/// The models of the shipped stages (see the module docs).
+pub const MODELS: &[Model] = &[
+    Model {
+        stage: "advection",
+        fixed: 10.0,
+        per_iteration: 0.0,
+        passes: "SSP-RK2, two stages, each reading u, v, ρ and writing u, v",
+    },
+    Model {
+        stage: "body_force",
+        fixed: 4.0,
+        per_iteration: 0.0,
+        passes: "u, v read and written",
+    },
+    Model {
+        stage: "viscous",
+        fixed: 24.0,
+        per_iteration: 25.0,
+        passes: "step: ρ, μ read; coefficients cxx, cyy, g, corner μ written; mass, dm, diagonal \
+                 (2 each) written; right-hand side (u, v, 3 coefficients, hoop 2, rhs 2); warm \
+                 start and update (δ history 4, u, v); per CG iteration: the product (x 2, \
+                 coefficients 3, dm 2, y 2) and the fused vector updates (x, p, q, r, diagonal \
+                 read, x, r, p written: 16)",
+    },
+    Model {
+        stage: "elastic",
+        fixed: 30.0,
+        per_iteration: 50.0,
+        passes: "step: u, v, ρ, μ, φ, B̃ (4) read, u, v, B̃ (4) written, right-hand side, mass, \
+                 diagonal, viscous coefficients (2 + 2 + 2 + 5); per BiCGSTAB iteration: two \
+                 products (x 2, viscous coefficients 3, dm 2, y 2, fields scattered 2: 11 each; \
+                 the tangent inside the solid not counted), two Jacobi applications (r, d, z: \
+                 6 each) and the vector updates (r, r₀, p, v, s, t, x: 16)",
+    },
+    Model {
+        stage: "projection",
+        fixed: 18.0,
+        per_iteration: 53.0,
+        passes: "step: u, v, ρ, p read, u, v, p written, divergence, five-point coefficients \
+                 (3) and the coarse levels' (≈ 3 more); per CG iteration: the product (3 \
+                 coefficients, x, y), the vector updates (8) and one multigrid W-cycle ≈ 2 × \
+                 the finest level's smoothing (2 sweeps × 6), residual (5), transfers (3)",
+    },
+    Model {
+        stage: "deformation",
+        fixed: 11.0,
+        per_iteration: 0.0,
+        passes: "u, v, φ, B̃ (4) read, B̃ (4) written",
+    },
+    Model {
+        stage: "vof",
+        fixed: 12.0,
+        per_iteration: 0.0,
+        passes: "u, v, φ read; the interface normal (2) and two directional sweeps of φ (read, \
+                 written: 4); φ, ρ, μ written",
+    },
+];
+
+/// The model of `stage`, if there is one.
+pub fn model(stage: &str) -> Option<&'static Model> {
+    MODELS.iter().find(|m| m.stage == stage)
+}
+
+/// Bytes per cell-step of `m` at `iterations` solver iterations per step.
+pub fn bytes(m: &Model, iterations: f64) -> f64 {
+    8.0 * (m.fixed + m.per_iteration * iterations)
+}
+
+/// STREAM triad bandwidth (bytes per second, 24 per element) over three arrays of `n` values
+/// each on `threads` threads (each thread its own contiguous part), best of 10 passes.
+pub fn triad(n: usize, threads: usize) -> f64 {
+    let threads = threads.max(1);
+    let mut a = vec![0.0f64; n];
+    let b: Vec<f64> = (0..n).map(|k| k as f64).collect();
+    let c: Vec<f64> = (0..n).map(|k| (n - k) as f64).collect();
+    let chunk = n.div_ceil(threads);
+    let mut best = f64::INFINITY;
+    for _ in 0..10 {
+        let t0 = Instant::now();
+        std::thread::scope(|s| {
+            for ((a, b), c) in a
+                .chunks_mut(chunk)
+                .zip(b.chunks(chunk))
+                .zip(c.chunks(chunk))
+            {
+                s.spawn(move || {
+                    for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                        *a = b + 3.0 * c;
+                    }
+                });
+            }
+        });
+        best = best.min(t0.elapsed().as_secs_f64());
+    }
+    // Keep the result alive so the passes are not optimised away.
+    assert!(a[n / 2].is_finite());
+    24.0 * n as f64 / best
+}
+
+/// The measured limits on `threads` threads: (main memory, last-level cache) in bytes/s.
+pub fn limits(threads: usize) -> (f64, f64) {
+    (triad(16 << 20, threads), triad(64 << 10, threads))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shipped_stage_has_a_model_and_bytes_grow_with_iterations() {
+        for s in [
+            "advection",
+            "body_force",
+            "viscous",
+            "elastic",
+            "projection",
+            "deformation",
+            "vof",
+        ] {
+            let m = model(s).unwrap_or_else(|| panic!("no model for {s}"));
+            assert!(m.fixed > 0.0);
+            assert!(bytes(m, 10.0) >= bytes(m, 0.0));
+        }
+        assert_eq!(bytes(model("viscous").unwrap(), 2.0), 8.0 * (24.0 + 50.0));
+    }
+
+    #[test]
+    fn the_triad_measures_a_plausible_bandwidth() {
+        let bw = triad(1 << 16, 1);
+        // Anything from an old laptop to a large server: 0.5 GB/s to 2 TB/s.
+        assert!(bw > 5e8 && bw < 2e12, "{bw}");
+    }
+}
