@@ -162,7 +162,7 @@ fn solid() -> BoxedStrategy<Solid> {
             viscosity: None,
             velocity,
             law: g.map(|g| LawSpec {
-                name: "neo_hookean_reference".into(),
+                name: "neo_hookean".into(),
                 parameters: [("G".to_string(), g)].into_iter().collect(),
             }),
         })
@@ -534,7 +534,7 @@ fn checkpoint_bytes() -> Vec<u8> {
     time: (end: 0.1, dt_max: 0.01),
     fluid: (density: 1.0, viscosity: 0.01),
     solid: (shape: Disk(center: (0.5, 0.5), radius: 0.3), density: 2.0,
-            law: (name: "neo_hookean_reference", parameters: {"G": 10.0})),
+            law: (name: "neo_hookean", parameters: {"G": 10.0})),
     boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
     output: (probes: [KineticEnergy], vtk_every: 0.05),
 )"#;

@@ -65,17 +65,6 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
     let Some(spec) = scene.solid.as_ref().and_then(|s| s.law.as_ref()) else {
         return Ok(None);
     };
-    if spec.name == "neo_hookean_reference" {
-        return Ok(Some(LawIdentity {
-            spec: spec.name.clone(),
-            name: spec.name.clone(),
-            abi_version: 0,
-            library: String::new(),
-            bytes: 0,
-            hash: 0,
-            parameters: Vec::new(),
-        }));
-    }
     let dir = scene
         .source_dir
         .clone()

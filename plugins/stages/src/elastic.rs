@@ -215,7 +215,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext, bc::UnknownFaces,
 };
-use efsi_laws_host::{ConstitutiveLaw, NeoHookeanReference, Sym, Tangent};
+use efsi_laws_host::{ConstitutiveLaw, Sym, Tangent};
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats, par};
 use rayon::prelude::*;
 
@@ -233,25 +233,15 @@ fn viscosities(scene: &Scene) -> (f64, f64) {
     (mu_f, mu_s)
 }
 
-/// The law named by the scene's solid: the plain-Rust reference neo-Hookean (for tests), or a
-/// plugin library found and checked by [`efsi_laws_host::load_law`] (missing file, ABI,
-/// parameters, finite-difference check of the tangent).
+/// The law named by the scene's solid: a plugin library found and checked by
+/// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
+/// tangent) — every law, test laws included, goes through the loader.
 pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
     let spec = scene
         .solid
         .as_ref()
         .and_then(|s| s.law.as_ref())
         .ok_or("the solid has no law")?;
-    if spec.name == "neo_hookean_reference" {
-        let g = *spec
-            .parameters
-            .get("G")
-            .ok_or("solid.law.parameters: `G` is required")?;
-        if !(g.is_finite() && g > 0.0) {
-            return Err(format!("solid.law.parameters.G: must be > 0, got {g}"));
-        }
-        return Ok(Box::new(NeoHookeanReference { g }));
-    }
     let dir = scene
         .source_dir
         .clone()
@@ -1942,6 +1932,7 @@ impl Stage for DeformationStage {
 mod tests {
     use super::*;
     use efsi_core::interface::shapes::Shape;
+    use efsi_laws_host::NeoHookeanReference;
 
     /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8
     /// grid, μ_f = 1, μ_s = 0.5; B is `bs` in every cell holding solid, I elsewhere. For each
@@ -2047,7 +2038,7 @@ mod tests {
     time: (end: 1.0, fixed_dt: 0.01),
     fluid: (density: 1.0, viscosity: 1.0),
     solid: (shape: Disk(center: (0.5, 0.5), radius: 0.25), density: 4.0,
-            law: (name: "neo_hookean_reference", parameters: {"G": 100.0})),
+            law: (name: "neo_hookean", parameters: {"G": 100.0})),
     boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
 )"#;
         let scene = Scene::from_str_at(text, std::path::Path::new("limits.ron")).unwrap();
