@@ -113,7 +113,7 @@
 //!
 //! B and its rates are transported as B (B̃ and B obey the same law because φ_s is materially
 //! conserved). In pure fluid (`w = 0`) B is reset to I and its rates to zero at the start of
-//! each step; cells with less than [`PHI_MIN`] of solid count as fluid.
+//! each step; cells with less than `PHI_MIN` (1e-3) of solid count as fluid.
 //!
 //! # Interface corners: the shear in series
 //!
