@@ -1,7 +1,9 @@
 //! `efsi laws --check`: the load-time tangent check run on the libraries given, with a non-zero
 //! exit code for a law that fails it.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::law_library;
 use std::process::{Command, Output};
 
 fn efsi(args: &[&str]) -> Output {
@@ -9,21 +11,6 @@ fn efsi(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run efsi")
-}
-
-/// A law plugin library built with the workspace, by library name.
-fn law_library(lib: &str) -> PathBuf {
-    let file = format!(
-        "{}{lib}{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    );
-    let bin = Path::new(env!("CARGO_BIN_EXE_efsi")).parent().unwrap();
-    [bin.to_path_buf(), bin.join("deps")]
-        .iter()
-        .map(|d| d.join(&file))
-        .find(|p| p.is_file())
-        .unwrap_or_else(|| panic!("{file} not built next to {}", bin.display()))
 }
 
 /// The worst relative error a `--check` line reports.
