@@ -56,11 +56,6 @@ fn oscillating_couette_quick() {
 }
 
 #[test]
-fn oscillating_couette_mr_quick() {
-    quick("oscillating_couette_mr");
-}
-
-#[test]
 fn disk_in_cavity_quick() {
     quick("disk_in_cavity");
 }

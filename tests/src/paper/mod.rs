@@ -5,7 +5,6 @@
 //! their checks.
 
 pub mod couette;
-pub mod couette_mr;
 pub mod disk_cavity;
 pub mod oscillating_disk;
 pub mod plot;
@@ -182,10 +181,6 @@ pub const CASES: &[Case] = &[
     Case {
         name: "oscillating_couette",
         run: couette::run,
-    },
-    Case {
-        name: "oscillating_couette_mr",
-        run: couette_mr::run,
     },
     Case {
         name: "stability",
