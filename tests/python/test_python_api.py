@@ -23,11 +23,7 @@ import pytest
 
 import efsi
 
-REPO = Path(__file__).resolve().parents[2]
-EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
-BIN_DIR = Path(EFSI).parent
-os.environ.setdefault("EFSI_LAW_PATH", os.pathsep.join([str(BIN_DIR), str(BIN_DIR / "deps")]))
-SPHERE = REPO / "cases/sphere_impact.ron"
+from efsi_test_support import BIN_DIR, EFSI, REPO, SPHERE, law_library, nan_law_scene  # noqa: F401
 
 CAVITY = """Scene(
     name: "py_api_cavity",
@@ -51,14 +47,6 @@ LONG = """Scene(
     output: (probe_every: 0.1, probes: [Point(name: "u_c", field: "u", at: (0.5, 0.5)), KineticEnergy]),
 )
 """
-
-
-def law_library(stem):
-    for d in (BIN_DIR, BIN_DIR / "deps"):
-        p = d / f"lib{stem}.so"
-        if p.is_file():
-            return p
-    pytest.fail(f"lib{stem}.so is not built next to {EFSI}")
 
 
 def test_scene_overrides_are_the_cli_paths():
@@ -202,20 +190,7 @@ def test_write_vtk_is_efsi_runs_file(tmp_path):
 
 def test_an_unstable_run_raises_unstable_error_with_stage_field_and_cell():
     lib = law_library("efsi_test_law_nan")
-    scene = efsi.Scene.from_str(
-        f"""Scene(
-    name: "solid",
-    domain: (x: (0.0, 0.0625), y: (0.0, 1.0)),
-    grid: (nx: 4, ny: 16),
-    time: (end: 0.6, dt_max: 0.01),
-    fluid: (density: 1.0, viscosity: 1.0),
-    solid: (shape: HalfPlane(normal: (0.0, 1.0), offset: 0.5), density: 1.0, viscosity: 0.0,
-            law: (name: "{lib}", parameters: {{"G": 5.0, "limit": 1.01}})),
-    boundaries: (x_min: Periodic, x_max: Periodic, y_min: NoSlip,
-                 y_max: MovingWall(speed: 1.0, motion: Sin(omega: 3.141592653589793))),
-    output: (probe_every: 0.05, probes: [KineticEnergy]),
-)"""
-    )
+    scene = efsi.Scene.from_str(nan_law_scene(lib))
     sim = efsi.Simulation(scene)
     with pytest.raises(efsi.UnstableError) as e:
         sim.advance_to(0.6)

@@ -22,11 +22,7 @@ import efsi
 pandas = pytest.importorskip("pandas")
 distributed = pytest.importorskip("distributed")
 
-REPO = Path(__file__).resolve().parents[2]
-EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
-BIN_DIR = Path(EFSI).parent
-os.environ.setdefault("EFSI_LAW_PATH", os.pathsep.join([str(BIN_DIR), str(BIN_DIR / "deps")]))
-SPHERE = REPO / "cases/sphere_impact.ron"
+from efsi_test_support import BIN_DIR, EFSI, REPO, SPHERE, law_library, nan_law_scene  # noqa: F401
 
 # Shear modulus × refinement (8.75 and 10.5 cells per radius of the scene's 35), to t = 0.03:
 # through the impact (≈ 0.027 s).
@@ -147,25 +143,8 @@ def test_a_sweep_on_two_workers_survives_a_killed_worker_and_matches_serial(clus
 
 
 def test_refused_and_unstable_runs_are_rows():
-    lib = None
-    for d in (BIN_DIR, BIN_DIR / "deps"):
-        if (d / "libefsi_test_law_nan.so").is_file():
-            lib = d / "libefsi_test_law_nan.so"
-    assert lib is not None, "the test_nan law is not built"
-    scene = efsi.Scene.from_str(
-        f"""Scene(
-    name: "solid",
-    domain: (x: (0.0, 0.0625), y: (0.0, 1.0)),
-    grid: (nx: 4, ny: 16),
-    time: (end: 0.6, dt_max: 0.01),
-    fluid: (density: 1.0, viscosity: 1.0),
-    solid: (shape: HalfPlane(normal: (0.0, 1.0), offset: 0.5), density: 1.0, viscosity: 0.0,
-            law: (name: "{lib}", parameters: {{"G": 5.0, "limit": 1.01}})),
-    boundaries: (x_min: Periodic, x_max: Periodic, y_min: NoSlip,
-                 y_max: MovingWall(speed: 1.0, motion: Sin(omega: 3.141592653589793))),
-    output: (probe_every: 0.05, probes: [KineticEnergy]),
-)"""
-    )
+    lib = law_library("efsi_test_law_nan")
+    scene = efsi.Scene.from_str(nan_law_scene(lib))
     runs = [
         {"solid.law.parameters.limit": 100.0},  # never reached: ok
         {"solid.law.parameters.limit": 1.01},  # NaN stress after some shearing: unstable

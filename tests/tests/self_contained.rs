@@ -33,13 +33,16 @@ fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// Fragments that would reach outside the repository: the workplace's shared folder beside the
-/// checkout, and absolute paths of this machine.
-const OUTSIDE: [&str; 4] = [
-    "../shared",
-    "shared/references",
-    "/work/",
-    "EFSI_REFERENCES",
-];
+/// checkout, and absolute paths of this machine. Assembled here, so that this file names none of
+/// them and is scanned like every other.
+fn outside() -> [String; 4] {
+    [
+        ["..", "shared"].join("/"),
+        ["shared", "references"].join("/"),
+        ["", "work", ""].join("/"),
+        ["EFSI", "REFERENCES"].join("_"),
+    ]
+}
 
 #[test]
 fn no_source_file_names_a_path_outside_the_repository() {
@@ -52,18 +55,15 @@ fn no_source_file_names_a_path_outside_the_repository() {
         files.len(),
         root.display()
     );
-    let this = Path::new(file!()).file_name().unwrap();
+    let outside = outside();
     let mut found = Vec::new();
     for f in files {
-        if f.file_name() == Some(this) {
-            continue;
-        }
         let Ok(text) = std::fs::read_to_string(&f) else {
             continue;
         };
         for (k, line) in text.lines().enumerate() {
-            for frag in OUTSIDE {
-                if line.contains(frag) {
+            for frag in &outside {
+                if line.contains(frag.as_str()) {
                     found.push(format!("{}:{}: {}", f.display(), k + 1, line.trim()));
                 }
             }

@@ -159,22 +159,13 @@ fn signals_stop_a_run_cleanly_and_resume_finishes_it_identically() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
-/// A small box with a solid disk whose law is `law` (a library path) with `params`.
+/// A small box with an elastic block whose law is `law` (a library path) with `params`, its
+/// fields written every 0.2.
 fn solid_scene(law: &str, params: &str) -> String {
-    format!(
-        r#"Scene(
-    name: "solid",
-    domain: (x: (0.0, 0.0625), y: (0.0, 1.0)),
-    grid: (nx: 4, ny: 16),
-    time: (end: 0.6, dt_max: 0.01),
-    fluid: (density: 1.0, viscosity: 1.0),
-    solid: (shape: HalfPlane(normal: (0.0, 1.0), offset: 0.5), density: 1.0, viscosity: 0.0,
-            law: (name: "{law}", parameters: {{{params}}})),
-    boundaries: (x_min: Periodic, x_max: Periodic, y_min: NoSlip,
-                 y_max: MovingWall(speed: 1.0, motion: Sin(omega: 3.141592653589793))),
-    output: (vtk_every: 0.2, probe_every: 0.05, probes: [KineticEnergy]),
-)
-"#
+    common::solid_scene_with_output(
+        law,
+        params,
+        "vtk_every: 0.2, probe_every: 0.05, probes: [KineticEnergy]",
     )
 }
 

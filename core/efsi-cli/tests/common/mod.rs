@@ -127,6 +127,11 @@ pub fn law_library(lib: &str) -> PathBuf {
 
 /// A small box with an elastic block whose law is `law` (a library path) with `params`.
 pub fn solid_scene(law: &str, params: &str) -> String {
+    solid_scene_with_output(law, params, "probe_every: 0.05, probes: [KineticEnergy]")
+}
+
+/// [`solid_scene`] with the `output` section's settings given.
+pub fn solid_scene_with_output(law: &str, params: &str, output: &str) -> String {
     format!(
         r#"Scene(
     name: "solid",
@@ -138,7 +143,7 @@ pub fn solid_scene(law: &str, params: &str) -> String {
             law: (name: "{law}", parameters: {{{params}}})),
     boundaries: (x_min: Periodic, x_max: Periodic, y_min: NoSlip,
                  y_max: MovingWall(speed: 1.0, motion: Sin(omega: 3.141592653589793))),
-    output: (probe_every: 0.05, probes: [KineticEnergy]),
+    output: ({output}),
 )
 "#
     )

@@ -332,28 +332,25 @@ pub fn write_vtr_with(
         }
         writeln!(h, "    </FieldData>")?;
         writeln!(h, r#"    <Piece Extent="{extent}">"#)?;
+        // One appended array's declaration; offsets in the order the data follow.
+        let mut declare = |h: &mut String, name: &str, components: usize| {
+            writeln!(
+                h,
+                r#"        <DataArray type="{array_type}" Name="{}" NumberOfComponents="{components}" format="appended" offset="{}"/>"#,
+                xml_attr(name),
+                off.next().unwrap()
+            )
+        };
         writeln!(h, "      <PointData>")?;
         if format.point_data {
             for a in arrays {
-                writeln!(
-                    h,
-                    r#"        <DataArray type="{array_type}" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
-                    xml_attr(a.name),
-                    a.components,
-                    off.next().unwrap()
-                )?;
+                declare(&mut h, a.name, a.components)?;
             }
         }
         writeln!(h, "      </PointData>")?;
         writeln!(h, "      <CellData>")?;
         for a in arrays {
-            writeln!(
-                h,
-                r#"        <DataArray type="{array_type}" Name="{}" NumberOfComponents="{}" format="appended" offset="{}"/>"#,
-                xml_attr(a.name),
-                a.components,
-                off.next().unwrap()
-            )?;
+            declare(&mut h, a.name, a.components)?;
         }
         writeln!(h, "      </CellData>")?;
         writeln!(h, "      <Coordinates>")?;
