@@ -56,6 +56,11 @@ fn oscillating_couette_quick() {
 }
 
 #[test]
+fn oscillating_couette_mr_quick() {
+    quick("oscillating_couette_mr");
+}
+
+#[test]
 fn disk_in_cavity_quick() {
     quick("disk_in_cavity");
 }

@@ -779,6 +779,12 @@ pub enum ProbeSpec {
         /// The line's abscissa.
         at: f64,
     },
+    /// Whether the solid stays in one piece: the cells holding more than 1e-3 of solid, joined
+    /// through their faces, form connected regions; column `solid_pieces` counts the regions
+    /// holding more than 1e-3 of the solid volume (smaller ones are VOF flotsam), and
+    /// `solid_largest_piece` is the largest region's share of the solid volume (1 for a solid
+    /// in one piece). Periodic sides are not wrapped: a solid crossing one counts as two.
+    SolidPieces,
 }
 
 impl ProbeSpec {
@@ -797,6 +803,7 @@ impl ProbeSpec {
             ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
             ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
             ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
+            ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
         }
     }
 
@@ -811,6 +818,7 @@ impl ProbeSpec {
                 | ProbeSpec::ContactForce { .. }
                 | ProbeSpec::ContactRadius { .. }
                 | ProbeSpec::SolidExtent { .. }
+                | ProbeSpec::SolidPieces
         )
     }
 }

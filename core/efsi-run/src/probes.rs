@@ -81,6 +81,13 @@ pub fn evaluate(
             let (b, t) = solid_extent(grid, state, *at);
             out.extend([b, t]);
         }
+        ProbeSpec::SolidPieces => match &state.phi {
+            Some(phi) => {
+                let p = solid_pieces(grid, phi);
+                out.extend([p.count as f64, p.largest]);
+            }
+            None => out.extend([f64::NAN, f64::NAN]),
+        },
         ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity => {
             let Some(phi) = &state.phi else {
                 out.extend(std::iter::repeat_n(f64::NAN, columns(p).len()));
@@ -253,4 +260,125 @@ pub fn solid_extent(grid: &Grid, state: &State, at: f64) -> (f64, f64) {
     let bottom = face(lo + 1) - phi[(i, lo)].clamp(0.0, 1.0) * grid.dy;
     let top = face(hi) + phi[(i, hi)].clamp(0.0, 1.0) * grid.dy;
     (bottom, top)
+}
+
+/// A cell holds solid for [`solid_pieces`] above this fraction.
+pub const PIECE_PHI_MIN: f64 = 1e-3;
+
+/// A region counts as a piece for [`solid_pieces`] above this share of the solid volume.
+pub const PIECE_VOLUME_MIN: f64 = 1e-3;
+
+/// The connected solid regions of [`solid_pieces`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolidPieces {
+    /// The regions holding more than [`PIECE_VOLUME_MIN`] of the solid volume.
+    pub count: usize,
+    /// The largest region's volume over the solid volume `∫φ dV` (NaN without solid).
+    pub largest: f64,
+}
+
+/// See [`ProbeSpec::SolidPieces`]: the cells with `φ > PIECE_PHI_MIN`, joined through their
+/// faces (not through corners; periodic sides not wrapped), flood-filled into regions whose
+/// volumes `∫φ dV` are compared with the whole solid's.
+pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let at = |i: usize, j: usize| phi[(i as isize, j as isize)];
+    let mut total = 0.0;
+    for j in 0..ny {
+        for i in 0..nx {
+            total += at(i, j).clamp(0.0, 1.0) * grid.cell_volume(i as isize);
+        }
+    }
+    let mut seen = vec![false; nx * ny];
+    let mut stack = Vec::new();
+    let mut volumes = Vec::new();
+    for start in 0..nx * ny {
+        if seen[start] || at(start % nx, start / nx) <= PIECE_PHI_MIN {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut v = 0.0;
+        while let Some(c) = stack.pop() {
+            let (i, j) = (c % nx, c / nx);
+            v += at(i, j).min(1.0) * grid.cell_volume(i as isize);
+            let mut visit = |q: usize, i: usize, j: usize| {
+                if !seen[q] && at(i, j) > PIECE_PHI_MIN {
+                    seen[q] = true;
+                    stack.push(q);
+                }
+            };
+            if i > 0 {
+                visit(c - 1, i - 1, j);
+            }
+            if i + 1 < nx {
+                visit(c + 1, i + 1, j);
+            }
+            if j > 0 {
+                visit(c - nx, i, j - 1);
+            }
+            if j + 1 < ny {
+                visit(c + nx, i, j + 1);
+            }
+        }
+        volumes.push(v);
+    }
+    if total <= 0.0 {
+        return SolidPieces {
+            count: 0,
+            largest: f64::NAN,
+        };
+    }
+    SolidPieces {
+        count: volumes
+            .iter()
+            .filter(|&&v| v > PIECE_VOLUME_MIN * total)
+            .count(),
+        largest: volumes.iter().copied().fold(0.0, f64::max) / total,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::grid::Geometry;
+
+    #[test]
+    fn solid_pieces_counts_face_connected_regions_and_the_largest_share() {
+        let grid = Grid::new(Geometry::Planar, 8, 6, (0.0, 1.0), (0.0, 0.75));
+        let mut phi = Field::zeros(&grid);
+        // No solid: no piece, no share.
+        let p = solid_pieces(&grid, &phi);
+        assert_eq!(p.count, 0);
+        assert!(p.largest.is_nan());
+        // A 3×2 block of full cells with a half-full cell beside it: one piece of 6.5 cells.
+        for j in 1..3 {
+            for i in 1..4 {
+                phi[(i, j)] = 1.0;
+            }
+        }
+        phi[(4, 1)] = 0.5;
+        let p = solid_pieces(&grid, &phi);
+        assert_eq!((p.count, p.largest), (1, 1.0));
+        // A cell touching the block only at a corner is a second piece: 1 of 7.5 cells.
+        phi[(4, 3)] = 1.0;
+        let p = solid_pieces(&grid, &phi);
+        assert_eq!(p.count, 2);
+        assert!((p.largest - 6.5 / 7.5).abs() < 1e-15, "{}", p.largest);
+        // Flotsam: a cell at the holding threshold is no solid, one just above it is a region
+        // too small to count as a piece, but its volume still counts in the whole.
+        phi[(7, 5)] = PIECE_PHI_MIN;
+        assert_eq!(solid_pieces(&grid, &phi).count, 2);
+        phi[(7, 5)] = 2.0 * PIECE_PHI_MIN;
+        let p = solid_pieces(&grid, &phi);
+        assert_eq!(p.count, 2);
+        let total = 7.5 + 2.0 * PIECE_PHI_MIN;
+        assert!((p.largest - 6.5 / total).abs() < 1e-15, "{}", p.largest);
+        // Joining the corner cell to the block through a face makes it one piece again.
+        phi[(4, 2)] = 0.25;
+        let p = solid_pieces(&grid, &phi);
+        assert_eq!(p.count, 1);
+        let total = 7.75 + 2.0 * PIECE_PHI_MIN;
+        assert!((p.largest - 7.75 / total).abs() < 1e-15, "{}", p.largest);
+    }
 }

@@ -5,8 +5,9 @@
 //!
 //! The solid carries the modified left Cauchy–Green tensor `B̃ = φ_s^{1/2} B`, transported by
 //! the upper-convected law (seed Eq. 8), `∂B̃/∂t + ∇·(V B̃) = L B̃ + B̃ Lᵀ` with
-//! `L_ij = ∂V_i/∂x_j` (∇·V = 0), and exerts the elastic stress `τ(B̃)` of a hyperelastic law
-//! ([`efsi_laws_host`]). Axisymmetric, the hoop component obeys `∂B̃_θθ/∂t + ∇·(V B̃_θθ) =
+//! `L_ij = ∂V_i/∂x_j` (∇·V = 0), and exerts the elastic stress of a hyperelastic law
+//! ([`efsi_laws_host`]): the law's stress at the solid's own B, weighted by the solid fraction
+//! (see "The interface" below; the seed's `τ(B̃)` for neo-Hookean). Axisymmetric, the hoop component obeys `∂B̃_θθ/∂t + ∇·(V B̃_θθ) =
 //! 2 (u_r/r) B̃_θθ`, i.e. `L_θθ = u_r/r`, and the force gains the hoop term `−τ_θθ/r` on the
 //! radial momentum — both through the grid's hoop factor, zero in planar geometry.
 //!
@@ -72,7 +73,7 @@
 //!
 //! # Stress-free reference
 //!
-//! The stage divides `τ(B̃) − τ(φ^{1/2} I)`: the law's stress minus its stress in the undeformed
+//! The stage divides `w (τ(B) − τ(I))`: the law's stress minus its stress in the undeformed
 //! state. The difference is isotropic — a change of pressure only, which the projection absorbs
 //! (on the MAC metric, axisymmetric hoop term included, the force of `q I` is exactly the discrete
 //! `∇q`) — but the rest stress jumps across the interface (`G φ^{1/2} I` for neo-Hookean,
@@ -80,46 +81,90 @@
 //! into a non-gradient field: the sphere was flung at ~10 m/s in its first step. The tangent is
 //! unchanged (the reference does not depend on B).
 //!
-//! # B and B̃
+//! # The interface: the law on the solid's own B, the fraction on the stress
 //!
-//! The stage stores B and forms `B̃ = w B`, `w = φ_s^{1/2}` (at corners the average of the four
-//! cells' w), wherever the law or the tangent needs it: B̃ and B obey the same transport law
-//! because φ_s is materially conserved, and this keeps B̃ on the VOF interface (rigid motion
-//! leaves `B̃ = φ^{1/2} I` to round-off). H, the advection and the linear increments above are
-//! written for B; `ΔB̃ = w ΔB`. In pure fluid (`w = 0`) B is reset to I and its rates to zero at
-//! the start of each step.
+//! A cell or corner on the interface holds solid (fraction `a`) and fluid side by side. The
+//! solid part is deformed by the solid's own B; the fluid part has no deformation. So the law is
+//! evaluated **only on the solid's own B** — never on a mixture with the fluid's identity, nor on
+//! a B scaled by the fraction — and the fraction enters as a weight on the stress. How the two
+//! phases share the load decides the weight:
+//!
+//! - **Normal components, at centres: in parallel.** Across an interface the normal and
+//!   tangential strains along it are continuous (iso-strain), so the cell's stress is the
+//!   phases' stresses weighted by their shares: the elastic part is `w (τ(B) − τ(I))` with the
+//!   weight `w = φ^{1/2}`. (A volume average would weigh `φ`; efsi keeps the seed's `φ^{1/2}`,
+//!   whose neo-Hookean stress `G φ^{1/2} B` is exactly the seed's `τ(B̃)`, `B̃ = φ^{1/2} B`:
+//!   both are first-order consistent at an interface and agree in full cells.) The tangent is
+//!   `w J(B)`: positive wherever the law's is. Evaluating the law on `B̃` instead, as the seed
+//!   writes it, is right only for a law linear in B: Saint Venant–Kirchhoff on `φ^{1/2}B` has the
+//!   shear stiffness `μ(2φ^{1/2} − 1)`, negative for `φ < ¼`.
+//! - **Shear, at corners: in series** (see "Interface corners" below): one shear stress, the
+//!   shear rate shared. The law sees the solid's own B — its normal components the
+//!   **solid-weighted** average of the four cells' (each cell weighted by the PLIC volume of
+//!   solid in its quarter next to the corner; cells without deformation weigh nothing), not the
+//!   plain average, which mixes in the fluid's `B = I` and feeds a law that depends on `tr B` at
+//!   a corner half in solid `tr B − 3 ≈ γ²/2` instead of `γ²` — and its shear stress counts with
+//!   the series weight `a/(aκ)` below.
+//!
+//! So at any interface point the stress the stage applies is the law's stress at the solid's own
+//! deformation times a documented weight (`φ^{1/2}` at centres less the rest stress, `a/(aκ)` at
+//! corners), whatever the law; for neo-Hookean (τ linear in B) it is the seed's stress to
+//! round-off. The strain energy is weighted alike, `∫ w W(B) dV`.
+//!
+//! B and its rates are transported as B (B̃ and B obey the same law because φ_s is materially
+//! conserved). In pure fluid (`w = 0`) B is reset to I and its rates to zero at the start of
+//! each step; cells with less than `PHI_MIN` (1e-3) of solid count as fluid.
 //!
 //! # Interface corners: the shear in series
 //!
-//! The shear component lives at corners, and a corner on the interface (solid fraction
-//! `a = ` the mean of its four cells' φ, `0 < a < 1`) holds solid and fluid side by side across
-//! the interface, where they shear **in series**: one shear stress, the shear rate shared,
-//! `2D = a·2D_s + (1 − a)·2D_f`. With a Kelvin–Voigt solid `τ = τ_e(B) + μ_s 2D_s` and a
-//! Newtonian fluid `τ = μ_f 2D_f`,
+//! The shear component lives at corners, and a corner on the interface holds solid and fluid
+//! side by side across the interface, where they shear **in series**: one shear stress, the
+//! shear rate shared, `2D = a·2D_s + (1 − a)·2D_f`. With a Kelvin–Voigt solid
+//! `τ = τ_e(B) + μ_s 2D_s` and a Newtonian fluid `τ = μ_f 2D_f`,
 //!
 //! ```text
 //!   τ = τ_e/κ + μ_h 2D,   2D_s = (2D − (1 − a) τ_e/μ_f) / (aκ),
-//!   κ = 1 + μ_s (1 − a)/(a μ_f),   μ_h = μ_s μ_f / (a μ_f + (1 − a) μ_s)  (harmonic mean),
+//!   aκ = a + μ_s (1 − a)/μ_f,   μ_h = μ_s μ_f / (a μ_f + (1 − a) μ_s)  (harmonic mean),
 //! ```
 //!
-//! so at such a corner the law sees the solid's own B (weight 1, not `φ^{1/2}`), its shear stress
-//! counts `1/κ`, the viscous stage's corner viscosity is the harmonic mean (see
-//! `viscous_operator::corner_viscosity`), and B₁₂ is stretched by the solid's velocity gradient — spin
-//! unchanged, shear rate `2D/(aκ)` — less a relaxation `r τ_e` (`r = (1 − a)/(μ_f a κ)`): the
-//! fluid's share of a sustained shear. The relaxation is implicit (backward Euler, linearised
-//! with the law's `∂τ₁₂/∂B̃₁₂` at Bⁿ), which makes `B₁₂(V)` still affine in V: the step's
+//! so at such a corner the law sees the solid's own B, its shear stress counts `1/κ = a/(aκ)`,
+//! the viscous stage's corner viscosity is the harmonic mean (see
+//! `viscous_operator::corner_viscosity`), and B₁₂ is stretched by the solid's velocity gradient — shear
+//! rate `2D/(aκ)` — less a relaxation `r τ_e` (`r = (1 − a)/(μ_f aκ)`): the fluid's share of a
+//! sustained shear. The solid's gradient differs from the corner's only in the derivative
+//! across the interface (the velocity is continuous along it, and so are its derivatives along
+//! it): with `n` the interface normal (∝ ∇φ over the four cells), the extra shear rate goes to
+//! `L₁₂ = ∂u/∂y` by the share `n_y²` and to `L₂₁ = ∂v/∂x` by `n_x²` — all of it to `L₁₂` at a
+//! horizontal interface, where then `Ḃ₁₂ = L₁₂ B₂₂` does not see `B₁₁` (splitting it evenly,
+//! which leaves the spin unchanged, added `(s − 1) D₁₂ (B₁₁ − B₂₂)`, of order `γ²`). The cells
+//! around the corner hold the same solid, so their normal components are stretched by the same
+//! solid gradient: `Ḃ₁₁ = 2 L₁₂ B₁₂` and `Ḃ₂₂ = 2 L₂₁ B₁₂` average the corners' solid gradients,
+//! relaxation included (explicit, at Bⁿ, as much of it as the corner's implicit step applies,
+//! × q: the full explicit rate blew the sphere in air up within 1 ms). With the corner's mixed
+//! gradient instead, the last solid cell's `B₁₁` lagged, and with it the `tr B` a law sees at the
+//! interface corner: the Mooney–Rivlin Couette case (τ = 2c₁γ + 4c₃γ³) at 64 cells erred by
+//! 5.2e-3, against 2.1e-3. The relaxation is implicit (backward Euler, linearised
+//! with the law's `∂τ₁₂/∂B₁₂` at Bⁿ), which makes `B₁₂(V)` still affine in V: the step's
 //! `B₁₂ = q (Bⁿ + E' + (Δt/2) H(V; Bⁿ))` with `q = 1/(1 + Δt r b̄ J₁₂₁₂)` and `E'` the explicit
 //! part less the relaxation's linearisation remainder (`Deformation::relax` holds q).
+//!
+//! **The corner's solid fraction** `a` is the solid volume of the four quarter cells around the
+//! corner over theirs, each quarter's share cut by its cell's PLIC line (Youngs normal, planar
+//! fit, as the VOF step reconstructs); uncut cells count their φ. The mean of the four cells' φ
+//! instead spreads a cut cell's solid evenly over its four corners: at a strongly sheared
+//! solid–air interface it gave corners whose quarters hold no solid a series stress `1/κ ≈ a`
+//! and a solid shear rate, and the sphere of the impact case grew a one-cell ledge at its
+//! equator after the rebound that tore off (2.9 % of its volume at 15 cells per radius). A
+//! corner whose quarters hold no solid carries no elastic shear (`a = 0`: `1/κ = 0`).
 //!
 //! A parallel (arithmetic) mixture there — the seed's `φ^{1/2}`-weighted stress beside the
 //! averaged viscosity — lets the solid's elasticity and the fluid's viscosity both act over the
 //! whole corner: an O(1) error in the interface shear, first order overall, and the dominant
 //! error of Sugiyama's Couette test (at 64 cells the profile error fell from 0.0179 to 0.0090
-//! in series, and the error at the grid points is 0.0015). For a solid in air (`μ_f` small) the relaxation is fast: the interface corner carries
-//! little shear and the solid slides past the air instead of dragging an O(1) spurious shear
-//! strain, which had flung the sphere of the impact case. The normal components at cell centres
-//! keep the parallel `φ^{1/2}` weighting: across an interface the normal and tangential strains
-//! are continuous (iso-strain), the shear stress is (iso-stress).
+//! in series, and the error at the grid points is 0.0015). For a solid in air (`μ_f` small) the
+//! relaxation is fast: the interface corner carries little shear and the solid slides past the
+//! air instead of dragging an O(1) spurious shear strain, which had flung the sphere of the
+//! impact case.
 //!
 //! # Space discretisation
 //!
@@ -429,6 +474,17 @@ struct Kernels {
     sf: Field,
     ks: Field,
     rc: Field,
+    /// Per centre, the solid fraction of each quarter of the cell by its PLIC line (lower-left,
+    /// lower-right, upper-left, upper-right; `φ` itself in uncut cells and beyond the batch).
+    quarter: [Field; 4],
+    /// Per corner, the weights of its four cells (lower-left, lower-right, upper-left,
+    /// upper-right of the corner) in its normal components of B: each cell's solid quarter
+    /// next to the corner, over their sum (cells without deformation, `w = 0`, weigh nothing).
+    kwt: [Field; 4],
+    /// Per corner, the share `n_y²` of the interface's unit normal (from the four cells' φ;
+    /// ½ where φ is uniform): the part of the solid's extra shear rate that goes to `L₁₂`, the
+    /// rest going to `L₂₁` (see "Interface corners").
+    ny2: Field,
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
     mu_s: f64,
@@ -602,6 +658,9 @@ impl Kernels {
             sf: Field::zeros(grid),
             ks: Field::zeros(grid),
             rc: Field::zeros(grid),
+            quarter: std::array::from_fn(|_| Field::zeros(grid)),
+            kwt: std::array::from_fn(|_| Field::zeros(grid)),
+            ny2: Field::zeros(grid),
             mu_f,
             mu_s,
             solid_c: Window::EMPTY,
@@ -666,6 +725,19 @@ impl Kernels {
         (j * (self.grid.nx as isize + 1) + i) as usize
     }
 
+    /// The solid-weighted average at corner `k` (linear index) of a centre field `f`: the
+    /// interface-consistent value of a normal component there (see "Interface corners").
+    #[inline(always)]
+    fn kavg(&self, f: &[f64], k: usize, s: usize) -> f64 {
+        let [w0, w1, w2, w3] = [
+            self.kwt[0].data()[k],
+            self.kwt[1].data()[k],
+            self.kwt[2].data()[k],
+            self.kwt[3].data()[k],
+        ];
+        w0 * f[k - s - 1] + w1 * f[k - s] + w2 * f[k - 1] + w3 * f[k]
+    }
+
     /// A law's error with the cell it names (an entry of the centre batch, or of the corner
     /// batch if `corner`) turned into the grid's cell (or corner) index and position.
     fn locate(&self, e: efsi_laws_host::LawError, corner: bool) -> String {
@@ -716,6 +788,7 @@ impl Kernels {
         self.solid_k = self.solid_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
         let g = efsi_core::G;
+        self.set_quarters(phi);
         for j in 1 - g..=ny + g {
             for i in 1 - g..=nx + g {
                 self.wc[(i, j)] = 0.25
@@ -723,11 +796,32 @@ impl Kernels {
                         + self.w[(i, j - 1)]
                         + self.w[(i - 1, j)]
                         + self.w[(i, j)]);
-                let a = 0.25
-                    * (phi[(i - 1, j - 1)].clamp(0.0, 1.0)
-                        + phi[(i, j - 1)].clamp(0.0, 1.0)
-                        + phi[(i - 1, j)].clamp(0.0, 1.0)
-                        + phi[(i, j)].clamp(0.0, 1.0));
+                // The corner's solid fraction: the four quarter cells around it.
+                let cells = [(i - 1, j - 1, 3), (i, j - 1, 2), (i - 1, j, 1), (i, j, 0)];
+                let q = cells.map(|(ci, cj, n)| self.quarter[n][(ci, cj)]);
+                let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+                let lam = std::array::from_fn::<f64, 4, _>(|n| {
+                    let (ci, cj, _) = cells[n];
+                    if self.w[(ci, cj)] > 0.0 { q[n] } else { 0.0 }
+                });
+                let sum: f64 = lam.iter().sum();
+                let solid = cells.map(|(ci, cj, _)| f64::from(u8::from(self.w[(ci, cj)] > 0.0)));
+                let count: f64 = solid.iter().sum();
+                // The interface normal ∝ ∇φ across the corner.
+                let f = |ci: isize, cj: isize| phi[(ci, cj)].clamp(0.0, 1.0);
+                let gx = f(i, j) + f(i, j - 1) - f(i - 1, j) - f(i - 1, j - 1);
+                let gy = f(i, j) + f(i - 1, j) - f(i, j - 1) - f(i - 1, j - 1);
+                let g2 = gx * gx + gy * gy;
+                self.ny2[(i, j)] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
+                for n in 0..4 {
+                    self.kwt[n][(i, j)] = if sum > 0.0 {
+                        lam[n] / sum
+                    } else if count > 0.0 {
+                        solid[n] / count
+                    } else {
+                        0.25
+                    };
+                }
                 // (w_k, s, 1/κ, r): fluid, solid, interface in series.
                 let (wk, sf, ks, rc) = if self.wc[(i, j)] == 0.0 {
                     (0.0, 1.0, 0.0, 0.0)
@@ -737,18 +831,66 @@ impl Kernels {
                     // An inviscid fluid carries no shear: neither does the interface.
                     (1.0, 1.0, 0.0, 0.0)
                 } else {
-                    let kappa = 1.0 + mu_s * (1.0 - a) / (a * mu_f);
-                    (
-                        1.0,
-                        1.0 / (a * kappa),
-                        1.0 / kappa,
-                        (1.0 - a) / (mu_f * a * kappa),
-                    )
+                    // aκ = a + μ_s (1 − a)/μ_f: finite where the corner's quarters hold no
+                    // solid (a = 0) beside a cell that does.
+                    let ak = a + mu_s * (1.0 - a) / mu_f;
+                    if ak > 0.0 {
+                        (1.0, 1.0 / ak, a / ak, (1.0 - a) / (mu_f * ak))
+                    } else {
+                        // No solid at an inviscid solid's corner: no shear carried.
+                        (1.0, 1.0, 0.0, 0.0)
+                    }
                 };
                 self.wk[(i, j)] = wk;
                 self.sf[(i, j)] = sf;
                 self.ks[(i, j)] = ks;
                 self.rc[(i, j)] = rc;
+            }
+        }
+    }
+
+    /// The solid fraction of each quarter of every centre ([`Kernels::quarter`]): in a cut cell
+    /// of `[−1, nx] × [−1, ny]`, the share of the quarter below the cell's PLIC line (Youngs
+    /// normal, the line cutting the cell's φ off a `dx × dy` cell, as the VOF reconstruction
+    /// does in planar geometry); elsewhere φ (clamped to `[0, 1]`).
+    fn set_quarters(&mut self, phi: &Field) {
+        let (nx, ny) = self.nxy();
+        let (dx, dy) = (self.grid.dx, self.grid.dy);
+        let pd = phi.data();
+        for q in &mut self.quarter {
+            par::for_each_chunk(q.data_mut(), |o, w| {
+                for (w, f) in w.iter_mut().zip(&pd[o..]) {
+                    *w = f.clamp(0.0, 1.0);
+                }
+            });
+        }
+        let c = self.solid_c;
+        let s = phi.stride();
+        for j in c.j0.max(-1)..=c.j1.min(ny) {
+            for i in c.i0.max(-1)..=c.i1.min(nx) {
+                let k = phi.idx(i, j);
+                let f = pd[k];
+                if f <= 0.0 || f >= 1.0 {
+                    continue;
+                }
+                let cl = |k: usize| pd[k].clamp(0.0, 1.0);
+                let b = [
+                    [cl(k - s - 1), cl(k - s), cl(k - s + 1)],
+                    [cl(k - 1), cl(k), cl(k + 1)],
+                    [cl(k + s - 1), cl(k + s), cl(k + s + 1)],
+                ];
+                let (mx, my) = efsi_core::interface::plic::youngs_normal(&b, dx, dy);
+                let line = efsi_core::interface::plic::Line::planar(mx, my, f, dx, dy);
+                let (hx, hy) = (0.5 * dx, 0.5 * dy);
+                let boxes = [
+                    ((0.0, 0.0), (hx, hy)),
+                    ((hx, 0.0), (dx, hy)),
+                    ((0.0, hy), (hx, dy)),
+                    ((hx, hy), (dx, dy)),
+                ];
+                for (n, (lo, hi)) in boxes.into_iter().enumerate() {
+                    self.quarter[n].data_mut()[k] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
+                }
             }
         }
     }
@@ -761,7 +903,7 @@ impl Kernels {
         law: &dyn ConstitutiveLaw,
         start: &[Field; 4],
         dt: f64,
-        explicit: &mut Field,
+        explicit: &mut [Field; 4],
         relax: &mut Field,
     ) -> Result<(), String> {
         relax.fill(1.0);
@@ -777,14 +919,13 @@ impl Kernels {
         for j in 0..=ny {
             for i in 0..=nx {
                 let k = start[0].idx(i, j);
-                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 let q = self.ki(i, j);
                 let w = self.wk.data()[k];
                 any |= self.rc.data()[k] > 0.0;
                 self.kb[q] = [
-                    w * avg4(b11, a0, a1, a2, a3),
-                    w * avg4(b22, a0, a1, a2, a3),
-                    w * avg4(b33, a0, a1, a2, a3),
+                    w * self.kavg(b11, k, s),
+                    w * self.kavg(b22, k, s),
+                    w * self.kavg(b33, k, s),
                     w * b12[k],
                 ];
             }
@@ -802,11 +943,24 @@ impl Kernels {
                     continue;
                 }
                 let q = self.ki(i, j);
-                let bbar = 0.5 * (self.kb[q][0] + self.kb[q][1]);
+                // The shear-rate change times the B it stretches (as in `stretch_in`).
+                let fy = self.ny2.data()[k];
+                let bbar = fy * self.kb[q][1] + (1.0 - fy) * self.kb[q][0];
                 let jt = self.kj[q][15].max(0.0);
                 let lambda = dt * rc * bbar;
                 relax.data_mut()[k] = 1.0 / (1.0 + lambda * jt);
-                explicit.data_mut()[k] -= lambda * (self.kt[q][3] - jt * b12[k]);
+                explicit[3].data_mut()[k] -= lambda * (self.kt[q][3] - jt * b12[k]);
+                // The same relaxation of the solid's shear rate stretches the normal components
+                // of the four cells around (explicit, at Bⁿ): `Ḃ₁₁ = 2 L₁₂ B₁₂`, `Ḃ₂₂ = 2 L₂₁ B₁₂`
+                // averaged over a centre's corners, with the share n_y² to L₁₂.
+                let fy = self.ny2.data()[k];
+                // The relaxation as the corner's implicit step applies it (× q): bounded where
+                // it is stiff (a solid in air), where the explicit rate would blow up.
+                let d = 0.5 * dt * rc * self.kt[q][3] * b12[k] * relax.data()[k];
+                for c in [k, k - 1, k - s, k - s - 1] {
+                    explicit[0].data_mut()[c] -= fy * d;
+                    explicit[1].data_mut()[c] -= (1.0 - fy) * d;
+                }
             }
         }
         Ok(())
@@ -909,6 +1063,7 @@ impl Kernels {
         let [l11, l22, l33] = [self.lc[0].data(), self.lc[1].data(), self.lc[2].data()];
         let [l12, l21] = [self.lk[0].data(), self.lk[1].data()];
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
+        let (sf, ny2) = (self.sf.data(), self.ny2.data());
         let base_at =
             |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
         let [o11, o22, o33, o12] = out;
@@ -919,17 +1074,13 @@ impl Kernels {
             |j, rows| {
                 for i in cw.i0..=cw.i1 {
                     let k = b[0].idx(i, j);
-                    let (c0, c1, c2, c3) = (k, k + 1, k + s, k + s + 1);
-                    let l12b12 = 0.25
-                        * (l12[c0] * b12[c0]
-                            + l12[c1] * b12[c1]
-                            + l12[c2] * b12[c2]
-                            + l12[c3] * b12[c3]);
-                    let l21b12 = 0.25
-                        * (l21[c0] * b12[c0]
-                            + l21[c1] * b12[c1]
-                            + l21[c2] * b12[c2]
-                            + l21[c3] * b12[c3]);
+                    // The solid's gradients at the corners (as for `h12` below).
+                    let (mut l12b12, mut l21b12) = (0.0, 0.0);
+                    for c in [k, k + 1, k + s, k + s + 1] {
+                        let e = (sf[c] - 1.0) * (l12[c] + l21[c]);
+                        l12b12 += 0.25 * (l12[c] + ny2[c] * e) * b12[c];
+                        l21b12 += 0.25 * (l21[c] + (1.0 - ny2[c]) * e) * b12[c];
+                    }
                     let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
                     let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
                     let h33 = 2.0 * l33[k] * b33[k];
@@ -943,11 +1094,14 @@ impl Kernels {
             for i in kw.i0..=kw.i1 {
                 let k = b[3].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
-                // The solid's velocity gradient: spin unchanged, shear rate times s.
-                let e = 0.5 * (self.sf.data()[k] - 1.0) * (l12[k] + l21[k]);
+                // The solid's velocity gradient: shear rate times s, the extra going to the
+                // derivative across the interface (L₁₂ by n_y², L₂₁ by n_x²); the solid's own
+                // normal components (solid-weighted).
+                let e = (self.sf.data()[k] - 1.0) * (l12[k] + l21[k]);
+                let fy = self.ny2.data()[k];
                 let h12 = avg4(l11, a0, a1, a2, a3) * b12[k]
-                    + (l12[k] + e) * avg4(b22, a0, a1, a2, a3)
-                    + avg4(b11, a0, a1, a2, a3) * (l21[k] + e)
+                    + (l12[k] + fy * e) * self.kavg(b22, k, s)
+                    + self.kavg(b11, k, s) * (l21[k] + (1.0 - fy) * e)
                     + b12[k] * avg4(l22, a0, a1, a2, a3);
                 let q = relax.map_or(1.0, |r| r.data()[k]);
                 row[at(i)] = q * (base_at(3, k) + a * h12);
@@ -1081,22 +1235,22 @@ impl Kernels {
             }
         }
         for (q, wq) in S.iter().zip(WQ) {
-            for (n, &(_, w, cs, sn, m1, m2, m3, _)) in cells.iter().enumerate() {
+            for (n, &(_, _, cs, sn, m1, m2, m3, _)) in cells.iter().enumerate() {
                 let (e1, e2, e3) = ((q * m1).exp(), (q * m2).exp(), (q * m3).exp());
                 self.cb[n] = [
-                    w * (e1 * cs * cs + e2 * sn * sn),
-                    w * (e1 * sn * sn + e2 * cs * cs),
-                    w * e3,
-                    w * (e1 - e2) * cs * sn,
+                    e1 * cs * cs + e2 * sn * sn,
+                    e1 * sn * sn + e2 * cs * cs,
+                    e3,
+                    (e1 - e2) * cs * sn,
                 ];
-                self.rb[n] = [w, w, w, 0.0];
+                self.rb[n] = [1.0, 1.0, 1.0, 0.0];
             }
             let n = cells.len();
             law.evaluate(&self.cb[..n], &mut self.ct[..n], None)
                 .map_err(|e| e.to_string())?;
             law.evaluate(&self.rb[..n], &mut self.rt[..n], None)
                 .map_err(|e| e.to_string())?;
-            for (n, &(_, _, cs, sn, m1, m2, m3, vol)) in cells.iter().enumerate() {
+            for (n, &(_, w, cs, sn, m1, m2, m3, vol)) in cells.iter().enumerate() {
                 let t = self.ct[n];
                 let r = self.rt[n];
                 // M in the grid's axes.
@@ -1109,7 +1263,7 @@ impl Kernels {
                     + (t[1] - r[1]) * mm22
                     + (t[2] - r[2]) * m3
                     + 2.0 * t[3] * mm12;
-                energy += 0.5 * wq * tr * vol;
+                energy += 0.5 * wq * w * tr * vol;
             }
         }
         self.energy_cells = cells;
@@ -1139,26 +1293,24 @@ impl Kernels {
             for i in -1..=nx {
                 let k = b[0].idx(i, j);
                 let q = self.ci(i, j);
-                let w = self.w.data()[k];
-                self.rb[q] = [w, w, w, 0.0];
+                self.rb[q] = [1.0, 1.0, 1.0, 0.0];
                 self.cb[q] = [
-                    w * b11[k],
-                    w * b22[k],
-                    w * b33[k],
-                    w * avg4(b12, k, k + 1, k + s, k + s + 1),
+                    b11[k],
+                    b22[k],
+                    b33[k],
+                    avg4(b12, k, k + 1, k + s, k + s + 1),
                 ];
             }
         }
         for j in 0..=ny {
             for i in 0..=nx {
                 let k = b[0].idx(i, j);
-                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 let q = self.ki(i, j);
                 let w = self.wk.data()[k];
                 self.kb[q] = [
-                    w * avg4(b11, a0, a1, a2, a3),
-                    w * avg4(b22, a0, a1, a2, a3),
-                    w * avg4(b33, a0, a1, a2, a3),
+                    w * self.kavg(b11, k, s),
+                    w * self.kavg(b22, k, s),
+                    w * self.kavg(b33, k, s),
                     w * b12[k],
                 ];
             }
@@ -1180,9 +1332,9 @@ impl Kernels {
         for j in -1..=ny {
             for i in -1..=nx {
                 let k = b[0].idx(i, j);
-                let t = self.ct[self.ci(i, j)];
+                let (t, w) = (self.ct[self.ci(i, j)], self.w.data()[k]);
                 for c in 0..3 {
-                    tau[c].data_mut()[k] = t[c];
+                    tau[c].data_mut()[k] = w * t[c];
                 }
             }
         }
@@ -1213,17 +1365,18 @@ impl Kernels {
                     let k = db[0].idx(i, j);
                     let w = self.w.data()[k];
                     let x = [
-                        w * d11[k],
-                        w * d22[k],
-                        w * d33[k],
-                        w * avg4(d12, k, k + 1, k + s, k + s + 1),
+                        d11[k],
+                        d22[k],
+                        d33[k],
+                        avg4(d12, k, k + 1, k + s, k + s + 1),
                     ];
                     let jm = &self.cj[self.ci(i, j)];
                     for c in 0..3 {
-                        rows[c][at(i)] = jm[4 * c] * x[0]
-                            + jm[4 * c + 1] * x[1]
-                            + jm[4 * c + 2] * x[2]
-                            + jm[4 * c + 3] * x[3];
+                        rows[c][at(i)] = w
+                            * (jm[4 * c] * x[0]
+                                + jm[4 * c + 1] * x[1]
+                                + jm[4 * c + 2] * x[2]
+                                + jm[4 * c + 3] * x[3]);
                     }
                 }
             },
@@ -1231,12 +1384,11 @@ impl Kernels {
         rows1(t12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
             for i in kw.i0..=kw.i1 {
                 let k = db[0].idx(i, j);
-                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
                 let w = self.wk.data()[k];
                 let x = [
-                    w * avg4(d11, a0, a1, a2, a3),
-                    w * avg4(d22, a0, a1, a2, a3),
-                    w * avg4(d33, a0, a1, a2, a3),
+                    w * self.kavg(d11, k, s),
+                    w * self.kavg(d22, k, s),
+                    w * self.kavg(d33, k, s),
                     w * d12[k],
                 ];
                 let jm = &self.kj[self.ki(i, j)];
@@ -1258,7 +1410,7 @@ impl Kernels {
         for j in c.j0..=c.j1 {
             for i in c.i0..=c.i1 {
                 let (jm, b) = (&self.cj[self.ci(i, j)], &self.cb[self.ci(i, j)]);
-                let g = 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
+                let g = self.w[(i, j)] * 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
                 eta[(i, j)] += a * g.max(0.0);
             }
         }
@@ -1269,7 +1421,8 @@ impl Kernels {
                 let (jm, b) = (&self.kj[q], &self.kb[q]);
                 let k = eta_k.idx(i, j);
                 let f = self.ks.data()[k] * self.sf.data()[k] * relax.data()[k];
-                let g = f * jm[15] * 0.5 * (b[0] + b[1]);
+                let fy = self.ny2.data()[k];
+                let g = f * jm[15] * (fy * b[1] + (1.0 - fy) * b[0]);
                 eta_k.data_mut()[k] += a * g.max(0.0);
             }
         }
@@ -1523,7 +1676,7 @@ impl ElasticStage {
             self.law.as_ref(),
             &d.start,
             dt,
-            &mut d.explicit[3],
+            &mut d.explicit,
             &mut d.relax,
         )
         .map_err(|m| err("elastic", m))?;
@@ -1562,7 +1715,9 @@ impl ElasticStage {
         let stiff = |i: isize, j: isize| {
             let jm = &cj[k.ci(i, j)];
             let b = &k.cb[k.ci(i, j)];
-            jm[0].abs().max(jm[5].abs()).max(jm[15].abs()) * b[0].abs().max(b[1].abs()).max(1e-300)
+            k.w[(i, j)]
+                * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
+                * b[0].abs().max(b[1].abs()).max(1e-300)
         };
         k.faces.for_each(|c, is_u, q| {
             let (i, j) = (
@@ -1778,6 +1933,101 @@ mod tests {
     use super::*;
     use efsi_core::interface::shapes::Shape;
     use efsi_laws_host::NeoHookeanReference;
+
+    /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8
+    /// grid, μ_f = 1, μ_s = 0.5; B is `bs` in every cell holding solid, I elsewhere. For each
+    /// shipped law, the stress the stage applies is the law's at the solid's own B times the
+    /// documented weight: `φ^{1/2}` at a centre (less the rest stress), `a/(aκ)` at a corner of
+    /// solid fraction `a` (the PLIC quarters: 1 and 0.6 around the corners of row 3, a = 0.8); and
+    /// the tangent's increment is the law's tangent at B times the same weight.
+    #[test]
+    fn each_shipped_law_sees_the_solids_own_deformation_at_the_interface() {
+        let text = r#"Scene(
+    name: "interface",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8),
+    time: (end: 1.0),
+    fluid: (density: 1.0, viscosity: 1.0),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+)"#;
+        let scene = Scene::from_str_at(text, std::path::Path::new("interface.ron")).unwrap();
+        let grid = Grid::new(scene.geometry, 8, 8, scene.domain.x, scene.domain.y);
+        let bc = BoundarySet::new(&scene.boundaries, &grid);
+        let (mu_f, mu_s, phi3) = (1.0, 0.5, 0.3);
+        let mut phi = Field::zeros(&grid);
+        for j in -efsi_core::G..8 + efsi_core::G {
+            for i in -efsi_core::G..8 + efsi_core::G {
+                phi[(i, j)] = match j {
+                    ..3 => 1.0,
+                    3 => phi3,
+                    _ => 0.0,
+                };
+            }
+        }
+        // A deformation with stretch and shear (det B ≠ 1 does not matter here).
+        let bs: Sym = [1.3, 0.85, 0.95, 0.2];
+        let laws: [(&str, &[(&str, f64)]); 3] = [
+            ("neo_hookean", &[("G", 2.0)]),
+            ("mooney_rivlin", &[("C1", 0.7), ("C2", 0.2), ("C3", 0.4)]),
+            ("saint_venant_kirchhoff", &[("lambda", 4.0), ("mu", 1.8)]),
+        ];
+        for (name, params) in laws {
+            let params = params.iter().map(|&(k, v)| (k.to_string(), v)).collect();
+            let law = efsi_laws_host::load_law(name, &params, std::path::Path::new("."))
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let mut k = Kernels::new(&grid, &bc, mu_f, mu_s);
+            k.set_weights(&phi);
+            let mut b: [Field; 4] = std::array::from_fn(|_| Field::zeros(&grid));
+            for j in -efsi_core::G..8 + efsi_core::G {
+                for i in -efsi_core::G..8 + efsi_core::G {
+                    let solid = k.w[(i, j)] > 0.0;
+                    for c in 0..3 {
+                        b[c][(i, j)] = if solid { bs[c] } else { 1.0 };
+                    }
+                    b[3][(i, j)] = if k.wc[(i, j)] > 0.0 { bs[3] } else { 0.0 };
+                }
+            }
+            let mut tau: [Field; 4] = std::array::from_fn(|_| Field::zeros(&grid));
+            k.evaluate(&law, &b, &mut tau, true).unwrap();
+            let (mut ts, mut ti) = ([[0.0; 4]], [[0.0; 4]]);
+            let mut js = [[0.0; 16]];
+            law.evaluate(&[bs], &mut ts, Some(&mut js)).unwrap();
+            law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut ti, None)
+                .unwrap();
+            let close = |got: f64, want: f64, what: &str| {
+                assert!(
+                    (got - want).abs() <= 1e-12 * (1.0 + want.abs()),
+                    "{name}: {what}: {got:e} ≠ {want:e}"
+                );
+            };
+            // The interface centre (row 3) and a full one (row 1).
+            for (j, w) in [(3, phi3.sqrt()), (1, 1.0)] {
+                for c in 0..3 {
+                    close(tau[c][(4, j)], w * (ts[0][c] - ti[0][c]), "centre stress");
+                }
+            }
+            // The corners of row 3: a = (1 + 1 + 0.6 + 0.6)/4 = 0.8; inside the layer a = 1.
+            let a = 0.8;
+            let ak = a + mu_s * (1.0 - a) / mu_f;
+            close(tau[3][(4, 3)], a / ak * ts[0][3], "interface corner shear");
+            close(tau[3][(4, 2)], ts[0][3], "solid corner shear");
+            // Above row 3 the corners' quarters hold no solid: no shear stress.
+            close(tau[3][(4, 4)], 0.0, "corner without solid");
+            // The tangent: a uniform increment db gives the law's J·db times the same weights.
+            let db: Sym = [0.01, -0.02, 0.005, 0.03];
+            let mut dbf: [Field; 4] = std::array::from_fn(|_| Field::zeros(&grid));
+            for (c, f) in dbf.iter_mut().enumerate() {
+                f.fill(db[c]);
+            }
+            let mut dtau: [Field; 4] = std::array::from_fn(|_| Field::zeros(&grid));
+            k.apply_tangent(&dbf, &mut dtau);
+            let jdb = |r: usize| (0..4).map(|c| js[0][4 * r + c] * db[c]).sum::<f64>();
+            for c in 0..3 {
+                close(dtau[c][(4, 3)], phi3.sqrt() * jdb(c), "centre tangent");
+            }
+            close(dtau[3][(4, 3)], a / ak * jdb(3), "interface corner tangent");
+        }
+    }
 
     #[test]
     fn laws_without_a_stable_rest_state_and_fixed_steps_beyond_the_wave_limit_are_refused() {

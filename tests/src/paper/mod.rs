@@ -5,6 +5,7 @@
 //! their checks.
 
 pub mod couette;
+pub mod couette_mr;
 pub mod disk_cavity;
 pub mod oscillating_disk;
 pub mod plot;
@@ -181,6 +182,10 @@ pub const CASES: &[Case] = &[
     Case {
         name: "oscillating_couette",
         run: couette::run,
+    },
+    Case {
+        name: "oscillating_couette_mr",
+        run: couette_mr::run,
     },
     Case {
         name: "stability",

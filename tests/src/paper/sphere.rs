@@ -7,6 +7,7 @@ use super::{Check, Options, Report, Run, execute, figure, load_case, probes};
 use crate::interp;
 use efsi_core::Scene;
 use efsi_core::interface::shapes::Shape;
+use efsi_core::scene::ProbeSpec;
 use std::f64::consts::PI;
 
 /// The sphere's material and initial condition, read from its scene.
@@ -76,6 +77,10 @@ struct Impact {
     contact_radius: f64,
     rebound_speed: f64,
     volume_drift: f64,
+    /// The smallest share of the solid volume in its largest connected piece, over the outputs.
+    largest_piece: f64,
+    /// The most pieces at any output.
+    pieces: f64,
 }
 
 fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
@@ -92,6 +97,12 @@ fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
     let radius = p.col("contact_radius")?;
     let (bottom, top) = (p.col("solid_bottom")?, p.col("solid_top")?);
     let vol = p.col("solid_volume")?;
+    let largest_piece = p
+        .col("solid_largest_piece")?
+        .iter()
+        .copied()
+        .fold(f64::MAX, f64::min);
+    let pieces = p.col("solid_pieces")?.iter().copied().fold(0.0, f64::max);
     let peak = force.iter().copied().fold(0.0, f64::max);
     let on: Vec<usize> = (0..t.len())
         .filter(|&k| force[k] > CONTACT * peak)
@@ -143,6 +154,8 @@ fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
         contact_radius: (first..=last).map(|k| radius[k]).fold(0.0, f64::max),
         rebound_speed,
         volume_drift,
+        largest_piece,
+        pieces,
         t,
         z,
         v,
@@ -166,6 +179,9 @@ fn scene_at(
     scene.grid.nx = (lx / h).round() as usize;
     scene.grid.ny = (ly / h).round() as usize;
     scene.time.cfl = cfl;
+    if !scene.output.probes.contains(&ProbeSpec::SolidPieces) {
+        scene.output.probes.push(ProbeSpec::SolidPieces);
+    }
     if !vtk {
         scene.output.vtk_every = None;
     }
@@ -178,7 +194,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     let (cprs, reference_cpr, conditions_cpr, cfls): (&[f64], f64, f64, &[f64]) = if opts.quick {
         (&[8.0, 10.0, 12.0], 12.0, 10.0, &[0.2])
     } else {
-        (&[10.0, 20.0, 35.0, 50.0], 50.0, 35.0, &[0.2, 0.8])
+        (&[10.0, 15.0, 20.0, 35.0, 50.0], 50.0, 35.0, &[0.2, 0.8])
     };
     let (base, _) = load_case("sphere_impact.ron")?;
     let sphere = sphere_of(&base)?;
@@ -271,6 +287,8 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             ("rebound_speed".into(), i.rebound_speed),
             ("restitution".into(), i.rebound_speed / i.impact_speed),
             ("volume_drift".into(), i.volume_drift),
+            ("largest_piece_min".into(), i.largest_piece),
+            ("pieces_max".into(), i.pieces),
         ];
     }
     // Checks, on the run the paper's claims are about (35 CPR; the finest in quick mode).
@@ -305,6 +323,22 @@ pub fn run(opts: &Options) -> Result<Report, String> {
                 .fold(0.0, f64::max),
             1e-10,
             "e",
+        ),
+        Check::at_least(
+            "one piece: the largest connected piece's share of the solid volume, least over every output of every run at 10 CPR or more",
+            runs.iter()
+                .filter(|(r, _)| {
+                    r.label
+                        .split(' ')
+                        .next()
+                        .and_then(|c| c.parse::<f64>().ok())
+                        .is_some_and(|c| c >= 10.0)
+                })
+                .map(|(_, i)| i.largest_piece)
+                .chain(conditions.iter().map(|(_, _, i)| i.largest_piece))
+                .fold(f64::MAX, f64::min),
+            0.999,
+            "%",
         ),
     ];
     if !opts.quick {
@@ -459,6 +493,24 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         "wall time (s)",
         &mut notes,
     );
+    notes.push(format!(
+        "SolidPieces: least share of the largest piece (most pieces) — {}",
+        by_cpr
+            .iter()
+            .map(|(r, i)| format!(
+                "{}: {:.5} % ({})",
+                r.label,
+                100.0 * i.largest_piece,
+                i.pieces
+            ))
+            .chain(conditions.iter().map(|(n, _, i)| format!(
+                "{n}: {:.5} % ({})",
+                100.0 * i.largest_piece,
+                i.pieces
+            )))
+            .collect::<Vec<_>>()
+            .join("; ")
+    ));
     for (n, r, i) in &conditions {
         notes.push(format!(
             "{n}: impact at {:.2} ms at {:.3} m/s, rebound {:.3} m/s (e = {:.3}), contact {:.2} ms, {} steps in {:.1} s",

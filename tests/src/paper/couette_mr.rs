@@ -1,0 +1,198 @@
+//! Sugiyama's oscillating Couette flow with a non-linear Mooney–Rivlin layer (shear stress
+//! `2c₁γ + 4c₃γ³`: `mooney_rivlin` with C1 = c₁ = 0.02, C2 = 0, C3 = c₃ = 0.04) against the
+//! finite-element reference of `tests/references/oscillating_couette_mr/c1_0.02/`, in the tenth
+//! period of a start from rest. A law whose shear stress depends on `tr B` checks that the
+//! interface corners feed the law the solid's own deformation.
+
+use super::plot::Scale;
+use super::{Check, Options, Report, Run, cases_dir, execute, figure, slug};
+use crate::{interp, read_csv, reference};
+use efsi_core::Scene;
+use efsi_core::scene::ProfileSpec;
+
+/// The reference's times (the tenth period, wall at rest and at its peak speed).
+const TIMES: [f64; 4] = [18.0, 18.5, 19.0, 19.5];
+
+/// The quick version's times: the start of the tenth period only, to t = 18.5.
+const QUICK_TIMES: [f64; 2] = [18.0, 18.5];
+
+/// The scene at `n` cells across the channel (0 ≤ y ≤ L_s + L_f = 0.4), Δt = 0.001 · 64/n;
+/// every parameter is the reference's header (`L_s = L_f = 0.2`, `ρ = 1`, `μ_f = 0.02`,
+/// `μ_s = 0.002`, `V = 0.4`, `ω = π`).
+pub fn scene(n: usize, end: f64, times: &[f64]) -> Result<(Scene, std::path::PathBuf), String> {
+    let h = 0.4 / n as f64;
+    let text = format!(
+        r#"Scene(
+    name: "oscillating_couette_mr",
+    domain: (x: (0.0, {w:e}), y: (0.0, 0.4)),
+    grid: (nx: 4, ny: {n}),
+    time: (end: {end:e}, cfl: 0.4, dt_max: {dt:e}),
+    fluid: (density: 1.0, viscosity: 0.02),
+    solid: (
+        shape: HalfPlane(normal: (0.0, 1.0), offset: 0.2),
+        density: 1.0,
+        viscosity: 0.002,
+        law: (name: "mooney_rivlin", parameters: {{"C1": 0.02, "C2": 0.0, "C3": 0.04}}),
+    ),
+    boundaries: (
+        x_min: Periodic,
+        x_max: Periodic,
+        y_min: NoSlip,
+        y_max: MovingWall(speed: 0.4, motion: Sin(omega: 3.141592653589793)),
+    ),
+    output: (probe_every: 0.05, probes: [SolidVolume, SolidPieces]),
+)"#,
+        w = 4.0 * h,
+        dt = 0.001 * 64.0 / n as f64,
+    );
+    let path = cases_dir().join("oscillating_couette_mr.ron");
+    let mut scene = Scene::from_str_at(&text, &path).map_err(|e| e.to_string())?;
+    let x = 2.0 * h;
+    // The profile at the cell centres, where u lives: no interpolation of the solution.
+    scene.output.profiles = vec![ProfileSpec::Line {
+        name: "u".into(),
+        from: (x, 0.5 * h),
+        to: (x, 0.4 - 0.5 * h),
+        points: n,
+        fields: vec!["u".into()],
+        at: times.to_vec(),
+    }];
+    Ok((scene, path))
+}
+
+/// Max |u − u_ref| at the grid's u points at each of `times`, from the run's profiles.
+fn errors(run: &Run, times: &[f64]) -> Result<Vec<f64>, String> {
+    let col = |h: &[String], n: &str| {
+        h.iter()
+            .position(|x| x == n)
+            .ok_or(format!("no column {n}"))
+    };
+    let mut out = Vec::new();
+    for &t in times {
+        let label = efsi_run::run::time_label(t);
+        let (rh, rc) = read_csv(&reference(&format!(
+            "oscillating_couette_mr/c1_0.02/u_profile_t_{label}.csv"
+        )));
+        let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
+        let (h, c) = read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
+        let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
+        out.push(
+            y.iter()
+                .zip(u)
+                .map(|(&y, &u)| (u - interp(ry, ru, y)).abs())
+                .fold(0.0, f64::max),
+        );
+    }
+    Ok(out)
+}
+
+/// Run the case.
+pub fn run(opts: &Options) -> Result<Report, String> {
+    let dir = opts.out.join("oscillating_couette_mr");
+    let (grids, times): (&[usize], &[f64]) = if opts.quick {
+        (&[32, 64], &QUICK_TIMES)
+    } else {
+        (&[64, 128, 256], &TIMES)
+    };
+    let end = times.iter().copied().fold(0.0, f64::max);
+    let mut runs = Vec::new();
+    let mut schedule = Vec::new();
+    for &n in grids {
+        let (scene, path) = scene(n, end, times)?;
+        let label = format!("{n} cells");
+        let (sim, mut run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
+            .map_err(|e| e.to_string())?;
+        schedule = sim
+            .pipeline()
+            .stage_names()
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let e = errors(&run, times)?;
+        run.error = Some(e.iter().copied().fold(0.0, f64::max));
+        run.metrics = times
+            .iter()
+            .zip(&e)
+            .map(|(t, e)| (format!("error_t{t}"), *e))
+            .collect();
+        runs.push(run);
+    }
+    let errs: Vec<f64> = runs.iter().map(|r| r.error.unwrap_or(f64::NAN)).collect();
+    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    for (r, p) in runs.iter_mut().skip(1).zip(&orders) {
+        r.metrics.push(("observed_order".into(), *p));
+    }
+    let e64 = runs
+        .iter()
+        .find(|r| r.label == "64 cells")
+        .and_then(|r| r.error)
+        .unwrap_or(f64::NAN);
+    let at = times
+        .iter()
+        .map(|t| t.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    // The issue's target is 2.0e-3 at 64 cells over the four times (2.13e-3 reached); the quick
+    // version's two times (2.01e-3 reached) are held to 2.5e-3 against regressions.
+    let checks = vec![
+        Check::at_most(
+            format!("64 cells: max abs(u − u_ref) at t = {at} (grid points)"),
+            e64,
+            if opts.quick { 2.5e-3 } else { 2.0e-3 },
+            "e",
+        ),
+        Check::at_least(
+            format!("observed order over {grids:?} cells (Δt ∝ h), the smallest"),
+            orders.iter().copied().fold(f64::MAX, f64::min),
+            if opts.quick { 0.9 } else { 1.0 },
+            "3",
+        ),
+    ];
+    let mut plots = Vec::new();
+    let mut notes = vec![format!(
+        "max errors {} at {:?} cells; observed orders {}",
+        errs.iter()
+            .map(|e| format!("{e:.3e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        grids,
+        orders
+            .iter()
+            .map(|p| format!("{p:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )];
+    let conv = vec![(
+        "max error over the reference's times".to_string(),
+        grids
+            .iter()
+            .zip(&errs)
+            .map(|(&n, &e)| (n as f64, e))
+            .collect(),
+    )];
+    figure(
+        &dir,
+        "convergence",
+        (
+            "Mooney–Rivlin Couette: error vs cells",
+            "cells across",
+            "max abs(u − u_ref)",
+        ),
+        &conv,
+        Scale::LogLog,
+        &mut plots,
+        &mut notes,
+    );
+    Ok(Report {
+        name: "oscillating_couette_mr".into(),
+        title: "Oscillating Couette flow, Mooney–Rivlin layer (c₁ = 0.02, c₃ = 0.04)".into(),
+        reference: "the finite-element profiles of `tests/references/oscillating_couette_mr/c1_0.02/` (N = 800, Δt = 1.25e-4, from rest), at the grid's u points".into(),
+        error_metric: format!("max abs(u − u_ref), t = {at}"),
+        runs,
+        checks,
+        plots,
+        notes,
+        schedule,
+        recommendation: "64 cells (Δt = 0.001): 2.1e-3 in about a minute of one core".into(),
+    })
+}
