@@ -1,0 +1,49 @@
+//! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
+//! then the next step's rates, the end-of-step stress and the strain energy.
+
+use super::{Kernels, err, missing};
+use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
+use efsi_laws_host::ConstitutiveLaw;
+
+pub(super) struct DeformationStage {
+    pub(super) law: Box<dyn ConstitutiveLaw>,
+    pub(super) k: Kernels,
+    /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
+    pub(super) wave_dt: f64,
+}
+
+impl Stage for DeformationStage {
+    fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
+        Some(self.wave_dt)
+    }
+
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        let k = &mut self.k;
+        let phi = state
+            .phi
+            .as_ref()
+            .ok_or_else(|| err("deformation", "the solid fraction is not allocated".into()))?;
+        k.set_weights(phi);
+        // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
+        k.gradient(&state.u, &state.v);
+        k.stretch(
+            &d.start,
+            0.5 * ctx.dt,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            &mut d.b,
+        );
+        k.fill_ghosts(&mut d.b);
+        std::mem::swap(&mut d.advection, &mut d.advection_prev);
+        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
+        k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
+        // The end-of-step stress and the elastic energy.
+        k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
+            .map_err(|m| err("deformation", m))?;
+        d.elastic_energy = k
+            .strain_energy(self.law.as_ref(), &d.b)
+            .map_err(|m| err("deformation", m))?;
+        Ok(StageStats::default())
+    }
+}

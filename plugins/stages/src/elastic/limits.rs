@@ -1,0 +1,75 @@
+//! The solid's limits, checked before the run: the elastic-wave Courant limit on Δt and the
+//! fewest cells across a solid.
+
+use efsi_core::{Grid, Scene};
+use efsi_laws_host::ConstitutiveLaw;
+
+/// The fewest cells across an elastic solid (its section's hydraulic diameter over the cell
+/// size): the stability map's solid 3 cells across gained up to 30 % of its impact energy as
+/// motion, 4 and more kept it to 0.7 %.
+pub const MIN_CELLS_ACROSS: f64 = 4.0;
+
+/// The largest Δt the elastic-wave Courant limit allows
+/// ([`efsi_core::scene::ElasticParams::wave_courant`]): `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
+/// the largest diagonal entry of the law's tangent at `B̃ = I` (the shear modulus for the
+/// shipped laws). A `time.fixed_dt` above it is refused here, before the run starts, naming
+/// the limit and what to change; so is a solid narrower than [`MIN_CELLS_ACROSS`].
+pub(super) fn wave_limit(
+    scene: &Scene,
+    grid: &Grid,
+    law: &dyn ConstitutiveLaw,
+) -> Result<f64, String> {
+    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let mut tau = [[0.0; 4]];
+    let mut tangent = [[0.0; 16]];
+    law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut tau, Some(&mut tangent))
+        .map_err(|e| format!("solid.law: at rest (B = I): {e}"))?;
+    let shear = tangent[0][15];
+    if shear.is_nan() || shear <= 0.0 {
+        return Err(format!(
+            "solid.law: its shear stiffness at rest (∂τ₁₂/∂B̃₁₂ at B̃ = I) is {shear:e} Pa, not \
+             positive: the material has no stable rest state (for Mooney–Rivlin, C1 + C2 must \
+             be > 0)"
+        ));
+    }
+    let g0 = (0..4).map(|a| tangent[0][5 * a].abs()).fold(0.0, f64::max);
+    if !(g0.is_finite() && g0 > 0.0) {
+        return Err(format!(
+            "solid.law: its stiffness at rest (the tangent's diagonal at B = I) is {g0}, not a \
+             positive number"
+        ));
+    }
+    if let Some(width) = efsi_core::interface::shapes::section_width(grid, &solid.shape) {
+        let h = grid.dx.max(grid.dy);
+        // The staircase estimate of the width is within 8 % for a disk 3 cells across or more.
+        if width / h < 0.9 * MIN_CELLS_ACROSS {
+            return Err(format!(
+                "solid.shape: the solid is {:.1} cells across (its section's hydraulic diameter \
+                 4A/P = {width:.4e} m over cells of {h:.4e} m); an elastic solid needs at least \
+                 {MIN_CELLS_ACROSS} (narrower ones were measured to gain up to 30 % of their \
+                 impact energy, `cargo xtask bench-paper --case stability`): refine the grid \
+                 (grid: nx, ny — nr, nz when axisymmetric) to cells of at most {:.4e} m, or widen the solid",
+                width / h,
+                width / MIN_CELLS_ACROSS
+            ));
+        }
+    }
+    let s = scene.numerics.elastic.wave_courant;
+    let h = grid.dx.min(grid.dy);
+    let c = (g0 / solid.density).sqrt();
+    let dt = s * h / c;
+    if let Some(fixed) = scene.time.fixed_dt
+        && fixed > dt
+    {
+        return Err(format!(
+            "time.fixed_dt: {fixed:e} s breaks the elastic-wave limit Δt·c/h ≤ {s} \
+                 (numerics.elastic.wave_courant): the solid's shear waves (c = √(G₀/ρ_s) = \
+                 {c:.4e} m/s from G₀ = {g0:e} Pa, ρ_s = {}) cross {:.3} cells of h = {h:.4e} m \
+                 per step; set time.fixed_dt ≤ {dt:.4e} s, or leave it out to let the step \
+                 adapt",
+            solid.density,
+            fixed * c / h
+        ));
+    }
+    Ok(dt)
+}
