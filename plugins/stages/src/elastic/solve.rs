@@ -1,0 +1,384 @@
+//! The implicit viscous–elastic system and its solve: the operator
+//! `M − θΔt K_v − (Δt²/2) K_J` (see the module docs of [`super`]) and the elastic stage.
+
+use super::{Kernels, err, missing};
+use crate::block_multigrid::ViscousBlocks;
+use crate::viscous_operator::{Coefficients, CompactFaces};
+use efsi_core::ops::face_density;
+use efsi_core::scene::ElasticPreconditioner;
+use efsi_core::{BoundarySet, Field, Grid, Stage, StageError, StageStats, State, StepContext};
+use efsi_laws_host::ConstitutiveLaw;
+use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
+
+pub(super) struct ElasticStage {
+    pub(super) law: Box<dyn ConstitutiveLaw>,
+    /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
+    pub(super) theta: f64,
+    pub(super) tau: [Field; 4],
+    pub(super) op: ElasticOperator,
+    pub(super) rhs: Vec<f64>,
+    pub(super) delta: Vec<f64>,
+    pub(super) diag: Vec<f64>,
+    pub(super) solver: BiCgStab,
+    pub(super) tol: f64,
+    pub(super) max_iter: usize,
+    /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
+    pub(super) implicit: bool,
+    /// Scene `numerics.elastic.preconditioner`, and the block multigrid's effective
+    /// viscosities × Δt at centres and corners (see [`Kernels::stiffness`]).
+    pub(super) preconditioner: ElasticPreconditioner,
+    pub(super) blocks: ViscousBlocks,
+    pub(super) eta: Field,
+    pub(super) eta_k: Field,
+    /// `K_η` of those, and the mass plus its hoop term and the diagonal of `M − K_η`.
+    pub(super) eta_coefficients: Coefficients,
+    pub(super) eta_dm: Vec<f64>,
+    pub(super) eta_diag: Vec<f64>,
+    /// Work space of the operator, allocated once.
+    pub(super) scratch: Scratch,
+}
+
+/// The elastic operator's work space: the increment as fields, and Δτ (zero outside the solid).
+pub(super) struct Scratch {
+    pub(super) xu: Field,
+    pub(super) xv: Field,
+    pub(super) dtau: [Field; 4],
+}
+
+/// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
+pub(super) struct ElasticOperator {
+    pub(super) k: Kernels,
+    pub(super) db: [Field; 4],
+    pub(super) mass: Vec<f64>,
+    /// `Δt²/2`.
+    pub(super) c: f64,
+    /// `θΔt` of the viscous step (0 without viscosity), and the viscosities it uses.
+    pub(super) theta_dt: f64,
+    pub(super) mu: Field,
+    pub(super) mu_corner: Field,
+    /// `θΔt K_v`, its coefficients set each step (zero without viscosity).
+    pub(super) viscous: Coefficients,
+    /// `mass` plus the hoop term of `θΔt K_v`.
+    pub(super) dm: Vec<f64>,
+}
+
+struct OperatorCtx<'a> {
+    op: &'a mut ElasticOperator,
+    start: &'a [Field; 4],
+    relax: &'a Field,
+    xu: &'a mut Field,
+    xv: &'a mut Field,
+    dtau: &'a mut [Field; 4],
+}
+
+impl LinearOperator for OperatorCtx<'_> {
+    fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+        let op = &mut *self.op;
+        let (xu, xv) = (&mut *self.xu, &mut *self.xv);
+        op.k.faces.scatter(x, xu, xv);
+        op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
+        // The increment's stress lives in the solid: gradients, stretching and tangent there.
+        let (cw, kw) = (op.k.solid_c, op.k.solid_k);
+        let (gc, gk) = op.k.gradient_windows();
+        op.k.gradient_in(xu, xv, gc, gk);
+        op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
+        op.k.apply_tangent(&op.db, self.dtau);
+        op.viscous.apply(xu, xv, &op.dm, Some(x), y);
+        op.k.force_sub(self.dtau, op.c, y);
+    }
+}
+
+impl Stage for ElasticStage {
+    fn initialize(
+        &mut self,
+        _grid: &Grid,
+        _bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        for c in 0..3 {
+            d.b[c].fill(1.0);
+        }
+        d.b[3].fill(0.0);
+        d.relax.fill(1.0);
+        let k = &mut self.op.k;
+        // The solid fraction is set: the stages writing material fields initialise first.
+        let phi = state
+            .phi
+            .as_ref()
+            .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
+        k.set_weights(phi);
+        k.fill_ghosts(&mut d.b);
+        k.gradient(&state.u, &state.v);
+        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
+        for c in 0..4 {
+            d.advection_prev[c].copy_from(&d.advection[c]);
+        }
+        k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
+        Ok(())
+    }
+
+    /// Takes B̃ out of the state for the step and puts it back on every exit, failed or not:
+    /// a failed step leaves the state complete, so the run loop (or an FMU) can restore the
+    /// step's start into it.
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let mut d = state.deformation.take().ok_or_else(missing)?;
+        let result = self.advance(ctx, state, &mut d);
+        state.deformation = Some(d);
+        result
+    }
+}
+
+impl ElasticStage {
+    /// One elastic step with B̃ (`d`) held outside the state.
+    fn advance(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        d: &mut efsi_core::Deformation,
+    ) -> Result<StageStats, StageError> {
+        let dt = ctx.dt;
+        let r = if state.dt_prev > 0.0 {
+            dt / state.dt_prev
+        } else {
+            0.0
+        };
+        let phi = state
+            .phi
+            .as_ref()
+            .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
+        self.op.k.set_weights(phi);
+        self.op.k.reset_fluid(d);
+        // Bⁿ and the explicit part E.
+        for c in 0..4 {
+            d.start[c].copy_from(&d.b[c]);
+            let (e, a, ap, h) = (
+                &mut d.explicit[c],
+                &d.advection[c],
+                &d.advection_prev[c],
+                &d.stretching[c],
+            );
+            for (((e, a), ap), h) in e
+                .data_mut()
+                .iter_mut()
+                .zip(a.data())
+                .zip(ap.data())
+                .zip(h.data())
+            {
+                *e = -dt * ((1.0 + 0.5 * r) * a - 0.5 * r * ap) + 0.5 * dt * h;
+            }
+        }
+        let k = &mut self.op.k;
+        // The interface corners' relaxation for this step.
+        k.relaxation(
+            self.law.as_ref(),
+            &d.start,
+            dt,
+            &mut d.explicit,
+            &mut d.relax,
+        )
+        .map_err(|m| err("elastic", m))?;
+        // B̃^{n+1/3} = B̃(V^{n+1/3}) and its stress and tangent.
+        k.gradient(&state.u, &state.v);
+        k.stretch(
+            &d.start,
+            0.5 * dt,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            &mut d.b,
+        );
+        k.fill_ghosts(&mut d.b);
+        k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
+            .map_err(|m| err("elastic", m))?;
+        // Right-hand side Δt·vol·∇·τ^{n+1/3}, mass and Jacobi diagonal.
+        k.force(&self.tau, &mut self.rhs);
+        let g = ctx.grid;
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let rho = &state.rho;
+        let s = rho.stride();
+        let c2 = if self.implicit { 0.5 * dt * dt } else { 0.0 };
+        self.op.c = c2;
+        self.op.theta_dt = self.theta * dt;
+        if self.theta > 0.0 {
+            self.op.mu.copy_from(&state.mu);
+            self.op
+                .viscous
+                .set_viscosity(g, &state.mu, self.op.theta_dt, &mut self.op.mu_corner);
+        }
+        let td = self.op.theta_dt;
+        let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
+        let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
+        let cj = &k.cj;
+        let stiff = |i: isize, j: isize| {
+            let jm = &cj[k.ci(i, j)];
+            let b = &k.cb[k.ci(i, j)];
+            k.w[(i, j)]
+                * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
+                * b[0].abs().max(b[1].abs()).max(1e-300)
+        };
+        k.faces.for_each(|c, is_u, q| {
+            let (i, j) = (
+                (q % s) as isize - efsi_core::G,
+                (q / s) as isize - efsi_core::G,
+            );
+            let (w, rf, e) = if is_u {
+                (
+                    m.rx(i) * dx * dy,
+                    face_density(rho.data()[q - 1], rho.data()[q]),
+                    stiff(i - 1, j).max(stiff(i, j)),
+                )
+            } else {
+                (
+                    m.rc(i) * dx * dy,
+                    face_density(rho.data()[q - s], rho.data()[q]),
+                    stiff(i, j - 1).max(stiff(i, j)),
+                )
+            };
+            mass[c] = rf * w;
+            let mv = if td > 0.0 {
+                let md = mu.data();
+                let (a, b) = if is_u {
+                    (md[q - 1], md[q])
+                } else {
+                    (md[q - s], md[q])
+                };
+                let mcd = mc.data();
+                2.0 * a
+                    .max(b)
+                    .max(mcd[q])
+                    .max(if is_u { mcd[q + s] } else { mcd[q + 1] })
+            } else {
+                0.0
+            };
+            diag[c] = mass[c] + (c2 * e + td * mv) * w * (4.0 / (dx * dx) + 4.0 / (dy * dy));
+            rhs[c] *= dt;
+        });
+        let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+        {
+            let op = &mut self.op;
+            for ((dm, m), h) in op.dm.iter_mut().zip(&op.mass).zip(op.viscous.hoop()) {
+                *dm = m + h;
+            }
+        }
+        // Momentum scale ‖M V^{n+1/3}‖: the residual is judged against the larger of it and the
+        // right-hand side, so a body nearly at rest (tiny right-hand side) is not asked for more
+        // digits than its momentum has.
+        let mut pnorm = 0.0;
+        {
+            let (u, v, mass) = (&state.u, &state.v, &self.op.mass);
+            self.op.k.faces.for_each(|c, is_u, q| {
+                let x = mass[c] * if is_u { u.data()[q] } else { v.data()[q] };
+                pnorm += x * x;
+            });
+        }
+        let scale = bnorm.max(pnorm.sqrt());
+        let stats = if bnorm == 0.0 {
+            SolveStats {
+                iterations: 0,
+                residual: 0.0,
+                converged: true,
+            }
+        } else {
+            self.delta.fill(0.0);
+            let s = &mut self.scratch;
+            // The operator writes Δτ in this step's solid only.
+            for f in &mut s.dtau {
+                f.fill(0.0);
+            }
+            let mut ctxop = OperatorCtx {
+                op: &mut self.op,
+                start: &d.start,
+                relax: &d.relax,
+                xu: &mut s.xu,
+                xv: &mut s.xv,
+                dtau: &mut s.dtau,
+            };
+            let st = match self.preconditioner {
+                ElasticPreconditioner::Jacobi => self.solver.solve(
+                    &mut ctxop,
+                    self.diag.as_slice(),
+                    &self.rhs,
+                    &mut self.delta,
+                    self.tol * scale,
+                    self.max_iter,
+                ),
+                ElasticPreconditioner::Multigrid | ElasticPreconditioner::Auto => {
+                    // η = θΔt μ + (Δt²/2) G_eff at centres and corners.
+                    let op = &*ctxop.op;
+                    let (e, ek) = (&mut self.eta, &mut self.eta_k);
+                    if op.theta_dt > 0.0 {
+                        let td = op.theta_dt;
+                        for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
+                            *e = td * m;
+                        }
+                        for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
+                            *e = td * m;
+                        }
+                    } else {
+                        e.fill(0.0);
+                        ek.fill(0.0);
+                    }
+                    op.k.stiffness(&d.relax, op.c, e, ek);
+                    let pre = &mut self.eta_coefficients;
+                    pre.set(g, e, ek, 1.0);
+                    for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
+                        *dm = m + h;
+                    }
+                    pre.diagonal(&self.eta_dm, &mut self.eta_diag);
+                    self.blocks.setup(pre, &self.eta_diag);
+                    self.solver.solve(
+                        &mut ctxop,
+                        &self.blocks,
+                        &self.rhs,
+                        &mut self.delta,
+                        self.tol * scale,
+                        self.max_iter,
+                    )
+                }
+            };
+            if !st.converged {
+                return Err(err(
+                    "elastic",
+                    format!(
+                        "BiCGSTAB did not converge in {} iterations, the limit numerics.elastic.max_iterations (relative residual {:.3e} > numerics.elastic.tolerance {:.1e}); {}",
+                        st.iterations,
+                        st.residual / bnorm,
+                        self.tol,
+                        if self.max_iter < 20 {
+                            "raise numerics.elastic.max_iterations"
+                        } else {
+                            "raise numerics.elastic.max_iterations or reduce the time step"
+                        }
+                    ),
+                ));
+            }
+            let delta = &self.delta;
+            let (u, v) = (&mut state.u, &mut state.v);
+            self.op.k.faces.for_each(|c, is_u, q| {
+                if is_u {
+                    u.data_mut()[q] += delta[c];
+                } else {
+                    v.data_mut()[q] += delta[c];
+                }
+            });
+            SolveStats {
+                residual: st.residual / bnorm,
+                ..st
+            }
+        };
+        // B̃^{n+2/3} = B̃(V^{n+2/3}).
+        let k = &mut self.op.k;
+        k.bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        k.gradient(&state.u, &state.v);
+        k.stretch(
+            &d.start,
+            0.5 * dt,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            &mut d.b,
+        );
+        k.fill_ghosts(&mut d.b);
+        Ok(StageStats { solve: Some(stats) })
+    }
+}
