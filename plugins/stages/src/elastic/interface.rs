@@ -1,0 +1,158 @@
+//! The interface weights: `φ^{1/2}` at centres, the corners' solid fraction from the PLIC
+//! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
+//! cells.
+
+use super::*;
+
+impl Kernels {
+    /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`
+    /// with ghosts filled.
+    pub(super) fn set_weights(&mut self, phi: &Field) {
+        let (nx, ny) = self.nxy();
+        // Every entry, ghosts included (one padded shape for all fields), in parallel chunks.
+        let pd = phi.data();
+        par::for_each_chunk(self.w.data_mut(), |o, w| {
+            for (w, f) in w.iter_mut().zip(&pd[o..]) {
+                *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
+            }
+        });
+        let mut c = Window::new(nx, -1, ny, -1);
+        for j in -1..=ny {
+            for i in -1..=nx {
+                if self.w[(i, j)] > 0.0 {
+                    c = Window::new(c.i0.min(i), c.i1.max(i), c.j0.min(j), c.j1.max(j));
+                }
+            }
+        }
+        self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
+        self.solid_k = self.solid_c.corners(nx, ny);
+        let (mu_f, mu_s) = (self.mu_f, self.mu_s);
+        let g = efsi_core::G;
+        self.set_quarters(phi);
+        for j in 1 - g..=ny + g {
+            for i in 1 - g..=nx + g {
+                self.wc[(i, j)] = 0.25
+                    * (self.w[(i - 1, j - 1)]
+                        + self.w[(i, j - 1)]
+                        + self.w[(i - 1, j)]
+                        + self.w[(i, j)]);
+                // The corner's solid fraction: the four quarter cells around it.
+                let cells = [(i - 1, j - 1, 3), (i, j - 1, 2), (i - 1, j, 1), (i, j, 0)];
+                let q = cells.map(|(ci, cj, n)| self.quarter[n][(ci, cj)]);
+                let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+                let lam = std::array::from_fn::<f64, 4, _>(|n| {
+                    let (ci, cj, _) = cells[n];
+                    if self.w[(ci, cj)] > 0.0 { q[n] } else { 0.0 }
+                });
+                let sum: f64 = lam.iter().sum();
+                let solid = cells.map(|(ci, cj, _)| f64::from(u8::from(self.w[(ci, cj)] > 0.0)));
+                let count: f64 = solid.iter().sum();
+                // The interface normal ∝ ∇φ across the corner.
+                let f = |ci: isize, cj: isize| phi[(ci, cj)].clamp(0.0, 1.0);
+                let gx = f(i, j) + f(i, j - 1) - f(i - 1, j) - f(i - 1, j - 1);
+                let gy = f(i, j) + f(i - 1, j) - f(i, j - 1) - f(i - 1, j - 1);
+                let g2 = gx * gx + gy * gy;
+                self.ny2[(i, j)] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
+                for n in 0..4 {
+                    self.kwt[n][(i, j)] = if sum > 0.0 {
+                        lam[n] / sum
+                    } else if count > 0.0 {
+                        solid[n] / count
+                    } else {
+                        0.25
+                    };
+                }
+                // (w_k, s, 1/κ, r): fluid, solid, interface in series.
+                let (wk, sf, ks, rc) = if self.wc[(i, j)] == 0.0 {
+                    (0.0, 1.0, 0.0, 0.0)
+                } else if a >= 1.0 {
+                    (1.0, 1.0, 1.0, 0.0)
+                } else if mu_f == 0.0 {
+                    // An inviscid fluid carries no shear: neither does the interface.
+                    (1.0, 1.0, 0.0, 0.0)
+                } else {
+                    // aκ = a + μ_s (1 − a)/μ_f: finite where the corner's quarters hold no
+                    // solid (a = 0) beside a cell that does.
+                    let ak = a + mu_s * (1.0 - a) / mu_f;
+                    if ak > 0.0 {
+                        (1.0, 1.0 / ak, a / ak, (1.0 - a) / (mu_f * ak))
+                    } else {
+                        // No solid at an inviscid solid's corner: no shear carried.
+                        (1.0, 1.0, 0.0, 0.0)
+                    }
+                };
+                self.wk[(i, j)] = wk;
+                self.sf[(i, j)] = sf;
+                self.ks[(i, j)] = ks;
+                self.rc[(i, j)] = rc;
+            }
+        }
+    }
+
+    /// The solid fraction of each quarter of every centre ([`Kernels::quarter`]): in a cut cell
+    /// of `[−1, nx] × [−1, ny]`, the share of the quarter below the cell's PLIC line (Youngs
+    /// normal, the line cutting the cell's φ off a `dx × dy` cell, as the VOF reconstruction
+    /// does in planar geometry); elsewhere φ (clamped to `[0, 1]`).
+    pub(super) fn set_quarters(&mut self, phi: &Field) {
+        let (nx, ny) = self.nxy();
+        let (dx, dy) = (self.grid.dx, self.grid.dy);
+        let pd = phi.data();
+        for q in &mut self.quarter {
+            par::for_each_chunk(q.data_mut(), |o, w| {
+                for (w, f) in w.iter_mut().zip(&pd[o..]) {
+                    *w = f.clamp(0.0, 1.0);
+                }
+            });
+        }
+        let c = self.solid_c;
+        let s = phi.stride();
+        for j in c.j0.max(-1)..=c.j1.min(ny) {
+            for i in c.i0.max(-1)..=c.i1.min(nx) {
+                let k = phi.idx(i, j);
+                let f = pd[k];
+                if f <= 0.0 || f >= 1.0 {
+                    continue;
+                }
+                let cl = |k: usize| pd[k].clamp(0.0, 1.0);
+                let b = [
+                    [cl(k - s - 1), cl(k - s), cl(k - s + 1)],
+                    [cl(k - 1), cl(k), cl(k + 1)],
+                    [cl(k + s - 1), cl(k + s), cl(k + s + 1)],
+                ];
+                let (mx, my) = efsi_core::interface::plic::youngs_normal(&b, dx, dy);
+                let line = efsi_core::interface::plic::Line::planar(mx, my, f, dx, dy);
+                let (hx, hy) = (0.5 * dx, 0.5 * dy);
+                let boxes = [
+                    ((0.0, 0.0), (hx, hy)),
+                    ((hx, 0.0), (dx, hy)),
+                    ((0.0, hy), (hx, dy)),
+                    ((hx, hy), (dx, dy)),
+                ];
+                for (n, (lo, hi)) in boxes.into_iter().enumerate() {
+                    self.quarter[n].data_mut()[k] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
+                }
+            }
+        }
+    }
+
+    /// Reset B to the identity, and its rates to zero, where there is no solid (`w = 0`): the
+    /// fluid has no memory of deformation, and B there only enters neighbouring averages and
+    /// fluxes; this keeps it bounded (stale rates would otherwise compound step after step).
+    pub(super) fn reset_fluid(&self, d: &mut efsi_core::Deformation) {
+        for c in 0..4 {
+            let (wt, one) = if c == 3 {
+                (&self.wc, 0.0)
+            } else {
+                (&self.w, 1.0)
+            };
+            for (k, &w) in wt.data().iter().enumerate() {
+                if w == 0.0 {
+                    d.b[c].data_mut()[k] = one;
+                    d.advection[c].data_mut()[k] = 0.0;
+                    d.advection_prev[c].data_mut()[k] = 0.0;
+                    d.stretching[c].data_mut()[k] = 0.0;
+                }
+            }
+        }
+    }
+}

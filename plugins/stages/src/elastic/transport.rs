@@ -1,0 +1,262 @@
+//! The transport kernels of B: the velocity gradient (centres and corners), the stretching
+//! `H(V; B) = L B + B Lᵀ` with the interface corners' solid gradient, the relaxation of the
+//! corners' shear, and the conservative advection `∇·(V B)`.
+
+use super::*;
+
+impl Kernels {
+    /// Velocity gradients of `(u, v)` (ghosts filled), everywhere the law batches need them.
+    pub(super) fn gradient(&mut self, u: &Field, v: &Field) {
+        let (nx, ny) = self.nxy();
+        let (c, k) = (self.all_centres(), Window::new(-1, nx + 1, -1, ny + 1));
+        self.gradient_in(u, v, c, k);
+    }
+
+    /// Velocity gradients of `(u, v)` (ghosts filled): `L₁₁, L₂₂, L₃₃` at the centres `cw`,
+    /// `L₁₂, L₂₁` at the corners `kw`.
+    pub(super) fn gradient_in(&mut self, u: &Field, v: &Field, cw: Window, kw: Window) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let s = u.stride();
+        let (ud, vd) = (u.data(), v.data());
+        let [l11, l22, l33] = &mut self.lc;
+        rows3(
+            [l11, l22, l33],
+            cw.rows(),
+            cw.points() >= PAR_POINTS,
+            |j, [r11, r22, r33]| {
+                for i in cw.i0..=cw.i1 {
+                    let k = u.idx(i, j);
+                    r11[at(i)] = (ud[k + 1] - ud[k]) / g.dx;
+                    r22[at(i)] = (vd[k + s] - vd[k]) / g.dy;
+                    r33[at(i)] = 0.5 * (ud[k] + ud[k + 1]) * m.hoop_c(i);
+                }
+            },
+        );
+        let par = kw.points() >= PAR_POINTS;
+        let [l12, l21] = &mut self.lk;
+        rows1(l12, kw.rows(), par, |j, r| {
+            for i in kw.i0..=kw.i1 {
+                let k = u.idx(i, j);
+                r[at(i)] = (ud[k] - ud[k - s]) / g.dy;
+            }
+        });
+        rows1(l21, kw.rows(), par, |j, r| {
+            for i in kw.i0..=kw.i1 {
+                let k = u.idx(i, j);
+                r[at(i)] = (vd[k] - vd[k - 1]) / g.dx;
+            }
+        });
+    }
+
+    /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
+    /// (`base` may be `None` for zero); centres over `[−1, nx] × [−1, ny]`, corners over
+    /// `[0, nx] × [0, ny]`. At interface corners the shear rate is the solid's share
+    /// (factor `s`), and with `relax` the corner result is divided by this step's relaxation.
+    pub(super) fn stretch(
+        &self,
+        b: &[Field; 4],
+        a: f64,
+        base: Option<(&[Field; 4], &[Field; 4])>,
+        relax: Option<&Field>,
+        out: &mut [Field; 4],
+    ) {
+        let (cw, kw) = (self.all_centres(), self.all_corners());
+        self.stretch_in(b, a, base, relax, out, cw, kw);
+    }
+
+    /// [`Kernels::stretch`] at the centres `cw` and the corners `kw` only (the gradients of the
+    /// last [`Kernels::gradient_in`] there).
+    pub(super) fn stretch_in(
+        &self,
+        b: &[Field; 4],
+        a: f64,
+        base: Option<(&[Field; 4], &[Field; 4])>,
+        relax: Option<&Field>,
+        out: &mut [Field; 4],
+        cw: Window,
+        kw: Window,
+    ) {
+        let s = b[0].stride();
+        let [l11, l22, l33] = [self.lc[0].data(), self.lc[1].data(), self.lc[2].data()];
+        let [l12, l21] = [self.lk[0].data(), self.lk[1].data()];
+        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
+        let (sf, ny2) = (self.sf.data(), self.ny2.data());
+        let base_at =
+            |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
+        let [o11, o22, o33, o12] = out;
+        rows3(
+            [o11, o22, o33],
+            cw.rows(),
+            cw.points() >= PAR_POINTS,
+            |j, rows| {
+                for i in cw.i0..=cw.i1 {
+                    let k = b[0].idx(i, j);
+                    // The solid's gradients at the corners (as for `h12` below).
+                    let (mut l12b12, mut l21b12) = (0.0, 0.0);
+                    for c in [k, k + 1, k + s, k + s + 1] {
+                        let e = (sf[c] - 1.0) * (l12[c] + l21[c]);
+                        l12b12 += 0.25 * (l12[c] + ny2[c] * e) * b12[c];
+                        l21b12 += 0.25 * (l21[c] + (1.0 - ny2[c]) * e) * b12[c];
+                    }
+                    let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
+                    let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
+                    let h33 = 2.0 * l33[k] * b33[k];
+                    for (c, h) in [(0, h11), (1, h22), (2, h33)] {
+                        rows[c][at(i)] = base_at(c, k) + a * h;
+                    }
+                }
+            },
+        );
+        rows1(o12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
+            for i in kw.i0..=kw.i1 {
+                let k = b[3].idx(i, j);
+                let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
+                // The solid's velocity gradient: shear rate times s, the extra going to the
+                // derivative across the interface (L₁₂ by n_y², L₂₁ by n_x²); the solid's own
+                // normal components (solid-weighted).
+                let e = (self.sf.data()[k] - 1.0) * (l12[k] + l21[k]);
+                let fy = self.ny2.data()[k];
+                let h12 = avg4(l11, a0, a1, a2, a3) * b12[k]
+                    + (l12[k] + fy * e) * self.kavg(b22, k, s)
+                    + self.kavg(b11, k, s) * (l21[k] + (1.0 - fy) * e)
+                    + b12[k] * avg4(l22, a0, a1, a2, a3);
+                let q = relax.map_or(1.0, |r| r.data()[k]);
+                row[at(i)] = q * (base_at(3, k) + a * h12);
+            }
+        });
+    }
+
+    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior;
+    /// rows in parallel (each writes only its own entries: the same bits on any number of
+    /// threads).
+    pub(super) fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (nx, ny) = self.nxy();
+        let s = u.stride();
+        let (ud, vd) = (u.data(), v.data());
+        let at = |d: &[f64], k: usize, o: usize| (d[k - 2 * o], d[k - o], d[k], d[k + o]);
+        let fx = |a: f64, d: &[f64], k: usize, o: usize| {
+            let (p, q, r, t) = at(d, k, o);
+            a * face_value(a, p, q, r, t)
+        };
+        let gu = efsi_core::G as usize;
+        for c in 0..3 {
+            let bd = b[c].data();
+            par::for_each_row(out[c].data_mut(), s, |jp, row| {
+                let j = jp as isize - efsi_core::G;
+                if j < 0 || j >= ny {
+                    return;
+                }
+                for i in 0..nx {
+                    let k = jp * s + gu + i as usize;
+                    // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
+                    let fw = fx(ud[k], bd, k, 1);
+                    let fe = fx(ud[k + 1], bd, k + 1, 1);
+                    let fs = fx(vd[k], bd, k, s);
+                    let fn_ = fx(vd[k + s], bd, k + s, s);
+                    row[gu + i as usize] =
+                        (m.rx(i + 1) * fe - m.rx(i) * fw) / (m.rc(i) * g.dx) + (fn_ - fs) / g.dy;
+                }
+            });
+        }
+        let bd = b[3].data();
+        par::for_each_row(out[3].data_mut(), s, |jp, row| {
+            let j = jp as isize - efsi_core::G;
+            if j < 0 || j > ny {
+                return;
+            }
+            for i in 0..=nx {
+                let (k, o) = (jp * s + gu + i as usize, gu + i as usize);
+                let r = m.rx(i);
+                if r == 0.0 {
+                    row[o] = 0.0;
+                    continue;
+                }
+                // The corner's control volume has x-faces at the cell centres i−1, i and y-faces
+                // at the row centres j−1, j; advecting velocities are 4-point averages.
+                let ue = 0.25 * (ud[k] + ud[k + 1] + ud[k - s] + ud[k + 1 - s]);
+                let uw = 0.25 * (ud[k - 1] + ud[k] + ud[k - 1 - s] + ud[k - s]);
+                let vn = 0.25 * (vd[k] + vd[k - 1] + vd[k + s] + vd[k + s - 1]);
+                let vs = 0.25 * (vd[k - s] + vd[k - s - 1] + vd[k] + vd[k - 1]);
+                let fe = fx(ue, bd, k + 1, 1);
+                let fw = fx(uw, bd, k, 1);
+                let fn_ = fx(vn, bd, k + s, s);
+                let fs = fx(vs, bd, k, s);
+                row[o] = (m.rc(i) * fe - m.rc(i - 1) * fw) / (r * g.dx) + (fn_ - fs) / g.dy;
+            }
+        });
+    }
+
+    /// The interface relaxation of the corner shear for this step (see "Interface corners"):
+    /// evaluates the law at the corners of `start` (Bⁿ), folds the linearised relaxation's
+    /// explicit part into `explicit[3]` and sets the divisor `relax` (1 away from interfaces).
+    pub(super) fn relaxation(
+        &mut self,
+        law: &dyn ConstitutiveLaw,
+        start: &[Field; 4],
+        dt: f64,
+        explicit: &mut [Field; 4],
+        relax: &mut Field,
+    ) -> Result<(), String> {
+        relax.fill(1.0);
+        let (nx, ny) = self.nxy();
+        let s = start[0].stride();
+        let [b11, b22, b33, b12] = [
+            start[0].data(),
+            start[1].data(),
+            start[2].data(),
+            start[3].data(),
+        ];
+        let mut any = false;
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = start[0].idx(i, j);
+                let q = self.ki(i, j);
+                let w = self.wk.data()[k];
+                any |= self.rc.data()[k] > 0.0;
+                self.kb[q] = [
+                    w * self.kavg(b11, k, s),
+                    w * self.kavg(b22, k, s),
+                    w * self.kavg(b33, k, s),
+                    w * b12[k],
+                ];
+            }
+        }
+        if !any {
+            return Ok(());
+        }
+        law.evaluate(&self.kb, &mut self.kt, Some(&mut self.kj[..]))
+            .map_err(|e| self.locate(e, true))?;
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let k = start[0].idx(i, j);
+                let rc = self.rc.data()[k];
+                if rc == 0.0 {
+                    continue;
+                }
+                let q = self.ki(i, j);
+                // The shear-rate change times the B it stretches (as in `stretch_in`).
+                let fy = self.ny2.data()[k];
+                let bbar = fy * self.kb[q][1] + (1.0 - fy) * self.kb[q][0];
+                let jt = self.kj[q][15].max(0.0);
+                let lambda = dt * rc * bbar;
+                relax.data_mut()[k] = 1.0 / (1.0 + lambda * jt);
+                explicit[3].data_mut()[k] -= lambda * (self.kt[q][3] - jt * b12[k]);
+                // The same relaxation of the solid's shear rate stretches the normal components
+                // of the four cells around (explicit, at Bⁿ): `Ḃ₁₁ = 2 L₁₂ B₁₂`, `Ḃ₂₂ = 2 L₂₁ B₁₂`
+                // averaged over a centre's corners, with the share n_y² to L₁₂.
+                let fy = self.ny2.data()[k];
+                // The relaxation as the corner's implicit step applies it (× q): bounded where
+                // it is stiff (a solid in air), where the explicit rate would blow up.
+                let d = 0.5 * dt * rc * self.kt[q][3] * b12[k] * relax.data()[k];
+                for c in [k, k - 1, k - s, k - s - 1] {
+                    explicit[0].data_mut()[c] -= fy * d;
+                    explicit[1].data_mut()[c] -= (1.0 - fy) * d;
+                }
+            }
+        }
+        Ok(())
+    }
+}
