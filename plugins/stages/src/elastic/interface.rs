@@ -2,7 +2,9 @@
 //! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
 //! cells.
 
-use super::*;
+use super::{Kernels, PHI_MIN, Window};
+use efsi_core::Field;
+use efsi_linalg::par;
 
 impl Kernels {
     /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`

@@ -206,7 +206,6 @@
 //! Unconditionally stable in the elastic wave speed for the neo-Hookean law at moderate
 //! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
 
-use crate::advection::face_value;
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::Coefficients;
 use efsi_core::scene::ElasticPreconditioner;
@@ -215,7 +214,7 @@ use efsi_core::{
     bc::UnknownFaces,
 };
 use efsi_laws_host::{ConstitutiveLaw, Sym, Tangent};
-use efsi_linalg::{BiCgStab, par};
+use efsi_linalg::BiCgStab;
 use rayon::prelude::*;
 
 mod deformation;

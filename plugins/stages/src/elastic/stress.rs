@@ -1,7 +1,9 @@
 //! The law batches (stress and tangent at centres and corners, weighted), the block multigrid's
 //! effective stiffness, and the stress divergence on the faces.
 
-use super::*;
+use super::{Kernels, PAR_POINTS, at, avg4, rows1, rows3};
+use efsi_core::Field;
+use efsi_laws_host::ConstitutiveLaw;
 
 impl Kernels {
     /// τ (and J if `tangent`) of `b` into the batches and `tau`.

@@ -2,7 +2,11 @@
 //! `H(V; B) = L B + B Lᵀ` with the interface corners' solid gradient, the relaxation of the
 //! corners' shear, and the conservative advection `∇·(V B)`.
 
-use super::*;
+use super::{Kernels, PAR_POINTS, Window, at, avg4, rows1, rows3};
+use crate::advection::face_value;
+use efsi_core::Field;
+use efsi_laws_host::ConstitutiveLaw;
+use efsi_linalg::par;
 
 impl Kernels {
     /// Velocity gradients of `(u, v)` (ghosts filled), everywhere the law batches need them.
