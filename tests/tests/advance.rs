@@ -222,7 +222,13 @@ impl StagePlugin for Saboteur {
     fn needed(&self, _: &Scene) -> bool {
         true
     }
-    fn build(&self, _: &Scene, _: &Grid, _: &BoundarySet) -> Result<Box<dyn Stage>, String> {
+    fn build(
+        &self,
+        _: &Scene,
+        _: &Grid,
+        _: &BoundarySet,
+        _: &mut efsi_core::Resources,
+    ) -> Result<Box<dyn Stage>, String> {
         Ok(Box::new(SaboteurStage {
             fail_at: self.fail_at,
         }))

@@ -82,7 +82,13 @@ impl StagePlugin for Dummy {
     fn needed(&self, _: &Scene) -> bool {
         true
     }
-    fn build(&self, _: &Scene, _: &Grid, _: &BoundarySet) -> Result<Box<dyn Stage>, String> {
+    fn build(
+        &self,
+        _: &Scene,
+        _: &Grid,
+        _: &BoundarySet,
+        _: &mut efsi_core::Resources,
+    ) -> Result<Box<dyn Stage>, String> {
         Ok(Box::new(Noop))
     }
 }

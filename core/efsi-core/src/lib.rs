@@ -30,7 +30,7 @@ pub use grid::{G, GHOST, Geometry, Grid};
 pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{
-    FieldId, Phase, Pipeline, Stage, StageError, StagePlugin, StageStats, StepContext,
+    FieldId, Phase, Pipeline, Resources, Stage, StageError, StagePlugin, StageStats, StepContext,
 };
 pub use simulation::Simulation;
 pub use snapshot::Snapshot;

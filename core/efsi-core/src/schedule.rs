@@ -206,9 +206,50 @@ pub trait StagePlugin: Sync {
     }
     /// Whether `scene` needs this stage.
     fn needed(&self, scene: &Scene) -> bool;
-    /// Build the stage for a scene; the error says which scene value is unusable.
-    fn build(&self, scene: &Scene, grid: &Grid, bc: &BoundarySet)
-    -> Result<Box<dyn Stage>, String>;
+    /// Build the stage for a scene; the error says which scene value is unusable. `shared`
+    /// holds what the stages of this pipeline share while it is built (in the pipeline's
+    /// order): a stage that needs what another loads or derives from the scene (the solid's
+    /// law, for one) takes it from there instead of making it again.
+    fn build(
+        &self,
+        scene: &Scene,
+        grid: &Grid,
+        bc: &BoundarySet,
+        shared: &mut Resources,
+    ) -> Result<Box<dyn Stage>, String>;
+}
+
+/// Values the stages of one pipeline share while it is built, one per type (in the spirit of
+/// Bevy's `Resource`): the first stage that needs one makes it, the next ones take it.
+/// [`Pipeline::build`] makes a fresh set per pipeline, so nothing is shared between scenes.
+#[derive(Default)]
+pub struct Resources {
+    map: std::collections::HashMap<std::any::TypeId, Box<dyn std::any::Any + Send + Sync>>,
+}
+
+impl Resources {
+    /// The value of type `T`, if a stage put one in.
+    pub fn get<T: std::any::Any + Send + Sync>(&self) -> Option<&T> {
+        self.map
+            .get(&std::any::TypeId::of::<T>())
+            .and_then(|b| b.downcast_ref())
+    }
+
+    /// The value of type `T`: the one already there, else the one `make` returns (kept for
+    /// the stages built after; an error is passed on and nothing kept).
+    pub fn get_or_try_insert_with<T: std::any::Any + Send + Sync, E>(
+        &mut self,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<&T, E> {
+        use std::collections::hash_map::Entry;
+        let slot = match self.map.entry(std::any::TypeId::of::<T>()) {
+            Entry::Occupied(o) => o.into_mut(),
+            Entry::Vacant(v) => v.insert(Box::new(make()?)),
+        };
+        Ok(slot
+            .downcast_ref()
+            .expect("every value is keyed by its own type's id"))
+    }
 }
 
 /// The pipeline could not be assembled.
@@ -328,13 +369,14 @@ impl Pipeline {
             }
         }
         let mut entries = Vec::with_capacity(order.len());
+        let mut shared = Resources::default();
         for p in order {
-            let stage = p
-                .build(scene, grid, bc)
-                .map_err(|message| ScheduleError::Build {
-                    stage: p.name().to_string(),
-                    message,
-                })?;
+            let stage =
+                p.build(scene, grid, bc, &mut shared)
+                    .map_err(|message| ScheduleError::Build {
+                        stage: p.name().to_string(),
+                        message,
+                    })?;
             entries.push(Entry {
                 name: p.name(),
                 source: p.source(),
@@ -722,5 +764,42 @@ impl fmt::Display for Pipeline {
         }
         let fields: Vec<_> = self.fields.iter().map(|x| x.name()).collect();
         write!(f, "fields: {}", fields.join(", "))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Resources;
+
+    /// The first maker of a type's value runs, later ones do not; a failed maker keeps
+    /// nothing, so the next stage to ask makes it again (and reports its own error).
+    #[test]
+    fn resources_make_each_value_once_and_keep_no_failure() {
+        let mut r = Resources::default();
+        let mut calls = 0;
+        let e = r
+            .get_or_try_insert_with::<u32, String>(|| {
+                calls += 1;
+                Err("no law".into())
+            })
+            .unwrap_err();
+        assert_eq!(e, "no law");
+        assert!(r.get::<u32>().is_none());
+        for want in [7, 7] {
+            let got = *r
+                .get_or_try_insert_with::<u32, String>(|| {
+                    calls += 1;
+                    Ok(7)
+                })
+                .unwrap();
+            assert_eq!(got, want);
+        }
+        assert_eq!(calls, 2, "made once after the failure, then taken");
+        // One value per type: another type is made separately.
+        assert_eq!(
+            r.get_or_try_insert_with::<&str, ()>(|| Ok("law")),
+            Ok(&"law")
+        );
+        assert_eq!(r.get::<u32>(), Some(&7));
     }
 }

@@ -64,6 +64,7 @@ impl StagePlugin for Advection {
         _scene: &Scene,
         grid: &Grid,
         _bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         Ok(Box::new(AdvectionStage {
             qu: Field::zeros(grid),

@@ -45,6 +45,7 @@ impl StagePlugin for BodyForce {
         scene: &Scene,
         _grid: &Grid,
         _bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         Ok(Box::new(BodyForceStage { g: scene.gravity }))
     }

@@ -63,6 +63,7 @@ impl StagePlugin for Projection {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let n = grid.cells();
         Ok(Box::new(ProjectionStage {

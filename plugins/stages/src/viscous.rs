@@ -87,6 +87,7 @@ impl StagePlugin for Viscous {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let faces = UnknownFaces::new(grid, bc);
         let n = faces.len();

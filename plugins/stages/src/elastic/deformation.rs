@@ -6,7 +6,7 @@ use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
-    pub(super) law: Box<dyn ConstitutiveLaw>,
+    pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     pub(super) k: Kernels,
     /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
     pub(super) wave_dt: f64,

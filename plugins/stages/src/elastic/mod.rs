@@ -264,6 +264,20 @@ pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
     Ok(Box::new(law))
 }
 
+/// The solid's law as the elastic and deformation stages of one pipeline share it: loaded and
+/// checked once, by whichever of them is built first ([`efsi_core::Resources`]).
+struct SharedLaw(std::sync::Arc<dyn ConstitutiveLaw>);
+
+/// The law of `scene` from the pipeline's shared values, loaded there by the first stage
+/// that asks.
+fn shared_law(
+    scene: &Scene,
+    shared: &mut efsi_core::Resources,
+) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, String> {
+    let law = shared.get_or_try_insert_with(|| resolve_law(scene).map(|l| SharedLaw(l.into())))?;
+    Ok(law.0.clone())
+}
+
 /// The elastic stage plugin (phase Elastic).
 pub struct Elastic;
 
@@ -298,8 +312,9 @@ impl StagePlugin for Elastic {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let law = resolve_law(scene)?;
+        let law = shared_law(scene, shared)?;
         let (mu_f, mu_s) = viscosities(scene);
         let k = Kernels::new(grid, bc, mu_f, mu_s);
         let n = k.faces.len();
@@ -387,9 +402,10 @@ impl StagePlugin for DeformationUpdate {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let (mu_f, mu_s) = viscosities(scene);
-        let law = resolve_law(scene)?;
+        let law = shared_law(scene, shared)?;
         let wave_dt = wave_limit(scene, grid, law.as_ref())?;
         Ok(Box::new(DeformationStage {
             law,

@@ -11,7 +11,7 @@ use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
 
 pub(super) struct ElasticStage {
-    pub(super) law: Box<dyn ConstitutiveLaw>,
+    pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     pub(super) theta: f64,
     pub(super) tau: [Field; 4],
@@ -130,13 +130,31 @@ impl Stage for ElasticStage {
 }
 
 impl ElasticStage {
-    /// One elastic step with B̃ (`d`) held outside the state.
+    /// One elastic step with B̃ (`d`) held outside the state: [`predict`](Self::predict) the
+    /// deformation at the step's first third and its stress, [`assemble`](Self::assemble) the
+    /// implicit system, [`solve`](Self::solve) it for the velocity increment and add it, then
+    /// [`correct`](Self::correct) the deformation with the new velocity.
     fn advance(
         &mut self,
         ctx: &StepContext,
         state: &mut State,
         d: &mut efsi_core::Deformation,
     ) -> Result<StageStats, StageError> {
+        self.predict(ctx, state, d)?;
+        let (bnorm, scale) = self.assemble(ctx, state);
+        let stats = self.solve(ctx, state, d, bnorm, scale)?;
+        self.correct(ctx, state, d);
+        Ok(StageStats { solve: Some(stats) })
+    }
+
+    /// Bⁿ and the explicit part E of the step, the interface corners' relaxation, then
+    /// `B̃^{n+1/3} = B̃(V^{n+1/3})` and its stress and tangent.
+    fn predict(
+        &mut self,
+        ctx: &StepContext,
+        state: &State,
+        d: &mut efsi_core::Deformation,
+    ) -> Result<(), StageError> {
         let dt = ctx.dt;
         let r = if state.dt_prev > 0.0 {
             dt / state.dt_prev
@@ -149,7 +167,6 @@ impl ElasticStage {
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         self.op.k.set_weights(phi);
         self.op.k.reset_fluid(d);
-        // Bⁿ and the explicit part E.
         for c in 0..4 {
             d.start[c].copy_from(&d.b[c]);
             let (e, a, ap, h) = (
@@ -169,7 +186,6 @@ impl ElasticStage {
             }
         }
         let k = &mut self.op.k;
-        // The interface corners' relaxation for this step.
         k.relaxation(
             self.law.as_ref(),
             &d.start,
@@ -178,7 +194,6 @@ impl ElasticStage {
             &mut d.relax,
         )
         .map_err(|m| err("elastic", m))?;
-        // B̃^{n+1/3} = B̃(V^{n+1/3}) and its stress and tangent.
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
@@ -189,8 +204,16 @@ impl ElasticStage {
         );
         k.fill_ghosts(&mut d.b);
         k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
-            .map_err(|m| err("elastic", m))?;
-        // Right-hand side Δt·vol·∇·τ^{n+1/3}, mass and Jacobi diagonal.
+            .map_err(|m| err("elastic", m))
+    }
+
+    /// The right-hand side `Δt·vol·∇·τ^{n+1/3}`, the mass, the viscous coefficients and the
+    /// Jacobi diagonal. Returns the right-hand side's norm and the residual's scale: the larger
+    /// of it and the momentum `‖M V^{n+1/3}‖`, so a body nearly at rest (tiny right-hand side)
+    /// is not asked for more digits than its momentum has.
+    fn assemble(&mut self, ctx: &StepContext, state: &State) -> (f64, f64) {
+        let dt = ctx.dt;
+        let k = &mut self.op.k;
         k.force(&self.tau, &mut self.rhs);
         let g = ctx.grid;
         let m = &g.metric;
@@ -261,9 +284,6 @@ impl ElasticStage {
                 *dm = m + h;
             }
         }
-        // Momentum scale ‖M V^{n+1/3}‖: the residual is judged against the larger of it and the
-        // right-hand side, so a body nearly at rest (tiny right-hand side) is not asked for more
-        // digits than its momentum has.
         let mut pnorm = 0.0;
         {
             let (u, v, mass) = (&state.u, &state.v, &self.op.mass);
@@ -272,7 +292,20 @@ impl ElasticStage {
                 pnorm += x * x;
             });
         }
-        let scale = bnorm.max(pnorm.sqrt());
+        (bnorm, bnorm.max(pnorm.sqrt()))
+    }
+
+    /// The implicit system for the velocity increment (BiCGSTAB with the scene's
+    /// preconditioner, to `tolerance × scale`), added to the velocity.
+    fn solve(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        d: &efsi_core::Deformation,
+        bnorm: f64,
+        scale: f64,
+    ) -> Result<SolveStats, StageError> {
+        let g = ctx.grid;
         let stats = if bnorm == 0.0 {
             SolveStats {
                 iterations: 0,
@@ -367,7 +400,14 @@ impl ElasticStage {
                 ..st
             }
         };
-        // B̃^{n+2/3} = B̃(V^{n+2/3}).
+        Ok(stats)
+    }
+
+    /// `B̃^{n+2/3} = B̃(V^{n+2/3})` with the corrected velocity (its boundary values at the
+    /// step's end).
+    fn correct(&mut self, ctx: &StepContext, state: &mut State, d: &mut efsi_core::Deformation) {
+        let g = ctx.grid;
+        let dt = ctx.dt;
         let k = &mut self.op.k;
         k.bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
         k.gradient(&state.u, &state.v);
@@ -379,6 +419,5 @@ impl ElasticStage {
             &mut d.b,
         );
         k.fill_ghosts(&mut d.b);
-        Ok(StageStats { solve: Some(stats) })
     }
 }

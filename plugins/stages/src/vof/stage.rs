@@ -62,6 +62,7 @@ impl StagePlugin for Vof {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let solid = scene.solid.as_ref().ok_or("no solid in the scene")?;
         let side = |s: Side| match bc.get(s) {
