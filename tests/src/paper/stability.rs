@@ -1,5 +1,5 @@
 //! Stability at the extremes (issue 8): the sphere-impact scene, reduced, over shear modulus ×
-//! density ratio × CFL number, and with a solid only three cells across. Every run must either
+//! density ratio × CFL number, and with solids only four and five cells across. Every run must either
 //! finish stable or be refused before it starts with a message naming the limit and the
 //! setting to change — no third outcome.
 //!
@@ -7,9 +7,9 @@
 //! `cases/sphere_impact.ron` at 8 cells per radius (6 in quick mode), the sphere released
 //! `GAP` above the substrate at its scene's 1.22 m/s so that it falls, hits and leaves the
 //! wall within `END`; the fluid's density is the solid's divided by the ratio (the solid keeps
-//! its 1106 kg/m³, the fluid its viscosity). The "3 cells across" and "4 cells across" runs
-//! shrink the sphere to a diameter of 3 and 4 cells on the same grid. Expected to be refused:
-//! the solid 3 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
+//! its 1106 kg/m³, the fluid its viscosity). The "4 cells across" and "5 cells across" runs
+//! shrink the sphere to a diameter of 4 and 5 cells on the same grid. Expected to be refused:
+//! the solid 4 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
 //! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
 //!
 //! # What "stable" means here
@@ -58,7 +58,7 @@ const RATIOS: [f64; 4] = [1.0, 10.0, 1e3, 1e4];
 /// CFL numbers.
 const CFLS: [f64; 3] = [0.1, 0.5, 0.9];
 /// Widths of the small solids, in cells: one below [`MIN_CELLS_ACROSS`] (refused), one at it.
-const ACROSS: [f64; 2] = [3.0, 4.0];
+const ACROSS: [f64; 2] = [4.0, 5.0];
 /// Gap between the sphere and the substrate at release (m).
 const GAP: f64 = 0.004;
 /// End time (s): impact at ≈ 3 ms, rebound by ≈ 12 ms for the seed's stiffness.
@@ -690,7 +690,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         name: "stability".into(),
         title: format!(
             "Stability at the extremes: the sphere at {cpr} cells per radius over G × ρs/ρf × CFL, \
-             and solids 3 and 4 cells across"
+             and solids 4 and 5 cells across"
         ),
         reference: "issue 8's criteria: finish with finite fields, solid volume kept, energy \
                     bounded by its start plus the work of gravity (walls at rest do no work) — \

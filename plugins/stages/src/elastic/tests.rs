@@ -125,7 +125,7 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     fast.time.fixed_dt = Some(0.1);
     let e = wave_limit(&fast, &grid, &law).unwrap_err();
     assert!(e.contains("set time.fixed_dt ≤ 5.0000e-2"), "{e}");
-    // A disk 3 cells across is refused; 8 cells across is not.
+    // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
     let mut small = scene.clone();
     small.solid.as_mut().unwrap().shape = Shape::Disk {
         center: (0.5, 0.5),
