@@ -365,3 +365,91 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
         "the sphere did not rebound: {rebound:e}"
     );
 }
+
+/// The stability map's sphere (8 cells per radius, density ratio 1e3, CFL 0.5, to 16 ms) at
+/// G = 1e7 Pa with the coupled elastic step (`numerics.elastic.coupling: Coupled`): it runs at
+/// the flow's step — within 2× the steps of the seed's G = 1.8e5 with the split step (42 here),
+/// where the split step's elastic-wave cap takes 161 — and gains no energy: kinetic +
+/// potential never above the start by more than 0.3 % of the budget (measured 7.0e-4), total
+/// energy at the end below its start.
+#[test]
+fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases/sphere_impact.ron");
+    let run = |g: f64, coupled: bool| {
+        let overrides: Vec<efsi_core::Override> = [
+            ("fluid.density", "1.106".to_string()),
+            ("grid.nx", "19".into()),
+            ("grid.ny", "38".into()),
+            ("output.vtk_every", "None".into()),
+            ("output.probe_every", "None".into()),
+            ("output.profiles", "[]".into()),
+            ("output.probes", "[]".into()),
+            ("solid.law.parameters.G", format!("{g:e}")),
+            (
+                "solid.shape",
+                "Disk(center: (0.0, 0.0232), radius: 0.0192)".into(),
+            ),
+            ("time.cfl", "0.5".into()),
+            ("time.end", "0.016".into()),
+            (
+                "numerics.elastic.coupling",
+                if coupled { "Coupled" } else { "Split" }.into(),
+            ),
+        ]
+        .iter()
+        .map(|(k, v)| {
+            efsi_core::Override::parse(&format!("{k}={v}")).unwrap_or_else(|e| panic!("{e}"))
+        })
+        .collect();
+        let scene =
+            efsi_core::Scene::load_with(&path, &overrides).unwrap_or_else(|e| panic!("{e}"));
+        let mut s = Simulation::new(scene, &path, &efsi_stages::builtin())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let gv = s.scene.gravity;
+        let energy = |s: &Simulation| {
+            (
+                efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
+                    + efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv),
+                s.state
+                    .deformation
+                    .as_ref()
+                    .map_or(0.0, |d| d.elastic_energy),
+            )
+        };
+        let (m0, e0) = energy(&s);
+        let ke0 = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+        let pe0 = efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv);
+        let (mut release, mut gain) = (0.0f64, f64::MIN);
+        run_until(&mut s, 0.016, |s, _| {
+            let pe = efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv);
+            release = release.max(pe0 - pe);
+            gain = gain.max(energy(s).0 - m0);
+        });
+        let budget = ke0 + release;
+        let (m1, e1) = energy(&s);
+        (s.state.step, gain / budget, (m1 + e1 - m0 - e0) / budget)
+    };
+    let (soft_steps, _, _) = run(1.8e5, false);
+    let (split_steps, _, _) = run(1e7, false);
+    let (steps, gain, end) = run(1e7, true);
+    eprintln!(
+        "G = 1e7 coupled: {steps} steps (split {split_steps}, G = 1.8e5 split {soft_steps}); \
+         gain {gain:.3e} E_b, total at the end {end:.3e} E_b"
+    );
+    assert!(
+        steps <= 2 * soft_steps,
+        "{steps} steps against {soft_steps}"
+    );
+    assert!(
+        steps * 3 < split_steps,
+        "{steps} against the split step's {split_steps}"
+    );
+    assert!(
+        gain <= 3e-3,
+        "kinetic + potential gained {gain:e} of the budget"
+    );
+    assert!(
+        end <= 0.0,
+        "total energy at the end {end:e} of the budget above its start"
+    );
+}

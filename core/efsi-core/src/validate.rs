@@ -362,6 +362,24 @@ impl Scene {
                 ),
             );
         }
+        if !(el.coupling_tolerance > 0.0 && el.coupling_tolerance < 1.0) {
+            return err(
+                "numerics.elastic.coupling_tolerance",
+                format!(
+                    "must be in (0, 1) (a fraction of the elastic step's divergence), got {}",
+                    el.coupling_tolerance
+                ),
+            );
+        }
+        if el.coupling_iterations == 0 {
+            return err("numerics.elastic.coupling_iterations", "must be ≥ 1");
+        }
+        if el.coupling == crate::scene::ElasticCoupling::Coupled && !el.implicit {
+            return err(
+                "numerics.elastic.coupling",
+                "Coupled needs the implicit elastic step (numerics.elastic.implicit: true)",
+            );
+        }
         let v = &self.numerics.viscous;
         if !(0.5..=1.0).contains(&v.theta) {
             return err(

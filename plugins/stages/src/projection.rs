@@ -81,6 +81,7 @@ impl StagePlugin for Projection {
             x: vec![0.0; n],
             weight: vec![0.0; n],
             weight_dt: f64::NAN,
+            increment: crate::elastic::coupled(scene).then(|| efsi_core::Field::zeros(grid)),
         }))
     }
 }
@@ -102,88 +103,90 @@ struct ProjectionStage {
     weight: Vec<f64>,
     /// The Δt the weights were computed for (they change only with it).
     weight_dt: f64,
+    /// With the coupled elastic step (`numerics.elastic.coupling: Coupled`), which has already
+    /// made the velocity nearly divergence-free and left its pressure in the state: the
+    /// pressure increment that removes what remains, solved for from zero, applied to the
+    /// velocity and added to that pressure. `None` in the split step.
+    increment: Option<efsi_core::Field>,
 }
 
-impl ProjectionStage {
-    /// Assemble the five-point matrix from the density (rows in parallel).
-    fn assemble(&mut self, grid: &Grid, bc: &BoundarySet, state: &State) {
-        let (nx, ny) = (grid.nx, grid.ny);
-        let m = &grid.metric;
-        let (dx, dy) = (grid.dx, grid.dy);
-        let rho = &state.rho;
-        let a = &mut self.a;
-        let px = bc.periodic(0);
-        let py = bc.periodic(1);
-        for_each_row(&mut a.east, nx, |j, row| {
-            let jj = j as isize;
-            for (i, e) in row.iter_mut().enumerate() {
-                let ii = i as isize;
-                *e = if i + 1 < nx || px {
-                    let ie = if i + 1 < nx { ii + 1 } else { 0 };
-                    m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
-                } else {
-                    0.0
-                };
+/// Assemble the projection's five-point matrix `Σ_f (A_f/(ρ_f h)) (p_C − p_F)` from the density
+/// (rows in parallel).
+pub(crate) fn assemble(a: &mut Stencil5, grid: &Grid, bc: &BoundarySet, rho: &efsi_core::Field) {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let m = &grid.metric;
+    let (dx, dy) = (grid.dx, grid.dy);
+    let px = bc.periodic(0);
+    let py = bc.periodic(1);
+    for_each_row(&mut a.east, nx, |j, row| {
+        let jj = j as isize;
+        for (i, e) in row.iter_mut().enumerate() {
+            let ii = i as isize;
+            *e = if i + 1 < nx || px {
+                let ie = if i + 1 < nx { ii + 1 } else { 0 };
+                m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
+            } else {
+                0.0
+            };
+        }
+    });
+    for_each_row(&mut a.north, nx, |j, row| {
+        let jj = j as isize;
+        for (i, n) in row.iter_mut().enumerate() {
+            let ii = i as isize;
+            *n = if j + 1 < ny || py {
+                let jn = if j + 1 < ny { jj + 1 } else { 0 };
+                m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
+            } else {
+                0.0
+            };
+        }
+    });
+    let outflow = |s: Side| *bc.get(s) == Boundary::Outflow;
+    let (o_xmin, o_xmax, o_ymin, o_ymax) = (
+        outflow(Side::XMin),
+        outflow(Side::XMax),
+        outflow(Side::YMin),
+        outflow(Side::YMax),
+    );
+    let (east, north) = (&a.east, &a.north);
+    for_each_row(&mut a.diag, nx, |j, row| {
+        let jj = j as isize;
+        for (i, dk) in row.iter_mut().enumerate() {
+            let k = j * nx + i;
+            let ii = i as isize;
+            let w = if i > 0 {
+                east[k - 1]
+            } else if px {
+                east[k + nx - 1]
+            } else {
+                0.0
+            };
+            let s = if j > 0 {
+                north[k - nx]
+            } else if py {
+                north[k + (ny - 1) * nx]
+            } else {
+                0.0
+            };
+            let mut d = east[k] + north[k] + w + s;
+            // Outflow sides: p = 0 on the boundary face, half a cell away.
+            let r = rho[(ii, jj)];
+            if i == 0 && o_xmin {
+                d += 2.0 * m.rx(0) * dy / (r * dx);
             }
-        });
-        for_each_row(&mut a.north, nx, |j, row| {
-            let jj = j as isize;
-            for (i, n) in row.iter_mut().enumerate() {
-                let ii = i as isize;
-                *n = if j + 1 < ny || py {
-                    let jn = if j + 1 < ny { jj + 1 } else { 0 };
-                    m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
-                } else {
-                    0.0
-                };
+            if i + 1 == nx && o_xmax {
+                d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
             }
-        });
-        let outflow = |s: Side| *bc.get(s) == Boundary::Outflow;
-        let (o_xmin, o_xmax, o_ymin, o_ymax) = (
-            outflow(Side::XMin),
-            outflow(Side::XMax),
-            outflow(Side::YMin),
-            outflow(Side::YMax),
-        );
-        let (east, north) = (&a.east, &a.north);
-        for_each_row(&mut a.diag, nx, |j, row| {
-            let jj = j as isize;
-            for (i, dk) in row.iter_mut().enumerate() {
-                let k = j * nx + i;
-                let ii = i as isize;
-                let w = if i > 0 {
-                    east[k - 1]
-                } else if px {
-                    east[k + nx - 1]
-                } else {
-                    0.0
-                };
-                let s = if j > 0 {
-                    north[k - nx]
-                } else if py {
-                    north[k + (ny - 1) * nx]
-                } else {
-                    0.0
-                };
-                let mut d = east[k] + north[k] + w + s;
-                // Outflow sides: p = 0 on the boundary face, half a cell away.
-                let r = rho[(ii, jj)];
-                if i == 0 && o_xmin {
-                    d += 2.0 * m.rx(0) * dy / (r * dx);
-                }
-                if i + 1 == nx && o_xmax {
-                    d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
-                }
-                if j == 0 && o_ymin {
-                    d += 2.0 * m.rc(ii) * dx / (r * dy);
-                }
-                if j + 1 == ny && o_ymax {
-                    d += 2.0 * m.rc(ii) * dx / (r * dy);
-                }
-                *dk = d;
+            if j == 0 && o_ymin {
+                d += 2.0 * m.rc(ii) * dx / (r * dy);
             }
-        });
-    }
+            if j + 1 == ny && o_ymax {
+                d += 2.0 * m.rc(ii) * dx / (r * dy);
+            }
+            *dk = d;
+        }
+    });
 }
 
 impl Stage for ProjectionStage {
@@ -195,7 +198,7 @@ impl Stage for ProjectionStage {
         let grid = ctx.grid;
         let (nx, ny) = (grid.nx, grid.ny);
         let dt = ctx.dt;
-        self.assemble(grid, ctx.bc, state);
+        assemble(&mut self.a, grid, ctx.bc, &state.rho);
         match &mut self.precond {
             Precond::Multigrid(mg) => mg.setup(&self.a),
             Precond::IncompleteCholesky(ic) => ic.factor(&self.a),
@@ -228,11 +231,15 @@ impl Stage for ProjectionStage {
             });
             self.weight_dt = dt;
         }
-        for_each_row(&mut self.x, nx, |j, row| {
-            for (i, x) in row.iter_mut().enumerate() {
-                *x = p[(i as isize, j as isize)];
-            }
-        });
+        if self.increment.is_some() {
+            self.x.fill(0.0);
+        } else {
+            for_each_row(&mut self.x, nx, |j, row| {
+                for (i, x) in row.iter_mut().enumerate() {
+                    *x = p[(i as isize, j as isize)];
+                }
+            });
+        }
         let singular = !ctx.bc.has_pressure_reference();
         if singular {
             let mean = self.b.iter().sum::<f64>() / self.b.len() as f64;
@@ -266,14 +273,25 @@ impl Stage for ProjectionStage {
         }
         let (x, ps) = (&self.x, state.p.stride());
         let p0 = state.p.idx(0, 0);
-        for_each_row(&mut state.p.data_mut()[p0..p0 + ny * ps], ps, |j, row| {
+        let target = match &mut self.increment {
+            Some(f) => f,
+            None => &mut state.p,
+        };
+        for_each_row(&mut target.data_mut()[p0..p0 + ny * ps], ps, |j, row| {
             row[..nx].copy_from_slice(&x[j * nx..(j + 1) * nx]);
         });
-        ctx.bc.fill_scalar(grid, &mut state.p, true);
-        // V^{n+1} = V^{n+2/3} − Δt ∇p/ρ on the unknown faces.
+        ctx.bc.fill_scalar(grid, target, true);
+        if let Some(f) = &self.increment {
+            // The pressure is the coupled step's plus what is found here.
+            for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
+                *p += x;
+            }
+        }
+        // V^{n+1} = V^{n+2/3} − Δt ∇p/ρ on the unknown faces (∇ of the increment after the
+        // coupled step).
         let ux = ctx.bc.normal_faces(0, nx);
         let vy = ctx.bc.normal_faces(1, ny);
-        let (p, rho) = (&state.p, &state.rho);
+        let (p, rho) = (self.increment.as_ref().unwrap_or(&state.p), &state.rho);
         let s = p.stride();
         let (pd, rd) = (p.data(), rho.data());
         let cx = dt / grid.dx;

@@ -14,7 +14,7 @@ pub(super) struct DeformationStage {
 
 impl Stage for DeformationStage {
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
-        Some(self.wave_dt)
+        self.wave_dt.is_finite().then_some(self.wave_dt)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {

@@ -62,6 +62,7 @@ pub(super) fn wave_limit(
     let dt = s * h / c;
     if let Some(fixed) = scene.time.fixed_dt
         && fixed > dt
+        && !super::coupled(scene)
     {
         return Err(format!(
             "time.fixed_dt: {fixed:e} s breaks the elastic-wave limit Δt·c/h ≤ {s} \

@@ -217,6 +217,7 @@ use efsi_laws_host::{ConstitutiveLaw, Sym, Tangent};
 use efsi_linalg::BiCgStab;
 use rayon::prelude::*;
 
+mod coupled;
 mod deformation;
 mod energy;
 mod interface;
@@ -234,6 +235,15 @@ use solve::{ElasticOperator, ElasticStage, Scratch};
 
 fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
+}
+
+/// Whether `scene` runs the coupled elastic step (`numerics.elastic.coupling: Coupled` with a
+/// solid that has a law): the elastic stage then leaves a pressure for the projection stage
+/// to complete, and Δt has no elastic-wave cap.
+pub(crate) fn coupled(scene: &Scene) -> bool {
+    law_needed(scene)
+        && scene.numerics.elastic.implicit
+        && scene.numerics.elastic.coupling == efsi_core::scene::ElasticCoupling::Coupled
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
@@ -302,7 +312,14 @@ impl StagePlugin for Elastic {
         ]
     }
     fn writes(&self) -> &'static [FieldId] {
-        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Deformation]
+        // The pressure only in the coupled step (`coupled`), which leaves its pressure for
+        // the projection stage to complete.
+        &[
+            FieldId::VelocityX,
+            FieldId::VelocityY,
+            FieldId::Deformation,
+            FieldId::Pressure,
+        ]
     }
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)
@@ -369,6 +386,7 @@ impl StagePlugin for Elastic {
                 xv: Field::zeros(grid),
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
             },
+            coupling: coupled(scene).then(|| coupled::Coupling::new(grid, bc, n, scene)),
         }))
     }
 }
@@ -407,6 +425,12 @@ impl StagePlugin for DeformationUpdate {
         let (mu_f, mu_s) = viscosities(scene);
         let law = shared_law(scene, shared)?;
         let wave_dt = wave_limit(scene, grid, law.as_ref())?;
+        // The coupled step has no elastic-wave cap (see `coupled`).
+        let wave_dt = if coupled(scene) {
+            f64::INFINITY
+        } else {
+            wave_dt
+        };
         Ok(Box::new(DeformationStage {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),

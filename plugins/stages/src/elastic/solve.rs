@@ -36,6 +36,8 @@ pub(super) struct ElasticStage {
     pub(super) eta_diag: Vec<f64>,
     /// Work space of the operator, allocated once.
     pub(super) scratch: Scratch,
+    /// The coupled step's work space (`numerics.elastic.coupling: Coupled`), else `None`.
+    pub(super) coupling: Option<super::coupled::Coupling>,
 }
 
 /// The elastic operator's work space: the increment as fields, and Δτ (zero outside the solid).
@@ -62,13 +64,13 @@ pub(super) struct ElasticOperator {
     pub(super) dm: Vec<f64>,
 }
 
-struct OperatorCtx<'a> {
-    op: &'a mut ElasticOperator,
-    start: &'a [Field; 4],
-    relax: &'a Field,
-    xu: &'a mut Field,
-    xv: &'a mut Field,
-    dtau: &'a mut [Field; 4],
+pub(super) struct OperatorCtx<'a> {
+    pub(super) op: &'a mut ElasticOperator,
+    pub(super) start: &'a [Field; 4],
+    pub(super) relax: &'a Field,
+    pub(super) xu: &'a mut Field,
+    pub(super) xv: &'a mut Field,
+    pub(super) dtau: &'a mut [Field; 4],
 }
 
 impl LinearOperator for OperatorCtx<'_> {
@@ -142,7 +144,11 @@ impl ElasticStage {
     ) -> Result<StageStats, StageError> {
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
-        let stats = self.solve(ctx, state, d, bnorm, scale)?;
+        let mut stats = self.solve(ctx, state, d, bnorm, scale)?;
+        if self.coupling.is_some() {
+            let c = self.couple(ctx, state, d)?;
+            stats.iterations += c.inner;
+        }
         self.correct(ctx, state, d);
         Ok(StageStats { solve: Some(stats) })
     }
