@@ -498,6 +498,15 @@ pub struct ElasticParams {
     /// step left (default 1e-3); the projection stage removes the rest.
     #[serde(default = "default_coupling_tolerance")]
     pub coupling_tolerance: f64,
+    /// The implicit weight θ of B's stretching over a step, `B^{n+1} = Bⁿ + Δt[(1 − θ) H(Vⁿ) +
+    /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, with `Split`; 0.75 with `Coupled`).
+    /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
+    /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
+    /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. (The
+    /// coupled stability-map sphere at G = 1e9 Pa, CFL 0.5: at 0.5 the energy guard stops it
+    /// in free flight, at 0.6 it gains 0.74 of its energy budget, at 0.75 nothing.)
+    #[serde(default)]
+    pub theta: Option<f64>,
     /// `Coupled` only: the most coupled iterations per step (default 50).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
@@ -516,10 +525,21 @@ pub enum ElasticCoupling {
     /// divergence constraint (FGMRES on the pressure's Schur complement, preconditioned by the
     /// projection's Poisson operator plus the solid's effective viscosity — Cahouet–Chabard),
     /// so the pressure's correction meets the solid's implicit stiffness: no elastic-wave cap
-    /// on Δt. Stable for the stability map's sphere at G = 1e7 Pa and CFL 0.5 (34 steps, none
-    /// of the energy gained), at G = 1e9 Pa only at smaller CFL (0.1); ≈ 2.9× the split
-    /// step's cost per step.
+    /// on Δt. The stability map's sphere at CFL 0.5 runs at G = 1e7 and 1e9 Pa in 31 and 30
+    /// steps (split: 161, 1606) without gaining energy; it still gains at CFL 0.9 with
+    /// G = 1e9 and at G = 1e11. Its B stretching is damped (`theta` 0.75), so an impact at
+    /// the flow's step loses much of its rebound; ≈ 2.9× the split step's cost per step.
     Coupled,
+}
+
+impl ElasticParams {
+    /// θ of B's stretching: the scene's, else 0.5 with `Split` and 0.75 with `Coupled`.
+    pub fn stretch_theta(&self) -> f64 {
+        self.theta.unwrap_or(match self.coupling {
+            ElasticCoupling::Split => 0.5,
+            ElasticCoupling::Coupled => 0.75,
+        })
+    }
 }
 
 fn default_coupling_tolerance() -> f64 {
@@ -545,6 +565,7 @@ impl Default for ElasticParams {
             coupling: ElasticCoupling::default(),
             coupling_tolerance: default_coupling_tolerance(),
             coupling_iterations: default_coupling_iter(),
+            theta: None,
         }
     }
 }
@@ -1010,6 +1031,16 @@ mod tests {
         let s = with("(coupling: Coupled, coupling_tolerance: 1e-4)").unwrap();
         assert_eq!(s.numerics.elastic.coupling, ElasticCoupling::Coupled);
         assert_eq!(s.numerics.elastic.coupling_tolerance, 1e-4);
+        assert_eq!(s.numerics.elastic.stretch_theta(), 0.75);
+        assert_eq!(load(MIN).unwrap().numerics.elastic.stretch_theta(), 0.5);
+        assert_eq!(
+            with("(theta: 0.6)")
+                .unwrap()
+                .numerics
+                .elastic
+                .stretch_theta(),
+            0.6
+        );
         assert_eq!(
             load(&s.to_ron()).unwrap().numerics.elastic.coupling,
             ElasticCoupling::Coupled
@@ -1031,6 +1062,7 @@ mod tests {
                 "(coupling: Coupled, implicit: false)",
                 &["numerics.elastic.coupling", "implicit"],
             ),
+            ("(theta: 0.4)", &["numerics.elastic.theta", "[0.5, 1]"]),
             ("(coupling: Monolithic)", &["Monolithic"]),
         ] {
             let e = with(el).unwrap_err().to_string();

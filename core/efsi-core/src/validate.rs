@@ -371,6 +371,14 @@ impl Scene {
                 ),
             );
         }
+        if let Some(t) = el.theta
+            && !(0.5..=1.0).contains(&t)
+        {
+            return err(
+                "numerics.elastic.theta",
+                format!("must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {t}"),
+            );
+        }
         if el.coupling_iterations == 0 {
             return err("numerics.elastic.coupling_iterations", "must be ≥ 1");
         }

@@ -8,6 +8,8 @@ use efsi_laws_host::ConstitutiveLaw;
 pub(super) struct DeformationStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     pub(super) k: Kernels,
+    /// θ of B's stretching (`numerics.elastic.theta`).
+    pub(super) stretch_theta: f64,
     /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
     pub(super) wave_dt: f64,
 }
@@ -29,7 +31,7 @@ impl Stage for DeformationStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
-            0.5 * ctx.dt,
+            self.stretch_theta * ctx.dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
             &mut d.b,

@@ -60,6 +60,13 @@
 //! `B̃^{n+1} = B̃(V^{n+1})` (Eq. 25 ≡ Eq. 24) and the rates `Aⁿ⁺¹`, `H(Vⁿ⁺¹; B̃ⁿ⁺¹)` the next
 //! step needs.
 //!
+//! **θ of the stretching.** The step above is Crank–Nicolson in the stretching (the `Δt/2`
+//! weights). With `numerics.elastic.theta` = θ the weights are `(1 − θ)Δt` on `H(Vⁿ)` and
+//! `θΔt` on `H(V)`, and the implicit term `θΔt² K_J`: for the 1-D wave at `s ≫ 1` the
+//! velocity's amplification tends to `−(1 − θ)/θ` — −1 at θ = ½ (an undamped two-step
+//! oscillation, harmless while the wave cap keeps `s` small), −⅓ at the coupled step's
+//! default ¾ (see `coupled`).
+//!
 //! # Coupling with the viscous step
 //!
 //! The viscous stage has already made `V^{n+1/3}` with an implicit viscous operator `K_v`
@@ -349,6 +356,7 @@ impl StagePlugin for Elastic {
                 viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
                 dm: vec![0.0; n],
             },
+            stretch_theta: scene.numerics.elastic.stretch_theta(),
             theta: if crate::viscous::Viscous.needed(scene) {
                 scene.numerics.viscous.theta
             } else {
@@ -435,6 +443,7 @@ impl StagePlugin for DeformationUpdate {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),
             wave_dt,
+            stretch_theta: scene.numerics.elastic.stretch_theta(),
         }))
     }
 }

@@ -14,6 +14,8 @@ pub(super) struct ElasticStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     pub(super) theta: f64,
+    /// θ of B's stretching (`numerics.elastic.theta`; 0.5: Crank–Nicolson).
+    pub(super) stretch_theta: f64,
     pub(super) tau: [Field; 4],
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
@@ -173,6 +175,7 @@ impl ElasticStage {
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         self.op.k.set_weights(phi);
         self.op.k.reset_fluid(d);
+        let th = self.stretch_theta;
         for c in 0..4 {
             d.start[c].copy_from(&d.b[c]);
             let (e, a, ap, h) = (
@@ -188,7 +191,7 @@ impl ElasticStage {
                 .zip(ap.data())
                 .zip(h.data())
             {
-                *e = -dt * ((1.0 + 0.5 * r) * a - 0.5 * r * ap) + 0.5 * dt * h;
+                *e = -dt * ((1.0 + 0.5 * r) * a - 0.5 * r * ap) + (1.0 - th) * dt * h;
             }
         }
         let k = &mut self.op.k;
@@ -203,7 +206,7 @@ impl ElasticStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
-            0.5 * dt,
+            self.stretch_theta * dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
             &mut d.b,
@@ -226,7 +229,11 @@ impl ElasticStage {
         let (dx, dy) = (g.dx, g.dy);
         let rho = &state.rho;
         let s = rho.stride();
-        let c2 = if self.implicit { 0.5 * dt * dt } else { 0.0 };
+        let c2 = if self.implicit {
+            self.stretch_theta * dt * dt
+        } else {
+            0.0
+        };
         self.op.c = c2;
         self.op.theta_dt = self.theta * dt;
         if self.theta > 0.0 {
@@ -419,7 +426,7 @@ impl ElasticStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
-            0.5 * dt,
+            self.stretch_theta * dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
             &mut d.b,
