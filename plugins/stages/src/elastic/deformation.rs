@@ -10,6 +10,8 @@ pub(super) struct DeformationStage {
     pub(super) k: Kernels,
     /// θ of B's stretching (`numerics.elastic.theta`).
     pub(super) stretch_theta: f64,
+    /// The first pass of the update (the stretching evaluated on Bⁿ).
+    pub(super) first: [efsi_core::Field; 4],
     /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
     pub(super) wave_dt: f64,
 }
@@ -31,6 +33,14 @@ impl Stage for DeformationStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
+            self.stretch_theta * ctx.dt,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            &mut self.first,
+        );
+        k.fill_ghosts(&mut self.first);
+        k.stretch(
+            &self.first,
             self.stretch_theta * ctx.dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
