@@ -10,8 +10,9 @@ pub(super) struct DeformationStage {
     pub(super) k: Kernels,
     /// θ of B's stretching (`numerics.elastic.theta`).
     pub(super) stretch_theta: f64,
-    /// The first pass of the update (the stretching evaluated on Bⁿ).
-    pub(super) first: [efsi_core::Field; 4],
+    /// The first pass of the update (the stretching evaluated on Bⁿ), with the split step;
+    /// `None` with the coupled one (see the module docs).
+    pub(super) first: Option<[efsi_core::Field; 4]>,
     /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
     pub(super) wave_dt: f64,
 }
@@ -31,21 +32,32 @@ impl Stage for DeformationStage {
         k.set_weights(phi);
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
-        k.stretch(
-            &d.start,
-            self.stretch_theta * ctx.dt,
-            Some((&d.start, &d.explicit)),
-            Some(&d.relax),
-            &mut self.first,
-        );
-        k.fill_ghosts(&mut self.first);
-        k.stretch(
-            &self.first,
-            self.stretch_theta * ctx.dt,
-            Some((&d.start, &d.explicit)),
-            Some(&d.relax),
-            &mut d.b,
-        );
+        let a = self.stretch_theta * ctx.dt;
+        if let Some(first) = &mut self.first {
+            k.stretch(
+                &d.start,
+                a,
+                Some((&d.start, &d.explicit)),
+                Some(&d.relax),
+                first,
+            );
+            k.fill_ghosts(first);
+            k.stretch(
+                first,
+                a,
+                Some((&d.start, &d.explicit)),
+                Some(&d.relax),
+                &mut d.b,
+            );
+        } else {
+            k.stretch(
+                &d.start,
+                a,
+                Some((&d.start, &d.explicit)),
+                Some(&d.relax),
+                &mut d.b,
+            );
+        }
         k.fill_ghosts(&mut d.b);
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
