@@ -44,13 +44,13 @@
 //! (BiCGSTAB, the elastic step's preconditioner).
 
 use super::err;
-use super::solve::{ElasticStage, OperatorCtx};
+use super::solve::ElasticStage;
 use crate::projection;
 use crate::viscous_operator::CompactFaces;
 use efsi_core::ops;
 use efsi_core::{Field, StageError, State, StepContext};
 use efsi_linalg::par::for_each_row;
-use efsi_linalg::{Multigrid, Norm, Pcg, SolveStats, Stencil5};
+use efsi_linalg::{Multigrid, Norm, Pcg, Stencil5};
 
 /// Krylov vectors kept before FGMRES restarts.
 const RESTART: usize = 30;
@@ -163,22 +163,7 @@ impl ElasticStage {
         let (nx, ny) = (g.nx, g.ny);
         let n = nx * ny;
         // The effective viscosities η at the centres (the block multigrid's).
-        {
-            let op = &self.op;
-            let (e, ek) = (&mut self.eta, &mut self.eta_k);
-            if op.theta_dt > 0.0 {
-                for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
-                    *e = op.theta_dt * m;
-                }
-                for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
-                    *e = op.theta_dt * m;
-                }
-            } else {
-                e.fill(0.0);
-                ek.fill(0.0);
-            }
-            op.k.stiffness(&d.relax, op.c, e, ek);
-        }
+        self.effective_viscosity(d);
         projection::assemble(&mut cp.poisson, g, bc, &state.rho);
         cp.mg.setup(&cp.poisson);
         for_each_row(&mut cp.weight, nx, |_, row| {
@@ -407,30 +392,7 @@ impl ElasticStage {
         let delta = &mut cp.dz[k];
         delta.fill(0.0);
         let st = if bnorm > 0.0 {
-            let sc = &mut self.scratch;
-            let mut ctxop = OperatorCtx {
-                op: &mut self.op,
-                start: &d.start,
-                relax: &d.relax,
-                xu: &mut sc.xu,
-                xv: &mut sc.xv,
-                dtau: &mut sc.dtau,
-            };
-            let tol = 1e-2 * cp.rel_tol * bnorm;
-            let st: SolveStats = match self.preconditioner {
-                efsi_core::scene::ElasticPreconditioner::Jacobi => self.solver.solve(
-                    &mut ctxop,
-                    self.diag.as_slice(),
-                    &cp.rhs,
-                    delta,
-                    tol,
-                    self.max_iter,
-                ),
-                _ => {
-                    self.solver
-                        .solve(&mut ctxop, &self.blocks, &cp.rhs, delta, tol, self.max_iter)
-                }
-            };
+            let st = self.solve_a(d, &cp.rhs, delta, 1e-2 * cp.rel_tol * bnorm);
             if !st.converged {
                 return Err(err(
                     "elastic",

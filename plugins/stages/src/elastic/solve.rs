@@ -66,13 +66,13 @@ pub(super) struct ElasticOperator {
     pub(super) dm: Vec<f64>,
 }
 
-pub(super) struct OperatorCtx<'a> {
-    pub(super) op: &'a mut ElasticOperator,
-    pub(super) start: &'a [Field; 4],
-    pub(super) relax: &'a Field,
-    pub(super) xu: &'a mut Field,
-    pub(super) xv: &'a mut Field,
-    pub(super) dtau: &'a mut [Field; 4],
+struct OperatorCtx<'a> {
+    op: &'a mut ElasticOperator,
+    start: &'a [Field; 4],
+    relax: &'a Field,
+    xu: &'a mut Field,
+    xv: &'a mut Field,
+    dtau: &'a mut [Field; 4],
 }
 
 impl LinearOperator for OperatorCtx<'_> {
@@ -332,57 +332,24 @@ impl ElasticStage {
             for f in &mut s.dtau {
                 f.fill(0.0);
             }
-            let mut ctxop = OperatorCtx {
-                op: &mut self.op,
-                start: &d.start,
-                relax: &d.relax,
-                xu: &mut s.xu,
-                xv: &mut s.xv,
-                dtau: &mut s.dtau,
-            };
-            let st = match self.preconditioner {
-                ElasticPreconditioner::Jacobi => self.solver.solve(
-                    &mut ctxop,
-                    self.diag.as_slice(),
-                    &self.rhs,
-                    &mut self.delta,
-                    self.tol * scale,
-                    self.max_iter,
-                ),
-                ElasticPreconditioner::Multigrid | ElasticPreconditioner::Auto => {
-                    // η = θΔt μ + (Δt²/2) G_eff at centres and corners.
-                    let op = &*ctxop.op;
-                    let (e, ek) = (&mut self.eta, &mut self.eta_k);
-                    if op.theta_dt > 0.0 {
-                        let td = op.theta_dt;
-                        for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
-                            *e = td * m;
-                        }
-                        for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
-                            *e = td * m;
-                        }
-                    } else {
-                        e.fill(0.0);
-                        ek.fill(0.0);
-                    }
-                    op.k.stiffness(&d.relax, op.c, e, ek);
-                    let pre = &mut self.eta_coefficients;
-                    pre.set(g, e, ek, 1.0);
-                    for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
-                        *dm = m + h;
-                    }
-                    pre.diagonal(&self.eta_dm, &mut self.eta_diag);
-                    self.blocks.setup(pre, &self.eta_diag);
-                    self.solver.solve(
-                        &mut ctxop,
-                        &self.blocks,
-                        &self.rhs,
-                        &mut self.delta,
-                        self.tol * scale,
-                        self.max_iter,
-                    )
+            if self.preconditioner != ElasticPreconditioner::Jacobi {
+                // η = θΔt μ + (Δt²/2) G_eff at centres and corners.
+                self.effective_viscosity(d);
+                let op = &self.op;
+                let pre = &mut self.eta_coefficients;
+                pre.set(g, &self.eta, &self.eta_k, 1.0);
+                for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
+                    *dm = m + h;
                 }
-            };
+                pre.diagonal(&self.eta_dm, &mut self.eta_diag);
+                self.blocks.setup(pre, &self.eta_diag);
+            }
+            let (rhs, mut delta) = (
+                std::mem::take(&mut self.rhs),
+                std::mem::take(&mut self.delta),
+            );
+            let st = self.solve_a(d, &rhs, &mut delta, self.tol * scale);
+            (self.rhs, self.delta) = (rhs, delta);
             if !st.converged {
                 return Err(err(
                     "elastic",
@@ -414,6 +381,56 @@ impl ElasticStage {
             }
         };
         Ok(stats)
+    }
+
+    /// The effective viscosities `η = θΔt μ + (Δt²/2) G_eff` at the centres and corners
+    /// (`eta`, `eta_k`): the block multigrid's, and the coupled step's preconditioner's.
+    pub(super) fn effective_viscosity(&mut self, d: &efsi_core::Deformation) {
+        let op = &self.op;
+        let (e, ek) = (&mut self.eta, &mut self.eta_k);
+        if op.theta_dt > 0.0 {
+            let td = op.theta_dt;
+            for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
+                *e = td * m;
+            }
+            for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
+                *e = td * m;
+            }
+        } else {
+            e.fill(0.0);
+            ek.fill(0.0);
+        }
+        op.k.stiffness(&d.relax, op.c, e, ek);
+    }
+
+    /// `A x = rhs` by BiCGSTAB to the absolute residual `tol`, with the scene's preconditioner
+    /// (the block multigrid set up for this step, or the Jacobi diagonal).
+    pub(super) fn solve_a(
+        &mut self,
+        d: &efsi_core::Deformation,
+        rhs: &[f64],
+        x: &mut [f64],
+        tol: f64,
+    ) -> SolveStats {
+        let s = &mut self.scratch;
+        let mut ctxop = OperatorCtx {
+            op: &mut self.op,
+            start: &d.start,
+            relax: &d.relax,
+            xu: &mut s.xu,
+            xv: &mut s.xv,
+            dtau: &mut s.dtau,
+        };
+        match self.preconditioner {
+            ElasticPreconditioner::Jacobi => {
+                self.solver
+                    .solve(&mut ctxop, self.diag.as_slice(), rhs, x, tol, self.max_iter)
+            }
+            ElasticPreconditioner::Multigrid | ElasticPreconditioner::Auto => {
+                self.solver
+                    .solve(&mut ctxop, &self.blocks, rhs, x, tol, self.max_iter)
+            }
+        }
     }
 
     /// `B̃^{n+2/3} = B̃(V^{n+2/3})` with the corrected velocity (its boundary values at the
