@@ -149,27 +149,13 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         ),
     ];
     let mut plots = Vec::new();
-    let mut notes = vec![format!(
-        "max errors {} at {:?} cells; observed orders {}",
-        errs.iter()
-            .map(|e| format!("{e:.3e}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        grids,
-        orders
-            .iter()
-            .map(|p| format!("{p:.3}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    )];
-    let conv = vec![(
-        "max error over the reference's times".to_string(),
-        grids
-            .iter()
-            .zip(&errs)
-            .map(|(&n, &e)| (n as f64, e))
-            .collect(),
-    )];
+    let (note, conv) = super::convergence(
+        "max error over the reference's times",
+        &grids,
+        &errs,
+        &orders,
+    );
+    let mut notes = vec![note];
     figure(
         &dir,
         "convergence",

@@ -483,3 +483,41 @@ pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
     write_report(opts, &reports, start.elapsed().as_secs_f64())?;
     Ok(reports)
 }
+
+/// A resolution study's note (`max errors … at [n…] cells; observed orders …`) and its
+/// convergence series (`label`: error against the cell count), as the Couette cases report
+/// them.
+pub fn convergence(
+    label: &str,
+    grids: &[usize],
+    errs: &[f64],
+    orders: &[f64],
+) -> (String, Vec<(String, Vec<(f64, f64)>)>) {
+    let list = |v: &[f64], digits: usize| {
+        v.iter()
+            .map(|e| {
+                if digits == 0 {
+                    format!("{e:.3e}")
+                } else {
+                    format!("{e:.3}")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    (
+        format!(
+            "max errors {} at {grids:?} cells; observed orders {}",
+            list(errs, 0),
+            list(orders, 3)
+        ),
+        vec![(
+            label.to_string(),
+            grids
+                .iter()
+                .zip(errs)
+                .map(|(&n, &e)| (n as f64, e))
+                .collect(),
+        )],
+    )
+}
