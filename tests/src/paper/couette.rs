@@ -104,7 +104,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         ),
     ];
     let mut plots = Vec::new();
-    let (note, conv) = super::convergence("max error over the four times", &grids, &errs, &orders);
+    let (note, conv) = super::convergence("max error over the four times", grids, &errs, &orders);
     let mut notes = vec![note];
     let trade = vec![(
         "grids (Δt ∝ h)".to_string(),
