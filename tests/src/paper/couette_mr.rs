@@ -151,7 +151,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     let mut plots = Vec::new();
     let (note, conv) = super::convergence(
         "max error over the reference's times",
-        &grids,
+        grids,
         &errs,
         &orders,
     );
