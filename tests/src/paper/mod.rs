@@ -484,6 +484,9 @@ pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
     Ok(reports)
 }
 
+/// A named series of (x, y) points of a plot.
+pub type Series = (String, Vec<(f64, f64)>);
+
 /// A resolution study's note (`max errors … at [n…] cells; observed orders …`) and its
 /// convergence series (`label`: error against the cell count), as the Couette cases report
 /// them.
@@ -492,7 +495,7 @@ pub fn convergence(
     grids: &[usize],
     errs: &[f64],
     orders: &[f64],
-) -> (String, Vec<(String, Vec<(f64, f64)>)>) {
+) -> (String, Vec<Series>) {
     let list = |v: &[f64], digits: usize| {
         v.iter()
             .map(|e| {
