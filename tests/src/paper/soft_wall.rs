@@ -98,7 +98,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         // decaying (2.3e-3, 1.0e-3, 3.8e-4 at t = 6, 8, 12 on 32²). Its rate in units of U²/L
         // (U = 0.5, L = 2) is pinned to the grid-converged value, measured with `efsi run
         // cases/soft_wall_cavity.ron --set grid.nx=N --set grid.ny=N --set time.steady=1e-12`
-        // ("final max|uⁿ⁺¹ − uⁿ|/Δt" × 8): 1.002e-2, 1.005e-2, 9.97e-3, 9.82e-3, 9.87e-3 at
+        // ("final max|uⁿ⁺¹ − uⁿ|/Δt" × 8): 1.003e-2, 1.005e-2, 9.97e-3, 9.82e-3, 9.87e-3 at
         // N = 32, 48, 64, 96, 128. A flow that is not steady yet fails above; an interface that
         // lags the converged creep (8.3e-3 at 32² before the interface treatment of issue 15)
         // fails below.
