@@ -12,6 +12,10 @@
 //! the solid 4 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
 //! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
 //!
+//! In full mode the map also reports (does not judge) the coupled elastic step
+//! (`numerics.elastic.coupling: Coupled`, experimental) at G = 1e7, 1e9, 1e11 Pa × CFL 0.1, 0.5,
+//! 0.9, ratio 1e3: steps, energy gain, total energy at the end, or how it failed.
+//!
 //! # What "stable" means here
 //! With `E = KE + PE + EE` (kinetic, gravitational potential of the whole domain — fluid
 //! included, so buoyancy is in it — and strain energy; walls at rest do no work) and the
@@ -57,6 +61,8 @@ const G_VALUES: [f64; 5] = [1e3, 1e5, 1.8e5, 1e7, 1e9];
 const RATIOS: [f64; 4] = [1.0, 10.0, 1e3, 1e4];
 /// CFL numbers.
 const CFLS: [f64; 3] = [0.1, 0.5, 0.9];
+/// Shear moduli (Pa) of the coupled step's runs (full mode, reported only).
+const COUPLED_G: [f64; 3] = [1e7, 1e9, 1e11];
 /// Widths of the small solids, in cells: one below [`MIN_CELLS_ACROSS`] (refused), one at it.
 const ACROSS: [f64; 2] = [4.0, 5.0];
 /// Gap between the sphere and the substrate at release (m).
@@ -80,6 +86,9 @@ struct Setting {
     across: Option<f64>,
     fixed_dt: Option<f64>,
     wave_courant: Option<f64>,
+    /// With the coupled elastic step (`numerics.elastic.coupling: Coupled`): reported, not
+    /// judged (it is experimental).
+    coupled: bool,
 }
 
 impl Setting {
@@ -91,6 +100,7 @@ impl Setting {
             across: None,
             fixed_dt: None,
             wave_courant: None,
+            coupled: false,
         }
     }
 
@@ -104,6 +114,9 @@ impl Setting {
         }
         if let Some(w) = self.wave_courant {
             s += &format!(", wave_courant {w}");
+        }
+        if self.coupled {
+            s += ", coupled";
         }
         s
     }
@@ -197,6 +210,9 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
     scene.time.fixed_dt = st.fixed_dt;
     if let Some(w) = st.wave_courant {
         scene.numerics.elastic.wave_courant = w;
+    }
+    if st.coupled {
+        scene.numerics.elastic.coupling = efsi_core::scene::ElasticCoupling::Coupled;
     }
     scene.output.vtk_every = None;
     // Probes every step: an interval would cap Δt (the run lands on every probe time).
@@ -334,6 +350,9 @@ fn overrides_for(st: &Setting, cpr: f64) -> Result<serde_json::Value, String> {
     }
     if let Some(w) = st.wave_courant {
         put("numerics.elastic.wave_courant", w.into());
+    }
+    if st.coupled {
+        put("numerics.elastic.coupling", "Coupled".into());
     }
     put("output.vtk_every", "None".into());
     put("output.probe_every", "None".into());
@@ -485,12 +504,26 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             ..Setting::new(1e7, 1e3, 0.5)
         },
     ];
+    // The coupled elastic step (issue 16), full mode only: stiff solids without the wave cap.
+    let mut coupled_runs = Vec::new();
+    if !opts.quick {
+        for &cfl in &CFLS {
+            for g in COUPLED_G {
+                coupled_runs.push(Setting {
+                    coupled: true,
+                    ..Setting::new(g, 1e3, cfl)
+                });
+            }
+        }
+    }
     let mut results = Vec::new();
+    let mut coupled_results = Vec::new();
     let mut runs = Vec::new();
     let settings: Vec<Setting> = grid_runs
         .iter()
         .chain(&small_runs)
         .chain(&refusals)
+        .chain(&coupled_runs)
         .copied()
         .collect();
     let attempts = match sweep_python() {
@@ -504,7 +537,11 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         if let Some(r) = run {
             runs.push(r);
         }
-        results.push((*st, outcome));
+        if st.coupled {
+            coupled_results.push((*st, outcome));
+        } else {
+            results.push((*st, outcome));
+        }
     }
 
     // The map: one panel per CFL number, then the small solids.
@@ -630,6 +667,29 @@ pub fn run(opts: &Options) -> Result<Report, String> {
          {tp:.3} E_b ({tp_at}); total at the end {te:.2e} E_b ({te_at}); volume drift {vd:.1e} \
          ({vd_at})."
     ));
+    if !coupled_results.is_empty() {
+        let lines: Vec<String> = coupled_results
+            .iter()
+            .map(|(s, o)| {
+                let steps = steps_of(s).map_or(String::new(), |n| format!("{n} steps, "));
+                match o {
+                    Outcome::Stable(f) => format!(
+                        "{}: stable, {steps}KE+PE gain {:.1e} E_b, total at the end {:.2} E_b",
+                        s.label(),
+                        f.mech_gain,
+                        f.total_end
+                    ),
+                    Outcome::Refused(m) => format!("{}: refused: {m}", s.label()),
+                    Outcome::Failed(m) => format!("{}: FAILED ({steps}{m})", s.label()),
+                }
+            })
+            .collect();
+        notes.push(format!(
+            "The coupled elastic step (numerics.elastic.coupling: Coupled, experimental; not \
+             judged by the checks, no wave cap), ratio 1e3: {}.",
+            lines.join("; ")
+        ));
+    }
     notes.push(format!(
         "The elastic-wave limit Δt·c/h ≤ {MAX_WAVE_COURANT} (numerics.elastic.wave_courant) caps \
          the step of the stiff solids: it is what keeps G = 1e7 and 1e9 stable, at the cost of \
