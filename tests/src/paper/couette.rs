@@ -43,6 +43,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
         &[32, 64, 128, 256]
     };
     let mut runs = Vec::new();
+    let mut per_run = Vec::new();
     let mut schedule = Vec::new();
     for &n in grids {
         let (mut scene, path) = load_case("oscillating_couette.ron")?;
@@ -62,7 +63,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             at: TIMES.to_vec(),
         }];
         let label = format!("{n} cells");
-        let (sim, mut run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
+        let (sim, run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
             .map_err(|e| e.to_string())?;
         schedule = sim
             .pipeline()
@@ -70,25 +71,10 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        let e = errors(&run)?;
-        run.error = Some(e.iter().copied().fold(0.0, f64::max));
-        run.metrics = TIMES
-            .iter()
-            .zip(&e)
-            .map(|(t, e)| (format!("error_t{t}"), *e))
-            .collect();
+        per_run.push(errors(&run)?);
         runs.push(run);
     }
-    let errs: Vec<f64> = runs.iter().map(|r| r.error.unwrap_or(f64::NAN)).collect();
-    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-    for (r, p) in runs.iter_mut().skip(1).zip(&orders) {
-        r.metrics.push(("observed_order".into(), *p));
-    }
-    let e64 = runs
-        .iter()
-        .find(|r| r.label == "64 cells")
-        .and_then(|r| r.error)
-        .unwrap_or(f64::NAN);
+    let (errs, orders, e64) = super::study(&mut runs, &per_run, &TIMES);
     let checks = vec![
         Check::at_most(
             "64 cells: max abs(u − u_ref) at t = 2, 2.8, 4, 4.8 (grid points)",

@@ -96,11 +96,12 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     };
     let end = times.iter().copied().fold(0.0, f64::max);
     let mut runs = Vec::new();
+    let mut per_run = Vec::new();
     let mut schedule = Vec::new();
     for &n in grids {
         let (scene, path) = scene(n, end, times)?;
         let label = format!("{n} cells");
-        let (sim, mut run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
+        let (sim, run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
             .map_err(|e| e.to_string())?;
         schedule = sim
             .pipeline()
@@ -108,25 +109,10 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        let e = errors(&run, times)?;
-        run.error = Some(e.iter().copied().fold(0.0, f64::max));
-        run.metrics = times
-            .iter()
-            .zip(&e)
-            .map(|(t, e)| (format!("error_t{t}"), *e))
-            .collect();
+        per_run.push(errors(&run, times)?);
         runs.push(run);
     }
-    let errs: Vec<f64> = runs.iter().map(|r| r.error.unwrap_or(f64::NAN)).collect();
-    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-    for (r, p) in runs.iter_mut().skip(1).zip(&orders) {
-        r.metrics.push(("observed_order".into(), *p));
-    }
-    let e64 = runs
-        .iter()
-        .find(|r| r.label == "64 cells")
-        .and_then(|r| r.error)
-        .unwrap_or(f64::NAN);
+    let (errs, orders, e64) = super::study(&mut runs, &per_run, times);
     let at = times
         .iter()
         .map(|t| t.to_string())

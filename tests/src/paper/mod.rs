@@ -524,3 +524,32 @@ pub fn convergence(
         )],
     )
 }
+
+/// A resolution study's bookkeeping: each run's error the largest of its errors at `times`
+/// (kept per time as `error_t{t}` metrics), the observed orders between successive runs (as
+/// `observed_order` from the second on), and the error of the run labelled `64 cells`.
+pub fn study<T: std::fmt::Display>(
+    runs: &mut [Run],
+    per_run: &[Vec<f64>],
+    times: &[T],
+) -> (Vec<f64>, Vec<f64>, f64) {
+    for (run, e) in runs.iter_mut().zip(per_run) {
+        run.error = Some(e.iter().copied().fold(0.0, f64::max));
+        run.metrics = times
+            .iter()
+            .zip(e)
+            .map(|(t, e)| (format!("error_t{t}"), *e))
+            .collect();
+    }
+    let errs: Vec<f64> = runs.iter().map(|r| r.error.unwrap_or(f64::NAN)).collect();
+    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    for (r, p) in runs.iter_mut().skip(1).zip(&orders) {
+        r.metrics.push(("observed_order".into(), *p));
+    }
+    let e64 = runs
+        .iter()
+        .find(|r| r.label == "64 cells")
+        .and_then(|r| r.error)
+        .unwrap_or(f64::NAN);
+    (errs, orders, e64)
+}
