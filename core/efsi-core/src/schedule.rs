@@ -23,19 +23,12 @@ use std::time::{Duration, Instant};
 pub enum Phase {
     /// Explicit convective term → V* (seed Eq. 11).
     Advection,
+    /// Body forces (gravity) → V* (seed Eq. 11).
+    BodyForce,
     /// Semi-implicit viscous term → V^{n+1/3} (seed Eq. 12); B̃ predictor (Eq. 13).
     Viscous,
     /// Semi-implicit elastic term → V^{n+2/3} (seed Eqs. 15–20).
     Elastic,
-    /// Body forces (gravity, the frame's acceleration), added right before the projection.
-    /// The seed adds them in V* (Eq. 11), before the viscous step; there the viscous solve
-    /// diffuses the part of `gΔt` that the projection would remove at no-slip walls into a
-    /// shear it cannot remove, so a viscous fluid at rest in a closed box under gravity started
-    /// to move (kinetic energy 2.9e-5 J/m, an rms speed of 7.7e-3 m/s, after one step of 0.025 s
-    /// at ν = 0.01 in a unit box under 9.81 m/s²; the energy guard stopped it). Added after
-    /// the implicit steps, a potential force meets the projection alone and a fluid at rest
-    /// stays at rest (to the solver's tolerance).
-    BodyForce,
     /// Pressure projection → V^{n+1} (seed Eqs. 21–23), B̃^{n+1} (Eq. 25).
     Projection,
     /// Interface transport (VOF PLIC) and material properties (seed Eqs. 4–6).
@@ -46,9 +39,9 @@ impl Phase {
     /// All phases in order.
     pub const ALL: [Phase; 6] = [
         Phase::Advection,
+        Phase::BodyForce,
         Phase::Viscous,
         Phase::Elastic,
-        Phase::BodyForce,
         Phase::Projection,
         Phase::Interface,
     ];
