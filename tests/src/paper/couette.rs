@@ -2,37 +2,10 @@
 //! against the start-up reference (`tests/references/oscillating_couette/from_rest/`).
 
 use super::plot::Scale;
-use super::{Check, Options, Report, Run, execute, figure, load_case, slug};
-use crate::{interp, read_csv, reference};
+use super::{Check, Options, Report, execute, figure, load_case, slug};
 use efsi_core::scene::ProfileSpec;
 
 const TIMES: [f64; 4] = [2.0, 2.8, 4.0, 4.8];
-
-/// Max |u − u_ref| at the grid's u points at each of [`TIMES`], from the run's profiles.
-fn errors(run: &Run) -> Result<Vec<f64>, String> {
-    let mut out = Vec::new();
-    for t in TIMES {
-        let label = efsi_run::run::time_label(t);
-        let (rh, rc) = read_csv(&reference(&format!(
-            "oscillating_couette/from_rest/u_profile_t_{label}.csv"
-        )));
-        let col = |h: &[String], n: &str| {
-            h.iter()
-                .position(|x| x == n)
-                .ok_or(format!("no column {n}"))
-        };
-        let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
-        let (h, c) = read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
-        let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
-        out.push(
-            y.iter()
-                .zip(u)
-                .map(|(&y, &u)| (u - interp(ry, ru, y)).abs())
-                .fold(0.0, f64::max),
-        );
-    }
-    Ok(out)
-}
 
 /// Run the case.
 pub fn run(opts: &Options) -> Result<Report, String> {
@@ -71,7 +44,11 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        per_run.push(errors(&run)?);
+        per_run.push(super::profile_errors(
+            &run,
+            "oscillating_couette/from_rest",
+            &TIMES,
+        )?);
         runs.push(run);
     }
     let (errs, orders, e64) = super::study(&mut runs, &per_run, &TIMES);

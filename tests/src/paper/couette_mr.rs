@@ -5,8 +5,7 @@
 //! interface corners feed the law the solid's own deformation.
 
 use super::plot::Scale;
-use super::{Check, Options, Report, Run, cases_dir, execute, figure, slug};
-use crate::{interp, read_csv, reference};
+use super::{Check, Options, Report, cases_dir, execute, figure, slug};
 use efsi_core::Scene;
 use efsi_core::scene::ProfileSpec;
 
@@ -60,32 +59,6 @@ pub fn scene(n: usize, end: f64, times: &[f64]) -> Result<(Scene, std::path::Pat
     Ok((scene, path))
 }
 
-/// Max |u − u_ref| at the grid's u points at each of `times`, from the run's profiles.
-fn errors(run: &Run, times: &[f64]) -> Result<Vec<f64>, String> {
-    let col = |h: &[String], n: &str| {
-        h.iter()
-            .position(|x| x == n)
-            .ok_or(format!("no column {n}"))
-    };
-    let mut out = Vec::new();
-    for &t in times {
-        let label = efsi_run::run::time_label(t);
-        let (rh, rc) = read_csv(&reference(&format!(
-            "oscillating_couette_mr/c1_0.02/u_profile_t_{label}.csv"
-        )));
-        let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
-        let (h, c) = read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
-        let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
-        out.push(
-            y.iter()
-                .zip(u)
-                .map(|(&y, &u)| (u - interp(ry, ru, y)).abs())
-                .fold(0.0, f64::max),
-        );
-    }
-    Ok(out)
-}
-
 /// Run the case.
 pub fn run(opts: &Options) -> Result<Report, String> {
     let dir = opts.out.join("oscillating_couette_mr");
@@ -109,7 +82,11 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        per_run.push(errors(&run, times)?);
+        per_run.push(super::profile_errors(
+            &run,
+            "oscillating_couette_mr/c1_0.02",
+            times,
+        )?);
         runs.push(run);
     }
     let (errs, orders, e64) = super::study(&mut runs, &per_run, times);

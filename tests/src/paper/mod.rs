@@ -553,3 +553,31 @@ pub fn study<T: std::fmt::Display>(
         .unwrap_or(f64::NAN);
     (errs, orders, e64)
 }
+
+/// Max |u − u_ref| at the grid's u points at each of `times`, from the run's profiles
+/// (`profiles/u_t{t}.csv`) against the reference files `{reference_dir}/u_profile_t_{t}.csv`
+/// (columns `y`, `u`), the reference interpolated linearly.
+pub fn profile_errors(run: &Run, reference_dir: &str, times: &[f64]) -> Result<Vec<f64>, String> {
+    let col = |h: &[String], n: &str| {
+        h.iter()
+            .position(|x| x == n)
+            .ok_or(format!("no column {n}"))
+    };
+    let mut out = Vec::new();
+    for &t in times {
+        let label = efsi_run::run::time_label(t);
+        let (rh, rc) = crate::read_csv(&crate::reference(&format!(
+            "{reference_dir}/u_profile_t_{label}.csv"
+        )));
+        let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
+        let (h, c) = crate::read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
+        let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
+        out.push(
+            y.iter()
+                .zip(u)
+                .map(|(&y, &u)| (u - crate::interp(ry, ru, y)).abs())
+                .fold(0.0, f64::max),
+        );
+    }
+    Ok(out)
+}

@@ -85,6 +85,13 @@ pub(super) struct Coupling {
     /// Per unknown face: the right-hand side `−Δt G z`; per cell: the flux change `F(Δ)`.
     rhs: Vec<f64>,
     w: Vec<f64>,
+    /// The step's velocity increment `Δ(p)` (per unknown face), the residual at a restart (per
+    /// cell) and the restart's Krylov coefficients: allocated once.
+    total: Vec<f64>,
+    y0: Vec<f64>,
+    coef: Vec<f64>,
+    /// The Δt of `weight` (it changes only with Δt).
+    weight_dt: f64,
 }
 
 /// What one coupled step did.
@@ -128,6 +135,10 @@ impl Coupling {
             g: vec![0.0; RESTART + 1],
             rhs: vec![0.0; faces],
             w: vec![0.0; n],
+            total: vec![0.0; faces],
+            y0: vec![0.0; n],
+            coef: vec![0.0; RESTART],
+            weight_dt: f64::NAN,
         }
     }
 }
@@ -166,11 +177,14 @@ impl ElasticStage {
         self.effective_viscosity(d);
         projection::assemble(&mut cp.poisson, g, bc, &state.rho);
         cp.mg.setup(&cp.poisson);
-        for_each_row(&mut cp.weight, nx, |_, row| {
-            for (i, w) in row.iter_mut().enumerate() {
-                *w = dt * dt / g.cell_volume(i as isize);
-            }
-        });
+        if dt != cp.weight_dt {
+            for_each_row(&mut cp.weight, nx, |_, row| {
+                for (i, w) in row.iter_mut().enumerate() {
+                    *w = dt * dt / g.cell_volume(i as isize);
+                }
+            });
+            cp.weight_dt = dt;
+        }
         let singular = !bc.has_pressure_reference();
         let max_div = |f: &[f64]| -> f64 {
             let mut worst = 0.0f64;
@@ -194,14 +208,14 @@ impl ElasticStage {
             ..CouplingStats::default()
         };
         cp.p.fill(0.0);
-        let mut total = vec![0.0; self.op.k.faces.len()];
-        let mut y0 = cp.basis[0].clone();
-        let beta0 = norm(&y0);
+        cp.total.fill(0.0);
+        cp.y0.copy_from_slice(&cp.basis[0]);
+        let beta0 = norm(&cp.y0);
         let target = cp.rel_tol * beta0;
         let mut beta = beta0;
         while beta > target && stats.before > cp.proj_tol && stats.iterations < cp.max_iter {
             // A restart cycle from the current residual y0.
-            for (b, y) in cp.basis[0].iter_mut().zip(&y0) {
+            for (b, y) in cp.basis[0].iter_mut().zip(&cp.y0) {
                 *b = y / beta;
             }
             cp.g.fill(0.0);
@@ -284,7 +298,7 @@ impl ElasticStage {
                 }
             }
             // Solve the triangular system and update p and the velocity increment.
-            let mut coef = vec![0.0; k];
+            let coef = &mut cp.coef[..k];
             for i in (0..k).rev() {
                 let mut sum = cp.g[i];
                 for j in i + 1..k {
@@ -298,7 +312,7 @@ impl ElasticStage {
                         cp.p[(ii as isize, j as isize)] += c * cp.z[i][j * nx + ii];
                     }
                 }
-                for (t, dz) in total.iter_mut().zip(&cp.dz[i]) {
+                for (t, dz) in cp.total.iter_mut().zip(&cp.dz[i]) {
                     *t += c * dz;
                 }
             }
@@ -306,16 +320,16 @@ impl ElasticStage {
             self.op
                 .k
                 .faces
-                .scatter(&total, &mut self.scratch.xu, &mut self.scratch.xv);
+                .scatter(&cp.total, &mut self.scratch.xu, &mut self.scratch.xv);
             bc.fill_velocity(g, &mut self.scratch.xu, &mut self.scratch.xv, 0.0, true);
             for j in 0..ny {
                 for i in 0..nx {
                     let (ii, jj) = (i as isize, j as isize);
-                    y0[j * nx + i] = -ops::net_outflux(g, &state.u, &state.v, ii, jj)
+                    cp.y0[j * nx + i] = -ops::net_outflux(g, &state.u, &state.v, ii, jj)
                         - ops::net_outflux(g, &self.scratch.xu, &self.scratch.xv, ii, jj);
                 }
             }
-            beta = norm(&y0);
+            beta = norm(&cp.y0);
             if !beta.is_finite() {
                 return Err(err(
                     "elastic",
@@ -326,15 +340,15 @@ impl ElasticStage {
                 ));
             }
         }
-        stats.after = max_div(&y0);
+        stats.after = max_div(&cp.y0);
         // V += Δ(p); the pressure for the projection to complete (it adds what it finds).
         {
             let (u, v) = (&mut state.u, &mut state.v);
             self.op.k.faces.for_each(|c, is_u, q| {
                 if is_u {
-                    u.data_mut()[q] += total[c];
+                    u.data_mut()[q] += cp.total[c];
                 } else {
-                    v.data_mut()[q] += total[c];
+                    v.data_mut()[q] += cp.total[c];
                 }
             });
         }
