@@ -272,7 +272,7 @@ fn a_failed_step_is_rolled_back_to_the_step_or_the_call_start() {
         rollback: Rollback::Call(&mut slot),
         ..Advance::default()
     };
-    let e = s.advance_to(0.5, control).unwrap_err();
+    let e = s.advance_to(1.0, control).unwrap_err();
     assert!(matches!(e, AdvanceError::Failed { good: true, .. }), "{e}");
     assert!(same_state(&s.state, &start.state));
 

@@ -334,8 +334,8 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
         let text =
             std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut scene = text.replace(
-            "numerics: (elastic: (",
-            &format!("numerics: (elastic: (preconditioner: {elastic}, "),
+            " elastic: (",
+            &format!(" elastic: (preconditioner: {elastic}, "),
         );
         if quick {
             scene = scene.replace("end: 0.06,", "end: 0.03,");

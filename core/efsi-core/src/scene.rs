@@ -602,8 +602,12 @@ fn default_elastic_iter() -> usize {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProjectionParams {
-    /// Convergence criterion: after projection `max |∇·u|·Δt ≤ tolerance` (dimensionless;
-    /// default 1e-10).
+    /// Convergence criterion: after projection `max |∇·u|·Δt ≤ tolerance` — the largest
+    /// fraction of its volume a cell may gain or lose in a step (dimensionless), reached after
+    /// at least one iteration. Default 1e-6: on the axisymmetric drop at 128² (2,000 steps) the
+    /// fall is the 1e-10 run's to seven digits and the drop's volume drifts by 5e-12, with 1.9
+    /// multigrid-preconditioned iterations a step instead of 4.7; Basilisk's default is 1e-3
+    /// in the same form. A strict setting is 1e-10.
     #[serde(default = "default_div_tol")]
     pub tolerance: f64,
     /// Iteration cap of the preconditioned conjugate gradient (default 10000).
@@ -637,7 +641,7 @@ pub enum PressureSolver {
 }
 
 fn default_div_tol() -> f64 {
-    1e-10
+    1e-6
 }
 fn default_max_iter() -> usize {
     10000
@@ -651,7 +655,12 @@ pub struct ViscousParams {
     /// Crank–Nicolson.
     #[serde(default = "one")]
     pub theta: f64,
-    /// Relative residual at which the conjugate gradient stops (default 1e-9).
+    /// Relative residual at which the conjugate gradient stops: `‖r‖ ≤ tolerance·‖b‖` with
+    /// `b = Δt K(V*)`, so the viscous velocity increment of the step is solved to about this
+    /// relative accuracy (default 1e-6). In a transient flow the error does not accumulate (the
+    /// drop at 128² falls the same to seven digits at 1e-3 and 1e-9); at a steady state it
+    /// biases the velocity by about `tolerance × U` (the Hagen–Poiseuille pipe: 3.7e-3 off at
+    /// 1e-3 on 32 cells, the 1e-9 result to five digits at 1e-6). A strict setting is 1e-9.
     #[serde(default = "default_visc_tol")]
     pub tolerance: f64,
     /// Iteration cap (default 10000).
@@ -695,7 +704,7 @@ fn one() -> f64 {
     1.0
 }
 fn default_visc_tol() -> f64 {
-    1e-9
+    1e-6
 }
 
 /// What to write and where.
@@ -1010,7 +1019,7 @@ mod tests {
         let s = load(MIN).unwrap();
         assert_eq!(s.time.cfl, 0.4);
         assert!(s.physics.advection);
-        assert_eq!(s.numerics.projection.tolerance, 1e-10);
+        assert_eq!(s.numerics.projection.tolerance, 1e-6);
         assert_eq!(s.numerics.projection.solver, PressureSolver::Multigrid);
     }
 

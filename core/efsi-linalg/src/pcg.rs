@@ -181,7 +181,10 @@ impl Pcg {
     /// Solve `A x = b` from the initial guess in `x`.
     ///
     /// `measure(r)` maps a residual to the number compared with `tol`; iteration stops when
-    /// `measure(r) ≤ tol` for the true residual, or after `max_iter` iterations.
+    /// `measure(r) ≤ tol` for the true residual, or after `max_iter` iterations. At least one
+    /// iteration is made unless the initial residual is exactly zero, so a warm start that
+    /// already meets the tolerance is still improved (in a time loop the residual then goes to
+    /// zero across steps at a steady state instead of staying at the tolerance).
     pub fn solve<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
         &mut self,
         a: &mut A,
@@ -239,7 +242,12 @@ impl Pcg {
         };
         let mut res = true_residual(a, x, r, q);
         let mut it = 0;
-        if res <= tol {
+        // At least one iteration unless the residual is exactly zero: a warm start already
+        // within the tolerance would otherwise leave its residual in place step after step, so
+        // a steady state would keep an error up to the tolerance (and a solver that stops at 0
+        // or 1 iterations by turns never lets it settle); one iteration per step drives it to
+        // zero across steps at the cost of that iteration.
+        if res == 0.0 {
             return SolveStats {
                 iterations: 0,
                 residual: res,

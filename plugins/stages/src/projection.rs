@@ -13,9 +13,13 @@
 //! **Solver.** Conjugate gradient warm-started from the previous pressure, preconditioned by
 //! the geometric multigrid W-cycle of [`efsi_linalg::Multigrid`] (default: iterations
 //! independent of the grid and of density ratios up to 1e4) or, as the seed, by incomplete
-//! Cholesky IC(0) (scene `numerics.projection.solver: Multigrid | IncompleteCholesky`). It stops when the divergence the correction would
-//! leave satisfies `max_cells |∇·V^{n+1}|·Δt ≤ tol` (dimensionless: the relative volume change
-//! of a cell per step; scene `numerics.projection.tolerance`, default 1e-10). Since
+//! Cholesky IC(0) (scene `numerics.projection.solver: Multigrid | IncompleteCholesky`). It
+//! stops when the divergence the correction would leave satisfies `max_cells |∇·V^{n+1}|·Δt ≤
+//! tol` (dimensionless: the relative volume change of a cell per step; scene
+//! `numerics.projection.tolerance`, default 1e-6), after at least one iteration: the warm start
+//! alone often meets the tolerance, and stopping there would leave its divergence in place step
+//! after step (a steady state kept `|∇·u|` up to `tol/Δt` and, stopping at 0 and 1 iterations by
+//! turns, never settled); one iteration a step drives it to zero across steps. Since
 //! `dV·∇·V^{n+1} = −Δt·r` for the residual `r`, the criterion is `max Δt²|r|/dV ≤ tol`, checked
 //! on the true residual.
 //!
