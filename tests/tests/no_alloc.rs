@@ -76,7 +76,14 @@ fn no_allocation_after_the_first_step() {
         "boundaries:",
         "numerics: (viscous: (preconditioner: Multigrid)),\n    boundaries:",
     );
-    let two_phase = ["advection", "body_force", "viscous", "projection", "vof"];
+    let two_phase = [
+        "advection",
+        "body_force",
+        "pressure_predictor",
+        "viscous",
+        "projection",
+        "vof",
+    ];
     let solid = [
         "advection",
         "body_force",
@@ -90,7 +97,7 @@ fn no_allocation_after_the_first_step() {
         (
             "cavity",
             CAVITY,
-            &["advection", "viscous", "projection"][..],
+            &["advection", "pressure_predictor", "viscous", "projection"][..],
         ),
         ("drop", DROP, &two_phase[..]),
         ("drop-mg", &drop_mg, &two_phase[..]),

@@ -20,11 +20,11 @@ fn cavity(extra: &str) -> String {
 }
 
 #[test]
-fn cavity_schedules_exactly_advection_viscous_projection() {
+fn cavity_schedules_exactly_advection_predictor_viscous_projection() {
     let s = sim(&cavity(""));
     assert_eq!(
         s.pipeline().stage_names(),
-        ["advection", "viscous", "projection"]
+        ["advection", "pressure_predictor", "viscous", "projection"]
     );
     assert!(s.state.phi.is_none(), "no solid: no solid-fraction storage");
     assert!(!s.pipeline().fields().contains(&FieldId::SolidFraction));
@@ -39,11 +39,26 @@ fn cavity_schedules_exactly_advection_viscous_projection() {
 #[test]
 fn stokes_scene_omits_advection_and_gravity_adds_body_force() {
     let s = sim(&cavity("physics: (advection: false),"));
-    assert_eq!(s.pipeline().stage_names(), ["viscous", "projection"]);
+    assert_eq!(
+        s.pipeline().stage_names(),
+        ["pressure_predictor", "viscous", "projection"]
+    );
     let s = sim(&cavity("gravity: (0.0, -9.81),"));
     assert_eq!(
         s.pipeline().stage_names(),
-        ["advection", "body_force", "viscous", "projection"]
+        [
+            "advection",
+            "body_force",
+            "pressure_predictor",
+            "viscous",
+            "projection"
+        ]
+    );
+    // The seed's non-incremental projection has no predictor.
+    let s = sim(&cavity("numerics: (projection: (incremental: false)),"));
+    assert_eq!(
+        s.pipeline().stage_names(),
+        ["advection", "viscous", "projection"]
     );
 }
 

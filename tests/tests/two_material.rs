@@ -47,7 +47,14 @@ fn fall(axisymmetric: bool, n: usize) -> Fall {
     let mut s = sim(&text);
     assert_eq!(
         s.pipeline().stage_names(),
-        ["advection", "body_force", "viscous", "projection", "vof"]
+        [
+            "advection",
+            "body_force",
+            "pressure_predictor",
+            "viscous",
+            "projection",
+            "vof"
+        ]
     );
     let v0 = phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
     let z0 = solid_moments(&s.grid, &s.state, s.state.phi.as_ref().unwrap())

@@ -127,7 +127,10 @@ fn check_and_print_schedule() {
     let path = write_scene(&d, GOOD);
     let out = efsi(&["check", &path]);
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stdout).contains("advection → viscous → projection"));
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .contains("advection → pressure_predictor → viscous → projection")
+    );
     let out = efsi(&["run", &path, "--print-schedule"]);
     let s = String::from_utf8_lossy(&out.stdout);
     let stages: Vec<&str> = s
@@ -135,7 +138,10 @@ fn check_and_print_schedule() {
         .filter(|l| l.contains("phase"))
         .map(|l| l.split_whitespace().nth(1).unwrap())
         .collect();
-    assert_eq!(stages, ["advection", "viscous", "projection"]);
+    assert_eq!(
+        stages,
+        ["advection", "pressure_predictor", "viscous", "projection"]
+    );
     // Each stage names the type that implements it.
     assert!(
         s.contains("(efsi_stages::viscous::Viscous)")

@@ -616,6 +616,17 @@ pub struct ProjectionParams {
     /// The preconditioner of the conjugate gradient (default `Multigrid`).
     #[serde(default)]
     pub solver: PressureSolver,
+    /// Incremental pressure correction: the last step's pressure gradient joins the predicted
+    /// velocity before the viscous step, and the projection solves for the pressure's
+    /// increment, so a viscous fluid at rest under gravity stays at rest (the seed's scheme
+    /// sheared `gΔt` at no-slip side walls into a flow; `efsi_stages::projection`). `false` is the seed's scheme
+    /// (Eqs. 11–23), the whole pressure found by the projection. Default (unset): incremental,
+    /// except in a scene with an elastic solid, where the seed's scheme is kept — with the
+    /// semi-implicit elastic step the incremental predictor pumped energy in (a Saint
+    /// Venant–Kirchhoff sphere gained 16× its energy budget by step 151; the stability map's
+    /// G = 1e9 sphere failed).
+    #[serde(default)]
+    pub incremental: Option<bool>,
 }
 
 impl Default for ProjectionParams {
@@ -624,6 +635,7 @@ impl Default for ProjectionParams {
             tolerance: default_div_tol(),
             max_iterations: default_max_iter(),
             solver: PressureSolver::default(),
+            incremental: None,
         }
     }
 }

@@ -25,6 +25,9 @@ pub enum Phase {
     Advection,
     /// Body forces (gravity) → V* (seed Eq. 11).
     BodyForce,
+    /// The last step's pressure gradient → V* (incremental pressure correction; the
+    /// projection then finds the pressure's increment).
+    PressurePredictor,
     /// Semi-implicit viscous term → V^{n+1/3} (seed Eq. 12); B̃ predictor (Eq. 13).
     Viscous,
     /// Semi-implicit elastic term → V^{n+2/3} (seed Eqs. 15–20).
@@ -37,9 +40,10 @@ pub enum Phase {
 
 impl Phase {
     /// All phases in order.
-    pub const ALL: [Phase; 6] = [
+    pub const ALL: [Phase; 7] = [
         Phase::Advection,
         Phase::BodyForce,
+        Phase::PressurePredictor,
         Phase::Viscous,
         Phase::Elastic,
         Phase::Projection,
@@ -514,6 +518,9 @@ impl Pipeline {
         state: &mut State,
     ) -> Result<(), StageError> {
         self.initialize_stages(grid, bc, state)?;
+        // The stages' starting pressure (the incremental projection's hydrostatic one) stays
+        // after the initial velocity is projected.
+        let p0 = state.p.clone();
         let before = (state.u.clone(), state.v.clone());
         // The projection's tolerance is on max|∇·u|·Δt: judge it with the step the flow allows
         // at Courant number 1, not Δt = 1 (which would ask for the divergence to round-off).
@@ -539,7 +546,7 @@ impl Pipeline {
             if e.stage.projects() {
                 e.stage.run(&ctx, state)?;
                 bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
-                state.p.fill(0.0);
+                state.p.copy_from(&p0);
                 // An initial velocity too large for floating point (e.g. 1e308) projects to
                 // infinities: refuse it here rather than start a run from them.
                 for (f, stagger) in [
@@ -565,8 +572,9 @@ impl Pipeline {
 
     /// Every stage's [`Stage::initialize`]: first the stages that write the material fields
     /// (solid fraction, density, viscosity), which the others read, then the rest, each group in
-    /// pipeline order.
-    fn initialize_stages(
+    /// pipeline order. Without [`initialize`](Self::initialize)'s projection of the initial
+    /// velocity: what a change of frame before the first step asks for.
+    pub fn initialize_stages(
         &mut self,
         grid: &Grid,
         bc: &BoundarySet,

@@ -519,7 +519,9 @@ impl Simulation {
 
     /// Set the acceleration of the grid's frame with respect to an inertial one, from the next
     /// step on ([`State::frame_acceleration`]: the body force becomes `gravity − a`, so a
-    /// table accelerating upwards at `a` acts like gravity stronger by `a`). Snapshots and
+    /// table accelerating upwards at `a` acts like gravity stronger by `a`). Set before the
+    /// first step, the stages start again from the new frame ([`Pipeline::initialize_stages`]),
+    /// so a constant acceleration is exactly a change of gravity. Snapshots and
     /// checkpoints carry it. Refused — nothing changes — when the value is not finite, when
     /// it has a radial component in axisymmetric geometry, or when no body-force stage runs
     /// (the body force is scheduled only in scenes with gravity).
@@ -544,7 +546,16 @@ impl Simulation {
                     .into(),
             ));
         }
+        let changed = self.state.frame_acceleration != a;
         self.state.frame_acceleration = a;
+        if changed && self.state.step == 0 {
+            // Before the first step the stages start again from the new frame (the incremental
+            // projection's starting pressure balances gravity less the acceleration), so a
+            // constant acceleration is exactly a change of gravity.
+            self.pipeline
+                .initialize_stages(&self.grid, &self.bc, &mut self.state)
+                .map_err(EfsiError::Stage)?;
+        }
         if a != (0.0, 0.0) {
             // An accelerating frame does work the guard does not account for.
             self.guard = Some(None);
@@ -554,8 +565,8 @@ impl Simulation {
 
     /// Set the speed of the moving wall on `side` from the next step on (its profile and
     /// motion still multiply it; [`BoundarySet::set_wall_speed`]): an input that changes between
-    /// steps, such as an FMU's lid speed. The step limit that keeps the CFL condition on the
-    /// walls follows it; a wall set moving turns the energy guard off (it does work the guard
+    /// steps, such as an FMU's lid speed. It bounds Δt while the fluid is at rest (the velocity
+    /// scale of a first step); a wall set moving turns the energy guard off (it does work the guard
     /// does not account for). Snapshots do not carry it: who sets it sets it again after a
     /// restore. Refused — nothing changes — for a side that is not a moving wall or a speed
     /// that is not finite.

@@ -5,8 +5,10 @@
 //! inertial one ([`State::frame_acceleration`], zero unless set between steps, e.g. by the
 //! FMU's base-acceleration input): in the frame of a shaking table the fictitious
 //! (d'Alembert) force `−a` adds to gravity. The acceleration is uniform, so the step is exact;
-//! it runs after advection, and the projection removes its gradient part (a hydrostatic
-//! pressure) where the density is uniform. In axisymmetric geometry only the axial component
+//! it runs after advection. Its gradient part (a hydrostatic pressure where the density is
+//! layered) is balanced by the last step's pressure, which the incremental projection's
+//! predictor subtracts right after this stage (`projection`), so the viscous step never sees
+//! it; in the seed's non-incremental scheme the projection removes it after the viscous step. In axisymmetric geometry only the axial component
 //! is allowed (the scene and [`efsi_core::Simulation::set_frame_acceleration`] check it).
 //!
 //! **Step limit.** An explicit body force must not move the fluid more than a fraction of a cell

@@ -20,6 +20,7 @@ pub fn builtin() -> Vec<&'static dyn StagePlugin> {
     vec![
         &advection::Advection,
         &body_force::BodyForce,
+        &projection::PressurePredictor,
         &viscous::Viscous,
         &elastic::Elastic,
         &projection::Projection,
