@@ -452,6 +452,10 @@ fn yes() -> bool {
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Numerics {
+    /// A set of solver tolerances (default `Default`); `Strict` tightens each tolerance to at
+    /// most its strict value — one setting for the strict run a check or a reference needs.
+    #[serde(default)]
+    pub preset: Preset,
     /// The pressure projection.
     #[serde(default)]
     pub projection: ProjectionParams,
@@ -461,6 +465,32 @@ pub struct Numerics {
     /// The elastic step.
     #[serde(default)]
     pub elastic: ElasticParams,
+}
+
+/// Solver-tolerance presets (`numerics.preset`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Preset {
+    /// The tolerances as set, or their defaults, chosen by the measured error/time trade
+    /// (README, *Accuracy, speed and the defaults*).
+    #[default]
+    Default,
+    /// Each tolerance at most its strict value: projection 1e-10, viscous 1e-9, elastic
+    /// 1e-10 (the defaults before they were chosen by the trade); a tighter one set in the
+    /// scene stays.
+    Strict,
+}
+
+impl Numerics {
+    /// Apply [`Preset::Strict`] to the tolerances (idempotent; nothing for `Default`). The
+    /// scene loader and [`crate::Simulation::new`] call it, so the stages and `run.json` see
+    /// the tolerances in force.
+    pub fn apply_preset(&mut self) {
+        if self.preset == Preset::Strict {
+            self.projection.tolerance = self.projection.tolerance.min(1e-10);
+            self.viscous.tolerance = self.viscous.tolerance.min(1e-9);
+            self.elastic.tolerance = self.elastic.tolerance.min(1e-10);
+        }
+    }
 }
 
 /// Parameters of the elastic step.
@@ -989,7 +1019,7 @@ impl Scene {
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
         // A byte-order mark some editors put first is not part of the scene.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        opts.from_str(text).map_err(|e| SceneError::Syntax {
+        let mut scene: Scene = opts.from_str(text).map_err(|e| SceneError::Syntax {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,
@@ -1000,7 +1030,9 @@ impl Scene {
                 ),
                 code => code.to_string(),
             },
-        })
+        })?;
+        scene.numerics.apply_preset();
+        Ok(scene)
     }
 
     /// The scene as RON text (what `run.json` and checkpoints record).
@@ -1033,6 +1065,33 @@ mod tests {
         assert!(s.physics.advection);
         assert_eq!(s.numerics.projection.tolerance, 1e-6);
         assert_eq!(s.numerics.projection.solver, PressureSolver::Multigrid);
+    }
+
+    /// `numerics.preset: Strict` tightens every tolerance to its strict value, keeps a tighter
+    /// one set beside it, survives the round trip through RON, and `Default` changes nothing.
+    #[test]
+    fn strict_preset_tightens_each_tolerance() {
+        let with = |n: &str| load(&MIN.replace("time:", &format!("numerics: {n}, time:"))).unwrap();
+        let s = with("(preset: Strict)");
+        let n = &s.numerics;
+        assert_eq!(
+            (
+                n.projection.tolerance,
+                n.viscous.tolerance,
+                n.elastic.tolerance
+            ),
+            (1e-10, 1e-9, 1e-10)
+        );
+        let s =
+            with("(preset: Strict, projection: (tolerance: 1e-12), viscous: (tolerance: 1e-3))");
+        assert_eq!(s.numerics.projection.tolerance, 1e-12);
+        assert_eq!(s.numerics.viscous.tolerance, 1e-9);
+        let back = load(&s.to_ron()).unwrap();
+        assert_eq!(back.numerics.preset, Preset::Strict);
+        assert_eq!(back.numerics.projection.tolerance, 1e-12);
+        let s = with("(preset: Default, viscous: (tolerance: 1e-3))");
+        assert_eq!(s.numerics.viscous.tolerance, 1e-3);
+        assert_eq!(s.numerics.projection.tolerance, 1e-6);
     }
 
     /// The elastic coupling: Split by default, Coupled by name (round trip); its tolerance,

@@ -161,10 +161,12 @@ fn check_memory(scene: &Scene, grid: &Grid) -> Result<(), String> {
 impl Simulation {
     /// Build a simulation from a scene and the available stage plugins.
     pub fn new(
-        scene: Scene,
+        mut scene: Scene,
         scene_path: &Path,
         plugins: &[&dyn StagePlugin],
     ) -> Result<Self, EfsiError> {
+        // A scene built or changed in code may have set the preset after loading.
+        scene.numerics.apply_preset();
         let config = |field: &str, message: String| EfsiError::Config {
             path: scene_path.to_path_buf(),
             field: field.into(),
