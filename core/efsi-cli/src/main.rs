@@ -423,7 +423,7 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
         eprintln!("warning: {w}");
     }
     out!(
-        "{:<16} {:>10} {:>16} {:>14}",
+        "{:<18} {:>10} {:>16} {:>14}",
         "stage",
         "seconds",
         "ns/cell-step",
@@ -431,7 +431,7 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
     );
     for s in sim.pipeline().timings() {
         out!(
-            "{:<16} {:>10.3} {:>16.1} {:>14.1}",
+            "{:<18} {:>10.3} {:>16.1} {:>14.1}",
             s.name,
             s.seconds,
             s.seconds * 1e9 / (cells * steps),

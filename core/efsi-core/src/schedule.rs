@@ -761,7 +761,7 @@ impl fmt::Display for Pipeline {
             let names = |fs: &[FieldId]| fs.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
             writeln!(
                 f,
-                "{:>2}. {:<16} phase {:<11} reads [{}] writes [{}]  ({})",
+                "{:>2}. {:<18} phase {:<17} reads [{}] writes [{}]  ({})",
                 k + 1,
                 e.name,
                 format!("{:?}", e.phase),
