@@ -61,6 +61,15 @@ use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
 /// The projection stage plugin.
 pub struct Projection;
 
+/// What the projection and its predictor read: the velocity, the density of the face weights
+/// and the pressure (the predictor's gradient, the projection's warm start or base).
+const READS: [FieldId; 4] = [
+    FieldId::VelocityX,
+    FieldId::VelocityY,
+    FieldId::Density,
+    FieldId::Pressure,
+];
+
 impl StagePlugin for Projection {
     fn name(&self) -> &'static str {
         "projection"
@@ -69,12 +78,7 @@ impl StagePlugin for Projection {
         Phase::Projection
     }
     fn reads(&self) -> &'static [FieldId] {
-        &[
-            FieldId::VelocityX,
-            FieldId::VelocityY,
-            FieldId::Density,
-            FieldId::Pressure,
-        ]
+        &READS
     }
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Pressure]
@@ -116,7 +120,7 @@ impl StagePlugin for Projection {
 /// by default on unless the scene has an elastic solid; never with the coupled elastic step,
 /// which finds its own pressure.
 pub(crate) fn incremental(scene: &Scene) -> bool {
-    let elastic = scene.solid.as_ref().is_some_and(|s| s.law.is_some());
+    let elastic = crate::elastic::law_needed(scene);
     scene.numerics.projection.incremental.unwrap_or(!elastic) && !crate::elastic::coupled(scene)
 }
 
@@ -134,12 +138,7 @@ impl StagePlugin for PressurePredictor {
         Phase::PressurePredictor
     }
     fn reads(&self) -> &'static [FieldId] {
-        &[
-            FieldId::VelocityX,
-            FieldId::VelocityY,
-            FieldId::Density,
-            FieldId::Pressure,
-        ]
+        &READS
     }
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::VelocityX, FieldId::VelocityY]
@@ -322,8 +321,6 @@ impl Stage for ProjectionStage {
             }
         }
         bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, true);
-        let tol = self.tol;
-        self.tol = 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy);
         let ctx = StepContext {
             grid,
             bc,
@@ -331,8 +328,7 @@ impl Stage for ProjectionStage {
             dt: 1.0,
             step: 0,
         };
-        let solved = self.run(&ctx, state);
-        self.tol = tol;
+        let solved = self.project(&ctx, state, 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy));
         state.u.copy_from(&u0);
         state.v.copy_from(&v0);
         if solved.is_err() || !state.p.data().iter().all(|p| p.is_finite()) {
@@ -344,6 +340,19 @@ impl Stage for ProjectionStage {
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        self.project(ctx, state, self.tol)
+    }
+}
+
+impl ProjectionStage {
+    /// The projection with the divergence tolerance `tol` (the scene's in a step; a stricter
+    /// one for the starting pressure of [`Stage::initialize`]).
+    fn project(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        tol: f64,
+    ) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
         let (nx, ny) = (grid.nx, grid.ny);
         let dt = ctx.dt;
@@ -397,13 +406,9 @@ impl Stage for ProjectionStage {
         let norm = Norm::MaxWeighted(&self.weight);
         let (a, b, x) = (&mut self.a, &self.b, &mut self.x);
         let st = match &self.precond {
-            Precond::Multigrid(mg) => {
-                self.pcg
-                    .solve_norm(a, mg, b, x, self.tol, self.max_iter, norm)
-            }
+            Precond::Multigrid(mg) => self.pcg.solve_norm(a, mg, b, x, tol, self.max_iter, norm),
             Precond::IncompleteCholesky(ic) => {
-                self.pcg
-                    .solve_norm(a, ic, b, x, self.tol, self.max_iter, norm)
+                self.pcg.solve_norm(a, ic, b, x, tol, self.max_iter, norm)
             }
         };
         if !st.converged {
@@ -412,7 +417,7 @@ impl Stage for ProjectionStage {
                 message: format!(
                     "pressure solve did not converge in {} iterations: max|∇·u|·Δt = {:.3e} > tolerance {:.1e}; \
                      raise numerics.projection.max_iterations or loosen numerics.projection.tolerance",
-                    st.iterations, st.residual, self.tol
+                    st.iterations, st.residual, tol
                 ),
             });
         }
@@ -431,7 +436,8 @@ impl Stage for ProjectionStage {
         });
         ctx.bc.fill_scalar(grid, target, true);
         if let Some(f) = &self.increment {
-            // The pressure is the coupled step's plus what is found here.
+            // The pressure is the one already there (the last step's, or the coupled step's)
+            // plus the increment found here.
             for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
                 *p += x;
             }
@@ -455,10 +461,9 @@ impl Stage for ProjectionStage {
             // first non-finite velocity (and the stage) right after the stage.
             debug_assert!(
                 !d.is_finite()
-                    || d <= self.tol * (1.0 + 1e-6) + 1e-15
+                    || d <= tol * (1.0 + 1e-6) + 1e-15
                     || singular_inconsistent(ctx, state),
-                "projection postcondition: max|∇·u|·Δt = {d:e} > {:e}",
-                self.tol
+                "projection postcondition: max|∇·u|·Δt = {d:e} > {tol:e}"
             );
         }
         Ok(StageStats { solve: Some(st) })

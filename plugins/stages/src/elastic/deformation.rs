@@ -33,31 +33,29 @@ impl Stage for DeformationStage {
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
         let a = self.stretch_theta * ctx.dt;
-        if let Some(first) = &mut self.first {
-            k.stretch(
-                &d.start,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                first,
-            );
-            k.fill_ghosts(first);
-            k.stretch(
-                first,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                &mut d.b,
-            );
-        } else {
-            k.stretch(
-                &d.start,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                &mut d.b,
-            );
-        }
+        // The split step's Picard pass stretches the first pass's tensor; the coupled step
+        // stretches Bⁿ (module docs).
+        let stretched = match &mut self.first {
+            Some(first) => {
+                k.stretch(
+                    &d.start,
+                    a,
+                    Some((&d.start, &d.explicit)),
+                    Some(&d.relax),
+                    first,
+                );
+                k.fill_ghosts(first);
+                &*first
+            }
+            None => &d.start,
+        };
+        k.stretch(
+            stretched,
+            a,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            &mut d.b,
+        );
         k.fill_ghosts(&mut d.b);
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);

@@ -253,7 +253,8 @@ pub use limits::MIN_CELLS_ACROSS;
 use limits::wave_limit;
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
-fn law_needed(scene: &Scene) -> bool {
+/// Whether the scene has an elastic solid (a solid with a constitutive law).
+pub(crate) fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
 }
 
