@@ -31,7 +31,7 @@
 //! (Ghia deviation 0.0072, 0.0067, 0.0062, 0.0061; measured when the lid's speed still capped
 //! Δt), the Re = 1000 cavity at 128² at 0.4, 0.8 and 1.0 on the interior velocities. The default stays 0.4 for accuracy, not stability: the step is split from the
 //! viscous and pressure steps, so a steady state carries an error ∝ Δt — the Re = 1000
-//! cavity's Ghia deviation is 0.0135 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
+//! cavity's Ghia deviation is 0.0133 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
 //!
 //! **Parallelism.** Tendencies and updates run over rows in parallel (rayon); each row writes
 //! its own faces, so results are bit-identical on any number of threads.
