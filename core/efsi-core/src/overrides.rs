@@ -27,7 +27,10 @@
 //! needs: `numerics.projection.solver` in a scene without `numerics` inserts
 //! `numerics: (projection: (solver: …))`, a law parameter not in the file inserts it into the
 //! `parameters` map). Whether a missing container is a struct `( )` or a map `{ }`, and the type
-//! of a missing value, are read from the scene with its defaults filled in.
+//! of a missing value, are read from the scene with its defaults filled in. A stage's
+//! `numerics` section that the file leaves out has no defaults in the scene (the stage owns
+//! them, [`crate::scene::options`]): its containers are structs and a string that is a
+//! capitalised identifier is written as an enum's variant (`IncompleteCholesky`).
 //!
 //! # Values
 //!
@@ -277,7 +280,7 @@ impl Scene {
         scene.overrides = overrides.to_vec();
         scene
             .validate()
-            .map_err(|(field, message)| invalid(path, overrides, field, message))?;
+            .map_err(|(field, message)| attribute(path, overrides, field, message))?;
         Ok(scene)
     }
 
@@ -360,9 +363,15 @@ impl Scene {
     }
 }
 
-/// A validation error, attributed to the last override whose path it names (or that lies
-/// inside the field it names).
-fn invalid(path: &Path, overrides: &[Override], field: String, message: String) -> SceneError {
+/// A validation error of the scene read from `path`, attributed to the last of the scene's
+/// `overrides` whose path it names (or that lies inside the field it names): an
+/// [`SceneError::Override`] naming it, else [`SceneError::Invalid`].
+pub fn attribute(
+    path: &Path,
+    overrides: &[Override],
+    field: String,
+    message: String,
+) -> SceneError {
     let named = parse_path(&field).unwrap_or_default();
     let overlaps = |o: &&Override| {
         let s = o.segments();
@@ -1137,6 +1146,11 @@ fn render(value: &OverrideValue, target: Option<Atom>) -> Result<String, String>
         (OverrideValue::Float(x), Some(Atom::Str)) => Ok(ron_string(&format!("{x:?}"))),
         (OverrideValue::Float(x), _) => ron::to_string(x).map_err(|e| e.to_string()),
         (OverrideValue::Str(s), Some(Atom::Ident)) if is_identifier(s) => Ok(s.clone()),
+        // A setting of unknown type (in a stage's section the file leaves out, whose defaults
+        // the scene does not know): a capitalised identifier is an enum's variant.
+        (OverrideValue::Str(s), None) if is_identifier(s) && s.starts_with(char::is_uppercase) => {
+            Ok(s.clone())
+        }
         (OverrideValue::Str(s), _) => Ok(ron_string(s)),
         (OverrideValue::Ron(t), target) => {
             let t = t.trim();
@@ -1198,10 +1212,7 @@ mod tests {
         assert_eq!(get("solid.law.parameters.G"), OverrideValue::Float(0.18e6));
         // A default the file leaves out, an enum's unit variant, a struct.
         assert_eq!(get("time.cfl"), OverrideValue::Float(0.4));
-        assert_eq!(
-            get("numerics.projection.solver"),
-            OverrideValue::Str("Multigrid".into())
-        );
+        assert_eq!(get("geometry"), OverrideValue::Str("Axisymmetric".into()));
         assert!(matches!(get("grid"), OverrideValue::Ron(_)));
         let e = scene.get("solid.law.parameters.K").unwrap_err().to_string();
         assert!(e.contains("no setting solid.law.parameters.K"), "{e}");
@@ -1321,11 +1332,12 @@ Scene(
         let law = s.solid.as_ref().unwrap().law.as_ref().unwrap();
         assert_eq!(law.parameters["G"], 1e6);
         assert_eq!(law.parameters["K"], 2.0);
+        // A stage's section holds what the overrides wrote; the absent enum value given as a
+        // string is written as its variant.
         assert_eq!(
-            s.numerics.projection.solver,
-            crate::scene::PressureSolver::IncompleteCholesky
+            s.numerics.section("projection"),
+            Some("(solver: IncompleteCholesky, tolerance: 1e-9)")
         );
-        assert_eq!(s.numerics.projection.tolerance, 1e-9);
         assert_eq!(s.time.steady, Some(1e-6));
         assert_eq!(s.solid.as_ref().unwrap().viscosity, Some(2.0));
     }
@@ -1358,8 +1370,8 @@ Scene(
     fn unknown_paths_are_refused_naming_the_override() {
         refused(&[ron("grid.nxx", "3")], &["set grid.nxx=3", "nxx", "nx"]);
         refused(
-            &[ron("numerics.pressure.tolerance", "1e-3")],
-            &["set numerics.pressure", "pressure"],
+            &[ron("physics.convection", "false")],
+            &["set physics.convection", "convection"],
         );
         refused(
             &[ron("output.probes[9].at", "(0, 0)")],

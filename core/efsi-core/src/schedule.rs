@@ -210,6 +210,11 @@ pub trait StagePlugin: Sync {
     }
     /// Whether `scene` needs this stage.
     fn needed(&self, scene: &Scene) -> bool;
+    /// The `numerics` section the stage reads its options from, if it has options
+    /// ([`crate::scene::options`]; default: none). Several plugins may declare one section.
+    fn options(&self) -> Option<crate::scene::OptionsDecl> {
+        None
+    }
     /// Build the stage for a scene; the error says which scene value is unusable. `shared`
     /// holds what the stages of this pipeline share while it is built (in the pipeline's
     /// order): a stage that needs what another loads or derives from the scene (the solid's

@@ -165,8 +165,6 @@ impl Simulation {
         scene_path: &Path,
         plugins: &[&dyn StagePlugin],
     ) -> Result<Self, EfsiError> {
-        // A scene built or changed in code may have set the preset after loading.
-        scene.numerics.apply_preset();
         let config = |field: &str, message: String| EfsiError::Config {
             path: scene_path.to_path_buf(),
             field: field.into(),
@@ -176,6 +174,13 @@ impl Simulation {
         scene
             .validate()
             .map_err(|(field, message)| config(&field, message))?;
+        // The stages' `numerics` sections, checked by the plugins that declare them; an error
+        // an override caused names the override.
+        crate::scene::options::check_sections(&mut scene, plugins).map_err(
+            |(field, message)| {
+                crate::overrides::attribute(scene_path, &scene.overrides, field, message)
+            },
+        )?;
         let grid = Grid::new(
             scene.geometry,
             scene.grid.nx,

@@ -31,7 +31,6 @@ impl Scene {
         self.validate_time()?;
         self.validate_materials()?;
         self.validate_boundaries()?;
-        self.validate_numerics()?;
         self.validate_output()
     }
 
@@ -319,85 +318,6 @@ impl Scene {
                     self.boundaries.x_min
                 ),
             );
-        }
-        Ok(())
-    }
-
-    /// The numerics' settings.
-    fn validate_numerics(&self) -> Checked {
-        // Numerics.
-        // A relative tolerance below the unit round-off can never be met.
-        let tolerance = |f: &str, tol: f64| {
-            if (f64::EPSILON..1.0).contains(&tol) {
-                Ok(())
-            } else {
-                err(
-                    f,
-                    format!(
-                        "must be in [{:e}, 1) (a relative residual below the unit round-off \
-                         cannot be reached), got {}",
-                        f64::EPSILON,
-                        num(tol)
-                    ),
-                )
-            }
-        };
-        let p = &self.numerics.projection;
-        tolerance("numerics.projection.tolerance", p.tolerance)?;
-        if p.max_iterations == 0 {
-            return err("numerics.projection.max_iterations", "must be ≥ 1");
-        }
-        let el = &self.numerics.elastic;
-        tolerance("numerics.elastic.tolerance", el.tolerance)?;
-        if el.max_iterations == 0 {
-            return err("numerics.elastic.max_iterations", "must be ≥ 1");
-        }
-        if !(el.wave_courant > 0.0 && el.wave_courant <= MAX_WAVE_COURANT) {
-            return err(
-                "numerics.elastic.wave_courant",
-                format!(
-                    "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
-                     split projection pumps energy into stiff solids (stability map)",
-                    el.wave_courant
-                ),
-            );
-        }
-        if !(el.coupling_tolerance > 0.0 && el.coupling_tolerance < 1.0) {
-            return err(
-                "numerics.elastic.coupling_tolerance",
-                format!(
-                    "must be in (0, 1) (a fraction of the elastic step's divergence), got {}",
-                    el.coupling_tolerance
-                ),
-            );
-        }
-        if let Some(t) = el.theta
-            && !(0.5..=1.0).contains(&t)
-        {
-            return err(
-                "numerics.elastic.theta",
-                format!("must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {t}"),
-            );
-        }
-        if el.coupling_iterations == 0 {
-            return err("numerics.elastic.coupling_iterations", "must be ≥ 1");
-        }
-        if el.coupling == crate::scene::ElasticCoupling::Coupled && !el.implicit {
-            return err(
-                "numerics.elastic.coupling",
-                "Coupled needs the implicit elastic step (numerics.elastic.implicit: true)",
-            );
-        }
-        let v = &self.numerics.viscous;
-        if !(0.5..=1.0).contains(&v.theta) {
-            return err(
-                "numerics.viscous.theta",
-                format!("must be in [0.5, 1], got {}", v.theta),
-            );
-        }
-        tolerance("numerics.viscous.tolerance", v.tolerance)?;
-        if v.max_iterations == 0 {
-            return err("numerics.viscous.max_iterations", "must be ≥ 1");
         }
         Ok(())
     }

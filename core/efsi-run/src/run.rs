@@ -701,10 +701,18 @@ impl Outputs {
         let timings = sim.pipeline().timings();
         let cells = sim.grid.cells() as f64;
         let steps = steps_this_run.max(1) as f64;
+        let mut scene = serde_json::to_value(&sim.scene).unwrap_or_default();
+        // The stages' numerics sections are RON text in the scene: recorded as JSON values.
+        for (name, ron_text) in sim.scene.numerics.sections() {
+            if let Ok(v) = ron::from_str::<ron::Value>(ron_text) {
+                scene["numerics"][name] = serde_json::to_value(v).unwrap_or_default();
+            }
+        }
+        let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
             "run_id": self.run_id,
             "efsi_version": env!("CARGO_PKG_VERSION"),
-            "scene": serde_json::to_value(&sim.scene).unwrap_or_default(),
+            "scene": scene,
             "scene_path": sim.scene_path.display().to_string(),
             "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
             "stop": stop,
@@ -717,7 +725,7 @@ impl Outputs {
             "cells": sim.grid.cells(),
             "wall_seconds": wall_seconds,
             "ns_per_cell_step": wall_seconds * 1e9 / (cells * steps),
-            "projection_tolerance": sim.scene.numerics.projection.tolerance,
+            "projection_tolerance": projection_tolerance,
             "final_rate_of_change": if sim.rate_of_change().is_finite() { serde_json::json!(sim.rate_of_change()) } else { serde_json::Value::Null },
             "stages": timings.iter().map(|s| serde_json::json!({
                 "name": s.name,

@@ -50,9 +50,10 @@
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Report, Run, execute_built, load_case, probes};
 use efsi_core::interface::shapes::Shape;
-use efsi_core::scene::{MAX_WAVE_COURANT, ProbeSpec};
+use efsi_core::scene::ProbeSpec;
 use efsi_core::{Scene, Simulation};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
+use efsi_stages::elastic::{ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT};
 use std::path::PathBuf;
 
 /// Shear moduli (Pa).
@@ -208,12 +209,14 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
     scene.time.end = END;
     scene.time.cfl = st.cfl;
     scene.time.fixed_dt = st.fixed_dt;
+    let mut elastic = ElasticOptions::default();
     if let Some(w) = st.wave_courant {
-        scene.numerics.elastic.wave_courant = w;
+        elastic.wave_courant = w;
     }
     if st.coupled {
-        scene.numerics.elastic.coupling = efsi_core::scene::ElasticCoupling::Coupled;
+        elastic.coupling = ElasticCoupling::Coupled;
     }
+    scene.numerics.set(&elastic);
     scene.output.vtk_every = None;
     // Probes every step: an interval would cap Δt (the run lands on every probe time).
     scene.output.probe_every = None;

@@ -113,10 +113,11 @@ impl Coupling {
         scene: &efsi_core::Scene,
     ) -> Self {
         let n = grid.cells();
-        let el = &scene.numerics.elastic;
+        let el: super::ElasticOptions = scene.numerics.get().unwrap_or_default();
+        let proj: crate::projection::ProjectionOptions = scene.numerics.get().unwrap_or_default();
         Coupling {
             rel_tol: el.coupling_tolerance,
-            proj_tol: scene.numerics.projection.tolerance,
+            proj_tol: proj.tolerance,
             max_iter: el.coupling_iterations,
             poisson: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
             mg: Multigrid::new(2),

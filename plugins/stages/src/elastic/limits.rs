@@ -56,7 +56,11 @@ pub(super) fn wave_limit(
             ));
         }
     }
-    let s = scene.numerics.elastic.wave_courant;
+    let s = scene
+        .numerics
+        .get::<super::ElasticOptions>()
+        .unwrap_or_default()
+        .wave_courant;
     let h = grid.dx.min(grid.dy);
     let c = (g0 / solid.density).sqrt();
     let dt = s * h / c;

@@ -228,7 +228,7 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::Coefficients;
-use efsi_core::scene::ElasticPreconditioner;
+use efsi_core::scene::OptionsDecl;
 use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin,
     bc::UnknownFaces,
@@ -242,6 +242,7 @@ mod deformation;
 mod energy;
 mod interface;
 mod limits;
+mod options;
 mod solve;
 mod stress;
 #[cfg(test)]
@@ -251,6 +252,7 @@ mod transport;
 use deformation::DeformationStage;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::wave_limit;
+pub use options::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, MAX_WAVE_COURANT};
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
@@ -262,9 +264,8 @@ pub(crate) fn law_needed(scene: &Scene) -> bool {
 /// solid that has a law): the elastic stage then leaves a pressure for the projection stage
 /// to complete, and Δt has no elastic-wave cap.
 pub(crate) fn coupled(scene: &Scene) -> bool {
-    law_needed(scene)
-        && scene.numerics.elastic.implicit
-        && scene.numerics.elastic.coupling == efsi_core::scene::ElasticCoupling::Coupled
+    let o: ElasticOptions = scene.numerics.get().unwrap_or_default();
+    law_needed(scene) && o.implicit && o.coupling == ElasticCoupling::Coupled
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
@@ -345,6 +346,9 @@ impl StagePlugin for Elastic {
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)
     }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ElasticOptions>())
+    }
     fn build(
         &self,
         scene: &Scene,
@@ -356,6 +360,7 @@ impl StagePlugin for Elastic {
         let (mu_f, mu_s) = viscosities(scene);
         let k = Kernels::new(grid, bc, mu_f, mu_s);
         let n = k.faces.len();
+        let o: ElasticOptions = crate::options(scene)?;
         Ok(Box::new(ElasticStage {
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
@@ -370,9 +375,9 @@ impl StagePlugin for Elastic {
                 viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
                 dm: vec![0.0; n],
             },
-            stretch_theta: scene.numerics.elastic.stretch_theta(),
+            stretch_theta: o.stretch_theta(),
             theta: if crate::viscous::Viscous.needed(scene) {
-                scene.numerics.viscous.theta
+                crate::options::<crate::viscous::ViscousOptions>(scene)?.theta
             } else {
                 0.0
             },
@@ -380,10 +385,10 @@ impl StagePlugin for Elastic {
             delta: vec![0.0; n],
             diag: vec![0.0; n],
             solver: BiCgStab::new(n),
-            tol: scene.numerics.elastic.tolerance,
-            max_iter: scene.numerics.elastic.max_iterations,
-            implicit: scene.numerics.elastic.implicit,
-            preconditioner: match scene.numerics.elastic.preconditioner {
+            tol: o.tolerance,
+            max_iter: o.max_iterations,
+            implicit: o.implicit,
+            preconditioner: match o.preconditioner {
                 ElasticPreconditioner::Auto
                     if efsi_core::scene::Side::ALL.iter().any(|&s| {
                         matches!(
@@ -437,6 +442,9 @@ impl StagePlugin for DeformationUpdate {
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)
     }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ElasticOptions>())
+    }
     fn build(
         &self,
         scene: &Scene,
@@ -457,7 +465,7 @@ impl StagePlugin for DeformationUpdate {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),
             wave_dt,
-            stretch_theta: scene.numerics.elastic.stretch_theta(),
+            stretch_theta: crate::options::<ElasticOptions>(scene)?.stretch_theta(),
             first: (!coupled(scene)).then(|| std::array::from_fn(|_| Field::zeros(grid))),
         }))
     }

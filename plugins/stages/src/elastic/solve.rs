@@ -1,11 +1,11 @@
 //! The implicit viscous–elastic system and its solve: the operator
 //! `M − θΔt K_v − (Δt²/2) K_J` (see the module docs of [`super`]) and the elastic stage.
 
+use super::ElasticPreconditioner;
 use super::{Kernels, err, missing};
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::{Coefficients, CompactFaces};
 use efsi_core::ops::face_density;
-use efsi_core::scene::ElasticPreconditioner;
 use efsi_core::{BoundarySet, Field, Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};

@@ -50,13 +50,16 @@
 //! fixed order, so the result is bit-identical on any number of threads. Nothing is allocated
 //! after the first step.
 
-use efsi_core::scene::{Boundary, PressureSolver, Side};
+use efsi_core::scene::{Boundary, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext, ops,
 };
 use efsi_linalg::par::{for_each_mut, for_each_row};
 use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
+
+mod options;
+pub use options::{PressureSolver, ProjectionOptions};
 
 /// The projection stage plugin.
 pub struct Projection;
@@ -86,6 +89,9 @@ impl StagePlugin for Projection {
     fn needed(&self, _scene: &Scene) -> bool {
         true
     }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ProjectionOptions>())
+    }
     fn build(
         &self,
         scene: &Scene,
@@ -94,11 +100,12 @@ impl StagePlugin for Projection {
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let n = grid.cells();
+        let o: ProjectionOptions = crate::options(scene)?;
         Ok(Box::new(ProjectionStage {
-            tol: scene.numerics.projection.tolerance,
-            max_iter: scene.numerics.projection.max_iterations,
+            tol: o.tolerance,
+            max_iter: o.max_iterations,
             a: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
-            precond: match scene.numerics.projection.solver {
+            precond: match o.solver {
                 PressureSolver::Multigrid => Precond::Multigrid(Multigrid::new(2)),
                 PressureSolver::IncompleteCholesky => {
                     Precond::IncompleteCholesky(IncompleteCholesky::new())
@@ -121,7 +128,8 @@ impl StagePlugin for Projection {
 /// which finds its own pressure.
 pub(crate) fn incremental(scene: &Scene) -> bool {
     let elastic = crate::elastic::law_needed(scene);
-    scene.numerics.projection.incremental.unwrap_or(!elastic) && !crate::elastic::coupled(scene)
+    let o: ProjectionOptions = scene.numerics.get().unwrap_or_default();
+    o.incremental.unwrap_or(!elastic) && !crate::elastic::coupled(scene)
 }
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last
@@ -145,6 +153,9 @@ impl StagePlugin for PressurePredictor {
     }
     fn needed(&self, scene: &Scene) -> bool {
         incremental(scene)
+    }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ProjectionOptions>())
     }
     fn build(
         &self,

@@ -44,7 +44,7 @@
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::{Coefficients, CompactFaces};
 use efsi_core::ops::face_density;
-use efsi_core::scene::ViscousPreconditioner;
+use efsi_core::scene::OptionsDecl;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -53,6 +53,9 @@ use efsi_core::{
 };
 use efsi_linalg::par::{self, dot, for_each_row, for_each_row2};
 use efsi_linalg::{LinearOperator, Norm, Pcg, SolveStats};
+
+mod options;
+pub use options::{ViscousOptions, ViscousPreconditioner};
 
 /// The viscous stage plugin.
 pub struct Viscous;
@@ -82,6 +85,10 @@ impl StagePlugin for Viscous {
                 .as_ref()
                 .is_some_and(|s| s.viscosity(&scene.fluid) > 0.0)
     }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ViscousOptions>())
+    }
+
     fn build(
         &self,
         scene: &Scene,
@@ -91,11 +98,12 @@ impl StagePlugin for Viscous {
     ) -> Result<Box<dyn Stage>, String> {
         let faces = UnknownFaces::new(grid, bc);
         let n = faces.len();
+        let o: ViscousOptions = crate::options(scene)?;
         Ok(Box::new(ViscousStage {
-            preconditioner: scene.numerics.viscous.preconditioner,
-            theta: scene.numerics.viscous.theta,
-            tol: scene.numerics.viscous.tolerance,
-            max_iter: scene.numerics.viscous.max_iterations,
+            preconditioner: o.preconditioner,
+            theta: o.theta,
+            tol: o.tolerance,
+            max_iter: o.max_iterations,
             op: ViscousSystem {
                 grid: grid.clone(),
                 bc: bc.clone(),

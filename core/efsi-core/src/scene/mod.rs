@@ -1,0 +1,527 @@
+//! The scene: one RON file that describes everything a run needs.
+//!
+//! ```ron
+//! Scene(
+//!     name: "lid_driven_cavity_re100",
+//!     geometry: Planar,
+//!     domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+//!     grid: (nx: 64, ny: 64),
+//!     time: (end: 30.0, cfl: 0.5, steady: 1e-8),
+//!     fluid: (density: 1.0, viscosity: 0.01),
+//!     boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+//!     output: (vtk_every: 5.0, profiles: [Line(name: "u_x0.5", from: (0.5, 0.0), to: (0.5, 1.0), points: 129, fields: ["u"])]),
+//! )
+//! ```
+//!
+//! Unknown fields are errors, and every error names the file, the line and column (syntax) or
+//! the field (values out of range) and says what was expected. Optional values may be written
+//! bare (`steady: 1e-8`) thanks to RON's `implicit_some` extension, which the loader enables.
+//! In axisymmetric geometry `x` is the radius r and `y` the axis z; the aliases `r`, `z`,
+//! `r_min`, `r_max`, `z_min`, `z_max` are accepted.
+
+use crate::grid::Geometry;
+pub use crate::interface::Shape;
+pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
+pub use output::{
+    FIELD_NAMES, MAX_PROFILE_POINTS, OutputSpec, ProbeSpec, ProfileSpec, VTK_FIELDS,
+    VtkCompression, VtkOptions, VtkPrecision,
+};
+
+mod numerics;
+mod output;
+pub mod options {
+    //! What a stage plugin needs to declare its `numerics` section.
+    pub use super::numerics::{
+        Checked, OptionsDecl, Preset, StageOptions, check_iterations, check_sections,
+        check_tolerance,
+    };
+}
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// An error in a scene: where it is and what was expected.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{path}: cannot read scene: {source}")]
+    Io {
+        /// The scene file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not valid RON, or does not match the scene schema.
+    #[error("{path}:{line}:{column}: {message}")]
+    Syntax {
+        /// The scene file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A value is out of its allowed range or inconsistent with another.
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        /// The scene file.
+        path: PathBuf,
+        /// The offending field, as a path (`fluid.viscosity`).
+        field: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// An override ([`crate::overrides`]: `efsi run --set`, `--refine`, [`Scene::set`]) that
+    /// cannot be applied, or whose value the scene refuses.
+    #[error("{path}: {setting}: {message}")]
+    Override {
+        /// The scene file (or `scene `name`` for a scene in memory).
+        path: PathBuf,
+        /// The override, as `set PATH=VALUE` or `refine F`.
+        setting: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+}
+
+/// A complete scene.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Name of the scene; the default output folder is `out/<name>/`.
+    pub name: String,
+    /// Planar or axisymmetric (default planar).
+    #[serde(default = "default_geometry")]
+    pub geometry: Geometry,
+    /// Extents of the box.
+    pub domain: Domain,
+    /// Cell counts.
+    pub grid: GridSpec,
+    /// Time span and step control.
+    pub time: TimeSpec,
+    /// The fluid's material.
+    pub fluid: Fluid,
+    /// Gravity (acceleration vector; default zero). In axisymmetric geometry it must be along z.
+    #[serde(default)]
+    pub gravity: (f64, f64),
+    /// Initial velocity of the fluid (default at rest).
+    #[serde(default)]
+    pub initial_velocity: InitialVelocity,
+    /// The solid, if any: its shape at t = 0 and its material (one material; several bodies
+    /// are a `Union` of shapes).
+    #[serde(default)]
+    pub solid: Option<Solid>,
+    /// Boundary conditions per side.
+    pub boundaries: Boundaries,
+    /// Physics switches that cannot be inferred.
+    #[serde(default)]
+    pub physics: Physics,
+    /// Numerical parameters of the solvers.
+    #[serde(default)]
+    pub numerics: Numerics,
+    /// What to write and where.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
+    #[serde(skip)]
+    pub source_dir: Option<PathBuf>,
+    /// The overrides applied to the file's settings, in order ([`crate::overrides`]; set by
+    /// [`Scene::load_with`], [`Scene::set`], …): the scene is the file's with these applied.
+    #[serde(skip)]
+    pub overrides: Vec<crate::overrides::Override>,
+}
+
+fn default_geometry() -> Geometry {
+    Geometry::Planar
+}
+
+/// Extents of the box. `x` is r and `y` is z in axisymmetric geometry.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    /// `(min, max)` along x (r).
+    #[serde(alias = "r")]
+    pub x: (f64, f64),
+    /// `(min, max)` along y (z).
+    #[serde(alias = "z")]
+    pub y: (f64, f64),
+}
+
+/// Cell counts.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Cells along x (r).
+    #[serde(alias = "nr")]
+    pub nx: usize,
+    /// Cells along y (z).
+    #[serde(alias = "nz")]
+    pub ny: usize,
+}
+
+/// Time span and step control.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// End time (> 0).
+    pub end: f64,
+    /// Courant number on `Δt·(|u|/dx + |v|/dy)` (default 0.4, in (0, 1]; the advection scheme's
+    /// sufficient TVD bound is 0.5, and the Re = 100 cavity shows limit-cycle noise from 0.45).
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// Largest step allowed (default: no bound beyond the CFL and `end`).
+    #[serde(default)]
+    pub dt_max: Option<f64>,
+    /// Smallest step allowed; a run that needs a smaller one stops with an error (default 1e-12·end).
+    #[serde(default)]
+    pub dt_min: Option<f64>,
+    /// A fixed step instead of the CFL rule (still shortened to land on output times).
+    #[serde(default)]
+    pub fixed_dt: Option<f64>,
+    /// Stop early at steady state: when `max|uⁿ⁺¹ − uⁿ|/Δt` falls below this (velocity/time units).
+    #[serde(default)]
+    pub steady: Option<f64>,
+}
+
+fn default_cfl() -> f64 {
+    0.4
+}
+
+impl TimeSpec {
+    /// The smallest step allowed: `dt_min`, else 1e-12·`end`. It also bounds the output and
+    /// checkpoint intervals from below (a shorter interval would force shorter steps).
+    pub fn dt_min_or_default(&self) -> f64 {
+        self.dt_min.unwrap_or(1e-12 * self.end)
+    }
+}
+
+/// A Newtonian fluid.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fluid {
+    /// Density ρ (kg/m³, > 0).
+    pub density: f64,
+    /// Dynamic viscosity μ (Pa·s, ≥ 0).
+    pub viscosity: f64,
+}
+
+/// Initial velocity field.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum InitialVelocity {
+    /// At rest.
+    #[default]
+    Rest,
+    /// Uniform `(u, v)`.
+    Uniform((f64, f64)),
+    /// From the stream function `ψ = a·sin(kx·x)·sin(ky·y)`, `u = ∂ψ/∂y`, `v = −∂ψ/∂x`
+    /// (sampled at cell corners, so the discrete field is exactly divergence-free).
+    SinSinStream {
+        /// Amplitude `a`.
+        amplitude: f64,
+        /// Wave numbers `(kx, ky)`.
+        wavenumbers: (f64, f64),
+    },
+}
+
+/// A solid body (or several, as a union of shapes) of one material.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solid {
+    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
+    pub shape: Shape,
+    /// Density ρ_s (kg/m³, > 0).
+    pub density: f64,
+    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
+    #[serde(default)]
+    pub viscosity: Option<f64>,
+    /// Initial velocity of the solid (default: at rest).
+    #[serde(default)]
+    pub velocity: Option<(f64, f64)>,
+    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
+    #[serde(default)]
+    pub law: Option<LawSpec>,
+}
+
+/// A constitutive law named in a scene.
+///
+/// ```ron
+/// law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
+/// law: (name: "plugins/my_law/target/release/libmy_law.so", parameters: {"k": 2.0}),
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LawSpec {
+    /// A shipped law's name (`neo_hookean`, `saint_venant_kirchhoff`, `mooney_rivlin`), or the
+    /// path of a law library (relative paths are relative to the scene file's folder).
+    pub name: String,
+    /// Parameter values by name; the law declares which exist, their units, defaults and ranges.
+    #[serde(default)]
+    pub parameters: std::collections::BTreeMap<String, f64>,
+}
+
+impl Solid {
+    /// μ_s: the scene's value, or the seed's rule μ_f ρ_s/ρ_f.
+    pub fn viscosity(&self, fluid: &Fluid) -> f64 {
+        self.viscosity
+            .unwrap_or(fluid.viscosity * self.density / fluid.density)
+    }
+}
+
+/// One of the four sides of the box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Side {
+    /// x = x_min (r = r_min).
+    #[serde(alias = "RMin")]
+    XMin,
+    /// x = x_max.
+    #[serde(alias = "RMax")]
+    XMax,
+    /// y = y_min.
+    #[serde(alias = "ZMin")]
+    YMin,
+    /// y = y_max.
+    #[serde(alias = "ZMax")]
+    YMax,
+}
+
+impl Side {
+    /// All sides, in the order x_min, x_max, y_min, y_max.
+    pub const ALL: [Side; 4] = [Side::XMin, Side::XMax, Side::YMin, Side::YMax];
+
+    /// The scene field name of this side.
+    pub fn field_name(self) -> &'static str {
+        match self {
+            Side::XMin => "x_min",
+            Side::XMax => "x_max",
+            Side::YMin => "y_min",
+            Side::YMax => "y_max",
+        }
+    }
+
+    /// The opposite side (the partner of a periodic pair).
+    pub fn opposite(self) -> Side {
+        match self {
+            Side::XMin => Side::XMax,
+            Side::XMax => Side::XMin,
+            Side::YMin => Side::YMax,
+            Side::YMax => Side::YMin,
+        }
+    }
+}
+
+impl fmt::Display for Side {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.field_name())
+    }
+}
+
+/// Boundary conditions on the four sides.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Boundaries {
+    /// Side x = x_min (r_min; the axis when r_min = 0).
+    #[serde(alias = "r_min")]
+    pub x_min: Boundary,
+    /// Side x = x_max.
+    #[serde(alias = "r_max")]
+    pub x_max: Boundary,
+    /// Side y = y_min.
+    #[serde(alias = "z_min")]
+    pub y_min: Boundary,
+    /// Side y = y_max.
+    #[serde(alias = "z_max")]
+    pub y_max: Boundary,
+}
+
+impl Boundaries {
+    /// The condition on `side`.
+    pub fn get(&self, side: Side) -> &Boundary {
+        match side {
+            Side::XMin => &self.x_min,
+            Side::XMax => &self.x_max,
+            Side::YMin => &self.y_min,
+            Side::YMax => &self.y_max,
+        }
+    }
+}
+
+/// A boundary condition on one side.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Boundary {
+    /// Fixed wall: zero velocity.
+    NoSlip,
+    /// Wall moving in its own plane: zero normal velocity, tangential velocity
+    /// `speed · profile(position) · motion(t)`.
+    MovingWall {
+        /// Peak tangential speed (m/s), along +x on y-sides and +y on x-sides.
+        speed: f64,
+        /// Shape along the wall (default uniform).
+        #[serde(default)]
+        profile: WallProfile,
+        /// Dependence on time (default steady).
+        #[serde(default)]
+        motion: WallMotion,
+    },
+    /// Impermeable wall without friction: zero normal velocity and zero tangential stress.
+    FreeSlip,
+    /// The symmetry axis r = 0 of an axisymmetric domain (x_min only).
+    Axis,
+    /// Periodic: the opposite side must be periodic too.
+    Periodic,
+    /// Outflow: zero normal gradient of velocity, zero pressure.
+    Outflow,
+}
+
+/// Shape of a moving wall's velocity along the wall.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum WallProfile {
+    /// The same speed everywhere.
+    #[default]
+    Uniform,
+    /// Seed Eq. (26): `sin²(π s / (2w))` over a ramp of width `w` at each end of the wall
+    /// (s the distance from that end), 1 in between.
+    Sin2Ramp {
+        /// Width of each ramp (m).
+        width: f64,
+    },
+}
+
+/// Dependence of a moving wall's velocity on time.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum WallMotion {
+    /// Constant in time.
+    #[default]
+    Steady,
+    /// `sin(ω t)` (Stokes' oscillating plate; Sugiyama's oscillating Couette flow).
+    Sin {
+        /// Angular frequency ω (rad/s).
+        omega: f64,
+    },
+    /// On for `t < t_off`, then stopped.
+    Until {
+        /// The time the wall stops (s).
+        t_off: f64,
+    },
+}
+
+impl WallProfile {
+    /// Factor at distance `s` along a wall of length `len`.
+    pub fn factor(&self, s: f64, len: f64) -> f64 {
+        match *self {
+            WallProfile::Uniform => 1.0,
+            WallProfile::Sin2Ramp { width } => {
+                let d = s.min(len - s).max(0.0);
+                if d < width {
+                    (std::f64::consts::PI * d / (2.0 * width)).sin().powi(2)
+                } else {
+                    1.0
+                }
+            }
+        }
+    }
+}
+
+impl WallMotion {
+    /// Factor at time `t`.
+    pub fn factor(&self, t: f64) -> f64 {
+        match *self {
+            WallMotion::Steady => 1.0,
+            WallMotion::Sin { omega } => (omega * t).sin(),
+            WallMotion::Until { t_off } => {
+                if t < t_off {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+}
+
+/// Physics switches that the scene cannot imply.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Physics {
+    /// Include the convective term (default true; false gives Stokes flow).
+    #[serde(default = "yes")]
+    pub advection: bool,
+}
+
+impl Default for Physics {
+    fn default() -> Self {
+        Physics { advection: true }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// How deep values may nest in a scene file (RON's default, which keeps the reader off the
+/// end of its stack).
+pub const RECURSION_LIMIT: usize = 128;
+
+/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
+/// digits).
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// The largest diffusion number μ·time.end/(ρh²) a scene may reach (1e200): far beyond any
+/// physical scene, and low enough that the viscous system's products stay finite.
+pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
+
+impl Scene {
+    /// Read and validate a scene file (with overrides: [`Scene::load_with`]).
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Scene::load_with(path, &[])
+    }
+
+    /// Parse and validate scene text; `path` is used in error messages only.
+    pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::from_str_with(text, path, &[])
+    }
+
+    /// Parse scene text without validating it (syntax and types only).
+    pub(crate) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let opts = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        // A byte-order mark some editors put first is not part of the scene.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut scene: Scene = opts.from_str(text).map_err(|e| SceneError::Syntax {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+            message: match e.code {
+                ron::Error::ExceededRecursionLimit => format!(
+                    "nested deeper than the scene reader allows ({RECURSION_LIMIT} levels): \
+                     flatten the shape (e.g. one Union of many shapes rather than Unions of Unions)"
+                ),
+                code => code.to_string(),
+            },
+        })?;
+        scene.numerics.locate_in(text);
+        Ok(scene)
+    }
+
+    /// The scene as RON text (what `run.json` and checkpoints record).
+    pub fn to_ron(&self) -> String {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests;

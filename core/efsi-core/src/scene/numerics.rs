@@ -1,0 +1,320 @@
+//! The `numerics` section: a preset, and one section per stage that declares options.
+//!
+//! The core does not know a stage's settings. A stage plugin that has some declares them as a
+//! type implementing [`StageOptions`] — its section's name under `numerics`, its fields with
+//! their defaults, its range checks and its strict preset — and returns
+//! [`OptionsDecl::of`] from [`crate::StagePlugin::options`]. The scene keeps each section as
+//! the RON text the file wrote ([`Numerics::section`]); a stage reads its options with
+//! [`Numerics::get`]. [`crate::Simulation::new`] checks the sections against the declarations
+//! of the plugins it is given ([`check_sections`]): an unknown section, a malformed or out of
+//! range setting is refused there, naming the setting, and the scene it keeps holds every
+//! declared section with its defaults filled in and the preset applied, so `run.json` records
+//! the settings in force. Adding an option or a section touches only the stage that owns it.
+//!
+//! ```text
+//! numerics: (
+//!     preset: Strict,
+//!     projection: (tolerance: 1e-8, solver: Multigrid),
+//!     viscous: (preconditioner: Jacobi),
+//! )
+//! ```
+
+use super::{Scene, num};
+use crate::schedule::StagePlugin;
+use ron::value::RawValue;
+use serde::de::{DeserializeOwned, MapAccess, Visitor};
+use serde::ser::SerializeStruct;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// The numerics of a scene: the tolerance preset and the stages' option sections.
+#[derive(Clone, Debug, Default)]
+pub struct Numerics {
+    /// A set of solver tolerances (default `Default`); `Strict` tightens each stage's
+    /// tolerances to at most their strict values ([`StageOptions::strict`]) — one setting for
+    /// the strict run a check or a reference needs.
+    pub preset: Preset,
+    sections: BTreeMap<String, Section>,
+}
+
+/// Solver-tolerance presets (`numerics.preset`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Preset {
+    /// The tolerances as set, or their defaults, chosen by the measured error/time trade
+    /// (README, *Accuracy, speed and the defaults*).
+    #[default]
+    Default,
+    /// Each tolerance at most its strict value (the stage's [`StageOptions::strict`]; a
+    /// tighter one set in the scene stays).
+    Strict,
+}
+
+/// One stage's section as the scene wrote it.
+#[derive(Clone, Debug)]
+struct Section {
+    raw: Box<RawValue>,
+    /// Line and column of the section's text in the scene file, for messages.
+    at: Option<(usize, usize)>,
+}
+
+/// A failed check of a section: the setting's path (`numerics.<section>.<field>`) and what is
+/// wrong.
+pub type Checked = Result<(), Failure>;
+
+/// A setting's path and what is wrong with it.
+pub type Failure = (String, String);
+
+/// The options a stage reads from its `numerics` section.
+pub trait StageOptions:
+    Serialize + DeserializeOwned + Default + Clone + Send + Sync + 'static
+{
+    /// The section's name under `numerics` (`projection`, `viscous`, …).
+    const SECTION: &'static str;
+    /// Check ranges and consistency; on failure the field's name within the section and what
+    /// was expected. `scene` is the whole scene, for checks that depend on it.
+    fn validate(&self, scene: &Scene) -> Result<(), (&'static str, String)>;
+    /// Tighten the tolerances to the strict preset's (idempotent).
+    fn strict(&mut self) {}
+}
+
+/// What a stage plugin declares of its options: the section's name and how to check it.
+#[derive(Clone, Copy)]
+pub struct OptionsDecl {
+    /// The section's name under `numerics`.
+    pub section: &'static str,
+    check: fn(&Scene) -> Result<Box<RawValue>, Failure>,
+}
+
+impl fmt::Debug for OptionsDecl {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("OptionsDecl")
+            .field("section", &self.section)
+            .finish()
+    }
+}
+
+impl OptionsDecl {
+    /// The declaration of the options type `O`.
+    pub fn of<O: StageOptions>() -> OptionsDecl {
+        OptionsDecl {
+            section: O::SECTION,
+            check: |scene| {
+                let o: O = scene.numerics.get()?;
+                o.validate(scene)
+                    .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
+                raw_of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))
+            },
+        }
+    }
+}
+
+fn raw_of<O: Serialize>(o: &O) -> Result<Box<RawValue>, String> {
+    let text = ron::ser::to_string_pretty(
+        o,
+        ron::ser::PrettyConfig::new()
+            .new_line(" ")
+            .indentor("")
+            .separator(" "),
+    )
+    .map_err(|e| e.to_string())?;
+    RawValue::from_boxed_ron(text.into_boxed_str()).map_err(|e| e.to_string())
+}
+
+/// Check the scene's `numerics` sections against the options `plugins` declare: each section
+/// must be declared by one of them (whether or not the scene needs that stage), parse as its
+/// type and pass its checks. On success every declared section is replaced by its settings in
+/// force (defaults filled in, the preset applied). On failure the setting's path and why.
+pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checked {
+    let mut decls: BTreeMap<&'static str, OptionsDecl> = BTreeMap::new();
+    for d in plugins.iter().filter_map(|p| p.options()) {
+        decls.entry(d.section).or_insert(d);
+    }
+    if let Some(name) = scene
+        .numerics
+        .sections
+        .keys()
+        .find(|n| !decls.contains_key(n.as_str()))
+    {
+        let known: Vec<&str> = decls.keys().copied().collect();
+        return Err((
+            format!("numerics.{name}"),
+            format!(
+                "no stage has a section `{name}`; the sections are preset, {}",
+                known.join(", ")
+            ),
+        ));
+    }
+    let mut effective = Vec::with_capacity(decls.len());
+    for d in decls.values() {
+        effective.push((d.section, (d.check)(scene)?));
+    }
+    for (name, raw) in effective {
+        scene
+            .numerics
+            .sections
+            .insert(name.to_string(), Section { raw, at: None });
+    }
+    Ok(())
+}
+
+impl Numerics {
+    /// The options of section `O::SECTION`: the scene's settings, the defaults for what it
+    /// leaves out, the preset applied. On error the section's path and the reader's message
+    /// (with the line and column in the scene file where known).
+    pub fn get<O: StageOptions>(&self) -> Result<O, (String, String)> {
+        let mut o = match self.sections.get(O::SECTION) {
+            None => O::default(),
+            Some(s) => {
+                let opts = ron::Options::default()
+                    .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+                opts.from_str(s.raw.get_ron()).map_err(|e| {
+                    let at = match s.at {
+                        Some((line, col)) => {
+                            let (l, c) = (e.span.start.line, e.span.start.col);
+                            let c = if l == 1 { col + c - 1 } else { c };
+                            format!(" (line {}, column {c})", line + l - 1)
+                        }
+                        None => String::new(),
+                    };
+                    (
+                        format!("numerics.{}", O::SECTION),
+                        format!("{}{at}", e.code),
+                    )
+                })?
+            }
+        };
+        if self.preset == Preset::Strict {
+            o.strict();
+        }
+        Ok(o)
+    }
+
+    /// Replace section `O::SECTION` by `options` (what a scene built in code sets).
+    pub fn set<O: StageOptions>(&mut self, options: &O) {
+        let raw = raw_of(options).expect("stage options serialise to RON");
+        self.sections
+            .insert(O::SECTION.to_string(), Section { raw, at: None });
+    }
+
+    /// Change section `O::SECTION` in place: read it ([`Numerics::get`], without the preset),
+    /// apply `change`, write it back.
+    pub fn update<O: StageOptions>(
+        &mut self,
+        change: impl FnOnce(&mut O),
+    ) -> Result<(), (String, String)> {
+        let preset = std::mem::take(&mut self.preset);
+        let got = self.get::<O>();
+        self.preset = preset;
+        let mut o = got?;
+        change(&mut o);
+        self.set(&o);
+        Ok(())
+    }
+
+    /// The RON text of a section as the scene holds it, if it has one.
+    pub fn section(&self, name: &str) -> Option<&str> {
+        self.sections.get(name).map(|s| s.raw.get_ron())
+    }
+
+    /// Each section's name and RON text, in name order.
+    pub fn sections(&self) -> impl Iterator<Item = (&str, &str)> {
+        self.sections
+            .iter()
+            .map(|(name, s)| (name.as_str(), s.raw.get_ron()))
+    }
+
+    /// Record where each section's text starts in `text`, the scene file it was read from.
+    pub(crate) fn locate_in(&mut self, text: &str) {
+        for s in self.sections.values_mut() {
+            if let Some(offset) = text.find(s.raw.get_ron()) {
+                let before = &text[..offset];
+                let line = before.matches('\n').count() + 1;
+                let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                s.at = Some((line, col));
+            }
+        }
+    }
+}
+
+/// A section's name as the `'static` field name a serializer needs: each distinct name is
+/// leaked once (a scene has a handful).
+fn intern(name: &str) -> &'static str {
+    use std::sync::Mutex;
+    static NAMES: Mutex<Vec<&'static str>> = Mutex::new(Vec::new());
+    let mut names = NAMES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(n) = names.iter().find(|n| **n == name) {
+        return n;
+    }
+    let n: &'static str = Box::leak(name.to_string().into_boxed_str());
+    names.push(n);
+    n
+}
+
+impl Serialize for Numerics {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut st = s.serialize_struct("Numerics", 1 + self.sections.len())?;
+        st.serialize_field("preset", &self.preset)?;
+        for (name, section) in &self.sections {
+            st.serialize_field(intern(name), &section.raw)?;
+        }
+        st.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Numerics {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Numerics;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("the numerics: `(preset: …, <stage>: (…), …)`")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Numerics, A::Error> {
+                let mut n = Numerics::default();
+                while let Some(key) = m.next_key::<String>()? {
+                    if key == "preset" {
+                        n.preset = m.next_value()?;
+                    } else {
+                        let raw: Box<RawValue> = m.next_value()?;
+                        if n.sections.contains_key(&key) {
+                            return Err(serde::de::Error::custom(format!(
+                                "duplicate section `{key}`"
+                            )));
+                        }
+                        n.sections.insert(key, Section { raw, at: None });
+                    }
+                }
+                Ok(n)
+            }
+        }
+        d.deserialize_struct("Numerics", &[], V)
+    }
+}
+
+/// A relative tolerance's check: within `[ε, 1)` (a residual below the unit round-off can
+/// never be met).
+pub fn check_tolerance(field: &'static str, tol: f64) -> Result<(), (&'static str, String)> {
+    if (f64::EPSILON..1.0).contains(&tol) {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!(
+                "must be in [{:e}, 1) (a relative residual below the unit round-off cannot be \
+                 reached), got {}",
+                f64::EPSILON,
+                num(tol)
+            ),
+        ))
+    }
+}
+
+/// An iteration cap's check: at least 1.
+pub fn check_iterations(field: &'static str, n: usize) -> Result<(), (&'static str, String)> {
+    if n == 0 {
+        Err((field, "must be ≥ 1".into()))
+    } else {
+        Ok(())
+    }
+}

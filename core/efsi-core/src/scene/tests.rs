@@ -1,0 +1,102 @@
+use super::*;
+
+const MIN: &str = r#"Scene(
+        name: "t",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 8, ny: 8),
+        time: (end: 1.0),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    )"#;
+
+fn load(s: &str) -> Result<Scene, SceneError> {
+    Scene::from_str_at(s, Path::new("scene.ron"))
+}
+
+#[test]
+fn minimal_scene_loads_with_defaults() {
+    let s = load(MIN).unwrap();
+    assert_eq!(s.time.cfl, 0.4);
+    assert!(s.physics.advection);
+    assert_eq!(s.numerics.preset, Preset::Default);
+    assert_eq!(s.numerics.sections().count(), 0);
+}
+
+#[test]
+fn implicit_some_and_round_trip() {
+    let s = load(&MIN.replace("end: 1.0", "end: 1.0, steady: 1e-6")).unwrap();
+    assert_eq!(s.time.steady, Some(1e-6));
+    let again = load(&s.to_ron()).unwrap();
+    assert_eq!(again.time.steady, Some(1e-6));
+}
+
+#[test]
+fn unknown_field_names_line_and_column() {
+    let e = load(&MIN.replace("density: 1.0,", "density: 1.0, colour: 3,")).unwrap_err();
+    let msg = e.to_string();
+    assert!(msg.starts_with("scene.ron:6:"), "{msg}");
+    assert!(msg.contains("colour"), "{msg}");
+}
+
+#[test]
+fn vtk_options_load_round_trip_and_are_checked_by_name() {
+    let with = |vtk: &str| {
+        load(&MIN.replace(
+            "time: (end: 1.0),",
+            &format!("time: (end: 1.0), output: (vtk_every: 0.5, vtk: {vtk}),"),
+        ))
+    };
+    let s = with(r#"(fields: ["velocity", "pressure"], precision: Float32, compression: Zlib, point_data: true)"#)
+            .unwrap();
+    let v = &s.output.vtk;
+    assert_eq!(
+        v.fields.as_deref(),
+        Some(&["velocity".to_string(), "pressure".to_string()][..])
+    );
+    assert_eq!(
+        (v.precision, v.compression, v.point_data),
+        (VtkPrecision::Float32, VtkCompression::Zlib, true)
+    );
+    assert_eq!(&load(&s.to_ron()).unwrap().output.vtk, v);
+    // The defaults: every array, Float64, raw, cell data only.
+    assert_eq!(load(MIN).unwrap().output.vtk, VtkOptions::default());
+    for (vtk, needles) in [
+        (
+            r#"(fields: ["velocity", "temperature"])"#,
+            &["output.vtk.fields[1]", "unknown field `temperature`"][..],
+        ),
+        (
+            r#"(fields: ["pressure", "pressure"])"#,
+            &["output.vtk.fields[1]", "listed twice"],
+        ),
+        (r#"(fields: [])"#, &["output.vtk.fields", "at least one"]),
+        (
+            r#"(fields: ["solid_fraction"])"#,
+            &["output.vtk.fields[0]", "needs a solid"],
+        ),
+        (
+            r#"(fields: ["B"])"#,
+            &["output.vtk.fields[0]", "needs a solid with a law"],
+        ),
+        (r#"(precision: Float16)"#, &["Float16"]),
+        (r#"(compression: Gzip)"#, &["Gzip"]),
+    ] {
+        let e = with(vtk).unwrap_err().to_string();
+        for n in needles {
+            assert!(e.contains(n), "{vtk}: expected `{n}` in: {e}");
+        }
+    }
+}
+
+#[test]
+fn sin2_ramp_matches_seed_eq26() {
+    // Seed Eq. 26 on a 2-long lid: 0.5 sin²(πx/0.6) on [0, 0.3].
+    let p = WallProfile::Sin2Ramp { width: 0.3 };
+    let x: f64 = 0.1;
+    assert!((p.factor(x, 2.0) - (std::f64::consts::PI * x / 0.6).sin().powi(2)).abs() < 1e-15);
+    assert_eq!(p.factor(1.0, 2.0), 1.0);
+    assert!(
+        (p.factor(1.9, 2.0) - (std::f64::consts::PI * (1.9f64 - 2.0) / 0.6).sin().powi(2)).abs()
+            < 1e-15
+    );
+}

@@ -1,0 +1,192 @@
+//! The elastic stages' options (`numerics.elastic`), read by the elastic and deformation stages.
+
+use efsi_core::Scene;
+use efsi_core::scene::options::{StageOptions, check_iterations, check_tolerance};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the elastic step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElasticOptions {
+    /// Treat the elastic stress implicitly (default true). `false` makes the elastic force
+    /// explicit — stable only for `Δt ≲ h √(ρ/G)`; it exists to show what the implicit term buys.
+    #[serde(default = "yes")]
+    pub implicit: bool,
+    /// Relative residual at which BiCGSTAB stops (default 1e-10).
+    #[serde(default = "default_elastic_tol")]
+    pub tolerance: f64,
+    /// Iteration cap (default 5000).
+    #[serde(default = "default_elastic_iter")]
+    pub max_iterations: usize,
+    /// Preconditioner of BiCGSTAB (default `Multigrid`).
+    #[serde(default)]
+    pub preconditioner: ElasticPreconditioner,
+    /// The largest elastic-wave Courant number `Δt·c/h` a step may take (default and largest
+    /// allowed: [`MAX_WAVE_COURANT`]), `c = √(G₀/ρ_s)` the solid's shear-wave speed at rest
+    /// (`G₀` the law's stiffness at `B̃ = I`) and `h` the smaller cell side. The elastic step
+    /// is implicit, but the pressure projection after it is not coupled to it: the strain its
+    /// correction leaves in the solid is stored at stiffness G and given back at the next
+    /// step, which pumps energy into stiff solids once `Δt·c/h` passes ≈ 5 (measured by the
+    /// stability map, `cargo xtask bench-paper --case stability`). The time step is capped so;
+    /// a `time.fixed_dt` above the cap is refused.
+    #[serde(default = "default_wave_courant")]
+    pub wave_courant: f64,
+    /// How the elastic step and the pressure projection are coupled (default `Split`).
+    #[serde(default)]
+    pub coupling: ElasticCoupling,
+    /// `Coupled` only: the coupled iteration stops once the residual of the divergence
+    /// constraint (2-norm of the cells' net outfluxes) is this fraction of the one the elastic
+    /// step left (default 1e-3); the projection stage removes the rest.
+    #[serde(default = "default_coupling_tolerance")]
+    pub coupling_tolerance: f64,
+    /// The implicit weight θ of B's stretching over a step, `B^{n+1} = Bⁿ + Δt[(1 − θ) H(Vⁿ) +
+    /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, with `Split`; 0.75 with `Coupled`).
+    /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
+    /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
+    /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. (The
+    /// coupled stability-map sphere at G = 1e9 Pa, CFL 0.5: at 0.5 the energy guard stops it
+    /// in free flight, at 0.6 it gains 0.74 of its energy budget, at 0.75 nothing.)
+    #[serde(default)]
+    pub theta: Option<f64>,
+    /// `Coupled` only: the most coupled iterations per step (default 50).
+    #[serde(default = "default_coupling_iter")]
+    pub coupling_iterations: usize,
+}
+
+/// How the implicit elastic step and the pressure projection share a time step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ElasticCoupling {
+    /// The elastic step, then the projection (seed Fig. 1): the projection's correction
+    /// strains the solid without its stiffness answering within the step, which pumps energy
+    /// into stiff solids above an elastic-wave Courant number of ≈ 5, so Δt is capped there
+    /// (`wave_courant`).
+    #[default]
+    Split,
+    /// Experimental. The elastic step solves its implicit system together with the
+    /// divergence constraint (FGMRES on the pressure's Schur complement, preconditioned by the
+    /// projection's Poisson operator plus the solid's effective viscosity — Cahouet–Chabard),
+    /// so the pressure's correction meets the solid's implicit stiffness: no elastic-wave cap
+    /// on Δt. The stability map's sphere at CFL 0.5 runs at G = 1e7 and 1e9 Pa in 31 and 30
+    /// steps (split: 161, 1606) without gaining energy; it still gains at CFL 0.9 with
+    /// G = 1e9 and at G = 1e11. Its B stretching is damped (`theta` 0.75), so an impact at
+    /// the flow's step loses much of its rebound; ≈ 2.9× the split step's cost per step.
+    Coupled,
+}
+
+impl ElasticOptions {
+    /// θ of B's stretching: the scene's, else 0.5 with `Split` and 0.75 with `Coupled`.
+    pub fn stretch_theta(&self) -> f64 {
+        self.theta.unwrap_or(match self.coupling {
+            ElasticCoupling::Split => 0.5,
+            ElasticCoupling::Coupled => 0.75,
+        })
+    }
+}
+
+fn default_coupling_tolerance() -> f64 {
+    1e-3
+}
+fn default_coupling_iter() -> usize {
+    50
+}
+
+/// The largest elastic-wave Courant number `Δt·c/h` allowed (see
+/// [`ElasticOptions::wave_courant`]): the largest at which every run of the stability map kept
+/// its energy bounded.
+pub const MAX_WAVE_COURANT: f64 = 4.0;
+
+impl Default for ElasticOptions {
+    fn default() -> Self {
+        ElasticOptions {
+            implicit: true,
+            tolerance: default_elastic_tol(),
+            max_iterations: default_elastic_iter(),
+            preconditioner: ElasticPreconditioner::default(),
+            wave_courant: default_wave_courant(),
+            coupling: ElasticCoupling::default(),
+            coupling_tolerance: default_coupling_tolerance(),
+            coupling_iterations: default_coupling_iter(),
+            theta: None,
+        }
+    }
+}
+
+/// Preconditioner of the elastic step's BiCGSTAB.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ElasticPreconditioner {
+    /// The diagonal: cheapest per iteration; iterations grow like the elastic wave's Courant
+    /// number `Δt √(G/ρ) / h`.
+    Jacobi,
+    /// Multigrid V-cycles on the u–u and v–v blocks of an SPD approximation of the system, the
+    /// viscous operator with an effective viscosity `θΔt μ + (Δt/2) G_eff`.
+    Multigrid,
+    /// Multigrid, except in scenes with a periodic boundary, where Jacobi (the default): the
+    /// red–black smoother keeps a flow uniform along a periodic direction uniform only to the
+    /// solver's tolerance (a velocity of 1e-12 across a flat interface, solid fraction leaking
+    /// into the fluid), where Jacobi keeps it exactly.
+    #[default]
+    Auto,
+}
+
+fn default_wave_courant() -> f64 {
+    MAX_WAVE_COURANT
+}
+
+fn default_elastic_tol() -> f64 {
+    1e-10
+}
+fn default_elastic_iter() -> usize {
+    5000
+}
+
+impl StageOptions for ElasticOptions {
+    const SECTION: &'static str = "elastic";
+
+    fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
+        check_tolerance("tolerance", self.tolerance)?;
+        check_iterations("max_iterations", self.max_iterations)?;
+        if !(self.wave_courant > 0.0 && self.wave_courant <= MAX_WAVE_COURANT) {
+            return Err((
+                "wave_courant",
+                format!(
+                    "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
+                     split projection pumps energy into stiff solids (stability map)",
+                    self.wave_courant
+                ),
+            ));
+        }
+        if !(self.coupling_tolerance > 0.0 && self.coupling_tolerance < 1.0) {
+            return Err((
+                "coupling_tolerance",
+                format!(
+                    "must be in (0, 1) (a fraction of the elastic step's divergence), got {}",
+                    self.coupling_tolerance
+                ),
+            ));
+        }
+        if let Some(t) = self.theta
+            && !(0.5..=1.0).contains(&t)
+        {
+            return Err((
+                "theta",
+                format!("must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {t}"),
+            ));
+        }
+        check_iterations("coupling_iterations", self.coupling_iterations)?;
+        if self.coupling == ElasticCoupling::Coupled && !self.implicit {
+            return Err((
+                "coupling",
+                "Coupled needs the implicit elastic step (numerics.elastic.implicit: true)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn strict(&mut self) {
+        self.tolerance = self.tolerance.min(1e-10);
+    }
+}
+
+fn yes() -> bool {
+    true
+}

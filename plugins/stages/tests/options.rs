@@ -1,0 +1,248 @@
+//! The stages' `numerics` sections: defaults, the strict preset, the checks each stage declares,
+//! and the scene's round trip — through the declarations of the shipped plugins, as
+//! `Simulation::new` checks them.
+
+use efsi_core::Scene;
+use efsi_core::scene::options::check_sections;
+use efsi_core::scene::{Preset, StageOptions};
+use efsi_stages::elastic::{ElasticCoupling, ElasticOptions};
+use efsi_stages::projection::{PressureSolver, ProjectionOptions};
+use efsi_stages::viscous::ViscousOptions;
+use std::path::Path;
+
+const MIN: &str = r#"Scene(
+    name: "t",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8),
+    time: (end: 1.0),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+)"#;
+
+/// The scene with `numerics` set to `n`, loaded and its sections checked by the shipped plugins.
+fn with(n: &str) -> Result<Scene, String> {
+    let text = MIN.replace("time:", &format!("numerics: {n},\n    time:"));
+    let mut s = Scene::from_str_at(&text, Path::new("scene.ron")).map_err(|e| e.to_string())?;
+    check_sections(&mut s, &efsi_stages::builtin()).map_err(|(f, m)| format!("{f}: {m}"))?;
+    Ok(s)
+}
+
+fn get<O: StageOptions>(s: &Scene) -> O {
+    s.numerics.get().unwrap()
+}
+
+#[test]
+fn defaults_apply_where_the_scene_is_silent() {
+    let s = with("()").unwrap();
+    let p: ProjectionOptions = get(&s);
+    assert_eq!((p.tolerance, p.solver), (1e-6, PressureSolver::Multigrid));
+    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-6);
+    assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-10);
+    // The checked scene holds every declared section with its settings in force.
+    let names: Vec<&str> = s.numerics.sections().map(|(n, _)| n).collect();
+    assert_eq!(names, ["elastic", "projection", "viscous"]);
+}
+
+/// `numerics.preset: Strict` tightens every tolerance to its strict value, keeps a tighter one
+/// set beside it, survives the round trip through RON, and `Default` changes nothing.
+#[test]
+fn strict_preset_tightens_each_tolerance() {
+    let s = with("(preset: Strict)").unwrap();
+    assert_eq!(
+        (
+            get::<ProjectionOptions>(&s).tolerance,
+            get::<ViscousOptions>(&s).tolerance,
+            get::<ElasticOptions>(&s).tolerance
+        ),
+        (1e-10, 1e-9, 1e-10)
+    );
+    let s = with("(preset: Strict, projection: (tolerance: 1e-12), viscous: (tolerance: 1e-3))")
+        .unwrap();
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-12);
+    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-9);
+    let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
+    assert_eq!(back.numerics.preset, Preset::Strict);
+    assert_eq!(get::<ProjectionOptions>(&back).tolerance, 1e-12);
+    let s = with("(preset: Default, viscous: (tolerance: 1e-3))").unwrap();
+    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-3);
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-6);
+}
+
+/// The elastic coupling: Split by default, Coupled by name (round trip); its tolerance,
+/// iteration cap and its need of the implicit step checked by field.
+#[test]
+fn elastic_coupling_is_a_scene_option_checked_by_field() {
+    let el = |e: &str| with(&format!("(elastic: {e})"));
+    assert_eq!(
+        get::<ElasticOptions>(&el("()").unwrap()).coupling,
+        ElasticCoupling::Split
+    );
+    let s = el("(coupling: Coupled, coupling_tolerance: 1e-4)").unwrap();
+    let o: ElasticOptions = get(&s);
+    assert_eq!(o.coupling, ElasticCoupling::Coupled);
+    assert_eq!(o.coupling_tolerance, 1e-4);
+    assert_eq!(o.stretch_theta(), 0.75);
+    assert_eq!(
+        get::<ElasticOptions>(&el("()").unwrap()).stretch_theta(),
+        0.5
+    );
+    assert_eq!(
+        get::<ElasticOptions>(&el("(theta: 0.6)").unwrap()).stretch_theta(),
+        0.6
+    );
+    let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
+    assert_eq!(
+        get::<ElasticOptions>(&back).coupling,
+        ElasticCoupling::Coupled
+    );
+    for (e, needles) in [
+        (
+            "(coupling: Coupled, coupling_tolerance: 0.0)",
+            &["numerics.elastic.coupling_tolerance", "(0, 1)"][..],
+        ),
+        (
+            "(coupling_tolerance: 1.5)",
+            &["numerics.elastic.coupling_tolerance"],
+        ),
+        (
+            "(coupling: Coupled, coupling_iterations: 0)",
+            &["numerics.elastic.coupling_iterations", "≥ 1"],
+        ),
+        (
+            "(coupling: Coupled, implicit: false)",
+            &["numerics.elastic.coupling", "implicit"],
+        ),
+        ("(theta: 0.4)", &["numerics.elastic.theta", "[0.5, 1]"]),
+        (
+            "(coupling: Monolithic)",
+            &["numerics.elastic", "Monolithic"],
+        ),
+        (
+            "(wave_courant: 10.0)",
+            &["numerics.elastic.wave_courant", "must be in (0, 4]"],
+        ),
+    ] {
+        let m = el(e).unwrap_err();
+        for n in needles {
+            assert!(m.contains(n), "{e}: expected `{n}` in: {m}");
+        }
+    }
+}
+
+#[test]
+fn pressure_solver_is_a_scene_option() {
+    let s = with("(projection: (solver: IncompleteCholesky, tolerance: 1e-9))").unwrap();
+    let p: ProjectionOptions = get(&s);
+    assert_eq!(p.solver, PressureSolver::IncompleteCholesky);
+    assert_eq!(p.tolerance, 1e-9);
+    let again = Scene::from_str_at(&s.to_ron(), Path::new("again.ron")).unwrap();
+    assert_eq!(
+        get::<ProjectionOptions>(&again).solver,
+        PressureSolver::IncompleteCholesky
+    );
+    let m = with("(projection: (solver: Jacobi))").unwrap_err();
+    assert!(
+        m.contains("numerics.projection") && m.contains("Jacobi"),
+        "{m}"
+    );
+}
+
+/// Each stage's ranges, by field, and a misspelt or unknown name named with where it is.
+#[test]
+fn bad_settings_name_the_setting_and_where_it_is() {
+    for (n, needles) in [
+        (
+            "(viscous: (max_iterations: 0))",
+            &["numerics.viscous.max_iterations", "must be ≥ 1"][..],
+        ),
+        (
+            "(projection: (tolerance: 1e-308))",
+            &[
+                "numerics.projection.tolerance",
+                "must be in [2.220446049250313e-16, 1)",
+            ],
+        ),
+        ("(viscous: (theta: 0.2))", &["numerics.viscous.theta"]),
+        (
+            "(projection: (tolerence: 1e-3))",
+            &["numerics.projection", "tolerence", "line 5, column"],
+        ),
+        (
+            "(pressure: (tolerance: 1e-3))",
+            &[
+                "numerics.pressure",
+                "no stage has a section `pressure`",
+                "projection",
+            ],
+        ),
+        (
+            "(projection: (tolerance: NaN))",
+            &["numerics.projection.tolerance"],
+        ),
+    ] {
+        let m = with(n).unwrap_err();
+        for needle in needles {
+            assert!(m.contains(needle), "{n}: expected `{needle}` in: {m}");
+        }
+    }
+}
+
+/// A scene built in code sets a section by its type; `update` changes one field of it.
+#[test]
+fn sections_are_set_and_updated_in_code() {
+    let mut s = with("()").unwrap();
+    s.numerics
+        .update(|p: &mut ProjectionOptions| p.tolerance = 1e-8)
+        .unwrap();
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-8);
+    assert_eq!(get::<ProjectionOptions>(&s).max_iterations, 10000);
+    s.numerics.set(&ViscousOptions {
+        theta: 0.5,
+        ..ViscousOptions::default()
+    });
+    let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
+    assert_eq!(get::<ViscousOptions>(&back).theta, 0.5);
+    assert_eq!(get::<ProjectionOptions>(&back).tolerance, 1e-8);
+}
+
+/// An override that names a section no stage has, or sets a stage's setting out of range, is
+/// refused when the simulation is built, naming the override; the file's own mistakes name the
+/// setting.
+#[test]
+fn simulation_refuses_bad_sections_naming_the_override() {
+    use efsi_core::{Override, Simulation};
+    let build = |overrides: &[Override], numerics: &str| {
+        let text = MIN.replace("time:", &format!("numerics: {numerics},\n    time:"));
+        let scene = Scene::from_str_with(&text, Path::new("scene.ron"), overrides)
+            .map_err(|e| e.to_string())?;
+        Simulation::new(scene, Path::new("scene.ron"), &efsi_stages::builtin())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    let m = build(&[Override::set("numerics.pressure.tolerance", 1e-3)], "()").unwrap_err();
+    assert!(
+        m.contains("set numerics.pressure.tolerance=") && m.contains("no stage has a section"),
+        "{m}"
+    );
+    let m = build(&[Override::set("numerics.viscous.tolerance", 2.0)], "()").unwrap_err();
+    assert!(
+        m.contains("set numerics.viscous.tolerance=2") && m.contains("must be in"),
+        "{m}"
+    );
+    let m = build(&[], "(viscous: (tolerance: 2.0))").unwrap_err();
+    assert!(
+        m.starts_with("scene.ron: numerics.viscous.tolerance: must be in"),
+        "{m}"
+    );
+    // A section the scene does not need is still checked (a typo stays a typo).
+    let m = build(&[], "(elastic: (tolerance: 0.0))").unwrap_err();
+    assert!(m.contains("numerics.elastic.tolerance"), "{m}");
+    build(
+        &[Override::set(
+            "numerics.projection.solver",
+            "IncompleteCholesky",
+        )],
+        "()",
+    )
+    .unwrap();
+}
