@@ -70,12 +70,17 @@
 //! refuses a file changed since).
 
 use crate::scene::{Scene, SceneError};
+use efsi_ron_edit::{Document, Path as SettingPath};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+/// The value an override sets: what a Python caller or an FMU parameter holds, or RON text
+/// ([`efsi_ron_edit::Value`]).
+pub use efsi_ron_edit::Value as OverrideValue;
+
 /// Field-name aliases the scene accepts, as `(alias, canonical)`: a path may use either.
-pub const FIELD_ALIASES: &[(&str, &str)] = &[
+pub const FIELD_ALIASES: efsi_ron_edit::Aliases = &[
     ("r", "x"),
     ("z", "y"),
     ("nr", "nx"),
@@ -85,79 +90,6 @@ pub const FIELD_ALIASES: &[(&str, &str)] = &[
     ("z_min", "y_min"),
     ("z_max", "y_max"),
 ];
-
-/// The canonical name of a field name that may be an alias.
-fn canonical(name: &str) -> &str {
-    FIELD_ALIASES
-        .iter()
-        .find(|(a, _)| *a == name)
-        .map_or(name, |(_, c)| c)
-}
-
-/// The value an override sets.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum OverrideValue {
-    /// `true` / `false`.
-    Bool(bool),
-    /// An integer (also accepted by a real-valued setting).
-    Int(i64),
-    /// A real number (accepted by an integer setting when it is whole).
-    Float(f64),
-    /// A string; written bare for an enum's unit variant (`"IncompleteCholesky"`).
-    Str(String),
-    /// Any RON value as text (`Disk(center: (0, 0.05), radius: 0.02)`, `1e6`, `[1.0, 2.0]`);
-    /// for a string setting, text that is not a quoted string is taken as the string itself.
-    Ron(String),
-}
-
-impl From<f64> for OverrideValue {
-    fn from(v: f64) -> Self {
-        OverrideValue::Float(v)
-    }
-}
-impl From<i64> for OverrideValue {
-    fn from(v: i64) -> Self {
-        OverrideValue::Int(v)
-    }
-}
-impl From<i32> for OverrideValue {
-    fn from(v: i32) -> Self {
-        OverrideValue::Int(v.into())
-    }
-}
-impl From<usize> for OverrideValue {
-    fn from(v: usize) -> Self {
-        OverrideValue::Int(i64::try_from(v).unwrap_or(i64::MAX))
-    }
-}
-impl From<bool> for OverrideValue {
-    fn from(v: bool) -> Self {
-        OverrideValue::Bool(v)
-    }
-}
-impl From<&str> for OverrideValue {
-    fn from(v: &str) -> Self {
-        OverrideValue::Str(v.to_string())
-    }
-}
-impl From<String> for OverrideValue {
-    fn from(v: String) -> Self {
-        OverrideValue::Str(v)
-    }
-}
-
-impl fmt::Display for OverrideValue {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            OverrideValue::Bool(b) => write!(f, "{b}"),
-            OverrideValue::Int(i) => write!(f, "{i}"),
-            OverrideValue::Float(x) => write!(f, "{x:?}"),
-            OverrideValue::Str(s) => write!(f, "{s:?}"),
-            OverrideValue::Ron(t) => f.write_str(t),
-        }
-    }
-}
-
 /// One change to a scene: a setting by its path, or the grid refined.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Override {
@@ -189,18 +121,20 @@ impl Override {
             ));
         };
         let (path, value) = (path.trim(), value.trim());
-        parse_path(path).map_err(|m| format!("`{arg}`: {m}"))?;
+        SettingPath::parse(path, FIELD_ALIASES).map_err(|m| format!("`{arg}`: {m}"))?;
         if value.is_empty() {
             return Err(format!("`{arg}`: the value is empty"));
         }
         Ok(Override::set(path, OverrideValue::Ron(value.to_string())))
     }
 
-    /// The path it changes, as segments with aliases resolved (`grid` for a refinement).
-    fn segments(&self) -> Vec<Seg> {
+    /// The path it changes, aliases resolved (`grid` for a refinement).
+    fn path(&self) -> SettingPath {
         match self {
-            Override::Set { path, .. } => parse_path(path).unwrap_or_default(),
-            Override::Refine(_) => vec![Seg::Key("grid".into())],
+            Override::Set { path, .. } => {
+                SettingPath::parse(path, FIELD_ALIASES).unwrap_or_default()
+            }
+            Override::Refine(_) => SettingPath::key("grid"),
         }
     }
 }
@@ -318,38 +252,12 @@ impl Scene {
             setting: format!("get {path}"),
             message,
         };
-        let segs = parse_path(path).map_err(fail)?;
-        let text = self.to_ron();
-        let root =
-            parse_ron(&text).map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
-        let node = match locate(&root, &segs, &text).map_err(fail)? {
-            Found::Node(n) => n,
-            Found::Missing { .. } => {
-                return Err(fail(format!("the scene has no setting {}", show(&segs))));
-            }
-        };
-        let raw = &text[node.start..node.end];
-        let inner = match &node.kind {
-            Kind::Tuple(Some(n), items) if n == "Some" && items.len() == 1 => &items[0],
-            _ => node,
-        };
-        let atom_text = &text[inner.start..inner.end];
-        Ok(match inner.atom() {
-            Some(Atom::Int) => atom_text
-                .parse()
-                .map(OverrideValue::Int)
-                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
-            Some(Atom::Float) => atom_text
-                .parse()
-                .map(OverrideValue::Float)
-                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
-            Some(Atom::Bool) => OverrideValue::Bool(atom_text == "true"),
-            Some(Atom::Str) => ron::from_str::<String>(atom_text)
-                .map(OverrideValue::Str)
-                .unwrap_or_else(|_| OverrideValue::Ron(atom_text.into())),
-            Some(Atom::Ident) if atom_text != "None" => OverrideValue::Str(atom_text.into()),
-            _ => OverrideValue::Ron(raw.into()),
-        })
+        let setting = SettingPath::parse(path, FIELD_ALIASES).map_err(fail)?;
+        let doc = Document::parse(self.to_ron(), FIELD_ALIASES)
+            .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
+        doc.get(&setting)
+            .map_err(fail)?
+            .ok_or_else(|| fail(format!("the scene has no setting {setting}")))
     }
 
     fn refine_grid(&mut self, f: f64) -> Result<(), String> {
@@ -372,13 +280,8 @@ pub fn attribute(
     field: String,
     message: String,
 ) -> SceneError {
-    let named = parse_path(&field).unwrap_or_default();
-    let overlaps = |o: &&Override| {
-        let s = o.segments();
-        let n = s.len().min(named.len());
-        n > 0 && s[..n] == named[..n]
-    };
-    match overrides.iter().rev().find(overlaps) {
+    let named = SettingPath::parse(&field, FIELD_ALIASES).unwrap_or_default();
+    match overrides.iter().rev().find(|o| o.path().overlaps(&named)) {
         Some(o) => SceneError::Override {
             path: path.to_path_buf(),
             setting: o.to_string(),
@@ -411,21 +314,16 @@ fn apply_sets(
             setting: o.to_string(),
             message,
         };
-        let segs = parse_path(p).map_err(fail)?;
+        let setting = SettingPath::parse(p, FIELD_ALIASES).map_err(fail)?;
         // The scene with its defaults filled in: the shape of what the file leaves out.
-        let full = scene.to_ron();
-        let hints = parse_ron(&full).ok().map(|n| (n, full));
+        let hints = Document::parse(scene.to_ron(), FIELD_ALIASES).ok();
         // A path the scene's shape cannot hold (through a value, past a list's end).
-        if let Some((root, t)) = &hints
-            && let Err(e) = locate(root, &segs, t)
-            && !e.contains("None")
-        {
-            return Err(fail(e));
+        if let Some(h) = &hints {
+            h.check_reachable(&setting).map_err(fail)?;
         }
-        let root =
-            parse_ron(&text).map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
-        let edit = plan(&(root, text.clone()), hints.as_ref(), &segs, value).map_err(fail)?;
-        text.replace_range(edit.start..edit.end, &edit.text);
+        let doc = Document::parse(text, FIELD_ALIASES)
+            .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
+        text = doc.set(hints.as_ref(), &setting, value).map_err(fail)?;
         scene = Scene::parse(&text, path).map_err(|e| match e {
             SceneError::Syntax { message, .. } => fail(message),
             other => other,
@@ -434,766 +332,9 @@ fn apply_sets(
     Ok(scene)
 }
 
-// ---- paths --------------------------------------------------------------------------------
-
-/// One step of a path: a field or map key, or an element index.
-#[derive(Clone, Debug, PartialEq)]
-enum Seg {
-    Key(String),
-    Index(usize),
-}
-
-impl fmt::Display for Seg {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Seg::Key(k) => f.write_str(k),
-            Seg::Index(i) => write!(f, "[{i}]"),
-        }
-    }
-}
-
-fn show(segs: &[Seg]) -> String {
-    let mut s = String::new();
-    for seg in segs {
-        if matches!(seg, Seg::Key(_)) && !s.is_empty() {
-            s.push('.');
-        }
-        s.push_str(&seg.to_string());
-    }
-    if s.is_empty() { "the scene".into() } else { s }
-}
-
-/// `a.b[2].c.1` → keys (aliases resolved) and indices.
-fn parse_path(path: &str) -> Result<Vec<Seg>, String> {
-    let bad = |why: &str| {
-        Err(format!(
-            "bad path `{path}`: {why} (expected e.g. grid.nx, output.probes[2].at, solid.law.parameters.G)"
-        ))
-    };
-    let mut segs = Vec::new();
-    for part in path.split('.') {
-        let (head, mut rest) = match part.find('[') {
-            Some(k) => part.split_at(k),
-            None => (part, ""),
-        };
-        if head.is_empty() && (segs.is_empty() || rest.is_empty()) {
-            return bad("an empty name");
-        }
-        if !head.is_empty() {
-            if head
-                .chars()
-                .any(|c| c.is_whitespace() || "]=\"'(){}:,".contains(c))
-            {
-                return bad(&format!("`{head}` is not a name"));
-            }
-            segs.push(match head.parse::<usize>() {
-                Ok(i) => Seg::Index(i),
-                Err(_) => Seg::Key(canonical(head).to_string()),
-            });
-        }
-        while !rest.is_empty() {
-            let Some(close) = rest.find(']') else {
-                return bad("an unclosed `[`");
-            };
-            match rest[1..close].trim().parse::<usize>() {
-                Ok(i) => segs.push(Seg::Index(i)),
-                Err(_) => return bad(&format!("`{}` is not an index", &rest[..=close])),
-            }
-            rest = &rest[close + 1..];
-            if !rest.is_empty() && !rest.starts_with('[') {
-                return bad(&format!("unexpected `{rest}` after an index"));
-            }
-        }
-    }
-    Ok(segs)
-}
-
-// ---- a RON syntax tree with byte spans ------------------------------------------------------
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Atom {
-    Int,
-    Float,
-    Str,
-    Char,
-    Bool,
-    Ident,
-}
-
-#[derive(Debug)]
-enum Kind {
-    Atom(Atom),
-    /// `Name(a: 1, b: 2)` or `(a: 1)`; `()` is an empty struct.
-    Struct(Vec<(String, Node)>),
-    /// `Name(1, 2)`, `Some(x)`, `(1.0, 2.0)`.
-    Tuple(Option<String>, Vec<Node>),
-    Seq(Vec<Node>),
-    Map(Vec<(Node, Node)>),
-}
-
-#[derive(Debug)]
-struct Node {
-    start: usize,
-    end: usize,
-    kind: Kind,
-    /// For containers: the byte offset of the closing bracket, and whether the last entry is
-    /// followed by a comma.
-    close: usize,
-    trailing_comma: bool,
-}
-
-impl Node {
-    fn describe(&self, text: Option<&str>) -> String {
-        match &self.kind {
-            Kind::Atom(Atom::Ident) => match text {
-                Some(t) => format!("`{}`", &t[self.start..self.end]),
-                None => "a name".into(),
-            },
-            Kind::Atom(a) => a_name(*a),
-            Kind::Struct(_) => "a struct".into(),
-            Kind::Tuple(..) => "a tuple".into(),
-            Kind::Seq(_) => "a list".into(),
-            Kind::Map(_) => "a map".into(),
-        }
-    }
-
-    fn is_empty(&self) -> bool {
-        match &self.kind {
-            Kind::Struct(f) => f.is_empty(),
-            Kind::Tuple(_, i) | Kind::Seq(i) => i.is_empty(),
-            Kind::Map(e) => e.is_empty(),
-            Kind::Atom(_) => true,
-        }
-    }
-
-    /// The atom a value holds, looking through `Some(…)`.
-    fn atom(&self) -> Option<Atom> {
-        match &self.kind {
-            Kind::Atom(a) => Some(*a),
-            Kind::Tuple(Some(n), items) if n == "Some" && items.len() == 1 => items[0].atom(),
-            _ => None,
-        }
-    }
-}
-
-/// `a number`, `an integer`.
-fn a_name(a: Atom) -> String {
-    let n = atom_name(a);
-    let article = if n.starts_with(['a', 'e', 'i', 'o', 'u']) {
-        "an"
-    } else {
-        "a"
-    };
-    format!("{article} {n}")
-}
-
-fn atom_name(a: Atom) -> &'static str {
-    match a {
-        Atom::Int => "integer",
-        Atom::Float => "number",
-        Atom::Str => "string",
-        Atom::Char => "character",
-        Atom::Bool => "boolean",
-        Atom::Ident => "name",
-    }
-}
-
-/// Parse one RON value filling `text` (a leading `#![enable(…)]` and comments allowed).
-/// On error, the byte offset and what was expected.
-fn parse_ron(text: &str) -> Result<Node, (usize, String)> {
-    let mut p = Parser {
-        s: text.as_bytes(),
-        at: 0,
-    };
-    p.skip();
-    while p.s[p.at..].starts_with(b"#![") {
-        match p.s[p.at..].iter().position(|&c| c == b']') {
-            Some(k) => p.at += k + 1,
-            None => return Err((p.at, "an unclosed `#![`".into())),
-        }
-        p.skip();
-    }
-    let node = p.value()?;
-    p.skip();
-    if p.at != p.s.len() {
-        return Err((p.at, "unexpected text after the value".into()));
-    }
-    Ok(node)
-}
-
-struct Parser<'a> {
-    s: &'a [u8],
-    at: usize,
-}
-
-impl Parser<'_> {
-    fn peek(&self) -> Option<u8> {
-        self.s.get(self.at).copied()
-    }
-
-    /// Skip whitespace and comments (`//…`, nested `/* … */`).
-    fn skip(&mut self) {
-        loop {
-            while self.peek().is_some_and(|c| c.is_ascii_whitespace()) {
-                self.at += 1;
-            }
-            if self.s[self.at..].starts_with(b"//") {
-                while self.peek().is_some_and(|c| c != b'\n') {
-                    self.at += 1;
-                }
-            } else if self.s[self.at..].starts_with(b"/*") {
-                let mut depth = 0usize;
-                while self.at < self.s.len() {
-                    if self.s[self.at..].starts_with(b"/*") {
-                        depth += 1;
-                        self.at += 2;
-                    } else if self.s[self.at..].starts_with(b"*/") {
-                        depth -= 1;
-                        self.at += 2;
-                        if depth == 0 {
-                            break;
-                        }
-                    } else {
-                        self.at += 1;
-                    }
-                }
-            } else {
-                return;
-            }
-        }
-    }
-
-    fn err<T>(&self, what: &str) -> Result<T, (usize, String)> {
-        let found = match self.peek() {
-            None => "the end".to_string(),
-            Some(_) => {
-                let rest = String::from_utf8_lossy(&self.s[self.at..]);
-                format!("`{}`", rest.chars().take(12).collect::<String>())
-            }
-        };
-        Err((self.at, format!("expected {what}, found {found}")))
-    }
-
-    fn is_ident_start(c: u8) -> bool {
-        c.is_ascii_alphabetic() || c == b'_' || c >= 0x80
-    }
-
-    fn is_ident(c: u8) -> bool {
-        c.is_ascii_alphanumeric() || c == b'_' || c >= 0x80
-    }
-
-    fn ident(&mut self) -> String {
-        let start = self.at;
-        if self.s[self.at..].starts_with(b"r#") {
-            self.at += 2;
-        }
-        while self.peek().is_some_and(Self::is_ident) {
-            self.at += 1;
-        }
-        String::from_utf8_lossy(&self.s[start..self.at])
-            .trim_start_matches("r#")
-            .to_string()
-    }
-
-    fn value(&mut self) -> Result<Node, (usize, String)> {
-        self.skip();
-        let start = self.at;
-        let atom = |p: &Self, a| Node {
-            start,
-            end: p.at,
-            kind: Kind::Atom(a),
-            close: p.at,
-            trailing_comma: false,
-        };
-        match self.peek() {
-            None => self.err("a value"),
-            Some(b'(') => self.paren(start, None),
-            Some(b'[') => {
-                let (items, close, trailing) = self.list(b']')?;
-                Ok(Node {
-                    start,
-                    end: self.at,
-                    kind: Kind::Seq(items),
-                    close,
-                    trailing_comma: trailing,
-                })
-            }
-            Some(b'{') => self.map(start),
-            Some(b'"') => {
-                self.string()?;
-                Ok(atom(self, Atom::Str))
-            }
-            Some(b'\'') => {
-                self.at += 1;
-                while let Some(c) = self.peek() {
-                    self.at += 1;
-                    match c {
-                        b'\\' => self.at += 1,
-                        b'\'' => return Ok(atom(self, Atom::Char)),
-                        _ => {}
-                    }
-                }
-                self.err("a closing `'`")
-            }
-            Some(b'r' | b'b') if self.raw_or_byte_string()? => Ok(atom(self, Atom::Str)),
-            Some(c) if c.is_ascii_digit() || c == b'+' || c == b'-' || c == b'.' => {
-                self.at += 1;
-                let mut float = c == b'.';
-                let hex = self.s[start..].starts_with(b"0x") || self.s[start..].starts_with(b"0b");
-                while let Some(c) = self.peek() {
-                    let exponent_sign = (c == b'+' || c == b'-')
-                        && !hex
-                        && matches!(self.s[self.at - 1], b'e' | b'E');
-                    if Self::is_ident(c) || c == b'.' || exponent_sign {
-                        float |= !hex && (c == b'.' || c == b'e' || c == b'E');
-                        self.at += 1;
-                    } else {
-                        break;
-                    }
-                }
-                let word = &self.s[start..self.at];
-                float |= word.ends_with(b"inf") || word.ends_with(b"NaN");
-                Ok(atom(self, if float { Atom::Float } else { Atom::Int }))
-            }
-            Some(c) if Self::is_ident_start(c) => {
-                let name = self.ident();
-                let ident_end = self.at;
-                self.skip();
-                if self.peek() == Some(b'(') {
-                    return self.paren(start, Some(name));
-                }
-                self.at = ident_end;
-                let a = match name.as_str() {
-                    "true" | "false" => Atom::Bool,
-                    "inf" | "NaN" => Atom::Float,
-                    _ => Atom::Ident,
-                };
-                Ok(atom(self, a))
-            }
-            Some(_) => self.err("a value"),
-        }
-    }
-
-    /// A raw string `r"…"`, `r#"…"#` or a byte string `b"…"`; false if it is an identifier.
-    fn raw_or_byte_string(&mut self) -> Result<bool, (usize, String)> {
-        let rest = &self.s[self.at..];
-        if rest.starts_with(b"b\"") {
-            self.at += 1;
-            self.string()?;
-            return Ok(true);
-        }
-        let hashes = rest[1..].iter().take_while(|&&c| c == b'#').count();
-        if !(rest.first() == Some(&b'r') && rest.get(1 + hashes) == Some(&b'"')) {
-            return Ok(false);
-        }
-        self.at += 2 + hashes;
-        let mut end = b"\"".to_vec();
-        end.extend(std::iter::repeat_n(b'#', hashes));
-        match self.s[self.at..].windows(end.len()).position(|w| w == end) {
-            Some(k) => {
-                self.at += k + end.len();
-                Ok(true)
-            }
-            None => self.err("the end of a raw string"),
-        }
-    }
-
-    fn string(&mut self) -> Result<(), (usize, String)> {
-        self.at += 1;
-        while let Some(c) = self.peek() {
-            self.at += 1;
-            match c {
-                b'\\' => self.at += 1,
-                b'"' => return Ok(()),
-                _ => {}
-            }
-        }
-        self.err("a closing `\"`")
-    }
-
-    /// Items separated by commas up to `close`; returns them, the closing offset and whether
-    /// a comma follows the last.
-    fn list(&mut self, close: u8) -> Result<(Vec<Node>, usize, bool), (usize, String)> {
-        self.at += 1;
-        let mut items = Vec::new();
-        let mut trailing = false;
-        loop {
-            self.skip();
-            if self.peek() == Some(close) {
-                let at = self.at;
-                self.at += 1;
-                return Ok((items, at, trailing));
-            }
-            items.push(self.value()?);
-            self.skip();
-            trailing = self.peek() == Some(b',');
-            if trailing {
-                self.at += 1;
-            } else if self.peek() != Some(close) {
-                return self.err(&format!("`,` or `{}`", close as char));
-            }
-        }
-    }
-
-    fn map(&mut self, start: usize) -> Result<Node, (usize, String)> {
-        self.at += 1;
-        let mut entries = Vec::new();
-        let mut trailing = false;
-        loop {
-            self.skip();
-            if self.peek() == Some(b'}') {
-                let close = self.at;
-                self.at += 1;
-                return Ok(Node {
-                    start,
-                    end: self.at,
-                    kind: Kind::Map(entries),
-                    close,
-                    trailing_comma: trailing,
-                });
-            }
-            let key = self.value()?;
-            self.skip();
-            if self.peek() != Some(b':') {
-                return self.err("`:` after a map key");
-            }
-            self.at += 1;
-            let value = self.value()?;
-            entries.push((key, value));
-            self.skip();
-            trailing = self.peek() == Some(b',');
-            if trailing {
-                self.at += 1;
-            } else if self.peek() != Some(b'}') {
-                return self.err("`,` or `}`");
-            }
-        }
-    }
-
-    /// After an optional name, at `(`: a struct if the first entry is `name:`, else a tuple.
-    fn paren(&mut self, start: usize, name: Option<String>) -> Result<Node, (usize, String)> {
-        let open = self.at;
-        self.at += 1;
-        self.skip();
-        let is_struct = if self.peek() == Some(b')') {
-            true
-        } else if self.peek().is_some_and(Self::is_ident_start) {
-            let back = self.at;
-            self.ident();
-            self.skip();
-            let colon = self.peek() == Some(b':') && self.s.get(self.at + 1) != Some(&b':');
-            self.at = back;
-            colon
-        } else {
-            false
-        };
-        if !is_struct {
-            self.at = open;
-            let (items, close, trailing) = self.list(b')')?;
-            return Ok(Node {
-                start,
-                end: self.at,
-                kind: Kind::Tuple(name, items),
-                close,
-                trailing_comma: trailing,
-            });
-        }
-        let mut fields = Vec::new();
-        let mut trailing = false;
-        loop {
-            self.skip();
-            if self.peek() == Some(b')') {
-                let close = self.at;
-                self.at += 1;
-                return Ok(Node {
-                    start,
-                    end: self.at,
-                    kind: Kind::Struct(fields),
-                    close,
-                    trailing_comma: trailing,
-                });
-            }
-            if !self.peek().is_some_and(Self::is_ident_start) {
-                return self.err("a field name");
-            }
-            let key = self.ident();
-            self.skip();
-            if self.peek() != Some(b':') {
-                return self.err(&format!("`:` after the field name `{key}`"));
-            }
-            self.at += 1;
-            let value = self.value()?;
-            fields.push((key, value));
-            self.skip();
-            trailing = self.peek() == Some(b',');
-            if trailing {
-                self.at += 1;
-            } else if self.peek() != Some(b')') {
-                return self.err("`,` or `)`");
-            }
-        }
-    }
-}
-
-// ---- locating a path and planning the edit ------------------------------------------------
-
-/// Where a path leads in a tree.
-enum Found<'a> {
-    /// The node at the whole path.
-    Node(&'a Node),
-    /// The path leaves the tree at `container` (a struct or map): `rest` is missing there.
-    Missing { container: &'a Node, rest: usize },
-}
-
-/// The child of `node` at `seg`, looking through `Some(…)` and one-value variants.
-/// `Ok(None)`: absent from a struct or map (insertable). `Err`: why the path cannot go on.
-fn child<'a>(node: &'a Node, seg: &Seg, text: Option<&str>) -> Result<Option<&'a Node>, String> {
-    match (&node.kind, seg) {
-        (Kind::Tuple(_, items), _)
-            if items.len() == 1 && !matches!(items[0].kind, Kind::Atom(_)) =>
-        {
-            match child(&items[0], seg, text) {
-                Ok(found) => Ok(found),
-                Err(_) if *seg == Seg::Index(0) => Ok(Some(&items[0])),
-                Err(e) => Err(e),
-            }
-        }
-        (Kind::Struct(fields), Seg::Key(k)) => Ok(fields
-            .iter()
-            .find(|(name, _)| canonical(name) == k)
-            .map(|(_, v)| v)),
-        (Kind::Map(entries), Seg::Key(k)) => Ok(entries.iter().find_map(|(key, v)| {
-            let name = text.map_or("", |t| t[key.start..key.end].trim_matches('"'));
-            (name == k).then_some(v)
-        })),
-        (Kind::Tuple(_, items) | Kind::Seq(items), Seg::Index(i)) => match items.get(*i) {
-            Some(v) => Ok(Some(v)),
-            None => Err(format!("has {} elements, no [{i}]", items.len())),
-        },
-        (Kind::Struct(fields), Seg::Index(_)) => Err(format!(
-            "is a struct: expected a field name{}",
-            if fields.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    " ({})",
-                    fields
-                        .iter()
-                        .map(|(k, _)| k.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            }
-        )),
-        (Kind::Map(_), Seg::Index(_)) => Err("is a map: expected a key".into()),
-        (Kind::Tuple(..) | Kind::Seq(_), Seg::Key(k)) => Err(format!(
-            "is {}: expected an index [k], not `{k}`",
-            node.describe(text)
-        )),
-        (Kind::Atom(Atom::Ident), _)
-            if text.is_some_and(|t| &t[node.start..node.end] == "None") =>
-        {
-            Err("is None (not set) in this scene: set it whole first".into())
-        }
-        (Kind::Atom(_), _) => Err(format!("is {}, which has no {seg}", node.describe(text))),
-    }
-}
-
-fn locate<'a>(root: &'a Node, segs: &[Seg], text: &str) -> Result<Found<'a>, String> {
-    let mut node = root;
-    for (k, seg) in segs.iter().enumerate() {
-        match child(node, seg, Some(text)) {
-            Ok(Some(next)) => node = next,
-            Ok(None) => {
-                return Ok(Found::Missing {
-                    container: container(node),
-                    rest: k,
-                });
-            }
-            Err(e) => return Err(format!("{} {e}", show(&segs[..k]))),
-        }
-    }
-    Ok(Found::Node(node))
-}
-
-/// The struct or map a key lookup ended in (looking through one-value wrappers).
-fn container(node: &Node) -> &Node {
-    match &node.kind {
-        Kind::Tuple(_, items) if items.len() == 1 => container(&items[0]),
-        _ => node,
-    }
-}
-
-/// The node at `segs` in the scene with its defaults (for the shape of what is missing).
-fn hint<'a>(hints: Option<&'a (Node, String)>, segs: &[Seg]) -> Option<&'a Node> {
-    let (root, text) = hints?;
-    match locate(root, segs, text) {
-        Ok(Found::Node(n)) => Some(n),
-        _ => None,
-    }
-}
-
-/// A text edit: replace `start..end` with `text`.
-struct Edit {
-    start: usize,
-    end: usize,
-    text: String,
-}
-
-fn plan(
-    root: &(Node, String),
-    hints: Option<&(Node, String)>,
-    segs: &[Seg],
-    value: &OverrideValue,
-) -> Result<Edit, String> {
-    let (tree, text) = root;
-    if segs.is_empty() {
-        return Err("the path is empty".into());
-    }
-    match locate(tree, segs, text)? {
-        Found::Node(node) => {
-            let new = render(
-                value,
-                node.atom()
-                    .or_else(|| {
-                        // `None` in the file: the type of the default's value, if it has one.
-                        hint(hints, segs).and_then(Node::atom)
-                    })
-                    .filter(|a| *a != Atom::Ident || !is_none(node, text)),
-            )?;
-            Ok(Edit {
-                start: node.start,
-                end: node.end,
-                text: new,
-            })
-        }
-        Found::Missing { container, rest } => {
-            let is_map = matches!(container.kind, Kind::Map(_));
-            let mut inner = render(value, hint(hints, segs).and_then(Node::atom))?;
-            for k in (rest + 1..segs.len()).rev() {
-                let Seg::Key(key) = &segs[k] else {
-                    return Err(format!(
-                        "{} is not in the scene: no element to index",
-                        show(&segs[..k])
-                    ));
-                };
-                let map = hint(hints, &segs[..k])
-                    .is_some_and(|n| matches!(container_kind(n), Kind::Map(_)));
-                inner = if map {
-                    format!("{{{}: {inner}}}", ron_string(key))
-                } else {
-                    format!("({key}: {inner})")
-                };
-            }
-            let Seg::Key(key) = &segs[rest] else {
-                return Err(format!(
-                    "{} has no element {}",
-                    show(&segs[..rest]),
-                    segs[rest]
-                ));
-            };
-            let key = if is_map { ron_string(key) } else { key.clone() };
-            let sep = if container.is_empty() || container.trailing_comma {
-                ""
-            } else {
-                ", "
-            };
-            Ok(Edit {
-                start: container.close,
-                end: container.close,
-                text: format!("{sep}{key}: {inner}"),
-            })
-        }
-    }
-}
-
-fn container_kind(node: &Node) -> &Kind {
-    &container(node).kind
-}
-
-fn is_none(node: &Node, text: &str) -> bool {
-    matches!(node.kind, Kind::Atom(Atom::Ident)) && &text[node.start..node.end] == "None"
-}
-
-fn ron_string(s: &str) -> String {
-    ron::to_string(s).unwrap_or_else(|_| format!("{s:?}"))
-}
-
-fn is_identifier(s: &str) -> bool {
-    s.bytes().next().is_some_and(Parser::is_ident_start)
-        && s.bytes().all(Parser::is_ident)
-        && !matches!(s, "true" | "false" | "inf" | "NaN")
-}
-
-/// `value` as RON text for a setting whose current value is of kind `target` (if known).
-fn render(value: &OverrideValue, target: Option<Atom>) -> Result<String, String> {
-    let whole = |x: f64| -> Result<String, String> {
-        if x.fract() == 0.0 && x.abs() < 9e15 {
-            Ok(format!("{}", x as i64))
-        } else {
-            Err(format!("expected an integer, got {x:?}"))
-        }
-    };
-    match (value, target) {
-        (OverrideValue::Bool(b), Some(t)) if t != Atom::Bool => {
-            Err(format!("expected {}, got {b}", a_name(t)))
-        }
-        (OverrideValue::Bool(b), _) => Ok(b.to_string()),
-        (OverrideValue::Int(i), Some(Atom::Float)) => Ok(format!("{i}.0")),
-        (OverrideValue::Int(i), Some(Atom::Str)) => Ok(ron_string(&i.to_string())),
-        (OverrideValue::Int(i), _) => Ok(i.to_string()),
-        (OverrideValue::Float(x), Some(Atom::Int)) => whole(*x),
-        (OverrideValue::Float(x), Some(Atom::Str)) => Ok(ron_string(&format!("{x:?}"))),
-        (OverrideValue::Float(x), _) => ron::to_string(x).map_err(|e| e.to_string()),
-        (OverrideValue::Str(s), Some(Atom::Ident)) if is_identifier(s) => Ok(s.clone()),
-        // A setting of unknown type (in a stage's section the file leaves out, whose defaults
-        // the scene does not know): a capitalised identifier is an enum's variant.
-        (OverrideValue::Str(s), None) if is_identifier(s) && s.starts_with(char::is_uppercase) => {
-            Ok(s.clone())
-        }
-        (OverrideValue::Str(s), _) => Ok(ron_string(s)),
-        (OverrideValue::Ron(t), target) => {
-            let t = t.trim();
-            match parse_ron(t) {
-                Ok(node) => match (node.atom(), target) {
-                    (Some(a), Some(Atom::Str)) if a != Atom::Str => Ok(ron_string(t)),
-                    (Some(Atom::Float), Some(Atom::Int)) => match t.parse::<f64>() {
-                        Ok(x) => whole(x),
-                        Err(_) => Err(format!("expected an integer, got {t}")),
-                    },
-                    _ => Ok(t.to_string()),
-                },
-                Err(_) if target == Some(Atom::Str) => Ok(ron_string(t)),
-                Err((at, m)) => Err(format!("the value `{t}` is not RON: {m} (at byte {at})")),
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn paths_parse_with_indices_and_aliases() {
-        assert_eq!(
-            parse_path("output.probes[2].at").unwrap(),
-            vec![
-                Seg::Key("output".into()),
-                Seg::Key("probes".into()),
-                Seg::Index(2),
-                Seg::Key("at".into())
-            ]
-        );
-        assert_eq!(
-            parse_path("grid.nr").unwrap(),
-            vec![Seg::Key("grid".into()), Seg::Key("nx".into())]
-        );
-        assert_eq!(parse_path("gravity.1").unwrap()[1], Seg::Index(1));
-        for bad in ["", "a..b", "a[x]", "a[1", "a[1]b", ".a"] {
-            assert!(parse_path(bad).is_err(), "{bad}");
-        }
-    }
 
     #[test]
     fn settings_are_read_by_path_with_their_defaults() {
@@ -1217,24 +358,6 @@ mod tests {
         let e = scene.get("solid.law.parameters.K").unwrap_err().to_string();
         assert!(e.contains("no setting solid.law.parameters.K"), "{e}");
         assert!(scene.get("grid..nx").is_err());
-    }
-
-    #[test]
-    fn the_tree_keeps_spans_through_comments_and_strings() {
-        let text = "#![enable(implicit_some)]\n// c\nS(a: (1, 2.5e-3), /* (x: */ b: \"q)\", c: {\"G\": 1e6,}, d: Some([A, B(x: 1)]), e: r#\"a\"#)";
-        let (root, _) = (parse_ron(text).unwrap(), ());
-        let Kind::Struct(f) = &root.kind else {
-            panic!("{root:?}")
-        };
-        let names: Vec<_> = f.iter().map(|(k, _)| k.as_str()).collect();
-        assert_eq!(names, ["a", "b", "c", "d", "e"]);
-        assert_eq!(&text[f[1].1.start..f[1].1.end], "\"q)\"");
-        assert!(f[2].1.trailing_comma);
-        let Kind::Tuple(_, items) = &f[0].1.kind else {
-            panic!()
-        };
-        assert_eq!(items[1].atom(), Some(Atom::Float));
-        assert_eq!(items[0].atom(), Some(Atom::Int));
     }
 
     const SPHERE: &str = r#"// a comment (with a paren
@@ -1490,7 +613,7 @@ Scene(
             let s = with(&[ron(&scene, value)]).unwrap_or_else(|e| panic!("{alias}: {e}"));
             let got = serde_json::to_value(&s).unwrap();
             let section = scene.split('.').next().unwrap();
-            let expect: serde_json::Value = if is_identifier(value) {
+            let expect: serde_json::Value = if value.starts_with(char::is_alphabetic) {
                 serde_json::json!(value)
             } else {
                 ron::from_str::<ron::Value>(value)

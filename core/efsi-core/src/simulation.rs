@@ -176,11 +176,7 @@ impl Simulation {
             .map_err(|(field, message)| config(&field, message))?;
         // The stages' `numerics` sections, checked by the plugins that declare them; an error
         // an override caused names the override.
-        crate::scene::options::check_sections(&mut scene, plugins).map_err(
-            |(field, message)| {
-                crate::overrides::attribute(scene_path, &scene.overrides, field, message)
-            },
-        )?;
+        scene.check_options(scene_path, plugins)?;
         let grid = Grid::new(
             scene.geometry,
             scene.grid.nx,

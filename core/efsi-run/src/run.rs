@@ -845,7 +845,9 @@ pub fn resume(
             });
         }
     }
-    let scene = Scene::load_with(&file.scene_path, &file.overrides)?;
+    let mut scene = Scene::load_with(&file.scene_path, &file.overrides)?;
+    // The recorded scene holds the stages' options in force: compare it with this one's.
+    scene.check_options(&file.scene_path, plugins)?;
     checkpoint::check_resumable(&file, &scene, &what)?;
     let law = checkpoint::law_identity(&scene)?;
     let mut sim = Simulation::new(scene, &file.scene_path, plugins)?;

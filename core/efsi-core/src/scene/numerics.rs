@@ -109,15 +109,13 @@ impl OptionsDecl {
     }
 }
 
+/// `o` as one line of RON: `(tolerance: 1e-6, max_iterations: 10000)`.
 fn raw_of<O: Serialize>(o: &O) -> Result<Box<RawValue>, String> {
-    let text = ron::ser::to_string_pretty(
-        o,
-        ron::ser::PrettyConfig::new()
-            .new_line(" ")
-            .indentor("")
-            .separator(" "),
-    )
-    .map_err(|e| e.to_string())?;
+    let config = ron::ser::PrettyConfig::new().new_line(" ").indentor("");
+    let mut text = ron::ser::to_string_pretty(o, config).map_err(|e| e.to_string())?;
+    if !text.contains(['"', '\'']) {
+        text = text.replace("( ", "(").replace(", )", ")");
+    }
     RawValue::from_boxed_ron(text.into_boxed_str()).map_err(|e| e.to_string())
 }
 
@@ -156,6 +154,20 @@ pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checke
             .insert(name.to_string(), Section { raw, at: None });
     }
     Ok(())
+}
+
+impl Scene {
+    /// [`check_sections`] with the plugins `plugins`, for the scene read from `path`: an error
+    /// an override caused names the override ([`crate::overrides::attribute`]).
+    pub fn check_options(
+        &mut self,
+        path: &std::path::Path,
+        plugins: &[&dyn StagePlugin],
+    ) -> Result<(), super::SceneError> {
+        check_sections(self, plugins).map_err(|(field, message)| {
+            crate::overrides::attribute(path, &self.overrides, field, message)
+        })
+    }
 }
 
 impl Numerics {

@@ -1,0 +1,96 @@
+use super::path::{Seg, parse_path};
+use super::tree::{Atom, Kind, parse_ron};
+use super::*;
+
+const ALIASES: Aliases = &[("nr", "nx"), ("r", "x")];
+
+#[test]
+fn paths_parse_with_indices_and_aliases() {
+    assert_eq!(
+        parse_path("output.probes[2].at", ALIASES).unwrap(),
+        vec![
+            Seg::Key("output".into()),
+            Seg::Key("probes".into()),
+            Seg::Index(2),
+            Seg::Key("at".into())
+        ]
+    );
+    assert_eq!(
+        parse_path("grid.nr", ALIASES).unwrap(),
+        vec![Seg::Key("grid".into()), Seg::Key("nx".into())]
+    );
+    assert_eq!(parse_path("gravity.1", ALIASES).unwrap()[1], Seg::Index(1));
+    for bad in ["", "a..b", "a[x]", "a[1", "a[1]b", ".a"] {
+        assert!(parse_path(bad, ALIASES).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn the_tree_keeps_spans_through_comments_and_strings() {
+    let text = "#![enable(implicit_some)]\n// c\nS(a: (1, 2.5e-3), /* (x: */ b: \"q)\", c: {\"G\": 1e6,}, d: Some([A, B(x: 1)]), e: r#\"a\"#)";
+    let (root, _) = (parse_ron(text).unwrap(), ());
+    let Kind::Struct(f) = &root.kind else {
+        panic!("{root:?}")
+    };
+    let names: Vec<_> = f.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(names, ["a", "b", "c", "d", "e"]);
+    assert_eq!(&text[f[1].1.start..f[1].1.end], "\"q)\"");
+    assert!(f[2].1.trailing_comma);
+    let Kind::Tuple(_, items) = &f[0].1.kind else {
+        panic!()
+    };
+    assert_eq!(items[1].atom(), Some(Atom::Float));
+    assert_eq!(items[0].atom(), Some(Atom::Int));
+}
+
+/// Set replaces a value in place, inserts an absent one with its containers (their kind
+/// and the value's type from the hints), and get reads values back.
+#[test]
+fn set_and_get_edit_the_text_in_place() {
+    let doc = Document::parse("S(a: 1, m: {\"k\": 2.0}, o: None) // end", ALIASES).unwrap();
+    let hints =
+        Document::parse("S(a: 1, m: {}, o: Some(0.5), s: (t: (u: Blue)))", ALIASES).unwrap();
+    let set = |p: &str, v: Value| doc.set(Some(&hints), &Path::parse(p, ALIASES).unwrap(), &v);
+    assert_eq!(
+        set("a", Value::Float(3.0)).unwrap(),
+        "S(a: 3, m: {\"k\": 2.0}, o: None) // end"
+    );
+    assert!(set("a", Value::Float(3.5)).unwrap_err().contains("integer"));
+    assert_eq!(
+        set("m.q", Value::Int(4)).unwrap(),
+        "S(a: 1, m: {\"k\": 2.0, \"q\": 4}, o: None) // end"
+    );
+    assert_eq!(
+        set("o", Value::Int(4)).unwrap(),
+        "S(a: 1, m: {\"k\": 2.0}, o: 4) // end"
+    );
+    assert_eq!(
+        set("s.t.u", Value::Str("Red".into())).unwrap(),
+        "S(a: 1, m: {\"k\": 2.0}, o: None, s: (t: (u: Red))) // end"
+    );
+    assert!(set("a.b", Value::Int(1)).unwrap_err().contains("integer"));
+    let get = |p: &str| doc.get(&Path::parse(p, ALIASES).unwrap());
+    assert_eq!(get("a").unwrap(), Some(Value::Int(1)));
+    assert_eq!(get("m.k").unwrap(), Some(Value::Float(2.0)));
+    assert_eq!(get("o").unwrap(), Some(Value::Ron("None".into())));
+    assert_eq!(get("zz").unwrap(), None);
+    assert!(get("a.b").unwrap_err().contains("integer"));
+    assert!(
+        doc.check_reachable(&Path::parse("a.b", ALIASES).unwrap())
+            .is_err()
+    );
+    assert!(
+        doc.check_reachable(&Path::parse("o.x", ALIASES).unwrap())
+            .is_ok()
+    );
+}
+
+#[test]
+fn paths_overlap_when_one_holds_the_other() {
+    let p = |s: &str| Path::parse(s, ALIASES).unwrap();
+    assert!(p("grid").overlaps(&p("grid.nx")));
+    assert!(p("grid.nr").overlaps(&p("grid.nx")));
+    assert!(!p("grid.nx").overlaps(&p("grid.ny")));
+    assert!(!Path::default().overlaps(&p("grid")));
+    assert_eq!(p("output.probes[2].at").to_string(), "output.probes[2].at");
+}
