@@ -1,0 +1,132 @@
+//! Building the hierarchy's matrices: 2 × 2 aggregation and the scaled Galerkin coarse matrix
+//! of each level from its finer neighbour (module docs: "Hierarchy").
+
+use super::level::Level;
+use super::transfer::RUN;
+use crate::par::{self, SharedSlice};
+use crate::stencil5::Stencil5;
+
+/// Cells per aggregate along a direction of `n` cells: 2, or 1 once `n ≤ 2`.
+pub(super) fn factor(n: usize) -> usize {
+    if n > 2 { 2 } else { 1 }
+}
+
+/// The coarse matrix of `a` (module docs: half the Galerkin product of the piecewise-constant
+/// aggregation along each coarsened direction), into `c` (reshaped as needed). The excess of
+/// the diagonal over the couplings is summed over each aggregate and multiplied by
+/// `excess_scale` when both directions are coarsened (½ for Dirichlet faces, 1 for a mass
+/// term).
+pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
+    let (nx, ny) = (a.nx, a.ny);
+    let (fx, fy) = (factor(nx), factor(ny));
+    let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
+    if c.nx != cx || c.ny != cy || c.len() != cx * cy {
+        *c = Stencil5::new(cx, cy, a.periodic_x, a.periodic_y);
+    }
+    c.periodic_x = a.periodic_x;
+    c.periodic_y = a.periodic_y;
+    // Over-correction: ½ along a coarsened direction (the rediscretised scale), 1 across.
+    let sx = if fx == 2 { 0.5 } else { 1.0 };
+    let sy = if fy == 2 { 0.5 } else { 1.0 };
+    let se = if fx * fy == 4 { excess_scale } else { 1.0 };
+    // i / fx as a shift (fx is 1 or 2): an integer division per cell cost more than the rest.
+    let lx = fx.trailing_zeros();
+    // Coarse rows in parallel. Each fine row's couplings and excesses are computed in runs
+    // (they vectorise), then added to the coarse row's sums fine row by fine row, child by
+    // child — every coarse entry sums its children in the order (j, i), so the sums do not
+    // depend on the number of threads.
+    let (ce, cn, cd) = (
+        SharedSlice::new(&mut c.east),
+        SharedSlice::new(&mut c.north),
+        SharedSlice::new(&mut c.diag),
+    );
+    par::for_each_index(cy, fy * nx, |jc| {
+        let row0 = jc * cx;
+        for kc in row0..row0 + cx {
+            // SAFETY: coarse row jc writes only its own entries (here and below).
+            unsafe {
+                ce.set(kc, 0.0);
+                cn.set(kc, 0.0);
+                cd.set(kc, 0.0);
+            }
+        }
+        let j1 = (fy * jc + fy).min(ny);
+        let (mut e, mut n, mut x) = ([0.0f64; RUN], [0.0f64; RUN], [0.0f64; RUN]);
+        for j in fy * jc..j1 {
+            let last_y = j + 1 == ny;
+            let north_face = j + 1 == j1 && cy > 1;
+            let mut i0 = 0;
+            while i0 < nx {
+                let len = (nx - i0).min(RUN);
+                let k0 = j * nx + i0;
+                let (e, n, x) = (&mut e[..len], &mut n[..len], &mut x[..len]);
+                e.copy_from_slice(&a.east[k0..k0 + len]);
+                if i0 + len == nx && !a.periodic_x {
+                    e[len - 1] = 0.0;
+                }
+                if last_y && !a.periodic_y {
+                    n.fill(0.0);
+                } else {
+                    n.copy_from_slice(&a.north[k0..k0 + len]);
+                }
+                for t in 0..len {
+                    let k = k0 + t;
+                    let i = i0 + t;
+                    let excess = a.diag[k] - (e[t] + n[t] + a.west(k, i) + a.south(k, j));
+                    x[t] = if excess > 1e-12 * a.diag[k] {
+                        se * excess
+                    } else {
+                        0.0
+                    };
+                }
+                for t in 0..len {
+                    let i = i0 + t;
+                    let kc = row0 + (i >> lx);
+                    // A fine face between two aggregates (or across the periodic wrap)
+                    // couples them; a periodic direction of one coarse cell couples the cell
+                    // to itself: no coupling.
+                    let east_face = (i + 1 == nx || (i + 1) >> lx != i >> lx) && cx > 1;
+                    // SAFETY: as above.
+                    unsafe {
+                        if east_face {
+                            ce.set(kc, ce.get(kc) + sx * e[t]);
+                        }
+                        if north_face {
+                            cn.set(kc, cn.get(kc) + sy * n[t]);
+                        }
+                        if x[t] != 0.0 {
+                            cd.set(kc, cd.get(kc) + x[t]);
+                        }
+                    }
+                }
+                i0 += len;
+            }
+        }
+    });
+    let mut diag = std::mem::take(&mut c.diag);
+    let cc = &*c;
+    par::for_each_row(&mut diag, cx, |jc, row| {
+        for (ic, d) in row.iter_mut().enumerate() {
+            let kc = jc * cx + ic;
+            *d += cc.east[kc] + cc.north[kc] + cc.west(kc, ic) + cc.south(kc, jc);
+        }
+    });
+    c.diag = diag;
+}
+
+/// Levels `range` of the hierarchy from their finer neighbours (`a` is level 0's matrix,
+/// `mats[l − 1]` level l's).
+pub(super) fn coarsen_levels(
+    a: &Stencil5,
+    mats: &mut [Stencil5],
+    levels: &mut [Level],
+    range: std::ops::Range<usize>,
+    excess_scale: f64,
+) {
+    for l in range {
+        let (done, rest) = mats.split_at_mut(l - 1);
+        let fine = if l == 1 { a } else { &done[l - 2] };
+        coarsen_into(fine, &mut rest[0], excess_scale);
+        levels[l].load(&rest[0]);
+    }
+}

@@ -1,0 +1,131 @@
+//! One level of the hierarchy: its matrix in a padded layout (one ghost ring) with the work
+//! vectors, loaded from a [`Stencil5`], its periodic ghosts and its residual.
+
+use crate::par;
+use crate::stencil5::Stencil5;
+
+/// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Level {
+    pub(super) nx: usize,
+    pub(super) ny: usize,
+    pub(super) periodic_x: bool,
+    pub(super) periodic_y: bool,
+    /// Padded row length `nx + 2`.
+    pub(super) s: usize,
+    pub(super) diag: Vec<f64>,
+    pub(super) dinv: Vec<f64>,
+    /// Coupling to the east neighbour; the west coupling of cell `k` is `ce[k − 1]` (the ghost
+    /// column holds the periodic wrap, or 0).
+    pub(super) ce: Vec<f64>,
+    /// Coupling to the north neighbour; the south coupling of `k` is `cn[k − s]`.
+    pub(super) cn: Vec<f64>,
+    pub(super) x: Vec<f64>,
+    pub(super) b: Vec<f64>,
+    /// The first coarse correction while a W-cycle computes the second.
+    pub(super) t: Vec<f64>,
+}
+
+impl Level {
+    pub(super) fn shape(a: &Stencil5) -> Self {
+        let m = (a.nx + 2) * (a.ny + 2);
+        Level {
+            nx: a.nx,
+            ny: a.ny,
+            periodic_x: a.periodic_x,
+            periodic_y: a.periodic_y,
+            s: a.nx + 2,
+            diag: vec![0.0; m],
+            dinv: vec![0.0; m],
+            ce: vec![0.0; m],
+            cn: vec![0.0; m],
+            x: vec![0.0; m],
+            b: vec![0.0; m],
+            t: vec![0.0; m],
+        }
+    }
+
+    /// Whether the level is below [`par::PAR_MIN`] cells, so its sweeps run on one thread.
+    pub(super) fn is_serial(&self) -> bool {
+        self.nx * self.ny < par::PAR_MIN
+    }
+
+    #[inline(always)]
+    pub(super) fn p(&self, i: usize, j: usize) -> usize {
+        (j + 1) * self.s + i + 1
+    }
+
+    /// Copy the coefficients of `a` (same shape) into the padded layout: row copies in
+    /// parallel, one array at a time (they vectorise).
+    pub(super) fn load(&mut self, a: &Stencil5) {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        let (px, py) = (a.periodic_x, a.periodic_y);
+        let rows = s..(ny + 1) * s;
+        par::for_each_row(&mut self.ce[rows.clone()], s, |j, row| {
+            let src = &a.east[j * nx..(j + 1) * nx];
+            row[1..=nx].copy_from_slice(src);
+            // The closed east side has no coupling; the west ghost holds the wrap coupling.
+            if !px {
+                row[nx] = 0.0;
+            }
+            row[0] = if px { src[nx - 1] } else { 0.0 };
+        });
+        par::for_each_row(&mut self.cn[rows.clone()], s, |j, row| {
+            if j + 1 < ny || py {
+                row[1..=nx].copy_from_slice(&a.north[j * nx..(j + 1) * nx]);
+            } else {
+                row[1..=nx].fill(0.0);
+            }
+        });
+        for i in 0..nx {
+            self.cn[i + 1] = if py { a.north[(ny - 1) * nx + i] } else { 0.0 };
+        }
+        par::for_each_row2(
+            &mut self.diag[rows.clone()],
+            &mut self.dinv[rows],
+            s,
+            |j, d, di| {
+                let src = &a.diag[j * nx..(j + 1) * nx];
+                d[1..=nx].copy_from_slice(src);
+                for (di, d) in di[1..=nx].iter_mut().zip(src) {
+                    *di = if *d > 0.0 { 1.0 / d } else { 0.0 };
+                }
+            },
+        );
+    }
+
+    /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).
+    pub(super) fn fill_ghosts(&mut self) {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        if self.periodic_x {
+            for j in 1..=ny {
+                self.x[j * s] = self.x[j * s + nx];
+                self.x[j * s + nx + 1] = self.x[j * s + 1];
+            }
+        }
+        if self.periodic_y {
+            let (bot, top) = (s, ny * s);
+            for i in 1..=nx {
+                self.x[i] = self.x[top + i];
+                self.x[(ny + 1) * s + i] = self.x[bot + i];
+            }
+        }
+    }
+
+    /// `out[t] = (b − A x)[k0 + t]` for a run of cells of one row (ghosts filled), over slices (it
+    /// vectorises).
+    #[inline(always)]
+    pub(super) fn residual_run(&self, k0: usize, out: &mut [f64]) {
+        let (n, s) = (out.len(), self.s);
+        let x = &self.x[k0 - s..k0 + s + n];
+        let (xc, xe, xw) = (&x[s..s + n], &x[s + 1..s + 1 + n], &x[s - 1..s - 1 + n]);
+        let (xn, xs) = (&x[2 * s..2 * s + n], &x[..n]);
+        let (b, d) = (&self.b[k0..k0 + n], &self.diag[k0..k0 + n]);
+        let (ce, cw) = (&self.ce[k0..k0 + n], &self.ce[k0 - 1..k0 - 1 + n]);
+        let (cn, cs) = (&self.cn[k0..k0 + n], &self.cn[k0 - s..k0 - s + n]);
+        for t in 0..n {
+            out[t] =
+                b[t] - d[t] * xc[t] + ce[t] * xe[t] + cw[t] * xw[t] + cn[t] * xn[t] + cs[t] * xs[t];
+        }
+    }
+}

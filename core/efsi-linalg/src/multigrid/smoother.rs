@@ -1,0 +1,98 @@
+//! The smoother: red–black Gauss–Seidel sweeps of a level, the two colours fused into one pass
+//! over memory and run over chunks of rows in parallel, bit-identical whatever the threads.
+
+use super::level::Level;
+use crate::par::{self, SharedSlice};
+
+impl Level {
+    /// One red–black Gauss–Seidel sweep: the cells of colour `first` ((i + j) mod 2), then the
+    /// others. The two half-sweeps are fused into one pass over memory (the second colour of
+    /// row j − 1 right after the first colour of row j, Douglas et al. 2000), in chunks of rows
+    /// in parallel: the second colour of each chunk's first and last rows waits for a second
+    /// phase, when the first colour is done everywhere. Every update reads the same values as
+    /// in two separate half-sweeps, so the result is the same bit for bit, whatever the
+    /// chunking and the number of threads.
+    pub(super) fn sweep(&mut self, first: usize) {
+        self.fill_ghosts();
+        let (nx, ny, s, px) = (self.nx, self.ny, self.s, self.periodic_x);
+        let second = 1 - first;
+        let xs = SharedSlice::new(&mut self.x);
+        let (b, ce, cn, dinv) = (&self.b[..], &self.ce[..], &self.cn[..], &self.dinv[..]);
+        // Update the cells of `colour` in row j, then refresh the row's periodic ghosts.
+        let row = |colour: usize, j: usize| {
+            let base = (j + 1) * s + 1;
+            let o = base + ((colour + j) & 1);
+            let end = base + nx;
+            if o < end {
+                // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
+                // exactly the length it touches, so that no index needs a bounds check.
+                let cnt = (end - o).div_ceil(2);
+                let len = 2 * cnt - 1;
+                let (b, dinv) = (&b[o..o + len], &dinv[o..o + len]);
+                let (ce, cw) = (&ce[o..o + len], &ce[o - 1..o - 1 + len]);
+                let (cn, cs) = (&cn[o..o + len], &cn[o - s..o - s + len]);
+                for m in 0..cnt {
+                    let t = 2 * m;
+                    let k = o + t;
+                    // SAFETY: a row update writes only cells of `colour` in row j and reads
+                    // their neighbours (the other colour) and row j's ghosts. The phases below
+                    // never run two updates concurrently where one writes what the other
+                    // touches: in phase 1 a chunk updates the second colour only of rows whose
+                    // neighbour rows are in the same chunk; in phase 2 only second-colour
+                    // cells of distinct rows are written, reading first-colour cells nobody
+                    // writes.
+                    unsafe {
+                        let v = (b[t]
+                            + ce[t] * xs.get(k + 1)
+                            + cw[t] * xs.get(k - 1)
+                            + cn[t] * xs.get(k + s)
+                            + cs[t] * xs.get(k - s))
+                            * dinv[t];
+                        xs.set(k, v);
+                    }
+                }
+            }
+            if px {
+                // SAFETY: row j's ghost cells are touched by row j's updates only.
+                unsafe {
+                    xs.set(base - 1, xs.get(base + nx - 1));
+                    xs.set(base + nx, xs.get(base));
+                }
+            }
+        };
+        let threads = rayon::current_num_threads();
+        let chunk = if self.is_serial() || threads == 1 {
+            ny
+        } else {
+            ny.div_ceil(2 * threads).max(4)
+        };
+        let chunks = ny.div_ceil(chunk);
+        let phase1 = |c: usize| {
+            let (r0, r1) = (c * chunk, ((c + 1) * chunk).min(ny));
+            for j in r0..r1 {
+                row(first, j);
+                if j >= r0 + 2 {
+                    row(second, j - 1);
+                }
+            }
+        };
+        let phase2 = |c: usize| {
+            let (r0, r1) = (c * chunk, ((c + 1) * chunk).min(ny));
+            row(second, r0);
+            if r1 - 1 > r0 {
+                row(second, r1 - 1);
+            }
+        };
+        par::for_each_index(chunks, chunk * nx, phase1);
+        if self.periodic_y {
+            // The second colour of rows 0 and ny − 1 reads the first colour across the wrap.
+            let x = &mut self.x;
+            for i in 1..=nx {
+                x[i] = x[ny * s + i];
+                x[(ny + 1) * s + i] = x[s + i];
+            }
+        }
+        // Phase 2 touches two rows per chunk: split only when that is worth a fork.
+        par::for_each_index(chunks, 2 * nx, phase2);
+    }
+}

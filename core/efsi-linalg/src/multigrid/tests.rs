@@ -1,0 +1,258 @@
+use super::*;
+use crate::{IncompleteCholesky, Pcg};
+
+/// A small deterministic generator (xorshift64*), for reproducible random problems.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Sides: `[x_min, x_max, y_min, y_max]`; `Some(true)` Dirichlet, `Some(false)` Neumann;
+/// `periodic` pairs override.
+#[derive(Clone, Copy)]
+struct Problem {
+    n: usize,
+    axisymmetric: bool,
+    periodic_x: bool,
+    dirichlet_top: bool,
+    ratio: f64,
+    seed: u64,
+}
+
+/// The projection's matrix `Σ_f A_f/(ρ_f h)(p_C − p_F)` on the unit square (r ∈ [0, 1]
+/// with the axis at r = 0 when axisymmetric) for a density of random disks `ratio` times
+/// heavier than the surroundings.
+fn pressure_matrix(p: Problem) -> Stencil5 {
+    let (nx, ny) = (p.n, p.n);
+    let h = 1.0 / p.n as f64;
+    let mut rng = Rng(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let disks: Vec<(f64, f64, f64)> = (0..6)
+        .map(|_| (rng.next(), rng.next(), 0.05 + 0.15 * rng.next()))
+        .collect();
+    let rho = |i: usize, j: usize| {
+        let (x, y) = ((i as f64 + 0.5) * h, (j as f64 + 0.5) * h);
+        if disks
+            .iter()
+            .any(|&(cx, cy, r)| (x - cx).powi(2) + (y - cy).powi(2) < r * r)
+        {
+            p.ratio
+        } else {
+            1.0
+        }
+    };
+    let rf = |i: usize| if p.axisymmetric { i as f64 * h } else { 1.0 };
+    let rc = |i: usize| {
+        if p.axisymmetric {
+            (i as f64 + 0.5) * h
+        } else {
+            1.0
+        }
+    };
+    let mut a = Stencil5::new(nx, ny, p.periodic_x, false);
+    for j in 0..ny {
+        for i in 0..nx {
+            let k = j * nx + i;
+            a.east[k] = if i + 1 < nx || p.periodic_x {
+                let ie = (i + 1) % nx;
+                rf(i + 1) / (0.5 * (rho(i, j) + rho(ie, j)))
+            } else {
+                0.0
+            };
+            a.north[k] = if j + 1 < ny {
+                rc(i) / (0.5 * (rho(i, j) + rho(i, j + 1)))
+            } else {
+                0.0
+            };
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            let k = j * nx + i;
+            let w = if i > 0 {
+                a.east[k - 1]
+            } else if p.periodic_x {
+                a.east[k + nx - 1]
+            } else {
+                0.0
+            };
+            let s = if j > 0 { a.north[k - nx] } else { 0.0 };
+            let mut d = a.east[k] + a.north[k] + w + s;
+            if p.dirichlet_top && j + 1 == ny {
+                d += 2.0 * rc(i) / rho(i, j);
+            }
+            a.diag[k] = d;
+        }
+    }
+    a
+}
+
+fn maxabs(r: &[f64]) -> f64 {
+    r.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// Right-hand side: random, made consistent (zero sum) when the matrix is singular.
+fn rhs(p: Problem) -> Vec<f64> {
+    let mut rng = Rng(p.seed + 17);
+    let mut b: Vec<f64> = (0..p.n * p.n).map(|_| rng.next() - 0.5).collect();
+    if !p.dirichlet_top {
+        let mean = b.iter().sum::<f64>() / b.len() as f64;
+        b.iter_mut().for_each(|v| *v -= mean);
+    }
+    b
+}
+
+const TOL: f64 = 1e-9;
+
+fn solve_mg(p: Problem) -> (Vec<f64>, usize) {
+    let mut a = pressure_matrix(p);
+    let b = rhs(p);
+    let mut mg = Multigrid::new(2);
+    mg.setup(&a);
+    let mut x = vec![0.0; b.len()];
+    let tol = TOL * maxabs(&b);
+    let st = Pcg::new(b.len()).solve(&mut a, &mg, &b, &mut x, tol, 500, maxabs);
+    assert!(st.converged, "MG-PCG failed on n = {}: {st:?}", p.n);
+    (x, st.iterations)
+}
+
+fn cases(n: usize) -> Vec<Problem> {
+    let mut v = Vec::new();
+    for (k, (axisymmetric, periodic_x, dirichlet_top)) in [
+        (false, false, false),
+        (true, false, false),
+        (false, true, false),
+        (false, false, true),
+        (true, false, true),
+        (false, true, true),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        v.push(Problem {
+            n,
+            axisymmetric,
+            periodic_x,
+            dirichlet_top,
+            ratio: 1e4,
+            seed: 3 + k as u64,
+        });
+    }
+    v
+}
+
+#[test]
+fn coarse_matrix_of_a_constant_coefficient_is_the_rediscretised_one() {
+    // Planar: unit couplings on 8×8 → unit couplings on 4×4; axisymmetric: r_f couplings.
+    for axisymmetric in [false, true] {
+        let p = Problem {
+            n: 8,
+            axisymmetric,
+            periodic_x: false,
+            dirichlet_top: true,
+            ratio: 1.0,
+            seed: 1,
+        };
+        let a = pressure_matrix(p);
+        let mut c = Stencil5::new(1, 1, false, false);
+        coarsen_into(&a, &mut c, 0.5);
+        let want = pressure_matrix(Problem { n: 4, ..p });
+        for k in 0..16 {
+            assert!(
+                (c.east[k] - want.east[k]).abs() < 1e-12,
+                "{axisymmetric} e{k}"
+            );
+            assert!((c.north[k] - want.north[k]).abs() < 1e-12 * want.north[k].max(1.0));
+            assert!((c.diag[k] - want.diag[k]).abs() < 1e-12 * want.diag[k]);
+        }
+    }
+}
+
+#[test]
+fn mg_pcg_converges_on_density_jumps_and_matches_ic_pcg() {
+    for p in cases(64) {
+        let (x_mg, it_mg) = solve_mg(p);
+        let mut a = pressure_matrix(p);
+        let b = rhs(p);
+        let mut ic = IncompleteCholesky::new();
+        ic.factor(&a);
+        let mut x_ic = vec![0.0; b.len()];
+        let tol = TOL * maxabs(&b);
+        let st = Pcg::new(b.len()).solve(&mut a, &ic, &b, &mut x_ic, tol, 20000, maxabs);
+        assert!(st.converged);
+        // Singular systems: compare up to the constant.
+        let shift = if p.dirichlet_top {
+            0.0
+        } else {
+            (x_mg.iter().sum::<f64>() - x_ic.iter().sum::<f64>()) / b.len() as f64
+        };
+        let scale = maxabs(&x_ic);
+        let diff = x_mg
+            .iter()
+            .zip(&x_ic)
+            .fold(0.0f64, |m, (a, b)| m.max((a - shift - b).abs()));
+        assert!(
+            diff < 1e-6 * scale,
+            "solutions differ by {diff:e} (scale {scale:e})"
+        );
+        assert!(
+            it_mg * 4 < st.iterations,
+            "MG {it_mg} vs IC {} iterations",
+            st.iterations
+        );
+        assert!(it_mg <= 30, "MG-PCG took {it_mg} iterations");
+    }
+}
+
+#[test]
+fn iterations_grow_less_than_20_percent_from_64_to_256() {
+    for (p64, p256) in cases(64).into_iter().zip(cases(256)) {
+        let (_, i64) = solve_mg(p64);
+        let (_, i256) = solve_mg(p256);
+        assert!(
+            (i256 as f64) < 1.2 * i64 as f64,
+            "{i64} → {i256} iterations (axisymmetric {}, periodic {}, Dirichlet {})",
+            p64.axisymmetric,
+            p64.periodic_x,
+            p64.dirichlet_top
+        );
+    }
+}
+
+/// The table behind the module docs' figures: MG-PCG iterations for the six problem kinds
+/// at density ratios 1, 1e2, 1e4 and 64² to 512² (a few seconds; run with
+/// `cargo test -p efsi-linalg --lib iteration_table -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn iteration_table() {
+    for ratio in [1.0, 1e2, 1e4] {
+        for n in [64, 128, 256, 512] {
+            let mut line = format!("ratio {ratio:e} n {n}:");
+            for mut p in cases(n) {
+                p.ratio = ratio;
+                let (_, it) = solve_mg(p);
+                line += &format!(" {it}");
+            }
+            println!("{line}");
+        }
+    }
+}
+
+#[test]
+fn one_and_two_threads_give_identical_bits() {
+    let p = cases(128)[1];
+    let run = |t| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+            .install(|| solve_mg(p))
+    };
+    let ((x1, i1), (x2, i2)) = (run(1), run(2));
+    assert_eq!(i1, i2);
+    assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
+}

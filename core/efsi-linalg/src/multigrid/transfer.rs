@@ -1,0 +1,69 @@
+//! The transfer operators between levels: restriction of the residual (`R = Pᵀ`, summing the
+//! children of each aggregate) and piecewise-constant prolongation `P` of the correction.
+
+use super::level::Level;
+use crate::par;
+
+/// Cells per block of a row in [`restrict`] (even).
+pub(super) const RUN: usize = 64;
+
+/// `c.b = R (f.b − A f.x)`: the residual of the fine level summed over each aggregate, fine row
+/// by fine row in the order (i, j) of the children — runs of residuals computed over slices,
+/// then added pairwise (the same sums, in the same order, as one child at a time).
+pub(super) fn restrict(f: &Level, c: &mut Level) {
+    let fx = if c.nx < f.nx { 2 } else { 1 };
+    let fy = if c.ny < f.ny { 2 } else { 1 };
+    let (fnx, fny, cnx, cs) = (f.nx, f.ny, c.nx, c.s);
+    // A coarse row sums `fy` fine rows: split the loop by the fine work.
+    par::for_each_row_weighted(&mut c.b[cs..(c.ny + 1) * cs], cs, fy * f.s, |jc, row| {
+        let out = &mut row[1..=cnx];
+        out.fill(0.0);
+        let mut r = [0.0f64; RUN];
+        for j in fy * jc..(fy * jc + fy).min(fny) {
+            let base = f.p(0, j);
+            let mut i0 = 0;
+            while i0 < fnx {
+                let len = (fnx - i0).min(RUN);
+                let r = &mut r[..len];
+                f.residual_run(base + i0, r);
+                if fx == 2 {
+                    let o = &mut out[i0 / 2..];
+                    let pairs = len / 2;
+                    for (m, o) in o[..pairs].iter_mut().enumerate() {
+                        *o = *o + r[2 * m] + r[2 * m + 1];
+                    }
+                    if len % 2 == 1 {
+                        o[pairs] += r[len - 1];
+                    }
+                } else {
+                    for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
+                        *o += r;
+                    }
+                }
+                i0 += len;
+            }
+        }
+    });
+}
+
+/// `f.x += P c.x`: piecewise-constant prolongation of the coarse correction.
+pub(super) fn prolong(f: &mut Level, c: &Level) {
+    let fx = if c.nx < f.nx { 2 } else { 1 };
+    let fy = if c.ny < f.ny { 2 } else { 1 };
+    let (fnx, fs) = (f.nx, f.s);
+    par::for_each_row(&mut f.x[fs..(f.ny + 1) * fs], fs, |j, row| {
+        let crow = &c.x[c.p(0, j / fy)..];
+        let row = &mut row[1..=fnx];
+        if fx == 2 {
+            for (pair, cx) in row.chunks_mut(2).zip(crow) {
+                for x in pair {
+                    *x += cx;
+                }
+            }
+        } else {
+            for (x, cx) in row.iter_mut().zip(crow) {
+                *x += cx;
+            }
+        }
+    });
+}

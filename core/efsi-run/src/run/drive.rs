@@ -1,0 +1,202 @@
+//! The step loop of a run: advancing the simulation to each output time, the outputs and
+//! checkpoints after every step, and what a stop request, a failed step or a failed output
+//! leaves behind (a checkpoint, the last good state, `run.json`'s `"Failed"`).
+
+use super::{Outputs, Progress, RunOptions, RunOutcome, StopReason};
+use crate::checkpoint::{self, Checkpoint, LawIdentity, OutputState};
+use efsi_core::error::EfsiError;
+use efsi_core::simulation::Simulation;
+use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Write the checkpoint of `snapshot` with the output bookkeeping `outputs`.
+fn save_checkpoint(
+    sim: &Simulation,
+    law: &Option<LawIdentity>,
+    outputs: OutputState,
+    snapshot: efsi_core::Snapshot,
+    dir: &Path,
+) -> Result<PathBuf, EfsiError> {
+    let path = dir.join(checkpoint::LATEST);
+    let c = Checkpoint {
+        efsi_version: env!("CARGO_PKG_VERSION").to_string(),
+        scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
+        scene_ron: sim.scene.to_ron(),
+        overrides: sim.scene.overrides.clone(),
+        law: law.clone(),
+        outputs,
+        snapshot,
+    };
+    c.write(&path)?;
+    Ok(path)
+}
+
+/// The step loop shared by [`run_with`](super::run_with) and [`resume`](super::resume).
+pub(super) fn drive(
+    sim: &mut Simulation,
+    out: &mut Outputs,
+    law: &Option<LawIdentity>,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&Progress),
+    start: Instant,
+    resumed_from: Option<(u64, f64, String)>,
+) -> Result<RunOutcome, EfsiError> {
+    let end = sim.scene.time.end;
+    let first_step = sim.state.step;
+    let mut stop = StopReason::EndTime;
+    let mut last_good = options.save_last_good.then(|| sim.snapshot());
+    let mut latest = None;
+    while !due(sim.state.t, end) {
+        let until = out.next_event(sim.state.t);
+        let until = if due(sim.state.t, until) {
+            end.min(out.next_event(sim.state.t + 1e-9 * end))
+        } else {
+            until
+        };
+        // After every step: the outputs due, the progress, a periodic checkpoint; a steady
+        // flow ends the run.
+        let mut each = |sim: &mut Simulation, step: &StepInfo| -> Result<Flow, EfsiError> {
+            let finished = due(sim.state.t, end) || sim.is_steady();
+            out.emit(sim, finished)?;
+            progress(&Progress {
+                t: sim.state.t,
+                end,
+                step: sim.state.step,
+                dt: step.dt,
+                wall: start.elapsed().as_secs_f64(),
+            });
+            if out.checkpoint_due(sim.state.t) {
+                latest = Some(save_checkpoint(
+                    sim,
+                    law,
+                    out.state(),
+                    sim.snapshot(),
+                    &out.dir,
+                )?);
+            }
+            Ok(if sim.is_steady() {
+                Flow::Stop
+            } else {
+                Flow::Continue
+            })
+        };
+        let control = Advance {
+            stop: options.stop.as_deref(),
+            rollback: match &mut last_good {
+                Some(_) => Rollback::Step(&mut last_good),
+                None => Rollback::None,
+            },
+            on_step: Some(&mut each),
+            ..Advance::default()
+        };
+        match sim.advance_to(until, control) {
+            Ok(Advanced::Reached) => {}
+            Ok(Advanced::Halted) => {
+                stop = StopReason::Steady;
+                break;
+            }
+            Ok(Advanced::Stopped { signal }) => {
+                match save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir) {
+                    Ok(c) => latest = Some(c),
+                    Err(error) => return Err(failed(sim, out, start, first_step, error)),
+                }
+                stop = StopReason::Interrupted { signal };
+                break;
+            }
+            // The simulation is back at the start of the failed step: the last good state.
+            Err(AdvanceError::Failed { error, good: true }) => {
+                let good = sim.snapshot();
+                let error = save_failure(sim, out, law, good, error);
+                return Err(failed(sim, out, start, first_step, error));
+            }
+            // An output or a checkpoint could not be written after a good step: save the state
+            // at the start of that step, whose outputs a resume writes again.
+            Err(AdvanceError::Hook(error)) => {
+                let error = match last_good.take() {
+                    Some(good) => {
+                        let (step, t) = (good.step(), good.t());
+                        match save_checkpoint(sim, law, out.state_before_emit(), good, &out.dir) {
+                            Ok(checkpoint) => EfsiError::Saved {
+                                error: Box::new(error),
+                                step,
+                                t,
+                                vtk: None,
+                                checkpoint,
+                            },
+                            Err(_) => error,
+                        }
+                    }
+                    None => error,
+                };
+                return Err(failed(sim, out, start, first_step, error));
+            }
+            Err(e) => return Err(failed(sim, out, start, first_step, e.into())),
+        }
+    }
+    let outcome = RunOutcome {
+        steps: sim.state.step,
+        t: sim.state.t,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        stop,
+        out_dir: out.dir.clone(),
+        steps_this_run: sim.state.step - first_step,
+        resumed_from,
+        checkpoint: latest,
+        warnings: out.warnings().to_vec(),
+    };
+    out.write_summary(sim, &outcome)?;
+    Ok(outcome)
+}
+
+/// The run failed with `error`: record it in `run.json` (as far as that can still be written)
+/// and return it.
+fn failed(
+    sim: &Simulation,
+    out: &Outputs,
+    start: Instant,
+    first_step: u64,
+    error: EfsiError,
+) -> EfsiError {
+    let stop = serde_json::json!({ "Failed": { "error": error.to_string(), "exit_code": error.exit_code() } });
+    let _ = out.write_run_json(
+        sim,
+        stop,
+        sim.state.step.saturating_sub(first_step),
+        None,
+        start.elapsed().as_secs_f64(),
+    );
+    error
+}
+
+/// A step failed with `error`: write the last good state `good` as VTK (when the scene writes
+/// VTK) and as the checkpoint, and return the error with where they went. If saving fails too,
+/// the original error is returned.
+fn save_failure(
+    sim: &Simulation,
+    out: &mut Outputs,
+    law: &Option<LawIdentity>,
+    good: efsi_core::Snapshot,
+    error: EfsiError,
+) -> EfsiError {
+    let (step, t) = (good.step(), good.t());
+    let state = out.state();
+    let vtk = if out.vtk_every.is_some() {
+        match out.write_fields(&sim.grid, &good.state, &sim.scene.name, "_last_good") {
+            Ok(p) => Some(p),
+            Err(_) => return error,
+        }
+    } else {
+        None
+    };
+    match save_checkpoint(sim, law, state, good, &out.dir) {
+        Ok(checkpoint) => EfsiError::Saved {
+            error: Box::new(error),
+            step,
+            t,
+            vtk,
+            checkpoint,
+        },
+        Err(_) => error,
+    }
+}

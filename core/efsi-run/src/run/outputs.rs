@@ -1,0 +1,471 @@
+//! The writers of one run ([`Outputs`]) and their schedule: which outputs are due at a time
+//! (VTK files, probe rows, profiles, periodic checkpoints), writing them, and the bookkeeping a
+//! checkpoint records so that a resumed run neither repeats nor loses any.
+
+use super::folder::{earlier_outputs, make_dirs, open_append, probe_header, replace_earlier_run};
+use super::record::new_run_id;
+use super::time_label;
+use crate::checkpoint::OutputState;
+use crate::lock::FolderLock;
+use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
+use crate::probes;
+use efsi_core::due;
+use efsi_core::error::EfsiError;
+use efsi_core::grid::Grid;
+use efsi_core::scene::{ProbeSpec, ProfileSpec};
+use efsi_core::simulation::Simulation;
+use efsi_core::state::State;
+use std::fs::{self, File};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+/// The writers of one run.
+pub struct Outputs {
+    pub(super) dir: PathBuf,
+    pub(super) vtk_every: Option<f64>,
+    pub(super) vtk: efsi_core::scene::VtkOptions,
+    vtk_count: u64,
+    pvd: PvdCollection,
+    probe_every: Option<f64>,
+    probe_count: u64,
+    probes: Vec<ProbeSpec>,
+    probe_path: PathBuf,
+    probe_file: File,
+    probe_bytes: u64,
+    row: Vec<f64>,
+    profiles: Vec<(ProfileSpec, Vec<f64>)>,
+    end: f64,
+    checkpoint_every: Option<f64>,
+    checkpoint_count: u64,
+    pub(super) warnings: Vec<String>,
+    pub(super) run_id: String,
+    /// The bookkeeping at the start of the latest [`Outputs::emit`] (see [`Outputs::state_before_emit`]).
+    mark: Mark,
+    _lock: FolderLock,
+}
+
+/// What [`Outputs::emit`] changes, as it was before the call: what a checkpoint of the state
+/// before the step must record.
+#[derive(Default)]
+struct Mark {
+    vtk_count: u64,
+    probe_count: u64,
+    probe_bytes: u64,
+    pvd_len: usize,
+    checkpoint_count: u64,
+    /// Profile times written by the call: (profile, time).
+    popped: Vec<(usize, f64)>,
+}
+
+/// The number of events of period `every` due by time `t` ([`due`]), at least `count`: the
+/// smallest `n ≥ count` whose event `n·every` is not yet due. Computed, not counted, so that a
+/// period tiny against `t` costs nothing.
+fn events_due(t: f64, every: f64, count: u64) -> u64 {
+    // `due(t, x)` holds for x ≤ t / (1 − 1e-9) (x not tiny): start there, then correct the
+    // rounding by single steps.
+    let mut n = (t / (every * (1.0 - 1e-9))).floor().max(0.0) as u64;
+    n = n.saturating_add(1).max(count);
+    while n > count && !due(t, (n - 1) as f64 * every) {
+        n -= 1;
+    }
+    while due(t, n as f64 * every) {
+        n += 1;
+    }
+    n
+}
+
+impl Outputs {
+    /// Create the output folder and open the writers (fails before any step if it cannot).
+    /// Checkpoints are due every `checkpoint_every` of simulated time, if given.
+    pub fn new(
+        sim: &Simulation,
+        dir: &Path,
+        checkpoint_every: Option<f64>,
+        overwrite: bool,
+    ) -> Result<Outputs, EfsiError> {
+        let o = &sim.scene.output;
+        make_dirs(dir)?;
+        let lock = FolderLock::acquire(dir)?;
+        replace_earlier_run(dir, &earlier_outputs(dir)?, overwrite)?;
+        let probe_path = dir.join("probes.csv");
+        let header = probe_header(&o.probes);
+        crate::output::atomic::write_atomically(&probe_path, |w| w.write_all(header.as_bytes()))
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        let profiles = o
+            .profiles
+            .iter()
+            .map(|p| {
+                let ProfileSpec::Line { at, .. } = p;
+                let mut times = at.clone();
+                times.sort_by(f64::total_cmp);
+                (p.clone(), times)
+            })
+            .collect();
+        // The collection starts empty: a stale one from an earlier run in this folder goes.
+        let pvd = PvdCollection::new(dir.join("fields.pvd"));
+        if o.vtk_every.is_some() {
+            pvd.write()
+                .map_err(|e| EfsiError::io(dir.join("fields.pvd"), e))?;
+        }
+        Ok(Outputs {
+            dir: dir.to_path_buf(),
+            vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
+            vtk_count: 0,
+            pvd,
+            probe_every: o.probe_every,
+            probe_count: 0,
+            probes: o.probes.clone(),
+            probe_file: open_append(&probe_path)?,
+            probe_path,
+            probe_bytes: header.len() as u64,
+            row: Vec::new(),
+            profiles,
+            end: sim.scene.time.end,
+            checkpoint_every,
+            checkpoint_count: 1,
+            warnings: Vec::new(),
+            run_id: new_run_id(dir),
+            mark: Mark::default(),
+            _lock: lock,
+        })
+    }
+
+    /// Reopen the writers of a run that stopped at a checkpoint with bookkeeping `state`:
+    /// `probes.csv` is truncated to its length at the checkpoint (its header must match the
+    /// scene's probes) and `fields.pvd` rewritten with the checkpoint's entries, so what the
+    /// resumed run writes neither duplicates nor loses rows.
+    pub fn resume(
+        sim: &Simulation,
+        dir: &Path,
+        state: &OutputState,
+        checkpoint_every: Option<f64>,
+        lock: FolderLock,
+    ) -> Result<Outputs, EfsiError> {
+        let o = &sim.scene.output;
+        make_dirs(dir)?;
+        let probe_path = dir.join("probes.csv");
+        let header = probe_header(&o.probes);
+        let fail = |message: String| EfsiError::Checkpoint {
+            what: probe_path.display().to_string(),
+            message,
+        };
+        let mut head = Vec::new();
+        File::open(&probe_path)
+            .and_then(|f| f.take(header.len() as u64).read_to_end(&mut head))
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        if head != header.as_bytes() {
+            return Err(fail(format!(
+                "its header is not the scene's `{}`",
+                header.trim_end()
+            )));
+        }
+        let len = fs::metadata(&probe_path)
+            .map_err(|e| EfsiError::io(&probe_path, e))?
+            .len();
+        if len < state.probe_bytes {
+            return Err(fail(format!(
+                "it has {len} bytes, fewer than the {} it had at the checkpoint: rows were lost",
+                state.probe_bytes
+            )));
+        }
+        let file = open_append(&probe_path)?;
+        file.set_len(state.probe_bytes)
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        if state.profile_times.len() != o.profiles.len() {
+            return Err(fail(format!(
+                "the checkpoint records {} profiles, the scene has {}",
+                state.profile_times.len(),
+                o.profiles.len()
+            )));
+        }
+        let profiles = o
+            .profiles
+            .iter()
+            .cloned()
+            .zip(state.profile_times.iter().cloned())
+            .collect();
+        let pvd = PvdCollection::with_entries(dir.join("fields.pvd"), state.pvd.clone());
+        if o.vtk_every.is_some() {
+            pvd.write()
+                .map_err(|e| EfsiError::io(dir.join("fields.pvd"), e))?;
+        }
+        Ok(Outputs {
+            dir: dir.to_path_buf(),
+            vtk_every: o.vtk_every,
+            vtk: o.vtk.clone(),
+            vtk_count: state.vtk_count,
+            pvd,
+            probe_every: o.probe_every,
+            probe_count: state.probe_count,
+            probes: o.probes.clone(),
+            probe_file: file,
+            probe_path,
+            probe_bytes: state.probe_bytes,
+            row: Vec::new(),
+            profiles,
+            end: sim.scene.time.end,
+            checkpoint_every,
+            checkpoint_count: state.checkpoint_count,
+            warnings: Vec::new(),
+            run_id: state.run_id.clone(),
+            mark: Mark::default(),
+            _lock: lock,
+        })
+    }
+
+    /// The bookkeeping a checkpoint records (see [`Outputs::resume`]).
+    pub fn state(&self) -> OutputState {
+        OutputState {
+            vtk_count: self.vtk_count,
+            probe_count: self.probe_count,
+            probe_bytes: self.probe_bytes,
+            pvd: self.pvd.entries().to_vec(),
+            profile_times: self.profiles.iter().map(|(_, t)| t.clone()).collect(),
+            checkpoint_every: self.checkpoint_every,
+            checkpoint_count: self.checkpoint_count,
+            run_id: self.run_id.clone(),
+        }
+    }
+
+    /// The bookkeeping as it was before the latest [`Outputs::emit`]: what a checkpoint of the
+    /// state at the start of the latest step records (its outputs are written again on resume).
+    pub fn state_before_emit(&self) -> OutputState {
+        let m = &self.mark;
+        let mut s = self.state();
+        s.vtk_count = m.vtk_count;
+        s.probe_count = m.probe_count;
+        s.probe_bytes = m.probe_bytes;
+        s.pvd.truncate(m.pvd_len);
+        s.checkpoint_count = m.checkpoint_count;
+        for &(k, t) in m.popped.iter().rev() {
+            s.profile_times[k].insert(0, t);
+        }
+        s
+    }
+
+    /// Whether a periodic checkpoint is due at `t`; if so, counts it.
+    pub(super) fn checkpoint_due(&mut self, t: f64) -> bool {
+        let Some(e) = self.checkpoint_every else {
+            return false;
+        };
+        if !due(t, self.checkpoint_count as f64 * e) {
+            return false;
+        }
+        self.checkpoint_count = events_due(t, e, self.checkpoint_count);
+        true
+    }
+
+    /// The next time an output is due after `t` (or the end).
+    pub fn next_event(&self, t: f64) -> f64 {
+        let mut next = self.end;
+        if let Some(e) = self.vtk_every {
+            next = next.min(self.vtk_count as f64 * e);
+        }
+        if let Some(e) = self.probe_every {
+            next = next.min(self.probe_count as f64 * e);
+        }
+        for (_, times) in &self.profiles {
+            if let Some(&tt) = times.first() {
+                next = next.min(tt);
+            }
+        }
+        next.max(t)
+    }
+
+    /// Write whatever is due at the simulation's current time (everything, if `last`).
+    pub fn emit(&mut self, sim: &Simulation, last: bool) -> Result<(), EfsiError> {
+        let t = sim.state.t;
+        self.mark.vtk_count = self.vtk_count;
+        self.mark.probe_count = self.probe_count;
+        self.mark.probe_bytes = self.probe_bytes;
+        self.mark.pvd_len = self.pvd.entries().len();
+        self.mark.checkpoint_count = self.checkpoint_count;
+        self.mark.popped.clear();
+        let probe_due = match self.probe_every {
+            Some(e) => due(t, self.probe_count as f64 * e),
+            None => true,
+        };
+        if probe_due || last {
+            self.row.clear();
+            self.row.push(t);
+            for p in &self.probes {
+                probes::evaluate(p, &sim.grid, &sim.state, sim.scene.gravity, &mut self.row);
+            }
+            let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
+            let line = line.join(",") + "\n";
+            // One write of a complete line: a reader never sees half a row. A write that fails
+            // part-way (a full disk, a file size limit) is undone to the last whole row.
+            if let Err(e) = self.probe_file.write_all(line.as_bytes()) {
+                let undone = self.probe_file.set_len(self.probe_bytes).map_or_else(
+                    |u| format!("; removing the partial row failed too: {u}"),
+                    |_| {
+                        format!(
+                            "; the file ends with its last whole row ({} bytes)",
+                            self.probe_bytes
+                        )
+                    },
+                );
+                return Err(EfsiError::io(
+                    &self.probe_path,
+                    std::io::Error::new(e.kind(), format!("{e}{undone}")),
+                ));
+            }
+            self.probe_bytes += line.len() as u64;
+            if let Some(e) = self.probe_every {
+                self.probe_count = events_due(t, e, self.probe_count);
+            }
+        }
+        let vtk_due = self
+            .vtk_every
+            .is_some_and(|e| due(t, self.vtk_count as f64 * e));
+        if vtk_due || (last && self.vtk_every.is_some()) {
+            self.write_fields(&sim.grid, &sim.state, &sim.scene.name, "")?;
+            if let Some(e) = self.vtk_every {
+                self.vtk_count = events_due(t, e, self.vtk_count);
+            }
+        }
+        for k in 0..self.profiles.len() {
+            let is_due = self.profiles[k].1.first().is_some_and(|&tt| due(t, tt));
+            let at_end = last && self.profiles[k].1.is_empty();
+            if is_due || at_end {
+                self.write_profile(k, sim)?;
+                while self.profiles[k].1.first().is_some_and(|&tt| due(t, tt)) {
+                    let tt = self.profiles[k].1.remove(0);
+                    self.mark.popped.push((k, tt));
+                }
+            }
+            // The run ends (at its end time or a steady state) before some of the profile's
+            // times: the profile is written now instead, and the run says so.
+            if last && !self.profiles[k].1.is_empty() {
+                let missed = std::mem::take(&mut self.profiles[k].1);
+                self.mark.popped.extend(missed.iter().map(|&tt| (k, tt)));
+                let file = self.write_profile(k, sim)?;
+                let ProfileSpec::Line { name, .. } = &self.profiles[k].0;
+                let times: Vec<String> = missed.iter().map(|&x| time_label(x)).collect();
+                self.warnings.push(format!(
+                    "profile `{name}`: the run ended at t = {} before its time(s) {}; written at the end instead: {}",
+                    time_label(t),
+                    times.join(", "),
+                    file.display()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Write `state` as `fields/<name>_<step><suffix>.vtr` and add it to the collection;
+    /// returns the file's path.
+    pub(super) fn write_fields(
+        &mut self,
+        grid: &Grid,
+        state: &State,
+        name: &str,
+        suffix: &str,
+    ) -> Result<PathBuf, EfsiError> {
+        let options = &self.vtk;
+        let data = crate::output::fields::arrays(grid, state, options);
+        let arrays: Vec<CellArray> = data
+            .iter()
+            .map(|(name, components, values)| CellArray {
+                name,
+                components: *components,
+                values,
+            })
+            .collect();
+        let format = VtrFormat {
+            precision: options.precision,
+            compression: options.compression,
+            point_data: options.point_data,
+        };
+        let notes = crate::output::fields::notes(grid.geometry);
+        let file = format!("{name}_{:06}{suffix}.vtr", state.step);
+        let path = self.dir.join("fields").join(&file);
+        write_vtr_with(&path, grid, state.t, &arrays, &format, &notes)
+            .map_err(|e| EfsiError::io(&path, e))?;
+        let rel = format!("fields/{file}");
+        self.pvd
+            .add(state.t, &rel)
+            .map_err(|e| EfsiError::io(self.dir.join("fields.pvd"), e))?;
+        Ok(path)
+    }
+
+    /// Write profile `k` at the simulation's time; returns the file's path.
+    fn write_profile(&mut self, k: usize, sim: &Simulation) -> Result<PathBuf, EfsiError> {
+        let ProfileSpec::Line {
+            name,
+            from,
+            to,
+            points,
+            fields,
+            ..
+        } = &self.profiles[k].0;
+        let path = self
+            .dir
+            .join("profiles")
+            .join(format!("{name}_t{}.csv", time_label(sim.state.t)));
+        let len = (to.0 - from.0).hypot(to.1 - from.1);
+        let mut text = format!("s,x,y,{}\n", fields.join(","));
+        for q in 0..*points {
+            let f = q as f64 / (*points - 1) as f64;
+            let p = (from.0 + f * (to.0 - from.0), from.1 + f * (to.1 - from.1));
+            text.push_str(&format!("{:.17e},{:.17e},{:.17e}", f * len, p.0, p.1));
+            for fl in fields {
+                text.push_str(&format!(
+                    ",{:.17e}",
+                    probes::sample(&sim.grid, &sim.state, fl, p)
+                ));
+            }
+            text.push('\n');
+        }
+        crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| EfsiError::io(&path, e))?;
+        Ok(path)
+    }
+
+    /// What the outputs have to tell the user about this run (a profile written at the end
+    /// instead of at its times), in the order it happened; also in `run.json`'s `warnings`.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    /// The counter as the loop `while due(t, n·e) { n += 1 }` would leave it.
+    fn counted(t: f64, e: f64, mut n: u64) -> u64 {
+        while due(t, n as f64 * e) {
+            n += 1;
+        }
+        n
+    }
+
+    #[test]
+    fn events_due_equals_counting_and_costs_nothing_for_tiny_periods() {
+        for (t, e, n) in [
+            (0.0, 0.1, 0),
+            (0.0, 0.1, 1),
+            (0.3, 0.1, 1),
+            (0.30000000000000004, 0.1, 2),
+            (0.29999999999, 0.1, 1),
+            (1.0, 0.25, 3),
+            (40.0, 2.0, 0),
+            (1e-3, 1e-7, 5),
+            (7.0, 3.0, 9),
+        ] {
+            assert_eq!(
+                events_due(t, e, n),
+                counted(t, e, n),
+                "t = {t}, e = {e}, n = {n}"
+            );
+        }
+        // 1e12 events due at once: computed, not counted.
+        let t0 = Instant::now();
+        let n = events_due(1.0, 1e-12, 1);
+        assert!(t0.elapsed().as_secs_f64() < 0.01);
+        assert!(due(1.0, (n - 1) as f64 * 1e-12) && !due(1.0, n as f64 * 1e-12));
+    }
+}

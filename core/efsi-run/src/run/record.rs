@@ -1,0 +1,96 @@
+//! `run.json`, the run's record: its identity (`run_id`, also in its checkpoints), the effective
+//! scene and overrides, how it stands or stopped, its steps, wall time and wall time per stage.
+
+use super::{Outputs, RunOutcome};
+use crate::checkpoint;
+use efsi_core::error::EfsiError;
+use efsi_core::simulation::Simulation;
+use std::fs;
+use std::io::Write;
+use std::path::Path;
+
+/// A new run's identity: a hash of the clock, the process and the folder.
+pub(super) fn new_run_id(dir: &Path) -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let mut bytes = nanos.to_le_bytes().to_vec();
+    bytes.extend_from_slice(&std::process::id().to_le_bytes());
+    let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    bytes.extend_from_slice(dir.as_os_str().as_encoded_bytes());
+    format!("{:016x}", checkpoint::fnv1a(&bytes))
+}
+
+/// The run identity recorded in `dir/run.json`, if any.
+pub(super) fn recorded_run_id(dir: &Path) -> Option<String> {
+    let text = fs::read_to_string(dir.join("run.json")).ok()?;
+    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+    Some(json.get("run_id")?.as_str()?.to_string())
+}
+
+impl Outputs {
+    /// Write `run.json` for a finished or stopped run.
+    pub fn write_summary(&self, sim: &Simulation, outcome: &RunOutcome) -> Result<(), EfsiError> {
+        self.write_run_json(
+            sim,
+            serde_json::to_value(outcome.stop).unwrap_or_default(),
+            outcome.steps_this_run,
+            outcome.resumed_from.as_ref().map(|r| r.0),
+            outcome.wall_seconds,
+        )
+    }
+
+    /// Write `run.json` with `stop` saying how the run stands (`"Running"` while it runs, the
+    /// [`StopReason`](super::StopReason) at its end, `{"Failed": {"error": …}}` after a failed
+    /// step or output).
+    pub(super) fn write_run_json(
+        &self,
+        sim: &Simulation,
+        stop: serde_json::Value,
+        steps_this_run: u64,
+        resumed_from_step: Option<u64>,
+        wall_seconds: f64,
+    ) -> Result<(), EfsiError> {
+        let timings = sim.pipeline().timings();
+        let cells = sim.grid.cells() as f64;
+        let steps = steps_this_run.max(1) as f64;
+        let mut scene = serde_json::to_value(&sim.scene).unwrap_or_default();
+        // The stages' numerics sections are RON text in the scene: recorded as JSON values.
+        for (name, ron_text) in sim.scene.numerics.sections() {
+            if let Ok(v) = ron::from_str::<ron::Value>(ron_text) {
+                scene["numerics"][name] = serde_json::to_value(v).unwrap_or_default();
+            }
+        }
+        let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
+        let json = serde_json::json!({
+            "run_id": self.run_id,
+            "efsi_version": env!("CARGO_PKG_VERSION"),
+            "scene": scene,
+            "scene_path": sim.scene_path.display().to_string(),
+            "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
+            "stop": stop,
+            "warnings": self.warnings,
+            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk),
+            "t_end": sim.state.t,
+            "steps": sim.state.step,
+            "steps_this_run": steps_this_run,
+            "resumed_from_step": resumed_from_step,
+            "cells": sim.grid.cells(),
+            "wall_seconds": wall_seconds,
+            "ns_per_cell_step": wall_seconds * 1e9 / (cells * steps),
+            "projection_tolerance": projection_tolerance,
+            "final_rate_of_change": if sim.rate_of_change().is_finite() { serde_json::json!(sim.rate_of_change()) } else { serde_json::Value::Null },
+            "stages": timings.iter().map(|s| serde_json::json!({
+                "name": s.name,
+                "seconds": s.seconds,
+                "ns_per_cell_step": s.seconds * 1e9 / (cells * steps),
+                "solver_iterations": s.iterations,
+                "solver_iterations_per_step": s.iterations as f64 / steps,
+            })).collect::<Vec<_>>(),
+        });
+        let path = self.dir.join("run.json");
+        let text = serde_json::to_string_pretty(&json).unwrap_or_default();
+        crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| EfsiError::io(&path, e))
+    }
+}

@@ -1,0 +1,216 @@
+//! Loading constitutive laws from plugin libraries.
+//!
+//! A law plugin is a dynamic library speaking the C ABI of `efsi-law-abi` (version
+//! [`ABI_VERSION`](efsi_law_abi::ABI_VERSION)): it exports `efsi_law_descriptor`, which returns
+//! the law's name, parameter table (name, unit, default, allowed range) and `create` / `destroy`
+//! / `evaluate` functions.
+//! Laws written in Rust use `efsi-law-sdk`; the shipped ones live in `plugins/laws/`.
+//!
+//! [`load_law`] turns the law a scene names (its name and parameter values) into a
+//! [`LoadedLaw`] (a [`ConstitutiveLaw`](crate::ConstitutiveLaw)):
+//!
+//! 1. **Resolve** the name: a name with a path separator or ending in `.so`/`.dylib`/`.dll` is a
+//!    library path (relative to the scene's folder); any other name `X` is a shipped law, the file
+//!    `libefsi_law_X.so` looked up in [`search_dirs`]: `$EFSI_LAW_PATH` (a `:`-separated list),
+//!    the running executable's folder, its parent and its `deps` subfolder, then `target/release`
+//!    and `target/debug` of the workspace efsi was built from.
+//! 2. **Open** it and check it: a library, with the entry symbol, built for this ABI version, with
+//!    the descriptor size this efsi expects, and a well-formed parameter table.
+//! 3. **Parameters**: every scene parameter must be declared (else the known ones are listed),
+//!    finite and in its range (name, value, range and unit in the message); the others take their
+//!    defaults.
+//! 4. **Create** the instance; a failure or panic inside the plugin comes back with its message.
+//! 5. **Check the tangent** against central finite differences of the stress ([`check_tangent`],
+//!    tolerance [`FD_TANGENT_TOLERANCE`]) and refuse a law whose tangent is wrong.
+//!
+//! Evaluation is one plugin call per batch of cells; a status other than success, a panic in the
+//! plugin, or a non-finite output becomes a [`LawError`] naming the law (and the first bad cell).
+
+use crate::LawError;
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+mod law;
+mod open;
+mod params;
+mod resolve;
+mod tangent;
+
+pub use law::LoadedLaw;
+use open::open;
+pub use params::ParamInfo;
+use params::{describe_values, instantiate};
+use resolve::not_a_library_file;
+pub use resolve::{library_file_name, resolve_law, search_dirs};
+pub use tangent::{TangentCheck, check_tangent, tangent_check_states};
+
+/// Relative tolerance of the load-time tangent check: at every test state,
+/// `max_ab |J_ab − J_fd,ab| ≤ FD_TANGENT_TOLERANCE · max(max|J|, max|J_fd|)`, with `J_fd` the
+/// central difference of the stress, step `h = 1e-6 · max(1, max|B̃|)`. Central differences
+/// of a smooth law at that step err by ~1e-10 relative (round-off `ε/h`, truncation `h²`), so
+/// the tolerance leaves a wide margin while a wrong term or factor fails it by orders of
+/// magnitude.
+pub const FD_TANGENT_TOLERANCE: f64 = 1e-5;
+
+/// Environment variable with extra folders (`:`-separated) to look for shipped-law libraries in,
+/// searched first.
+pub const LAW_PATH_ENV: &str = "EFSI_LAW_PATH";
+
+const COMPONENTS: [&str; 4] = ["11", "22", "33", "12"];
+
+/// A number for people: plain between 1e-3 and 1e6, else in exponent form.
+fn number(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// What a law library says about itself (for `efsi laws` and error messages).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LawInfo {
+    /// The law's name.
+    pub name: String,
+    /// One line describing it.
+    pub description: String,
+    /// The library it was read from.
+    pub path: PathBuf,
+    /// The ABI version the library was built for.
+    pub abi_version: u32,
+    /// Its declared parameters, in the order `create` receives them.
+    pub parameters: Vec<ParamInfo>,
+}
+
+impl fmt::Display for LawInfo {
+    /// The law's name and description, its library, then one line per parameter: name, unit,
+    /// default, range, description.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{} — {}", self.name, self.description)?;
+        writeln!(f, "  library: {}", self.path.display())?;
+        if self.parameters.is_empty() {
+            writeln!(f, "  no parameters")?;
+        }
+        for p in &self.parameters {
+            let unit = if p.unit.is_empty() { "-" } else { &p.unit };
+            writeln!(
+                f,
+                "  {:<10} {:<4} default {:<10} range {:<12} {}",
+                p.name,
+                unit,
+                number(p.default),
+                p.range_text(),
+                p.description
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Loads the law a scene names, `name` with the parameter values `parameters` (see the module
+/// docs for the resolution and the checks). `scene_dir` is the scene file's folder: relative
+/// library paths are relative to it.
+pub fn load_law(
+    name: &str,
+    parameters: &BTreeMap<String, f64>,
+    scene_dir: &Path,
+) -> Result<LoadedLaw, LawError> {
+    let path = resolve_law(name, scene_dir)?;
+    let mut law = instantiate(&path, name, parameters)?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check at load failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    if !check.passed() {
+        let (a, b) = check.worst_entry;
+        return Err(law.error(format!(
+            "refused: its tangent disagrees with finite differences of its stress ({}): at B̃ = {:?}, ∂τ{}/∂B̃{} is {:.6e} but the stress gives {:.6e} — relative error {:.3e} > tolerance {FD_TANGENT_TOLERANCE:e}; fix the law's tangent (or its stress)",
+            describe_values(&law.info, &law.values),
+            check.worst_state,
+            COMPONENTS[a],
+            COMPONENTS[b],
+            check.tangent,
+            check.finite_difference,
+            check.worst_relative_error,
+        )));
+    }
+    law.check = Some(check);
+    Ok(law)
+}
+
+/// The tangent check of the law in the library at `path`, created with its default parameters
+/// (`efsi laws --check`): the law's description and the check's outcome, passed or not
+/// ([`TangentCheck::passed`]). An error if the library cannot be loaded, the law cannot be
+/// created or cannot evaluate the check's states.
+pub fn check_library(path: &Path) -> Result<(LawInfo, TangentCheck), LawError> {
+    let label = path.display().to_string();
+    if !path.is_file() {
+        return Err(LawError {
+            law: label,
+            message: format!("library not found: {}", path.display()),
+            cell: None,
+        });
+    }
+    let law = instantiate(path, &label, &BTreeMap::new())?;
+    let check = check_tangent(&law).map_err(|e| {
+        law.error(format!(
+            "tangent check failed ({}): {}",
+            describe_values(&law.info, &law.values),
+            e.message
+        ))
+    })?;
+    Ok((law.info.clone(), check))
+}
+
+/// Reads a law library's name and parameter table without creating the law (`efsi laws`).
+pub fn describe(path: &Path) -> Result<LawInfo, LawError> {
+    let label = path.display().to_string();
+    if let Some(message) = not_a_library_file(path) {
+        return Err(LawError {
+            law: label,
+            message,
+            cell: None,
+        });
+    }
+    open(path, &label).map(|o| o.info)
+}
+
+/// Describes every shipped law found on the search path (the first of each name, in
+/// [`search_dirs`] order), then each library in `extra`.
+pub fn list_laws(extra: &[PathBuf]) -> Vec<Result<LawInfo, LawError>> {
+    let prefix = format!("{}efsi_law_", std::env::consts::DLL_PREFIX);
+    let suffix = std::env::consts::DLL_SUFFIX;
+    let mut seen = std::collections::BTreeSet::new();
+    let mut out = Vec::new();
+    for dir in search_dirs() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        let mut found: Vec<(String, PathBuf)> = entries
+            .filter_map(|e| e.ok())
+            .filter_map(|e| {
+                let file = e.file_name().into_string().ok()?;
+                let name = file
+                    .strip_prefix(&prefix)?
+                    .strip_suffix(suffix)?
+                    .to_string();
+                e.path().is_file().then_some((name, e.path()))
+            })
+            .collect();
+        found.sort();
+        for (name, path) in found {
+            if seen.insert(name) {
+                out.push(describe(&path));
+            }
+        }
+    }
+    out.extend(extra.iter().map(|p| describe(p)));
+    out
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,194 @@
+//! Opening a law library and checking it before anything else runs: the entry symbol, the ABI
+//! version and descriptor size, the strings and the parameter table of its descriptor.
+
+use super::LawInfo;
+use super::params::ParamInfo;
+use crate::LawError;
+use efsi_law_abi::{
+    ABI_VERSION, CRATE_VERSION, DESCRIPTOR_SIZE, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NAME,
+    EntryFn, EvaluateFn, LawDescriptor, PARAM_MAX_EXCLUSIVE, PARAM_MIN_EXCLUSIVE, ParamDesc,
+};
+use libloading::Library;
+use std::ffi::{CStr, c_char};
+use std::path::Path;
+
+/// An opened, checked library.
+pub(super) struct Opened {
+    pub(super) library: Library,
+    pub(super) info: LawInfo,
+    pub(super) create: efsi_law_abi::CreateFn,
+    pub(super) destroy: DestroyFn,
+    pub(super) evaluate: EvaluateFn,
+}
+
+/// Opens `path` and checks its descriptor; `label` names the law until the descriptor does.
+pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
+    let mut law = label.to_string();
+    let fail = |law: &str, message: String| LawError {
+        law: law.to_string(),
+        message,
+        cell: None,
+    };
+    // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
+    // (the user named it), and the checks below guard the ABI.
+    let library = unsafe { Library::new(path) }.map_err(|e| {
+        // The loader's own words (`dlerror`) are the error's source, not its summary.
+        let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
+        fail(
+            &law,
+            format!("{} is not a loadable library: {why}", path.display()),
+        )
+    })?;
+    // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.
+    let entry: EntryFn = unsafe { library.get::<EntryFn>(ENTRY_SYMBOL) }
+        .map(|s| *s)
+        .map_err(|_| {
+            fail(
+                &law,
+                format!(
+                    "{} is not an efsi law library: it has no `{ENTRY_SYMBOL_NAME}` symbol (build it with efsi-law-sdk's `export_law!`)",
+                    path.display()
+                ),
+            )
+        })?;
+    // SAFETY: `entry` has the ABI's signature; it takes no arguments.
+    let ptr = unsafe { entry() };
+    if ptr.is_null() {
+        return Err(fail(
+            &law,
+            format!(
+                "{}: `{ENTRY_SYMBOL_NAME}` returned no descriptor (the library could not describe its law)",
+                path.display()
+            ),
+        ));
+    }
+    // The first two u32 fields are frozen across ABI versions: read them before anything else.
+    // SAFETY: every version's descriptor starts with these two fields.
+    let [version, size] = unsafe { ptr.cast::<[u32; 2]>().read() };
+    if version != ABI_VERSION {
+        return Err(fail(
+            &law,
+            format!(
+                "{} was built for ABI v{version}, efsi expects v{ABI_VERSION}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                path.display()
+            ),
+        ));
+    }
+    if size != DESCRIPTOR_SIZE {
+        return Err(fail(
+            &law,
+            format!(
+                "{}: descriptor size {size} bytes, efsi expects {DESCRIPTOR_SIZE} for ABI v{ABI_VERSION}: the library's layout does not match its version; rebuild it against efsi-law-sdk {CRATE_VERSION}",
+                path.display()
+            ),
+        ));
+    }
+    // SAFETY: version and size match this crate's definition; it lives as long as `library`.
+    let d: &LawDescriptor = unsafe { &*ptr };
+    // SAFETY: descriptor strings are NUL-terminated, live as long as the library (ABI rule).
+    let text = |p: *const c_char, what: &str, law: &str| unsafe { c_text(p, what, law, path) };
+    let name = text(d.name, "name", &law)?;
+    law = name.clone();
+    let description = text(d.description, "description", &law)?;
+    if d.param_desc_size != std::mem::size_of::<ParamDesc>() {
+        return Err(fail(
+            &law,
+            format!(
+                "{}: parameter entries of {} bytes, efsi expects {}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                path.display(),
+                d.param_desc_size,
+                std::mem::size_of::<ParamDesc>()
+            ),
+        ));
+    }
+    let table: &[ParamDesc] = match (d.param_count, d.params.is_null()) {
+        (0, _) => &[],
+        (_, true) => {
+            return Err(fail(
+                &law,
+                format!(
+                    "{}: declares {} parameters but no table",
+                    path.display(),
+                    d.param_count
+                ),
+            ));
+        }
+        // SAFETY: non-null, `param_count` entries of the checked size (ABI rule).
+        (n, false) => unsafe { std::slice::from_raw_parts(d.params, n) },
+    };
+    let mut parameters: Vec<ParamInfo> = Vec::with_capacity(table.len());
+    for (k, p) in table.iter().enumerate() {
+        let what = format!("parameter {k}'s name");
+        let info = ParamInfo {
+            name: text(p.name, &what, &law)?,
+            unit: text(p.unit, "parameter unit", &law)?,
+            description: text(p.description, "parameter description", &law)?,
+            default: p.default,
+            min: p.min,
+            max: p.max,
+            min_exclusive: p.flags & PARAM_MIN_EXCLUSIVE != 0,
+            max_exclusive: p.flags & PARAM_MAX_EXCLUSIVE != 0,
+        };
+        if parameters.iter().any(|q| q.name == info.name) {
+            return Err(fail(
+                &law,
+                format!("declares parameter `{}` twice", info.name),
+            ));
+        }
+        if !info.contains(info.default) {
+            return Err(fail(
+                &law,
+                format!(
+                    "parameter `{}`'s declared default {} is outside its declared range {}",
+                    info.name,
+                    info.default,
+                    info.range_text()
+                ),
+            ));
+        }
+        parameters.push(info);
+    }
+    let (Some(create), Some(destroy), Some(evaluate)) = (d.create, d.destroy, d.evaluate) else {
+        return Err(fail(
+            &law,
+            format!(
+                "{}: the descriptor lacks a create, destroy or evaluate function",
+                path.display()
+            ),
+        ));
+    };
+    Ok(Opened {
+        info: LawInfo {
+            name,
+            description,
+            path: path.to_path_buf(),
+            abi_version: version,
+            parameters,
+        },
+        create,
+        destroy,
+        evaluate,
+        library,
+    })
+}
+
+/// A descriptor string.
+///
+/// # Safety
+/// `p` is null or a NUL-terminated string that outlives the call.
+unsafe fn c_text(p: *const c_char, what: &str, law: &str, path: &Path) -> Result<String, LawError> {
+    if p.is_null() {
+        return Err(LawError {
+            law: law.to_string(),
+            message: format!("{}: the descriptor's {what} is null", path.display()),
+            cell: None,
+        });
+    }
+    // SAFETY: by the caller's contract.
+    let s = unsafe { CStr::from_ptr(p) };
+    s.to_str().map(str::to_string).map_err(|_| LawError {
+        law: law.to_string(),
+        message: format!("{}: the descriptor's {what} is not UTF-8", path.display()),
+        cell: None,
+    })
+}
