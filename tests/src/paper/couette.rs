@@ -1,24 +1,45 @@
 //! Sugiyama's oscillating Couette flow with a neo-Hookean layer (`cases/oscillating_couette.ron`)
 //! against the start-up reference (`tests/references/oscillating_couette/from_rest/`).
 
+use super::case::{Case, Done, Harness, Verdict, trade};
 use super::plot::Scale;
-use super::{Check, Options, Report, execute, figure, load_case, slug};
+use super::{Check, Options, Run, load_case};
+use efsi_core::Scene;
 use efsi_core::scene::ProfileSpec;
+use std::path::PathBuf;
 
 const TIMES: [f64; 4] = [2.0, 2.8, 4.0, 4.8];
 
-/// Run the case.
-pub fn run(opts: &Options) -> Result<Report, String> {
-    let dir = opts.out.join("oscillating_couette");
-    let grids: &[usize] = if opts.quick {
-        &[16, 32, 64]
-    } else {
-        &[32, 64, 128, 256]
-    };
-    let mut runs = Vec::new();
-    let mut per_run = Vec::new();
-    let mut schedule = Vec::new();
-    for &n in grids {
+/// The case: grids of 16, 32, 64 (quick) or 32 … 256 cells across, Δt ∝ h.
+pub struct Couette {
+    grids: &'static [usize],
+}
+
+impl Case for Couette {
+    const NAME: &'static str = "oscillating_couette";
+    type Setting = usize;
+    /// The max error at each of [`TIMES`].
+    type Measured = Vec<f64>;
+
+    fn new(opts: &Options) -> Result<Self, String> {
+        Ok(Couette {
+            grids: if opts.quick {
+                &[16, 32, 64]
+            } else {
+                &[32, 64, 128, 256]
+            },
+        })
+    }
+
+    fn settings(&self) -> Vec<usize> {
+        self.grids.to_vec()
+    }
+
+    fn label(&self, n: &usize) -> String {
+        format!("{n} cells")
+    }
+
+    fn scene(&self, &n: &usize) -> Result<(Scene, PathBuf), String> {
         let (mut scene, path) = load_case("oscillating_couette.ron")?;
         scene.grid.ny = n;
         // Δt ∝ h (the scene's 0.001 at 64 cells): the elastic step is first order in time.
@@ -35,80 +56,77 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             fields: vec!["u".into()],
             at: TIMES.to_vec(),
         }];
-        let label = format!("{n} cells");
-        let (sim, run) = execute(scene, &path, &dir.join(slug(&label)), &label, opts)
-            .map_err(|e| e.to_string())?;
-        schedule = sim
-            .pipeline()
-            .stage_names()
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        per_run.push(super::profile_errors(
-            &run,
-            "oscillating_couette/from_rest",
-            &TIMES,
-        )?);
-        runs.push(run);
+        Ok((scene, path))
     }
-    let (errs, orders, e64) = super::study(&mut runs, &per_run, &TIMES);
-    let checks = vec![
-        Check::at_most(
-            "64 cells: max abs(u − u_ref) at t = 2, 2.8, 4, 4.8 (grid points)",
-            e64,
-            0.005,
-            "e",
-        ),
-        Check::at_least(
-            format!("observed order over {grids:?} cells (Δt ∝ h), the smallest"),
-            orders.iter().copied().fold(f64::MAX, f64::min),
-            1.0,
-            "3",
-        ),
-    ];
-    let mut plots = Vec::new();
-    let (note, conv) = super::convergence("max error over the four times", grids, &errs, &orders);
-    let mut notes = vec![note];
-    let trade = vec![(
-        "grids (Δt ∝ h)".to_string(),
-        runs.iter()
-            .filter_map(|r| r.error.map(|e| (r.wall_seconds, e)))
-            .collect(),
-    )];
-    for (file, title, x, series) in [
-        (
-            "convergence",
-            "Couette: error vs cells",
-            "cells across",
-            conv,
-        ),
-        (
-            "tradeoff",
-            "Couette: error vs wall time",
-            "wall time (s)",
-            trade,
-        ),
-    ] {
-        figure(
-            &dir,
-            file,
-            (title, x, "max abs(u − u_ref)"),
-            &series,
-            Scale::LogLog,
-            &mut plots,
-            &mut notes,
-        );
+
+    fn measure(
+        &self,
+        _: &usize,
+        _: &efsi_core::Simulation,
+        run: &mut Run,
+    ) -> Result<Vec<f64>, String> {
+        super::profile_errors(run, "oscillating_couette/from_rest", &TIMES)
     }
-    Ok(Report {
-        name: "oscillating_couette".into(),
-        title: "Sugiyama's oscillating Couette flow, neo-Hookean layer, μ_s = 0".into(),
-        reference: "the start-up-from-rest solution of `tests/references/oscillating_couette/from_rest/` (1D FE, 801 nodes), at the grid's u points".into(),
-        error_metric: "max abs(u − u_ref), t = 2, 2.8, 4, 4.8".into(),
-        runs,
-        checks,
-        plots,
-        notes,
-        schedule,
-        recommendation: "64 cells (Δt = 0.001): 1.5e-3, a third of the target, in a few seconds; the error halves with each doubling (first order: the interface and the elastic step)".into(),
-    })
+
+    fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
+        let (errs, orders, e64) = profile_study(done, &TIMES);
+        let grids = self.grids;
+        let checks = vec![
+            Check::at_most(
+                "64 cells: max abs(u − u_ref) at t = 2, 2.8, 4, 4.8 (grid points)",
+                e64,
+                0.005,
+                "e",
+            ),
+            Check::at_least(
+                format!("observed order over {grids:?} cells (Δt ∝ h), the smallest"),
+                orders.iter().copied().fold(f64::MAX, f64::min),
+                1.0,
+                "3",
+            ),
+        ];
+        let (note, conv) =
+            super::convergence("max error over the four times", grids, &errs, &orders);
+        h.notes.push(note);
+        let tradeoff = vec![trade("grids (Δt ∝ h)", &done.runs)];
+        for (file, title, x, series) in [
+            (
+                "convergence",
+                "Couette: error vs cells",
+                "cells across",
+                conv,
+            ),
+            (
+                "tradeoff",
+                "Couette: error vs wall time",
+                "wall time (s)",
+                tradeoff,
+            ),
+        ] {
+            h.figure(
+                file,
+                (title, x, "max abs(u − u_ref)"),
+                &series,
+                Scale::LogLog,
+            );
+        }
+        Ok(Verdict {
+            title: "Sugiyama's oscillating Couette flow, neo-Hookean layer, μ_s = 0".into(),
+            reference: "the start-up-from-rest solution of `tests/references/oscillating_couette/from_rest/` (1D FE, 801 nodes), at the grid's u points".into(),
+            error_metric: "max abs(u − u_ref), t = 2, 2.8, 4, 4.8".into(),
+            checks,
+            recommendation: "64 cells (Δt = 0.001): 1.5e-3, a third of the target, in a few seconds; the error halves with each doubling (first order: the interface and the elastic step)".into(),
+        })
+    }
+}
+
+/// [`super::study`] over the runs of a Couette case whose measurement is the profile errors at
+/// `times`: the errors, the observed orders and the error at 64 cells.
+pub(super) fn profile_study<C, T>(done: &mut Done<C>, times: &[T]) -> (Vec<f64>, Vec<f64>, f64)
+where
+    C: Case<Measured = Vec<f64>>,
+    T: std::fmt::Display,
+{
+    let per_run: Vec<Vec<f64>> = done.measured.iter().map(|(_, e)| e.clone()).collect();
+    super::study(&mut done.runs, &per_run, times)
 }

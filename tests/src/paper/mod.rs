@@ -4,6 +4,7 @@
 //! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
 //! their checks.
 
+pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
@@ -149,48 +150,32 @@ impl Report {
     }
 }
 
-/// A case: its name and how to run it.
-pub struct Case {
+/// A case as `--case` names it, and how to run it (see [`case::Case`]).
+pub struct Entry {
     /// Name, as `--case` takes it.
     pub name: &'static str,
     /// Runs the case.
     pub run: fn(&Options) -> Result<Report, String>,
 }
 
+/// The entry of case `C`.
+const fn entry<C: case::Case>() -> Entry {
+    Entry {
+        name: C::NAME,
+        run: case::run::<C>,
+    }
+}
+
 /// Every case, in report order.
-pub const CASES: &[Case] = &[
-    Case {
-        name: "sphere_impact",
-        run: sphere::run,
-    },
-    Case {
-        name: "soft_wall_cavity",
-        run: soft_wall::run,
-    },
-    Case {
-        name: "disk_in_cavity",
-        run: disk_cavity::run,
-    },
-    Case {
-        name: "oscillating_disk",
-        run: oscillating_disk::run,
-    },
-    Case {
-        name: "shear_rectangle",
-        run: shear_rectangle::run,
-    },
-    Case {
-        name: "oscillating_couette",
-        run: couette::run,
-    },
-    Case {
-        name: "oscillating_couette_mr",
-        run: couette_mr::run,
-    },
-    Case {
-        name: "stability",
-        run: stability::run,
-    },
+pub const CASES: &[Entry] = &[
+    entry::<sphere::SphereImpact>(),
+    entry::<soft_wall::SoftWall>(),
+    entry::<disk_cavity::DiskCavity>(),
+    entry::<oscillating_disk::OscillatingDisk>(),
+    entry::<shear_rectangle::ShearRectangle>(),
+    entry::<couette::Couette>(),
+    entry::<couette_mr::CouetteMr>(),
+    entry::<stability::Stability>(),
 ];
 
 /// The workspace's `cases/` folder.
