@@ -6,7 +6,7 @@
 //! figures with their CSV series.
 
 use super::plot::Scale;
-use super::{Check, Options, Report, Run, Series, execute, figure, slug};
+use super::{Check, Options, Report, Run, Series, execute_built, plot, save_series, slug};
 use efsi_core::{Scene, Simulation};
 use std::path::{Path, PathBuf};
 
@@ -130,29 +130,37 @@ impl Harness<'_> {
         folder: &str,
         label: &str,
     ) -> Result<(Simulation, Run), String> {
-        let (sim, run) = execute(scene, path, &self.dir.join(folder), label, self.opts)
+        let sim =
+            Simulation::new(scene, path, &efsi_stages::builtin()).map_err(|e| e.to_string())?;
+        let (sim, run) = execute_built(sim, &self.dir.join(folder), label, self.opts)
             .map_err(|e| e.to_string())?;
         self.schedule = stage_names(&sim);
         Ok((sim, run))
     }
 
-    /// Draw a figure into the case's folder (see [`figure`]).
+    /// Draw a figure into the case's folder: `<file>.png` and the CSV of its series
+    /// `<file>.csv` beside it. The plot is recorded in [`Harness::plots`]; what could not be
+    /// written becomes a note, so the report says what is missing.
     pub fn figure(
         &mut self,
         file: &str,
-        axes: (&str, &str, &str),
+        (title, x, y): (&str, &str, &str),
         series: &[Series],
         scale: Scale,
     ) {
-        figure(
-            &self.dir,
-            file,
-            axes,
-            series,
-            scale,
-            &mut self.plots,
-            &mut self.notes,
-        );
+        let dir = &self.dir;
+        if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, series) {
+            self.notes.push(format!("{file}.csv not written: {e}"));
+        }
+        let case = dir
+            .file_name()
+            .map_or(String::new(), |c| c.to_string_lossy().into_owned());
+        match plot::lines(&dir.join(format!("{file}.png")), title, x, y, series, scale) {
+            Ok(()) => self
+                .plots
+                .push((title.to_string(), format!("{case}/{file}.png"))),
+            Err(e) => self.notes.push(format!("plot {file} not drawn: {e}")),
+        }
     }
 }
 
@@ -219,4 +227,12 @@ pub fn trade<'a>(label: &str, runs: impl IntoIterator<Item = &'a Run>) -> Series
 pub fn largest_ratio(values: impl IntoIterator<Item = f64>) -> f64 {
     let v: Vec<f64> = values.into_iter().collect();
     v.windows(2).map(|w| w[1] / w[0]).fold(0.0, f64::max)
+}
+
+/// A named series of `ys` against `xs`.
+pub fn xy(label: &str, xs: &[f64], ys: &[f64]) -> Series {
+    (
+        label.to_string(),
+        xs.iter().copied().zip(ys.iter().copied()).collect(),
+    )
 }

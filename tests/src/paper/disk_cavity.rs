@@ -9,7 +9,7 @@
 //! right-most point x_max ≈ 0.70 near t ≈ 6.4 and spirals in towards (0.54, 0.71); the reference
 //! ends near t ≈ 17–20 on that clock (its last points match the third, small turn).
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade};
+use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade, xy};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
@@ -255,12 +255,7 @@ impl Case for DiskCavity {
         ));
         // Plots and their series.
         let mut paths = vec![("Sugiyama et al. 2011, 1024²".to_string(), reference.clone())];
-        paths.extend(runs.iter().map(|(r, a)| {
-            (
-                r.label.clone(),
-                a.x.iter().copied().zip(a.y.iter().copied()).collect(),
-            )
-        }));
+        paths.extend(runs.iter().map(|(r, a)| xy(&r.label, &a.x, &a.y)));
         h.figure(
             "centroid_path",
             (
@@ -271,15 +266,7 @@ impl Case for DiskCavity {
             &paths,
             Scale::Linear,
         );
-        let xs: Vec<_> = runs
-            .iter()
-            .map(|(r, a)| {
-                (
-                    r.label.clone(),
-                    a.t.iter().copied().zip(a.x.iter().copied()).collect(),
-                )
-            })
-            .collect();
+        let xs: Vec<_> = runs.iter().map(|(r, a)| xy(&r.label, &a.t, &a.x)).collect();
         h.figure(
             "centroid_x",
             ("Centroid x_c(t)", "t", "x_c"),

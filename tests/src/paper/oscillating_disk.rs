@@ -9,9 +9,9 @@
 //! peaks near t = 0.2; the solid volume is conserved. The speed/accuracy error is the kinetic
 //! energy history against the finest grid's.
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade};
+use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade, xy};
 use super::plot::Scale;
-use super::{Check, Options, Run, load_case, probes};
+use super::{Check, Options, Run, Series, load_case, probes};
 use efsi_core::scene::InitialVelocity;
 use efsi_core::{Scene, Simulation};
 use std::path::PathBuf;
@@ -292,14 +292,9 @@ impl Case for OscillatingDisk {
             runs.iter().map(|(_, h, _)| h.volume_drift),
         ));
         // Plots and their series.
-        let series = |f: fn(&History) -> &Vec<f64>| -> Vec<(String, Vec<(f64, f64)>)> {
+        let series = |f: fn(&History) -> &Vec<f64>| -> Vec<Series> {
             runs.iter()
-                .map(|(r, h, _)| {
-                    (
-                        r.label.clone(),
-                        h.t.iter().copied().zip(f(h).iter().copied()).collect(),
-                    )
-                })
+                .map(|(r, h, _)| xy(&r.label, &h.t, f(h)))
                 .collect()
         };
         h.figure(

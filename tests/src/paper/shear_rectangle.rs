@@ -55,7 +55,7 @@ impl Case for ShearRectangle {
     }
 
     /// Step in-process to record φ (deformation measure every 0.05, images of the finest grid
-    /// at the [`INSTANTS`]).
+    /// at t = 0, 2, 4, 5, 7, 10).
     fn run(&self, h: &mut Harness, &n: &usize) -> Result<(Option<Run>, Deformation), String> {
         let (scene, path) = self.scene(&n)?;
         let label = self.label(&n);
@@ -133,51 +133,29 @@ impl Case for ShearRectangle {
         if next_image == 0 && finest {
             h.notes.push("no images (run ended early)".into());
         }
-        let steps = sim.state.step;
         let wall = start.elapsed().as_secs_f64();
-        let cells = g.nx * g.ny;
-        let stages = sim
-            .pipeline()
-            .timings()
-            .iter()
-            .map(|t| {
-                (
-                    t.name.to_string(),
-                    t.seconds,
-                    1e9 * t.seconds / (steps.max(1) as f64 * cells as f64),
-                    t.iterations as f64 / steps.max(1) as f64,
-                )
-            })
-            .collect();
         let (tp, peak) = curve
             .iter()
             .copied()
             .fold((0.0, 0.0), |m, p| if p.1 > m.1 { p } else { m });
         let last = curve.last().map_or(f64::NAN, |p| p.1);
-        let run = Run {
-            label: label.clone(),
-            cells,
-            steps,
-            wall_seconds: wall,
-            error: None,
-            metrics: vec![
-                ("peak_time".into(), tp),
-                ("release_measure".into(), interp_at(&curve, 4.0)),
-                (
-                    "min_after_release".into(),
-                    curve
-                        .iter()
-                        .filter(|p| p.0 > 4.0)
-                        .fold(f64::MAX, |m, p| m.min(p.1)),
-                ),
-                ("peak_measure".into(), peak),
-                ("final_measure".into(), last),
-                ("recovered_fraction".into(), 1.0 - last / peak),
-                ("area_drift".into(), drift),
-            ],
-            stages,
-            dir: dir.join(super::slug(&label)),
-        };
+        let rdir = dir.join(super::slug(&label));
+        let mut run = Run::of(&sim, &label, &rdir, sim.state.step, wall);
+        run.metrics = vec![
+            ("peak_time".into(), tp),
+            ("release_measure".into(), interp_at(&curve, 4.0)),
+            (
+                "min_after_release".into(),
+                curve
+                    .iter()
+                    .filter(|p| p.0 > 4.0)
+                    .fold(f64::MAX, |m, p| m.min(p.1)),
+            ),
+            ("peak_measure".into(), peak),
+            ("final_measure".into(), last),
+            ("recovered_fraction".into(), 1.0 - last / peak),
+            ("area_drift".into(), drift),
+        ];
         Ok((Some(run), Deformation { curve, drift }))
     }
 

@@ -188,27 +188,16 @@ fn scene_at(
     Ok((scene, path))
 }
 
-/// The runs of the sphere: the resolution study, the CFL study, or one of the seed's other
-/// initial conditions.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Group {
-    /// Cells per radius at CFL 0.4.
-    Cpr,
-    /// CFL numbers at the middle resolution.
-    Cfl,
-    /// Another initial condition (its name).
-    Conditions(&'static str),
-}
-
 /// One run of the sphere.
-#[derive(Clone, Debug)]
-pub struct Drop {
-    file: &'static str,
-    cpr: f64,
-    cfl: f64,
-    vtk: bool,
-    group: Group,
-    label: String,
+#[derive(Clone, Copy, Debug)]
+pub enum Drop {
+    /// Cells per radius, at CFL 0.4.
+    Cpr(f64),
+    /// A CFL number, at the middle resolution.
+    Cfl(f64),
+    /// Another initial condition of the seed (its scene and name), at the conditions'
+    /// resolution.
+    Condition(&'static str, &'static str),
 }
 
 /// The case: 8, 10, 12 cells per radius (quick) or 10 … 50, the CFL numbers at the middle
@@ -249,42 +238,29 @@ impl Case for SphereImpact {
     }
 
     fn settings(&self) -> Vec<Drop> {
-        let mk = |file, cpr, cfl, vtk, group, label| Drop {
-            file,
-            cpr,
-            cfl,
-            vtk,
-            group,
-            label,
-        };
-        let mut out = Vec::new();
-        for &cpr in self.cprs {
-            let vtk = cpr == self.conditions_cpr;
-            let label = format!("{cpr} CPR");
-            out.push(mk("sphere_impact.ron", cpr, 0.4, vtk, Group::Cpr, label));
-        }
-        let mid = self.mid;
-        for &cfl in self.cfls {
-            let label = format!("{mid} CPR, CFL {cfl}");
-            out.push(mk("sphere_impact.ron", mid, cfl, false, Group::Cfl, label));
-        }
-        let cpr = self.conditions_cpr;
-        for (file, name) in [
-            ("sphere_impact_case1.ron", "case 1 (61.9 mm, 0.73 m/s)"),
-            ("sphere_impact_case2.ron", "case 2 (58.6 mm, 1.06 m/s)"),
-        ] {
-            let label = format!("{name} {cpr} CPR");
-            out.push(mk(file, cpr, 0.4, false, Group::Conditions(name), label));
-        }
-        out
+        let cprs = self.cprs.iter().map(|&c| Drop::Cpr(c));
+        cprs.chain(self.cfls.iter().map(|&c| Drop::Cfl(c)))
+            .chain([
+                Drop::Condition("sphere_impact_case1.ron", "case 1 (61.9 mm, 0.73 m/s)"),
+                Drop::Condition("sphere_impact_case2.ron", "case 2 (58.6 mm, 1.06 m/s)"),
+            ])
+            .collect()
     }
 
     fn label(&self, s: &Drop) -> String {
-        s.label.clone()
+        match *s {
+            Drop::Cpr(cpr) => format!("{cpr} CPR"),
+            Drop::Cfl(cfl) => format!("{} CPR, CFL {cfl}", self.mid),
+            Drop::Condition(_, name) => format!("{name} {} CPR", self.conditions_cpr),
+        }
     }
 
     fn scene(&self, s: &Drop) -> Result<(Scene, std::path::PathBuf), String> {
-        scene_at(s.file, s.cpr, s.cfl, s.vtk)
+        match *s {
+            Drop::Cpr(cpr) => scene_at("sphere_impact.ron", cpr, 0.4, cpr == self.conditions_cpr),
+            Drop::Cfl(cfl) => scene_at("sphere_impact.ron", self.mid, cfl, false),
+            Drop::Condition(file, _) => scene_at(file, self.conditions_cpr, 0.4, false),
+        }
     }
 
     fn measure(&self, s: &Drop, sim: &Simulation, run: &mut Run) -> Result<Impact, String> {
@@ -301,13 +277,13 @@ impl Case for SphereImpact {
             .measured
             .iter()
             .rev()
-            .find(|(s, _)| s.group == Group::Cpr)
+            .find(|(s, _)| matches!(s, Drop::Cpr(_)))
             .map(|(_, i)| i.stages.clone())
             .unwrap_or_default();
         let n_main = done
             .measured
             .iter()
-            .filter(|(s, _)| !matches!(s.group, Group::Conditions(_)))
+            .filter(|(s, _)| !matches!(s, Drop::Condition(..)))
             .count();
         let (main, cond) = done.runs.split_at_mut(n_main);
         let mut runs: Vec<(&mut Run, &Impact)> = main
@@ -317,8 +293,8 @@ impl Case for SphereImpact {
         let conditions: Vec<(String, &Run, &Impact)> = cond
             .iter()
             .zip(&done.measured[n_main..])
-            .filter_map(|(r, (s, i))| match s.group {
-                Group::Conditions(name) => Some((name.to_string(), r, i)),
+            .filter_map(|(r, (s, i))| match s {
+                Drop::Condition(_, name) => Some((name.to_string(), r, i)),
                 _ => None,
             })
             .collect();
@@ -359,8 +335,90 @@ impl Case for SphereImpact {
             ];
         }
         let runs: Vec<(&Run, &Impact)> = runs.into_iter().map(|(r, i)| (&*r, i)).collect();
-        let checks = checks(self, &runs, &conditions)?;
-        let jr = judged(self, &runs)?;
+        // Checks, on the run the paper's claims are about (35 CPR; the finest in quick mode).
+        let judge_cpr = if self.quick { reference_cpr } else { 35.0 };
+        let (jr, _) = runs
+            .iter()
+            .find(|(r, _)| r.label == format!("{judge_cpr} CPR"))
+            .ok_or("no judged run")?;
+        let m = |n: &str| jr.metric(n).unwrap_or(f64::NAN);
+        let mut checks = vec![
+            Check::at_most(
+                format!(
+                    "free fall: max abs(z − z_free)/z_free before contact ({})",
+                    jr.label
+                ),
+                m("free_fall_error"),
+                0.005,
+                "%",
+            ),
+            Check::within(
+                format!("restitution e = v_rebound / v_impact ({})", jr.label),
+                m("restitution"),
+                0.5,
+                1.0,
+                "3",
+            ),
+            drift_check(
+                "solid volume drift, every run",
+                runs.iter()
+                    .map(|(_, i)| i.volume_drift)
+                    .chain(conditions.iter().map(|(_, _, i)| i.volume_drift)),
+            ),
+            Check::at_least(
+                "one piece: the largest connected piece's share of the solid volume, least over every output of every run at 10 CPR or more",
+                runs.iter()
+                    .filter(|(r, _)| {
+                        r.label
+                            .split(' ')
+                            .next()
+                            .and_then(|c| c.parse::<f64>().ok())
+                            .is_some_and(|c| c >= 10.0)
+                    })
+                    .map(|(_, i)| i.largest_piece)
+                    .chain(conditions.iter().map(|(_, _, i)| i.largest_piece))
+                    .fold(f64::MAX, f64::min),
+                0.999,
+                "%",
+            ),
+        ];
+        if !self.quick {
+            let rel = |a: f64, b: f64| (a - b) / b;
+            checks.push(Check::within(
+                format!(
+                    "contact time (force above 2 % of its peak) vs Hertz {:.2} ms ({})",
+                    1e3 * m("hertz_contact_time_s"),
+                    jr.label
+                ),
+                rel(m("contact_time_s"), m("hertz_contact_time_s")),
+                -0.15,
+                0.15,
+                "%",
+            ));
+            checks.push(Check::within(
+                format!(
+                    "max compression 2R − height vs Hertz {:.2} mm ({})",
+                    1e3 * m("hertz_compression_m"),
+                    jr.label
+                ),
+                rel(m("compression_m"), m("hertz_compression_m")),
+                -0.15,
+                0.15,
+                "%",
+            ));
+            let r35 = m("rebound_speed");
+            let r50 = runs
+                .iter()
+                .find(|(r, _)| r.label == "50 CPR")
+                .and_then(|(r, _)| r.metric("rebound_speed"))
+                .unwrap_or(f64::NAN);
+            checks.push(Check::at_most(
+                "rebound speed, 35 vs 50 CPR, relative difference",
+                ((r35 - r50) / r50).abs(),
+                0.05,
+                "%",
+            ));
+        }
         // Plots and their series.
         let by_cpr: Vec<(&Run, &Impact)> = runs
             .iter()
@@ -501,101 +559,4 @@ impl Case for SphereImpact {
             },
         })
     }
-}
-
-/// The run the paper's claims are about (35 CPR; the finest in quick mode).
-fn judged<'a>(c: &SphereImpact, runs: &[(&'a Run, &Impact)]) -> Result<&'a Run, String> {
-    let judge_cpr = if c.quick { c.reference_cpr } else { 35.0 };
-    runs.iter()
-        .find(|(r, _)| r.label == format!("{judge_cpr} CPR"))
-        .map(|(r, _)| *r)
-        .ok_or_else(|| "no judged run".to_string())
-}
-
-/// The checks, on the judged run (see [`judged`]) and over every run.
-fn checks(
-    c: &SphereImpact,
-    runs: &[(&Run, &Impact)],
-    conditions: &[(String, &Run, &Impact)],
-) -> Result<Vec<Check>, String> {
-    let jr = judged(c, runs)?;
-    let m = |n: &str| jr.metric(n).unwrap_or(f64::NAN);
-    let mut checks = vec![
-        Check::at_most(
-            format!(
-                "free fall: max abs(z − z_free)/z_free before contact ({})",
-                jr.label
-            ),
-            m("free_fall_error"),
-            0.005,
-            "%",
-        ),
-        Check::within(
-            format!("restitution e = v_rebound / v_impact ({})", jr.label),
-            m("restitution"),
-            0.5,
-            1.0,
-            "3",
-        ),
-        drift_check(
-            "solid volume drift, every run",
-            runs.iter()
-                .map(|(_, i)| i.volume_drift)
-                .chain(conditions.iter().map(|(_, _, i)| i.volume_drift)),
-        ),
-        Check::at_least(
-            "one piece: the largest connected piece's share of the solid volume, least over every output of every run at 10 CPR or more",
-            runs.iter()
-                .filter(|(r, _)| {
-                    r.label
-                        .split(' ')
-                        .next()
-                        .and_then(|c| c.parse::<f64>().ok())
-                        .is_some_and(|c| c >= 10.0)
-                })
-                .map(|(_, i)| i.largest_piece)
-                .chain(conditions.iter().map(|(_, _, i)| i.largest_piece))
-                .fold(f64::MAX, f64::min),
-            0.999,
-            "%",
-        ),
-    ];
-    if !c.quick {
-        let rel = |a: f64, b: f64| (a - b) / b;
-        checks.push(Check::within(
-            format!(
-                "contact time (force above 2 % of its peak) vs Hertz {:.2} ms ({})",
-                1e3 * m("hertz_contact_time_s"),
-                jr.label
-            ),
-            rel(m("contact_time_s"), m("hertz_contact_time_s")),
-            -0.15,
-            0.15,
-            "%",
-        ));
-        checks.push(Check::within(
-            format!(
-                "max compression 2R − height vs Hertz {:.2} mm ({})",
-                1e3 * m("hertz_compression_m"),
-                jr.label
-            ),
-            rel(m("compression_m"), m("hertz_compression_m")),
-            -0.15,
-            0.15,
-            "%",
-        ));
-        let r35 = m("rebound_speed");
-        let r50 = runs
-            .iter()
-            .find(|(r, _)| r.label == "50 CPR")
-            .and_then(|(r, _)| r.metric("rebound_speed"))
-            .unwrap_or(f64::NAN);
-        checks.push(Check::at_most(
-            "rebound speed, 35 vs 50 CPR, relative difference",
-            ((r35 - r50) / r50).abs(),
-            0.05,
-            "%",
-        ));
-    }
-    Ok(checks)
 }

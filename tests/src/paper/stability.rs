@@ -492,67 +492,46 @@ impl Case for Stability {
 
     /// The map's settings, the small solids, the refusals, then the coupled step's runs.
     fn settings(&self) -> Vec<Setting> {
-        let mut grid_runs = Vec::new();
+        let mut out = Vec::new();
         for &cfl in self.cfls {
             for &ratio in self.ratios {
-                for &g in self.gs {
-                    grid_runs.push(Setting::new(g, ratio, cfl));
-                }
+                out.extend(self.gs.iter().map(|&g| Setting::new(g, ratio, cfl)));
             }
         }
-        let mut small_runs = Vec::new();
         for across in ACROSS {
             for &ratio in self.small_ratios {
-                for &g in self.gs {
-                    small_runs.push(Setting {
-                        across: Some(across),
-                        ..Setting::new(g, ratio, 0.5)
-                    });
-                }
+                let small = |&g: &f64| Setting {
+                    across: Some(across),
+                    ..Setting::new(g, ratio, 0.5)
+                };
+                out.extend(self.gs.iter().map(small));
             }
         }
-        let refusals = [
-            Setting {
-                fixed_dt: Some(1e-4),
-                ..Setting::new(1e9, 1e3, 0.5)
-            },
-            Setting {
-                wave_courant: Some(2.5 * MAX_WAVE_COURANT),
-                ..Setting::new(1e7, 1e3, 0.5)
-            },
-        ];
+        // Beyond a limit: to be refused.
+        out.push(Setting {
+            fixed_dt: Some(1e-4),
+            ..Setting::new(1e9, 1e3, 0.5)
+        });
+        out.push(Setting {
+            wave_courant: Some(2.5 * MAX_WAVE_COURANT),
+            ..Setting::new(1e7, 1e3, 0.5)
+        });
         // The coupled elastic step (issue 16), full mode only: stiff solids without the wave cap.
-        let mut coupled_runs = Vec::new();
         if !self.quick {
             for &cfl in &CFLS {
                 for g in COUPLED_G {
-                    coupled_runs.push(Setting {
+                    out.push(Setting {
                         coupled: true,
                         ..Setting::new(g, 1e3, cfl)
                     });
                 }
             }
         }
-        grid_runs
-            .iter()
-            .chain(&small_runs)
-            .chain(&refusals)
-            .chain(&coupled_runs)
-            .copied()
-            .collect()
+        out
     }
 
     fn label(&self, st: &Setting) -> String {
         st.label()
-    }
-
-    fn scene(&self, st: &Setting) -> Result<(Scene, PathBuf), String> {
-        scene_for(st, self.cpr)
-    }
-
-    fn run(&self, h: &mut Harness, st: &Setting) -> Result<(Option<Run>, Outcome), String> {
-        let (outcome, run) = attempt(st, self.cpr, &h.dir, h.opts);
-        Ok((run, outcome))
     }
 
     /// Through an efsi sweep if there is a Python for it, else one after the other here.
@@ -564,15 +543,16 @@ impl Case for Stability {
                 .map(|st| attempt(st, self.cpr, &h.dir, h.opts))
                 .collect(),
         };
-        let mut done = Done {
-            runs: Vec::new(),
-            measured: Vec::new(),
-        };
-        for (st, (outcome, run)) in settings.into_iter().zip(attempts) {
-            done.runs.extend(run);
-            done.measured.push((st, outcome));
-        }
-        Ok(done)
+        let mut runs = Vec::new();
+        let measured = settings.into_iter().zip(attempts);
+        let measured = measured.map(|(st, (outcome, run))| {
+            runs.extend(run);
+            (st, outcome)
+        });
+        Ok(Done {
+            measured: measured.collect(),
+            runs,
+        })
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
