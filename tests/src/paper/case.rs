@@ -22,18 +22,13 @@ pub trait Case: Sized {
     /// What one run shows beyond its [`Run`] record.
     type Measured;
 
-    /// The case's fixed data (references, quick or full mode) for `opts`.
-    fn new(opts: &Options) -> Result<Self, String>;
-
-    /// The runs to make, in report order.
-    fn settings(&self) -> Vec<Self::Setting>;
-
-    /// The run's label ("32 cells", "35 CPR", …).
-    fn label(&self, s: &Self::Setting) -> String;
+    /// The case's fixed data for `opts` (references, quick or full mode) and its runs in
+    /// report order, each a label ("32 cells", "35 CPR", …) and a setting.
+    fn plan(opts: &Options) -> Plan<Self>;
 
     /// The run's folder under the case's (the label as a [`slug`]).
-    fn folder(&self, s: &Self::Setting) -> String {
-        slug(&self.label(s))
+    fn folder(&self, label: &str, _s: &Self::Setting) -> String {
+        slug(label)
     }
 
     /// The scene of a setting, and the path it is read relative to.
@@ -52,26 +47,25 @@ pub trait Case: Sized {
     }
 
     /// Make one run: its record (`None` if it never ran) and what it shows.
-    fn run(
-        &self,
-        h: &mut Harness,
-        s: &Self::Setting,
-    ) -> Result<(Option<Run>, Self::Measured), String> {
+    fn run(&self, h: &mut Harness, label: &str, s: &Self::Setting) -> RunResult<Self::Measured> {
         let (scene, path) = self.scene(s)?;
-        let label = self.label(s);
-        let (sim, mut run) = h.execute(scene, &path, &self.folder(s), &label)?;
+        let (sim, mut run) = h.execute(scene, &path, &self.folder(label, s), label)?;
         let m = self.measure(s, &sim, &mut run)?;
         Ok((Some(run), m))
     }
 
-    /// Make every run of `settings`, in order (one after the other unless overridden).
-    fn runs(&self, h: &mut Harness, settings: Vec<Self::Setting>) -> Result<Done<Self>, String> {
+    /// Make the runs of the plan, in order (one after the other unless overridden).
+    fn runs(
+        &self,
+        h: &mut Harness,
+        plan: Vec<(String, Self::Setting)>,
+    ) -> Result<Done<Self>, String> {
         let mut done = Done {
             runs: Vec::new(),
             measured: Vec::new(),
         };
-        for s in settings {
-            let (run, m) = self.run(h, &s)?;
+        for (label, s) in plan {
+            let (run, m) = self.run(h, &label, &s)?;
             done.runs.extend(run);
             done.measured.push((s, m));
         }
@@ -82,6 +76,12 @@ pub trait Case: Sized {
     /// pipeline go into `h`; runs' errors and metrics may be set here.
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String>;
 }
+
+/// A case's data and its runs, each a label and a setting (see [`Case::plan`]).
+pub type Plan<C> = Result<(C, Vec<(String, <C as Case>::Setting)>), String>;
+
+/// One run's outcome: its record (`None` if it never ran) and what it shows.
+pub type RunResult<M> = Result<(Option<Run>, M), String>;
 
 /// The runs of a case: the records of those that ran, and every setting with what it showed.
 pub struct Done<C: Case> {
@@ -166,7 +166,7 @@ impl Harness<'_> {
 
 /// Run case `C` as `opts` asks and assemble its report.
 pub fn run<C: Case>(opts: &Options) -> Result<Report, String> {
-    let case = C::new(opts)?;
+    let (case, plan) = C::plan(opts)?;
     let mut h = Harness {
         opts,
         dir: opts.out.join(C::NAME),
@@ -174,7 +174,7 @@ pub fn run<C: Case>(opts: &Options) -> Result<Report, String> {
         notes: Vec::new(),
         schedule: Vec::new(),
     };
-    let mut done = case.runs(&mut h, case.settings())?;
+    let mut done = case.runs(&mut h, plan)?;
     let v = case.conclude(&mut h, &mut done)?;
     Ok(Report {
         name: C::NAME.into(),

@@ -1,7 +1,7 @@
 //! Sugiyama's oscillating Couette flow with a neo-Hookean layer (`cases/oscillating_couette.ron`)
 //! against the start-up reference (`tests/references/oscillating_couette/from_rest/`).
 
-use super::case::{Case, Done, Harness, Verdict, trade};
+use super::case::{Case, Done, Harness, Plan, Verdict, trade};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case};
 use efsi_core::scene::ProfileSpec;
@@ -22,6 +22,14 @@ pub(super) struct Profiles {
 }
 
 impl Profiles {
+    /// The runs: a label ("32 cells") and the grid.
+    pub fn plan(&self) -> Vec<(String, usize)> {
+        self.grids
+            .iter()
+            .map(|&n| (format!("{n} cells"), n))
+            .collect()
+    }
+
     /// Max |u − u_ref| at the grid's u points at each of the times, from the run's profiles
     /// (`profiles/u_t{t}.csv`) against the reference's `u_profile_t_{t}.csv` (columns `y`,
     /// `u`), the reference interpolated linearly.
@@ -130,24 +138,20 @@ impl Case for Couette {
     /// The max error at each of the times.
     type Measured = Vec<f64>;
 
-    fn new(opts: &Options) -> Result<Self, String> {
-        Ok(Couette(Profiles {
-            grids: if opts.quick {
-                &[16, 32, 64]
-            } else {
-                &[32, 64, 128, 256]
-            },
+    fn plan(opts: &Options) -> Plan<Self> {
+        let grids: &[usize] = if opts.quick {
+            &[16, 32, 64]
+        } else {
+            &[32, 64, 128, 256]
+        };
+        let reference = "oscillating_couette/from_rest";
+        let case = Couette(Profiles {
+            grids,
             times: &TIMES,
-            reference: "oscillating_couette/from_rest",
-        }))
-    }
-
-    fn settings(&self) -> Vec<usize> {
-        self.0.grids.to_vec()
-    }
-
-    fn label(&self, n: &usize) -> String {
-        format!("{n} cells")
+            reference,
+        });
+        let plan = case.0.plan();
+        Ok((case, plan))
     }
 
     fn scene(&self, &n: &usize) -> Result<(Scene, PathBuf), String> {

@@ -4,7 +4,7 @@
 //! period of a start from rest. A law whose shear stress depends on `tr B` checks that the
 //! interface corners feed the law the solid's own deformation.
 
-use super::case::{Case, Done, Harness, Verdict};
+use super::case::{Case, Done, Harness, Plan, Verdict};
 use super::{Options, Run, cases_dir};
 use efsi_core::scene::ProfileSpec;
 use efsi_core::{Scene, Simulation};
@@ -71,29 +71,21 @@ impl Case for CouetteMr {
     /// The max error at each of the times.
     type Measured = Vec<f64>;
 
-    fn new(opts: &Options) -> Result<Self, String> {
+    fn plan(opts: &Options) -> Plan<Self> {
         let (grids, times): (&[usize], &[f64]) = if opts.quick {
             (&[32, 64], &QUICK_TIMES)
         } else {
             (&[64, 128, 256], &TIMES)
         };
         let reference = "oscillating_couette_mr/c1_0.02";
-        Ok(CouetteMr {
-            profiles: super::couette::Profiles {
-                grids,
-                times,
-                reference,
-            },
-            quick: opts.quick,
-        })
-    }
-
-    fn settings(&self) -> Vec<usize> {
-        self.profiles.grids.to_vec()
-    }
-
-    fn label(&self, n: &usize) -> String {
-        format!("{n} cells")
+        let profiles = super::couette::Profiles {
+            grids,
+            times,
+            reference,
+        };
+        let plan = profiles.plan();
+        let quick = opts.quick;
+        Ok((CouetteMr { profiles, quick }, plan))
     }
 
     fn scene(&self, &n: &usize) -> Result<(Scene, std::path::PathBuf), String> {

@@ -9,7 +9,9 @@
 //! right-most point x_max ≈ 0.70 near t ≈ 6.4 and spirals in towards (0.54, 0.71); the reference
 //! ends near t ≈ 17–20 on that clock (its last points match the third, small turn).
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade, xy};
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, trade, xy,
+};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
@@ -134,30 +136,27 @@ impl Case for DiskCavity {
     type Setting = usize;
     type Measured = Path2;
 
-    fn new(opts: &Options) -> Result<Self, String> {
+    fn plan(opts: &Options) -> Plan<Self> {
         // Full: to t = 20, past the reference's spiral; quick: the first turn only (t = 9).
         let (grids, end): (&[usize], f64) = if opts.quick {
             (&[16, 24, 32], 9.0)
         } else {
             (&[32, 48, 64, 96], 20.0)
         };
-        Ok(DiskCavity {
-            grids,
-            end,
-            quick: opts.quick,
-            reference: reference()?,
-        })
+        let (quick, reference) = (opts.quick, reference()?);
+        let plan = grids.iter().map(|&n| (format!("{n}²"), n)).collect();
+        Ok((
+            DiskCavity {
+                grids,
+                end,
+                quick,
+                reference,
+            },
+            plan,
+        ))
     }
 
-    fn settings(&self) -> Vec<usize> {
-        self.grids.to_vec()
-    }
-
-    fn label(&self, n: &usize) -> String {
-        format!("{n}²")
-    }
-
-    fn folder(&self, n: &usize) -> String {
+    fn folder(&self, _: &str, n: &usize) -> String {
         format!("N{n}")
     }
 

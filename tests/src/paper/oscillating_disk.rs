@@ -9,7 +9,9 @@
 //! peaks near t = 0.2; the solid volume is conserved. The speed/accuracy error is the kinetic
 //! energy history against the finest grid's.
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, largest_ratio, trade, xy};
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, trade, xy,
+};
 use super::plot::Scale;
 use super::{Check, Options, Run, Series, load_case, probes};
 use efsi_core::scene::InitialVelocity;
@@ -88,7 +90,7 @@ impl Case for OscillatingDisk {
     type Setting = (usize, Option<f64>);
     type Measured = History;
 
-    fn new(opts: &Options) -> Result<Self, String> {
+    fn plan(opts: &Options) -> Plan<Self> {
         let (grids, end): (&[usize], f64) = if opts.quick {
             (&[24, 32, 48], 0.5)
         } else {
@@ -105,33 +107,27 @@ impl Case for OscillatingDisk {
         // ½∫(u² + v²) over [0, 1]² with u = a ky sin(kx x) cos(ky y), v = −a kx cos(kx x) sin(ky y)
         // (kx, ky multiples of 2π).
         let ke_exact = amplitude * amplitude * (kx * kx + ky * ky) / 8.0;
-        Ok(OscillatingDisk {
+        let quick = opts.quick;
+        let mut plan: Vec<_> = grids
+            .iter()
+            .map(|&n| (format!("{n}²"), (n, None)))
+            .collect();
+        if !quick {
+            // Sensitivity to the solid viscosity: the purely elastic solid of Robinson-Mosher et al.
+            let mu_s = 0.0;
+            plan.push((format!("64², μ_s = {mu_s}"), (64, Some(mu_s))));
+        }
+        let case = OscillatingDisk {
             grids,
             end,
-            quick: opts.quick,
+            quick,
             ke_exact,
-        })
+        };
+        Ok((case, plan))
     }
 
-    fn settings(&self) -> Vec<(usize, Option<f64>)> {
-        let mut variants: Vec<(usize, Option<f64>)> =
-            self.grids.iter().map(|&n| (n, None)).collect();
-        if !self.quick {
-            // Sensitivity to the solid viscosity: the purely elastic solid of Robinson-Mosher et al.
-            variants.push((64, Some(0.0)));
-        }
-        variants
-    }
-
-    fn label(&self, &(n, mu_s): &(usize, Option<f64>)) -> String {
-        match mu_s {
-            None => format!("{n}²"),
-            Some(m) => format!("{n}², μ_s = {m}"),
-        }
-    }
-
-    fn folder(&self, s: &(usize, Option<f64>)) -> String {
-        super::slug(&self.label(s).replace('²', ""))
+    fn folder(&self, label: &str, _: &(usize, Option<f64>)) -> String {
+        super::slug(&label.replace('²', ""))
     }
 
     fn scene(&self, &(n, mu_s): &(usize, Option<f64>)) -> Result<(Scene, PathBuf), String> {

@@ -2,7 +2,7 @@
 //! sliding plates for t < 4, then released (`cases/shear_rectangle.ron`): the deformation
 //! measure Σ|φ(t) − φ(0)|h²/area peaks near t = 4 and decays; the solid's area is conserved.
 
-use super::case::{Case, Done, Harness, Verdict, drift_check, stage_names, trade};
+use super::case::{Case, Done, Harness, Plan, RunResult, Verdict, drift_check, stage_names, trade};
 use super::plot::{Scale, field};
 use super::{Check, Options, Run, load_case};
 use crate::interp;
@@ -28,22 +28,17 @@ impl Case for ShearRectangle {
     type Setting = usize;
     type Measured = Deformation;
 
-    fn new(opts: &Options) -> Result<Self, String> {
-        Ok(ShearRectangle {
-            grids: if opts.quick {
-                &[12, 16, 24]
-            } else {
-                &[16, 32, 64]
-            },
-        })
-    }
-
-    fn settings(&self) -> Vec<usize> {
-        self.grids.to_vec()
-    }
-
-    fn label(&self, n: &usize) -> String {
-        format!("{}×{n}", 4 * n)
+    fn plan(opts: &Options) -> Plan<Self> {
+        let grids: &[usize] = if opts.quick {
+            &[12, 16, 24]
+        } else {
+            &[16, 32, 64]
+        };
+        let plan = grids
+            .iter()
+            .map(|&n| (format!("{}×{n}", 4 * n), n))
+            .collect();
+        Ok((ShearRectangle { grids }, plan))
     }
 
     fn scene(&self, &n: &usize) -> Result<(Scene, PathBuf), String> {
@@ -56,9 +51,8 @@ impl Case for ShearRectangle {
 
     /// Step in-process to record φ (deformation measure every 0.05, images of the finest grid
     /// at t = 0, 2, 4, 5, 7, 10).
-    fn run(&self, h: &mut Harness, &n: &usize) -> Result<(Option<Run>, Deformation), String> {
+    fn run(&self, h: &mut Harness, label: &str, &n: &usize) -> RunResult<Deformation> {
         let (scene, path) = self.scene(&n)?;
-        let label = self.label(&n);
         let dir = h.dir.clone();
         let mut sim = efsi_core::Simulation::new(scene.clone(), &path, &efsi_stages::builtin())
             .map_err(|e| e.to_string())?;
@@ -139,8 +133,8 @@ impl Case for ShearRectangle {
             .copied()
             .fold((0.0, 0.0), |m, p| if p.1 > m.1 { p } else { m });
         let last = curve.last().map_or(f64::NAN, |p| p.1);
-        let rdir = dir.join(super::slug(&label));
-        let mut run = Run::of(&sim, &label, &rdir, sim.state.step, wall);
+        let rdir = dir.join(super::slug(label));
+        let mut run = Run::of(&sim, label, &rdir, sim.state.step, wall);
         run.metrics = vec![
             ("peak_time".into(), tp),
             ("release_measure".into(), interp_at(&curve, 4.0)),

@@ -1,7 +1,7 @@
 //! Seed §5.2: the soft wall in a lid-driven cavity (`cases/soft_wall_cavity.ron`), Stokes flow:
 //! steady state by t = 8 and the deformed wall profile converging under refinement.
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, trade};
+use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check, trade};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case};
 use crate::interp;
@@ -46,25 +46,17 @@ impl Case for SoftWall {
     type Setting = usize;
     type Measured = Wall;
 
-    fn new(opts: &Options) -> Result<Self, String> {
-        Ok(SoftWall {
-            grids: if opts.quick {
-                &[16, 24, 32]
-            } else {
-                &[32, 64, 128]
-            },
-        })
+    fn plan(opts: &Options) -> Plan<Self> {
+        let grids: &[usize] = if opts.quick {
+            &[16, 24, 32]
+        } else {
+            &[32, 64, 128]
+        };
+        let plan = grids.iter().map(|&n| (format!("{n}²"), n)).collect();
+        Ok((SoftWall { grids }, plan))
     }
 
-    fn settings(&self) -> Vec<usize> {
-        self.grids.to_vec()
-    }
-
-    fn label(&self, n: &usize) -> String {
-        format!("{n}²")
-    }
-
-    fn folder(&self, n: &usize) -> String {
+    fn folder(&self, _: &str, n: &usize) -> String {
         format!("{n}")
     }
 

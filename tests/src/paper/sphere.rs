@@ -2,7 +2,7 @@
 //! against free fall before contact and Hertz's contact estimates
 //! (`tests/references/hertz_sphere_impact/`).
 
-use super::case::{Case, Done, Harness, Verdict, drift, drift_check, stage_names, trade};
+use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check, stage_names, trade};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
 use crate::interp;
@@ -204,10 +204,8 @@ pub enum Drop {
 /// resolution and the seed's two other initial conditions.
 pub struct SphereImpact {
     quick: bool,
-    cprs: &'static [f64],
     reference_cpr: f64,
     conditions_cpr: f64,
-    cfls: &'static [f64],
     /// The resolution of the CFL study.
     mid: f64,
     sphere: Sphere,
@@ -218,41 +216,40 @@ impl Case for SphereImpact {
     type Setting = Drop;
     type Measured = Impact;
 
-    fn new(opts: &Options) -> Result<Self, String> {
+    fn plan(opts: &Options) -> Plan<Self> {
         let (cprs, reference_cpr, conditions_cpr, cfls): (&[f64], f64, f64, &[f64]) = if opts.quick
         {
             (&[8.0, 10.0, 12.0], 12.0, 10.0, &[0.2])
         } else {
             (&[10.0, 15.0, 20.0, 35.0, 50.0], 50.0, 35.0, &[0.2, 0.8])
         };
+        let mid = if opts.quick { 10.0 } else { 20.0 };
         let (base, _) = load_case("sphere_impact.ron")?;
-        Ok(SphereImpact {
+        let mut plan: Vec<_> = cprs
+            .iter()
+            .map(|&c| (format!("{c} CPR"), Drop::Cpr(c)))
+            .collect();
+        plan.extend(
+            cfls.iter()
+                .map(|&c| (format!("{mid} CPR, CFL {c}"), Drop::Cfl(c))),
+        );
+        for (file, name) in [
+            ("sphere_impact_case1.ron", "case 1 (61.9 mm, 0.73 m/s)"),
+            ("sphere_impact_case2.ron", "case 2 (58.6 mm, 1.06 m/s)"),
+        ] {
+            plan.push((
+                format!("{name} {conditions_cpr} CPR"),
+                Drop::Condition(file, name),
+            ));
+        }
+        let case = SphereImpact {
             quick: opts.quick,
-            cprs,
             reference_cpr,
             conditions_cpr,
-            cfls,
-            mid: if opts.quick { 10.0 } else { 20.0 },
+            mid,
             sphere: sphere_of(&base)?,
-        })
-    }
-
-    fn settings(&self) -> Vec<Drop> {
-        let cprs = self.cprs.iter().map(|&c| Drop::Cpr(c));
-        cprs.chain(self.cfls.iter().map(|&c| Drop::Cfl(c)))
-            .chain([
-                Drop::Condition("sphere_impact_case1.ron", "case 1 (61.9 mm, 0.73 m/s)"),
-                Drop::Condition("sphere_impact_case2.ron", "case 2 (58.6 mm, 1.06 m/s)"),
-            ])
-            .collect()
-    }
-
-    fn label(&self, s: &Drop) -> String {
-        match *s {
-            Drop::Cpr(cpr) => format!("{cpr} CPR"),
-            Drop::Cfl(cfl) => format!("{} CPR, CFL {cfl}", self.mid),
-            Drop::Condition(_, name) => format!("{name} {} CPR", self.conditions_cpr),
-        }
+        };
+        Ok((case, plan))
     }
 
     fn scene(&self, s: &Drop) -> Result<(Scene, std::path::PathBuf), String> {

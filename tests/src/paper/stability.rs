@@ -47,7 +47,7 @@
 //! way (the same scenes, the same steps); the sweep's report has no per-stage timings and names
 //! a refused setting's override.
 
-use super::case::{Case, Done, Harness, Verdict, stage_names};
+use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Run, execute_built, load_case, probes};
 use efsi_core::interface::shapes::Shape;
@@ -468,28 +468,7 @@ pub struct Stability {
     small_ratios: &'static [f64],
 }
 
-impl Case for Stability {
-    const NAME: &'static str = "stability";
-    type Setting = Setting;
-    type Measured = Outcome;
-
-    fn new(opts: &Options) -> Result<Self, String> {
-        let (cpr, gs, ratios, cfls): (f64, &[f64], &[f64], &[f64]) = if opts.quick {
-            (6.0, &[1e3, 1e9], &[1.0, 1e4], &[0.1, 0.9])
-        } else {
-            (8.0, &G_VALUES, &RATIOS, &CFLS)
-        };
-        let small_ratios: &[f64] = if opts.quick { &[1e3] } else { &RATIOS };
-        Ok(Stability {
-            quick: opts.quick,
-            cpr,
-            gs,
-            ratios,
-            cfls,
-            small_ratios,
-        })
-    }
-
+impl Stability {
     /// The map's settings, the small solids, the refusals, then the coupled step's runs.
     fn settings(&self) -> Vec<Setting> {
         let mut out = Vec::new();
@@ -529,13 +508,35 @@ impl Case for Stability {
         }
         out
     }
+}
 
-    fn label(&self, st: &Setting) -> String {
-        st.label()
+impl Case for Stability {
+    const NAME: &'static str = "stability";
+    type Setting = Setting;
+    type Measured = Outcome;
+
+    fn plan(opts: &Options) -> Plan<Self> {
+        let (cpr, gs, ratios, cfls): (f64, &[f64], &[f64], &[f64]) = if opts.quick {
+            (6.0, &[1e3, 1e9], &[1.0, 1e4], &[0.1, 0.9])
+        } else {
+            (8.0, &G_VALUES, &RATIOS, &CFLS)
+        };
+        let small_ratios: &[f64] = if opts.quick { &[1e3] } else { &RATIOS };
+        let case = Stability {
+            quick: opts.quick,
+            cpr,
+            gs,
+            ratios,
+            cfls,
+            small_ratios,
+        };
+        let plan = case.settings().into_iter().map(|st| (st.label(), st));
+        Ok((case, plan.collect()))
     }
 
     /// Through an efsi sweep if there is a Python for it, else one after the other here.
-    fn runs(&self, h: &mut Harness, settings: Vec<Setting>) -> Result<Done<Self>, String> {
+    fn runs(&self, h: &mut Harness, plan: Vec<(String, Setting)>) -> Result<Done<Self>, String> {
+        let settings: Vec<Setting> = plan.into_iter().map(|(_, st)| st).collect();
         let attempts = match sweep_python() {
             Some(python) => through_sweep(&python, &settings, self.cpr, &h.dir)?,
             None => settings
