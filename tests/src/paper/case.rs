@@ -236,3 +236,13 @@ pub fn xy(label: &str, xs: &[f64], ys: &[f64]) -> Series {
         xs.iter().copied().zip(ys.iter().copied()).collect(),
     )
 }
+
+/// The largest deviation of the points (`xs`, `ys`) from a reference (`rx`, `ry`) interpolated
+/// linearly at `xs`.
+pub fn deviation(xs: &[f64], ys: &[f64], (rx, ry): (&[f64], &[f64])) -> f64 {
+    let d = xs
+        .iter()
+        .zip(ys)
+        .map(|(&x, &y)| (y - crate::interp(rx, ry, x)).abs());
+    d.fold(0.0, f64::max)
+}

@@ -1,7 +1,7 @@
 //! Sugiyama's oscillating Couette flow with a neo-Hookean layer (`cases/oscillating_couette.ron`)
 //! against the start-up reference (`tests/references/oscillating_couette/from_rest/`).
 
-use super::case::{Case, Done, Harness, Plan, Verdict, trade};
+use super::case::{Case, Done, Harness, Plan, Verdict, deviation, trade};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case};
 use efsi_core::scene::ProfileSpec;
@@ -49,12 +49,7 @@ impl Profiles {
             let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
             let (h, c) = crate::read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
             let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
-            out.push(
-                y.iter()
-                    .zip(u)
-                    .map(|(&y, &u)| (u - crate::interp(ry, ru, y)).abs())
-                    .fold(0.0, f64::max),
-            );
+            out.push(deviation(y, u, (ry, ru)));
         }
         Ok(out)
     }

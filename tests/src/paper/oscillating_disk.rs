@@ -10,7 +10,7 @@
 //! energy history against the finest grid's.
 
 use super::case::{
-    Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, trade, xy,
+    Case, Done, Harness, Plan, Verdict, deviation, drift, drift_check, largest_ratio, trade, xy,
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, Series, load_case, probes};
@@ -165,12 +165,7 @@ impl Case for OscillatingDisk {
             .map(|(_, h)| h.clone())
             .ok_or("no finest run")?;
         for (r, ((n, _), h)) in done.runs.iter_mut().zip(&done.measured) {
-            let e =
-                h.t.iter()
-                    .zip(&h.kinetic)
-                    .map(|(&t, &k)| (k - crate::interp(&reference.t, &reference.kinetic, t)).abs())
-                    .fold(0.0, f64::max)
-                    / ke_exact;
+            let e = deviation(&h.t, &h.kinetic, (&reference.t, &reference.kinetic)) / ke_exact;
             r.error = (*n != finest && !r.label.contains("μ_s")).then_some(e);
             let ke0 = h.kinetic[0];
             r.metrics = vec![

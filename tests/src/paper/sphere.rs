@@ -2,10 +2,11 @@
 //! against free fall before contact and Hertz's contact estimates
 //! (`tests/references/hertz_sphere_impact/`).
 
-use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check, stage_names, trade};
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, deviation, drift, drift_check, stage_names, trade,
+};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use crate::interp;
 use efsi_core::interface::shapes::Shape;
 use efsi_core::scene::ProbeSpec;
 use efsi_core::{Scene, Simulation};
@@ -303,12 +304,7 @@ impl Case for SphereImpact {
             .map(|(_, i)| (*i).clone())
             .ok_or("no reference run")?;
         for (r, i) in runs.iter_mut() {
-            let e =
-                i.t.iter()
-                    .zip(&i.z)
-                    .map(|(&t, &z)| (z - interp(&reference.t, &reference.z, t)).abs())
-                    .fold(0.0, f64::max)
-                    / sphere.radius;
+            let e = deviation(&i.t, &i.z, (&reference.t, &reference.z)) / sphere.radius;
             r.error = (r.label != format!("{reference_cpr} CPR")).then_some(e);
             let (dh, th, fh, ah) = hertz(sphere, i.impact_speed);
             r.metrics = vec![
