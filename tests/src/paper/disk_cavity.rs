@@ -9,9 +9,14 @@
 //! right-most point x_max ≈ 0.70 near t ≈ 6.4 and spirals in towards (0.54, 0.71); the reference
 //! ends near t ≈ 17–20 on that clock (its last points match the third, small turn).
 
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, trade, xy,
+};
 use super::plot::Scale;
-use super::{Check, Options, Report, Run, execute, figure, load_case, probes, slug};
+use super::{Check, Options, Run, load_case, probes};
+use efsi_core::{Scene, Simulation};
 use std::f64::consts::PI;
+use std::path::PathBuf;
 
 /// The reference file, relative to `tests/references/`.
 const REFERENCE: &str = "disk_in_cavity/lid_cavity_disk_centroid_Sugiyama2011_1024.csv";
@@ -51,7 +56,7 @@ fn distance_to_polyline(p: (f64, f64), line: &[(f64, f64)]) -> f64 {
 
 /// What one run's centroid path shows.
 #[derive(Clone, Debug, Default)]
-struct Path2 {
+pub struct Path2 {
     t: Vec<f64>,
     x: Vec<f64>,
     y: Vec<f64>,
@@ -103,7 +108,6 @@ fn analyse(run: &Run, reference: &[(f64, f64)]) -> Result<Path2, String> {
             }
         }
     }
-    let v0 = vol[0];
     Ok(Path2 {
         mean_distance: d.iter().sum::<f64>() / d.len() as f64,
         max_distance: d.iter().copied().fold(0.0, f64::max),
@@ -112,48 +116,64 @@ fn analyse(run: &Run, reference: &[(f64, f64)]) -> Result<Path2, String> {
         x_min: x.iter().copied().fold(f64::INFINITY, f64::min),
         y_max: y.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         t_turn: turn,
-        volume_drift: vol
-            .iter()
-            .map(|v| ((v - v0) / v0).abs())
-            .fold(0.0, f64::max),
+        volume_drift: drift(vol),
         t,
         x,
         y,
     })
 }
 
-/// Run the case.
-pub fn run(opts: &Options) -> Result<Report, String> {
-    let dir = opts.out.join("disk_in_cavity");
-    // Full: to t = 20, past the reference's spiral; quick: the first turn only (t = 9).
-    let (grids, end): (&[usize], f64) = if opts.quick {
-        (&[16, 24, 32], 9.0)
-    } else {
-        (&[32, 48, 64, 96], 20.0)
-    };
-    let reference = reference()?;
-    let mut runs: Vec<(Run, Path2)> = Vec::new();
-    let mut schedule = Vec::new();
-    for &n in grids {
+/// The case: 16², 24², 32² over the first turn (quick) or 32² … 96² to t = 20.
+pub struct DiskCavity {
+    grids: &'static [usize],
+    end: f64,
+    quick: bool,
+    reference: Vec<(f64, f64)>,
+}
+
+impl Case for DiskCavity {
+    const NAME: &'static str = "disk_in_cavity";
+    type Setting = usize;
+    type Measured = Path2;
+
+    fn plan(opts: &Options) -> Plan<Self> {
+        // Full: to t = 20, past the reference's spiral; quick: the first turn only (t = 9).
+        let (grids, end): (&[usize], f64) = if opts.quick {
+            (&[16, 24, 32], 9.0)
+        } else {
+            (&[32, 48, 64, 96], 20.0)
+        };
+        let (quick, reference) = (opts.quick, reference()?);
+        let plan = grids.iter().map(|&n| (format!("{n}²"), n)).collect();
+        Ok((
+            DiskCavity {
+                grids,
+                end,
+                quick,
+                reference,
+            },
+            plan,
+        ))
+    }
+
+    fn folder(&self, _: &str, n: &usize) -> String {
+        format!("N{n}")
+    }
+
+    fn scene(&self, &n: &usize) -> Result<(Scene, PathBuf), String> {
         let (mut scene, path) = load_case("disk_in_cavity.ron")?;
         scene.grid.nx = n;
         scene.grid.ny = n;
-        scene.time.end = end;
+        scene.time.end = self.end;
         scene.output.probe_every = Some(0.02);
-        if opts.quick || n != grids[grids.len() - 1] {
+        if self.quick || n != self.grids[self.grids.len() - 1] {
             scene.output.vtk_every = None;
         }
-        let label = format!("{n}²");
-        let rdir = dir.join(slug(&format!("N{n}")));
-        let (sim, mut run) =
-            execute(scene, &path, &rdir, &label, opts).map_err(|e| e.to_string())?;
-        schedule = sim
-            .pipeline()
-            .stage_names()
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        let a = analyse(&run, &reference)?;
+        Ok((scene, path))
+    }
+
+    fn measure(&self, _: &usize, _: &Simulation, run: &mut Run) -> Result<Path2, String> {
+        let a = analyse(run, &self.reference)?;
         run.error = Some(a.mean_distance);
         run.metrics = vec![
             ("mean_distance".into(), a.mean_distance),
@@ -166,194 +186,157 @@ pub fn run(opts: &Options) -> Result<Report, String> {
             ("t_second_turn".into(), a.t_turn[1]),
             ("volume_drift".into(), a.volume_drift),
         ];
-        runs.push((run, a));
+        Ok(a)
     }
-    let (fr, fa) = runs.last().ok_or("no runs")?;
-    let finest = fr.label.clone();
-    let mut checks = Vec::new();
-    if opts.quick {
-        // Coarse grids over the first turn: the loop must be there, of about the right size,
-        // close to the reference path, and growing towards it with refinement.
-        checks.push(Check::at_most(
+
+    fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
+        let (end, reference) = (self.end, &self.reference);
+        let runs: Vec<(&Run, &Path2)> = done
+            .runs
+            .iter()
+            .zip(done.measured.iter().map(|(_, a)| a))
+            .collect();
+        let (fr, fa) = runs.last().copied().ok_or("no runs")?;
+        let finest = fr.label.clone();
+        let mut checks = vec![Check::at_most(
             format!("mean distance to the reference path, t ≤ {end} ({finest})"),
             fa.mean_distance,
             0.02,
             "4",
-        ));
-        checks.push(Check::within(
-            format!("x_max, coarse grid ({finest}; reference 0.702)"),
-            fa.x_max,
-            X_MAX_REF - 0.04,
-            X_MAX_REF + 0.01,
-            "4",
-        ));
-        checks.push(Check::within(
-            format!("first turn about (0.542, 0.709) closes at t ({finest})"),
-            fa.t_turn[0],
-            7.0,
-            9.0,
-            "2",
-        ));
-    } else {
-        checks.push(Check::at_most(
-            format!("mean distance to the reference path, t ≤ {end} ({finest})"),
-            fa.mean_distance,
-            0.02,
-            "4",
-        ));
-        checks.push(Check::within(
-            format!("x_max ({finest}; reference 0.702)"),
-            fa.x_max,
-            X_MAX_REF - 0.01,
-            X_MAX_REF + 0.01,
-            "4",
-        ));
-    }
-    // Convergence towards the reference: the loop widens and the path approaches it.
-    let growth = runs
-        .windows(2)
-        .map(|w| w[1].1.x_max - w[0].1.x_max)
-        .fold(f64::INFINITY, f64::min);
-    checks.push(Check::within(
-        "x_max grows with refinement: least increase over successive grids",
-        growth,
-        0.0,
-        0.1,
-        "4",
-    ));
-    checks.push(Check::at_most(
-        "mean distance falls with refinement: largest ratio of successive grids' distances",
-        runs.windows(2)
-            .map(|w| w[1].1.mean_distance / w[0].1.mean_distance)
-            .fold(0.0, f64::max),
-        1.0,
-        "3",
-    ));
-    checks.push(Check::at_most(
-        "solid volume drift, every run",
-        runs.iter().map(|(_, a)| a.volume_drift).fold(0.0, f64::max),
-        1e-10,
-        "e",
-    ));
-    // Plots and their series.
-    let mut plots = Vec::new();
-    let mut notes = Vec::new();
-    let mut plot = |file: &str,
-                    title: &str,
-                    x: &str,
-                    y: &str,
-                    series: Vec<(String, Vec<(f64, f64)>)>,
-                    scale: Scale,
-                    notes: &mut Vec<String>| {
-        figure(&dir, file, (title, x, y), &series, scale, &mut plots, notes);
-    };
-    let mut paths = vec![("Sugiyama et al. 2011, 1024²".to_string(), reference.clone())];
-    paths.extend(runs.iter().map(|(r, a)| {
-        (
-            r.label.clone(),
-            a.x.iter().copied().zip(a.y.iter().copied()).collect(),
-        )
-    }));
-    plot(
-        "centroid_path",
-        &format!("Disk centroid path, 0 ≤ t ≤ {end}, against Sugiyama et al. 2011"),
-        "x_c",
-        "y_c",
-        paths,
-        Scale::Linear,
-        &mut notes,
-    );
-    plot(
-        "centroid_x",
-        "Centroid x_c(t)",
-        "t",
-        "x_c",
-        runs.iter()
-            .map(|(r, a)| {
-                (
-                    r.label.clone(),
-                    a.t.iter().copied().zip(a.x.iter().copied()).collect(),
-                )
-            })
-            .collect(),
-        Scale::Linear,
-        &mut notes,
-    );
-    plot(
-        "tradeoff",
-        "Speed vs accuracy: mean distance to the reference path vs wall time",
-        "wall time (s)",
-        "mean distance to the reference path",
-        vec![(
-            "grids (CFL 0.4)".into(),
-            runs.iter()
-                .filter_map(|(r, _)| r.error.map(|e| (r.wall_seconds, e)))
-                .collect(),
-        )],
-        Scale::LogLog,
-        &mut notes,
-    );
-    for (r, a) in &runs {
-        notes.push(format!(
-            "{}: mean distance {:.4}, max {:.4}; x_max {:.4} at t = {:.2}; x_min {:.4}, y_max {:.4}; \
-             turns about the spiral's end close at t = {:.2} and {:.2}; {} steps in {:.1} s",
-            r.label,
-            a.mean_distance,
-            a.max_distance,
-            a.x_max,
-            a.t_x_max,
-            a.x_min,
-            a.y_max,
-            a.t_turn[0],
-            a.t_turn[1],
-            r.steps,
-            r.wall_seconds
-        ));
-    }
-    notes.push(format!(
-        "The reference's first point (0.587, 0.497) lies {:.4} from the disk's initial centroid \
-         (0.6, 0.5): part of the early distance is the digitization's.",
-        distance_to_polyline((0.6, 0.5), &reference[..2])
-    ));
-    // The cheapest grid meeting both targets.
-    let recommendation = match runs
-        .iter()
-        .find(|(_, a)| a.mean_distance <= 0.02 && (a.x_max - X_MAX_REF).abs() <= 0.01)
-    {
-        Some((r, a)) => format!(
-            "{} at CFL 0.4, the cheapest grid here that meets both targets (mean distance {:.4}, \
-             x_max {:.4}, {:.0} s); coarser grids keep the loop's shape (mean distance ≤ {:.4}) \
-             but shrink it (x_max too small), so use them for quick looks only",
-            r.label,
-            a.mean_distance,
-            a.x_max,
-            r.wall_seconds,
-            runs.iter()
-                .map(|(_, a)| a.mean_distance)
-                .fold(0.0, f64::max)
-        ),
-        None => format!("no grid here meets both targets; the finest ({finest}) comes closest"),
-    };
-    let all: Vec<Run> = runs.into_iter().map(|(r, _)| r).collect();
-    Ok(Report {
-        name: "disk_in_cavity".into(),
-        title: "neo-Hookean disk in the lid-driven cavity (seed §5.3)".into(),
-        reference:
-            "the centroid path of Sugiyama et al. 2011 on a 1024² grid (73 digitized points, \
-                    no time stamps; `tests/references/disk_in_cavity/`)"
-                .into(),
-        error_metric: format!(
-            "mean distance of the centroid samples (every 0.02, t ≤ {end}) to the published path"
-        ),
-        runs: all,
-        checks,
-        plots,
-        notes,
-        schedule,
-        recommendation: if opts.quick {
-            format!("quick mode (first turn only): {recommendation}")
+        )];
+        if self.quick {
+            // Coarse grids over the first turn: the loop must be there, of about the right size,
+            // close to the reference path, and growing towards it with refinement.
+            checks.push(Check::within(
+                format!("x_max, coarse grid ({finest}; reference 0.702)"),
+                fa.x_max,
+                X_MAX_REF - 0.04,
+                X_MAX_REF + 0.01,
+                "4",
+            ));
+            checks.push(Check::within(
+                format!("first turn about (0.542, 0.709) closes at t ({finest})"),
+                fa.t_turn[0],
+                7.0,
+                9.0,
+                "2",
+            ));
         } else {
-            recommendation
-        },
-    })
+            checks.push(Check::within(
+                format!("x_max ({finest}; reference 0.702)"),
+                fa.x_max,
+                X_MAX_REF - 0.01,
+                X_MAX_REF + 0.01,
+                "4",
+            ));
+        }
+        // Convergence towards the reference: the loop widens and the path approaches it.
+        let growth = runs
+            .windows(2)
+            .map(|w| w[1].1.x_max - w[0].1.x_max)
+            .fold(f64::INFINITY, f64::min);
+        checks.push(Check::within(
+            "x_max grows with refinement: least increase over successive grids",
+            growth,
+            0.0,
+            0.1,
+            "4",
+        ));
+        checks.push(Check::at_most(
+            "mean distance falls with refinement: largest ratio of successive grids' distances",
+            largest_ratio(runs.iter().map(|(_, a)| a.mean_distance)),
+            1.0,
+            "3",
+        ));
+        checks.push(drift_check(
+            "solid volume drift, every run",
+            runs.iter().map(|(_, a)| a.volume_drift),
+        ));
+        // Plots and their series.
+        let mut paths = vec![("Sugiyama et al. 2011, 1024²".to_string(), reference.clone())];
+        paths.extend(runs.iter().map(|(r, a)| xy(&r.label, &a.x, &a.y)));
+        h.figure(
+            "centroid_path",
+            (
+                &format!("Disk centroid path, 0 ≤ t ≤ {end}, against Sugiyama et al. 2011"),
+                "x_c",
+                "y_c",
+            ),
+            &paths,
+            Scale::Linear,
+        );
+        let xs: Vec<_> = runs.iter().map(|(r, a)| xy(&r.label, &a.t, &a.x)).collect();
+        h.figure(
+            "centroid_x",
+            ("Centroid x_c(t)", "t", "x_c"),
+            &xs,
+            Scale::Linear,
+        );
+        h.figure(
+            "tradeoff",
+            (
+                "Speed vs accuracy: mean distance to the reference path vs wall time",
+                "wall time (s)",
+                "mean distance to the reference path",
+            ),
+            &[trade("grids (CFL 0.4)", runs.iter().map(|(r, _)| *r))],
+            Scale::LogLog,
+        );
+        for (r, a) in &runs {
+            h.notes.push(format!(
+                "{}: mean distance {:.4}, max {:.4}; x_max {:.4} at t = {:.2}; x_min {:.4}, y_max {:.4}; \
+                 turns about the spiral's end close at t = {:.2} and {:.2}; {} steps in {:.1} s",
+                r.label,
+                a.mean_distance,
+                a.max_distance,
+                a.x_max,
+                a.t_x_max,
+                a.x_min,
+                a.y_max,
+                a.t_turn[0],
+                a.t_turn[1],
+                r.steps,
+                r.wall_seconds
+            ));
+        }
+        h.notes.push(format!(
+            "The reference's first point (0.587, 0.497) lies {:.4} from the disk's initial centroid \
+             (0.6, 0.5): part of the early distance is the digitization's.",
+            distance_to_polyline((0.6, 0.5), &reference[..2])
+        ));
+        // The cheapest grid meeting both targets.
+        let recommendation = match runs
+            .iter()
+            .find(|(_, a)| a.mean_distance <= 0.02 && (a.x_max - X_MAX_REF).abs() <= 0.01)
+        {
+            Some((r, a)) => format!(
+                "{} at CFL 0.4, the cheapest grid here that meets both targets (mean distance {:.4}, \
+                 x_max {:.4}, {:.0} s); coarser grids keep the loop's shape (mean distance ≤ {:.4}) \
+                 but shrink it (x_max too small), so use them for quick looks only",
+                r.label,
+                a.mean_distance,
+                a.x_max,
+                r.wall_seconds,
+                runs.iter()
+                    .map(|(_, a)| a.mean_distance)
+                    .fold(0.0, f64::max)
+            ),
+            None => format!("no grid here meets both targets; the finest ({finest}) comes closest"),
+        };
+        Ok(Verdict {
+            title: "neo-Hookean disk in the lid-driven cavity (seed §5.3)".into(),
+            reference: "the centroid path of Sugiyama et al. 2011 on a 1024² grid (73 digitized \
+                        points, no time stamps; `tests/references/disk_in_cavity/`)"
+                .into(),
+            error_metric: format!(
+                "mean distance of the centroid samples (every 0.02, t ≤ {end}) to the published path"
+            ),
+            checks,
+            recommendation: if self.quick {
+                format!("quick mode (first turn only): {recommendation}")
+            } else {
+                recommendation
+            },
+        })
+    }
 }

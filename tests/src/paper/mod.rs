@@ -4,6 +4,7 @@
 //! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
 //! their checks.
 
+pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
@@ -53,6 +54,33 @@ pub struct Run {
 }
 
 impl Run {
+    /// The record of a finished simulation: its cells, `steps`, wall time and per-stage
+    /// timings (no error or metrics yet).
+    pub fn of(sim: &Simulation, label: &str, dir: &Path, steps: u64, wall_seconds: f64) -> Run {
+        let cells = sim.grid.nx * sim.grid.ny;
+        let n = steps.max(1) as f64;
+        let timings = sim.pipeline().timings();
+        let stages = timings.iter().map(|t| {
+            let per_cell = 1e9 * t.seconds / (n * cells as f64);
+            (
+                t.name.to_string(),
+                t.seconds,
+                per_cell,
+                t.iterations as f64 / n,
+            )
+        });
+        Run {
+            label: label.to_string(),
+            cells,
+            steps,
+            wall_seconds,
+            error: None,
+            metrics: Vec::new(),
+            stages: stages.collect(),
+            dir: dir.to_path_buf(),
+        }
+    }
+
     /// A named metric.
     pub fn metric(&self, name: &str) -> Option<f64> {
         self.metrics
@@ -149,48 +177,32 @@ impl Report {
     }
 }
 
-/// A case: its name and how to run it.
-pub struct Case {
+/// A case as `--case` names it, and how to run it (see [`case::Case`]).
+pub struct Entry {
     /// Name, as `--case` takes it.
     pub name: &'static str,
     /// Runs the case.
     pub run: fn(&Options) -> Result<Report, String>,
 }
 
+/// The entry of case `C`.
+const fn entry<C: case::Case>() -> Entry {
+    Entry {
+        name: C::NAME,
+        run: case::run::<C>,
+    }
+}
+
 /// Every case, in report order.
-pub const CASES: &[Case] = &[
-    Case {
-        name: "sphere_impact",
-        run: sphere::run,
-    },
-    Case {
-        name: "soft_wall_cavity",
-        run: soft_wall::run,
-    },
-    Case {
-        name: "disk_in_cavity",
-        run: disk_cavity::run,
-    },
-    Case {
-        name: "oscillating_disk",
-        run: oscillating_disk::run,
-    },
-    Case {
-        name: "shear_rectangle",
-        run: shear_rectangle::run,
-    },
-    Case {
-        name: "oscillating_couette",
-        run: couette::run,
-    },
-    Case {
-        name: "oscillating_couette_mr",
-        run: couette_mr::run,
-    },
-    Case {
-        name: "stability",
-        run: stability::run,
-    },
+pub const CASES: &[Entry] = &[
+    entry::<sphere::SphereImpact>(),
+    entry::<soft_wall::SoftWall>(),
+    entry::<disk_cavity::DiskCavity>(),
+    entry::<oscillating_disk::OscillatingDisk>(),
+    entry::<shear_rectangle::ShearRectangle>(),
+    entry::<couette::Couette>(),
+    entry::<couette_mr::CouetteMr>(),
+    entry::<stability::Stability>(),
 ];
 
 /// The workspace's `cases/` folder.
@@ -205,28 +217,15 @@ pub fn load_case(file: &str) -> Result<(Scene, PathBuf), String> {
     Ok((scene, path))
 }
 
-/// Run `scene` (from `path`) with all outputs into `dir`; returns the finished simulation and
-/// its [`Run`] record (no error or metrics yet).
-pub fn execute(
-    scene: Scene,
-    path: &Path,
-    dir: &Path,
-    label: &str,
-    opts: &Options,
-) -> Result<(Simulation, Run), EfsiError> {
-    let sim = Simulation::new(scene, path, &efsi_stages::builtin())?;
-    execute_built(sim, dir, label, opts)
-}
-
-/// [`execute`] for a simulation already built (so a caller can tell a scene refused before
-/// the run from a run that failed).
+/// Run `sim` with all outputs into `dir` (a progress bar if `opts` asks for one); returns the
+/// finished simulation and its [`Run`] record (no error or metrics yet). The simulation is
+/// built by the caller, so it can tell a scene refused before the run from a run that failed.
 pub fn execute_built(
     mut sim: Simulation,
     dir: &Path,
     label: &str,
     opts: &Options,
 ) -> Result<(Simulation, Run), EfsiError> {
-    let cells = sim.grid.nx * sim.grid.ny;
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(1000);
         b.set_style(
@@ -246,30 +245,7 @@ pub fn execute_built(
         bar.set_message(format!("{:.4e}", p.t));
     })?;
     bar.finish_and_clear();
-    let steps = outcome.steps.max(1) as f64;
-    let stages = sim
-        .pipeline()
-        .timings()
-        .iter()
-        .map(|t| {
-            (
-                t.name.to_string(),
-                t.seconds,
-                1e9 * t.seconds / (steps * cells as f64),
-                t.iterations as f64 / steps,
-            )
-        })
-        .collect();
-    let run = Run {
-        label: label.to_string(),
-        cells,
-        steps: outcome.steps,
-        wall_seconds: outcome.wall_seconds,
-        error: None,
-        metrics: Vec::new(),
-        stages,
-        dir: dir.to_path_buf(),
-    };
+    let run = Run::of(&sim, label, dir, outcome.steps, outcome.wall_seconds);
     Ok((sim, run))
 }
 
@@ -392,30 +368,6 @@ pub fn write_report(opts: &Options, reports: &[Report], wall: f64) -> Result<(),
     save(&opts.out.join("summary.json"), text.as_bytes())
 }
 
-/// Draw one figure of `case` (under `dir`, which is `<out>/<case>`): `<file>.png` and the CSV
-/// of its series `<file>.csv` beside it. The plot is recorded in `plots` (caption, path relative
-/// to the report); what could not be written becomes a note, so the report says what is missing.
-pub fn figure(
-    dir: &Path,
-    file: &str,
-    (title, x, y): (&str, &str, &str),
-    series: &[(String, Vec<(f64, f64)>)],
-    scale: plot::Scale,
-    plots: &mut Vec<(String, String)>,
-    notes: &mut Vec<String>,
-) {
-    if let Err(e) = save_series(&dir.join(format!("{file}.csv")), x, y, series) {
-        notes.push(format!("{file}.csv not written: {e}"));
-    }
-    let case = dir
-        .file_name()
-        .map_or(String::new(), |c| c.to_string_lossy().into_owned());
-    match plot::lines(&dir.join(format!("{file}.png")), title, x, y, series, scale) {
-        Ok(()) => plots.push((title.to_string(), format!("{case}/{file}.png"))),
-        Err(e) => notes.push(format!("plot {file} not drawn: {e}")),
-    }
-}
-
 /// A label as a folder name: letters, digits, `.` and `-` kept, runs of anything else `_`.
 pub fn slug(label: &str) -> String {
     let mut out = String::new();
@@ -486,98 +438,3 @@ pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
 
 /// A named series of (x, y) points of a plot.
 pub type Series = (String, Vec<(f64, f64)>);
-
-/// A resolution study's note (`max errors … at [n…] cells; observed orders …`) and its
-/// convergence series (`label`: error against the cell count), as the Couette cases report
-/// them.
-pub fn convergence(
-    label: &str,
-    grids: &[usize],
-    errs: &[f64],
-    orders: &[f64],
-) -> (String, Vec<Series>) {
-    let list = |v: &[f64], digits: usize| {
-        v.iter()
-            .map(|e| {
-                if digits == 0 {
-                    format!("{e:.3e}")
-                } else {
-                    format!("{e:.3}")
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    (
-        format!(
-            "max errors {} at {grids:?} cells; observed orders {}",
-            list(errs, 0),
-            list(orders, 3)
-        ),
-        vec![(
-            label.to_string(),
-            grids
-                .iter()
-                .zip(errs)
-                .map(|(&n, &e)| (n as f64, e))
-                .collect(),
-        )],
-    )
-}
-
-/// A resolution study's bookkeeping: each run's error the largest of its errors at `times`
-/// (kept per time as `error_t{t}` metrics), the observed orders between successive runs (as
-/// `observed_order` from the second on), and the error of the run labelled `64 cells`.
-pub fn study<T: std::fmt::Display>(
-    runs: &mut [Run],
-    per_run: &[Vec<f64>],
-    times: &[T],
-) -> (Vec<f64>, Vec<f64>, f64) {
-    for (run, e) in runs.iter_mut().zip(per_run) {
-        run.error = Some(e.iter().copied().fold(0.0, f64::max));
-        run.metrics = times
-            .iter()
-            .zip(e)
-            .map(|(t, e)| (format!("error_t{t}"), *e))
-            .collect();
-    }
-    let errs: Vec<f64> = runs.iter().map(|r| r.error.unwrap_or(f64::NAN)).collect();
-    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-    for (r, p) in runs.iter_mut().skip(1).zip(&orders) {
-        r.metrics.push(("observed_order".into(), *p));
-    }
-    let e64 = runs
-        .iter()
-        .find(|r| r.label == "64 cells")
-        .and_then(|r| r.error)
-        .unwrap_or(f64::NAN);
-    (errs, orders, e64)
-}
-
-/// Max |u − u_ref| at the grid's u points at each of `times`, from the run's profiles
-/// (`profiles/u_t{t}.csv`) against the reference files `{reference_dir}/u_profile_t_{t}.csv`
-/// (columns `y`, `u`), the reference interpolated linearly.
-pub fn profile_errors(run: &Run, reference_dir: &str, times: &[f64]) -> Result<Vec<f64>, String> {
-    let col = |h: &[String], n: &str| {
-        h.iter()
-            .position(|x| x == n)
-            .ok_or(format!("no column {n}"))
-    };
-    let mut out = Vec::new();
-    for &t in times {
-        let label = efsi_run::run::time_label(t);
-        let (rh, rc) = crate::read_csv(&crate::reference(&format!(
-            "{reference_dir}/u_profile_t_{label}.csv"
-        )));
-        let (ry, ru) = (&rc[col(&rh, "y")?], &rc[col(&rh, "u")?]);
-        let (h, c) = crate::read_csv(&run.dir.join(format!("profiles/u_t{label}.csv")));
-        let (y, u) = (&c[col(&h, "y")?], &c[col(&h, "u")?]);
-        out.push(
-            y.iter()
-                .zip(u)
-                .map(|(&y, &u)| (u - crate::interp(ry, ru, y)).abs())
-                .fold(0.0, f64::max),
-        );
-    }
-    Ok(out)
-}

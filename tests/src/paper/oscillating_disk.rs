@@ -9,16 +9,21 @@
 //! peaks near t = 0.2; the solid volume is conserved. The speed/accuracy error is the kinetic
 //! energy history against the finest grid's.
 
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, deviation, drift, drift_check, largest_ratio, trade, xy,
+};
 use super::plot::Scale;
-use super::{Check, Options, Report, Run, execute, figure, load_case, probes, slug};
+use super::{Check, Options, Run, Series, load_case, probes};
 use efsi_core::scene::InitialVelocity;
+use efsi_core::{Scene, Simulation};
+use std::path::PathBuf;
 
 /// The time the seed gives for the largest deformation.
 const T_PEAK_SEED: f64 = 0.2;
 
 /// What one run shows.
 #[derive(Clone, Debug, Default)]
-struct History {
+pub struct History {
     t: Vec<f64>,
     kinetic: Vec<f64>,
     elastic: Vec<f64>,
@@ -58,358 +63,352 @@ fn analyse(run: &Run) -> Result<History, String> {
     let k = (0..elastic.len())
         .max_by(|&a, &b| elastic[a].total_cmp(&elastic[b]))
         .unwrap_or(0);
-    let v0 = vol[0];
     Ok(History {
         extrema: extrema(&t, &kinetic, 2),
         t_elastic_peak: t[k],
         elastic_peak: elastic[k],
-        volume_drift: vol
-            .iter()
-            .map(|v| ((v - v0) / v0).abs())
-            .fold(0.0, f64::max),
+        volume_drift: drift(vol),
         t,
         kinetic,
         elastic,
     })
 }
 
-/// Run the case.
-pub fn run(opts: &Options) -> Result<Report, String> {
-    let dir = opts.out.join("oscillating_disk");
-    let (grids, end): (&[usize], f64) = if opts.quick {
-        (&[24, 32, 48], 0.5)
-    } else {
-        (&[32, 64, 128, 192], 1.0)
-    };
-    let (base, _) = load_case("oscillating_disk.ron")?;
-    let InitialVelocity::SinSinStream {
-        amplitude,
-        wavenumbers: (kx, ky),
-    } = base.initial_velocity
-    else {
-        return Err("the scene's initial velocity is not a SinSinStream".into());
-    };
-    // ½∫(u² + v²) over [0, 1]² with u = a ky sin(kx x) cos(ky y), v = −a kx cos(kx x) sin(ky y)
-    // (kx, ky multiples of 2π).
-    let ke_exact = amplitude * amplitude * (kx * kx + ky * ky) / 8.0;
-    let mut runs: Vec<(Run, History, usize)> = Vec::new();
-    let mut schedule = Vec::new();
-    let mut variants: Vec<(usize, Option<f64>)> = grids.iter().map(|&n| (n, None)).collect();
-    if !opts.quick {
-        // Sensitivity to the solid viscosity: the purely elastic solid of Robinson-Mosher et al.
-        variants.push((64, Some(0.0)));
+/// The case: 24², 32², 48² to t = 0.5 (quick) or 32² … 192² to t = 1 and 64² with a purely
+/// elastic solid.
+pub struct OscillatingDisk {
+    grids: &'static [usize],
+    end: f64,
+    quick: bool,
+    /// The exact initial kinetic energy.
+    ke_exact: f64,
+}
+
+impl Case for OscillatingDisk {
+    const NAME: &'static str = "oscillating_disk";
+    /// The grid, and the solid viscosity if not the scene's.
+    type Setting = (usize, Option<f64>);
+    type Measured = History;
+
+    fn plan(opts: &Options) -> Plan<Self> {
+        let (grids, end): (&[usize], f64) = if opts.quick {
+            (&[24, 32, 48], 0.5)
+        } else {
+            (&[32, 64, 128, 192], 1.0)
+        };
+        let (base, _) = load_case("oscillating_disk.ron")?;
+        let InitialVelocity::SinSinStream {
+            amplitude,
+            wavenumbers: (kx, ky),
+        } = base.initial_velocity
+        else {
+            return Err("the scene's initial velocity is not a SinSinStream".into());
+        };
+        // ½∫(u² + v²) over [0, 1]² with u = a ky sin(kx x) cos(ky y), v = −a kx cos(kx x) sin(ky y)
+        // (kx, ky multiples of 2π).
+        let ke_exact = amplitude * amplitude * (kx * kx + ky * ky) / 8.0;
+        let quick = opts.quick;
+        let mut plan: Vec<_> = grids
+            .iter()
+            .map(|&n| (format!("{n}²"), (n, None)))
+            .collect();
+        if !quick {
+            // Sensitivity to the solid viscosity: the purely elastic solid of Robinson-Mosher et al.
+            let mu_s = 0.0;
+            plan.push((format!("64², μ_s = {mu_s}"), (64, Some(mu_s))));
+        }
+        let case = OscillatingDisk {
+            grids,
+            end,
+            quick,
+            ke_exact,
+        };
+        Ok((case, plan))
     }
-    let finest = grids[grids.len() - 1];
-    for &(n, mu_s) in &variants {
+
+    fn folder(&self, label: &str, _: &(usize, Option<f64>)) -> String {
+        super::slug(&label.replace('²', ""))
+    }
+
+    fn scene(&self, &(n, mu_s): &(usize, Option<f64>)) -> Result<(Scene, PathBuf), String> {
         let (mut scene, path) = load_case("oscillating_disk.ron")?;
         scene.grid.nx = n;
         scene.grid.ny = n;
-        scene.time.end = end;
+        scene.time.end = self.end;
         scene.output.probe_every = Some(0.005);
-        if opts.quick || n != finest {
+        if self.quick || n != self.grids[self.grids.len() - 1] {
             scene.output.vtk_every = None;
         }
-        let label = match mu_s {
-            None => format!("{n}²"),
-            Some(m) => format!("{n}², μ_s = {m}"),
-        };
         if let (Some(m), Some(solid)) = (mu_s, scene.solid.as_mut()) {
             solid.viscosity = Some(m);
         }
-        let rdir = dir.join(slug(&label.replace('²', "")));
-        let (sim, run) = execute(scene, &path, &rdir, &label, opts).map_err(|e| e.to_string())?;
-        schedule = sim
-            .pipeline()
-            .stage_names()
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        let h = analyse(&run)?;
-        runs.push((run, h, n));
+        Ok((scene, path))
     }
-    // Errors against the finest grid's kinetic energy history, relative to the exact KE(0).
-    let reference = runs
-        .iter()
-        .find(|(r, _, n)| *n == finest && !r.label.contains("μ_s"))
-        .map(|(_, h, _)| h.clone())
-        .ok_or("no finest run")?;
-    for (r, h, n) in runs.iter_mut() {
-        let e =
-            h.t.iter()
-                .zip(&h.kinetic)
-                .map(|(&t, &k)| (k - crate::interp(&reference.t, &reference.kinetic, t)).abs())
-                .fold(0.0, f64::max)
-                / ke_exact;
-        r.error = (*n != finest && !r.label.contains("μ_s")).then_some(e);
-        let ke0 = h.kinetic[0];
-        r.metrics = vec![
-            ("ke0".into(), ke0),
-            ("ke0_error".into(), ke_exact - ke0),
-            ("ke_end".into(), h.kinetic[h.kinetic.len() - 1]),
-            ("t_elastic_peak".into(), h.t_elastic_peak),
-            ("elastic_peak".into(), h.elastic_peak),
-            ("volume_drift".into(), h.volume_drift),
-        ];
-        if !r.label.contains("μ_s") {
-            r.metrics.push(("ke_history_error".into(), e));
+
+    fn measure(
+        &self,
+        _: &(usize, Option<f64>),
+        _: &Simulation,
+        run: &mut Run,
+    ) -> Result<History, String> {
+        analyse(run)
+    }
+
+    fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
+        let (end, ke_exact) = (self.end, self.ke_exact);
+        let finest = self.grids[self.grids.len() - 1];
+        // Errors against the finest grid's kinetic energy history, relative to the exact KE(0).
+        let reference = done
+            .measured
+            .iter()
+            .find(|((n, mu_s), _)| *n == finest && mu_s.is_none())
+            .map(|(_, h)| h.clone())
+            .ok_or("no finest run")?;
+        for (r, ((n, _), h)) in done.runs.iter_mut().zip(&done.measured) {
+            let e = deviation(&h.t, &h.kinetic, (&reference.t, &reference.kinetic)) / ke_exact;
+            r.error = (*n != finest && !r.label.contains("μ_s")).then_some(e);
+            let ke0 = h.kinetic[0];
+            r.metrics = vec![
+                ("ke0".into(), ke0),
+                ("ke0_error".into(), ke_exact - ke0),
+                ("ke_end".into(), h.kinetic[h.kinetic.len() - 1]),
+                ("t_elastic_peak".into(), h.t_elastic_peak),
+                ("elastic_peak".into(), h.elastic_peak),
+                ("volume_drift".into(), h.volume_drift),
+            ];
+            if !r.label.contains("μ_s") {
+                r.metrics.push(("ke_history_error".into(), e));
+            }
         }
-    }
-    let plain: Vec<&(Run, History, usize)> = runs
-        .iter()
-        .filter(|(r, _, _)| !r.label.contains("μ_s"))
-        .collect();
-    // Initial kinetic energy: error and observed order over the grids.
-    let ke0_err: Vec<f64> = plain
-        .iter()
-        .map(|(_, h, _)| (ke_exact - h.kinetic[0]).abs())
-        .collect();
-    let hs: Vec<f64> = plain.iter().map(|(_, _, n)| 1.0 / *n as f64).collect();
-    let orders = crate::orders(&hs, &ke0_err);
-    let (fr, fh, _) = plain[plain.len() - 1];
-    let mut checks = vec![
-        Check::within(
-            format!(
-                "initial kinetic energy, observed order ({} vs {})",
-                plain[plain.len() - 2].0.label,
-                fr.label
-            ),
-            orders[orders.len() - 1],
-            1.8,
-            2.2,
-            "2",
-        ),
-        Check::at_most(
-            format!(
-                "initial kinetic energy, relative error vs 0.0246740 ({})",
-                fr.label
-            ),
-            ke0_err[ke0_err.len() - 1] / ke_exact,
-            if opts.quick { 5e-3 } else { 2e-4 },
-            "e",
-        ),
-        Check::at_most(
-            format!("KE(t = {end}) / KE(0), largest over the grids (decay)"),
-            plain
-                .iter()
-                .map(|(_, h, _)| h.kinetic[h.kinetic.len() - 1] / h.kinetic[0])
-                .fold(0.0, f64::max),
-            if opts.quick { 0.8 } else { 0.5 },
-            "3",
-        ),
-    ];
-    let maxima = fh.extrema.iter().filter(|e| e.2).count();
-    let minima = fh.extrema.iter().filter(|e| !e.2).count();
-    let first_min = fh.extrema.iter().find(|e| !e.2).map_or(f64::NAN, |e| e.0);
-    if opts.quick {
-        checks.push(Check::within(
-            format!(
-                "KE oscillates: local minima + maxima before t = {end} ({})",
-                fr.label
-            ),
-            (maxima + minima) as f64,
-            2.0,
-            4.0,
-            "0",
-        ));
-        checks.push(Check::within(
-            format!(
-                "time of the elastic energy peak, coarse grid ({})",
-                fr.label
-            ),
-            fh.t_elastic_peak,
-            0.18,
-            0.24,
-            "4",
-        ));
-    } else {
-        checks.push(Check::within(
-            format!(
-                "KE oscillates: local minima + maxima in (0, 1) ({})",
-                fr.label
-            ),
-            (maxima + minima) as f64,
-            4.0,
-            6.0,
-            "0",
-        ));
-        checks.push(Check::within(
-            format!("time of the elastic energy peak ({}; seed: 0.2)", fr.label),
-            fh.t_elastic_peak,
-            T_PEAK_SEED - 0.02,
-            T_PEAK_SEED + 0.02,
-            "4",
-        ));
-        let errs: Vec<f64> = plain.iter().filter_map(|(r, _, _)| r.error).collect();
-        checks.push(Check::at_most(
-            "KE history error vs the finest grid falls with refinement: largest ratio of successive errors",
-            errs.windows(2)
-                .map(|w| w[1] / w[0])
-                .fold(0.0, f64::max),
-            1.0,
-            "3",
-        ));
-    }
-    checks.push(Check::at_most(
-        "solid volume drift, every run",
-        runs.iter()
-            .map(|(_, h, _)| h.volume_drift)
-            .fold(0.0, f64::max),
-        1e-10,
-        "e",
-    ));
-    // Plots and their series.
-    let mut plots = Vec::new();
-    let mut notes = Vec::new();
-    let mut plot = |file: &str,
-                    title: &str,
-                    x: &str,
-                    y: &str,
-                    series: Vec<(String, Vec<(f64, f64)>)>,
-                    scale: Scale,
-                    notes: &mut Vec<String>| {
-        figure(&dir, file, (title, x, y), &series, scale, &mut plots, notes);
-    };
-    let series = |f: fn(&History) -> &Vec<f64>| -> Vec<(String, Vec<(f64, f64)>)> {
-        runs.iter()
-            .map(|(r, h, _)| {
-                (
-                    r.label.clone(),
-                    h.t.iter().copied().zip(f(h).iter().copied()).collect(),
-                )
-            })
-            .collect()
-    };
-    plot(
-        "kinetic_energy",
-        "Kinetic energy vs time",
-        "t",
-        "kinetic energy",
-        series(|h| &h.kinetic),
-        Scale::Linear,
-        &mut notes,
-    );
-    plot(
-        "elastic_energy",
-        "Elastic energy vs time (largest deformation at its peak)",
-        "t",
-        "elastic energy",
-        series(|h| &h.elastic),
-        Scale::Linear,
-        &mut notes,
-    );
-    plot(
-        "ke0_convergence",
-        "Initial kinetic energy: error vs exact 0.0246740",
-        "N",
-        "abs(KE(0) − KE_exact)",
-        vec![(
-            "KE(0) error".into(),
-            plain
-                .iter()
-                .zip(&ke0_err)
-                .map(|((_, _, n), e)| (*n as f64, *e))
-                .collect(),
-        )],
-        Scale::LogLog,
-        &mut notes,
-    );
-    plot(
-        "tradeoff",
-        "Speed vs accuracy: KE history error vs wall time",
-        "wall time (s)",
-        "max abs(KE − KE_finest) / KE_exact(0)",
-        vec![(
-            "grids (CFL 0.4)".into(),
-            plain
-                .iter()
-                .filter_map(|(r, _, _)| r.error.map(|e| (r.wall_seconds, e)))
-                .collect(),
-        )],
-        Scale::LogLog,
-        &mut notes,
-    );
-    let mut table = String::from("Initial kinetic energy (exact 0.0246740): ");
-    for (k, ((r, h, _), e)) in plain.iter().zip(&ke0_err).enumerate() {
-        table += &format!(
-            "{} {:.7} (error {:.2e}{}){}",
-            r.label,
-            h.kinetic[0],
-            e,
-            if k > 0 {
-                format!(", order {:.2}", orders[k - 1])
-            } else {
-                String::new()
-            },
-            if k + 1 < plain.len() { "; " } else { "" }
-        );
-    }
-    notes.push(table);
-    for (r, h, _) in &runs {
-        let ext: Vec<String> = h
-            .extrema
+        let runs: Vec<(&Run, &History, usize)> = done
+            .runs
             .iter()
-            .map(|(t, _, max)| format!("{} {t:.4}", if *max { "max" } else { "min" }))
+            .zip(&done.measured)
+            .map(|(r, ((n, _), h))| (r, h, *n))
             .collect();
-        notes.push(format!(
-            "{}: KE {:.5} → {:.5} at t = {end}; KE extrema at {}; elastic energy peak {:.5} at \
-             t = {:.4}; {} steps in {:.1} s",
-            r.label,
-            h.kinetic[0],
-            h.kinetic[h.kinetic.len() - 1],
-            if ext.is_empty() {
-                "—".into()
-            } else {
-                ext.join(", ")
-            },
-            h.elastic_peak,
-            h.t_elastic_peak,
-            r.steps,
-            r.wall_seconds
-        ));
-    }
-    notes.push(format!(
-        "First kinetic energy minimum ({}): t = {first_min:.4}",
-        fr.label
-    ));
-    // The cheapest grid whose kinetic energy history is within 5 % of KE(0) of the finest's
-    // and whose elastic energy peaks within 0.01 of the finest's peak time.
-    let recommendation = match plain.iter().find(|(r, h, _)| {
-        r.error.is_some_and(|e| e <= 0.05) && (h.t_elastic_peak - fh.t_elastic_peak).abs() <= 0.01
-    }) {
-        Some((r, h, _)) => format!(
-            "{} at CFL 0.4: the cheapest grid whose KE history is within 5 % of KE(0) of the \
-             finest grid's (error {:.3}) and whose elastic energy peaks within 0.01 of its peak \
-             time (t = {:.4}), in {:.1} s",
-            r.label,
-            r.error.unwrap_or(f64::NAN),
-            h.t_elastic_peak,
-            r.wall_seconds
-        ),
-        None => format!(
-            "no grid coarser than {} is within 5 % of it: use the finest",
-            fr.label
-        ),
-    };
-    let all: Vec<Run> = runs.into_iter().map(|(r, _, _)| r).collect();
-    Ok(Report {
-        name: "oscillating_disk".into(),
-        title: "elastic disk in a decaying vortex (seed §5.4)".into(),
-        reference:
-            "the exact initial kinetic energy a²(kx² + ky²)/8 = 0.0246740; the seed's time of \
-                    largest deformation, t ≈ 0.2; the finest grid for the speed/accuracy trade"
-                .into(),
-        error_metric: format!(
-            "max abs(KE − KE_{finest}²)/KE_exact(0) over 0 ≤ t ≤ {end} (against the finest grid)"
-        ),
-        runs: all,
-        checks,
-        plots,
-        notes,
-        schedule,
-        recommendation: if opts.quick {
-            format!("quick mode (t ≤ {end}, coarse grids): {recommendation}")
+        let plain: Vec<&(&Run, &History, usize)> = runs
+            .iter()
+            .filter(|(r, _, _)| !r.label.contains("μ_s"))
+            .collect();
+        // Initial kinetic energy: error and observed order over the grids.
+        let ke0_err: Vec<f64> = plain
+            .iter()
+            .map(|(_, h, _)| (ke_exact - h.kinetic[0]).abs())
+            .collect();
+        let hs: Vec<f64> = plain.iter().map(|(_, _, n)| 1.0 / *n as f64).collect();
+        let orders = crate::orders(&hs, &ke0_err);
+        let (fr, fh, _) = *plain[plain.len() - 1];
+        let mut checks = vec![
+            Check::within(
+                format!(
+                    "initial kinetic energy, observed order ({} vs {})",
+                    plain[plain.len() - 2].0.label,
+                    fr.label
+                ),
+                orders[orders.len() - 1],
+                1.8,
+                2.2,
+                "2",
+            ),
+            Check::at_most(
+                format!(
+                    "initial kinetic energy, relative error vs 0.0246740 ({})",
+                    fr.label
+                ),
+                ke0_err[ke0_err.len() - 1] / ke_exact,
+                if self.quick { 5e-3 } else { 2e-4 },
+                "e",
+            ),
+            Check::at_most(
+                format!("KE(t = {end}) / KE(0), largest over the grids (decay)"),
+                plain
+                    .iter()
+                    .map(|(_, h, _)| h.kinetic[h.kinetic.len() - 1] / h.kinetic[0])
+                    .fold(0.0, f64::max),
+                if self.quick { 0.8 } else { 0.5 },
+                "3",
+            ),
+        ];
+        let maxima = fh.extrema.iter().filter(|e| e.2).count();
+        let minima = fh.extrema.iter().filter(|e| !e.2).count();
+        let first_min = fh.extrema.iter().find(|e| !e.2).map_or(f64::NAN, |e| e.0);
+        if self.quick {
+            checks.push(Check::within(
+                format!(
+                    "KE oscillates: local minima + maxima before t = {end} ({})",
+                    fr.label
+                ),
+                (maxima + minima) as f64,
+                2.0,
+                4.0,
+                "0",
+            ));
+            checks.push(Check::within(
+                format!(
+                    "time of the elastic energy peak, coarse grid ({})",
+                    fr.label
+                ),
+                fh.t_elastic_peak,
+                0.18,
+                0.24,
+                "4",
+            ));
         } else {
-            recommendation
-        },
-    })
+            checks.push(Check::within(
+                format!(
+                    "KE oscillates: local minima + maxima in (0, 1) ({})",
+                    fr.label
+                ),
+                (maxima + minima) as f64,
+                4.0,
+                6.0,
+                "0",
+            ));
+            checks.push(Check::within(
+                format!("time of the elastic energy peak ({}; seed: 0.2)", fr.label),
+                fh.t_elastic_peak,
+                T_PEAK_SEED - 0.02,
+                T_PEAK_SEED + 0.02,
+                "4",
+            ));
+            checks.push(Check::at_most(
+                "KE history error vs the finest grid falls with refinement: largest ratio of successive errors",
+                largest_ratio(plain.iter().filter_map(|(r, _, _)| r.error)),
+                1.0,
+                "3",
+            ));
+        }
+        checks.push(drift_check(
+            "solid volume drift, every run",
+            runs.iter().map(|(_, h, _)| h.volume_drift),
+        ));
+        // Plots and their series.
+        let series = |f: fn(&History) -> &Vec<f64>| -> Vec<Series> {
+            runs.iter()
+                .map(|(r, h, _)| xy(&r.label, &h.t, f(h)))
+                .collect()
+        };
+        h.figure(
+            "kinetic_energy",
+            ("Kinetic energy vs time", "t", "kinetic energy"),
+            &series(|h| &h.kinetic),
+            Scale::Linear,
+        );
+        h.figure(
+            "elastic_energy",
+            (
+                "Elastic energy vs time (largest deformation at its peak)",
+                "t",
+                "elastic energy",
+            ),
+            &series(|h| &h.elastic),
+            Scale::Linear,
+        );
+        h.figure(
+            "ke0_convergence",
+            (
+                "Initial kinetic energy: error vs exact 0.0246740",
+                "N",
+                "abs(KE(0) − KE_exact)",
+            ),
+            &[(
+                "KE(0) error".into(),
+                plain
+                    .iter()
+                    .zip(&ke0_err)
+                    .map(|((_, _, n), e)| (*n as f64, *e))
+                    .collect(),
+            )],
+            Scale::LogLog,
+        );
+        h.figure(
+            "tradeoff",
+            (
+                "Speed vs accuracy: KE history error vs wall time",
+                "wall time (s)",
+                "max abs(KE − KE_finest) / KE_exact(0)",
+            ),
+            &[trade("grids (CFL 0.4)", plain.iter().map(|(r, _, _)| *r))],
+            Scale::LogLog,
+        );
+        let mut table = String::from("Initial kinetic energy (exact 0.0246740): ");
+        for (k, ((r, h, _), e)) in plain.iter().copied().zip(&ke0_err).enumerate() {
+            table += &format!(
+                "{} {:.7} (error {:.2e}{}){}",
+                r.label,
+                h.kinetic[0],
+                e,
+                if k > 0 {
+                    format!(", order {:.2}", orders[k - 1])
+                } else {
+                    String::new()
+                },
+                if k + 1 < plain.len() { "; " } else { "" }
+            );
+        }
+        h.notes.push(table);
+        for (r, hi, _) in &runs {
+            let ext: Vec<String> = hi
+                .extrema
+                .iter()
+                .map(|(t, _, max)| format!("{} {t:.4}", if *max { "max" } else { "min" }))
+                .collect();
+            h.notes.push(format!(
+                "{}: KE {:.5} → {:.5} at t = {end}; KE extrema at {}; elastic energy peak {:.5} at \
+                 t = {:.4}; {} steps in {:.1} s",
+                r.label,
+                hi.kinetic[0],
+                hi.kinetic[hi.kinetic.len() - 1],
+                if ext.is_empty() {
+                    "—".into()
+                } else {
+                    ext.join(", ")
+                },
+                hi.elastic_peak,
+                hi.t_elastic_peak,
+                r.steps,
+                r.wall_seconds
+            ));
+        }
+        h.notes.push(format!(
+            "First kinetic energy minimum ({}): t = {first_min:.4}",
+            fr.label
+        ));
+        // The cheapest grid whose kinetic energy history is within 5 % of KE(0) of the finest's
+        // and whose elastic energy peaks within 0.01 of the finest's peak time.
+        let recommendation = match plain.iter().find(|(r, h, _)| {
+            r.error.is_some_and(|e| e <= 0.05)
+                && (h.t_elastic_peak - fh.t_elastic_peak).abs() <= 0.01
+        }) {
+            Some((r, h, _)) => format!(
+                "{} at CFL 0.4: the cheapest grid whose KE history is within 5 % of KE(0) of the \
+                 finest grid's (error {:.3}) and whose elastic energy peaks within 0.01 of its peak \
+                 time (t = {:.4}), in {:.1} s",
+                r.label,
+                r.error.unwrap_or(f64::NAN),
+                h.t_elastic_peak,
+                r.wall_seconds
+            ),
+            None => format!(
+                "no grid coarser than {} is within 5 % of it: use the finest",
+                fr.label
+            ),
+        };
+        Ok(Verdict {
+            title: "elastic disk in a decaying vortex (seed §5.4)".into(),
+            reference: "the exact initial kinetic energy a²(kx² + ky²)/8 = 0.0246740; the seed's \
+                        time of largest deformation, t ≈ 0.2; the finest grid for the \
+                        speed/accuracy trade"
+                .into(),
+            error_metric: format!(
+                "max abs(KE − KE_{finest}²)/KE_exact(0) over 0 ≤ t ≤ {end} (against the finest grid)"
+            ),
+            checks,
+            recommendation: if self.quick {
+                format!("quick mode (t ≤ {end}, coarse grids): {recommendation}")
+            } else {
+                recommendation
+            },
+        })
+    }
 }

@@ -1,0 +1,421 @@
+//! `cargo xtask bench`: the cavity, drop and sphere benchmarks, ns per cell-step on one and
+//! N threads.
+
+use crate::csv::{column, read_csv};
+use crate::{cargo, roofline, root, run};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A benchmark case: `cavity<N>` (Re = 1000 lid-driven cavity, N², t ∈ [0, 2]) or `drop<N>`
+/// (axisymmetric drop, ρ 1 in 1e-3, μ 1e-2 in 2e-4, g = 1, box 4 × 4, N², t ∈ [0, 1],
+/// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner and/or `-vmg`
+/// for the block-multigrid viscous preconditioner; or `sphere`, the sphere impact of
+/// `cases/sphere_impact.ron` (35 cells per radius, 82 × 164, the whole run; `--quick` until
+/// t = 0.03), suffix `-ej` for the Jacobi-preconditioned elastic step.
+struct Case {
+    name: String,
+    scene: String,
+    drop: bool,
+    cells: usize,
+}
+
+fn case(name: &str, quick: bool) -> Result<Case, String> {
+    // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
+    // step instead of the default Jacobi).
+    let (rest, viscous) = match name.strip_suffix("-vmg") {
+        Some(b) => (b, "Multigrid"),
+        None => (name, "Jacobi"),
+    };
+    let (base, solver) = match rest.strip_suffix("-ic") {
+        Some(b) => (b, "IncompleteCholesky"),
+        None => (rest, "Multigrid"),
+    };
+    let bad = || {
+        format!(
+            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
+             optionally -ej"
+        )
+    };
+    if let Some(rest) = name.strip_prefix("sphere") {
+        // The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until
+        // t = 0.03, just after first contact. Suffix -ej: Jacobi-preconditioned elastic step.
+        let elastic = match rest {
+            "" => "Multigrid",
+            "-ej" => "Jacobi",
+            _ => return Err(bad()),
+        };
+        let path = root().join("cases/sphere_impact.ron");
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut scene = text.replace(
+            " elastic: (",
+            &format!(" elastic: (preconditioner: {elastic}, "),
+        );
+        if quick {
+            scene = scene.replace("end: 0.06,", "end: 0.03,");
+        }
+        if !scene.contains("preconditioner") || (quick && !scene.contains("end: 0.03,")) {
+            return Err(format!("{}: not the expected scene layout", path.display()));
+        }
+        return Ok(Case {
+            name: name.to_string(),
+            scene,
+            drop: false,
+            cells: 82 * 164,
+        });
+    }
+    let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
+        (false, n.parse::<usize>().map_err(|_| bad())?)
+    } else if let Some(n) = base.strip_prefix("drop") {
+        (true, n.parse::<usize>().map_err(|_| bad())?)
+    } else {
+        return Err(bad());
+    };
+    if n < 8 {
+        return Err(bad());
+    }
+    let scene = if drop {
+        let end = if quick { 0.25 } else { 1.0 };
+        format!(
+            r#"// Axisymmetric drop falling from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
+    grid: (nr: {n}, nz: {n}),
+    time: (end: {end}, fixed_dt: {dt:e}),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    gravity: (0.0, -1.0),
+    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
+    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
+)
+"#,
+            dt = 0.5 / n as f64
+        )
+    } else {
+        let end = if quick { 0.5 } else { 2.0 };
+        format!(
+            r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Planar,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: {n}, ny: {n}),
+    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
+    fluid: (density: 1.0, viscosity: 0.001),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
+)
+"#
+        )
+    };
+    Ok(Case {
+        name: name.to_string(),
+        scene,
+        drop,
+        cells: n * n,
+    })
+}
+
+/// One run's figures.
+#[derive(Clone)]
+struct Figures {
+    total: f64,
+    stages: Vec<(String, f64, f64)>,
+    steps: f64,
+    fall: Option<f64>,
+    wall: f64,
+}
+
+fn run_case(c: &Case, threads: usize, out: &Path) -> Result<Figures, String> {
+    let dir = out.join(format!("{}_t{threads}", c.name));
+    let scene = out.join(format!("{}.ron", c.name));
+    std::fs::write(&scene, &c.scene).map_err(|e| e.to_string())?;
+    let mut cmd = Command::new(root().join("target/release/efsi"));
+    cmd.arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&dir)
+        .arg("-q")
+        .arg("--threads")
+        .arg(threads.to_string())
+        // Repeats and reruns replace the case's earlier outputs.
+        .arg("--overwrite")
+        .stdout(std::process::Stdio::null());
+    let status = cmd
+        .status()
+        .map_err(|e| format!("cannot start efsi: {e}"))?;
+    if !status.success() {
+        return Err(format!("{}: efsi failed ({status})", c.name));
+    }
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let j: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    let stages = j["stages"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|s| {
+                    (
+                        s["name"].as_str().unwrap_or("?").to_string(),
+                        num(&s["ns_per_cell_step"]),
+                        num(&s["solver_iterations_per_step"]),
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let fall = if c.drop {
+        let p = dir.join("probes.csv");
+        let (h, cols) = read_csv(&p)?;
+        let z = column(&h, &cols, "solid_y", &p)?;
+        Some(z[0] - z[z.len() - 1])
+    } else {
+        None
+    };
+    Ok(Figures {
+        total: num(&j["ns_per_cell_step"]),
+        stages,
+        steps: num(&j["steps"]),
+        fall,
+        wall: num(&j["wall_seconds"]),
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Element-wise medians of several runs of one case.
+fn median_figures(runs: &[Figures]) -> Figures {
+    let mut f = runs[0].clone();
+    f.total = median(runs.iter().map(|r| r.total).collect());
+    f.wall = median(runs.iter().map(|r| r.wall).collect());
+    for (k, s) in f.stages.iter_mut().enumerate() {
+        s.1 = median(runs.iter().map(|r| r.stages[k].1).collect());
+        s.2 = median(runs.iter().map(|r| r.stages[k].2).collect());
+    }
+    f
+}
+
+pub(crate) fn bench(args: &[String]) -> Result<(), String> {
+    let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
+    let quick = args.iter().any(|a| a == "--quick");
+    let with_roofline = args.iter().any(|a| a == "--roofline");
+    let out = value("--out")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target/bench"));
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads: usize = match value("--threads") {
+        Some(t) => t
+            .parse()
+            .map_err(|_| format!("--threads {t}: not a number"))?,
+        None => all,
+    };
+    let repeat: usize = match value("--repeat") {
+        Some(t) => t
+            .parse()
+            .map_err(|_| format!("--repeat {t}: not a number"))?,
+        None => 1,
+    };
+    let names = value("--cases").unwrap_or_else(|| {
+        if quick {
+            "cavity128,drop128".into()
+        } else {
+            "cavity128,cavity256,drop128,drop256,sphere".into()
+        }
+    });
+    let cases = names
+        .split(',')
+        .map(|n| case(n.trim(), quick))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "-p", "efsi"]);
+    run(c, "build efsi (release)")?;
+    std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
+    let mut pools = vec![1];
+    if threads != 1 {
+        pools.push(threads);
+    }
+    // The bandwidth limits, measured in this run (main memory, last-level cache) per pool size.
+    let limits: Vec<(f64, f64)> = if with_roofline {
+        pools.iter().map(|&t| roofline::limits(t)).collect()
+    } else {
+        Vec::new()
+    };
+    for (&t, (mem, llc)) in pools.iter().zip(&limits) {
+        println!(
+            "triad, {t} thread(s): main memory {:.1} GB/s, last-level cache {:.1} GB/s",
+            mem / 1e9,
+            llc / 1e9
+        );
+    }
+    let mut json = Vec::new();
+    let mut rows = Vec::new();
+    println!(
+        "{:<14} {:>3} {:>6} {:>10} {:>8}  per stage: ns/cell-step (solver iterations/step)",
+        "case", "thr", "steps", "ns/cell·st", "speedup"
+    );
+    for c in &cases {
+        // Runs alternate between the pool sizes, so that a load change on the machine affects
+        // both alike and the ratio is measured within one run of the bench.
+        let mut runs: Vec<Vec<Figures>> = vec![Vec::new(); pools.len()];
+        for _ in 0..repeat.max(1) {
+            for (k, &t) in pools.iter().enumerate() {
+                runs[k].push(run_case(c, t, &out)?);
+            }
+        }
+        let base = median_figures(&runs[0]).total;
+        for (k, &t) in pools.iter().enumerate() {
+            let f = median_figures(&runs[k]);
+            let spread = {
+                let v: Vec<f64> = runs[k].iter().map(|r| r.total).collect();
+                let (lo, hi) = v
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                (hi - lo) / f.total
+            };
+            let stages = f
+                .stages
+                .iter()
+                .map(|(n, ns, it)| {
+                    if *it > 0.0 {
+                        format!("{n} {ns:.0} ({it:.1})")
+                    } else {
+                        format!("{n} {ns:.0}")
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            // The speed-up of each alternating pair of runs: on a VM whose second core comes
+            // and goes, their spread says how far to trust the ratio of the medians.
+            let pairs: Vec<f64> = runs[0]
+                .iter()
+                .zip(&runs[k])
+                .map(|(a, b)| a.total / b.total)
+                .collect();
+            let pair_note = if k > 0 && pairs.len() > 1 {
+                let (lo, hi) = pairs
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                format!(" (pairs {lo:.2}–{hi:.2}×)")
+            } else {
+                String::new()
+            };
+            let fall = f
+                .fall
+                .map(|z| {
+                    format!(
+                        "; fall {z:.4} (½gt² = {:.4})",
+                        0.5 * if quick { 0.0625 } else { 1.0 }
+                    )
+                })
+                .unwrap_or_default();
+            println!(
+                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{pair_note}",
+                c.name,
+                t,
+                f.steps,
+                f.total,
+                base / f.total,
+                f.wall
+            );
+            let roof = limits.get(k).map(|&(mem, llc)| {
+                let per_stage: Vec<serde_json::Value> = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, ns, it)| {
+                        let m = roofline::model(n)?;
+                        let b = roofline::bytes(m, *it);
+                        let bw = b / (ns * 1e-9);
+                        rows.push((c.name.clone(), t, n.clone(), *ns, b, bw, bw / mem, bw / llc));
+                        Some(serde_json::json!({
+                            "name": n, "bytes_per_cell_step": b, "achieved_bytes_per_s": bw,
+                            "fraction_of_memory_triad": bw / mem,
+                            "fraction_of_cache_triad": bw / llc,
+                        }))
+                    })
+                    .collect();
+                let total_bytes: f64 = f
+                    .stages
+                    .iter()
+                    .filter_map(|(n, _, it)| roofline::model(n).map(|m| roofline::bytes(m, *it)))
+                    .sum();
+                let bw = total_bytes / (f.total * 1e-9);
+                rows.push((
+                    c.name.clone(),
+                    t,
+                    "total".into(),
+                    f.total,
+                    total_bytes,
+                    bw,
+                    bw / mem,
+                    bw / llc,
+                ));
+                serde_json::json!({
+                    "memory_triad_bytes_per_s": mem, "cache_triad_bytes_per_s": llc,
+                    "bytes_per_cell_step": total_bytes, "achieved_bytes_per_s": bw,
+                    "fraction_of_memory_triad": bw / mem, "fraction_of_cache_triad": bw / llc,
+                    "stages": per_stage,
+                })
+            });
+            json.push(serde_json::json!({
+                "roofline": roof,
+                "case": c.name,
+                "threads": t,
+                "cells": c.cells,
+                "steps": f.steps,
+                "repeats": runs[k].len(),
+                "ns_per_cell_step": f.total,
+                "ns_per_cell_step_runs": runs[k].iter().map(|r| r.total).collect::<Vec<_>>(),
+                "spread": spread,
+                "speedup_vs_1_thread": base / f.total,
+                "speedup_pairs": pairs,
+                "wall_seconds": f.wall,
+                "fall": f.fall,
+                "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({
+                    "name": n, "ns_per_cell_step": ns, "solver_iterations_per_step": it
+                })).collect::<Vec<_>>(),
+            }));
+        }
+    }
+    if with_roofline {
+        println!(
+            "\nroofline (compulsory traffic model: xtask/src/roofline.rs)\n{:<14} {:>3} {:<12} {:>10} {:>10} {:>8} {:>8} {:>8}",
+            "case", "thr", "stage", "ns/cell·st", "B/cell·st", "GB/s", "of mem", "of LLC"
+        );
+        for (case, t, stage, ns, b, bw, fm, fc) in &rows {
+            println!(
+                "{case:<14} {t:>3} {stage:<12} {ns:>10.1} {b:>10.0} {:>8.2} {:>7.0}% {:>7.0}%",
+                bw / 1e9,
+                100.0 * fm,
+                100.0 * fc
+            );
+        }
+    }
+    let path = out.join("bench.json");
+    let text = serde_json::to_string_pretty(&serde_json::json!({
+        "quick": quick,
+        "threads": pools,
+        "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
+            "stage": m.stage, "values_per_cell_step": m.fixed,
+            "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
+        })).collect::<Vec<_>>(),
+        "cases": json,
+    }))
+    .map_err(|e| e.to_string())?;
+    std::fs::write(&path, text).map_err(|e| e.to_string())?;
+    eprintln!("figures: {}", path.display());
+    Ok(())
+}
