@@ -12,8 +12,8 @@
 //! sphere's 3C_d ρ_f v²/(8ρ_s R) is smaller still. Together ≈ 0.2 % of the fall, below the 0.3 %
 //! the issue allows for drag.
 
-use efsi_core::interface::phase_volume;
 use efsi_run::probes::solid_moments;
+use efsi_stages::vof::phase_volume;
 use efsi_tests::sim;
 
 struct Fall {

@@ -399,8 +399,7 @@ Scene(
         ])
         .unwrap();
         assert_eq!((s.grid.nx, s.grid.ny), (64, 96));
-        let crate::interface::Shape::Disk { center, radius } = s.solid.as_ref().unwrap().shape
-        else {
+        let crate::scene::Shape::Disk { center, radius } = s.solid.as_ref().unwrap().shape else {
             panic!("{:?}", s.solid)
         };
         assert_eq!((center, radius), ((0.0, 0.06), 0.02));
@@ -431,7 +430,7 @@ Scene(
         ));
         assert!(matches!(
             s.solid.unwrap().shape,
-            crate::interface::Shape::Rectangle {
+            crate::scene::Shape::Rectangle {
                 max: (0.01, 0.04),
                 ..
             }

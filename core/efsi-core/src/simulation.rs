@@ -227,39 +227,8 @@ impl Simulation {
                 }
             }
         }
-        // A solid's initial velocity V_s: every face gets the momentum-weighted mixture
-        // (φ_f ρ_s V_s + (1 − φ_f) ρ_f V_fluid) / (φ_f ρ_s + (1 − φ_f) ρ_f), φ_f the average
-        // fraction of its two cells — the velocity of the face's mixture — so a heavy body's
-        // interface faces move with it. The initial projection (Pipeline::initialize) then
-        // removes the divergence this leaves at the interface.
-        if let Some(solid) = &scene.solid
-            && let Some((us, vs)) = solid.velocity
-        {
-            let mut phi = Field::zeros(&grid);
-            crate::interface::fill_fraction(&grid, &solid.shape, &mut phi);
-            bc.fill_scalar(&grid, &mut phi, false);
-            let (rs, rf) = (solid.density, scene.fluid.density);
-            let blend = |f: f64, vs: f64, vf: f64| {
-                let (ms, mf) = (f * rs, (1.0 - f) * rf);
-                if ms + mf > 0.0 {
-                    (ms * vs + mf * vf) / (ms + mf)
-                } else {
-                    vf
-                }
-            };
-            for j in 0..grid.ny as isize {
-                for i in 0..=grid.nx as isize {
-                    let f = 0.5 * (phi[(i - 1, j)] + phi[(i, j)]);
-                    state.u[(i, j)] = blend(f, us, state.u[(i, j)]);
-                }
-            }
-            for j in 0..=grid.ny as isize {
-                for i in 0..grid.nx as isize {
-                    let f = 0.5 * (phi[(i, j - 1)] + phi[(i, j)]);
-                    state.v[(i, j)] = blend(f, vs, state.v[(i, j)]);
-                }
-            }
-        }
+        // A solid's initial velocity is blended in by the stage that owns the solid fraction
+        // (the VOF stage's initialize).
         bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
         bc.fill_scalar(&grid, &mut state.rho, false);
         bc.fill_scalar(&grid, &mut state.mu, false);

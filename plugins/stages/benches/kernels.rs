@@ -5,8 +5,8 @@
 //! (time per iteration / 65 536 cells).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use efsi_core::interface::{Shape, fill_fraction};
 use efsi_core::{Field, Geometry, Grid};
+use efsi_stages::vof::{Shape, fill_fraction};
 use efsi_stages::vof::{VofAdvector, VofBoundaries};
 use std::f64::consts::PI;
 use std::hint::black_box;

@@ -7,8 +7,8 @@ use super::case::{
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use efsi_core::interface::shapes::Shape;
 use efsi_core::scene::ProbeSpec;
+use efsi_core::scene::Shape;
 use efsi_core::{Scene, Simulation};
 use std::f64::consts::PI;
 

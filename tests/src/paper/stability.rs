@@ -50,8 +50,8 @@
 use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Run, execute_built, load_case, probes};
-use efsi_core::interface::shapes::Shape;
 use efsi_core::scene::ProbeSpec;
+use efsi_core::scene::Shape;
 use efsi_core::{Scene, Simulation};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use efsi_stages::elastic::{ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT};

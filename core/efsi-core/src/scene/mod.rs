@@ -20,15 +20,16 @@
 //! `r_min`, `r_max`, `z_min`, `z_max` are accepted.
 
 use crate::grid::Geometry;
-pub use crate::interface::Shape;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
 pub use output::{
     FIELD_NAMES, MAX_PROFILE_POINTS, OutputSpec, ProbeSpec, ProfileSpec, VTK_FIELDS,
     VtkCompression, VtkOptions, VtkPrecision,
 };
+pub use shape::Shape;
 
 mod numerics;
 mod output;
+mod shape;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
     pub use super::numerics::{

@@ -121,8 +121,8 @@ impl Kernels {
                     [cl(k - 1), cl(k), cl(k + 1)],
                     [cl(k + s - 1), cl(k + s), cl(k + s + 1)],
                 ];
-                let (mx, my) = efsi_core::interface::plic::youngs_normal(&b, dx, dy);
-                let line = efsi_core::interface::plic::Line::planar(mx, my, f, dx, dy);
+                let (mx, my) = crate::vof::plic::youngs_normal(&b, dx, dy);
+                let line = crate::vof::plic::Line::planar(mx, my, f, dx, dy);
                 let (hx, hy) = (0.5 * dx, 0.5 * dy);
                 let boxes = [
                     ((0.0, 0.0), (hx, hy)),

@@ -41,7 +41,7 @@ pub(super) fn wave_limit(
              positive number"
         ));
     }
-    if let Some(width) = efsi_core::interface::shapes::section_width(grid, &solid.shape) {
+    if let Some(width) = crate::vof::section_width(grid, &solid.shape) {
         let h = grid.dx.max(grid.dy);
         // The staircase estimate of the width is within 8 % for a disk 3 cells across or more.
         if width / h < 0.9 * MIN_CELLS_ACROSS {

@@ -30,7 +30,7 @@
 //!   for a discretely divergence-free velocity `Σ_sweeps c_c (U_out − U_in) = 0` in every cell;
 //! - `F = U · f_up` is the phase volume carried through the face: `f_up` is the exact fraction
 //!   of the **fluxed region** — the slab of the upwind cell adjacent to the face whose volume is
-//!   `|U|` — that lies below the upwind cell's PLIC line ([`efsi_core::interface::plic`]). In planar geometry
+//!   `|U|` — that lies below the upwind cell's PLIC line ([`super::plic`]). In planar geometry
 //!   (and along z) the slab has width `|u|Δt`; along r its width `w` solves
 //!   `∫_slab r dA = r_f |u| Δt Δz`, i.e. `w = 2 r_f |s| / (r_f + √(r_f² − 2 r_f s))` with
 //!   `s = u Δt`, and `f_up` is its r-weighted fraction (`∫ r dA` of the polygon below the line
@@ -63,15 +63,12 @@
 //!
 //! - G. D. Weymouth & D. K.-P. Yue (2010), *Conservative volume-of-fluid method for free-surface
 //!   simulations on Cartesian grids*, J. Comput. Phys. 229:2853–2865.
-//! - D. L. Youngs (1982), see [`efsi_core::interface::plic`]; R. Scardovelli & S. Zaleski (2000), ibid.
+//! - D. L. Youngs (1982), see [`super::plic`]; R. Scardovelli & S. Zaleski (2000), ibid.
 //! - W. J. Rider & D. B. Kothe (1998), *Reconstructing volume tracking*, J. Comput. Phys.
 //!   141:112–152, and E. Aulisa et al. (2007), J. Comput. Phys. 225:2301 (the test problems).
 //! - S. Popinet, Basilisk `src/vof.h` (the same scheme; the reference errors of the tests).
 
-pub use efsi_core::interface::phase_volume;
-use efsi_core::interface::plic::{
-    axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal,
-};
+use super::plic::{axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal};
 use efsi_core::{Field, G, Grid};
 use efsi_linalg::par;
 
@@ -616,6 +613,25 @@ impl VofAdvector {
 
 /// The ghost width as an index offset.
 const GU: usize = G as usize;
+
+/// The phase volume `Σ φ V` over the interior (per radian in axisymmetric geometry), summed
+/// with Neumaier's compensated summation so it can be compared to round-off.
+pub fn phase_volume(grid: &Grid, phi: &Field) -> f64 {
+    let (mut sum, mut comp) = (0.0f64, 0.0f64);
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            let x = phi[(i, j)] * grid.cell_volume(i);
+            let t = sum + x;
+            comp += if sum.abs() >= x.abs() {
+                (sum - t) + x
+            } else {
+                (x - t) + sum
+            };
+            sum = t;
+        }
+    }
+    sum + comp
+}
 
 #[cfg(test)]
 mod tests {

@@ -4,12 +4,15 @@
 //!   prescribed MAC velocity, planar and axisymmetric ([`VofAdvector`]).
 //! - [`stage`]: the stage plugin ([`Vof`]): φ_s transport and the two-material ρ, μ.
 //!
-//! The interface geometry (PLIC lines, Youngs normals, exact shape fractions) is in
-//! [`efsi_core::interface`], shared with scenes and probes.
+//! - [`plic`]: PLIC lines in cells, Youngs normals (also used by the elastic stage's interface
+//!   corners); [`shapes`]: the exact cell fractions of a scene's [`Shape`] (the initial φ_s).
 
 pub mod advect;
+pub mod plic;
+pub mod shapes;
 pub mod stage;
 
 pub use advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide, phase_volume};
-pub use efsi_core::interface::{Shape, fill_fraction};
+pub use efsi_core::scene::Shape;
+pub use shapes::{ShapeVolume, fill_fraction, section_width};
 pub use stage::Vof;

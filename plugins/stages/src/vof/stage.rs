@@ -26,7 +26,7 @@
 //! `Σ φ_s V` is conserved to round-off.
 
 use super::advect::{VofAdvector, VofBoundaries, VofSide};
-use efsi_core::interface::fill_fraction;
+use super::shapes::fill_fraction;
 use efsi_core::scene::{Boundary, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -84,6 +84,7 @@ impl StagePlugin for Vof {
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
+            initial_velocity: solid.velocity,
             u_adv: Field::zeros(grid),
             v_adv: Field::zeros(grid),
         }))
@@ -94,13 +95,55 @@ struct VofStage {
     advector: VofAdvector,
     rho: (f64, f64),
     mu: (f64, f64),
-    shape: efsi_core::interface::Shape,
+    shape: efsi_core::scene::Shape,
+    /// The solid's initial velocity, until it is blended into the starting velocity (the
+    /// first [`Stage::initialize`]).
+    initial_velocity: Option<(f64, f64)>,
     /// The velocity at the end of the previous step (Vⁿ), then the step average.
     u_adv: Field,
     v_adv: Field,
 }
 
 impl VofStage {
+    /// The solid's initial velocity V_s: every face gets the momentum-weighted mixture
+    /// (φ_f ρ_s V_s + (1 − φ_f) ρ_f V_fluid) / (φ_f ρ_s + (1 − φ_f) ρ_f), φ_f the average
+    /// fraction of its two cells — the velocity of the face's mixture — so a heavy body's
+    /// interface faces move with it. The initial projection (`Pipeline::initialize`) then
+    /// removes the divergence this leaves at the interface. Once, before the first step.
+    fn blend_initial_velocity(
+        &self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+        (us, vs): (f64, f64),
+    ) {
+        let mut phi = Field::zeros(grid);
+        fill_fraction(grid, &self.shape, &mut phi);
+        bc.fill_scalar(grid, &mut phi, false);
+        let (rf, rs) = self.rho;
+        let blend = |f: f64, vs: f64, vf: f64| {
+            let (ms, mf) = (f * rs, (1.0 - f) * rf);
+            if ms + mf > 0.0 {
+                (ms * vs + mf * vf) / (ms + mf)
+            } else {
+                vf
+            }
+        };
+        for j in 0..grid.ny as isize {
+            for i in 0..=grid.nx as isize {
+                let f = 0.5 * (phi[(i - 1, j)] + phi[(i, j)]);
+                state.u[(i, j)] = blend(f, us, state.u[(i, j)]);
+            }
+        }
+        for j in 0..=grid.ny as isize {
+            for i in 0..grid.nx as isize {
+                let f = 0.5 * (phi[(i, j - 1)] + phi[(i, j)]);
+                state.v[(i, j)] = blend(f, vs, state.v[(i, j)]);
+            }
+        }
+        bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
+    }
+
     /// ρ and μ from φ (seed Eqs. 5–6), interior and ghosts alike.
     fn mix(&self, phi: &Field, rho: &mut Field, mu: &mut Field) {
         let (rf, rs) = self.rho;
@@ -127,9 +170,12 @@ impl Stage for VofStage {
     fn initialize(
         &mut self,
         grid: &Grid,
-        _bc: &BoundarySet,
+        bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
+        if let Some(velocity) = self.initial_velocity.take() {
+            self.blend_initial_velocity(grid, bc, state, velocity);
+        }
         let phi = state.phi.as_mut().ok_or_else(missing)?;
         fill_fraction(grid, &self.shape, phi);
         self.advector.fill_ghosts(phi);

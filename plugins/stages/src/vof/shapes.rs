@@ -38,52 +38,32 @@
 //! (1998, J. Comput. Phys. 141:112).
 
 use super::plic::{half_plane_moments, rect_fraction};
-use crate::{Field, Grid};
-use serde::{Deserialize, Serialize};
+use efsi_core::scene::Shape;
+use efsi_core::{Field, Grid};
 
 /// Deepest recursive split of a cell crossed by two or more boundaries.
 pub const MAX_DEPTH: u32 = 18;
 /// Most splits spent on one cell before the remaining sub-cells are decided by their centre.
 pub const MAX_SPLITS: u32 = 20_000;
 
-/// A region of the plane (x–y, or r–z in axisymmetric geometry), as written in scenes.
-///
-/// ```ron
-/// Difference(
-///     Disk(center: (0.5, 0.75), radius: 0.15),
-///     Rectangle(min: (0.475, 0.5), max: (0.525, 0.85)),
-/// )
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum Shape {
-    /// The open disk `|x − center| < radius` (a sphere when centred on the axis, a torus off it).
-    Disk {
-        /// Centre `(x, y)` (or `(r, z)`).
-        center: (f64, f64),
-        /// Radius, > 0.
-        radius: f64,
-    },
-    /// The axis-aligned rectangle `min < x < max` (a cylinder or annulus when axisymmetric).
-    Rectangle {
-        /// Lower-left corner.
-        min: (f64, f64),
-        /// Upper-right corner.
-        max: (f64, f64),
-    },
-    /// The half-plane `normal · x < offset` (`normal` need not be unit, must be non-zero).
-    HalfPlane {
-        /// Outward normal.
-        normal: (f64, f64),
-        /// Offset `c` in `normal · x < c`.
-        offset: f64,
-    },
-    /// Points in any of the shapes.
-    Union(Vec<Shape>),
-    /// Points in all of the shapes.
-    Intersection(Vec<Shape>),
-    /// Points in the first shape and not in the second.
-    Difference(Box<Shape>, Box<Shape>),
+/// The exact volume of a [`Shape`] in a rectangle.
+pub trait ShapeVolume {
+    /// The exact volume `∫_{S ∩ [x0,x1]×[y0,y1]} w dA` (`w = r` if `axi`), up to the resolution
+    /// limits stated in the module docs.
+    fn volume_in(&self, x: (f64, f64), y: (f64, f64), axi: bool) -> f64;
+}
+
+impl ShapeVolume for Shape {
+    fn volume_in(&self, x: (f64, f64), y: (f64, f64), axi: bool) -> f64 {
+        let r = Rect {
+            x0: x.0,
+            x1: x.1,
+            y0: y.0,
+            y1: y.1,
+        };
+        let mut budget = MAX_SPLITS;
+        volume(self, r, axi, MAX_DEPTH, &mut budget)
+    }
 }
 
 /// An axis-aligned rectangle `[x0,x1] × [y0,y1]`.
@@ -146,178 +126,105 @@ enum Cover {
     Mixed,
 }
 
-impl Shape {
-    /// Check the parameters: positive radius, non-empty rectangle, non-zero normal, finite
-    /// numbers, non-empty unions and intersections.
-    pub fn validate(&self) -> Result<(), String> {
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        match self {
-            Shape::Disk { center, radius } => {
-                if !fin(&[center.0, center.1]) {
-                    return Err(format!("Disk: center must be finite, got {center:?}"));
-                }
-                if !radius.is_finite() || *radius <= 0.0 {
-                    return Err(format!(
-                        "Disk: radius must be finite and > 0, got {radius:e}"
-                    ));
-                }
-            }
-            Shape::Rectangle { min, max } => {
-                if !fin(&[min.0, min.1, max.0, max.1]) || min.0 >= max.0 || min.1 >= max.1 {
-                    return Err(format!("Rectangle: need min < max, got {min:?}, {max:?}"));
-                }
-            }
-            Shape::HalfPlane { normal, offset } => {
-                if !fin(&[normal.0, normal.1, *offset]) || (normal.0 == 0.0 && normal.1 == 0.0) {
-                    return Err(format!(
-                        "HalfPlane: normal must be finite and non-zero, got {normal:?}"
-                    ));
-                }
-            }
-            Shape::Union(v) | Shape::Intersection(v) => {
-                if v.is_empty() {
-                    return Err("Union/Intersection: needs at least one shape".into());
-                }
-                for s in v {
-                    s.validate()?;
-                }
-            }
-            Shape::Difference(a, b) => {
-                a.validate()?;
-                b.validate()?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Whether the point `(x, y)` is inside the shape.
-    pub fn contains(&self, x: f64, y: f64) -> bool {
-        match self {
-            Shape::Disk { center, radius } => {
-                let (a, b) = (x - center.0, y - center.1);
-                a * a + b * b < radius * radius
-            }
-            Shape::Rectangle { min, max } => min.0 < x && x < max.0 && min.1 < y && y < max.1,
-            Shape::HalfPlane { normal, offset } => normal.0 * x + normal.1 * y < *offset,
-            Shape::Union(v) => v.iter().any(|s| s.contains(x, y)),
-            Shape::Intersection(v) => v.iter().all(|s| s.contains(x, y)),
-            Shape::Difference(a, b) => a.contains(x, y) && !b.contains(x, y),
-        }
-    }
-
-    /// The exact volume `∫_{S ∩ [x0,x1]×[y0,y1]} w dA` (`w = r` if `axi`), up to the resolution
-    /// limits stated in the module docs.
-    pub fn volume_in(&self, x: (f64, f64), y: (f64, f64), axi: bool) -> f64 {
-        let r = Rect {
-            x0: x.0,
-            x1: x.1,
-            y0: y.0,
-            y1: y.1,
-        };
-        let mut budget = MAX_SPLITS;
-        self.volume(r, axi, MAX_DEPTH, &mut budget)
-    }
-
-    fn volume(&self, r: Rect, axi: bool, depth: u32, budget: &mut u32) -> f64 {
-        match self.cover(r, axi) {
-            Cover::In => r.volume(axi),
-            Cover::Out => 0.0,
-            Cover::Exact(v) => v,
-            Cover::Mixed => {
-                if depth == 0 || *budget == 0 {
-                    let (xm, ym) = (0.5 * (r.x0 + r.x1), 0.5 * (r.y0 + r.y1));
-                    if self.contains(xm, ym) {
-                        r.volume(axi)
-                    } else {
-                        0.0
-                    }
+fn volume(this: &Shape, r: Rect, axi: bool, depth: u32, budget: &mut u32) -> f64 {
+    match cover(this, r, axi) {
+        Cover::In => r.volume(axi),
+        Cover::Out => 0.0,
+        Cover::Exact(v) => v,
+        Cover::Mixed => {
+            if depth == 0 || *budget == 0 {
+                let (xm, ym) = (0.5 * (r.x0 + r.x1), 0.5 * (r.y0 + r.y1));
+                if this.contains(xm, ym) {
+                    r.volume(axi)
                 } else {
-                    *budget -= 1;
-                    r.quarters()
-                        .iter()
-                        .map(|q| self.volume(*q, axi, depth - 1, budget))
-                        .sum()
+                    0.0
                 }
+            } else {
+                *budget -= 1;
+                r.quarters()
+                    .iter()
+                    .map(|q| volume(this, *q, axi, depth - 1, budget))
+                    .sum()
             }
         }
     }
+}
 
-    fn cover(&self, r: Rect, axi: bool) -> Cover {
-        match self {
-            Shape::Disk { center, radius } => disk_cover(*center, *radius, r, axi),
-            Shape::Rectangle { min, max } => {
-                let (x0, x1) = (r.x0.max(min.0), r.x1.min(max.0));
-                let (y0, y1) = (r.y0.max(min.1), r.y1.min(max.1));
-                if x0 >= x1 || y0 >= y1 {
-                    Cover::Out
-                } else if x0 == r.x0 && x1 == r.x1 && y0 == r.y0 && y1 == r.y1 {
-                    Cover::In
-                } else {
-                    Cover::Exact(Rect { x0, y0, x1, y1 }.volume(axi))
-                }
+fn cover(this: &Shape, r: Rect, axi: bool) -> Cover {
+    match this {
+        Shape::Disk { center, radius } => disk_cover(*center, *radius, r, axi),
+        Shape::Rectangle { min, max } => {
+            let (x0, x1) = (r.x0.max(min.0), r.x1.min(max.0));
+            let (y0, y1) = (r.y0.max(min.1), r.y1.min(max.1));
+            if x0 >= x1 || y0 >= y1 {
+                Cover::Out
+            } else if x0 == r.x0 && x1 == r.x1 && y0 == r.y0 && y1 == r.y1 {
+                Cover::In
+            } else {
+                Cover::Exact(Rect { x0, y0, x1, y1 }.volume(axi))
             }
-            Shape::HalfPlane { normal, offset } => {
-                let (nx, ny) = *normal;
-                let d = [
-                    nx * r.x0 + ny * r.y0,
-                    nx * r.x1 + ny * r.y0,
-                    nx * r.x0 + ny * r.y1,
-                    nx * r.x1 + ny * r.y1,
-                ];
-                if d.iter().all(|&v| v <= *offset) {
-                    Cover::In
-                } else if d.iter().all(|&v| v >= *offset) {
-                    Cover::Out
+        }
+        Shape::HalfPlane { normal, offset } => {
+            let (nx, ny) = *normal;
+            let d = [
+                nx * r.x0 + ny * r.y0,
+                nx * r.x1 + ny * r.y0,
+                nx * r.x0 + ny * r.y1,
+                nx * r.x1 + ny * r.y1,
+            ];
+            if d.iter().all(|&v| v <= *offset) {
+                Cover::In
+            } else if d.iter().all(|&v| v >= *offset) {
+                Cover::Out
+            } else {
+                let a = offset - d[0];
+                let (w, h) = (r.x1 - r.x0, r.y1 - r.y0);
+                Cover::Exact(if axi {
+                    let (area, m1) = half_plane_moments(nx, ny, a, w, h);
+                    r.x0 * area + m1
                 } else {
-                    let a = offset - d[0];
-                    let (w, h) = (r.x1 - r.x0, r.y1 - r.y0);
-                    Cover::Exact(if axi {
-                        let (area, m1) = half_plane_moments(nx, ny, a, w, h);
-                        r.x0 * area + m1
-                    } else {
-                        w * h * rect_fraction(nx, ny, a, w, h)
-                    })
-                }
+                    w * h * rect_fraction(nx, ny, a, w, h)
+                })
             }
-            Shape::Union(v) => {
-                let mut only = None;
-                for s in v {
-                    match s.cover(r, axi) {
-                        Cover::In => return Cover::In,
-                        Cover::Out => {}
-                        c => {
-                            if only.is_some() {
-                                return Cover::Mixed;
-                            }
-                            only = Some(c);
+        }
+        Shape::Union(v) => {
+            let mut only = None;
+            for s in v {
+                match cover(s, r, axi) {
+                    Cover::In => return Cover::In,
+                    Cover::Out => {}
+                    c => {
+                        if only.is_some() {
+                            return Cover::Mixed;
                         }
+                        only = Some(c);
                     }
                 }
-                only.unwrap_or(Cover::Out)
             }
-            Shape::Intersection(v) => {
-                let mut only = None;
-                for s in v {
-                    match s.cover(r, axi) {
-                        Cover::Out => return Cover::Out,
-                        Cover::In => {}
-                        c => {
-                            if only.is_some() {
-                                return Cover::Mixed;
-                            }
-                            only = Some(c);
-                        }
-                    }
-                }
-                only.unwrap_or(Cover::In)
-            }
-            Shape::Difference(a, b) => match (a.cover(r, axi), b.cover(r, axi)) {
-                (_, Cover::In) | (Cover::Out, _) => Cover::Out,
-                (ca, Cover::Out) => ca,
-                (Cover::In, Cover::Exact(vb)) => Cover::Exact((r.volume(axi) - vb).max(0.0)),
-                _ => Cover::Mixed,
-            },
+            only.unwrap_or(Cover::Out)
         }
+        Shape::Intersection(v) => {
+            let mut only = None;
+            for s in v {
+                match cover(s, r, axi) {
+                    Cover::Out => return Cover::Out,
+                    Cover::In => {}
+                    c => {
+                        if only.is_some() {
+                            return Cover::Mixed;
+                        }
+                        only = Some(c);
+                    }
+                }
+            }
+            only.unwrap_or(Cover::In)
+        }
+        Shape::Difference(a, b) => match (cover(a, r, axi), cover(b, r, axi)) {
+            (_, Cover::In) | (Cover::Out, _) => Cover::Out,
+            (ca, Cover::Out) => ca,
+            (Cover::In, Cover::Exact(vb)) => Cover::Exact((r.volume(axi) - vb).max(0.0)),
+            _ => Cover::Mixed,
+        },
     }
 }
 
@@ -432,7 +339,7 @@ pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
                 y1: grid.yf(j + 1),
             };
             let mut budget = MAX_SPLITS;
-            let v = shape.volume(r, axi, MAX_DEPTH, &mut budget);
+            let v = volume(shape, r, axi, MAX_DEPTH, &mut budget);
             phi[(i, j)] = (v / r.volume(axi)).clamp(0.0, 1.0);
         }
     }
@@ -463,7 +370,7 @@ pub fn section_width(grid: &Grid, shape: &Shape) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Geometry;
+    use efsi_core::Geometry;
     use std::f64::consts::PI;
 
     #[test]
