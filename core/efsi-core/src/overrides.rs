@@ -212,6 +212,8 @@ impl Scene {
             }
         }
         scene.overrides = overrides.to_vec();
+        // Positions in messages point into the text the user wrote, never the rewritten one.
+        scene.numerics.locate_in(text);
         scene
             .validate()
             .map_err(|(field, message)| attribute(path, overrides, field, message))?;
@@ -235,6 +237,8 @@ impl Scene {
     pub fn apply(&mut self, overrides: &[Override]) -> Result<(), SceneError> {
         let label = PathBuf::from(format!("scene `{}`", self.name));
         let mut next = Scene::from_str_with(&self.to_ron(), &label, overrides)?;
+        // No position in text the user did not write.
+        next.numerics.locate_in("");
         next.source_dir = self.source_dir.clone();
         let mut all = std::mem::take(&mut self.overrides);
         all.extend_from_slice(overrides);

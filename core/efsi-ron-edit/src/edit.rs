@@ -135,14 +135,16 @@ pub(crate) fn plan(
     }
     match locate(tree, segs, text, aliases)? {
         Found::Node(node) => {
+            let hinted = hint(hints, segs, aliases).and_then(Node::atom);
+            let target = match (node.atom(), hinted) {
+                // A real number the file wrote as a whole one (`end: 1`) stays real.
+                (Some(Atom::Int), Some(Atom::Float)) => Some(Atom::Float),
+                // `None` in the file: the type of the default's value, if it has one.
+                (atom, hinted) => atom.or(hinted),
+            };
             let new = render(
                 value,
-                node.atom()
-                    .or_else(|| {
-                        // `None` in the file: the type of the default's value, if it has one.
-                        hint(hints, segs, aliases).and_then(Node::atom)
-                    })
-                    .filter(|a| *a != Atom::Ident || !is_none(node, text)),
+                target.filter(|a| *a != Atom::Ident || !is_none(node, text)),
             )?;
             Ok(Edit {
                 start: node.start,

@@ -56,6 +56,18 @@ fn set_and_get_edit_the_text_in_place() {
         "S(a: 3, m: {\"k\": 2.0}, o: None) // end"
     );
     assert!(set("a", Value::Float(3.5)).unwrap_err().contains("integer"));
+    // A real written as a whole number in the text is real by the hints.
+    let real = Document::parse("S(a: 1, r: 1)", ALIASES).unwrap();
+    let real_hints = Document::parse("S(a: 1, r: 1.0)", ALIASES).unwrap();
+    assert_eq!(
+        real.set(
+            Some(&real_hints),
+            &Path::parse("r", ALIASES).unwrap(),
+            &Value::Ron("0.3".into())
+        )
+        .unwrap(),
+        "S(a: 1, r: 0.3)"
+    );
     assert_eq!(
         set("m.q", Value::Int(4)).unwrap(),
         "S(a: 1, m: {\"k\": 2.0, \"q\": 4}, o: None) // end"

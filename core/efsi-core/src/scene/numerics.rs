@@ -56,6 +56,8 @@ struct Section {
     raw: Box<RawValue>,
     /// Line and column of the section's text in the scene file, for messages.
     at: Option<(usize, usize)>,
+    /// The settings in force as JSON (set by [`check_sections`]), for records.
+    json: Option<serde_json::Value>,
 }
 
 /// A failed check of a section: the setting's path (`numerics.<section>.<field>`) and what is
@@ -83,7 +85,7 @@ pub trait StageOptions:
 pub struct OptionsDecl {
     /// The section's name under `numerics`.
     pub section: &'static str,
-    check: fn(&Scene) -> Result<Box<RawValue>, Failure>,
+    check: fn(&Scene) -> Result<(Box<RawValue>, serde_json::Value), Failure>,
 }
 
 impl fmt::Debug for OptionsDecl {
@@ -103,7 +105,8 @@ impl OptionsDecl {
                 let o: O = scene.numerics.get()?;
                 o.validate(scene)
                     .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
-                raw_of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))
+                let raw = raw_of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
+                Ok((raw, serde_json::to_value(&o).unwrap_or_default()))
             },
         }
     }
@@ -147,11 +150,13 @@ pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checke
     for d in decls.values() {
         effective.push((d.section, (d.check)(scene)?));
     }
-    for (name, raw) in effective {
-        scene
-            .numerics
-            .sections
-            .insert(name.to_string(), Section { raw, at: None });
+    for (name, (raw, json)) in effective {
+        let section = Section {
+            raw,
+            at: None,
+            json: Some(json),
+        };
+        scene.numerics.sections.insert(name.to_string(), section);
     }
     Ok(())
 }
@@ -205,8 +210,12 @@ impl Numerics {
     /// Replace section `O::SECTION` by `options` (what a scene built in code sets).
     pub fn set<O: StageOptions>(&mut self, options: &O) {
         let raw = raw_of(options).expect("stage options serialise to RON");
-        self.sections
-            .insert(O::SECTION.to_string(), Section { raw, at: None });
+        let section = Section {
+            raw,
+            at: None,
+            json: None,
+        };
+        self.sections.insert(O::SECTION.to_string(), section);
     }
 
     /// Change section `O::SECTION` in place: read it ([`Numerics::get`], without the preset),
@@ -236,15 +245,24 @@ impl Numerics {
             .map(|(name, s)| (name.as_str(), s.raw.get_ron()))
     }
 
-    /// Record where each section's text starts in `text`, the scene file it was read from.
+    /// Each checked section's settings in force as JSON ([`check_sections`]; sections not
+    /// checked since they were set are left out), in name order.
+    pub fn sections_json(&self) -> impl Iterator<Item = (&str, &serde_json::Value)> {
+        self.sections
+            .iter()
+            .filter_map(|(name, s)| Some((name.as_str(), s.json.as_ref()?)))
+    }
+
+    /// Record where each section's text starts in `text`, the scene file it was read from; a
+    /// section not found there as written (an override rewrote it) gets no position.
     pub(crate) fn locate_in(&mut self, text: &str) {
         for s in self.sections.values_mut() {
-            if let Some(offset) = text.find(s.raw.get_ron()) {
+            s.at = text.find(s.raw.get_ron()).map(|offset| {
                 let before = &text[..offset];
                 let line = before.matches('\n').count() + 1;
                 let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-                s.at = Some((line, col));
-            }
+                (line, col)
+            });
         }
     }
 }
@@ -294,7 +312,12 @@ impl<'de> Deserialize<'de> for Numerics {
                                 "duplicate section `{key}`"
                             )));
                         }
-                        n.sections.insert(key, Section { raw, at: None });
+                        let section = Section {
+                            raw,
+                            at: None,
+                            json: None,
+                        };
+                        n.sections.insert(key, section);
                     }
                 }
                 Ok(n)

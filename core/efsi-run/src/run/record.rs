@@ -56,10 +56,8 @@ impl Outputs {
         let steps = steps_this_run.max(1) as f64;
         let mut scene = serde_json::to_value(&sim.scene).unwrap_or_default();
         // The stages' numerics sections are RON text in the scene: recorded as JSON values.
-        for (name, ron_text) in sim.scene.numerics.sections() {
-            if let Ok(v) = ron::from_str::<ron::Value>(ron_text) {
-                scene["numerics"][name] = serde_json::to_value(v).unwrap_or_default();
-            }
+        for (name, json) in sim.scene.numerics.sections_json() {
+            scene["numerics"][name] = json.clone();
         }
         let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
