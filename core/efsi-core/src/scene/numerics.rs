@@ -64,6 +64,9 @@ struct Section {
 /// wrong.
 pub type Checked = Result<(), Failure>;
 
+/// A section's settings in force: as RON text and as JSON.
+type InForce = (Box<RawValue>, serde_json::Value);
+
 /// A setting's path and what is wrong with it.
 pub type Failure = (String, String);
 
@@ -85,7 +88,7 @@ pub trait StageOptions:
 pub struct OptionsDecl {
     /// The section's name under `numerics`.
     pub section: &'static str,
-    check: fn(&Scene) -> Result<(Box<RawValue>, serde_json::Value), Failure>,
+    check: fn(&Scene) -> Result<InForce, Failure>,
 }
 
 impl fmt::Debug for OptionsDecl {
