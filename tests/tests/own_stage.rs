@@ -1,0 +1,186 @@
+//! A user's own stage with its own `numerics` options, defined entirely in this file: adding a
+//! stage and an option touches no file of efsi (the plugin contract of `efsi_core::schedule`
+//! and `efsi_core::scene::options`). The stage damps the velocity implicitly,
+//! `u ← u / (1 + rate·Δt)`, at a rate its section sets.
+
+use efsi_core::scene::options::check_iterations;
+use efsi_core::scene::{OptionsDecl, StageOptions};
+use efsi_core::schedule::VELOCITY;
+use efsi_core::{
+    BoundarySet, FieldId, Grid, Phase, Scene, Simulation, Stage, StageError, StagePlugin,
+    StageStats, State, StepContext,
+};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// `numerics.damping`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DampingOptions {
+    /// The damping rate (1/s, default 1).
+    #[serde(default = "one")]
+    rate: f64,
+    /// Sub-steps per step (default 1): a second field, to show ranges checked by name.
+    #[serde(default = "one_step")]
+    substeps: usize,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn one_step() -> usize {
+    1
+}
+
+impl Default for DampingOptions {
+    fn default() -> Self {
+        DampingOptions {
+            rate: one(),
+            substeps: one_step(),
+        }
+    }
+}
+
+impl StageOptions for DampingOptions {
+    const SECTION: &'static str = "damping";
+
+    fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
+        if !(self.rate.is_finite() && self.rate >= 0.0) {
+            return Err(("rate", format!("must be finite and ≥ 0, got {}", self.rate)));
+        }
+        check_iterations("substeps", self.substeps)
+    }
+}
+
+struct Damping;
+
+impl StagePlugin for Damping {
+    fn name(&self) -> &'static str {
+        "damping"
+    }
+    fn phase(&self) -> Phase {
+        Phase::BodyForce
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        &VELOCITY
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        &VELOCITY
+    }
+    fn needed(&self, _scene: &Scene) -> bool {
+        true
+    }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<DampingOptions>())
+    }
+    fn build(
+        &self,
+        scene: &Scene,
+        _grid: &Grid,
+        _bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
+    ) -> Result<Box<dyn Stage>, String> {
+        let o: DampingOptions = scene.numerics.get().map_err(|(f, m)| format!("{f}: {m}"))?;
+        Ok(Box::new(DampingStage(o)))
+    }
+}
+
+struct DampingStage(DampingOptions);
+
+impl Stage for DampingStage {
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let h = ctx.dt / self.0.substeps as f64;
+        for _ in 0..self.0.substeps {
+            let f = 1.0 / (1.0 + self.0.rate * h);
+            state.u.data_mut().iter_mut().for_each(|u| *u *= f);
+            state.v.data_mut().iter_mut().for_each(|v| *v *= f);
+        }
+        Ok(StageStats::default())
+    }
+}
+
+/// A uniform flow through a periodic box: advection and projection keep it uniform, so only
+/// the damping changes it.
+fn scene(numerics: &str) -> Result<Scene, String> {
+    let text = format!(
+        r#"Scene(
+    name: "own_stage",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8),
+    time: (end: 1.0, fixed_dt: 0.01),
+    fluid: (density: 1.0, viscosity: 0.0),
+    initial_velocity: Uniform((1.0, 0.5)),
+    numerics: {numerics},
+    boundaries: (x_min: Periodic, x_max: Periodic, y_min: Periodic, y_max: Periodic),
+)"#
+    );
+    Scene::from_str_at(&text, Path::new("own_stage.ron")).map_err(|e| e.to_string())
+}
+
+fn plugins() -> Vec<&'static dyn StagePlugin> {
+    let mut p = efsi_stages::builtin();
+    p.push(&Damping);
+    p
+}
+
+#[test]
+fn a_stage_of_ones_own_reads_its_own_section() {
+    let mut sim = Simulation::new(
+        scene("(damping: (rate: 2.0, substeps: 2))").unwrap(),
+        Path::new("own_stage.ron"),
+        &plugins(),
+    )
+    .unwrap();
+    assert!(sim.pipeline().stage_names().contains(&"damping"));
+    for _ in 0..10 {
+        sim.step(0.01).unwrap();
+    }
+    let expect = (1.0f64 + 2.0 * 0.005).powi(-20);
+    let (u, v) = (sim.state.u[(3, 4)], sim.state.v[(3, 4)]);
+    assert!((u - expect).abs() < 1e-13, "u = {u}, expected {expect}");
+    assert!(
+        (v - 0.5 * expect).abs() < 1e-13,
+        "v = {v}, expected {}",
+        0.5 * expect
+    );
+    // The settings in force are recorded with the scene, defaults and all.
+    let recorded: Vec<&str> = sim.scene.numerics.sections().map(|(n, _)| n).collect();
+    assert!(recorded.contains(&"damping"), "{recorded:?}");
+}
+
+#[test]
+fn the_section_is_refused_without_its_stage_and_checked_by_field_with_it() {
+    let refused = |numerics: &str, plugins: &[&dyn StagePlugin]| match Simulation::new(
+        scene(numerics).unwrap(),
+        Path::new("own_stage.ron"),
+        plugins,
+    ) {
+        Ok(_) => panic!("{numerics}: accepted"),
+        Err(e) => e.to_string(),
+    };
+    let m = refused("(damping: (rate: 2.0))", &efsi_stages::builtin());
+    assert!(
+        m.contains("numerics.damping") && m.contains("no stage has a section `damping`"),
+        "{m}"
+    );
+    let m = refused("(damping: (rate: -1.0))", &plugins());
+    assert!(
+        m.contains("numerics.damping.rate: must be finite and ≥ 0"),
+        "{m}"
+    );
+    let m = refused("(damping: (substeps: 0))", &plugins());
+    assert!(m.contains("numerics.damping.substeps: must be ≥ 1"), "{m}");
+    let m = refused("(damping: (rate: 1.0, sub_steps: 2))", &plugins());
+    assert!(
+        m.contains("numerics.damping") && m.contains("sub_steps"),
+        "{m}"
+    );
+    // An override of the new option is checked and named like any other.
+    let mut s = scene("()").unwrap();
+    s.set("numerics.damping.rate", -3.0).unwrap();
+    let m = match Simulation::new(s, Path::new("own_stage.ron"), &plugins()) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(m.contains("set numerics.damping.rate=-3.0"), "{m}");
+}
