@@ -233,7 +233,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin,
     bc::UnknownFaces,
 };
-use efsi_laws_host::{ConstitutiveLaw, Sym, Tangent};
+use efsi_laws_host::{Sym, Tangent};
 use efsi_linalg::BiCgStab;
 use rayon::prelude::*;
 
@@ -241,6 +241,7 @@ mod coupled;
 mod deformation;
 mod energy;
 mod interface;
+mod law;
 mod limits;
 mod options;
 mod solve;
@@ -250,6 +251,8 @@ mod tests;
 mod transport;
 
 use deformation::DeformationStage;
+pub use law::resolve_law;
+use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::wave_limit;
 pub use options::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, MAX_WAVE_COURANT};
@@ -276,38 +279,6 @@ fn viscosities(scene: &Scene) -> (f64, f64) {
         .as_ref()
         .map_or(mu_f, |s| s.viscosity(&scene.fluid));
     (mu_f, mu_s)
-}
-
-/// The law named by the scene's solid: a plugin library found and checked by
-/// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
-/// tangent) — every law, test laws included, goes through the loader.
-pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
-    let spec = scene
-        .solid
-        .as_ref()
-        .and_then(|s| s.law.as_ref())
-        .ok_or("the solid has no law")?;
-    let dir = scene
-        .source_dir
-        .clone()
-        .unwrap_or_else(|| std::path::PathBuf::from("."));
-    let law = efsi_laws_host::load_law(&spec.name, &spec.parameters, &dir)
-        .map_err(|e| format!("solid.law: {e}"))?;
-    Ok(Box::new(law))
-}
-
-/// The solid's law as the elastic and deformation stages of one pipeline share it: loaded and
-/// checked once, by whichever of them is built first ([`efsi_core::Resources`]).
-struct SharedLaw(std::sync::Arc<dyn ConstitutiveLaw>);
-
-/// The law of `scene` from the pipeline's shared values, loaded there by the first stage
-/// that asks.
-fn shared_law(
-    scene: &Scene,
-    shared: &mut efsi_core::Resources,
-) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, String> {
-    let law = shared.get_or_try_insert_with(|| resolve_law(scene).map(|l| SharedLaw(l.into())))?;
-    Ok(law.0.clone())
 }
 
 /// The elastic stage plugin (phase Elastic).

@@ -1,5 +1,6 @@
 use super::*;
 use efsi_core::scene::Shape;
+use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
 
 /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8

@@ -1,0 +1,37 @@
+//! The solid's constitutive law: resolved by name through the law loader, and shared by the
+//! elastic and deformation stages of one pipeline (loaded and checked once).
+
+use efsi_core::Scene;
+use efsi_laws_host::ConstitutiveLaw;
+
+/// The law named by the scene's solid: a plugin library found and checked by
+/// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
+/// tangent) — every law, test laws included, goes through the loader.
+pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
+    let spec = scene
+        .solid
+        .as_ref()
+        .and_then(|s| s.law.as_ref())
+        .ok_or("the solid has no law")?;
+    let dir = scene
+        .source_dir
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from("."));
+    let law = efsi_laws_host::load_law(&spec.name, &spec.parameters, &dir)
+        .map_err(|e| format!("solid.law: {e}"))?;
+    Ok(Box::new(law))
+}
+
+/// The solid's law as the elastic and deformation stages of one pipeline share it: loaded and
+/// checked once, by whichever of them is built first ([`efsi_core::Resources`]).
+struct SharedLaw(std::sync::Arc<dyn ConstitutiveLaw>);
+
+/// The law of `scene` from the pipeline's shared values, loaded there by the first stage
+/// that asks.
+pub(super) fn shared_law(
+    scene: &Scene,
+    shared: &mut efsi_core::Resources,
+) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, String> {
+    let law = shared.get_or_try_insert_with(|| resolve_law(scene).map(|l| SharedLaw(l.into())))?;
+    Ok(law.0.clone())
+}
