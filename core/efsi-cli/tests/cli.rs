@@ -142,10 +142,15 @@ fn check_and_print_schedule() {
         stages,
         ["advection", "pressure_predictor", "viscous", "projection"]
     );
-    // Each stage names the type that implements it.
+    // Each stage names the type that implements it, and the section of its options.
     assert!(
         s.contains("(efsi_stages::viscous::Viscous)")
             && s.contains("(efsi_stages::projection::Projection)"),
+        "{s}"
+    );
+    assert!(
+        s.lines()
+            .any(|l| l.contains(" viscous ") && l.contains("options numerics.viscous")),
         "{s}"
     );
 }

@@ -315,6 +315,8 @@ struct Entry {
     phase: Phase,
     reads: &'static [FieldId],
     writes: &'static [FieldId],
+    /// The `numerics` section of its options, if it has one.
+    options: Option<&'static str>,
     stage: Box<dyn Stage>,
     time: Duration,
     calls: u64,
@@ -392,6 +394,7 @@ impl Pipeline {
                 phase: p.phase(),
                 reads: p.reads(),
                 writes: p.writes(),
+                options: p.options().map(|d| d.section),
                 stage,
                 time: Duration::ZERO,
                 calls: 0,
@@ -764,9 +767,12 @@ impl fmt::Display for Pipeline {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (k, e) in self.entries.iter().enumerate() {
             let names = |fs: &[FieldId]| fs.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
+            let options = e
+                .options
+                .map_or(String::new(), |s| format!(" options numerics.{s}"));
             writeln!(
                 f,
-                "{:>2}. {:<18} phase {:<17} reads [{}] writes [{}]  ({})",
+                "{:>2}. {:<18} phase {:<17} reads [{}] writes [{}]{options}  ({})",
                 k + 1,
                 e.name,
                 format!("{:?}", e.phase),
