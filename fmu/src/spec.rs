@@ -469,12 +469,15 @@ pub fn probe_columns(scene: &Scene) -> Vec<String> {
         .collect()
 }
 
-/// The value of the setting at `path` in `scene` (with its defaults); [`REFINE`]'s is 1.
+/// The value of the setting at `path` in `scene` (with its defaults, the stages' too);
+/// [`REFINE`]'s is 1.
 pub fn scene_value(scene: &Scene, path: &str) -> Result<OverrideValue, String> {
     if path == REFINE {
         return Ok(OverrideValue::Float(1.0));
     }
-    scene.get(path).map_err(|e| e.to_string())
+    scene
+        .get_in_force(path, &efsi_stages::builtin())
+        .map_err(|e| e.to_string())
 }
 
 /// Whether the scene can take the input `name`.

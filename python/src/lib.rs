@@ -249,7 +249,10 @@ impl PyScene {
     /// RON text for anything else.
     fn get(&self, py: Python<'_>, path: &str) -> PyResult<Py<PyAny>> {
         guarded(py, || {
-            let v = self.scene.get(path).map_err(|e| efsi_err(py, e))?;
+            let v = self
+                .scene
+                .get_in_force(path, &efsi_stages::builtin())
+                .map_err(|e| efsi_err(py, e))?;
             value_to_py(py, v)
         })
     }

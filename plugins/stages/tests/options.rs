@@ -246,3 +246,28 @@ fn simulation_refuses_bad_sections_naming_the_override() {
     )
     .unwrap();
 }
+
+/// A stage's setting the scene leaves out reads as the stage's default through
+/// `get_in_force` (what the Python binding and the FMU's start values use); `get` alone sees
+/// only what the scene holds.
+#[test]
+fn settings_in_force_read_the_stages_defaults() {
+    use efsi_core::OverrideValue;
+    let s = Scene::from_str_at(MIN, Path::new("scene.ron")).unwrap();
+    let builtin = efsi_stages::builtin();
+    assert_eq!(
+        s.get_in_force("numerics.projection.tolerance", &builtin)
+            .unwrap(),
+        OverrideValue::Float(1e-6)
+    );
+    assert_eq!(
+        s.get_in_force("numerics.viscous.preconditioner", &builtin)
+            .unwrap(),
+        OverrideValue::Str("Jacobi".into())
+    );
+    assert!(s.get("numerics.projection.tolerance").is_err());
+    assert_eq!(
+        s.get_in_force("grid.nx", &builtin).unwrap(),
+        OverrideValue::Int(8)
+    );
+}
