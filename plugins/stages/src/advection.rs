@@ -69,6 +69,9 @@ impl StagePlugin for Advection {
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
+        // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
+        // an outflow side have ny + 1 rows), plus the top edge.
+        let edges = ((grid.ny + 1).div_ceil(BAND) + 1) * (grid.nx + 1 + 2 * efsi_core::GHOST);
         Ok(Box::new(AdvectionStage {
             qu: Field::zeros(grid),
             qv: Field::zeros(grid),
@@ -76,17 +79,16 @@ impl StagePlugin for Advection {
             mv_: Field::zeros(grid),
             u0: Field::zeros(grid),
             v0: Field::zeros(grid),
-            m0u: Field::zeros(grid),
-            m0v: Field::zeros(grid),
             m1u: Field::zeros(grid),
             m1v: Field::zeros(grid),
-            fxm: Field::zeros(grid),
-            fxq: Field::zeros(grid),
-            fym: Field::zeros(grid),
-            fyq: Field::zeros(grid),
+            edge_m: vec![0.0; edges],
+            edge_q: vec![0.0; edges],
         }))
     }
 }
+
+/// Rows of tendencies per band of the fused flux-and-difference pass (bands run in parallel).
+const BAND: usize = 16;
 
 struct AdvectionStage {
     /// Momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces.
@@ -95,18 +97,16 @@ struct AdvectionStage {
     /// Mass tendencies `−∇·(m a)`.
     mu_: Field,
     mv_: Field,
-    /// Start-of-step velocity and face masses, and the first stage's masses.
+    /// Start-of-step velocity (the start-of-step face masses are recomputed from the density,
+    /// which advection does not change), and the current stage's face masses.
     u0: Field,
     v0: Field,
-    m0u: Field,
-    m0v: Field,
     m1u: Field,
     m1v: Field,
-    /// Mass and momentum fluxes through the control volumes' x- and y-faces (scratch).
-    fxm: Field,
-    fxq: Field,
-    fym: Field,
-    fyq: Field,
+    /// Mass and momentum fluxes through the bottom edge of each band of rows, and the top of
+    /// the last (scratch, one padded row per edge).
+    edge_m: Vec<f64>,
+    edge_q: Vec<f64>,
 }
 
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
@@ -159,11 +159,76 @@ fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
     (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
 }
 
+/// The tendencies of one control-volume family, `rows = qt.len() / s` padded rows from padded
+/// index `r0`, faces `i0..i1` of each row: `(qt, mt)[k] = diff(i, [west, east, south, north])`
+/// with the (mass, momentum) fluxes `xflux(k)` through the face left of `k` and `yflux(k)`
+/// through the face below. Each flux is computed once, in a fused pass: the rows are split into
+/// bands of [`BAND`] rows (in parallel); the flux through a band's bottom edge (and the top of
+/// the last) is computed first into `edge_*`, then each band walks its rows upwards, carrying
+/// the west flux along the row in a register and the flux below the next row in that row's
+/// own tendency entries, which it overwrites once read. The floating-point operations per
+/// entry are those of storing every flux and differencing them, so the results are the same,
+/// bit for bit, on any number of threads.
+#[allow(clippy::too_many_arguments)]
+fn tendencies(
+    qt: &mut [f64],
+    mt: &mut [f64],
+    edge_m: &mut [f64],
+    edge_q: &mut [f64],
+    s: usize,
+    r0: usize,
+    (i0, i1): (isize, isize),
+    xflux: impl Fn(usize) -> (f64, f64) + Sync,
+    yflux: impl Fn(usize) -> (f64, f64) + Sync,
+    diff: impl Fn(isize, [(f64, f64); 4]) -> (f64, f64) + Sync,
+) {
+    let rows = qt.len() / s;
+    if rows == 0 || i1 <= i0 {
+        return;
+    }
+    let nb = rows.div_ceil(BAND);
+    let (em, eq) = (&mut edge_m[..(nb + 1) * s], &mut edge_q[..(nb + 1) * s]);
+    let (c0, c1) = ((i0 + efsi_core::G) as usize, (i1 + efsi_core::G) as usize);
+    for_each_row2(em, eq, s, |b, fm, fq| {
+        let k0 = r0 + (b * BAND).min(rows) * s;
+        for c in c0..c1 {
+            (fm[c], fq[c]) = yflux(k0 + c);
+        }
+    });
+    let (em, eq) = (&*em, &*eq);
+    for_each_row2(qt, mt, BAND * s, |b, qb, mb| {
+        let n = qb.len() / s;
+        qb[c0..c1].copy_from_slice(&eq[b * s + c0..b * s + c1]);
+        mb[c0..c1].copy_from_slice(&em[b * s + c0..b * s + c1]);
+        for jr in 0..n {
+            let k0 = r0 + (b * BAND + jr) * s;
+            let (qr, qn) = qb[jr * s..].split_at_mut(s);
+            let (mr, mn) = mb[jr * s..].split_at_mut(s);
+            let top = (jr + 1 == n).then(|| (&em[(b + 1) * s..], &eq[(b + 1) * s..]));
+            let mut west = xflux(k0 + c0);
+            for c in c0..c1 {
+                let k = k0 + c;
+                let east = xflux(k + 1);
+                let north = match top {
+                    Some((tm, tq)) => (tm[c], tq[c]),
+                    None => {
+                        let f = yflux(k + s);
+                        (mn[c], qn[c]) = f;
+                        f
+                    }
+                };
+                let south = (mr[c], qr[c]);
+                let i = c as isize - efsi_core::G;
+                (qr[c], mr[c]) = diff(i, [west, east, south, north]);
+                west = east;
+            }
+        }
+    });
+}
+
 impl AdvectionStage {
     /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
-    /// (ghosts filled), on the unknown faces. Each face flux of the control volumes is computed
-    /// once (into `fx*`, `fy*`, rows in parallel) and then differenced (rows in parallel): each
-    /// loop writes its own entries, so the result is bit-identical on any thread count.
+    /// (ghosts filled), on the unknown faces (see [`tendencies`]).
     fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
         let g = ctx.grid;
         let m = &g.metric;
@@ -176,116 +241,56 @@ impl AdvectionStage {
         let at = |d: &[f64], k: usize, o: usize| [d[k - 2 * o], d[k - o], d[k], d[k + o]];
         let row0 = |j: isize| u.idx(-efsi_core::G, j);
         // u control volumes, centred on x-faces: east/west faces at cell centres (the flux
-        // through the centre left of face k is stored at k), north/south faces at corners
-        // (v averaged over the two columns; the flux below face k stored at k).
+        // through the centre left of face k), north/south faces at corners (v averaged over
+        // the two columns; the flux below face k).
         let r0 = row0(0);
         let n = ny as usize * s;
-        for_each_row2(
-            &mut self.fxm.data_mut()[r0..r0 + n],
-            &mut self.fxq.data_mut()[r0..r0 + n],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in ux.lo..=ux.hi {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1));
-                }
-            },
-        );
-        let n1 = (ny + 1) as usize * s;
-        for_each_row2(
-            &mut self.fym.data_mut()[r0..r0 + n1],
-            &mut self.fyq.data_mut()[r0..r0 + n1],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in ux.lo..ux.hi {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s));
-                }
-            },
-        );
-        let (fxm, fxq, fym, fyq) = (
-            self.fxm.data(),
-            self.fxq.data(),
-            self.fym.data(),
-            self.fyq.data(),
-        );
-        let (qu, muu) = (
+        tendencies(
             &mut self.qu.data_mut()[r0..r0 + n],
             &mut self.mu_.data_mut()[r0..r0 + n],
-        );
-        for_each_row2(qu, muu, s, |jr, qu, muu| {
-            let k0 = r0 + jr * s;
-            for i in ux.lo..ux.hi {
-                let c = (i + efsi_core::G) as usize;
-                let k = k0 + c;
+            &mut self.edge_m,
+            &mut self.edge_q,
+            s,
+            r0,
+            (ux.lo, ux.hi),
+            |k| flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1)),
+            |k| flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s)),
+            |i, [w, e, so, no]| {
                 let r = m.rx(i);
                 if r == 0.0 {
-                    qu[c] = 0.0;
-                    muu[c] = 0.0;
-                    continue;
+                    return (0.0, 0.0);
                 }
                 let (re, rw) = (m.rc(i), m.rc(i - 1));
-                qu[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
-                muu[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
-            }
-        });
+                (
+                    -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+                    -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+                )
+            },
+        );
         // v control volumes, centred on y-faces: east/west faces at corners (u averaged over
-        // the two rows; the flux left of face k stored at k), north/south faces at cell
-        // centres (the flux below face k stored at k).
+        // the two rows; the flux left of face k), north/south faces at cell centres (the flux
+        // below face k).
         let rows = (vy.hi - vy.lo).max(0) as usize;
         let r0 = row0(vy.lo);
         let n = rows * s;
-        for_each_row2(
-            &mut self.fxm.data_mut()[r0..r0 + n],
-            &mut self.fxq.data_mut()[r0..r0 + n],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in 0..=nx {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1));
-                }
-            },
-        );
-        let n1 = (rows + 1) * s;
-        for_each_row2(
-            &mut self.fym.data_mut()[r0..r0 + n1],
-            &mut self.fyq.data_mut()[r0..r0 + n1],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in 0..nx {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s));
-                }
-            },
-        );
-        let (fxm, fxq, fym, fyq) = (
-            self.fxm.data(),
-            self.fxq.data(),
-            self.fym.data(),
-            self.fyq.data(),
-        );
-        let (qv, mvv) = (
+        tendencies(
             &mut self.qv.data_mut()[r0..r0 + n],
             &mut self.mv_.data_mut()[r0..r0 + n],
-        );
-        for_each_row2(qv, mvv, s, |jr, qv, mvv| {
-            let k0 = r0 + jr * s;
-            for i in 0..nx {
-                let c = (i + efsi_core::G) as usize;
-                let k = k0 + c;
+            &mut self.edge_m,
+            &mut self.edge_q,
+            s,
+            r0,
+            (0, nx),
+            |k| flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1)),
+            |k| flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s)),
+            |i, [w, e, so, no]| {
                 let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
-                qv[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
-                mvv[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
-            }
-        });
+                (
+                    -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+                    -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+                )
+            },
+        );
     }
 }
 
@@ -323,14 +328,13 @@ impl Stage for AdvectionStage {
         //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
         let dt = ctx.dt;
-        face_masses(&state.rho, &mut self.m0u, &mut self.m0v);
+        face_masses(&state.rho, &mut self.m1u, &mut self.m1v);
         copy(self.u0.data_mut(), state.u.data());
         copy(self.v0.data_mut(), state.v.data());
-        copy(self.m1u.data_mut(), self.m0u.data());
-        copy(self.m1v.data_mut(), self.m0v.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);
+        let s = state.u.stride();
         for stage in 0..2 {
             let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
             let (m1u, m1v) = (std::mem::take(&mut self.m1u), std::mem::take(&mut self.m1v));
@@ -341,7 +345,7 @@ impl Stage for AdvectionStage {
                     &mut state.u,
                     &mut self.m1u,
                     &self.u0,
-                    &self.m0u,
+                    1,
                     &self.qu,
                     &self.mu_,
                     ux.lo,
@@ -353,7 +357,7 @@ impl Stage for AdvectionStage {
                     &mut state.v,
                     &mut self.m1v,
                     &self.v0,
-                    &self.m0v,
+                    s,
                     &self.qv,
                     &self.mv_,
                     0,
@@ -362,11 +366,11 @@ impl Stage for AdvectionStage {
                     vy.hi,
                 ),
             ];
-            for (x, m1, x0, m0, q, dm, i0, i1, j0, j1) in faces {
-                let s = x.stride();
+            let rho = state.rho.data();
+            for (x, m1, x0, o, q, dm, i0, i1, j0, j1) in faces {
                 let r0 = x.idx(-efsi_core::G, j0);
                 let n = (j1 - j0).max(0) as usize * s;
-                let (dmd, qd, m0d, x0d) = (dm.data(), q.data(), m0.data(), x0.data());
+                let (dmd, qd, x0d) = (dm.data(), q.data(), x0.data());
                 let xd = &mut x.data_mut()[r0..r0 + n];
                 let m1d = &mut m1.data_mut()[r0..r0 + n];
                 for_each_row2(xd, m1d, s, |jr, xr, mr| {
@@ -379,7 +383,9 @@ impl Stage for AdvectionStage {
                         let (m_new, q_new) = if stage == 0 {
                             (m_e, q_e)
                         } else {
-                            let (a, b) = (m0d[k], x0d[k]);
+                            // The start-of-step face mass, as `face_masses` gave it.
+                            let a = efsi_core::ops::face_density(rho[k - o], rho[k]);
+                            let b = x0d[k];
                             (0.5 * (a + m_e), 0.5 * (a * b + q_e))
                         };
                         mr[c] = m_new;
