@@ -41,7 +41,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
-use efsi_linalg::par::{copy, for_each_row, for_each_row2, max_over_rows};
+use efsi_linalg::par::{copy, for_each_row, for_each_row2, for_each_row2_with, max_over_rows};
 
 /// The advection stage plugin.
 pub struct Advection;
@@ -71,7 +71,8 @@ impl StagePlugin for Advection {
     ) -> Result<Box<dyn Stage>, String> {
         // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
         // an outflow side have ny + 1 rows), plus the top edge.
-        let edges = ((grid.ny + 1).div_ceil(BAND) + 1) * (grid.nx + 1 + 2 * efsi_core::GHOST);
+        let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
+        let bands = (grid.ny + 1).div_ceil(BAND);
         Ok(Box::new(AdvectionStage {
             qu: Field::zeros(grid),
             qv: Field::zeros(grid),
@@ -81,8 +82,9 @@ impl StagePlugin for Advection {
             v0: Field::zeros(grid),
             m1u: Field::zeros(grid),
             m1v: Field::zeros(grid),
-            edge_m: vec![0.0; edges],
-            edge_q: vec![0.0; edges],
+            edge_m: vec![0.0; (bands + 1) * stride],
+            edge_q: vec![0.0; (bands + 1) * stride],
+            row_x: (0..bands).map(|_| vec![0.0; 2 * stride]).collect(),
         }))
     }
 }
@@ -107,6 +109,8 @@ struct AdvectionStage {
     /// the last (scratch, one padded row per edge).
     edge_m: Vec<f64>,
     edge_q: Vec<f64>,
+    /// Each band's mass and momentum fluxes through the x-faces of its current row (scratch).
+    row_x: Vec<Vec<f64>>,
 }
 
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
@@ -159,28 +163,120 @@ fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
     (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
 }
 
+/// A family of control volumes (centred on the u- or the v-faces): its face fluxes and their
+/// balance (methods inlined into [`tendencies`]' loops).
+trait Family: Sync {
+    /// (Mass, momentum) flux through the x-face of the control volume left of face `k`.
+    fn xflux(&self, k: usize) -> (f64, f64);
+    /// (Mass, momentum) flux through the y-face of the control volume below face `k`.
+    fn yflux(&self, k: usize) -> (f64, f64);
+    /// (Momentum, mass) tendency of the control volume of column `i` from its west, east,
+    /// south and north fluxes.
+    fn diff(&self, i: isize, f: [(f64, f64); 4]) -> (f64, f64);
+}
+
+/// What both families read: the velocity, the face masses of the family, the metric.
+struct Flow<'a> {
+    u: &'a [f64],
+    v: &'a [f64],
+    m: &'a [f64],
+    s: usize,
+    metric: &'a efsi_core::grid::Metric,
+    dx: f64,
+    dy: f64,
+}
+
+#[inline(always)]
+fn at(d: &[f64], k: usize, o: usize) -> [f64; 4] {
+    [d[k - 2 * o], d[k - o], d[k], d[k + o]]
+}
+
+/// u control volumes, centred on x-faces: east/west faces at cell centres (the flux through
+/// the centre left of face k), north/south faces at corners (v averaged over the two columns;
+/// the flux below face k).
+struct UFamily<'a>(Flow<'a>);
+
+impl Family for UFamily<'_> {
+    #[inline(always)]
+    fn xflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(0.5 * (f.u[k - 1] + f.u[k]), at(f.m, k, 1), at(f.u, k, 1))
+    }
+    #[inline(always)]
+    fn yflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(
+            0.5 * (f.v[k - 1] + f.v[k]),
+            at(f.m, k, f.s),
+            at(f.u, k, f.s),
+        )
+    }
+    #[inline(always)]
+    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
+        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
+        let r = m.rx(i);
+        if r == 0.0 {
+            return (0.0, 0.0);
+        }
+        let (re, rw) = (m.rc(i), m.rc(i - 1));
+        (
+            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+        )
+    }
+}
+
+/// v control volumes, centred on y-faces: east/west faces at corners (u averaged over the two
+/// rows; the flux left of face k), north/south faces at cell centres (the flux below face k).
+struct VFamily<'a>(Flow<'a>);
+
+impl Family for VFamily<'_> {
+    #[inline(always)]
+    fn xflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(0.5 * (f.u[k - f.s] + f.u[k]), at(f.m, k, 1), at(f.v, k, 1))
+    }
+    #[inline(always)]
+    fn yflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(
+            0.5 * (f.v[k - f.s] + f.v[k]),
+            at(f.m, k, f.s),
+            at(f.v, k, f.s),
+        )
+    }
+    #[inline(always)]
+    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
+        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
+        let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
+        (
+            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+        )
+    }
+}
+
 /// The tendencies of one control-volume family, `rows = qt.len() / s` padded rows from padded
-/// index `r0`, faces `i0..i1` of each row: `(qt, mt)[k] = diff(i, [west, east, south, north])`
-/// with the (mass, momentum) fluxes `xflux(k)` through the face left of `k` and `yflux(k)`
-/// through the face below. Each flux is computed once, in a fused pass: the rows are split into
-/// bands of [`BAND`] rows (in parallel); the flux through a band's bottom edge (and the top of
-/// the last) is computed first into `edge_*`, then each band walks its rows upwards, carrying
-/// the west flux along the row in a register and the flux below the next row in that row's
-/// own tendency entries, which it overwrites once read. The floating-point operations per
-/// entry are those of storing every flux and differencing them, so the results are the same,
-/// bit for bit, on any number of threads.
+/// index `r0`, faces `i0..i1` of each row: `(qt, mt)[k] = fam.diff(i, [west, east, south,
+/// north])` with the (mass, momentum) fluxes `fam.xflux(k)` through the face left of `k` and
+/// `fam.yflux(k)` through the face below. Each flux is computed once, without a full-grid flux array: the
+/// rows are split into bands of [`BAND`] rows (in parallel); the fluxes through a band's bottom
+/// edge (and the top of the last) are computed first into `edge_*`, then each band walks its
+/// rows upwards: the x-face fluxes of the row into the band's `row_x`, the fluxes below the
+/// next row into that row's own tendency entries (overwritten once read). The floating-point
+/// operations per entry are those of storing every flux and differencing them, so the results
+/// are the same, bit for bit, on any number of threads.
 #[allow(clippy::too_many_arguments)]
 fn tendencies(
     qt: &mut [f64],
     mt: &mut [f64],
     edge_m: &mut [f64],
     edge_q: &mut [f64],
+    row_x: &mut [Vec<f64>],
     s: usize,
     r0: usize,
     (i0, i1): (isize, isize),
-    xflux: impl Fn(usize) -> (f64, f64) + Sync,
-    yflux: impl Fn(usize) -> (f64, f64) + Sync,
-    diff: impl Fn(isize, [(f64, f64); 4]) -> (f64, f64) + Sync,
+    fam: &impl Family,
 ) {
     let rows = qt.len() / s;
     if rows == 0 || i1 <= i0 {
@@ -190,40 +286,69 @@ fn tendencies(
     let (em, eq) = (&mut edge_m[..(nb + 1) * s], &mut edge_q[..(nb + 1) * s]);
     let (c0, c1) = ((i0 + efsi_core::G) as usize, (i1 + efsi_core::G) as usize);
     for_each_row2(em, eq, s, |b, fm, fq| {
-        let k0 = r0 + (b * BAND).min(rows) * s;
-        for c in c0..c1 {
-            (fm[c], fq[c]) = yflux(k0 + c);
-        }
+        y_row(fam, r0 + (b * BAND).min(rows) * s, c0..c1, fm, fq);
     });
     let (em, eq) = (&*em, &*eq);
-    for_each_row2(qt, mt, BAND * s, |b, qb, mb| {
+    for_each_row2_with(qt, mt, BAND * s, &mut row_x[..nb], |b, qb, mb, x| {
         let n = qb.len() / s;
+        let (xm, xq) = x.split_at_mut(s);
         qb[c0..c1].copy_from_slice(&eq[b * s + c0..b * s + c1]);
         mb[c0..c1].copy_from_slice(&em[b * s + c0..b * s + c1]);
         for jr in 0..n {
             let k0 = r0 + (b * BAND + jr) * s;
             let (qr, qn) = qb[jr * s..].split_at_mut(s);
             let (mr, mn) = mb[jr * s..].split_at_mut(s);
-            let top = (jr + 1 == n).then(|| (&em[(b + 1) * s..], &eq[(b + 1) * s..]));
-            let mut west = xflux(k0 + c0);
-            for c in c0..c1 {
-                let k = k0 + c;
-                let east = xflux(k + 1);
-                let north = match top {
-                    Some((tm, tq)) => (tm[c], tq[c]),
-                    None => {
-                        let f = yflux(k + s);
-                        (mn[c], qn[c]) = f;
-                        f
-                    }
-                };
-                let south = (mr[c], qr[c]);
-                let i = c as isize - efsi_core::G;
-                (qr[c], mr[c]) = diff(i, [west, east, south, north]);
-                west = east;
-            }
+            let (nm, nq): (&[f64], &[f64]) = if jr + 1 == n {
+                (&em[(b + 1) * s..], &eq[(b + 1) * s..])
+            } else {
+                y_row(fam, k0 + s, c0..c1, mn, qn);
+                (mn, qn)
+            };
+            x_row(fam, k0, c0..c1 + 1, xm, xq);
+            diff_row(fam, c0..c1, [xm, xq, nm, nq], qr, mr);
         }
     });
+}
+
+// The row loops are functions of their own, not inlined: their arrays are arguments, which
+// the compiler knows do not overlap, so the loops vectorise.
+
+/// `(fm, fq)[c] = fam.yflux(k0 + c)` for `c` in `cs`.
+#[inline(never)]
+fn y_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
+    for c in cs {
+        (fm[c], fq[c]) = fam.yflux(k0 + c);
+    }
+}
+
+/// `(fm, fq)[c] = fam.xflux(k0 + c)` for `c` in `cs`.
+#[inline(never)]
+fn x_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
+    for c in cs {
+        (fm[c], fq[c]) = fam.xflux(k0 + c);
+    }
+}
+
+/// The tendencies of a row from its x-face fluxes `xm, xq`, the fluxes below it in `(mr, qr)`
+/// (overwritten) and above it `nm, nq`.
+#[inline(never)]
+fn diff_row(
+    fam: &impl Family,
+    cs: std::ops::Range<usize>,
+    [xm, xq, nm, nq]: [&[f64]; 4],
+    qr: &mut [f64],
+    mr: &mut [f64],
+) {
+    for c in cs {
+        let i = c as isize - efsi_core::G;
+        let f = [
+            (xm[c], xq[c]),
+            (xm[c + 1], xq[c + 1]),
+            (mr[c], qr[c]),
+            (nm[c], nq[c]),
+        ];
+        (qr[c], mr[c]) = fam.diff(i, f);
+    }
 }
 
 impl AdvectionStage {
@@ -231,45 +356,32 @@ impl AdvectionStage {
     /// (ghosts filled), on the unknown faces (see [`tendencies`]).
     fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
         let g = ctx.grid;
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
         let s = u.stride();
-        let (ud, vd, mud, mvd) = (u.data(), v.data(), mu.data(), mv.data());
+        let flow = |m| Flow {
+            u: u.data(),
+            v: v.data(),
+            m,
+            s,
+            metric: &g.metric,
+            dx: g.dx,
+            dy: g.dy,
+        };
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
-        let (nx, ny) = (g.nx as isize, g.ny as isize);
-        let at = |d: &[f64], k: usize, o: usize| [d[k - 2 * o], d[k - o], d[k], d[k + o]];
         let row0 = |j: isize| u.idx(-efsi_core::G, j);
-        // u control volumes, centred on x-faces: east/west faces at cell centres (the flux
-        // through the centre left of face k), north/south faces at corners (v averaged over
-        // the two columns; the flux below face k).
         let r0 = row0(0);
-        let n = ny as usize * s;
+        let n = g.ny * s;
         tendencies(
             &mut self.qu.data_mut()[r0..r0 + n],
             &mut self.mu_.data_mut()[r0..r0 + n],
             &mut self.edge_m,
             &mut self.edge_q,
+            &mut self.row_x,
             s,
             r0,
             (ux.lo, ux.hi),
-            |k| flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1)),
-            |k| flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s)),
-            |i, [w, e, so, no]| {
-                let r = m.rx(i);
-                if r == 0.0 {
-                    return (0.0, 0.0);
-                }
-                let (re, rw) = (m.rc(i), m.rc(i - 1));
-                (
-                    -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
-                    -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
-                )
-            },
+            &UFamily(flow(mu.data())),
         );
-        // v control volumes, centred on y-faces: east/west faces at corners (u averaged over
-        // the two rows; the flux left of face k), north/south faces at cell centres (the flux
-        // below face k).
         let rows = (vy.hi - vy.lo).max(0) as usize;
         let r0 = row0(vy.lo);
         let n = rows * s;
@@ -278,18 +390,11 @@ impl AdvectionStage {
             &mut self.mv_.data_mut()[r0..r0 + n],
             &mut self.edge_m,
             &mut self.edge_q,
+            &mut self.row_x,
             s,
             r0,
-            (0, nx),
-            |k| flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1)),
-            |k| flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s)),
-            |i, [w, e, so, no]| {
-                let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
-                (
-                    -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
-                    -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
-                )
-            },
+            (0, g.nx as isize),
+            &VFamily(flow(mv.data())),
         );
     }
 }
