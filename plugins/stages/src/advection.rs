@@ -33,8 +33,11 @@
 //! viscous and pressure steps, so a steady state carries an error ∝ Δt — the Re = 1000
 //! cavity's Ghia deviation is 0.0133 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
 //!
-//! **Parallelism.** Tendencies and updates run over rows in parallel (rayon); each row writes
-//! its own faces, so results are bit-identical on any number of threads.
+//! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
+//! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
+//! run over rows in parallel (rayon); each band or row writes its own faces, so results are
+//! bit-identical on any number of threads. The stage keeps 8 full-grid arrays: the tendencies
+//! (4), the start-of-step velocity (2) and the current stage's face masses (2).
 
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
