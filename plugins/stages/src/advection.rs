@@ -33,15 +33,18 @@
 //! viscous and pressure steps, so a steady state carries an error ∝ Δt — the Re = 1000
 //! cavity's Ghia deviation is 0.0133 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
 //!
-//! **Parallelism.** Tendencies and updates run over rows in parallel (rayon); each row writes
-//! its own faces, so results are bit-identical on any number of threads.
+//! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
+//! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
+//! run over rows in parallel (rayon); each band or row writes its own faces, so results are
+//! bit-identical on any number of threads. The stage keeps 8 full-grid arrays: the tendencies
+//! (4), the start-of-step velocity (2) and the current stage's face masses (2).
 
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
-use efsi_linalg::par::{copy, for_each_row, for_each_row2, max_over_rows};
+use efsi_linalg::par::{copy, for_each_row, for_each_row2, for_each_row2_with, max_over_rows};
 
 /// The advection stage plugin.
 pub struct Advection;
@@ -69,6 +72,10 @@ impl StagePlugin for Advection {
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
+        // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
+        // an outflow side have ny + 1 rows), plus the top edge.
+        let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
+        let bands = (grid.ny + 1).div_ceil(BAND);
         Ok(Box::new(AdvectionStage {
             qu: Field::zeros(grid),
             qv: Field::zeros(grid),
@@ -76,17 +83,17 @@ impl StagePlugin for Advection {
             mv_: Field::zeros(grid),
             u0: Field::zeros(grid),
             v0: Field::zeros(grid),
-            m0u: Field::zeros(grid),
-            m0v: Field::zeros(grid),
             m1u: Field::zeros(grid),
             m1v: Field::zeros(grid),
-            fxm: Field::zeros(grid),
-            fxq: Field::zeros(grid),
-            fym: Field::zeros(grid),
-            fyq: Field::zeros(grid),
+            edge_m: vec![0.0; (bands + 1) * stride],
+            edge_q: vec![0.0; (bands + 1) * stride],
+            row_x: (0..bands).map(|_| vec![0.0; 2 * stride]).collect(),
         }))
     }
 }
+
+/// Rows of tendencies per band of the fused flux-and-difference pass (bands run in parallel).
+const BAND: usize = 16;
 
 struct AdvectionStage {
     /// Momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces.
@@ -95,18 +102,18 @@ struct AdvectionStage {
     /// Mass tendencies `−∇·(m a)`.
     mu_: Field,
     mv_: Field,
-    /// Start-of-step velocity and face masses, and the first stage's masses.
+    /// Start-of-step velocity (the start-of-step face masses are recomputed from the density,
+    /// which advection does not change), and the current stage's face masses.
     u0: Field,
     v0: Field,
-    m0u: Field,
-    m0v: Field,
     m1u: Field,
     m1v: Field,
-    /// Mass and momentum fluxes through the control volumes' x- and y-faces (scratch).
-    fxm: Field,
-    fxq: Field,
-    fym: Field,
-    fyq: Field,
+    /// Mass and momentum fluxes through the bottom edge of each band of rows, and the top of
+    /// the last (scratch, one padded row per edge).
+    edge_m: Vec<f64>,
+    edge_q: Vec<f64>,
+    /// Each band's mass and momentum fluxes through the x-faces of its current row (scratch).
+    row_x: Vec<Vec<f64>>,
 }
 
 /// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
@@ -159,133 +166,239 @@ fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
     (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
 }
 
+/// A family of control volumes (centred on the u- or the v-faces): its face fluxes and their
+/// balance (methods inlined into [`tendencies`]' loops).
+trait Family: Sync {
+    /// (Mass, momentum) flux through the x-face of the control volume left of face `k`.
+    fn xflux(&self, k: usize) -> (f64, f64);
+    /// (Mass, momentum) flux through the y-face of the control volume below face `k`.
+    fn yflux(&self, k: usize) -> (f64, f64);
+    /// (Momentum, mass) tendency of the control volume of column `i` from its west, east,
+    /// south and north fluxes.
+    fn diff(&self, i: isize, f: [(f64, f64); 4]) -> (f64, f64);
+}
+
+/// What both families read: the velocity, the face masses of the family, the metric.
+struct Flow<'a> {
+    u: &'a [f64],
+    v: &'a [f64],
+    m: &'a [f64],
+    s: usize,
+    metric: &'a efsi_core::grid::Metric,
+    dx: f64,
+    dy: f64,
+}
+
+#[inline(always)]
+fn at(d: &[f64], k: usize, o: usize) -> [f64; 4] {
+    [d[k - 2 * o], d[k - o], d[k], d[k + o]]
+}
+
+/// u control volumes, centred on x-faces: east/west faces at cell centres (the flux through
+/// the centre left of face k), north/south faces at corners (v averaged over the two columns;
+/// the flux below face k).
+struct UFamily<'a>(Flow<'a>);
+
+impl Family for UFamily<'_> {
+    #[inline(always)]
+    fn xflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(0.5 * (f.u[k - 1] + f.u[k]), at(f.m, k, 1), at(f.u, k, 1))
+    }
+    #[inline(always)]
+    fn yflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(
+            0.5 * (f.v[k - 1] + f.v[k]),
+            at(f.m, k, f.s),
+            at(f.u, k, f.s),
+        )
+    }
+    #[inline(always)]
+    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
+        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
+        let r = m.rx(i);
+        if r == 0.0 {
+            return (0.0, 0.0);
+        }
+        let (re, rw) = (m.rc(i), m.rc(i - 1));
+        (
+            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+        )
+    }
+}
+
+/// v control volumes, centred on y-faces: east/west faces at corners (u averaged over the two
+/// rows; the flux left of face k), north/south faces at cell centres (the flux below face k).
+struct VFamily<'a>(Flow<'a>);
+
+impl Family for VFamily<'_> {
+    #[inline(always)]
+    fn xflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(0.5 * (f.u[k - f.s] + f.u[k]), at(f.m, k, 1), at(f.v, k, 1))
+    }
+    #[inline(always)]
+    fn yflux(&self, k: usize) -> (f64, f64) {
+        let f = &self.0;
+        flux(
+            0.5 * (f.v[k - f.s] + f.v[k]),
+            at(f.m, k, f.s),
+            at(f.v, k, f.s),
+        )
+    }
+    #[inline(always)]
+    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
+        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
+        let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
+        (
+            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
+            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
+        )
+    }
+}
+
+/// The tendencies of one control-volume family, `rows = qt.len() / s` padded rows from padded
+/// index `r0`, faces `i0..i1` of each row: `(qt, mt)[k] = fam.diff(i, [west, east, south,
+/// north])` with the (mass, momentum) fluxes `fam.xflux(k)` through the face left of `k` and
+/// `fam.yflux(k)` through the face below. Each flux is computed once, without a full-grid flux array: the
+/// rows are split into bands of [`BAND`] rows (in parallel); the fluxes through a band's bottom
+/// edge (and the top of the last) are computed first into `edge_*`, then each band walks its
+/// rows upwards: the x-face fluxes of the row into the band's `row_x`, the fluxes below the
+/// next row into that row's own tendency entries (overwritten once read). The floating-point
+/// operations per entry are those of storing every flux and differencing them, so the results
+/// are the same, bit for bit, on any number of threads.
+#[allow(clippy::too_many_arguments)]
+fn tendencies(
+    qt: &mut [f64],
+    mt: &mut [f64],
+    edge_m: &mut [f64],
+    edge_q: &mut [f64],
+    row_x: &mut [Vec<f64>],
+    s: usize,
+    r0: usize,
+    (i0, i1): (isize, isize),
+    fam: &impl Family,
+) {
+    let rows = qt.len() / s;
+    if rows == 0 || i1 <= i0 {
+        return;
+    }
+    let nb = rows.div_ceil(BAND);
+    let (em, eq) = (&mut edge_m[..(nb + 1) * s], &mut edge_q[..(nb + 1) * s]);
+    let (c0, c1) = ((i0 + efsi_core::G) as usize, (i1 + efsi_core::G) as usize);
+    for_each_row2(em, eq, s, |b, fm, fq| {
+        y_row(fam, r0 + (b * BAND).min(rows) * s, c0..c1, fm, fq);
+    });
+    let (em, eq) = (&*em, &*eq);
+    for_each_row2_with(qt, mt, BAND * s, &mut row_x[..nb], |b, qb, mb, x| {
+        let n = qb.len() / s;
+        let (xm, xq) = x.split_at_mut(s);
+        qb[c0..c1].copy_from_slice(&eq[b * s + c0..b * s + c1]);
+        mb[c0..c1].copy_from_slice(&em[b * s + c0..b * s + c1]);
+        for jr in 0..n {
+            let k0 = r0 + (b * BAND + jr) * s;
+            let (qr, qn) = qb[jr * s..].split_at_mut(s);
+            let (mr, mn) = mb[jr * s..].split_at_mut(s);
+            let (nm, nq): (&[f64], &[f64]) = if jr + 1 == n {
+                (&em[(b + 1) * s..], &eq[(b + 1) * s..])
+            } else {
+                y_row(fam, k0 + s, c0..c1, mn, qn);
+                (mn, qn)
+            };
+            x_row(fam, k0, c0..c1 + 1, xm, xq);
+            diff_row(fam, c0..c1, [xm, xq, nm, nq], qr, mr);
+        }
+    });
+}
+
+// The row loops are functions of their own, not inlined: their arrays are arguments, which
+// the compiler knows do not overlap, so the loops vectorise.
+
+/// `(fm, fq)[c] = fam.yflux(k0 + c)` for `c` in `cs`.
+#[inline(never)]
+fn y_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
+    for c in cs {
+        (fm[c], fq[c]) = fam.yflux(k0 + c);
+    }
+}
+
+/// `(fm, fq)[c] = fam.xflux(k0 + c)` for `c` in `cs`.
+#[inline(never)]
+fn x_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
+    for c in cs {
+        (fm[c], fq[c]) = fam.xflux(k0 + c);
+    }
+}
+
+/// The tendencies of a row from its x-face fluxes `xm, xq`, the fluxes below it in `(mr, qr)`
+/// (overwritten) and above it `nm, nq`.
+#[inline(never)]
+fn diff_row(
+    fam: &impl Family,
+    cs: std::ops::Range<usize>,
+    [xm, xq, nm, nq]: [&[f64]; 4],
+    qr: &mut [f64],
+    mr: &mut [f64],
+) {
+    for c in cs {
+        let i = c as isize - efsi_core::G;
+        let f = [
+            (xm[c], xq[c]),
+            (xm[c + 1], xq[c + 1]),
+            (mr[c], qr[c]),
+            (nm[c], nq[c]),
+        ];
+        (qr[c], mr[c]) = fam.diff(i, f);
+    }
+}
+
 impl AdvectionStage {
     /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
-    /// (ghosts filled), on the unknown faces. Each face flux of the control volumes is computed
-    /// once (into `fx*`, `fy*`, rows in parallel) and then differenced (rows in parallel): each
-    /// loop writes its own entries, so the result is bit-identical on any thread count.
+    /// (ghosts filled), on the unknown faces (see [`tendencies`]).
     fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
         let g = ctx.grid;
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
         let s = u.stride();
-        let (ud, vd, mud, mvd) = (u.data(), v.data(), mu.data(), mv.data());
+        let flow = |m| Flow {
+            u: u.data(),
+            v: v.data(),
+            m,
+            s,
+            metric: &g.metric,
+            dx: g.dx,
+            dy: g.dy,
+        };
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
-        let (nx, ny) = (g.nx as isize, g.ny as isize);
-        let at = |d: &[f64], k: usize, o: usize| [d[k - 2 * o], d[k - o], d[k], d[k + o]];
         let row0 = |j: isize| u.idx(-efsi_core::G, j);
-        // u control volumes, centred on x-faces: east/west faces at cell centres (the flux
-        // through the centre left of face k is stored at k), north/south faces at corners
-        // (v averaged over the two columns; the flux below face k stored at k).
         let r0 = row0(0);
-        let n = ny as usize * s;
-        for_each_row2(
-            &mut self.fxm.data_mut()[r0..r0 + n],
-            &mut self.fxq.data_mut()[r0..r0 + n],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in ux.lo..=ux.hi {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (ud[k - 1] + ud[k]), at(mud, k, 1), at(ud, k, 1));
-                }
-            },
-        );
-        let n1 = (ny + 1) as usize * s;
-        for_each_row2(
-            &mut self.fym.data_mut()[r0..r0 + n1],
-            &mut self.fyq.data_mut()[r0..r0 + n1],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in ux.lo..ux.hi {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (vd[k - 1] + vd[k]), at(mud, k, s), at(ud, k, s));
-                }
-            },
-        );
-        let (fxm, fxq, fym, fyq) = (
-            self.fxm.data(),
-            self.fxq.data(),
-            self.fym.data(),
-            self.fyq.data(),
-        );
-        let (qu, muu) = (
+        let n = g.ny * s;
+        tendencies(
             &mut self.qu.data_mut()[r0..r0 + n],
             &mut self.mu_.data_mut()[r0..r0 + n],
+            &mut self.edge_m,
+            &mut self.edge_q,
+            &mut self.row_x,
+            s,
+            r0,
+            (ux.lo, ux.hi),
+            &UFamily(flow(mu.data())),
         );
-        for_each_row2(qu, muu, s, |jr, qu, muu| {
-            let k0 = r0 + jr * s;
-            for i in ux.lo..ux.hi {
-                let c = (i + efsi_core::G) as usize;
-                let k = k0 + c;
-                let r = m.rx(i);
-                if r == 0.0 {
-                    qu[c] = 0.0;
-                    muu[c] = 0.0;
-                    continue;
-                }
-                let (re, rw) = (m.rc(i), m.rc(i - 1));
-                qu[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
-                muu[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
-            }
-        });
-        // v control volumes, centred on y-faces: east/west faces at corners (u averaged over
-        // the two rows; the flux left of face k stored at k), north/south faces at cell
-        // centres (the flux below face k stored at k).
         let rows = (vy.hi - vy.lo).max(0) as usize;
         let r0 = row0(vy.lo);
         let n = rows * s;
-        for_each_row2(
-            &mut self.fxm.data_mut()[r0..r0 + n],
-            &mut self.fxq.data_mut()[r0..r0 + n],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in 0..=nx {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (ud[k - s] + ud[k]), at(mvd, k, 1), at(vd, k, 1));
-                }
-            },
-        );
-        let n1 = (rows + 1) * s;
-        for_each_row2(
-            &mut self.fym.data_mut()[r0..r0 + n1],
-            &mut self.fyq.data_mut()[r0..r0 + n1],
-            s,
-            |jr, fm, fq| {
-                let k0 = r0 + jr * s;
-                for i in 0..nx {
-                    let c = (i + efsi_core::G) as usize;
-                    let k = k0 + c;
-                    (fm[c], fq[c]) = flux(0.5 * (vd[k - s] + vd[k]), at(mvd, k, s), at(vd, k, s));
-                }
-            },
-        );
-        let (fxm, fxq, fym, fyq) = (
-            self.fxm.data(),
-            self.fxq.data(),
-            self.fym.data(),
-            self.fyq.data(),
-        );
-        let (qv, mvv) = (
+        tendencies(
             &mut self.qv.data_mut()[r0..r0 + n],
             &mut self.mv_.data_mut()[r0..r0 + n],
+            &mut self.edge_m,
+            &mut self.edge_q,
+            &mut self.row_x,
+            s,
+            r0,
+            (0, g.nx as isize),
+            &VFamily(flow(mv.data())),
         );
-        for_each_row2(qv, mvv, s, |jr, qv, mvv| {
-            let k0 = r0 + jr * s;
-            for i in 0..nx {
-                let c = (i + efsi_core::G) as usize;
-                let k = k0 + c;
-                let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
-                qv[c] = -((re * fxq[k + 1] - rw * fxq[k]) / (dx * r) + (fyq[k + s] - fyq[k]) / dy);
-                mvv[c] = -((re * fxm[k + 1] - rw * fxm[k]) / (dx * r) + (fym[k + s] - fym[k]) / dy);
-            }
-        });
     }
 }
 
@@ -323,14 +436,13 @@ impl Stage for AdvectionStage {
         //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
         let dt = ctx.dt;
-        face_masses(&state.rho, &mut self.m0u, &mut self.m0v);
+        face_masses(&state.rho, &mut self.m1u, &mut self.m1v);
         copy(self.u0.data_mut(), state.u.data());
         copy(self.v0.data_mut(), state.v.data());
-        copy(self.m1u.data_mut(), self.m0u.data());
-        copy(self.m1v.data_mut(), self.m0v.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);
+        let s = state.u.stride();
         for stage in 0..2 {
             let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
             let (m1u, m1v) = (std::mem::take(&mut self.m1u), std::mem::take(&mut self.m1v));
@@ -341,7 +453,7 @@ impl Stage for AdvectionStage {
                     &mut state.u,
                     &mut self.m1u,
                     &self.u0,
-                    &self.m0u,
+                    1,
                     &self.qu,
                     &self.mu_,
                     ux.lo,
@@ -353,7 +465,7 @@ impl Stage for AdvectionStage {
                     &mut state.v,
                     &mut self.m1v,
                     &self.v0,
-                    &self.m0v,
+                    s,
                     &self.qv,
                     &self.mv_,
                     0,
@@ -362,11 +474,11 @@ impl Stage for AdvectionStage {
                     vy.hi,
                 ),
             ];
-            for (x, m1, x0, m0, q, dm, i0, i1, j0, j1) in faces {
-                let s = x.stride();
+            let rho = state.rho.data();
+            for (x, m1, x0, o, q, dm, i0, i1, j0, j1) in faces {
                 let r0 = x.idx(-efsi_core::G, j0);
                 let n = (j1 - j0).max(0) as usize * s;
-                let (dmd, qd, m0d, x0d) = (dm.data(), q.data(), m0.data(), x0.data());
+                let (dmd, qd, x0d) = (dm.data(), q.data(), x0.data());
                 let xd = &mut x.data_mut()[r0..r0 + n];
                 let m1d = &mut m1.data_mut()[r0..r0 + n];
                 for_each_row2(xd, m1d, s, |jr, xr, mr| {
@@ -379,7 +491,9 @@ impl Stage for AdvectionStage {
                         let (m_new, q_new) = if stage == 0 {
                             (m_e, q_e)
                         } else {
-                            let (a, b) = (m0d[k], x0d[k]);
+                            // The start-of-step face mass, as `face_masses` gave it.
+                            let a = efsi_core::ops::face_density(rho[k - o], rho[k]);
+                            let b = x0d[k];
                             (0.5 * (a + m_e), 0.5 * (a * b + q_e))
                         };
                         mr[c] = m_new;

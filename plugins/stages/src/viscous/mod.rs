@@ -126,7 +126,10 @@ impl StagePlugin for Viscous {
                 prev_dt: [0.0; 2],
                 history: 0,
             },
-            blocks: ViscousBlocks::new(grid, bc),
+            // Only a preconditioner that may use them needs the hierarchies (≈ 27 cell-sized
+            // arrays, touched by their set-up).
+            blocks: (o.preconditioner != ViscousPreconditioner::Jacobi)
+                .then(|| ViscousBlocks::new(grid, bc)),
         }))
     }
 }
@@ -141,8 +144,9 @@ struct ViscousStage {
     rhs: Vec<f64>,
     delta: Vec<f64>,
     diag: Vec<f64>,
-    /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept.
-    blocks: ViscousBlocks,
+    /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept (`None` with
+    /// the Jacobi preconditioner, which never uses it).
+    blocks: Option<ViscousBlocks>,
     warm: WarmStart,
 }
 
@@ -371,11 +375,12 @@ impl Stage for ViscousStage {
                     ratio > AUTO_MULTIGRID_RATIO
                 }
             };
-            let st = if use_mg {
-                self.blocks.setup(&op.k, &self.diag);
+            let blocks = self.blocks.as_mut().filter(|_| use_mg);
+            let st = if let Some(blocks) = blocks {
+                blocks.setup(&op.k, &self.diag);
                 self.pcg.solve_norm(
                     op,
-                    &self.blocks,
+                    &*blocks,
                     rhs,
                     &mut self.delta,
                     tol,
