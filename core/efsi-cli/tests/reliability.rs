@@ -318,6 +318,22 @@ fn resume_refuses_a_changed_scene_or_law_and_accepts_them_restored() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("cannot resume"), "{err}");
     assert!(err.contains("scene: fluid.viscosity: 1.0 → 2.0"), "{err}");
+    // A stage's option the file did not set is compared setting by setting with its default.
+    std::fs::write(
+        &scene,
+        text.replace(
+            "fluid: (",
+            "numerics: (viscous: (max_iterations: 77)),\n    fluid: (",
+        ),
+    )
+    .unwrap();
+    let o = efsi(&["resume", out_s, "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("scene: numerics.viscous.max_iterations: 10000 → 77"),
+        "{err}"
+    );
 
     std::fs::write(&scene, &text).unwrap();
     std::fs::remove_file(&law).unwrap();

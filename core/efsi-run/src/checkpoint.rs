@@ -175,8 +175,17 @@ pub fn scene_differences(old: &Scene, new: &Scene) -> Vec<String> {
             _ => out.push(format!("{path}: {a} → {b}")),
         }
     }
-    let a = serde_json::to_value(old).unwrap_or_default();
-    let b = serde_json::to_value(new).unwrap_or_default();
+    let mut a = serde_json::to_value(old).unwrap_or_default();
+    let mut b = serde_json::to_value(new).unwrap_or_default();
+    // A stage's numerics section is RON text in the scene; where both scenes hold it checked
+    // (its settings in force), compare it setting by setting.
+    let old_sections: std::collections::BTreeMap<_, _> = old.numerics.sections_json().collect();
+    for (name, nb) in new.numerics.sections_json() {
+        if let Some(na) = old_sections.get(name) {
+            a["numerics"][name] = (*na).clone();
+            b["numerics"][name] = nb.clone();
+        }
+    }
     let mut out = Vec::new();
     walk("", &a, &b, &mut out);
     out
@@ -641,8 +650,17 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
 /// Check that a checkpoint may resume with `scene` and the law it names now: the scene must
 /// equal the recorded one except for a later `time.end`, and the law library must be the
 /// same. The error lists what differs.
-pub fn check_resumable(file: &CheckpointFile, scene: &Scene, what: &str) -> Result<(), EfsiError> {
+///
+/// `scene`'s stages' sections are compared with the recorded ones setting by setting once both
+/// are checked by `plugins` (the recorded scene here; `scene` by its caller).
+pub fn check_resumable(
+    file: &CheckpointFile,
+    scene: &Scene,
+    what: &str,
+    plugins: &[&dyn efsi_core::StagePlugin],
+) -> Result<(), EfsiError> {
     let mut recorded = file.scene()?;
+    recorded.check_options(&file.scene_path, plugins)?;
     let mut diffs = Vec::new();
     // `time.end` alone may change, to a time after the checkpoint's: a stopped or finished
     // run continues to a later end (no step before the checkpoint depends on it).
