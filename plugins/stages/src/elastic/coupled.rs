@@ -110,14 +110,13 @@ impl Coupling {
         grid: &efsi_core::Grid,
         bc: &efsi_core::BoundarySet,
         faces: usize,
-        scene: &efsi_core::Scene,
+        el: &super::ElasticOptions,
+        proj_tol: f64,
     ) -> Self {
         let n = grid.cells();
-        let el: super::ElasticOptions = scene.numerics.get().unwrap_or_default();
-        let proj: crate::projection::ProjectionOptions = scene.numerics.get().unwrap_or_default();
         Coupling {
             rel_tol: el.coupling_tolerance,
-            proj_tol: proj.tolerance,
+            proj_tol,
             max_iter: el.coupling_iterations,
             poisson: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
             mg: Multigrid::new(2),

@@ -12,7 +12,7 @@ use efsi_laws_host::ConstitutiveLaw;
 pub const MIN_CELLS_ACROSS: f64 = 5.0;
 
 /// The largest Δt the elastic-wave Courant limit allows
-/// ([`efsi_core::scene::ElasticParams::wave_courant`]): `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
+/// ([`super::ElasticOptions::wave_courant`]): `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
 /// the largest diagonal entry of the law's tangent at `B̃ = I` (the shear modulus for the
 /// shipped laws). A `time.fixed_dt` above it is refused here, before the run starts, naming
 /// the limit and what to change; so is a solid narrower than [`MIN_CELLS_ACROSS`].
@@ -56,11 +56,7 @@ pub(super) fn wave_limit(
             ));
         }
     }
-    let s = scene
-        .numerics
-        .get::<super::ElasticOptions>()
-        .unwrap_or_default()
-        .wave_courant;
+    let s = crate::options::<super::ElasticOptions>(scene)?.wave_courant;
     let h = grid.dx.min(grid.dy);
     let c = (g0 / solid.density).sqrt();
     let dt = s * h / c;

@@ -384,7 +384,12 @@ impl StagePlugin for Elastic {
                 xv: Field::zeros(grid),
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
             },
-            coupling: coupled(scene).then(|| coupled::Coupling::new(grid, bc, n, scene)),
+            coupling: if coupled(scene) {
+                let proj: crate::projection::ProjectionOptions = crate::options(scene)?;
+                Some(coupled::Coupling::new(grid, bc, n, &o, proj.tolerance))
+            } else {
+                None
+            },
         }))
     }
 }
@@ -425,6 +430,7 @@ impl StagePlugin for DeformationUpdate {
     ) -> Result<Box<dyn Stage>, String> {
         let (mu_f, mu_s) = viscosities(scene);
         let law = shared_law(scene, shared)?;
+        let o: ElasticOptions = crate::options(scene)?;
         let wave_dt = wave_limit(scene, grid, law.as_ref())?;
         // The coupled step has no elastic-wave cap (see `coupled`).
         let wave_dt = if coupled(scene) {
@@ -436,7 +442,7 @@ impl StagePlugin for DeformationUpdate {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),
             wave_dt,
-            stretch_theta: crate::options::<ElasticOptions>(scene)?.stretch_theta(),
+            stretch_theta: o.stretch_theta(),
             first: (!coupled(scene)).then(|| std::array::from_fn(|_| Field::zeros(grid))),
         }))
     }
