@@ -43,72 +43,56 @@
 //! Each iteration costs one Poisson solve (multigrid-preconditioned CG) and one solve with `A`
 //! (BiCGSTAB, the elastic step's preconditioner).
 
+use super::ElasticPreconditioner;
 use super::err;
-use super::solve::ElasticStage;
-use crate::projection;
+use super::solve::{ElasticStage, OperatorCtx};
 use crate::viscous_operator::CompactFaces;
+use crate::block_multigrid::ViscousBlocks;
+use crate::projection;
 use efsi_core::ops;
-use efsi_core::{Field, StageError, State, StepContext};
+use efsi_core::bc::UnknownFaces;
+use efsi_core::{BoundarySet, Field, Grid, StageError, State, StepContext};
 use efsi_linalg::par::for_each_row;
-use efsi_linalg::{Multigrid, Norm, Pcg, Stencil5};
+use efsi_linalg::{
+    Accept, Fgmres, FlexiblePreconditioner, LinearOperator, Multigrid, Preconditioner, SolveStats,
+    Stencil5,
+};
 
 /// Krylov vectors kept before FGMRES restarts.
 const RESTART: usize = 30;
 
-/// The coupled step's work space: the projection's Poisson system and vectors.
+/// The coupled step's work space: the saddle-point system's vectors, the projection's Poisson
+/// system and its multigrid, FGMRES.
 pub(super) struct Coupling {
-    /// Stop when the divergence left is this fraction of the elastic step's (scene
+    /// Stop when the divergence left is this fraction of the step's divergence scale (scene
     /// `numerics.elastic.coupling_tolerance`), or the projection's tolerance.
-    pub(super) rel_tol: f64,
-    pub(super) proj_tol: f64,
-    pub(super) max_iter: usize,
+    rel_tol: f64,
+    proj_tol: f64,
+    max_iter: usize,
     poisson: Stencil5,
     mg: Multigrid,
-    pcg: Pcg,
-    /// Per cell: the Poisson right-hand side, its solution, the residual weights `Δt²/dV`.
-    b: Vec<f64>,
-    s: Vec<f64>,
-    weight: Vec<f64>,
-    /// A pressure as a cell field with ghosts (for its gradient), and the pressure found.
-    q: Field,
-    p: Field,
-    /// FGMRES: the Arnoldi basis (flux residuals), the preconditioned vectors (pressures),
-    /// the velocity increments `Δ(z_i)`, the Hessenberg matrix, Givens rotations and the
-    /// residual's projections.
-    basis: Vec<Vec<f64>>,
-    z: Vec<Vec<f64>>,
-    dz: Vec<Vec<f64>>,
-    h: Vec<Vec<f64>>,
-    cs: Vec<f64>,
-    sn: Vec<f64>,
-    g: Vec<f64>,
-    /// Per unknown face: the right-hand side `−Δt G z`; per cell: the flux change `F(Δ)`.
+    fgmres: Fgmres,
+    /// `[b; c]` and `[δ; p]`: per unknown face, then per cell.
     rhs: Vec<f64>,
-    w: Vec<f64>,
-    /// The step's velocity increment `Δ(p)` (per unknown face), the residual at a restart (per
-    /// cell) and the restart's Krylov coefficients: allocated once.
-    total: Vec<f64>,
-    y0: Vec<f64>,
-    coef: Vec<f64>,
-    /// The Δt of `weight` (it changes only with Δt).
+    x: Vec<f64>,
+    /// Per cell: `Δt/dV`, and the Poisson right-hand side and solution of the preconditioner.
+    dt_vol: Vec<f64>,
+    pb: Vec<f64>,
+    ps: Vec<f64>,
+    /// Per unknown face: the preconditioner's velocity right-hand side.
+    ru: Vec<f64>,
+    /// A pressure as a cell field with ghosts (for its gradient), one for the operator and one
+    /// for the preconditioner.
+    q: Field,
+    qp: Field,
+    /// The Δt of `dt_vol` (it changes only with Δt).
     weight_dt: f64,
-}
-
-/// What one coupled step did.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct CouplingStats {
-    /// Uzawa iterations, and the inner solves' iterations summed.
-    pub(super) iterations: usize,
-    pub(super) inner: usize,
-    /// `max |∇·V|·Δt` after the elastic step, and after the coupling.
-    pub(super) before: f64,
-    pub(super) after: f64,
 }
 
 impl Coupling {
     pub(super) fn new(
-        grid: &efsi_core::Grid,
-        bc: &efsi_core::BoundarySet,
+        grid: &Grid,
+        bc: &BoundarySet,
         faces: usize,
         el: &super::ElasticOptions,
         proj_tol: f64,
@@ -120,323 +104,382 @@ impl Coupling {
             max_iter: el.coupling_iterations,
             poisson: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
             mg: Multigrid::new(2),
-            pcg: Pcg::new(n),
-            b: vec![0.0; n],
-            s: vec![0.0; n],
-            weight: vec![0.0; n],
+            fgmres: Fgmres::new(faces + n, RESTART),
+            rhs: vec![0.0; faces + n],
+            x: vec![0.0; faces + n],
+            dt_vol: vec![0.0; n],
+            pb: vec![0.0; n],
+            ps: vec![0.0; n],
+            ru: vec![0.0; faces],
             q: Field::zeros(grid),
-            p: Field::zeros(grid),
-            basis: vec![vec![0.0; n]; RESTART + 1],
-            z: vec![vec![0.0; n]; RESTART],
-            dz: vec![vec![0.0; faces]; RESTART],
-            h: vec![vec![0.0; RESTART]; RESTART + 1],
-            cs: vec![0.0; RESTART],
-            sn: vec![0.0; RESTART],
-            g: vec![0.0; RESTART + 1],
-            rhs: vec![0.0; faces],
-            w: vec![0.0; n],
-            total: vec![0.0; faces],
-            y0: vec![0.0; n],
-            coef: vec![0.0; RESTART],
+            qp: Field::zeros(grid),
             weight_dt: f64::NAN,
         }
     }
 }
 
+/// `y += Δt Ĝ q` on the unknown faces (`Ĝ q` = face area × the jump of `q` across the face, so
+/// that `F = −Ĝᵀ` for the net outflux `F`), `q` a cell field whose ghosts are filled.
+fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, dt: f64, y: &mut [f64]) {
+    let (m, dx, dy) = (&g.metric, g.dx, g.dy);
+    let (yu, yv) = y.split_at_mut(faces.nu());
+    let lo = faces.ux.lo;
+    let nur = (faces.ux.hi - lo).max(0) as usize;
+    if nur > 0 {
+        for_each_row(yu, nur, |j, row| {
+            let j = j as isize;
+            for (t, y) in row.iter_mut().enumerate() {
+                let i = lo + t as isize;
+                *y += dt * m.rx(i) * dy * (q[(i, j)] - q[(i - 1, j)]);
+            }
+        });
+    }
+    let vlo = faces.vy.lo;
+    for_each_row(yv, g.nx, |r, row| {
+        let j = vlo + r as isize;
+        for (i, y) in row.iter_mut().enumerate() {
+            let i = i as isize;
+            *y += dt * m.rc(i) * dx * (q[(i, j)] - q[(i, j - 1)]);
+        }
+    });
+}
+
+/// Copy a per-cell vector into a cell field and fill its ghosts (homogeneous).
+fn to_field(g: &Grid, bc: &BoundarySet, x: &[f64], f: &mut Field) {
+    let nx = g.nx;
+    for j in 0..g.ny {
+        for i in 0..nx {
+            f[(i as isize, j as isize)] = x[j * nx + i];
+        }
+    }
+    bc.fill_scalar(g, f, true);
+}
+
+/// The saddle-point operator `[A, ΔtĜ; ω (Δt/dV) F, 0]` on `[δ; p]`.
+struct Saddle<'a> {
+    a: OperatorCtx<'a>,
+    grid: &'a Grid,
+    bc: &'a BoundarySet,
+    dt: f64,
+    omega: f64,
+    dt_vol: &'a [f64],
+    q: &'a mut Field,
+    nf: usize,
+}
+
+impl LinearOperator for Saddle<'_> {
+    fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+        let (xd, xp) = x.split_at(self.nf);
+        let (yu, yc) = y.split_at_mut(self.nf);
+        // A δ; the operator leaves δ scattered, ghosts filled, in its scratch fields.
+        self.a.apply(xd, yu);
+        let (g, om) = (self.grid, self.omega);
+        let (xu, xv, w) = (&*self.a.xu, &*self.a.xv, self.dt_vol);
+        let nx = g.nx;
+        for_each_row(yc, nx, |j, row| {
+            for (i, y) in row.iter_mut().enumerate() {
+                *y = om * w[j * nx + i] * ops::net_outflux(g, xu, xv, i as isize, j as isize);
+            }
+        });
+        to_field(g, self.bc, xp, self.q);
+        add_gradient(&self.a.op.k.faces, g, self.q, self.dt, yu);
+    }
+}
+
+/// The velocity block's approximate inverse: the elastic step's preconditioner.
+enum VelocityBlock<'a> {
+    Jacobi(&'a [f64]),
+    Multigrid(&'a ViscousBlocks),
+}
+
+/// The block upper-triangular preconditioner `[Â, ΔtĜ; 0, −Ŝ]⁻¹`: the pressure from the
+/// Cahouet–Chabard approximation of the Schur complement (one multigrid cycle of the
+/// projection's Poisson operator plus the local term `2η/Δt`), then the velocity from one
+/// application of the elastic step's preconditioner to `r_u − ΔtĜ p`.
+struct BlockTriangular<'a> {
+    a: VelocityBlock<'a>,
+    faces: &'a UnknownFaces,
+    poisson: &'a Multigrid,
+    eta: &'a Field,
+    grid: &'a Grid,
+    bc: &'a BoundarySet,
+    dt: f64,
+    omega: f64,
+    singular: bool,
+    pb: &'a mut [f64],
+    ps: &'a mut [f64],
+    ru: &'a mut [f64],
+    qp: &'a mut Field,
+    nf: usize,
+}
+
+impl FlexiblePreconditioner for BlockTriangular<'_> {
+    fn apply(&mut self, r: &[f64], z: &mut [f64]) {
+        let (ru, rc) = r.split_at(self.nf);
+        let (zu, zp) = z.split_at_mut(self.nf);
+        let (g, dt, om) = (self.grid, self.dt, self.omega);
+        let nx = g.nx;
+        // The pressure: with the flux residual v = dV r_c/(ωΔt), solve the Poisson equation
+        // `−dV ∇·(∇s/ρ) = v/Δt` (one cycle) and add `2η v/(Δt dV)`.
+        for_each_row(self.pb, nx, |j, row| {
+            for (i, b) in row.iter_mut().enumerate() {
+                *b = g.cell_volume(i as isize) * rc[j * nx + i] / (om * dt * dt);
+            }
+        });
+        if self.singular {
+            let mean = self.pb.iter().sum::<f64>() / self.pb.len() as f64;
+            self.pb.iter_mut().for_each(|b| *b -= mean);
+        }
+        self.poisson.apply(self.pb, self.ps);
+        let (ps, eta) = (&*self.ps, self.eta);
+        for_each_row(zp, nx, |j, row| {
+            let jj = j as isize;
+            for (i, z) in row.iter_mut().enumerate() {
+                let c = j * nx + i;
+                *z = ps[c] + 2.0 * eta[(i as isize, jj)] * rc[c] / (om * dt * dt);
+            }
+        });
+        // The velocity: Â⁻¹ (r_u − ΔtĜ p).
+        to_field(g, self.bc, zp, self.qp);
+        self.ru.copy_from_slice(ru);
+        for v in self.ru.iter_mut() {
+            *v = -*v;
+        }
+        add_gradient(self.faces, g, self.qp, dt, self.ru);
+        for v in self.ru.iter_mut() {
+            *v = -*v;
+        }
+        match self.a {
+            VelocityBlock::Jacobi(d) => {
+                for ((z, r), d) in zu.iter_mut().zip(self.ru.iter()).zip(d) {
+                    *z = r / d;
+                }
+            }
+            VelocityBlock::Multigrid(m) => m.apply(self.ru, zu),
+        }
+    }
+}
+
 impl ElasticStage {
-    /// The coupled step after the elastic solve (see the module docs): FGMRES on the pressure
-    /// until the divergence left is small, the velocity updated through `A`; the pressure
-    /// found is left in the state for the projection stage to complete.
-    pub(super) fn couple(
+    /// The coupled step in place of the split solve (see the module docs): FGMRES on the
+    /// saddle-point system for the velocity increment and the pressure, both applied; the
+    /// projection stage removes what divergence is left and adds its pressure.
+    pub(super) fn solve_coupled(
         &mut self,
         ctx: &StepContext,
         state: &mut State,
         d: &efsi_core::Deformation,
-    ) -> Result<CouplingStats, StageError> {
+        bnorm: f64,
+        scale: f64,
+    ) -> Result<SolveStats, StageError> {
         let Some(mut cp) = self.coupling.take() else {
-            return Ok(CouplingStats::default());
+            return Err(err("elastic", "the coupled step has no work space".into()));
         };
-        let r = self.couple_with(&mut cp, ctx, state, d);
+        let r = self.solve_coupled_with(&mut cp, ctx, state, d, bnorm, scale);
         self.coupling = Some(cp);
         r
     }
 
-    fn couple_with(
+    fn solve_coupled_with(
         &mut self,
         cp: &mut Coupling,
         ctx: &StepContext,
         state: &mut State,
         d: &efsi_core::Deformation,
-    ) -> Result<CouplingStats, StageError> {
+        bnorm: f64,
+        scale: f64,
+    ) -> Result<SolveStats, StageError> {
         let g = ctx.grid;
         let bc = ctx.bc;
         let dt = ctx.dt;
-        let (nx, ny) = (g.nx, g.ny);
-        let n = nx * ny;
-        // The effective viscosities η at the centres (the block multigrid's).
-        self.effective_viscosity(d);
-        projection::assemble(&mut cp.poisson, g, bc, &state.rho);
-        cp.mg.setup(&cp.poisson);
+        let nx = g.nx;
+        let nf = self.delta.len();
         if dt != cp.weight_dt {
-            for_each_row(&mut cp.weight, nx, |_, row| {
+            for_each_row(&mut cp.dt_vol, nx, |_, row| {
                 for (i, w) in row.iter_mut().enumerate() {
-                    *w = dt * dt / g.cell_volume(i as isize);
+                    *w = dt / g.cell_volume(i as isize);
                 }
             });
             cp.weight_dt = dt;
         }
-        let singular = !bc.has_pressure_reference();
-        let max_div = |f: &[f64]| -> f64 {
+        // The divergence of V^{n+1/3} (its boundary values at the step's end), and of the
+        // explicit elastic increment M⁻¹ b: the scale the divergence target is relative to.
+        bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        let (rc, w) = (&mut cp.rhs[nf..], &cp.dt_vol);
+        let (u, v) = (&state.u, &state.v);
+        for_each_row(rc, nx, |j, row| {
+            for (i, y) in row.iter_mut().enumerate() {
+                *y = -w[j * nx + i] * ops::net_outflux(g, u, v, i as isize, j as isize);
+            }
+        });
+        let div0 = max_abs(&cp.rhs[nf..]);
+        let div_b = {
+            let sc = &mut self.scratch;
+            let (mass, rhs) = (&self.op.mass, &self.rhs);
+            for (r, (b, m)) in cp.ru.iter_mut().zip(rhs.iter().zip(mass)) {
+                *r = b / m;
+            }
+            self.op.k.faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv);
+            bc.fill_velocity(g, &mut sc.xu, &mut sc.xv, 0.0, true);
             let mut worst = 0.0f64;
-            for j in 0..ny {
+            for j in 0..g.ny {
                 for i in 0..nx {
-                    worst = worst.max((f[j * nx + i] / g.cell_volume(i as isize)).abs() * dt);
+                    let f = ops::net_outflux(g, &sc.xu, &sc.xv, i as isize, j as isize);
+                    worst = worst.max((w[j * nx + i] * f).abs());
                 }
             }
             worst
         };
-        // The net outfluxes of V^{n+2/3}: the target is F(Δ(p)) = −F.
-        bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
-        let y = &mut cp.basis[0];
-        for j in 0..ny {
-            for i in 0..nx {
-                y[j * nx + i] = -ops::net_outflux(g, &state.u, &state.v, i as isize, j as isize);
-            }
+        if bnorm == 0.0 && div0 == 0.0 {
+            return Ok(SolveStats {
+                iterations: 0,
+                residual: 0.0,
+                converged: true,
+            });
         }
-        let mut stats = CouplingStats {
-            before: max_div(&cp.basis[0]),
-            ..CouplingStats::default()
+        let div_tol = cp.proj_tol.max(cp.rel_tol * div0.max(div_b));
+        let tol_u = self.tol * scale;
+        // The divergence rows weighted so that a uniform divergence at its tolerance weighs as
+        // much as the momentum residual at its own.
+        let n = g.cells();
+        let omega = if tol_u > 0.0 {
+            tol_u / (div_tol * (n as f64).sqrt())
+        } else {
+            1.0
         };
-        cp.p.fill(0.0);
-        cp.total.fill(0.0);
-        cp.y0.copy_from_slice(&cp.basis[0]);
-        let beta0 = norm(&cp.y0);
-        let target = cp.rel_tol * beta0;
-        let mut beta = beta0;
-        while beta > target && stats.before > cp.proj_tol && stats.iterations < cp.max_iter {
-            // A restart cycle from the current residual y0.
-            for (b, y) in cp.basis[0].iter_mut().zip(&cp.y0) {
-                *b = y / beta;
-            }
-            cp.g.fill(0.0);
-            cp.g[0] = beta;
-            let mut k = 0;
-            while k < RESTART && stats.iterations < cp.max_iter {
-                stats.iterations += 1;
-                // z_k = P⁻¹ v_k: the projection's Poisson solve plus the local term.
-                {
-                    let v = &cp.basis[k];
-                    for (b, v) in cp.b.iter_mut().zip(v) {
-                        *b = v / dt;
-                    }
-                    if singular {
-                        let mean = cp.b.iter().sum::<f64>() / n as f64;
-                        cp.b.iter_mut().for_each(|b| *b -= mean);
-                    }
-                    cp.s.fill(0.0);
-                    let st = cp.pcg.solve_norm(
-                        &mut cp.poisson,
-                        &cp.mg,
-                        &cp.b,
-                        &mut cp.s,
-                        1e-3 * cp.rel_tol * max_div(v).max(f64::MIN_POSITIVE),
-                        10_000,
-                        Norm::MaxWeighted(&cp.weight),
-                    );
-                    stats.inner += st.iterations;
-                    let z = &mut cp.z[k];
-                    for j in 0..ny {
-                        for i in 0..nx {
-                            let c = j * nx + i;
-                            let (ii, jj) = (i as isize, j as isize);
-                            z[c] = cp.s[c]
-                                + 2.0 * self.eta[(ii, jj)] * v[c] / (dt * g.cell_volume(ii));
-                        }
-                    }
-                }
-                // w = S z_k = F(Δ(z_k)), Δ(z_k) kept.
-                let it = self.flux_response(cp, k, ctx, d)?;
-                stats.inner += it;
-                // Arnoldi (modified Gram–Schmidt).
-                for i in 0..=k {
-                    let hij = dot(&cp.w, &cp.basis[i]);
-                    cp.h[i][k] = hij;
-                    for (w, b) in cp.w.iter_mut().zip(&cp.basis[i]) {
-                        *w -= hij * b;
-                    }
-                }
-                let hn = norm(&cp.w);
-                cp.h[k + 1][k] = hn;
-                if hn > 0.0 {
-                    for (b, w) in cp.basis[k + 1].iter_mut().zip(&cp.w) {
-                        *b = w / hn;
-                    }
-                }
-                // Givens rotations.
-                for i in 0..k {
-                    let (a, b) = (cp.h[i][k], cp.h[i + 1][k]);
-                    cp.h[i][k] = cp.cs[i] * a + cp.sn[i] * b;
-                    cp.h[i + 1][k] = -cp.sn[i] * a + cp.cs[i] * b;
-                }
-                let (a, b) = (cp.h[k][k], cp.h[k + 1][k]);
-                let rr = a.hypot(b);
-                let (c, s) = if rr > 0.0 {
-                    (a / rr, b / rr)
-                } else {
-                    (1.0, 0.0)
-                };
-                cp.cs[k] = c;
-                cp.sn[k] = s;
-                cp.h[k][k] = rr;
-                cp.h[k + 1][k] = 0.0;
-                cp.g[k + 1] = -s * cp.g[k];
-                cp.g[k] *= c;
-                beta = cp.g[k + 1].abs();
-                k += 1;
-                if beta <= target || hn == 0.0 {
-                    break;
-                }
-            }
-            // Solve the triangular system and update p and the velocity increment.
-            let coef = &mut cp.coef[..k];
-            for i in (0..k).rev() {
-                let mut sum = cp.g[i];
-                for j in i + 1..k {
-                    sum -= cp.h[i][j] * coef[j];
-                }
-                coef[i] = sum / cp.h[i][i];
-            }
-            for (i, c) in coef.iter().enumerate() {
-                for j in 0..ny {
-                    for ii in 0..nx {
-                        cp.p[(ii as isize, j as isize)] += c * cp.z[i][j * nx + ii];
-                    }
-                }
-                for (t, dz) in cp.total.iter_mut().zip(&cp.dz[i]) {
-                    *t += c * dz;
-                }
-            }
-            // The true residual for the restart: y0 = −F(V) − F(Δ(p)).
-            self.op
-                .k
-                .faces
-                .scatter(&cp.total, &mut self.scratch.xu, &mut self.scratch.xv);
-            bc.fill_velocity(g, &mut self.scratch.xu, &mut self.scratch.xv, 0.0, true);
-            for j in 0..ny {
-                for i in 0..nx {
-                    let (ii, jj) = (i as isize, j as isize);
-                    cp.y0[j * nx + i] = -ops::net_outflux(g, &state.u, &state.v, ii, jj)
-                        - ops::net_outflux(g, &self.scratch.xu, &self.scratch.xv, ii, jj);
-                }
-            }
-            beta = norm(&cp.y0);
-            if !beta.is_finite() {
-                return Err(err(
-                    "elastic",
-                    format!(
-                        "coupled step: the divergence became {beta} after {} iterations",
-                        stats.iterations
-                    ),
-                ));
-            }
+        cp.rhs[..nf].copy_from_slice(&self.rhs);
+        cp.rhs[nf..].iter_mut().for_each(|c| *c *= omega);
+        // The preconditioners: the elastic step's (velocity), the projection's Poisson
+        // multigrid (pressure).
+        self.setup_preconditioner(g, d);
+        if self.preconditioner == ElasticPreconditioner::Jacobi {
+            // η for the Schur complement's local term (the multigrid's setup made it).
+            self.effective_viscosity(d);
         }
-        stats.after = max_div(&cp.y0);
-        // V += Δ(p); the pressure for the projection to complete (it adds what it finds).
+        projection::assemble(&mut cp.poisson, g, bc, &state.rho);
+        cp.mg.setup(&cp.poisson);
+        // From no increment and the pressure the last step ended with (the seed's scheme keeps
+        // the whole pressure, which changes little from one step to the next).
+        cp.x[..nf].fill(0.0);
+        {
+            let xp = &mut cp.x[nf..];
+            let p = &state.p;
+            for_each_row(xp, nx, |j, row| {
+                for (i, x) in row.iter_mut().enumerate() {
+                    *x = p[(i as isize, j as isize)];
+                }
+            });
+        }
+        let s = &mut self.scratch;
+        let mut saddle = Saddle {
+            a: OperatorCtx {
+                op: &mut self.op,
+                start: &d.start,
+                relax: &d.relax,
+                xu: &mut s.xu,
+                xv: &mut s.xv,
+                dtau: &mut s.dtau,
+            },
+            grid: g,
+            bc,
+            dt,
+            omega,
+            dt_vol: &cp.dt_vol,
+            q: &mut cp.q,
+            nf,
+        };
+        let faces = saddle.a.op.k.faces;
+        let mut pre = BlockTriangular {
+            a: match self.preconditioner {
+                ElasticPreconditioner::Jacobi => VelocityBlock::Jacobi(&self.diag),
+                _ => VelocityBlock::Multigrid(&self.blocks),
+            },
+            faces: &faces,
+            poisson: &cp.mg,
+            eta: &self.eta,
+            grid: g,
+            bc,
+            dt,
+            omega,
+            singular: !bc.has_pressure_reference(),
+            pb: &mut cp.pb,
+            ps: &mut cp.ps,
+            ru: &mut cp.ru,
+            qp: &mut cp.qp,
+            nf,
+        };
+        let mut worst = (0.0, 0.0);
+        let st = cp.fgmres.solve(
+            &mut saddle,
+            &mut pre,
+            &cp.rhs,
+            &mut cp.x,
+            tol_u,
+            cp.max_iter,
+            |r| {
+                let (ru, rc) = r.split_at(nf);
+                let (mu, mc) = (norm(ru), max_abs(rc) / omega);
+                worst = (mu, mc);
+                if std::env::var("EFSI_DEBUG_COUPLED").is_ok() {
+                    eprintln!("accept? mu {:.3e}/{:.3e} div {:.3e}/{:.3e}", mu, tol_u, mc, div_tol);
+                }
+                if mu <= tol_u && mc <= div_tol {
+                    Accept::Done
+                } else {
+                    Accept::Continue(0.3 * norm(r))
+                }
+            },
+        );
+        if std::env::var("EFSI_DEBUG_COUPLED").is_ok() {
+            eprintln!("step: its {} div0 {:.3e} div_b {:.3e} bnorm {:.3e} scale {:.3e}", st.iterations, div0, div_b, bnorm, scale);
+        }
+        if !st.converged {
+            return Err(err(
+                "elastic",
+                format!(
+                    "coupled step: FGMRES did not converge in {} iterations, the limit numerics.elastic.coupling_iterations (momentum residual {:.3e} of the scale, divergence·Δt {:.3e} > {:.1e}); raise numerics.elastic.coupling_iterations or reduce the time step",
+                    st.iterations,
+                    worst.0 / scale.max(f64::MIN_POSITIVE),
+                    worst.1,
+                    div_tol
+                ),
+            ));
+        }
+        // V += δ; the pressure for the projection to complete (it adds what it finds).
+        let (delta, p) = cp.x.split_at(nf);
         {
             let (u, v) = (&mut state.u, &mut state.v);
             self.op.k.faces.for_each(|c, is_u, q| {
                 if is_u {
-                    u.data_mut()[q] += cp.total[c];
+                    u.data_mut()[q] += delta[c];
                 } else {
-                    v.data_mut()[q] += cp.total[c];
+                    v.data_mut()[q] += delta[c];
                 }
             });
         }
-        if singular {
-            let mut sum = 0.0;
-            for j in 0..ny as isize {
-                for i in 0..nx as isize {
-                    sum += cp.p[(i, j)];
-                }
-            }
-            let mean = sum / n as f64;
-            for j in 0..ny as isize {
-                for i in 0..nx as isize {
-                    cp.p[(i, j)] -= mean;
-                }
-            }
-        }
-        state.p.copy_from(&cp.p);
-        bc.fill_scalar(g, &mut state.p, true);
-        Ok(stats)
-    }
-
-    /// `w = F(Δ(z_k))`: the velocity increment the pressure `z_k` drives through `A`
-    /// (`A Δ = −Δt G z_k`, kept as `dz[k]`) and the net outflux it makes in each cell.
-    /// Returns BiCGSTAB's iterations.
-    fn flux_response(
-        &mut self,
-        cp: &mut Coupling,
-        k: usize,
-        ctx: &StepContext,
-        d: &efsi_core::Deformation,
-    ) -> Result<usize, StageError> {
-        let g = ctx.grid;
-        let (nx, ny) = (g.nx, g.ny);
-        for j in 0..ny {
-            for i in 0..nx {
-                cp.q[(i as isize, j as isize)] = cp.z[k][j * nx + i];
-            }
-        }
-        ctx.bc.fill_scalar(g, &mut cp.q, true);
-        let (m, (dx, dy)) = (&g.metric, (g.dx, g.dy));
-        let q = &cp.q;
-        let s = q.stride();
-        let dt = ctx.dt;
-        let rhs = &mut cp.rhs;
-        self.op.k.faces.for_each(|c, is_u, f| {
-            let i = (f % s) as isize - efsi_core::G;
-            rhs[c] = if is_u {
-                -dt * m.rx(i) * dy * (q.data()[f] - q.data()[f - 1])
-            } else {
-                -dt * m.rc(i) * dx * (q.data()[f] - q.data()[f - s])
-            };
-        });
-        let bnorm = norm(&cp.rhs);
-        let delta = &mut cp.dz[k];
-        delta.fill(0.0);
-        let st = if bnorm > 0.0 {
-            let st = self.solve_a(d, &cp.rhs, delta, 1e-2 * cp.rel_tol * bnorm);
-            if !st.converged {
-                return Err(err(
-                    "elastic",
-                    format!(
-                        "coupled step: BiCGSTAB did not converge in {} iterations (relative residual {:.3e}); raise numerics.elastic.max_iterations or reduce the time step",
-                        st.iterations,
-                        st.residual / bnorm
-                    ),
-                ));
-            }
-            st.iterations
+        let mean = if bc.has_pressure_reference() {
+            0.0
         } else {
-            0
+            p.iter().sum::<f64>() / n as f64
         };
-        let sc = &mut self.scratch;
-        self.op.k.faces.scatter(&cp.dz[k], &mut sc.xu, &mut sc.xv);
-        ctx.bc.fill_velocity(g, &mut sc.xu, &mut sc.xv, 0.0, true);
-        for j in 0..ny {
+        for j in 0..g.ny {
             for i in 0..nx {
-                cp.w[j * nx + i] = ops::net_outflux(g, &sc.xu, &sc.xv, i as isize, j as isize);
+                state.p[(i as isize, j as isize)] = p[j * nx + i] - mean;
             }
         }
-        Ok(st)
+        bc.fill_scalar(g, &mut state.p, true);
+        Ok(SolveStats {
+            iterations: st.iterations,
+            residual: worst.0 / bnorm.max(f64::MIN_POSITIVE),
+            converged: true,
+        })
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
+    efsi_linalg::par::dot(a, a).sqrt()
+}
+
+fn max_abs(a: &[f64]) -> f64 {
+    a.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }

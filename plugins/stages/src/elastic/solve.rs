@@ -66,13 +66,15 @@ pub(super) struct ElasticOperator {
     pub(super) dm: Vec<f64>,
 }
 
-struct OperatorCtx<'a> {
-    op: &'a mut ElasticOperator,
-    start: &'a [Field; 4],
-    relax: &'a Field,
-    xu: &'a mut Field,
-    xv: &'a mut Field,
-    dtau: &'a mut [Field; 4],
+/// The elastic operator bound to this step's deformation and work space. After
+/// [`apply`](LinearOperator::apply), `xu`, `xv` hold `x` scattered, ghosts filled.
+pub(super) struct OperatorCtx<'a> {
+    pub(super) op: &'a mut ElasticOperator,
+    pub(super) start: &'a [Field; 4],
+    pub(super) relax: &'a Field,
+    pub(super) xu: &'a mut Field,
+    pub(super) xv: &'a mut Field,
+    pub(super) dtau: &'a mut [Field; 4],
 }
 
 impl LinearOperator for OperatorCtx<'_> {
@@ -146,11 +148,11 @@ impl ElasticStage {
     ) -> Result<StageStats, StageError> {
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
-        let mut stats = self.solve(ctx, state, d, bnorm, scale)?;
-        if self.coupling.is_some() {
-            let c = self.couple(ctx, state, d)?;
-            stats.iterations += c.inner;
-        }
+        let stats = if self.coupling.is_some() {
+            self.solve_coupled(ctx, state, d, bnorm, scale)?
+        } else {
+            self.solve(ctx, state, d, bnorm, scale)?
+        };
         self.correct(ctx, state, d);
         Ok(StageStats { solve: Some(stats) })
     }
@@ -327,23 +329,7 @@ impl ElasticStage {
             }
         } else {
             self.delta.fill(0.0);
-            let s = &mut self.scratch;
-            // The operator writes Δτ in this step's solid only.
-            for f in &mut s.dtau {
-                f.fill(0.0);
-            }
-            if self.preconditioner != ElasticPreconditioner::Jacobi {
-                // η = θΔt μ + (Δt²/2) G_eff at centres and corners.
-                self.effective_viscosity(d);
-                let op = &self.op;
-                let pre = &mut self.eta_coefficients;
-                pre.set(g, &self.eta, &self.eta_k, 1.0);
-                for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
-                    *dm = m + h;
-                }
-                pre.diagonal(&self.eta_dm, &mut self.eta_diag);
-                self.blocks.setup(pre, &self.eta_diag);
-            }
+            self.setup_preconditioner(g, d);
             let (rhs, mut delta) = (
                 std::mem::take(&mut self.rhs),
                 std::mem::take(&mut self.delta),
@@ -381,6 +367,26 @@ impl ElasticStage {
             }
         };
         Ok(stats)
+    }
+
+    /// The operator's scratch stress cleared (it writes Δτ in this step's solid only) and,
+    /// unless Jacobi, the block multigrid set up with the effective viscosities `η = θΔt μ +
+    /// (Δt²/2) G_eff` at centres and corners.
+    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &efsi_core::Deformation) {
+        for f in &mut self.scratch.dtau {
+            f.fill(0.0);
+        }
+        if self.preconditioner != ElasticPreconditioner::Jacobi {
+            self.effective_viscosity(d);
+            let op = &self.op;
+            let pre = &mut self.eta_coefficients;
+            pre.set(g, &self.eta, &self.eta_k, 1.0);
+            for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
+                *dm = m + h;
+            }
+            pre.diagonal(&self.eta_dm, &mut self.eta_diag);
+            self.blocks.setup(pre, &self.eta_diag);
+        }
     }
 
     /// The effective viscosities `η = θΔt μ + (Δt²/2) G_eff` at the centres and corners
