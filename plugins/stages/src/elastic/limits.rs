@@ -56,17 +56,22 @@ pub(super) fn wave_limit(
             ));
         }
     }
-    let s = crate::options::<super::ElasticOptions>(scene)?.wave_courant;
+    let o = crate::options::<super::ElasticOptions>(scene)?;
+    let s = o.wave_cap();
+    let option = if super::coupled(scene) {
+        "numerics.elastic.coupled_wave_courant"
+    } else {
+        "numerics.elastic.wave_courant"
+    };
     let h = grid.dx.min(grid.dy);
     let c = (g0 / solid.density).sqrt();
     let dt = s * h / c;
     if let Some(fixed) = scene.time.fixed_dt
         && fixed > dt
-        && !super::coupled(scene)
     {
         return Err(format!(
             "time.fixed_dt: {fixed:e} s breaks the elastic-wave limit Δt·c/h ≤ {s} \
-                 (numerics.elastic.wave_courant): the solid's shear waves (c = √(G₀/ρ_s) = \
+                 ({option}): the solid's shear waves (c = √(G₀/ρ_s) = \
                  {c:.4e} m/s from G₀ = {g0:e} Pa, ρ_s = {}) cross {:.3} cells of h = {h:.4e} m \
                  per step; set time.fixed_dt ≤ {dt:.4e} s, or leave it out to let the step \
                  adapt",

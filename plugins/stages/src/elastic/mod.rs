@@ -255,7 +255,9 @@ pub use law::resolve_law;
 use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::wave_limit;
-pub use options::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, MAX_WAVE_COURANT};
+pub use options::{
+    ElasticCoupling, ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
+};
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
@@ -265,7 +267,7 @@ pub(crate) fn law_needed(scene: &Scene) -> bool {
 
 /// Whether `scene` runs the coupled elastic step (`numerics.elastic.coupling: Coupled` with a
 /// solid that has a law): the elastic stage then leaves a pressure for the projection stage
-/// to complete, and Δt has no elastic-wave cap.
+/// to complete, and Δt is capped at `coupled_wave_courant` elastic-wave Courant numbers.
 pub(crate) fn coupled(scene: &Scene) -> bool {
     let o: ElasticOptions = scene.numerics.get().unwrap_or_default();
     law_needed(scene) && o.implicit && o.coupling == ElasticCoupling::Coupled
@@ -432,12 +434,6 @@ impl StagePlugin for DeformationUpdate {
         let law = shared_law(scene, shared)?;
         let o: ElasticOptions = crate::options(scene)?;
         let wave_dt = wave_limit(scene, grid, law.as_ref())?;
-        // The coupled step has no elastic-wave cap (see `coupled`).
-        let wave_dt = if coupled(scene) {
-            f64::INFINITY
-        } else {
-            wave_dt
-        };
         Ok(Box::new(DeformationStage {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),

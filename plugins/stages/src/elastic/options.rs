@@ -34,9 +34,10 @@ pub struct ElasticOptions {
     /// How the elastic step and the pressure projection are coupled (default `Split`).
     #[serde(default)]
     pub coupling: ElasticCoupling,
-    /// `Coupled` only: the coupled iteration stops once the residual of the divergence
-    /// constraint (2-norm of the cells' net outfluxes) is this fraction of the one the elastic
-    /// step left (default 1e-3); the projection stage removes the rest.
+    /// `Coupled` only: the coupled solve stops once `max |∇·V|·Δt` is at most this fraction
+    /// of the step's divergence scale (that of the velocity before the step or of the
+    /// explicit elastic increment, whichever is larger; default 1e-3) or the projection's
+    /// tolerance, whichever is larger; the projection stage removes the rest.
     #[serde(default = "default_coupling_tolerance")]
     pub coupling_tolerance: f64,
     /// The implicit weight θ of B's stretching over a step, `B^{n+1} = Bⁿ + Δt[(1 − θ) H(Vⁿ) +
@@ -48,9 +49,16 @@ pub struct ElasticOptions {
     /// in free flight, at 0.6 it gains 0.74 of its energy budget, at 0.75 nothing.)
     #[serde(default)]
     pub theta: Option<f64>,
-    /// `Coupled` only: the most coupled iterations per step (default 50).
+    /// `Coupled` only: the most FGMRES iterations per step (default 50).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
+    /// `Coupled` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
+    /// (default and largest allowed: [`MAX_COUPLED_WAVE_COURANT`]). The coupled step is stable
+    /// far beyond the split step's [`MAX_WAVE_COURANT`], but not without bound: in the
+    /// stability map, an impact taken in one step at `Δt·c/h` ≈ 240–500 gained energy (G = 1e9
+    /// Pa at CFL 0.9, G = 1e11 Pa at CFL 0.1–0.9), while every run at 100 or less kept it.
+    #[serde(default = "default_coupled_wave_courant")]
+    pub coupled_wave_courant: f64,
 }
 
 /// How the implicit elastic step and the pressure projection share a time step.
@@ -62,18 +70,28 @@ pub enum ElasticCoupling {
     /// (`wave_courant`).
     #[default]
     Split,
-    /// Experimental. The elastic step solves its implicit system together with the
-    /// divergence constraint (FGMRES on the pressure's Schur complement, preconditioned by the
-    /// projection's Poisson operator plus the solid's effective viscosity — Cahouet–Chabard),
-    /// so the pressure's correction meets the solid's implicit stiffness: no elastic-wave cap
-    /// on Δt. The stability map's sphere at CFL 0.5 runs at G = 1e7 and 1e9 Pa in 31 and 30
-    /// steps (split: 161, 1606) without gaining energy; it still gains at CFL 0.9 with
-    /// G = 1e9 and at G = 1e11. Its B stretching is damped (`theta` 0.75), so an impact at
-    /// the flow's step loses much of its rebound; ≈ 2.9× the split step's cost per step.
+    /// The elastic step solves its implicit system together with the divergence constraint
+    /// (FGMRES on the saddle-point system, block-triangular preconditioner from the elastic
+    /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
+    /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
+    /// `coupled_wave_courant` (100) elastic-wave Courant numbers instead of 4. The stability
+    /// map's sphere at CFL 0.5 runs at G = 1e7 and 1e9 Pa in 31 and 65 steps (split: 161, 1606)
+    /// without gaining energy, and at G = 1e11 Pa too. Its B stretching is damped (`theta`
+    /// 0.75), so an impact at the flow's step loses much of its rebound; ≈ 1.4× the split
+    /// step's cost per step on the seed's sphere.
     Coupled,
 }
 
 impl ElasticOptions {
+    /// The elastic-wave Courant number that caps Δt: `wave_courant` with the split step,
+    /// `coupled_wave_courant` with the coupled one.
+    pub fn wave_cap(&self) -> f64 {
+        match self.coupling {
+            ElasticCoupling::Split => self.wave_courant,
+            ElasticCoupling::Coupled => self.coupled_wave_courant,
+        }
+    }
+
     /// θ of B's stretching: the scene's, else 0.5 with `Split` and 0.75 with `Coupled`.
     pub fn stretch_theta(&self) -> f64 {
         self.theta.unwrap_or(match self.coupling {
@@ -88,6 +106,15 @@ fn default_coupling_tolerance() -> f64 {
 }
 fn default_coupling_iter() -> usize {
     50
+}
+
+/// The largest elastic-wave Courant number `Δt·c/h` the coupled step may take (see
+/// [`ElasticOptions::coupled_wave_courant`]): the largest at which every run of the stability
+/// map kept its energy bounded.
+pub const MAX_COUPLED_WAVE_COURANT: f64 = 100.0;
+
+fn default_coupled_wave_courant() -> f64 {
+    MAX_COUPLED_WAVE_COURANT
 }
 
 /// The largest elastic-wave Courant number `Δt·c/h` allowed (see
@@ -107,6 +134,7 @@ impl Default for ElasticOptions {
             coupling_tolerance: default_coupling_tolerance(),
             coupling_iterations: default_coupling_iter(),
             theta: None,
+            coupled_wave_courant: default_coupled_wave_courant(),
         }
     }
 }
@@ -152,6 +180,19 @@ impl StageOptions for ElasticOptions {
                     "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
                      split projection pumps energy into stiff solids (stability map)",
                     self.wave_courant
+                ),
+            ));
+        }
+        if !(self.coupled_wave_courant > 0.0
+            && self.coupled_wave_courant <= MAX_COUPLED_WAVE_COURANT)
+        {
+            return Err((
+                "coupled_wave_courant",
+                format!(
+                    "must be in (0, {MAX_COUPLED_WAVE_COURANT}], got {}: above \
+                     {MAX_COUPLED_WAVE_COURANT} the coupled step was measured to gain energy at \
+                     impacts (stability map)",
+                    self.coupled_wave_courant
                 ),
             ));
         }
