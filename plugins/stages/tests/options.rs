@@ -121,6 +121,13 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
             "(wave_courant: 10.0)",
             &["numerics.elastic.wave_courant", "must be in (0, 4]"],
         ),
+        (
+            "(coupling: Coupled, coupled_wave_courant: 150.0)",
+            &[
+                "numerics.elastic.coupled_wave_courant",
+                "must be in (0, 100]",
+            ],
+        ),
     ] {
         let m = el(e).unwrap_err();
         for n in needles {
