@@ -367,13 +367,13 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
 }
 
 /// The stability map's sphere (8 cells per radius, density ratio 1e3, CFL 0.5, to 16 ms) at
-/// G = 1e7 and 1e9 Pa with the coupled elastic step (`numerics.elastic.coupling: Coupled`): it
-/// runs near the flow's step — within 2× the steps of the seed's G = 1.8e5 with the split step
-/// (42 here; measured 31 and 65, the latter at the coupled cap of 100 wave Courant numbers),
-/// where the split step's elastic-wave cap of 4 takes 161 and 1606 (the split count scales
-/// with the wave speed, √G: 10× from 1e7 to 1e9) — and gains no energy: kinetic + potential
-/// never above the start by more than 0.3 % of the budget (measured 2.8e-5 and 0), total
-/// energy at the end below its start.
+/// G = 1e7 and 1e9 Pa with the coupled elastic step (`numerics.elastic.coupling: Coupled`):
+/// G = 1e7 runs at the flow's step, within 2× the steps of the seed's G = 1.8e5 with the split
+/// step (42 here; measured 32); G = 1e9 at the coupled cap of 25 wave Courant numbers takes
+/// 257, a sixth of the split step's 1606 at its cap of 4 (the split count scales with the wave
+/// speed, √G: 10× from 1e7 to 1e9); neither gains energy: kinetic + potential never above the
+/// start by more than 0.3 % of the budget (measured 2.8e-5 and 0), total energy at the end
+/// below its start.
 #[test]
 fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases/sphere_impact.ron");
@@ -439,14 +439,16 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
             "G = {g:e} coupled: {steps} steps (split at 1e7: {split_steps}, G = 1.8e5 split \
              {soft_steps}); gain {gain:.3e} E_b, total at the end {end:.3e} E_b"
         );
-        assert!(
-            steps <= 2 * soft_steps,
-            "G {g:e}: {steps} steps against {soft_steps}"
-        );
+        if g <= 1e7 {
+            assert!(
+                steps <= 2 * soft_steps,
+                "G {g:e}: {steps} steps against {soft_steps}"
+            );
+        }
         // The split step's count at G: its cap scales with the wave speed √G.
         let split_at_g = split_steps as f64 * (g / 1e7).sqrt();
         assert!(
-            (steps * 3) as f64 <= split_at_g,
+            (steps * 5) as f64 <= split_at_g,
             "G {g:e}: {steps} against the split step's {split_at_g}"
         );
         assert!(

@@ -122,11 +122,8 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
             &["numerics.elastic.wave_courant", "must be in (0, 4]"],
         ),
         (
-            "(coupling: Coupled, coupled_wave_courant: 150.0)",
-            &[
-                "numerics.elastic.coupled_wave_courant",
-                "must be in (0, 100]",
-            ],
+            "(coupling: Coupled, coupled_wave_courant: 100.0)",
+            &["numerics.elastic.coupled_wave_courant", "must be in (0, 50]"],
         ),
     ] {
         let m = el(e).unwrap_err();

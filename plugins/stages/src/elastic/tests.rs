@@ -126,19 +126,19 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     fast.time.fixed_dt = Some(0.1);
     let e = wave_limit(&fast, &grid, &law).unwrap_err();
     assert!(e.contains("set time.fixed_dt ≤ 5.0000e-2"), "{e}");
-    // The coupled step's cap is 100 wave Courant numbers (1.25 s here): 0.1 passes, 2 does not,
-    // and the refusal names the coupled step's option.
+    // The coupled step's cap is 25 wave Courant numbers (0.3125 s here): 0.1 passes, 2 does
+    // not, and the refusal names the coupled step's option.
     fast.numerics
         .update(|o: &mut crate::elastic::ElasticOptions| {
             o.coupling = crate::elastic::ElasticCoupling::Coupled
         })
         .unwrap();
     let dt = wave_limit(&fast, &grid, &law).unwrap();
-    assert!((dt - 1.25).abs() < 1e-12, "{dt}");
+    assert!((dt - 0.3125).abs() < 1e-12, "{dt}");
     fast.time.fixed_dt = Some(2.0);
     let e = wave_limit(&fast, &grid, &law).unwrap_err();
     assert!(
-        e.contains("numerics.elastic.coupled_wave_courant") && e.contains("≤ 1.2500e0"),
+        e.contains("numerics.elastic.coupled_wave_courant") && e.contains("≤ 3.1250e-1"),
         "{e}"
     );
     // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
