@@ -10,6 +10,7 @@ fn quick(name: &str) {
         quick: true,
         out: out.clone(),
         progress: false,
+        overrides: Vec::new(),
     };
     let report = (case.run)(&opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     for c in &report.checks {

@@ -1,6 +1,7 @@
-//! `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR]`: the paper's cases, their
-//! accuracy against references and their speed/accuracy trade, as `DIR/REPORT.md`,
-//! `DIR/summary.json`, PNG plots and CSV series.
+//! `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR] [--set KEY=VALUE…]`: the
+//! paper's cases, their accuracy against references and their speed/accuracy trade, as
+//! `DIR/REPORT.md`, `DIR/summary.json`, PNG plots and CSV series. `--set` applies a setting to
+//! every run's scene (as `efsi run --set` does), e.g. to check the cases with another scheme.
 
 use efsi_tests::paper::{CASES, Options, bench};
 use std::path::PathBuf;
@@ -12,6 +13,7 @@ fn main() -> ExitCode {
         quick: false,
         out: PathBuf::from("target/bench-paper"),
         progress: true,
+        overrides: Vec::new(),
     };
     let mut cases = Vec::new();
     while let Some(a) = args.next() {
@@ -26,6 +28,11 @@ fn main() -> ExitCode {
                 None => return usage("--out needs a folder"),
             },
             "--no-progress" => opts.progress = false,
+            "--set" => match args.next().map(|a| efsi_core::Override::parse(&a)) {
+                Some(Ok(o)) => opts.overrides.push(o),
+                Some(Err(e)) => return usage(&format!("--set: {e}")),
+                None => return usage("--set needs KEY=VALUE"),
+            },
             "-h" | "--help" => {
                 println!("{}", help());
                 return ExitCode::SUCCESS;
@@ -52,7 +59,8 @@ fn main() -> ExitCode {
 
 fn help() -> String {
     format!(
-        "usage: cargo xtask bench-paper [--quick] [--case NAME]… [--out DIR] [--no-progress]\ncases: {}",
+        "usage: cargo xtask bench-paper [--quick] [--case NAME]… [--out DIR] [--no-progress] \
+         [--set KEY=VALUE]…\ncases: {}",
         CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
     )
 }

@@ -130,6 +130,7 @@ impl Harness<'_> {
         folder: &str,
         label: &str,
     ) -> Result<(Simulation, Run), String> {
+        let scene = self.opts.adjust(scene)?;
         let sim =
             Simulation::new(scene, path, &efsi_stages::builtin()).map_err(|e| e.to_string())?;
         let (sim, run) = execute_built(sim, &self.dir.join(folder), label, self.opts)

@@ -53,6 +53,7 @@ impl Case for ShearRectangle {
     /// at t = 0, 2, 4, 5, 7, 10).
     fn run(&self, h: &mut Harness, label: &str, &n: &usize) -> RunResult<Deformation> {
         let (scene, path) = self.scene(&n)?;
+        let scene = h.opts.adjust(scene)?;
         let dir = h.dir.clone();
         let mut sim = efsi_core::Simulation::new(scene.clone(), &path, &efsi_stages::builtin())
             .map_err(|e| e.to_string())?;

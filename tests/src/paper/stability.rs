@@ -279,7 +279,7 @@ fn attempt(
     opts: &Options,
 ) -> (Outcome, Option<Run>) {
     let label = st.label();
-    let (scene, path) = match scene_for(st, cpr) {
+    let (scene, path) = match scene_for(st, cpr).and_then(|(s, p)| Ok((opts.adjust(s)?, p))) {
         Ok(s) => s,
         Err(e) => return (Outcome::Failed(format!("scene: {e}")), None),
     };
