@@ -205,7 +205,11 @@ impl Fgmres {
                 }
                 let (p, q) = (col[k], col[k + 1]);
                 let rr = p.hypot(q);
-                let (c, s) = if rr > 0.0 { (p / rr, q / rr) } else { (1.0, 0.0) };
+                let (c, s) = if rr > 0.0 {
+                    (p / rr, q / rr)
+                } else {
+                    (1.0, 0.0)
+                };
                 cs[k] = c;
                 sn[k] = s;
                 col[k] = rr;

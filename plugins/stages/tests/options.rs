@@ -123,7 +123,10 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
         ),
         (
             "(coupling: Coupled, coupled_wave_courant: 100.0)",
-            &["numerics.elastic.coupled_wave_courant", "must be in (0, 50]"],
+            &[
+                "numerics.elastic.coupled_wave_courant",
+                "must be in (0, 50]",
+            ],
         ),
     ] {
         let m = el(e).unwrap_err();

@@ -68,11 +68,11 @@
 use super::ElasticPreconditioner;
 use super::err;
 use super::solve::{ElasticStage, OperatorCtx};
-use crate::viscous_operator::CompactFaces;
 use crate::block_multigrid::ViscousBlocks;
 use crate::projection;
-use efsi_core::ops;
+use crate::viscous_operator::CompactFaces;
 use efsi_core::bc::UnknownFaces;
+use efsi_core::ops;
 use efsi_core::{BoundarySet, Field, Grid, StageError, State, StepContext};
 use efsi_linalg::par::for_each_row;
 use efsi_linalg::{

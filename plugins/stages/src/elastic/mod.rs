@@ -256,7 +256,7 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::wave_limit;
 pub use options::{
-    ElasticCoupling, ElasticOptions, ElasticPreconditioner, DEFAULT_COUPLED_WAVE_COURANT,
+    DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
     MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 use solve::{ElasticOperator, ElasticStage, Scratch};
