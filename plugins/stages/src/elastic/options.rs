@@ -155,7 +155,8 @@ pub enum ElasticPreconditioner {
     /// Multigrid V-cycles on the u–u and v–v blocks of an SPD approximation of the system, the
     /// viscous operator with an effective viscosity `θΔt μ + (Δt/2) G_eff`.
     Multigrid,
-    /// Multigrid, except in scenes with a periodic boundary, where Jacobi (the default): the
+    /// Multigrid, except with the split step in scenes with a periodic boundary, where Jacobi
+    /// (the default; the coupled step keeps the multigrid, with which its FGMRES converges): the
     /// red–black smoother keeps a flow uniform along a periodic direction uniform only to the
     /// solver's tolerance (a velocity of 1e-12 across a flat interface, solid fraction leaking
     /// into the fluid), where Jacobi keeps it exactly.
