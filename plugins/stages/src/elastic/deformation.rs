@@ -10,9 +10,8 @@ pub(super) struct DeformationStage {
     pub(super) k: Kernels,
     /// θ of B's stretching (`numerics.elastic.theta`).
     pub(super) stretch_theta: f64,
-    /// The first pass of the update (the stretching evaluated on Bⁿ), with the split step;
-    /// `None` with the coupled one (see the module docs).
-    pub(super) first: Option<[efsi_core::Field; 4]>,
+    /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
+    pub(super) first: [efsi_core::Field; 4],
     /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
     pub(super) wave_dt: f64,
 }
@@ -33,22 +32,17 @@ impl Stage for DeformationStage {
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
         let a = self.stretch_theta * ctx.dt;
-        // The split step's Picard pass stretches the first pass's tensor; the coupled step
-        // stretches Bⁿ (module docs).
-        let stretched = match &mut self.first {
-            Some(first) => {
-                k.stretch(
-                    &d.start,
-                    a,
-                    Some((&d.start, &d.explicit)),
-                    Some(&d.relax),
-                    first,
-                );
-                k.fill_ghosts(first);
-                &*first
-            }
-            None => &d.start,
-        };
+        // The Picard pass: the update stretches the first pass's tensor.
+        let first = &mut self.first;
+        k.stretch(
+            &d.start,
+            a,
+            Some((&d.start, &d.explicit)),
+            Some(&d.relax),
+            first,
+        );
+        k.fill_ghosts(first);
+        let stretched = &*first;
         k.stretch(
             stretched,
             a,

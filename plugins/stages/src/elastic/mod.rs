@@ -68,10 +68,12 @@
 //! Couette case (64 cells, Δt = 0.001) erred by 2.09e-3 with the lag (5.8e-4 at Δt/4: the
 //! error was the time step's, not the interface's) and by 3.5e-4 with the pass. The
 //! intermediate tensors of the elastic step keep `H(V; B̃ⁿ)`: the implicit system is
-//! linear in V only so. The coupled step (`coupled`, first order in time with its θ = ¾)
-//! keeps the lag: the pass changes `B̃^{n+1}` by `θΔt H(V^{n+1}; B̃^{(1)} − B̃ⁿ)`, a strain the
-//! implicit stiffness did not answer, and at an elastic-wave Courant number of ~100 (the
-//! stability map's sphere at G = 1e9 Pa) it left 5.7 energy budgets of strain at the end.
+//! linear in V only so. The coupled step makes the same pass. At 100 elastic-wave Courant
+//! numbers (the stability map's sphere at G = 1e9 Pa) the pass left 5.7 energy budgets of
+//! strain at the end — it changes `B̃^{n+1}` by a strain the implicit stiffness did not answer
+//! — which is one reason for the coupled step's cap of 25, at which every run of the map stays
+//! stable with it; without it the seed's sphere at 12 cells per radius and CFL 0.9 gained 16
+//! times its energy budget.
 //!
 //! **θ of the stretching.** The step above is Crank–Nicolson in the stretching (the `Δt/2`
 //! weights). With `numerics.elastic.theta` = θ the weights are `(1 − θ)Δt` on `H(Vⁿ)` and
@@ -444,7 +446,7 @@ impl StagePlugin for DeformationUpdate {
             k: Kernels::new(grid, bc, mu_f, mu_s),
             wave_dt,
             stretch_theta: o.stretch_theta(),
-            first: (!coupled(scene)).then(|| std::array::from_fn(|_| Field::zeros(grid))),
+            first: std::array::from_fn(|_| Field::zeros(grid)),
         }))
     }
 }

@@ -44,9 +44,12 @@ pub struct ElasticOptions {
     /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, with `Split`; 0.75 with `Coupled`).
     /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
     /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
-    /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. (The
-    /// coupled stability-map sphere at G = 1e9 Pa, CFL 0.5: at 0.5 the energy guard stops it
-    /// in free flight, at 0.6 it gains 0.74 of its energy budget, at 0.75 nothing.)
+    /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. With
+    /// `Coupled`, 0.5 is the accurate choice for smooth motion (the Mooney–Rivlin Couette case
+    /// at 64 cells errs by 3.5e-4 against 9.8e-4 at 0.75) and keeps more of an impact's rebound
+    /// (0.96 against 0.78 m/s, the map's G = 1e9 sphere), but the map's sphere at G = 1e7 Pa
+    /// and CFL 0.9 gained 18 % of its energy budget at 6 cells per radius, and 1.3 % at 12;
+    /// at 0.75 every run of the map is stable.
     #[serde(default)]
     pub theta: Option<f64>,
     /// `Coupled` only: the most FGMRES iterations per step (default 500; the stability map's
@@ -57,9 +60,9 @@ pub struct ElasticOptions {
     /// (default [`DEFAULT_COUPLED_WAVE_COURANT`], at most [`MAX_COUPLED_WAVE_COURANT`]). The
     /// coupled step is stable far beyond the split step's [`MAX_WAVE_COURANT`], but not without
     /// bound, and it damps an impact it takes in few steps: the stability map's sphere (8 cells
-    /// per radius) at G = 1e9 Pa leaves the wall at 0.83 m/s with a cap of 25 (split: 1.03),
-    /// 0.82 at 50, sticks to it at 100, and gains energy at an impact taken at 100 (6 cells per
-    /// radius) or 240–500 (8 cells per radius).
+    /// per radius, CFL 0.5–0.9) at G = 1e9 Pa leaves the wall at 0.78 m/s with a cap of 25 or
+    /// 50 (split: 1.03), but at 6 cells per radius sticks to it at 50, and gains energy at an
+    /// impact taken at 100 (6 cells per radius) or 240–500 (8 cells per radius).
     #[serde(default = "default_coupled_wave_courant")]
     pub coupled_wave_courant: f64,
 }
@@ -78,9 +81,9 @@ pub enum ElasticCoupling {
     /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
     /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
     /// `coupled_wave_courant` (25) elastic-wave Courant numbers instead of 4. The stability
-    /// map's sphere at CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
+    /// map's sphere at CFL 0.5 takes 33 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
-    /// (`theta` 0.75), so an impact loses part of its rebound (0.83 against the split step's
+    /// (`theta` 0.75), so an impact loses part of its rebound (0.78 against the split step's
     /// 1.03 m/s at G = 1e9); ≈ 1.4× the split step's cost per step on the seed's sphere.
     Coupled,
 }
