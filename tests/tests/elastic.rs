@@ -69,8 +69,14 @@ fn a_scene_without_solid_loads_no_law_and_allocates_no_b() {
     assert!(
         !names.contains(&"elastic") && !names.contains(&"deformation") && !names.contains(&"vof")
     );
-    assert!(s.state.deformation.is_none() && s.state.phi.is_none());
-    assert!(!s.pipeline().fields().contains(&FieldId::Deformation));
+    assert!(
+        s.state
+            .resources
+            .get::<efsi_stages::elastic::Deformation>()
+            .is_none()
+            && s.state.phi.is_none()
+    );
+    assert!(!s.pipeline().fields().contains(&efsi_stages::elastic::B));
 }
 
 /// A test-only stage that imposes a velocity field every step (a kinematic driver).
@@ -132,7 +138,11 @@ impl Stage for PrescribedStage {
 
 /// max over the solid of |B̃ − φ^{1/2} I| (B̃ = φ^{1/2} B).
 fn stress_free_error(s: &Simulation) -> f64 {
-    let d = s.state.deformation.as_ref().unwrap();
+    let d = s
+        .state
+        .resources
+        .get::<efsi_stages::elastic::Deformation>()
+        .unwrap();
     let phi = s.state.phi.as_ref().unwrap();
     let mut e = 0.0f64;
     for j in 0..s.grid.ny as isize {
@@ -411,8 +421,8 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
                 efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
                     + efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv),
                 s.state
-                    .deformation
-                    .as_ref()
+                    .resources
+                    .get::<efsi_stages::elastic::Deformation>()
                     .map_or(0.0, |d| d.elastic_energy),
             )
         };

@@ -18,6 +18,9 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::time::{Duration, Instant};
 
+mod outputs;
+pub use outputs::{OutputDecl, OutputKind};
+
 /// The phases of one time step, in execution order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Phase {
@@ -66,9 +69,10 @@ pub enum FieldId {
     Viscosity,
     /// Solid volume fraction (allocated only when declared).
     SolidFraction,
-    /// The modified left Cauchy–Green tensor B̃ and its step-start data (allocated only when
-    /// declared).
-    Deformation,
+    /// A field a stage owns, by name (e.g. the elastic stages' `B`): it lives in the stage's
+    /// [`StateResource`](crate::state::StateResource), which the stage adds to the state
+    /// ([`Stage::init_state`]); declaring it lets the scheduler order and check its users.
+    Stage(&'static str),
 }
 
 impl FieldId {
@@ -90,7 +94,7 @@ impl FieldId {
             FieldId::Density => "density",
             FieldId::Viscosity => "viscosity",
             FieldId::SolidFraction => "solid_fraction",
-            FieldId::Deformation => "B",
+            FieldId::Stage(name) => name,
         }
     }
 }
@@ -145,6 +149,11 @@ pub trait Stage: Send {
     ) -> Result<(), StageError> {
         Ok(())
     }
+
+    /// Add the stage's own data to a new state ([`StateResources::insert`](crate::state::StateResources::insert)), before any
+    /// [`initialize`](Self::initialize); stages that share a resource add it if it is absent
+    /// (default: nothing).
+    fn init_state(&self, _grid: &Grid, _state: &mut State) {}
 
     /// The largest stable Δt for the current state, if this stage limits it (default: none).
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
@@ -214,6 +223,11 @@ pub trait StagePlugin: Sync {
     /// ([`crate::scene::options`]; default: none). Several plugins may declare one section.
     fn options(&self) -> Option<crate::scene::OptionsDecl> {
         None
+    }
+    /// The outputs the stage contributes (VTK arrays, probe quantities) computed from the
+    /// state, its own resources included ([`OutputDecl`]; default: none).
+    fn outputs(&self) -> &'static [OutputDecl] {
+        &[]
     }
     /// Build the stage for a scene; the error says which scene value is unusable. `shared`
     /// holds what the stages of this pipeline share while it is built (in the pipeline's
@@ -296,7 +310,7 @@ pub enum ScheduleError {
         /// Why.
         why: &'static str,
     },
-    /// Two plugins share a name.
+    /// Two plugins share a name, or two scheduled stages an output's name.
     #[error("two stage plugins are named `{0}`")]
     DuplicateName(String),
     /// A plugin refused the scene.
@@ -341,6 +355,7 @@ pub struct StageTiming {
 pub struct Pipeline {
     entries: Vec<Entry>,
     fields: BTreeSet<FieldId>,
+    outputs: Vec<OutputDecl>,
 }
 
 impl Pipeline {
@@ -381,7 +396,14 @@ impl Pipeline {
         }
         let mut entries = Vec::with_capacity(order.len());
         let mut shared = Resources::default();
+        let mut outputs: Vec<OutputDecl> = Vec::new();
         for p in order {
+            for o in p.outputs() {
+                if outputs.iter().any(|x| x.name == o.name) {
+                    return Err(ScheduleError::DuplicateName(format!("output {}", o.name)));
+                }
+                outputs.push(*o);
+            }
             let stage =
                 p.build(scene, grid, bc, &mut shared)
                     .map_err(|message| ScheduleError::Build {
@@ -402,7 +424,11 @@ impl Pipeline {
                 last: StageStats::default(),
             });
         }
-        Ok(Pipeline { entries, fields })
+        Ok(Pipeline {
+            entries,
+            fields,
+            outputs,
+        })
     }
 
     /// Order by phase, then topologically by `after` within a phase; reject ambiguity.
@@ -498,6 +524,18 @@ impl Pipeline {
     /// The fields the pipeline uses (the state allocates exactly these).
     pub fn fields(&self) -> &BTreeSet<FieldId> {
         &self.fields
+    }
+
+    /// The outputs the scheduled stages contribute, in pipeline order.
+    pub fn outputs(&self) -> &[OutputDecl] {
+        &self.outputs
+    }
+
+    /// Add each stage's own data to a new state ([`Stage::init_state`]), in pipeline order.
+    pub fn init_state(&self, grid: &Grid, state: &mut State) {
+        for e in &self.entries {
+            e.stage.init_state(grid, state);
+        }
     }
 
     /// Stage names in execution order.
@@ -655,17 +693,19 @@ impl Pipeline {
                             ctx.bc.fill_scalar(ctx.grid, phi, false);
                         }
                     }
-                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Deformation => {}
+                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Stage(_) => {}
                 }
             }
-            if e.writes.contains(&FieldId::Deformation)
-                && let Some(d) = &state.deformation
-                && let Some((c, (i, j))) = d.first_non_finite(nx, ny)
+            if e.writes.iter().any(|f| matches!(f, FieldId::Stage(_)))
+                && let Some((c, (i, j))) = state
+                    .resources
+                    .iter()
+                    .find_map(|r| r.first_non_finite(nx, ny))
             {
                 return Err(StageError {
                     stage: e.name.to_string(),
                     message: format!(
-                        "produced a non-finite B{c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                        "produced a non-finite {c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
                         ctx.step, ctx.t, ctx.dt
                     ),
                 });

@@ -151,7 +151,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
     ) -> Result<CouplingStats, StageError> {
         let Some(mut cp) = self.coupling.take() else {
             return Ok(CouplingStats::default());
@@ -166,7 +166,7 @@ impl ElasticStage {
         cp: &mut Coupling,
         ctx: &StepContext,
         state: &mut State,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
     ) -> Result<CouplingStats, StageError> {
         let g = ctx.grid;
         let bc = ctx.bc;
@@ -379,7 +379,7 @@ impl ElasticStage {
         cp: &mut Coupling,
         k: usize,
         ctx: &StepContext,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
     ) -> Result<usize, StageError> {
         let g = ctx.grid;
         let (nx, ny) = (g.nx, g.ny);

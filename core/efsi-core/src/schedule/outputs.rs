@@ -1,0 +1,45 @@
+//! What a stage contributes to a run's outputs ([`crate::StagePlugin::outputs`]): VTK arrays
+//! and probe quantities of the fields it owns, each computed from the state. The run's writers
+//! (crate `efsi-run`) list the shared fields' outputs first, then the scheduled stages', and
+//! check the scene's `output.vtk.fields` and `output.probes` against exactly these: a stage
+//! that adds a field adds its outputs here, and no core or writer file changes.
+
+use crate::grid::{Geometry, Grid};
+use crate::state::State;
+
+/// One output of a stage, by name.
+#[derive(Clone, Copy, Debug)]
+pub struct OutputDecl {
+    /// Its name: the VTK array's (`output.vtk.fields`) or the probe's column
+    /// (`output.probes: [Quantity("name")]`).
+    pub name: &'static str,
+    /// What it holds (documented in `run.json`).
+    pub meaning: &'static str,
+    /// Its unit for a scene in SI units.
+    pub unit: &'static str,
+    /// Its kind and how it is computed.
+    pub kind: OutputKind,
+}
+
+/// How an output is computed.
+#[derive(Clone, Copy, Debug)]
+pub enum OutputKind {
+    /// A VTK cell array.
+    Array {
+        /// Its components in the file's order (VTK's: vectors X, Y, Z; symmetric tensors XX,
+        /// YY, ZZ, XY, YZ, XZ), each named by the physical component it holds.
+        components: fn(Geometry) -> Vec<&'static str>,
+        /// Its values at the cell centres, cell-major (`components` per cell, rows of x in
+        /// order of y), or `None` when the state does not hold it.
+        values: fn(&Grid, &State) -> Option<Vec<f64>>,
+    },
+    /// A number per probe sample: one column of `probes.csv`.
+    Quantity(fn(&Grid, &State) -> f64),
+}
+
+impl OutputDecl {
+    /// Whether it is a VTK array.
+    pub fn is_array(&self) -> bool {
+        matches!(self.kind, OutputKind::Array { .. })
+    }
+}
