@@ -79,6 +79,66 @@ fn a_scene_without_solid_loads_no_law_and_allocates_no_b() {
     assert!(!s.pipeline().fields().contains(&efsi_stages::elastic::B));
 }
 
+/// The elastic stage's outputs (`B`, `stress`, `elastic_energy`) exist where it is scheduled;
+/// elsewhere naming them is refused with the arrays and quantities the scene's stages provide.
+#[test]
+fn the_elastic_outputs_are_there_only_with_the_elastic_stage() {
+    let fluid = |output: &str| {
+        format!(
+            r#"Scene(
+        name: "fluid_only",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 8, ny: 8),
+        time: (end: 1.0),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+        output: ({output}),
+    )"#
+        )
+    };
+    let refused = |output: &str| match sim_with(&fluid(output), &efsi_stages::builtin()) {
+        Ok(_) => panic!("{output}: accepted"),
+        Err(e) => e.to_string(),
+    };
+    let listed =
+        r#"["velocity", "pressure", "density", "viscosity", "divergence", "solid_fraction"]"#;
+    for (output, needles) in [
+        (
+            r#"vtk: (fields: ["velocity", "temperature"])"#,
+            [
+                "output.vtk.fields[1]",
+                "unknown field `temperature`",
+                listed,
+            ],
+        ),
+        (
+            r#"vtk: (fields: ["B"])"#,
+            ["output.vtk.fields[0]", "unknown field `B`", listed],
+        ),
+        (
+            r#"probes: [KineticEnergy, Quantity("elastic_energy")]"#,
+            [
+                "output.probes[1]",
+                "unknown quantity `elastic_energy`",
+                "this scene's stages report []",
+            ],
+        ),
+    ] {
+        let m = refused(output);
+        for n in needles {
+            assert!(m.contains(n), "{output}: `{n}` not in: {m}");
+        }
+    }
+    let s = couette(
+        8,
+        r#"law: (name: "neo_hookean", parameters: {"G": 5.0}),"#,
+        "",
+        "dt_max: 0.001",
+    );
+    let names: Vec<&str> = s.pipeline().outputs().iter().map(|o| o.name).collect();
+    assert_eq!(names, ["B", "stress", "elastic_energy"]);
+}
+
 /// A test-only stage that imposes a velocity field every step (a kinematic driver).
 struct Prescribed(fn(f64, f64) -> (f64, f64));
 struct PrescribedStage(fn(f64, f64) -> (f64, f64));
