@@ -2,8 +2,9 @@
 //! file: adding a field, its VTK array and its probe touches no file of efsi (the contract of
 //! `efsi_core::schedule`: `FieldId::Stage`, `StateResource`, `StagePlugin::outputs`). The
 //! stage keeps the age of the fluid, `∂a/∂t = 1` in every cell, in a field of its own; the
-//! run writes it as the VTK array `age` and the probe column `mean_age`, carries it through
-//! checkpoints, and refuses outputs that no scheduled stage provides, naming the ones there are.
+//! run writes it as the VTK array `age`, samples it in a point probe and a line profile, adds
+//! the probe quantity `mean_age`, carries the field through checkpoints, and refuses outputs
+//! that no scheduled stage provides, naming the ones there are.
 
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, OutputDecl, OutputKind, Phase, Scene, Simulation, Stage,
@@ -43,16 +44,13 @@ impl StateResource for Age {
     }
 }
 
-/// The age of every cell, cell-major.
-fn age_values(grid: &Grid, state: &State) -> Option<Vec<f64>> {
-    let a = &state.resources.get::<Age>()?.0;
-    let cells = (0..grid.ny as isize).flat_map(|j| (0..grid.nx as isize).map(move |i| (i, j)));
-    Some(cells.map(|c| a[c]).collect())
-}
-
 /// The mean age over the cells.
 fn mean_age(grid: &Grid, state: &State) -> f64 {
-    age_values(grid, state).map_or(f64::NAN, |v| v.iter().sum::<f64>() / v.len() as f64)
+    let Some(Age(a)) = state.resources.get::<Age>() else {
+        return f64::NAN;
+    };
+    let cells = (0..grid.ny as isize).flat_map(|j| (0..grid.nx as isize).map(move |i| (i, j)));
+    cells.map(|c| a[c]).sum::<f64>() / (grid.nx * grid.ny) as f64
 }
 
 const OUTPUTS: &[OutputDecl] = &[
@@ -60,10 +58,7 @@ const OUTPUTS: &[OutputDecl] = &[
         name: "age",
         meaning: "time since the start of the run",
         unit: "s",
-        kind: OutputKind::Array {
-            components: |_| vec!["a"],
-            values: age_values,
-        },
+        kind: OutputKind::Field(|state| state.resources.get::<Age>().map(|a| &a.0)),
     },
     OutputDecl {
         name: "mean_age",
@@ -116,6 +111,7 @@ impl Stage for AgingStage {
             .resources
             .get_mut::<Age>()
             .expect("added by init_state");
+        // Ghosts included: a point probe near a side interpolates with them.
         a.0.data_mut().iter_mut().for_each(|x| *x += ctx.dt);
         Ok(StageStats::default())
     }
@@ -154,7 +150,9 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-const OUTPUT: &str = "vtk_every: 0.0625, probes: [Quantity(\"mean_age\"), KineticEnergy], vtk: (fields: [\"velocity\", \"age\"])";
+const OUTPUT: &str = r#"vtk_every: 0.0625, vtk: (fields: ["velocity", "age"]),
+        probes: [Quantity("mean_age"), KineticEnergy, Point(name: "age_c", field: "age", at: (0.3, 0.4))],
+        profiles: [Line(name: "a", from: (0.0, 0.5), to: (1.0, 0.5), points: 5, fields: ["u", "age"])]"#;
 
 #[test]
 fn a_stage_of_ones_own_writes_its_field_to_vtk_and_probes() {
@@ -166,13 +164,24 @@ fn a_stage_of_ones_own_writes_its_field_to_vtk_and_probes() {
     // probes.csv: the column named after the quantity, the age equal to the time in every row.
     let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("t,mean_age,kinetic_energy"));
+    assert_eq!(lines.next(), Some("t,mean_age,kinetic_energy,age_c"));
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
         .collect();
     assert_eq!(rows.len(), 9);
     for r in &rows {
         assert_eq!(r[1], r[0], "mean age at t = {}", r[0]);
+        assert_eq!(r[3], r[0], "sampled age at t = {}", r[0]);
+    }
+    // The profile at the end samples it along the line.
+    let profiles: Vec<_> = std::fs::read_dir(dir.join("profiles")).unwrap().collect();
+    assert_eq!(profiles.len(), 1);
+    let text = std::fs::read_to_string(profiles[0].as_ref().unwrap().path()).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("s,x,y,u,age"));
+    for l in lines {
+        let age: f64 = l.rsplit(',').next().unwrap().parse().unwrap();
+        assert_eq!(age, 0.125, "{l}");
     }
     // The VTK files: the array asked for, one component, the age in every cell.
     let files = read_pvd(&dir.join("fields.pvd")).unwrap();
@@ -190,6 +199,7 @@ fn a_stage_of_ones_own_writes_its_field_to_vtk_and_probes() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap();
     let arrays = &json["vtk"]["arrays"];
     assert_eq!(arrays[1]["name"], "age");
+    assert_eq!(arrays[1]["components"], serde_json::json!(["age"]));
     assert_eq!(arrays[1]["unit"], "s");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -273,6 +283,16 @@ fn outputs_no_scheduled_stage_provides_are_refused_naming_the_ones_there_are() {
     let m = refused("probes: [Quantity(\"mean\")]", &plugins());
     assert!(
         m.contains("unknown quantity `mean`") && m.contains(r#"["mean_age"]"#),
+        "{m}"
+    );
+    let m = refused(
+        r#"profiles: [Line(name: "a", from: (0.0, 0.5), to: (1.0, 0.5), points: 5, fields: ["agee"])]"#,
+        &plugins(),
+    );
+    assert!(
+        m.contains("output.profiles[0].fields")
+            && m.contains("unknown field `agee`")
+            && m.contains(r#""solid_fraction", "age"]"#),
         "{m}"
     );
 }

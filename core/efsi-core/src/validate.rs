@@ -434,12 +434,6 @@ impl Scene {
                         "solid_fraction needs a solid, and the scene has none",
                     );
                 }
-                if !FIELD_NAMES.contains(&field.as_str()) {
-                    return err(
-                        &format!("{f}.field"),
-                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
-                    );
-                }
                 if !inside(*at) {
                     return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
                 }
@@ -478,12 +472,6 @@ impl Scene {
                         "solid_fraction needs a solid, and the scene has none",
                     );
                 }
-                if !FIELD_NAMES.contains(&field.as_str()) {
-                    return err(
-                        &format!("{f}.fields"),
-                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
-                    );
-                }
             }
             if fields.is_empty() {
                 return err(&format!("{f}.fields"), "must name at least one field");
@@ -502,9 +490,12 @@ impl Scene {
 
     /// The outputs the stages provide, checked once the pipeline is built
     /// ([`crate::Simulation::new`]): every array of `output.vtk.fields` is a shared field's
-    /// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every `Quantity` probe one a
-    /// scheduled stage reports; an unknown one is named with the ones there are.
+    /// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every field a `Point` probe or a
+    /// profile samples a shared one ([`FIELD_NAMES`]) or a stage's
+    /// ([`OutputKind::Field`](crate::OutputKind::Field)), every `Quantity` probe one a scheduled
+    /// stage reports; an unknown one is named with the ones there are.
     pub fn check_outputs(&self, pipeline: &crate::Pipeline) -> Checked {
+        use crate::OutputKind;
         let stage = |array: bool| {
             pipeline
                 .outputs()
@@ -512,6 +503,36 @@ impl Scene {
                 .filter(move |o| o.is_array() == array)
                 .map(|o| o.name)
         };
+        let fields: Vec<&str> = FIELD_NAMES
+            .iter()
+            .copied()
+            .chain(pipeline.outputs().iter().filter_map(|o| match o.kind {
+                OutputKind::Field(_) => Some(o.name),
+                _ => None,
+            }))
+            .collect();
+        let sampled = |at: String, f: &String| {
+            if fields.contains(&f.as_str()) {
+                Ok(())
+            } else {
+                err(
+                    &at,
+                    format!(
+                        "unknown field `{f}`: this scene's fields and stages provide {fields:?}"
+                    ),
+                )
+            }
+        };
+        for (k, p) in self.output.probes.iter().enumerate() {
+            if let ProbeSpec::Point { field, .. } = p {
+                sampled(format!("output.probes[{k}].field"), field)?;
+            }
+        }
+        for (k, ProfileSpec::Line { fields, .. }) in self.output.profiles.iter().enumerate() {
+            for f in fields {
+                sampled(format!("output.profiles[{k}].fields"), f)?;
+            }
+        }
         let o = &self.output;
         for (k, f) in o.vtk.fields.iter().flatten().enumerate() {
             let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();

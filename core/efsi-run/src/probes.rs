@@ -40,6 +40,25 @@ pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
     }
 }
 
+/// A named field sampled at a point: a shared field ([`sample`]) or one of the stages'
+/// `outputs` ([`OutputKind::Field`]); NaN for a name neither has.
+pub fn sample_in(
+    grid: &Grid,
+    state: &State,
+    outputs: &[OutputDecl],
+    field: &str,
+    at: (f64, f64),
+) -> f64 {
+    let stage = outputs.iter().find_map(|o| match o.kind {
+        OutputKind::Field(f) if o.name == field => Some(f),
+        _ => None,
+    });
+    match stage {
+        Some(f) => f(state).map_or(f64::NAN, |f| interpolate(grid, f, (0.5, 0.5), at)),
+        None => sample(grid, state, field, at),
+    }
+}
+
 /// Column names of a probe in `probes.csv`.
 pub fn columns(p: &ProbeSpec) -> Vec<String> {
     p.columns()
@@ -67,7 +86,7 @@ pub fn evaluate(
     out: &mut Vec<f64>,
 ) {
     match p {
-        ProbeSpec::Point { field, at, .. } => out.push(sample(grid, state, field, *at)),
+        ProbeSpec::Point { field, at, .. } => out.push(sample_in(grid, state, outputs, field, *at)),
         ProbeSpec::KineticEnergy => {
             out.push(ops::kinetic_energy(grid, &state.u, &state.v, &state.rho))
         }

@@ -91,7 +91,7 @@ pub enum ProbeSpec {
     Point {
         /// Column name.
         name: String,
-        /// Field name (see [`FIELD_NAMES`]).
+        /// Field name (see [`FIELD_NAMES`], and the stages' fields).
         field: String,
         /// Position.
         at: (f64, f64),
@@ -198,7 +198,8 @@ impl ProbeSpec {
 /// than any grid this solver runs (at most 1e4 cells across).
 pub const MAX_PROFILE_POINTS: usize = 100_000;
 
-/// Field names that probes and profiles can sample.
+/// The shared fields' names that probes and profiles can sample; the scheduled stages add
+/// theirs ([`crate::OutputKind::Field`]).
 pub const FIELD_NAMES: &[&str] = &[
     "u",
     "v",
@@ -223,7 +224,7 @@ pub enum ProfileSpec {
         to: (f64, f64),
         /// Number of points (≥ 2), both ends included.
         points: usize,
-        /// Fields to sample (see [`FIELD_NAMES`]).
+        /// Fields to sample (see [`FIELD_NAMES`], and the stages' fields).
         fields: Vec<String>,
         /// Times at which to write it (default: only at the end of the run).
         #[serde(default)]

@@ -1,9 +1,11 @@
-//! What a stage contributes to a run's outputs ([`crate::StagePlugin::outputs`]): VTK arrays
-//! and probe quantities of the fields it owns, each computed from the state. The run's writers
-//! (crate `efsi-run`) list the shared fields' outputs first, then the scheduled stages', and
-//! check the scene's `output.vtk.fields` and `output.probes` against exactly these: a stage
+//! What a stage contributes to a run's outputs ([`crate::StagePlugin::outputs`]): VTK arrays,
+//! fields to sample at points and probe quantities of the fields it owns, each computed from
+//! the state. The run's writers (crate `efsi-run`) list the shared fields' outputs first, then
+//! the scheduled stages'; [`crate::Scene::check_outputs`] checks the scene's
+//! `output.vtk.fields`, `output.probes` and `output.profiles` against exactly these. A stage
 //! that adds a field adds its outputs here, and no core or writer file changes.
 
+use crate::field::Field;
 use crate::grid::{Geometry, Grid};
 use crate::state::State;
 
@@ -33,6 +35,9 @@ pub enum OutputKind {
         /// order of y), or `None` when the state does not hold it.
         values: fn(&Grid, &State) -> Option<Vec<f64>>,
     },
+    /// A scalar field at the cell centres (ghosts filled): a VTK array of one component, and
+    /// a field `Point` probes and line profiles sample by name (bilinear interpolation).
+    Field(fn(&State) -> Option<&Field>),
     /// A number per probe sample: one column of `probes.csv`.
     Quantity(fn(&Grid, &State) -> f64),
 }
@@ -40,6 +45,6 @@ pub enum OutputKind {
 impl OutputDecl {
     /// Whether it is a VTK array.
     pub fn is_array(&self) -> bool {
-        matches!(self.kind, OutputKind::Array { .. })
+        matches!(self.kind, OutputKind::Array { .. } | OutputKind::Field(_))
     }
 }

@@ -59,15 +59,19 @@ pub fn notes(geometry: Geometry) -> [(&'static str, &'static str); 2] {
 pub fn describe(geometry: Geometry, point_data: bool, outputs: &[OutputDecl]) -> Vec<ArrayDoc> {
     let axi = geometry == Geometry::Axisymmetric;
     let location = if point_data { "cell and point" } else { "cell" };
-    let stage = outputs.iter().filter_map(|o| match o.kind {
-        OutputKind::Array { components, .. } => Some(ArrayDoc {
+    let stage = outputs.iter().filter_map(|o| {
+        let components = match o.kind {
+            OutputKind::Array { components, .. } => components(geometry),
+            OutputKind::Field(_) => vec![o.name],
+            OutputKind::Quantity(_) => return None,
+        };
+        Some(ArrayDoc {
             name: o.name,
             location,
-            components: components(geometry),
+            components,
             meaning: o.meaning,
             unit: o.unit,
-        }),
-        OutputKind::Quantity(_) => None,
+        })
     });
     VTK_FIELDS
         .iter()
@@ -126,11 +130,13 @@ pub fn present(
             .as_ref()
             .is_none_or(|f| f.iter().any(|x| x == name))
     };
-    let stage = outputs.iter().filter_map(|o| match o.kind {
-        OutputKind::Array { values, .. } if wanted(o.name) && values(grid, state).is_some() => {
-            Some(o.name)
-        }
-        _ => None,
+    let stage = outputs.iter().filter_map(|o| {
+        let there = match o.kind {
+            OutputKind::Array { values, .. } => values(grid, state).is_some(),
+            OutputKind::Field(f) => f(state).is_some(),
+            OutputKind::Quantity(_) => false,
+        };
+        (there && wanted(o.name)).then_some(o.name)
     });
     VTK_FIELDS
         .iter()
@@ -209,14 +215,19 @@ pub fn arrays(
                     out.push((name, 1, scalar(phi)));
                 }
             }
-            _ => {
-                let stage = outputs.iter().find(|o| o.name == name);
-                if let Some(OutputKind::Array { components, values }) = stage.map(|o| o.kind)
-                    && let Some(v) = values(grid, state)
-                {
-                    out.push((name, components(grid.geometry).len(), v));
+            _ => match outputs.iter().find(|o| o.name == name).map(|o| o.kind) {
+                Some(OutputKind::Array { components, values }) => {
+                    if let Some(v) = values(grid, state) {
+                        out.push((name, components(grid.geometry).len(), v));
+                    }
                 }
-            }
+                Some(OutputKind::Field(f)) => {
+                    if let Some(f) = f(state) {
+                        out.push((name, 1, scalar(f)));
+                    }
+                }
+                _ => {}
+            },
         }
     }
     out

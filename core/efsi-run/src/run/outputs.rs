@@ -424,7 +424,7 @@ impl Outputs {
             for fl in fields {
                 text.push_str(&format!(
                     ",{:.17e}",
-                    probes::sample(&sim.grid, &sim.state, fl, p)
+                    probes::sample_in(&sim.grid, &sim.state, &self.outputs, fl, p)
                 ));
             }
             text.push('\n');
