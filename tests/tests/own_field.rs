@@ -68,11 +68,16 @@ const OUTPUTS: &[OutputDecl] = &[
     },
 ];
 
-struct Aging;
+/// The plugin, by name, after the stages named (a second one shows that two stages cannot
+/// declare one output).
+struct Aging(&'static str, &'static [&'static str]);
 
 impl StagePlugin for Aging {
     fn name(&self) -> &'static str {
-        "aging"
+        self.0
+    }
+    fn after(&self) -> &'static [&'static str] {
+        self.1
     }
     fn phase(&self) -> Phase {
         Phase::Interface
@@ -119,7 +124,7 @@ impl Stage for AgingStage {
 
 fn plugins() -> Vec<&'static dyn StagePlugin> {
     let mut p = efsi_stages::builtin();
-    p.push(&Aging);
+    p.push(&Aging("aging", &[]));
     p
 }
 
@@ -270,6 +275,14 @@ fn outputs_no_scheduled_stage_provides_are_refused_naming_the_ones_there_are() {
     let m = refused("probes: [Quantity(\"mean_age\")]", &efsi_stages::builtin());
     assert!(
         m.contains("output.probes[0]") && m.contains("unknown quantity `mean_age`"),
+        "{m}"
+    );
+    // Two stages cannot both declare one output.
+    let mut twice = plugins();
+    twice.push(&Aging("aging_too", &["aging"]));
+    let m = refused("", &twice);
+    assert!(
+        m.contains("stages `aging` and `aging_too` both declare the output `age`"),
         "{m}"
     );
     // With it, a misspelt one is named with the ones its stages provide.

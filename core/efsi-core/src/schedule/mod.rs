@@ -310,9 +310,19 @@ pub enum ScheduleError {
         /// Why.
         why: &'static str,
     },
-    /// Two plugins share a name, or two scheduled stages an output's name.
+    /// Two plugins share a name.
     #[error("two stage plugins are named `{0}`")]
     DuplicateName(String),
+    /// Two scheduled stages declare an output of one name.
+    #[error("stages `{first}` and `{second}` both declare the output `{output}`")]
+    DuplicateOutput {
+        /// The output's name.
+        output: &'static str,
+        /// The stage that declared it first.
+        first: &'static str,
+        /// The other.
+        second: &'static str,
+    },
     /// A plugin refused the scene.
     #[error("stage `{stage}`: {message}")]
     Build {
@@ -396,13 +406,17 @@ impl Pipeline {
         }
         let mut entries = Vec::with_capacity(order.len());
         let mut shared = Resources::default();
-        let mut outputs: Vec<OutputDecl> = Vec::new();
+        let mut outputs: Vec<(&'static str, OutputDecl)> = Vec::new();
         for p in order {
             for o in p.outputs() {
-                if outputs.iter().any(|x| x.name == o.name) {
-                    return Err(ScheduleError::DuplicateName(format!("output {}", o.name)));
+                if let Some((first, _)) = outputs.iter().find(|(_, x)| x.name == o.name) {
+                    return Err(ScheduleError::DuplicateOutput {
+                        output: o.name,
+                        first,
+                        second: p.name(),
+                    });
                 }
-                outputs.push(*o);
+                outputs.push((p.name(), *o));
             }
             let stage =
                 p.build(scene, grid, bc, &mut shared)
@@ -427,7 +441,7 @@ impl Pipeline {
         Ok(Pipeline {
             entries,
             fields,
-            outputs,
+            outputs: outputs.into_iter().map(|(_, o)| o).collect(),
         })
     }
 
