@@ -120,7 +120,7 @@ fn the_elastic_outputs_are_there_only_with_the_elastic_stage() {
             [
                 "output.probes[1]",
                 "unknown quantity `elastic_energy`",
-                "this scene's stages report []",
+                "no stage of this scene reports one",
             ],
         ),
     ] {

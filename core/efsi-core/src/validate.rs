@@ -551,9 +551,13 @@ impl Scene {
                 if !quantities.contains(&q.as_str()) {
                     return err(
                         &format!("output.probes[{k}]"),
-                        format!(
-                            "unknown quantity `{q}`: this scene's stages report {quantities:?}"
-                        ),
+                        if quantities.is_empty() {
+                            format!("unknown quantity `{q}`: no stage of this scene reports one")
+                        } else {
+                            format!(
+                                "unknown quantity `{q}`: this scene's stages report {quantities:?}"
+                            )
+                        },
                     );
                 }
             }

@@ -18,8 +18,12 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::time::{Duration, Instant};
 
+mod error;
 mod outputs;
+mod resources;
+pub use error::ScheduleError;
 pub use outputs::{OutputDecl, OutputKind};
+pub use resources::Resources;
 
 /// The phases of one time step, in execution order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -240,97 +244,6 @@ pub trait StagePlugin: Sync {
         bc: &BoundarySet,
         shared: &mut Resources,
     ) -> Result<Box<dyn Stage>, String>;
-}
-
-/// Values the stages of one pipeline share while it is built, one per type (in the spirit of
-/// Bevy's `Resource`): the first stage that needs one makes it, the next ones take it.
-/// [`Pipeline::build`] makes a fresh set per pipeline, so nothing is shared between scenes.
-#[derive(Default)]
-pub struct Resources {
-    map: std::collections::HashMap<std::any::TypeId, Box<dyn std::any::Any + Send + Sync>>,
-}
-
-impl Resources {
-    /// The value of type `T`, if a stage put one in.
-    pub fn get<T: std::any::Any + Send + Sync>(&self) -> Option<&T> {
-        self.map
-            .get(&std::any::TypeId::of::<T>())
-            .and_then(|b| b.downcast_ref())
-    }
-
-    /// The value of type `T`: the one already there, else the one `make` returns (kept for
-    /// the stages built after; an error is passed on and nothing kept).
-    pub fn get_or_try_insert_with<T: std::any::Any + Send + Sync, E>(
-        &mut self,
-        make: impl FnOnce() -> Result<T, E>,
-    ) -> Result<&T, E> {
-        use std::collections::hash_map::Entry;
-        let slot = match self.map.entry(std::any::TypeId::of::<T>()) {
-            Entry::Occupied(o) => o.into_mut(),
-            Entry::Vacant(v) => v.insert(Box::new(make()?)),
-        };
-        Ok(slot
-            .downcast_ref()
-            .expect("every value is keyed by its own type's id"))
-    }
-}
-
-/// The pipeline could not be assembled.
-#[derive(Debug, Clone, thiserror::Error)]
-pub enum ScheduleError {
-    /// A stage reads a field that nothing provides.
-    #[error("stage `{stage}` reads `{field}`, which no scheduled stage provides")]
-    MissingField {
-        /// The stage.
-        stage: String,
-        /// The field.
-        field: &'static str,
-    },
-    /// Two stages of one phase touch the same field without an ordering between them.
-    #[error(
-        "stages `{a}` and `{b}` of phase {phase:?} both touch `{field}` but neither is declared after the other"
-    )]
-    Ambiguous {
-        /// First stage.
-        a: String,
-        /// Second stage.
-        b: String,
-        /// Their phase.
-        phase: Phase,
-        /// The shared field.
-        field: &'static str,
-    },
-    /// An ordering constraint names a stage that is not in the same phase, or forms a cycle.
-    #[error("stage `{stage}`: ordering constraint on `{other}` cannot be satisfied ({why})")]
-    BadOrder {
-        /// The stage.
-        stage: String,
-        /// The stage it names.
-        other: String,
-        /// Why.
-        why: &'static str,
-    },
-    /// Two plugins share a name.
-    #[error("two stage plugins are named `{0}`")]
-    DuplicateName(String),
-    /// Two scheduled stages declare an output of one name.
-    #[error("stages `{first}` and `{second}` both declare the output `{output}`")]
-    DuplicateOutput {
-        /// The output's name.
-        output: &'static str,
-        /// The stage that declared it first.
-        first: &'static str,
-        /// The other.
-        second: &'static str,
-    },
-    /// A plugin refused the scene.
-    #[error("stage `{stage}`: {message}")]
-    Build {
-        /// The stage.
-        stage: String,
-        /// Its message.
-        message: String,
-    },
 }
 
 struct Entry {
