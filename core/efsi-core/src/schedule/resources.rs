@@ -2,7 +2,7 @@
 
 /// Values the stages of one pipeline share while it is built, one per type (in the spirit of
 /// Bevy's `Resource`): the first stage that needs one makes it, the next ones take it.
-/// [`Pipeline::build`] makes a fresh set per pipeline, so nothing is shared between scenes.
+/// [`Pipeline::build`](super::Pipeline::build) makes a fresh set per pipeline, so nothing is shared between scenes.
 #[derive(Default)]
 pub struct Resources {
     map: std::collections::HashMap<std::any::TypeId, Box<dyn std::any::Any + Send + Sync>>,
