@@ -328,6 +328,7 @@ impl Run {
                 &self.sim.grid,
                 &self.sim.state,
                 self.sim.scene.gravity,
+                self.sim.pipeline().outputs(),
                 &mut self.row,
             );
         }

@@ -423,7 +423,14 @@ fn fmi3_outputs_equal_the_solver_driven_directly() {
         sim.advance_to(until, Advance::default()).unwrap();
         let mut row = Vec::new();
         for p in &sim.scene.output.probes {
-            efsi_run::probes::evaluate(p, &sim.grid, &sim.state, sim.scene.gravity, &mut row);
+            efsi_run::probes::evaluate(
+                p,
+                &sim.grid,
+                &sim.state,
+                sim.scene.gravity,
+                sim.pipeline().outputs(),
+                &mut row,
+            );
         }
         for name in OUTPUT_NAMES {
             let want = row[columns.iter().position(|c| c == name).unwrap()];

@@ -307,6 +307,7 @@ impl Recorder {
                     &sim.grid,
                     &sim.state,
                     sim.scene.gravity,
+                    sim.pipeline().outputs(),
                     &mut self.rows,
                 );
             }

@@ -498,3 +498,39 @@ fn the_energy_guard_judges_a_resumed_run_as_the_uninterrupted_one() {
     assert_eq!(resumed, whole);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The elastic stages' data moved from the core's state into a stage-owned resource with its
+/// checkpoint names and order unchanged (the format version stays): a checkpoint written
+/// before the move is read as before. The names, in order: the shared fields, φ, the seven B
+/// tensors' four components, then the scalars.
+#[test]
+fn the_elastic_stages_data_keeps_its_checkpoint_names() {
+    let dir = scratch("names");
+    let sim = load(&dir, DISK);
+    let names: Vec<String> = sim.state.arrays().into_iter().map(|(n, _)| n).collect();
+    let mut want: Vec<String> = ["u", "v", "p", "rho", "mu", "phi"].map(String::from).into();
+    for part in [
+        "b",
+        "start",
+        "advection",
+        "advection_prev",
+        "stretching",
+        "explicit",
+        "stress",
+    ] {
+        for c in ["11", "22", "33", "12"] {
+            want.push(format!("B.{part}.{c}"));
+        }
+    }
+    assert_eq!(names, want);
+    let scalars: Vec<&str> = sim.state.scalars().into_iter().map(|(n, _)| n).collect();
+    assert_eq!(
+        scalars,
+        [
+            "frame_acceleration_x",
+            "frame_acceleration_y",
+            "elastic_energy"
+        ]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

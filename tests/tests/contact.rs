@@ -31,8 +31,8 @@ fn contact_probes_are_exactly_zero_before_touch_down_and_after_lift_off() {
             sim.state.t,
             solid_extent(&sim.grid, &sim.state, 0.0).0,
             row_max,
-            contact_force(&sim.grid, &sim.state, Side::YMin),
-            contact_radius(&sim.grid, &sim.state, Side::YMin),
+            contact_force(&sim.grid, &sim.state, sim.pipeline().outputs(), Side::YMin),
+            contact_radius(&sim.grid, &sim.state, sim.pipeline().outputs(), Side::YMin),
         ));
     });
     // Touch-down and lift-off as the solid fraction sees them: the first and last step with

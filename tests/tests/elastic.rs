@@ -69,8 +69,74 @@ fn a_scene_without_solid_loads_no_law_and_allocates_no_b() {
     assert!(
         !names.contains(&"elastic") && !names.contains(&"deformation") && !names.contains(&"vof")
     );
-    assert!(s.state.deformation.is_none() && s.state.phi.is_none());
-    assert!(!s.pipeline().fields().contains(&FieldId::Deformation));
+    assert!(
+        s.state
+            .resources
+            .get::<efsi_stages::elastic::Deformation>()
+            .is_none()
+            && s.state.phi.is_none()
+    );
+    assert!(!s.pipeline().fields().contains(&efsi_stages::elastic::B));
+}
+
+/// The elastic stage's outputs (`B`, `stress`, `elastic_energy`) exist where it is scheduled;
+/// elsewhere naming them is refused with the arrays and quantities the scene's stages provide.
+#[test]
+fn the_elastic_outputs_are_there_only_with_the_elastic_stage() {
+    let fluid = |output: &str| {
+        format!(
+            r#"Scene(
+        name: "fluid_only",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 8, ny: 8),
+        time: (end: 1.0),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+        output: ({output}),
+    )"#
+        )
+    };
+    let refused = |output: &str| match sim_with(&fluid(output), &efsi_stages::builtin()) {
+        Ok(_) => panic!("{output}: accepted"),
+        Err(e) => e.to_string(),
+    };
+    let listed =
+        r#"["velocity", "pressure", "density", "viscosity", "divergence", "solid_fraction"]"#;
+    for (output, needles) in [
+        (
+            r#"vtk: (fields: ["velocity", "temperature"])"#,
+            [
+                "output.vtk.fields[1]",
+                "unknown field `temperature`",
+                listed,
+            ],
+        ),
+        (
+            r#"vtk: (fields: ["B"])"#,
+            ["output.vtk.fields[0]", "unknown field `B`", listed],
+        ),
+        (
+            r#"probes: [KineticEnergy, Quantity("elastic_energy")]"#,
+            [
+                "output.probes[1]",
+                "unknown quantity `elastic_energy`",
+                "no stage of this scene reports one",
+            ],
+        ),
+    ] {
+        let m = refused(output);
+        for n in needles {
+            assert!(m.contains(n), "{output}: `{n}` not in: {m}");
+        }
+    }
+    let s = couette(
+        8,
+        r#"law: (name: "neo_hookean", parameters: {"G": 5.0}),"#,
+        "",
+        "dt_max: 0.001",
+    );
+    let names: Vec<&str> = s.pipeline().outputs().iter().map(|o| o.name).collect();
+    assert_eq!(names, ["B", "stress", "elastic_energy"]);
 }
 
 /// A test-only stage that imposes a velocity field every step (a kinematic driver).
@@ -132,7 +198,11 @@ impl Stage for PrescribedStage {
 
 /// max over the solid of |B̃ − φ^{1/2} I| (B̃ = φ^{1/2} B).
 fn stress_free_error(s: &Simulation) -> f64 {
-    let d = s.state.deformation.as_ref().unwrap();
+    let d = s
+        .state
+        .resources
+        .get::<efsi_stages::elastic::Deformation>()
+        .unwrap();
     let phi = s.state.phi.as_ref().unwrap();
     let mut e = 0.0f64;
     for j in 0..s.grid.ny as isize {
@@ -413,8 +483,8 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
                 efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
                     + efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv),
                 s.state
-                    .deformation
-                    .as_ref()
+                    .resources
+                    .get::<efsi_stages::elastic::Deformation>()
                     .map_or(0.0, |d| d.elastic_energy),
             )
         };
@@ -495,7 +565,11 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
         let (mut strain, mut drift) = (0.0f64, 0.0f64);
         run_until(&mut s, 0.1, |s, _| {
             let ke = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-            let ee = s.state.deformation.as_ref().unwrap().elastic_energy;
+            let ee = s
+                .state
+                .resources
+                .get::<efsi_stages::elastic::Deformation>()
+                .map_or(0.0, |d| d.elastic_energy);
             strain = strain.max(ee / ke);
             drift = drift.max((volume(s) - v0).abs() / v0);
         });

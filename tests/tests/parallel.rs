@@ -20,7 +20,7 @@ fn run(text: &str, threads: usize, steps: usize) -> Vec<Vec<u64>> {
                 s.step(dt).unwrap();
             }
             let mut fields = vec![&s.state.u, &s.state.v, &s.state.p, &s.state.rho];
-            if let Some(d) = &s.state.deformation {
+            if let Some(d) = s.state.resources.get::<efsi_stages::elastic::Deformation>() {
                 fields.extend(&d.b);
             }
             fields

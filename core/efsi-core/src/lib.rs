@@ -29,8 +29,9 @@ pub use grid::{G, GHOST, Geometry, Grid};
 pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{
-    FieldId, Phase, Pipeline, Resources, Stage, StageError, StagePlugin, StageStats, StepContext,
+    FieldId, OutputDecl, OutputKind, Phase, Pipeline, Resources, Stage, StageError, StagePlugin,
+    StageStats, StepContext,
 };
 pub use simulation::Simulation;
 pub use snapshot::Snapshot;
-pub use state::{Deformation, State};
+pub use state::{State, StateResource, StateResources};

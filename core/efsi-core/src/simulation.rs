@@ -43,10 +43,9 @@ impl EnergyGuard {
         let ke = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
         let pe = crate::ops::potential_energy(grid, &state.rho, gravity);
         let ee = state
-            .deformation
-            .as_ref()
-            .map_or(0.0, |d| d.elastic_energy)
-            .max(0.0);
+            .resources
+            .iter()
+            .fold(0.0, |e, r| e + r.stored_energy().max(0.0));
         (ke, pe, ee)
     }
 
@@ -187,12 +186,16 @@ impl Simulation {
         check_memory(&scene, &grid).map_err(|m| config("grid", m))?;
         let bc = BoundarySet::new(&scene.boundaries, &grid);
         let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
+        scene.check_outputs(&pipeline).map_err(|(field, message)| {
+            crate::overrides::attribute(scene_path, &scene.overrides, field, message)
+        })?;
         let mut state = State::new(
             &grid,
             scene.fluid.density,
             scene.fluid.viscosity,
             pipeline.fields(),
         );
+        pipeline.init_state(&grid, &mut state);
         // Initial velocity.
         match &scene.initial_velocity {
             InitialVelocity::Rest => {}

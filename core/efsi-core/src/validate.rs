@@ -346,7 +346,6 @@ impl Scene {
             }
         }
         if let Some(fields) = &o.vtk.fields {
-            let law = self.solid.as_ref().is_some_and(|s| s.law.is_some());
             if fields.is_empty() {
                 return err(
                     "output.vtk.fields",
@@ -355,12 +354,6 @@ impl Scene {
             }
             for (k, f) in fields.iter().enumerate() {
                 let at = format!("output.vtk.fields[{k}]");
-                if !VTK_FIELDS.contains(&f.as_str()) {
-                    return err(
-                        &at,
-                        format!("unknown field `{f}`, expected one of {VTK_FIELDS:?}"),
-                    );
-                }
                 if fields[..k].contains(f) {
                     return err(&at, format!("`{f}` is listed twice"));
                 }
@@ -368,12 +361,6 @@ impl Scene {
                     return err(
                         &at,
                         "`solid_fraction` needs a solid, and the scene has none",
-                    );
-                }
-                if (f == "B" || f == "stress") && !law {
-                    return err(
-                        &at,
-                        format!("`{f}` needs a solid with a law, and the scene has none"),
                     );
                 }
             }
@@ -447,12 +434,6 @@ impl Scene {
                         "solid_fraction needs a solid, and the scene has none",
                     );
                 }
-                if !FIELD_NAMES.contains(&field.as_str()) {
-                    return err(
-                        &format!("{f}.field"),
-                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
-                    );
-                }
                 if !inside(*at) {
                     return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
                 }
@@ -491,12 +472,6 @@ impl Scene {
                         "solid_fraction needs a solid, and the scene has none",
                     );
                 }
-                if !FIELD_NAMES.contains(&field.as_str()) {
-                    return err(
-                        &format!("{f}.fields"),
-                        format!("unknown field `{field}`, expected one of {FIELD_NAMES:?}"),
-                    );
-                }
             }
             if fields.is_empty() {
                 return err(&format!("{f}.fields"), "must name at least one field");
@@ -506,6 +481,83 @@ impl Scene {
                     return err(
                         &format!("{f}.at"),
                         format!("time {t} is outside [0, time.end]"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The outputs the stages provide, checked once the pipeline is built
+    /// ([`crate::Simulation::new`]): every array of `output.vtk.fields` is a shared field's
+    /// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every field a `Point` probe or a
+    /// profile samples a shared one ([`FIELD_NAMES`]) or a stage's
+    /// ([`OutputKind::Field`](crate::OutputKind::Field)), every `Quantity` probe one a scheduled
+    /// stage reports; an unknown one is named with the ones there are.
+    pub fn check_outputs(&self, pipeline: &crate::Pipeline) -> Checked {
+        use crate::OutputKind;
+        let stage = |array: bool| {
+            pipeline
+                .outputs()
+                .iter()
+                .filter(move |o| o.is_array() == array)
+                .map(|o| o.name)
+        };
+        let fields: Vec<&str> = FIELD_NAMES
+            .iter()
+            .copied()
+            .chain(pipeline.outputs().iter().filter_map(|o| match o.kind {
+                OutputKind::Field(_) => Some(o.name),
+                _ => None,
+            }))
+            .collect();
+        let sampled = |at: String, f: &String| {
+            if fields.contains(&f.as_str()) {
+                Ok(())
+            } else {
+                err(
+                    &at,
+                    format!(
+                        "unknown field `{f}`: this scene's fields and stages provide {fields:?}"
+                    ),
+                )
+            }
+        };
+        for (k, p) in self.output.probes.iter().enumerate() {
+            if let ProbeSpec::Point { field, .. } = p {
+                sampled(format!("output.probes[{k}].field"), field)?;
+            }
+        }
+        for (k, ProfileSpec::Line { fields, .. }) in self.output.profiles.iter().enumerate() {
+            for f in fields {
+                sampled(format!("output.profiles[{k}].fields"), f)?;
+            }
+        }
+        let o = &self.output;
+        for (k, f) in o.vtk.fields.iter().flatten().enumerate() {
+            let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
+            if !arrays.contains(&f.as_str()) {
+                return err(
+                    &format!("output.vtk.fields[{k}]"),
+                    format!(
+                        "unknown field `{f}`: this scene's fields and stages provide {arrays:?}"
+                    ),
+                );
+            }
+        }
+        for (k, p) in o.probes.iter().enumerate() {
+            if let ProbeSpec::Quantity(q) = p {
+                let quantities: Vec<&str> = stage(false).collect();
+                if !quantities.contains(&q.as_str()) {
+                    return err(
+                        &format!("output.probes[{k}]"),
+                        if quantities.is_empty() {
+                            format!("unknown quantity `{q}`: no stage of this scene reports one")
+                        } else {
+                            format!(
+                                "unknown quantity `{q}`: this scene's stages report {quantities:?}"
+                            )
+                        },
                     );
                 }
             }

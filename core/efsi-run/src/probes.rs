@@ -5,6 +5,7 @@ use efsi_core::grid::Grid;
 use efsi_core::ops::{self, potential_energy};
 use efsi_core::scene::{ProbeSpec, Side};
 use efsi_core::state::State;
+use efsi_core::{OutputDecl, OutputKind};
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).
@@ -39,21 +40,53 @@ pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
     }
 }
 
+/// A named field sampled at a point: a shared field ([`sample`]) or one of the stages'
+/// `outputs` ([`OutputKind::Field`]); NaN for a name neither has.
+pub fn sample_in(
+    grid: &Grid,
+    state: &State,
+    outputs: &[OutputDecl],
+    field: &str,
+    at: (f64, f64),
+) -> f64 {
+    let stage = outputs.iter().find_map(|o| match o.kind {
+        OutputKind::Field(f) if o.name == field => Some(f),
+        _ => None,
+    });
+    match stage {
+        Some(f) => f(state).map_or(f64::NAN, |f| interpolate(grid, f, (0.5, 0.5), at)),
+        None => sample(grid, state, field, at),
+    }
+}
+
 /// Column names of a probe in `probes.csv`.
 pub fn columns(p: &ProbeSpec) -> Vec<String> {
     p.columns()
 }
 
-/// Append the probe's values to `out`; `gravity` is the scene's.
+/// The quantity `name` of the stages' `outputs` ([`OutputKind::Quantity`]), NaN if none.
+pub fn quantity(grid: &Grid, state: &State, outputs: &[OutputDecl], name: &str) -> f64 {
+    outputs
+        .iter()
+        .find_map(|o| match o.kind {
+            OutputKind::Quantity(f) if o.name == name => Some(f(grid, state)),
+            _ => None,
+        })
+        .unwrap_or(f64::NAN)
+}
+
+/// Append the probe's values to `out`; `gravity` is the scene's, `outputs` the scheduled
+/// stages' ([`efsi_core::Pipeline::outputs`]).
 pub fn evaluate(
     p: &ProbeSpec,
     grid: &Grid,
     state: &State,
     gravity: (f64, f64),
+    outputs: &[OutputDecl],
     out: &mut Vec<f64>,
 ) {
     match p {
-        ProbeSpec::Point { field, at, .. } => out.push(sample(grid, state, field, *at)),
+        ProbeSpec::Point { field, at, .. } => out.push(sample_in(grid, state, outputs, field, *at)),
         ProbeSpec::KineticEnergy => {
             out.push(ops::kinetic_energy(grid, &state.u, &state.v, &state.rho))
         }
@@ -69,14 +102,10 @@ pub fn evaluate(
             }
             out.push(m)
         }
-        ProbeSpec::ElasticEnergy => out.push(
-            state
-                .deformation
-                .as_ref()
-                .map_or(f64::NAN, |d| d.elastic_energy),
-        ),
-        ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, *wall)),
-        ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, *wall)),
+        ProbeSpec::ElasticEnergy => out.push(quantity(grid, state, outputs, "elastic_energy")),
+        ProbeSpec::Quantity(name) => out.push(quantity(grid, state, outputs, name)),
+        ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, outputs, *wall)),
+        ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, outputs, *wall)),
         ProbeSpec::SolidExtent { at } => {
             let (b, t) = solid_extent(grid, state, *at);
             out.extend([b, t]);
@@ -173,20 +202,32 @@ fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
 /// Absolute, so a trace of solid left by the interface advection (φ ≈ 1e-18) never counts.
 pub const CONTACT_MIN_SOLID_FRACTION: f64 = 1e-3;
 
+/// The elastic stress the stages output (the VTK array `stress`, six components per cell),
+/// if the state has one.
+fn stress(grid: &Grid, state: &State, outputs: &[OutputDecl]) -> Option<Vec<f64>> {
+    outputs.iter().find_map(|o| match o.kind {
+        OutputKind::Array { values, .. } if o.name == "stress" => values(grid, state),
+        _ => None,
+    })
+}
+
 /// The contact cells along `wall` — [`ProbeSpec::ContactForce`]'s definition, shared by both
 /// contact probes: each first-row cell holding at least [`CONTACT_MIN_SOLID_FRACTION`] of solid
 /// and pressing on the wall (`p − p_a − τ_nn > 0`, with `p_a` the mean pressure of the row's
 /// other cells, or 0 if there are none), as (traction, wall-face area, position along the wall).
-fn contact_cells(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)> {
-    let (Some(phi), Some(d)) = (&state.phi, &state.deformation) else {
+/// `τ_nn` is the normal component of the stages' `stress` output.
+fn contact_cells(grid: &Grid, state: &State, tau: &[f64], wall: Side) -> Vec<(f64, f64, f64)> {
+    let Some(phi) = &state.phi else {
         return Vec::new();
     };
     let cells = wall_cells(grid, wall);
-    let normal = if matches!(wall, Side::YMin | Side::YMax) {
-        1
-    } else {
-        0
+    // The normal component's place in the VTK tensor (XX, YY, ZZ, …; r–z in the X–Z plane).
+    let normal = match wall {
+        Side::XMin | Side::XMax => 0,
+        _ if grid.is_axisymmetric() => 2,
+        _ => 1,
     };
+    let tau_nn = |(i, j): (isize, isize)| tau[6 * (j as usize * grid.nx + i as usize) + normal];
     let solid = |c: (isize, isize)| phi[c] >= CONTACT_MIN_SOLID_FRACTION;
     let (mut pa, mut na) = (0.0, 0usize);
     for &(c, _, _) in &cells {
@@ -199,33 +240,35 @@ fn contact_cells(grid: &Grid, state: &State, wall: Side) -> Vec<(f64, f64, f64)>
     cells
         .iter()
         .filter(|&&(c, _, _)| solid(c))
-        .map(|&(c, area, s)| (state.p[c] - pa - d.stress[normal][c], area, s))
+        .map(|&(c, area, s)| (state.p[c] - pa - tau_nn(c), area, s))
         .filter(|&(t, _, _)| t > 0.0)
         .collect()
 }
 
 /// See [`ProbeSpec::ContactForce`]: exactly 0 when no cell is in contact.
-pub fn contact_force(grid: &Grid, state: &State, wall: Side) -> f64 {
-    if state.phi.is_none() || state.deformation.is_none() {
+/// `outputs` are the scheduled stages' (NaN without a solid or a `stress` output).
+pub fn contact_force(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: Side) -> f64 {
+    let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
         return f64::NAN;
-    }
+    };
     // Summed from +0.0 (an empty `Sum` of f64 is −0.0).
-    contact_cells(grid, state, wall)
+    contact_cells(grid, state, &tau, wall)
         .iter()
         .fold(0.0, |f, (t, a, _)| f + t * a)
 }
 
 /// See [`ProbeSpec::ContactRadius`]: exactly 0 when no cell is in contact.
-pub fn contact_radius(grid: &Grid, state: &State, wall: Side) -> f64 {
-    if state.phi.is_none() || state.deformation.is_none() {
+/// `outputs` as for [`contact_force`].
+pub fn contact_radius(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: Side) -> f64 {
+    let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
         return f64::NAN;
-    }
+    };
     let h = if matches!(wall, Side::YMin | Side::YMax) {
         grid.dx
     } else {
         grid.dy
     };
-    contact_cells(grid, state, wall)
+    contact_cells(grid, state, &tau, wall)
         .iter()
         .fold(0.0f64, |m, (_, _, s)| m.max(s + 0.5 * h))
 }

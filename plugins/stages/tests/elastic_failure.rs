@@ -82,7 +82,13 @@ fn a_failed_elastic_step_leaves_the_state_restorable() {
         "the layer shears for a while first: {message}"
     );
     // B̃ is back in the state: the step's start restores into it, bit for bit.
-    assert!(sim.state.deformation.is_some(), "B̃ was not put back");
+    assert!(
+        sim.state
+            .resources
+            .get::<efsi_stages::elastic::Deformation>()
+            .is_some(),
+        "B̃ was not put back"
+    );
     sim.restore(&good).unwrap_or_else(|e| panic!("{e}"));
     assert!(same_bits(&sim.snapshot(), &good));
     // And the run continues from there as before: the same step fails the same way.

@@ -28,10 +28,11 @@ pub struct OutputSpec {
     pub profiles: Vec<ProfileSpec>,
 }
 
-/// The arrays a VTK file can hold, by name (`output.vtk.fields`): `velocity`, `pressure`,
-/// `density`, `viscosity`, `divergence` always; `solid_fraction` with a solid; `B` (that is
-/// B̃ = φ^{1/2} B) and `stress` (the elastic extra stress) with a solid that has a law. The
-/// README's output section documents each one's location, components, meaning and unit.
+/// The arrays of the shared fields a VTK file can hold, by name (`output.vtk.fields`):
+/// `velocity`, `pressure`, `density`, `viscosity`, `divergence` always; `solid_fraction` with a
+/// solid. The scheduled stages add theirs ([`crate::StagePlugin::outputs`]: the elastic stage's
+/// `B` and `stress`). The README's output section documents each one's location, components,
+/// meaning and unit.
 pub const VTK_FIELDS: &[&str] = &[
     "velocity",
     "pressure",
@@ -39,8 +40,6 @@ pub const VTK_FIELDS: &[&str] = &[
     "viscosity",
     "divergence",
     "solid_fraction",
-    "B",
-    "stress",
 ];
 
 /// How the VTK field files are written (`output.vtk`); the defaults write every array as
@@ -48,7 +47,8 @@ pub const VTK_FIELDS: &[&str] = &[
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VtkOptions {
-    /// The arrays to write, by name (see [`VTK_FIELDS`]); default: every array the scene has.
+    /// The arrays to write, by name (see [`VTK_FIELDS`], and the stages' arrays); default:
+    /// every array the scene has.
     #[serde(default)]
     pub fields: Option<Vec<String>>,
     /// The floating-point type of the arrays (coordinates and time stay `Float64`).
@@ -91,7 +91,7 @@ pub enum ProbeSpec {
     Point {
         /// Column name.
         name: String,
-        /// Field name (see [`FIELD_NAMES`]).
+        /// Field name (see [`FIELD_NAMES`], and the stages' fields).
         field: String,
         /// Position.
         at: (f64, f64),
@@ -152,6 +152,9 @@ pub enum ProbeSpec {
     /// `solid_largest_piece` is the largest region's share of the solid volume (1 for a solid
     /// in one piece). Periodic sides are not wrapped: a solid crossing one counts as two.
     SolidPieces,
+    /// A quantity a scheduled stage reports ([`crate::StagePlugin::outputs`]), by name; the
+    /// column is named after it.
+    Quantity(String),
 }
 
 impl ProbeSpec {
@@ -171,6 +174,7 @@ impl ProbeSpec {
             ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
             ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
             ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
+            ProbeSpec::Quantity(name) => vec![name.clone()],
         }
     }
 
@@ -194,7 +198,8 @@ impl ProbeSpec {
 /// than any grid this solver runs (at most 1e4 cells across).
 pub const MAX_PROFILE_POINTS: usize = 100_000;
 
-/// Field names that probes and profiles can sample.
+/// The shared fields' names that probes and profiles can sample; the scheduled stages add
+/// theirs ([`crate::OutputKind::Field`]).
 pub const FIELD_NAMES: &[&str] = &[
     "u",
     "v",
@@ -219,7 +224,7 @@ pub enum ProfileSpec {
         to: (f64, f64),
         /// Number of points (≥ 2), both ends included.
         points: usize,
-        /// Fields to sample (see [`FIELD_NAMES`]).
+        /// Fields to sample (see [`FIELD_NAMES`], and the stages' fields).
         fields: Vec<String>,
         /// Times at which to write it (default: only at the end of the run).
         #[serde(default)]

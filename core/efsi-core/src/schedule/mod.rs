@@ -18,6 +18,13 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::time::{Duration, Instant};
 
+mod error;
+mod outputs;
+mod resources;
+pub use error::ScheduleError;
+pub use outputs::{OutputDecl, OutputKind};
+pub use resources::Resources;
+
 /// The phases of one time step, in execution order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Phase {
@@ -66,9 +73,10 @@ pub enum FieldId {
     Viscosity,
     /// Solid volume fraction (allocated only when declared).
     SolidFraction,
-    /// The modified left Cauchy–Green tensor B̃ and its step-start data (allocated only when
-    /// declared).
-    Deformation,
+    /// A field a stage owns, by name (e.g. the elastic stages' `B`): it lives in the stage's
+    /// [`StateResource`](crate::state::StateResource), which the stage adds to the state
+    /// ([`Stage::init_state`]); declaring it lets the scheduler order and check its users.
+    Stage(&'static str),
 }
 
 impl FieldId {
@@ -90,7 +98,7 @@ impl FieldId {
             FieldId::Density => "density",
             FieldId::Viscosity => "viscosity",
             FieldId::SolidFraction => "solid_fraction",
-            FieldId::Deformation => "B",
+            FieldId::Stage(name) => name,
         }
     }
 }
@@ -145,6 +153,11 @@ pub trait Stage: Send {
     ) -> Result<(), StageError> {
         Ok(())
     }
+
+    /// Add the stage's own data to a new state ([`StateResources::insert`](crate::state::StateResources::insert)), before any
+    /// [`initialize`](Self::initialize); stages that share a resource add it if it is absent
+    /// (default: nothing).
+    fn init_state(&self, _grid: &Grid, _state: &mut State) {}
 
     /// The largest stable Δt for the current state, if this stage limits it (default: none).
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
@@ -215,6 +228,11 @@ pub trait StagePlugin: Sync {
     fn options(&self) -> Option<crate::scene::OptionsDecl> {
         None
     }
+    /// The outputs the stage contributes (VTK arrays, probe quantities) computed from the
+    /// state, its own resources included ([`OutputDecl`]; default: none).
+    fn outputs(&self) -> &'static [OutputDecl] {
+        &[]
+    }
     /// Build the stage for a scene; the error says which scene value is unusable. `shared`
     /// holds what the stages of this pipeline share while it is built (in the pipeline's
     /// order): a stage that needs what another loads or derives from the scene (the solid's
@@ -226,87 +244,6 @@ pub trait StagePlugin: Sync {
         bc: &BoundarySet,
         shared: &mut Resources,
     ) -> Result<Box<dyn Stage>, String>;
-}
-
-/// Values the stages of one pipeline share while it is built, one per type (in the spirit of
-/// Bevy's `Resource`): the first stage that needs one makes it, the next ones take it.
-/// [`Pipeline::build`] makes a fresh set per pipeline, so nothing is shared between scenes.
-#[derive(Default)]
-pub struct Resources {
-    map: std::collections::HashMap<std::any::TypeId, Box<dyn std::any::Any + Send + Sync>>,
-}
-
-impl Resources {
-    /// The value of type `T`, if a stage put one in.
-    pub fn get<T: std::any::Any + Send + Sync>(&self) -> Option<&T> {
-        self.map
-            .get(&std::any::TypeId::of::<T>())
-            .and_then(|b| b.downcast_ref())
-    }
-
-    /// The value of type `T`: the one already there, else the one `make` returns (kept for
-    /// the stages built after; an error is passed on and nothing kept).
-    pub fn get_or_try_insert_with<T: std::any::Any + Send + Sync, E>(
-        &mut self,
-        make: impl FnOnce() -> Result<T, E>,
-    ) -> Result<&T, E> {
-        use std::collections::hash_map::Entry;
-        let slot = match self.map.entry(std::any::TypeId::of::<T>()) {
-            Entry::Occupied(o) => o.into_mut(),
-            Entry::Vacant(v) => v.insert(Box::new(make()?)),
-        };
-        Ok(slot
-            .downcast_ref()
-            .expect("every value is keyed by its own type's id"))
-    }
-}
-
-/// The pipeline could not be assembled.
-#[derive(Debug, Clone, thiserror::Error)]
-pub enum ScheduleError {
-    /// A stage reads a field that nothing provides.
-    #[error("stage `{stage}` reads `{field}`, which no scheduled stage provides")]
-    MissingField {
-        /// The stage.
-        stage: String,
-        /// The field.
-        field: &'static str,
-    },
-    /// Two stages of one phase touch the same field without an ordering between them.
-    #[error(
-        "stages `{a}` and `{b}` of phase {phase:?} both touch `{field}` but neither is declared after the other"
-    )]
-    Ambiguous {
-        /// First stage.
-        a: String,
-        /// Second stage.
-        b: String,
-        /// Their phase.
-        phase: Phase,
-        /// The shared field.
-        field: &'static str,
-    },
-    /// An ordering constraint names a stage that is not in the same phase, or forms a cycle.
-    #[error("stage `{stage}`: ordering constraint on `{other}` cannot be satisfied ({why})")]
-    BadOrder {
-        /// The stage.
-        stage: String,
-        /// The stage it names.
-        other: String,
-        /// Why.
-        why: &'static str,
-    },
-    /// Two plugins share a name.
-    #[error("two stage plugins are named `{0}`")]
-    DuplicateName(String),
-    /// A plugin refused the scene.
-    #[error("stage `{stage}`: {message}")]
-    Build {
-        /// The stage.
-        stage: String,
-        /// Its message.
-        message: String,
-    },
 }
 
 struct Entry {
@@ -341,6 +278,7 @@ pub struct StageTiming {
 pub struct Pipeline {
     entries: Vec<Entry>,
     fields: BTreeSet<FieldId>,
+    outputs: Vec<OutputDecl>,
 }
 
 impl Pipeline {
@@ -381,7 +319,18 @@ impl Pipeline {
         }
         let mut entries = Vec::with_capacity(order.len());
         let mut shared = Resources::default();
+        let mut outputs: Vec<(&'static str, OutputDecl)> = Vec::new();
         for p in order {
+            for o in p.outputs() {
+                if let Some((first, _)) = outputs.iter().find(|(_, x)| x.name == o.name) {
+                    return Err(ScheduleError::DuplicateOutput {
+                        output: o.name,
+                        first,
+                        second: p.name(),
+                    });
+                }
+                outputs.push((p.name(), *o));
+            }
             let stage =
                 p.build(scene, grid, bc, &mut shared)
                     .map_err(|message| ScheduleError::Build {
@@ -402,7 +351,11 @@ impl Pipeline {
                 last: StageStats::default(),
             });
         }
-        Ok(Pipeline { entries, fields })
+        Ok(Pipeline {
+            entries,
+            fields,
+            outputs: outputs.into_iter().map(|(_, o)| o).collect(),
+        })
     }
 
     /// Order by phase, then topologically by `after` within a phase; reject ambiguity.
@@ -498,6 +451,18 @@ impl Pipeline {
     /// The fields the pipeline uses (the state allocates exactly these).
     pub fn fields(&self) -> &BTreeSet<FieldId> {
         &self.fields
+    }
+
+    /// The outputs the scheduled stages contribute, in pipeline order.
+    pub fn outputs(&self) -> &[OutputDecl] {
+        &self.outputs
+    }
+
+    /// Add each stage's own data to a new state ([`Stage::init_state`]), in pipeline order.
+    pub fn init_state(&self, grid: &Grid, state: &mut State) {
+        for e in &self.entries {
+            e.stage.init_state(grid, state);
+        }
     }
 
     /// Stage names in execution order.
@@ -655,17 +620,19 @@ impl Pipeline {
                             ctx.bc.fill_scalar(ctx.grid, phi, false);
                         }
                     }
-                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Deformation => {}
+                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Stage(_) => {}
                 }
             }
-            if e.writes.contains(&FieldId::Deformation)
-                && let Some(d) = &state.deformation
-                && let Some((c, (i, j))) = d.first_non_finite(nx, ny)
+            if e.writes.iter().any(|f| matches!(f, FieldId::Stage(_)))
+                && let Some((c, (i, j))) = state
+                    .resources
+                    .iter()
+                    .find_map(|r| r.first_non_finite(nx, ny))
             {
                 return Err(StageError {
                     stage: e.name.to_string(),
                     message: format!(
-                        "produced a non-finite B{c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                        "produced a non-finite {c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
                         ctx.step, ctx.t, ctx.dt
                     ),
                 });

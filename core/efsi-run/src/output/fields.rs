@@ -12,6 +12,7 @@
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
 use efsi_core::scene::{VTK_FIELDS, VtkOptions};
+use efsi_core::{OutputDecl, OutputKind};
 
 use efsi_core::state::State;
 
@@ -52,19 +53,26 @@ pub fn notes(geometry: Geometry) -> [(&'static str, &'static str); 2] {
     ]
 }
 
-/// Every array the files of a run with `geometry` can hold, in [`VTK_FIELDS`] order, as
-/// written with `point_data` or not.
-pub fn describe(geometry: Geometry, point_data: bool) -> Vec<ArrayDoc> {
+/// Every array the files of a run with `geometry` can hold, as written with `point_data` or
+/// not: the shared fields' ([`VTK_FIELDS`] order), then the arrays among the stages' `outputs`
+/// ([`efsi_core::StagePlugin::outputs`]).
+pub fn describe(geometry: Geometry, point_data: bool, outputs: &[OutputDecl]) -> Vec<ArrayDoc> {
     let axi = geometry == Geometry::Axisymmetric;
     let location = if point_data { "cell and point" } else { "cell" };
-    let tensor = |t: &'static str| -> Vec<&'static str> {
-        match (axi, t) {
-            (false, "B") => vec!["B̃xx", "B̃yy", "B̃zz (out of plane)", "B̃xy", "0", "0"],
-            (true, "B") => vec!["B̃rr", "B̃θθ", "B̃zz", "0", "0", "B̃rz"],
-            (false, _) => vec!["τxx", "τyy", "τzz (out of plane)", "τxy", "0", "0"],
-            (true, _) => vec!["τrr", "τθθ", "τzz", "0", "0", "τrz"],
-        }
-    };
+    let stage = outputs.iter().filter_map(|o| {
+        let components = match o.kind {
+            OutputKind::Array { components, .. } => components(geometry),
+            OutputKind::Field(_) => vec![o.name],
+            OutputKind::Quantity(_) => return None,
+        };
+        Some(ArrayDoc {
+            name: o.name,
+            location,
+            components,
+            meaning: o.meaning,
+            unit: o.unit,
+        })
+    });
     VTK_FIELDS
         .iter()
         .map(|&name| {
@@ -90,20 +98,10 @@ pub fn describe(geometry: Geometry, point_data: bool) -> Vec<ArrayDoc> {
                     "discrete divergence of the velocity (the projection's residual; ≈ 0)",
                     "1/s",
                 ),
-                "solid_fraction" => (
+                _ => (
                     vec!["φ"],
                     "solid volume fraction φ of the cell, 0 (fluid) to 1 (solid); present with a solid",
                     "1",
-                ),
-                "B" => (
-                    tensor("B"),
-                    "B̃ = φ^{1/2} B, not B: the left Cauchy–Green tensor B = F Fᵀ of the solid weighted by the square root of the solid fraction (divide by √φ for B; I in a solid at rest, 0 in the fluid); the shear component is the mean of the cell's four corners; present with a solid that has a law",
-                    "1",
-                ),
-                _ => (
-                    tensor("stress"),
-                    "the elastic extra stress only, τ(B̃) − τ(φ^{1/2} I): the law's stress less its isotropic rest stress; without the pressure and the viscous stress (the Cauchy stress is −p I + 2μD + this); the shear component is the mean of the cell's four corners; present with a solid that has a law",
-                    "Pa",
                 ),
             };
             ArrayDoc {
@@ -114,34 +112,51 @@ pub fn describe(geometry: Geometry, point_data: bool) -> Vec<ArrayDoc> {
                 unit,
             }
         })
+        .chain(stage)
         .collect()
 }
 
 /// The names of the arrays a file of `state` holds under `options`: those asked for (all by
-/// default) that the state has, in [`VTK_FIELDS`] order.
-pub fn present(state: &State, options: &VtkOptions) -> Vec<&'static str> {
+/// default) that the state has, in [`describe`]'s order.
+pub fn present(
+    grid: &Grid,
+    state: &State,
+    options: &VtkOptions,
+    outputs: &[OutputDecl],
+) -> Vec<&'static str> {
+    let wanted = |name: &str| {
+        options
+            .fields
+            .as_ref()
+            .is_none_or(|f| f.iter().any(|x| x == name))
+    };
+    let stage = outputs.iter().filter_map(|o| {
+        let there = match o.kind {
+            OutputKind::Array { values, .. } => values(grid, state).is_some(),
+            OutputKind::Field(f) => f(state).is_some(),
+            OutputKind::Quantity(_) => false,
+        };
+        (there && wanted(o.name)).then_some(o.name)
+    });
     VTK_FIELDS
         .iter()
         .copied()
-        .filter(|name| {
-            options
-                .fields
-                .as_ref()
-                .is_none_or(|f| f.iter().any(|x| x == name))
-        })
-        .filter(|&name| match name {
-            "solid_fraction" => state.phi.is_some(),
-            "B" | "stress" => state.phi.is_some() && state.deformation.is_some(),
-            _ => true,
-        })
+        .filter(|name| wanted(name))
+        .filter(|&name| name != "solid_fraction" || state.phi.is_some())
+        .chain(stage)
         .collect()
 }
 
 /// The `run.json` section `vtk`: the files' format, text field data and the arrays they hold,
 /// each described ([`describe`]).
-pub fn summary(grid: &Grid, state: &State, options: &VtkOptions) -> serde_json::Value {
-    let names = present(state, options);
-    let docs: Vec<ArrayDoc> = describe(grid.geometry, options.point_data)
+pub fn summary(
+    grid: &Grid,
+    state: &State,
+    options: &VtkOptions,
+    outputs: &[OutputDecl],
+) -> serde_json::Value {
+    let names = present(grid, state, options, outputs);
+    let docs: Vec<ArrayDoc> = describe(grid.geometry, options.point_data, outputs)
         .into_iter()
         .filter(|d| names.contains(&d.name))
         .collect();
@@ -158,14 +173,15 @@ pub fn summary(grid: &Grid, state: &State, options: &VtkOptions) -> serde_json::
     })
 }
 
-/// The arrays `options` asks for (all the state has, by default), in [`VTK_FIELDS`] order:
+/// The arrays `options` asks for (all the state has, by default), in [`describe`]'s order:
 /// `(name, components, values)`, cell-major.
 pub fn arrays(
     grid: &Grid,
     state: &State,
     options: &VtkOptions,
+    outputs: &[OutputDecl],
 ) -> Vec<(&'static str, usize, Vec<f64>)> {
-    let wanted = present(state, options);
+    let wanted = present(grid, state, options, outputs);
     let (nx, ny) = (grid.nx, grid.ny);
     let n = nx * ny;
     let cells = || (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| (i, j)));
@@ -199,43 +215,19 @@ pub fn arrays(
                     out.push((name, 1, scalar(phi)));
                 }
             }
-            "B" | "stress" => {
-                if let (Some(d), Some(phi)) = (&state.deformation, &state.phi) {
-                    let t = if name == "B" {
-                        tensor(grid, &d.b, Some(phi))
-                    } else {
-                        tensor(grid, &d.stress, None)
-                    };
-                    out.push((name, 6, t));
+            _ => match outputs.iter().find(|o| o.name == name).map(|o| o.kind) {
+                Some(OutputKind::Array { components, values }) => {
+                    if let Some(v) = values(grid, state) {
+                        out.push((name, components(grid.geometry).len(), v));
+                    }
                 }
-            }
-            _ => {}
-        }
-    }
-    out
-}
-
-/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
-/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
-/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
-fn tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut out = vec![0.0; 6 * nx * ny];
-    let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
-        (0, 2, 1, 5)
-    } else {
-        (0, 1, 2, 3)
-    };
-    for j in 0..ny as isize {
-        for i in 0..nx as isize {
-            let k = 6 * (j as usize * nx + i as usize);
-            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
-            let t12 =
-                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
-            out[k + c11] = w * t[0][(i, j)];
-            out[k + c22] = w * t[1][(i, j)];
-            out[k + c33] = w * t[2][(i, j)];
-            out[k + c12] = w * t12;
+                Some(OutputKind::Field(f)) => {
+                    if let Some(f) = f(state) {
+                        out.push((name, 1, scalar(f)));
+                    }
+                }
+                _ => {}
+            },
         }
     }
     out

@@ -29,6 +29,8 @@ pub struct Outputs {
     probe_every: Option<f64>,
     probe_count: u64,
     probes: Vec<ProbeSpec>,
+    /// The scheduled stages' outputs (their VTK arrays and probe quantities).
+    pub(super) outputs: Vec<efsi_core::OutputDecl>,
     probe_path: PathBuf,
     probe_file: File,
     probe_bytes: u64,
@@ -116,6 +118,7 @@ impl Outputs {
             probe_every: o.probe_every,
             probe_count: 0,
             probes: o.probes.clone(),
+            outputs: sim.pipeline().outputs().to_vec(),
             probe_file: open_append(&probe_path)?,
             probe_path,
             probe_bytes: header.len() as u64,
@@ -199,6 +202,7 @@ impl Outputs {
             probe_every: o.probe_every,
             probe_count: state.probe_count,
             probes: o.probes.clone(),
+            outputs: sim.pipeline().outputs().to_vec(),
             probe_file: file,
             probe_path,
             probe_bytes: state.probe_bytes,
@@ -290,7 +294,14 @@ impl Outputs {
             self.row.clear();
             self.row.push(t);
             for p in &self.probes {
-                probes::evaluate(p, &sim.grid, &sim.state, sim.scene.gravity, &mut self.row);
+                probes::evaluate(
+                    p,
+                    &sim.grid,
+                    &sim.state,
+                    sim.scene.gravity,
+                    &self.outputs,
+                    &mut self.row,
+                );
             }
             let line: Vec<String> = self.row.iter().map(|v| format!("{v:.17e}")).collect();
             let line = line.join(",") + "\n";
@@ -364,7 +375,7 @@ impl Outputs {
         suffix: &str,
     ) -> Result<PathBuf, EfsiError> {
         let options = &self.vtk;
-        let data = crate::output::fields::arrays(grid, state, options);
+        let data = crate::output::fields::arrays(grid, state, options, &self.outputs);
         let arrays: Vec<CellArray> = data
             .iter()
             .map(|(name, components, values)| CellArray {
@@ -413,7 +424,7 @@ impl Outputs {
             for fl in fields {
                 text.push_str(&format!(
                     ",{:.17e}",
-                    probes::sample(&sim.grid, &sim.state, fl, p)
+                    probes::sample_in(&sim.grid, &sim.state, &self.outputs, fl, p)
                 ));
             }
             text.push('\n');

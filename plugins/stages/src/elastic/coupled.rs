@@ -290,7 +290,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {
@@ -307,7 +307,7 @@ impl ElasticStage {
         cp: &mut Coupling,
         ctx: &StepContext,
         state: &mut State,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {

@@ -17,12 +17,22 @@ pub(super) struct DeformationStage {
 }
 
 impl Stage for DeformationStage {
+    /// B and its history, shared with the elastic stage ([`Deformation`](super::Deformation)).
+    fn init_state(&self, grid: &Grid, state: &mut State) {
+        if state.resources.get::<super::Deformation>().is_none() {
+            state.resources.insert(super::Deformation::zeros(grid));
+        }
+    }
+
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
         self.wave_dt.is_finite().then_some(self.wave_dt)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        let d = state
+            .resources
+            .get_mut::<super::Deformation>()
+            .ok_or_else(missing)?;
         let k = &mut self.k;
         let phi = state
             .phi

@@ -140,7 +140,7 @@ impl Kernels {
     /// Reset B to the identity, and its rates to zero, where there is no solid (`w = 0`): the
     /// fluid has no memory of deformation, and B there only enters neighbouring averages and
     /// fluxes; this keeps it bounded (stale rates would otherwise compound step after step).
-    pub(super) fn reset_fluid(&self, d: &mut efsi_core::Deformation) {
+    pub(super) fn reset_fluid(&self, d: &mut super::Deformation) {
         for c in 0..4 {
             let (wt, one) = if c == 3 {
                 (&self.wc, 0.0)

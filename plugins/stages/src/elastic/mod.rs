@@ -246,6 +246,8 @@ mod interface;
 mod law;
 mod limits;
 mod options;
+mod outputs;
+mod resource;
 mod solve;
 mod stress;
 #[cfg(test)]
@@ -261,7 +263,11 @@ pub use options::{
     DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
     MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
+pub use resource::Deformation;
 use solve::{ElasticOperator, ElasticStage, Scratch};
+
+/// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
+pub const B: FieldId = FieldId::Stage("B");
 
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
 pub(crate) fn law_needed(scene: &Scene) -> bool {
@@ -306,24 +312,22 @@ impl StagePlugin for Elastic {
             FieldId::Density,
             FieldId::Viscosity,
             FieldId::SolidFraction,
-            FieldId::Deformation,
+            B,
         ]
     }
     fn writes(&self) -> &'static [FieldId] {
         // The pressure only in the coupled step (`coupled`), which leaves its pressure for
         // the projection stage to complete.
-        &[
-            FieldId::VelocityX,
-            FieldId::VelocityY,
-            FieldId::Deformation,
-            FieldId::Pressure,
-        ]
+        &[FieldId::VelocityX, FieldId::VelocityY, B, FieldId::Pressure]
     }
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ElasticOptions>())
+    }
+    fn outputs(&self) -> &'static [efsi_core::OutputDecl] {
+        outputs::OUTPUTS
     }
     fn build(
         &self,
@@ -415,11 +419,11 @@ impl StagePlugin for DeformationUpdate {
             FieldId::VelocityX,
             FieldId::VelocityY,
             FieldId::SolidFraction,
-            FieldId::Deformation,
+            B,
         ]
     }
     fn writes(&self) -> &'static [FieldId] {
-        &[FieldId::Deformation]
+        &[B]
     }
     fn after(&self) -> &'static [&'static str] {
         &["projection"]

@@ -101,7 +101,10 @@ impl Stage for ElasticStage {
         _bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
-        let d = state.deformation.as_mut().ok_or_else(missing)?;
+        let d = state
+            .resources
+            .get_mut::<super::Deformation>()
+            .ok_or_else(missing)?;
         for c in 0..3 {
             d.b[c].fill(1.0);
         }
@@ -128,9 +131,12 @@ impl Stage for ElasticStage {
     /// a failed step leaves the state complete, so the run loop (or an FMU) can restore the
     /// step's start into it.
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        let mut d = state.deformation.take().ok_or_else(missing)?;
+        let mut d = state
+            .resources
+            .take::<super::Deformation>()
+            .ok_or_else(missing)?;
         let result = self.advance(ctx, state, &mut d);
-        state.deformation = Some(d);
+        state.resources.put(d);
         result
     }
 }
@@ -144,7 +150,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &mut efsi_core::Deformation,
+        d: &mut super::Deformation,
     ) -> Result<StageStats, StageError> {
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
@@ -163,7 +169,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &State,
-        d: &mut efsi_core::Deformation,
+        d: &mut super::Deformation,
     ) -> Result<(), StageError> {
         let dt = ctx.dt;
         let r = if state.dt_prev > 0.0 {
@@ -316,7 +322,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {
@@ -372,7 +378,7 @@ impl ElasticStage {
     /// The operator's scratch stress cleared (it writes Δτ in this step's solid only) and,
     /// unless Jacobi, the block multigrid set up with the effective viscosities `η = θΔt μ +
     /// (Δt²/2) G_eff` at centres and corners.
-    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &efsi_core::Deformation) {
+    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &super::Deformation) {
         for f in &mut self.scratch.dtau {
             f.fill(0.0);
         }
@@ -391,7 +397,7 @@ impl ElasticStage {
 
     /// The effective viscosities `η = θΔt μ + (Δt²/2) G_eff` at the centres and corners
     /// (`eta`, `eta_k`): the block multigrid's, and the coupled step's preconditioner's.
-    pub(super) fn effective_viscosity(&mut self, d: &efsi_core::Deformation) {
+    pub(super) fn effective_viscosity(&mut self, d: &super::Deformation) {
         let op = &self.op;
         let (e, ek) = (&mut self.eta, &mut self.eta_k);
         if op.theta_dt > 0.0 {
@@ -413,7 +419,7 @@ impl ElasticStage {
     /// (the block multigrid set up for this step, or the Jacobi diagonal).
     pub(super) fn solve_a(
         &mut self,
-        d: &efsi_core::Deformation,
+        d: &super::Deformation,
         rhs: &[f64],
         x: &mut [f64],
         tol: f64,
@@ -441,7 +447,7 @@ impl ElasticStage {
 
     /// `B̃^{n+2/3} = B̃(V^{n+2/3})` with the corrected velocity (its boundary values at the
     /// step's end).
-    fn correct(&mut self, ctx: &StepContext, state: &mut State, d: &mut efsi_core::Deformation) {
+    fn correct(&mut self, ctx: &StepContext, state: &mut State, d: &mut super::Deformation) {
         let g = ctx.grid;
         let dt = ctx.dt;
         let k = &mut self.op.k;

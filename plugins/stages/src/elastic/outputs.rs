@@ -1,0 +1,84 @@
+//! The elastic stages' outputs ([`StagePlugin::outputs`](efsi_core::StagePlugin::outputs)):
+//! the VTK arrays `B` (B̃ = φ^{1/2} B) and `stress` (the elastic extra stress), and the probe
+//! quantity `elastic_energy`, all from the [`Deformation`] resource.
+
+use super::Deformation;
+use efsi_core::{Field, Geometry, Grid, OutputDecl, OutputKind, State};
+
+/// What the elastic plugin contributes.
+pub(super) const OUTPUTS: &[OutputDecl] = &[
+    OutputDecl {
+        name: "B",
+        meaning: "B̃ = φ^{1/2} B, not B: the left Cauchy–Green tensor B = F Fᵀ of the solid weighted by the square root of the solid fraction (divide by √φ for B; I in a solid at rest, 0 in the fluid); the shear component is the mean of the cell's four corners; present with a solid that has a law",
+        unit: "1",
+        kind: OutputKind::Array {
+            components: |g| match g {
+                Geometry::Planar => vec!["B̃xx", "B̃yy", "B̃zz (out of plane)", "B̃xy", "0", "0"],
+                Geometry::Axisymmetric => vec!["B̃rr", "B̃θθ", "B̃zz", "0", "0", "B̃rz"],
+            },
+            values: |grid, state| {
+                let d = state.resources.get::<Deformation>()?;
+                Some(tensor(grid, &d.b, Some(state.phi.as_ref()?)))
+            },
+        },
+    },
+    OutputDecl {
+        name: "stress",
+        meaning: "the elastic extra stress only, τ(B̃) − τ(φ^{1/2} I): the law's stress less its isotropic rest stress; without the pressure and the viscous stress (the Cauchy stress is −p I + 2μD + this); the shear component is the mean of the cell's four corners; present with a solid that has a law",
+        unit: "Pa",
+        kind: OutputKind::Array {
+            components: |g| match g {
+                Geometry::Planar => vec!["τxx", "τyy", "τzz (out of plane)", "τxy", "0", "0"],
+                Geometry::Axisymmetric => vec!["τrr", "τθθ", "τzz", "0", "0", "τrz"],
+            },
+            values: |grid, state| {
+                state.phi.as_ref()?;
+                Some(tensor(
+                    grid,
+                    &state.resources.get::<Deformation>()?.stress,
+                    None,
+                ))
+            },
+        },
+    },
+    OutputDecl {
+        name: "elastic_energy",
+        meaning: "the elastic (strain) energy stored in the solid, ∫ W(B̃) dV (per radian in axisymmetric geometry)",
+        unit: "J",
+        kind: OutputKind::Quantity(elastic_energy),
+    },
+];
+
+/// The strain energy of the last step's end (NaN without the resource).
+fn elastic_energy(_grid: &Grid, state: &State) -> f64 {
+    state
+        .resources
+        .get::<Deformation>()
+        .map_or(f64::NAN, |d| d.elastic_energy)
+}
+
+/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
+/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
+/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
+fn tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let mut out = vec![0.0; 6 * nx * ny];
+    let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
+        (0, 2, 1, 5)
+    } else {
+        (0, 1, 2, 3)
+    };
+    for j in 0..ny as isize {
+        for i in 0..nx as isize {
+            let k = 6 * (j as usize * nx + i as usize);
+            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
+            let t12 =
+                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
+            out[k + c11] = w * t[0][(i, j)];
+            out[k + c22] = w * t[1][(i, j)];
+            out[k + c33] = w * t[2][(i, j)];
+            out[k + c12] = w * t12;
+        }
+    }
+    out
+}
