@@ -140,9 +140,9 @@ impl Coupling {
     }
 }
 
-/// `y += Δt Ĝ q` on the unknown faces (`Ĝ q` = face area × the jump of `q` across the face, so
+/// `y += c Ĝ q` on the unknown faces (`Ĝ q` = face area × the jump of `q` across the face, so
 /// that `F = −Ĝᵀ` for the net outflux `F`), `q` a cell field whose ghosts are filled.
-fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, dt: f64, y: &mut [f64]) {
+fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]) {
     let (m, dx, dy) = (&g.metric, g.dx, g.dy);
     let (yu, yv) = y.split_at_mut(faces.nu());
     let lo = faces.ux.lo;
@@ -152,7 +152,7 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, dt: f64, y: &mut [f64
             let j = j as isize;
             for (t, y) in row.iter_mut().enumerate() {
                 let i = lo + t as isize;
-                *y += dt * m.rx(i) * dy * (q[(i, j)] - q[(i - 1, j)]);
+                *y += c * m.rx(i) * dy * (q[(i, j)] - q[(i - 1, j)]);
             }
         });
     }
@@ -161,7 +161,7 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, dt: f64, y: &mut [f64
         let j = vlo + r as isize;
         for (i, y) in row.iter_mut().enumerate() {
             let i = i as isize;
-            *y += dt * m.rc(i) * dx * (q[(i, j)] - q[(i, j - 1)]);
+            *y += c * m.rc(i) * dx * (q[(i, j)] - q[(i, j - 1)]);
         }
     });
 }
@@ -264,13 +264,7 @@ impl FlexiblePreconditioner for BlockTriangular<'_> {
         // The velocity: Â⁻¹ (r_u − ΔtĜ p).
         to_field(g, self.bc, zp, self.qp);
         self.ru.copy_from_slice(ru);
-        for v in self.ru.iter_mut() {
-            *v = -*v;
-        }
-        add_gradient(self.faces, g, self.qp, dt, self.ru);
-        for v in self.ru.iter_mut() {
-            *v = -*v;
-        }
+        add_gradient(self.faces, g, self.qp, -dt, self.ru);
         match self.a {
             VelocityBlock::Jacobi(d) => {
                 for ((z, r), d) in zu.iter_mut().zip(self.ru.iter()).zip(d) {
