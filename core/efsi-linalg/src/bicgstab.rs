@@ -133,18 +133,7 @@ impl BiCgStab {
 mod tests {
     use super::*;
 
-    /// A non-symmetric advection–diffusion matrix.
-    struct AdvDiff(usize);
-    impl LinearOperator for AdvDiff {
-        fn apply(&mut self, x: &[f64], y: &mut [f64]) {
-            let n = self.0;
-            for k in 0..n {
-                let l = if k > 0 { x[k - 1] } else { 0.0 };
-                let r = if k + 1 < n { x[k + 1] } else { 0.0 };
-                y[k] = 3.0 * x[k] - 1.6 * l - 0.4 * r;
-            }
-        }
-    }
+    use crate::test_systems::AdvDiff;
 
     #[test]
     fn solves_a_non_symmetric_system() {

@@ -386,16 +386,8 @@ impl ElasticStage {
                 }
             });
         }
-        let s = &mut self.scratch;
         let mut saddle = Saddle {
-            a: OperatorCtx {
-                op: &mut self.op,
-                start: &d.start,
-                relax: &d.relax,
-                xu: &mut s.xu,
-                xv: &mut s.xv,
-                dtau: &mut s.dtau,
-            },
+            a: OperatorCtx::new(&mut self.op, &mut self.scratch, d),
             grid: g,
             bc,
             dt,

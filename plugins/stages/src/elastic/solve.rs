@@ -77,6 +77,24 @@ pub(super) struct OperatorCtx<'a> {
     pub(super) dtau: &'a mut [Field; 4],
 }
 
+impl<'a> OperatorCtx<'a> {
+    /// The operator of this step's deformation `d`, working in `scratch`.
+    pub(super) fn new(
+        op: &'a mut ElasticOperator,
+        scratch: &'a mut Scratch,
+        d: &'a super::Deformation,
+    ) -> Self {
+        OperatorCtx {
+            op,
+            start: &d.start,
+            relax: &d.relax,
+            xu: &mut scratch.xu,
+            xv: &mut scratch.xv,
+            dtau: &mut scratch.dtau,
+        }
+    }
+}
+
 impl LinearOperator for OperatorCtx<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         let op = &mut *self.op;
@@ -424,15 +442,7 @@ impl ElasticStage {
         x: &mut [f64],
         tol: f64,
     ) -> SolveStats {
-        let s = &mut self.scratch;
-        let mut ctxop = OperatorCtx {
-            op: &mut self.op,
-            start: &d.start,
-            relax: &d.relax,
-            xu: &mut s.xu,
-            xv: &mut s.xv,
-            dtau: &mut s.dtau,
-        };
+        let mut ctxop = OperatorCtx::new(&mut self.op, &mut self.scratch, d);
         match self.preconditioner {
             ElasticPreconditioner::Jacobi => {
                 self.solver
