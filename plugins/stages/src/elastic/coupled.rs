@@ -58,12 +58,12 @@
 //!
 //! # Limits
 //!
-//! Δt is capped at `coupled_wave_courant` (≤ 100) elastic-wave Courant numbers `Δt·c/h`: the
-//! stability map's sphere gained energy at impacts taken in one step at 240–500, never at
-//! 100 or less. At the flow's step an impact of a stiff solid lasts less than a step and the
-//! implicit stiffness with θ = ¾ damps it: the rebound is lost (the map's G = 1e9 sphere
-//! leaves the wall at 0.38 m/s uncapped, sticks at the cap, where the split step's 4 gives
-//! 1.03 m/s).
+//! Δt is capped at `coupled_wave_courant` (default 25, at most 50) elastic-wave Courant
+//! numbers `Δt·c/h`: the stability map's sphere gained energy at impacts taken at 240–500
+//! (8 cells per radius) and at 100 (6 cells per radius), never at 50 or less. An impact
+//! lasting a few steps is damped by θ = ¾: the map's G = 1e9 sphere leaves the wall at
+//! 0.78 m/s at the cap of 25, where the split step at its cap of 4 gives 1.03 m/s (θ = ½:
+//! 0.96, but it gained energy at CFL 0.9 with G = 1e7).
 
 use super::ElasticPreconditioner;
 use super::err;

@@ -81,7 +81,7 @@ pub enum ElasticCoupling {
     /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
     /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
     /// `coupled_wave_courant` (25) elastic-wave Courant numbers instead of 4. The stability
-    /// map's sphere at CFL 0.5 takes 33 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
+    /// map's sphere at CFL 0.5 takes 31 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
     /// (`theta` 0.75), so an impact loses part of its rebound (0.78 against the split step's
     /// 1.03 m/s at G = 1e9); ≈ 1.4× the split step's cost per step on the seed's sphere.
