@@ -42,6 +42,7 @@
 //! very viscous solid, θ = ½ is second-order in time.
 
 use crate::block_multigrid::ViscousBlocks;
+use crate::scratch::{self, Scratch};
 use crate::viscous_operator::{Coefficients, CompactFaces};
 use efsi_core::ops::face_density;
 use efsi_core::scene::OptionsDecl;
@@ -52,7 +53,7 @@ use efsi_core::{
     bc::{UnknownFaces, WallTime},
 };
 use efsi_linalg::par::{self, dot, for_each_row};
-use efsi_linalg::{LinearOperator, Norm, Pcg, SolveStats};
+use efsi_linalg::{LinearOperator, Norm, SolveStats, pcg::solve_norm_in};
 
 mod options;
 pub use options::{ViscousOptions, ViscousPreconditioner};
@@ -94,7 +95,7 @@ impl StagePlugin for Viscous {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let faces = UnknownFaces::new(grid, bc);
         let n = faces.len();
@@ -114,10 +115,8 @@ impl StagePlugin for Viscous {
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
             },
-            pcg: Pcg::new(n),
-            rhs: vec![0.0; n],
+            scratch: Scratch::reserve(shared, WORK, n),
             delta: vec![0.0; n],
-            diag: vec![0.0; n],
             warm: WarmStart {
                 enabled: scene.time.steady.is_none(),
                 prev: [vec![0.0; n], vec![0.0; n]],
@@ -138,10 +137,10 @@ struct ViscousStage {
     tol: f64,
     max_iter: usize,
     op: ViscousSystem,
-    pcg: Pcg,
-    rhs: Vec<f64>,
+    /// The pipeline's work vectors: [`WORK`] of the system's length while the stage runs
+    /// (the right-hand side, the diagonal and the solver's three).
+    scratch: Scratch,
     delta: Vec<f64>,
-    diag: Vec<f64>,
     /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept (`None` with
     /// the Jacobi preconditioner, which never uses it).
     blocks: Option<ViscousBlocks>,
@@ -157,6 +156,10 @@ struct WarmStart {
     prev_dt: [f64; 2],
     history: usize,
 }
+
+/// Work vectors the stage takes from the pipeline's pool: the right-hand side, the diagonal,
+/// and conjugate gradient's three.
+const WORK: usize = 5;
 
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
 const AUTO_MULTIGRID_RATIO: f64 = 40.0;
@@ -353,7 +356,9 @@ impl Stage for ViscousStage {
         let g = ctx.grid;
         let op = &mut self.op;
         op.theta_dt = self.theta * ctx.dt;
-        op.assemble(&state.mu, &state.rho, &mut self.diag);
+        let mut pool = self.scratch.lock();
+        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.delta.len());
+        op.assemble(&state.mu, &state.rho, diag);
         // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
         // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing. The
         // stencil with the hoop term as its diagonal gives −θΔt·K(V*).
@@ -363,7 +368,6 @@ impl Stage for ViscousStage {
             theta: self.theta,
         };
         ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
-        let rhs = &mut self.rhs;
         op.k.apply(&state.u, &state.v, op.k.hoop(), None, rhs);
         let scale = -1.0 / self.theta;
         for_each_row(rhs, g.nx.max(1), |_, row| {
@@ -388,13 +392,14 @@ impl Stage for ViscousStage {
                     // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs
                     // ~10√κ iterations at 1e-9, at a quarter of the block multigrid's cost
                     // per iteration, which needs ~16: break-even near κ ≈ 40.
-                    op.max_diag_to_mass(&state.rho, &self.diag) > AUTO_MULTIGRID_RATIO
+                    op.max_diag_to_mass(&state.rho, diag) > AUTO_MULTIGRID_RATIO
                 }
             };
             let blocks = self.blocks.as_mut().filter(|_| use_mg);
             let st = if let Some(blocks) = blocks {
-                blocks.setup(&op.k, &self.diag);
-                self.pcg.solve_norm(
+                blocks.setup(&op.k, diag);
+                solve_norm_in(
+                    [r, p, q],
                     op,
                     &*blocks,
                     rhs,
@@ -404,9 +409,10 @@ impl Stage for ViscousStage {
                     Norm::L2,
                 )
             } else {
-                self.pcg.solve_norm(
+                solve_norm_in(
+                    [r, p, q],
                     op,
-                    self.diag.as_slice(),
+                    &*diag,
                     rhs,
                     &mut self.delta,
                     tol,
