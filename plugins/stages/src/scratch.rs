@@ -13,27 +13,22 @@
 use efsi_core::Resources;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-/// A handle on the pipeline's pool of work vectors.
+/// A handle on the pipeline's pool: one block of values that a running stage cuts into its
+/// work vectors ([`take`]).
 #[derive(Clone)]
-pub(crate) struct Scratch(Arc<Mutex<Vec<Vec<f64>>>>);
+pub(crate) struct Scratch(Arc<Mutex<Vec<f64>>>);
 
 impl Scratch {
-    /// The pipeline's pool (the first stage built creates it), grown so that it holds at least
-    /// `count` vectors of at least `len` values each.
-    pub(crate) fn reserve(shared: &mut Resources, count: usize, len: usize) -> Self {
+    /// The pipeline's pool (the first stage built creates it), grown to at least `len` values.
+    pub(crate) fn reserve(shared: &mut Resources, len: usize) -> Self {
         let pool = shared
             .get_or_try_insert_with(|| Ok::<_, ()>(Scratch(Arc::default())))
             .expect("infallible")
             .clone();
         {
             let mut v = pool.lock();
-            if v.len() < count {
-                v.resize_with(count, Vec::new);
-            }
-            for b in &mut v[..count] {
-                if b.len() < len {
-                    b.resize(len, 0.0);
-                }
+            if v.len() < len {
+                v.resize(len, 0.0);
             }
         }
         pool
@@ -41,15 +36,20 @@ impl Scratch {
 
     /// The pool, for one stage's run (a panic in another stage does not make it unusable:
     /// its contents carry nothing).
-    pub(crate) fn lock(&self) -> MutexGuard<'_, Vec<Vec<f64>>> {
+    pub(crate) fn lock(&self) -> MutexGuard<'_, Vec<f64>> {
         self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
-/// The first `N` vectors of the pool, each cut to `len` values.
-pub(crate) fn take<const N: usize>(pool: &mut [Vec<f64>], len: usize) -> [&mut [f64]; N] {
-    let mut it = pool.iter_mut();
-    std::array::from_fn(|_| &mut it.next().expect("reserved at build")[..len])
+/// `N` consecutive vectors of `len` values from the start of the pool (reserved at build with
+/// at least `N × len` values).
+pub(crate) fn take<const N: usize>(pool: &mut [f64], len: usize) -> [&mut [f64]; N] {
+    let mut rest = &mut pool[..N * len];
+    std::array::from_fn(|_| {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        rest = tail;
+        head
+    })
 }
 
 #[cfg(test)]
@@ -59,13 +59,14 @@ mod tests {
     #[test]
     fn the_pool_holds_the_largest_need_once() {
         let mut shared = Resources::default();
-        let a = Scratch::reserve(&mut shared, 3, 10);
-        let b = Scratch::reserve(&mut shared, 2, 25);
-        let pool = a.lock();
-        assert_eq!(pool.iter().map(Vec::len).collect::<Vec<_>>(), [25, 25, 10]);
-        drop(pool);
+        let a = Scratch::reserve(&mut shared, 30);
+        let b = Scratch::reserve(&mut shared, 50);
+        let _ = Scratch::reserve(&mut shared, 20);
+        assert_eq!(a.lock().len(), 50);
         let mut pool = b.lock();
         let [x, y] = take::<2>(&mut pool, 7);
-        assert_eq!((x.len(), y.len()), (7, 7));
+        x[6] = 1.0;
+        y[0] = 2.0;
+        assert_eq!(&pool[6..8], [1.0, 2.0]);
     }
 }

@@ -112,7 +112,7 @@ impl StagePlugin for Projection {
                     Precond::IncompleteCholesky(IncompleteCholesky::new())
                 }
             },
-            scratch: Scratch::reserve(shared, WORK, n),
+            scratch: Scratch::reserve(shared, WORK * n),
             weight: vec![0.0; n],
             weight_dt: f64::NAN,
             increment: (incremental(scene) || crate::elastic::coupled(scene))

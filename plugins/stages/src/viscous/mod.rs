@@ -115,7 +115,7 @@ impl StagePlugin for Viscous {
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
             },
-            scratch: Scratch::reserve(shared, WORK, n),
+            scratch: Scratch::reserve(shared, WORK * n),
             delta: vec![0.0; n],
             warm: WarmStart {
                 enabled: scene.time.steady.is_none(),
