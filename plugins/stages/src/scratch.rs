@@ -28,6 +28,9 @@ impl Scratch {
         {
             let mut v = pool.lock();
             if v.len() < len {
+                // Exactly `len`: the pool is sized by the largest need, not grown by doubling.
+                let more = len - v.len();
+                v.reserve_exact(more);
                 v.resize(len, 0.0);
             }
         }
