@@ -113,8 +113,6 @@ impl StagePlugin for Projection {
                 }
             },
             scratch: Scratch::reserve(shared, WORK * n),
-            weight: vec![0.0; n],
-            weight_dt: f64::NAN,
             increment: (incremental(scene) || crate::elastic::coupled(scene))
                 .then(|| efsi_core::Field::zeros(grid)),
             gravity: scene.gravity,
@@ -185,7 +183,7 @@ impl Stage for PredictorStage {
 }
 
 /// Work vectors the projection takes from the pipeline's pool.
-const WORK: usize = 5;
+const WORK: usize = 6;
 
 /// The preconditioner the scene chose.
 enum Precond {
@@ -199,11 +197,8 @@ struct ProjectionStage {
     a: Stencil5,
     precond: Precond,
     /// The pipeline's work vectors: [`WORK`] of one value per cell while the stage runs (the
-    /// right-hand side, the pressure solved for, and the solver's three).
+    /// right-hand side, the pressure solved for, the residual weights and the solver's three).
     scratch: Scratch,
-    weight: Vec<f64>,
-    /// The Δt the weights were computed for (they change only with it).
-    weight_dt: f64,
     /// With the coupled elastic step (`numerics.elastic.coupling: Coupled`), which has already
     /// made the velocity nearly divergence-free and left its pressure in the state: the
     /// pressure increment that removes what remains, solved for from zero, applied to the
@@ -376,7 +371,7 @@ impl ProjectionStage {
         }
         // Right-hand side, the residual weights Δt²/dV and the initial guess.
         let mut pool = self.scratch.lock();
-        let [b, x, r, pw, q] = scratch::take::<WORK>(&mut pool, grid.cells());
+        let [b, x, weight, r, pw, q] = scratch::take::<WORK>(&mut pool, grid.cells());
         let (u, v, p) = (&state.u, &state.v, &state.p);
         // −(net volume outflux)/Δt, as `ops::net_outflux` computes it, over slices (it
         // vectorises).
@@ -396,14 +391,11 @@ impl ProjectionStage {
                 row[i] = -out / dt;
             }
         });
-        if dt != self.weight_dt {
-            for_each_row(&mut self.weight, nx, |_, row| {
-                for (i, w) in row.iter_mut().enumerate() {
-                    *w = dt * dt / grid.cell_volume(i as isize);
-                }
-            });
-            self.weight_dt = dt;
-        }
+        for_each_row(weight, nx, |_, row| {
+            for (i, w) in row.iter_mut().enumerate() {
+                *w = dt * dt / grid.cell_volume(i as isize);
+            }
+        });
         if self.increment.is_some() {
             x.fill(0.0);
         } else {
@@ -418,7 +410,7 @@ impl ProjectionStage {
             let mean = b.iter().sum::<f64>() / b.len() as f64;
             b.iter_mut().for_each(|b| *b -= mean);
         }
-        let norm = Norm::MaxWeighted(&self.weight);
+        let norm = Norm::MaxWeighted(weight);
         let (a, work) = (&mut self.a, [r, pw, q]);
         let st = match &self.precond {
             Precond::Multigrid(mg) => solve_norm_in(work, a, mg, b, x, tol, self.max_iter, norm),
