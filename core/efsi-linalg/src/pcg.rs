@@ -146,11 +146,12 @@ pub struct SolveStats {
     pub converged: bool,
 }
 
-/// Reusable conjugate-gradient workspace for systems of one size.
+/// Reusable conjugate-gradient workspace for systems of one size: three vectors, the residual
+/// `r`, the search direction `p` and `q`, which holds `A p` until the residual is updated and
+/// the preconditioned residual `z = M⁻¹ r` after (the two are never needed at once).
 #[derive(Clone, Debug)]
 pub struct Pcg {
     r: Vec<f64>,
-    z: Vec<f64>,
     p: Vec<f64>,
     q: Vec<f64>,
 }
@@ -162,7 +163,6 @@ impl Pcg {
     pub fn new(n: usize) -> Self {
         Pcg {
             r: vec![0.0; n],
-            z: vec![0.0; n],
             p: vec![0.0; n],
             q: vec![0.0; n],
         }
@@ -195,7 +195,17 @@ impl Pcg {
         max_iter: usize,
         measure: impl Fn(&[f64]) -> f64,
     ) -> SolveStats {
-        self.run(a, m, b, x, tol, max_iter, Measure::Closure(&measure))
+        let Pcg { r, p, q } = self;
+        run(
+            [r, p, q],
+            a,
+            m,
+            b,
+            x,
+            tol,
+            max_iter,
+            Measure::Closure(&measure),
+        )
     }
 
     /// [`solve`](Self::solve) with a [`Norm`] as the measure, computed in the same pass as
@@ -211,142 +221,170 @@ impl Pcg {
         max_iter: usize,
         norm: Norm,
     ) -> SolveStats {
-        self.run(a, m, b, x, tol, max_iter, Measure::Norm(norm))
+        let Pcg { r, p, q } = self;
+        run([r, p, q], a, m, b, x, tol, max_iter, Measure::Norm(norm))
     }
+}
 
-    fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
-        &mut self,
-        a: &mut A,
-        m: &M,
-        b: &[f64],
-        x: &mut [f64],
-        tol: f64,
-        max_iter: usize,
-        measure: Measure,
-    ) -> SolveStats {
-        let n = b.len();
-        assert_eq!(n, self.r.len());
-        assert_eq!(n, x.len());
-        let Pcg { r, z, p, q } = self;
-        // r = b − A x and its measure.
-        let true_residual = |a: &mut A, x: &[f64], r: &mut [f64], q: &mut [f64]| {
-            a.apply(x, q);
-            let q = &*q;
-            par::for_each_chunk(r, |o, r| {
-                let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
-                for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
-                    *r = b - q;
-                }
-            });
-            measure.of(r)
-        };
-        let mut res = true_residual(a, x, r, q);
-        let mut it = 0;
-        // At least one iteration unless the residual is exactly zero: a warm start already
-        // within the tolerance would otherwise leave its residual in place step after step, so
-        // a steady state would keep an error up to the tolerance (and a solver that stops at 0
-        // or 1 iterations by turns never lets it settle); one iteration per step drives it to
-        // zero across steps at the cost of that iteration.
-        if res == 0.0 {
-            return SolveStats {
-                iterations: 0,
-                residual: res,
-                converged: true,
-            };
-        }
-        let mut rz = m.apply_dot(r, z);
-        p.copy_from_slice(z);
-        while it < max_iter {
-            let pq = a.apply_dot(p, q);
-            if pq <= 0.0 || !pq.is_finite() {
-                // Breakdown: p is in the null space (singular system) or the operator is not SPD.
-                break;
+/// [`Pcg::solve_norm`] on borrowed work vectors — `work` holds three slices of the system's
+/// length (`r`, `p`, `q`; their contents on entry do not matter) — for callers that share one
+/// pool of vectors between several solves. The same iterates, bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+    work: [&mut [f64]; 3],
+    a: &mut A,
+    m: &M,
+    b: &[f64],
+    x: &mut [f64],
+    tol: f64,
+    max_iter: usize,
+    norm: Norm,
+) -> SolveStats {
+    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm))
+}
+
+/// The iteration, on the work vectors `[r, p, q]`; `q` holds `A p`, then `z = M⁻¹ r` once `r`
+/// is updated.
+#[allow(clippy::too_many_arguments)]
+fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+    [r, p, q]: [&mut [f64]; 3],
+    a: &mut A,
+    m: &M,
+    b: &[f64],
+    x: &mut [f64],
+    tol: f64,
+    max_iter: usize,
+    measure: Measure,
+) -> SolveStats {
+    let n = b.len();
+    assert!(
+        r.len() == n && p.len() == n && q.len() == n,
+        "PCG: work vector length ≠ system size"
+    );
+    assert_eq!(n, x.len());
+    // r = b − A x and its measure.
+    let true_residual = |a: &mut A, x: &[f64], r: &mut [f64], q: &mut [f64]| {
+        a.apply(x, q);
+        let q = &*q;
+        par::for_each_chunk(r, |o, r| {
+            let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
+            for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
+                *r = b - q;
             }
-            let alpha = rz / pq;
-            // x += α p, r −= α q, and the measure of r, in one pass.
-            let (pv, qv) = (&*p, &*q);
-            let update = |o: usize, x: &mut [f64], r: &mut [f64]| {
-                let n = x.len();
-                let (p, q) = (&pv[o..o + n], &qv[o..o + n]);
-                for (x, p) in x.iter_mut().zip(p) {
-                    *x += alpha * p;
-                }
-                for (r, q) in r.iter_mut().zip(q) {
-                    *r -= alpha * q;
-                }
-            };
-            // With a Jacobi preconditioner and a norm, the same pass also forms z = r / d and
-            // r·z (`rz_fused`); it stays valid unless the true residual replaces r below.
-            let mut rz_fused = None;
-            res = match (measure, m.jacobi_diagonal()) {
-                (Measure::Norm(nm), Some(d)) => {
-                    let (v, rz_new) = par::reduce_chunks3(
-                        x,
-                        r,
-                        z,
-                        (0.0, 0.0),
-                        |o, x, r, z| {
-                            update(o, x, r);
-                            (nm.chunk(o, r), jacobi_chunk(r, &d[o..], z))
-                        },
-                        |a, b| (nm.combine(a.0, b.0), a.1 + b.1),
-                    );
-                    rz_fused = Some(rz_new);
-                    nm.finish(v)
-                }
-                (Measure::Norm(nm), None) => nm.finish(par::reduce_chunks2(
+        });
+        measure.of(r)
+    };
+    let mut res = true_residual(a, x, r, q);
+    let mut it = 0;
+    // At least one iteration unless the residual is exactly zero: a warm start already
+    // within the tolerance would otherwise leave its residual in place step after step, so
+    // a steady state would keep an error up to the tolerance (and a solver that stops at 0
+    // or 1 iterations by turns never lets it settle); one iteration per step drives it to
+    // zero across steps at the cost of that iteration.
+    if res == 0.0 {
+        return SolveStats {
+            iterations: 0,
+            residual: res,
+            converged: true,
+        };
+    }
+    let mut rz = m.apply_dot(r, q);
+    p.copy_from_slice(q);
+    while it < max_iter {
+        let pq = a.apply_dot(p, q);
+        if pq <= 0.0 || !pq.is_finite() {
+            // Breakdown: p is in the null space (singular system) or the operator is not SPD.
+            break;
+        }
+        let alpha = rz / pq;
+        // x += α p, r −= α q, and the measure of r, in one pass.
+        let pv = &*p;
+        let update = |o: usize, x: &mut [f64], r: &mut [f64], q: &[f64]| {
+            let n = x.len();
+            let (p, q) = (&pv[o..o + n], &q[..n]);
+            for (x, p) in x.iter_mut().zip(p) {
+                *x += alpha * p;
+            }
+            for (r, q) in r.iter_mut().zip(q) {
+                *r -= alpha * q;
+            }
+        };
+        // With a Jacobi preconditioner and a norm, the same pass also forms z = r / d and
+        // r·z (`rz_fused`), z over `A p` chunk by chunk once the chunk has used it; it
+        // stays valid unless the true residual replaces r below.
+        let mut rz_fused = None;
+        res = match (measure, m.jacobi_diagonal()) {
+            (Measure::Norm(nm), Some(d)) => {
+                let (v, rz_new) = par::reduce_chunks3(
+                    x,
+                    r,
+                    q,
+                    (0.0, 0.0),
+                    |o, x, r, q| {
+                        update(o, x, r, q);
+                        (nm.chunk(o, r), jacobi_chunk(r, &d[o..], q))
+                    },
+                    |a, b| (nm.combine(a.0, b.0), a.1 + b.1),
+                );
+                rz_fused = Some(rz_new);
+                nm.finish(v)
+            }
+            (Measure::Norm(nm), None) => {
+                let qv = &*q;
+                nm.finish(par::reduce_chunks2(
                     x,
                     r,
                     0.0,
                     |o, x, r| {
-                        update(o, x, r);
+                        update(o, x, r, &qv[o..]);
                         nm.chunk(o, r)
                     },
                     |a, b| nm.combine(a, b),
-                )),
-                (Measure::Closure(f), _) => {
-                    par::reduce_chunks2(
-                        x,
-                        r,
-                        0.0,
-                        |o, x, r| {
-                            update(o, x, r);
-                            0.0
-                        },
-                        |a, _| a,
-                    );
-                    f(r)
-                }
-            };
-            it += 1;
-            if res <= tol {
-                // Confirm with the true residual.
-                rz_fused = None;
-                res = true_residual(a, x, r, q);
-                if res <= tol {
-                    return SolveStats {
-                        iterations: it,
-                        residual: res,
-                        converged: true,
-                    };
-                }
+                ))
             }
-            let rz_new = rz_fused.unwrap_or_else(|| m.apply_dot(r, z));
-            let beta = rz_new / rz;
-            rz = rz_new;
-            let z = &*z;
-            par::for_each_chunk(p, |o, p| {
-                let z = &z[o..o + p.len()];
-                for (p, z) in p.iter_mut().zip(z) {
-                    *p = z + beta * *p;
-                }
-            });
+            (Measure::Closure(f), _) => {
+                let qv = &*q;
+                par::reduce_chunks2(
+                    x,
+                    r,
+                    0.0,
+                    |o, x, r| {
+                        update(o, x, r, &qv[o..]);
+                        0.0
+                    },
+                    |a, _| a,
+                );
+                f(r)
+            }
+        };
+        it += 1;
+        if res <= tol {
+            // Confirm with the true residual.
+            rz_fused = None;
+            res = true_residual(a, x, r, q);
+            if res <= tol {
+                return SolveStats {
+                    iterations: it,
+                    residual: res,
+                    converged: true,
+                };
+            }
         }
-        SolveStats {
-            iterations: it,
-            residual: res,
-            converged: res <= tol,
-        }
+        let rz_new = rz_fused.unwrap_or_else(|| m.apply_dot(r, q));
+        let beta = rz_new / rz;
+        rz = rz_new;
+        let z = &*q;
+        par::for_each_chunk(p, |o, p| {
+            let z = &z[o..o + p.len()];
+            for (p, z) in p.iter_mut().zip(z) {
+                *p = z + beta * *p;
+            }
+        });
+    }
+    SolveStats {
+        iterations: it,
+        residual: res,
+        converged: res <= tol,
     }
 }
 

@@ -36,9 +36,12 @@
 //! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
 //! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
 //! run over rows in parallel (rayon); each band or row writes its own faces, so results are
-//! bit-identical on any number of threads. The stage keeps 8 full-grid arrays: the tendencies
-//! (4), the start-of-step velocity (2) and the current stage's face masses (2).
+//! bit-identical on any number of threads. The stage uses 8 full-grid arrays while it runs —
+//! the tendencies (4), the start-of-step velocity (2) and the current stage's face masses (2)
+//! — taken from the pipeline's pool of work vectors (`scratch`), which the later stages of the
+//! step reuse; it keeps none from one step to the next.
 
+use crate::scratch::{self, Scratch};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -70,21 +73,14 @@ impl StagePlugin for Advection {
         _scene: &Scene,
         grid: &Grid,
         _bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
         // an outflow side have ny + 1 rows), plus the top edge.
         let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
         let bands = (grid.ny + 1).div_ceil(BAND);
         Ok(Box::new(AdvectionStage {
-            qu: Field::zeros(grid),
-            qv: Field::zeros(grid),
-            mu_: Field::zeros(grid),
-            mv_: Field::zeros(grid),
-            u0: Field::zeros(grid),
-            v0: Field::zeros(grid),
-            m1u: Field::zeros(grid),
-            m1v: Field::zeros(grid),
+            scratch: Scratch::reserve(shared, WORK * stride * (grid.ny + 1 + 2 * efsi_core::GHOST)),
             edge_m: vec![0.0; (bands + 1) * stride],
             edge_q: vec![0.0; (bands + 1) * stride],
             row_x: (0..bands).map(|_| vec![0.0; 2 * stride]).collect(),
@@ -95,19 +91,15 @@ impl StagePlugin for Advection {
 /// Rows of tendencies per band of the fused flux-and-difference pass (bands run in parallel).
 const BAND: usize = 16;
 
+/// Full-grid work arrays the stage takes from the pipeline's pool, in this order: the
+/// momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces, the mass tendencies `−∇·(m a)`, the
+/// start-of-step velocity (the start-of-step face masses are recomputed from the density,
+/// which advection does not change), and the current stage's face masses.
+const WORK: usize = 8;
+
 struct AdvectionStage {
-    /// Momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces.
-    qu: Field,
-    qv: Field,
-    /// Mass tendencies `−∇·(m a)`.
-    mu_: Field,
-    mv_: Field,
-    /// Start-of-step velocity (the start-of-step face masses are recomputed from the density,
-    /// which advection does not change), and the current stage's face masses.
-    u0: Field,
-    v0: Field,
-    m1u: Field,
-    m1v: Field,
+    /// The pipeline's work vectors ([`WORK`] padded full-grid arrays while the stage runs).
+    scratch: Scratch,
     /// Mass and momentum fluxes through the bottom edge of each band of rows, and the top of
     /// the last (scratch, one padded row per edge).
     edge_m: Vec<f64>,
@@ -357,7 +349,15 @@ fn diff_row(
 impl AdvectionStage {
     /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
     /// (ghosts filled), on the unknown faces (see [`tendencies`]).
-    fn rhs(&mut self, ctx: &StepContext, u: &Field, v: &Field, mu: &Field, mv: &Field) {
+    #[allow(clippy::too_many_arguments)]
+    fn rhs(
+        &mut self,
+        ctx: &StepContext,
+        u: &Field,
+        v: &Field,
+        [mu, mv]: [&[f64]; 2],
+        [qu, qv, mu_, mv_]: [&mut [f64]; 4],
+    ) {
         let g = ctx.grid;
         let s = u.stride();
         let flow = |m| Flow {
@@ -375,29 +375,29 @@ impl AdvectionStage {
         let r0 = row0(0);
         let n = g.ny * s;
         tendencies(
-            &mut self.qu.data_mut()[r0..r0 + n],
-            &mut self.mu_.data_mut()[r0..r0 + n],
+            &mut qu[r0..r0 + n],
+            &mut mu_[r0..r0 + n],
             &mut self.edge_m,
             &mut self.edge_q,
             &mut self.row_x,
             s,
             r0,
             (ux.lo, ux.hi),
-            &UFamily(flow(mu.data())),
+            &UFamily(flow(mu)),
         );
         let rows = (vy.hi - vy.lo).max(0) as usize;
         let r0 = row0(vy.lo);
         let n = rows * s;
         tendencies(
-            &mut self.qv.data_mut()[r0..r0 + n],
-            &mut self.mv_.data_mut()[r0..r0 + n],
+            &mut qv[r0..r0 + n],
+            &mut mv_[r0..r0 + n],
             &mut self.edge_m,
             &mut self.edge_q,
             &mut self.row_x,
             s,
             r0,
             (0, g.nx as isize),
-            &VFamily(flow(mv.data())),
+            &VFamily(flow(mv)),
         );
     }
 }
@@ -405,18 +405,22 @@ impl AdvectionStage {
 /// Face masses (densities) from the cell densities, ghosts included (rows in parallel): on
 /// u-faces every padded row but the last, columns 1.. and column 0 a copy of column 1; on
 /// v-faces every padded row from the second, row 0 a copy of row 1, all columns but the last.
-fn face_masses(rho: &Field, mu: &mut Field, mv: &mut Field) {
+/// The u-faces' last row and the v-faces' last column, outside every stencil, are set to zero
+/// (the arrays come from the shared pool, whatever they held).
+fn face_masses(rho: &Field, mu: &mut [f64], mv: &mut [f64]) {
     let s = rho.stride();
     let rows = rho.rows();
     let r = rho.data();
-    for_each_row(&mut mu.data_mut()[..(rows - 1) * s], s, |j, row| {
+    mu[(rows - 1) * s..].fill(0.0);
+    mv.iter_mut().skip(s - 1).step_by(s).for_each(|m| *m = 0.0);
+    for_each_row(&mut mu[..(rows - 1) * s], s, |j, row| {
         let rr = &r[j * s..(j + 1) * s];
         for c in 1..s {
             row[c] = efsi_core::ops::face_density(rr[c - 1], rr[c]);
         }
         row[0] = row[1];
     });
-    for_each_row(mv.data_mut(), s, |j, row| {
+    for_each_row(mv, s, |j, row| {
         let j = j.max(1);
         let (lo, hi) = (&r[(j - 1) * s..j * s], &r[j * s..(j + 1) * s]);
         for c in 0..s - 1 {
@@ -436,26 +440,33 @@ impl Stage for AdvectionStage {
         //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
         let dt = ctx.dt;
-        face_masses(&state.rho, &mut self.m1u, &mut self.m1v);
-        copy(self.u0.data_mut(), state.u.data());
-        copy(self.v0.data_mut(), state.v.data());
+        let scratch = self.scratch.clone();
+        let mut pool = scratch.lock();
+        let [qu, qv, mu_, mv_, u0, v0, m1u, m1v] =
+            scratch::take::<WORK>(&mut pool, state.u.data().len());
+        face_masses(&state.rho, m1u, m1v);
+        copy(u0, state.u.data());
+        copy(v0, state.v.data());
         let ux = ctx.bc.normal_faces(0, g.nx);
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);
         let s = state.u.stride();
         for stage in 0..2 {
-            let (u, v) = (std::mem::take(&mut state.u), std::mem::take(&mut state.v));
-            let (m1u, m1v) = (std::mem::take(&mut self.m1u), std::mem::take(&mut self.m1v));
-            self.rhs(ctx, &u, &v, &m1u, &m1v);
-            (state.u, state.v, self.m1u, self.m1v) = (u, v, m1u, m1v);
+            self.rhs(
+                ctx,
+                &state.u,
+                &state.v,
+                [m1u, m1v],
+                [&mut *qu, &mut *qv, &mut *mu_, &mut *mv_],
+            );
             let faces = [
                 (
                     &mut state.u,
-                    &mut self.m1u,
-                    &self.u0,
+                    &mut *m1u,
+                    &*u0,
                     1,
-                    &self.qu,
-                    &self.mu_,
+                    &*qu,
+                    &*mu_,
                     ux.lo,
                     ux.hi,
                     0,
@@ -463,11 +474,11 @@ impl Stage for AdvectionStage {
                 ),
                 (
                     &mut state.v,
-                    &mut self.m1v,
-                    &self.v0,
+                    &mut *m1v,
+                    &*v0,
                     s,
-                    &self.qv,
-                    &self.mv_,
+                    &*qv,
+                    &*mv_,
                     0,
                     nx,
                     vy.lo,
@@ -478,9 +489,9 @@ impl Stage for AdvectionStage {
             for (x, m1, x0, o, q, dm, i0, i1, j0, j1) in faces {
                 let r0 = x.idx(-efsi_core::G, j0);
                 let n = (j1 - j0).max(0) as usize * s;
-                let (dmd, qd, x0d) = (dm.data(), q.data(), x0.data());
+                let (dmd, qd, x0d) = (dm, q, x0);
                 let xd = &mut x.data_mut()[r0..r0 + n];
-                let m1d = &mut m1.data_mut()[r0..r0 + n];
+                let m1d = &mut m1[r0..r0 + n];
                 for_each_row2(xd, m1d, s, |jr, xr, mr| {
                     for i in i0..i1 {
                         let c = (i + efsi_core::G) as usize;

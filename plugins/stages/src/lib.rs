@@ -9,6 +9,7 @@ mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
 pub mod projection;
+mod scratch;
 pub mod viscous;
 mod viscous_operator;
 pub mod vof;

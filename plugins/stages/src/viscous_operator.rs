@@ -80,25 +80,34 @@ impl Coefficients {
         self.set(g, mu, corner, scale);
     }
 
+    /// [`set_viscosity`](Self::set_viscosity) without keeping the corner viscosities: each
+    /// corner's harmonic mean goes straight into its weight (the same values, bit for bit, and
+    /// no corner array). Rows in parallel.
+    pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
+        self.set_cells(g, mu, scale);
+        let m = &g.metric;
+        let s = mu.stride();
+        let r0 = mu.idx(-G, 0);
+        let rows = g.ny + 1;
+        let mud = mu.data();
+        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
+            let k0 = r0 + jr * s;
+            for i in 0..=g.nx as isize {
+                let c = (i + G) as usize;
+                let k = k0 + c;
+                let mk = corner_mean([mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]]);
+                gr[c] = scale * m.rx(i) * mk;
+            }
+        });
+        self.set_hoop(g, mu, scale);
+    }
+
     /// The coefficients of `scale·K_η` for the cell coefficients `eta` (ghosts filled) and the
     /// corner coefficients `eta_k`. Rows in parallel.
     pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
+        self.set_cells(g, eta, scale);
         let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
         let s = eta.stride();
-        let ed = eta.data();
-        let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
-        {
-            let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
-            for_each_row2(cxx, cyy, s, |jr, cx, cy| {
-                let row = &ed[jr * s..(jr + 1) * s];
-                for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
-                    let r = m.rc(c as isize - G);
-                    *cx = ax * r * e;
-                    *cy = ay * r * e;
-                }
-            });
-        }
         let r0 = eta.idx(-G, 0);
         let rows = g.ny + 1;
         let ekd = &eta_k.data()[r0..r0 + rows * s];
@@ -109,6 +118,32 @@ impl Coefficients {
                 gr[c] = scale * m.rx(i) * er[c];
             }
         });
+        self.set_hoop(g, eta, scale);
+    }
+
+    /// The normal-stress coefficients `cxx`, `cyy` of `scale·K_η` from the cell coefficients.
+    fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let s = eta.stride();
+        let ed = eta.data();
+        let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
+        let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
+        for_each_row2(cxx, cyy, s, |jr, cx, cy| {
+            let row = &ed[jr * s..(jr + 1) * s];
+            for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
+                let r = m.rc(c as isize - G);
+                *cx = ax * r * e;
+                *cy = ay * r * e;
+            }
+        });
+    }
+
+    /// The hoop term of `scale·K_η` on each unknown u-face, from the cell coefficients.
+    fn set_hoop(&mut self, g: &Grid, eta: &Field, scale: f64) {
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let ed = eta.data();
         let ux = self.faces.ux;
         let nur = (ux.hi - ux.lo).max(0) as usize;
         let nu = self.faces.nu();
@@ -306,14 +341,20 @@ pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
         for i in 0..=nx {
             let c = (i + G) as usize;
             let k = k0 + c;
-            let q = [mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]];
-            mr[c] = if q.iter().all(|&x| x > 0.0) {
-                4.0 / q.iter().map(|x| 1.0 / x).sum::<f64>()
-            } else {
-                0.0
-            };
+            mr[c] = corner_mean([mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]]);
         }
     });
+}
+
+/// The harmonic mean of the four cell viscosities around a corner, zero if any is inviscid
+/// ([`corner_viscosity`]).
+#[inline(always)]
+fn corner_mean(q: [f64; 4]) -> f64 {
+    if q.iter().all(|&x| x > 0.0) {
+        4.0 / q.iter().map(|x| 1.0 / x).sum::<f64>()
+    } else {
+        0.0
+    }
 }
 
 /// Compact vectors of unknown faces (u faces first, then v, rows in order) and the fields they

@@ -50,13 +50,14 @@
 //! fixed order, so the result is bit-identical on any number of threads. Nothing is allocated
 //! after the first step.
 
+use crate::scratch::{self, Scratch};
 use efsi_core::scene::{Boundary, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext, ops,
 };
 use efsi_linalg::par::{for_each_mut, for_each_row};
-use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Pcg, Stencil5};
+use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Stencil5, pcg::solve_norm_in};
 
 mod options;
 pub use options::{PressureSolver, ProjectionOptions};
@@ -97,7 +98,7 @@ impl StagePlugin for Projection {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let n = grid.cells();
         let o: ProjectionOptions = crate::options(scene)?;
@@ -111,11 +112,7 @@ impl StagePlugin for Projection {
                     Precond::IncompleteCholesky(IncompleteCholesky::new())
                 }
             },
-            pcg: Pcg::new(n),
-            b: vec![0.0; n],
-            x: vec![0.0; n],
-            weight: vec![0.0; n],
-            weight_dt: f64::NAN,
+            scratch: Scratch::reserve(shared, WORK * n),
             increment: (incremental(scene) || crate::elastic::coupled(scene))
                 .then(|| efsi_core::Field::zeros(grid)),
             gravity: scene.gravity,
@@ -185,6 +182,9 @@ impl Stage for PredictorStage {
     }
 }
 
+/// Work vectors the projection takes from the pipeline's pool.
+const WORK: usize = 6;
+
 /// The preconditioner the scene chose.
 enum Precond {
     Multigrid(Multigrid),
@@ -196,12 +196,9 @@ struct ProjectionStage {
     max_iter: usize,
     a: Stencil5,
     precond: Precond,
-    pcg: Pcg,
-    b: Vec<f64>,
-    x: Vec<f64>,
-    weight: Vec<f64>,
-    /// The Δt the weights were computed for (they change only with it).
-    weight_dt: f64,
+    /// The pipeline's work vectors: [`WORK`] of one value per cell while the stage runs (the
+    /// right-hand side, the pressure solved for, the residual weights and the solver's three).
+    scratch: Scratch,
     /// With the coupled elastic step (`numerics.elastic.coupling: Coupled`), which has already
     /// made the velocity nearly divergence-free and left its pressure in the state: the
     /// pressure increment that removes what remains, solved for from zero, applied to the
@@ -373,6 +370,8 @@ impl ProjectionStage {
             Precond::IncompleteCholesky(ic) => ic.factor(&self.a),
         }
         // Right-hand side, the residual weights Δt²/dV and the initial guess.
+        let mut pool = self.scratch.lock();
+        let [b, x, weight, r, pw, q] = scratch::take::<WORK>(&mut pool, grid.cells());
         let (u, v, p) = (&state.u, &state.v, &state.p);
         // −(net volume outflux)/Δt, as `ops::net_outflux` computes it, over slices (it
         // vectorises).
@@ -382,7 +381,7 @@ impl ProjectionStage {
             u.stride(),
         );
         let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
-        for_each_row(&mut self.b, nx, |j, row| {
+        for_each_row(b, nx, |j, row| {
             let k0 = u.idx(0, j as isize);
             let (uw, ue) = (&ud[k0..k0 + nx], &ud[k0 + 1..k0 + 1 + nx]);
             let (vs, vn) = (&vd[k0..k0 + nx], &vd[k0 + s..k0 + s + nx]);
@@ -392,18 +391,15 @@ impl ProjectionStage {
                 row[i] = -out / dt;
             }
         });
-        if dt != self.weight_dt {
-            for_each_row(&mut self.weight, nx, |_, row| {
-                for (i, w) in row.iter_mut().enumerate() {
-                    *w = dt * dt / grid.cell_volume(i as isize);
-                }
-            });
-            self.weight_dt = dt;
-        }
+        for_each_row(weight, nx, |_, row| {
+            for (i, w) in row.iter_mut().enumerate() {
+                *w = dt * dt / grid.cell_volume(i as isize);
+            }
+        });
         if self.increment.is_some() {
-            self.x.fill(0.0);
+            x.fill(0.0);
         } else {
-            for_each_row(&mut self.x, nx, |j, row| {
+            for_each_row(x, nx, |j, row| {
                 for (i, x) in row.iter_mut().enumerate() {
                     *x = p[(i as isize, j as isize)];
                 }
@@ -411,15 +407,15 @@ impl ProjectionStage {
         }
         let singular = !ctx.bc.has_pressure_reference();
         if singular {
-            let mean = self.b.iter().sum::<f64>() / self.b.len() as f64;
-            self.b.iter_mut().for_each(|b| *b -= mean);
+            let mean = b.iter().sum::<f64>() / b.len() as f64;
+            b.iter_mut().for_each(|b| *b -= mean);
         }
-        let norm = Norm::MaxWeighted(&self.weight);
-        let (a, b, x) = (&mut self.a, &self.b, &mut self.x);
+        let norm = Norm::MaxWeighted(weight);
+        let (a, work) = (&mut self.a, [r, pw, q]);
         let st = match &self.precond {
-            Precond::Multigrid(mg) => self.pcg.solve_norm(a, mg, b, x, tol, self.max_iter, norm),
+            Precond::Multigrid(mg) => solve_norm_in(work, a, mg, b, x, tol, self.max_iter, norm),
             Precond::IncompleteCholesky(ic) => {
-                self.pcg.solve_norm(a, ic, b, x, tol, self.max_iter, norm)
+                solve_norm_in(work, a, ic, b, x, tol, self.max_iter, norm)
             }
         };
         if !st.converged {
@@ -433,10 +429,10 @@ impl ProjectionStage {
             });
         }
         if singular {
-            let mean = self.x.iter().sum::<f64>() / self.x.len() as f64;
-            for_each_mut(&mut self.x, |_, p| *p -= mean);
+            let mean = x.iter().sum::<f64>() / x.len() as f64;
+            for_each_mut(x, |_, p| *p -= mean);
         }
-        let (x, ps) = (&self.x, state.p.stride());
+        let (x, ps) = (&*x, state.p.stride());
         let p0 = state.p.idx(0, 0);
         let target = match &mut self.increment {
             Some(f) => f,

@@ -42,6 +42,7 @@
 //! very viscous solid, θ = ½ is second-order in time.
 
 use crate::block_multigrid::ViscousBlocks;
+use crate::scratch::{self, Scratch};
 use crate::viscous_operator::{Coefficients, CompactFaces};
 use efsi_core::ops::face_density;
 use efsi_core::scene::OptionsDecl;
@@ -51,8 +52,8 @@ use efsi_core::{
     State, StepContext,
     bc::{UnknownFaces, WallTime},
 };
-use efsi_linalg::par::{self, dot, for_each_row, for_each_row2};
-use efsi_linalg::{LinearOperator, Norm, Pcg, SolveStats};
+use efsi_linalg::par::{self, dot, for_each_row};
+use efsi_linalg::{LinearOperator, Norm, SolveStats, pcg::solve_norm_in};
 
 mod options;
 pub use options::{ViscousOptions, ViscousPreconditioner};
@@ -94,7 +95,7 @@ impl StagePlugin for Viscous {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let faces = UnknownFaces::new(grid, bc);
         let n = faces.len();
@@ -109,17 +110,13 @@ impl StagePlugin for Viscous {
                 bc: bc.clone(),
                 k: Coefficients::new(grid, faces),
                 faces,
-                mu_corner: Field::zeros(grid),
-                mass: vec![0.0; n],
                 dm: vec![0.0; n],
                 theta_dt: 0.0,
                 xu: Field::zeros(grid),
                 xv: Field::zeros(grid),
             },
-            pcg: Pcg::new(n),
-            rhs: vec![0.0; n],
+            scratch: Scratch::reserve(shared, WORK * n),
             delta: vec![0.0; n],
-            diag: vec![0.0; n],
             warm: WarmStart {
                 enabled: scene.time.steady.is_none(),
                 prev: [vec![0.0; n], vec![0.0; n]],
@@ -140,10 +137,10 @@ struct ViscousStage {
     tol: f64,
     max_iter: usize,
     op: ViscousSystem,
-    pcg: Pcg,
-    rhs: Vec<f64>,
+    /// The pipeline's work vectors: [`WORK`] of the system's length while the stage runs
+    /// (the right-hand side, the diagonal and the solver's three).
+    scratch: Scratch,
     delta: Vec<f64>,
-    diag: Vec<f64>,
     /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept (`None` with
     /// the Jacobi preconditioner, which never uses it).
     blocks: Option<ViscousBlocks>,
@@ -160,6 +157,10 @@ struct WarmStart {
     history: usize,
 }
 
+/// Work vectors the stage takes from the pipeline's pool: the right-hand side, the diagonal,
+/// and conjugate gradient's three.
+const WORK: usize = 5;
+
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
 const AUTO_MULTIGRID_RATIO: f64 = 40.0;
 
@@ -173,8 +174,6 @@ struct ViscousSystem {
     faces: UnknownFaces,
     /// `θΔt K`'s coefficients.
     k: Coefficients,
-    mu_corner: Field,
-    mass: Vec<f64>,
     /// `mass + hoop`: the diagonal of `M − θΔt K` without the stencil's part.
     dm: Vec<f64>,
     theta_dt: f64,
@@ -184,44 +183,67 @@ struct ViscousSystem {
 
 impl ViscousSystem {
     /// The step's coefficients from the cell viscosities `mu` (ghosts filled) and densities
-    /// `rho`: `θΔt K`, masses (face density the average of the two cells), and the diagonal
-    /// of the full matrix into `diag` (rows in parallel).
+    /// `rho`: `θΔt K`, mass plus hoop term `dm` (face density the average of the two cells),
+    /// and the diagonal of the full matrix into `diag` (rows in parallel).
     fn assemble(&mut self, mu: &Field, rho: &Field, diag: &mut [f64]) {
-        let g = &self.grid;
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        self.k
-            .set_viscosity(g, mu, self.theta_dt, &mut self.mu_corner);
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = (ux.hi - ux.lo) as usize;
-        let nu = self.faces.nu();
-        let nx = g.nx;
-        let rd = rho.data();
-        let s = rho.stride();
-        let idx = |i: isize, j: isize| rho.idx(i, j);
+        self.k.set_viscosity_weights(&self.grid, mu, self.theta_dt);
         let hoop = self.k.hoop();
-        let (mu_m, mu_v) = self.mass.split_at_mut(nu);
-        let (dm_u, dm_v) = self.dm.split_at_mut(nu);
+        let (g, faces) = (&self.grid, &self.faces);
+        let nur = u_row(faces);
+        let (dm_u, dm_v) = self.dm.split_at_mut(faces.nu());
         if nur > 0 {
-            for_each_row2(mu_m, dm_u, nur, |j, ms, dms| {
-                for (c, (ms, dm)) in ms.iter_mut().zip(dms.iter_mut()).enumerate() {
-                    let i = ux.lo + c as isize;
-                    let k = idx(i, j as isize);
-                    *ms = face_density(rd[k - 1], rd[k]) * m.rx(i) * dx * dy;
-                    *dm = *ms + hoop[j * nur + c];
+            for_each_row(dm_u, nur, |j, dms| {
+                for (c, dm) in dms.iter_mut().enumerate() {
+                    *dm = mass_u(g, faces, rho, c, j) + hoop[j * nur + c];
                 }
             });
         }
-        for_each_row2(mu_v, dm_v, nx, |jr, ms, dms| {
-            let j = vy.lo + jr as isize;
-            for (i, (ms, dm)) in ms.iter_mut().zip(dms.iter_mut()).enumerate() {
-                let k = idx(i as isize, j);
-                *ms = face_density(rd[k - s], rd[k]) * m.rc(i as isize) * dx * dy;
-                *dm = *ms;
+        for_each_row(dm_v, g.nx, |jr, dms| {
+            for (i, dm) in dms.iter_mut().enumerate() {
+                *dm = mass_v(g, faces, rho, i, jr);
             }
         });
         self.k.diagonal(&self.dm, diag);
     }
+
+    /// The largest ratio of `diag` to the face mass, `Auto`'s choice of preconditioner (the
+    /// masses recomputed: only this rule needs them, so they are not stored).
+    fn max_diag_to_mass(&self, rho: &Field, diag: &[f64]) -> f64 {
+        let (g, faces) = (&self.grid, &self.faces);
+        let ratio = |d: f64, ms: f64| if ms > 0.0 { d / ms } else { 0.0 };
+        let (nur, nu) = (u_row(faces), faces.nu());
+        let mut m = 0.0f64;
+        for (q, d) in diag[..nu].iter().enumerate() {
+            m = m.max(ratio(*d, mass_u(g, faces, rho, q % nur, q / nur)));
+        }
+        for (q, d) in diag[nu..].iter().enumerate() {
+            m = m.max(ratio(*d, mass_v(g, faces, rho, q % g.nx, q / g.nx)));
+        }
+        m
+    }
+}
+
+/// Unknown u-faces per row.
+fn u_row(faces: &UnknownFaces) -> usize {
+    (faces.ux.hi - faces.ux.lo).max(0) as usize
+}
+
+/// The mass `ρ_f dV_f` of the `c`-th unknown u-face of row `j` (face density the average of
+/// the two cells).
+#[inline(always)]
+fn mass_u(g: &Grid, faces: &UnknownFaces, rho: &Field, c: usize, j: usize) -> f64 {
+    let i = faces.ux.lo + c as isize;
+    let k = rho.idx(i, j as isize);
+    let rd = rho.data();
+    face_density(rd[k - 1], rd[k]) * g.metric.rx(i) * g.dx * g.dy
+}
+
+/// The mass of v-face `i` in the `jr`-th row of unknown v-faces.
+#[inline(always)]
+fn mass_v(g: &Grid, faces: &UnknownFaces, rho: &Field, i: usize, jr: usize) -> f64 {
+    let k = rho.idx(i as isize, faces.vy.lo + jr as isize);
+    let rd = rho.data();
+    face_density(rd[k - rho.stride()], rd[k]) * g.metric.rc(i as isize) * g.dx * g.dy
 }
 
 impl LinearOperator for ViscousSystem {
@@ -334,7 +356,9 @@ impl Stage for ViscousStage {
         let g = ctx.grid;
         let op = &mut self.op;
         op.theta_dt = self.theta * ctx.dt;
-        op.assemble(&state.mu, &state.rho, &mut self.diag);
+        let mut pool = self.scratch.lock();
+        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.delta.len());
+        op.assemble(&state.mu, &state.rho, diag);
         // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
         // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing. The
         // stencil with the hoop term as its diagonal gives −θΔt·K(V*).
@@ -344,7 +368,6 @@ impl Stage for ViscousStage {
             theta: self.theta,
         };
         ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
-        let rhs = &mut self.rhs;
         op.k.apply(&state.u, &state.v, op.k.hoop(), None, rhs);
         let scale = -1.0 / self.theta;
         for_each_row(rhs, g.nx.max(1), |_, row| {
@@ -369,16 +392,14 @@ impl Stage for ViscousStage {
                     // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs
                     // ~10√κ iterations at 1e-9, at a quarter of the block multigrid's cost
                     // per iteration, which needs ~16: break-even near κ ≈ 40.
-                    let ratio = self.diag.iter().zip(&op.mass).fold(0.0f64, |m, (d, ms)| {
-                        if *ms > 0.0 { m.max(d / ms) } else { m }
-                    });
-                    ratio > AUTO_MULTIGRID_RATIO
+                    op.max_diag_to_mass(&state.rho, diag) > AUTO_MULTIGRID_RATIO
                 }
             };
             let blocks = self.blocks.as_mut().filter(|_| use_mg);
             let st = if let Some(blocks) = blocks {
-                blocks.setup(&op.k, &self.diag);
-                self.pcg.solve_norm(
+                blocks.setup(&op.k, diag);
+                solve_norm_in(
+                    [r, p, q],
                     op,
                     &*blocks,
                     rhs,
@@ -388,9 +409,10 @@ impl Stage for ViscousStage {
                     Norm::L2,
                 )
             } else {
-                self.pcg.solve_norm(
+                solve_norm_in(
+                    [r, p, q],
                     op,
-                    self.diag.as_slice(),
+                    &*diag,
                     rhs,
                     &mut self.delta,
                     tol,

@@ -180,15 +180,11 @@ pub struct VofAdvector {
     ny: usize,
     dx: f64,
     dy: f64,
-    /// Frozen indicator `c_c = [φⁿ > ½]`.
-    cc: Field,
-    /// PLIC line per padded cell, interleaved: normal x, normal y, α (cell-local coordinates).
-    lines: Vec<f64>,
-    /// Phase flux `F` and volume flux `U` per face of the current sweep.
-    flux: Field,
-    vflux: Field,
-    /// Net volume outflux per cell summed over the sweeps of the step (`∇·u Δt V`, ≈ 0).
-    divsum: Field,
+    /// Values per padded array of the grid.
+    cells: usize,
+    /// The work arrays of a step ([`Work`], [`WORK`] padded arrays) when the advector owns
+    /// them; empty when its stage lends them from the pipeline's pool ([`Self::step_in`]).
+    own: Vec<f64>,
     /// Per padded row: the partial statistics of the current pass.
     rows: Vec<RowStats>,
     /// Per padded column (`i + G`): `1/V`, the radius of the left edge, the face radius.
@@ -196,6 +192,39 @@ pub struct VofAdvector {
     r_left: Vec<f64>,
     r_face: Vec<f64>,
     r_centre: Vec<f64>,
+}
+
+/// Padded full-grid arrays a step works in ([`Work`]); nothing in them carries over between
+/// steps.
+pub(crate) const WORK: usize = 7;
+
+/// A step's work arrays, cut from one block of [`WORK`] padded arrays.
+struct Work<'a> {
+    /// Frozen indicator `c_c = [φⁿ > ½]` (interior cells).
+    cc: &'a mut [f64],
+    /// PLIC line per padded cell, interleaved: normal x, normal y, α (cell-local coordinates).
+    lines: &'a mut [f64],
+    /// Phase flux `F` and volume flux `U` per face of the current sweep.
+    flux: &'a mut [f64],
+    vflux: &'a mut [f64],
+    /// Net volume outflux per cell summed over the sweeps of the step (`∇·u Δt V`, ≈ 0).
+    divsum: &'a mut [f64],
+}
+
+impl<'a> Work<'a> {
+    fn cut(block: &'a mut [f64], cells: usize) -> Self {
+        let (cc, rest) = block[..WORK * cells].split_at_mut(cells);
+        let (lines, rest) = rest.split_at_mut(3 * cells);
+        let (flux, rest) = rest.split_at_mut(cells);
+        let (vflux, divsum) = rest.split_at_mut(cells);
+        Work {
+            cc,
+            lines,
+            flux,
+            vflux,
+            divsum,
+        }
+    }
 }
 
 /// One row's share of a pass's statistics (folded in row order).
@@ -267,12 +296,20 @@ impl VofAdvector {
 
     /// An advector for `grid` with the given sides, or why the sides do not fit the grid.
     pub fn try_new(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
+        let mut a = Self::lending(grid, bounds)?;
+        a.own = vec![0.0; WORK * a.cells];
+        Ok(a)
+    }
+
+    /// An advector without work arrays of its own: its steps borrow them
+    /// ([`Self::step_in`]).
+    pub(crate) fn lending(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
         bounds.validate(grid)?;
         let ncol = grid.nx + 1 + 2 * G as usize;
         let col = |k: usize| k as isize - G;
         let axi = grid.is_axisymmetric();
-        let cc = Field::zeros(grid);
-        let (cells, rows) = (cc.data().len(), cc.rows());
+        let rows = grid.ny + 1 + 2 * G as usize;
+        let cells = ncol * rows;
         Ok(VofAdvector {
             bounds,
             axi,
@@ -280,11 +317,8 @@ impl VofAdvector {
             ny: grid.ny,
             dx: grid.dx,
             dy: grid.dy,
-            cc,
-            lines: vec![0.0; 3 * cells],
-            flux: Field::zeros(grid),
-            vflux: Field::zeros(grid),
-            divsum: Field::zeros(grid),
+            cells,
+            own: Vec::new(),
             rows: vec![RowStats::default(); rows],
             inv_vol: (0..ncol).map(|k| 1.0 / grid.cell_volume(col(k))).collect(),
             r_left: (0..ncol)
@@ -313,11 +347,31 @@ impl VofAdvector {
         dt: f64,
         step_index: u64,
     ) -> AdvectStats {
+        let mut own = std::mem::take(&mut self.own);
+        let st = self.step_in(&mut own, grid, phi, u, v, dt, step_index);
+        self.own = own;
+        st
+    }
+
+    /// [`step`](Self::step) in the borrowed work arrays `work` (at least [`WORK`] padded
+    /// arrays; their contents on entry do not matter).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn step_in(
+        &mut self,
+        work: &mut [f64],
+        grid: &Grid,
+        phi: &mut Field,
+        u: &Field,
+        v: &Field,
+        dt: f64,
+        step_index: u64,
+    ) -> AdvectStats {
         debug_assert!(grid.nx == self.nx && grid.ny == self.ny, "grid mismatch");
-        debug_assert_eq!(phi.stride(), self.cc.stride());
+        debug_assert_eq!(phi.data().len(), self.cells);
+        let mut w = Work::cut(work, self.cells);
         let (nx, ny, s) = (self.nx, self.ny, phi.stride());
         let src = phi.data();
-        par::for_each_row(self.cc.data_mut(), s, |jp, row| {
+        par::for_each_row(w.cc, s, |jp, row| {
             if (GU..GU + ny).contains(&jp) {
                 let o = jp * s + GU;
                 for (c, f) in row[GU..GU + nx].iter_mut().zip(&src[o..o + nx]) {
@@ -334,10 +388,10 @@ impl VofAdvector {
         for (n, d) in order.into_iter().enumerate() {
             let last = n == 1;
             let s = match (self.axi, d) {
-                (false, X) => self.sweep::<false, X>(phi, u, dt, last),
-                (false, _) => self.sweep::<false, Y>(phi, v, dt, last),
-                (true, X) => self.sweep::<true, X>(phi, u, dt, last),
-                (true, _) => self.sweep::<true, Y>(phi, v, dt, last),
+                (false, X) => self.sweep::<false, X>(&mut w, phi, u, dt, last),
+                (false, _) => self.sweep::<false, Y>(&mut w, phi, v, dt, last),
+                (true, X) => self.sweep::<true, X>(&mut w, phi, u, dt, last),
+                (true, _) => self.sweep::<true, Y>(&mut w, phi, v, dt, last),
             };
             stats.merge(s);
         }
@@ -375,7 +429,8 @@ impl VofAdvector {
 
     /// Reconstruct the PLIC line of every cut cell in `[i0,i1) × [j0,j1)`, rows in parallel.
     fn reconstruct<const AXI: bool>(
-        &mut self,
+        &self,
+        lines: &mut [f64],
         phi: &Field,
         i0: isize,
         i1: isize,
@@ -386,7 +441,7 @@ impl VofAdvector {
         let (dx, dy) = (self.dx, self.dy);
         let c = phi.data();
         let r_left = &self.r_left;
-        par::for_each_row(&mut self.lines, 3 * s, |jp, row| {
+        par::for_each_row(lines, 3 * s, |jp, row| {
             let j = jp as isize - G;
             if j < j0 || j >= j1 {
                 return;
@@ -423,6 +478,7 @@ impl VofAdvector {
     /// divergence exceeds that residual, 1e-8 of its volume per step, keeps the correction.)
     fn sweep<const AXI: bool, const D: u8>(
         &mut self,
+        w: &mut Work,
         phi: &mut Field,
         vel: &Field,
         dt: f64,
@@ -444,9 +500,9 @@ impl VofAdvector {
         // Lines in the interior, plus the ghost layer that can be upwind of a periodic face.
         let g = if periodic { 1 } else { 0 };
         if D == X {
-            self.reconstruct::<AXI>(phi, -g, nx + g, 0, ny);
+            self.reconstruct::<AXI>(w.lines, phi, -g, nx + g, 0, ny);
         } else {
-            self.reconstruct::<AXI>(phi, 0, nx, -g, ny + g);
+            self.reconstruct::<AXI>(w.lines, phi, 0, nx, -g, ny + g);
         }
 
         // Face fluxes; face (i, j) shares the linear index of cell (i, j) (its high neighbour).
@@ -454,90 +510,84 @@ impl VofAdvector {
         let slab = Slab {
             dx,
             dy,
-            lines: &self.lines,
+            lines: &*w.lines,
             r_left: &self.r_left,
         };
         let (r_face, r_centre, inv_vol) = (&self.r_face, &self.r_centre, &self.inv_vol);
         let c = phi.data();
         let v = vel.data();
-        par::for_each_row2_with(
-            self.vflux.data_mut(),
-            self.flux.data_mut(),
-            s,
-            &mut self.rows,
-            |jp, urow, frow, st| {
-                *st = RowStats::default();
-                let j = jp as isize - G;
-                // The high periodic face of a y sweep is the low one: copied below.
-                if j < 0 || j >= fj1 || (D == Y && j == nd && periodic) {
-                    return;
+        par::for_each_row2_with(w.vflux, w.flux, s, &mut self.rows, |jp, urow, frow, st| {
+            *st = RowStats::default();
+            let j = jp as isize - G;
+            // The high periodic face of a y sweep is the low one: copied below.
+            if j < 0 || j >= fj1 || (D == Y && j == nd && periodic) {
+                return;
+            }
+            for i in 0..fi1 {
+                let il = (i + G) as usize;
+                let k = jp * s + il;
+                let p = if D == X { i } else { j };
+                let (mut big_u, mut big_f) = (0.0, 0.0);
+                let closed = (p == 0 && lo_side == VofSide::Closed)
+                    || (p == nd && hi_side == VofSide::Closed);
+                if D == X && p == nd && periodic {
+                    urow[il] = urow[GU];
+                    frow[il] = frow[GU];
+                    continue;
                 }
-                for i in 0..fi1 {
-                    let il = (i + G) as usize;
-                    let k = jp * s + il;
-                    let p = if D == X { i } else { j };
-                    let (mut big_u, mut big_f) = (0.0, 0.0);
-                    let closed = (p == 0 && lo_side == VofSide::Closed)
-                        || (p == nd && hi_side == VofSide::Closed);
-                    if D == X && p == nd && periodic {
-                        urow[il] = urow[GU];
-                        frow[il] = frow[GU];
-                        continue;
-                    }
-                    let sv = v[k] * dt;
-                    if !closed && sv != 0.0 {
-                        let pos = sv > 0.0;
-                        let (ku, iu) = if !pos {
-                            (k, i)
-                        } else if D == X {
-                            (k - o, i - 1)
+                let sv = v[k] * dt;
+                if !closed && sv != 0.0 {
+                    let pos = sv > 0.0;
+                    let (ku, iu) = if !pos {
+                        (k, i)
+                    } else if D == X {
+                        (k - o, i - 1)
+                    } else {
+                        (k - o, i)
+                    };
+                    let (area, w) = if D == X {
+                        let rf = r_face[il];
+                        let w = if AXI {
+                            let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
+                            2.0 * rf * sv.abs() / (rf + disc.sqrt())
                         } else {
-                            (k - o, i)
+                            sv.abs()
                         };
-                        let (area, w) = if D == X {
-                            let rf = r_face[il];
-                            let w = if AXI {
-                                let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
-                                2.0 * rf * sv.abs() / (rf + disc.sqrt())
-                            } else {
-                                sv.abs()
-                            };
-                            (rf * dy, w.min(dx))
+                        (rf * dy, w.min(dx))
+                    } else {
+                        (r_centre[il] * dx, sv.abs().min(dy))
+                    };
+                    big_u = area * sv;
+                    if big_u != 0.0 {
+                        st.cfl = st.cfl.max(big_u.abs() * inv_vol[(iu + G) as usize]);
+                        let cu = c[ku];
+                        let frac = if cu <= 0.0 {
+                            0.0
+                        } else if cu >= 1.0 {
+                            1.0
                         } else {
-                            (r_centre[il] * dx, sv.abs().min(dy))
+                            slab.fraction::<AXI, D>(ku, iu, w, pos)
                         };
-                        big_u = area * sv;
-                        if big_u != 0.0 {
-                            st.cfl = st.cfl.max(big_u.abs() * inv_vol[(iu + G) as usize]);
-                            let cu = c[ku];
-                            let frac = if cu <= 0.0 {
-                                0.0
-                            } else if cu >= 1.0 {
-                                1.0
-                            } else {
-                                slab.fraction::<AXI, D>(ku, iu, w, pos)
-                            };
-                            big_f = big_u * frac;
-                        }
+                        big_f = big_u * frac;
                     }
-                    urow[il] = big_u;
-                    frow[il] = big_f;
                 }
-            },
-        );
+                urow[il] = big_u;
+                frow[il] = big_f;
+            }
+        });
         if D == Y && periodic {
             let (top, bot) = (phi.idx(0, ny), phi.idx(0, 0));
             let n = nx as usize;
-            self.vflux.data_mut().copy_within(bot..bot + n, top);
-            self.flux.data_mut().copy_within(bot..bot + n, top);
+            w.vflux.copy_within(bot..bot + n, top);
+            w.flux.copy_within(bot..bot + n, top);
         }
         let cfl = self.rows.iter().fold(0.0f64, |m, r| m.max(r.cfl));
 
         // Update and clip.
-        let (f, uu, cc) = (self.flux.data(), self.vflux.data(), self.cc.data());
+        let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
         par::for_each_row2_with(
             phi.data_mut(),
-            self.divsum.data_mut(),
+            w.divsum,
             s,
             &mut self.rows,
             |jp, crow, drow, st| {

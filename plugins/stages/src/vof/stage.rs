@@ -25,8 +25,9 @@
 //! clipped volume is bounded by 1e-12 of a cell, checked in debug builds); the phase volume
 //! `Σ φ_s V` is conserved to round-off.
 
-use super::advect::{VofAdvector, VofBoundaries, VofSide};
+use super::advect::{self, VofAdvector, VofBoundaries, VofSide};
 use super::shapes::fill_fraction;
+use crate::scratch::Scratch;
 use efsi_core::scene::{Boundary, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -62,7 +63,7 @@ impl StagePlugin for Vof {
         scene: &Scene,
         grid: &Grid,
         bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let solid = scene.solid.as_ref().ok_or("no solid in the scene")?;
         let side = |s: Side| match bc.get(s) {
@@ -78,9 +79,12 @@ impl StagePlugin for Vof {
             y_lo: side(Side::YMin)?,
             y_hi: side(Side::YMax)?,
         };
-        let advector = VofAdvector::try_new(grid, bounds)?;
+        let advector = VofAdvector::lending(grid, bounds)?;
+        let pad = 2 * efsi_core::GHOST;
+        let cells = (grid.nx + 1 + pad) * (grid.ny + 1 + pad);
         Ok(Box::new(VofStage {
             advector,
+            scratch: Scratch::reserve(shared, advect::WORK * cells),
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
@@ -92,7 +96,11 @@ impl StagePlugin for Vof {
 }
 
 struct VofStage {
+    /// The advector, whose work arrays come from `scratch`.
     advector: VofAdvector,
+    /// The pipeline's work vectors (the advector's [`advect::WORK`] padded arrays while the
+    /// stage runs).
+    scratch: Scratch,
     rho: (f64, f64),
     mu: (f64, f64),
     shape: efsi_core::scene::Shape,
@@ -248,8 +256,10 @@ impl Stage for VofStage {
             });
         }
         let mut st = super::AdvectStats::default();
+        let mut pool = self.scratch.lock();
         for k in 0..n {
-            let s = self.advector.step(
+            let s = self.advector.step_in(
+                &mut pool,
                 ctx.grid,
                 &mut phi,
                 &self.u_adv,
