@@ -13,7 +13,7 @@
 //! Dot products sum fixed chunks in order ([`super::par`]), so the iterates do not depend on the
 //! number of threads.
 
-use super::par::{REDUCE_CHUNK, dot, for_each_chunk, for_each_mut};
+use super::par::{REDUCE_CHUNK, dot, dot_serial, for_each_chunk, for_each_mut};
 use rayon::prelude::*;
 
 /// Reorthogonalise once when cancellation left less than this fraction of the new vector.
@@ -261,9 +261,9 @@ fn project(basis: &[Vec<f64>], w: &[f64], parts: &mut [f64], proj: &mut [f64]) -
             let hi = (lo + REDUCE_CHUNK).min(w.len());
             let wc = &w[lo..hi];
             for (p, v) in p.iter_mut().zip(basis) {
-                *p = dot4(&v[lo..hi], wc);
+                *p = dot_serial(&v[lo..hi], wc);
             }
-            p[k] = dot4(wc, wc);
+            p[k] = dot_serial(wc, wc);
         });
     proj[..stride].fill(0.0);
     for p in parts.chunks(stride) {
@@ -272,24 +272,6 @@ fn project(basis: &[Vec<f64>], w: &[f64], parts: &mut [f64], proj: &mut [f64]) -
         }
     }
     proj[k]
-}
-
-/// Four-lane dot product of two equal-length slices (vectorises).
-#[inline]
-fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0f64; 4];
-    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ar, br) = (ac.remainder(), bc.remainder());
-    for (x, y) in ac.zip(bc) {
-        for l in 0..4 {
-            s[l] += x[l] * y[l];
-        }
-    }
-    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-    for (x, y) in ar.iter().zip(br) {
-        t += x * y;
-    }
-    t
 }
 
 /// `w −= Σ_i c_i basis[i]`, chunk by chunk (each chunk of `w` stays in cache).

@@ -15,7 +15,7 @@ pub const PAR_MIN: usize = 8192;
 
 /// Four-lane dot product of two equal-length slices (vectorises).
 #[inline]
-fn dot_serial(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot_serial(a: &[f64], b: &[f64]) -> f64 {
     let mut s = [0.0f64; 4];
     let n4 = a.len() / 4 * 4;
     for k in (0..n4).step_by(4) {

@@ -166,6 +166,17 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]
     });
 }
 
+/// `out = c (Δt/dV) F(u, v)` per cell (`dt_vol` = Δt/dV, `F` the net outflux), rows in
+/// parallel.
+fn outflux_per_volume(g: &Grid, u: &Field, v: &Field, dt_vol: &[f64], c: f64, out: &mut [f64]) {
+    let nx = g.nx;
+    for_each_row(out, nx, |j, row| {
+        for (i, y) in row.iter_mut().enumerate() {
+            *y = c * dt_vol[j * nx + i] * ops::net_outflux(g, u, v, i as isize, j as isize);
+        }
+    });
+}
+
 /// Copy a per-cell vector into a cell field and fill its ghosts (homogeneous).
 fn to_field(g: &Grid, bc: &BoundarySet, x: &[f64], f: &mut Field) {
     let nx = g.nx;
@@ -197,12 +208,7 @@ impl LinearOperator for Saddle<'_> {
         self.a.apply(xd, yu);
         let (g, om) = (self.grid, self.omega);
         let (xu, xv, w) = (&*self.a.xu, &*self.a.xv, self.dt_vol);
-        let nx = g.nx;
-        for_each_row(yc, nx, |j, row| {
-            for (i, y) in row.iter_mut().enumerate() {
-                *y = om * w[j * nx + i] * ops::net_outflux(g, xu, xv, i as isize, j as isize);
-            }
-        });
+        outflux_per_volume(g, xu, xv, w, om, yc);
         to_field(g, self.bc, xp, self.q);
         add_gradient(&self.a.op.k.faces, g, self.q, self.dt, yu);
     }
@@ -322,12 +328,7 @@ impl ElasticStage {
         // explicit elastic increment M⁻¹ b: the scale the divergence target is relative to.
         bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
         let (rc, w) = (&mut cp.rhs[nf..], &cp.dt_vol);
-        let (u, v) = (&state.u, &state.v);
-        for_each_row(rc, nx, |j, row| {
-            for (i, y) in row.iter_mut().enumerate() {
-                *y = -w[j * nx + i] * ops::net_outflux(g, u, v, i as isize, j as isize);
-            }
-        });
+        outflux_per_volume(g, &state.u, &state.v, w, -1.0, rc);
         let div0 = max_abs(&cp.rhs[nf..]);
         let div_b = {
             let sc = &mut self.scratch;
@@ -337,14 +338,8 @@ impl ElasticStage {
             }
             self.op.k.faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv);
             bc.fill_velocity(g, &mut sc.xu, &mut sc.xv, 0.0, true);
-            let mut worst = 0.0f64;
-            for j in 0..g.ny {
-                for i in 0..nx {
-                    let f = ops::net_outflux(g, &sc.xu, &sc.xv, i as isize, j as isize);
-                    worst = worst.max((w[j * nx + i] * f).abs());
-                }
-            }
-            worst
+            outflux_per_volume(g, &sc.xu, &sc.xv, w, 1.0, &mut cp.pb);
+            max_abs(&cp.pb)
         };
         if bnorm == 0.0 && div0 == 0.0 {
             return Ok(SolveStats {
