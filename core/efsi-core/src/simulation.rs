@@ -371,8 +371,8 @@ impl Simulation {
                         format!(
                             "the stability limit of the stage `{name}` (time.cfl = {}{})",
                             crate::scene::num(t.cfl),
-                            if name == "elastic" {
-                                ", numerics.elastic.wave_courant and the solid's stiffness: the elastic wave speed"
+                            if name == "deformation" {
+                                ", numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
                             } else {
                                 ", and the velocity it sees"
                             }

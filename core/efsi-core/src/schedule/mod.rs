@@ -164,6 +164,15 @@ pub trait Stage: Send {
         None
     }
 
+    /// A longer limit on Δt this stage can take instead of `own` (its [`max_dt`](Self::max_dt))
+    /// at a price, asked of the stage whose limit is the smallest once the next smallest,
+    /// `others`, is known: the elastic stage's `Auto` coupling switches to its dearer coupled
+    /// step only where the other stages allow steps long enough to pay for it. The step is then
+    /// at most `others` (default: none, `own` stands).
+    fn lift_dt(&self, _own: f64, _others: Option<f64>) -> Option<f64> {
+        None
+    }
+
     /// Whether this stage makes the velocity divergence-free (the projection). The pipeline
     /// also runs such a stage once on the initial velocity (default: no).
     fn projects(&self) -> bool {
@@ -575,18 +584,40 @@ impl Pipeline {
     }
 
     /// The stage whose step limit is the smallest, with that limit (None if no stage limits Δt).
+    /// That stage may then lift its limit ([`Stage::lift_dt`]) up to the next smallest one.
     pub fn limiting_stage(
         &self,
         grid: &Grid,
         state: &State,
         cfl: f64,
     ) -> Option<(&'static str, f64)> {
-        self.entries
-            .iter()
-            .filter_map(|e| e.stage.max_dt(grid, state, cfl).map(|d| (e.name, d)))
-            .fold(None, |m: Option<(&'static str, f64)>, d| {
-                Some(m.map_or(d, |m| if d.1 < m.1 { d } else { m }))
-            })
+        // The smallest limit (with its entry) and the next smallest (with its stage's name).
+        let mut first: Option<(&Entry, f64)> = None;
+        let mut second: Option<(&'static str, f64)> = None;
+        for e in &self.entries {
+            let Some(d) = e.stage.max_dt(grid, state, cfl) else {
+                continue;
+            };
+            match first {
+                Some((_, fd)) if !(d < fd) => {
+                    if second.is_none_or(|s| d < s.1) {
+                        second = Some((e.name, d));
+                    }
+                }
+                _ => {
+                    second = first.map(|(f, fd)| (f.name, fd)).or(second);
+                    first = Some((e, d));
+                }
+            }
+        }
+        let (e, d) = first?;
+        match e.stage.lift_dt(d, second.map(|s| s.1)) {
+            Some(lifted) if lifted > d => match second {
+                Some(s) if s.1 <= lifted => Some(s),
+                _ => Some((e.name, lifted)),
+            },
+            _ => Some((e.name, d)),
+        }
     }
 
     /// Run every stage once, in order. After each stage the ghosts of what it wrote are

@@ -1,19 +1,23 @@
 //! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
-use super::{Kernels, err, missing};
+use super::{AUTO_COUPLED_GAIN, ElasticCoupling, Kernels, err, missing};
 use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     pub(super) k: Kernels,
-    /// θ of B's stretching (`numerics.elastic.theta`).
-    pub(super) stretch_theta: f64,
+    /// θ of B's stretching (`numerics.elastic.theta`) in a split step and in a coupled one, and
+    /// the pipeline's flag saying which this step is (set by the elastic stage).
+    pub(super) thetas: [f64; 2],
+    pub(super) step_flag: super::CoupledStep,
+    /// `numerics.elastic.coupling` (`Split` where the scene cannot couple).
+    pub(super) mode: super::ElasticCoupling,
     /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
     pub(super) first: [efsi_core::Field; 4],
-    /// The elastic-wave limit on Δt ([`wave_limit`](super::limits::wave_limit)).
-    pub(super) wave_dt: f64,
+    /// The elastic-wave limits on Δt.
+    pub(super) limits: super::limits::WaveLimits,
 }
 
 impl Stage for DeformationStage {
@@ -24,8 +28,21 @@ impl Stage for DeformationStage {
         }
     }
 
+    /// The split step's wave limit, or the coupled step's with `Coupled`.
     fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
-        self.wave_dt.is_finite().then_some(self.wave_dt)
+        let dt = match self.mode {
+            ElasticCoupling::Coupled => self.limits.coupled,
+            ElasticCoupling::Split | ElasticCoupling::Auto => self.limits.split,
+        };
+        dt.is_finite().then_some(dt)
+    }
+
+    /// With `Auto`, the coupled step's wave limit where the other stages allow steps at least
+    /// [`AUTO_COUPLED_GAIN`] times the split step's.
+    fn lift_dt(&self, own: f64, others: Option<f64>) -> Option<f64> {
+        let lifted = self.mode == ElasticCoupling::Auto
+            && others.is_none_or(|o| o >= AUTO_COUPLED_GAIN * own);
+        (lifted && self.limits.coupled.is_finite()).then_some(self.limits.coupled)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
@@ -41,7 +58,7 @@ impl Stage for DeformationStage {
         k.set_weights(phi);
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
-        let a = self.stretch_theta * ctx.dt;
+        let a = self.thetas[usize::from(self.step_flag.get())] * ctx.dt;
         // The Picard pass: the update stretches the first pass's tensor.
         let first = &mut self.first;
         k.stretch(

@@ -11,16 +11,38 @@ use efsi_laws_host::ConstitutiveLaw;
 /// 5 cells and more at most 0.15 %.
 pub const MIN_CELLS_ACROSS: f64 = 5.0;
 
-/// The largest Δt the elastic-wave Courant limit allows
-/// ([`super::ElasticOptions::wave_courant`]): `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
+/// The largest Δt the elastic-wave Courant limits allow, `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
 /// the largest diagonal entry of the law's tangent at `B̃ = I` (the shear modulus for the
-/// shipped laws). A `time.fixed_dt` above it is refused here, before the run starts, naming
-/// the limit and what to change; so is a solid narrower than [`MIN_CELLS_ACROSS`].
-pub(super) fn wave_limit(
+/// shipped laws): `split` at `s` = [`super::ElasticOptions::wave_courant`], `coupled` at
+/// [`super::ElasticOptions::coupled_wave_courant`] where the scene may take the coupled step
+/// (else equal to `split`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct WaveLimits {
+    pub(super) split: f64,
+    pub(super) coupled: f64,
+}
+
+/// The scene's [`WaveLimits`], worked out once per pipeline and shared by the elastic and
+/// deformation stages.
+pub(super) fn shared_wave_limits(
     scene: &Scene,
     grid: &Grid,
     law: &dyn ConstitutiveLaw,
-) -> Result<f64, String> {
+    shared: &mut efsi_core::Resources,
+) -> Result<WaveLimits, String> {
+    shared
+        .get_or_try_insert_with(|| wave_limit(scene, grid, law))
+        .copied()
+}
+
+/// The [`WaveLimits`]. A `time.fixed_dt` above the larger one is refused here, before the run
+/// starts, naming the limit and what to change; so is a solid narrower than
+/// [`MIN_CELLS_ACROSS`].
+fn wave_limit(
+    scene: &Scene,
+    grid: &Grid,
+    law: &dyn ConstitutiveLaw,
+) -> Result<WaveLimits, String> {
     let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
     let mut tau = [[0.0; 4]];
     let mut tangent = [[0.0; 16]];
@@ -57,8 +79,9 @@ pub(super) fn wave_limit(
         }
     }
     let o = crate::options::<super::ElasticOptions>(scene)?;
-    let s = o.wave_cap();
-    let option = if super::coupled(scene) {
+    let couples = super::may_couple(scene);
+    let s = if couples { o.wave_cap() } else { o.wave_courant };
+    let option = if couples {
         "numerics.elastic.coupled_wave_courant"
     } else {
         "numerics.elastic.wave_courant"
@@ -79,5 +102,8 @@ pub(super) fn wave_limit(
             fixed * c / h
         ));
     }
-    Ok(dt)
+    Ok(WaveLimits {
+        split: o.wave_courant * h / c,
+        coupled: dt,
+    })
 }

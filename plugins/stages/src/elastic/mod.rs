@@ -258,9 +258,9 @@ use deformation::DeformationStage;
 pub use law::resolve_law;
 use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
-use limits::wave_limit;
+use limits::shared_wave_limits;
 pub use options::{
-    DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
+    AUTO_COUPLED_GAIN, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
     MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
@@ -274,12 +274,66 @@ pub(crate) fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
 }
 
-/// Whether `scene` runs the coupled elastic step (`numerics.elastic.coupling: Coupled` with a
-/// solid that has a law): the elastic stage then leaves a pressure for the projection stage
-/// to complete, and Δt is capped at `coupled_wave_courant` elastic-wave Courant numbers.
-pub(crate) fn coupled(scene: &Scene) -> bool {
+/// Whether `scene` may take the coupled elastic step (`numerics.elastic.coupling` `Coupled` or
+/// `Auto` with a solid that has an implicit law): a coupled step leaves a pressure for the
+/// projection stage to complete, and Δt may reach `coupled_wave_courant` elastic-wave Courant
+/// numbers.
+pub(crate) fn may_couple(scene: &Scene) -> bool {
+    coupling(scene) != ElasticCoupling::Split
+}
+
+/// `numerics.elastic.coupling`, or `Split` where the scene has no solid with an implicit law.
+pub(crate) fn coupling(scene: &Scene) -> ElasticCoupling {
     let o: ElasticOptions = scene.numerics.get().unwrap_or_default();
-    law_needed(scene) && o.implicit && o.coupling == ElasticCoupling::Coupled
+    if law_needed(scene) && o.implicit {
+        o.coupling
+    } else {
+        ElasticCoupling::Split
+    }
+}
+
+/// Whether the step under way is a coupled one, set by the elastic stage at the start of each
+/// step and read by the stages after it in the same step (the deformation update's θ, the
+/// projection's increment). Shared through the pipeline's [`efsi_core::Resources`]; nothing of
+/// it outlives the step, so snapshots and checkpoints do not carry it.
+#[derive(Clone, Default)]
+pub(crate) struct CoupledStep(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl CoupledStep {
+    /// The pipeline's flag (made by the first stage that asks).
+    pub(crate) fn shared(shared: &mut efsi_core::Resources) -> CoupledStep {
+        shared
+            .get_or_try_insert_with(|| Ok::<_, ()>(CoupledStep::default()))
+            .map(CoupledStep::clone)
+            .unwrap_or_default()
+    }
+
+    pub(crate) fn get(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn set(&self, coupled: bool) {
+        self.0.store(coupled, std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+/// What differs between a split and a coupled step: θ of B's stretching and the velocity
+/// block's preconditioner.
+#[derive(Clone, Copy, Debug)]
+struct StepScheme {
+    theta: f64,
+    preconditioner: ElasticPreconditioner,
+}
+
+/// Whether a step of `dt` is a coupled one: always with `Coupled`, never with `Split`, and with
+/// `Auto` once Δt exceeds the split step's wave limit `split_dt` (by more than the run loop's
+/// rounding when it lands on an output time).
+fn coupled_step(mode: ElasticCoupling, dt: f64, split_dt: f64) -> bool {
+    match mode {
+        ElasticCoupling::Split => false,
+        ElasticCoupling::Coupled => true,
+        ElasticCoupling::Auto => dt > split_dt * (1.0 + 1e-6),
+    }
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
@@ -341,7 +395,38 @@ impl StagePlugin for Elastic {
         let k = Kernels::new(grid, bc, mu_f, mu_s);
         let n = k.faces.len();
         let o: ElasticOptions = crate::options(scene)?;
+        let couples = may_couple(scene);
+        let split_dt = shared_wave_limits(scene, grid, law.as_ref(), shared)?.split;
+        let schemes = [false, true].map(|coupled| StepScheme {
+            theta: o.stretch_theta(coupled),
+            preconditioner: match o.preconditioner {
+                // The coupled step keeps the multigrid: with Jacobi for its velocity block
+                // its FGMRES stagnates (the shear rectangle at 96 × 24: 1.2e-9 of the scale
+                // after 500 iterations).
+                ElasticPreconditioner::Auto
+                    if !coupled
+                        && efsi_core::scene::Side::ALL.iter().any(|&s| {
+                            matches!(
+                                scene.boundaries.get(s),
+                                efsi_core::scene::Boundary::Periodic
+                            )
+                        }) =>
+                {
+                    ElasticPreconditioner::Jacobi
+                }
+                ElasticPreconditioner::Auto => ElasticPreconditioner::Multigrid,
+                p => p,
+            },
+        });
         Ok(Box::new(ElasticStage {
+            mode: coupling(scene),
+            split_dt,
+            step_flag: {
+                // Until the first step says otherwise (the projection of the initial velocity).
+                let flag = CoupledStep::shared(shared);
+                flag.set(coupling(scene) == ElasticCoupling::Coupled);
+                flag
+            },
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
             op: ElasticOperator {
@@ -355,7 +440,7 @@ impl StagePlugin for Elastic {
                 viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
                 dm: vec![0.0; n],
             },
-            stretch_theta: o.stretch_theta(),
+            stretch_theta: schemes[0].theta,
             theta: if crate::viscous::Viscous.needed(scene) {
                 crate::options::<crate::viscous::ViscousOptions>(scene)?.theta
             } else {
@@ -368,24 +453,8 @@ impl StagePlugin for Elastic {
             tol: o.tolerance,
             max_iter: o.max_iterations,
             implicit: o.implicit,
-            preconditioner: match o.preconditioner {
-                // The coupled step keeps the multigrid: with Jacobi for its velocity block its
-                // FGMRES stagnates (the shear rectangle at 96 × 24: 1.2e-9 of the scale after
-                // 500 iterations).
-                ElasticPreconditioner::Auto
-                    if !coupled(scene)
-                        && efsi_core::scene::Side::ALL.iter().any(|&s| {
-                            matches!(
-                                scene.boundaries.get(s),
-                                efsi_core::scene::Boundary::Periodic
-                            )
-                        }) =>
-                {
-                    ElasticPreconditioner::Jacobi
-                }
-                ElasticPreconditioner::Auto => ElasticPreconditioner::Multigrid,
-                p => p,
-            },
+            preconditioner: schemes[0].preconditioner,
+            schemes,
             blocks: ViscousBlocks::new(grid, bc),
             eta: Field::zeros(grid),
             eta_k: Field::zeros(grid),
@@ -397,7 +466,7 @@ impl StagePlugin for Elastic {
                 xv: Field::zeros(grid),
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
             },
-            coupling: if coupled(scene) {
+            coupling: if couples {
                 let proj: crate::projection::ProjectionOptions = crate::options(scene)?;
                 Some(coupled::Coupling::new(grid, bc, n, &o, proj.tolerance))
             } else {
@@ -444,12 +513,14 @@ impl StagePlugin for DeformationUpdate {
         let (mu_f, mu_s) = viscosities(scene);
         let law = shared_law(scene, shared)?;
         let o: ElasticOptions = crate::options(scene)?;
-        let wave_dt = wave_limit(scene, grid, law.as_ref())?;
+        let limits = shared_wave_limits(scene, grid, law.as_ref(), shared)?;
         Ok(Box::new(DeformationStage {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),
-            wave_dt,
-            stretch_theta: o.stretch_theta(),
+            mode: coupling(scene),
+            limits,
+            thetas: [o.stretch_theta(false), o.stretch_theta(true)],
+            step_flag: CoupledStep::shared(shared),
             first: std::array::from_fn(|_| Field::zeros(grid)),
         }))
     }

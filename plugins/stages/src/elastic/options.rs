@@ -31,17 +31,18 @@ pub struct ElasticOptions {
     /// a `time.fixed_dt` above the cap is refused.
     #[serde(default = "default_wave_courant")]
     pub wave_courant: f64,
-    /// How the elastic step and the pressure projection are coupled (default `Split`).
+    /// How the elastic step and the pressure projection are coupled (default `Split`; `Auto`
+    /// chooses per step).
     #[serde(default)]
     pub coupling: ElasticCoupling,
-    /// `Coupled` only: the coupled solve stops once `max |∇·V|·Δt` is at most this fraction
+    /// `Coupled`/`Auto` only: the coupled solve stops once `max |∇·V|·Δt` is at most this fraction
     /// of the step's divergence scale (that of the velocity before the step or of the
     /// explicit elastic increment, whichever is larger; default 1e-3) or the projection's
     /// tolerance, whichever is larger; the projection stage removes the rest.
     #[serde(default = "default_coupling_tolerance")]
     pub coupling_tolerance: f64,
     /// The implicit weight θ of B's stretching over a step, `B^{n+1} = Bⁿ + Δt[(1 − θ) H(Vⁿ) +
-    /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, with `Split`; 0.75 with `Coupled`).
+    /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, in a split step; 0.75 in a coupled one).
     /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
     /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
     /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. With
@@ -52,11 +53,11 @@ pub struct ElasticOptions {
     /// at 0.75 every run of the map is stable.
     #[serde(default)]
     pub theta: Option<f64>,
-    /// `Coupled` only: the most FGMRES iterations per step (default 500; the stability map's
+    /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500; the stability map's
     /// sphere at the default tolerance 1e-10 takes 37 a step on average at G = 1e9 Pa).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
-    /// `Coupled` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
+    /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
     /// (default [`DEFAULT_COUPLED_WAVE_COURANT`], at most [`MAX_COUPLED_WAVE_COURANT`]). The
     /// coupled step is stable far beyond the split step's [`MAX_WAVE_COURANT`], but not without
     /// bound, and it damps an impact it takes in few steps: the stability map's sphere (8 cells
@@ -84,26 +85,35 @@ pub enum ElasticCoupling {
     /// map's sphere at CFL 0.5 takes 31 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
     /// (`theta` 0.75), so an impact loses part of its rebound (0.78 against the split step's
-    /// 1.03 m/s at G = 1e9); ≈ 1.4× the split step's cost per step on the seed's sphere.
+    /// 1.03 m/s at G = 1e9); ≈ 1.5× the split step's cost per step on the seed's sphere.
     Coupled,
+    /// Each step chooses: the split step while the other stages' limit on Δt is within
+    /// [`AUTO_COUPLED_GAIN`] times the split step's wave cap (`wave_courant`), the coupled step
+    /// (up to `coupled_wave_courant`) where the flow allows longer steps than that — so a soft
+    /// solid runs as with `Split` and a stiff one at the flow's step. Each step's θ is its
+    /// scheme's (`theta` when set applies to both).
+    Auto,
 }
+
+/// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
+/// this much over the split step's wave cap: a coupled step costs 1.4–1.5 split steps on the
+/// seed's sphere (35 cells per radius), so a shorter gain would not pay for it.
+pub const AUTO_COUPLED_GAIN: f64 = 1.5;
 
 impl ElasticOptions {
     /// The elastic-wave Courant number that caps Δt: `wave_courant` with the split step,
-    /// `coupled_wave_courant` with the coupled one.
+    /// `coupled_wave_courant` where the coupled step may be taken (`Coupled`, `Auto`).
     pub fn wave_cap(&self) -> f64 {
         match self.coupling {
             ElasticCoupling::Split => self.wave_courant,
-            ElasticCoupling::Coupled => self.coupled_wave_courant,
+            ElasticCoupling::Coupled | ElasticCoupling::Auto => self.coupled_wave_courant,
         }
     }
 
-    /// θ of B's stretching: the scene's, else 0.5 with `Split` and 0.75 with `Coupled`.
-    pub fn stretch_theta(&self) -> f64 {
-        self.theta.unwrap_or(match self.coupling {
-            ElasticCoupling::Split => 0.5,
-            ElasticCoupling::Coupled => 0.75,
-        })
+    /// θ of B's stretching in a coupled step (`coupled`) or a split one: the scene's, else 0.5
+    /// in a split step and 0.75 in a coupled one.
+    pub fn stretch_theta(&self, coupled: bool) -> f64 {
+        self.theta.unwrap_or(if coupled { 0.75 } else { 0.5 })
     }
 }
 
@@ -224,10 +234,13 @@ impl StageOptions for ElasticOptions {
             ));
         }
         check_iterations("coupling_iterations", self.coupling_iterations)?;
-        if self.coupling == ElasticCoupling::Coupled && !self.implicit {
+        if self.coupling != ElasticCoupling::Split && !self.implicit {
             return Err((
                 "coupling",
-                "Coupled needs the implicit elastic step (numerics.elastic.implicit: true)".into(),
+                format!(
+                    "{:?} needs the implicit elastic step (numerics.elastic.implicit: true)",
+                    self.coupling
+                ),
             ));
         }
         Ok(())

@@ -14,8 +14,17 @@ pub(super) struct ElasticStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     pub(super) theta: f64,
-    /// θ of B's stretching (`numerics.elastic.theta`; 0.5: Crank–Nicolson).
+    /// θ of B's stretching in this step (`numerics.elastic.theta`; 0.5: Crank–Nicolson in a
+    /// split step, 0.75 in a coupled one): the step's scheme's.
     pub(super) stretch_theta: f64,
+    /// The split step's scheme and the coupled step's.
+    pub(super) schemes: [super::StepScheme; 2],
+    /// `numerics.elastic.coupling` (`Split` where the scene cannot couple), the split step's
+    /// wave limit on Δt (the step above which `Auto` couples), and the pipeline's flag telling
+    /// the later stages which step this is.
+    pub(super) mode: super::ElasticCoupling,
+    pub(super) split_dt: f64,
+    pub(super) step_flag: super::CoupledStep,
     pub(super) tau: [Field; 4],
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
@@ -26,7 +35,7 @@ pub(super) struct ElasticStage {
     pub(super) max_iter: usize,
     /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
     pub(super) implicit: bool,
-    /// Scene `numerics.elastic.preconditioner`, and the block multigrid's effective
+    /// The step's preconditioner (from scene `numerics.elastic.preconditioner`), and the block multigrid's effective
     /// viscosities × Δt at centres and corners (see [`Kernels::stiffness`]).
     pub(super) preconditioner: ElasticPreconditioner,
     pub(super) blocks: ViscousBlocks,
@@ -38,7 +47,8 @@ pub(super) struct ElasticStage {
     pub(super) eta_diag: Vec<f64>,
     /// Work space of the operator, allocated once.
     pub(super) scratch: Scratch,
-    /// The coupled step's work space (`numerics.elastic.coupling: Coupled`), else `None`.
+    /// The coupled step's work space (`numerics.elastic.coupling` `Coupled` or `Auto`), else
+    /// `None`.
     pub(super) coupling: Option<super::coupled::Coupling>,
 }
 
@@ -160,7 +170,8 @@ impl Stage for ElasticStage {
 }
 
 impl ElasticStage {
-    /// One elastic step with B̃ (`d`) held outside the state: [`predict`](Self::predict) the
+    /// One elastic step with B̃ (`d`) held outside the state: choose the split or the coupled
+    /// step (`numerics.elastic.coupling`; with `Auto` by Δt), [`predict`](Self::predict) the
     /// deformation at the step's first third and its stress, [`assemble`](Self::assemble) the
     /// implicit system, [`solve`](Self::solve) it for the velocity increment and add it, then
     /// [`correct`](Self::correct) the deformation with the new velocity.
@@ -170,9 +181,14 @@ impl ElasticStage {
         state: &mut State,
         d: &mut super::Deformation,
     ) -> Result<StageStats, StageError> {
+        let coupled = self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
+        let scheme = self.schemes[usize::from(coupled)];
+        self.stretch_theta = scheme.theta;
+        self.preconditioner = scheme.preconditioner;
+        self.step_flag.set(coupled);
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
-        let stats = if self.coupling.is_some() {
+        let stats = if coupled {
             self.solve_coupled(ctx, state, d, bnorm, scale)?
         } else {
             self.solve(ctx, state, d, bnorm, scale)?

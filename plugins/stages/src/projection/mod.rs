@@ -113,20 +113,25 @@ impl StagePlugin for Projection {
                 }
             },
             scratch: Scratch::reserve(shared, WORK * n),
-            increment: (incremental(scene) || crate::elastic::coupled(scene))
+            increment: (incremental(scene) || crate::elastic::may_couple(scene))
                 .then(|| efsi_core::Field::zeros(grid)),
+            incremental: incremental(scene),
+            coupled_step: crate::elastic::may_couple(scene)
+                .then(|| crate::elastic::CoupledStep::shared(shared)),
+            hydrostatic_start: incremental(scene)
+                || crate::elastic::coupling(scene) == crate::elastic::ElasticCoupling::Coupled,
             gravity: scene.gravity,
         }))
     }
 }
 
 /// Whether `scene` runs the incremental pressure correction: `numerics.projection.incremental`,
-/// by default on unless the scene has an elastic solid; never with the coupled elastic step,
-/// which finds its own pressure.
+/// by default on unless the scene has an elastic solid; never where the coupled elastic step may
+/// be taken, which finds its own pressure.
 pub(crate) fn incremental(scene: &Scene) -> bool {
     let elastic = crate::elastic::law_needed(scene);
     let o: ProjectionOptions = scene.numerics.get().unwrap_or_default();
-    o.incremental.unwrap_or(!elastic) && !crate::elastic::coupled(scene)
+    o.incremental.unwrap_or(!elastic) && !crate::elastic::may_couple(scene)
 }
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last
@@ -205,6 +210,14 @@ struct ProjectionStage {
     /// velocity and added to that pressure; likewise in the incremental scheme, after the
     /// predictor applied the last step's pressure. `None` in the seed's non-incremental scheme.
     increment: Option<efsi_core::Field>,
+    /// Whether the scene runs the incremental scheme (every step solves for an increment);
+    /// else, where the coupled elastic step may be taken, the flag saying whether this step is
+    /// one (its pressure is then already applied and the projection solves for an increment).
+    incremental: bool,
+    coupled_step: Option<crate::elastic::CoupledStep>,
+    /// Whether the run starts from the hydrostatic pressure (the incremental scheme, and the
+    /// coupled step's `Coupled`) rather than from zero.
+    hydrostatic_start: bool,
     /// Gravity, whose hydrostatic pressure (in the grid's frame) the incremental scheme starts
     /// from.
     gravity: (f64, f64),
@@ -308,7 +321,7 @@ impl Stage for ProjectionStage {
         // Gravity in the grid's frame (a frame acceleration set before the first step counts).
         let a = state.frame_acceleration;
         let (gx, gy) = (self.gravity.0 - a.0, self.gravity.1 - a.1);
-        if self.increment.is_none() || (gx, gy) == (0.0, 0.0) {
+        if !self.hydrostatic_start || (gx, gy) == (0.0, 0.0) {
             return Ok(());
         }
         // Project the field g (on the faces the flow may cross) with Δt = 1: what the
@@ -396,7 +409,11 @@ impl ProjectionStage {
                 *w = dt * dt / grid.cell_volume(i as isize);
             }
         });
-        if self.increment.is_some() {
+        // An increment on the pressure already applied (the incremental scheme's predictor,
+        // or the coupled elastic step's), else the whole pressure from the last step's.
+        let incremental =
+            self.incremental || self.coupled_step.as_ref().is_some_and(|c| c.get());
+        if incremental {
             x.fill(0.0);
         } else {
             for_each_row(x, nx, |j, row| {
@@ -435,14 +452,14 @@ impl ProjectionStage {
         let (x, ps) = (&*x, state.p.stride());
         let p0 = state.p.idx(0, 0);
         let target = match &mut self.increment {
-            Some(f) => f,
-            None => &mut state.p,
+            Some(f) if incremental => f,
+            _ => &mut state.p,
         };
         for_each_row(&mut target.data_mut()[p0..p0 + ny * ps], ps, |j, row| {
             row[..nx].copy_from_slice(&x[j * nx..(j + 1) * nx]);
         });
         ctx.bc.fill_scalar(grid, target, true);
-        if let Some(f) = &self.increment {
+        if let Some(f) = self.increment.as_ref().filter(|_| incremental) {
             // The pressure is the one already there (the last step's, or the coupled step's)
             // plus the increment found here.
             for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
@@ -454,7 +471,10 @@ impl ProjectionStage {
         subtract_gradient(
             grid,
             ctx.bc,
-            self.increment.as_ref().unwrap_or(&state.p),
+            self.increment
+                .as_ref()
+                .filter(|_| incremental)
+                .unwrap_or(&state.p),
             &state.rho,
             dt,
             &mut state.u,
