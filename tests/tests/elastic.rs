@@ -590,3 +590,48 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
     assert!(strain <= 1e-4, "strain energy {strain:e} of the kinetic");
     assert!(drift <= 1e-10, "volume drift {drift:e}");
 }
+
+/// `numerics.elastic.coupling: Auto` chooses per step: a soft disk spinning in the vortex cell
+/// (G = 1e3 Pa: the flow's step is within the split step's wave cap) runs exactly as with
+/// `Split`, a stiff one (G = 1e9 Pa: the flow allows steps far beyond the split cap) exactly as
+/// with `Coupled` — the same steps and the same velocities to the last bit.
+#[test]
+fn auto_coupling_runs_a_soft_solid_split_and_a_stiff_one_coupled() {
+    let text = |g: f64, coupling: &str| {
+        format!(
+            r#"Scene(
+        name: "spin",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 32, ny: 32),
+        time: (end: 0.05, cfl: 0.5),
+        fluid: (density: 1.0, viscosity: 0.001),
+        initial_velocity: SinSinStream(amplitude: 0.05, wavenumbers: (6.283185307179586, 6.283185307179586)),
+        solid: (shape: Disk(center: (0.25, 0.25), radius: 0.15), density: 1000.0,
+                law: (name: "neo_hookean", parameters: {{"G": {g:e}}})),
+        numerics: (elastic: (coupling: {coupling})),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    )"#
+        )
+    };
+    let run = |g: f64, coupling: &str| {
+        let mut s = sim(&text(g, coupling));
+        run_until(&mut s, 0.05, |_, _| {});
+        (s.state.step, s.state.u.data().to_vec(), s.state.v.data().to_vec())
+    };
+    for (g, same_as, other) in [(1e3, "Split", "Coupled"), (1e9, "Coupled", "Split")] {
+        let auto = run(g, "Auto");
+        let expected = run(g, same_as);
+        let (steps, u, v) = &auto;
+        assert_eq!(*steps, expected.0, "G {g:e}: steps against {same_as}");
+        assert!(
+            u == &expected.1 && v == &expected.2,
+            "G {g:e}: Auto's velocity differs from {same_as}'s"
+        );
+        // …and the choice mattered: the other scheme gives another result.
+        let o = run(g, other);
+        assert!(
+            o.0 != *steps || o.1 != *u,
+            "G {g:e}: {other} gives the same run as {same_as}"
+        );
+    }
+}

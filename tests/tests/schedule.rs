@@ -158,3 +158,85 @@ fn unordered_writers_of_one_field_are_ambiguous_and_after_resolves_it() {
     );
     assert!(s.state.phi.is_some(), "a declared field is allocated");
 }
+
+/// A stage with a fixed limit on Δt that it lifts to `lifted` where the others allow at least
+/// `gain` times its own.
+struct Limit {
+    name: &'static str,
+    dt: f64,
+    lift: Option<(f64, f64)>,
+}
+struct LimitStage(f64, Option<(f64, f64)>);
+impl Stage for LimitStage {
+    fn run(
+        &mut self,
+        _: &efsi_core::StepContext,
+        _: &mut efsi_core::State,
+    ) -> Result<efsi_core::StageStats, efsi_core::StageError> {
+        Ok(Default::default())
+    }
+    fn max_dt(&self, _: &Grid, _: &efsi_core::State, _: f64) -> Option<f64> {
+        Some(self.0)
+    }
+    fn lift_dt(&self, own: f64, others: Option<f64>) -> Option<f64> {
+        let (gain, lifted) = self.1?;
+        others.is_none_or(|o| o >= gain * own).then_some(lifted)
+    }
+}
+impl StagePlugin for Limit {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn phase(&self) -> Phase {
+        Phase::Interface
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        &[]
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        &[]
+    }
+    fn needed(&self, _: &Scene) -> bool {
+        true
+    }
+    fn build(
+        &self,
+        _: &Scene,
+        _: &Grid,
+        _: &BoundarySet,
+        _: &mut efsi_core::Resources,
+    ) -> Result<Box<dyn Stage>, String> {
+        Ok(Box::new(LimitStage(self.dt, self.lift)))
+    }
+}
+
+/// The limiting stage may lift its limit (`Stage::lift_dt`, the elastic stage's `Auto`
+/// coupling): only where the next smallest limit leaves room for the gain it asks, and never
+/// above that next limit; a stage that is not the smallest is not asked.
+#[test]
+fn the_limiting_stage_may_lift_its_limit_up_to_the_next_one() {
+    let cases = [
+        // (liftable stage's dt, its lift (gain, lifted), other stage's dt) → (name, Δt)
+        (0.1, (1.5, 0.5), 1.0, ("liftable", 0.5)),
+        (0.1, (1.5, 0.5), 0.12, ("liftable", 0.1)),
+        (0.1, (1.5, 5.0), 1.0, ("other", 1.0)),
+        (0.1, (1.5, 0.5), 0.05, ("other", 0.05)),
+    ];
+    for (dt, lift, other, expected) in cases {
+        let a = Limit {
+            name: "liftable",
+            dt,
+            lift: Some(lift),
+        };
+        let b = Limit {
+            name: "other",
+            dt: other,
+            lift: None,
+        };
+        // A fluid at rest: the built-in stages set no limit.
+        let s = sim_with(&cavity("").replace("MovingWall(speed: 1.0)", "NoSlip"), &[&a, &b])
+            .unwrap();
+        let got = s.pipeline().limiting_stage(&s.grid, &s.state, 0.5);
+        assert_eq!(got, Some(expected), "{dt} lifting {lift:?} beside {other}");
+    }
+}

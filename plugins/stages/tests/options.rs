@@ -68,7 +68,7 @@ fn strict_preset_tightens_each_tolerance() {
     assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-6);
 }
 
-/// The elastic coupling: Split by default, Coupled by name (round trip); its tolerance,
+/// The elastic coupling: Split by default, Coupled and Auto by name (round trip); its tolerance,
 /// iteration cap and its need of the implicit step checked by field.
 #[test]
 fn elastic_coupling_is_a_scene_option_checked_by_field() {
@@ -81,14 +81,22 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
     let o: ElasticOptions = get(&s);
     assert_eq!(o.coupling, ElasticCoupling::Coupled);
     assert_eq!(o.coupling_tolerance, 1e-4);
-    assert_eq!(o.stretch_theta(), 0.75);
+    assert_eq!(o.stretch_theta(true), 0.75);
+    assert_eq!(o.wave_cap(), 25.0);
+    let split = get::<ElasticOptions>(&el("()").unwrap());
+    assert_eq!((split.stretch_theta(false), split.wave_cap()), (0.5, 4.0));
+    for coupled in [false, true] {
+        assert_eq!(
+            get::<ElasticOptions>(&el("(theta: 0.6)").unwrap()).stretch_theta(coupled),
+            0.6
+        );
+    }
+    // Auto: each step its scheme's θ; Δt may reach the coupled step's cap.
+    let auto: ElasticOptions = get(&el("(coupling: Auto)").unwrap());
+    assert_eq!(auto.coupling, ElasticCoupling::Auto);
     assert_eq!(
-        get::<ElasticOptions>(&el("()").unwrap()).stretch_theta(),
-        0.5
-    );
-    assert_eq!(
-        get::<ElasticOptions>(&el("(theta: 0.6)").unwrap()).stretch_theta(),
-        0.6
+        (auto.stretch_theta(false), auto.stretch_theta(true), auto.wave_cap()),
+        (0.5, 0.75, 25.0)
     );
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
     assert_eq!(
@@ -111,6 +119,10 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
         (
             "(coupling: Coupled, implicit: false)",
             &["numerics.elastic.coupling", "implicit"],
+        ),
+        (
+            "(coupling: Auto, implicit: false)",
+            &["numerics.elastic.coupling", "Auto needs the implicit"],
         ),
         ("(theta: 0.4)", &["numerics.elastic.theta", "[0.5, 1]"]),
         (

@@ -38,7 +38,7 @@ pub(super) fn shared_wave_limits(
 /// The [`WaveLimits`]. A `time.fixed_dt` above the larger one is refused here, before the run
 /// starts, naming the limit and what to change; so is a solid narrower than
 /// [`MIN_CELLS_ACROSS`].
-fn wave_limit(
+pub(super) fn wave_limit(
     scene: &Scene,
     grid: &Grid,
     law: &dyn ConstitutiveLaw,

@@ -2,6 +2,7 @@ use super::*;
 use efsi_core::scene::Shape;
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
+use super::limits::wave_limit;
 
 /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8
 /// grid, μ_f = 1, μ_s = 0.5; B is `bs` in every cell holding solid, I elsewhere. For each
@@ -121,7 +122,8 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     // c = √(100/4) = 5, h = 1/16: the limit is 4·h/c = 0.05; 0.01 passes, 0.1 is refused.
     let law = NeoHookeanReference { g: 100.0 };
     let dt = wave_limit(&scene, &grid, &law).unwrap();
-    assert!((dt - 0.05).abs() < 1e-12, "{dt}");
+    assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
+    assert_eq!(dt.coupled, dt.split, "no coupled step with Split");
     let mut fast = scene.clone();
     fast.time.fixed_dt = Some(0.1);
     let e = wave_limit(&fast, &grid, &law).unwrap_err();
@@ -134,13 +136,25 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
         })
         .unwrap();
     let dt = wave_limit(&fast, &grid, &law).unwrap();
-    assert!((dt - 0.3125).abs() < 1e-12, "{dt}");
-    fast.time.fixed_dt = Some(2.0);
-    let e = wave_limit(&fast, &grid, &law).unwrap_err();
-    assert!(
-        e.contains("numerics.elastic.coupled_wave_courant") && e.contains("≤ 3.1250e-1"),
-        "{e}"
-    );
+    assert!((dt.coupled - 0.3125).abs() < 1e-12, "{dt:?}");
+    assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
+    // Auto: the same two limits and the same refusal as Coupled.
+    let mut auto = fast.clone();
+    auto.numerics
+        .update(|o: &mut crate::elastic::ElasticOptions| {
+            o.coupling = crate::elastic::ElasticCoupling::Auto
+        })
+        .unwrap();
+    let a = wave_limit(&auto, &grid, &law).unwrap();
+    assert_eq!((a.split, a.coupled), (dt.split, dt.coupled));
+    for s in [&mut fast, &mut auto] {
+        s.time.fixed_dt = Some(2.0);
+        let e = wave_limit(s, &grid, &law).unwrap_err();
+        assert!(
+            e.contains("numerics.elastic.coupled_wave_courant") && e.contains("≤ 3.1250e-1"),
+            "{e}"
+        );
+    }
     // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
     let mut small = scene.clone();
     small.solid.as_mut().unwrap().shape = Shape::Disk {
