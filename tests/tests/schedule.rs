@@ -178,7 +178,13 @@ impl Stage for LimitStage {
     fn max_dt(&self, _: &Grid, _: &efsi_core::State, _: f64) -> Option<f64> {
         Some(self.0)
     }
-    fn lift_dt(&self, own: f64, others: Option<f64>) -> Option<f64> {
+    fn lift_dt(
+        &self,
+        _: &Grid,
+        _: &efsi_core::State,
+        own: f64,
+        others: Option<f64>,
+    ) -> Option<f64> {
         let (gain, lifted) = self.1?;
         others.is_none_or(|o| o >= gain * own).then_some(lifted)
     }

@@ -169,7 +169,13 @@ pub trait Stage: Send {
     /// `others`, is known: the elastic stage's `Auto` coupling switches to its dearer coupled
     /// step only where the other stages allow steps long enough to pay for it. The step is then
     /// at most `others` (default: none, `own` stands).
-    fn lift_dt(&self, _own: f64, _others: Option<f64>) -> Option<f64> {
+    fn lift_dt(
+        &self,
+        _grid: &Grid,
+        _state: &State,
+        _own: f64,
+        _others: Option<f64>,
+    ) -> Option<f64> {
         None
     }
 
@@ -611,7 +617,7 @@ impl Pipeline {
             }
         }
         let (e, d) = first?;
-        match e.stage.lift_dt(d, second.map(|s| s.1)) {
+        match e.stage.lift_dt(grid, state, d, second.map(|s| s.1)) {
             Some(lifted) if lifted > d => match second {
                 Some(s) if s.1 <= lifted => Some(s),
                 _ => Some((e.name, lifted)),

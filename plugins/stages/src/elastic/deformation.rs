@@ -1,7 +1,7 @@
 //! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
-use super::{AUTO_COUPLED_GAIN, ElasticCoupling, Kernels, err, missing};
+use super::{AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, ElasticCoupling, Kernels, err, missing};
 use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
@@ -38,11 +38,21 @@ impl Stage for DeformationStage {
     }
 
     /// With `Auto`, the coupled step's wave limit where the other stages allow steps at least
-    /// [`AUTO_COUPLED_GAIN`] times the split step's.
-    fn lift_dt(&self, own: f64, others: Option<f64>) -> Option<f64> {
+    /// [`AUTO_COUPLED_GAIN`] times the split step's and the solid is not busy deforming: its
+    /// strain energy at most [`AUTO_STRAIN_SHARE`] of the flow's kinetic energy.
+    fn lift_dt(&self, grid: &Grid, state: &State, own: f64, others: Option<f64>) -> Option<f64> {
         let lifted = self.mode == ElasticCoupling::Auto
-            && others.is_none_or(|o| o >= AUTO_COUPLED_GAIN * own);
-        (lifted && self.limits.coupled.is_finite()).then_some(self.limits.coupled)
+            && others.is_none_or(|o| o >= AUTO_COUPLED_GAIN * own)
+            && self.limits.coupled.is_finite();
+        if !lifted {
+            return None;
+        }
+        let strain = state
+            .resources
+            .get::<super::Deformation>()
+            .map_or(0.0, |d| d.elastic_energy);
+        let kinetic = efsi_core::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
+        (strain <= AUTO_STRAIN_SHARE * kinetic).then_some(self.limits.coupled)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {

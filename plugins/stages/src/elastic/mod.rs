@@ -260,7 +260,7 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::shared_wave_limits;
 pub use options::{
-    AUTO_COUPLED_GAIN, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
     MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
