@@ -616,7 +616,11 @@ fn auto_coupling_runs_a_soft_solid_split_and_a_stiff_one_coupled() {
     let run = |g: f64, coupling: &str| {
         let mut s = sim(&text(g, coupling));
         run_until(&mut s, 0.05, |_, _| {});
-        (s.state.step, s.state.u.data().to_vec(), s.state.v.data().to_vec())
+        (
+            s.state.step,
+            s.state.u.data().to_vec(),
+            s.state.v.data().to_vec(),
+        )
     };
     for (g, same_as, other) in [(1e3, "Split", "Coupled"), (1e9, "Coupled", "Split")] {
         let auto = run(g, "Auto");

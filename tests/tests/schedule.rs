@@ -240,8 +240,11 @@ fn the_limiting_stage_may_lift_its_limit_up_to_the_next_one() {
             lift: None,
         };
         // A fluid at rest: the built-in stages set no limit.
-        let s = sim_with(&cavity("").replace("MovingWall(speed: 1.0)", "NoSlip"), &[&a, &b])
-            .unwrap();
+        let s = sim_with(
+            &cavity("").replace("MovingWall(speed: 1.0)", "NoSlip"),
+            &[&a, &b],
+        )
+        .unwrap();
         let got = s.pipeline().limiting_stage(&s.grid, &s.state, 0.5);
         assert_eq!(got, Some(expected), "{dt} lifting {lift:?} beside {other}");
     }

@@ -95,7 +95,11 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
     let auto: ElasticOptions = get(&el("(coupling: Auto)").unwrap());
     assert_eq!(auto.coupling, ElasticCoupling::Auto);
     assert_eq!(
-        (auto.stretch_theta(false), auto.stretch_theta(true), auto.wave_cap()),
+        (
+            auto.stretch_theta(false),
+            auto.stretch_theta(true),
+            auto.wave_cap()
+        ),
         (0.5, 0.75, 25.0)
     );
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();

@@ -605,7 +605,8 @@ impl Pipeline {
                 continue;
             };
             match first {
-                Some((_, fd)) if !(d < fd) => {
+                // Not smaller (a tie, or a NaN on either side): the first stays first.
+                Some((_, fd)) if d.partial_cmp(&fd) != Some(std::cmp::Ordering::Less) => {
                     if second.is_none_or(|s| d < s.1) {
                         second = Some((e.name, d));
                     }

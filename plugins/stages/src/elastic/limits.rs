@@ -80,7 +80,11 @@ pub(super) fn wave_limit(
     }
     let o = crate::options::<super::ElasticOptions>(scene)?;
     let couples = super::may_couple(scene);
-    let s = if couples { o.wave_cap() } else { o.wave_courant };
+    let s = if couples {
+        o.coupled_wave_courant
+    } else {
+        o.wave_courant
+    };
     let option = if couples {
         "numerics.elastic.coupled_wave_courant"
     } else {

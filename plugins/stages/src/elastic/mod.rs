@@ -260,8 +260,8 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::shared_wave_limits;
 pub use options::{
-    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
-    MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling,
+    ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
 use solve::{ElasticOperator, ElasticStage, Scratch};
@@ -304,7 +304,7 @@ impl CoupledStep {
     pub(crate) fn shared(shared: &mut efsi_core::Resources) -> CoupledStep {
         shared
             .get_or_try_insert_with(|| Ok::<_, ()>(CoupledStep::default()))
-            .map(CoupledStep::clone)
+            .cloned()
             .unwrap_or_default()
     }
 

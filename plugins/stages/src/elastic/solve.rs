@@ -181,7 +181,8 @@ impl ElasticStage {
         state: &mut State,
         d: &mut super::Deformation,
     ) -> Result<StageStats, StageError> {
-        let coupled = self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
+        let coupled =
+            self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
         let scheme = self.schemes[usize::from(coupled)];
         self.stretch_theta = scheme.theta;
         self.preconditioner = scheme.preconditioner;

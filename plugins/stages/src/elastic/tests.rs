@@ -1,8 +1,8 @@
+use super::limits::wave_limit;
 use super::*;
 use efsi_core::scene::Shape;
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
-use super::limits::wave_limit;
 
 /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8
 /// grid, μ_f = 1, μ_s = 0.5; B is `bs` in every cell holding solid, I elsewhere. For each

@@ -411,8 +411,7 @@ impl ProjectionStage {
         });
         // An increment on the pressure already applied (the incremental scheme's predictor,
         // or the coupled elastic step's), else the whole pressure from the last step's.
-        let incremental =
-            self.incremental || self.coupled_step.as_ref().is_some_and(|c| c.get());
+        let incremental = self.incremental || self.coupled_step.as_ref().is_some_and(|c| c.get());
         if incremental {
             x.fill(0.0);
         } else {
