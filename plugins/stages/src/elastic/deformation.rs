@@ -1,7 +1,7 @@
 //! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
-use super::{AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, ElasticCoupling, Kernels, err, missing};
+use super::{AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing};
 use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
@@ -14,6 +14,8 @@ pub(super) struct DeformationStage {
     pub(super) step_flag: super::CoupledStep,
     /// `numerics.elastic.coupling` (`Split` where the scene cannot couple).
     pub(super) mode: super::ElasticCoupling,
+    /// Which sides are walls (x min, x max, y min, y max): `NoSlip`, `MovingWall`, `FreeSlip`.
+    pub(super) walls: [bool; 4],
     /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
     pub(super) first: [efsi_core::Field; 4],
     /// The elastic-wave limits on Δt.
@@ -52,7 +54,9 @@ impl Stage for DeformationStage {
             .get::<super::Deformation>()
             .map_or(0.0, |d| d.elastic_energy);
         let kinetic = efsi_core::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-        (strain <= AUTO_STRAIN_SHARE * kinetic).then_some(self.limits.coupled)
+        (strain <= AUTO_STRAIN_SHARE * kinetic
+            && !self.near_wall(grid, state, self.limits.coupled))
+        .then_some(self.limits.coupled)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
@@ -98,5 +102,35 @@ impl Stage for DeformationStage {
             .strain_energy(self.law.as_ref(), &d.b)
             .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
+    }
+}
+
+impl DeformationStage {
+    /// Whether a cell mostly solid (φ > ½) is within [`AUTO_WALL_CELLS`] cells of a wall, or
+    /// would be after a step of `dt` at its velocity: an impact `Auto` takes with split steps.
+    fn near_wall(&self, grid: &Grid, state: &State, dt: f64) -> bool {
+        let Some(phi) = state.phi.as_ref() else {
+            return false;
+        };
+        let c = self.k.solid_c;
+        let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+        let (i0, i1, j0, j1) = (c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1));
+        let [x_min, x_max, y_min, y_max] = self.walls;
+        let (u, v) = (&state.u, &state.v);
+        let reach = |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
+        (j0..=j1).any(|j| {
+            (i0..=i1).any(|i| {
+                if phi[(i, j)] <= 0.5 {
+                    return false;
+                }
+                let uc = 0.5 * (u[(i, j)] + u[(i + 1, j)]);
+                let vc = 0.5 * (v[(i, j)] + v[(i, j + 1)]);
+                let (dx, dy) = (grid.dx, grid.dy);
+                (x_min && reach(i as f64 * dx, -uc, dx))
+                    || (x_max && reach((nx - 1 - i) as f64 * dx, uc, dx))
+                    || (y_min && reach(j as f64 * dy, -vc, dy))
+                    || (y_max && reach((ny - 1 - j) as f64 * dy, vc, dy))
+            })
+        })
     }
 }

@@ -260,7 +260,7 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::shared_wave_limits;
 pub use options::{
-    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling,
     ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
@@ -519,6 +519,14 @@ impl StagePlugin for DeformationUpdate {
             k: Kernels::new(grid, bc, mu_f, mu_s),
             mode: coupling(scene),
             limits,
+            walls: efsi_core::scene::Side::ALL.map(|side| {
+                matches!(
+                    scene.boundaries.get(side),
+                    efsi_core::scene::Boundary::NoSlip
+                        | efsi_core::scene::Boundary::MovingWall { .. }
+                        | efsi_core::scene::Boundary::FreeSlip
+                )
+            }),
             thetas: [o.stretch_theta(false), o.stretch_theta(true)],
             step_flag: CoupledStep::shared(shared),
             first: std::array::from_fn(|_| Field::zeros(grid)),

@@ -107,6 +107,11 @@ pub enum ElasticCoupling {
 /// the wall at 0.974 m/s in 282 steps, 0.01 at 0.994 in 341, 0.001 at 0.994 in 747.
 pub const AUTO_STRAIN_SHARE: f64 = 1e-2;
 
+/// With `coupling: Auto`, the coupled step is not taken while a cell mostly solid is within this
+/// many cells of a wall, or would be after the coupled step at its velocity: the impact is
+/// taken with split steps from its first contact.
+pub const AUTO_WALL_CELLS: f64 = 2.0;
+
 /// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
 /// this much over the split step's wave cap: a coupled step costs 1.4–1.5 split steps on the
 /// seed's sphere (35 cells per radius), so a shorter gain would not pay for it.
