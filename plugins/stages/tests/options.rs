@@ -68,14 +68,14 @@ fn strict_preset_tightens_each_tolerance() {
     assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-6);
 }
 
-/// The elastic coupling: Split by default, Coupled and Auto by name (round trip); its tolerance,
+/// The elastic coupling: Auto by default, Split and Coupled by name (round trip); its tolerance,
 /// iteration cap and its need of the implicit step checked by field.
 #[test]
 fn elastic_coupling_is_a_scene_option_checked_by_field() {
     let el = |e: &str| with(&format!("(elastic: {e})"));
     assert_eq!(
         get::<ElasticOptions>(&el("()").unwrap()).coupling,
-        ElasticCoupling::Split
+        ElasticCoupling::Auto
     );
     let s = el("(coupling: Coupled, coupling_tolerance: 1e-4)").unwrap();
     let o: ElasticOptions = get(&s);
@@ -83,7 +83,7 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
     assert_eq!(o.coupling_tolerance, 1e-4);
     assert_eq!(o.stretch_theta(true), 0.75);
     assert_eq!(o.wave_cap(), 25.0);
-    let split = get::<ElasticOptions>(&el("()").unwrap());
+    let split = get::<ElasticOptions>(&el("(coupling: Split)").unwrap());
     assert_eq!((split.stretch_theta(false), split.wave_cap()), (0.5, 4.0));
     for coupled in [false, true] {
         assert_eq!(
@@ -92,7 +92,7 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
         );
     }
     // Auto: each step its scheme's θ; Δt may reach the coupled step's cap.
-    let auto: ElasticOptions = get(&el("(coupling: Auto)").unwrap());
+    let auto: ElasticOptions = get(&el("()").unwrap());
     assert_eq!(auto.coupling, ElasticCoupling::Auto);
     assert_eq!(
         (
