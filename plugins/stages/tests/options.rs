@@ -102,6 +102,8 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
         ),
         (0.5, 0.75, 25.0)
     );
+    // …and with the explicit elastic step it is accepted (every step is then split).
+    assert!(el("(implicit: false)").is_ok());
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
     assert_eq!(
         get::<ElasticOptions>(&back).coupling,
@@ -123,10 +125,6 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
         (
             "(coupling: Coupled, implicit: false)",
             &["numerics.elastic.coupling", "implicit"],
-        ),
-        (
-            "(coupling: Auto, implicit: false)",
-            &["numerics.elastic.coupling", "Auto needs the implicit"],
         ),
         ("(theta: 0.4)", &["numerics.elastic.theta", "[0.5, 1]"]),
         (

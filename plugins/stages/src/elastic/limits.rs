@@ -85,10 +85,13 @@ pub(super) fn wave_limit(
     } else {
         o.wave_courant
     };
-    let option = if couples {
-        "numerics.elastic.coupled_wave_courant"
-    } else {
-        "numerics.elastic.wave_courant"
+    let option = match super::coupling(scene) {
+        super::ElasticCoupling::Split => "numerics.elastic.wave_courant",
+        super::ElasticCoupling::Coupled => "numerics.elastic.coupled_wave_courant",
+        super::ElasticCoupling::Auto => {
+            "numerics.elastic.coupled_wave_courant; coupling: Auto takes the coupled step above \
+             the split step's numerics.elastic.wave_courant"
+        }
     };
     let h = grid.dx.min(grid.dy);
     let c = (g0 / solid.density).sqrt();

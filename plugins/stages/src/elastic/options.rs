@@ -95,7 +95,8 @@ pub enum ElasticCoupling {
     /// damp. The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 341 steps
     /// and a rebound of 0.994 m/s, against Split's 1606 and 1.032 and Coupled's 257 and 0.779;
     /// at 1e7 Pa: 117 steps and 0.820, against 161 and 0.988, and 31 and 0.381. Each step's θ is
-    /// its scheme's (`theta`, when set, applies to both). The default: where the flow never
+    /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
+    /// split. The default: where the flow never
     /// allows longer steps than the split step's cap (the seed's sphere, every shipped case) it
     /// is `Split` to the last bit.
     #[default]
@@ -253,7 +254,7 @@ impl StageOptions for ElasticOptions {
             ));
         }
         check_iterations("coupling_iterations", self.coupling_iterations)?;
-        if self.coupling != ElasticCoupling::Split && !self.implicit {
+        if self.coupling == ElasticCoupling::Coupled && !self.implicit {
             return Err((
                 "coupling",
                 format!(

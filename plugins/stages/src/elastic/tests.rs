@@ -111,7 +111,13 @@ solid: (shape: Disk(center: (0.5, 0.5), radius: 0.25), density: 4.0,
         law: (name: "neo_hookean", parameters: {"G": 100.0})),
 boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
 )"#;
-    let scene = Scene::from_str_at(text, std::path::Path::new("limits.ron")).unwrap();
+    let mut scene = Scene::from_str_at(text, std::path::Path::new("limits.ron")).unwrap();
+    scene
+        .numerics
+        .update(|o: &mut crate::elastic::ElasticOptions| {
+            o.coupling = crate::elastic::ElasticCoupling::Split
+        })
+        .unwrap();
     let grid = Grid::new(scene.geometry, 16, 16, scene.domain.x, scene.domain.y);
     // Neo-Hookean with a negative shear modulus: no stable rest state.
     let e = wave_limit(&scene, &grid, &NeoHookeanReference { g: -1.0 }).unwrap_err();
@@ -138,7 +144,7 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     let dt = wave_limit(&fast, &grid, &law).unwrap();
     assert!((dt.coupled - 0.3125).abs() < 1e-12, "{dt:?}");
     assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
-    // Auto: the same two limits and the same refusal as Coupled.
+    // Auto: the same two limits; its refusal names both options.
     let mut auto = fast.clone();
     auto.numerics
         .update(|o: &mut crate::elastic::ElasticOptions| {
@@ -155,6 +161,8 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
             "{e}"
         );
     }
+    let e = wave_limit(&auto, &grid, &law).unwrap_err();
+    assert!(e.contains("numerics.elastic.wave_courant"), "{e}");
     // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
     let mut small = scene.clone();
     small.solid.as_mut().unwrap().shape = Shape::Disk {
