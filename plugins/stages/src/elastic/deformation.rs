@@ -1,7 +1,9 @@
 //! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
-use super::{AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing};
+use super::{
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing,
+};
 use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
@@ -54,9 +56,8 @@ impl Stage for DeformationStage {
             .get::<super::Deformation>()
             .map_or(0.0, |d| d.elastic_energy);
         let kinetic = efsi_core::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-        (strain <= AUTO_STRAIN_SHARE * kinetic
-            && !self.near_wall(grid, state, self.limits.coupled))
-        .then_some(self.limits.coupled)
+        (strain <= AUTO_STRAIN_SHARE * kinetic && !self.near_wall(grid, state, self.limits.coupled))
+            .then_some(self.limits.coupled)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
@@ -117,7 +118,8 @@ impl DeformationStage {
         let (i0, i1, j0, j1) = (c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1));
         let [x_min, x_max, y_min, y_max] = self.walls;
         let (u, v) = (&state.u, &state.v);
-        let reach = |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
+        let reach =
+            |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
         (j0..=j1).any(|j| {
             (i0..=i1).any(|i| {
                 if phi[(i, j)] <= 0.5 {
