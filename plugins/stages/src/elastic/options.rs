@@ -92,9 +92,9 @@ pub enum ElasticCoupling {
     /// [`AUTO_STRAIN_SHARE`] of the kinetic energy), else the split step at its cap. A soft
     /// solid runs as with `Split`; a stiff one crosses the flow at the flow's step and takes
     /// an impact at the split step's, which resolves the rebound the coupled step's long steps
-    /// damp. The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 341 steps
-    /// and a rebound of 0.994 m/s, against Split's 1606 and 1.032 and Coupled's 257 and 0.779;
-    /// at 1e7 Pa: 117 steps and 0.820, against 161 and 0.988, and 31 and 0.381. Each step's θ is
+    /// damp. The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 369 steps
+    /// and a rebound of 1.038 m/s, against Split's 1606 and 1.032 and Coupled's 257 and 0.779;
+    /// at 1e7 Pa: 90 steps and 0.960, against 161 and 0.988, and 31 and 0.381. Each step's θ is
     /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
     /// split. The default: where the flow never
     /// allows longer steps than the split step's cap (the seed's sphere, every shipped case) it
@@ -106,14 +106,18 @@ pub enum ElasticCoupling {
 /// With `coupling: Auto`, the coupled step is taken only while the solid's strain energy is at
 /// most this share of the flow's kinetic energy: above it the solid is exchanging energy with
 /// its deformation (an impact, an oscillation) at a rate the split step's shorter steps
-/// resolve. Measured on the stability map's sphere (G = 1e9 Pa, CFL 0.5): a share of 0.1 left
-/// the wall at 0.974 m/s in 282 steps, 0.01 at 0.994 in 341, 0.001 at 0.994 in 747.
+/// resolve. Measured on the stability map's sphere (G = 1e9 Pa, CFL 0.5, without the wall
+/// rule [`AUTO_WALL_CELLS`]): a share of 0.1 left the wall at 0.974 m/s in 282 steps, 0.01 at
+/// 0.994 in 341, 0.001 at 0.994 in 747.
 pub const AUTO_STRAIN_SHARE: f64 = 1e-2;
 
 /// With `coupling: Auto`, the coupled step is not taken while a cell mostly solid is within this
 /// many cells of a wall, or would be after the coupled step at its velocity: the impact is
-/// taken with split steps from its first contact.
-pub const AUTO_WALL_CELLS: f64 = 2.0;
+/// taken with split steps from its first contact. Measured on the stability map's sphere (CFL
+/// 0.5): at G = 1e9 Pa a margin of 1 cell took 369 steps and left the wall at 1.038 m/s, 2
+/// cells 484 and 1.039, none (the strain-energy rule alone) 341 and 0.994 (`Split`: 1606 and
+/// 1.032); at G = 1e10 Pa 1 cell took 1285 steps and left at 0.975 (`Split`: 5079, 0.973).
+pub const AUTO_WALL_CELLS: f64 = 1.0;
 
 /// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
 /// this much over the split step's wave cap: a coupled step costs 1.4–1.5 split steps on the
