@@ -183,19 +183,41 @@ impl ElasticStage {
     ) -> Result<StageStats, StageError> {
         let coupled =
             self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
+        self.set_scheme(coupled);
+        self.predict(ctx, state, d)?;
+        let (bnorm, scale) = self.assemble(ctx, state);
+        let stats = if !coupled {
+            self.solve(ctx, state, d, bnorm, scale)?
+        } else {
+            match self.solve_coupled(ctx, state, d, bnorm, scale) {
+                Ok(stats) => stats,
+                // `Auto` chose the coupled step and its solve did not converge: the step is
+                // taken split instead, from the same start (the velocity is as it was; B back
+                // to Bⁿ). One split step above its wave cap does not pump energy in the way a
+                // run of them does, and the energy guard watches what follows.
+                Err(_) if self.mode == super::ElasticCoupling::Auto => {
+                    for c in 0..4 {
+                        d.b[c].copy_from(&d.start[c]);
+                    }
+                    self.set_scheme(false);
+                    self.predict(ctx, state, d)?;
+                    let (bnorm, scale) = self.assemble(ctx, state);
+                    self.solve(ctx, state, d, bnorm, scale)?
+                }
+                Err(e) => return Err(e),
+            }
+        };
+        self.correct(ctx, state, d);
+        Ok(StageStats { solve: Some(stats) })
+    }
+
+    /// θ and the preconditioner of a coupled or a split step, and the flag telling the later
+    /// stages which it is.
+    fn set_scheme(&mut self, coupled: bool) {
         let scheme = self.schemes[usize::from(coupled)];
         self.stretch_theta = scheme.theta;
         self.preconditioner = scheme.preconditioner;
         self.step_flag.set(coupled);
-        self.predict(ctx, state, d)?;
-        let (bnorm, scale) = self.assemble(ctx, state);
-        let stats = if coupled {
-            self.solve_coupled(ctx, state, d, bnorm, scale)?
-        } else {
-            self.solve(ctx, state, d, bnorm, scale)?
-        };
-        self.correct(ctx, state, d);
-        Ok(StageStats { solve: Some(stats) })
     }
 
     /// Bⁿ and the explicit part E of the step, the interface corners' relaxation, then
