@@ -92,7 +92,8 @@ pub enum ElasticCoupling {
     /// [`AUTO_STRAIN_SHARE`] of the kinetic energy), else the split step at its cap. A soft
     /// solid runs as with `Split`; a stiff one crosses the flow at the flow's step and takes
     /// an impact at the split step's, which resolves the rebound the coupled step's long steps
-    /// damp. The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 369 steps
+    /// damp. A coupled solve that does not converge within `coupling_iterations` is retaken as a
+    /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 369 steps
     /// and a rebound of 1.038 m/s, against Split's 1606 and 1.032 and Coupled's 257 and 0.779;
     /// at 1e7 Pa: 90 steps and 0.960, against 161 and 0.988, and 31 and 0.381. Each step's θ is
     /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
