@@ -57,7 +57,7 @@ def test_scene_overrides_are_the_cli_paths():
     assert scene.get("solid.law.parameters.G") == 0.18e6
     # A stage's setting the file leaves out reads as the stage's default.
     assert scene.get("numerics.viscous.max_iterations") == 10000
-    assert scene.get("numerics.elastic.coupling") == "Split"
+    assert scene.get("numerics.elastic.coupling") == "Auto"
     scene.set("solid.law.parameters.G", 1e6)
     scene.set("numerics.projection.solver", "IncompleteCholesky")  # absent from the file: added
     scene.set("solid.shape.center", "(0.0, 0.05)")  # RON text, as on the command line
