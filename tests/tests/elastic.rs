@@ -554,6 +554,26 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
     assert!(gain <= 3e-3 && end <= 0.0, "gain {gain:e}, end {end:e}");
 }
 
+/// A disk of shear modulus `g` (ρ_s/ρ_f = 1e3, 32 × 32 cells) at the centre of one cell of the
+/// vortex ψ = a sin 2πx sin 2πy, where the flow is a solid-body rotation, run to `end` with
+/// the `numerics.elastic` settings `elastic`.
+fn spinning_disk(g: f64, end: f64, elastic: &str) -> String {
+    format!(
+        r#"Scene(
+        name: "spin",
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+        grid: (nx: 32, ny: 32),
+        time: (end: {end}, cfl: 0.5),
+        fluid: (density: 1.0, viscosity: 0.001),
+        initial_velocity: SinSinStream(amplitude: 0.05, wavenumbers: (6.283185307179586, 6.283185307179586)),
+        solid: (shape: Disk(center: (0.25, 0.25), radius: 0.15), density: 1000.0,
+                law: (name: "neo_hookean", parameters: {{"G": {g:e}}})),
+        numerics: (elastic: ({elastic})),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    )"#
+    )
+}
+
 /// A stiff disk spinning (G = 1e9 Pa, ρ_s/ρ_f = 1e3, 32 × 32 cells): placed at the centre of
 /// one cell of the vortex ψ = a sin 2πx sin 2πy, where the flow is a solid-body rotation, it
 /// spins as a rigid body while the fluid around it decays. The coupled step at its cap of 25
@@ -563,22 +583,7 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
 /// the solid's volume to 1e-10, in a sixth of the steps (128 against 800).
 #[test]
 fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_step() {
-    let text = |coupling: &str| {
-        format!(
-            r#"Scene(
-        name: "spin",
-        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-        grid: (nx: 32, ny: 32),
-        time: (end: 0.1, cfl: 0.5),
-        fluid: (density: 1.0, viscosity: 0.001),
-        initial_velocity: SinSinStream(amplitude: 0.05, wavenumbers: (6.283185307179586, 6.283185307179586)),
-        solid: (shape: Disk(center: (0.25, 0.25), radius: 0.15), density: 1000.0,
-                law: (name: "neo_hookean", parameters: {{"G": 1e9}})),
-        numerics: (elastic: (coupling: {coupling})),
-        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
-    )"#
-        )
-    };
+    let text = |coupling: &str| spinning_disk(1e9, 0.1, &format!("coupling: {coupling}"));
     let run = |coupling: &str| {
         let mut s = sim(&text(coupling));
         let volume =
@@ -619,22 +624,7 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
 /// with `Coupled` — the same steps and the same velocities to the last bit.
 #[test]
 fn auto_coupling_runs_a_soft_solid_split_and_a_stiff_one_coupled() {
-    let text = |g: f64, coupling: &str| {
-        format!(
-            r#"Scene(
-        name: "spin",
-        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-        grid: (nx: 32, ny: 32),
-        time: (end: 0.05, cfl: 0.5),
-        fluid: (density: 1.0, viscosity: 0.001),
-        initial_velocity: SinSinStream(amplitude: 0.05, wavenumbers: (6.283185307179586, 6.283185307179586)),
-        solid: (shape: Disk(center: (0.25, 0.25), radius: 0.15), density: 1000.0,
-                law: (name: "neo_hookean", parameters: {{"G": {g:e}}})),
-        numerics: (elastic: (coupling: {coupling})),
-        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
-    )"#
-        )
-    };
+    let text = |g: f64, coupling: &str| spinning_disk(g, 0.05, &format!("coupling: {coupling}"));
     let run = |g: f64, coupling: &str| {
         let mut s = sim(&text(g, coupling));
         run_until(&mut s, 0.05, |_, _| {});
@@ -668,19 +658,10 @@ fn auto_coupling_runs_a_soft_solid_split_and_a_stiff_one_coupled() {
 #[test]
 fn auto_takes_a_step_split_when_its_coupled_solve_does_not_converge() {
     let text = |coupling: &str| {
-        format!(
-            r#"Scene(
-        name: "spin",
-        domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-        grid: (nx: 32, ny: 32),
-        time: (end: 0.05, cfl: 0.5),
-        fluid: (density: 1.0, viscosity: 0.001),
-        initial_velocity: SinSinStream(amplitude: 0.05, wavenumbers: (6.283185307179586, 6.283185307179586)),
-        solid: (shape: Disk(center: (0.25, 0.25), radius: 0.15), density: 1000.0,
-                law: (name: "neo_hookean", parameters: {{"G": 1e9}})),
-        numerics: (elastic: (coupling: {coupling}, coupling_iterations: 1)),
-        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
-    )"#
+        spinning_disk(
+            1e9,
+            0.05,
+            &format!("coupling: {coupling}, coupling_iterations: 1"),
         )
     };
     // The split step's wave cap: 4 h / c, c = √(G/ρ_s).
