@@ -213,7 +213,7 @@ impl Scene {
         }
         scene.overrides = overrides.to_vec();
         // Positions in messages point into the text the user wrote, never the rewritten one.
-        scene.numerics.locate_in(text);
+        scene.locate_sections_in(text);
         scene
             .validate()
             .map_err(|(field, message)| attribute(path, overrides, field, message))?;
@@ -238,7 +238,7 @@ impl Scene {
         let label = PathBuf::from(format!("scene `{}`", self.name));
         let mut next = Scene::from_str_with(&self.to_ron(), &label, overrides)?;
         // No position in text the user did not write.
-        next.numerics.locate_in("");
+        next.locate_sections_in("");
         next.source_dir = self.source_dir.clone();
         let mut all = std::mem::take(&mut self.overrides);
         all.extend_from_slice(overrides);
@@ -407,10 +407,11 @@ Scene(
             panic!("{:?}", s.solid)
         };
         assert_eq!((center, radius), ((0.0, 0.06), 0.02));
-        let crate::scene::ProbeSpec::Point { at, .. } = &s.output.probes[2] else {
-            panic!()
-        };
-        assert_eq!(*at, (0.02, 0.03));
+        assert!(
+            s.output.text().contains("at: (0.02, 0.03)"),
+            "{}",
+            s.output.text()
+        );
         assert_eq!(s.gravity, (0.0, -1.0));
         assert_eq!(
             s.solid.as_ref().unwrap().law.as_ref().unwrap().name,

@@ -186,9 +186,6 @@ impl Simulation {
         check_memory(&scene, &grid).map_err(|m| config("grid", m))?;
         let bc = BoundarySet::new(&scene.boundaries, &grid);
         let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
-        scene.check_outputs(&pipeline).map_err(|(field, message)| {
-            crate::overrides::attribute(scene_path, &scene.overrides, field, message)
-        })?;
         let mut state = State::new(
             &grid,
             scene.fluid.density,

@@ -13,3 +13,4 @@ pub mod probes;
 pub mod run;
 
 pub use checkpoint::{Checkpoint, CheckpointFile};
+pub use output::spec::{OutputSpec, ProbeSpec, ProfileSpec, SceneOutput, simulation};

@@ -21,14 +21,11 @@
 
 use crate::grid::Geometry;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
-pub use output::{
-    FIELD_NAMES, MAX_PROFILE_POINTS, OutputSpec, ProbeSpec, ProfileSpec, VTK_FIELDS,
-    VtkCompression, VtkOptions, VtkPrecision,
-};
+pub use section::Section;
 pub use shape::Shape;
 
 mod numerics;
-mod output;
+mod section;
 mod shape;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
@@ -122,9 +119,10 @@ pub struct Scene {
     /// Numerical parameters of the solvers.
     #[serde(default)]
     pub numerics: Numerics,
-    /// What to write and where.
+    /// What a run writes and where: a [`Section`] whose type and checks the run crate owns
+    /// (`efsi-run`'s `OutputSpec`).
     #[serde(default)]
-    pub output: OutputSpec,
+    pub output: Section,
     /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
     #[serde(skip)]
     pub source_dir: Option<PathBuf>,
@@ -514,8 +512,15 @@ impl Scene {
                 code => code.to_string(),
             },
         })?;
-        scene.numerics.locate_in(text);
+        scene.locate_sections_in(text);
         Ok(scene)
+    }
+
+    /// Record where the opaque sections ([`Section`]) start in `text`, the file the scene was
+    /// read from (no position where an override rewrote one).
+    pub(crate) fn locate_sections_in(&mut self, text: &str) {
+        self.numerics.locate_in(text);
+        self.output.locate_in(text);
     }
 
     /// The scene as RON text (what `run.json` and checkpoints record).
