@@ -70,10 +70,12 @@
 //! refuses a file changed since).
 
 use crate::scene::{Scene, SceneError};
+use efsi_ron_edit::overrides::{apply_sets, blame};
 use efsi_ron_edit::{Document, Path as SettingPath};
-use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::path::{Path, PathBuf};
+
+/// One change to a scene: a setting by its path, or the grid refined.
+pub use efsi_ron_edit::overrides::Override;
 
 /// The value an override sets: what a Python caller or an FMU parameter holds, or RON text
 /// ([`efsi_ron_edit::Value`]).
@@ -90,65 +92,6 @@ pub const FIELD_ALIASES: efsi_ron_edit::Aliases = &[
     ("z_min", "y_min"),
     ("z_max", "y_max"),
 ];
-/// One change to a scene: a setting by its path, or the grid refined.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum Override {
-    /// Set the setting at `path` (see the module docs) to `value`.
-    Set {
-        /// `grid.nx`, `solid.law.parameters.G`, `output.probes[2].at`, …
-        path: String,
-        /// The new value.
-        value: OverrideValue,
-    },
-    /// Multiply every grid dimension by this factor (> 0), keeping the domain.
-    Refine(f64),
-}
-
-impl Override {
-    /// Set the setting at `path` to `value`.
-    pub fn set(path: impl Into<String>, value: impl Into<OverrideValue>) -> Override {
-        Override::Set {
-            path: path.into(),
-            value: value.into(),
-        }
-    }
-
-    /// Parse the command line's `PATH=VALUE`, `VALUE` being RON text.
-    pub fn parse(arg: &str) -> Result<Override, String> {
-        let Some((path, value)) = arg.split_once('=') else {
-            return Err(format!(
-                "`{arg}`: expected PATH=VALUE, e.g. grid.nx=128 or solid.law.parameters.G=1e6"
-            ));
-        };
-        let (path, value) = (path.trim(), value.trim());
-        SettingPath::parse(path, FIELD_ALIASES).map_err(|m| format!("`{arg}`: {m}"))?;
-        if value.is_empty() {
-            return Err(format!("`{arg}`: the value is empty"));
-        }
-        Ok(Override::set(path, OverrideValue::Ron(value.to_string())))
-    }
-
-    /// The path it changes, aliases resolved (`grid` for a refinement).
-    fn path(&self) -> SettingPath {
-        match self {
-            Override::Set { path, .. } => {
-                SettingPath::parse(path, FIELD_ALIASES).unwrap_or_default()
-            }
-            Override::Refine(_) => SettingPath::key("grid"),
-        }
-    }
-}
-
-impl fmt::Display for Override {
-    /// `set PATH=VALUE` or `refine F`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Override::Set { path, value } => write!(f, "set {path}={value}"),
-            Override::Refine(x) => write!(f, "refine {x}"),
-        }
-    }
-}
-
 impl Scene {
     /// Read a scene file, apply `overrides` in order and validate the result (see the module
     /// docs). Errors in the file name its line and column; errors an override causes name the
@@ -195,11 +138,18 @@ impl Scene {
         overrides: &[Override],
     ) -> Result<Scene, SceneError> {
         let parsed = Scene::parse(text, path)?;
-        let mut scene = if overrides.iter().any(|o| matches!(o, Override::Set { .. })) {
-            apply_sets(text, parsed, path, overrides)?
-        } else {
-            parsed
+        let hints = |s: &Scene| s.to_ron();
+        let read = |text: &str| match Scene::parse(text, path) {
+            Err(SceneError::Syntax { message, .. }) => Err(message),
+            other => other.map_err(|e| e.to_string()),
         };
+        let mut scene = apply_sets(text, parsed, overrides, FIELD_ALIASES, hints, read).map_err(
+            |(o, message)| SceneError::Override {
+                path: path.to_path_buf(),
+                setting: o.to_string(),
+                message,
+            },
+        )?;
         for o in overrides {
             if let Override::Refine(f) = o {
                 scene
@@ -284,8 +234,7 @@ pub fn attribute(
     field: String,
     message: String,
 ) -> SceneError {
-    let named = SettingPath::parse(&field, FIELD_ALIASES).unwrap_or_default();
-    match overrides.iter().rev().find(|o| o.path().overlaps(&named)) {
+    match blame(overrides, &field, FIELD_ALIASES) {
         Some(o) => SceneError::Override {
             path: path.to_path_buf(),
             setting: o.to_string(),
@@ -297,43 +246,6 @@ pub fn attribute(
             message,
         },
     }
-}
-
-/// Apply the `Set` overrides to `text` (whose parse is `parsed`) one by one, each checked by
-/// the loader's parse before the next: an error is the override's that caused it.
-fn apply_sets(
-    text: &str,
-    parsed: Scene,
-    path: &Path,
-    overrides: &[Override],
-) -> Result<Scene, SceneError> {
-    let mut text = text.to_string();
-    let mut scene = parsed;
-    for o in overrides {
-        let Override::Set { path: p, value } = o else {
-            continue;
-        };
-        let fail = |message: String| SceneError::Override {
-            path: path.to_path_buf(),
-            setting: o.to_string(),
-            message,
-        };
-        let setting = SettingPath::parse(p, FIELD_ALIASES).map_err(fail)?;
-        // The scene with its defaults filled in: the shape of what the file leaves out.
-        let hints = Document::parse(scene.to_ron(), FIELD_ALIASES).ok();
-        // A path the scene's shape cannot hold (through a value, past a list's end).
-        if let Some(h) = &hints {
-            h.check_reachable(&setting).map_err(fail)?;
-        }
-        let doc = Document::parse(text, FIELD_ALIASES)
-            .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
-        text = doc.set(hints.as_ref(), &setting, value).map_err(fail)?;
-        scene = Scene::parse(&text, path).map_err(|e| match e {
-            SceneError::Syntax { message, .. } => fail(message),
-            other => other,
-        })?;
-    }
-    Ok(scene)
 }
 
 #[cfg(test)]

@@ -2,15 +2,15 @@
 //! — and its checks.
 //!
 //! The core keeps the section as RON text it does not read ([`efsi_core::scene::Section`]);
-//! this crate owns its type ([`OutputSpec`]) and checks it: [`simulation`] builds a
-//! [`Simulation`] and checks the section against the scene and the scheduled stages' outputs
+//! this crate owns its type ([`OutputSpec`]) and checks it: [`crate::simulation`] builds a
+//! simulation and checks the section against the scene and the scheduled stages' outputs
 //! (every failure naming the setting's path, or the override that set it), then keeps the
 //! settings in force in the scene, so that checkpoints record its defaults too. Code reads and
 //! changes it through [`SceneOutput`].
 
 use efsi_core::error::EfsiError;
 use efsi_core::scene::{Scene, Section, Side, num};
-use efsi_core::{OutputKind, Pipeline, Simulation, StagePlugin};
+use efsi_core::{OutputKind, Pipeline};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -289,20 +289,6 @@ pub fn check(scene: &Scene, path: &Path, pipeline: &Pipeline) -> Result<OutputSp
     checked.map_err(|(field, message)| {
         efsi_core::overrides::attribute(path, &scene.overrides, field, message).into()
     })
-}
-
-/// [`Simulation::new`], then the scene's `output` section checked ([`check`]) and kept with
-/// its settings in force: how a driver that writes a run's outputs (the CLI, the FMU, the
-/// Python binding) builds its simulation.
-pub fn simulation(
-    scene: Scene,
-    path: &Path,
-    plugins: &[&dyn StagePlugin],
-) -> Result<Simulation, EfsiError> {
-    let mut sim = Simulation::new(scene, path, plugins)?;
-    let spec = check(&sim.scene, path, sim.pipeline())?;
-    sim.scene.set_output(&spec);
-    Ok(sim)
 }
 
 /// The `output` section of `scene` as JSON, what records hold: its settings, defaults filled
