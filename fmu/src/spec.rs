@@ -26,6 +26,7 @@ use efsi_core::Scene;
 use efsi_core::overrides::{Override, OverrideValue};
 use efsi_core::scene::{Boundary, Side};
 use efsi_run::SceneOutput;
+use efsi_run::SceneOverrides;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;

@@ -12,6 +12,7 @@
 use efsi_core::overrides::Override;
 use efsi_core::{Advance, Scene};
 use efsi_fmu::spec::{SPHERE, Spec};
+use efsi_run::SceneOverrides;
 use libloading::{Library, Symbol};
 use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::path::{Path, PathBuf};

@@ -27,6 +27,7 @@ use efsi_core::{
     Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Scene, Simulation, Snapshot,
     Stagger, StepInfo, due,
 };
+use efsi_run::SceneOverrides;
 use efsi_run::{ProbeSpec, SceneOutput};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;

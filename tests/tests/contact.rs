@@ -4,6 +4,7 @@
 
 use efsi_core::scene::Side;
 use efsi_core::{Override, Scene};
+use efsi_run::SceneOverrides;
 use efsi_run::probes::{CONTACT_MIN_SOLID_FRACTION, contact_force, contact_radius, solid_extent};
 use efsi_tests::{run_until, workspace_root};
 

@@ -4,6 +4,7 @@
 
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{BoundarySet, Grid, Scene, Simulation, StageError, StageStats, State, StepContext};
+use efsi_run::SceneOverrides;
 use efsi_tests::{run_until, sim, sim_with};
 use std::path::Path;
 

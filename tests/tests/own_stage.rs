@@ -10,6 +10,7 @@ use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext,
 };
+use efsi_run::SceneOverrides;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

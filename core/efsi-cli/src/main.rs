@@ -24,6 +24,7 @@ mod plot;
 use clap::{Parser, Subcommand};
 use efsi_core::{EfsiError, Override, Scene, Simulation};
 use efsi_run::SceneOutput;
+use efsi_run::SceneOverrides as _;
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};

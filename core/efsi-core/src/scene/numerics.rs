@@ -157,24 +157,6 @@ impl Scene {
     }
 }
 
-impl Scene {
-    /// [`Scene::get`] with the stages' `numerics` sections in force: a setting of a section the
-    /// scene leaves out is the default of the stage among `plugins` that declares it (what a
-    /// simulation of this scene runs with). A scene whose sections do not pass their checks
-    /// is read as it is.
-    pub fn get_in_force(
-        &self,
-        path: &str,
-        plugins: &[&dyn StagePlugin],
-    ) -> Result<crate::OverrideValue, super::SceneError> {
-        let mut filled = self.clone();
-        match check_sections(&mut filled, plugins) {
-            Ok(()) => filled.get(path),
-            Err(_) => self.get(path),
-        }
-    }
-}
-
 impl Numerics {
     /// The options of section `O::SECTION`: the scene's settings, the defaults for what it
     /// leaves out, the preset applied. On error the section's path and the reader's message

@@ -48,6 +48,7 @@
 //! [`resume`] continues a run from its latest checkpoint, appending to the same outputs, after
 //! checking that the checkpoint's run is the folder's (its `run.json`).
 
+use crate::SceneOverrides;
 use crate::checkpoint::{self, CheckpointFile};
 use crate::lock::FolderLock;
 use efsi_core::error::EfsiError;
