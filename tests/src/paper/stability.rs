@@ -220,10 +220,9 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
         elastic.coupling = ElasticCoupling::Coupled;
     }
     scene.numerics.set(&elastic);
-    scene.update_output(|o| o.vtk_every = None)?;
-    // Probes every step: an interval would cap Δt (the run lands on every probe time).
-    scene.update_output(|o| o.probe_every = None)?;
     scene.update_output(|o| {
+        // No VTK; probes every step: an interval would cap Δt (the run lands on every probe time).
+        (o.vtk_every, o.probe_every) = (None, None);
         o.probes = vec![
             ProbeSpec::SolidVolume,
             ProbeSpec::SolidCentroid,
