@@ -12,6 +12,7 @@
 
 use crate::log::CATEGORIES;
 use crate::spec::{Causality, Kind, Spec, Variable};
+use efsi_run::SceneOutput;
 use std::fmt::Write;
 
 fn model_description(spec: &Spec) -> String {
@@ -165,7 +166,10 @@ fn units_categories_experiment(out: &mut String, vars: &[Variable], step: f64, s
 fn experiment(spec: &Spec) -> (f64, f64) {
     match spec.parsed_scene() {
         Ok(s) => (
-            s.output.probe_every.unwrap_or(s.time.end / 100.0),
+            s.output_spec()
+                .ok()
+                .and_then(|o| o.probe_every)
+                .unwrap_or(s.time.end / 100.0),
             s.time.end,
         ),
         Err(_) => (1.0, 100.0),

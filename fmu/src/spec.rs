@@ -25,6 +25,8 @@
 use efsi_core::Scene;
 use efsi_core::overrides::{Override, OverrideValue};
 use efsi_core::scene::{Boundary, Side};
+use efsi_run::SceneOutput;
+use efsi_run::SceneOverrides;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;
@@ -218,7 +220,7 @@ impl Spec {
             }
             k += 2;
         }
-        let columns = probe_columns(&scene);
+        let columns = probe_columns(&scene)?;
         if spec.outputs.is_empty() {
             spec.outputs = columns
                 .iter()
@@ -460,13 +462,13 @@ fn fnv(seed: u64, text: &str) -> u64 {
 }
 
 /// The probe columns of a scene, in `probes.csv` order (time excluded).
-pub fn probe_columns(scene: &Scene) -> Vec<String> {
-    scene
-        .output
+pub fn probe_columns(scene: &Scene) -> Result<Vec<String>, String> {
+    let output = scene.output_spec().map_err(|(f, m)| format!("{f}: {m}"))?;
+    Ok(output
         .probes
         .iter()
         .flat_map(efsi_run::probes::columns)
-        .collect()
+        .collect())
 }
 
 /// The value of the setting at `path` in `scene` (with its defaults, the stages' too);

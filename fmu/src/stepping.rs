@@ -21,6 +21,7 @@ use crate::spec::{InputTarget, Spec, input_target};
 use efsi_core::overrides::OverrideValue;
 use efsi_core::{Advance, AdvanceError, EfsiError, Simulation, Snapshot};
 use efsi_laws_host::loader::{describe, library_file_name};
+use efsi_run::SceneOutput;
 use efsi_run::checkpoint::{LawIdentity, law_identity};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -48,6 +49,8 @@ pub struct Run {
     pub outputs: Vec<f64>,
     /// The parameter values it was built from.
     pub params: Vec<OverrideValue>,
+    /// The scene's probes.
+    probes: Vec<efsi_run::ProbeSpec>,
     /// For each output, its column among the scene's probe columns.
     columns: Vec<usize>,
     /// The probe row (reused).
@@ -166,7 +169,7 @@ impl Run {
         let mut scene = spec.scene_with(&values)?;
         let file = law_in_fmu(&mut scene, &law_dir()?)?;
         let label = Path::new(SCENE_LABEL);
-        let sim = Simulation::new(scene, label, &efsi_stages::builtin())
+        let sim = efsi_run::simulation(scene, label, &efsi_stages::builtin())
             .map_err(|e| format!("the simulation could not be set up: {e}"))?;
         let mut law = law_identity(&sim.scene).map_err(|e| e.to_string())?;
         if let (Some(l), Some(f)) = (&mut law, file) {
@@ -176,7 +179,12 @@ impl Run {
             scene_ron: sim.scene.to_ron(),
             law,
         });
-        let all = crate::spec::probe_columns(&sim.scene);
+        let all = crate::spec::probe_columns(&sim.scene)?;
+        let probes = sim
+            .scene
+            .output_spec()
+            .map(|o| o.probes)
+            .unwrap_or_default();
         let columns = spec
             .outputs
             .iter()
@@ -190,6 +198,7 @@ impl Run {
             sim,
             outputs: Vec::new(),
             params: params.to_vec(),
+            probes,
             columns,
             row: Vec::new(),
             identity,
@@ -306,7 +315,7 @@ impl Run {
         };
         if let Err(e) = self.sim.restore(start) {
             self.rebuilt = Some(e.to_string());
-            let mut fresh = Simulation::new(
+            let mut fresh = efsi_run::simulation(
                 self.sim.scene.clone(),
                 &self.sim.scene_path,
                 &efsi_stages::builtin(),
@@ -322,7 +331,7 @@ impl Run {
     /// The outputs of the current state: the scene's probes, the spec's columns of them.
     pub fn evaluate(&mut self) -> Vec<f64> {
         self.row.clear();
-        for p in &self.sim.scene.output.probes {
+        for p in &self.probes {
             efsi_run::probes::evaluate(
                 p,
                 &self.sim.grid,

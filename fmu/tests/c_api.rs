@@ -10,8 +10,9 @@
 //! instead of ending the test run.
 
 use efsi_core::overrides::Override;
-use efsi_core::{Advance, Scene, Simulation};
+use efsi_core::{Advance, Scene};
 use efsi_fmu::spec::{SPHERE, Spec};
+use efsi_run::SceneOverrides;
 use libloading::{Library, Symbol};
 use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::path::{Path, PathBuf};
@@ -409,20 +410,23 @@ fn fmi3_outputs_equal_the_solver_driven_directly() {
         Override::set("solid.shape.center[1]", 0.025),
         Override::set("time.end", n as f64 * H),
     ];
-    let mut sim = Simulation::new(
+    let mut sim = efsi_run::simulation(
         Scene::load_with(sphere_scene(), &overrides).unwrap(),
         &sphere_scene(),
         &efsi_stages::builtin(),
     )
     .unwrap();
-    let columns = efsi_fmu::spec::probe_columns(&sim.scene);
+    let columns = efsi_fmu::spec::probe_columns(&sim.scene).unwrap();
+    let probes = efsi_run::SceneOutput::output_spec(&sim.scene)
+        .unwrap()
+        .probes;
     let mut peak = 0.0f64;
     for k in 0..n {
         f.do_step(k as f64 * H, H);
         let until = (k + 1) as f64 * H;
         sim.advance_to(until, Advance::default()).unwrap();
         let mut row = Vec::new();
-        for p in &sim.scene.output.probes {
+        for p in &probes {
             efsi_run::probes::evaluate(
                 p,
                 &sim.grid,

@@ -23,11 +23,12 @@
 //! efsi's message; a panic inside efsi is caught at this boundary and raised as `EfsiError`
 //! (`internal error: …`), never as a Rust panic crossing into Python.
 
-use efsi_core::scene::ProbeSpec;
 use efsi_core::{
     Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Scene, Simulation, Snapshot,
     Stagger, StepInfo, due,
 };
+use efsi_run::SceneOverrides;
+use efsi_run::{ProbeSpec, SceneOutput};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyFloat, PyInt, PyString};
@@ -246,7 +247,8 @@ struct Recorder {
 
 impl Recorder {
     fn new(sim: &Simulation) -> Recorder {
-        let o = &sim.scene.output;
+        // The section was checked when the simulation was built (`efsi_run::simulation`).
+        let o = &sim.scene.output_spec().unwrap_or_default();
         let mut columns = vec!["t".to_string()];
         for p in &o.probes {
             columns.extend(efsi_run::probes::columns(p));
@@ -255,7 +257,7 @@ impl Recorder {
             .profiles
             .iter()
             .map(|p| {
-                let efsi_core::scene::ProfileSpec::Line { at, .. } = p;
+                let efsi_run::ProfileSpec::Line { at, .. } = p;
                 let mut times = at.clone();
                 times.sort_by(f64::total_cmp);
                 times
@@ -458,7 +460,7 @@ impl PySimulation {
         let (scene, path) = (scene.scene.clone(), scene.path.clone());
         guarded(py, || {
             let sim = py
-                .detach(|| Simulation::new(scene, &path, &efsi_stages::builtin()))
+                .detach(|| efsi_run::simulation(scene, &path, &efsi_stages::builtin()))
                 .map_err(|e| efsi_err(py, e))?;
             let recorder = Recorder::new(&sim);
             Ok(PySimulation {
@@ -645,8 +647,17 @@ impl PySimulation {
             let mut d = self.lock()?;
             let sim = &mut d.sim;
             let keep = sim.scene.output.clone();
-            sim.scene.output.vtk_every = Some(f64::MAX);
-            sim.scene.output.profiles.clear();
+            let once = sim.scene.update_output(|o| {
+                o.vtk_every = Some(f64::MAX);
+                o.profiles.clear();
+            });
+            let path = sim.scene_path.clone();
+            let config = |message| efsi_core::EfsiError::Config {
+                path,
+                field: "output".into(),
+                message,
+            };
+            once.map_err(|m| efsi_err(py, config(m)))?;
             let written = write_now(sim, &dir, overwrite);
             sim.scene.output = keep;
             written.map_err(|e| efsi_err(py, e))

@@ -17,7 +17,7 @@ pub fn sim(text: &str) -> Simulation {
 
 /// A simulation of `text` with the given stage plugins.
 pub fn sim_with(text: &str, plugins: &[&dyn StagePlugin]) -> Result<Simulation, EfsiError> {
-    Simulation::new(scene(text), Path::new("<test>"), plugins)
+    efsi_run::simulation(scene(text), Path::new("<test>"), plugins)
 }
 
 /// Step `sim` until time `t` (landing on it, [`Simulation::advance_to`]), calling `each` with

@@ -39,7 +39,7 @@ fn case(name: &str, n: usize) -> Simulation {
     let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
     scene.grid.nx = n;
     scene.grid.ny = n;
-    Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
+    efsi_run::simulation(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]

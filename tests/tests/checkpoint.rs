@@ -61,7 +61,7 @@ fn load(dir: &Path, text: &str) -> Simulation {
     let path = dir.join("scene.ron");
     std::fs::write(&path, text).unwrap();
     let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
+    efsi_run::simulation(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Run to the end in `dir/a` (with periodic checkpoints); run again in `dir/b`, stopped after

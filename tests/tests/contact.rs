@@ -3,7 +3,8 @@
 //! stepped through touch-down, the contact and the lift-off to the case's end.
 
 use efsi_core::scene::Side;
-use efsi_core::{Override, Scene, Simulation};
+use efsi_core::{Override, Scene};
+use efsi_run::SceneOverrides;
 use efsi_run::probes::{CONTACT_MIN_SOLID_FRACTION, contact_force, contact_radius, solid_extent};
 use efsi_tests::{run_until, workspace_root};
 
@@ -12,8 +13,8 @@ fn contact_probes_are_exactly_zero_before_touch_down_and_after_lift_off() {
     let path = workspace_root().join("cases/sphere_impact.ron");
     let scene =
         Scene::load_with(&path, &[Override::Refine(15.0 / 35.0)]).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim =
-        Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
+        .unwrap_or_else(|e| panic!("{e}"));
     let (dz, radius) = (sim.grid.dy, 0.0192);
     assert!(
         (radius / sim.grid.dx - 15.0).abs() < 0.2,

@@ -4,6 +4,7 @@
 
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{BoundarySet, Grid, Scene, Simulation, StageError, StageStats, State, StepContext};
+use efsi_run::SceneOverrides;
 use efsi_tests::{run_until, sim, sim_with};
 use std::path::Path;
 
@@ -24,7 +25,7 @@ fn couette(ny: usize, law: &str, extra_numerics: &str, dt_max: &str) -> Simulati
     let mut scene = Scene::from_str_at(&text, &path).unwrap_or_else(|e| panic!("{e}"));
     scene.source_dir = path.parent().map(Path::to_path_buf);
     scene.output = Default::default();
-    Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
+    efsi_run::simulation(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
@@ -251,7 +252,7 @@ fn rigid(
         &efsi_stages::elastic::DeformationUpdate,
         &efsi_stages::vof::Vof,
     ];
-    let mut s = Simulation::new(scene, &path, &plugins).unwrap_or_else(|e| panic!("{e}"));
+    let mut s = efsi_run::simulation(scene, &path, &plugins).unwrap_or_else(|e| panic!("{e}"));
     let mut worst = 0.0f64;
     run_until(&mut s, t_end, |s, _| {
         worst = worst.max(stress_free_error(s))
@@ -401,8 +402,8 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
     scene.grid.nx = 23;
     scene.grid.ny = 47;
     scene.time.dt_max = Some(2e-4);
-    let mut s =
-        Simulation::new(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"));
+    let mut s = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
+        .unwrap_or_else(|e| panic!("{e}"));
     let g = s.scene.gravity;
     let energies = |s: &Simulation| {
         (
@@ -473,7 +474,7 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
         .collect();
         let scene =
             efsi_core::Scene::load_with(&path, &overrides).unwrap_or_else(|e| panic!("{e}"));
-        let mut s = Simulation::new(scene, &path, &efsi_stages::builtin())
+        let mut s = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
             .unwrap_or_else(|e| panic!("{e}"));
         let gv = s.scene.gravity;
         let energy = |s: &Simulation| {

@@ -162,7 +162,8 @@ const OUTPUT: &str = r#"vtk_every: 0.0625, vtk: (fields: ["velocity", "age"]),
 #[test]
 fn a_stage_of_ones_own_writes_its_field_to_vtk_and_probes() {
     let dir = tmp("run");
-    let mut sim = Simulation::new(scene(OUTPUT), Path::new("own_field.ron"), &plugins()).unwrap();
+    let mut sim =
+        efsi_run::simulation(scene(OUTPUT), Path::new("own_field.ron"), &plugins()).unwrap();
     assert!(sim.pipeline().fields().contains(&AGE));
     let out = run_with(&mut sim, &dir, &RunOptions::default(), &mut |_| {}).unwrap();
     assert_eq!(out.steps, 8);
@@ -216,7 +217,7 @@ fn the_field_survives_a_checkpoint_and_a_resume() {
     // A resume reads the scene again from its file.
     let path = dir.join("own_field.ron");
     std::fs::write(&path, scene_text(OUTPUT)).unwrap();
-    let load = || Simulation::new(Scene::load(&path).unwrap(), &path, &plugins()).unwrap();
+    let load = || efsi_run::simulation(Scene::load(&path).unwrap(), &path, &plugins()).unwrap();
     let mut a = load();
     assert!(a.state.arrays().iter().any(|(n, _)| n == "age"));
     run_with(&mut a, &dir.join("a"), &RunOptions::default(), &mut |_| {}).unwrap();
@@ -256,7 +257,7 @@ fn the_field_survives_a_checkpoint_and_a_resume() {
 
 #[test]
 fn outputs_no_scheduled_stage_provides_are_refused_naming_the_ones_there_are() {
-    let refused = |output: &str, plugins: &[&dyn StagePlugin]| match Simulation::new(
+    let refused = |output: &str, plugins: &[&dyn StagePlugin]| match efsi_run::simulation(
         scene(output),
         Path::new("own_field.ron"),
         plugins,

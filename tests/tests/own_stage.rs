@@ -7,9 +7,10 @@ use efsi_core::scene::options::check_iterations;
 use efsi_core::scene::{OptionsDecl, StageOptions};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
-    BoundarySet, FieldId, Grid, Phase, Scene, Simulation, Stage, StageError, StagePlugin,
-    StageStats, State, StepContext,
+    BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
+    StepContext,
 };
+use efsi_run::SceneOverrides;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -125,7 +126,7 @@ fn plugins() -> Vec<&'static dyn StagePlugin> {
 
 #[test]
 fn a_stage_of_ones_own_reads_its_own_section() {
-    let mut sim = Simulation::new(
+    let mut sim = efsi_run::simulation(
         scene("(damping: (rate: 2.0, substeps: 2))").unwrap(),
         Path::new("own_stage.ron"),
         &plugins(),
@@ -150,7 +151,7 @@ fn a_stage_of_ones_own_reads_its_own_section() {
 
 #[test]
 fn the_section_is_refused_without_its_stage_and_checked_by_field_with_it() {
-    let refused = |numerics: &str, plugins: &[&dyn StagePlugin]| match Simulation::new(
+    let refused = |numerics: &str, plugins: &[&dyn StagePlugin]| match efsi_run::simulation(
         scene(numerics).unwrap(),
         Path::new("own_stage.ron"),
         plugins,
@@ -178,7 +179,7 @@ fn the_section_is_refused_without_its_stage_and_checked_by_field_with_it() {
     // An override of the new option is checked and named like any other.
     let mut s = scene("()").unwrap();
     s.set("numerics.damping.rate", -3.0).unwrap();
-    let m = match Simulation::new(s, Path::new("own_stage.ron"), &plugins()) {
+    let m = match efsi_run::simulation(s, Path::new("own_stage.ron"), &plugins()) {
         Ok(_) => panic!("accepted"),
         Err(e) => e.to_string(),
     };

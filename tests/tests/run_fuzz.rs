@@ -25,11 +25,12 @@
 //! seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it). The figures are printed (`--nocapture`).
 
 use efsi_core::scene::{
-    Boundaries, Boundary, Domain, Fluid, GridSpec, LawSpec, OutputSpec, ProbeSpec, ProfileSpec,
-    Shape, Side, Solid, TimeSpec, WallMotion, WallProfile,
+    Boundaries, Boundary, Domain, Fluid, GridSpec, LawSpec, Section, Shape, Side, Solid, TimeSpec,
+    WallMotion, WallProfile,
 };
-use efsi_core::{Geometry, Scene, Simulation};
+use efsi_core::{Geometry, Scene};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};
+use efsi_run::{OutputSpec, ProbeSpec, ProfileSpec};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 use std::cell::RefCell;
@@ -255,14 +256,15 @@ fn scene() -> impl Strategy<Value = Scene> {
                     },
                     physics: Default::default(),
                     numerics: Default::default(),
-                    output: OutputSpec {
+                    output: Section::of(&OutputSpec {
                         folder: None,
                         vtk_every,
                         vtk: Default::default(),
                         probe_every,
                         probes,
                         profiles,
-                    },
+                    })
+                    .unwrap(),
                     source_dir: None,
                     overrides: Vec::new(),
                 }
@@ -357,7 +359,7 @@ fn one_case(
         }
     };
     let plugins = efsi_stages::builtin();
-    let mut sim = match Simulation::new(loaded, &path, &plugins) {
+    let mut sim = match efsi_run::simulation(loaded, &path, &plugins) {
         Ok(s) => s,
         Err(e) => {
             prop_assert!(e.exit_code() == 2 || e.exit_code() == 3, "{}\n{}", e, text);
@@ -427,7 +429,7 @@ fn one_case(
             }
         });
         let whole = case.join("whole");
-        let mut sim = Simulation::new(Scene::load(&path).unwrap(), &path, &plugins).unwrap();
+        let mut sim = efsi_run::simulation(Scene::load(&path).unwrap(), &path, &plugins).unwrap();
         let (opts, flag) = options(target);
         let straight = run_with(&mut sim, &whole, &opts, &mut |p| {
             if p.step >= target {
@@ -539,7 +541,7 @@ fn checkpoint_bytes() -> Vec<u8> {
     output: (probes: [KineticEnergy], vtk_every: 0.05),
 )"#;
     let scene = Scene::from_str_at(text, Path::new("ck.ron")).unwrap();
-    let sim = Simulation::new(scene, Path::new("ck.ron"), &efsi_stages::builtin()).unwrap();
+    let sim = efsi_run::simulation(scene, Path::new("ck.ron"), &efsi_stages::builtin()).unwrap();
     efsi_run::checkpoint::encode(&efsi_run::Checkpoint {
         efsi_version: "fuzz".into(),
         scene_path: "ck.ron".into(),
@@ -577,7 +579,7 @@ fn the_checkpoint_decoder_refuses_or_decodes_mutated_files() {
         Path::new("ck.ron"),
     )
     .unwrap();
-    let template = Simulation::new(scene, Path::new("ck.ron"), &efsi_stages::builtin())
+    let template = efsi_run::simulation(scene, Path::new("ck.ron"), &efsi_stages::builtin())
         .unwrap()
         .snapshot();
     let cases = env("EFSI_RUN_FUZZ_CASES", 48) * 8;

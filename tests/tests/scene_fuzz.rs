@@ -11,7 +11,7 @@
 //! Deterministic (fixed seed). `EFSI_FUZZ_CASES=N` runs N mutated scenes instead of the
 //! default 15000 (plus N/3 byte strings; ≈ 0.7 s); `EFSI_FUZZ_SEED` changes the seed.
 
-use efsi_core::{Scene, Simulation};
+use efsi_core::Scene;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
@@ -208,7 +208,7 @@ fn check(text: &str, path: &Path, tally: &mut Tally) {
         return;
     }
     let built = catch_unwind(AssertUnwindSafe(|| {
-        Simulation::new(scene, path, &efsi_stages::builtin())
+        efsi_run::simulation(scene, path, &efsi_stages::builtin())
     }));
     match built {
         Err(_) => panic!("Simulation::new panicked on:\n{text}"),

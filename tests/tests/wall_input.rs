@@ -20,7 +20,7 @@ fn cavity(lid: f64) -> Simulation {
 )"#
     );
     let path = Path::new("lid.ron");
-    Simulation::new(
+    efsi_run::simulation(
         Scene::from_str_at(&text, path).unwrap(),
         path,
         &efsi_stages::builtin(),

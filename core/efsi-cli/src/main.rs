@@ -23,6 +23,8 @@ mod plot;
 
 use clap::{Parser, Subcommand};
 use efsi_core::{EfsiError, Override, Scene, Simulation};
+use efsi_run::SceneOutput;
+use efsi_run::SceneOverrides as _;
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -175,7 +177,7 @@ enum Command {
 
 fn load(path: &Path, overrides: &[Override]) -> Result<Simulation, EfsiError> {
     let scene = Scene::load_with(path, overrides)?;
-    Simulation::new(scene, path, &efsi_stages::builtin())
+    efsi_run::simulation(scene, path, &efsi_stages::builtin())
 }
 
 fn main() -> ExitCode {
@@ -382,7 +384,7 @@ fn run_scene(
         return Ok(None);
     }
     let dir = out
-        .or_else(|| sim.scene.output.folder.clone())
+        .or_else(|| sim.scene.output_spec().ok().and_then(|o| o.folder))
         .unwrap_or_else(|| Path::new("out").join(&sim.scene.name));
     let opts = options(checkpoint_every, overwrite)?;
     let bar = progress_bar(quiet);

@@ -217,7 +217,7 @@ fn a_law_returning_nan_stops_the_run_naming_the_law() {
     let file = efsi_run::CheckpointFile::read(&out.join("checkpoint/latest.efsick")).unwrap();
     assert_eq!(file.record.step(), step);
     let scene = file.scene().unwrap();
-    let sim = efsi_core::Simulation::new(scene, &file.scene_path, &efsi_stages::builtin()).unwrap();
+    let sim = efsi_run::simulation(scene, &file.scene_path, &efsi_stages::builtin()).unwrap();
     let snap = file.record.into_snapshot(sim.snapshot(), "test").unwrap();
     for (name, f) in snap.state.arrays() {
         assert!(f.data().iter().all(|x| x.is_finite()), "{name}");

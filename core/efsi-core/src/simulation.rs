@@ -115,48 +115,6 @@ pub struct Simulation {
     guard: Option<Option<EnergyGuard>>,
 }
 
-/// Memory a run needs per grid cell, ghost layers included (bytes): the fields, the stages'
-/// work arrays and the solvers' hierarchies, from the peak resident size of runs on large grids
-/// (fluid only, and with an elastic solid).
-pub const BYTES_PER_CELL: (f64, f64) = (790.0, 2800.0);
-
-/// Refuse a scene whose estimated memory (cells with ghost layers × [`BYTES_PER_CELL`]) exceeds
-/// the memory the machine has available now (`MemAvailable` of `/proc/meminfo`; no check where
-/// that cannot be read), before anything is allocated.
-fn check_memory(scene: &Scene, grid: &Grid) -> Result<(), String> {
-    let padded =
-        ((grid.nx + 1 + 2 * crate::grid::GHOST) * (grid.ny + 1 + 2 * crate::grid::GHOST)) as f64;
-    let per_cell = if scene.solid.is_some() {
-        BYTES_PER_CELL.1
-    } else {
-        BYTES_PER_CELL.0
-    };
-    let need = padded * per_cell;
-    let Some(available) = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
-        m.lines()
-            .find_map(|l| l.strip_prefix("MemAvailable:"))
-            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
-            .map(|kb| kb * 1024.0)
-    }) else {
-        return Ok(());
-    };
-    if need <= available {
-        return Ok(());
-    }
-    Err(format!(
-        "the run needs about {:.1} GB ({padded:.3e} cells with ghost layers × ≈ {per_cell} B{}), \
-         more than the {:.1} GB of memory available: use a coarser grid (e.g. --refine {:.2})",
-        need / 1e9,
-        if scene.solid.is_some() {
-            " with a solid"
-        } else {
-            ""
-        },
-        available / 1e9,
-        (available / need).sqrt() * 0.9
-    ))
-}
-
 impl Simulation {
     /// Build a simulation from a scene and the available stage plugins.
     pub fn new(
@@ -183,12 +141,8 @@ impl Simulation {
             scene.domain.x,
             scene.domain.y,
         );
-        check_memory(&scene, &grid).map_err(|m| config("grid", m))?;
         let bc = BoundarySet::new(&scene.boundaries, &grid);
         let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
-        scene.check_outputs(&pipeline).map_err(|(field, message)| {
-            crate::overrides::attribute(scene_path, &scene.overrides, field, message)
-        })?;
         let mut state = State::new(
             &grid,
             scene.fluid.density,

@@ -20,6 +20,7 @@
 //! `#![enable(…)]`), not its semantics — that is the caller's loader's job.
 
 mod edit;
+pub mod overrides;
 mod path;
 mod tree;
 

@@ -177,6 +177,9 @@ pub fn scene_differences(old: &Scene, new: &Scene) -> Vec<String> {
     }
     let mut a = serde_json::to_value(old).unwrap_or_default();
     let mut b = serde_json::to_value(new).unwrap_or_default();
+    // The output sections are RON text in the scenes: compared setting by setting.
+    a["output"] = crate::output::spec::json(old);
+    b["output"] = crate::output::spec::json(new);
     // A stage's numerics section is RON text in the scene; where both scenes hold it checked
     // (its settings in force), compare it setting by setting.
     let old_sections: std::collections::BTreeMap<_, _> = old.numerics.sections_json().collect();

@@ -1,9 +1,10 @@
 //! Sampling fields at points and along lines, and the time-series probes of `probes.csv`.
 
+use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::Grid;
 use efsi_core::ops::{self, potential_energy};
-use efsi_core::scene::{ProbeSpec, Side};
+use efsi_core::scene::Side;
 use efsi_core::state::State;
 use efsi_core::{OutputDecl, OutputKind};
 
@@ -21,7 +22,7 @@ pub fn interpolate(grid: &Grid, f: &Field, (ox, oy): (f64, f64), (x, y): (f64, f
         + wy * ((1.0 - wx) * f[(i0, j0 + 1)] + wx * f[(i0 + 1, j0 + 1)])
 }
 
-/// A named field sampled at a point (names from [`efsi_core::scene::FIELD_NAMES`]).
+/// A named field sampled at a point (names from [`crate::output::spec::FIELD_NAMES`]).
 pub fn sample(grid: &Grid, state: &State, field: &str, at: (f64, f64)) -> f64 {
     let u = || interpolate(grid, &state.u, (0.0, 0.5), at);
     let v = || interpolate(grid, &state.v, (0.5, 0.0), at);

@@ -5,6 +5,7 @@
 use efsi_core::Scene;
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::{Preset, StageOptions};
+use efsi_run::SceneOverrides;
 use efsi_stages::elastic::{ElasticCoupling, ElasticOptions};
 use efsi_stages::projection::{PressureSolver, ProjectionOptions};
 use efsi_stages::viscous::ViscousOptions;

@@ -131,8 +131,8 @@ impl Harness<'_> {
         label: &str,
     ) -> Result<(Simulation, Run), String> {
         let scene = self.opts.adjust(scene)?;
-        let sim =
-            Simulation::new(scene, path, &efsi_stages::builtin()).map_err(|e| e.to_string())?;
+        let sim = efsi_run::simulation(scene, path, &efsi_stages::builtin())
+            .map_err(|e| e.to_string())?;
         let (sim, run) = execute_built(sim, &self.dir.join(folder), label, self.opts)
             .map_err(|e| e.to_string())?;
         self.schedule = stage_names(&sim);

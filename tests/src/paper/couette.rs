@@ -4,8 +4,8 @@
 use super::case::{Case, Done, Harness, Plan, Verdict, deviation, trade};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case};
-use efsi_core::scene::ProfileSpec;
 use efsi_core::{Scene, Simulation};
+use efsi_run::{ProfileSpec, SceneOutput};
 use std::path::PathBuf;
 
 const TIMES: [f64; 4] = [2.0, 2.8, 4.0, 4.8];
@@ -154,18 +154,20 @@ impl Case for Couette {
         scene.grid.ny = n;
         // Δt ∝ h (the scene's 0.001 at 64 cells): the elastic step is first order in time.
         scene.time.dt_max = Some(0.001 * 64.0 / n as f64);
-        scene.output.vtk_every = None;
+        scene.update_output(|o| o.vtk_every = None)?;
         let x = 0.5 * (scene.domain.x.0 + scene.domain.x.1);
         let h = 1.0 / n as f64;
         // The profile at the cell centres, where u lives: no interpolation.
-        scene.output.profiles = vec![ProfileSpec::Line {
-            name: "u".into(),
-            from: (x, 0.5 * h),
-            to: (x, 1.0 - 0.5 * h),
-            points: n,
-            fields: vec!["u".into()],
-            at: TIMES.to_vec(),
-        }];
+        scene.update_output(|o| {
+            o.profiles = vec![ProfileSpec::Line {
+                name: "u".into(),
+                from: (x, 0.5 * h),
+                to: (x, 1.0 - 0.5 * h),
+                points: n,
+                fields: vec!["u".into()],
+                at: TIMES.to_vec(),
+            }];
+        })?;
         Ok((scene, path))
     }
 

@@ -6,8 +6,8 @@
 
 use super::case::{Case, Done, Harness, Plan, Verdict};
 use super::{Options, Run, cases_dir};
-use efsi_core::scene::ProfileSpec;
 use efsi_core::{Scene, Simulation};
+use efsi_run::{ProfileSpec, SceneOutput};
 
 /// The reference's times (the tenth period, wall at rest and at its peak speed).
 const TIMES: [f64; 4] = [18.0, 18.5, 19.0, 19.5];
@@ -48,14 +48,16 @@ pub fn scene(n: usize, end: f64, times: &[f64]) -> Result<(Scene, std::path::Pat
     let mut scene = Scene::from_str_at(&text, &path).map_err(|e| e.to_string())?;
     let x = 2.0 * h;
     // The profile at the cell centres, where u lives: no interpolation of the solution.
-    scene.output.profiles = vec![ProfileSpec::Line {
-        name: "u".into(),
-        from: (x, 0.5 * h),
-        to: (x, 0.4 - 0.5 * h),
-        points: n,
-        fields: vec!["u".into()],
-        at: times.to_vec(),
-    }];
+    scene.update_output(|o| {
+        o.profiles = vec![ProfileSpec::Line {
+            name: "u".into(),
+            from: (x, 0.5 * h),
+            to: (x, 0.4 - 0.5 * h),
+            points: n,
+            fields: vec!["u".into()],
+            at: times.to_vec(),
+        }];
+    })?;
     Ok((scene, path))
 }
 

@@ -15,6 +15,7 @@ use super::case::{
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
+use efsi_run::SceneOutput;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
@@ -165,9 +166,9 @@ impl Case for DiskCavity {
         scene.grid.nx = n;
         scene.grid.ny = n;
         scene.time.end = self.end;
-        scene.output.probe_every = Some(0.02);
+        scene.update_output(|o| o.probe_every = Some(0.02))?;
         if self.quick || n != self.grids[self.grids.len() - 1] {
-            scene.output.vtk_every = None;
+            scene.update_output(|o| o.vtk_every = None)?;
         }
         Ok((scene, path))
     }

@@ -16,6 +16,7 @@ pub mod sphere;
 pub mod stability;
 
 use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_run::SceneOverrides;
 use efsi_run::run::{Progress, run};
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -16,6 +16,7 @@ use super::plot::Scale;
 use super::{Check, Options, Run, Series, load_case, probes};
 use efsi_core::scene::InitialVelocity;
 use efsi_core::{Scene, Simulation};
+use efsi_run::SceneOutput;
 use std::path::PathBuf;
 
 /// The time the seed gives for the largest deformation.
@@ -135,9 +136,9 @@ impl Case for OscillatingDisk {
         scene.grid.nx = n;
         scene.grid.ny = n;
         scene.time.end = self.end;
-        scene.output.probe_every = Some(0.005);
+        scene.update_output(|o| o.probe_every = Some(0.005))?;
         if self.quick || n != self.grids[self.grids.len() - 1] {
-            scene.output.vtk_every = None;
+            scene.update_output(|o| o.vtk_every = None)?;
         }
         if let (Some(m), Some(solid)) = (mu_s, scene.solid.as_mut()) {
             solid.viscosity = Some(m);

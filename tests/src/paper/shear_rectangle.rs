@@ -7,6 +7,7 @@ use super::plot::{Scale, field};
 use super::{Check, Options, Run, load_case};
 use crate::interp;
 use efsi_core::Scene;
+use efsi_run::SceneOutput;
 use std::path::PathBuf;
 
 /// The instants of the shape images (of the finest grid).
@@ -45,7 +46,7 @@ impl Case for ShearRectangle {
         let (mut scene, path) = load_case("shear_rectangle.ron")?;
         scene.grid.ny = n;
         scene.grid.nx = 4 * n;
-        scene.output.vtk_every = None;
+        scene.update_output(|o| o.vtk_every = None)?;
         Ok((scene, path))
     }
 
@@ -55,7 +56,7 @@ impl Case for ShearRectangle {
         let (scene, path) = self.scene(&n)?;
         let scene = h.opts.adjust(scene)?;
         let dir = h.dir.clone();
-        let mut sim = efsi_core::Simulation::new(scene.clone(), &path, &efsi_stages::builtin())
+        let mut sim = efsi_run::simulation(scene.clone(), &path, &efsi_stages::builtin())
             .map_err(|e| e.to_string())?;
         h.schedule = stage_names(&sim);
         let phi0 = sim.state.phi.clone().ok_or("no solid fraction")?;

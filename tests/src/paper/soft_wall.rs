@@ -6,6 +6,7 @@ use super::plot::Scale;
 use super::{Check, Options, Run, load_case};
 use crate::interp;
 use efsi_core::{Scene, Simulation};
+use efsi_run::SceneOutput;
 use std::path::PathBuf;
 
 /// The wall's height `h(x)` per column: the solid fraction summed up each column (a height
@@ -67,7 +68,7 @@ impl Case for SoftWall {
         // Track the velocity change (no early stop: 1e-12 is not reached by t = 8).
         scene.time.steady = Some(1e-12);
         if n != *self.grids.last().unwrap_or(&n) {
-            scene.output.vtk_every = None;
+            scene.update_output(|o| o.vtk_every = None)?;
         }
         Ok((scene, path))
     }

@@ -7,9 +7,9 @@ use super::case::{
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use efsi_core::scene::ProbeSpec;
 use efsi_core::scene::Shape;
 use efsi_core::{Scene, Simulation};
+use efsi_run::{ProbeSpec, SceneOutput};
 use std::f64::consts::PI;
 
 /// The sphere's material and initial condition, read from its scene.
@@ -180,11 +180,13 @@ fn scene_at(
     scene.grid.nx = (lx / h).round() as usize;
     scene.grid.ny = (ly / h).round() as usize;
     scene.time.cfl = cfl;
-    if !scene.output.probes.contains(&ProbeSpec::SolidPieces) {
-        scene.output.probes.push(ProbeSpec::SolidPieces);
-    }
+    scene.update_output(|o| {
+        if !o.probes.contains(&ProbeSpec::SolidPieces) {
+            o.probes.push(ProbeSpec::SolidPieces);
+        }
+    })?;
     if !vtk {
-        scene.output.vtk_every = None;
+        scene.update_output(|o| o.vtk_every = None)?;
     }
     Ok((scene, path))
 }

@@ -50,9 +50,9 @@
 use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Run, execute_built, load_case, probes};
-use efsi_core::scene::ProbeSpec;
+use efsi_core::Scene;
 use efsi_core::scene::Shape;
-use efsi_core::{Scene, Simulation};
+use efsi_run::{ProbeSpec, SceneOutput};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use efsi_stages::elastic::{
     DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT,
@@ -220,17 +220,18 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
     }
     elastic.coupling = st.coupling;
     scene.numerics.set(&elastic);
-    scene.output.vtk_every = None;
-    // Probes every step: an interval would cap Δt (the run lands on every probe time).
-    scene.output.probe_every = None;
-    scene.output.probes = vec![
-        ProbeSpec::SolidVolume,
-        ProbeSpec::SolidCentroid,
-        ProbeSpec::SolidVelocity,
-        ProbeSpec::KineticEnergy,
-        ProbeSpec::PotentialEnergy,
-        ProbeSpec::ElasticEnergy,
-    ];
+    scene.update_output(|o| {
+        // No VTK; probes every step: an interval would cap Δt (the run lands on every probe time).
+        (o.vtk_every, o.probe_every) = (None, None);
+        o.probes = vec![
+            ProbeSpec::SolidVolume,
+            ProbeSpec::SolidCentroid,
+            ProbeSpec::SolidVelocity,
+            ProbeSpec::KineticEnergy,
+            ProbeSpec::PotentialEnergy,
+            ProbeSpec::ElasticEnergy,
+        ];
+    })?;
     Ok((scene, path))
 }
 
@@ -282,7 +283,7 @@ fn attempt(
         Ok(s) => s,
         Err(e) => return (Outcome::Failed(format!("scene: {e}")), None),
     };
-    let sim = match Simulation::new(scene, &path, &efsi_stages::builtin()) {
+    let sim = match efsi_run::simulation(scene, &path, &efsi_stages::builtin()) {
         Ok(sim) => sim,
         Err(e) => return (Outcome::Refused(e.to_string()), None),
     };
@@ -778,7 +779,7 @@ impl Case for Stability {
             pass: names_setting && refused.len() == expected_refusals,
         });
         h.schedule = match scene_for(&Setting::new(1.8e5, 1e3, 0.5), cpr).and_then(|(s, p)| {
-            Simulation::new(s, &p, &efsi_stages::builtin()).map_err(|e| e.to_string())
+            efsi_run::simulation(s, &p, &efsi_stages::builtin()).map_err(|e| e.to_string())
         }) {
             Ok(sim) => stage_names(&sim),
             Err(_) => Vec::new(),

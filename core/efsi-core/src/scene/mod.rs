@@ -21,14 +21,11 @@
 
 use crate::grid::Geometry;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
-pub use output::{
-    FIELD_NAMES, MAX_PROFILE_POINTS, OutputSpec, ProbeSpec, ProfileSpec, VTK_FIELDS,
-    VtkCompression, VtkOptions, VtkPrecision,
-};
+pub use section::Section;
 pub use shape::Shape;
 
 mod numerics;
-mod output;
+mod section;
 mod shape;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
@@ -74,7 +71,7 @@ pub enum SceneError {
         /// What is wrong and what was expected.
         message: String,
     },
-    /// An override ([`crate::overrides`]: `efsi run --set`, `--refine`, [`Scene::set`]) that
+    /// An override ([`crate::overrides`]: `efsi run --set`, `--refine`, `Scene::set`) that
     /// cannot be applied, or whose value the scene refuses.
     #[error("{path}: {setting}: {message}")]
     Override {
@@ -122,14 +119,15 @@ pub struct Scene {
     /// Numerical parameters of the solvers.
     #[serde(default)]
     pub numerics: Numerics,
-    /// What to write and where.
+    /// What a run writes and where: a [`Section`] whose type and checks the run crate owns
+    /// (`efsi-run`'s `OutputSpec`).
     #[serde(default)]
-    pub output: OutputSpec,
+    pub output: Section,
     /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
     #[serde(skip)]
     pub source_dir: Option<PathBuf>,
     /// The overrides applied to the file's settings, in order ([`crate::overrides`]; set by
-    /// [`Scene::load_with`], [`Scene::set`], …): the scene is the file's with these applied.
+    /// `efsi_run::SceneOverrides`): the scene is the file's with these applied.
     #[serde(skip)]
     pub overrides: Vec<crate::overrides::Override>,
 }
@@ -486,18 +484,25 @@ pub fn num(v: f64) -> String {
 pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
 
 impl Scene {
-    /// Read and validate a scene file (with overrides: [`Scene::load_with`]).
+    /// Read and validate a scene file (with overrides: `efsi_run::SceneOverrides::load_with`).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        Scene::load_with(path, &[])
+        let path = path.as_ref();
+        let mut scene = Scene::from_str_at(&Scene::read_file(path)?, path)?;
+        scene.source_dir = path.parent().map(Path::to_path_buf);
+        Ok(scene)
     }
 
     /// Parse and validate scene text; `path` is used in error messages only.
     pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        Scene::from_str_with(text, path, &[])
+        let scene = Scene::parse(text, path)?;
+        scene
+            .validate()
+            .map_err(|(field, message)| crate::overrides::attribute(path, &[], field, message))?;
+        Ok(scene)
     }
 
     /// Parse scene text without validating it (syntax and types only).
-    pub(crate) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let opts = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
         // A byte-order mark some editors put first is not part of the scene.
@@ -514,8 +519,15 @@ impl Scene {
                 code => code.to_string(),
             },
         })?;
-        scene.numerics.locate_in(text);
+        scene.locate_sections_in(text);
         Ok(scene)
+    }
+
+    /// Record where the opaque sections ([`Section`]) start in `text`, the file the scene was
+    /// read from (no position where an override rewrote one).
+    pub fn locate_sections_in(&mut self, text: &str) {
+        self.numerics.locate_in(text);
+        self.output.locate_in(text);
     }
 
     /// The scene as RON text (what `run.json` and checkpoints record).

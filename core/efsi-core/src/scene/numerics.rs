@@ -19,9 +19,8 @@
 //! )
 //! ```
 
-use super::{Scene, num};
+use super::{Scene, Section, num};
 use crate::schedule::StagePlugin;
-use ron::value::RawValue;
 use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeStruct;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -35,7 +34,7 @@ pub struct Numerics {
     /// tolerances to at most their strict values ([`StageOptions::strict`]) — one setting for
     /// the strict run a check or a reference needs.
     pub preset: Preset,
-    sections: BTreeMap<String, Section>,
+    sections: BTreeMap<String, Entry>,
 }
 
 /// Solver-tolerance presets (`numerics.preset`).
@@ -50,22 +49,16 @@ pub enum Preset {
     Strict,
 }
 
-/// One stage's section as the scene wrote it.
-#[derive(Clone, Debug)]
-struct Section {
-    raw: Box<RawValue>,
-    /// Line and column of the section's text in the scene file, for messages.
-    at: Option<(usize, usize)>,
-    /// The settings in force as JSON (set by [`check_sections`]), for records.
-    json: Option<serde_json::Value>,
-}
+/// One stage's section as the scene wrote it, and its settings in force as JSON (set by
+/// [`check_sections`]), for records.
+type Entry = (Section, Option<serde_json::Value>);
 
 /// A failed check of a section: the setting's path (`numerics.<section>.<field>`) and what is
 /// wrong.
 pub type Checked = Result<(), Failure>;
 
 /// A section's settings in force: as RON text and as JSON.
-type InForce = (Box<RawValue>, serde_json::Value);
+type InForce = (Section, serde_json::Value);
 
 /// A setting's path and what is wrong with it.
 pub type Failure = (String, String);
@@ -108,21 +101,11 @@ impl OptionsDecl {
                 let o: O = scene.numerics.get()?;
                 o.validate(scene)
                     .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
-                let raw = raw_of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
+                let raw = Section::of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
                 Ok((raw, serde_json::to_value(&o).unwrap_or_default()))
             },
         }
     }
-}
-
-/// `o` as one line of RON: `(tolerance: 1e-6, max_iterations: 10000)`.
-fn raw_of<O: Serialize>(o: &O) -> Result<Box<RawValue>, String> {
-    let config = ron::ser::PrettyConfig::new().new_line(" ").indentor("");
-    let mut text = ron::ser::to_string_pretty(o, config).map_err(|e| e.to_string())?;
-    if !text.contains(['"', '\'']) {
-        text = text.replace("( ", "(").replace(", )", ")");
-    }
-    RawValue::from_boxed_ron(text.into_boxed_str()).map_err(|e| e.to_string())
 }
 
 /// Check the scene's `numerics` sections against the options `plugins` declare: each section
@@ -154,12 +137,8 @@ pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checke
         effective.push((d.section, (d.check)(scene)?));
     }
     for (name, (raw, json)) in effective {
-        let section = Section {
-            raw,
-            at: None,
-            json: Some(json),
-        };
-        scene.numerics.sections.insert(name.to_string(), section);
+        let entry = (raw, Some(json));
+        scene.numerics.sections.insert(name.to_string(), entry);
     }
     Ok(())
 }
@@ -178,24 +157,6 @@ impl Scene {
     }
 }
 
-impl Scene {
-    /// [`Scene::get`] with the stages' `numerics` sections in force: a setting of a section the
-    /// scene leaves out is the default of the stage among `plugins` that declares it (what a
-    /// simulation of this scene runs with). A scene whose sections do not pass their checks
-    /// is read as it is.
-    pub fn get_in_force(
-        &self,
-        path: &str,
-        plugins: &[&dyn StagePlugin],
-    ) -> Result<crate::OverrideValue, super::SceneError> {
-        let mut filled = self.clone();
-        match check_sections(&mut filled, plugins) {
-            Ok(()) => filled.get(path),
-            Err(_) => self.get(path),
-        }
-    }
-}
-
 impl Numerics {
     /// The options of section `O::SECTION`: the scene's settings, the defaults for what it
     /// leaves out, the preset applied. On error the section's path and the reader's message
@@ -203,24 +164,9 @@ impl Numerics {
     pub fn get<O: StageOptions>(&self) -> Result<O, (String, String)> {
         let mut o = match self.sections.get(O::SECTION) {
             None => O::default(),
-            Some(s) => {
-                let opts = ron::Options::default()
-                    .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-                opts.from_str(s.raw.get_ron()).map_err(|e| {
-                    let at = match s.at {
-                        Some((line, col)) => {
-                            let (l, c) = (e.span.start.line, e.span.start.col);
-                            let c = if l == 1 { col + c - 1 } else { c };
-                            format!(" (line {}, column {c})", line + l - 1)
-                        }
-                        None => String::new(),
-                    };
-                    (
-                        format!("numerics.{}", O::SECTION),
-                        format!("{}{at}", e.code),
-                    )
-                })?
-            }
+            Some((s, _)) => s
+                .get()
+                .map_err(|m| (format!("numerics.{}", O::SECTION), m))?,
         };
         if self.preset == Preset::Strict {
             o.strict();
@@ -230,13 +176,8 @@ impl Numerics {
 
     /// Replace section `O::SECTION` by `options` (what a scene built in code sets).
     pub fn set<O: StageOptions>(&mut self, options: &O) {
-        let raw = raw_of(options).expect("stage options serialise to RON");
-        let section = Section {
-            raw,
-            at: None,
-            json: None,
-        };
-        self.sections.insert(O::SECTION.to_string(), section);
+        let raw = Section::of(options).expect("stage options serialise to RON");
+        self.sections.insert(O::SECTION.to_string(), (raw, None));
     }
 
     /// Change section `O::SECTION` in place: read it ([`Numerics::get`], without the preset),
@@ -256,14 +197,14 @@ impl Numerics {
 
     /// The RON text of a section as the scene holds it, if it has one.
     pub fn section(&self, name: &str) -> Option<&str> {
-        self.sections.get(name).map(|s| s.raw.get_ron())
+        self.sections.get(name).map(|(s, _)| s.text())
     }
 
     /// Each section's name and RON text, in name order.
     pub fn sections(&self) -> impl Iterator<Item = (&str, &str)> {
         self.sections
             .iter()
-            .map(|(name, s)| (name.as_str(), s.raw.get_ron()))
+            .map(|(name, (s, _))| (name.as_str(), s.text()))
     }
 
     /// Each checked section's settings in force as JSON ([`check_sections`]; sections not
@@ -271,19 +212,14 @@ impl Numerics {
     pub fn sections_json(&self) -> impl Iterator<Item = (&str, &serde_json::Value)> {
         self.sections
             .iter()
-            .filter_map(|(name, s)| Some((name.as_str(), s.json.as_ref()?)))
+            .filter_map(|(name, (_, json))| Some((name.as_str(), json.as_ref()?)))
     }
 
     /// Record where each section's text starts in `text`, the scene file it was read from; a
     /// section not found there as written (an override rewrote it) gets no position.
     pub(crate) fn locate_in(&mut self, text: &str) {
-        for s in self.sections.values_mut() {
-            s.at = text.find(s.raw.get_ron()).map(|offset| {
-                let before = &text[..offset];
-                let line = before.matches('\n').count() + 1;
-                let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-                (line, col)
-            });
+        for (s, _) in self.sections.values_mut() {
+            s.locate_in(text);
         }
     }
 }
@@ -306,8 +242,8 @@ impl Serialize for Numerics {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let mut st = s.serialize_struct("Numerics", 1 + self.sections.len())?;
         st.serialize_field("preset", &self.preset)?;
-        for (name, section) in &self.sections {
-            st.serialize_field(intern(name), &section.raw)?;
+        for (name, (section, _)) in &self.sections {
+            st.serialize_field(intern(name), section)?;
         }
         st.end()
     }
@@ -327,18 +263,13 @@ impl<'de> Deserialize<'de> for Numerics {
                     if key == "preset" {
                         n.preset = m.next_value()?;
                     } else {
-                        let raw: Box<RawValue> = m.next_value()?;
+                        let section: Section = m.next_value()?;
                         if n.sections.contains_key(&key) {
                             return Err(serde::de::Error::custom(format!(
                                 "duplicate section `{key}`"
                             )));
                         }
-                        let section = Section {
-                            raw,
-                            at: None,
-                            json: None,
-                        };
-                        n.sections.insert(key, section);
+                        n.sections.insert(key, (section, None));
                     }
                 }
                 Ok(n)

@@ -39,51 +39,6 @@ fn unknown_field_names_line_and_column() {
 }
 
 #[test]
-fn vtk_options_load_round_trip_and_are_checked_by_name() {
-    let with = |vtk: &str| {
-        load(&MIN.replace(
-            "time: (end: 1.0),",
-            &format!("time: (end: 1.0), output: (vtk_every: 0.5, vtk: {vtk}),"),
-        ))
-    };
-    let s = with(r#"(fields: ["velocity", "pressure"], precision: Float32, compression: Zlib, point_data: true)"#)
-            .unwrap();
-    let v = &s.output.vtk;
-    assert_eq!(
-        v.fields.as_deref(),
-        Some(&["velocity".to_string(), "pressure".to_string()][..])
-    );
-    assert_eq!(
-        (v.precision, v.compression, v.point_data),
-        (VtkPrecision::Float32, VtkCompression::Zlib, true)
-    );
-    assert_eq!(&load(&s.to_ron()).unwrap().output.vtk, v);
-    // The defaults: every array, Float64, raw, cell data only.
-    assert_eq!(load(MIN).unwrap().output.vtk, VtkOptions::default());
-    // Names are checked against the shared fields and the scheduled stages' outputs when the
-    // pipeline is built (tests/tests/elastic.rs, tests/tests/own_field.rs); the loader checks
-    // the list's form.
-    for (vtk, needles) in [
-        (
-            r#"(fields: ["pressure", "pressure"])"#,
-            &["output.vtk.fields[1]", "listed twice"][..],
-        ),
-        (r#"(fields: [])"#, &["output.vtk.fields", "at least one"]),
-        (
-            r#"(fields: ["solid_fraction"])"#,
-            &["output.vtk.fields[0]", "needs a solid"],
-        ),
-        (r#"(precision: Float16)"#, &["Float16"]),
-        (r#"(compression: Gzip)"#, &["Gzip"]),
-    ] {
-        let e = with(vtk).unwrap_err().to_string();
-        for n in needles {
-            assert!(e.contains(n), "{vtk}: expected `{n}` in: {e}");
-        }
-    }
-}
-
-#[test]
 fn sin2_ramp_matches_seed_eq26() {
     // Seed Eq. 26 on a 2-long lid: 0.5 sin²(πx/0.6) on [0, 0.3].
     let p = WallProfile::Sin2Ramp { width: 0.3 };

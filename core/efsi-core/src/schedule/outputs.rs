@@ -1,7 +1,7 @@
 //! What a stage contributes to a run's outputs ([`crate::StagePlugin::outputs`]): VTK arrays,
 //! fields to sample at points and probe quantities of the fields it owns, each computed from
 //! the state. The run's writers (crate `efsi-run`) list the shared fields' outputs first, then
-//! the scheduled stages'; [`crate::Scene::check_outputs`] checks the scene's
+//! the scheduled stages'; `efsi-run` checks the scene's
 //! `output.vtk.fields`, `output.probes` and `output.profiles` against exactly these. A stage
 //! that adds a field adds its outputs here, and no core or writer file changes.
 

@@ -9,9 +9,9 @@
 //! the slice into the body. Units are the scene's; the ones named here are those of a scene in
 //! SI units (m, kg, s), as the shipped solid cases are.
 
+use crate::output::spec::{VTK_FIELDS, VtkOptions};
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
-use efsi_core::scene::{VTK_FIELDS, VtkOptions};
 use efsi_core::{OutputDecl, OutputKind};
 
 use efsi_core::state::State;

@@ -36,8 +36,8 @@
 //! `.vtr` opened without its `.pvd` still carries its time).
 
 use crate::output::atomic::write_atomically;
+pub use crate::output::spec::{VtkCompression, VtkPrecision};
 use efsi_core::grid::{Geometry, Grid};
-pub use efsi_core::scene::{VtkCompression, VtkPrecision};
 use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};

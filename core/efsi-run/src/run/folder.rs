@@ -2,9 +2,9 @@
 //! (refused, or removed with `overwrite`), and the `probes.csv` header and append handle.
 
 use crate::checkpoint::{self, CheckpointFile};
+use crate::output::spec::ProbeSpec;
 use crate::probes;
 use efsi_core::error::EfsiError;
-use efsi_core::scene::ProbeSpec;
 use std::fs::{self, File, OpenOptions};
 use std::path::{Path, PathBuf};
 

@@ -48,6 +48,7 @@
 //! [`resume`] continues a run from its latest checkpoint, appending to the same outputs, after
 //! checking that the checkpoint's run is the folder's (its `run.json`).
 
+use crate::SceneOverrides;
 use crate::checkpoint::{self, CheckpointFile};
 use crate::lock::FolderLock;
 use efsi_core::error::EfsiError;
@@ -265,7 +266,7 @@ pub fn resume(
     scene.check_options(&file.scene_path, plugins)?;
     checkpoint::check_resumable(&file, &scene, &what, plugins)?;
     let law = checkpoint::law_identity(&scene)?;
-    let mut sim = Simulation::new(scene, &file.scene_path, plugins)?;
+    let mut sim = crate::simulation(scene, &file.scene_path, plugins)?;
     let snapshot = file.record.clone().into_snapshot(sim.snapshot(), &what)?;
     sim.restore(&snapshot)?;
     let mut options = options.clone();

@@ -7,12 +7,12 @@ use super::record::new_run_id;
 use super::time_label;
 use crate::checkpoint::OutputState;
 use crate::lock::FolderLock;
+use crate::output::spec::{ProbeSpec, ProfileSpec};
 use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
 use crate::probes;
 use efsi_core::due;
 use efsi_core::error::EfsiError;
 use efsi_core::grid::Grid;
-use efsi_core::scene::{ProbeSpec, ProfileSpec};
 use efsi_core::simulation::Simulation;
 use efsi_core::state::State;
 use std::fs::{self, File};
@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 pub struct Outputs {
     pub(super) dir: PathBuf,
     pub(super) vtk_every: Option<f64>,
-    pub(super) vtk: efsi_core::scene::VtkOptions,
+    pub(super) vtk: crate::output::spec::VtkOptions,
     vtk_count: u64,
     pvd: PvdCollection,
     probe_every: Option<f64>,
@@ -85,7 +85,7 @@ impl Outputs {
         checkpoint_every: Option<f64>,
         overwrite: bool,
     ) -> Result<Outputs, EfsiError> {
-        let o = &sim.scene.output;
+        let o = &crate::output::spec::check(&sim.scene, &sim.scene_path, sim.pipeline())?;
         make_dirs(dir)?;
         let lock = FolderLock::acquire(dir)?;
         replace_earlier_run(dir, &earlier_outputs(dir)?, overwrite)?;
@@ -145,7 +145,7 @@ impl Outputs {
         checkpoint_every: Option<f64>,
         lock: FolderLock,
     ) -> Result<Outputs, EfsiError> {
-        let o = &sim.scene.output;
+        let o = &crate::output::spec::check(&sim.scene, &sim.scene_path, sim.pipeline())?;
         make_dirs(dir)?;
         let probe_path = dir.join("probes.csv");
         let header = probe_header(&o.probes);

@@ -59,6 +59,7 @@ impl Outputs {
         for (name, json) in sim.scene.numerics.sections_json() {
             scene["numerics"][name] = json.clone();
         }
+        scene["output"] = crate::output::spec::json(&sim.scene);
         let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
             "run_id": self.run_id,

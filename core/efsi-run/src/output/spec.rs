@@ -1,0 +1,619 @@
+//! The scene's `output` section: what a run writes and where — VTK fields, probes and profiles
+//! — and its checks.
+//!
+//! The core keeps the section as RON text it does not read ([`efsi_core::scene::Section`]);
+//! this crate owns its type ([`OutputSpec`]) and checks it: [`crate::simulation`] builds a
+//! simulation and checks the section against the scene and the scheduled stages' outputs
+//! (every failure naming the setting's path, or the override that set it), then keeps the
+//! settings in force in the scene, so that checkpoints record its defaults too. Code reads and
+//! changes it through [`SceneOutput`].
+
+use efsi_core::error::EfsiError;
+use efsi_core::scene::{Scene, Section, Side, num};
+use efsi_core::{OutputKind, Pipeline};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What to write and where.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Output folder (default `out/<name>/`; `efsi run --out` overrides).
+    #[serde(default)]
+    pub folder: Option<PathBuf>,
+    /// Write VTK fields every this many seconds of simulated time (and at the start and end).
+    #[serde(default)]
+    pub vtk_every: Option<f64>,
+    /// What the VTK files hold and how: fields, precision, compression, point data.
+    #[serde(default)]
+    pub vtk: VtkOptions,
+    /// Sample the probes every this many seconds (default: every step).
+    #[serde(default)]
+    pub probe_every: Option<f64>,
+    /// Probes: one or more columns each in `probes.csv`.
+    #[serde(default)]
+    pub probes: Vec<ProbeSpec>,
+    /// Line profiles, written to `profiles/<name>_t<time>.csv`.
+    #[serde(default)]
+    pub profiles: Vec<ProfileSpec>,
+}
+
+/// The arrays of the shared fields a VTK file can hold, by name (`output.vtk.fields`):
+/// `velocity`, `pressure`, `density`, `viscosity`, `divergence` always; `solid_fraction` with a
+/// solid. The scheduled stages add theirs ([`efsi_core::StagePlugin::outputs`]: the elastic stage's
+/// `B` and `stress`). The README's output section documents each one's location, components,
+/// meaning and unit.
+pub const VTK_FIELDS: &[&str] = &[
+    "velocity",
+    "pressure",
+    "density",
+    "viscosity",
+    "divergence",
+    "solid_fraction",
+];
+
+/// How the VTK field files are written (`output.vtk`); the defaults write every array as
+/// `Float64` cell data, uncompressed (bit-exact values).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VtkOptions {
+    /// The arrays to write, by name (see [`VTK_FIELDS`], and the stages' arrays); default:
+    /// every array the scene has.
+    #[serde(default)]
+    pub fields: Option<Vec<String>>,
+    /// The floating-point type of the arrays (coordinates and time stay `Float64`).
+    #[serde(default)]
+    pub precision: VtkPrecision,
+    /// Compression of the appended binary data.
+    #[serde(default)]
+    pub compression: VtkCompression,
+    /// Also write each array as point data, at the grid's nodes (each node the mean of the
+    /// cells around it), beside the cell data — for smooth contours and surfaces.
+    #[serde(default)]
+    pub point_data: bool,
+}
+
+/// The floating-point type of VTK arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkPrecision {
+    /// 8 bytes per value, the simulation's values exactly.
+    #[default]
+    Float64,
+    /// 4 bytes per value, rounded to single precision (≈ 7 significant digits).
+    Float32,
+}
+
+/// Compression of VTK's appended binary data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VtkCompression {
+    /// Raw blocks.
+    #[default]
+    None,
+    /// zlib (deflate), VTK's `vtkZLibDataCompressor`: every VTK/ParaView reader opens it.
+    Zlib,
+}
+
+/// A probe: a time series written as columns of `probes.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ProbeSpec {
+    /// A field sampled at a point (bilinear interpolation).
+    Point {
+        /// Column name.
+        name: String,
+        /// Field name (see [`FIELD_NAMES`], and the stages' fields).
+        field: String,
+        /// Position.
+        at: (f64, f64),
+    },
+    /// Kinetic energy ½∫ρ|u|² dV (per radian in axisymmetric geometry).
+    KineticEnergy,
+    /// Gravitational potential energy `−∫ρ g·x dV` of the scene's gravity, measured from the
+    /// origin of coordinates (per radian in axisymmetric geometry); column `potential_energy`.
+    /// With [`ProbeSpec::KineticEnergy`] and [`ProbeSpec::ElasticEnergy`] it makes the total
+    /// mechanical energy, which only walls that move and the frame's acceleration can raise.
+    PotentialEnergy,
+    /// `max |∇·u|` over the cells.
+    MaxDivergence,
+    /// Maximum speed.
+    MaxSpeed,
+    /// Solid volume `∫φ_s dV` (per radian in axisymmetric geometry); column `solid_volume`.
+    SolidVolume,
+    /// Solid centroid `∫φ_s x dV / ∫φ_s dV`; columns `solid_x`, `solid_y`.
+    SolidCentroid,
+    /// Volume-weighted solid velocity `∫φ_s u dV / ∫φ_s dV`; columns `solid_u`, `solid_v`.
+    SolidVelocity,
+    /// Elastic (strain) energy stored in the solid, `∫ W(B̃) dV` from the law (per radian in
+    /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
+    ElasticEnergy,
+    /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
+    /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
+    /// column `contact_force`. A contact cell is a cell of the first row along the wall that
+    /// holds a solid fraction φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less
+    /// carries no deformation) and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean
+    /// pressure of the row's other cells, `τ_nn` the elastic normal stress (the viscous one
+    /// vanishes on a no-slip wall). The criterion is absolute: a trace of solid (φ ≈ 1e-18)
+    /// left by the interface advection is no contact, and without a contact cell — before
+    /// touch-down, after lift-off — the probe is exactly 0. A body pressed on a no-slip wall
+    /// keeps a thin air film, thinner than a cell, under it: the film carries the load, so a
+    /// partly filled cell counts.
+    ContactForce {
+        /// The wall (`YMin` is the substrate z = z_min in axisymmetric scenes).
+        wall: Side,
+    },
+    /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
+    /// distance along the wall from its start to the outer edge of the last contact cell (as
+    /// defined at [`ProbeSpec::ContactForce`]: φ ≥ 1e-3 and pressing on the wall); exactly 0
+    /// without one. Column `contact_radius`.
+    ContactRadius {
+        /// The wall.
+        wall: Side,
+    },
+    /// The solid's extent along the vertical line `x = at` (the axis in axisymmetric scenes):
+    /// the bottom and top of its longest run of cells holding solid, each placed by the end
+    /// cell's solid fraction (a height function). Columns `solid_bottom`, `solid_top`.
+    SolidExtent {
+        /// The line's abscissa.
+        at: f64,
+    },
+    /// Whether the solid stays in one piece: the cells holding more than 1e-3 of solid, joined
+    /// through their faces, form connected regions; column `solid_pieces` counts the regions
+    /// holding more than 1e-3 of the solid volume (smaller ones are VOF flotsam), and
+    /// `solid_largest_piece` is the largest region's share of the solid volume (1 for a solid
+    /// in one piece). Periodic sides are not wrapped: a solid crossing one counts as two.
+    SolidPieces,
+    /// A quantity a scheduled stage reports ([`efsi_core::StagePlugin::outputs`]), by name; the
+    /// column is named after it.
+    Quantity(String),
+}
+
+impl ProbeSpec {
+    /// The probe's column names in `probes.csv`, in order.
+    pub fn columns(&self) -> Vec<String> {
+        match self {
+            ProbeSpec::Point { name, .. } => vec![name.clone()],
+            ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
+            ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
+            ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
+            ProbeSpec::MaxSpeed => vec!["max_speed".into()],
+            ProbeSpec::SolidVolume => vec!["solid_volume".into()],
+            ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
+            ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
+            ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
+            ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
+            ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
+            ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
+            ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
+            ProbeSpec::Quantity(name) => vec![name.clone()],
+        }
+    }
+
+    /// Whether the probe needs a solid in the scene.
+    pub fn needs_solid(&self) -> bool {
+        matches!(
+            self,
+            ProbeSpec::SolidVolume
+                | ProbeSpec::SolidCentroid
+                | ProbeSpec::SolidVelocity
+                | ProbeSpec::ElasticEnergy
+                | ProbeSpec::ContactForce { .. }
+                | ProbeSpec::ContactRadius { .. }
+                | ProbeSpec::SolidExtent { .. }
+                | ProbeSpec::SolidPieces
+        )
+    }
+}
+
+/// The most points a line profile may have: a 100 000-line CSV file per output time, finer
+/// than any grid this solver runs (at most 1e4 cells across).
+pub const MAX_PROFILE_POINTS: usize = 100_000;
+
+/// The shared fields' names that probes and profiles can sample; the scheduled stages add
+/// theirs ([`efsi_core::OutputKind::Field`]).
+pub const FIELD_NAMES: &[&str] = &[
+    "u",
+    "v",
+    "p",
+    "speed",
+    "density",
+    "viscosity",
+    "solid_fraction",
+];
+
+/// A line profile: fields sampled at evenly spaced points of a segment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ProfileSpec {
+    /// The segment `from → to`.
+    Line {
+        /// File stem.
+        name: String,
+        /// Start point.
+        from: (f64, f64),
+        /// End point.
+        to: (f64, f64),
+        /// Number of points (≥ 2), both ends included.
+        points: usize,
+        /// Fields to sample (see [`FIELD_NAMES`], and the stages' fields).
+        fields: Vec<String>,
+        /// Times at which to write it (default: only at the end of the run).
+        #[serde(default)]
+        at: Vec<f64>,
+    },
+}
+
+impl ProfileSpec {
+    /// The file stem.
+    pub fn name(&self) -> &str {
+        match self {
+            ProfileSpec::Line { name, .. } => name,
+        }
+    }
+}
+
+/// Reading and changing a scene's `output` section ([`OutputSpec`]).
+pub trait SceneOutput {
+    /// The section's settings, defaults filled in; on error the setting (`output`) and the
+    /// reader's message (with the line and column in the scene file where known).
+    fn output_spec(&self) -> Result<OutputSpec, (String, String)>;
+    /// Replace the section by `spec`.
+    fn set_output(&mut self, spec: &OutputSpec);
+    /// Change the section in place: read it, apply `change`, write it back.
+    fn update_output(&mut self, change: impl FnOnce(&mut OutputSpec)) -> Result<(), String> {
+        let mut spec = self.output_spec().map_err(|(f, m)| format!("{f}: {m}"))?;
+        change(&mut spec);
+        self.set_output(&spec);
+        Ok(())
+    }
+}
+
+impl SceneOutput for Scene {
+    fn output_spec(&self) -> Result<OutputSpec, (String, String)> {
+        self.output.get().map_err(|m| ("output".to_string(), m))
+    }
+
+    fn set_output(&mut self, spec: &OutputSpec) {
+        self.output = Section::of(spec).expect("the output section serialises to RON");
+    }
+}
+
+/// Read the `output` section of `scene` (the scene read from `path`) and check it against the
+/// scene and against the outputs `pipeline`'s stages provide; an error an override caused
+/// names the override.
+pub fn check(scene: &Scene, path: &Path, pipeline: &Pipeline) -> Result<OutputSpec, EfsiError> {
+    let checked = scene.output_spec().and_then(|o| {
+        validate(&o, scene)?;
+        check_names(&o, pipeline)?;
+        Ok(o)
+    });
+    checked.map_err(|(field, message)| {
+        efsi_core::overrides::attribute(path, &scene.overrides, field, message).into()
+    })
+}
+
+/// The `output` section of `scene` as JSON, what records hold: its settings, defaults filled
+/// in (the section's RON text where it does not read as one).
+pub fn json(scene: &Scene) -> serde_json::Value {
+    match scene.output_spec() {
+        Ok(o) => serde_json::to_value(o).unwrap_or_default(),
+        Err(_) => serde_json::Value::String(scene.output.text().to_string()),
+    }
+}
+
+/// A failed check: the setting's path and the message.
+type Checked = Result<(), (String, String)>;
+
+fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+    Err((field.to_string(), msg.into()))
+}
+
+fn positive(field: &str, v: f64) -> Checked {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        err(
+            field,
+            format!("must be a finite number > 0, got {}", num(v)),
+        )
+    }
+}
+
+/// The section's ranges and consistency with the scene: intervals, VTK options, probes and
+/// profiles.
+fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
+    let dt_min = scene.time.dt_min_or_default();
+    for (f, v) in [
+        ("output.vtk_every", o.vtk_every),
+        ("output.probe_every", o.probe_every),
+    ] {
+        if let Some(v) = v {
+            positive(f, v)?;
+            if v < dt_min {
+                return err(
+                    f,
+                    format!(
+                        "must be at least time.dt_min = {dt_min:e} (the smallest step; by \
+                         default 1e-12·time.end), got {v:e}: shorter intervals would force \
+                         shorter steps"
+                    ),
+                );
+            }
+        }
+    }
+    if let Some(fields) = &o.vtk.fields {
+        if fields.is_empty() {
+            return err(
+                "output.vtk.fields",
+                "must name at least one field (leave it out for all of them)",
+            );
+        }
+        for (k, f) in fields.iter().enumerate() {
+            let at = format!("output.vtk.fields[{k}]");
+            if fields[..k].contains(f) {
+                return err(&at, format!("`{f}` is listed twice"));
+            }
+            if f == "solid_fraction" && scene.solid.is_none() {
+                return err(
+                    &at,
+                    "`solid_fraction` needs a solid, and the scene has none",
+                );
+            }
+        }
+    }
+    let inside = |p: (f64, f64)| {
+        p.0 >= scene.domain.x.0
+            && p.0 <= scene.domain.x.1
+            && p.1 >= scene.domain.y.0
+            && p.1 <= scene.domain.y.1
+    };
+    // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
+    let mut columns: std::collections::HashMap<String, usize> =
+        [("t".to_string(), usize::MAX)].into_iter().collect();
+    let has_law = scene.solid.as_ref().is_some_and(|s| s.law.is_some());
+    for (k, probe) in o.probes.iter().enumerate() {
+        let f = format!("output.probes[{k}]");
+        if probe.needs_solid() && scene.solid.is_none() {
+            return err(
+                &f,
+                format!("{probe:?} needs a solid, and the scene has none"),
+            );
+        }
+        if *probe == ProbeSpec::ElasticEnergy && !has_law {
+            return err(
+                &f,
+                "ElasticEnergy needs a solid with a law (solid.law), and this solid has none",
+            );
+        }
+        if let ProbeSpec::SolidExtent { at } = probe
+            && !(at.is_finite() && *at >= scene.domain.x.0 && *at <= scene.domain.x.1)
+        {
+            return err(
+                &format!("{f}.at"),
+                format!(
+                    "x = {} is outside the domain's [{}, {}]",
+                    num(*at),
+                    num(scene.domain.x.0),
+                    num(scene.domain.x.1)
+                ),
+            );
+        }
+        for c in probe.columns() {
+            if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
+                return err(
+                    &format!("{f}.name"),
+                    format!(
+                        "must be a non-empty CSV column name without commas, quotes or \
+                         control characters, got {c:?}"
+                    ),
+                );
+            }
+            if let Some(&other) = columns.get(&c) {
+                let first = if other == usize::MAX {
+                    "the time column".to_string()
+                } else {
+                    format!("output.probes[{other}]")
+                };
+                return err(
+                    &f,
+                    format!(
+                        "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
+                    ),
+                );
+            }
+            columns.insert(c, k);
+        }
+        if let ProbeSpec::Point { field, at, .. } = probe {
+            if field == "solid_fraction" && scene.solid.is_none() {
+                return err(
+                    &format!("{f}.field"),
+                    "solid_fraction needs a solid, and the scene has none",
+                );
+            }
+            if !inside(*at) {
+                return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
+            }
+        }
+    }
+    let mut pnames = std::collections::HashSet::new();
+    for (k, prof) in o.profiles.iter().enumerate() {
+        let ProfileSpec::Line {
+            name,
+            from,
+            to,
+            points,
+            fields,
+            at,
+        } = prof;
+        let f = format!("output.profiles[{k}]");
+        if name.is_empty() || name.contains(['/', '\\']) || !pnames.insert(name.clone()) {
+            return err(
+                &format!("{f}.name"),
+                format!("must be a unique file stem, got `{name}`"),
+            );
+        }
+        if !(2..=MAX_PROFILE_POINTS).contains(points) {
+            return err(
+                &format!("{f}.points"),
+                format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
+            );
+        }
+        if !inside(*from) || !inside(*to) {
+            return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
+        }
+        for field in fields {
+            if field == "solid_fraction" && scene.solid.is_none() {
+                return err(
+                    &format!("{f}.fields"),
+                    "solid_fraction needs a solid, and the scene has none",
+                );
+            }
+        }
+        if fields.is_empty() {
+            return err(&format!("{f}.fields"), "must name at least one field");
+        }
+        for t in at {
+            if !(t.is_finite() && *t >= 0.0 && *t <= scene.time.end) {
+                return err(
+                    &format!("{f}.at"),
+                    format!("time {t} is outside [0, time.end]"),
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The outputs the stages provide, checked once the pipeline is built: every array of `output.vtk.fields` is a shared field's
+/// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every field a `Point` probe or a
+/// profile samples a shared one ([`FIELD_NAMES`]) or a stage's
+/// ([`OutputKind::Field`]), every `Quantity` probe one a scheduled
+/// stage reports; an unknown one is named with the ones there are.
+fn check_names(o: &OutputSpec, pipeline: &Pipeline) -> Checked {
+    let stage = |array: bool| {
+        pipeline
+            .outputs()
+            .iter()
+            .filter(move |o| o.is_array() == array)
+            .map(|o| o.name)
+    };
+    let fields: Vec<&str> = FIELD_NAMES
+        .iter()
+        .copied()
+        .chain(pipeline.outputs().iter().filter_map(|o| match o.kind {
+            OutputKind::Field(_) => Some(o.name),
+            _ => None,
+        }))
+        .collect();
+    let sampled = |at: String, f: &String| {
+        if fields.contains(&f.as_str()) {
+            Ok(())
+        } else {
+            err(
+                &at,
+                format!("unknown field `{f}`: this scene's fields and stages provide {fields:?}"),
+            )
+        }
+    };
+    for (k, p) in o.probes.iter().enumerate() {
+        if let ProbeSpec::Point { field, .. } = p {
+            sampled(format!("output.probes[{k}].field"), field)?;
+        }
+    }
+    for (k, ProfileSpec::Line { fields, .. }) in o.profiles.iter().enumerate() {
+        for f in fields {
+            sampled(format!("output.profiles[{k}].fields"), f)?;
+        }
+    }
+    for (k, f) in o.vtk.fields.iter().flatten().enumerate() {
+        let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
+        if !arrays.contains(&f.as_str()) {
+            return err(
+                &format!("output.vtk.fields[{k}]"),
+                format!("unknown field `{f}`: this scene's fields and stages provide {arrays:?}"),
+            );
+        }
+    }
+    for (k, p) in o.probes.iter().enumerate() {
+        if let ProbeSpec::Quantity(q) = p {
+            let quantities: Vec<&str> = stage(false).collect();
+            if !quantities.contains(&q.as_str()) {
+                return err(
+                    &format!("output.probes[{k}]"),
+                    if quantities.is_empty() {
+                        format!("unknown quantity `{q}`: no stage of this scene reports one")
+                    } else {
+                        format!("unknown quantity `{q}`: this scene's stages report {quantities:?}")
+                    },
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = r#"Scene(
+            name: "t",
+            domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+            grid: (nx: 8, ny: 8),
+            time: (end: 1.0),
+            fluid: (density: 1.0, viscosity: 0.01),
+            boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+        )"#;
+
+    #[test]
+    fn vtk_options_load_round_trip_and_are_checked_by_name() {
+        let load = |text: &str| {
+            let scene = Scene::from_str_at(text, Path::new("scene.ron")).unwrap();
+            let o = scene.output_spec()?;
+            validate(&o, &scene).map(|()| o)
+        };
+        let with = |vtk: &str| {
+            load(&MIN.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (vtk_every: 0.5, vtk: {vtk}),"),
+            ))
+        };
+        let s = with(r#"(fields: ["velocity", "pressure"], precision: Float32, compression: Zlib, point_data: true)"#)
+                .unwrap();
+        let v = &s.vtk;
+        assert_eq!(
+            v.fields.as_deref(),
+            Some(&["velocity".to_string(), "pressure".to_string()][..])
+        );
+        assert_eq!(
+            (v.precision, v.compression, v.point_data),
+            (VtkPrecision::Float32, VtkCompression::Zlib, true)
+        );
+        let mut scene = Scene::from_str_at(MIN, Path::new("scene.ron")).unwrap();
+        scene.set_output(&s);
+        assert_eq!(&load(&scene.to_ron()).unwrap().vtk, v);
+        // The defaults: every array, Float64, raw, cell data only.
+        assert_eq!(load(MIN).unwrap().vtk, VtkOptions::default());
+        // Names are checked against the shared fields and the scheduled stages' outputs when the
+        // pipeline is built (tests/tests/elastic.rs, tests/tests/own_field.rs); the loader checks
+        // the list's form.
+        for (vtk, needles) in [
+            (
+                r#"(fields: ["pressure", "pressure"])"#,
+                &["output.vtk.fields[1]", "listed twice"][..],
+            ),
+            (r#"(fields: [])"#, &["output.vtk.fields", "at least one"]),
+            (
+                r#"(fields: ["solid_fraction"])"#,
+                &["output.vtk.fields[0]", "needs a solid"],
+            ),
+            (r#"(precision: Float16)"#, &["Float16"]),
+            (r#"(compression: Gzip)"#, &["Gzip"]),
+        ] {
+            let (f, m) = with(vtk).unwrap_err();
+            let e = format!("{f}: {m}");
+            for n in needles {
+                assert!(e.contains(n), "{vtk}: expected `{n}` in: {e}");
+            }
+        }
+    }
+}
