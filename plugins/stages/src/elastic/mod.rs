@@ -232,13 +232,13 @@ use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::Coefficients;
 use efsi_core::scene::OptionsDecl;
 use efsi_core::{
-    BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin,
+    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin,
     bc::UnknownFaces,
 };
 use efsi_laws_host::{Sym, Tangent};
 use efsi_linalg::BiCgStab;
-use rayon::prelude::*;
 
+mod choice;
 mod coupled;
 mod deformation;
 mod energy;
@@ -248,12 +248,15 @@ mod limits;
 mod options;
 mod outputs;
 mod resource;
+mod rows;
 mod solve;
 mod stress;
 #[cfg(test)]
 mod tests;
 mod transport;
 
+pub(crate) use choice::{CoupledStep, coupling, may_couple};
+use choice::{StepScheme, coupled_step};
 use deformation::DeformationStage;
 pub use law::resolve_law;
 use law::shared_law;
@@ -265,6 +268,7 @@ pub use options::{
     MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
+use rows::{PAR_POINTS, Window, at, rows1, rows3};
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
@@ -273,68 +277,6 @@ pub const B: FieldId = FieldId::Stage("B");
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
 pub(crate) fn law_needed(scene: &Scene) -> bool {
     scene.solid.as_ref().is_some_and(|s| s.law.is_some())
-}
-
-/// Whether `scene` may take the coupled elastic step (`numerics.elastic.coupling` `Coupled` or
-/// `Auto` with a solid that has an implicit law): a coupled step leaves a pressure for the
-/// projection stage to complete, and Δt may reach `coupled_wave_courant` elastic-wave Courant
-/// numbers.
-pub(crate) fn may_couple(scene: &Scene) -> bool {
-    coupling(scene) != ElasticCoupling::Split
-}
-
-/// `numerics.elastic.coupling`, or `Split` where the scene has no solid with an implicit law.
-pub(crate) fn coupling(scene: &Scene) -> ElasticCoupling {
-    let o: ElasticOptions = scene.numerics.get().unwrap_or_default();
-    if law_needed(scene) && o.implicit {
-        o.coupling
-    } else {
-        ElasticCoupling::Split
-    }
-}
-
-/// Whether the step under way is a coupled one, set by the elastic stage at the start of each
-/// step and read by the stages after it in the same step (the deformation update's θ, the
-/// projection's increment). Shared through the pipeline's [`efsi_core::Resources`]; nothing of
-/// it outlives the step, so snapshots and checkpoints do not carry it.
-#[derive(Clone, Default)]
-pub(crate) struct CoupledStep(std::sync::Arc<std::sync::atomic::AtomicBool>);
-
-impl CoupledStep {
-    /// The pipeline's flag (made by the first stage that asks).
-    pub(crate) fn shared(shared: &mut efsi_core::Resources) -> CoupledStep {
-        shared
-            .get_or_try_insert_with(|| Ok::<_, ()>(CoupledStep::default()))
-            .cloned()
-            .unwrap_or_default()
-    }
-
-    pub(crate) fn get(&self) -> bool {
-        self.0.load(std::sync::atomic::Ordering::Relaxed)
-    }
-
-    fn set(&self, coupled: bool) {
-        self.0.store(coupled, std::sync::atomic::Ordering::Relaxed)
-    }
-}
-
-/// What differs between a split and a coupled step: θ of B's stretching and the velocity
-/// block's preconditioner.
-#[derive(Clone, Copy, Debug)]
-struct StepScheme {
-    theta: f64,
-    preconditioner: ElasticPreconditioner,
-}
-
-/// Whether a step of `dt` is a coupled one: always with `Coupled`, never with `Split`, and with
-/// `Auto` once Δt exceeds the split step's wave limit `split_dt` (by more than the run loop's
-/// rounding when it lands on an output time).
-fn coupled_step(mode: ElasticCoupling, dt: f64, split_dt: f64) -> bool {
-    match mode {
-        ElasticCoupling::Split => false,
-        ElasticCoupling::Coupled => true,
-        ElasticCoupling::Auto => dt > split_dt * (1.0 + 1e-6),
-    }
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
@@ -604,125 +546,6 @@ type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
 #[inline(always)]
 fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
     0.25 * (f[a] + f[b] + f[c] + f[d])
-}
-
-/// A window kernel with at least this many points runs its rows in parallel.
-const PAR_POINTS: usize = 1024;
-
-/// Run `body(j, rows)` over the rows `j0..=j1` of the fields `a, b, c` (`rows[n]` is row `j` of
-/// the n-th field, ghosts included: point `i` at `i + G`), in parallel when `par`. Each row
-/// writes only its own entries, so the result does not depend on the number of threads.
-fn rows3(
-    [a, b, c]: [&mut Field; 3],
-    (j0, j1): (isize, isize),
-    par: bool,
-    body: impl Fn(isize, [&mut [f64]; 3]) + Sync + Send,
-) {
-    if j0 > j1 {
-        return;
-    }
-    let s = a.stride();
-    let (lo, hi) = (a.idx(-G, j0), a.idx(-G, j1) + s);
-    let (a, b, c) = (
-        &mut a.data_mut()[lo..hi],
-        &mut b.data_mut()[lo..hi],
-        &mut c.data_mut()[lo..hi],
-    );
-    if par {
-        a.par_chunks_mut(s)
-            .zip(b.par_chunks_mut(s))
-            .zip(c.par_chunks_mut(s))
-            .enumerate()
-            .for_each(|(r, ((a, b), c))| body(j0 + r as isize, [a, b, c]));
-    } else {
-        a.chunks_mut(s)
-            .zip(b.chunks_mut(s))
-            .zip(c.chunks_mut(s))
-            .enumerate()
-            .for_each(|(r, ((a, b), c))| body(j0 + r as isize, [a, b, c]));
-    }
-}
-
-/// [`rows3`] for one field.
-fn rows1(
-    a: &mut Field,
-    (j0, j1): (isize, isize),
-    par: bool,
-    body: impl Fn(isize, &mut [f64]) + Sync + Send,
-) {
-    if j0 > j1 {
-        return;
-    }
-    let s = a.stride();
-    let (lo, hi) = (a.idx(-G, j0), a.idx(-G, j1) + s);
-    let a = &mut a.data_mut()[lo..hi];
-    if par {
-        a.par_chunks_mut(s)
-            .enumerate()
-            .for_each(|(r, a)| body(j0 + r as isize, a));
-    } else {
-        a.chunks_mut(s)
-            .enumerate()
-            .for_each(|(r, a)| body(j0 + r as isize, a));
-    }
-}
-
-/// The position of point `i` in a row of [`rows3`] / [`rows1`].
-#[inline(always)]
-fn at(i: isize) -> usize {
-    (i + G) as usize
-}
-
-/// A rectangle of grid points `[i0, i1] × [j0, j1]` (inclusive; empty when `i0 > i1`), of
-/// centres or of corners.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Window {
-    i0: isize,
-    i1: isize,
-    j0: isize,
-    j1: isize,
-}
-
-impl Window {
-    fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
-        Window { i0, i1, j0, j1 }
-    }
-
-    /// Number of points.
-    fn points(self) -> usize {
-        if self.i0 > self.i1 || self.j0 > self.j1 {
-            0
-        } else {
-            ((self.i1 - self.i0 + 1) * (self.j1 - self.j0 + 1)) as usize
-        }
-    }
-
-    /// The rows `(j0, j1)`.
-    fn rows(self) -> (isize, isize) {
-        (self.j0, self.j1)
-    }
-
-    /// No point.
-    const EMPTY: Window = Window {
-        i0: 0,
-        i1: -1,
-        j0: 0,
-        j1: -1,
-    };
-
-    /// The corners `(i, j)` (lower-left of centre `(i, j)`) touching a centre of `self`,
-    /// within `[0, nx] × [0, ny]`.
-    fn corners(self, nx: isize, ny: isize) -> Window {
-        if self.i0 > self.i1 {
-            return Window::EMPTY;
-        }
-        Window::new(
-            self.i0.max(0),
-            (self.i1 + 1).min(nx),
-            self.j0.max(0),
-            (self.j1 + 1).min(ny),
-        )
-    }
 }
 
 impl Kernels {
