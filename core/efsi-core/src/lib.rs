@@ -19,7 +19,7 @@ pub mod schedule;
 pub mod simulation;
 pub mod snapshot;
 pub mod state;
-mod validate;
+pub mod validate;
 
 pub use advance::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
 pub use bc::BoundarySet;

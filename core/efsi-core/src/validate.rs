@@ -1,17 +1,20 @@
 //! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
-//! each failure naming the setting's path and what was expected.
+//! each failure naming the setting's path and what was expected. The helpers are public for
+//! the crates that check sections the core does not own (efsi-run's `output`).
 
 use crate::grid::Geometry;
 use crate::scene::*;
 
 /// A failed check: the setting's path and the message.
-type Checked = Result<(), (String, String)>;
+pub type Checked = Result<(), (String, String)>;
 
-fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+/// The failure of the setting at `field` (its path), saying `msg`.
+pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
     Err((field.to_string(), msg.into()))
 }
 
-fn positive(field: &str, v: f64) -> Checked {
+/// `v`, the setting at `field`, must be a finite number above zero.
+pub fn positive(field: &str, v: f64) -> Checked {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {

@@ -10,6 +10,7 @@
 
 use efsi_core::error::EfsiError;
 use efsi_core::scene::{Scene, Section, Side, num};
+use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -297,24 +298,6 @@ pub fn json(scene: &Scene) -> serde_json::Value {
     match scene.output_spec() {
         Ok(o) => serde_json::to_value(o).unwrap_or_default(),
         Err(_) => serde_json::Value::String(scene.output.text().to_string()),
-    }
-}
-
-/// A failed check: the setting's path and the message.
-type Checked = Result<(), (String, String)>;
-
-fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
-    Err((field.to_string(), msg.into()))
-}
-
-fn positive(field: &str, v: f64) -> Checked {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        err(
-            field,
-            format!("must be a finite number > 0, got {}", num(v)),
-        )
     }
 }
 
