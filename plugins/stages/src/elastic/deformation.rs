@@ -113,8 +113,12 @@ impl DeformationStage {
         let Some(phi) = state.phi.as_ref() else {
             return false;
         };
-        let c = self.k.solid_c;
         let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+        // The solid's cells as of the last update; before the first one, every cell.
+        let c = match self.k.solid_c {
+            c if c.points() > 0 => c,
+            _ => super::Window::new(0, nx - 1, 0, ny - 1),
+        };
         let (i0, i1, j0, j1) = (c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1));
         let [x_min, x_max, y_min, y_max] = self.walls;
         let (u, v) = (&state.u, &state.v);
