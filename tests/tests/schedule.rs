@@ -67,6 +67,8 @@ struct Dummy {
     reads: &'static [FieldId],
     writes: &'static [FieldId],
     after: &'static [&'static str],
+    /// A limit on Δt and its lift ([`LimitStage`]); none: a stage that does nothing.
+    limit: Option<(f64, Option<(f64, f64)>)>,
 }
 struct Noop;
 impl Stage for Noop {
@@ -104,7 +106,10 @@ impl StagePlugin for Dummy {
         _: &BoundarySet,
         _: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        Ok(Box::new(Noop))
+        Ok(match self.limit {
+            Some((dt, lift)) => Box::new(LimitStage(dt, lift)),
+            None => Box::new(Noop),
+        })
     }
 }
 
@@ -115,6 +120,7 @@ fn reading_an_unprovided_field_is_refused_at_build() {
         reads: &[FieldId::SolidFraction],
         writes: &[],
         after: &[],
+        limit: None,
     };
     match sim_with(&cavity(""), &[&reader]) {
         Err(EfsiError::Schedule(ScheduleError::MissingField { stage, field })) => {
@@ -131,12 +137,14 @@ fn unordered_writers_of_one_field_are_ambiguous_and_after_resolves_it() {
         reads: &[],
         writes: &[FieldId::SolidFraction],
         after: &[],
+        limit: None,
     };
     let b = Dummy {
         name: "b",
         reads: &[FieldId::SolidFraction],
         writes: &[],
         after: &[],
+        limit: None,
     };
     let err = sim_with(&cavity(""), &[&a, &b]).err().expect("ambiguous");
     assert!(
@@ -149,6 +157,7 @@ fn unordered_writers_of_one_field_are_ambiguous_and_after_resolves_it() {
         reads: &[FieldId::SolidFraction],
         writes: &[],
         after: &["a"],
+        limit: None,
     };
     let s = sim_with(&cavity(""), &[&b2, &a]).unwrap();
     assert_eq!(
@@ -160,12 +169,7 @@ fn unordered_writers_of_one_field_are_ambiguous_and_after_resolves_it() {
 }
 
 /// A stage with a fixed limit on Δt that it lifts to `lifted` where the others allow at least
-/// `gain` times its own.
-struct Limit {
-    name: &'static str,
-    dt: f64,
-    lift: Option<(f64, f64)>,
-}
+/// `gain` times its own (`(dt, Some((gain, lifted)))`).
 struct LimitStage(f64, Option<(f64, f64)>);
 impl Stage for LimitStage {
     fn run(
@@ -189,33 +193,6 @@ impl Stage for LimitStage {
         others.is_none_or(|o| o >= gain * own).then_some(lifted)
     }
 }
-impl StagePlugin for Limit {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-    fn phase(&self) -> Phase {
-        Phase::Interface
-    }
-    fn reads(&self) -> &'static [FieldId] {
-        &[]
-    }
-    fn writes(&self) -> &'static [FieldId] {
-        &[]
-    }
-    fn needed(&self, _: &Scene) -> bool {
-        true
-    }
-    fn build(
-        &self,
-        _: &Scene,
-        _: &Grid,
-        _: &BoundarySet,
-        _: &mut efsi_core::Resources,
-    ) -> Result<Box<dyn Stage>, String> {
-        Ok(Box::new(LimitStage(self.dt, self.lift)))
-    }
-}
-
 /// The limiting stage may lift its limit (`Stage::lift_dt`, the elastic stage's `Auto`
 /// coupling): only where the next smallest limit leaves room for the gain it asks, and never
 /// above that next limit; a stage that is not the smallest is not asked.
@@ -229,15 +206,19 @@ fn the_limiting_stage_may_lift_its_limit_up_to_the_next_one() {
         (0.1, (1.5, 0.5), 0.05, ("other", 0.05)),
     ];
     for (dt, lift, other, expected) in cases {
-        let a = Limit {
+        let a = Dummy {
             name: "liftable",
-            dt,
-            lift: Some(lift),
+            reads: &[],
+            writes: &[],
+            after: &[],
+            limit: Some((dt, Some(lift))),
         };
-        let b = Limit {
+        let b = Dummy {
             name: "other",
-            dt: other,
-            lift: None,
+            reads: &[],
+            writes: &[],
+            after: &[],
+            limit: Some((other, None)),
         };
         // A fluid at rest: the built-in stages set no limit.
         let s = sim_with(

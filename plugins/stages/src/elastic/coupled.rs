@@ -363,7 +363,7 @@ impl ElasticStage {
         // The preconditioners: the elastic step's (velocity), the projection's Poisson
         // multigrid (pressure).
         self.setup_preconditioner(g, d);
-        if self.preconditioner == ElasticPreconditioner::Jacobi {
+        if self.scheme.preconditioner == ElasticPreconditioner::Jacobi {
             // η for the Schur complement's local term (the multigrid's setup made it).
             self.effective_viscosity(d);
         }
@@ -393,7 +393,7 @@ impl ElasticStage {
         };
         let faces = saddle.a.op.k.faces;
         let mut pre = BlockTriangular {
-            a: match self.preconditioner {
+            a: match self.scheme.preconditioner {
                 ElasticPreconditioner::Jacobi => VelocityBlock::Jacobi(&self.diag),
                 _ => VelocityBlock::Multigrid(&self.blocks),
             },

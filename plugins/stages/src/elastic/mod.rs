@@ -383,7 +383,7 @@ impl StagePlugin for Elastic {
                 viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
                 dm: vec![0.0; n],
             },
-            stretch_theta: schemes[0].theta,
+            scheme: schemes[0],
             theta: if crate::viscous::Viscous.needed(scene) {
                 crate::options::<crate::viscous::ViscousOptions>(scene)?.theta
             } else {
@@ -396,7 +396,6 @@ impl StagePlugin for Elastic {
             tol: o.tolerance,
             max_iter: o.max_iterations,
             implicit: o.implicit,
-            preconditioner: schemes[0].preconditioner,
             schemes,
             blocks: ViscousBlocks::new(grid, bc),
             eta: Field::zeros(grid),

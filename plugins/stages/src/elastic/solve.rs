@@ -14,9 +14,10 @@ pub(super) struct ElasticStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     pub(super) theta: f64,
-    /// θ of B's stretching in this step (`numerics.elastic.theta`; 0.5: Crank–Nicolson in a
-    /// split step, 0.75 in a coupled one): the step's scheme's.
-    pub(super) stretch_theta: f64,
+    /// This step's scheme: θ of B's stretching (`numerics.elastic.theta`; 0.5: Crank–Nicolson
+    /// in a split step, 0.75 in a coupled one) and the preconditioner (from scene
+    /// `numerics.elastic.preconditioner`), one of `schemes`.
+    pub(super) scheme: super::StepScheme,
     /// The split step's scheme and the coupled step's.
     pub(super) schemes: [super::StepScheme; 2],
     /// `numerics.elastic.coupling` (`Split` where the scene cannot couple), the split step's
@@ -35,9 +36,8 @@ pub(super) struct ElasticStage {
     pub(super) max_iter: usize,
     /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
     pub(super) implicit: bool,
-    /// The step's preconditioner (from scene `numerics.elastic.preconditioner`), and the block multigrid's effective
-    /// viscosities × Δt at centres and corners (see [`Kernels::stiffness`]).
-    pub(super) preconditioner: ElasticPreconditioner,
+    /// The block multigrid's effective viscosities × Δt at centres and corners (see
+    /// [`Kernels::stiffness`]).
     pub(super) blocks: ViscousBlocks,
     pub(super) eta: Field,
     pub(super) eta_k: Field,
@@ -214,9 +214,7 @@ impl ElasticStage {
     /// θ and the preconditioner of a coupled or a split step, and the flag telling the later
     /// stages which it is.
     fn set_scheme(&mut self, coupled: bool) {
-        let scheme = self.schemes[usize::from(coupled)];
-        self.stretch_theta = scheme.theta;
-        self.preconditioner = scheme.preconditioner;
+        self.scheme = self.schemes[usize::from(coupled)];
         self.step_flag.set(coupled);
     }
 
@@ -240,7 +238,7 @@ impl ElasticStage {
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         self.op.k.set_weights(phi);
         self.op.k.reset_fluid(d);
-        let th = self.stretch_theta;
+        let th = self.scheme.theta;
         for c in 0..4 {
             d.start[c].copy_from(&d.b[c]);
             let (e, a, ap, h) = (
@@ -271,7 +269,7 @@ impl ElasticStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
-            self.stretch_theta * dt,
+            self.scheme.theta * dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
             &mut d.b,
@@ -295,7 +293,7 @@ impl ElasticStage {
         let rho = &state.rho;
         let s = rho.stride();
         let c2 = if self.implicit {
-            self.stretch_theta * dt * dt
+            self.scheme.theta * dt * dt
         } else {
             0.0
         };
@@ -439,7 +437,7 @@ impl ElasticStage {
         for f in &mut self.scratch.dtau {
             f.fill(0.0);
         }
-        if self.preconditioner != ElasticPreconditioner::Jacobi {
+        if self.scheme.preconditioner != ElasticPreconditioner::Jacobi {
             self.effective_viscosity(d);
             let op = &self.op;
             let pre = &mut self.eta_coefficients;
@@ -482,7 +480,7 @@ impl ElasticStage {
         tol: f64,
     ) -> SolveStats {
         let mut ctxop = OperatorCtx::new(&mut self.op, &mut self.scratch, d);
-        match self.preconditioner {
+        match self.scheme.preconditioner {
             ElasticPreconditioner::Jacobi => {
                 self.solver
                     .solve(&mut ctxop, self.diag.as_slice(), rhs, x, tol, self.max_iter)
@@ -504,7 +502,7 @@ impl ElasticStage {
         k.gradient(&state.u, &state.v);
         k.stretch(
             &d.start,
-            self.stretch_theta * dt,
+            self.scheme.theta * dt,
             Some((&d.start, &d.explicit)),
             Some(&d.relax),
             &mut d.b,
