@@ -587,3 +587,74 @@ impl Stage for ViscousStage {
         Ok(StageStats { solve: Some(stats) })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::grid::Geometry;
+    use efsi_core::scene::{Boundaries, Boundary};
+
+    /// The stage's own Jacobi CG (search direction in the fields, `z = r·(1/d)`) gives the
+    /// iterates of the generic Jacobi-PCG to rounding, in the same number of iterations.
+    #[test]
+    fn the_field_jacobi_cg_matches_the_generic_one() {
+        let grid = Grid::new(Geometry::Axisymmetric, 24, 20, (0.0, 1.0), (0.0, 0.8));
+        let b = Boundaries {
+            x_min: Boundary::Axis,
+            x_max: Boundary::NoSlip,
+            y_min: Boundary::NoSlip,
+            y_max: Boundary::FreeSlip,
+        };
+        let bc = BoundarySet::new(&b, &grid);
+        let faces = UnknownFaces::new(&grid, &bc);
+        let n = faces.len();
+        let (mut mu, mut rho) = (Field::zeros(&grid), Field::zeros(&grid));
+        let m = mu.data().len();
+        for (k, (mu, rho)) in mu.data_mut().iter_mut().zip(rho.data_mut()).enumerate() {
+            let inside = (k * 7919) % m < m / 3;
+            *mu = if inside { 1e-2 } else { 2e-4 };
+            *rho = if inside { 1.0 } else { 1e-3 };
+        }
+        bc.fill_scalar(&grid, &mut mu, false);
+        bc.fill_scalar(&grid, &mut rho, false);
+        let mut sys = ViscousSystem {
+            grid: grid.clone(),
+            bc: bc.clone(),
+            k: Coefficients::new(&grid, faces),
+            faces,
+            dm: vec![0.0; n],
+            theta_dt: 0.01,
+            xu: Field::zeros(&grid),
+            xv: Field::zeros(&grid),
+        };
+        let mut diag = vec![0.0; n];
+        sys.assemble(&mu, &rho, &mut diag);
+        let rhs: Vec<f64> = (0..n)
+            .map(|k| ((k * 2654435761) % 1000) as f64 / 500.0 - 1.0)
+            .collect();
+        let tol = 1e-10 * dot(&rhs, &rhs).sqrt();
+        let (mut r, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut x1 = vec![0.0; n];
+        let work = [&mut r[..], &mut p[..], &mut q[..]];
+        let s1 = solve_norm_in(
+            work,
+            &mut sys,
+            diag.as_slice(),
+            &rhs,
+            &mut x1,
+            tol,
+            500,
+            Norm::L2,
+        );
+        let dinv: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
+        let mut x2 = vec![0.0; n];
+        let work = [&mut r[..], &mut q[..], &mut p[..]];
+        let s2 = sys.solve_jacobi(work, &dinv, &rhs, &mut x2, tol, 500);
+        assert!(s1.converged && s2.converged, "{s1:?} {s2:?}");
+        assert!(s1.iterations.abs_diff(s2.iterations) <= 1, "{s1:?} {s2:?}");
+        let scale = x1.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        for (a, b) in x1.iter().zip(&x2) {
+            assert!((a - b).abs() <= 1e-8 * scale, "{a} vs {b}");
+        }
+    }
+}
