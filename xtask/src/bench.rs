@@ -129,11 +129,11 @@ struct Figures {
     wall: f64,
 }
 
-fn run_case(c: &Case, threads: usize, out: &Path) -> Result<Figures, String> {
+fn run_case(c: &Case, threads: usize, out: &Path, binary: &Path) -> Result<Figures, String> {
     let dir = out.join(format!("{}_t{threads}", c.name));
     let scene = out.join(format!("{}.ron", c.name));
     std::fs::write(&scene, &c.scene).map_err(|e| e.to_string())?;
-    let mut cmd = Command::new(root().join("target/release/efsi"));
+    let mut cmd = Command::new(binary);
     cmd.arg("run")
         .arg(&scene)
         .arg("--out")
@@ -240,9 +240,16 @@ pub(crate) fn bench(args: &[String]) -> Result<(), String> {
         .split(',')
         .map(|n| case(n.trim(), quick))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut c = cargo();
-    c.args(["build", "--quiet", "--release", "-p", "efsi"]);
-    run(c, "build efsi (release)")?;
+    // `--binary PATH`: time another build of efsi (a baseline), else build and time this one.
+    let binary = match value("--binary") {
+        Some(b) => PathBuf::from(b),
+        None => {
+            let mut c = cargo();
+            c.args(["build", "--quiet", "--release", "-p", "efsi"]);
+            run(c, "build efsi (release)")?;
+            root().join("target/release/efsi")
+        }
+    };
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let mut pools = vec![1];
     if threads != 1 {
@@ -273,7 +280,7 @@ pub(crate) fn bench(args: &[String]) -> Result<(), String> {
         let mut runs: Vec<Vec<Figures>> = vec![Vec::new(); pools.len()];
         for _ in 0..repeat.max(1) {
             for (k, &t) in pools.iter().enumerate() {
-                runs[k].push(run_case(c, t, &out)?);
+                runs[k].push(run_case(c, t, &out, &binary)?);
             }
         }
         let base = median_figures(&runs[0]).total;

@@ -10,7 +10,8 @@
 //!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982); refuses a
 //!   run whose Reynolds number (`ρ U L / μ` of the scene in `DIR/run.json`) is not `RE`, and names
 //!   the Reynolds numbers the reference has when it has no column for `RE`.
-//! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]`: the
+//! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]
+//!   [--binary PATH]`: the
 //!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
 //!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
 //!   multigrid viscous one) and the sphere impact at 35 cells per radius (case `sphere`, the
@@ -23,7 +24,8 @@
 //!   `target/bench`). A benchmark, not a test: timings are never asserted. With `--roofline`
 //!   it also measures the machine's triad bandwidth and prints, per case and stage, the bytes
 //!   per cell-step of a compulsory-traffic model, the achieved bandwidth and its fraction of the
-//!   limit ([`roofline`]).
+//!   limit ([`roofline`]). `--binary PATH` times that build of `efsi` instead of building this
+//!   one (a baseline for before/after figures).
 //! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
 //!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
 //!   laws (profile `fmu-release`: release code, stripped) and package the scene as
@@ -97,7 +99,7 @@ fn main() -> ExitCode {
         Some("fmu") => fmu::fmu(&args[1..]).map(|_| ()),
         _ => Err(
             "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--roofline] [--cases LIST] \
-             [--threads N] [--repeat R] [--out DIR] | bench-paper [--quick] [--case NAME]… \
+             [--threads N] [--repeat R] [--out DIR] [--binary PATH] | bench-paper [--quick] [--case NAME]… \
              [--out DIR] | ghia DIR RE>"
                 .into(),
         ),

@@ -292,6 +292,61 @@ pub fn for_each_row_sum(
     acc
 }
 
+/// Run `f(j, a_row, b_row, c_row) -> (p, q)` over the rows (`row_len` long) of three
+/// equal-length slices, in parallel when they are long, and return the partials summed
+/// component-wise in row order (the same bits on any number of threads): an element-wise
+/// update of three vectors fused with two reductions over what it writes, in one pass.
+pub fn for_each_row3_sum2(
+    a: &mut [f64],
+    b: &mut [f64],
+    c: &mut [f64],
+    row_len: usize,
+    f: impl Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> (f64, f64) + Sync + Send,
+) -> (f64, f64) {
+    assert!(a.len() == b.len() && a.len() == c.len());
+    let mut acc = (0.0, 0.0);
+    if row_len == 0 {
+        return acc;
+    }
+    if a.len() < PAR_MIN {
+        for (j, ((x, y), z)) in a
+            .chunks_mut(row_len)
+            .zip(b.chunks_mut(row_len))
+            .zip(c.chunks_mut(row_len))
+            .enumerate()
+        {
+            let p = f(j, x, y, z);
+            acc = (acc.0 + p.0, acc.1 + p.1);
+        }
+        return acc;
+    }
+    let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
+    let block = row_len * MAX_PARTS;
+    for (k, ((a, b), c)) in a
+        .chunks_mut(block)
+        .zip(b.chunks_mut(block))
+        .zip(c.chunks_mut(block))
+        .enumerate()
+    {
+        let n = a.len().div_ceil(row_len);
+        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(
+                a.par_chunks_mut(row_len)
+                    .zip(b.par_chunks_mut(row_len))
+                    .zip(c.par_chunks_mut(row_len)),
+            )
+            .enumerate()
+            .with_min_len(min_rows)
+            .for_each(|(j, (p, ((x, y), z)))| *p = f(k * MAX_PARTS + j, x, y, z));
+        for p in &parts[..n] {
+            acc = (acc.0 + p.0, acc.1 + p.1);
+        }
+    }
+    acc
+}
+
 /// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
 /// parallel when they are long.
 pub fn for_each_row2(

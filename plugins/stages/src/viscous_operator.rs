@@ -364,6 +364,10 @@ pub(crate) trait CompactFaces {
     fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field);
     /// `u, v += x` on the unknown faces.
     fn add(&self, x: &[f64], u: &mut Field, v: &mut Field);
+    /// `u, v ← x + β (u, v)` on the unknown faces.
+    fn xpby(&self, x: &[f64], beta: f64, u: &mut Field, v: &mut Field);
+    /// Write the unknown faces of `u`, `v` into the compact vector `x`.
+    fn gather(&self, u: &Field, v: &Field, x: &mut [f64]);
 }
 
 impl CompactFaces for UnknownFaces {
@@ -377,6 +381,34 @@ impl CompactFaces for UnknownFaces {
                 *a += b;
             }
         });
+    }
+
+    fn xpby(&self, x: &[f64], beta: f64, u: &mut Field, v: &mut Field) {
+        each_face_row(self, x, u, v, |a, b| {
+            for (a, b) in a.iter_mut().zip(b) {
+                *a = b + beta * *a;
+            }
+        });
+    }
+
+    fn gather(&self, u: &Field, v: &Field, x: &mut [f64]) {
+        let (ux, vy) = (self.ux, self.vy);
+        let nur = (ux.hi - ux.lo).max(0) as usize;
+        let nu = self.nu();
+        let (xu, xv) = x.split_at_mut(nu);
+        if nur > 0 {
+            for_each_row(xu, nur, |j, row| {
+                let k0 = u.idx(ux.lo, j as isize);
+                row.copy_from_slice(&u.data()[k0..k0 + nur]);
+            });
+        }
+        let nx = u.stride() - 1 - 2 * efsi_core::GHOST;
+        if nx > 0 {
+            for_each_row(xv, nx, |jr, row| {
+                let k0 = v.idx(0, vy.lo + jr as isize);
+                row.copy_from_slice(&v.data()[k0..k0 + nx]);
+            });
+        }
     }
 }
 
