@@ -33,7 +33,10 @@
 //! increment), preconditioned by
 //! the geometric multigrid W-cycle of [`efsi_linalg::Multigrid`] (default: iterations
 //! independent of the grid and of density ratios up to 1e4) or, as the seed, by incomplete
-//! Cholesky IC(0) (scene `numerics.projection.solver: Multigrid | IncompleteCholesky`). It
+//! Cholesky IC(0) (scene `numerics.projection.solver: Multigrid | IncompleteCholesky`). The
+//! matrix and its preconditioner depend only on the density (the grid and the boundaries are
+//! fixed for a run): they are set up again only in a step whose density differs, bit for bit,
+//! from the one they were set up for, so a one-fluid scene assembles them once. It
 //! stops when the divergence the correction would leave satisfies `max_cells |∇·V^{n+1}|·Δt ≤
 //! tol` (dimensionless: the relative volume change of a cell per step; scene
 //! `numerics.projection.tolerance`, default 1e-6), after at least one iteration: the warm start
