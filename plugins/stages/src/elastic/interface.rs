@@ -19,20 +19,43 @@ impl Kernels {
             }
         });
         let mut c = Window::new(nx, -1, ny, -1);
+        let wd = self.w.data();
         for j in -1..=ny {
-            for i in -1..=nx {
-                if self.w[(i, j)] > 0.0 {
-                    c = Window::new(c.i0.min(i), c.i1.max(i), c.j0.min(j), c.j1.max(j));
-                }
+            let row = &wd[self.w.idx(-1, j)..self.w.idx(-1, j) + (nx + 2) as usize];
+            if let Some(first) = row.iter().position(|&w| w > 0.0) {
+                let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
+                c = Window::new(
+                    c.i0.min(first as isize - 1),
+                    c.i1.max(last as isize - 1),
+                    c.j0.min(j),
+                    c.j1.max(j),
+                );
             }
         }
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
         self.solid_k = self.solid_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
         let g = efsi_core::G;
+        // Corners none of whose cells holds solid: no weight, no series factors, the plain
+        // average, and a normal of no consequence (it multiplies a zero extra shear rate).
+        for f in [&mut self.wc, &mut self.wk, &mut self.ks, &mut self.rc] {
+            f.fill(0.0);
+        }
+        self.sf.fill(1.0);
+        self.ny2.fill(0.5);
+        for f in &mut self.kwt {
+            f.fill(0.25);
+        }
+        let c = self.solid_c;
+        if c.i0 > c.i1 {
+            return;
+        }
         self.set_quarters(phi);
-        for j in 1 - g..=ny + g {
-            for i in 1 - g..=nx + g {
+        // The corners of the solid's centres, ghost corners included.
+        let (i0, i1) = (c.i0.max(1 - g), (c.i1 + 1).min(nx + g));
+        let (j0, j1) = (c.j0.max(1 - g), (c.j1 + 1).min(ny + g));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
                 self.wc[(i, j)] = 0.25
                     * (self.w[(i - 1, j - 1)]
                         + self.w[(i, j - 1)]
@@ -99,12 +122,17 @@ impl Kernels {
         let (nx, ny) = self.nxy();
         let (dx, dy) = (self.grid.dx, self.grid.dy);
         let pd = phi.data();
+        // The cells around the solid's corners: its window and one more all round.
+        let c = self.solid_c;
+        let g = efsi_core::G;
+        let (lo, hi) = (
+            phi.idx(-g, (c.j0 - 1).max(-g)),
+            phi.idx(-g, (c.j1 + 1).min(ny + g - 1)) + phi.stride(),
+        );
         for q in &mut self.quarter {
-            par::for_each_chunk(q.data_mut(), |o, w| {
-                for (w, f) in w.iter_mut().zip(&pd[o..]) {
-                    *w = f.clamp(0.0, 1.0);
-                }
-            });
+            for (w, f) in q.data_mut()[lo..hi].iter_mut().zip(&pd[lo..hi]) {
+                *w = f.clamp(0.0, 1.0);
+            }
         }
         let c = self.solid_c;
         let s = phi.stride();

@@ -521,13 +521,11 @@ struct Kernels {
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
     /// axes (cos, sin), the logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
-    /// Law batches: centres `i ∈ [−1, nx]`, `j ∈ [−1, ny]`; corners `i ∈ [0, nx]`, `j ∈ [0, ny]`.
+    /// Law batches, sized for every centre `[−1, nx] × [−1, ny]` and corner `[0, nx] × [0, ny]`:
+    /// the centres of `solid_c` and the corners of `solid_k` ([`Kernels::ci`], `ki`).
     cb: Vec<Sym>,
     ct: Vec<Sym>,
     cj: Vec<Tangent>,
-    /// The stress-free reference `w I` at the centres, and its stress.
-    rb: Vec<Sym>,
-    rt: Vec<Sym>,
     kb: Vec<Sym>,
     kt: Vec<Sym>,
     kj: Vec<Tangent>,
@@ -572,8 +570,6 @@ impl Kernels {
             solid_k: Window::EMPTY,
             energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
-            rb: vec![[0.0; 4]; nc],
-            rt: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
             cj: vec![[0.0; 16]; nc],
             kb: vec![[0.0; 4]; nk],
@@ -618,16 +614,21 @@ impl Kernels {
         Window::new(0, nx, 0, ny)
     }
 
-    /// Batch index of centre `(i, j)`, `i, j ≥ −1`.
+    /// Batch index of centre `(i, j)` of the solid's window [`Kernels::solid_c`] (the law
+    /// batches hold the window's points, row by row).
     #[inline(always)]
     fn ci(&self, i: isize, j: isize) -> usize {
-        ((j + 1) * (self.grid.nx as isize + 2) + i + 1) as usize
+        let c = self.solid_c;
+        debug_assert!(c.contains(i, j), "centre ({i}, {j}) outside {c:?}");
+        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
     }
 
-    /// Batch index of corner `(i, j)`, `i, j ≥ 0`.
+    /// Batch index of corner `(i, j)` of the solid's corners [`Kernels::solid_k`].
     #[inline(always)]
     fn ki(&self, i: isize, j: isize) -> usize {
-        (j * (self.grid.nx as isize + 1) + i) as usize
+        let c = self.solid_k;
+        debug_assert!(c.contains(i, j), "corner ({i}, {j}) outside {c:?}");
+        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
     }
 
     /// The solid-weighted average at corner `k` (linear index) of a centre field `f`: the
@@ -651,17 +652,16 @@ impl Kernels {
         };
         let g = &self.grid;
         let text = efsi_laws_host::LawError { cell: None, ..e }.to_string();
+        let c = if corner { self.solid_k } else { self.solid_c };
+        let w = (c.i1 - c.i0 + 1).max(1) as usize;
+        let (i, j) = (c.i0 + (q % w) as isize, c.j0 + (q / w) as isize);
         if corner {
-            let w = g.nx + 1;
-            let (i, j) = ((q % w) as isize, (q / w) as isize);
             format!(
                 "{text} at corner (i, j) = ({i}, {j}), (x, y) = ({:.6e}, {:.6e})",
                 g.xf(i),
                 g.yf(j)
             )
         } else {
-            let w = g.nx + 2;
-            let (i, j) = ((q % w) as isize - 1, (q / w) as isize - 1);
             format!(
                 "{text} in cell (i, j) = ({i}, {j}), centre (x, y) = ({:.6e}, {:.6e})",
                 g.xc(i),

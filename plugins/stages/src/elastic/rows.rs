@@ -86,6 +86,12 @@ impl Window {
         Window { i0, i1, j0, j1 }
     }
 
+    /// Whether `(i, j)` is a point of the window.
+    #[inline(always)]
+    pub(super) fn contains(self, i: isize, j: isize) -> bool {
+        (self.i0..=self.i1).contains(&i) && (self.j0..=self.j1).contains(&j)
+    }
+
     /// Number of points.
     pub(super) fn points(self) -> usize {
         if self.i0 > self.i1 || self.j0 > self.j1 {

@@ -309,7 +309,11 @@ impl ElasticStage {
         let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
         let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
         let cj = &k.cj;
+        // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
         let stiff = |i: isize, j: isize| {
+            if !k.solid_c.contains(i, j) {
+                return 0.0;
+            }
             let jm = &cj[k.ci(i, j)];
             let b = &k.cb[k.ci(i, j)];
             k.w[(i, j)]

@@ -205,7 +205,8 @@ impl Kernels {
         relax: &mut Field,
     ) -> Result<(), String> {
         relax.fill(1.0);
-        let (nx, ny) = self.nxy();
+        // Only the solid's corners relax (`r > 0` needs a solid cell beside the corner).
+        let kw = self.solid_k;
         let s = start[0].stride();
         let [b11, b22, b33, b12] = [
             start[0].data(),
@@ -214,8 +215,8 @@ impl Kernels {
             start[3].data(),
         ];
         let mut any = false;
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = start[0].idx(i, j);
                 let q = self.ki(i, j);
                 let w = self.wk.data()[k];
@@ -231,10 +232,11 @@ impl Kernels {
         if !any {
             return Ok(());
         }
-        law.evaluate(&self.kb, &mut self.kt, Some(&mut self.kj[..]))
+        let nk = kw.points();
+        law.evaluate(&self.kb[..nk], &mut self.kt[..nk], Some(&mut self.kj[..nk]))
             .map_err(|e| self.locate(e, true))?;
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = start[0].idx(i, j);
                 let rc = self.rc.data()[k];
                 if rc == 0.0 {
