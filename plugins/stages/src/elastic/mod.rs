@@ -268,7 +268,7 @@ pub use options::{
     MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
-use rows::{PAR_POINTS, Window, at, rows1, rows3};
+use rows::{PAR_POINTS, Window, at, rows1, rows2, rows3};
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
@@ -485,7 +485,8 @@ struct Kernels {
     faces: UnknownFaces,
     /// L₁₁, L₂₂, L₃₃ at centres.
     lc: [Field; 3],
-    /// L₁₂, L₂₁ at corners.
+    /// The solid's L₁₂, L₂₁ at corners (the shear rate's interface share included: see
+    /// [`Kernels::gradient_in`]).
     lk: [Field; 2],
     /// `φ^{1/2}` at centres and its four-cell average at corners (zero exactly where the
     /// corner has no solid).
