@@ -2,7 +2,7 @@
 //! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
 //! cells.
 
-use super::{Kernels, PHI_MIN, Window};
+use super::{Kernels, NEAR, PHI_MIN, Window};
 use efsi_core::Field;
 use efsi_linalg::par;
 
@@ -18,22 +18,38 @@ impl Kernels {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         });
-        let mut c = Window::new(nx, -1, ny, -1);
+        // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`).
+        let (mut c, mut m) = (Window::new(nx, -1, ny, -1), Window::new(nx, -1, ny, -1));
         let wd = self.w.data();
         for j in -1..=ny {
-            let row = &wd[self.w.idx(-1, j)..self.w.idx(-1, j) + (nx + 2) as usize];
-            if let Some(first) = row.iter().position(|&w| w > 0.0) {
-                let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
-                c = Window::new(
-                    c.i0.min(first as isize - 1),
-                    c.i1.max(last as isize - 1),
-                    c.j0.min(j),
-                    c.j1.max(j),
-                );
+            let o = self.w.idx(-1, j);
+            for (f, d, b) in [(wd, 0.0, &mut c), (pd, 0.0, &mut m)] {
+                let row = &f[o..o + (nx + 2) as usize];
+                if let Some(first) = row.iter().position(|&w| w > d) {
+                    let last = row.iter().rposition(|&w| w > d).unwrap_or(first);
+                    *b = Window::new(
+                        b.i0.min(first as isize - 1),
+                        b.i1.max(last as isize - 1),
+                        b.j0.min(j),
+                        b.j1.max(j),
+                    );
+                }
             }
         }
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
         self.solid_k = self.solid_c.corners(nx, ny);
+        // Where B can matter: the material grown by `NEAR` cells (see `Kernels::near_c`).
+        self.near_c = if m.i0 > m.i1 {
+            Window::EMPTY
+        } else {
+            Window::new(
+                (m.i0 - NEAR).max(-1),
+                (m.i1 + NEAR).min(nx),
+                (m.j0 - NEAR).max(-1),
+                (m.j1 + NEAR).min(ny),
+            )
+        };
+        self.near_k = self.near_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
         let g = efsi_core::G;
         // Corners none of whose cells holds solid: no weight, no series factors, the plain

@@ -519,6 +519,15 @@ struct Kernels {
     /// elastic operator skips them.
     solid_c: Window,
     solid_k: Window,
+    /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included) and
+    /// their corners, set by [`Kernels::set_weights`]: the deformation is transported there
+    /// only. Elsewhere B stays the identity and its rates zero ([`Kernels::reset_fluid`]):
+    /// a cell becomes solid only from a neighbour's material (the VOF step moves less than a
+    /// cell per step), and its B and rates read B at most three cells beyond it (the
+    /// advection's van Leer stencil), so the solid's deformation is the same as if B were
+    /// transported everywhere.
+    near_c: Window,
+    near_k: Window,
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
     /// axes (cos, sin), the logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
@@ -537,6 +546,10 @@ struct Kernels {
 /// weighted by `φ^{1/2}`, would act on a face whose mass is the fluid's (`φρ_s ≪ ρ_f` at a
 /// density ratio of 1000), which flung air at tens of m/s as a sphere left the substrate.
 const PHI_MIN: f64 = 1e-3;
+
+/// How many cells beyond any material the deformation is transported ([`Kernels::near_c`]):
+/// one cell the material may reach in a step, three more its B and rates read.
+const NEAR: isize = 4;
 
 /// See [`Kernels::strain_energy`].
 type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
@@ -569,6 +582,8 @@ impl Kernels {
             mu_s,
             solid_c: Window::EMPTY,
             solid_k: Window::EMPTY,
+            near_c: Window::EMPTY,
+            near_k: Window::EMPTY,
             energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
@@ -583,12 +598,11 @@ impl Kernels {
         (self.grid.nx as isize, self.grid.ny as isize)
     }
 
-    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the solid's
-    /// centres and corners: one centre more all round (within the batch), and the corners of
-    /// every solid centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
-    fn gradient_windows(&self) -> (Window, Window) {
+    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the centres
+    /// `c` and their corners: one centre more all round (within the batch), and the corners of
+    /// every centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
+    fn gradient_windows(&self, c: Window) -> (Window, Window) {
         let (nx, ny) = self.nxy();
-        let c = self.solid_c;
         if c.i0 > c.i1 {
             return (Window::EMPTY, Window::EMPTY);
         }
@@ -601,18 +615,6 @@ impl Kernels {
             ),
             Window::new(c.i0, c.i1 + 1, c.j0, c.j1 + 1),
         )
-    }
-
-    /// Every centre of the law batch, `[−1, nx] × [−1, ny]`.
-    fn all_centres(&self) -> Window {
-        let (nx, ny) = self.nxy();
-        Window::new(-1, nx, -1, ny)
-    }
-
-    /// Every corner of the law batch, `[0, nx] × [0, ny]`.
-    fn all_corners(&self) -> Window {
-        let (nx, ny) = self.nxy();
-        Window::new(0, nx, 0, ny)
     }
 
     /// Batch index of centre `(i, j)` of the solid's window [`Kernels::solid_c`] (the law

@@ -113,7 +113,7 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
         let (cw, kw) = (op.k.solid_c, op.k.solid_k);
-        let (gc, gk) = op.k.gradient_windows();
+        let (gc, gk) = op.k.gradient_windows(cw);
         op.k.gradient_in(xu, xv, gc, gk);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);

@@ -9,10 +9,10 @@ use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::par;
 
 impl Kernels {
-    /// Velocity gradients of `(u, v)` (ghosts filled), everywhere the law batches need them.
+    /// Velocity gradients of `(u, v)` (ghosts filled), wherever [`Kernels::stretch`] reads
+    /// them (near the material, [`Kernels::near_c`]).
     pub(super) fn gradient(&mut self, u: &Field, v: &Field) {
-        let (nx, ny) = self.nxy();
-        let (c, k) = (self.all_centres(), Window::new(-1, nx + 1, -1, ny + 1));
+        let (c, k) = self.gradient_windows(self.near_c);
         self.gradient_in(u, v, c, k);
     }
 
@@ -43,27 +43,23 @@ impl Kernels {
         let (sf, ny2) = (self.sf.data(), self.ny2.data());
         let par = kw.points() >= PAR_POINTS;
         let [g12, g21] = &mut self.lk;
-        rows2(
-            [g12, g21],
-            kw.rows(),
-            par,
-            |j, [r12, r21]| {
-                for i in kw.i0..=kw.i1 {
-                    let k = u.idx(i, j);
-                    let l12 = (ud[k] - ud[k - s]) / g.dy;
-                    let l21 = (vd[k] - vd[k - 1]) / g.dx;
-                    let e = (sf[k] - 1.0) * (l12 + l21);
-                    r12[at(i)] = l12 + ny2[k] * e;
-                    r21[at(i)] = l21 + (1.0 - ny2[k]) * e;
-                }
-            },
-        );
+        rows2([g12, g21], kw.rows(), par, |j, [r12, r21]| {
+            for i in kw.i0..=kw.i1 {
+                let k = u.idx(i, j);
+                let l12 = (ud[k] - ud[k - s]) / g.dy;
+                let l21 = (vd[k] - vd[k - 1]) / g.dx;
+                let e = (sf[k] - 1.0) * (l12 + l21);
+                r12[at(i)] = l12 + ny2[k] * e;
+                r21[at(i)] = l21 + (1.0 - ny2[k]) * e;
+            }
+        });
     }
 
     /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
-    /// (`base` may be `None` for zero); centres over `[−1, nx] × [−1, ny]`, corners over
-    /// `[0, nx] × [0, ny]`. At interface corners the shear rate is the solid's share
-    /// (factor `s`), and with `relax` the corner result is divided by this step's relaxation.
+    /// (`base` may be `None` for zero), near the material ([`Kernels::near_c`], `near_k`;
+    /// `out` is left untouched elsewhere). At interface corners the shear rate is the solid's
+    /// share (factor `s`), and with `relax` the corner result is divided by this step's
+    /// relaxation.
     pub(super) fn stretch(
         &self,
         b: &[Field; 4],
@@ -72,7 +68,7 @@ impl Kernels {
         relax: Option<&Field>,
         out: &mut [Field; 4],
     ) {
-        let (cw, kw) = (self.all_centres(), self.all_corners());
+        let (cw, kw) = (self.near_c, self.near_k);
         self.stretch_in(b, a, base, relax, out, cw, kw);
     }
 
@@ -140,9 +136,10 @@ impl Kernels {
         });
     }
 
-    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior;
-    /// rows in parallel (each writes only its own entries: the same bits on any number of
-    /// threads).
+    /// `out = ∇·(V b)` (conservative, van Leer face values), at the interior centres and
+    /// corners near the material ([`Kernels::near_c`], `near_k`; `out` is left untouched
+    /// elsewhere); rows in parallel (each writes only its own entries: the same bits on any
+    /// number of threads).
     pub(super) fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
         let g = &self.grid;
         let m = &g.metric;
@@ -155,14 +152,16 @@ impl Kernels {
             a * face_value(a, p, q, r, t)
         };
         let gu = efsi_core::G as usize;
+        let (cw, kw) = (self.near_c, self.near_k);
+        let (ci0, ci1) = (cw.i0.max(0), cw.i1.min(nx - 1));
         for c in 0..3 {
             let bd = b[c].data();
             par::for_each_row(out[c].data_mut(), s, |jp, row| {
                 let j = jp as isize - efsi_core::G;
-                if j < 0 || j >= ny {
+                if j < 0 || j >= ny || j < cw.j0 || j > cw.j1 {
                     return;
                 }
-                for i in 0..nx {
+                for i in ci0..=ci1 {
                     let k = jp * s + gu + i as usize;
                     // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
                     let fw = fx(ud[k], bd, k, 1);
@@ -177,10 +176,10 @@ impl Kernels {
         let bd = b[3].data();
         par::for_each_row(out[3].data_mut(), s, |jp, row| {
             let j = jp as isize - efsi_core::G;
-            if j < 0 || j > ny {
+            if j < 0 || j > ny || j < kw.j0 || j > kw.j1 {
                 return;
             }
-            for i in 0..=nx {
+            for i in kw.i0..=kw.i1 {
                 let (k, o) = (jp * s + gu + i as usize, gu + i as usize);
                 let r = m.rx(i);
                 if r == 0.0 {
