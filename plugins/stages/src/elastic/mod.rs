@@ -216,7 +216,9 @@
 //! The increment's stress `J : (w ΔB)` vanishes outside the solid, so the operator computes
 //! gradients, stretching and tangent only over the solid's bounding box (plus the ring the
 //! stencils read) and adds its force only to the faces next to it: the cost of the elastic part
-//! follows the solid's size, not the grid's. The viscous part `θΔt K_v` is applied over the
+//! follows the solid's size, not the grid's. The law's batches hold the same window's centres
+//! and corners, and B is transported only within a few cells of any material, where it can
+//! reach the solid within a step (`Kernels::near_c`); beyond, it stays the identity. The viscous part `θΔt K_v` is applied over the
 //! whole grid by the one viscous operator (`viscous_operator`, coefficients set once per step),
 //! the block multigrid preconditioner takes its blocks from the same operator with the
 //! effective viscosities `η`. Loops over rows
