@@ -60,6 +60,43 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
+/// `(Σ a_k b_k, Σ a_k c_k)` in one pass, each summed as [`dot`] sums it (the same bits as
+/// two calls, on any number of threads).
+pub fn dot2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
+    assert!(a.len() == b.len() && a.len() == c.len());
+    let add = |s: (f64, f64), v: (f64, f64)| (s.0 + v.0, s.1 + v.1);
+    let part = |o: usize, a: &[f64]| {
+        let n = a.len();
+        (dot_serial(a, &b[o..o + n]), dot_serial(a, &c[o..o + n]))
+    };
+    if a.len() < PAR_MIN {
+        return a
+            .chunks(REDUCE_CHUNK)
+            .enumerate()
+            .map(|(k, a)| part(k * REDUCE_CHUNK, a))
+            .fold((0.0, 0.0), add);
+    }
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    if a.len() <= big {
+        let n = a.len().div_ceil(REDUCE_CHUNK);
+        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
+        parts[..n]
+            .par_iter_mut()
+            .zip(a.par_chunks(REDUCE_CHUNK))
+            .enumerate()
+            .for_each(|(k, (p, a))| *p = part(k * REDUCE_CHUNK, a));
+        parts[..n].iter().fold((0.0, 0.0), |s, v| add(s, *v))
+    } else {
+        // As `dot` does: each block of chunks folded, then the blocks.
+        (0..a.len().div_ceil(big))
+            .map(|m| {
+                let r = m * big..((m + 1) * big).min(a.len());
+                dot2(&a[r.clone()], &b[r.clone()], &c[r])
+            })
+            .fold((0.0, 0.0), add)
+    }
+}
+
 /// Largest number of chunk partials a reduction keeps on the stack at once.
 const MAX_PARTS: usize = 512;
 

@@ -74,8 +74,13 @@ impl Stage for DeformationStage {
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
         let a = self.thetas[usize::from(self.step_flag.get())] * ctx.dt;
-        // The Picard pass: the update stretches the first pass's tensor.
+        // The Picard pass: the update stretches the first pass's tensor. The first pass
+        // writes near the material only; beyond it (where the second pass's corner averages
+        // reach) it holds the step's B, the identity there.
         let first = &mut self.first;
+        for (f, b) in first.iter_mut().zip(&d.b) {
+            f.copy_from(b);
+        }
         k.stretch(
             &d.start,
             a,

@@ -35,6 +35,7 @@ impl Kernels {
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
         // Per centre: the in-plane eigen-decomposition (cos, sin, λ₁, λ₂) and λ₃ = B₃₃.
         let mut energy = 0.0;
+        let r = super::stress::rest_stress(law)?;
         let mut cells = std::mem::take(&mut self.energy_cells);
         cells.clear();
         for j in 0..ny {
@@ -81,16 +82,12 @@ impl Kernels {
                     e3,
                     (e1 - e2) * cs * sn,
                 ];
-                self.rb[n] = [1.0, 1.0, 1.0, 0.0];
             }
             let n = cells.len();
             law.evaluate(&self.cb[..n], &mut self.ct[..n], None)
                 .map_err(|e| e.to_string())?;
-            law.evaluate(&self.rb[..n], &mut self.rt[..n], None)
-                .map_err(|e| e.to_string())?;
             for (n, &(_, w, cs, sn, m1, m2, m3, vol)) in cells.iter().enumerate() {
                 let t = self.ct[n];
-                let r = self.rt[n];
                 // M in the grid's axes.
                 let (mm11, mm22, mm12) = (
                     m1 * cs * cs + m2 * sn * sn,

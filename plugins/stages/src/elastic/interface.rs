@@ -2,7 +2,7 @@
 //! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
 //! cells.
 
-use super::{Kernels, PHI_MIN, Window};
+use super::{Kernels, NEAR, PHI_MIN, Window};
 use efsi_core::Field;
 use efsi_linalg::par;
 
@@ -18,21 +18,60 @@ impl Kernels {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         });
-        let mut c = Window::new(nx, -1, ny, -1);
+        // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`).
+        let (mut c, mut m) = (Window::new(nx, -1, ny, -1), Window::new(nx, -1, ny, -1));
+        let wd = self.w.data();
         for j in -1..=ny {
-            for i in -1..=nx {
-                if self.w[(i, j)] > 0.0 {
-                    c = Window::new(c.i0.min(i), c.i1.max(i), c.j0.min(j), c.j1.max(j));
+            let o = self.w.idx(-1, j);
+            for (f, d, b) in [(wd, 0.0, &mut c), (pd, 0.0, &mut m)] {
+                let row = &f[o..o + (nx + 2) as usize];
+                if let Some(first) = row.iter().position(|&w| w > d) {
+                    let last = row.iter().rposition(|&w| w > d).unwrap_or(first);
+                    *b = Window::new(
+                        b.i0.min(first as isize - 1),
+                        b.i1.max(last as isize - 1),
+                        b.j0.min(j),
+                        b.j1.max(j),
+                    );
                 }
             }
         }
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
         self.solid_k = self.solid_c.corners(nx, ny);
+        // Where B can matter: the material grown by `NEAR` cells (see `Kernels::near_c`).
+        self.near_c = if m.i0 > m.i1 {
+            Window::EMPTY
+        } else {
+            Window::new(
+                (m.i0 - NEAR).max(-1),
+                (m.i1 + NEAR).min(nx),
+                (m.j0 - NEAR).max(-1),
+                (m.j1 + NEAR).min(ny),
+            )
+        };
+        self.near_k = self.near_c.corners(nx, ny);
         let (mu_f, mu_s) = (self.mu_f, self.mu_s);
         let g = efsi_core::G;
+        // Corners none of whose cells holds solid: no weight, no series factors, the plain
+        // average, and a normal of no consequence (it multiplies a zero extra shear rate).
+        for f in [&mut self.wc, &mut self.wk, &mut self.ks, &mut self.rc] {
+            f.fill(0.0);
+        }
+        self.sf.fill(1.0);
+        self.ny2.fill(0.5);
+        for f in &mut self.kwt {
+            f.fill(0.25);
+        }
+        let c = self.solid_c;
+        if c.i0 > c.i1 {
+            return;
+        }
         self.set_quarters(phi);
-        for j in 1 - g..=ny + g {
-            for i in 1 - g..=nx + g {
+        // The corners of the solid's centres, ghost corners included.
+        let (i0, i1) = (c.i0.max(1 - g), (c.i1 + 1).min(nx + g));
+        let (j0, j1) = (c.j0.max(1 - g), (c.j1 + 1).min(ny + g));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
                 self.wc[(i, j)] = 0.25
                     * (self.w[(i - 1, j - 1)]
                         + self.w[(i, j - 1)]
@@ -99,12 +138,17 @@ impl Kernels {
         let (nx, ny) = self.nxy();
         let (dx, dy) = (self.grid.dx, self.grid.dy);
         let pd = phi.data();
+        // The cells around the solid's corners: its window and one more all round.
+        let c = self.solid_c;
+        let g = efsi_core::G;
+        let (lo, hi) = (
+            phi.idx(-g, (c.j0 - 1).max(-g)),
+            phi.idx(-g, (c.j1 + 1).min(ny + g - 1)) + phi.stride(),
+        );
         for q in &mut self.quarter {
-            par::for_each_chunk(q.data_mut(), |o, w| {
-                for (w, f) in w.iter_mut().zip(&pd[o..]) {
-                    *w = f.clamp(0.0, 1.0);
-                }
-            });
+            for (w, f) in q.data_mut()[lo..hi].iter_mut().zip(&pd[lo..hi]) {
+                *w = f.clamp(0.0, 1.0);
+            }
         }
         let c = self.solid_c;
         let s = phi.stride();

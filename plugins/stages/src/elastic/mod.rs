@@ -216,7 +216,9 @@
 //! The increment's stress `J : (w ΔB)` vanishes outside the solid, so the operator computes
 //! gradients, stretching and tangent only over the solid's bounding box (plus the ring the
 //! stencils read) and adds its force only to the faces next to it: the cost of the elastic part
-//! follows the solid's size, not the grid's. The viscous part `θΔt K_v` is applied over the
+//! follows the solid's size, not the grid's. The law's batches hold the same window's centres
+//! and corners, and B is transported only within a few cells of any material, where it can
+//! reach the solid within a step (`Kernels::near_c`); beyond, it stays the identity. The viscous part `θΔt K_v` is applied over the
 //! whole grid by the one viscous operator (`viscous_operator`, coefficients set once per step),
 //! the block multigrid preconditioner takes its blocks from the same operator with the
 //! effective viscosities `η`. Loops over rows
@@ -268,7 +270,7 @@ pub use options::{
     MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
-use rows::{PAR_POINTS, Window, at, rows1, rows3};
+use rows::{PAR_POINTS, Window, at, rows1, rows2, rows3};
 use solve::{ElasticOperator, ElasticStage, Scratch};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
@@ -485,7 +487,8 @@ struct Kernels {
     faces: UnknownFaces,
     /// L₁₁, L₂₂, L₃₃ at centres.
     lc: [Field; 3],
-    /// L₁₂, L₂₁ at corners.
+    /// The solid's L₁₂, L₂₁ at corners (the shear rate's interface share included: see
+    /// [`Kernels::gradient_in`]).
     lk: [Field; 2],
     /// `φ^{1/2}` at centres and its four-cell average at corners (zero exactly where the
     /// corner has no solid).
@@ -518,16 +521,23 @@ struct Kernels {
     /// elastic operator skips them.
     solid_c: Window,
     solid_k: Window,
+    /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included) and
+    /// their corners, set by [`Kernels::set_weights`]: the deformation is transported there
+    /// only. Elsewhere B stays the identity and its rates zero ([`Kernels::reset_fluid`]):
+    /// a cell becomes solid only from a neighbour's material (the VOF step moves less than a
+    /// cell per step), and its B and rates read B at most three cells beyond it (the
+    /// advection's van Leer stencil), so the solid's deformation is the same as if B were
+    /// transported everywhere.
+    near_c: Window,
+    near_k: Window,
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
     /// axes (cos, sin), the logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
-    /// Law batches: centres `i ∈ [−1, nx]`, `j ∈ [−1, ny]`; corners `i ∈ [0, nx]`, `j ∈ [0, ny]`.
+    /// Law batches, sized for every centre `[−1, nx] × [−1, ny]` and corner `[0, nx] × [0, ny]`:
+    /// the centres of `solid_c` and the corners of `solid_k` ([`Kernels::ci`], `ki`).
     cb: Vec<Sym>,
     ct: Vec<Sym>,
     cj: Vec<Tangent>,
-    /// The stress-free reference `w I` at the centres, and its stress.
-    rb: Vec<Sym>,
-    rt: Vec<Sym>,
     kb: Vec<Sym>,
     kt: Vec<Sym>,
     kj: Vec<Tangent>,
@@ -538,6 +548,10 @@ struct Kernels {
 /// weighted by `φ^{1/2}`, would act on a face whose mass is the fluid's (`φρ_s ≪ ρ_f` at a
 /// density ratio of 1000), which flung air at tens of m/s as a sphere left the substrate.
 const PHI_MIN: f64 = 1e-3;
+
+/// How many cells beyond any material the deformation is transported ([`Kernels::near_c`]):
+/// one cell the material may reach in a step, three more its B and rates read.
+const NEAR: isize = 4;
 
 /// See [`Kernels::strain_energy`].
 type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
@@ -570,10 +584,10 @@ impl Kernels {
             mu_s,
             solid_c: Window::EMPTY,
             solid_k: Window::EMPTY,
+            near_c: Window::EMPTY,
+            near_k: Window::EMPTY,
             energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
-            rb: vec![[0.0; 4]; nc],
-            rt: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
             cj: vec![[0.0; 16]; nc],
             kb: vec![[0.0; 4]; nk],
@@ -586,12 +600,11 @@ impl Kernels {
         (self.grid.nx as isize, self.grid.ny as isize)
     }
 
-    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the solid's
-    /// centres and corners: one centre more all round (within the batch), and the corners of
-    /// every solid centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
-    fn gradient_windows(&self) -> (Window, Window) {
+    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the centres
+    /// `c` and their corners: one centre more all round (within the batch), and the corners of
+    /// every centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
+    fn gradient_windows(&self, c: Window) -> (Window, Window) {
         let (nx, ny) = self.nxy();
-        let c = self.solid_c;
         if c.i0 > c.i1 {
             return (Window::EMPTY, Window::EMPTY);
         }
@@ -606,28 +619,21 @@ impl Kernels {
         )
     }
 
-    /// Every centre of the law batch, `[−1, nx] × [−1, ny]`.
-    fn all_centres(&self) -> Window {
-        let (nx, ny) = self.nxy();
-        Window::new(-1, nx, -1, ny)
-    }
-
-    /// Every corner of the law batch, `[0, nx] × [0, ny]`.
-    fn all_corners(&self) -> Window {
-        let (nx, ny) = self.nxy();
-        Window::new(0, nx, 0, ny)
-    }
-
-    /// Batch index of centre `(i, j)`, `i, j ≥ −1`.
+    /// Batch index of centre `(i, j)` of the solid's window [`Kernels::solid_c`] (the law
+    /// batches hold the window's points, row by row).
     #[inline(always)]
     fn ci(&self, i: isize, j: isize) -> usize {
-        ((j + 1) * (self.grid.nx as isize + 2) + i + 1) as usize
+        let c = self.solid_c;
+        debug_assert!(c.contains(i, j), "centre ({i}, {j}) outside {c:?}");
+        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
     }
 
-    /// Batch index of corner `(i, j)`, `i, j ≥ 0`.
+    /// Batch index of corner `(i, j)` of the solid's corners [`Kernels::solid_k`].
     #[inline(always)]
     fn ki(&self, i: isize, j: isize) -> usize {
-        (j * (self.grid.nx as isize + 1) + i) as usize
+        let c = self.solid_k;
+        debug_assert!(c.contains(i, j), "corner ({i}, {j}) outside {c:?}");
+        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
     }
 
     /// The solid-weighted average at corner `k` (linear index) of a centre field `f`: the
@@ -651,17 +657,16 @@ impl Kernels {
         };
         let g = &self.grid;
         let text = efsi_laws_host::LawError { cell: None, ..e }.to_string();
+        let c = if corner { self.solid_k } else { self.solid_c };
+        let w = (c.i1 - c.i0 + 1).max(1) as usize;
+        let (i, j) = (c.i0 + (q % w) as isize, c.j0 + (q / w) as isize);
         if corner {
-            let w = g.nx + 1;
-            let (i, j) = ((q % w) as isize, (q / w) as isize);
             format!(
                 "{text} at corner (i, j) = ({i}, {j}), (x, y) = ({:.6e}, {:.6e})",
                 g.xf(i),
                 g.yf(j)
             )
         } else {
-            let w = g.nx + 2;
-            let (i, j) = ((q % w) as isize - 1, (q / w) as isize - 1);
             format!(
                 "{text} in cell (i, j) = ({i}, {j}), centre (x, y) = ({:.6e}, {:.6e})",
                 g.xc(i),

@@ -41,6 +41,32 @@ pub(super) fn rows3(
     }
 }
 
+/// [`rows3`] for two fields.
+pub(super) fn rows2(
+    [a, b]: [&mut Field; 2],
+    (j0, j1): (isize, isize),
+    par: bool,
+    body: impl Fn(isize, [&mut [f64]; 2]) + Sync + Send,
+) {
+    if j0 > j1 {
+        return;
+    }
+    let s = a.stride();
+    let (lo, hi) = (a.idx(-G, j0), a.idx(-G, j1) + s);
+    let (a, b) = (&mut a.data_mut()[lo..hi], &mut b.data_mut()[lo..hi]);
+    if par {
+        a.par_chunks_mut(s)
+            .zip(b.par_chunks_mut(s))
+            .enumerate()
+            .for_each(|(r, (a, b))| body(j0 + r as isize, [a, b]));
+    } else {
+        a.chunks_mut(s)
+            .zip(b.chunks_mut(s))
+            .enumerate()
+            .for_each(|(r, (a, b))| body(j0 + r as isize, [a, b]));
+    }
+}
+
 /// [`rows3`] for one field.
 pub(super) fn rows1(
     a: &mut Field,
@@ -84,6 +110,12 @@ pub(super) struct Window {
 impl Window {
     pub(super) fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
         Window { i0, i1, j0, j1 }
+    }
+
+    /// Whether `(i, j)` is a point of the window.
+    #[inline(always)]
+    pub(super) fn contains(self, i: isize, j: isize) -> bool {
+        (self.i0..=self.i1).contains(&i) && (self.j0..=self.j1).contains(&j)
     }
 
     /// Number of points.

@@ -113,7 +113,7 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
         let (cw, kw) = (op.k.solid_c, op.k.solid_k);
-        let (gc, gk) = op.k.gradient_windows();
+        let (gc, gk) = op.k.gradient_windows(cw);
         op.k.gradient_in(xu, xv, gc, gk);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
         op.k.apply_tangent(&op.db, self.dtau);
@@ -309,7 +309,11 @@ impl ElasticStage {
         let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
         let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
         let cj = &k.cj;
+        // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
         let stiff = |i: isize, j: isize| {
+            if !k.solid_c.contains(i, j) {
+                return 0.0;
+            }
             let jm = &cj[k.ci(i, j)];
             let b = &k.cb[k.ci(i, j)];
             k.w[(i, j)]

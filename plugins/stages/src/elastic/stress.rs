@@ -5,8 +5,18 @@ use super::{Kernels, PAR_POINTS, at, avg4, rows1, rows3};
 use efsi_core::Field;
 use efsi_laws_host::ConstitutiveLaw;
 
+/// The law's stress in the undeformed state `B = I` (the same at every point).
+pub(super) fn rest_stress(law: &dyn ConstitutiveLaw) -> Result<efsi_laws_host::Sym, String> {
+    let mut r = [[0.0; 4]];
+    law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut r, None)
+        .map_err(|e| e.to_string())?;
+    Ok(r[0])
+}
+
 impl Kernels {
-    /// τ (and J if `tangent`) of `b` into the batches and `tau`.
+    /// τ (and J if `tangent`) of `b` into the batches and `tau`. The law sees the solid's
+    /// centres and corners only ([`Kernels::solid_c`], `solid_k`, packed in that order: see
+    /// [`Kernels::ci`]); elsewhere the weights `w`, `1/κ` vanish and so does `tau`.
     pub(super) fn evaluate(
         &mut self,
         law: &dyn ConstitutiveLaw,
@@ -14,14 +24,14 @@ impl Kernels {
         tau: &mut [Field; 4],
         tangent: bool,
     ) -> Result<(), String> {
-        let (nx, ny) = self.nxy();
+        let (cw, kw) = (self.solid_c, self.solid_k);
+        let (nc, nk) = (cw.points(), kw.points());
         let s = b[0].stride();
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
-        for j in -1..=ny {
-            for i in -1..=nx {
+        for j in cw.j0..=cw.j1 {
+            for i in cw.i0..=cw.i1 {
                 let k = b[0].idx(i, j);
                 let q = self.ci(i, j);
-                self.rb[q] = [1.0, 1.0, 1.0, 0.0];
                 self.cb[q] = [
                     b11[k],
                     b22[k],
@@ -30,8 +40,8 @@ impl Kernels {
                 ];
             }
         }
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = b[0].idx(i, j);
                 let q = self.ki(i, j);
                 let w = self.wk.data()[k];
@@ -43,22 +53,35 @@ impl Kernels {
                 ];
             }
         }
-        law.evaluate(&self.cb, &mut self.ct, tangent.then_some(&mut self.cj[..]))
-            .map_err(|e| self.locate(e, false))?;
-        law.evaluate(&self.kb, &mut self.kt, tangent.then_some(&mut self.kj[..]))
-            .map_err(|e| self.locate(e, true))?;
+        for f in tau.iter_mut() {
+            f.fill(0.0);
+        }
+        if nc == 0 {
+            return Ok(());
+        }
+        law.evaluate(
+            &self.cb[..nc],
+            &mut self.ct[..nc],
+            tangent.then_some(&mut self.cj[..nc]),
+        )
+        .map_err(|e| self.locate(e, false))?;
+        law.evaluate(
+            &self.kb[..nk],
+            &mut self.kt[..nk],
+            tangent.then_some(&mut self.kj[..nk]),
+        )
+        .map_err(|e| self.locate(e, true))?;
         // Subtract the stress of the stress-free state B = I (B̃ = w I): isotropic, so only a
         // change of pressure — but it jumps across the interface, and fed through the implicit
         // solve it would not stay a pure gradient (see "Stress-free reference" in the docs).
-        law.evaluate(&self.rb, &mut self.rt, None)
-            .map_err(|e| e.to_string())?;
-        for (t, r) in self.ct.iter_mut().zip(&self.rt) {
+        let r = rest_stress(law)?;
+        for t in &mut self.ct[..nc] {
             for c in 0..3 {
                 t[c] -= r[c];
             }
         }
-        for j in -1..=ny {
-            for i in -1..=nx {
+        for j in cw.j0..=cw.j1 {
+            for i in cw.i0..=cw.i1 {
                 let k = b[0].idx(i, j);
                 let (t, w) = (self.ct[self.ci(i, j)], self.w.data()[k]);
                 for c in 0..3 {
@@ -66,8 +89,8 @@ impl Kernels {
                 }
             }
         }
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = b[0].idx(i, j);
                 tau[3].data_mut()[k] = self.ks.data()[k] * self.kt[self.ki(i, j)][3];
             }

@@ -2,17 +2,17 @@
 //! `H(V; B) = L B + B Lᵀ` with the interface corners' solid gradient, the relaxation of the
 //! corners' shear, and the conservative advection `∇·(V B)`.
 
-use super::{Kernels, PAR_POINTS, Window, at, avg4, rows1, rows3};
+use super::{Kernels, PAR_POINTS, Window, at, avg4, rows1, rows2, rows3};
 use crate::advection::face_value;
 use efsi_core::Field;
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::par;
 
 impl Kernels {
-    /// Velocity gradients of `(u, v)` (ghosts filled), everywhere the law batches need them.
+    /// Velocity gradients of `(u, v)` (ghosts filled), wherever [`Kernels::stretch`] reads
+    /// them (near the material, [`Kernels::near_c`]).
     pub(super) fn gradient(&mut self, u: &Field, v: &Field) {
-        let (nx, ny) = self.nxy();
-        let (c, k) = (self.all_centres(), Window::new(-1, nx + 1, -1, ny + 1));
+        let (c, k) = self.gradient_windows(self.near_c);
         self.gradient_in(u, v, c, k);
     }
 
@@ -37,26 +37,29 @@ impl Kernels {
                 }
             },
         );
+        // The solid's shear gradients at the corners: the shear rate times `s` (1 away from
+        // interfaces), the extra going to the derivative across the interface — `L₁₂` by the
+        // share `n_y²`, `L₂₁` by `n_x²` (see "Interface corners").
+        let (sf, ny2) = (self.sf.data(), self.ny2.data());
         let par = kw.points() >= PAR_POINTS;
-        let [l12, l21] = &mut self.lk;
-        rows1(l12, kw.rows(), par, |j, r| {
+        let [g12, g21] = &mut self.lk;
+        rows2([g12, g21], kw.rows(), par, |j, [r12, r21]| {
             for i in kw.i0..=kw.i1 {
                 let k = u.idx(i, j);
-                r[at(i)] = (ud[k] - ud[k - s]) / g.dy;
-            }
-        });
-        rows1(l21, kw.rows(), par, |j, r| {
-            for i in kw.i0..=kw.i1 {
-                let k = u.idx(i, j);
-                r[at(i)] = (vd[k] - vd[k - 1]) / g.dx;
+                let l12 = (ud[k] - ud[k - s]) / g.dy;
+                let l21 = (vd[k] - vd[k - 1]) / g.dx;
+                let e = (sf[k] - 1.0) * (l12 + l21);
+                r12[at(i)] = l12 + ny2[k] * e;
+                r21[at(i)] = l21 + (1.0 - ny2[k]) * e;
             }
         });
     }
 
     /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
-    /// (`base` may be `None` for zero); centres over `[−1, nx] × [−1, ny]`, corners over
-    /// `[0, nx] × [0, ny]`. At interface corners the shear rate is the solid's share
-    /// (factor `s`), and with `relax` the corner result is divided by this step's relaxation.
+    /// (`base` may be `None` for zero), near the material ([`Kernels::near_c`], `near_k`;
+    /// `out` is left untouched elsewhere). At interface corners the shear rate is the solid's
+    /// share (factor `s`), and with `relax` the corner result is divided by this step's
+    /// relaxation.
     pub(super) fn stretch(
         &self,
         b: &[Field; 4],
@@ -65,7 +68,7 @@ impl Kernels {
         relax: Option<&Field>,
         out: &mut [Field; 4],
     ) {
-        let (cw, kw) = (self.all_centres(), self.all_corners());
+        let (cw, kw) = (self.near_c, self.near_k);
         self.stretch_in(b, a, base, relax, out, cw, kw);
     }
 
@@ -83,57 +86,60 @@ impl Kernels {
     ) {
         let s = b[0].stride();
         let [l11, l22, l33] = [self.lc[0].data(), self.lc[1].data(), self.lc[2].data()];
-        let [l12, l21] = [self.lk[0].data(), self.lk[1].data()];
+        let [g12, g21] = [self.lk[0].data(), self.lk[1].data()];
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
-        let (sf, ny2) = (self.sf.data(), self.ny2.data());
-        let base_at =
-            |c: usize, k: usize| base.map_or(0.0, |(x, y)| x[c].data()[k] + y[c].data()[k]);
         let [o11, o22, o33, o12] = out;
-        rows3(
-            [o11, o22, o33],
-            cw.rows(),
-            cw.points() >= PAR_POINTS,
-            |j, rows| {
-                for i in cw.i0..=cw.i1 {
-                    let k = b[0].idx(i, j);
-                    // The solid's gradients at the corners (as for `h12` below).
-                    let (mut l12b12, mut l21b12) = (0.0, 0.0);
-                    for c in [k, k + 1, k + s, k + s + 1] {
-                        let e = (sf[c] - 1.0) * (l12[c] + l21[c]);
-                        l12b12 += 0.25 * (l12[c] + ny2[c] * e) * b12[c];
-                        l21b12 += 0.25 * (l21[c] + (1.0 - ny2[c]) * e) * b12[c];
+        // `base + a·h`, or `a·h` alone without a base (as `0 + a·h`: the same bits).
+        let (cpar, kpar) = (cw.points() >= PAR_POINTS, kw.points() >= PAR_POINTS);
+        rows3([o11, o22, o33], cw.rows(), cpar, |j, rows| {
+            for i in cw.i0..=cw.i1 {
+                let k = b[0].idx(i, j);
+                // The solid's gradients at the corners (as for `h12` below).
+                let (mut l12b12, mut l21b12) = (0.0, 0.0);
+                for c in [k, k + 1, k + s, k + s + 1] {
+                    l12b12 += 0.25 * g12[c] * b12[c];
+                    l21b12 += 0.25 * g21[c] * b12[c];
+                }
+                let h = [
+                    2.0 * (l11[k] * b11[k] + l12b12),
+                    2.0 * (l21b12 + l22[k] * b22[k]),
+                    2.0 * l33[k] * b33[k],
+                ];
+                match base {
+                    Some((x, y)) => {
+                        for c in 0..3 {
+                            rows[c][at(i)] = x[c].data()[k] + y[c].data()[k] + a * h[c];
+                        }
                     }
-                    let h11 = 2.0 * (l11[k] * b11[k] + l12b12);
-                    let h22 = 2.0 * (l21b12 + l22[k] * b22[k]);
-                    let h33 = 2.0 * l33[k] * b33[k];
-                    for (c, h) in [(0, h11), (1, h22), (2, h33)] {
-                        rows[c][at(i)] = base_at(c, k) + a * h;
+                    None => {
+                        for c in 0..3 {
+                            rows[c][at(i)] = 0.0 + a * h[c];
+                        }
                     }
                 }
-            },
-        );
-        rows1(o12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
+            }
+        });
+        rows1(o12, kw.rows(), kpar, |j, row| {
             for i in kw.i0..=kw.i1 {
                 let k = b[3].idx(i, j);
                 let (a0, a1, a2, a3) = (k - s - 1, k - s, k - 1, k);
-                // The solid's velocity gradient: shear rate times s, the extra going to the
-                // derivative across the interface (L₁₂ by n_y², L₂₁ by n_x²); the solid's own
-                // normal components (solid-weighted).
-                let e = (self.sf.data()[k] - 1.0) * (l12[k] + l21[k]);
-                let fy = self.ny2.data()[k];
+                // The solid's velocity gradient; the solid's own normal components
+                // (solid-weighted).
                 let h12 = avg4(l11, a0, a1, a2, a3) * b12[k]
-                    + (l12[k] + fy * e) * self.kavg(b22, k, s)
-                    + self.kavg(b11, k, s) * (l21[k] + (1.0 - fy) * e)
+                    + g12[k] * self.kavg(b22, k, s)
+                    + self.kavg(b11, k, s) * g21[k]
                     + b12[k] * avg4(l22, a0, a1, a2, a3);
+                let base = base.map_or(0.0, |(x, y)| x[3].data()[k] + y[3].data()[k]);
                 let q = relax.map_or(1.0, |r| r.data()[k]);
-                row[at(i)] = q * (base_at(3, k) + a * h12);
+                row[at(i)] = q * (base + a * h12);
             }
         });
     }
 
-    /// `out = ∇·(V b)` (conservative, van Leer face values), centres and corners of the interior;
-    /// rows in parallel (each writes only its own entries: the same bits on any number of
-    /// threads).
+    /// `out = ∇·(V b)` (conservative, van Leer face values), at the interior centres and
+    /// corners near the material ([`Kernels::near_c`], `near_k`; `out` is left untouched
+    /// elsewhere); rows in parallel (each writes only its own entries: the same bits on any
+    /// number of threads).
     pub(super) fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
         let g = &self.grid;
         let m = &g.metric;
@@ -146,14 +152,16 @@ impl Kernels {
             a * face_value(a, p, q, r, t)
         };
         let gu = efsi_core::G as usize;
+        let (cw, kw) = (self.near_c, self.near_k);
+        let (ci0, ci1) = (cw.i0.max(0), cw.i1.min(nx - 1));
         for c in 0..3 {
             let bd = b[c].data();
             par::for_each_row(out[c].data_mut(), s, |jp, row| {
                 let j = jp as isize - efsi_core::G;
-                if j < 0 || j >= ny {
+                if j < 0 || j >= ny || j < cw.j0 || j > cw.j1 {
                     return;
                 }
-                for i in 0..nx {
+                for i in ci0..=ci1 {
                     let k = jp * s + gu + i as usize;
                     // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
                     let fw = fx(ud[k], bd, k, 1);
@@ -168,10 +176,10 @@ impl Kernels {
         let bd = b[3].data();
         par::for_each_row(out[3].data_mut(), s, |jp, row| {
             let j = jp as isize - efsi_core::G;
-            if j < 0 || j > ny {
+            if j < 0 || j > ny || j < kw.j0 || j > kw.j1 {
                 return;
             }
-            for i in 0..=nx {
+            for i in kw.i0..=kw.i1 {
                 let (k, o) = (jp * s + gu + i as usize, gu + i as usize);
                 let r = m.rx(i);
                 if r == 0.0 {
@@ -205,7 +213,8 @@ impl Kernels {
         relax: &mut Field,
     ) -> Result<(), String> {
         relax.fill(1.0);
-        let (nx, ny) = self.nxy();
+        // Only the solid's corners relax (`r > 0` needs a solid cell beside the corner).
+        let kw = self.solid_k;
         let s = start[0].stride();
         let [b11, b22, b33, b12] = [
             start[0].data(),
@@ -214,8 +223,8 @@ impl Kernels {
             start[3].data(),
         ];
         let mut any = false;
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = start[0].idx(i, j);
                 let q = self.ki(i, j);
                 let w = self.wk.data()[k];
@@ -231,10 +240,11 @@ impl Kernels {
         if !any {
             return Ok(());
         }
-        law.evaluate(&self.kb, &mut self.kt, Some(&mut self.kj[..]))
+        let nk = kw.points();
+        law.evaluate(&self.kb[..nk], &mut self.kt[..nk], Some(&mut self.kj[..nk]))
             .map_err(|e| self.locate(e, true))?;
-        for j in 0..=ny {
-            for i in 0..=nx {
+        for j in kw.j0..=kw.j1 {
+            for i in kw.i0..=kw.i1 {
                 let k = start[0].idx(i, j);
                 let rc = self.rc.data()[k];
                 if rc == 0.0 {
