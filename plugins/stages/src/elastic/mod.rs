@@ -229,12 +229,10 @@
 //! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
 
 use crate::block_multigrid::ViscousBlocks;
+use crate::faces::UnknownFaces;
 use crate::viscous_operator::Coefficients;
 use efsi_core::scene::OptionsDecl;
-use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin,
-    bc::UnknownFaces,
-};
+use efsi_core::{BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin};
 use efsi_laws_host::{Sym, Tangent};
 use efsi_linalg::BiCgStab;
 
