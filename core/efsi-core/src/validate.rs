@@ -1,15 +1,20 @@
 //! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
 //! each failure naming the setting's path and what was expected. The helpers are public for
-//! the crates that check sections the core does not own (efsi-run's `output`).
+//! the checks of sections the core does not own: efsi-run's `output`, the stages' `numerics`
+//! sections ([`check_tolerance`], [`check_iterations`], re-exported by
+//! [`crate::scene::options`]).
 
 use crate::grid::Geometry;
 use crate::scene::*;
 
-/// A failed check: the setting's path and the message.
-pub type Checked = Result<(), (String, String)>;
+/// A failed check: the setting's path and what is wrong with it.
+pub type Failure = (String, String);
+
+/// A check: nothing, or a [`Failure`].
+pub type Checked = Result<(), Failure>;
 
 /// The failure of the setting at `field` (its path), saying `msg`.
-pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, Failure> {
     Err((field.to_string(), msg.into()))
 }
 
@@ -22,6 +27,33 @@ pub fn positive(field: &str, v: f64) -> Checked {
             field,
             format!("must be a finite number > 0, got {}", num(v)),
         )
+    }
+}
+
+/// A relative tolerance's check: within `[ε, 1)` (a residual below the unit round-off can
+/// never be met).
+pub fn check_tolerance(field: &'static str, tol: f64) -> Result<(), (&'static str, String)> {
+    if (f64::EPSILON..1.0).contains(&tol) {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!(
+                "must be in [{:e}, 1) (a relative residual below the unit round-off cannot be \
+                 reached), got {}",
+                f64::EPSILON,
+                num(tol)
+            ),
+        ))
+    }
+}
+
+/// An iteration cap's check: at least 1.
+pub fn check_iterations(field: &'static str, n: usize) -> Result<(), (&'static str, String)> {
+    if n == 0 {
+        Err((field, "must be ≥ 1".into()))
+    } else {
+        Ok(())
     }
 }
 
