@@ -88,40 +88,7 @@ impl Simulation {
             pipeline.fields(),
         );
         pipeline.init_state(&grid, &mut state);
-        // Initial velocity.
-        match &scene.initial_velocity {
-            InitialVelocity::Rest => {}
-            InitialVelocity::Uniform((a, b)) => {
-                state.u.fill(*a);
-                state.v.fill(*b);
-            }
-            InitialVelocity::SinSinStream {
-                amplitude,
-                wavenumbers,
-            } => {
-                if grid.is_axisymmetric() {
-                    return Err(config(
-                        "initial_velocity",
-                        "SinSinStream is a planar stream function; not available in axisymmetric geometry".into(),
-                    ));
-                }
-                let psi = |x: f64, y: f64| {
-                    amplitude * (wavenumbers.0 * x).sin() * (wavenumbers.1 * y).sin()
-                };
-                for j in -1..=grid.ny as isize {
-                    for i in -1..=grid.nx as isize + 1 {
-                        let (x, y0, y1) = (grid.xf(i), grid.yf(j), grid.yf(j + 1));
-                        state.u[(i, j)] = (psi(x, y1) - psi(x, y0)) / grid.dy;
-                    }
-                }
-                for j in -1..=grid.ny as isize + 1 {
-                    for i in -1..=grid.nx as isize {
-                        let (x0, x1, y) = (grid.xf(i), grid.xf(i + 1), grid.yf(j));
-                        state.v[(i, j)] = -(psi(x1, y) - psi(x0, y)) / grid.dx;
-                    }
-                }
-            }
-        }
+        set_initial_velocity(&scene.initial_velocity, &grid, &mut state);
         // A solid's initial velocity is blended in by the stage that owns the solid fraction
         // (the VOF stage's initialize).
         bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
@@ -245,13 +212,9 @@ impl Simulation {
                     (
                         d,
                         format!(
-                            "the stability limit of the stage `{name}` (time.cfl = {}{})",
+                            "the stability limit of the stage `{name}` (time.cfl = {}, {})",
                             crate::scene::num(t.cfl),
-                            if name == "deformation" {
-                                ", numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
-                            } else {
-                                ", and the velocity it sees"
-                            }
+                            self.pipeline.limit_depends_on(name).unwrap_or_default()
                         ),
                     )
                 });
@@ -431,5 +394,39 @@ impl Simulation {
             .time
             .steady
             .is_some_and(|tol| self.last_change <= tol)
+    }
+}
+
+/// Set the fluid's initial velocity of the scene (`initial_velocity`) on every face, ghosts
+/// included: a uniform one, or the velocity of the stream function
+/// `ψ = A sin(k_x x) sin(k_y y)` (`SinSinStream`, planar only: [`Scene::validate`] refuses it in
+/// axisymmetric geometry) as differences of ψ across each face, so that it is discretely
+/// divergence-free.
+fn set_initial_velocity(initial: &InitialVelocity, grid: &Grid, state: &mut State) {
+    match initial {
+        InitialVelocity::Rest => {}
+        InitialVelocity::Uniform((a, b)) => {
+            state.u.fill(*a);
+            state.v.fill(*b);
+        }
+        InitialVelocity::SinSinStream {
+            amplitude,
+            wavenumbers,
+        } => {
+            let psi =
+                |x: f64, y: f64| amplitude * (wavenumbers.0 * x).sin() * (wavenumbers.1 * y).sin();
+            for j in -1..=grid.ny as isize {
+                for i in -1..=grid.nx as isize + 1 {
+                    let (x, y0, y1) = (grid.xf(i), grid.yf(j), grid.yf(j + 1));
+                    state.u[(i, j)] = (psi(x, y1) - psi(x, y0)) / grid.dy;
+                }
+            }
+            for j in -1..=grid.ny as isize + 1 {
+                for i in -1..=grid.nx as isize {
+                    let (x0, x1, y) = (grid.xf(i), grid.xf(i + 1), grid.yf(j));
+                    state.v[(i, j)] = -(psi(x1, y) - psi(x0, y)) / grid.dx;
+                }
+            }
+        }
     }
 }

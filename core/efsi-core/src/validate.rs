@@ -245,6 +245,14 @@ impl Scene {
         {
             return err("initial_velocity", "must be finite");
         }
+        if let InitialVelocity::SinSinStream { .. } = self.initial_velocity
+            && self.geometry == Geometry::Axisymmetric
+        {
+            return err(
+                "initial_velocity",
+                "SinSinStream is a planar stream function; not available in axisymmetric geometry",
+            );
+        }
         if let Some(solid) = &self.solid {
             solid
                 .shape

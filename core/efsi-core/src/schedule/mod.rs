@@ -236,6 +236,11 @@ pub trait StagePlugin: Sync {
     fn after(&self) -> &'static [&'static str] {
         &[]
     }
+    /// What its step limit ([`Stage::max_dt`]) depends on besides `time.cfl`, for the message
+    /// when Δt collapses (default: `and the velocity it sees`).
+    fn limit_depends_on(&self) -> &'static str {
+        "and the velocity it sees"
+    }
     /// Whether `scene` needs this stage.
     fn needed(&self, scene: &Scene) -> bool;
     /// The `numerics` section the stage reads its options from, if it has options
@@ -269,6 +274,8 @@ struct Entry {
     writes: &'static [FieldId],
     /// The `numerics` section of its options, if it has one.
     options: Option<&'static str>,
+    /// [`StagePlugin::limit_depends_on`].
+    limit: &'static str,
     stage: Box<dyn Stage>,
     time: Duration,
     calls: u64,
@@ -359,6 +366,7 @@ impl Pipeline {
                 reads: p.reads(),
                 writes: p.writes(),
                 options: p.options().map(|d| d.section),
+                limit: p.limit_depends_on(),
                 stage,
                 time: Duration::ZERO,
                 calls: 0,
@@ -582,6 +590,15 @@ impl Pipeline {
             }
         }
         Ok(())
+    }
+
+    /// What the step limit of the stage named `stage` depends on
+    /// ([`StagePlugin::limit_depends_on`]), if it is in the pipeline.
+    pub fn limit_depends_on(&self, stage: &str) -> Option<&'static str> {
+        self.entries
+            .iter()
+            .find(|e| e.name == stage)
+            .map(|e| e.limit)
     }
 
     /// The largest Δt every stage allows, if any stage limits it.

@@ -437,6 +437,9 @@ impl StagePlugin for DeformationUpdate {
     fn after(&self) -> &'static [&'static str] {
         &["projection"]
     }
+    fn limit_depends_on(&self) -> &'static str {
+        "numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
+    }
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)
     }
