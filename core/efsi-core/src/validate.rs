@@ -30,6 +30,15 @@ pub fn positive(field: &str, v: f64) -> Checked {
     }
 }
 
+/// `v`, the vector at `field`, must have finite components.
+pub fn finite(field: &str, (a, b): (f64, f64)) -> Checked {
+    if a.is_finite() && b.is_finite() {
+        Ok(())
+    } else {
+        err(field, "must be finite")
+    }
+}
+
 /// A relative tolerance's check: within `[ε, 1)` (a residual below the unit round-off can
 /// never be met).
 pub fn check_tolerance(field: &'static str, tol: f64) -> Result<(), (&'static str, String)> {
@@ -108,11 +117,10 @@ impl Scene {
                 ),
             );
         }
-        if self.grid.nx == 0 {
-            return err("grid.nx", "must be at least 1 cell, got 0");
-        }
-        if self.grid.ny == 0 {
-            return err("grid.ny", "must be at least 1 cell, got 0");
+        for (f, n) in [("grid.nx", self.grid.nx), ("grid.ny", self.grid.ny)] {
+            if n == 0 {
+                return err(f, "must be at least 1 cell, got 0");
+            }
         }
         if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
             return err(
@@ -231,19 +239,15 @@ impl Scene {
                 );
             }
         }
-        if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
-            return err("gravity", "must be finite");
-        }
+        finite("gravity", self.gravity)?;
         if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
             return err(
                 "gravity",
                 "must be along z (the axis) in axisymmetric geometry: (0, g_z)",
             );
         }
-        if let InitialVelocity::Uniform((a, b)) = self.initial_velocity
-            && !(a.is_finite() && b.is_finite())
-        {
-            return err("initial_velocity", "must be finite");
+        if let InitialVelocity::Uniform(v) = self.initial_velocity {
+            finite("initial_velocity", v)?;
         }
         if let InitialVelocity::SinSinStream { .. } = self.initial_velocity
             && self.geometry == Geometry::Axisymmetric
@@ -279,10 +283,8 @@ impl Scene {
                     format!("must be a finite number ≥ 0, got {mu}"),
                 );
             }
-            if let Some((a, b)) = solid.velocity
-                && !(a.is_finite() && b.is_finite())
-            {
-                return err("solid.velocity", "must be finite");
+            if let Some(v) = solid.velocity {
+                finite("solid.velocity", v)?;
             }
             if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0)
             {
