@@ -74,6 +74,7 @@ impl Scene {
         self.validate_domain_and_grid()?;
         self.validate_time()?;
         self.validate_materials()?;
+        self.validate_solid()?;
         self.validate_boundaries()
     }
 
@@ -194,7 +195,7 @@ impl Scene {
         Ok(())
     }
 
-    /// The fluid, gravity, the initial velocity and the solid.
+    /// The fluid, gravity and the initial velocity.
     fn validate_materials(&self) -> Checked {
         if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
             return err(
@@ -257,42 +258,47 @@ impl Scene {
                 "SinSinStream is a planar stream function; not available in axisymmetric geometry",
             );
         }
-        if let Some(solid) = &self.solid {
-            solid
-                .shape
-                .validate()
-                .map_err(|m| ("solid.shape".to_string(), m))?;
-            positive("solid.density", solid.density)?;
-            // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
-            // equation's coefficients 1/ρ span more than floating point resolves.
-            let ratio = solid.density / self.fluid.density;
-            if !(1e-6..=1e6).contains(&ratio) {
-                return err(
-                    "solid.density",
-                    format!(
-                        "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
-                        solid.density, self.fluid.density
-                    ),
-                );
-            }
-            if let Some(mu) = solid.viscosity
-                && !(mu.is_finite() && mu >= 0.0)
-            {
-                return err(
-                    "solid.viscosity",
-                    format!("must be a finite number ≥ 0, got {mu}"),
-                );
-            }
-            if let Some(v) = solid.velocity {
-                finite("solid.velocity", v)?;
-            }
-            if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0)
-            {
-                return err(
-                    "solid.velocity",
-                    "an axisymmetric body can only move along the axis: (0, v_z)",
-                );
-            }
+        Ok(())
+    }
+
+    /// The solid: its shape, density (and the density ratio), viscosity and velocity.
+    fn validate_solid(&self) -> Checked {
+        let Some(solid) = &self.solid else {
+            return Ok(());
+        };
+        solid
+            .shape
+            .validate()
+            .map_err(|m| ("solid.shape".to_string(), m))?;
+        positive("solid.density", solid.density)?;
+        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
+        // equation's coefficients 1/ρ span more than floating point resolves.
+        let ratio = solid.density / self.fluid.density;
+        if !(1e-6..=1e6).contains(&ratio) {
+            return err(
+                "solid.density",
+                format!(
+                    "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
+                    solid.density, self.fluid.density
+                ),
+            );
+        }
+        if let Some(mu) = solid.viscosity
+            && !(mu.is_finite() && mu >= 0.0)
+        {
+            return err(
+                "solid.viscosity",
+                format!("must be a finite number ≥ 0, got {mu}"),
+            );
+        }
+        if let Some(v) = solid.velocity {
+            finite("solid.velocity", v)?;
+        }
+        if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0) {
+            return err(
+                "solid.velocity",
+                "an axisymmetric body can only move along the axis: (0, v_z)",
+            );
         }
         Ok(())
     }
