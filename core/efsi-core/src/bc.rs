@@ -32,66 +32,6 @@ pub struct FaceRange {
     pub hi: isize,
 }
 
-/// The normal-velocity faces an implicit stage solves for, in one compact order: the u-faces row
-/// by row, then the v-faces row by row. Compact vectors of the linear solvers use this order;
-/// [`UnknownFaces::for_each`] maps it to the fields' linear index.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct UnknownFaces {
-    /// Unknown u-faces along x (all rows).
-    pub ux: FaceRange,
-    /// Unknown v-faces along y (all columns).
-    pub vy: FaceRange,
-    nx: usize,
-    ny: usize,
-}
-
-impl UnknownFaces {
-    /// The unknown faces of `grid` under `bc`.
-    pub fn new(grid: &Grid, bc: &BoundarySet) -> Self {
-        UnknownFaces {
-            ux: bc.normal_faces(0, grid.nx),
-            vy: bc.normal_faces(1, grid.ny),
-            nx: grid.nx,
-            ny: grid.ny,
-        }
-    }
-
-    /// Number of unknown u-faces (they come first).
-    pub fn nu(&self) -> usize {
-        (self.ux.hi - self.ux.lo) as usize * self.ny
-    }
-
-    /// Number of unknowns.
-    pub fn len(&self) -> usize {
-        self.nu() + (self.vy.hi - self.vy.lo) as usize * self.nx
-    }
-
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Call `f(compact index, is_u, linear field index)` for every unknown face, in order.
-    #[inline]
-    pub fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
-        let stride = self.nx + 1 + 2 * crate::grid::GHOST;
-        let idx = |i: isize, j: isize| (j + G) as usize * stride + (i + G) as usize;
-        let mut c = 0;
-        for j in 0..self.ny as isize {
-            for i in self.ux.lo..self.ux.hi {
-                f(c, true, idx(i, j));
-                c += 1;
-            }
-        }
-        for j in self.vy.lo..self.vy.hi {
-            for i in 0..self.nx as isize {
-                f(c, false, idx(i, j));
-                c += 1;
-            }
-        }
-    }
-}
-
 /// Which wall speeds to impose when filling velocity ghosts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum WallTime {

@@ -42,8 +42,9 @@ pub enum EfsiError {
         /// Step reached.
         step: u64,
     },
-    /// The motion gained energy that nothing supplied: the scheme is pumping it in (see
-    /// [`crate::simulation::ENERGY_GUARD`]).
+    /// The motion gained energy that nothing supplied: the scheme is pumping it in (the
+    /// verdict of efsi-run's energy guard, a [`crate::StepCheck`]; `limit` is its
+    /// `ENERGY_GUARD`).
     #[error(
         "unstable run: at t = {t:.6e} (step {step}) the kinetic + potential energy is {gain:.3e} above its start, more than {limit}× the {supplied:.3e} that the initial motion, the initial strain and gravity can have supplied (energies per radian in axisymmetric geometry): the scheme is pumping energy in — lower time.cfl or numerics.elastic.wave_courant, refine the grid, or check the solid's law (one whose stiffness turns negative, as Saint Venant–Kirchhoff's does in compression, does this)"
     )]

@@ -32,6 +32,6 @@ pub use schedule::{
     FieldId, OutputDecl, OutputKind, Phase, Pipeline, Resources, Stage, StageError, StagePlugin,
     StageStats, StepContext,
 };
-pub use simulation::Simulation;
+pub use simulation::{Simulation, StepCheck};
 pub use snapshot::Snapshot;
 pub use state::{State, StateResource, StateResources};

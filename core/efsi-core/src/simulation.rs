@@ -8,84 +8,29 @@ use crate::bc::BoundarySet;
 use crate::error::EfsiError;
 use crate::field::Field;
 use crate::grid::Grid;
-use crate::scene::{Boundary, InitialVelocity, Scene, Side};
+use crate::scene::{InitialVelocity, Scene, Side};
 use crate::schedule::{Pipeline, StagePlugin, StepContext};
 use crate::state::State;
 use std::path::{Path, PathBuf};
 
-/// How far the kinetic + potential energy may rise above its start, as a multiple of the energy
-/// the initial motion, the initial strain and gravity can have supplied, before a run is
-/// stopped as unstable ([`EfsiError::EnergyGrowth`]). The stability map's stable runs stayed
-/// below 0.003 of it; a run pumping energy in (a Saint Venant–Kirchhoff sphere at 10 cells per
-/// radius: 800× in 60 ms) passes it within milliseconds, long before a NaN would appear.
-pub const ENERGY_GUARD: f64 = 1.0;
-
-/// The energy guard's record: the start, and the largest release of potential energy so far.
-/// Active only where nothing else supplies energy — no moving wall, no frame acceleration, no
-/// outflow boundary, no gravity along a periodic direction (walls at rest, axes, free-slip
-/// walls and periodic boundaries across gravity supply none).
-#[derive(Clone, Copy, Debug)]
-struct EnergyGuard {
-    /// Kinetic + potential energy at the start.
-    mech0: f64,
-    /// Potential energy at the start.
-    pe0: f64,
-    /// Kinetic + strain energy at the start.
-    supply0: f64,
-    /// The largest drop of potential energy below its start so far.
-    release: f64,
-    /// An absolute allowance for round-off (1e-9 of the energies involved).
-    floor: f64,
-}
-
-impl EnergyGuard {
-    fn energies(grid: &Grid, state: &State, gravity: (f64, f64)) -> (f64, f64, f64) {
-        let ke = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-        let pe = crate::ops::potential_energy(grid, &state.rho, gravity);
-        let ee = state
-            .resources
-            .iter()
-            .fold(0.0, |e, r| e + r.stored_energy().max(0.0));
-        (ke, pe, ee)
-    }
-
-    fn start(grid: &Grid, state: &State, scene: &Scene, wall_speed: f64) -> Option<Self> {
-        if wall_speed != 0.0 || state.frame_acceleration != (0.0, 0.0) {
-            return None;
-        }
-        // Fluid leaving or entering through an outflow, or gravity along a periodic direction
-        // (a flow driven round and round), changes the energy without a potential for it.
-        let b = &scene.boundaries;
-        let open = Side::ALL
-            .iter()
-            .any(|&side| matches!(b.get(side), Boundary::Outflow));
-        let periodic = |side: Side| matches!(b.get(side), Boundary::Periodic);
-        let driven = (periodic(Side::XMin) && scene.gravity.0 != 0.0)
-            || (periodic(Side::YMin) && scene.gravity.1 != 0.0);
-        if open || driven {
-            return None;
-        }
-        let (ke, pe, ee) = Self::energies(grid, state, scene.gravity);
-        let mut mass = 0.0;
-        for j in 0..grid.ny as isize {
-            for i in 0..grid.nx as isize {
-                mass += state.rho[(i, j)] * grid.cell_volume(i);
-            }
-        }
-        let reach =
-            scene.gravity.0.hypot(scene.gravity.1) * (grid.x1() - grid.x0).max(grid.y1() - grid.y0);
-        let floor = (1e-9 * (ke + ee + mass * reach)).max(1e-300);
-        [ke, pe, ee]
-            .iter()
-            .all(|x| x.is_finite())
-            .then_some(EnergyGuard {
-                mech0: ke + pe,
-                pe0: pe,
-                supply0: ke + ee,
-                release: 0.0,
-                floor,
-            })
-    }
+/// A check of every step that may stop a run, added by the driver that builds the simulation
+/// ([`Simulation::add_check`]; crate `efsi-run` adds its energy guard). [`Simulation::step`]
+/// calls [`before`](Self::before) ahead of the pipeline and [`after`](Self::after) once the
+/// step's time and count are set; an error from `after` is the step's. What a check carries
+/// from step to step travels in snapshots ([`crate::Snapshot::checks`]) and checkpoints.
+pub trait StepCheck: Send {
+    /// Its name, which labels its record in a snapshot.
+    fn name(&self) -> &'static str;
+    /// Before the step, on the state it starts from (default: nothing).
+    fn before(&mut self, _scene: &Scene, _ctx: &StepContext, _state: &State) {}
+    /// After the step, on the state it left.
+    fn after(&mut self, scene: &Scene, ctx: &StepContext, state: &State) -> Result<(), EfsiError>;
+    /// Its record of what carries from step to step, into `out` (contents replaced, allocation
+    /// reused: the run loop snapshots before every step).
+    fn save_into(&self, out: &mut Vec<f64>);
+    /// Take back a record of [`save_into`](Self::save_into) (empty when the snapshot holds none
+    /// for it), so that the steps after a restore are judged as those of the run it continues.
+    fn restore(&mut self, record: &[f64]);
 }
 
 /// A scene ready to step.
@@ -104,15 +49,8 @@ pub struct Simulation {
     previous: Option<(Field, Field)>,
     last_change: f64,
     velocity_scale: f64,
-    /// The largest moving-wall speed (a wall that moves supplies energy: the energy guard is
-    /// off). It is part of the velocity scale of the first step; after that Δt follows the
-    /// velocities inside the domain, which is what the advection scheme's stability depends
-    /// on (a wall's tangential speed is carried by no face flux).
-    wall_speed: f64,
-    /// The energy guard: `None` until the first step after construction or a restore (the
-    /// state is public and may be set up by hand in between), then `Some(None)` where something
-    /// supplies energy and the guard is off.
-    guard: Option<Option<EnergyGuard>>,
+    /// The step checks, in the order added.
+    checks: Vec<Box<dyn StepCheck>>,
 }
 
 impl Simulation {
@@ -150,40 +88,7 @@ impl Simulation {
             pipeline.fields(),
         );
         pipeline.init_state(&grid, &mut state);
-        // Initial velocity.
-        match &scene.initial_velocity {
-            InitialVelocity::Rest => {}
-            InitialVelocity::Uniform((a, b)) => {
-                state.u.fill(*a);
-                state.v.fill(*b);
-            }
-            InitialVelocity::SinSinStream {
-                amplitude,
-                wavenumbers,
-            } => {
-                if grid.is_axisymmetric() {
-                    return Err(config(
-                        "initial_velocity",
-                        "SinSinStream is a planar stream function; not available in axisymmetric geometry".into(),
-                    ));
-                }
-                let psi = |x: f64, y: f64| {
-                    amplitude * (wavenumbers.0 * x).sin() * (wavenumbers.1 * y).sin()
-                };
-                for j in -1..=grid.ny as isize {
-                    for i in -1..=grid.nx as isize + 1 {
-                        let (x, y0, y1) = (grid.xf(i), grid.yf(j), grid.yf(j + 1));
-                        state.u[(i, j)] = (psi(x, y1) - psi(x, y0)) / grid.dy;
-                    }
-                }
-                for j in -1..=grid.ny as isize + 1 {
-                    for i in -1..=grid.nx as isize {
-                        let (x0, x1, y) = (grid.xf(i), grid.xf(i + 1), grid.yf(j));
-                        state.v[(i, j)] = -(psi(x1, y) - psi(x0, y)) / grid.dx;
-                    }
-                }
-            }
-        }
+        set_initial_velocity(&scene.initial_velocity, &grid, &mut state);
         // A solid's initial velocity is blended in by the stage that owns the solid fraction
         // (the VOF stage's initialize).
         bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
@@ -206,14 +111,11 @@ impl Simulation {
                 ),
             ));
         }
-        // A velocity scale bounds the first step when the fluid starts at rest.
-        let mut wall_speed = 0.0f64;
-        for side in Side::ALL {
-            if let Boundary::MovingWall { speed, .. } = scene.boundaries.get(side) {
-                wall_speed = wall_speed.max(speed.abs());
-            }
-        }
-        let mut scale = wall_speed;
+        // A velocity scale bounds the first step when the fluid starts at rest: the largest
+        // moving-wall speed is part of it; after that Δt follows the velocities inside the
+        // domain, which is what the advection scheme's stability depends on (a wall's
+        // tangential speed is carried by no face flux).
+        let mut scale = Self::wall_speed(&bc);
         let lx = grid.x1() - grid.x0;
         let ly = grid.y1() - grid.y0;
         scale = scale.max((scene.gravity.0.hypot(scene.gravity.1) * lx.max(ly)).sqrt());
@@ -248,43 +150,30 @@ impl Simulation {
             previous,
             last_change: f64::INFINITY,
             velocity_scale: scale,
-            wall_speed,
-            guard: None,
+            checks: Vec::new(),
         })
     }
 
-    /// The energy guard's record, for a snapshot: empty before the guard starts (the first
-    /// step), `[0]` when it is off, `[1, mech0, pe0, supply0, release, floor]` when it is on.
-    pub(crate) fn guard_record_into(&self, out: &mut Vec<f64>) {
-        out.clear();
-        match &self.guard {
-            None => {}
-            Some(None) => out.push(0.0),
-            Some(Some(g)) => out.extend([1.0, g.mech0, g.pe0, g.supply0, g.release, g.floor]),
-        }
+    /// Add a check of every step ([`StepCheck`]), after those already added.
+    pub fn add_check(&mut self, check: Box<dyn StepCheck>) {
+        self.checks.push(check);
     }
 
-    /// Put the energy guard back from a record of [`Self::guard_record_into`], so that its
-    /// verdict does not depend on where a run was stopped and resumed; a record that does not
-    /// fit starts it afresh at the next step. Off while something supplies energy now (a moving
-    /// wall, a frame acceleration).
-    pub(crate) fn set_guard_record(&mut self, r: &[f64]) {
-        self.guard = match r {
-            [x] if *x == 0.0 => Some(None),
-            [x, mech0, pe0, supply0, release, floor] if *x == 1.0 => Some(Some(EnergyGuard {
-                mech0: *mech0,
-                pe0: *pe0,
-                supply0: *supply0,
-                release: *release,
-                floor: *floor,
-            })),
-            _ => None,
-        };
-        if self.guard.is_some()
-            && (self.wall_speed != 0.0 || self.state.frame_acceleration != (0.0, 0.0))
-        {
-            self.guard = Some(None);
-        }
+    /// The step checks, in the order added.
+    pub fn checks(&self) -> &[Box<dyn StepCheck>] {
+        &self.checks
+    }
+
+    pub(crate) fn checks_mut(&mut self) -> &mut [Box<dyn StepCheck>] {
+        &mut self.checks
+    }
+
+    /// The largest moving-wall speed of `bc`.
+    fn wall_speed(bc: &BoundarySet) -> f64 {
+        Side::ALL
+            .iter()
+            .filter_map(|&s| bc.moving_wall_speed(s))
+            .fold(0.0, |m: f64, v| m.max(v.abs()))
     }
 
     /// The pipeline (for printing, timings and statistics).
@@ -323,13 +212,9 @@ impl Simulation {
                     (
                         d,
                         format!(
-                            "the stability limit of the stage `{name}` (time.cfl = {}{})",
+                            "the stability limit of the stage `{name}` (time.cfl = {}, {})",
                             crate::scene::num(t.cfl),
-                            if name == "deformation" {
-                                ", numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
-                            } else {
-                                ", and the velocity it sees"
-                            }
+                            self.pipeline.limit_depends_on(name).unwrap_or_default()
                         ),
                     )
                 });
@@ -399,32 +284,15 @@ impl Simulation {
             dt,
             step: self.state.step,
         };
-        if self.guard.is_none() {
-            self.guard = Some(EnergyGuard::start(
-                &self.grid,
-                &self.state,
-                &self.scene,
-                self.wall_speed,
-            ));
+        for c in &mut self.checks {
+            c.before(&self.scene, &ctx, &self.state);
         }
         self.pipeline.run_step(&ctx, &mut self.state)?;
         self.state.t += dt;
         self.state.step += 1;
         self.state.dt_prev = dt;
-        if let Some(Some(g)) = &mut self.guard {
-            let (ke, pe, _) = EnergyGuard::energies(&self.grid, &self.state, self.scene.gravity);
-            g.release = g.release.max(g.pe0 - pe);
-            let supplied = g.supply0 + g.release;
-            let gain = ke + pe - g.mech0;
-            if gain > ENERGY_GUARD * supplied + g.floor {
-                return Err(EfsiError::EnergyGrowth {
-                    t: self.state.t,
-                    step: self.state.step,
-                    gain,
-                    supplied,
-                    limit: ENERGY_GUARD,
-                });
-            }
+        for c in &mut self.checks {
+            c.after(&self.scene, &ctx, &self.state)?;
         }
         if let Some((pu, pv)) = &self.previous {
             let (nx, ny) = (self.grid.nx as isize, self.grid.ny as isize);
@@ -485,18 +353,14 @@ impl Simulation {
                 .initialize_stages(&self.grid, &self.bc, &mut self.state)
                 .map_err(EfsiError::Stage)?;
         }
-        if a != (0.0, 0.0) {
-            // An accelerating frame does work the guard does not account for.
-            self.guard = Some(None);
-        }
         Ok(())
     }
 
     /// Set the speed of the moving wall on `side` from the next step on (its profile and
     /// motion still multiply it; [`BoundarySet::set_wall_speed`]): an input that changes between
     /// steps, such as an FMU's lid speed. It bounds Δt while the fluid is at rest (the velocity
-    /// scale of a first step); a wall set moving turns the energy guard off (it does work the guard
-    /// does not account for). Snapshots do not carry it: who sets it sets it again after a
+    /// scale of a first step); the step checks see it from the next step on (efsi-run's energy
+    /// guard turns off for good once a step runs with a wall moving). Snapshots do not carry it: who sets it sets it again after a
     /// restore. Refused — nothing changes — for a side that is not a moving wall or a speed
     /// that is not finite.
     pub fn set_wall_speed(&mut self, side: Side, speed: f64) -> Result<(), EfsiError> {
@@ -507,15 +371,8 @@ impl Simulation {
                 field: format!("boundaries.{}.speed", side.field_name()),
                 message,
             })?;
-        self.wall_speed = Side::ALL
-            .iter()
-            .filter_map(|&s| self.bc.moving_wall_speed(s))
-            .fold(0.0, |m: f64, v| m.max(v.abs()));
         // A lid set moving in a fluid at rest bounds the first step as the scene's would.
-        self.velocity_scale = self.velocity_scale.max(self.wall_speed);
-        if speed != 0.0 {
-            self.guard = Some(None);
-        }
+        self.velocity_scale = self.velocity_scale.max(Self::wall_speed(&self.bc));
         Ok(())
     }
 
@@ -537,5 +394,39 @@ impl Simulation {
             .time
             .steady
             .is_some_and(|tol| self.last_change <= tol)
+    }
+}
+
+/// Set the fluid's initial velocity of the scene (`initial_velocity`) on every face, ghosts
+/// included: a uniform one, or the velocity of the stream function
+/// `ψ = A sin(k_x x) sin(k_y y)` (`SinSinStream`, planar only: [`Scene::validate`] refuses it in
+/// axisymmetric geometry) as differences of ψ across each face, so that it is discretely
+/// divergence-free.
+fn set_initial_velocity(initial: &InitialVelocity, grid: &Grid, state: &mut State) {
+    match initial {
+        InitialVelocity::Rest => {}
+        InitialVelocity::Uniform((a, b)) => {
+            state.u.fill(*a);
+            state.v.fill(*b);
+        }
+        InitialVelocity::SinSinStream {
+            amplitude,
+            wavenumbers,
+        } => {
+            let psi =
+                |x: f64, y: f64| amplitude * (wavenumbers.0 * x).sin() * (wavenumbers.1 * y).sin();
+            for j in -1..=grid.ny as isize {
+                for i in -1..=grid.nx as isize + 1 {
+                    let (x, y0, y1) = (grid.xf(i), grid.yf(j), grid.yf(j + 1));
+                    state.u[(i, j)] = (psi(x, y1) - psi(x, y0)) / grid.dy;
+                }
+            }
+            for j in -1..=grid.ny as isize + 1 {
+                for i in -1..=grid.nx as isize {
+                    let (x0, x1, y) = (grid.xf(i), grid.xf(i + 1), grid.yf(j));
+                    state.v[(i, j)] = -(psi(x1, y) - psi(x0, y)) / grid.dx;
+                }
+            }
+        }
     }
 }

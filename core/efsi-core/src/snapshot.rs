@@ -9,7 +9,8 @@
 //! the deformation tensors), time, step count and previous Δt; the simulation's private
 //! stepping data (the last rate of change, which decides steadiness, and the velocity scale of
 //! the first step); and each stage's carried-over data ([`crate::schedule::Stage::save`], e.g.
-//! the VOF stage's previous velocity); the energy guard's baseline. The simulation's `previous` velocity is not in it: every
+//! the VOF stage's previous velocity); each step check's record ([`crate::simulation::StepCheck`],
+//! e.g. efsi-run's energy guard's baseline). The simulation's `previous` velocity is not in it: every
 //! step overwrites it before reading it. Restoring a snapshot into a simulation built from the
 //! same scene continues the run **bit for bit** as if it had never stopped.
 
@@ -28,9 +29,10 @@ pub struct Snapshot {
     pub velocity_scale: f64,
     /// Each stage's carried-over data, by stage name, in pipeline order.
     pub stages: Vec<(String, Vec<f64>)>,
-    /// The energy guard's record (its baseline energies; empty before the first step), so that
-    /// a restored run judges energy growth against the same start as the run it continues.
-    pub guard: Vec<f64>,
+    /// Each step check's record ([`crate::simulation::StepCheck::save_into`]), by check name,
+    /// in the order the checks were added: a restored run is judged by them as the run it
+    /// continues (e.g. energy growth against the same start).
+    pub checks: Vec<(&'static str, Vec<f64>)>,
 }
 
 impl Snapshot {
@@ -69,15 +71,14 @@ impl Simulation {
     /// A copy of everything that determines the steps after this one (see [`Snapshot`]).
     pub fn snapshot(&self) -> Snapshot {
         let (last_change, velocity_scale) = self.stepping();
-        // Room for the longest record: snapshots taken into this one later never allocate.
-        let mut guard = Vec::with_capacity(6);
-        self.guard_record_into(&mut guard);
+        let mut checks = Vec::new();
+        self.save_checks_into(&mut checks);
         Snapshot {
             state: self.state.clone(),
             last_change,
             velocity_scale,
             stages: self.pipeline().save_stages(),
-            guard,
+            checks,
         }
     }
 
@@ -89,7 +90,22 @@ impl Simulation {
         }
         (snap.last_change, snap.velocity_scale) = self.stepping();
         self.pipeline().save_stages_into(&mut snap.stages);
-        self.guard_record_into(&mut snap.guard);
+        self.save_checks_into(&mut snap.checks);
+    }
+
+    /// Each step check's record into `out`, reusing its storage when it holds the same checks.
+    fn save_checks_into(&self, out: &mut Vec<(&'static str, Vec<f64>)>) {
+        let names = self.checks().iter().map(|c| c.name());
+        if !out.iter().map(|(n, _)| *n).eq(names) {
+            *out = self
+                .checks()
+                .iter()
+                .map(|c| (c.name(), Vec::new()))
+                .collect();
+        }
+        for (c, (_, record)) in self.checks().iter().zip(out) {
+            c.save_into(record);
+        }
     }
 
     /// Put a snapshot back: the simulation continues exactly as the one it was taken from
@@ -128,7 +144,10 @@ impl Simulation {
         }
         self.state.copy_from(&snap.state);
         self.set_stepping(snap.last_change, snap.velocity_scale);
-        self.set_guard_record(&snap.guard);
+        for c in self.checks_mut() {
+            let record = snap.checks.iter().find(|(n, _)| *n == c.name());
+            c.restore(record.map_or(&[], |(_, r)| r.as_slice()));
+        }
         Ok(())
     }
 }

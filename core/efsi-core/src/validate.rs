@@ -1,15 +1,20 @@
 //! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
 //! each failure naming the setting's path and what was expected. The helpers are public for
-//! the crates that check sections the core does not own (efsi-run's `output`).
+//! the checks of sections the core does not own: efsi-run's `output`, the stages' `numerics`
+//! sections ([`check_tolerance`], [`check_iterations`], re-exported by
+//! [`crate::scene::options`]).
 
 use crate::grid::Geometry;
 use crate::scene::*;
 
-/// A failed check: the setting's path and the message.
-pub type Checked = Result<(), (String, String)>;
+/// A failed check: the setting's path and what is wrong with it.
+pub type Failure = (String, String);
+
+/// A check: nothing, or a [`Failure`].
+pub type Checked = Result<(), Failure>;
 
 /// The failure of the setting at `field` (its path), saying `msg`.
-pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, (String, String)> {
+pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, Failure> {
     Err((field.to_string(), msg.into()))
 }
 
@@ -25,6 +30,42 @@ pub fn positive(field: &str, v: f64) -> Checked {
     }
 }
 
+/// `v`, the vector at `field`, must have finite components.
+pub fn finite(field: &str, (a, b): (f64, f64)) -> Checked {
+    if a.is_finite() && b.is_finite() {
+        Ok(())
+    } else {
+        err(field, "must be finite")
+    }
+}
+
+/// A relative tolerance's check: within `[ε, 1)` (a residual below the unit round-off can
+/// never be met).
+pub fn check_tolerance(field: &'static str, tol: f64) -> Result<(), (&'static str, String)> {
+    if (f64::EPSILON..1.0).contains(&tol) {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!(
+                "must be in [{:e}, 1) (a relative residual below the unit round-off cannot be \
+                 reached), got {}",
+                f64::EPSILON,
+                num(tol)
+            ),
+        ))
+    }
+}
+
+/// An iteration cap's check: at least 1.
+pub fn check_iterations(field: &'static str, n: usize) -> Result<(), (&'static str, String)> {
+    if n == 0 {
+        Err((field, "must be ≥ 1".into()))
+    } else {
+        Ok(())
+    }
+}
+
 impl Scene {
     /// Check ranges and consistency, section by section; on failure, the field path and what
     /// was expected.
@@ -33,6 +74,7 @@ impl Scene {
         self.validate_domain_and_grid()?;
         self.validate_time()?;
         self.validate_materials()?;
+        self.validate_solid()?;
         self.validate_boundaries()
     }
 
@@ -76,11 +118,10 @@ impl Scene {
                 ),
             );
         }
-        if self.grid.nx == 0 {
-            return err("grid.nx", "must be at least 1 cell, got 0");
-        }
-        if self.grid.ny == 0 {
-            return err("grid.ny", "must be at least 1 cell, got 0");
+        for (f, n) in [("grid.nx", self.grid.nx), ("grid.ny", self.grid.ny)] {
+            if n == 0 {
+                return err(f, "must be at least 1 cell, got 0");
+            }
         }
         if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
             return err(
@@ -154,7 +195,7 @@ impl Scene {
         Ok(())
     }
 
-    /// The fluid, gravity, the initial velocity and the solid.
+    /// The fluid, gravity and the initial velocity.
     fn validate_materials(&self) -> Checked {
         if !(self.fluid.viscosity.is_finite() && self.fluid.viscosity >= 0.0) {
             return err(
@@ -199,58 +240,65 @@ impl Scene {
                 );
             }
         }
-        if !(self.gravity.0.is_finite() && self.gravity.1.is_finite()) {
-            return err("gravity", "must be finite");
-        }
+        finite("gravity", self.gravity)?;
         if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
             return err(
                 "gravity",
                 "must be along z (the axis) in axisymmetric geometry: (0, g_z)",
             );
         }
-        if let InitialVelocity::Uniform((a, b)) = self.initial_velocity
-            && !(a.is_finite() && b.is_finite())
-        {
-            return err("initial_velocity", "must be finite");
+        if let InitialVelocity::Uniform(v) = self.initial_velocity {
+            finite("initial_velocity", v)?;
         }
-        if let Some(solid) = &self.solid {
-            solid
-                .shape
-                .validate()
-                .map_err(|m| ("solid.shape".to_string(), m))?;
-            positive("solid.density", solid.density)?;
-            // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
-            // equation's coefficients 1/ρ span more than floating point resolves.
-            let ratio = solid.density / self.fluid.density;
-            if !(1e-6..=1e6).contains(&ratio) {
-                return err(
-                    "solid.density",
-                    format!(
-                        "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
-                        solid.density, self.fluid.density
-                    ),
-                );
-            }
-            if let Some(mu) = solid.viscosity
-                && !(mu.is_finite() && mu >= 0.0)
-            {
-                return err(
-                    "solid.viscosity",
-                    format!("must be a finite number ≥ 0, got {mu}"),
-                );
-            }
-            if let Some((a, b)) = solid.velocity
-                && !(a.is_finite() && b.is_finite())
-            {
-                return err("solid.velocity", "must be finite");
-            }
-            if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0)
-            {
-                return err(
-                    "solid.velocity",
-                    "an axisymmetric body can only move along the axis: (0, v_z)",
-                );
-            }
+        if let InitialVelocity::SinSinStream { .. } = self.initial_velocity
+            && self.geometry == Geometry::Axisymmetric
+        {
+            return err(
+                "initial_velocity",
+                "SinSinStream is a planar stream function; not available in axisymmetric geometry",
+            );
+        }
+        Ok(())
+    }
+
+    /// The solid: its shape, density (and the density ratio), viscosity and velocity.
+    fn validate_solid(&self) -> Checked {
+        let Some(solid) = &self.solid else {
+            return Ok(());
+        };
+        solid
+            .shape
+            .validate()
+            .map_err(|m| ("solid.shape".to_string(), m))?;
+        positive("solid.density", solid.density)?;
+        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
+        // equation's coefficients 1/ρ span more than floating point resolves.
+        let ratio = solid.density / self.fluid.density;
+        if !(1e-6..=1e6).contains(&ratio) {
+            return err(
+                "solid.density",
+                format!(
+                    "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
+                    solid.density, self.fluid.density
+                ),
+            );
+        }
+        if let Some(mu) = solid.viscosity
+            && !(mu.is_finite() && mu >= 0.0)
+        {
+            return err(
+                "solid.viscosity",
+                format!("must be a finite number ≥ 0, got {mu}"),
+            );
+        }
+        if let Some(v) = solid.velocity {
+            finite("solid.velocity", v)?;
+        }
+        if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0) {
+            return err(
+                "solid.velocity",
+                "an axisymmetric body can only move along the axis: (0, v_z)",
+            );
         }
         Ok(())
     }

@@ -1,5 +1,6 @@
 //! Setting a simulation up for a run: the checks a driver makes before and after
-//! [`Simulation::new`] — the machine's memory, the scene's `output` section.
+//! [`Simulation::new`] — the machine's memory, the scene's `output` section — and the energy
+//! guard ([`crate::guard`]) added to its steps.
 
 use crate::output::spec::SceneOutput;
 use efsi_core::error::EfsiError;
@@ -11,7 +12,7 @@ use std::path::Path;
 /// How a driver (the CLI, the FMU, the Python binding) builds its simulation: a scene beyond
 /// the machine's memory refused before anything is allocated, then [`Simulation::new`], then
 /// the scene's `output` section checked ([`crate::output::spec::check`]) and kept with its
-/// settings in force.
+/// settings in force, and the energy guard added ([`crate::guard::EnergyGuard`]).
 pub fn simulation(
     scene: Scene,
     path: &Path,
@@ -29,6 +30,7 @@ pub fn simulation(
     let mut sim = Simulation::new(scene, path, plugins)?;
     let spec = crate::output::spec::check(&sim.scene, path, sim.pipeline())?;
     sim.scene.set_output(&spec);
+    sim.add_check(Box::new(crate::guard::EnergyGuard::default()));
     Ok(sim)
 }
 

@@ -17,8 +17,9 @@
 //! on any number of threads. [`ViscousBlocks::new`] allocates the hierarchies; later set-ups and
 //! applications allocate nothing.
 
+use crate::faces::UnknownFaces;
 use crate::viscous_operator::Coefficients;
-use efsi_core::{BoundarySet, Grid, bc::UnknownFaces};
+use efsi_core::{BoundarySet, Grid};
 use efsi_linalg::{Multigrid, Preconditioner, Stencil5};
 
 /// Multigrid on the u–u and v–v blocks of `M − K_η` (see the module docs).

@@ -8,6 +8,7 @@ pub mod advection;
 mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
+mod faces;
 pub mod projection;
 mod scratch;
 pub mod viscous;

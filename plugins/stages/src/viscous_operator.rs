@@ -33,7 +33,8 @@
 //! matrix's diagonal, [`Coefficients::blocks`] its u–u and v–v blocks as five-point stencils for
 //! the block multigrid ([`crate::block_multigrid`]).
 
-use efsi_core::{Field, G, Grid, bc::UnknownFaces};
+use crate::faces::UnknownFaces;
+use efsi_core::{Field, G, Grid};
 use efsi_linalg::Stencil5;
 use efsi_linalg::par::{self, for_each_row, for_each_row_sum, for_each_row2};
 
@@ -355,90 +356,6 @@ fn corner_mean(q: [f64; 4]) -> f64 {
     } else {
         0.0
     }
-}
-
-/// Compact vectors of unknown faces (u faces first, then v, rows in order) and the fields they
-/// live in: scatter and accumulate, rows in parallel.
-pub(crate) trait CompactFaces {
-    /// Write the compact vector `x` into the unknown faces of `u`, `v`.
-    fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field);
-    /// `u, v += x` on the unknown faces.
-    fn add(&self, x: &[f64], u: &mut Field, v: &mut Field);
-    /// `u, v ← x + β (u, v)` on the unknown faces.
-    fn xpby(&self, x: &[f64], beta: f64, u: &mut Field, v: &mut Field);
-    /// Write the unknown faces of `u`, `v` into the compact vector `x`.
-    fn gather(&self, u: &Field, v: &Field, x: &mut [f64]);
-}
-
-impl CompactFaces for UnknownFaces {
-    fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| a.copy_from_slice(b));
-    }
-
-    fn add(&self, x: &[f64], u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| {
-            for (a, b) in a.iter_mut().zip(b) {
-                *a += b;
-            }
-        });
-    }
-
-    fn xpby(&self, x: &[f64], beta: f64, u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| {
-            for (a, b) in a.iter_mut().zip(b) {
-                *a = b + beta * *a;
-            }
-        });
-    }
-
-    fn gather(&self, u: &Field, v: &Field, x: &mut [f64]) {
-        let (ux, vy) = (self.ux, self.vy);
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.nu();
-        let (xu, xv) = x.split_at_mut(nu);
-        if nur > 0 {
-            for_each_row(xu, nur, |j, row| {
-                let k0 = u.idx(ux.lo, j as isize);
-                row.copy_from_slice(&u.data()[k0..k0 + nur]);
-            });
-        }
-        let nx = u.stride() - 1 - 2 * efsi_core::GHOST;
-        if nx > 0 {
-            for_each_row(xv, nx, |jr, row| {
-                let k0 = v.idx(0, vy.lo + jr as isize);
-                row.copy_from_slice(&v.data()[k0..k0 + nx]);
-            });
-        }
-    }
-}
-
-/// `f(field row's unknown faces, x's row)` for every row of u- then v-faces, in parallel.
-fn each_face_row(
-    faces: &UnknownFaces,
-    x: &[f64],
-    u: &mut Field,
-    v: &mut Field,
-    f: impl Fn(&mut [f64], &[f64]) + Sync + Send,
-) {
-    let (ux, vy) = (faces.ux, faces.vy);
-    let s = u.stride();
-    let nur = (ux.hi - ux.lo).max(0) as usize;
-    let nx = s - 1 - 2 * efsi_core::GHOST;
-    let nu = faces.nu();
-    if let Some(rows) = nu.checked_div(nur) {
-        let r0 = u.idx(-G, 0);
-        let o = (G + ux.lo) as usize;
-        for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
-            f(&mut row[o..o + nur], &x[j * nur..(j + 1) * nur]);
-        });
-    }
-    let rows = (vy.hi - vy.lo).max(0) as usize;
-    let r0 = v.idx(-G, vy.lo);
-    let xv = &x[nu..];
-    let o = efsi_core::GHOST;
-    for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
-        f(&mut row[o..o + nx], &xv[j * nx..(j + 1) * nx]);
-    });
 }
 
 #[cfg(test)]

@@ -29,10 +29,8 @@ mod section;
 mod shape;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
-    pub use super::numerics::{
-        Checked, OptionsDecl, Preset, StageOptions, check_iterations, check_sections,
-        check_tolerance,
-    };
+    pub use super::numerics::{OptionsDecl, Preset, StageOptions, check_sections};
+    pub use crate::validate::{Checked, check_iterations, check_tolerance};
 }
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -19,8 +19,9 @@
 //! )
 //! ```
 
-use super::{Scene, Section, num};
+use super::{Scene, Section};
 use crate::schedule::StagePlugin;
+use crate::validate::{Checked, Failure};
 use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeStruct;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -53,15 +54,8 @@ pub enum Preset {
 /// [`check_sections`]), for records.
 type Entry = (Section, Option<serde_json::Value>);
 
-/// A failed check of a section: the setting's path (`numerics.<section>.<field>`) and what is
-/// wrong.
-pub type Checked = Result<(), Failure>;
-
 /// A section's settings in force: as RON text and as JSON.
 type InForce = (Section, serde_json::Value);
-
-/// A setting's path and what is wrong with it.
-pub type Failure = (String, String);
 
 /// The options a stage reads from its `numerics` section.
 pub trait StageOptions:
@@ -276,32 +270,5 @@ impl<'de> Deserialize<'de> for Numerics {
             }
         }
         d.deserialize_struct("Numerics", &[], V)
-    }
-}
-
-/// A relative tolerance's check: within `[ε, 1)` (a residual below the unit round-off can
-/// never be met).
-pub fn check_tolerance(field: &'static str, tol: f64) -> Result<(), (&'static str, String)> {
-    if (f64::EPSILON..1.0).contains(&tol) {
-        Ok(())
-    } else {
-        Err((
-            field,
-            format!(
-                "must be in [{:e}, 1) (a relative residual below the unit round-off cannot be \
-                 reached), got {}",
-                f64::EPSILON,
-                num(tol)
-            ),
-        ))
-    }
-}
-
-/// An iteration cap's check: at least 1.
-pub fn check_iterations(field: &'static str, n: usize) -> Result<(), (&'static str, String)> {
-    if n == 0 {
-        Err((field, "must be ≥ 1".into()))
-    } else {
-        Ok(())
     }
 }

@@ -18,93 +18,14 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::time::{Duration, Instant};
 
+mod declare;
 mod error;
 mod outputs;
 mod resources;
+pub use declare::{FieldId, Phase, VELOCITY};
 pub use error::ScheduleError;
 pub use outputs::{OutputDecl, OutputKind};
 pub use resources::Resources;
-
-/// The phases of one time step, in execution order.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Phase {
-    /// Explicit convective term → V* (seed Eq. 11).
-    Advection,
-    /// Body forces (gravity) → V* (seed Eq. 11).
-    BodyForce,
-    /// The last step's pressure gradient → V* (incremental pressure correction; the
-    /// projection then finds the pressure's increment).
-    PressurePredictor,
-    /// Semi-implicit viscous term → V^{n+1/3} (seed Eq. 12); B̃ predictor (Eq. 13).
-    Viscous,
-    /// Semi-implicit elastic term → V^{n+2/3} (seed Eqs. 15–20).
-    Elastic,
-    /// Pressure projection → V^{n+1} (seed Eqs. 21–23), B̃^{n+1} (Eq. 25).
-    Projection,
-    /// Interface transport (VOF PLIC) and material properties (seed Eqs. 4–6).
-    Interface,
-}
-
-impl Phase {
-    /// All phases in order.
-    pub const ALL: [Phase; 7] = [
-        Phase::Advection,
-        Phase::BodyForce,
-        Phase::PressurePredictor,
-        Phase::Viscous,
-        Phase::Elastic,
-        Phase::Projection,
-        Phase::Interface,
-    ];
-}
-
-/// A field a stage may read or write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum FieldId {
-    /// Velocity component on x-faces.
-    VelocityX,
-    /// Velocity component on y-faces.
-    VelocityY,
-    /// Pressure.
-    Pressure,
-    /// Density.
-    Density,
-    /// Viscosity.
-    Viscosity,
-    /// Solid volume fraction (allocated only when declared).
-    SolidFraction,
-    /// A field a stage owns, by name (e.g. the elastic stages' `B`): it lives in the stage's
-    /// [`StateResource`](crate::state::StateResource), which the stage adds to the state
-    /// ([`Stage::init_state`]); declaring it lets the scheduler order and check its users.
-    Stage(&'static str),
-}
-
-impl FieldId {
-    /// Fields every state has, whatever the pipeline.
-    pub const BASE: [FieldId; 5] = [
-        FieldId::VelocityX,
-        FieldId::VelocityY,
-        FieldId::Pressure,
-        FieldId::Density,
-        FieldId::Viscosity,
-    ];
-
-    /// The name used in messages and outputs.
-    pub fn name(self) -> &'static str {
-        match self {
-            FieldId::VelocityX => "u",
-            FieldId::VelocityY => "v",
-            FieldId::Pressure => "pressure",
-            FieldId::Density => "density",
-            FieldId::Viscosity => "viscosity",
-            FieldId::SolidFraction => "solid_fraction",
-            FieldId::Stage(name) => name,
-        }
-    }
-}
-
-/// Both velocity components, for declarations.
-pub const VELOCITY: [FieldId; 2] = [FieldId::VelocityX, FieldId::VelocityY];
 
 /// What a stage sees of the run besides the state.
 pub struct StepContext<'a> {
@@ -236,6 +157,11 @@ pub trait StagePlugin: Sync {
     fn after(&self) -> &'static [&'static str] {
         &[]
     }
+    /// What its step limit ([`Stage::max_dt`]) depends on besides `time.cfl`, for the message
+    /// when Δt collapses (default: `and the velocity it sees`).
+    fn limit_depends_on(&self) -> &'static str {
+        "and the velocity it sees"
+    }
     /// Whether `scene` needs this stage.
     fn needed(&self, scene: &Scene) -> bool;
     /// The `numerics` section the stage reads its options from, if it has options
@@ -269,6 +195,8 @@ struct Entry {
     writes: &'static [FieldId],
     /// The `numerics` section of its options, if it has one.
     options: Option<&'static str>,
+    /// [`StagePlugin::limit_depends_on`].
+    limit: &'static str,
     stage: Box<dyn Stage>,
     time: Duration,
     calls: u64,
@@ -359,6 +287,7 @@ impl Pipeline {
                 reads: p.reads(),
                 writes: p.writes(),
                 options: p.options().map(|d| d.section),
+                limit: p.limit_depends_on(),
                 stage,
                 time: Duration::ZERO,
                 calls: 0,
@@ -582,6 +511,15 @@ impl Pipeline {
             }
         }
         Ok(())
+    }
+
+    /// What the step limit of the stage named `stage` depends on
+    /// ([`StagePlugin::limit_depends_on`]), if it is in the pipeline.
+    pub fn limit_depends_on(&self, stage: &str) -> Option<&'static str> {
+        self.entries
+            .iter()
+            .find(|e| e.name == stage)
+            .map(|e| e.limit)
     }
 
     /// The largest Δt every stage allows, if any stage limits it.

@@ -231,12 +231,10 @@
 //! deformation (the implicit part dominates); the explicit AB2 advection follows the flow's CFL.
 
 use crate::block_multigrid::ViscousBlocks;
+use crate::faces::UnknownFaces;
 use crate::viscous_operator::Coefficients;
 use efsi_core::scene::OptionsDecl;
-use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin,
-    bc::UnknownFaces,
-};
+use efsi_core::{BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin};
 use efsi_laws_host::{Sym, Tangent};
 use efsi_linalg::BiCgStab;
 
@@ -440,6 +438,9 @@ impl StagePlugin for DeformationUpdate {
     }
     fn after(&self) -> &'static [&'static str] {
         &["projection"]
+    }
+    fn limit_depends_on(&self) -> &'static str {
+        "numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
     }
     fn needed(&self, scene: &Scene) -> bool {
         law_needed(scene)

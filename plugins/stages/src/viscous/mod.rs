@@ -53,15 +53,15 @@
 //! very viscous solid, θ = ½ is second-order in time.
 
 use crate::block_multigrid::ViscousBlocks;
+use crate::faces::UnknownFaces;
 use crate::scratch::{self, Scratch};
-use crate::viscous_operator::{Coefficients, CompactFaces};
+use crate::viscous_operator::Coefficients;
 use efsi_core::ops::face_density;
 use efsi_core::scene::OptionsDecl;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext,
-    bc::{UnknownFaces, WallTime},
+    State, StepContext, bc::WallTime,
 };
 use efsi_linalg::par::{self, dot, for_each_row};
 use efsi_linalg::{LinearOperator, Norm, SolveStats, pcg::solve_norm_in};
