@@ -10,7 +10,9 @@
 //! velocity-like vector counted as two values per cell (one u- and one v-face). A stage's bytes
 //! per cell-step are `8 (F + I·k)` with `F` the values streamed once per step, `I` those streamed
 //! per solver iteration and `k` the measured iterations per step ([`MODELS`] states `F` and `I`
-//! for each stage, with the passes they count). Anything a kernel reads twice from memory, or
+//! for each stage, with the passes they count; the viscous and elastic stages have a second
+//! model for the block-multigrid preconditioner, which the bench picks for the cases that use
+//! it). Anything a kernel reads twice from memory, or
 //! stencils whose neighbours miss the cache, is traffic the model does not count: the achieved
 //! bandwidth `bytes / time` is a lower bound, and its fraction of the triad bandwidth says how
 //! far the stage is from being limited by memory traffic alone (near 1: only fewer passes or
@@ -27,9 +29,19 @@ pub struct Model {
     pub fixed: f64,
     /// Values per cell streamed per solver iteration.
     pub per_iteration: f64,
+    /// Whether this is the stage's model with the block-multigrid preconditioner
+    /// (`numerics.*.preconditioner: Multigrid`) rather than Jacobi.
+    pub block_multigrid: bool,
     /// What the counts are.
     pub passes: &'static str,
 }
+
+/// One block-multigrid application, both blocks (u–u and v–v, one unknown per cell each), in
+/// values per cell: per block a V(1,1)-cycle on the finest level streams the right-hand side in
+/// and the correction out (4), two red–black sweeps and one residual (each: diagonal, two
+/// couplings, x, b read and one written: 6 × 3 = 18), restriction (1.25) and prolongation
+/// (2.25), ≈ 25.5; the coarse levels add a third (factor-2 coarsening in 2-D): ≈ 34 per block.
+const BLOCK_MG_APPLICATION: f64 = 68.0;
 
 /// The models of the shipped stages (see the module docs).
 pub const MODELS: &[Model] = &[
@@ -37,18 +49,21 @@ pub const MODELS: &[Model] = &[
         stage: "advection",
         fixed: 10.0,
         per_iteration: 0.0,
+        block_multigrid: false,
         passes: "SSP-RK2, two stages, each reading u, v, ρ and writing u, v",
     },
     Model {
         stage: "body_force",
         fixed: 4.0,
         per_iteration: 0.0,
+        block_multigrid: false,
         passes: "u, v read and written",
     },
     Model {
         stage: "viscous",
         fixed: 24.0,
         per_iteration: 25.0,
+        block_multigrid: false,
         passes: "step: ρ, μ read; coefficients cxx, cyy, g, corner μ written; mass, dm, diagonal \
                  (2 each) written; right-hand side (u, v, 3 coefficients, hoop 2, rhs 2); warm \
                  start and update (δ history 4, u, v); per CG iteration: the product (x 2, \
@@ -59,6 +74,7 @@ pub const MODELS: &[Model] = &[
         stage: "elastic",
         fixed: 30.0,
         per_iteration: 50.0,
+        block_multigrid: false,
         passes: "step: u, v, ρ, μ, φ, B̃ (4) read, u, v, B̃ (4) written, right-hand side, mass, \
                  diagonal, viscous coefficients (2 + 2 + 2 + 5); per BiCGSTAB iteration: two \
                  products (x 2, viscous coefficients 3, dm 2, y 2, fields scattered 2: 11 each; \
@@ -66,9 +82,29 @@ pub const MODELS: &[Model] = &[
                  6 each) and the vector updates (r, r₀, p, v, s, t, x: 16)",
     },
     Model {
+        stage: "viscous",
+        fixed: 24.0 + 20.0,
+        per_iteration: 9.0 + BLOCK_MG_APPLICATION + 16.0,
+        block_multigrid: true,
+        passes: "as Jacobi's, plus the set-up of the blocks (coefficients of both blocks and \
+                 their coarse levels: ≈ 20); per CG iteration: the product (9), one \
+                 block-multigrid application (both blocks, V(1,1): ≈ 68) and the vector \
+                 updates (16)",
+    },
+    Model {
+        stage: "elastic",
+        fixed: 30.0 + 20.0,
+        per_iteration: 50.0 - 12.0 + 2.0 * BLOCK_MG_APPLICATION,
+        block_multigrid: true,
+        passes: "as Jacobi's, plus the set-up of the blocks (≈ 20); per BiCGSTAB iteration \
+                 the two Jacobi applications (12) replaced by two block-multigrid applications \
+                 (both blocks, V(1,1): ≈ 68 each)",
+    },
+    Model {
         stage: "projection",
         fixed: 18.0,
         per_iteration: 53.0,
+        block_multigrid: false,
         passes: "step: u, v, ρ, p read, u, v, p written, divergence, five-point coefficients \
                  (3) and the coarse levels' (≈ 3 more); per CG iteration: the product (3 \
                  coefficients, x, y), the vector updates (8) and one multigrid W-cycle ≈ 2 × \
@@ -78,20 +114,26 @@ pub const MODELS: &[Model] = &[
         stage: "deformation",
         fixed: 11.0,
         per_iteration: 0.0,
+        block_multigrid: false,
         passes: "u, v, φ, B̃ (4) read, B̃ (4) written",
     },
     Model {
         stage: "vof",
         fixed: 12.0,
         per_iteration: 0.0,
+        block_multigrid: false,
         passes: "u, v, φ read; the interface normal (2) and two directional sweeps of φ (read, \
                  written: 4); φ, ρ, μ written",
     },
 ];
 
-/// The model of `stage`, if there is one.
-pub fn model(stage: &str) -> Option<&'static Model> {
-    MODELS.iter().find(|m| m.stage == stage)
+/// The model of `stage` (the block-multigrid one where `block_multigrid` and the stage has
+/// one), if there is one.
+pub fn model(stage: &str, block_multigrid: bool) -> Option<&'static Model> {
+    MODELS
+        .iter()
+        .find(|m| m.stage == stage && m.block_multigrid == block_multigrid)
+        .or_else(|| MODELS.iter().find(|m| m.stage == stage))
 }
 
 /// Bytes per cell-step of `m` at `iterations` solver iterations per step.
@@ -150,11 +192,24 @@ mod tests {
             "deformation",
             "vof",
         ] {
-            let m = model(s).unwrap_or_else(|| panic!("no model for {s}"));
-            assert!(m.fixed > 0.0);
-            assert!(bytes(m, 10.0) >= bytes(m, 0.0));
+            for mg in [false, true] {
+                let m = model(s, mg).unwrap_or_else(|| panic!("no model for {s}"));
+                assert_eq!(m.stage, s);
+                assert!(m.fixed > 0.0);
+                assert!(bytes(m, 10.0) >= bytes(m, 0.0));
+            }
         }
-        assert_eq!(bytes(model("viscous").unwrap(), 2.0), 8.0 * (24.0 + 50.0));
+        assert_eq!(
+            bytes(model("viscous", false).unwrap(), 2.0),
+            8.0 * (24.0 + 50.0)
+        );
+        // The block multigrid's models are their own, and a stage without one falls back.
+        for s in ["viscous", "elastic"] {
+            let (j, mg) = (model(s, false).unwrap(), model(s, true).unwrap());
+            assert!(mg.block_multigrid && !j.block_multigrid);
+            assert!(mg.per_iteration > j.per_iteration);
+        }
+        assert!(!model("projection", true).unwrap().block_multigrid);
     }
 
     #[test]
