@@ -33,6 +33,24 @@
 //! viscous and pressure steps, so a steady state carries an error ∝ Δt — the Re = 1000
 //! cavity's Ghia deviation is 0.0133 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
 //!
+//! **Where the second stage looks** (`numerics.advection.predictor`). Heun's second stage
+//! evaluates the tendency at the first stage's velocity `V¹ = Vⁿ + Δt A(Vⁿ)`, a prediction
+//! from advection alone. Split from the viscous and pressure steps, that makes the discrete
+//! steady state depend on Δt: at a steady state the other stages cancel advection, but the
+//! stage returns `½Δt (A(V) + A(V + Δt A(V)))`, not `Δt A(V)` — an error ∝ Δt. With
+//! `WholeStep` the second stage looks where the whole step is headed instead:
+//! `V¹ = Vⁿ + Δt A(Vⁿ) + (Δt/Δtₙ₋₁)(Vⁿ − Y)`, with `Y` the velocity this stage left at the
+//! previous step, so `(Vⁿ − Y)/Δtₙ₋₁` is what every other stage added then (pressure,
+//! viscosity, body forces). The update is still `Vⁿ + ½Δt (A(Vⁿ) + A(V¹))`; only the point of
+//! the second evaluation moves. At a steady state `V¹ = Vⁿ` and the update is exactly
+//! `Δt A(Vⁿ)`, so the steady state is that of the spatial discretisation, at any Δt; in a
+//! transient the second evaluation is a better estimate of the velocity at the step's end,
+//! and the method stays second order. The first step, a step after a restore without the
+//! history and a scene that sets `Advection` use `V¹` from advection alone (the classical
+//! Heun stage). Default: `WholeStep`, except in a scene with an elastic solid, whose stiff,
+//! wave-like elastic increments are a poor predictor of the next step's (there the seed's
+//! splitting stays). The cost: two full-grid arrays kept from step to step and in snapshots.
+//!
 //! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
 //! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
 //! run over rows in parallel (rayon); each band or row writes its own faces, so results are
@@ -42,12 +60,53 @@
 //! step reuse; it keeps none from one step to the next.
 
 use crate::scratch::{self, Scratch};
+use efsi_core::scene::OptionsDecl;
+use efsi_core::scene::options::StageOptions;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
 use efsi_linalg::par::{copy, for_each_row, for_each_row2, for_each_row2_with, max_over_rows};
+use serde::{Deserialize, Serialize};
+
+/// The advection's options (`numerics.advection`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdvectionOptions {
+    /// Where the second Runge–Kutta stage evaluates the advection (module docs). Default
+    /// (unset): `WholeStep`, except in a scene with an elastic solid, where it is `Advection`.
+    #[serde(default)]
+    pub predictor: Option<AdvectionPredictor>,
+}
+
+/// The velocity at which Heun's second stage evaluates the advection.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AdvectionPredictor {
+    /// The first stage's velocity, advection alone (the classical Heun stage; the steady
+    /// state carries an error ∝ Δt).
+    Advection,
+    /// The first stage's velocity plus the last step's increments of every other stage,
+    /// rescaled to this Δt: the steady state does not depend on Δt.
+    WholeStep,
+}
+
+impl StageOptions for AdvectionOptions {
+    const SECTION: &'static str = "advection";
+
+    fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
+        Ok(())
+    }
+}
+
+/// Whether `scene`'s advection predicts its second stage with the whole step's increments.
+fn whole_step(scene: &Scene) -> Result<bool, String> {
+    let o: AdvectionOptions = crate::options(scene)?;
+    Ok(match o.predictor {
+        Some(p) => p == AdvectionPredictor::WholeStep,
+        None => !crate::elastic::law_needed(scene),
+    })
+}
 
 /// The advection stage plugin.
 pub struct Advection;
@@ -68,9 +127,12 @@ impl StagePlugin for Advection {
     fn needed(&self, scene: &Scene) -> bool {
         scene.physics.advection
     }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<AdvectionOptions>())
+    }
     fn build(
         &self,
-        _scene: &Scene,
+        scene: &Scene,
         grid: &Grid,
         _bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
@@ -79,7 +141,18 @@ impl StagePlugin for Advection {
         // an outflow side have ny + 1 rows), plus the top edge.
         let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
         let bands = (grid.ny + 1).div_ceil(BAND);
+        let padded = stride * (grid.ny + 1 + 2 * efsi_core::GHOST);
+        let carry = if whole_step(scene)? {
+            Some(Carry {
+                u: vec![0.0; padded],
+                v: vec![0.0; padded],
+                dt: 0.0,
+            })
+        } else {
+            None
+        };
         Ok(Box::new(AdvectionStage {
+            carry,
             scratch: Scratch::reserve(shared, WORK * stride * (grid.ny + 1 + 2 * efsi_core::GHOST)),
             edge_m: vec![0.0; (bands + 1) * stride],
             edge_q: vec![0.0; (bands + 1) * stride],
@@ -97,7 +170,18 @@ const BAND: usize = 16;
 /// which advection does not change), and the current stage's face masses.
 const WORK: usize = 8;
 
+/// What the `WholeStep` predictor keeps from step to step: the velocity the stage left at the
+/// previous step (`Y` in the module docs, padded like the fields) and that step's Δt (0: no
+/// history yet).
+struct Carry {
+    u: Vec<f64>,
+    v: Vec<f64>,
+    dt: f64,
+}
+
 struct AdvectionStage {
+    /// The `WholeStep` predictor's history (`None` with `Advection`).
+    carry: Option<Carry>,
     /// The pipeline's work vectors ([`WORK`] padded full-grid arrays while the stage runs).
     scratch: Scratch,
     /// Mass and momentum fluxes through the bottom edge of each band of rows, and the top of
@@ -451,6 +535,12 @@ impl Stage for AdvectionStage {
         let vy = ctx.bc.normal_faces(1, g.ny);
         let (nx, ny) = (g.nx as isize, g.ny as isize);
         let s = state.u.stride();
+        // The other stages' increments of the last step, rescaled to this Δt (module docs).
+        let mut carry = self.carry.take();
+        let (lag, yu, yv): (f64, &[f64], &[f64]) = match &carry {
+            Some(c) if c.dt > 0.0 => (dt / c.dt, &c.u, &c.v),
+            _ => (0.0, &[], &[]),
+        };
         for stage in 0..2 {
             self.rhs(
                 ctx,
@@ -464,6 +554,7 @@ impl Stage for AdvectionStage {
                     &mut state.u,
                     &mut *m1u,
                     &*u0,
+                    yu,
                     1,
                     &*qu,
                     &*mu_,
@@ -476,6 +567,7 @@ impl Stage for AdvectionStage {
                     &mut state.v,
                     &mut *m1v,
                     &*v0,
+                    yv,
                     s,
                     &*qv,
                     &*mv_,
@@ -486,7 +578,7 @@ impl Stage for AdvectionStage {
                 ),
             ];
             let rho = state.rho.data();
-            for (x, m1, x0, o, q, dm, i0, i1, j0, j1) in faces {
+            for (x, m1, x0, y, o, q, dm, i0, i1, j0, j1) in faces {
                 let r0 = x.idx(-efsi_core::G, j0);
                 let n = (j1 - j0).max(0) as usize * s;
                 let (dmd, qd, x0d) = (dm, q, x0);
@@ -496,9 +588,20 @@ impl Stage for AdvectionStage {
                     for i in i0..i1 {
                         let c = (i + efsi_core::G) as usize;
                         let k = r0 + jr * s + c;
-                        // (m, m u) after an Euler step from the current stage values.
+                        // The other stages' increment added to the first stage's velocity.
+                        let other = if lag != 0.0 {
+                            lag * (x0d[k] - y[k])
+                        } else {
+                            0.0
+                        };
+                        // (m, m u) after an Euler step from the current stage values (the
+                        // second stage from the first's momentum, without that increment).
                         let m_e = mr[c] + dt * dmd[k];
-                        let q_e = mr[c] * xr[c] + dt * qd[k];
+                        let q_e = if stage == 1 && lag != 0.0 {
+                            mr[c] * (xr[c] - other) + dt * qd[k]
+                        } else {
+                            mr[c] * xr[c] + dt * qd[k]
+                        };
                         let (m_new, q_new) = if stage == 0 {
                             (m_e, q_e)
                         } else {
@@ -509,6 +612,9 @@ impl Stage for AdvectionStage {
                         };
                         mr[c] = m_new;
                         xr[c] = q_new / m_new;
+                        if stage == 0 && lag != 0.0 {
+                            xr[c] += other;
+                        }
                     }
                 });
             }
@@ -517,7 +623,52 @@ impl Stage for AdvectionStage {
                     .fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
             }
         }
+        if let Some(c) = &mut carry {
+            copy(&mut c.u, state.u.data());
+            copy(&mut c.v, state.v.data());
+            c.dt = dt;
+        }
+        self.carry = carry;
         Ok(StageStats::default())
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        if let Some(c) = self.carry.as_ref().filter(|c| c.dt > 0.0) {
+            out.reserve(1 + c.u.len() + c.v.len());
+            out.push(c.dt);
+            out.extend_from_slice(&c.u);
+            out.extend_from_slice(&c.v);
+        }
+    }
+
+    fn save(&self) -> Vec<f64> {
+        let mut v = Vec::new();
+        self.save_into(&mut v);
+        v
+    }
+
+    /// Nothing (no history: the next step's second stage looks from advection alone), or what
+    /// [`save`](Stage::save) wrote.
+    fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        match &mut self.carry {
+            Some(c) if data.is_empty() => {
+                c.dt = 0.0;
+                Ok(())
+            }
+            Some(c) if data.len() == 1 + c.u.len() + c.v.len() && data[0] > 0.0 => {
+                let n = c.u.len();
+                c.dt = data[0];
+                c.u.copy_from_slice(&data[1..1 + n]);
+                c.v.copy_from_slice(&data[1 + n..]);
+                Ok(())
+            }
+            None if data.is_empty() => Ok(()),
+            _ => Err(format!(
+                "expected the advection's history ([Δt] and two velocity arrays), got {} values",
+                data.len()
+            )),
+        }
     }
 }
 
