@@ -27,11 +27,9 @@
 //! **Stability.** Each Euler stage with a TVD limiter of `ψ ≤ 2` is TVD for
 //! `Δt (|u|/dx + |v|/dy) ≤ ½`; the stage limits Δt to `CFL · min(1 / (|u|/dx + |v|/dy))` with
 //! the scene's CFL (default 0.4). Beyond the bound the scheme is not guaranteed TVD but stays
-//! stable: the Re = 100 cavity at 64² reaches its steady state at CFL 0.4, 0.6, 0.8 and 1.0
-//! (Ghia deviation 0.0072, 0.0067, 0.0062, 0.0061; measured when the lid's speed still capped
-//! Δt), the Re = 1000 cavity at 128² at 0.4, 0.8 and 1.0 on the interior velocities. The default stays 0.4 for accuracy, not stability: the step is split from the
-//! viscous and pressure steps, so a steady state carries an error ∝ Δt — the Re = 1000
-//! cavity's Ghia deviation is 0.0133 at CFL 0.4, 0.0258 at 0.8, 0.0312 at 1.0.
+//! stable: the Re = 100 cavity at 64² and the Re = 1000 cavity at 128² reach their steady
+//! states at CFL 0.4, 0.8 and 1.0. With the `WholeStep` predictor (below) the steady state
+//! does not move with the CFL, so the CFL buys time accuracy only.
 //!
 //! **Where the second stage looks** (`numerics.advection.predictor`). Heun's second stage
 //! evaluates the tendency at the first stage's velocity `V¹ = Vⁿ + Δt A(Vⁿ)`, a prediction
@@ -47,9 +45,12 @@
 //! transient the second evaluation is a better estimate of the velocity at the step's end,
 //! and the method stays second order. The first step, a step after a restore without the
 //! history and a scene that sets `Advection` use `V¹` from advection alone (the classical
-//! Heun stage). Default: `WholeStep`, except in a scene with an elastic solid, whose stiff,
-//! wave-like elastic increments are a poor predictor of the next step's (there the seed's
-//! splitting stays). The cost: two full-grid arrays kept from step to step and in snapshots.
+//! Heun stage). Default: `WholeStep` in a scene of one fluid, `Advection` in a scene with a
+//! solid: there a face the interface crosses changes density between steps by up to the
+//! density ratio, so the last step's increments predict the next one's poorly — a dense disk
+//! falling through a fluid 1000 times lighter (`tests/two_material.rs`) fell with twice the
+//! error (4.3e-3 of its fall against 2.0e-3) and lost volume (6.8e-10 against 0). The cost:
+//! two full-grid arrays kept from step to step and in snapshots.
 //!
 //! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
 //! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
@@ -57,7 +58,7 @@
 //! bit-identical on any number of threads. The stage uses 8 full-grid arrays while it runs —
 //! the tendencies (4), the start-of-step velocity (2) and the current stage's face masses (2)
 //! — taken from the pipeline's pool of work vectors (`scratch`), which the later stages of the
-//! step reuse; it keeps none from one step to the next.
+//! step reuse. It keeps from one step to the next only the `WholeStep` predictor's two arrays.
 
 use crate::scratch::{self, Scratch};
 use efsi_core::scene::OptionsDecl;
@@ -75,7 +76,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct AdvectionOptions {
     /// Where the second Runge–Kutta stage evaluates the advection (module docs). Default
-    /// (unset): `WholeStep`, except in a scene with an elastic solid, where it is `Advection`.
+    /// (unset): `WholeStep` in a scene of one fluid, `Advection` in a scene with a solid.
     #[serde(default)]
     pub predictor: Option<AdvectionPredictor>,
 }
@@ -104,7 +105,7 @@ fn whole_step(scene: &Scene) -> Result<bool, String> {
     let o: AdvectionOptions = crate::options(scene)?;
     Ok(match o.predictor {
         Some(p) => p == AdvectionPredictor::WholeStep,
-        None => !crate::elastic::law_needed(scene),
+        None => scene.solid.is_none(),
     })
 }
 
@@ -634,8 +635,11 @@ impl Stage for AdvectionStage {
 
     fn save_into(&self, out: &mut Vec<f64>) {
         out.clear();
-        if let Some(c) = self.carry.as_ref().filter(|c| c.dt > 0.0) {
+        if let Some(c) = &self.carry {
+            // Room for the history from the first save on: no allocation once it exists.
             out.reserve(1 + c.u.len() + c.v.len());
+        }
+        if let Some(c) = self.carry.as_ref().filter(|c| c.dt > 0.0) {
             out.push(c.dt);
             out.extend_from_slice(&c.u);
             out.extend_from_slice(&c.v);

@@ -6,6 +6,7 @@ use efsi_core::Scene;
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::{Preset, StageOptions};
 use efsi_run::SceneOverrides;
+use efsi_stages::advection::AdvectionOptions;
 use efsi_stages::elastic::{ElasticCoupling, ElasticOptions};
 use efsi_stages::projection::{PressureSolver, ProjectionOptions};
 use efsi_stages::viscous::ViscousOptions;
@@ -39,9 +40,11 @@ fn defaults_apply_where_the_scene_is_silent() {
     assert_eq!((p.tolerance, p.solver), (1e-6, PressureSolver::Multigrid));
     assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-6);
     assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-10);
+    // Unset: the scene decides (`WholeStep` in a scene of one fluid).
+    assert_eq!(get::<AdvectionOptions>(&s).predictor, None);
     // The checked scene holds every declared section with its settings in force.
     let names: Vec<&str> = s.numerics.sections().map(|(n, _)| n).collect();
-    assert_eq!(names, ["elastic", "projection", "viscous"]);
+    assert_eq!(names, ["advection", "elastic", "projection", "viscous"]);
 }
 
 /// `numerics.preset: Strict` tightens every tolerance to its strict value, keeps a tighter one
