@@ -75,6 +75,7 @@ use efsi_core::overrides::{FIELD_ALIASES, Override, OverrideValue, attribute};
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::{Scene, SceneError};
 use efsi_ron_edit::overrides::apply_sets;
+use efsi_stages::solid::SceneSolid;
 use efsi_ron_edit::{Document, Path as SettingPath};
 use std::path::{Path, PathBuf};
 
@@ -122,9 +123,14 @@ impl SceneOverrides for Scene {
 
     fn from_str_with(text: &str, path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
         let parsed = Scene::parse(text, path)?;
-        let hints = |s: &Scene| s.to_ron();
+        let hints = with_defaults;
+        // Each override's result must read as a scene, its solid section as a solid.
         let read = |text: &str| match Scene::parse(text, path) {
             Err(SceneError::Syntax { message, .. }) => Err(message),
+            Ok(scene) => match scene.solid_spec() {
+                Err((_, message)) => Err(message),
+                Ok(_) => Ok(scene),
+            },
             other => other.map_err(|e| e.to_string()),
         };
         let mut scene = apply_sets(text, parsed, overrides, FIELD_ALIASES, hints, read).map_err(
@@ -146,8 +152,14 @@ impl SceneOverrides for Scene {
         scene.overrides = overrides.to_vec();
         // Positions in messages point into the text the user wrote, never the rewritten one.
         scene.locate_sections_in(text);
+        // The solid's checks (the stages own the section) too: a scene loaded or changed is
+        // refused at once, as for the sections the core owns.
         scene
             .validate()
+            .and_then(|()| match scene.solid_spec()? {
+                Some(solid) => solid.validate(&scene),
+                None => Ok(()),
+            })
             .map_err(|(field, message)| attribute(path, overrides, field, message))?;
         Ok(scene)
     }
@@ -180,7 +192,7 @@ impl SceneOverrides for Scene {
             message,
         };
         let setting = SettingPath::parse(path, FIELD_ALIASES).map_err(fail)?;
-        let doc = Document::parse(self.to_ron(), FIELD_ALIASES)
+        let doc = Document::parse(with_defaults(self), FIELD_ALIASES)
             .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
         doc.get(&setting)
             .map_err(fail)?
@@ -197,6 +209,20 @@ impl SceneOverrides for Scene {
             Ok(()) => filled.get(path),
             Err(_) => self.get(path),
         }
+    }
+}
+
+/// `scene` as RON text with the defaults of its sections filled in where the core knows them,
+/// and its `solid` section's (the stages' type, [`efsi_stages::solid::Solid`]) where it reads
+/// as one: what a path is read from, and the shape of a setting the file leaves out.
+fn with_defaults(scene: &Scene) -> String {
+    match scene.solid_spec() {
+        Ok(Some(solid)) => {
+            let mut filled = scene.clone();
+            filled.set_solid(&solid);
+            filled.to_ron()
+        }
+        _ => scene.to_ron(),
     }
 }
 
@@ -277,9 +303,9 @@ Scene(
         ])
         .unwrap();
         assert_eq!((s.grid.nx, s.grid.ny), (64, 96));
-        let efsi_core::scene::Shape::Disk { center, radius } = s.solid.as_ref().unwrap().shape
+        let efsi_stages::solid::Shape::Disk { center, radius } = s.solid_spec().unwrap().unwrap().shape
         else {
-            panic!("{:?}", s.solid)
+            panic!("{:?}", s.solid_spec())
         };
         assert_eq!((center, radius), ((0.0, 0.06), 0.02));
         assert!(
@@ -289,7 +315,7 @@ Scene(
         );
         assert_eq!(s.gravity, (0.0, -1.0));
         assert_eq!(
-            s.solid.as_ref().unwrap().law.as_ref().unwrap().name,
+            s.solid_spec().unwrap().unwrap().law.unwrap().name,
             "mooney_rivlin"
         );
         assert_eq!(s.overrides.len(), 7);
@@ -309,8 +335,8 @@ Scene(
             efsi_core::scene::InitialVelocity::Uniform((1.0, 2.0))
         ));
         assert!(matches!(
-            s.solid.unwrap().shape,
-            efsi_core::scene::Shape::Rectangle {
+            s.solid_spec().unwrap().unwrap().shape,
+            efsi_stages::solid::Shape::Rectangle {
                 max: (0.01, 0.04),
                 ..
             }
@@ -331,7 +357,7 @@ Scene(
             Override::set("solid.viscosity", 2),
         ])
         .unwrap();
-        let law = s.solid.as_ref().unwrap().law.as_ref().unwrap();
+        let law = s.solid_spec().unwrap().unwrap().law.unwrap();
         assert_eq!(law.parameters["G"], 1e6);
         assert_eq!(law.parameters["K"], 2.0);
         // A stage's section holds what the overrides wrote; the absent enum value given as a
@@ -341,7 +367,7 @@ Scene(
             Some("(solver: IncompleteCholesky, tolerance: 1e-9)")
         );
         assert_eq!(s.time.steady, Some(1e-6));
-        assert_eq!(s.solid.as_ref().unwrap().viscosity, Some(2.0));
+        assert_eq!(s.solid_spec().unwrap().unwrap().viscosity, Some(2.0));
     }
 
     #[test]
@@ -455,7 +481,7 @@ Scene(
         s.set("solid.law.parameters.G", 3e5).unwrap();
         s.refine(2.0).unwrap();
         assert_eq!(
-            s.solid.as_ref().unwrap().law.as_ref().unwrap().parameters["G"],
+            s.solid_spec().unwrap().unwrap().law.as_ref().unwrap().parameters["G"],
             3e5
         );
         assert_eq!((s.grid.nx, s.grid.ny), (46, 94));

@@ -11,6 +11,7 @@ pub mod elastic;
 mod faces;
 pub mod projection;
 mod scratch;
+pub mod solid;
 pub mod viscous;
 mod viscous_operator;
 pub mod vof;

@@ -276,16 +276,13 @@ pub const B: FieldId = FieldId::Stage("B");
 
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
 pub(crate) fn law_needed(scene: &Scene) -> bool {
-    scene.solid.as_ref().is_some_and(|s| s.law.is_some())
+    crate::solid::solid(scene).is_ok_and(|s| s.law.is_some())
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
 fn viscosities(scene: &Scene) -> (f64, f64) {
     let mu_f = scene.fluid.viscosity;
-    let mu_s = scene
-        .solid
-        .as_ref()
-        .map_or(mu_f, |s| s.viscosity(&scene.fluid));
+    let mu_s = crate::solid::solid(scene).map_or(mu_f, |s| s.viscosity(&scene.fluid));
     (mu_f, mu_s)
 }
 

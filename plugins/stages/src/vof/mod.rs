@@ -13,6 +13,6 @@ pub mod shapes;
 pub mod stage;
 
 pub use advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide, phase_volume};
-pub use efsi_core::scene::Shape;
+pub use crate::solid::Shape;
 pub use shapes::{ShapeVolume, fill_fraction, section_width};
 pub use stage::Vof;
