@@ -23,6 +23,7 @@ use efsi_core::{Advance, AdvanceError, EfsiError, Simulation, Snapshot};
 use efsi_laws_host::loader::{describe, library_file_name};
 use efsi_run::SceneOutput;
 use efsi_run::checkpoint::{LawIdentity, law_identity};
+use efsi_stages::body_force::FrameAcceleration;
 use efsi_stages::solid::SceneSolid;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

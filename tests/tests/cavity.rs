@@ -3,6 +3,7 @@
 //! are in the foundation issue's closing note).
 
 use efsi_core::{Scene, Simulation};
+use efsi_run::SceneOverrides;
 use efsi_run::probes::sample;
 use efsi_tests::{interp, read_csv, reference, run_to_steady};
 use std::path::Path;

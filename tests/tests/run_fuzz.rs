@@ -25,8 +25,7 @@
 //! seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it). The figures are printed (`--nocapture`).
 
 use efsi_core::scene::{
-    Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, WallMotion,
-    WallProfile,
+    Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, WallMotion, WallProfile,
 };
 use efsi_core::{Geometry, Scene};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};

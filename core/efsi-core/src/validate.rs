@@ -1,8 +1,8 @@
-//! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
-//! each failure naming the setting's path and what was expected. The helpers are public for
-//! the checks of sections the core does not own: efsi-run's `output`, the stages' `numerics`
-//! sections ([`check_tolerance`], [`check_iterations`], re-exported by
-//! [`crate::scene::options`]).
+//! The scene's checks, one function per section the core owns ([`Scene::validate`]): ranges
+//! and consistency, each failure naming the setting's path and what was expected. The helpers
+//! are public for the checks of sections the core does not own: efsi-run's `output`, the
+//! stages' `solid` ([`Scene::check_diffusion`]) and `numerics` sections ([`check_tolerance`],
+//! [`check_iterations`], re-exported by [`crate::scene::options`]).
 
 use crate::grid::Geometry;
 use crate::scene::*;

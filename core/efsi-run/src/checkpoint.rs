@@ -67,11 +67,13 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
         .source_dir
         .clone()
         .unwrap_or_else(|| PathBuf::from("."));
-    let solid = scene.solid_spec().map_err(|(field, message)| EfsiError::Config {
-        path: dir.clone(),
-        field,
-        message,
-    })?;
+    let solid = scene
+        .solid_spec()
+        .map_err(|(field, message)| EfsiError::Config {
+            path: dir.clone(),
+            field,
+            message,
+        })?;
     let Some(spec) = solid.and_then(|s| s.law) else {
         return Ok(None);
     };

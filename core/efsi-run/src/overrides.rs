@@ -1,4 +1,5 @@
-//! Scene overrides: change any setting of a scene by its path, without editing the file.
+//! Scene files and overrides: read a scene file ([`read_file`], [`SceneOverrides::load`]), and
+//! change any setting of a scene by its path, without editing the file.
 //!
 //! ```text
 //! efsi run cases/sphere_impact.ron --set grid.nx=128 --set solid.law.parameters.G=1e6 --refine 2
@@ -75,13 +76,18 @@ use efsi_core::overrides::{FIELD_ALIASES, Override, OverrideValue, attribute};
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::{Scene, SceneError};
 use efsi_ron_edit::overrides::apply_sets;
-use efsi_stages::solid::SceneSolid;
 use efsi_ron_edit::{Document, Path as SettingPath};
+use efsi_stages::solid::SceneSolid;
 use std::path::{Path, PathBuf};
 
 /// Overrides applied to a scene: read a scene file with them, set, refine and read its
 /// settings by path (see the module docs).
 pub trait SceneOverrides: Sized {
+    /// Read a scene file ([`read_file`]) and validate it: [`load_with`](Self::load_with)
+    /// without overrides.
+    fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with(path, &[])
+    }
     /// Read a scene file, apply `overrides` in order and validate the result (see the module
     /// docs). Errors in the file name its line and column; errors an override causes name the
     /// override ([`SceneError::Override`]).
@@ -115,7 +121,7 @@ pub trait SceneOverrides: Sized {
 impl SceneOverrides for Scene {
     fn load_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = Scene::read_file(path)?;
+        let text = read_file(path)?;
         let mut scene = Scene::from_str_with(&text, path, overrides)?;
         scene.source_dir = path.parent().map(Path::to_path_buf);
         Ok(scene)
@@ -212,6 +218,41 @@ impl SceneOverrides for Scene {
     }
 }
 
+/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// The text of the scene file at `path`: at most [`MAX_SCENE_BYTES`] of UTF-8; anything else is
+/// refused as not a scene file.
+pub fn read_file(path: &Path) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    // Read at most one byte past the cap: `/dev/zero` or a huge file is refused, not read.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            use std::io::Read;
+            f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes)
+        })
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(io(std::io::Error::other(format!(
+            "larger than {} MiB: not a scene file",
+            MAX_SCENE_BYTES >> 20
+        ))));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (invalid byte at offset {})",
+                e.utf8_error().valid_up_to()
+            ),
+        ))
+    })
+}
+
 /// `scene` as RON text with the defaults of its sections filled in where the core knows them,
 /// and its `solid` section's (the stages' type, [`efsi_stages::solid::Solid`]) where it reads
 /// as one: what a path is read from, and the shape of a setting the file leaves out.
@@ -303,7 +344,8 @@ Scene(
         ])
         .unwrap();
         assert_eq!((s.grid.nx, s.grid.ny), (64, 96));
-        let efsi_stages::solid::Shape::Disk { center, radius } = s.solid_spec().unwrap().unwrap().shape
+        let efsi_stages::solid::Shape::Disk { center, radius } =
+            s.solid_spec().unwrap().unwrap().shape
         else {
             panic!("{:?}", s.solid_spec())
         };
@@ -481,7 +523,13 @@ Scene(
         s.set("solid.law.parameters.G", 3e5).unwrap();
         s.refine(2.0).unwrap();
         assert_eq!(
-            s.solid_spec().unwrap().unwrap().law.as_ref().unwrap().parameters["G"],
+            s.solid_spec()
+                .unwrap()
+                .unwrap()
+                .law
+                .as_ref()
+                .unwrap()
+                .parameters["G"],
             3e5
         );
         assert_eq!((s.grid.nx, s.grid.ny), (46, 94));

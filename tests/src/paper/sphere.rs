@@ -7,9 +7,9 @@ use super::case::{
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use efsi_stages::solid::{SceneSolid, Shape, Solid};
 use efsi_core::{Scene, Simulation};
 use efsi_run::{ProbeSpec, SceneOutput};
+use efsi_stages::solid::{SceneSolid, Shape, Solid};
 use std::f64::consts::PI;
 
 /// The sphere's material and initial condition, read from its scene.

@@ -50,12 +50,12 @@ use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Run, execute_built, load_case, probes};
 use efsi_core::Scene;
-use efsi_stages::solid::{SceneSolid, Shape};
 use efsi_run::{ProbeSpec, SceneOutput};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use efsi_stages::elastic::{
     DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT,
 };
+use efsi_stages::solid::{SceneSolid, Shape};
 use std::path::PathBuf;
 
 /// Shear moduli (Pa).

@@ -120,7 +120,8 @@ pub struct Scene {
     /// (`efsi-run`'s `OutputSpec`).
     #[serde(default)]
     pub output: Section,
-    /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
+    /// The folder of the scene file (set by `efsi_run::SceneOverrides::load`; relative law paths start
+    /// there).
     #[serde(skip)]
     pub source_dir: Option<PathBuf>,
     /// The overrides applied to the file's settings, in order ([`crate::overrides`]; set by
@@ -419,9 +420,6 @@ fn yes() -> bool {
 /// end of its stack).
 pub const RECURSION_LIMIT: usize = 128;
 
-/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
-pub const MAX_SCENE_BYTES: u64 = 4 << 20;
-
 /// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
 /// digits).
 pub fn num(v: f64) -> String {
@@ -437,14 +435,6 @@ pub fn num(v: f64) -> String {
 pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
 
 impl Scene {
-    /// Read and validate a scene file (with overrides: `efsi_run::SceneOverrides::load_with`).
-    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        let path = path.as_ref();
-        let mut scene = Scene::from_str_at(&Scene::read_file(path)?, path)?;
-        scene.source_dir = path.parent().map(Path::to_path_buf);
-        Ok(scene)
-    }
-
     /// Parse and validate scene text; `path` is used in error messages only.
     pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let scene = Scene::parse(text, path)?;

@@ -13,17 +13,19 @@
 //! The core keeps the section as RON text ([`efsi_core::scene::Section`]); the stages read it
 //! as a [`Solid`] ([`SceneSolid::solid_spec`]). The VOF stage's plugin checks it
 //! ([`check`], its [`StagePlugin::check_scene`](efsi_core::StagePlugin::check_scene)) when a
-//! simulation is built, each failure naming the setting's path (`solid.density`), and puts
-//! back its settings in force, so that records hold the defaults too.
+//! simulation is built — its ranges, and that it covers a cell of the grid — each failure
+//! naming the setting's path (`solid.density`), and puts back its settings in force, so that
+//! records hold the defaults too. `efsi_run::SceneOverrides` checks its ranges when a scene
+//! is loaded or changed.
 
 mod shape;
 
 pub use shape::Shape;
 
-use efsi_core::Scene;
 use efsi_core::grid::Geometry;
 use efsi_core::scene::{Fluid, Section};
 use efsi_core::validate::{Checked, err, finite, positive};
+use efsi_core::{Field, Grid, Scene};
 use serde::{Deserialize, Serialize};
 
 /// A solid body (or several, as a union of shapes) of one material.
@@ -159,7 +161,29 @@ pub fn check(scene: &mut Scene) -> Checked {
         return Ok(());
     };
     solid.validate(scene)?;
+    covers_a_cell(scene, &solid.shape)?;
     scene.set_solid(&solid);
+    Ok(())
+}
+
+/// A solid that covers no cell of the scene's grid (outside the domain, far below a cell, an
+/// empty intersection) would leave a run without one, its probes NaN: refused, by the cell
+/// fractions the VOF stage starts from ([`crate::vof::fill_fraction`]).
+fn covers_a_cell(scene: &Scene, shape: &Shape) -> Checked {
+    let (domain, n) = (&scene.domain, &scene.grid);
+    let grid = Grid::new(scene.geometry, n.nx, n.ny, domain.x, domain.y);
+    let mut phi = Field::zeros(&grid);
+    crate::vof::fill_fraction(&grid, shape, &mut phi);
+    if (0..grid.ny as isize).all(|j| (0..grid.nx as isize).all(|i| phi[(i, j)] <= 0.0)) {
+        return err(
+            "solid.shape",
+            format!(
+                "covers no cell of the {}×{} grid (outside the domain, much smaller than a \
+                 cell of {:e} × {:e}, or empty): the run would have no solid",
+                grid.nx, grid.ny, grid.dx, grid.dy
+            ),
+        );
+    }
     Ok(())
 }
 

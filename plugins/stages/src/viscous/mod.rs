@@ -54,9 +54,9 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
+use crate::ops::face_density;
 use crate::scratch::{self, Scratch};
 use crate::viscous_operator::Coefficients;
-use efsi_core::ops::face_density;
 use efsi_core::scene::OptionsDecl;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
