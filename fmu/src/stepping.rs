@@ -23,6 +23,8 @@ use efsi_core::{Advance, AdvanceError, EfsiError, Simulation, Snapshot};
 use efsi_laws_host::loader::{describe, library_file_name};
 use efsi_run::SceneOutput;
 use efsi_run::checkpoint::{LawIdentity, law_identity};
+use efsi_stages::body_force::FrameAcceleration;
+use efsi_stages::solid::SceneSolid;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -121,7 +123,10 @@ fn law_dir() -> Result<PathBuf, String> {
 /// else: the scene names a law by its name; its library `libefsi_law_<name>.so` must be in
 /// `dir`. Returns the library's file name.
 fn law_in_fmu(scene: &mut efsi_core::Scene, dir: &Path) -> Result<Option<String>, String> {
-    let Some(law) = scene.solid.as_mut().and_then(|s| s.law.as_mut()) else {
+    let Some(mut solid) = scene.solid_spec().map_err(|(f, m)| format!("{f}: {m}"))? else {
+        return Ok(None);
+    };
+    let Some(law) = solid.law.as_mut() else {
         return Ok(None);
     };
     let plain = !law.name.is_empty()
@@ -146,6 +151,7 @@ fn law_in_fmu(scene: &mut efsi_core::Scene, dir: &Path) -> Result<Option<String>
     }
     describe(&dir.join(&file)).map_err(|e| format!("solid.law.name = \"{}\": {e}", law.name))?;
     law.name = file.clone();
+    scene.set_solid(&solid);
     scene.source_dir = Some(dir.to_path_buf());
     Ok(Some(file))
 }

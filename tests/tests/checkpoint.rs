@@ -4,6 +4,7 @@
 //! cell) after saving the last good state as VTK and as a checkpoint.
 
 use efsi_core::{EfsiError, Scene, Simulation};
+use efsi_run::SceneOverrides;
 use efsi_run::checkpoint::{self, CheckpointFile};
 use efsi_run::run::{RunOptions, RunOutcome, StopReason, resume, run_with};
 use efsi_tests::run_until;

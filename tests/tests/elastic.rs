@@ -299,7 +299,7 @@ fn stiff_solid_runs_at_the_flow_time_step_only_with_the_implicit_term() {
     let bound = 0.5 * 0.0625;
     run_until(&mut s, 2.0, |s, dt| {
         dts.push(dt);
-        energy.push(efsi_core::ops::kinetic_energy(
+        energy.push(efsi_stages::ops::kinetic_energy(
             &s.grid,
             &s.state.u,
             &s.state.v,
@@ -325,7 +325,7 @@ fn stiff_solid_runs_at_the_flow_time_step_only_with_the_implicit_term() {
             outcome = Err(e.to_string());
             break;
         }
-        emax = emax.max(efsi_core::ops::kinetic_energy(
+        emax = emax.max(efsi_stages::ops::kinetic_energy(
             &s.grid,
             &s.state.u,
             &s.state.v,
@@ -407,8 +407,8 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
     let g = s.scene.gravity;
     let energies = |s: &Simulation| {
         (
-            efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho),
-            efsi_core::ops::potential_energy(&s.grid, &s.state.rho, g),
+            efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho),
+            efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, g),
         )
     };
     let (ke0, pe0) = energies(&s);
@@ -479,8 +479,8 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
         let gv = s.scene.gravity;
         let energy = |s: &Simulation| {
             (
-                efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
-                    + efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv),
+                efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
+                    + efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv),
                 s.state
                     .resources
                     .get::<efsi_stages::elastic::Deformation>()
@@ -488,11 +488,11 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
             )
         };
         let (m0, e0) = energy(&s);
-        let ke0 = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-        let pe0 = efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv);
+        let ke0 = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+        let pe0 = efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv);
         let (mut release, mut gain) = (0.0f64, f64::MIN);
         run_until(&mut s, 0.016, |s, _| {
-            let pe = efsi_core::ops::potential_energy(&s.grid, &s.state.rho, gv);
+            let pe = efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv);
             release = release.max(pe0 - pe);
             gain = gain.max(energy(s).0 - m0);
         });
@@ -592,7 +592,8 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
         let v0 = volume(&s);
         let (mut strain, mut drift) = (0.0f64, 0.0f64);
         run_until(&mut s, 0.1, |s, _| {
-            let ke = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+            let ke =
+                efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
             let ee = s
                 .state
                 .resources
@@ -601,7 +602,7 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
             strain = strain.max(ee / ke);
             drift = drift.max((volume(s) - v0).abs() / v0);
         });
-        let ke = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
         (s.state.step, ke, strain, drift)
     };
     let (split_steps, split_ke, split_strain, _) = run("Split");

@@ -1,8 +1,9 @@
-//! The frame acceleration (`Simulation::set_frame_acceleration`, the FMU's base-acceleration
+//! The frame acceleration (`FrameAcceleration::set_frame_acceleration`, the FMU's base-acceleration
 //! input): a constant one is exactly a change of gravity, it travels with snapshots and
 //! checkpoints, and it is refused where it could not act.
 
 use efsi_run::checkpoint::{self, Checkpoint, OutputState};
+use efsi_stages::body_force::FrameAcceleration;
 use efsi_tests::{run_until, sim};
 
 /// A heavy viscous disk (no law: VOF, body force, viscous, projection stages) falling in a box.

@@ -10,6 +10,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, OutputDecl, OutputKind, Phase, Scene, Simulation, Stage,
     StageError, StagePlugin, StageStats, State, StateResource, StepContext,
 };
+use efsi_run::SceneOverrides;
 use efsi_run::output::read::{read_pvd, read_vtr};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! The pressure projection: the divergence postcondition over whole runs, and convergence of
 //! the variable-density Poisson solve at density ratio 1e4 (planar and axisymmetric).
 
-use efsi_core::ops::max_abs_div;
+use efsi_stages::ops::max_abs_div;
 use efsi_stages::projection::Projection;
 use efsi_tests::{run_until, sim, sim_with};
 

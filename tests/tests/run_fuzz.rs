@@ -25,12 +25,12 @@
 //! seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it). The figures are printed (`--nocapture`).
 
 use efsi_core::scene::{
-    Boundaries, Boundary, Domain, Fluid, GridSpec, LawSpec, Section, Shape, Side, Solid, TimeSpec,
-    WallMotion, WallProfile,
+    Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, WallMotion, WallProfile,
 };
 use efsi_core::{Geometry, Scene};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};
-use efsi_run::{OutputSpec, ProbeSpec, ProfileSpec};
+use efsi_run::{OutputSpec, ProbeSpec, ProfileSpec, SceneOverrides};
+use efsi_stages::solid::{LawSpec, Shape, Solid};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 use std::cell::RefCell;
@@ -235,7 +235,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     fluid: Fluid { density, viscosity },
                     gravity: if gravity { (0.0, -9.81) } else { (0.0, 0.0) },
                     initial_velocity: Default::default(),
-                    solid,
+                    solid: solid.map(|s| Section::of(&s).expect("a solid serialises to RON")),
                     boundaries: {
                         // A periodic side mostly gets a periodic partner.
                         let mut b = b;
@@ -666,9 +666,10 @@ fn defects_found_by_the_fuzzers_stay_fixed() {
         )
     };
     // A disk with a NaN centre was refused as "radius must be finite and > 0, got 0.175".
-    let e = Scene::from_str_at(
+    let e = Scene::from_str_with(
         &base("Disk(center: (NaN, 0.5), radius: 0.175)"),
         Path::new("r.ron"),
+        &[],
     )
     .unwrap_err()
     .to_string();

@@ -306,44 +306,6 @@ impl BoundarySet {
         }
     }
 
-    /// Fill ghosts of a corner-staggered field (e.g. the shear B̃₁₂): wrap at periodic sides,
-    /// even reflection about the boundary line elsewhere, except at the axis where a shear
-    /// component is odd in r — zero on the axis — when `odd_at_axis`.
-    pub fn fill_corner(&self, grid: &Grid, f: &mut Field, odd_at_axis: bool) {
-        for axis in 0..2 {
-            let Frame {
-                n,
-                m,
-                lo_side,
-                hi_side: _,
-            } = Frame::new(grid, axis);
-            let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
-            let periodic = *self.get(lo_side) == Boundary::Periodic;
-            let sign = if odd_at_axis && *self.get(lo_side) == Boundary::Axis {
-                -1.0
-            } else {
-                1.0
-            };
-            for b in -G..(m + 1 + G) {
-                if periodic {
-                    f[at(n, b)] = f[at(0, b)];
-                    for g in 1..=G {
-                        f[at(-g, b)] = f[at(n - g, b)];
-                        f[at(n + g, b)] = f[at(g, b)];
-                    }
-                    continue;
-                }
-                if sign < 0.0 {
-                    f[at(0, b)] = 0.0;
-                }
-                for g in 1..=G {
-                    f[at(-g, b)] = sign * f[at(g, b)];
-                    f[at(n + g, b)] = f[at(n - g, b)];
-                }
-            }
-        }
-    }
-
     /// Fill ghosts of a cell-centred scalar with even reflection at walls (zero normal
     /// gradient), wrapping at periodic sides; `dirichlet_outflow` makes it odd (zero on the
     /// boundary) at outflow sides, as for the pressure.

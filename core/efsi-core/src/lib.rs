@@ -12,7 +12,6 @@ pub mod bc;
 pub mod error;
 pub mod field;
 pub mod grid;
-pub mod ops;
 pub mod overrides;
 pub mod scene;
 pub mod schedule;

@@ -1,9 +1,8 @@
 //! The scene's side of overrides (`efsi run --set PATH=VALUE --refine F`): the field-name
-//! aliases a path may use, reading a scene file, and attributing a setting's error to the
-//! override that set it. The mechanism is [`efsi_ron_edit::overrides`]; applying overrides to
+//! aliases a path may use, and attributing a setting's error to the override that set it. The mechanism is [`efsi_ron_edit::overrides`]; applying overrides to
 //! a scene (`Scene::load_with`, `Scene::set`, …) is `efsi_run::SceneOverrides`.
 
-use crate::scene::{Scene, SceneError};
+use crate::scene::SceneError;
 use efsi_ron_edit::overrides::blame;
 use std::path::Path;
 
@@ -25,42 +24,6 @@ pub const FIELD_ALIASES: efsi_ron_edit::Aliases = &[
     ("z_min", "y_min"),
     ("z_max", "y_max"),
 ];
-
-impl Scene {
-    /// The text of the scene file at `path`: at most [`crate::scene::MAX_SCENE_BYTES`] of
-    /// UTF-8; anything else is refused as not a scene file.
-    pub fn read_file(path: &Path) -> Result<String, SceneError> {
-        let io = |source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        // Read at most one byte past the cap: `/dev/zero` or a huge file is refused, not read.
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .and_then(|f| {
-                use std::io::Read;
-                f.take(crate::scene::MAX_SCENE_BYTES + 1)
-                    .read_to_end(&mut bytes)
-            })
-            .map_err(io)?;
-        if bytes.len() as u64 > crate::scene::MAX_SCENE_BYTES {
-            return Err(io(std::io::Error::other(format!(
-                "larger than {} MiB: not a scene file",
-                crate::scene::MAX_SCENE_BYTES >> 20
-            ))));
-        }
-        let text = String::from_utf8(bytes).map_err(|e| {
-            io(std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                format!(
-                    "not UTF-8 text (invalid byte at offset {})",
-                    e.utf8_error().valid_up_to()
-                ),
-            ))
-        })?;
-        Ok(text)
-    }
-}
 
 /// A validation error of the scene read from `path`, attributed to the last of the scene's
 /// `overrides` whose path it names (or that lies inside the field it names): an

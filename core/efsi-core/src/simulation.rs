@@ -69,8 +69,8 @@ impl Simulation {
         scene
             .validate()
             .map_err(|(field, message)| config(&field, message))?;
-        // The stages' `numerics` sections, checked by the plugins that declare them; an error
-        // an override caused names the override.
+        // The sections the stages own (`solid`, `numerics`), checked by their plugins; an
+        // error an override caused names the override.
         scene.check_options(scene_path, plugins)?;
         let grid = Grid::new(
             scene.geometry,
@@ -96,21 +96,6 @@ impl Simulation {
         bc.fill_scalar(&grid, &mut state.mu, false);
         let mut pipeline = pipeline;
         pipeline.initialize(&grid, &bc, &mut state)?;
-        // A solid that covers no cell (outside the domain, far below a cell, an empty
-        // intersection) would leave a run without one, its probes NaN.
-        if scene.solid.is_some()
-            && let Some(phi) = &state.phi
-            && (0..grid.ny as isize).all(|j| (0..grid.nx as isize).all(|i| phi[(i, j)] <= 0.0))
-        {
-            return Err(config(
-                "solid.shape",
-                format!(
-                    "covers no cell of the {}×{} grid (outside the domain, much smaller than a \
-                     cell of {:e} × {:e}, or empty): the run would have no solid",
-                    grid.nx, grid.ny, grid.dx, grid.dy
-                ),
-            ));
-        }
         // A velocity scale bounds the first step when the fluid starts at rest: the largest
         // moving-wall speed is part of it; after that Δt follows the velocities inside the
         // domain, which is what the advection scheme's stability depends on (a wall's
@@ -314,46 +299,13 @@ impl Simulation {
         Ok(())
     }
 
-    /// Set the acceleration of the grid's frame with respect to an inertial one, from the next
-    /// step on ([`State::frame_acceleration`]: the body force becomes `gravity − a`, so a
-    /// table accelerating upwards at `a` acts like gravity stronger by `a`). Set before the
-    /// first step, the stages start again from the new frame ([`Pipeline::initialize_stages`]),
-    /// so a constant acceleration is exactly a change of gravity. Snapshots and
-    /// checkpoints carry it. Refused — nothing changes — when the value is not finite, when
-    /// it has a radial component in axisymmetric geometry, or when no body-force stage runs
-    /// (the body force is scheduled only in scenes with gravity).
-    pub fn set_frame_acceleration(&mut self, a: (f64, f64)) -> Result<(), EfsiError> {
-        let refuse = |message: String| EfsiError::Config {
-            path: self.scene_path.clone(),
-            field: "frame_acceleration".into(),
-            message,
-        };
-        if !(a.0.is_finite() && a.1.is_finite()) {
-            return Err(refuse(format!("must be finite, got ({}, {})", a.0, a.1)));
-        }
-        if self.grid.is_axisymmetric() && a.0 != 0.0 {
-            return Err(refuse(format!(
-                "must be along z in axisymmetric geometry, got a radial component {}",
-                a.0
-            )));
-        }
-        if !self.pipeline.has_phase(crate::Phase::BodyForce) {
-            return Err(refuse(
-                "no body-force stage runs in this scene (it is scheduled only with gravity): give the scene a gravity"
-                    .into(),
-            ));
-        }
-        let changed = self.state.frame_acceleration != a;
-        self.state.frame_acceleration = a;
-        if changed && self.state.step == 0 {
-            // Before the first step the stages start again from the new frame (the incremental
-            // projection's starting pressure balances gravity less the acceleration), so a
-            // constant acceleration is exactly a change of gravity.
-            self.pipeline
-                .initialize_stages(&self.grid, &self.bc, &mut self.state)
-                .map_err(EfsiError::Stage)?;
-        }
-        Ok(())
+    /// Initialise every stage again from the current fields ([`Pipeline::initialize_stages`],
+    /// without the initial projection): what a change of frame before the first step asks for
+    /// (`efsi_stages::body_force::FrameAcceleration`).
+    pub fn initialize_stages(&mut self) -> Result<(), EfsiError> {
+        self.pipeline
+            .initialize_stages(&self.grid, &self.bc, &mut self.state)
+            .map_err(EfsiError::Stage)
     }
 
     /// Set the speed of the moving wall on `side` from the next step on (its profile and

@@ -33,7 +33,7 @@ pub struct State {
     /// Acceleration of the grid's frame with respect to an inertial one (m/s², default zero):
     /// the body-force stage applies `gravity − frame_acceleration` (d'Alembert), so a frame
     /// accelerating upwards, like a shaking table, makes everything in it heavier. Set between
-    /// steps with [`crate::Simulation::set_frame_acceleration`] (the FMU's base-acceleration
+    /// steps with `efsi_stages::body_force::FrameAcceleration` (the FMU's base-acceleration
     /// input); kept here so snapshots and checkpoints carry it.
     pub frame_acceleration: (f64, f64),
     /// The stages' own data ([`StateResource`]).

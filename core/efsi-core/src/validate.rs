@@ -1,8 +1,8 @@
-//! The scene's checks, one function per section ([`Scene::validate`]): ranges and consistency,
-//! each failure naming the setting's path and what was expected. The helpers are public for
-//! the checks of sections the core does not own: efsi-run's `output`, the stages' `numerics`
-//! sections ([`check_tolerance`], [`check_iterations`], re-exported by
-//! [`crate::scene::options`]).
+//! The scene's checks, one function per section the core owns ([`Scene::validate`]): ranges
+//! and consistency, each failure naming the setting's path and what was expected. The helpers
+//! are public for the checks of sections the core does not own: efsi-run's `output`, the
+//! stages' `solid` ([`Scene::check_diffusion`]) and `numerics` sections ([`check_tolerance`],
+//! [`check_iterations`], re-exported by [`crate::scene::options`]).
 
 use crate::grid::Geometry;
 use crate::scene::*;
@@ -74,7 +74,6 @@ impl Scene {
         self.validate_domain_and_grid()?;
         self.validate_time()?;
         self.validate_materials()?;
-        self.validate_solid()?;
         self.validate_boundaries()
     }
 
@@ -206,40 +205,7 @@ impl Scene {
                 ),
             );
         }
-        // The viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end: beyond
-        // MAX_DIFFUSION_NUMBER their products overflow, and the solver starts from a NaN residual.
-        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
-            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
-        let mut viscous = vec![("fluid.viscosity", self.fluid.viscosity, self.fluid.density)];
-        if let Some(sd) = &self.solid
-            && let Some(mu) = sd.viscosity
-        {
-            viscous.push(("solid.viscosity", mu, sd.density));
-        }
-        for (f, mu, rho) in viscous {
-            let d = mu * self.time.end / (rho * h * h);
-            if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
-                return err(
-                    f,
-                    format!(
-                        "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
-                         viscous system's coefficients would overflow",
-                        num(mu),
-                        num(d),
-                        MAX_DIFFUSION_NUMBER
-                    ),
-                );
-            }
-            if !d.is_finite() && mu.is_finite() && rho > 0.0 {
-                return err(
-                    f,
-                    format!(
-                        "{} makes the diffusion number μ·time.end/(ρh²) overflow",
-                        num(mu)
-                    ),
-                );
-            }
-        }
+        self.check_diffusion("fluid.viscosity", self.fluid.viscosity, self.fluid.density)?;
         finite("gravity", self.gravity)?;
         if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
             return err(
@@ -261,43 +227,33 @@ impl Scene {
         Ok(())
     }
 
-    /// The solid: its shape, density (and the density ratio), viscosity and velocity.
-    fn validate_solid(&self) -> Checked {
-        let Some(solid) = &self.solid else {
-            return Ok(());
-        };
-        solid
-            .shape
-            .validate()
-            .map_err(|m| ("solid.shape".to_string(), m))?;
-        positive("solid.density", solid.density)?;
-        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
-        // equation's coefficients 1/ρ span more than floating point resolves.
-        let ratio = solid.density / self.fluid.density;
-        if !(1e-6..=1e6).contains(&ratio) {
+    /// A material's viscosity `mu` (the setting at `field`) against its density `rho`: the
+    /// viscous system's coefficients are μΔt/(ρh²) with Δt ≤ time.end; beyond
+    /// [`MAX_DIFFUSION_NUMBER`] their products overflow, and the solver starts from a NaN
+    /// residual. (Also the check of the stages' `solid.viscosity`.)
+    pub fn check_diffusion(&self, field: &str, mu: f64, rho: f64) -> Checked {
+        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+            .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        let d = mu * self.time.end / (rho * h * h);
+        if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
             return err(
-                "solid.density",
+                field,
                 format!(
-                    "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
-                    solid.density, self.fluid.density
+                    "{} makes the diffusion number μ·time.end/(ρh²) = {} exceed {:e}: the \
+                     viscous system's coefficients would overflow",
+                    num(mu),
+                    num(d),
+                    MAX_DIFFUSION_NUMBER
                 ),
             );
         }
-        if let Some(mu) = solid.viscosity
-            && !(mu.is_finite() && mu >= 0.0)
-        {
+        if !d.is_finite() && mu.is_finite() && rho > 0.0 {
             return err(
-                "solid.viscosity",
-                format!("must be a finite number ≥ 0, got {mu}"),
-            );
-        }
-        if let Some(v) = solid.velocity {
-            finite("solid.velocity", v)?;
-        }
-        if self.geometry == Geometry::Axisymmetric && solid.velocity.is_some_and(|v| v.0 != 0.0) {
-            return err(
-                "solid.velocity",
-                "an axisymmetric body can only move along the axis: (0, v_z)",
+                field,
+                format!(
+                    "{} makes the diffusion number μ·time.end/(ρh²) overflow",
+                    num(mu)
+                ),
             );
         }
         Ok(())

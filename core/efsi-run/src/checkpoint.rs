@@ -30,6 +30,7 @@ use efsi_core::overrides::Override;
 use efsi_core::scene::Scene;
 use efsi_core::state::State;
 use efsi_laws_host::loader::{describe, resolve_law};
+use efsi_stages::solid::SceneSolid;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -62,13 +63,20 @@ pub struct LawIdentity {
 /// The identity of the law `scene` names (None without a solid law). The library is resolved
 /// as the elastic stage resolves it (relative to the scene's folder, else the search path).
 pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
-    let Some(spec) = scene.solid.as_ref().and_then(|s| s.law.as_ref()) else {
-        return Ok(None);
-    };
     let dir = scene
         .source_dir
         .clone()
         .unwrap_or_else(|| PathBuf::from("."));
+    let solid = scene
+        .solid_spec()
+        .map_err(|(field, message)| EfsiError::Config {
+            path: dir.clone(),
+            field,
+            message,
+        })?;
+    let Some(spec) = solid.and_then(|s| s.law) else {
+        return Ok(None);
+    };
     let refuse = |e: efsi_laws_host::LawError| EfsiError::Config {
         path: dir.clone(),
         field: "solid.law".into(),
@@ -180,6 +188,8 @@ pub fn scene_differences(old: &Scene, new: &Scene) -> Vec<String> {
     // The output sections are RON text in the scenes: compared setting by setting.
     a["output"] = crate::output::spec::json(old);
     b["output"] = crate::output::spec::json(new);
+    a["solid"] = efsi_stages::solid::json(old);
+    b["solid"] = efsi_stages::solid::json(new);
     // A stage's numerics section is RON text in the scene; where both scenes hold it checked
     // (its settings in force), compare it setting by setting.
     let old_sections: std::collections::BTreeMap<_, _> = old.numerics.sections_json().collect();

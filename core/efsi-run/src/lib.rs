@@ -5,8 +5,8 @@
 //! writers ([`output`]: VTK XML, atomic files), the probes' definitions ([`probes`]) and the
 //! checkpoint file with resume ([`checkpoint`]), the lock that keeps an output folder to one
 //! process ([`lock`]), the energy guard that stops a run gaining energy nothing supplied
-//! ([`guard`]), scene overrides ([`overrides`]: `--set`, `--refine`, FMU and Python
-//! parameters), and the set-up of a simulation for a run ([`simulation`]: the memory
+//! ([`guard`]), reading scene files and overrides ([`overrides`]: `--set`, `--refine`, FMU
+//! and Python parameters), and the set-up of a simulation for a run ([`simulation`]: the memory
 //! check, the `output` section's). The CLI, the FMU and other drivers use them.
 
 pub mod checkpoint;

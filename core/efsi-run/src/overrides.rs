@@ -1,4 +1,5 @@
-//! Scene overrides: change any setting of a scene by its path, without editing the file.
+//! Scene files and overrides: read a scene file ([`read_file`], [`SceneOverrides::load`]), and
+//! change any setting of a scene by its path, without editing the file.
 //!
 //! ```text
 //! efsi run cases/sphere_impact.ron --set grid.nx=128 --set solid.law.parameters.G=1e6 --refine 2
@@ -76,11 +77,17 @@ use efsi_core::scene::options::check_sections;
 use efsi_core::scene::{Scene, SceneError};
 use efsi_ron_edit::overrides::apply_sets;
 use efsi_ron_edit::{Document, Path as SettingPath};
+use efsi_stages::solid::SceneSolid;
 use std::path::{Path, PathBuf};
 
 /// Overrides applied to a scene: read a scene file with them, set, refine and read its
 /// settings by path (see the module docs).
 pub trait SceneOverrides: Sized {
+    /// Read a scene file ([`read_file`]) and validate it: [`load_with`](Self::load_with)
+    /// without overrides.
+    fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with(path, &[])
+    }
     /// Read a scene file, apply `overrides` in order and validate the result (see the module
     /// docs). Errors in the file name its line and column; errors an override causes name the
     /// override ([`SceneError::Override`]).
@@ -114,7 +121,7 @@ pub trait SceneOverrides: Sized {
 impl SceneOverrides for Scene {
     fn load_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = Scene::read_file(path)?;
+        let text = read_file(path)?;
         let mut scene = Scene::from_str_with(&text, path, overrides)?;
         scene.source_dir = path.parent().map(Path::to_path_buf);
         Ok(scene)
@@ -122,9 +129,14 @@ impl SceneOverrides for Scene {
 
     fn from_str_with(text: &str, path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
         let parsed = Scene::parse(text, path)?;
-        let hints = |s: &Scene| s.to_ron();
+        let hints = with_defaults;
+        // Each override's result must read as a scene, its solid section as a solid.
         let read = |text: &str| match Scene::parse(text, path) {
             Err(SceneError::Syntax { message, .. }) => Err(message),
+            Ok(scene) => match scene.solid_spec() {
+                Err((_, message)) => Err(message),
+                Ok(_) => Ok(scene),
+            },
             other => other.map_err(|e| e.to_string()),
         };
         let mut scene = apply_sets(text, parsed, overrides, FIELD_ALIASES, hints, read).map_err(
@@ -146,8 +158,14 @@ impl SceneOverrides for Scene {
         scene.overrides = overrides.to_vec();
         // Positions in messages point into the text the user wrote, never the rewritten one.
         scene.locate_sections_in(text);
+        // The solid's checks (the stages own the section) too: a scene loaded or changed is
+        // refused at once, as for the sections the core owns.
         scene
             .validate()
+            .and_then(|()| match scene.solid_spec()? {
+                Some(solid) => solid.validate(&scene),
+                None => Ok(()),
+            })
             .map_err(|(field, message)| attribute(path, overrides, field, message))?;
         Ok(scene)
     }
@@ -180,7 +198,7 @@ impl SceneOverrides for Scene {
             message,
         };
         let setting = SettingPath::parse(path, FIELD_ALIASES).map_err(fail)?;
-        let doc = Document::parse(self.to_ron(), FIELD_ALIASES)
+        let doc = Document::parse(with_defaults(self), FIELD_ALIASES)
             .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
         doc.get(&setting)
             .map_err(fail)?
@@ -197,6 +215,55 @@ impl SceneOverrides for Scene {
             Ok(()) => filled.get(path),
             Err(_) => self.get(path),
         }
+    }
+}
+
+/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// The text of the scene file at `path`: at most [`MAX_SCENE_BYTES`] of UTF-8; anything else is
+/// refused as not a scene file.
+pub fn read_file(path: &Path) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    // Read at most one byte past the cap: `/dev/zero` or a huge file is refused, not read.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            use std::io::Read;
+            f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes)
+        })
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(io(std::io::Error::other(format!(
+            "larger than {} MiB: not a scene file",
+            MAX_SCENE_BYTES >> 20
+        ))));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (invalid byte at offset {})",
+                e.utf8_error().valid_up_to()
+            ),
+        ))
+    })
+}
+
+/// `scene` as RON text with the defaults of its sections filled in where the core knows them,
+/// and its `solid` section's (the stages' type, [`efsi_stages::solid::Solid`]) where it reads
+/// as one: what a path is read from, and the shape of a setting the file leaves out.
+fn with_defaults(scene: &Scene) -> String {
+    match scene.solid_spec() {
+        Ok(Some(solid)) => {
+            let mut filled = scene.clone();
+            filled.set_solid(&solid);
+            filled.to_ron()
+        }
+        _ => scene.to_ron(),
     }
 }
 
@@ -277,9 +344,10 @@ Scene(
         ])
         .unwrap();
         assert_eq!((s.grid.nx, s.grid.ny), (64, 96));
-        let efsi_core::scene::Shape::Disk { center, radius } = s.solid.as_ref().unwrap().shape
+        let efsi_stages::solid::Shape::Disk { center, radius } =
+            s.solid_spec().unwrap().unwrap().shape
         else {
-            panic!("{:?}", s.solid)
+            panic!("{:?}", s.solid_spec())
         };
         assert_eq!((center, radius), ((0.0, 0.06), 0.02));
         assert!(
@@ -289,7 +357,7 @@ Scene(
         );
         assert_eq!(s.gravity, (0.0, -1.0));
         assert_eq!(
-            s.solid.as_ref().unwrap().law.as_ref().unwrap().name,
+            s.solid_spec().unwrap().unwrap().law.unwrap().name,
             "mooney_rivlin"
         );
         assert_eq!(s.overrides.len(), 7);
@@ -309,8 +377,8 @@ Scene(
             efsi_core::scene::InitialVelocity::Uniform((1.0, 2.0))
         ));
         assert!(matches!(
-            s.solid.unwrap().shape,
-            efsi_core::scene::Shape::Rectangle {
+            s.solid_spec().unwrap().unwrap().shape,
+            efsi_stages::solid::Shape::Rectangle {
                 max: (0.01, 0.04),
                 ..
             }
@@ -331,7 +399,7 @@ Scene(
             Override::set("solid.viscosity", 2),
         ])
         .unwrap();
-        let law = s.solid.as_ref().unwrap().law.as_ref().unwrap();
+        let law = s.solid_spec().unwrap().unwrap().law.unwrap();
         assert_eq!(law.parameters["G"], 1e6);
         assert_eq!(law.parameters["K"], 2.0);
         // A stage's section holds what the overrides wrote; the absent enum value given as a
@@ -341,7 +409,7 @@ Scene(
             Some("(solver: IncompleteCholesky, tolerance: 1e-9)")
         );
         assert_eq!(s.time.steady, Some(1e-6));
-        assert_eq!(s.solid.as_ref().unwrap().viscosity, Some(2.0));
+        assert_eq!(s.solid_spec().unwrap().unwrap().viscosity, Some(2.0));
     }
 
     #[test]
@@ -455,7 +523,13 @@ Scene(
         s.set("solid.law.parameters.G", 3e5).unwrap();
         s.refine(2.0).unwrap();
         assert_eq!(
-            s.solid.as_ref().unwrap().law.as_ref().unwrap().parameters["G"],
+            s.solid_spec()
+                .unwrap()
+                .unwrap()
+                .law
+                .as_ref()
+                .unwrap()
+                .parameters["G"],
             3e5
         );
         assert_eq!((s.grid.nx, s.grid.ny), (46, 94));

@@ -501,7 +501,7 @@ fn face_masses(rho: &Field, mu: &mut [f64], mv: &mut [f64]) {
     for_each_row(&mut mu[..(rows - 1) * s], s, |j, row| {
         let rr = &r[j * s..(j + 1) * s];
         for c in 1..s {
-            row[c] = efsi_core::ops::face_density(rr[c - 1], rr[c]);
+            row[c] = crate::ops::face_density(rr[c - 1], rr[c]);
         }
         row[0] = row[1];
     });
@@ -607,7 +607,7 @@ impl Stage for AdvectionStage {
                             (m_e, q_e)
                         } else {
                             // The start-of-step face mass, as `face_masses` gave it.
-                            let a = efsi_core::ops::face_density(rho[k - o], rho[k]);
+                            let a = crate::ops::face_density(rho[k - o], rho[k]);
                             let b = x0d[k];
                             (0.5 * (a + m_e), 0.5 * (a * b + q_e))
                         };

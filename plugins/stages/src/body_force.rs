@@ -9,7 +9,7 @@
 //! layered) is balanced by the last step's pressure, which the incremental projection's
 //! predictor subtracts right after this stage (`projection`), so the viscous step never sees
 //! it; in the seed's non-incremental scheme the projection removes it after the viscous step. In axisymmetric geometry only the axial component
-//! is allowed (the scene and [`efsi_core::Simulation::set_frame_acceleration`] check it).
+//! is allowed (the scene and [`FrameAcceleration::set_frame_acceleration`] check it).
 //!
 //! **Step limit.** An explicit body force must not move the fluid more than a fraction of a cell
 //! per step: with the convective rate `C = max(|u|/dx + |v|/dy)`, the stage allows
@@ -18,13 +18,60 @@
 
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
-    BoundarySet, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
-    StepContext,
+    BoundarySet, EfsiError, FieldId, G, Grid, Phase, Scene, Simulation, Stage, StageError,
+    StagePlugin, StageStats, State, StepContext,
 };
 use efsi_linalg::par;
 
 /// The body-force stage plugin.
 pub struct BodyForce;
+
+/// The acceleration of a simulation's frame, the body force's input.
+pub trait FrameAcceleration {
+    /// Set the acceleration of the grid's frame with respect to an inertial one, from the next
+    /// step on ([`State::frame_acceleration`]: the body force becomes `gravity − a`, so a
+    /// table accelerating upwards at `a` acts like gravity stronger by `a`). Set before the
+    /// first step, the stages start again from the new frame
+    /// ([`Simulation::initialize_stages`]), so a constant acceleration is exactly a change of
+    /// gravity. Snapshots and checkpoints carry it. Refused — nothing changes — when the value
+    /// is not finite, when it has a radial component in axisymmetric geometry, or when no
+    /// body-force stage runs (the body force is scheduled only in scenes with gravity).
+    fn set_frame_acceleration(&mut self, a: (f64, f64)) -> Result<(), EfsiError>;
+}
+
+impl FrameAcceleration for Simulation {
+    fn set_frame_acceleration(&mut self, a: (f64, f64)) -> Result<(), EfsiError> {
+        let refuse = |message: String| EfsiError::Config {
+            path: self.scene_path.clone(),
+            field: "frame_acceleration".into(),
+            message,
+        };
+        if !(a.0.is_finite() && a.1.is_finite()) {
+            return Err(refuse(format!("must be finite, got ({}, {})", a.0, a.1)));
+        }
+        if self.grid.is_axisymmetric() && a.0 != 0.0 {
+            return Err(refuse(format!(
+                "must be along z in axisymmetric geometry, got a radial component {}",
+                a.0
+            )));
+        }
+        if !self.pipeline().has_phase(Phase::BodyForce) {
+            return Err(refuse(
+                "no body-force stage runs in this scene (it is scheduled only with gravity): give the scene a gravity"
+                    .into(),
+            ));
+        }
+        let changed = self.state.frame_acceleration != a;
+        self.state.frame_acceleration = a;
+        if changed && self.state.step == 0 {
+            // Before the first step the stages start again from the new frame (the incremental
+            // projection's starting pressure balances gravity less the acceleration), so a
+            // constant acceleration is exactly a change of gravity.
+            self.initialize_stages()?;
+        }
+        Ok(())
+    }
+}
 
 impl StagePlugin for BodyForce {
     fn name(&self) -> &'static str {

@@ -17,6 +17,7 @@ use super::{Check, Options, Run, Series, load_case, probes};
 use efsi_core::scene::InitialVelocity;
 use efsi_core::{Scene, Simulation};
 use efsi_run::SceneOutput;
+use efsi_stages::solid::SceneSolid;
 use std::path::PathBuf;
 
 /// The time the seed gives for the largest deformation.
@@ -140,8 +141,8 @@ impl Case for OscillatingDisk {
         if self.quick || n != self.grids[self.grids.len() - 1] {
             scene.update_output(|o| o.vtk_every = None)?;
         }
-        if let (Some(m), Some(solid)) = (mu_s, scene.solid.as_mut()) {
-            solid.viscosity = Some(m);
+        if let Some(m) = mu_s {
+            scene.update_solid(|solid| solid.viscosity = Some(m))?;
         }
         Ok((scene, path))
     }

@@ -7,9 +7,9 @@ use super::case::{
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use efsi_core::scene::Shape;
 use efsi_core::{Scene, Simulation};
 use efsi_run::{ProbeSpec, SceneOutput};
+use efsi_stages::solid::{SceneSolid, Shape, Solid};
 use std::f64::consts::PI;
 
 /// The sphere's material and initial condition, read from its scene.
@@ -23,8 +23,16 @@ struct Sphere {
     g: f64,
 }
 
+/// The solid of `scene`, or why there is none.
+pub(crate) fn solid_of(scene: &Scene) -> Result<Solid, String> {
+    scene
+        .solid_spec()
+        .map_err(|(f, m)| format!("{f}: {m}"))?
+        .ok_or_else(|| "the scene has no solid".into())
+}
+
 fn sphere_of(scene: &Scene) -> Result<Sphere, String> {
-    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let solid = solid_of(scene)?;
     let Shape::Disk { center, radius } = solid.shape else {
         return Err("the solid is not a disk".into());
     };

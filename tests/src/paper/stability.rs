@@ -50,12 +50,12 @@ use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
 use super::{Check, Options, Run, execute_built, load_case, probes};
 use efsi_core::Scene;
-use efsi_core::scene::Shape;
 use efsi_run::{ProbeSpec, SceneOutput};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use efsi_stages::elastic::{
     DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT,
 };
+use efsi_stages::solid::{SceneSolid, Shape};
 use std::path::PathBuf;
 
 /// Shear moduli (Pa).
@@ -191,7 +191,7 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
         scene.domain.x.1 - scene.domain.x.0,
         scene.domain.y.1 - scene.domain.y.0,
     );
-    let solid = scene.solid.as_mut().ok_or("the scene has no solid")?;
+    let mut solid = super::sphere::solid_of(&scene)?;
     let Shape::Disk { radius, .. } = solid.shape else {
         return Err("the solid is not a disk".into());
     };
@@ -201,13 +201,10 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
         center: (0.0, r + GAP),
         radius: r,
     };
-    solid
-        .law
-        .as_mut()
-        .ok_or("the solid has no law")?
-        .parameters
-        .insert("G".into(), st.g);
+    let law = solid.law.as_mut().ok_or("the solid has no law")?;
+    law.parameters.insert("G".into(), st.g);
     scene.fluid.density = solid.density / st.ratio;
+    scene.set_solid(&solid);
     scene.grid.nx = (lx / h).round() as usize;
     scene.grid.ny = (ly / h).round() as usize;
     scene.time.end = END;
@@ -334,7 +331,7 @@ fn sweep_python() -> Option<std::ffi::OsString> {
 /// (a number, or RON text).
 fn overrides_for(st: &Setting, cpr: f64) -> Result<serde_json::Value, String> {
     let (scene, _) = scene_for(st, cpr)?;
-    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let solid = super::sphere::solid_of(&scene)?;
     let Shape::Disk { center, radius } = solid.shape else {
         return Err("the solid is not a disk".into());
     };

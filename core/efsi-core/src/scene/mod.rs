@@ -22,11 +22,9 @@
 use crate::grid::Geometry;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
 pub use section::Section;
-pub use shape::Shape;
 
 mod numerics;
 mod section;
-mod shape;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
     pub use super::numerics::{OptionsDecl, Preset, StageOptions, check_sections};
@@ -106,9 +104,10 @@ pub struct Scene {
     #[serde(default)]
     pub initial_velocity: InitialVelocity,
     /// The solid, if any: its shape at t = 0 and its material (one material; several bodies
-    /// are a `Union` of shapes).
+    /// are a `Union` of shapes). A [`Section`] whose type and checks the stages own
+    /// (`efsi_stages::solid::Solid`).
     #[serde(default)]
-    pub solid: Option<Solid>,
+    pub solid: Option<Section>,
     /// Boundary conditions per side.
     pub boundaries: Boundaries,
     /// Physics switches that cannot be inferred.
@@ -121,7 +120,8 @@ pub struct Scene {
     /// (`efsi-run`'s `OutputSpec`).
     #[serde(default)]
     pub output: Section,
-    /// The folder of the scene file (set by [`Scene::load`]; relative law paths start there).
+    /// The folder of the scene file (set by `efsi_run::SceneOverrides::load`; relative law paths start
+    /// there).
     #[serde(skip)]
     pub source_dir: Option<PathBuf>,
     /// The overrides applied to the file's settings, in order ([`crate::overrides`]; set by
@@ -221,50 +221,6 @@ pub enum InitialVelocity {
         /// Wave numbers `(kx, ky)`.
         wavenumbers: (f64, f64),
     },
-}
-
-/// A solid body (or several, as a union of shapes) of one material.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Solid {
-    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
-    pub shape: Shape,
-    /// Density ρ_s (kg/m³, > 0).
-    pub density: f64,
-    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
-    #[serde(default)]
-    pub viscosity: Option<f64>,
-    /// Initial velocity of the solid (default: at rest).
-    #[serde(default)]
-    pub velocity: Option<(f64, f64)>,
-    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
-    #[serde(default)]
-    pub law: Option<LawSpec>,
-}
-
-/// A constitutive law named in a scene.
-///
-/// ```ron
-/// law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
-/// law: (name: "plugins/my_law/target/release/libmy_law.so", parameters: {"k": 2.0}),
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LawSpec {
-    /// A shipped law's name (`neo_hookean`, `saint_venant_kirchhoff`, `mooney_rivlin`), or the
-    /// path of a law library (relative paths are relative to the scene file's folder).
-    pub name: String,
-    /// Parameter values by name; the law declares which exist, their units, defaults and ranges.
-    #[serde(default)]
-    pub parameters: std::collections::BTreeMap<String, f64>,
-}
-
-impl Solid {
-    /// μ_s: the scene's value, or the seed's rule μ_f ρ_s/ρ_f.
-    pub fn viscosity(&self, fluid: &Fluid) -> f64 {
-        self.viscosity
-            .unwrap_or(fluid.viscosity * self.density / fluid.density)
-    }
 }
 
 /// One of the four sides of the box.
@@ -464,9 +420,6 @@ fn yes() -> bool {
 /// end of its stack).
 pub const RECURSION_LIMIT: usize = 128;
 
-/// The largest scene file read (4 MiB): a scene is a page of text; anything larger is not one.
-pub const MAX_SCENE_BYTES: u64 = 4 << 20;
-
 /// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
 /// digits).
 pub fn num(v: f64) -> String {
@@ -482,14 +435,6 @@ pub fn num(v: f64) -> String {
 pub const MAX_DIFFUSION_NUMBER: f64 = 1e200;
 
 impl Scene {
-    /// Read and validate a scene file (with overrides: `efsi_run::SceneOverrides::load_with`).
-    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        let path = path.as_ref();
-        let mut scene = Scene::from_str_at(&Scene::read_file(path)?, path)?;
-        scene.source_dir = path.parent().map(Path::to_path_buf);
-        Ok(scene)
-    }
-
     /// Parse and validate scene text; `path` is used in error messages only.
     pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let scene = Scene::parse(text, path)?;
@@ -526,6 +471,9 @@ impl Scene {
     pub fn locate_sections_in(&mut self, text: &str) {
         self.numerics.locate_in(text);
         self.output.locate_in(text);
+        if let Some(solid) = &mut self.solid {
+            solid.locate_in(text);
+        }
     }
 
     /// The scene as RON text (what `run.json` and checkpoints record).

@@ -102,11 +102,16 @@ impl OptionsDecl {
     }
 }
 
-/// Check the scene's `numerics` sections against the options `plugins` declare: each section
-/// must be declared by one of them (whether or not the scene needs that stage), parse as its
-/// type and pass its checks. On success every declared section is replaced by its settings in
-/// force (defaults filled in, the preset applied). On failure the setting's path and why.
+/// Check the scene's sections that `plugins` own, first those outside `numerics`
+/// ([`StagePlugin::check_scene`]), then the `numerics` sections against the options `plugins`
+/// declare: each section must be declared by one of them (whether or not the scene needs that
+/// stage), parse as its type and pass its checks. On success every declared section is
+/// replaced by its settings in force (defaults filled in, the preset applied). On failure the
+/// setting's path and why.
 pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checked {
+    for p in plugins {
+        p.check_scene(scene)?;
+    }
     let mut decls: BTreeMap<&'static str, OptionsDecl> = BTreeMap::new();
     for d in plugins.iter().filter_map(|p| p.options()) {
         decls.entry(d.section).or_insert(d);

@@ -169,6 +169,14 @@ pub trait StagePlugin: Sync {
     fn options(&self) -> Option<crate::scene::OptionsDecl> {
         None
     }
+    /// Check the scene's sections outside `numerics` that the stage owns (the VOF stage: the
+    /// `solid` section, [`crate::scene::Section`]) and put back their settings in force; on
+    /// failure the setting's path and what was expected. Run with the `numerics` checks
+    /// ([`crate::scene::options::check_sections`]), whether or not the scene needs the stage
+    /// (default: nothing).
+    fn check_scene(&self, _scene: &mut Scene) -> crate::validate::Checked {
+        Ok(())
+    }
     /// The outputs the stage contributes (VTK arrays, probe quantities) computed from the
     /// state, its own resources included ([`OutputDecl`]; default: none).
     fn outputs(&self) -> &'static [OutputDecl] {

@@ -12,6 +12,7 @@ use efsi_core::error::EfsiError;
 use efsi_core::scene::{Scene, Section, Side, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
+use efsi_stages::solid::SceneSolid;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -352,7 +353,9 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
     // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
     let mut columns: std::collections::HashMap<String, usize> =
         [("t".to_string(), usize::MAX)].into_iter().collect();
-    let has_law = scene.solid.as_ref().is_some_and(|s| s.law.is_some());
+    let has_law = scene
+        .solid_spec()
+        .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
     for (k, probe) in o.probes.iter().enumerate() {
         let f = format!("output.probes[{k}]");
         if probe.needs_solid() && scene.solid.is_none() {

@@ -70,8 +70,8 @@ use super::err;
 use super::solve::{ElasticStage, OperatorCtx};
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
+use crate::ops;
 use crate::projection;
-use efsi_core::ops;
 use efsi_core::{BoundarySet, Field, Grid, StageError, State, StepContext};
 use efsi_linalg::par::for_each_row;
 use efsi_linalg::{

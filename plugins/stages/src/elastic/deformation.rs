@@ -55,7 +55,7 @@ impl Stage for DeformationStage {
             .resources
             .get::<super::Deformation>()
             .map_or(0.0, |d| d.elastic_energy);
-        let kinetic = efsi_core::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
+        let kinetic = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
         (strain <= AUTO_STRAIN_SHARE * kinetic && !self.near_wall(grid, state, self.limits.coupled))
             .then_some(self.limits.coupled)
     }

@@ -8,10 +8,8 @@ use efsi_laws_host::ConstitutiveLaw;
 /// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
 /// tangent) — every law, test laws included, goes through the loader.
 pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
-    let spec = scene
-        .solid
-        .as_ref()
-        .and_then(|s| s.law.as_ref())
+    let spec = crate::solid::solid(scene)?
+        .law
         .ok_or("the solid has no law")?;
     let dir = scene
         .source_dir

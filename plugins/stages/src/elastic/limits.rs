@@ -43,7 +43,7 @@ pub(super) fn wave_limit(
     grid: &Grid,
     law: &dyn ConstitutiveLaw,
 ) -> Result<WaveLimits, String> {
-    let solid = scene.solid.as_ref().ok_or("the scene has no solid")?;
+    let solid = crate::solid::solid(scene)?;
     let mut tau = [[0.0; 4]];
     let mut tangent = [[0.0; 16]];
     law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut tau, Some(&mut tangent))

@@ -233,8 +233,10 @@
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
 use crate::viscous_operator::Coefficients;
-use efsi_core::scene::OptionsDecl;
-use efsi_core::{BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin};
+use efsi_core::scene::{Boundary, OptionsDecl, Side};
+use efsi_core::{
+    BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin,
+};
 use efsi_laws_host::{Sym, Tangent};
 use efsi_linalg::BiCgStab;
 
@@ -276,16 +278,13 @@ pub const B: FieldId = FieldId::Stage("B");
 
 /// Whether the scene has an elastic solid (a solid with a constitutive law).
 pub(crate) fn law_needed(scene: &Scene) -> bool {
-    scene.solid.as_ref().is_some_and(|s| s.law.is_some())
+    crate::solid::solid(scene).is_ok_and(|s| s.law.is_some())
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
 fn viscosities(scene: &Scene) -> (f64, f64) {
     let mu_f = scene.fluid.viscosity;
-    let mu_s = scene
-        .solid
-        .as_ref()
-        .map_or(mu_f, |s| s.viscosity(&scene.fluid));
+    let mu_s = crate::solid::solid(scene).map_or(mu_f, |s| s.viscosity(&scene.fluid));
     (mu_f, mu_s)
 }
 
@@ -681,7 +680,41 @@ impl Kernels {
         for f in t.iter_mut().take(3) {
             self.bc.fill_scalar(&self.grid, f, false);
         }
-        self.bc.fill_corner(&self.grid, &mut t[3], true);
+        fill_corner(&self.bc, &self.grid, &mut t[3], true);
+    }
+}
+
+/// Fill the ghosts of a corner-staggered field (B̃₁₂, at the cell corners: a staggering of
+/// this stage's, which the core's boundary conditions do not know): wrap at periodic sides,
+/// even reflection about the boundary line elsewhere, except at the axis where a shear
+/// component is odd in r — zero on the axis — when `odd_at_axis`.
+fn fill_corner(bc: &BoundarySet, grid: &Grid, f: &mut Field, odd_at_axis: bool) {
+    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+    for (axis, n, m, lo_side) in [(0, nx, ny, Side::XMin), (1, ny, nx, Side::YMin)] {
+        let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
+        let periodic = *bc.get(lo_side) == Boundary::Periodic;
+        let sign = if odd_at_axis && *bc.get(lo_side) == Boundary::Axis {
+            -1.0
+        } else {
+            1.0
+        };
+        for b in -G..(m + 1 + G) {
+            if periodic {
+                f[at(n, b)] = f[at(0, b)];
+                for g in 1..=G {
+                    f[at(-g, b)] = f[at(n - g, b)];
+                    f[at(n + g, b)] = f[at(g, b)];
+                }
+                continue;
+            }
+            if sign < 0.0 {
+                f[at(0, b)] = 0.0;
+            }
+            for g in 1..=G {
+                f[at(-g, b)] = sign * f[at(g, b)];
+                f[at(n + g, b)] = f[at(n - g, b)];
+            }
+        }
     }
 }
 

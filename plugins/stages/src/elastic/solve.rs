@@ -4,8 +4,8 @@
 use super::ElasticPreconditioner;
 use super::{Kernels, err, missing};
 use crate::block_multigrid::ViscousBlocks;
+use crate::ops::face_density;
 use crate::viscous_operator::Coefficients;
-use efsi_core::ops::face_density;
 use efsi_core::{BoundarySet, Field, Grid, Stage, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};

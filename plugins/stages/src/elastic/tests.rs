@@ -1,6 +1,6 @@
 use super::limits::wave_limit;
 use super::*;
-use efsi_core::scene::Shape;
+use crate::solid::{SceneSolid, Shape};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
 
@@ -165,10 +165,14 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     assert!(e.contains("numerics.elastic.wave_courant"), "{e}");
     // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
     let mut small = scene.clone();
-    small.solid.as_mut().unwrap().shape = Shape::Disk {
-        center: (0.5, 0.5),
-        radius: 1.5 / 16.0,
-    };
+    small
+        .update_solid(|s| {
+            s.shape = Shape::Disk {
+                center: (0.5, 0.5),
+                radius: 1.5 / 16.0,
+            }
+        })
+        .unwrap();
     let e = wave_limit(&small, &grid, &law).unwrap_err();
     assert!(
         e.contains("cells across") && e.contains("refine the grid"),

@@ -53,11 +53,12 @@
 //! fixed order, so the result is bit-identical on any number of threads. Nothing is allocated
 //! after the first step.
 
+use crate::ops;
 use crate::scratch::{self, Scratch};
 use efsi_core::scene::{Boundary, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
-    StepContext, ops,
+    StepContext,
 };
 use efsi_linalg::par::{for_each_mut, for_each_row};
 use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Stencil5, pcg::solve_norm_in};

@@ -54,9 +54,9 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
+use crate::ops::face_density;
 use crate::scratch::{self, Scratch};
 use crate::viscous_operator::Coefficients;
-use efsi_core::ops::face_density;
 use efsi_core::scene::OptionsDecl;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
@@ -92,10 +92,7 @@ impl StagePlugin for Viscous {
     }
     fn needed(&self, scene: &Scene) -> bool {
         scene.fluid.viscosity > 0.0
-            || scene
-                .solid
-                .as_ref()
-                .is_some_and(|s| s.viscosity(&scene.fluid) > 0.0)
+            || crate::solid::solid(scene).is_ok_and(|s| s.viscosity(&scene.fluid) > 0.0)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ViscousOptions>())

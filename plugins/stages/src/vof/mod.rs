@@ -12,7 +12,7 @@ pub mod plic;
 pub mod shapes;
 pub mod stage;
 
+pub use crate::solid::Shape;
 pub use advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide, phase_volume};
-pub use efsi_core::scene::Shape;
 pub use shapes::{ShapeVolume, fill_fraction, section_width};
 pub use stage::Vof;

@@ -38,7 +38,7 @@
 //! (1998, J. Comput. Phys. 141:112).
 
 use super::plic::{half_plane_moments, rect_fraction};
-use efsi_core::scene::Shape;
+use crate::solid::Shape;
 use efsi_core::{Field, Grid};
 
 /// Deepest recursive split of a cell crossed by two or more boundaries.

@@ -28,6 +28,7 @@
 use super::advect::{self, VofAdvector, VofBoundaries, VofSide};
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
+use crate::solid::Shape;
 use efsi_core::scene::{Boundary, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -58,6 +59,9 @@ impl StagePlugin for Vof {
     fn needed(&self, scene: &Scene) -> bool {
         scene.solid.is_some()
     }
+    fn check_scene(&self, scene: &mut Scene) -> efsi_core::validate::Checked {
+        crate::solid::check(scene)
+    }
     fn build(
         &self,
         scene: &Scene,
@@ -65,7 +69,7 @@ impl StagePlugin for Vof {
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let solid = scene.solid.as_ref().ok_or("no solid in the scene")?;
+        let solid = crate::solid::solid(scene)?;
         let side = |s: Side| match bc.get(s) {
             Boundary::Periodic => Ok(VofSide::Periodic),
             Boundary::Outflow => Err(format!(
@@ -87,7 +91,7 @@ impl StagePlugin for Vof {
             scratch: Scratch::reserve(shared, advect::WORK * cells),
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
-            shape: solid.shape.clone(),
+            shape: solid.shape,
             initial_velocity: solid.velocity,
             u_adv: Field::zeros(grid),
             v_adv: Field::zeros(grid),
@@ -103,7 +107,7 @@ struct VofStage {
     scratch: Scratch,
     rho: (f64, f64),
     mu: (f64, f64),
-    shape: efsi_core::scene::Shape,
+    shape: Shape,
     /// The solid's initial velocity, until it is blended into the starting velocity (the
     /// first [`Stage::initialize`]).
     initial_velocity: Option<(f64, f64)>,

@@ -2,10 +2,9 @@
 //!
 //! All are finite-volume forms on the MAC grid with the axisymmetric metric: a flux through an
 //! x-face is weighted by the face radius `r_f`, through a y-face by the cell radius `r_c`, and the
-//! balance is divided by the control volume's radius (see [`crate::grid`]).
+//! balance is divided by the control volume's radius (see [`efsi_core::grid`]).
 
-use crate::field::Field;
-use crate::grid::Grid;
+use efsi_core::{Field, Grid};
 
 /// The density on the face between two cells of densities `a` and `b`: their arithmetic mean.
 /// The one face-density rule of every stage: the mass of a momentum control volume (advection,

@@ -1,5 +1,5 @@
 //! The shapes a scene's solid is made of ([`Shape`]): their parameters, checks and
-//! point membership. Their exact cell fractions are the VOF stage's (`efsi_stages::vof`).
+//! point membership. Their exact cell fractions are the VOF stage's ([`crate::vof::shapes`]).
 
 use serde::{Deserialize, Serialize};
 
