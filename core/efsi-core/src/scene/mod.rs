@@ -165,7 +165,7 @@ pub struct TimeSpec {
     /// End time (> 0).
     pub end: f64,
     /// Courant number on `Δt·(|u|/dx + |v|/dy)` (default 0.4, in (0, 1]; the advection scheme's
-    /// sufficient TVD bound is 0.5, and the Re = 100 cavity shows limit-cycle noise from 0.45).
+    /// sufficient TVD bound is 0.5, and the cavities reach their steady states up to 1.0).
     #[serde(default = "default_cfl")]
     pub cfl: f64,
     /// Largest step allowed (default: no bound beyond the CFL and `end`).
