@@ -59,8 +59,8 @@
 //! # Limits
 //!
 //! The solve is not what limits the step: the Schur approximation carries the elastic term
-//! (`θΔt² G_eff` in `η`), and FGMRES takes 20–30 iterations a step at any G and any wave
-//! Courant number (the stability map's sphere: 27 at G = 1e7 and 1e9 Pa, from 25 to 1000
+//! (`θΔt² G_eff` in `η`), and FGMRES takes 20–32 iterations a step at any G and any wave
+//! Courant number (the stability map's sphere at G = 1e7–1e11 Pa and caps from 25 to 1000
 //! wave Courant numbers). Δt is capped at `coupled_wave_courant` (default 25, at most 50)
 //! elastic-wave Courant numbers `Δt·c/h` for what the solid does with long steps:
 //!
