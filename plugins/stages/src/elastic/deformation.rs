@@ -75,9 +75,10 @@ impl Stage for DeformationStage {
         k.gradient(&state.u, &state.v);
         let coupled = self.step_flag.get();
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
-        if coupled {
-            // The coupled step: B̃^{n+1} = B̃(V^{n+1}), the tensor its implicit stiffness was
-            // solved with (no Picard pass; see the module docs).
+        if coupled && ctx.dt > self.limits.split * (1.0 + 1e-6) {
+            // A coupled step beyond the split step's wave limit: B̃^{n+1} = B̃(V^{n+1}), the
+            // tensor its implicit stiffness was solved with (no Picard pass; see the module
+            // docs).
             k.stretch(
                 &d.start,
                 a,
