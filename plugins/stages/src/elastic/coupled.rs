@@ -58,12 +58,30 @@
 //!
 //! # Limits
 //!
-//! Δt is capped at `coupled_wave_courant` (default 25, at most 50) elastic-wave Courant
-//! numbers `Δt·c/h`: the stability map's sphere gained energy at impacts taken at 240–500
-//! (8 cells per radius) and at 100 (6 cells per radius), never at 50 or less. An impact
-//! lasting a few steps is damped by θ = ¾: the map's G = 1e9 sphere leaves the wall at
-//! 0.78 m/s at the cap of 25, where the split step at its cap of 4 gives 1.03 m/s (θ = ½:
-//! 0.96, but it gained energy at CFL 0.9 with G = 1e7).
+//! The solve is not what limits the step: the Schur approximation carries the elastic term
+//! (`θΔt² G_eff` in `η`), and FGMRES takes 20–32 iterations a step at any G and any wave
+//! Courant number (the stability map's sphere at G = 1e7–1e11 Pa and caps from 25 to 1000
+//! wave Courant numbers). Δt is capped at `coupled_wave_courant` (default 25, at most 50)
+//! elastic-wave Courant numbers `Δt·c/h` for what the solid does with long steps:
+//!
+//! - **Strain left by a rigid motion.** A stiff solid moving through the grid keeps a strain
+//!   the explicit parts of the step leave at its interface (transport, corner relaxation),
+//!   stored at G and growing with Δt: the map's sphere at G = 1e9 Pa falling at 50 wave
+//!   Courant numbers holds 2e-3 of its kinetic energy as strain, at 100 about 1e-2, and
+//!   without a cap (the flow's step, ≈ 400) a fall of a few steps pumped energy into it at
+//!   G = 1e11 Pa. The end-of-step update makes no Picard pass in a coupled step (see the
+//!   parent module's docs), which stored several times more.
+//! - **A contact taken in a few steps.** An impact shorter than a step is damped by θ = ¾
+//!   (the 1-D amplification tends to −⅓, see the parent module): the map's sphere at G = 1e9
+//!   Pa leaves the wall at 0.99, 0.93, 0.90, 0.83, 0.82 m/s at caps of 4, 8, 12, 25, 50
+//!   (the split step at 4: 1.03); at 100 it stays on the wall, and at 6 cells per radius it
+//!   gained 15–25 % of its energy budget there; at 200 runs failed. θ = ½ keeps more of the
+//!   rebound (1.02, 0.99, 0.97 at 4, 8, 12) but its stiff modes are undamped, and it gained
+//!   energy at G = 1e7 Pa and CFL 0.9.
+//!
+//! With the cap every run of the map (6 and 8 cells per radius, G = 1e7–1e11 Pa, CFL 0.1–0.9)
+//! stays stable at 25 and 50. `Auto` takes the contact with split steps instead (see
+//! `ElasticCoupling::Auto`).
 
 use super::ElasticPreconditioner;
 use super::err;

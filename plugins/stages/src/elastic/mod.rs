@@ -68,19 +68,36 @@
 //! Couette case (64 cells, Δt = 0.001) erred by 2.09e-3 with the lag (5.8e-4 at Δt/4: the
 //! error was the time step's, not the interface's) and by 3.5e-4 with the pass. The
 //! intermediate tensors of the elastic step keep `H(V; B̃ⁿ)`: the implicit system is
-//! linear in V only so. The coupled step makes the same pass. At 100 elastic-wave Courant
-//! numbers (the stability map's sphere at G = 1e9 Pa) the pass left 5.7 energy budgets of
-//! strain at the end — it changes `B̃^{n+1}` by a strain the implicit stiffness did not answer
-//! — which is one reason for the coupled step's cap of 25, at which every run of the map stays
-//! stable with it; without it the seed's sphere at 12 cells per radius and CFL 0.9 gained 16
-//! times its energy budget.
+//! linear in V only so. A coupled step longer than the split step's wave limit
+//! (`wave_courant`) makes no pass: it ends with `B̃^{n+1} = B̃(V^{n+1})`, the tensor its
+//! implicit stiffness was solved with. The pass changes `B̃` by
+//! `θΔt (L ΔB̃ + ΔB̃ Lᵀ)`, a strain no stiffness answered within the step, which the next step
+//! finds stored at G: in a stiff solid at tens of elastic-wave Courant numbers it is most of the
+//! strain energy a rigid motion leaves (the stability map's sphere at G = 1e9 Pa falling at 50:
+//! 9.2e-3 of its kinetic energy with the pass, 2.0e-3 without). A coupled step is first order
+//! in time for the solid anyway (θ = ¾ below), so the pass's `O(Δt³)` buys little there;
+//! within the split step's limit, where the pass is known stable, a coupled step makes it
+//! (with `Coupled`, the Mooney–Rivlin Couette case at 64 cells errs by 9.8e-4 with it, 2.0e-3
+//! without).
 //!
 //! **θ of the stretching.** The step above is Crank–Nicolson in the stretching (the `Δt/2`
 //! weights). With `numerics.elastic.theta` = θ the weights are `(1 − θ)Δt` on `H(Vⁿ)` and
 //! `θΔt` on `H(V)`, and the implicit term `θΔt² K_J`: for the 1-D wave at `s ≫ 1` the
 //! velocity's amplification tends to `−(1 − θ)/θ` — −1 at θ = ½ (an undamped two-step
 //! oscillation, harmless while the wave cap keeps `s` small), −⅓ at the coupled step's
-//! default ¾ (see `coupled`).
+//! default ¾ (see `coupled`). The largest |amplification| of the 1-D wave's two modes:
+//!
+//! ```text
+//!   s =     0.1    1      2      3      5      20     100    400
+//!   θ = ½   0.998  0.816  0.577  0.426  0.667  0.980  0.999  1.000
+//!   θ = 0.6 0.997  0.791  0.542  0.395  0.250  0.649  0.666  0.667
+//!   θ = ¾   0.996  0.756  0.500  0.359  0.225  0.315  0.333  0.333
+//!   θ = 1   0.995  0.707  0.447  0.316  0.196  0.050  0.010  0.002
+//! ```
+//!
+//! (`s = kΔt c` is π times the wave Courant number `Δt c/h` for the grid's shortest wave.)
+//! Every θ ≥ ½ is stable for every s; above ½ the stiff modes are damped, which is what a
+//! contact taken in a few long steps loses of its rebound (see `coupled`).
 //!
 //! # Coupling with the viscous step
 //!

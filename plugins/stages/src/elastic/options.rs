@@ -46,11 +46,10 @@ pub struct ElasticOptions {
     /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
     /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
     /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. With
-    /// `Coupled`, 0.5 is the accurate choice for smooth motion (the Mooney–Rivlin Couette case
-    /// at 64 cells errs by 3.5e-4 against 9.8e-4 at 0.75) and keeps more of an impact's rebound
-    /// (0.96 against 0.78 m/s, the map's G = 1e9 sphere), but the map's sphere at G = 1e7 Pa
-    /// and CFL 0.9 gained 18 % of its energy budget at 6 cells per radius, and 1.3 % at 12;
-    /// at 0.75 every run of the map is stable.
+    /// `Coupled`, 0.5 keeps more of an impact's rebound (the map's G = 1e9 sphere at a cap of
+    /// 12: 0.97 against 0.90 m/s), but its stiff modes are undamped: the map's sphere at
+    /// G = 1e7 Pa and CFL 0.9 gained 18 % of its energy budget at 6 cells per radius, and
+    /// 1.3 % at 12; at 0.75 every run of the map is stable.
     #[serde(default)]
     pub theta: Option<f64>,
     /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500; the stability map's
@@ -60,10 +59,11 @@ pub struct ElasticOptions {
     /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
     /// (default [`DEFAULT_COUPLED_WAVE_COURANT`], at most [`MAX_COUPLED_WAVE_COURANT`]). The
     /// coupled step is stable far beyond the split step's [`MAX_WAVE_COURANT`], but not without
-    /// bound, and it damps an impact it takes in few steps: the stability map's sphere (8 cells
-    /// per radius, CFL 0.5–0.9) at G = 1e9 Pa leaves the wall at 0.78 m/s with a cap of 25 or
-    /// 50 (split: 1.03), but at 6 cells per radius sticks to it at 50, and gains energy at an
-    /// impact taken at 100 (6 cells per radius) or 240–500 (8 cells per radius).
+    /// bound: a stiff solid moving through the grid keeps a strain that grows with Δt, and an
+    /// impact taken in few steps is damped (see the `coupled` module's "Limits"). The stability
+    /// map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa leaves the wall at 0.83 m/s
+    /// with a cap of 25 and 0.82 with 50 (split: 1.03); at 6 cells per radius it sticks to the
+    /// wall at 50, and gains energy at an impact taken at 100.
     #[serde(default = "default_coupled_wave_courant")]
     pub coupled_wave_courant: f64,
 }
@@ -81,10 +81,11 @@ pub enum ElasticCoupling {
     /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
     /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
     /// `coupled_wave_courant` (25) elastic-wave Courant numbers instead of 4. The stability
-    /// map's sphere at CFL 0.5 takes 31 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
+    /// map's sphere at CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
-    /// (`theta` 0.75), so an impact loses part of its rebound (0.78 against the split step's
-    /// 1.03 m/s at G = 1e9); ≈ 1.5× the split step's cost per step on the seed's sphere.
+    /// (`theta` 0.75), so an impact loses part of its rebound (0.83 against the split step's
+    /// 1.03 m/s at G = 1e9, 0.51 against 0.99 at 1e7); ≈ 1.5× the split step's cost per step on
+    /// the seed's sphere.
     Coupled,
     /// Each step chooses: the coupled step (up to `coupled_wave_courant`) where the flow
     /// allows steps at least [`AUTO_COUPLED_GAIN`] times the split step's wave cap
@@ -93,9 +94,10 @@ pub enum ElasticCoupling {
     /// solid runs as with `Split`; a stiff one crosses the flow at the flow's step and takes
     /// an impact at the split step's, which resolves the rebound the coupled step's long steps
     /// damp. A coupled solve that does not converge within `coupling_iterations` is retaken as a
-    /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa: 369 steps
-    /// and a rebound of 1.038 m/s, against Split's 1606 and 1.032 and Coupled's 257 and 0.779;
-    /// at 1e7 Pa: 90 steps and 0.960, against 161 and 0.988, and 31 and 0.381. Each step's θ is
+    /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per
+    /// radius, CFL 0.5) at G = 1e9 Pa: 370 steps and a rebound of 1.039 m/s, against Split's
+    /// 1606 and 1.032 and Coupled's 257 and 0.827; at 1e7 Pa: 58 steps and 0.960, against 161
+    /// and 0.988, and 32 and 0.510. Each step's θ is
     /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
     /// split. The default: where the flow never
     /// allows longer steps than the split step's cap (the seed's sphere, every shipped case) it
@@ -151,7 +153,8 @@ fn default_coupling_iter() -> usize {
 
 /// The largest elastic-wave Courant number `Δt·c/h` the coupled step may take (see
 /// [`ElasticOptions::coupled_wave_courant`]): every run of the stability map's sphere at 6 and 8
-/// cells per radius kept its energy bounded at 50, not at 100.
+/// cells per radius kept its energy bounded at 50, not at 100 (6 cells per radius, G = 1e9 Pa,
+/// CFL 0.5 and 0.9: 15 and 25 % of the energy budget gained) nor 200.
 pub const MAX_COUPLED_WAVE_COURANT: f64 = 50.0;
 
 /// The coupled step's default cap on `Δt·c/h`: stable like [`MAX_COUPLED_WAVE_COURANT`], and
