@@ -584,7 +584,7 @@ fn a_stiff_sphere_falls_at_the_largest_coupled_cap_without_storing_strain() {
     let mut s = map_sphere(1e9, "Coupled", 1.2e-3, &cap);
     let mut worst = 0.0f64;
     run_until(&mut s, 1.2e-3, |s, _| {
-        let ke = efsi_core::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
         let ee = s
             .state
             .resources
