@@ -75,42 +75,24 @@ impl Stage for DeformationStage {
         k.gradient(&state.u, &state.v);
         let coupled = self.step_flag.get();
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
-        if coupled && ctx.dt > self.limits.split * (1.0 + 1e-6) {
-            // A coupled step beyond the split step's wave limit: B̃^{n+1} = B̃(V^{n+1}), the
-            // tensor its implicit stiffness was solved with (no Picard pass; see the module
-            // docs).
-            k.stretch(
-                &d.start,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                &mut d.b,
-            );
-        } else {
-            // The Picard pass: the update stretches the first pass's tensor. The first pass
-            // writes near the material only; beyond it (where the second pass's corner averages
-            // reach) it holds the step's B, the identity there.
+        // The Picard pass, except in a coupled step beyond the split step's wave limit, which
+        // ends with B̃^{n+1} = B̃(V^{n+1}), the tensor its implicit stiffness was solved with
+        // (see the module docs).
+        let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
+        let base = Some((&d.start, &d.explicit));
+        if picard {
+            // The first pass writes near the material only; beyond it (where the second pass's
+            // corner averages reach) it holds the step's B, the identity there.
             let first = &mut self.first;
             for (f, b) in first.iter_mut().zip(&d.b) {
                 f.copy_from(b);
             }
-            k.stretch(
-                &d.start,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                first,
-            );
+            k.stretch(&d.start, a, base, Some(&d.relax), first);
             k.fill_ghosts(first);
-            let stretched = &*first;
-            k.stretch(
-                stretched,
-                a,
-                Some((&d.start, &d.explicit)),
-                Some(&d.relax),
-                &mut d.b,
-            );
         }
+        // The update stretches the first pass's tensor (Picard) or the step's start.
+        let from = if picard { &self.first } else { &d.start };
+        k.stretch(from, a, base, Some(&d.relax), &mut d.b);
         k.fill_ghosts(&mut d.b);
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);
