@@ -596,9 +596,16 @@ impl Stage for ViscousStage {
                         self.delta.fill(0.0);
                     } else {
                         self.warm.guess(ctx.dt, &mut self.delta);
+                        // The guess's residual, r = b − A δ, in `r`.
                         op.product(&self.delta, q);
-                        let r0 = rhs.iter().zip(q.iter()).map(|(b, a)| (b - a) * (b - a));
-                        tol = tol.min(CONTRACT * r0.sum::<f64>().sqrt()).max(floor);
+                        par::for_each_chunk(r, |o, r| {
+                            let (b, a) = (&rhs[o..o + r.len()], &q[o..o + r.len()]);
+                            r.iter_mut()
+                                .zip(b)
+                                .zip(a)
+                                .for_each(|((r, b), a)| *r = b - a);
+                        });
+                        tol = tol.min(CONTRACT * dot(r, r).sqrt()).max(floor);
                     }
                 }
             }
