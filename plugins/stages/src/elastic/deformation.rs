@@ -93,6 +93,11 @@ impl Stage for DeformationStage {
         // The update stretches the first pass's tensor (Picard) or the step's start.
         let from = if picard { &self.first } else { &d.start };
         k.stretch(from, a, base, Some(&d.relax), &mut d.b);
+        // The fluid's B back to the identity before the rates are taken and the interface
+        // moves: stretched by the fluid's velocity gradient, it would flow into the solid
+        // through the next step's advection and stay in the cells the solid enters (see
+        // "Pure fluid" in the module docs).
+        k.reset_fluid_b(&mut d.b);
         k.fill_ghosts(&mut d.b);
         std::mem::swap(&mut d.advection, &mut d.advection_prev);
         k.advect(&state.u, &state.v, &d.b, &mut d.advection);

@@ -185,18 +185,32 @@ impl Kernels {
     /// fluid has no memory of deformation, and B there only enters neighbouring averages and
     /// fluxes; this keeps it bounded (stale rates would otherwise compound step after step).
     pub(super) fn reset_fluid(&self, d: &mut super::Deformation) {
+        self.reset_fluid_b(&mut d.b);
         for c in 0..4 {
+            let wt = if c == 3 { &self.wc } else { &self.w };
+            for (k, &w) in wt.data().iter().enumerate() {
+                if w == 0.0 {
+                    d.advection[c].data_mut()[k] = 0.0;
+                    d.advection_prev[c].data_mut()[k] = 0.0;
+                    d.stretching[c].data_mut()[k] = 0.0;
+                }
+            }
+        }
+    }
+
+    /// Reset B (not its rates) to the identity where there is no solid (`w = 0`, the
+    /// corners: `w_c = 0`). The end-of-step update calls it before it takes the next step's
+    /// rates, which then see the fluid undeformed (see "Pure fluid" in the module docs).
+    pub(super) fn reset_fluid_b(&self, b: &mut [Field; 4]) {
+        for (c, b) in b.iter_mut().enumerate() {
             let (wt, one) = if c == 3 {
                 (&self.wc, 0.0)
             } else {
                 (&self.w, 1.0)
             };
-            for (k, &w) in wt.data().iter().enumerate() {
+            for (b, &w) in b.data_mut().iter_mut().zip(wt.data()) {
                 if w == 0.0 {
-                    d.b[c].data_mut()[k] = one;
-                    d.advection[c].data_mut()[k] = 0.0;
-                    d.advection_prev[c].data_mut()[k] = 0.0;
-                    d.stretching[c].data_mut()[k] = 0.0;
+                    *b = one;
                 }
             }
         }
