@@ -140,10 +140,10 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
             &["numerics.elastic.wave_courant", "must be in (0, 4]"],
         ),
         (
-            "(coupling: Coupled, coupled_wave_courant: 100.0)",
+            "(coupling: Coupled, coupled_wave_courant: 400.0)",
             &[
                 "numerics.elastic.coupled_wave_courant",
-                "must be in (0, 50]",
+                "must be in (0, 200]",
             ],
         ),
     ] {
