@@ -170,7 +170,8 @@ fn default_coupling_iter() -> usize {
 pub const MAX_COUPLED_WAVE_COURANT: f64 = 200.0;
 
 /// The coupled step's default cap on `Δt·c/h`: an impact taken with `Coupled` keeps some of its
-/// rebound (0.51 m/s against the split step's 1.03 on the map's sphere at G = 1e9 Pa) (see [`ElasticOptions::coupled_wave_courant`]).
+/// rebound (0.51 m/s against the split step's 1.03 on the map's sphere at G = 1e9 Pa; see
+/// [`ElasticOptions::coupled_wave_courant`]).
 pub const DEFAULT_COUPLED_WAVE_COURANT: f64 = 25.0;
 
 fn default_coupled_wave_courant() -> f64 {
