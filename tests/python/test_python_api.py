@@ -252,8 +252,11 @@ def test_the_same_bits_as_efsi_run(tmp_path):
 
 CHILD = textwrap.dedent(
     """
-    import math, sys, time
+    import math, signal, sys, time
     import efsi
+    # A process started in the background of a shell without job control (nohup …, a CI
+    # runner) inherits SIGINT ignored, and Python then installs no KeyboardInterrupt for it.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     sim = efsi.Simulation(efsi.Scene.from_str(sys.argv[1]))
     print("ready", flush=True)
     try:
