@@ -655,6 +655,7 @@ impl Stage for ViscousStage {
             self.warm.remember(ctx.dt, &mut self.delta);
             SolveStats {
                 residual: st.residual / bnorm,
+                converged: true,
                 ..st
             }
         };
