@@ -300,6 +300,17 @@ impl ViscousSystem {
             .fill_velocity(&self.grid, &mut self.xu, &mut self.xv, 0.0, true);
     }
 
+    /// `r = b − A x` (and `q = A x`; the fields then hold `x`).
+    fn residual(&mut self, b: &[f64], x: &[f64], r: &mut [f64], q: &mut [f64]) {
+        self.product(x, q);
+        par::for_each_chunk(r, |o, r| {
+            let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
+            for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
+                *r = b - q;
+            }
+        });
+    }
+
     /// The smallest diagonal mass (a lower bound of the system's eigenvalues).
     fn min_mass(&self) -> f64 {
         self.dm.iter().fold(f64::INFINITY, |m, &d| m.min(d))
@@ -348,13 +359,7 @@ impl ViscousSystem {
         let nx = self.grid.nx;
         // r = b − A x and ‖r‖₂ (the fields then hold x).
         let true_residual = |sys: &mut Self, x: &[f64], r: &mut [f64], q: &mut [f64]| {
-            sys.product(x, q);
-            par::for_each_chunk(r, |o, r| {
-                let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
-                for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
-                    *r = b - q;
-                }
-            });
+            sys.residual(b, x, r, q);
             Norm::L2.of(r)
         };
         let mut res = true_residual(self, x, r, q);
@@ -596,15 +601,7 @@ impl Stage for ViscousStage {
                         self.delta.fill(0.0);
                     } else {
                         self.warm.guess(ctx.dt, &mut self.delta);
-                        // The guess's residual, r = b − A δ, in `r`.
-                        op.product(&self.delta, q);
-                        par::for_each_chunk(r, |o, r| {
-                            let (b, a) = (&rhs[o..o + r.len()], &q[o..o + r.len()]);
-                            r.iter_mut()
-                                .zip(b)
-                                .zip(a)
-                                .for_each(|((r, b), a)| *r = b - a);
-                        });
+                        op.residual(rhs, &self.delta, r, q);
                         tol = tol.min(CONTRACT * dot(r, r).sqrt()).max(floor);
                     }
                 }
