@@ -38,7 +38,7 @@ fn defaults_apply_where_the_scene_is_silent() {
     let s = with("()").unwrap();
     let p: ProjectionOptions = get(&s);
     assert_eq!((p.tolerance, p.solver), (1e-6, PressureSolver::Multigrid));
-    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-6);
+    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-3);
     assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-10);
     // Unset: the scene decides (`WholeStep` in a scene of one fluid).
     assert_eq!(get::<AdvectionOptions>(&s).predictor, None);
@@ -67,8 +67,8 @@ fn strict_preset_tightens_each_tolerance() {
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
     assert_eq!(back.numerics.preset, Preset::Strict);
     assert_eq!(get::<ProjectionOptions>(&back).tolerance, 1e-12);
-    let s = with("(preset: Default, viscous: (tolerance: 1e-3))").unwrap();
-    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-3);
+    let s = with("(preset: Default, viscous: (tolerance: 1e-4))").unwrap();
+    assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-4);
     assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-6);
 }
 
