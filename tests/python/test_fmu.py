@@ -628,6 +628,16 @@ def ecos_scene(ecospy, path, h, n, params, inputs, outputs):
 def fmpy_scene(path, h, n, params, inputs, outputs):
     """The same calls through fmpy's FMU2Slave / FMU3Slave (doStep(t, h), t += h)."""
     unzipped = extract(path)
+    try:
+        return fmpy_slave_rows(unzipped, h, n, params, inputs, outputs)
+    finally:
+        import shutil
+
+        shutil.rmtree(unzipped, ignore_errors=True)
+
+
+def fmpy_slave_rows(unzipped, h, n, params, inputs, outputs):
+    """`fmpy_scene` on an extracted FMU."""
     md = read_model_description(unzipped)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi2 = md.fmiVersion == "2.0"

@@ -217,6 +217,7 @@ fn snapshot_and_restore_rewind_a_simulation_exactly() {
     );
     assert!(e.to_string().contains("phi"), "{e}");
     assert_eq!(cavity.state.step, before.step());
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Write a checkpoint of a few steps of the cavity; returns its folder.

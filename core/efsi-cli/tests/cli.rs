@@ -1,8 +1,10 @@
 //! The `efsi` command end to end: bad input is refused with exit code 2 and a message naming
 //! the file and line:column or the field; `check`, `--print-schedule` and `run` outputs.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use common::{efsi, tmp};
+use std::path::Path;
 
 const GOOD: &str = r#"Scene(
     name: "tiny_cavity",
@@ -19,20 +21,6 @@ const GOOD: &str = r#"Scene(
     ),
 )
 "#;
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efsi-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn efsi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_efsi"))
-        .args(args)
-        .output()
-        .expect("run efsi")
-}
 
 fn write_scene(dir: &Path, text: &str) -> String {
     let p = dir.join("scene.ron");

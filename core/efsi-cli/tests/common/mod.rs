@@ -6,12 +6,37 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-/// A fresh scratch folder for test `name`.
-pub fn tmp(name: &str) -> PathBuf {
+/// A test's scratch folder, made fresh; removed when the test passes and kept when it fails
+/// (a panic), for a look at what the run left. Derefs to its path.
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// A fresh scratch folder for test `name` (see [`Scratch`]).
+pub fn tmp(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("efsi-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
 }
 
 /// Run `efsi args…` to its end.
