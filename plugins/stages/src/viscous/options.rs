@@ -18,7 +18,7 @@ pub struct ViscousOptions {
     /// error does not accumulate: the drop at 128² falls the same to 2e-7 of its fall at 1e-3 and
     /// 1e-9 (the grid's own error is ≈ 1e-4 of it), the Re = 1000 cavity's centrelines at t = 2
     /// are as far from a 256² reference at 1e-3 as at 1e-6 (9.0e-4), the oscillating Couette
-    /// flows' errors move by ≤ 0.5 %. Near a steady state (`time.steady`) the stage tightens its
+    /// flows' errors move by ≤ 2 %. Near a steady state (`time.steady`) the stage tightens its
     /// own stop (see the stage's module docs), so a steady state does not depend on this
     /// tolerance. A strict setting is 1e-9 (the `Strict` preset).
     #[serde(default = "default_visc_tol")]
