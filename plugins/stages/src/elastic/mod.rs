@@ -96,8 +96,9 @@
 //! ```
 //!
 //! (`s = kΔt c` is π times the wave Courant number `Δt c/h` for the grid's shortest wave.)
-//! Every θ ≥ ½ is stable for every s; above ½ the stiff modes are damped, which is what a
-//! contact taken in a few long steps loses of its rebound (see `coupled`).
+//! Every θ ≥ ½ is stable for every s; above ½ the stiff modes are damped. At θ = ½ the step
+//! still loses `½ ∫ w G |ΔB|²` (the stress at the step's end): a contact taken in a few long
+//! steps loses its rebound so, and through the wall row's sliver (see `coupled`, "Limits").
 //!
 //! # Coupling with the viscous step
 //!

@@ -128,8 +128,11 @@ pub const AUTO_STRAIN_SHARE: f64 = 1e-2;
 /// cells were one cell off the wall lost 13 % of its kinetic energy in that step (at 16 ms
 /// 0.953 m/s against `Split`'s 1.030 at G = 1e9 Pa, 0.850 against 0.943 at 1e7); with 1.5
 /// cells: 454 steps and 1.030, and 64 steps and 0.928 (2 cells: 491 and 1.029, 70 and
-/// 0.942). Why the step loses there is not known (the strain it leaves is in the bottom
-/// cells); with the fluid's one-step stretch that the reset removed, it did not.
+/// 0.942). The step loses there because the wall row's cell on the axis still holds a sliver
+/// of solid (φ ≈ 2e-3): the coupled step stretches it with the whole cell's rate, the air
+/// filling the gap under the leaving sphere (B₂₂ − 1 from −0.010 to +0.044 at the stiffness
+/// `φ^{1/2} G`), which pulls the sphere back, and resets its strain a step later (see the
+/// `coupled` module's "Limits").
 pub const AUTO_WALL_CELLS: f64 = 1.5;
 
 /// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
