@@ -48,11 +48,14 @@ impl CoupledStep {
     }
 }
 
-/// What differs between a split and a coupled step: θ of B's stretching and the velocity
-/// block's preconditioner.
+/// What differs between a split and a coupled step: θ of B's stretching, the momentum step's
+/// weight of the new stress and the velocity block's preconditioner.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct StepScheme {
     pub(super) theta: f64,
+    /// The weight of `τ(B^{n+1})` in the momentum step, `1 − alpha` that of `τ(Bⁿ)`: θ in a
+    /// coupled step, 1 (the stress at the step's end) in a split one.
+    pub(super) alpha: f64,
     pub(super) preconditioner: ElasticPreconditioner,
 }
 

@@ -56,6 +56,41 @@
 //! preconditioner stalls: a cell with a sliver of solid has air's mass but stiff faces, and
 //! the preconditioner's eigenvalues spread over (0, 3] there.
 //!
+//! # The stress at θ
+//!
+//! The coupled step weights the stress in its momentum step as its stretching weights the
+//! velocity: with `B(V) = Bⁿ + E + θΔt H(V; Bⁿ)` (see the parent module) it solves
+//! `ρ δ/Δt = ∇·[θ τ(B(V)) + (1 − θ) τ(Bⁿ)]`, linearised about `B^{n+1/3}` as the split step is:
+//! `(M − θ_v Δt K_v − θ² Δt² K_J) δ = Δt·vol·∇·[θ τ^{n+1/3} + (1 − θ) τⁿ]` (one more law
+//! evaluation a step, `τ(Bⁿ)` without its tangent). The split step keeps the stress at the
+//! step's end (θ = ½, weight 1 on `τ^{n+1}`), whose damping it needs: with the midpoint
+//! `½(τⁿ + τ^{n+1})` the map's sphere under `Split` gains 2.1 % of its budget at G = 1e9 Pa and
+//! 3.1 % at 1e7 (total at 16 ms +4.4 % and +21 %).
+//!
+//! Why: take the 1-D model of a solid in contact, a mass m on a spring k (x the strain, v the
+//! velocity), stretched as B is and pushed as the momentum step pushes,
+//!
+//! ```text
+//!   x⁺ = x + Δt (θ v⁺ + (1 − θ) v),      m (v⁺ − v) = −Δt k (α x⁺ + (1 − α) x).
+//! ```
+//!
+//! With `y = (v, x)`, the energy `E = ½⟨y, y⟩ = ½ m v² + ½ k x²` and `A y = (−k x/m, v)`,
+//! `⟨A y, y⟩ = 0`. For α = θ the step is the θ-method `Δy = Δt A y_θ`,
+//! `y_θ = θ y⁺ + (1 − θ) y = ȳ + (θ − ½) Δy` (`ȳ` the mean of y and y⁺), so
+//!
+//! ```text
+//!   E⁺ − E = ⟨Δy, ȳ⟩ = ⟨Δy, y_θ⟩ − (θ − ½) |Δy|² = −(θ − ½) (m Δv² + k Δx²):
+//! ```
+//!
+//! nothing gained for θ ≥ ½, nothing lost at θ = ½ (the midpoint rule). With the stress at the
+//! step's end (α = 1) at θ = ½ the step loses `½ k Δx²` besides — as much as it stores when a
+//! compression happens within one step. The 1-D wave's amplification is
+//! `((1 + (1 − θ)² s²)/(1 + θ² s²))^{1/2}`: 1 at θ = ½ for every s; at θ = ¾ 0.998, 0.825,
+//! 0.62, 0.41, 0.34, 0.33 at s = 0.1, 1, 2, 5, 20, ∞ (stress at the end: 0.996, 0.756, 0.500,
+//! 0.225, 0.315, 0.333; see the parent module's table). The model holds for a linear law away
+//! from the interface; what the discrete solid adds is outside it: the law's nonlinearity, B's
+//! advection, and at the interface the VOF step moving φ under a fixed B (see "Limits").
+//!
 //! # Limits
 //!
 //! The solve is not what limits the step: the Schur approximation carries the elastic term
@@ -69,17 +104,47 @@
 //!   G = 1e9 Pa falling at 50 wave Courant numbers held as 7.3e-3 of its kinetic energy, at
 //!   100–400 as 5e-2–0.55 (the fall gaining 1.5–18 % of its energy). Reset, the fall keeps
 //!   at most 1.3e-9 at 50 and 3.2e-5 at 400, without gain.
-//! - **A contact taken in a few steps.** An impact shorter than a step is damped by θ = ¾
-//!   (the 1-D amplification tends to −⅓, see the parent module): the map's sphere at G = 1e9
-//!   Pa moved up at 16 ms at 0.99, 0.93, 0.90, 0.83, 0.82 m/s with caps of 4, 8, 12, 25, 50
-//!   (the split step at 4: 1.03) while the fluid's stretch still reached the solid; without
-//!   it at 0.99, 0.89, 0.82, 0.51, 0.02, and at 100 and 200 it stays on the wall (at G = 1e7
-//!   Pa from 25 on) — part of the earlier rebound was that stretch's strain. Those long steps
-//!   are stable now: no run failed and none gained more than 3e-5 of its budget (8 cells per
-//!   radius at G = 1e7 and 1e9 Pa to 200; 6 cells per radius, CFL 0.5 and 0.9, G = 1e7, 1e9,
-//!   1e11 Pa at 100 and 200), where 100 gained 15–25 % before. θ = ½ keeps more of the
-//!   rebound (1.02, 0.99, 0.97 at 4, 8, 12) but its stiff modes are undamped, and it gained
-//!   energy at G = 1e7 Pa and CFL 0.9.
+//! - **A contact taken in a few steps.** The map's sphere at G = 1e9 Pa (8 cells per radius)
+//!   touches the wall for ≈ 0.35 ms (split steps: contact force from 1.35 to 1.75 ms), a few
+//!   steps at 25 wave Courant numbers and less than one at 200. Two things then lose its
+//!   rebound: at 16 ms it moves up at 0.957, 0.647, 0.095 m/s with caps of 8, 25, 50 (θ = ¾,
+//!   the stress at θ; with the stress at the step's end 0.893, 0.506, 0.020) and rests on the
+//!   wall at 200 (the split step at 4: 1.030). At G = 1e7 Pa and a cap of 8: 0.641 (end: 0.513);
+//!   from 25 on it rests on the wall either way. At 1e11 Pa and 25: 0.843 (end: 0.739).
+//!   1. *The stress at the step's end* — now at θ (above). With the stress at the step's end
+//!      and θ = ½ the step lost `½ ∫ w G |B^{n+1} − Bⁿ|²`: at 200 the impact step turned the
+//!      sphere's kinetic energy (3.96e-3 J/rad) into 2.06e-3 of strain and lost 1.90e-3. At
+//!      θ = ¾ what the step loses is the θ-method's `(θ − ½)|Δy|²`, still most of an impact
+//!      taken in one step. At θ = ½ (`theta: 0.5`, the midpoint rule) the step loses nothing
+//!      in the 1-D model, and the run gains through the next mechanism: 1.117, 1.175, 1.195
+//!      m/s at 16 ms with caps of 8, 25, 200, kinetic + potential 5.0 %, 16 %, 21 % of the
+//!      budget above its start (an elastic rebound, e = 1, would leave at ≈ 1.12) — θ = ½ is
+//!      not for coupled steps that take a contact.
+//!   2. *The wall row's sliver.* The contact is far below the grid (Hertz: 0.09 mm of
+//!      approach, 1/26 of a cell); in long steps what stops and relaunches the sphere is the
+//!      wall row's cell on the axis, holding φ = 1e-3–7e-2 of solid, whose normal components
+//!      take the whole cell's rate (iso-strain, see "The interface" in the parent module) —
+//!      the squeeze of the air between the sphere and the wall, `v/h` — at the stiffness
+//!      `φ^{1/2} G`. It holds 87–97 % of the strain energy in contact (B₂₂ − 1 = −0.19 with
+//!      the midpoint step at 200), is stretched as the sphere leaves (adhesion: the coupled
+//!      step that made `Auto`'s wall margin 1.5 cells stretched it to B₂₂ − 1 = +0.044 and
+//!      took 12.6 % of the kinetic energy), and what strain it still holds when it drops
+//!      below `PHI_MIN` is reset with it. The solid fraction moving at fixed B changes the
+//!      stored `φ^{1/2} W(B)` too: with the midpoint step at 8, +1.11e-3 J/rad gained and
+//!      −0.75e-3 lost that way over the run against a budget of 5.1e-3. With the weight `φ`
+//!      instead of `φ^{1/2}` the sliver is softer and the rebound closer (split 1.073,
+//!      coupled at 25 and θ = ½: 1.033), but at 200 the run pumps energy. Over a run at the
+//!      default θ = ¾ and cap 25 that way +1.60e-3 J/rad are gained and −0.78e-3 lost; the
+//!      elastic stages take the net back as strain (−0.82e-3) and lose 2.30e-3 of kinetic
+//!      energy (at 8: +1.02e-3, −0.61e-3 and 0.79e-3; at 200: +1.39e-3, −0.36e-3, 3.97e-3).
+//!      B's advection in contact moves as much: at 200 with θ = ½ it changes the strain
+//!      energy by −16.9e-3 and +3.8e-3 J/rad over the run, and the elastic step after the
+//!      impact stores 13.8e-3 J/rad (2.7 budgets) — a cure of the sliver alone would not make
+//!      a contact taken in one step conservative.
+//!
+//!   Those long steps are stable: no run failed and none gained more than 3e-5 of its budget
+//!   (8 cells per radius at G = 1e7 and 1e9 Pa to 200; 6 cells per radius, CFL 0.5 and 0.9,
+//!   G = 1e7, 1e9, 1e11 Pa at 100 and 200).
 //!
 //! With the cap every run of the map (6 and 8 cells per radius, G = 1e7–1e11 Pa, CFL 0.1–0.9)
 //! stays stable at 25 and 50, and the runs measured at 100 and 200 too; the cap is kept for the

@@ -96,8 +96,10 @@
 //! ```
 //!
 //! (`s = kΔt c` is π times the wave Courant number `Δt c/h` for the grid's shortest wave.)
-//! Every θ ≥ ½ is stable for every s; above ½ the stiff modes are damped, which is what a
-//! contact taken in a few long steps loses of its rebound (see `coupled`).
+//! Every θ ≥ ½ is stable for every s; above ½ the stiff modes are damped. At θ = ½ the step
+//! still loses `½ ∫ w G |ΔB|²` (the stress at the step's end). The coupled step takes the
+//! stress at θ instead, `θ τ^{n+1} + (1 − θ) τⁿ`, which loses only the θ-method's share (see
+//! `coupled`, "The stress at θ"; its long steps' limits in "Limits").
 //!
 //! # Coupling with the viscous step
 //!
@@ -384,6 +386,9 @@ impl StagePlugin for Elastic {
         let split_dt = shared_wave_limits(scene, grid, law.as_ref(), shared)?.split;
         let schemes = [false, true].map(|coupled| StepScheme {
             theta: o.stretch_theta(coupled),
+            // The coupled step's momentum takes the stress at its stretching's θ (see `coupled`,
+            // "The stress at θ"); the split step keeps the stress at the step's end.
+            alpha: if coupled { o.stretch_theta(true) } else { 1.0 },
             preconditioner: match o.preconditioner {
                 // The coupled step keeps the multigrid: with Jacobi for its velocity block
                 // its FGMRES stagnates (the shear rectangle at 96 × 24: 1.2e-9 of the scale
@@ -414,6 +419,7 @@ impl StagePlugin for Elastic {
             },
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
+            tau_n: std::array::from_fn(|_| Field::zeros(grid)),
             op: ElasticOperator {
                 k,
                 db: std::array::from_fn(|_| Field::zeros(grid)),

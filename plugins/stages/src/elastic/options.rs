@@ -61,8 +61,8 @@ pub struct ElasticOptions {
     /// coupled step is stable far beyond the split step's [`MAX_WAVE_COURANT`]; what the cap
     /// limits is accuracy: an impact taken in few coupled steps is damped (see the `coupled`
     /// module's "Limits"). The stability map's sphere (8 cells per radius, CFL 0.5) at
-    /// G = 1e9 Pa under `Coupled` moves up at 16 ms at 0.51 m/s with a cap of 25 and sticks to
-    /// the wall from 50 (split: 1.03). Under `Auto`, which takes the impact with split steps,
+    /// G = 1e9 Pa under `Coupled` moves up at 16 ms at 0.65 m/s with a cap of 25, 0.10 at 50, and
+    /// rests on the wall at 200 (split: 1.03). Under `Auto`, which takes the impact with split steps,
     /// larger caps cost fewer steps at the split step's rebound: 454, 339, 284 and 232 steps at
     /// 25, 50, 100 and 200 (1.030, 1.029, 1.025, 1.025 m/s; no energy gained beyond 2.9e-5 of
     /// the budget).
@@ -85,7 +85,7 @@ pub enum ElasticCoupling {
     /// `coupled_wave_courant` (25) elastic-wave Courant numbers instead of 4. The stability
     /// map's sphere at CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
-    /// (`theta` 0.75), so an impact taken in a few steps loses its rebound (at 16 ms 0.51 against
+    /// (`theta` 0.75), so an impact taken in a few steps loses its rebound (at 16 ms 0.65 against
     /// the split step's 1.03 m/s at G = 1e9; at 1e7 it stays on the wall); ≈ 1.5× the split
     /// step's cost per step on
     /// the seed's sphere.
@@ -99,7 +99,7 @@ pub enum ElasticCoupling {
     /// damp. A coupled solve that does not converge within `coupling_iterations` is retaken as a
     /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per
     /// radius, CFL 0.5) at G = 1e9 Pa: 454 steps and 1.030 m/s at 16 ms, against Split's
-    /// 1606 and 1.030 and Coupled's 257 and 0.506; at 1e7 Pa: 64 steps and 0.928, against 161
+    /// 1606 and 1.030 and Coupled's 257 and 0.647; at 1e7 Pa: 64 steps and 0.928, against 161
     /// and 0.943, and 30 and none (on the wall). Each step's θ is
     /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
     /// split. The default: where the flow never
@@ -128,8 +128,11 @@ pub const AUTO_STRAIN_SHARE: f64 = 1e-2;
 /// cells were one cell off the wall lost 13 % of its kinetic energy in that step (at 16 ms
 /// 0.953 m/s against `Split`'s 1.030 at G = 1e9 Pa, 0.850 against 0.943 at 1e7); with 1.5
 /// cells: 454 steps and 1.030, and 64 steps and 0.928 (2 cells: 491 and 1.029, 70 and
-/// 0.942). Why the step loses there is not known (the strain it leaves is in the bottom
-/// cells); with the fluid's one-step stretch that the reset removed, it did not.
+/// 0.942). The step loses there because the wall row's cell on the axis still holds a sliver
+/// of solid (φ ≈ 2e-3): the coupled step stretches it with the whole cell's rate, the air
+/// filling the gap under the leaving sphere (B₂₂ − 1 from −0.010 to +0.044 at the stiffness
+/// `φ^{1/2} G`), which pulls the sphere back, and resets its strain a step later (see the
+/// `coupled` module's "Limits").
 pub const AUTO_WALL_CELLS: f64 = 1.5;
 
 /// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
@@ -170,7 +173,7 @@ fn default_coupling_iter() -> usize {
 pub const MAX_COUPLED_WAVE_COURANT: f64 = 200.0;
 
 /// The coupled step's default cap on `Δt·c/h`: an impact taken with `Coupled` keeps some of its
-/// rebound (0.51 m/s against the split step's 1.03 on the map's sphere at G = 1e9 Pa; see
+/// rebound (0.65 m/s against the split step's 1.03 on the map's sphere at G = 1e9 Pa; see
 /// [`ElasticOptions::coupled_wave_courant`]).
 pub const DEFAULT_COUPLED_WAVE_COURANT: f64 = 25.0;
 

@@ -27,6 +27,8 @@ pub(super) struct ElasticStage {
     pub(super) split_dt: f64,
     pub(super) step_flag: super::CoupledStep,
     pub(super) tau: [Field; 4],
+    /// τ(Bⁿ) with this step's weights (the coupled step's old-time stress).
+    pub(super) tau_n: [Field; 4],
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
     pub(super) delta: Vec<f64>,
@@ -258,6 +260,10 @@ impl ElasticStage {
             }
         }
         let k = &mut self.op.k;
+        if self.scheme.alpha < 1.0 {
+            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
+                .map_err(|m| err("elastic", m))?;
+        }
         k.relaxation(
             self.law.as_ref(),
             &d.start,
@@ -287,13 +293,18 @@ impl ElasticStage {
         let dt = ctx.dt;
         let k = &mut self.op.k;
         k.force(&self.tau, &mut self.rhs);
+        let alpha = self.scheme.alpha;
+        if alpha < 1.0 {
+            self.rhs.iter_mut().for_each(|r| *r *= alpha);
+            k.force_sub(&self.tau_n, alpha - 1.0, &mut self.rhs);
+        }
         let g = ctx.grid;
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
         let rho = &state.rho;
         let s = rho.stride();
         let c2 = if self.implicit {
-            self.scheme.theta * dt * dt
+            alpha * self.scheme.theta * dt * dt
         } else {
             0.0
         };
