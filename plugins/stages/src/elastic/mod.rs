@@ -419,7 +419,7 @@ impl StagePlugin for Elastic {
             },
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
-            tau_n: std::array::from_fn(|_| Field::zeros(grid)),
+            tau_n: couples.then(|| std::array::from_fn(|_| Field::zeros(grid))),
             op: ElasticOperator {
                 k,
                 db: std::array::from_fn(|_| Field::zeros(grid)),

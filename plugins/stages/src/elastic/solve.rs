@@ -27,8 +27,9 @@ pub(super) struct ElasticStage {
     pub(super) split_dt: f64,
     pub(super) step_flag: super::CoupledStep,
     pub(super) tau: [Field; 4],
-    /// τ(Bⁿ) with this step's weights (the coupled step's old-time stress).
-    pub(super) tau_n: [Field; 4],
+    /// τ(Bⁿ) with this step's weights (the coupled step's old-time stress); only in a scene
+    /// that may take coupled steps.
+    pub(super) tau_n: Option<[Field; 4]>,
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
     pub(super) delta: Vec<f64>,
@@ -260,8 +261,8 @@ impl ElasticStage {
             }
         }
         let k = &mut self.op.k;
-        if self.scheme.alpha < 1.0 {
-            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
+        if let Some(tau_n) = self.tau_n.as_mut().filter(|_| self.scheme.alpha < 1.0) {
+            k.evaluate(self.law.as_ref(), &d.start, tau_n, false)
                 .map_err(|m| err("elastic", m))?;
         }
         k.relaxation(
@@ -294,9 +295,9 @@ impl ElasticStage {
         let k = &mut self.op.k;
         k.force(&self.tau, &mut self.rhs);
         let alpha = self.scheme.alpha;
-        if alpha < 1.0 {
+        if let Some(tau_n) = self.tau_n.as_ref().filter(|_| alpha < 1.0) {
             self.rhs.iter_mut().for_each(|r| *r *= alpha);
-            k.force_sub(&self.tau_n, alpha - 1.0, &mut self.rhs);
+            k.force_sub(tau_n, alpha - 1.0, &mut self.rhs);
         }
         let g = ctx.grid;
         let m = &g.metric;
