@@ -168,9 +168,16 @@ impl Harness<'_> {
 /// Run case `C` as `opts` asks and assemble its report.
 pub fn run<C: Case>(opts: &Options) -> Result<Report, String> {
     let (case, plan) = C::plan(opts)?;
+    // The case's folder is the bench's own: cleared first, so a run into the same `--out` starts
+    // afresh (efsi refuses to write over an earlier run's outputs, which failed every setting of
+    // the stability map on a second `bench-paper` into one folder).
+    let dir = opts.out.join(C::NAME);
+    if dir.exists() {
+        std::fs::remove_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
     let mut h = Harness {
         opts,
-        dir: opts.out.join(C::NAME),
+        dir,
         plots: Vec::new(),
         notes: Vec::new(),
         schedule: Vec::new(),
