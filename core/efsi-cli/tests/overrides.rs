@@ -3,8 +3,10 @@
 //! out-of-range value is refused (exit code 2) naming the override; `efsi resume` applies the
 //! recorded overrides again.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use common::{efsi, tmp};
+use std::path::Path;
 
 const CAVITY: &str = r#"Scene(
     name: "tiny_cavity",
@@ -19,20 +21,6 @@ const CAVITY: &str = r#"Scene(
     ),
 )
 "#;
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efsi-overrides-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn efsi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_efsi"))
-        .args(args)
-        .output()
-        .expect("run efsi")
-}
 
 fn text(o: &[u8]) -> String {
     String::from_utf8_lossy(o).into_owned()

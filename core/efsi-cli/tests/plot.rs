@@ -1,22 +1,10 @@
 //! `efsi plot DIR`: the probe time series and a field at an output time as PNGs of the
 //! documented sizes, with something drawn on them; bad requests are refused by name.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn efsi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_efsi"))
-        .args(args)
-        .output()
-        .expect("run efsi")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efsi-plot-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{efsi, tmp};
+use std::path::Path;
 
 /// A viscous drop falling in an axisymmetric box, VTK as Float32 + zlib.
 const DROP: &str = r#"Scene(

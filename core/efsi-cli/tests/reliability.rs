@@ -7,28 +7,10 @@
 
 mod common;
 
-use common::law_library;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use common::{efsi, law_library, probe_rows, stderr, tmp};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efsi-rel-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn efsi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_efsi"))
-        .args(args)
-        .output()
-        .expect("run efsi")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A 32² cavity long enough (≈ 2500 steps) to be interrupted twice.
 const LONG: &str = r#"Scene(
@@ -41,10 +23,6 @@ const LONG: &str = r#"Scene(
     output: (vtk_every: 2.0, probe_every: 0.1, probes: [Point(name: "u_c", field: "u", at: (0.5, 0.5)), KineticEnergy]),
 )
 "#;
-
-fn probe_rows(dir: &Path) -> usize {
-    std::fs::read_to_string(dir.join("probes.csv")).map_or(0, |s| s.lines().count())
-}
 
 /// Start `efsi args…`, wait until `dir/probes.csv` has more than `rows` lines, then send
 /// `signal`; returns the exit code and stderr.
