@@ -39,7 +39,7 @@ fn defaults_apply_where_the_scene_is_silent() {
     let p: ProjectionOptions = get(&s);
     assert_eq!((p.tolerance, p.solver), (1e-6, PressureSolver::Multigrid));
     assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-3);
-    assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-10);
+    assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-6);
     // Unset: the scene decides (`WholeStep` in a scene of one fluid).
     assert_eq!(get::<AdvectionOptions>(&s).predictor, None);
     // The checked scene holds every declared section with its settings in force.

@@ -55,7 +55,7 @@
 //! flow's time step. Multiplied by the face volumes the system is
 //! `(M − (Δt²/2) K_J) δ = Δt·vol·∇·τ^{n+1/3}`; `K_J` is not symmetric for a general law, so it
 //! is solved with BiCGSTAB (see "Solve" below), to `‖r‖ ≤ tol · max(‖b‖, ‖M V^{n+1/3}‖)`
-//! (scene `numerics.elastic.tolerance`, default 1e-10). Finally `V^{n+2/3} = V^{n+1/3} + δ` and
+//! (scene `numerics.elastic.tolerance`, default 1e-6). Finally `V^{n+2/3} = V^{n+1/3} + δ` and
 //! `B̃^{n+2/3} = B̃(V^{n+2/3})`; after the projection the [`DeformationUpdate`] stage sets
 //! `B̃^{n+1} = B̃(V^{n+1})` (Eq. 25 ≡ Eq. 24) and the rates `Aⁿ⁺¹`, `H(Vⁿ⁺¹; B̃ⁿ⁺¹)` the next
 //! step needs.

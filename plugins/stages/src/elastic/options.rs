@@ -12,7 +12,14 @@ pub struct ElasticOptions {
     /// explicit — stable only for `Δt ≲ h √(ρ/G)`; it exists to show what the implicit term buys.
     #[serde(default = "yes")]
     pub implicit: bool,
-    /// Relative residual at which BiCGSTAB stops (default 1e-10).
+    /// Relative residual at which BiCGSTAB stops: `‖r‖ ≤ tolerance · max(‖b‖, ‖M V‖)`, the
+    /// step's elastic–viscous increment or the momentum, whichever is larger (default 1e-6;
+    /// the `Strict` preset 1e-10). Chosen by the measured trade: the sphere impact at 35
+    /// cells per radius takes 6.0 iterations a step instead of 12.2 at 1e-10 with its
+    /// restitution 5e-6 apart (0.948607 against 0.948602) and its contact time, compression and
+    /// volume drift unchanged; the paper's quick cases move by at most 2 % of their error (the
+    /// oscillating Couette flows, whose elastic layer this solve drives; at 1e-5 they moved by
+    /// up to 14 %).
     #[serde(default = "default_elastic_tol")]
     pub tolerance: f64,
     /// Iteration cap (default 5000).
@@ -226,7 +233,7 @@ fn default_wave_courant() -> f64 {
 }
 
 fn default_elastic_tol() -> f64 {
-    1e-10
+    1e-6
 }
 fn default_elastic_iter() -> usize {
     5000
