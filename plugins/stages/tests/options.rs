@@ -37,7 +37,21 @@ fn get<O: StageOptions>(s: &Scene) -> O {
 fn defaults_apply_where_the_scene_is_silent() {
     let s = with("()").unwrap();
     let p: ProjectionOptions = get(&s);
-    assert_eq!((p.tolerance, p.solver), (1e-6, PressureSolver::Multigrid));
+    // The projection's tolerance, unset, is the scene's: 1e-4 with one fluid, 1e-6 with a
+    // second material; the checked scene names the value in force.
+    assert_eq!(
+        (p.tolerance, p.solver),
+        (Some(1e-4), PressureSolver::Multigrid)
+    );
+    let text = MIN.replace(
+        "time:",
+        "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.2), density: 2.0, viscosity: 0.01),\n    time:",
+    );
+    let mut two = Scene::from_str_at(&text, Path::new("two.ron")).unwrap();
+    assert_eq!(ProjectionOptions::default().tolerance_in(&two), 1e-6);
+    assert_eq!(ProjectionOptions::default().tolerance_in(&s), 1e-4);
+    check_sections(&mut two, &efsi_stages::builtin()).unwrap();
+    assert_eq!(get::<ProjectionOptions>(&two).tolerance, Some(1e-6));
     assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-3);
     assert_eq!(get::<ElasticOptions>(&s).tolerance, 1e-6);
     // Unset: the scene decides (`WholeStep` in a scene of one fluid).
@@ -54,7 +68,7 @@ fn strict_preset_tightens_each_tolerance() {
     let s = with("(preset: Strict)").unwrap();
     assert_eq!(
         (
-            get::<ProjectionOptions>(&s).tolerance,
+            get::<ProjectionOptions>(&s).tolerance_in(&s),
             get::<ViscousOptions>(&s).tolerance,
             get::<ElasticOptions>(&s).tolerance
         ),
@@ -62,14 +76,14 @@ fn strict_preset_tightens_each_tolerance() {
     );
     let s = with("(preset: Strict, projection: (tolerance: 1e-12), viscous: (tolerance: 1e-3))")
         .unwrap();
-    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-12);
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance, Some(1e-12));
     assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-9);
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
     assert_eq!(back.numerics.preset, Preset::Strict);
-    assert_eq!(get::<ProjectionOptions>(&back).tolerance, 1e-12);
+    assert_eq!(get::<ProjectionOptions>(&back).tolerance, Some(1e-12));
     let s = with("(preset: Default, viscous: (tolerance: 1e-4))").unwrap();
     assert_eq!(get::<ViscousOptions>(&s).tolerance, 1e-4);
-    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-6);
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance_in(&s), 1e-4);
 }
 
 /// The elastic coupling: Auto by default, Split and Coupled by name (round trip); its tolerance,
@@ -159,7 +173,7 @@ fn pressure_solver_is_a_scene_option() {
     let s = with("(projection: (solver: IncompleteCholesky, tolerance: 1e-9))").unwrap();
     let p: ProjectionOptions = get(&s);
     assert_eq!(p.solver, PressureSolver::IncompleteCholesky);
-    assert_eq!(p.tolerance, 1e-9);
+    assert_eq!(p.tolerance, Some(1e-9));
     let again = Scene::from_str_at(&s.to_ron(), Path::new("again.ron")).unwrap();
     assert_eq!(
         get::<ProjectionOptions>(&again).solver,
@@ -217,9 +231,9 @@ fn bad_settings_name_the_setting_and_where_it_is() {
 fn sections_are_set_and_updated_in_code() {
     let mut s = with("()").unwrap();
     s.numerics
-        .update(|p: &mut ProjectionOptions| p.tolerance = 1e-8)
+        .update(|p: &mut ProjectionOptions| p.tolerance = Some(1e-8))
         .unwrap();
-    assert_eq!(get::<ProjectionOptions>(&s).tolerance, 1e-8);
+    assert_eq!(get::<ProjectionOptions>(&s).tolerance, Some(1e-8));
     assert_eq!(get::<ProjectionOptions>(&s).max_iterations, 10000);
     s.numerics.set(&ViscousOptions {
         theta: 0.5,
@@ -227,7 +241,7 @@ fn sections_are_set_and_updated_in_code() {
     });
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();
     assert_eq!(get::<ViscousOptions>(&back).theta, 0.5);
-    assert_eq!(get::<ProjectionOptions>(&back).tolerance, 1e-8);
+    assert_eq!(get::<ProjectionOptions>(&back).tolerance, Some(1e-8));
 }
 
 /// An override that names a section no stage has, or sets a stage's setting out of range, is
@@ -283,7 +297,7 @@ fn settings_in_force_read_the_stages_defaults() {
     assert_eq!(
         s.get_in_force("numerics.projection.tolerance", &builtin)
             .unwrap(),
-        OverrideValue::Float(1e-6)
+        OverrideValue::Float(1e-4)
     );
     assert_eq!(
         s.get_in_force("numerics.viscous.preconditioner", &builtin)

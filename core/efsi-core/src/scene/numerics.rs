@@ -68,6 +68,9 @@ pub trait StageOptions:
     fn validate(&self, scene: &Scene) -> Result<(), (&'static str, String)>;
     /// Tighten the tolerances to the strict preset's (idempotent).
     fn strict(&mut self) {}
+    /// Fill in the settings left unset whose default depends on the scene, so that the
+    /// settings in force (`run.json`, [`check_sections`]) name a value. Default: nothing.
+    fn resolve(&mut self, _scene: &Scene) {}
 }
 
 /// What a stage plugin declares of its options: the section's name and how to check it.
@@ -92,7 +95,8 @@ impl OptionsDecl {
         OptionsDecl {
             section: O::SECTION,
             check: |scene| {
-                let o: O = scene.numerics.get()?;
+                let mut o: O = scene.numerics.get()?;
+                o.resolve(scene);
                 o.validate(scene)
                     .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
                 let raw = Section::of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;

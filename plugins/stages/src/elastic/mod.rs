@@ -458,7 +458,13 @@ impl StagePlugin for Elastic {
             },
             coupling: if couples {
                 let proj: crate::projection::ProjectionOptions = crate::options(scene)?;
-                Some(coupled::Coupling::new(grid, bc, n, &o, proj.tolerance))
+                Some(coupled::Coupling::new(
+                    grid,
+                    bc,
+                    n,
+                    &o,
+                    proj.tolerance_in(scene),
+                ))
             } else {
                 None
             },

@@ -39,7 +39,8 @@
 //! from the one they were set up for, so a one-fluid scene assembles them once. It
 //! stops when the divergence the correction would leave satisfies `max_cells |∇·V^{n+1}|·Δt ≤
 //! tol` (dimensionless: the relative volume change of a cell per step; scene
-//! `numerics.projection.tolerance`, default 1e-6), after at least one iteration: the warm start
+//! `numerics.projection.tolerance`, default 1e-4 in a scene of one fluid and 1e-6 with a second
+//! material), after at least one iteration: the warm start
 //! alone often meets the tolerance, and stopping there would leave its divergence in place step
 //! after step (a steady state kept `|∇·u|` up to `tol/Δt` and, stopping at 0 and 1 iterations by
 //! turns, never settled); one iteration a step drives it to zero across steps. Since
@@ -64,7 +65,7 @@ use efsi_linalg::par::{for_each_mut, for_each_row};
 use efsi_linalg::{IncompleteCholesky, Multigrid, Norm, Stencil5, pcg::solve_norm_in};
 
 mod options;
-pub use options::{PressureSolver, ProjectionOptions};
+pub use options::{INTERFACE_TOLERANCE, ONE_FLUID_TOLERANCE, PressureSolver, ProjectionOptions};
 
 /// The projection stage plugin.
 pub struct Projection;
@@ -107,7 +108,7 @@ impl StagePlugin for Projection {
         let n = grid.cells();
         let o: ProjectionOptions = crate::options(scene)?;
         Ok(Box::new(ProjectionStage {
-            tol: o.tolerance,
+            tol: o.tolerance_in(scene),
             max_iter: o.max_iterations,
             a: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
             precond: match o.solver {
