@@ -82,9 +82,10 @@ def test_planar_run_round_trips(tmp_path):
     assert np.all(vel[:, 2] == 0.0)
     assert np.all(vtk_to_numpy(cd.GetArray("density")) == 2.0)
     assert np.all(vtk_to_numpy(cd.GetArray("viscosity")) == 0.05)
-    # Divergence-free to the default projection tolerance, max|div|·Δt ≤ 1e-6, with every
-    # Δt ≥ 1/30 (the first step from rest, 0.4·h/U; the interior velocities allow longer ones).
-    assert np.abs(vtk_to_numpy(cd.GetArray("divergence"))).max() <= 1e-6 * 30.0
+    # Divergence-free to the default projection tolerance of a scene of one fluid,
+    # max|div|·Δt ≤ 1e-4, with every Δt ≥ 1/30 (the first step from rest, 0.4·h/U; the interior
+    # velocities allow longer ones).
+    assert np.abs(vtk_to_numpy(cd.GetArray("divergence"))).max() <= 1e-4 * 30.0
     # The top row of cells moves with the lid; compare with the profile through their centres,
     # sampled by efsi itself at the same points (cell centres of the top row).
     top = vel.reshape(24, 12, 3)[-1, :, 0]
