@@ -212,9 +212,34 @@ impl SceneOverrides for Scene {
     ) -> Result<OverrideValue, SceneError> {
         let mut filled = self.clone();
         match check_sections(&mut filled, plugins) {
-            Ok(()) => filled.get(path),
+            // A stage's setting as the settings in force record it (a default that depends
+            // on the scene resolved), else as the checked scene's text holds it.
+            Ok(()) => in_force_json(&filled, path).map_or_else(|| filled.get(path), Ok),
             Err(_) => self.get(path),
         }
+    }
+}
+
+/// `numerics.SECTION.FIELD` of a checked scene, from its settings in force as JSON, when that
+/// names a number, a flag or an enum's unit variant.
+fn in_force_json(scene: &Scene, path: &str) -> Option<OverrideValue> {
+    let mut parts = path.strip_prefix("numerics.")?.split('.');
+    let (section, field) = (parts.next()?, parts.next()?);
+    if parts.next().is_some() {
+        return None;
+    }
+    let (_, json) = scene
+        .numerics
+        .sections_json()
+        .find(|(n, _)| *n == section)?;
+    match json.get(field)? {
+        serde_json::Value::Bool(b) => Some(OverrideValue::Bool(*b)),
+        serde_json::Value::Number(n) => Some(match n.as_i64() {
+            Some(i) => OverrideValue::Int(i),
+            None => OverrideValue::Float(n.as_f64()?),
+        }),
+        serde_json::Value::String(s) => Some(OverrideValue::Str(s.clone())),
+        _ => None,
     }
 }
 

@@ -69,7 +69,9 @@ pub trait StageOptions:
     /// Tighten the tolerances to the strict preset's (idempotent).
     fn strict(&mut self) {}
     /// Fill in the settings left unset whose default depends on the scene, so that the
-    /// settings in force (`run.json`, [`check_sections`]) name a value. Default: nothing.
+    /// settings in force as JSON (`run.json`, [`Numerics::sections_json`]) name a value. The
+    /// section's text keeps them unset: a checked scene changed afterwards (a solid added)
+    /// resolves them anew. Default: nothing.
     fn resolve(&mut self, _scene: &Scene) {}
 }
 
@@ -95,12 +97,16 @@ impl OptionsDecl {
         OptionsDecl {
             section: O::SECTION,
             check: |scene| {
-                let mut o: O = scene.numerics.get()?;
-                o.resolve(scene);
-                o.validate(scene)
+                let o: O = scene.numerics.get()?;
+                let mut resolved = o.clone();
+                resolved.resolve(scene);
+                resolved
+                    .validate(scene)
                     .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
+                // The text as the scene set it (defaults filled in, the preset applied); the
+                // JSON with the scene's own defaults resolved.
                 let raw = Section::of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
-                Ok((raw, serde_json::to_value(&o).unwrap_or_default()))
+                Ok((raw, serde_json::to_value(&resolved).unwrap_or_default()))
             },
         }
     }

@@ -60,7 +60,8 @@ pub struct ElasticOptions {
     #[serde(default)]
     pub theta: Option<f64>,
     /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500; the stability map's
-    /// sphere at the default tolerance 1e-10 takes 37 a step on average at G = 1e9 Pa).
+    /// sphere at the tolerance 1e-10, the default until 2026-11-27, took 37 a step on average
+    /// at G = 1e9 Pa).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
     /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take

@@ -21,9 +21,11 @@
 //! `gΔt` at no-slip side walls into a flow the projection cannot remove, and the energy guard
 //! stopped the run). The starting pressure is the one that balances gravity in the grid's
 //! frame ([`Stage::initialize`]: `g − a` projected with Δt = 1, the hydrostatic pressure where
-//! the density is layered). A steady state still depends on Δt through the explicit, split
-//! advection (measured: the Re = 100 cavity at 32² steady at CFL 0.4 and 0.8 differs by 3.8e-3
-//! on its centrelines with either scheme). With an elastic solid the seed's scheme stays the
+//! the density is layered). A steady state depends on Δt through the explicit, split advection
+//! with the classical Heun stage (`numerics.advection.predictor: Advection`; the Re = 100 cavity
+//! at 32² steady at CFL 0.4 and 0.8 differs by 3.8e-3 on its centrelines with either
+//! projection scheme); the default `WholeStep` predictor of a scene of one fluid removes that
+//! (1.3e-7, `tests/tests/cavity.rs`). With an elastic solid the seed's scheme stays the
 //! default: with the semi-implicit elastic step the incremental predictor pumped energy in (a
 //! Saint Venant–Kirchhoff sphere gained 16× its energy budget by step 151, the stability map's
 //! G = 1e9 sphere failed). The coupled elastic step (`numerics.elastic.coupling: Coupled`)

@@ -36,7 +36,7 @@
 //! whatever the tolerance: the Re = 100 cavity at 32² reaches the same centrelines at
 //! `tolerance` 1e-3 and 1e-6 to 2.5e-10, where solves from zero (the rule before) stopped
 //! 1.7e-4 apart. It is also cheaper: to the shipped cavities' steady states, 1.4 iterations a
-//! step instead of 9.8 (Re = 1000, 128², 17,454 steps either way, centrelines 2.3e-7 from the
+//! step instead of 9.8 (Re = 1000, 128², CFL 0.8, 17,454 steps either way, centrelines 2.3e-7 from the
 //! old run's, Ghia deviation unchanged) and 3.1 instead of 19.4 (Re = 100, 64²). Where that
 //! floor is below round-off (`1e-13 ‖b‖`: the Poiseuille tests at `steady: 1e-12`) the solve
 //! starts from zero instead, a map without history, which settles bit for bit, and solves to the
