@@ -98,15 +98,26 @@ impl StageOptions for AdvectionOptions {
     fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
         Ok(())
     }
+
+    fn resolve(&mut self, scene: &Scene) {
+        self.predictor.get_or_insert(default_predictor(scene));
+    }
+}
+
+/// The predictor of a scene that sets none: `WholeStep` with one fluid, `Advection` with a
+/// solid (a `solid` section).
+fn default_predictor(scene: &Scene) -> AdvectionPredictor {
+    if scene.solid.is_none() {
+        AdvectionPredictor::WholeStep
+    } else {
+        AdvectionPredictor::Advection
+    }
 }
 
 /// Whether `scene`'s advection predicts its second stage with the whole step's increments.
 fn whole_step(scene: &Scene) -> Result<bool, String> {
     let o: AdvectionOptions = crate::options(scene)?;
-    Ok(match o.predictor {
-        Some(p) => p == AdvectionPredictor::WholeStep,
-        None => scene.solid.is_none(),
-    })
+    Ok(o.predictor.unwrap_or(default_predictor(scene)) == AdvectionPredictor::WholeStep)
 }
 
 /// The advection stage plugin.

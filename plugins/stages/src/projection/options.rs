@@ -107,5 +107,8 @@ impl StageOptions for ProjectionOptions {
 
     fn resolve(&mut self, scene: &Scene) {
         self.tolerance = Some(self.tolerance_in(scene));
+        if self.incremental.is_none() {
+            self.incremental = Some(super::incremental(scene));
+        }
     }
 }
