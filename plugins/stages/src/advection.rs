@@ -107,10 +107,10 @@ impl StageOptions for AdvectionOptions {
 /// The predictor of a scene that sets none: `WholeStep` with one fluid, `Advection` with a
 /// solid (a `solid` section).
 fn default_predictor(scene: &Scene) -> AdvectionPredictor {
-    if scene.solid.is_none() {
-        AdvectionPredictor::WholeStep
-    } else {
+    if crate::second_material(scene) {
         AdvectionPredictor::Advection
+    } else {
+        AdvectionPredictor::WholeStep
     }
 }
 

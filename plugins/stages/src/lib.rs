@@ -30,6 +30,13 @@ pub(crate) fn options<O: StageOptions>(scene: &efsi_core::Scene) -> Result<O, St
         .map_err(|(field, message)| format!("{field}: {message}"))
 }
 
+/// Whether `scene` has a second material (a `solid` section: a solid or a second fluid), whose
+/// interface the VOF stage tracks. The defaults that depend on the scene follow it: the
+/// advection's predictor and the projection's tolerance.
+pub(crate) fn second_material(scene: &efsi_core::Scene) -> bool {
+    scene.solid.is_some()
+}
+
 /// Every stage plugin shipped with efsi.
 pub fn builtin() -> Vec<&'static dyn StagePlugin> {
     vec![

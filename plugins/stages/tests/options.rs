@@ -41,22 +41,16 @@ fn defaults_apply_where_the_scene_is_silent() {
     // second material. The settings in force as JSON name it; the section's text keeps it unset,
     // so a checked scene given a solid afterwards resolves it anew.
     assert_eq!((p.tolerance, p.solver), (None, PressureSolver::Multigrid));
-    let in_force = |s: &Scene| {
-        s.numerics
-            .sections_json()
-            .find(|(n, _)| *n == "projection")
-            .map(|(_, j)| j["tolerance"].as_f64())
-    };
-    assert_eq!(in_force(&s), Some(Some(1e-4)));
-    // So do the other defaults that depend on the scene: the advection's predictor (`WholeStep`
-    // with one fluid, `Advection` with a second material) and the incremental projection (on
-    // unless the scene has an elastic solid).
     let json = |s: &Scene, section: &str, field: &str| {
         s.numerics
             .sections_json()
             .find(|(n, _)| *n == section)
             .map(|(_, j)| j[field].clone())
     };
+    assert_eq!(json(&s, "projection", "tolerance"), Some(1e-4.into()));
+    // So do the other defaults that depend on the scene: the advection's predictor (`WholeStep`
+    // with one fluid, `Advection` with a second material) and the incremental projection (on
+    // unless the scene has an elastic solid).
     assert_eq!(json(&s, "advection", "predictor"), Some("WholeStep".into()));
     assert_eq!(json(&s, "projection", "incremental"), Some(true.into()));
     assert_eq!(p.tolerance_in(&s), 1e-4);
@@ -66,7 +60,7 @@ fn defaults_apply_where_the_scene_is_silent() {
     );
     let mut two = Scene::from_str_at(&text, Path::new("two.ron")).unwrap();
     check_sections(&mut two, &efsi_stages::builtin()).unwrap();
-    assert_eq!(in_force(&two), Some(Some(1e-6)));
+    assert_eq!(json(&two, "projection", "tolerance"), Some(1e-6.into()));
     assert_eq!(
         json(&two, "advection", "predictor"),
         Some("Advection".into())

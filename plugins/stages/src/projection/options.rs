@@ -80,10 +80,10 @@ impl ProjectionOptions {
     /// of one fluid (no `solid` section) and [`INTERFACE_TOLERANCE`] in one with a second
     /// material.
     pub fn tolerance_in(&self, scene: &Scene) -> f64 {
-        self.tolerance.unwrap_or(if scene.solid.is_none() {
-            ONE_FLUID_TOLERANCE
-        } else {
+        self.tolerance.unwrap_or(if crate::second_material(scene) {
             INTERFACE_TOLERANCE
+        } else {
+            ONE_FLUID_TOLERANCE
         })
     }
 }

@@ -57,7 +57,7 @@ impl StagePlugin for Vof {
         &[FieldId::SolidFraction, FieldId::Density, FieldId::Viscosity]
     }
     fn needed(&self, scene: &Scene) -> bool {
-        scene.solid.is_some()
+        crate::second_material(scene)
     }
     fn check_scene(&self, scene: &mut Scene) -> efsi_core::validate::Checked {
         crate::solid::check(scene)
