@@ -48,6 +48,50 @@ impl Stencil5 {
         }
     }
 
+    /// Reshape to `nx × ny`, every entry zero, reusing the storage when it is large enough.
+    pub fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
+        let n = nx * ny;
+        (self.nx, self.ny) = (nx, ny);
+        (self.periodic_x, self.periodic_y) = (periodic_x, periodic_y);
+        for v in [&mut self.diag, &mut self.east, &mut self.north] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+    }
+
+    /// The principal submatrix of the rectangle of `nx × ny` cells whose first cell is
+    /// `(i0, j0)`, into `out` (reshaped, its storage reused): the same rows, diagonal included,
+    /// without the couplings to cells outside — the matrix of the equations inside with the
+    /// unknowns outside held at zero. A direction the rectangle spans whole keeps its periodic
+    /// wrap.
+    pub fn window_into(
+        &self,
+        (i0, j0): (usize, usize),
+        (nx, ny): (usize, usize),
+        out: &mut Stencil5,
+    ) {
+        assert!(
+            i0 + nx <= self.nx && j0 + ny <= self.ny,
+            "window {nx} × {ny} at ({i0}, {j0}) outside the {} × {} matrix",
+            self.nx,
+            self.ny
+        );
+        let px = self.periodic_x && nx == self.nx;
+        let py = self.periodic_y && ny == self.ny;
+        out.reshape(nx, ny, px, py);
+        for j in 0..ny {
+            let (src, dst) = ((j0 + j) * self.nx + i0, j * nx);
+            out.diag[dst..dst + nx].copy_from_slice(&self.diag[src..src + nx]);
+            out.east[dst..dst + nx].copy_from_slice(&self.east[src..src + nx]);
+            if !px && nx > 0 {
+                out.east[dst + nx - 1] = 0.0;
+            }
+            if j + 1 < ny || py {
+                out.north[dst..dst + nx].copy_from_slice(&self.north[src..src + nx]);
+            }
+        }
+    }
+
     /// The coupling of cell `k` (in column `i`) to its west neighbour: the east coupling of
     /// the cell to its west, across the periodic wrap in the first column, 0 at a closed side.
     #[inline(always)]

@@ -21,7 +21,7 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
     let (fx, fy) = (factor(nx), factor(ny));
     let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
     if c.nx != cx || c.ny != cy || c.len() != cx * cy {
-        *c = Stencil5::new(cx, cy, a.periodic_x, a.periodic_y);
+        c.reshape(cx, cy, a.periodic_x, a.periodic_y);
     }
     c.periodic_x = a.periodic_x;
     c.periodic_y = a.periodic_y;

@@ -13,6 +13,14 @@ pub(super) struct Coarsest {
 }
 
 impl Coarsest {
+    /// Room for the factor of a level of up to `cells` cells, so that factoring one never
+    /// allocates.
+    pub(super) fn reserve(&mut self, cells: usize) {
+        let (l, y) = (cells * cells, cells);
+        self.l.reserve(l.saturating_sub(self.l.len()));
+        self.y.reserve(y.saturating_sub(self.y.len()));
+    }
+
     pub(super) fn factor(&mut self, lv: &Level) {
         let m = lv.nx * lv.ny;
         self.m = m;

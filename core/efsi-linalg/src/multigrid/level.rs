@@ -27,21 +27,30 @@ pub(super) struct Level {
 }
 
 impl Level {
-    pub(super) fn shape(a: &Stencil5) -> Self {
-        let m = (a.nx + 2) * (a.ny + 2);
-        Level {
-            nx: a.nx,
-            ny: a.ny,
-            periodic_x: a.periodic_x,
-            periodic_y: a.periodic_y,
-            s: a.nx + 2,
-            diag: vec![0.0; m],
-            dinv: vec![0.0; m],
-            ce: vec![0.0; m],
-            cn: vec![0.0; m],
-            x: vec![0.0; m],
-            b: vec![0.0; m],
-            t: vec![0.0; m],
+    /// A zero level of `nx × ny` cells.
+    pub(super) fn shape(nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) -> Self {
+        let mut l = Level::default();
+        l.reshape(nx, ny, periodic_x, periodic_y);
+        l
+    }
+
+    /// Reshape to `nx × ny` cells, every vector zero, reusing the storage when it is large
+    /// enough.
+    pub(super) fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
+        let m = (nx + 2) * (ny + 2);
+        (self.nx, self.ny, self.s) = (nx, ny, nx + 2);
+        (self.periodic_x, self.periodic_y) = (periodic_x, periodic_y);
+        for v in [
+            &mut self.diag,
+            &mut self.dinv,
+            &mut self.ce,
+            &mut self.cn,
+            &mut self.x,
+            &mut self.b,
+            &mut self.t,
+        ] {
+            v.clear();
+            v.resize(m, 0.0);
         }
     }
 

@@ -58,7 +58,9 @@
 //! more than half its sweep whenever the other core is not immediately free.)
 //!
 //! **Allocation.** [`Multigrid::setup`] allocates the hierarchy on the first call and reuses it
-//! for later matrices of the same shape; [`Preconditioner::apply`] never allocates.
+//! for later matrices of the same shape or smaller ones (a window of the first, set up each
+//! step where a solid moves: [`Stencil5::window_into`], [`Multigrid::apply_window`]); only a
+//! matrix larger than every earlier one allocates. [`Preconditioner::apply`] never allocates.
 
 use super::par;
 use super::pcg::Preconditioner;
@@ -87,7 +89,10 @@ pub const W_LEVELS: usize = 2;
 
 #[derive(Clone, Debug, Default)]
 struct Hierarchy {
+    /// The levels; only the first `n` are in use (a smaller matrix reuses the storage of a
+    /// larger one's levels).
     levels: Vec<Level>,
+    n: usize,
     coarsest: Coarsest,
 }
 
@@ -152,70 +157,115 @@ impl Multigrid {
 
     /// Number of levels (1 when the matrix is already at most [`COARSEST_CELLS`]).
     pub fn levels(&self) -> usize {
-        self.h.borrow().levels.len()
+        self.h.borrow().n
     }
 
     /// Build (first call, or a new shape) or refresh the hierarchy for the matrix `a`.
-    /// Allocates only when the shape changes.
+    /// Allocates only when `a` needs more storage than every matrix set up before: a smaller
+    /// matrix (a window of the first one, say) reuses the levels in place.
     pub fn setup(&mut self, a: &Stencil5) {
         let h = self.h.get_mut();
-        let same = h.levels.first().is_some_and(|l| {
+        let same = h.n > 0 && {
+            let l = &h.levels[0];
             l.nx == a.nx
                 && l.ny == a.ny
                 && l.periodic_x == a.periodic_x
                 && l.periodic_y == a.periodic_y
-        });
+        };
         if !same {
-            h.levels.clear();
-            self.mats.clear();
-            h.levels.push(Level::shape(a));
-            let (mut nx, mut ny) = (a.nx, a.ny);
+            let (px, py) = (a.periodic_x, a.periodic_y);
+            let reshape = |levels: &mut Vec<Level>, l: usize, nx: usize, ny: usize| {
+                if l < levels.len() {
+                    levels[l].reshape(nx, ny, px, py);
+                } else {
+                    levels.push(Level::shape(nx, ny, px, py));
+                }
+            };
+            reshape(&mut h.levels, 0, a.nx, a.ny);
+            let (mut nx, mut ny, mut n) = (a.nx, a.ny, 1);
             while nx * ny > COARSEST_CELLS && (nx > 2 || ny > 2) {
                 nx = nx.div_ceil(factor(nx));
                 ny = ny.div_ceil(factor(ny));
-                let m = Stencil5::new(nx, ny, a.periodic_x, a.periodic_y);
-                h.levels.push(Level::shape(&m));
-                self.mats.push(m);
+                reshape(&mut h.levels, n, nx, ny);
+                if n - 1 < self.mats.len() {
+                    self.mats[n - 1].reshape(nx, ny, px, py);
+                } else {
+                    self.mats.push(Stencil5::new(nx, ny, px, py));
+                }
+                n += 1;
             }
+            h.n = n;
+            // The coarsest factor of any matrix fits in this (it never has more cells).
+            h.coarsest.reserve(COARSEST_CELLS);
         }
+        let n = h.n;
         h.levels[0].load(a);
         let excess = self.excess_scale;
-        let Hierarchy { levels, coarsest } = h;
-        let n = levels.len();
+        let Hierarchy {
+            levels, coarsest, ..
+        } = h;
+        let levels = &mut levels[..n];
+        let mats = &mut self.mats[..n - 1];
         // Levels coarsened from a serial-sized one, and the Cholesky factor, with a second
         // thread kept awake for what follows.
         let first_serial = (1..n).find(|&l| levels[l - 1].is_serial()).unwrap_or(n);
-        coarsen_levels(a, &mut self.mats, levels, 1..first_serial, excess);
-        let mats = &mut self.mats;
+        coarsen_levels(a, mats, levels, 1..first_serial, excess);
         par::serial_warm(|| {
             coarsen_levels(a, mats, levels, first_serial..n, excess);
             coarsest.factor(levels.last().expect("at least one level"));
         });
     }
-}
 
-impl Preconditioner for Multigrid {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
+    /// The preconditioner applied to a window of longer vectors: the matrix set up is
+    /// `nx × ny`, and its unknown `(i, j)` is entry `origin + j·stride + i` of `r` and `z`;
+    /// entries of `z` outside the window are not touched. [`Preconditioner::apply`] is the
+    /// window that is the whole vector (`stride = nx`, `origin = 0`).
+    pub fn apply_window(&self, r: &[f64], z: &mut [f64], stride: usize, origin: usize) {
         let mut h = self.h.borrow_mut();
-        let Hierarchy { levels, coarsest } = &mut *h;
+        let n = h.n;
+        let Hierarchy {
+            levels, coarsest, ..
+        } = &mut *h;
+        let levels = &mut levels[..n];
+        let (nx, ny) = (levels[0].nx, levels[0].ny);
+        assert!(
+            nx <= stride && (ny == 0 || origin + (ny - 1) * stride + nx <= r.len().min(z.len())),
+            "multigrid: the {nx} × {ny} window at {origin} (rows of {stride}) exceeds the vectors"
+        );
         {
             let l0 = &mut levels[0];
-            let (nx, s) = (l0.nx, l0.s);
-            assert_eq!(
-                r.len(),
-                nx * l0.ny,
-                "multigrid: vector length ≠ matrix size"
-            );
-            par::for_each_row(&mut l0.b[s..(l0.ny + 1) * s], s, |j, row| {
-                row[1..=nx].copy_from_slice(&r[j * nx..(j + 1) * nx]);
+            let s = l0.s;
+            par::for_each_row(&mut l0.b[s..(ny + 1) * s], s, |j, row| {
+                let o = origin + j * stride;
+                row[1..=nx].copy_from_slice(&r[o..o + nx]);
             });
         }
         cycle(levels, coarsest, 0, self.sweeps, self.gamma);
         let l0 = &levels[0];
-        let (nx, s) = (l0.nx, l0.s);
-        par::for_each_row(z, nx, |j, row| {
-            row.copy_from_slice(&l0.x[(j + 1) * s + 1..(j + 1) * s + 1 + nx]);
-        });
+        let s = l0.s;
+        let x = &l0.x;
+        if stride == nx && origin == 0 {
+            par::for_each_row(&mut z[..nx * ny], nx, |j, row| {
+                row.copy_from_slice(&x[(j + 1) * s + 1..(j + 1) * s + 1 + nx]);
+            });
+        } else {
+            let zw = &mut z[origin..origin + (ny - 1) * stride + nx];
+            par::for_each_row_weighted(zw, stride, nx, |j, row| {
+                let n = row.len().min(nx);
+                row[..n].copy_from_slice(&x[(j + 1) * s + 1..(j + 1) * s + 1 + n]);
+            });
+        }
+    }
+}
+
+impl Preconditioner for Multigrid {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let (nx, ny) = {
+            let h = self.h.borrow();
+            (h.levels[0].nx, h.levels[0].ny)
+        };
+        assert_eq!(r.len(), nx * ny, "multigrid: vector length ≠ matrix size");
+        self.apply_window(r, z, nx, 0);
     }
 }
 

@@ -256,3 +256,95 @@ fn one_and_two_threads_give_identical_bits() {
     assert_eq!(i1, i2);
     assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
 }
+
+/// A hierarchy set up for a large matrix and then for a smaller one (a window of it) reuses its
+/// storage and gives the same bits as a hierarchy built for the smaller one alone; and
+/// [`Multigrid::apply_window`] on the window of long vectors is [`Preconditioner::apply`] on the
+/// window's own vectors, leaving the rest of `z` alone.
+#[test]
+fn a_window_reuses_the_hierarchy_and_matches_a_fresh_one() {
+    let p = Problem {
+        n: 96,
+        axisymmetric: true,
+        periodic_x: false,
+        dirichlet_top: true,
+        ratio: 1e3,
+        seed: 7,
+    };
+    let a = pressure_matrix(p);
+    let (i0, j0, wx, wy) = (17, 30, 41, 53);
+    let mut w = Stencil5::new(0, 0, false, false);
+    a.window_into((i0, j0), (wx, wy), &mut w);
+    assert_eq!(
+        (w.nx, w.ny, w.periodic_x, w.periodic_y),
+        (wx, wy, false, false)
+    );
+    // The principal submatrix: the diagonal kept, the couplings across the window's edges gone.
+    for j in 0..wy {
+        for i in 0..wx {
+            let (k, g) = (j * wx + i, (j0 + j) * a.nx + i0 + i);
+            assert_eq!(w.diag[k], a.diag[g]);
+            assert_eq!(w.east[k], if i + 1 < wx { a.east[g] } else { 0.0 });
+            assert_eq!(w.north[k], if j + 1 < wy { a.north[g] } else { 0.0 });
+        }
+    }
+    let mut reused = Multigrid::new(2);
+    reused.setup(&a);
+    let big = reused.levels();
+    reused.setup(&w);
+    let mut fresh = Multigrid::new(2);
+    fresh.setup(&w);
+    assert_eq!(reused.levels(), fresh.levels());
+    assert!(big > reused.levels());
+    let mut rng = Rng(3);
+    let r: Vec<f64> = (0..a.len()).map(|_| rng.next() - 0.5).collect();
+    let rw: Vec<f64> = (0..wy)
+        .flat_map(|j| r[(j0 + j) * a.nx + i0..(j0 + j) * a.nx + i0 + wx].to_vec())
+        .collect();
+    let (mut z1, mut z2) = (vec![0.0; rw.len()], vec![0.0; rw.len()]);
+    fresh.apply(&rw, &mut z1);
+    reused.apply(&rw, &mut z2);
+    assert!(z1.iter().zip(&z2).all(|(a, b)| a.to_bits() == b.to_bits()));
+    let mut z = vec![f64::NAN; a.len()];
+    reused.apply_window(&r, &mut z, a.nx, j0 * a.nx + i0);
+    for j in 0..a.ny {
+        for i in 0..a.nx {
+            let g = j * a.nx + i;
+            if (j0..j0 + wy).contains(&j) && (i0..i0 + wx).contains(&i) {
+                assert_eq!(z[g].to_bits(), z1[(j - j0) * wx + i - i0].to_bits());
+            } else {
+                assert!(z[g].is_nan(), "({i}, {j}) outside the window was written");
+            }
+        }
+    }
+    // Back to the whole matrix: the same bits as before the window.
+    let mut again = Multigrid::new(2);
+    again.setup(&a);
+    reused.setup(&a);
+    let (mut z3, mut z4) = (vec![0.0; a.len()], vec![0.0; a.len()]);
+    again.apply(&r, &mut z3);
+    reused.apply(&r, &mut z4);
+    assert!(z3.iter().zip(&z4).all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+/// A window spanning a periodic direction whole keeps the wrap; one that does not is closed.
+#[test]
+fn a_window_keeps_a_periodic_wrap_only_when_it_spans_the_direction() {
+    let p = Problem {
+        n: 32,
+        axisymmetric: false,
+        periodic_x: true,
+        dirichlet_top: false,
+        ratio: 10.0,
+        seed: 2,
+    };
+    let a = pressure_matrix(p);
+    assert!(a.periodic_x);
+    let mut w = Stencil5::new(0, 0, false, false);
+    a.window_into((0, 4), (32, 10), &mut w);
+    assert!(w.periodic_x && !w.periodic_y);
+    assert_eq!(w.east[31], a.east[4 * 32 + 31]);
+    a.window_into((3, 4), (20, 10), &mut w);
+    assert!(!w.periodic_x);
+    assert_eq!(w.east[19], 0.0);
+}
