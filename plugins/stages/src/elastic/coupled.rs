@@ -447,7 +447,7 @@ impl ElasticStage {
         cp.rhs[nf..].iter_mut().for_each(|c| *c *= omega);
         // The preconditioners: the elastic step's (velocity), the projection's Poisson
         // multigrid (pressure).
-        self.setup_preconditioner(g, d, false);
+        self.setup_preconditioner(g, d);
         if self.scheme.preconditioner == ElasticPreconditioner::Jacobi {
             // η for the Schur complement's local term (the multigrid's setup made it).
             self.effective_viscosity(d);

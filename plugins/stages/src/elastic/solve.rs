@@ -406,7 +406,7 @@ impl ElasticStage {
             }
         } else {
             self.delta.fill(0.0);
-            self.setup_preconditioner(g, d, true);
+            self.setup_preconditioner(g, d);
             let (rhs, mut delta) = (
                 std::mem::take(&mut self.rhs),
                 std::mem::take(&mut self.delta),
@@ -448,14 +448,9 @@ impl ElasticStage {
 
     /// The operator's scratch stress cleared (it writes Δτ in this step's solid only) and,
     /// unless Jacobi, the block multigrid set up with the effective viscosities `η = θΔt μ +
-    /// (Δt²/2) G_eff` at centres and corners — with `windowed`, on a window around the solid
-    /// only, the Jacobi diagonal elsewhere (`ViscousBlocks::setup_in`; module docs).
-    pub(super) fn setup_preconditioner(
-        &mut self,
-        g: &Grid,
-        d: &super::Deformation,
-        windowed: bool,
-    ) {
+    /// (Δt²/2) G_eff` at centres and corners, on a window around the solid only, the Jacobi
+    /// diagonal elsewhere (`ViscousBlocks::setup_in`; module docs).
+    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &super::Deformation) {
         for f in &mut self.scratch.dtau {
             f.fill(0.0);
         }
@@ -469,7 +464,7 @@ impl ElasticStage {
             }
             pre.diagonal(&self.eta_dm, &mut self.eta_diag);
             let c = op.k.solid_c;
-            let solid = (windowed && c.i0 <= c.i1).then_some(((c.i0, c.i1), (c.j0, c.j1)));
+            let solid = (c.i0 <= c.i1).then_some(((c.i0, c.i1), (c.j0, c.j1)));
             self.blocks.setup_in(pre, &self.eta_diag, solid);
         }
     }
