@@ -229,16 +229,15 @@ fn margin(q: f64) -> isize {
 }
 
 impl Preconditioner for ViscousBlocks {
+    /// The two blocks' cycles, in parallel when there are threads to spare (each block's own
+    /// loops keep their fixed order, so the bits do not depend on the threads).
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let nu = self.au.len();
         let (ru, rv) = r.split_at(nu);
         let (zu, zv) = z.split_at_mut(nu);
-        for (a, w, m, r, z) in [
-            (&self.au, self.wu, &self.mu, ru, zu),
-            (&self.av, self.wv, &self.mv, rv, zv),
-        ] {
+        let block = |a: &Stencil5, w: BlockWindow, m: &Multigrid, r: &[f64], z: &mut [f64]| {
             if a.is_empty() {
-                continue;
+                return;
             }
             if w.whole {
                 m.apply(r, z);
@@ -252,6 +251,15 @@ impl Preconditioner for ViscousBlocks {
                 });
                 m.apply_window(r, z, a.nx, w.j0 * a.nx + w.i0);
             }
+        };
+        if rayon::current_num_threads() > 1 {
+            rayon::join(
+                || block(&self.au, self.wu, &self.mu, ru, zu),
+                || block(&self.av, self.wv, &self.mv, rv, zv),
+            );
+        } else {
+            block(&self.au, self.wu, &self.mu, ru, zu);
+            block(&self.av, self.wv, &self.mv, rv, zv);
         }
     }
 }

@@ -65,7 +65,7 @@
 use super::par;
 use super::pcg::Preconditioner;
 use super::stencil5::Stencil5;
-use std::cell::RefCell;
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 mod coarsen;
 mod coarsest;
@@ -125,7 +125,9 @@ pub struct Multigrid {
     excess_scale: f64,
     /// The coarse matrices (levels 1, 2, …).
     mats: Vec<Stencil5>,
-    h: RefCell<Hierarchy>,
+    /// Behind a mutex (uncontended: one lock per application), so that a multigrid can be
+    /// shared between threads, each applying its own (two blocks of a system in parallel).
+    h: Mutex<Hierarchy>,
 }
 
 impl Multigrid {
@@ -137,7 +139,7 @@ impl Multigrid {
             gamma: 2,
             excess_scale: 0.5,
             mats: Vec::new(),
-            h: RefCell::new(Hierarchy::default()),
+            h: Mutex::new(Hierarchy::default()),
         }
     }
 
@@ -155,16 +157,22 @@ impl Multigrid {
         self
     }
 
+    /// The hierarchy (a panic in another thread's application left nothing half-done that
+    /// the next set-up does not redo).
+    fn lock(&self) -> MutexGuard<'_, Hierarchy> {
+        self.h.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
     /// Number of levels (1 when the matrix is already at most [`COARSEST_CELLS`]).
     pub fn levels(&self) -> usize {
-        self.h.borrow().n
+        self.lock().n
     }
 
     /// Build (first call, or a new shape) or refresh the hierarchy for the matrix `a`.
     /// Allocates only when `a` needs more storage than every matrix set up before: a smaller
     /// matrix (a window of the first one, say) reuses the levels in place.
     pub fn setup(&mut self, a: &Stencil5) {
-        let h = self.h.get_mut();
+        let h = self.h.get_mut().unwrap_or_else(PoisonError::into_inner);
         let same = h.n > 0 && {
             let l = &h.levels[0];
             l.nx == a.nx
@@ -221,7 +229,7 @@ impl Multigrid {
     /// entries of `z` outside the window are not touched. [`Preconditioner::apply`] is the
     /// window that is the whole vector (`stride = nx`, `origin = 0`).
     pub fn apply_window(&self, r: &[f64], z: &mut [f64], stride: usize, origin: usize) {
-        let mut h = self.h.borrow_mut();
+        let mut h = self.lock();
         let n = h.n;
         let Hierarchy {
             levels, coarsest, ..
@@ -261,7 +269,7 @@ impl Multigrid {
 impl Preconditioner for Multigrid {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let (nx, ny) = {
-            let h = self.h.borrow();
+            let h = self.lock();
             (h.levels[0].nx, h.levels[0].ny)
         };
         assert_eq!(r.len(), nx * ny, "multigrid: vector length ≠ matrix size");
