@@ -7,8 +7,8 @@ use super::level::Level;
 #[derive(Clone, Debug, Default)]
 pub(super) struct Coarsest {
     m: usize,
-    l: Vec<f64>,
-    y: Vec<f64>,
+    pub(super) l: Vec<f64>,
+    pub(super) y: Vec<f64>,
     singular_pin: bool,
 }
 

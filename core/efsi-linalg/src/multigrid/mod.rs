@@ -65,7 +65,7 @@
 use super::par;
 use super::pcg::Preconditioner;
 use super::stencil5::Stencil5;
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
 
 mod coarsen;
 mod coarsest;
@@ -125,8 +125,10 @@ pub struct Multigrid {
     excess_scale: f64,
     /// The coarse matrices (levels 1, 2, …).
     mats: Vec<Stencil5>,
-    /// Behind a mutex (uncontended: one lock per application), so that a multigrid can be
-    /// shared between threads, each applying its own (two blocks of a system in parallel).
+    /// Behind a mutex, so that a multigrid can live in a structure other threads read (two
+    /// blocks of a system, each with its own multigrid, applied in parallel). One application
+    /// at a time: a second, concurrent one panics instead of waiting (it could deadlock on the
+    /// rayon worker holding the lock).
     h: Mutex<Hierarchy>,
 }
 
@@ -158,9 +160,17 @@ impl Multigrid {
     }
 
     /// The hierarchy (a panic in another thread's application left nothing half-done that
-    /// the next set-up does not redo).
+    /// the next application does not overwrite).
     fn lock(&self) -> MutexGuard<'_, Hierarchy> {
-        self.h.lock().unwrap_or_else(PoisonError::into_inner)
+        match self.h.try_lock() {
+            Ok(h) => h,
+            Err(TryLockError::Poisoned(p)) => p.into_inner(),
+            Err(TryLockError::WouldBlock) => {
+                panic!(
+                    "multigrid: applied from two threads at once (one multigrid per application in flight)"
+                )
+            }
+        }
     }
 
     /// Number of levels (1 when the matrix is already at most [`COARSEST_CELLS`]).
@@ -169,8 +179,9 @@ impl Multigrid {
     }
 
     /// Build (first call, or a new shape) or refresh the hierarchy for the matrix `a`.
-    /// Allocates only when `a` needs more storage than every matrix set up before: a smaller
-    /// matrix (a window of the first one, say) reuses the levels in place.
+    /// Allocates only where a level of `a`'s hierarchy needs more storage than that level of
+    /// every matrix set up before: a smaller matrix (a window of the first one, say) reuses
+    /// the levels in place.
     pub fn setup(&mut self, a: &Stencil5) {
         let h = self.h.get_mut().unwrap_or_else(PoisonError::into_inner);
         let same = h.n > 0 && {
@@ -236,6 +247,9 @@ impl Multigrid {
         } = &mut *h;
         let levels = &mut levels[..n];
         let (nx, ny) = (levels[0].nx, levels[0].ny);
+        if nx == 0 || ny == 0 {
+            return;
+        }
         assert!(
             nx <= stride && (ny == 0 || origin + (ny - 1) * stride + nx <= r.len().min(z.len())),
             "multigrid: the {nx} × {ny} window at {origin} (rows of {stride}) exceeds the vectors"

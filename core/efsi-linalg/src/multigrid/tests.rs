@@ -348,3 +348,64 @@ fn a_window_keeps_a_periodic_wrap_only_when_it_spans_the_direction() {
     assert!(!w.periodic_x);
     assert_eq!(w.east[19], 0.0);
 }
+
+/// After a set-up for the whole matrix, set-ups for windows of any shape (odd, one cell wide or
+/// tall, below the coarsest size) reuse every vector of the hierarchy: no pointer or capacity
+/// changes, so a window that moves and resizes each step allocates nothing.
+#[test]
+fn windows_of_any_shape_reuse_the_whole_matrix_storage() {
+    let p = Problem {
+        n: 75,
+        axisymmetric: true,
+        periodic_x: false,
+        dirichlet_top: false,
+        ratio: 1e2,
+        seed: 11,
+    };
+    let a = pressure_matrix(p);
+    let mut mg = Multigrid::new(1).with_w_cycle(false).with_excess_scale(1.0);
+    mg.setup(&a);
+    let storage = |mg: &Multigrid| {
+        let h = mg.lock();
+        let mut v: Vec<(usize, usize)> = Vec::new();
+        for l in &h.levels {
+            for x in [&l.diag, &l.dinv, &l.ce, &l.cn, &l.x, &l.b, &l.t] {
+                v.push((x.as_ptr() as usize, x.capacity()));
+            }
+        }
+        for m in &mg.mats {
+            for x in [&m.diag, &m.east, &m.north] {
+                v.push((x.as_ptr() as usize, x.capacity()));
+            }
+        }
+        for x in [&h.coarsest.l, &h.coarsest.y] {
+            v.push((x.as_ptr() as usize, x.capacity()));
+        }
+        (v, h.levels.len(), mg.mats.len())
+    };
+    let before = storage(&mg);
+    let mut w = Stencil5::new(0, 0, false, false);
+    for (origin, shape) in [
+        ((3, 5), (71, 69)),
+        ((0, 0), (75, 1)),
+        ((10, 0), (1, 75)),
+        ((2, 2), (7, 9)),
+        ((1, 1), (8, 8)),
+        ((0, 0), (3, 74)),
+        ((40, 30), (35, 45)),
+        ((0, 0), (75, 75)),
+    ] {
+        a.window_into(origin, shape, &mut w);
+        mg.setup(&w);
+        let mut rng = Rng(5);
+        let r: Vec<f64> = (0..w.len()).map(|_| rng.next() - 0.5).collect();
+        let mut z = vec![0.0; w.len()];
+        mg.apply(&r, &mut z);
+        assert!(z.iter().all(|x| x.is_finite()), "{shape:?}");
+        assert_eq!(
+            storage(&mg),
+            before,
+            "window {shape:?} at {origin:?} reallocated"
+        );
+    }
+}
