@@ -228,11 +228,7 @@ fn in_force_json(scene: &Scene, path: &str) -> Option<OverrideValue> {
     if parts.next().is_some() {
         return None;
     }
-    let (_, json) = scene
-        .numerics
-        .sections_json()
-        .find(|(n, _)| *n == section)?;
-    match json.get(field)? {
+    match scene.numerics.in_force(section, field)? {
         serde_json::Value::Bool(b) => Some(OverrideValue::Bool(*b)),
         serde_json::Value::Number(n) => Some(match n.as_i64() {
             Some(i) => OverrideValue::Int(i),

@@ -111,20 +111,23 @@ impl ViscousBlocks {
         let nvr = (faces.vy.hi - faces.vy.lo).max(0) as usize;
         let mg = || Multigrid::new(1).with_w_cycle(false).with_excess_scale(1.0);
         let (px, py) = (bc.periodic(0), bc.periodic(1));
+        let (au, av) = (
+            Stencil5::new(nur, grid.ny, px, py),
+            Stencil5::new(grid.nx, nvr, px, py),
+        );
         let mut b = ViscousBlocks {
             faces,
-            au: Stencil5::new(nur, grid.ny, px, py),
-            av: Stencil5::new(grid.nx, nvr, px, py),
-            wu: BlockWindow::whole(&Stencil5::new(0, 0, false, false)),
-            wv: BlockWindow::whole(&Stencil5::new(0, 0, false, false)),
+            wu: BlockWindow::whole(&au),
+            wv: BlockWindow::whole(&av),
             su: Stencil5::new(nur, grid.ny, px, py),
             sv: Stencil5::new(grid.nx, nvr, px, py),
+            au,
+            av,
             mu: mg(),
             mv: mg(),
         };
         b.au.diag.fill(1.0);
         b.av.diag.fill(1.0);
-        (b.wu, b.wv) = (BlockWindow::whole(&b.au), BlockWindow::whole(&b.av));
         if !b.au.is_empty() {
             b.mu.setup(&b.au);
         }
@@ -173,16 +176,15 @@ impl ViscousBlocks {
             if a.is_empty() {
                 continue;
             }
-            let (x, y) = solid.map_or(((0, -1), (0, -1)), |c| faces(0, c)[b]);
-            *w = match BlockWindow::clamped(a, x, y) {
-                // No solid, or none of its faces in this block: the whole block.
-                None => BlockWindow::whole(a),
-                Some(w0) => {
-                    let m = margin(outside_decay(a, w0));
-                    let (x, y) = faces(m, solid.expect("a window comes from a solid"))[b];
-                    BlockWindow::clamped(a, x, y).unwrap_or(BlockWindow::whole(a))
-                }
+            // The solid's own faces, grown by the margin their surroundings need; the whole
+            // block without a solid, or where none of its faces are in this block.
+            let grown = |c| {
+                let (x, y) = faces(0, c)[b];
+                let m = margin(outside_decay(a, BlockWindow::clamped(a, x, y)?));
+                let (x, y) = faces(m, c)[b];
+                BlockWindow::clamped(a, x, y)
             };
+            *w = solid.and_then(grown).unwrap_or(BlockWindow::whole(a));
             if w.whole {
                 mg.setup(a);
             } else {

@@ -41,12 +41,7 @@ fn defaults_apply_where_the_scene_is_silent() {
     // second material. The settings in force as JSON name it; the section's text keeps it unset,
     // so a checked scene given a solid afterwards resolves it anew.
     assert_eq!((p.tolerance, p.solver), (None, PressureSolver::Multigrid));
-    let json = |s: &Scene, section: &str, field: &str| {
-        s.numerics
-            .sections_json()
-            .find(|(n, _)| *n == section)
-            .map(|(_, j)| j[field].clone())
-    };
+    let json = |s: &Scene, section: &str, field: &str| s.numerics.in_force(section, field).cloned();
     assert_eq!(json(&s, "projection", "tolerance"), Some(1e-4.into()));
     // So do the other defaults that depend on the scene: the advection's predictor (`WholeStep`
     // with one fluid, `Advection` with a second material) and the incremental projection (on

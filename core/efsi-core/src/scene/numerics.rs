@@ -224,6 +224,13 @@ impl Numerics {
             .filter_map(|(name, (_, json))| Some((name.as_str(), json.as_ref()?)))
     }
 
+    /// Setting `numerics.SECTION.FIELD` as the settings in force record it ([`check_sections`]:
+    /// a default that depends on the scene resolved); `None` if the section was not checked
+    /// since it was set, or has no such field.
+    pub fn in_force(&self, section: &str, field: &str) -> Option<&serde_json::Value> {
+        self.sections.get(section)?.1.as_ref()?.get(field)
+    }
+
     /// Record where each section's text starts in `text`, the scene file it was read from; a
     /// section not found there as written (an override rewrote it) gets no position.
     pub(crate) fn locate_in(&mut self, text: &str) {

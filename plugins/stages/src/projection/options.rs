@@ -107,8 +107,7 @@ impl StageOptions for ProjectionOptions {
 
     fn resolve(&mut self, scene: &Scene) {
         self.tolerance = Some(self.tolerance_in(scene));
-        if self.incremental.is_none() {
-            self.incremental = Some(super::incremental(scene));
-        }
+        self.incremental
+            .get_or_insert_with(|| super::incremental(scene));
     }
 }
