@@ -1,6 +1,7 @@
 //! One level of the hierarchy: its matrix in a padded layout (one ghost ring) with the work
 //! vectors, loaded from a [`Stencil5`], its periodic ghosts and its residual.
 
+use super::W_LEVELS;
 use crate::par;
 use crate::stencil5::Stencil5;
 
@@ -22,7 +23,8 @@ pub(super) struct Level {
     pub(super) cn: Vec<f64>,
     pub(super) x: Vec<f64>,
     pub(super) b: Vec<f64>,
-    /// The first coarse correction while a W-cycle computes the second.
+    /// The first coarse correction while a W-cycle computes the second: allocated only on the
+    /// levels a second correction is made on ([`Level::needs_t`]), empty elsewhere.
     pub(super) t: Vec<f64>,
 }
 
@@ -35,7 +37,7 @@ impl Level {
     }
 
     /// Reshape to `nx × ny` cells, every vector zero, reusing the storage when it is large
-    /// enough.
+    /// enough (`t` is left to [`Level::size_t`]).
     pub(super) fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
         let m = (nx + 2) * (ny + 2);
         (self.nx, self.ny, self.s) = (nx, ny, nx + 2);
@@ -47,10 +49,30 @@ impl Level {
             &mut self.cn,
             &mut self.x,
             &mut self.b,
-            &mut self.t,
         ] {
             v.clear();
             v.resize(m, 0.0);
+        }
+    }
+
+    /// Whether a cycle with `gamma` coarse corrections (2: W-cycle) on a hierarchy of `n`
+    /// levels reads level `l`'s `t`: the second correction is made on levels 1..=[`W_LEVELS`]
+    /// that are not the coarsest (module `cycle`).
+    pub(super) fn needs_t(l: usize, n: usize, gamma: usize) -> bool {
+        gamma >= 2 && (1..=W_LEVELS).contains(&l) && l + 1 < n
+    }
+
+    /// `t` sized for level `l` of `n` (zero where it is read, empty elsewhere: level 0's and
+    /// the coarse levels' were never read), reusing its storage.
+    pub(super) fn size_t(&mut self, l: usize, n: usize, gamma: usize) {
+        let len = if Self::needs_t(l, n, gamma) {
+            (self.nx + 2) * (self.ny + 2)
+        } else {
+            0
+        };
+        if self.t.len() != len {
+            self.t.clear();
+            self.t.resize(len, 0.0);
         }
     }
 

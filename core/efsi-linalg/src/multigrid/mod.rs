@@ -218,6 +218,9 @@ impl Multigrid {
             h.coarsest.reserve(COARSEST_CELLS);
         }
         let n = h.n;
+        for (l, lv) in h.levels[..n].iter_mut().enumerate() {
+            lv.size_t(l, n, self.gamma);
+        }
         h.levels[0].load(a);
         let excess = self.excess_scale;
         let Hierarchy {

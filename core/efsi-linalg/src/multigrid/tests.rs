@@ -409,3 +409,25 @@ fn windows_of_any_shape_reuse_the_whole_matrix_storage() {
         );
     }
 }
+
+#[test]
+fn the_second_correction_buffer_lives_only_where_it_is_made() {
+    let a = pressure_matrix(Problem {
+        n: 64,
+        axisymmetric: false,
+        periodic_x: false,
+        dirichlet_top: false,
+        ratio: 1.0,
+        seed: 3,
+    });
+    for w in [true, false] {
+        let mut mg = Multigrid::new(2).with_w_cycle(w);
+        mg.setup(&a);
+        let h = mg.lock();
+        assert_eq!(h.n, 4);
+        for (l, lv) in h.levels[..h.n].iter().enumerate() {
+            let used = w && (1..=W_LEVELS).contains(&l) && l + 1 < h.n;
+            assert_eq!(lv.t.is_empty(), !used, "level {l}, W-cycle {w}");
+        }
+    }
+}
