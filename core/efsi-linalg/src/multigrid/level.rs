@@ -1,9 +1,9 @@
 //! One level of the hierarchy: its matrix in a padded layout (one ghost ring) with the work
-//! vectors, loaded from a [`Stencil5`], its periodic ghosts and its residual.
+//! vectors, loaded from a [`Stencil5`](crate::Stencil5), its periodic ghosts and its residual.
 
 use super::W_LEVELS;
 use crate::par;
-use crate::stencil5::Stencil5;
+use crate::stencil5::Stencil5View;
 
 /// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
 #[derive(Clone, Debug, Default)]
@@ -88,7 +88,7 @@ impl Level {
 
     /// Copy the coefficients of `a` (same shape) into the padded layout: row copies in
     /// parallel, one array at a time (they vectorise).
-    pub(super) fn load(&mut self, a: &Stencil5) {
+    pub(super) fn load(&mut self, a: Stencil5View<'_>) {
         let (nx, ny, s) = (self.nx, self.ny, self.s);
         let (px, py) = (a.periodic_x, a.periodic_y);
         let rows = s..(ny + 1) * s;

@@ -64,12 +64,13 @@
 
 use super::par;
 use super::pcg::Preconditioner;
-use super::stencil5::Stencil5;
+use super::stencil5::{Stencil5, Stencil5View};
 use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
 
 mod coarsen;
 mod coarsest;
 mod cycle;
+mod fine;
 mod level;
 mod smoother;
 mod transfer;
@@ -78,6 +79,7 @@ pub use coarsen::coarsen_into;
 use coarsen::{coarsen_levels, factor};
 use coarsest::Coarsest;
 use cycle::cycle;
+pub use fine::FineMatrix;
 use level::Level;
 
 /// The hierarchy stops coarsening at this many cells (solved by dense Cholesky).
@@ -183,6 +185,12 @@ impl Multigrid {
     /// every matrix set up before: a smaller matrix (a window of the first one, say) reuses
     /// the levels in place.
     pub fn setup(&mut self, a: &Stencil5) {
+        self.setup_view(a.view());
+    }
+
+    /// [`setup`](Self::setup) from a borrowed matrix, which the caller need not keep: the
+    /// finest level holds a copy, whose product [`fine_matrix`](Self::fine_matrix) applies.
+    pub fn setup_view(&mut self, a: Stencil5View<'_>) {
         let h = self.h.get_mut().unwrap_or_else(PoisonError::into_inner);
         let same = h.n > 0 && {
             let l = &h.levels[0];

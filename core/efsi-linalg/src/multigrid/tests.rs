@@ -431,3 +431,24 @@ fn the_second_correction_buffer_lives_only_where_it_is_made() {
         }
     }
 }
+
+#[test]
+fn the_fine_matrix_product_is_the_stencils_bit_for_bit() {
+    let mut rng = Rng(17);
+    for (nx, ny) in [(7, 5), (1, 6), (6, 1), (40, 33)] {
+        for (px, py) in [(false, false), (true, false), (false, true), (true, true)] {
+            let mut a = Stencil5::new(nx, ny, px, py);
+            for v in [&mut a.diag, &mut a.east, &mut a.north] {
+                v.iter_mut().for_each(|x| *x = rng.next() + 0.1);
+            }
+            let x: Vec<f64> = (0..nx * ny).map(|_| rng.next() - 0.5).collect();
+            let (mut y1, mut y2) = (vec![0.0; nx * ny], vec![0.0; nx * ny]);
+            a.mul(&x, &mut y1);
+            let mut mg = Multigrid::new(2);
+            mg.setup_view(a.view());
+            mg.fine_matrix().mul(&x, &mut y2);
+            let bits = |y: &[f64]| y.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&y1), bits(&y2), "{nx} × {ny}, periodic {px} {py}");
+        }
+    }
+}
