@@ -125,6 +125,30 @@ impl Level {
         );
     }
 
+    /// Whether [`load`](Self::load) of `a` would leave the matrix as it is: same shape and
+    /// sides, and bit for bit the entries `load` keeps (a closed side's couplings are zero
+    /// whatever `a` holds there). The coarse levels then are `a`'s too: coarsening reads only
+    /// those entries.
+    pub(super) fn holds(&self, a: Stencil5View<'_>) -> bool {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        if (nx, ny, self.periodic_x, self.periodic_y) != (a.nx, a.ny, a.periodic_x, a.periodic_y) {
+            return false;
+        }
+        let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
+        let east = if a.periodic_x {
+            nx
+        } else {
+            nx.saturating_sub(1)
+        };
+        (0..ny).all(|j| {
+            let (p, r) = ((j + 1) * s + 1, j * nx);
+            same(&self.diag[p..p + nx], &a.diag[r..r + nx])
+                && same(&self.ce[p..p + east], &a.east[r..r + east])
+                && ((j + 1 == ny && !a.periodic_y)
+                    || same(&self.cn[p..p + nx], &a.north[r..r + nx]))
+        })
+    }
+
     /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).
     pub(super) fn fill_ghosts(&mut self) {
         let (nx, ny, s) = (self.nx, self.ny, self.s);

@@ -246,6 +246,14 @@ impl Multigrid {
         });
     }
 
+    /// Whether the multigrid is set up for `a` already, bit for bit: [`setup_view`](Self::setup_view)
+    /// of `a` would change nothing. Lets a caller that assembles its matrix each time skip the
+    /// set-up without keeping a copy of what it was assembled from.
+    pub fn is_set_up_for(&self, a: Stencil5View<'_>) -> bool {
+        let h = self.lock();
+        h.n > 0 && h.levels[0].holds(a)
+    }
+
     /// The preconditioner applied to a window of longer vectors: the matrix set up is
     /// `nx × ny`, and its unknown `(i, j)` is entry `origin + j·stride + i` of `r` and `z`;
     /// entries of `z` outside the window are not touched. [`Preconditioner::apply`] is the

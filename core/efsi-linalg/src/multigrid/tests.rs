@@ -452,3 +452,30 @@ fn the_fine_matrix_product_is_the_stencils_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn a_matrix_set_up_already_is_recognised_bit_for_bit() {
+    let mut a = pressure_matrix(Problem {
+        n: 20,
+        axisymmetric: true,
+        periodic_x: false,
+        dirichlet_top: true,
+        ratio: 1e2,
+        seed: 5,
+    });
+    let mut mg = Multigrid::new(2);
+    assert!(!mg.is_set_up_for(a.view()));
+    mg.setup(&a);
+    assert!(mg.is_set_up_for(a.view()));
+    // A closed side's coupling is not part of the matrix set up.
+    a.east[19] = 7.0;
+    a.north[19 * 20 + 3] = 7.0;
+    assert!(mg.is_set_up_for(a.view()));
+    let k = 7 * 20 + 4;
+    let d = a.diag[k];
+    a.diag[k] = f64::from_bits(d.to_bits() + 1);
+    assert!(!mg.is_set_up_for(a.view()));
+    a.diag[k] = d;
+    a.north[k] *= 2.0;
+    assert!(!mg.is_set_up_for(a.view()));
+}
