@@ -170,6 +170,11 @@ impl Simulation {
         &mut self.pipeline
     }
 
+    /// The stages' [`Stage::restored`](crate::Stage::restored) with the state just put back.
+    pub(crate) fn stages_restored(&mut self) {
+        self.pipeline.restored(&self.state);
+    }
+
     /// The private stepping data a snapshot carries: the last rate of change and the velocity
     /// scale. (`previous` is not: [`step`](Self::step) overwrites it before reading it.)
     pub(crate) fn stepping(&self) -> (f64, f64) {

@@ -9,7 +9,8 @@
 //! the deformation tensors), time, step count and previous Δt; the simulation's private
 //! stepping data (the last rate of change, which decides steadiness, and the velocity scale of
 //! the first step); and each stage's carried-over data ([`crate::schedule::Stage::save`], e.g.
-//! the VOF stage's previous velocity); each step check's record ([`crate::simulation::StepCheck`],
+//! the viscous stage's last increments; the VOF stage's previous velocity is the state's own
+//! between steps, taken back from it, [`crate::schedule::Stage::restored`]); each step check's record ([`crate::simulation::StepCheck`],
 //! e.g. efsi-run's energy guard's baseline). The simulation's `previous` velocity is not in it: every
 //! step overwrites it before reading it. Restoring a snapshot into a simulation built from the
 //! same scene continues the run **bit for bit** as if it had never stopped.
@@ -143,6 +144,7 @@ impl Simulation {
             return Err(fail(e.to_string()));
         }
         self.state.copy_from(&snap.state);
+        self.stages_restored();
         self.set_stepping(snap.last_change, snap.velocity_scale);
         for c in self.checks_mut() {
             let record = snap.checks.iter().find(|(n, _)| *n == c.name());

@@ -13,7 +13,7 @@ pub use bicgstab::BiCgStab;
 pub use fgmres::{Accept, Fgmres, FlexiblePreconditioner};
 pub use multigrid::Multigrid;
 pub use pcg::{LinearOperator, Norm, Pcg, Preconditioner, SolveStats};
-pub use stencil5::{IncompleteCholesky, Stencil5};
+pub use stencil5::{IncompleteCholesky, Stencil5, Stencil5View};
 
 /// Small systems shared by the solvers' unit tests.
 #[cfg(test)]

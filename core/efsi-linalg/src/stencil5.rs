@@ -33,7 +33,68 @@ pub struct Stencil5 {
     pub north: Vec<f64>,
 }
 
+/// A [`Stencil5`] whose arrays are borrowed (from a work pool, say): what
+/// [`Multigrid::setup_view`](crate::Multigrid::setup_view) reads, so that a caller whose matrix
+/// the multigrid keeps need not keep its own copy.
+#[derive(Clone, Copy, Debug)]
+pub struct Stencil5View<'a> {
+    /// Cells along x.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+    /// Whether x wraps around.
+    pub periodic_x: bool,
+    /// Whether y wraps around.
+    pub periodic_y: bool,
+    /// Diagonal `d_k` (`nx·ny` values).
+    pub diag: &'a [f64],
+    /// Coupling to the east neighbour `e_k`.
+    pub east: &'a [f64],
+    /// Coupling to the north neighbour `n_k`.
+    pub north: &'a [f64],
+}
+
+impl Stencil5View<'_> {
+    /// The coupling of cell `k` (in column `i`) to its west neighbour: the east coupling of
+    /// the cell to its west, across the periodic wrap in the first column, 0 at a closed side.
+    #[inline(always)]
+    pub fn west(&self, k: usize, i: usize) -> f64 {
+        if i > 0 {
+            self.east[k - 1]
+        } else if self.periodic_x {
+            self.east[k + self.nx - 1]
+        } else {
+            0.0
+        }
+    }
+
+    /// The coupling of cell `k` (in row `j`) to its south neighbour (as [`west`](Self::west)).
+    #[inline(always)]
+    pub fn south(&self, k: usize, j: usize) -> f64 {
+        if j > 0 {
+            self.north[k - self.nx]
+        } else if self.periodic_y {
+            self.north[k + (self.ny - 1) * self.nx]
+        } else {
+            0.0
+        }
+    }
+}
+
 impl Stencil5 {
+    /// The matrix as a [`Stencil5View`].
+    pub fn view(&self) -> Stencil5View<'_> {
+        Stencil5View {
+            nx: self.nx,
+            ny: self.ny,
+            periodic_x: self.periodic_x,
+            periodic_y: self.periodic_y,
+            diag: &self.diag,
+            east: &self.east,
+            north: &self.north,
+        }
+    }
+
     /// A zero matrix of the given shape.
     pub fn new(nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) -> Self {
         let n = nx * ny;
@@ -96,25 +157,13 @@ impl Stencil5 {
     /// the cell to its west, across the periodic wrap in the first column, 0 at a closed side.
     #[inline(always)]
     pub fn west(&self, k: usize, i: usize) -> f64 {
-        if i > 0 {
-            self.east[k - 1]
-        } else if self.periodic_x {
-            self.east[k + self.nx - 1]
-        } else {
-            0.0
-        }
+        self.view().west(k, i)
     }
 
     /// The coupling of cell `k` (in row `j`) to its south neighbour (as [`west`](Self::west)).
     #[inline(always)]
     pub fn south(&self, k: usize, j: usize) -> f64 {
-        if j > 0 {
-            self.north[k - self.nx]
-        } else if self.periodic_y {
-            self.north[k + (self.ny - 1) * self.nx]
-        } else {
-            0.0
-        }
+        self.view().south(k, j)
     }
 
     /// Number of unknowns.

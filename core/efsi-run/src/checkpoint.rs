@@ -31,7 +31,6 @@ use efsi_core::scene::Scene;
 use efsi_core::state::State;
 use efsi_laws_host::loader::{describe, resolve_law};
 use efsi_stages::solid::SceneSolid;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The first eight bytes of every checkpoint file.
@@ -361,7 +360,7 @@ impl Checkpoint {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| EfsiError::io(dir, e))?;
         }
-        crate::output::atomic::write_atomically(path, |w| w.write_all(&bytes))
+        crate::output::atomic::write_bytes_atomically(path, &bytes)
             .map_err(|e| EfsiError::io(path, e))
     }
 }

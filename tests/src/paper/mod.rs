@@ -400,9 +400,7 @@ pub fn slug(label: &str) -> String {
 
 /// Write a file atomically.
 pub fn save(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    use std::io::Write as _;
-    efsi_run::output::atomic::write_atomically(path, |w| w.write_all(bytes))
-        .map_err(|e| e.to_string())
+    efsi_run::output::atomic::write_bytes_atomically(path, bytes).map_err(|e| e.to_string())
 }
 
 /// Write named series `(label, points)` sharing an x column name as CSV: `series,x,y` rows.

@@ -107,9 +107,11 @@ pub trait Stage: Send {
     }
 
     /// The stage's own data that carries from one step to the next and is not in the
-    /// [`State`] (e.g. a previous velocity kept for a time average), flattened to numbers, for
-    /// checkpoints and in-memory snapshots ([`crate::snapshot`]). Scratch space that every
-    /// step overwrites before reading does not belong here. Default: nothing.
+    /// [`State`] (e.g. the viscous stage's last increments, its solver's initial guess),
+    /// flattened to numbers, for checkpoints and in-memory snapshots ([`crate::snapshot`]).
+    /// Scratch space that every step overwrites before reading does not belong here, nor a
+    /// copy of what the state holds between steps (the VOF stage's previous velocity is the
+    /// state's: it takes it back in [`restored`](Self::restored)). Default: nothing.
     ///
     /// A stage that returns data here must accept it back in [`restore`](Self::restore): a run
     /// restored from a snapshot must continue bit for bit as if it had never stopped.
@@ -123,6 +125,11 @@ pub trait Stage: Send {
     fn save_into(&self, out: &mut Vec<f64>) {
         *out = self.save();
     }
+
+    /// After a snapshot's data and state are back ([`restore`](Self::restore), then the
+    /// state): a stage takes here what it keeps between steps as a copy of the state, instead of
+    /// saving it (default: nothing).
+    fn restored(&mut self, _state: &State) {}
 
     /// Take back what [`save`](Self::save) returned (of a stage built from the same scene).
     /// The default accepts only nothing; the error says what does not fit.
@@ -692,6 +699,13 @@ impl Pipeline {
             })?;
         }
         Ok(())
+    }
+
+    /// Each stage's [`Stage::restored`], once a snapshot's state is back.
+    pub fn restored(&mut self, state: &State) {
+        for e in &mut self.entries {
+            e.stage.restored(state);
+        }
     }
 
     /// The statistics each stage reported in the last step, in order.

@@ -4,7 +4,7 @@
 use super::level::Level;
 use super::transfer::RUN;
 use crate::par::{self, SharedSlice};
-use crate::stencil5::Stencil5;
+use crate::stencil5::{Stencil5, Stencil5View};
 
 /// Cells per aggregate along a direction of `n` cells: 2, or 1 once `n ≤ 2`.
 pub(super) fn factor(n: usize) -> usize {
@@ -17,6 +17,11 @@ pub(super) fn factor(n: usize) -> usize {
 /// `excess_scale` when both directions are coarsened (½ for Dirichlet faces, 1 for a mass
 /// term).
 pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
+    coarsen_view_into(a.view(), c, excess_scale);
+}
+
+/// [`coarsen_into`] from a borrowed matrix.
+pub(super) fn coarsen_view_into(a: Stencil5View<'_>, c: &mut Stencil5, excess_scale: f64) {
     let (nx, ny) = (a.nx, a.ny);
     let (fx, fy) = (factor(nx), factor(ny));
     let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
@@ -117,7 +122,7 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
 /// Levels `range` of the hierarchy from their finer neighbours (`a` is level 0's matrix,
 /// `mats[l − 1]` level l's).
 pub(super) fn coarsen_levels(
-    a: &Stencil5,
+    a: Stencil5View<'_>,
     mats: &mut [Stencil5],
     levels: &mut [Level],
     range: std::ops::Range<usize>,
@@ -125,8 +130,8 @@ pub(super) fn coarsen_levels(
 ) {
     for l in range {
         let (done, rest) = mats.split_at_mut(l - 1);
-        let fine = if l == 1 { a } else { &done[l - 2] };
-        coarsen_into(fine, &mut rest[0], excess_scale);
-        levels[l].load(&rest[0]);
+        let fine = if l == 1 { a } else { done[l - 2].view() };
+        coarsen_view_into(fine, &mut rest[0], excess_scale);
+        levels[l].load(rest[0].view());
     }
 }

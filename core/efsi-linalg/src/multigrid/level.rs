@@ -1,8 +1,9 @@
 //! One level of the hierarchy: its matrix in a padded layout (one ghost ring) with the work
-//! vectors, loaded from a [`Stencil5`], its periodic ghosts and its residual.
+//! vectors, loaded from a [`Stencil5`](crate::Stencil5), its periodic ghosts and its residual.
 
+use super::W_LEVELS;
 use crate::par;
-use crate::stencil5::Stencil5;
+use crate::stencil5::Stencil5View;
 
 /// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
 #[derive(Clone, Debug, Default)]
@@ -22,7 +23,8 @@ pub(super) struct Level {
     pub(super) cn: Vec<f64>,
     pub(super) x: Vec<f64>,
     pub(super) b: Vec<f64>,
-    /// The first coarse correction while a W-cycle computes the second.
+    /// The first coarse correction while a W-cycle computes the second: allocated only on the
+    /// levels a second correction is made on ([`Level::needs_t`]), empty elsewhere.
     pub(super) t: Vec<f64>,
 }
 
@@ -35,7 +37,7 @@ impl Level {
     }
 
     /// Reshape to `nx × ny` cells, every vector zero, reusing the storage when it is large
-    /// enough.
+    /// enough (`t` is left to [`Level::size_t`]).
     pub(super) fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
         let m = (nx + 2) * (ny + 2);
         (self.nx, self.ny, self.s) = (nx, ny, nx + 2);
@@ -47,10 +49,30 @@ impl Level {
             &mut self.cn,
             &mut self.x,
             &mut self.b,
-            &mut self.t,
         ] {
             v.clear();
             v.resize(m, 0.0);
+        }
+    }
+
+    /// Whether a cycle with `gamma` coarse corrections (2: W-cycle) on a hierarchy of `n`
+    /// levels reads level `l`'s `t`: the second correction is made on levels 1..=[`W_LEVELS`]
+    /// that are not the coarsest (module `cycle`).
+    pub(super) fn needs_t(l: usize, n: usize, gamma: usize) -> bool {
+        gamma >= 2 && (1..=W_LEVELS).contains(&l) && l + 1 < n
+    }
+
+    /// `t` sized for level `l` of `n` (zero where it is read, empty elsewhere: level 0's and
+    /// the coarse levels' were never read), reusing its storage.
+    pub(super) fn size_t(&mut self, l: usize, n: usize, gamma: usize) {
+        let len = if Self::needs_t(l, n, gamma) {
+            (self.nx + 2) * (self.ny + 2)
+        } else {
+            0
+        };
+        if self.t.len() != len {
+            self.t.clear();
+            self.t.resize(len, 0.0);
         }
     }
 
@@ -66,7 +88,7 @@ impl Level {
 
     /// Copy the coefficients of `a` (same shape) into the padded layout: row copies in
     /// parallel, one array at a time (they vectorise).
-    pub(super) fn load(&mut self, a: &Stencil5) {
+    pub(super) fn load(&mut self, a: Stencil5View<'_>) {
         let (nx, ny, s) = (self.nx, self.ny, self.s);
         let (px, py) = (a.periodic_x, a.periodic_y);
         let rows = s..(ny + 1) * s;
@@ -101,6 +123,30 @@ impl Level {
                 }
             },
         );
+    }
+
+    /// Whether [`load`](Self::load) of `a` would leave the matrix as it is: same shape and
+    /// sides, and bit for bit the entries `load` keeps (a closed side's couplings are zero
+    /// whatever `a` holds there). The coarse levels then are `a`'s too: coarsening reads only
+    /// those entries.
+    pub(super) fn holds(&self, a: Stencil5View<'_>) -> bool {
+        let (nx, ny, s) = (self.nx, self.ny, self.s);
+        if (nx, ny, self.periodic_x, self.periodic_y) != (a.nx, a.ny, a.periodic_x, a.periodic_y) {
+            return false;
+        }
+        let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
+        let east = if a.periodic_x {
+            nx
+        } else {
+            nx.saturating_sub(1)
+        };
+        (0..ny).all(|j| {
+            let (p, r) = ((j + 1) * s + 1, j * nx);
+            same(&self.diag[p..p + nx], &a.diag[r..r + nx])
+                && same(&self.ce[p..p + east], &a.east[r..r + east])
+                && ((j + 1 == ny && !a.periodic_y)
+                    || same(&self.cn[p..p + nx], &a.north[r..r + nx]))
+        })
     }
 
     /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).

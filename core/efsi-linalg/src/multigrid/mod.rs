@@ -64,12 +64,13 @@
 
 use super::par;
 use super::pcg::Preconditioner;
-use super::stencil5::Stencil5;
+use super::stencil5::{Stencil5, Stencil5View};
 use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
 
 mod coarsen;
 mod coarsest;
 mod cycle;
+mod fine;
 mod level;
 mod smoother;
 mod transfer;
@@ -78,6 +79,7 @@ pub use coarsen::coarsen_into;
 use coarsen::{coarsen_levels, factor};
 use coarsest::Coarsest;
 use cycle::cycle;
+pub use fine::FineMatrix;
 use level::Level;
 
 /// The hierarchy stops coarsening at this many cells (solved by dense Cholesky).
@@ -183,6 +185,12 @@ impl Multigrid {
     /// every matrix set up before: a smaller matrix (a window of the first one, say) reuses
     /// the levels in place.
     pub fn setup(&mut self, a: &Stencil5) {
+        self.setup_view(a.view());
+    }
+
+    /// [`setup`](Self::setup) from a borrowed matrix, which the caller need not keep: the
+    /// finest level holds a copy, whose product [`fine_matrix`](Self::fine_matrix) applies.
+    pub fn setup_view(&mut self, a: Stencil5View<'_>) {
         let h = self.h.get_mut().unwrap_or_else(PoisonError::into_inner);
         let same = h.n > 0 && {
             let l = &h.levels[0];
@@ -218,6 +226,9 @@ impl Multigrid {
             h.coarsest.reserve(COARSEST_CELLS);
         }
         let n = h.n;
+        for (l, lv) in h.levels[..n].iter_mut().enumerate() {
+            lv.size_t(l, n, self.gamma);
+        }
         h.levels[0].load(a);
         let excess = self.excess_scale;
         let Hierarchy {
@@ -233,6 +244,14 @@ impl Multigrid {
             coarsen_levels(a, mats, levels, first_serial..n, excess);
             coarsest.factor(levels.last().expect("at least one level"));
         });
+    }
+
+    /// Whether the multigrid is set up for `a` already, bit for bit: [`setup_view`](Self::setup_view)
+    /// of `a` would change nothing. Lets a caller that assembles its matrix each time skip the
+    /// set-up without keeping a copy of what it was assembled from.
+    pub fn is_set_up_for(&self, a: Stencil5View<'_>) -> bool {
+        let h = self.lock();
+        h.n > 0 && h.levels[0].holds(a)
     }
 
     /// The preconditioner applied to a window of longer vectors: the matrix set up is

@@ -409,3 +409,73 @@ fn windows_of_any_shape_reuse_the_whole_matrix_storage() {
         );
     }
 }
+
+#[test]
+fn the_second_correction_buffer_lives_only_where_it_is_made() {
+    let a = pressure_matrix(Problem {
+        n: 64,
+        axisymmetric: false,
+        periodic_x: false,
+        dirichlet_top: false,
+        ratio: 1.0,
+        seed: 3,
+    });
+    for w in [true, false] {
+        let mut mg = Multigrid::new(2).with_w_cycle(w);
+        mg.setup(&a);
+        let h = mg.lock();
+        assert_eq!(h.n, 4);
+        for (l, lv) in h.levels[..h.n].iter().enumerate() {
+            let used = w && (1..=W_LEVELS).contains(&l) && l + 1 < h.n;
+            assert_eq!(lv.t.is_empty(), !used, "level {l}, W-cycle {w}");
+        }
+    }
+}
+
+#[test]
+fn the_fine_matrix_product_is_the_stencils_bit_for_bit() {
+    let mut rng = Rng(17);
+    for (nx, ny) in [(7, 5), (1, 6), (6, 1), (40, 33)] {
+        for (px, py) in [(false, false), (true, false), (false, true), (true, true)] {
+            let mut a = Stencil5::new(nx, ny, px, py);
+            for v in [&mut a.diag, &mut a.east, &mut a.north] {
+                v.iter_mut().for_each(|x| *x = rng.next() + 0.1);
+            }
+            let x: Vec<f64> = (0..nx * ny).map(|_| rng.next() - 0.5).collect();
+            let (mut y1, mut y2) = (vec![0.0; nx * ny], vec![0.0; nx * ny]);
+            a.mul(&x, &mut y1);
+            let mut mg = Multigrid::new(2);
+            mg.setup_view(a.view());
+            mg.fine_matrix().mul(&x, &mut y2);
+            let bits = |y: &[f64]| y.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&y1), bits(&y2), "{nx} × {ny}, periodic {px} {py}");
+        }
+    }
+}
+
+#[test]
+fn a_matrix_set_up_already_is_recognised_bit_for_bit() {
+    let mut a = pressure_matrix(Problem {
+        n: 20,
+        axisymmetric: true,
+        periodic_x: false,
+        dirichlet_top: true,
+        ratio: 1e2,
+        seed: 5,
+    });
+    let mut mg = Multigrid::new(2);
+    assert!(!mg.is_set_up_for(a.view()));
+    mg.setup(&a);
+    assert!(mg.is_set_up_for(a.view()));
+    // A closed side's coupling is not part of the matrix set up.
+    a.east[19] = 7.0;
+    a.north[19 * 20 + 3] = 7.0;
+    assert!(mg.is_set_up_for(a.view()));
+    let k = 7 * 20 + 4;
+    let d = a.diag[k];
+    a.diag[k] = f64::from_bits(d.to_bits() + 1);
+    assert!(!mg.is_set_up_for(a.view()));
+    a.diag[k] = d;
+    a.north[k] *= 2.0;
+    assert!(!mg.is_set_up_for(a.view()));
+}

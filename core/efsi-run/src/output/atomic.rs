@@ -37,10 +37,27 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> io::Result<()> {
+    write_through(path, BUFFER_BYTES, write)
+}
+
+/// [`write_atomically`] for data already in memory: `bytes` go to the temporary file in one
+/// write, without the 1 MiB buffer (which `run.json`, a few kB, made the largest allocation of
+/// the run's end).
+pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    write_through(path, 0, |w| w.write_all(bytes))
+}
+
+/// [`write_atomically`] with a buffer of `capacity` bytes (0: every write goes straight to the
+/// file).
+fn write_through(
+    path: &Path,
+    capacity: usize,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> io::Result<()> {
     let tmp = temporary_path(path)?;
     let result = (|| {
         let file = File::create(&tmp)?;
-        let mut w = BufWriter::with_capacity(BUFFER_BYTES, file);
+        let mut w = BufWriter::with_capacity(capacity, file);
         write(&mut w)?;
         w.flush()?;
         // Surface any error the buffered writer still holds and close the file before renaming.

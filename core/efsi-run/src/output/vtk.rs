@@ -35,7 +35,7 @@
 //! `TimeValue` (the name VTK ≥ 8.2 XML readers recognise as the time step of a lone file, so a
 //! `.vtr` opened without its `.pvd` still carries its time).
 
-use crate::output::atomic::write_atomically;
+use crate::output::atomic::{write_atomically, write_bytes_atomically};
 pub use crate::output::spec::{VtkCompression, VtkPrecision};
 use efsi_core::grid::{Geometry, Grid};
 use std::fmt::Write as _;
@@ -456,7 +456,7 @@ impl PvdCollection {
     /// Rewrite the `.pvd` file from the current entries (atomically).
     pub fn write(&self) -> io::Result<()> {
         let xml = self.to_xml();
-        write_atomically(&self.path, |w| w.write_all(xml.as_bytes()))
+        write_bytes_atomically(&self.path, xml.as_bytes())
     }
 }
 

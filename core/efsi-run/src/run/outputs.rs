@@ -91,7 +91,7 @@ impl Outputs {
         replace_earlier_run(dir, &earlier_outputs(dir)?, overwrite)?;
         let probe_path = dir.join("probes.csv");
         let header = probe_header(&o.probes);
-        crate::output::atomic::write_atomically(&probe_path, |w| w.write_all(header.as_bytes()))
+        crate::output::atomic::write_bytes_atomically(&probe_path, header.as_bytes())
             .map_err(|e| EfsiError::io(&probe_path, e))?;
         let profiles = o
             .profiles
@@ -429,7 +429,7 @@ impl Outputs {
             }
             text.push('\n');
         }
-        crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+        crate::output::atomic::write_bytes_atomically(&path, text.as_bytes())
             .map_err(|e| EfsiError::io(&path, e))?;
         Ok(path)
     }

@@ -6,7 +6,6 @@ use crate::checkpoint;
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
 use std::fs;
-use std::io::Write;
 use std::path::Path;
 
 /// A new run's identity: a hash of the clock, the process and the folder.
@@ -90,7 +89,7 @@ impl Outputs {
         });
         let path = self.dir.join("run.json");
         let text = serde_json::to_string_pretty(&json).unwrap_or_default();
-        crate::output::atomic::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+        crate::output::atomic::write_bytes_atomically(&path, text.as_bytes())
             .map_err(|e| EfsiError::io(&path, e))
     }
 }

@@ -138,7 +138,6 @@ impl StagePlugin for Viscous {
                 xv: Field::zeros(grid),
             },
             scratch: Scratch::reserve(shared, WORK * n),
-            delta: vec![0.0; n],
             warm: WarmStart {
                 settle: scene
                     .time
@@ -165,7 +164,6 @@ struct ViscousStage {
     /// The pipeline's work vectors: [`WORK`] of the system's length while the stage runs
     /// (the right-hand side, the diagonal and the solver's three).
     scratch: Scratch,
-    delta: Vec<f64>,
     /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept (`None` with
     /// the Jacobi preconditioner, which never uses it).
     blocks: Option<ViscousBlocks>,
@@ -173,7 +171,9 @@ struct ViscousStage {
 }
 
 /// The increments `δ` of the last two steps (newest first) and their `Δt`, for the initial
-/// guess; `history` counts the valid ones (0–2).
+/// guess; `history` counts the valid ones (0–2). While the stage runs, `prev[1]` holds this
+/// step's `δ` (its guess is written over the oldest increment, the last read of it), so the
+/// stage keeps two vectors of unknowns instead of three.
 struct WarmStart {
     /// In a run that stops at a steady state: the relative change of `δ/Δt` between the last
     /// two steps below which the solve's stopping rule changes (module docs), and the run's
@@ -458,9 +458,16 @@ impl LinearOperator for ViscousSystem {
 }
 
 impl WarmStart {
-    /// The initial guess of `δ`: `δ/Δt` extrapolated linearly in time from the last two steps
-    /// (from the last one alone after one step; zero at first), times this step's `Δt`.
-    fn guess(&self, dt: f64, delta: &mut [f64]) {
+    /// This step's `δ`, in `prev[1]` while the stage runs (the oldest increment once
+    /// [`guess`](Self::guess) has read it).
+    fn delta(&mut self) -> &mut Vec<f64> {
+        &mut self.prev[1]
+    }
+
+    /// The initial guess of `δ` into [`delta`](Self::delta): `δ/Δt` extrapolated linearly in
+    /// time from the last two steps (from the last one alone after one step; zero at first),
+    /// times this step's `Δt`, each entry written over the oldest increment's after reading it.
+    fn guess(&mut self, dt: f64) {
         let [d1, d2] = self.prev_dt;
         let (c1, c2) = match self.history {
             0 => (0.0, 0.0),
@@ -470,12 +477,11 @@ impl WarmStart {
                 (dt / d1 * (1.0 + w), -dt / d2 * w)
             }
         };
-        let [p1, p2] = &self.prev;
-        par::for_each_chunk(delta, |o, d| {
-            let n = d.len();
-            let (p1, p2) = (&p1[o..o + n], &p2[o..o + n]);
-            for ((d, a), b) in d.iter_mut().zip(p1).zip(p2) {
-                *d = c1 * a + c2 * b;
+        let [p1, p2] = &mut self.prev;
+        par::for_each_chunk(p2, |o, d| {
+            let p1 = &p1[o..o + d.len()];
+            for (d, a) in d.iter_mut().zip(p1) {
+                *d = c1 * a + c2 * *d;
             }
         });
     }
@@ -496,11 +502,9 @@ impl WarmStart {
         (diff <= settle * size).then_some(steady)
     }
 
-    /// Keep this step's `δ` (in `delta`) and `Δt` for the next initial guess.
-    fn remember(&mut self, dt: f64, delta: &mut Vec<f64>) {
-        let [p1, p2] = &mut self.prev;
-        std::mem::swap(p1, p2);
-        std::mem::swap(p1, delta);
+    /// Keep this step's `δ` (in [`delta`](Self::delta)) and `Δt` for the next initial guess.
+    fn remember(&mut self, dt: f64) {
+        self.prev.swap(0, 1);
         self.prev_dt = [dt, self.prev_dt[0]];
         self.history = (self.history + 1).min(2);
     }
@@ -530,7 +534,7 @@ impl Stage for ViscousStage {
         let w = &self.warm;
         out.clear();
         // Room for the longest history at once: no reallocation as the history fills up.
-        out.reserve(3 + w.prev.len() * self.delta.len());
+        out.reserve(3 + w.prev.len() * w.prev[0].len());
         out.extend_from_slice(&[w.history as f64, w.prev_dt[0], w.prev_dt[1]]);
         for p in &w.prev[..w.history] {
             out.extend_from_slice(p);
@@ -540,8 +544,8 @@ impl Stage for ViscousStage {
     /// Nothing (a snapshot without a history: the next solve starts from zero), or what
     /// [`save`](Stage::save) wrote.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
-        let n = self.delta.len();
         let w = &mut self.warm;
+        let n = w.prev[0].len();
         if data.is_empty() {
             w.history = 0;
             return Ok(());
@@ -567,7 +571,7 @@ impl Stage for ViscousStage {
         let op = &mut self.op;
         op.theta_dt = self.theta * ctx.dt;
         let mut pool = self.scratch.lock();
-        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.delta.len());
+        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, op.faces.len());
         op.assemble(&state.mu, &state.rho, diag);
         // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
         // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing. The
@@ -585,8 +589,8 @@ impl Stage for ViscousStage {
         });
         let bnorm = dot(rhs, rhs).sqrt();
         let stats = if bnorm == 0.0 {
-            self.delta.fill(0.0);
-            self.warm.remember(ctx.dt, &mut self.delta);
+            self.warm.delta().fill(0.0);
+            self.warm.remember(ctx.dt);
             SolveStats {
                 iterations: 0,
                 residual: 0.0,
@@ -595,7 +599,7 @@ impl Stage for ViscousStage {
         } else {
             let mut tol = self.tol * bnorm;
             match self.warm.settled() {
-                None => self.warm.guess(ctx.dt, &mut self.delta),
+                None => self.warm.guess(ctx.dt),
                 // Near a steady state (module docs): the warm start's residual reduced
                 // CONTRACT-fold, down to what keeps the solver's error under a share of the
                 // steady criterion; a criterion at round-off starts from zero and solves to the
@@ -603,11 +607,11 @@ impl Stage for ViscousStage {
                 Some(steady) => {
                     let floor = STEADY_SHARE * steady * ctx.dt * op.min_mass();
                     if floor < ROUND_OFF * bnorm {
-                        self.delta.fill(0.0);
+                        self.warm.delta().fill(0.0);
                         tol = tol.min(STRICT_TOLERANCE * bnorm);
                     } else {
-                        self.warm.guess(ctx.dt, &mut self.delta);
-                        op.residual(rhs, &self.delta, r, q);
+                        self.warm.guess(ctx.dt);
+                        op.residual(rhs, self.warm.delta(), r, q);
                         tol = tol.min(CONTRACT * dot(r, r).sqrt()).max(floor);
                     }
                 }
@@ -623,6 +627,7 @@ impl Stage for ViscousStage {
                 }
             };
             let blocks = self.blocks.as_mut().filter(|_| use_mg);
+            let delta = &mut self.warm.prev[1];
             let st = if let Some(blocks) = blocks {
                 blocks.setup(&op.k, diag);
                 solve_norm_in(
@@ -630,7 +635,7 @@ impl Stage for ViscousStage {
                     op,
                     &*blocks,
                     rhs,
-                    &mut self.delta,
+                    delta,
                     tol,
                     self.max_iter,
                     Norm::L2,
@@ -638,11 +643,14 @@ impl Stage for ViscousStage {
             } else {
                 // The reciprocal of the diagonal, in place.
                 par::for_each_chunk(diag, |_, d| d.iter_mut().for_each(|d| *d = 1.0 / *d));
-                op.solve_jacobi([r, q, p], diag, rhs, &mut self.delta, tol, self.max_iter)
+                op.solve_jacobi([r, q, p], diag, rhs, delta, tol, self.max_iter)
             };
             // A solve short of the tighter stop near a steady state but within the tolerance
             // is converged.
             if !st.converged && st.residual > self.tol * bnorm {
+                // The failed solve's iterate is where the oldest increment was: the history
+                // keeps the newest one only.
+                self.warm.history = self.warm.history.min(1);
                 return Err(StageError {
                     stage: "viscous".into(),
                     message: format!(
@@ -654,8 +662,8 @@ impl Stage for ViscousStage {
                     ),
                 });
             }
-            op.faces.add(&self.delta, &mut state.u, &mut state.v);
-            self.warm.remember(ctx.dt, &mut self.delta);
+            op.faces.add(delta, &mut state.u, &mut state.v);
+            self.warm.remember(ctx.dt);
             SolveStats {
                 residual: st.residual / bnorm,
                 converged: true,

@@ -1,0 +1,101 @@
+//! The product of the matrix a multigrid was last set up for, from its finest level's padded
+//! copy: a caller that sets the multigrid up from a borrowed matrix
+//! ([`Multigrid::setup_view`]) keeps no copy of its own for conjugate gradient's products.
+
+use super::Multigrid;
+use crate::par;
+use crate::pcg::LinearOperator;
+
+/// `y = A x` for the matrix `A` of the last [`Multigrid::setup`] or
+/// [`Multigrid::setup_view`] ([`Multigrid::fine_matrix`]).
+///
+/// The same bits as [`Stencil5::mul`](crate::Stencil5::mul) of that matrix: the same terms in
+/// the same order (diagonal, east, west, north, south, then the periodic x-wrap), read from
+/// the padded copy, whose entries are the matrix's (the couplings that cross a closed side,
+/// which `mul` skips, are not read).
+#[derive(Clone, Copy, Debug)]
+pub struct FineMatrix<'a>(&'a Multigrid);
+
+impl Multigrid {
+    /// The matrix the multigrid was last set up for, as an operator (see [`FineMatrix`]).
+    /// Applying it and the preconditioner at the same time from two threads panics, as two
+    /// applications of the preconditioner do.
+    pub fn fine_matrix(&self) -> FineMatrix<'_> {
+        FineMatrix(self)
+    }
+}
+
+impl FineMatrix<'_> {
+    /// `y = A x` (rows in parallel; the same bits on any number of threads).
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        let h = self.0.lock();
+        let l = &h.levels[0];
+        let (nx, ny, s) = (l.nx, l.ny, l.s);
+        let (px, py) = (l.periodic_x, l.periodic_y);
+        assert_eq!(
+            x.len(),
+            nx * ny,
+            "multigrid matrix: vector length ≠ matrix size"
+        );
+        assert_eq!(
+            y.len(),
+            nx * ny,
+            "multigrid matrix: vector length ≠ matrix size"
+        );
+        if nx == 0 || ny == 0 {
+            return;
+        }
+        let (d, ce, cn) = (&l.diag[..], &l.ce[..], &l.cn[..]);
+        par::for_each_row(y, nx, |j, yr| {
+            let r = j * nx;
+            // Padded index of cell (0, j); row j's couplings are those of `Stencil5` row j.
+            let p = (j + 1) * s + 1;
+            let (xr, dr, er) = (&x[r..r + nx], &d[p..p + nx], &ce[p..p + nx]);
+            for ((y, d), x) in yr.iter_mut().zip(dr).zip(xr) {
+                *y = d * x;
+            }
+            for ((y, e), x) in yr[..nx - 1].iter_mut().zip(&er[..nx - 1]).zip(&xr[1..]) {
+                *y -= e * x;
+            }
+            for ((y, e), x) in yr[1..].iter_mut().zip(&er[..nx - 1]).zip(&xr[..nx - 1]) {
+                *y -= e * x;
+            }
+            // Row j's north couplings (row ny − 1's: the wrap, or zero unless periodic).
+            let nr = &cn[p..p + nx];
+            if j + 1 < ny {
+                let xn = &x[r + nx..r + 2 * nx];
+                for ((y, n), x) in yr.iter_mut().zip(nr).zip(xn) {
+                    *y -= n * x;
+                }
+            } else if py {
+                for ((y, n), x) in yr.iter_mut().zip(nr).zip(&x[..nx]) {
+                    *y -= n * x;
+                }
+            }
+            // Row j − 1's north couplings (for row 0 the ghost row: the wrap).
+            let ns = &cn[p - s..p - s + nx];
+            if j > 0 {
+                let xs = &x[r - nx..r];
+                for ((y, n), x) in yr.iter_mut().zip(ns).zip(xs) {
+                    *y -= n * x;
+                }
+            } else if py {
+                let t = (ny - 1) * nx;
+                for ((y, n), x) in yr.iter_mut().zip(ns).zip(&x[t..t + nx]) {
+                    *y -= n * x;
+                }
+            }
+            if px {
+                let c = er[nx - 1];
+                yr[nx - 1] -= c * xr[0];
+                yr[0] -= c * xr[nx - 1];
+            }
+        });
+    }
+}
+
+impl LinearOperator for FineMatrix<'_> {
+    fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+        self.mul(x, y);
+    }
+}
