@@ -4,10 +4,11 @@
 //! larger than the caches (3 × 128 MiB: main memory) and over arrays that fit in the last-level
 //! cache (3 × 512 KiB), on one thread and on the bench's thread count, best of 10 passes, counting
 //! 24 bytes per element as STREAM does (the write-allocate read not counted). The threads are
-//! started once and a pass repeats the cache-sized triad up to 32 MiB, between two spinning
-//! barriers (a sleeping one put a wake-up on every pass, as efsi's steps no longer have):
-//! timed with a thread start per pass, as before 2026-11-27's evening, the cache figure was a
-//! quarter of this (7.0 GB/s on one thread against 24–26 on the 2-core reference machine).
+//! started once and a pass repeats the cache-sized triad up to 32 MiB, between two barriers
+//! (timed with a thread start per pass, the cache figure was the start's cost). The triad is
+//! compiled at opt-level 3 like efsi's kernels (`[profile.dev.package.xtask]` in the workspace's
+//! `Cargo.toml`: `cargo xtask` builds in the dev profile, whose opt-level 1 left the loop
+//! unvectorised and the limits 1.6× (memory) to 4× (cache) too low until 2026-11-27).
 //!
 //! **The traffic** of a stage is a model of its *compulsory* memory traffic per cell and step:
 //! each array the stage's kernels must stream counted once per pass, 8 bytes per value, a
@@ -158,7 +159,7 @@ pub fn triad(n: usize, threads: usize) -> f64 {
     let c: Vec<f64> = (0..n).map(|k| (n - k) as f64).collect();
     let chunk = n.div_ceil(threads);
     let parts = n.div_ceil(chunk);
-    let barrier = SpinBarrier::new(parts);
+    let barrier = std::sync::Barrier::new(parts);
     // Each timed pass repeats the triad until it moves ≥ 32 MiB, so that the barriers' cost
     // (tens of µs on a VM) stays small beside a cache-sized pass.
     let reps = ((32usize << 20) / (24 * n.max(1))).max(1);
@@ -199,46 +200,6 @@ pub fn triad(n: usize, threads: usize) -> f64 {
     // Keep the result alive so the passes are not optimised away.
     assert!(a[n / 2].is_finite());
     24.0 * (n * reps) as f64 / best
-}
-
-/// A barrier whose waiters spin (yielding the core every few dozen rounds) instead of sleeping:
-/// with `std::sync::Barrier` each pass waited for a sleeping thread to be woken, which on a VM
-/// costs as much as a cache-sized pass, and the two-thread cache figure came out below the
-/// one-thread one (21–23 against 24–26 GB/s). efsi's steps keep their threads awake the same
-/// way (`efsi_linalg::par::hot`).
-struct SpinBarrier {
-    n: usize,
-    count: std::sync::atomic::AtomicUsize,
-    generation: std::sync::atomic::AtomicUsize,
-}
-
-impl SpinBarrier {
-    fn new(n: usize) -> Self {
-        SpinBarrier {
-            n,
-            count: 0.into(),
-            generation: 0.into(),
-        }
-    }
-
-    fn wait(&self) {
-        use std::sync::atomic::Ordering::{AcqRel, Acquire, Relaxed, Release};
-        let g = self.generation.load(Acquire);
-        if self.count.fetch_add(1, AcqRel) + 1 == self.n {
-            self.count.store(0, Relaxed);
-            self.generation.fetch_add(1, Release);
-            return;
-        }
-        let mut spins = 0u32;
-        while self.generation.load(Acquire) == g {
-            spins = spins.wrapping_add(1);
-            if spins.is_multiple_of(64) {
-                std::thread::yield_now();
-            } else {
-                std::hint::spin_loop();
-            }
-        }
-    }
 }
 
 /// The measured limits on `threads` threads: (main memory, last-level cache) in bytes/s.
@@ -284,7 +245,7 @@ mod tests {
     #[test]
     fn the_triad_measures_a_plausible_bandwidth() {
         // Anything from an old laptop to a large server: 0.5 GB/s to 2 TB/s; on three threads
-        // too (the spinning barrier releases every pass, whatever the machine's cores).
+        // too (more than some machines' cores: the barriers must still release every pass).
         for threads in [1, 3] {
             let bw = triad(1 << 16, threads);
             assert!(bw > 5e8 && bw < 2e12, "{threads} threads: {bw}");
