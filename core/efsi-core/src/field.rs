@@ -97,9 +97,9 @@ impl Field {
         &mut self.data
     }
 
-    /// Set every entry (ghosts included) to `value`.
+    /// Set every entry (ghosts included) to `value`; in parallel chunks on large grids.
     pub fn fill(&mut self, value: f64) {
-        self.data.fill(value);
+        efsi_linalg::par::for_each_chunk(&mut self.data, |_, d| d.fill(value));
     }
 
     /// Copy all values from `other` (same shape); in parallel chunks on large grids.

@@ -125,12 +125,7 @@ impl Norm<'_> {
 
     /// The measure of `r`.
     pub fn of(&self, r: &[f64]) -> f64 {
-        let v = r
-            .chunks(par::REDUCE_CHUNK)
-            .enumerate()
-            .fold(0.0, |acc, (c, r)| {
-                self.combine(acc, self.chunk(c * par::REDUCE_CHUNK, r))
-            });
+        let v = par::reduce(r, 0.0, |o, r| self.chunk(o, r), |a, b| self.combine(a, b));
         self.finish(v)
     }
 }
@@ -266,13 +261,32 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     let true_residual = |a: &mut A, x: &[f64], r: &mut [f64], q: &mut [f64]| {
         a.apply(x, q);
         let q = &*q;
-        par::for_each_chunk(r, |o, r| {
+        let diff = |o: usize, r: &mut [f64]| {
             let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
             for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
                 *r = b - q;
             }
-        });
-        measure.of(r)
+        };
+        match measure {
+            // The difference and its measure in one pass (the chunks and their fold are
+            // `Norm::of`'s).
+            Measure::Norm(n) => {
+                let v = par::reduce_chunks(
+                    r,
+                    0.0,
+                    |o, r| {
+                        diff(o, r);
+                        n.chunk(o, r)
+                    },
+                    |a, b| n.combine(a, b),
+                );
+                n.finish(v)
+            }
+            Measure::Closure(f) => {
+                par::for_each_chunk(r, diff);
+                f(r)
+            }
+        }
     };
     let mut res = true_residual(a, x, r, q);
     let mut it = 0;
@@ -393,15 +407,6 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
 enum Measure<'a> {
     Closure(&'a dyn Fn(&[f64]) -> f64),
     Norm(Norm<'a>),
-}
-
-impl Measure<'_> {
-    fn of(&self, r: &[f64]) -> f64 {
-        match self {
-            Measure::Closure(f) => f(r),
-            Measure::Norm(n) => n.of(r),
-        }
-    }
 }
 
 #[cfg(test)]
