@@ -97,9 +97,9 @@ impl Field {
         &mut self.data
     }
 
-    /// Set every entry (ghosts included) to `value`; in parallel chunks on large grids.
+    /// Set every entry (ghosts included) to `value`.
     pub fn fill(&mut self, value: f64) {
-        efsi_linalg::par::for_each_chunk(&mut self.data, |_, d| d.fill(value));
+        self.data.fill(value);
     }
 
     /// Copy all values from `other` (same shape); in parallel chunks on large grids.

@@ -222,38 +222,6 @@ pub fn reduce_chunks(
     acc
 }
 
-/// [`reduce_chunks`] over a slice it only reads: `f(offset, chunk)` on the fixed chunks of
-/// [`REDUCE_CHUNK`] elements (in parallel when `a` is long), the partials folded in chunk order
-/// from `init` — the same bits on any number of threads.
-pub fn reduce(
-    a: &[f64],
-    init: f64,
-    f: impl Fn(usize, &[f64]) -> f64 + Sync + Send,
-    combine: impl Fn(f64, f64) -> f64,
-) -> f64 {
-    let mut acc = init;
-    if a.len() < PAR_MIN {
-        for (c, x) in a.chunks(REDUCE_CHUNK).enumerate() {
-            acc = combine(acc, f(c * REDUCE_CHUNK, x));
-        }
-        return acc;
-    }
-    let big = REDUCE_CHUNK * MAX_PARTS;
-    for (s, a) in a.chunks(big).enumerate() {
-        let n = a.len().div_ceil(REDUCE_CHUNK);
-        let mut parts = [0.0f64; MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(a.par_chunks(REDUCE_CHUNK))
-            .enumerate()
-            .for_each(|(c, (p, x))| *p = f(s * big + c * REDUCE_CHUNK, x));
-        for p in &parts[..n] {
-            acc = combine(acc, *p);
-        }
-    }
-    acc
-}
-
 /// Four-lane sum of `f(k)` for `k in 0..n` (vectorises when `f` does), for the partials of
 /// [`reduce_chunks`] and [`reduce_chunks2`].
 #[inline(always)]
@@ -680,34 +648,6 @@ mod tests {
         assert_eq!(d1.to_bits(), d2.to_bits());
         let exact: f64 = a.iter().zip(&b).map(|(a, b)| a * b).sum();
         assert!((d1 - exact).abs() <= 1e-12 * exact.abs());
-    }
-
-    /// `reduce` folds the chunks' partials in order from `init`: the serial fold's bits on
-    /// 1 and 3 threads, below `PAR_MIN`, above it, and above one block of partials.
-    #[test]
-    fn reduce_is_the_serial_chunk_fold_on_any_number_of_threads() {
-        for n in [5_000, 100_003, REDUCE_CHUNK * MAX_PARTS + 12_345] {
-            let a: Vec<f64> = (0..n)
-                .map(|k| ((k * 7919) % 1013) as f64 / 17.0 - 20.0)
-                .collect();
-            let part = |o: usize, x: &[f64]| {
-                x.iter()
-                    .enumerate()
-                    .fold(0.0, |s, (k, v)| s + v * (o + k) as f64)
-            };
-            let serial = a
-                .chunks(REDUCE_CHUNK)
-                .enumerate()
-                .fold(0.5, |s, (c, x)| s + part(c * REDUCE_CHUNK, x));
-            for t in [1, 3] {
-                let r = rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .unwrap()
-                    .install(|| reduce(&a, 0.5, part, |x, y| x + y));
-                assert_eq!(r.to_bits(), serial.to_bits(), "n = {n}, {t} threads");
-            }
-        }
     }
 
     #[test]

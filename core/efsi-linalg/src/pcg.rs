@@ -125,7 +125,12 @@ impl Norm<'_> {
 
     /// The measure of `r`.
     pub fn of(&self, r: &[f64]) -> f64 {
-        let v = par::reduce(r, 0.0, |o, r| self.chunk(o, r), |a, b| self.combine(a, b));
+        let v = r
+            .chunks(par::REDUCE_CHUNK)
+            .enumerate()
+            .fold(0.0, |acc, (c, r)| {
+                self.combine(acc, self.chunk(c * par::REDUCE_CHUNK, r))
+            });
         self.finish(v)
     }
 }

@@ -200,10 +200,8 @@ impl ViscousBlocks {
 /// disturbance there, one that runs along the most strongly coupled direction. Infinite when
 /// no row outside couples.
 fn outside_decay(a: &Stencil5, w: BlockWindow) -> f64 {
-    // Rows in parallel: a minimum does not depend on the order (the rows' minima are negated
-    // into `max_over_rows`, exactly).
-    let row = |j: usize| {
-        let mut r = f64::INFINITY;
+    let mut r = f64::INFINITY;
+    for j in 0..a.ny {
         let inside_j = (w.j0..w.j0 + w.ny).contains(&j);
         for i in 0..a.nx {
             if inside_j && (w.i0..w.i0 + w.nx).contains(&i) {
@@ -216,9 +214,8 @@ fn outside_decay(a: &Stencil5, w: BlockWindow) -> f64 {
                 r = r.min((a.diag[k] - (c[0] + c[1] + c[2] + c[3])) / cmax);
             }
         }
-        -r
-    };
-    -efsi_linalg::par::max_over_rows(a.ny, a.nx, f64::NEG_INFINITY, row)
+    }
+    r
 }
 
 /// The factor by which an increment is let decay between the solid and the edge of the

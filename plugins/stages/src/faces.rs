@@ -61,55 +61,6 @@ impl UnknownFaces {
         }
     }
 
-    /// `f(is_u, q0, [a, b, c])` for every row of unknown faces, rows in parallel on a large
-    /// grid: `a, b, c` are that row's entries of three compact vectors, and its `n`-th face has
-    /// the fields' linear index `q0 + n` (the order of [`UnknownFaces::for_each`]). Each call
-    /// writes only its own row, so the result does not depend on the number of threads.
-    pub(crate) fn for_each_row3(
-        &self,
-        [a, b, c]: [&mut [f64]; 3],
-        f: impl Fn(bool, usize, [&mut [f64]; 3]) + Sync + Send,
-    ) {
-        use rayon::prelude::*;
-        let stride = self.nx + 1 + 2 * GHOST;
-        let idx = |i: isize, j: isize| (j + G) as usize * stride + (i + G) as usize;
-        let nur = (self.ux.hi - self.ux.lo).max(0) as usize;
-        let nu = self.nu();
-        let parallel = self.len() >= efsi_linalg::par::PAR_MIN;
-        let (a, b, c) = (a.split_at_mut(nu), b.split_at_mut(nu), c.split_at_mut(nu));
-        let halves = [
-            (true, nur, (a.0, b.0, c.0)),
-            (false, self.nx, (a.1, b.1, c.1)),
-        ];
-        for (is_u, len, (a, b, c)) in halves {
-            if len == 0 {
-                continue;
-            }
-            let q0 = |r: usize| {
-                if is_u {
-                    idx(self.ux.lo, r as isize)
-                } else {
-                    idx(0, self.vy.lo + r as isize)
-                }
-            };
-            let body = |(r, ((a, b), c)): (usize, Row3<'_>)| f(is_u, q0(r), [a, b, c]);
-            if parallel {
-                a.par_chunks_mut(len)
-                    .zip(b.par_chunks_mut(len))
-                    .zip(c.par_chunks_mut(len))
-                    .enumerate()
-                    .with_min_len((efsi_linalg::par::PAR_MIN / 2).div_ceil(len))
-                    .for_each(body);
-            } else {
-                a.chunks_mut(len)
-                    .zip(b.chunks_mut(len))
-                    .zip(c.chunks_mut(len))
-                    .enumerate()
-                    .for_each(body);
-            }
-        }
-    }
-
     /// Write the compact vector `x` into the unknown faces of `u`, `v`.
     pub(crate) fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field) {
         each_face_row(self, x, u, v, |a, b| a.copy_from_slice(b));
@@ -155,9 +106,6 @@ impl UnknownFaces {
     }
 }
 
-/// One row of three compact vectors, as zipped chunks.
-type Row3<'a> = ((&'a mut [f64], &'a mut [f64]), &'a mut [f64]);
-
 /// `f(field row's unknown faces, x's row)` for every row of u- then v-faces, in parallel.
 fn each_face_row(
     faces: &UnknownFaces,
@@ -185,78 +133,4 @@ fn each_face_row(
     for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
         f(&mut row[o..o + nx], &xv[j * nx..(j + 1) * nx]);
     });
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use efsi_core::grid::Geometry;
-    use efsi_core::scene::{Boundaries, Boundary};
-
-    /// `for_each_row3` hands each row of every kind of unknown faces (walls, an axis, periodic
-    /// sides) the compact entries and the field indices `for_each` gives them, on a grid small
-    /// enough to run serially and one large enough to run in parallel.
-    #[test]
-    fn rows_of_faces_match_the_compact_order() {
-        let sides = [
-            [
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-            ],
-            [
-                Boundary::Axis,
-                Boundary::FreeSlip,
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-            ],
-            [
-                Boundary::Periodic,
-                Boundary::Periodic,
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-            ],
-            [
-                Boundary::NoSlip,
-                Boundary::NoSlip,
-                Boundary::Periodic,
-                Boundary::Periodic,
-            ],
-        ];
-        for (nx, ny) in [(7, 5), (130, 90)] {
-            for [x_min, x_max, y_min, y_max] in sides.clone() {
-                let geometry = if x_min == Boundary::Axis {
-                    Geometry::Axisymmetric
-                } else {
-                    Geometry::Planar
-                };
-                let grid = Grid::new(geometry, nx, ny, (0.0, 1.0), (0.0, 0.75));
-                let b = Boundaries {
-                    x_min,
-                    x_max,
-                    y_min,
-                    y_max,
-                };
-                let faces = UnknownFaces::new(&grid, &BoundarySet::new(&b, &grid));
-                let n = faces.len();
-                let mut expected = vec![(false, 0); n];
-                faces.for_each(|c, is_u, q| expected[c] = (is_u, q));
-                let (mut kind, mut index, mut seen) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-                faces.for_each_row3([&mut kind, &mut index, &mut seen], |is_u, q0, [k, q, s]| {
-                    for m in 0..k.len() {
-                        k[m] = f64::from(u8::from(is_u));
-                        q[m] = (q0 + m) as f64;
-                        s[m] += 1.0;
-                    }
-                });
-                for c in 0..n {
-                    let label = format!("{nx}x{ny} {b:?}, face {c}");
-                    assert_eq!(seen[c], 1.0, "{label}: visited once");
-                    assert_eq!(kind[c] == 1.0, expected[c].0, "{label}");
-                    assert_eq!(index[c] as usize, expected[c].1, "{label}");
-                }
-            }
-        }
-    }
 }

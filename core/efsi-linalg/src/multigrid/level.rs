@@ -140,22 +140,13 @@ impl Level {
         } else {
             nx.saturating_sub(1)
         };
-        let row = |j: usize| {
+        (0..ny).all(|j| {
             let (p, r) = ((j + 1) * s + 1, j * nx);
             same(&self.diag[p..p + nx], &a.diag[r..r + nx])
                 && same(&self.ce[p..p + east], &a.east[r..r + east])
                 && ((j + 1 == ny && !a.periodic_y)
                     || same(&self.cn[p..p + nx], &a.north[r..r + nx]))
-        };
-        if self.is_serial() {
-            (0..ny).all(row)
-        } else {
-            use rayon::prelude::*;
-            (0..ny)
-                .into_par_iter()
-                .with_min_len(par::PAR_MIN / 2 / nx.max(1) + 1)
-                .all(row)
-        }
+        })
     }
 
     /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).

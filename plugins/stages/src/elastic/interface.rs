@@ -187,19 +187,13 @@ impl Kernels {
     pub(super) fn reset_fluid(&self, d: &mut super::Deformation) {
         self.reset_fluid_b(&mut d.b);
         for c in 0..4 {
-            let wt = if c == 3 { &self.wc } else { &self.w }.data();
-            for a in [
-                &mut d.advection[c],
-                &mut d.advection_prev[c],
-                &mut d.stretching[c],
-            ] {
-                par::for_each_chunk(a.data_mut(), |o, a| {
-                    for (a, &w) in a.iter_mut().zip(&wt[o..]) {
-                        if w == 0.0 {
-                            *a = 0.0;
-                        }
-                    }
-                });
+            let wt = if c == 3 { &self.wc } else { &self.w };
+            for (k, &w) in wt.data().iter().enumerate() {
+                if w == 0.0 {
+                    d.advection[c].data_mut()[k] = 0.0;
+                    d.advection_prev[c].data_mut()[k] = 0.0;
+                    d.stretching[c].data_mut()[k] = 0.0;
+                }
             }
         }
     }
@@ -214,14 +208,11 @@ impl Kernels {
             } else {
                 (&self.w, 1.0)
             };
-            let wt = wt.data();
-            par::for_each_chunk(b.data_mut(), |o, b| {
-                for (b, &w) in b.iter_mut().zip(&wt[o..]) {
-                    if w == 0.0 {
-                        *b = one;
-                    }
+            for (b, &w) in b.data_mut().iter_mut().zip(wt.data()) {
+                if w == 0.0 {
+                    *b = one;
                 }
-            });
+            }
         }
     }
 }

@@ -332,8 +332,7 @@ impl ElasticStage {
                 * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
                 * b[0].abs().max(b[1].abs()).max(1e-300)
         };
-        // Rows of faces in parallel (each writes only its own entries).
-        let face = |is_u: bool, q: usize| {
+        k.faces.for_each(|c, is_u, q| {
             let (i, j) = (
                 (q % s) as isize - efsi_core::G,
                 (q / s) as isize - efsi_core::G,
@@ -351,7 +350,7 @@ impl ElasticStage {
                     stiff(i, j - 1).max(stiff(i, j)),
                 )
             };
-            let mass = rf * w;
+            mass[c] = rf * w;
             let mv = if td > 0.0 {
                 let md = mu.data();
                 let (a, b) = if is_u {
@@ -367,27 +366,15 @@ impl ElasticStage {
             } else {
                 0.0
             };
-            (
-                mass,
-                mass + (c2 * e + td * mv) * w * (4.0 / (dx * dx) + 4.0 / (dy * dy)),
-            )
-        };
-        k.faces
-            .for_each_row3([mass, diag, rhs], |is_u, q0, [mass, diag, rhs]| {
-                for n in 0..mass.len() {
-                    (mass[n], diag[n]) = face(is_u, q0 + n);
-                    rhs[n] *= dt;
-                }
-            });
+            diag[c] = mass[c] + (c2 * e + td * mv) * w * (4.0 / (dx * dx) + 4.0 / (dy * dy));
+            rhs[c] *= dt;
+        });
         let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
         {
             let op = &mut self.op;
-            let (mass, hoop) = (&op.mass, op.viscous.hoop());
-            efsi_linalg::par::for_each_chunk(&mut op.dm, |o, dm| {
-                for ((dm, m), h) in dm.iter_mut().zip(&mass[o..]).zip(&hoop[o..]) {
-                    *dm = m + h;
-                }
-            });
+            for ((dm, m), h) in op.dm.iter_mut().zip(&op.mass).zip(op.viscous.hoop()) {
+                *dm = m + h;
+            }
         }
         let mut pnorm = 0.0;
         {

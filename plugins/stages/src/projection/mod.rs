@@ -66,7 +66,7 @@ use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext,
 };
-use efsi_linalg::par::{for_each_chunk, for_each_mut, for_each_row};
+use efsi_linalg::par::{for_each_mut, for_each_row};
 use efsi_linalg::{
     IncompleteCholesky, Multigrid, Norm, Stencil5, Stencil5View, pcg::solve_norm_in,
 };
@@ -540,12 +540,9 @@ impl ProjectionStage {
         if let Some(f) = self.increment.as_ref().filter(|_| incremental) {
             // The pressure is the one already there (the last step's, or the coupled step's)
             // plus the increment found here.
-            let fd = f.data();
-            for_each_chunk(state.p.data_mut(), |o, p| {
-                for (p, x) in p.iter_mut().zip(&fd[o..]) {
-                    *p += x;
-                }
-            });
+            for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
+                *p += x;
+            }
         }
         // V^{n+1} = V^{n+2/3} − Δt ∇φ/ρ on the unknown faces, φ the increment (or the whole
         // pressure in the seed's non-incremental scheme).
