@@ -115,7 +115,6 @@ impl StagePlugin for Projection {
         let n = grid.cells();
         let o: ProjectionOptions = crate::options(scene)?;
         // Multigrid's matrix is assembled in the pool, beside the work vectors.
-        let multigrid = o.solver == PressureSolver::Multigrid;
         let (precond, pooled) = match o.solver {
             PressureSolver::Multigrid => (Precond::Multigrid(Multigrid::new(2)), MATRIX),
             PressureSolver::IncompleteCholesky => (
@@ -126,6 +125,8 @@ impl StagePlugin for Projection {
                 0,
             ),
         };
+        let keep_density =
+            matches!(precond, Precond::IncompleteCholesky(..)) || !crate::second_material(scene);
         Ok(Box::new(ProjectionStage {
             tol: o.tolerance_in(scene),
             max_iter: o.max_iterations,
@@ -143,7 +144,7 @@ impl StagePlugin for Projection {
             // cavity256: assembling and setting up every step costs 63 -> 90 ns per cell-step
             // in the projection); where a second material changes the density nearly every
             // step, the multigrid's own matrix is compared with the assembled one instead.
-            set_up_for: (!multigrid || !crate::second_material(scene)).then(Vec::new),
+            set_up_for: keep_density.then(Vec::new),
         }))
     }
 }
