@@ -11,7 +11,14 @@ use rayon::prelude::*;
 pub const REDUCE_CHUNK: usize = 4096;
 
 /// Below this many elements a loop runs serially (a fork costs a few microseconds).
-pub const PAR_MIN: usize = 8192;
+///
+/// Chosen by measurement (whole processes on two threads, interleaved, each round started on a
+/// quiet machine, 2026-11-28): 2048 instead of 8192 made the 35-cells-per-radius sphere's
+/// two-thread run 7–8 % faster (medians of 6, 8 and 10 rounds: 0.967, 0.917, 0.927 of 8192's
+/// time), with the drop 256² (0.985) and the cavity 128² (1.042 and 0.915 in two sets of
+/// rounds) within the noise and one thread unchanged (0.995–1.004); 1024 and 512 were no better
+/// than 2048 (sphere 0.916–0.934 and 0.897–0.914), 16384 and 32768 9 % and 16 % slower.
+pub const PAR_MIN: usize = 2048;
 
 /// Four-lane dot product of two equal-length slices (vectorises).
 #[inline]

@@ -36,8 +36,8 @@
 //!
 //! The two corrections are made on the finest [`W_LEVELS`] = 2 levels only; below them the
 //! cycle is a V-cycle. A full W-cycle visits level `l` 2^l times, and the coarse levels (below
-//! [`par::PAR_MIN`] cells) run serially: on a 256² grid they were ≈ 30 % of a cycle on one
-//! thread and ≈ 40 % on two. With the V below level 2 they are visited 4 times, and the
+//! [`par::PAR_MIN`] cells) run serially: on a 256² grid, with the threshold then at 8192 cells,
+//! they were ≈ 30 % of a cycle on one thread and ≈ 40 % on two. With the V below level 2 they are visited 4 times, and the
 //! iterations are those of the full W-cycle — the `iteration_table` test over the six problem
 //! kinds at ratios 1, 1e2, 1e4 from 64² to 512² gives the same counts everywhere but one
 //! (10 instead of 11 at 512²); a W on the finest level alone needed up to 11 where the full
@@ -54,8 +54,9 @@
 //! finest level, coarsening by coarse rows); each writes disjoint entries from inputs no one
 //! writes in that loop, and every coarse entry sums its children in the same order, so results
 //! are bit-identical whatever the number of threads. (Splitting the 4096-cell level too was
-//! tried: on this 2-core VM the median cycle got slower — a join on a level that small costs
-//! more than half its sweep whenever the other core is not immediately free.)
+//! tried first in a benchmark of the cycle alone, where the median cycle got slower; whole runs
+//! interleaved later found the sphere impact 7–8 % faster on two threads with levels down to
+//! 2048 cells split, and the drop and the cavity unchanged — see [`par::PAR_MIN`].)
 //!
 //! **Allocation.** [`Multigrid::setup`] allocates the hierarchy on the first call and reuses it
 //! for later matrices of the same shape or smaller ones (a window of the first, set up each
