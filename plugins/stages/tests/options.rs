@@ -121,7 +121,8 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
             0.6
         );
     }
-    // Auto: each step its scheme's θ; Δt may reach the coupled step's cap.
+    // Auto: each step its scheme's θ; Δt may reach the coupled step's cap, by default 200
+    // (Coupled's 25 when set so).
     let auto: ElasticOptions = get(&el("()").unwrap());
     assert_eq!(auto.coupling, ElasticCoupling::Auto);
     assert_eq!(
@@ -130,8 +131,10 @@ fn elastic_coupling_is_a_scene_option_checked_by_field() {
             auto.stretch_theta(true),
             auto.wave_cap()
         ),
-        (0.5, 0.75, 25.0)
+        (0.5, 0.75, 200.0)
     );
+    let capped = get::<ElasticOptions>(&el("(coupled_wave_courant: 25.0)").unwrap());
+    assert_eq!(capped.wave_cap(), 25.0);
     // …and with the explicit elastic step it is accepted (every step is then split).
     assert!(el("(implicit: false)").is_ok());
     let back = Scene::from_str_at(&s.to_ron(), Path::new("back.ron")).unwrap();

@@ -12,7 +12,7 @@
 //! the solid 4 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
 //! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
 //!
-//! The map's runs are `Split`; `Coupled` (Δt·c/h ≤ 25) and `Auto` run at G = 1e7, 1e9, 1e11 Pa
+//! The map's runs are `Split`; `Coupled` (Δt·c/h ≤ 25) and `Auto` (≤ 200) run at G = 1e7, 1e9, 1e11 Pa
 //! × CFL 0.1, 0.5, 0.9, ratio 1e3 (quick: G = 1e9, CFL 0.9), their rebounds reported.
 //!
 //! # What "stable" means here
@@ -53,7 +53,8 @@ use efsi_core::Scene;
 use efsi_run::{ProbeSpec, SceneOutput};
 use efsi_stages::elastic::MIN_CELLS_ACROSS;
 use efsi_stages::elastic::{
-    DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, MAX_WAVE_COURANT,
+    DEFAULT_AUTO_COUPLED_WAVE_COURANT, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling,
+    ElasticOptions, MAX_WAVE_COURANT,
 };
 use efsi_stages::solid::{SceneSolid, Shape};
 use std::path::PathBuf;
@@ -718,8 +719,8 @@ impl Case for Stability {
                 .collect();
             h.notes.push(format!(
                 "The coupled elastic step (numerics.elastic.coupling: Coupled, Δt·c/h ≤ \
-                 {DEFAULT_COUPLED_WAVE_COURANT}, and Auto), ratio 1e3: \
-                 {}.",
+                 {DEFAULT_COUPLED_WAVE_COURANT}, and Auto, ≤ {DEFAULT_AUTO_COUPLED_WAVE_COURANT}), \
+                 ratio 1e3: {}.",
                 lines.join("; ")
             ));
         }

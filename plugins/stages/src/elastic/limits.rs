@@ -81,7 +81,7 @@ pub(super) fn wave_limit(
     let o = crate::options::<super::ElasticOptions>(scene)?;
     let couples = super::may_couple(scene);
     let s = if couples {
-        o.coupled_wave_courant
+        o.coupled_cap()
     } else {
         o.wave_courant
     };

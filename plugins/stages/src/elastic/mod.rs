@@ -314,9 +314,9 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::shared_wave_limits;
 pub use options::{
-    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, DEFAULT_COUPLED_WAVE_COURANT,
-    ElasticCoupling, ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT,
-    MAX_WAVE_COURANT,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, DEFAULT_AUTO_COUPLED_WAVE_COURANT,
+    DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
+    MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
 use rows::{PAR_POINTS, Window, at, rows1, rows2, rows3};

@@ -72,25 +72,29 @@ pub struct ElasticOptions {
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
     /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
-    /// (default [`DEFAULT_COUPLED_WAVE_COURANT`], at most [`MAX_COUPLED_WAVE_COURANT`]). The
-    /// coupled step is stable far beyond the split step's [`MAX_WAVE_COURANT`]; what the cap
-    /// limits is accuracy: an impact taken in few coupled steps is damped (see the `coupled`
-    /// module's "Limits"). The stability map's sphere (8 cells per radius, CFL 0.5) at
-    /// G = 1e9 Pa under `Coupled` moves up at 16 ms at 0.65 m/s with a cap of 25, 0.10 at 50, and
-    /// rests on the wall at 200 (split: 1.03). Under `Auto`, which takes the impact with split steps,
-    /// larger caps cost fewer steps at the split step's rebound: 454, 339, 284 and 232 steps at
-    /// 25, 50, 100 and 200 (1.030, 1.029, 1.025, 1.025 m/s; no energy gained beyond 2.9e-5 of
-    /// the budget).
-    /// Away from walls the cap costs `Auto` accuracy: a stiff disk spinning rigidly in a vortex
-    /// cell (G = 1e9 Pa, 32², to t = 0.1, where the cap sets Δt) loses 1.9e-4, 4.2e-4, 9.1e-4
-    /// and 1.17e-3 of its kinetic energy against the split step's 800 steps at caps of 25, 50,
-    /// 100 and 200 (128, 64, 32, 16 steps; first order in time, θ = 0.75). Hence the one
-    /// default, 25, for `Coupled` and `Auto`. The loss is the coupled step's, not the flow's
-    /// time error: the vortex without the disk, in 16 fixed steps, ends within 1.8e-3 of its
-    /// decay from the 800-step run's, while the disk at a cap of 200 ends 3.9 % of its decay off
-    /// (from t = 0.03 to 0.1 it decays 7.7 % faster than under `Split`).
-    #[serde(default = "default_coupled_wave_courant")]
-    pub coupled_wave_courant: f64,
+    /// (at most [`MAX_COUPLED_WAVE_COURANT`]; default [`DEFAULT_COUPLED_WAVE_COURANT`] with
+    /// `Coupled`, [`DEFAULT_AUTO_COUPLED_WAVE_COURANT`] with `Auto`). The coupled step is stable
+    /// far beyond the split step's [`MAX_WAVE_COURANT`]; what the cap limits is accuracy: an
+    /// impact taken in few coupled steps is damped (see the `coupled` module's "Limits"). The
+    /// stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa under `Coupled` moves
+    /// up at 16 ms at 0.65 m/s with a cap of 25, 0.10 at 50, and rests on the wall at 200
+    /// (split: 1.03), hence 25 there. `Auto` takes impacts with split steps (within
+    /// [`AUTO_WALL_CELLS`] of a wall), so its cap only sets the step of a stiff solid's flight:
+    /// 454, 339, 284 and 232 steps at caps of 25, 50, 100 and 200 (1.030, 1.029, 1.025,
+    /// 1.025 m/s; no energy gained beyond 2.9e-5 of the budget).
+    ///
+    /// What a long coupled step costs away from walls is the time error any step of that
+    /// length has: a stiff disk spinning rigidly in a vortex cell (G = 1e9 Pa, 32², to t = 0.1,
+    /// where the cap sets Δt) ends 1.9e-4, 4.2e-4, 9.1e-4 and 1.17e-3 of its kinetic energy
+    /// below the split step's 800 steps at caps of 25, 50, 100 and 200 (128, 64, 32, 16 steps;
+    /// first order in time). A disk as rigid there but softer, G = 4e5 Pa, whose split wave cap
+    /// gives the same 16 steps of 6.25e-3 s, ends 2.49e-3 below its own 800-step run under
+    /// `Split` (1.94e-3 under `Coupled`); the vortex without the disk, in 16 fixed steps,
+    /// within 1.2e-4 of its 800-step run. So `Auto` takes its flights at 200: a stiff solid is
+    /// then no less accurate than a soft one at the step its own wave cap allows (measured
+    /// 2026-11-28, `tests/tests/elastic.rs`; the cap of 25 was the one default until then).
+    #[serde(default)]
+    pub coupled_wave_courant: Option<f64>,
 }
 
 /// How the implicit elastic step and the pressure projection share a time step.
@@ -105,7 +109,7 @@ pub enum ElasticCoupling {
     /// (FGMRES on the saddle-point system, block-triangular preconditioner from the elastic
     /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
     /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
-    /// `coupled_wave_courant` (25) elastic-wave Courant numbers instead of 4. The stability
+    /// `coupled_wave_courant` (default 25 here) elastic-wave Courant numbers instead of 4. The stability
     /// map's sphere at CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
     /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
     /// (`theta` 0.75), so an impact taken in a few steps loses its rebound (at 16 ms 0.65 against
@@ -121,9 +125,9 @@ pub enum ElasticCoupling {
     /// an impact at the split step's, which resolves the rebound the coupled step's long steps
     /// damp. A coupled solve that does not converge within `coupling_iterations` is retaken as a
     /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per
-    /// radius, CFL 0.5) at G = 1e9 Pa: 454 steps and 1.030 m/s at 16 ms, against Split's
-    /// 1606 and 1.030 and Coupled's 257 and 0.647; at 1e7 Pa: 64 steps and 0.928, against 161
-    /// and 0.943, and 30 and none (on the wall). Each step's θ is
+    /// radius, CFL 0.5) at G = 1e9 Pa: 232 steps and 1.025 m/s at 16 ms (cap 200, the default
+    /// with `Auto`), against Split's 1606 and 1.030 and Coupled's 257 and 0.647; at 1e7 Pa: 70
+    /// steps and 0.943, against 161 and 0.943, and 30 and none (on the wall). Each step's θ is
     /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
     /// split. The default: where the flow never
     /// allows longer steps than the split step's cap (the seed's sphere, every shipped case) it
@@ -169,8 +173,20 @@ impl ElasticOptions {
     pub fn wave_cap(&self) -> f64 {
         match self.coupling {
             ElasticCoupling::Split => self.wave_courant,
-            ElasticCoupling::Coupled | ElasticCoupling::Auto => self.coupled_wave_courant,
+            ElasticCoupling::Coupled | ElasticCoupling::Auto => self.coupled_cap(),
         }
+    }
+
+    /// The coupled step's cap on `Δt·c/h`: the scene's `coupled_wave_courant`, else
+    /// [`DEFAULT_AUTO_COUPLED_WAVE_COURANT`] with `Auto` and [`DEFAULT_COUPLED_WAVE_COURANT`]
+    /// otherwise.
+    pub fn coupled_cap(&self) -> f64 {
+        self.coupled_wave_courant
+            .unwrap_or(if self.coupling == ElasticCoupling::Auto {
+                DEFAULT_AUTO_COUPLED_WAVE_COURANT
+            } else {
+                DEFAULT_COUPLED_WAVE_COURANT
+            })
     }
 
     /// θ of B's stretching in a coupled step (`coupled`) or a split one: the scene's, else 0.5
@@ -195,14 +211,15 @@ fn default_coupling_iter() -> usize {
 /// 15–25 % and 200 failed, and the maximum was 50.
 pub const MAX_COUPLED_WAVE_COURANT: f64 = 200.0;
 
-/// The coupled step's default cap on `Δt·c/h`: an impact taken with `Coupled` keeps some of its
-/// rebound (0.65 m/s against the split step's 1.03 on the map's sphere at G = 1e9 Pa; see
-/// [`ElasticOptions::coupled_wave_courant`]).
+/// The coupled step's default cap on `Δt·c/h` with `Coupled`: an impact taken with `Coupled`
+/// keeps some of its rebound (0.65 m/s against the split step's 1.03 on the map's sphere at
+/// G = 1e9 Pa; see [`ElasticOptions::coupled_wave_courant`]).
 pub const DEFAULT_COUPLED_WAVE_COURANT: f64 = 25.0;
 
-fn default_coupled_wave_courant() -> f64 {
-    DEFAULT_COUPLED_WAVE_COURANT
-}
+/// The coupled step's default cap on `Δt·c/h` with `Auto`, which takes impacts with split
+/// steps: the largest allowed, [`MAX_COUPLED_WAVE_COURANT`] (see
+/// [`ElasticOptions::coupled_wave_courant`]).
+pub const DEFAULT_AUTO_COUPLED_WAVE_COURANT: f64 = MAX_COUPLED_WAVE_COURANT;
 
 /// The largest elastic-wave Courant number `Δt·c/h` allowed (see
 /// [`ElasticOptions::wave_courant`]): the largest at which every run of the stability map kept
@@ -221,7 +238,7 @@ impl Default for ElasticOptions {
             coupling_tolerance: default_coupling_tolerance(),
             coupling_iterations: default_coupling_iter(),
             theta: None,
-            coupled_wave_courant: default_coupled_wave_courant(),
+            coupled_wave_courant: None,
         }
     }
 }
@@ -258,6 +275,11 @@ fn default_elastic_iter() -> usize {
 impl StageOptions for ElasticOptions {
     const SECTION: &'static str = "elastic";
 
+    fn resolve(&mut self, _scene: &Scene) {
+        // The cap's default depends on `coupling`; θ's on each step's kind, so it stays unset.
+        self.coupled_wave_courant = Some(self.coupled_cap());
+    }
+
     fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
         check_tolerance("tolerance", self.tolerance)?;
         check_iterations("max_iterations", self.max_iterations)?;
@@ -271,15 +293,14 @@ impl StageOptions for ElasticOptions {
                 ),
             ));
         }
-        if !(self.coupled_wave_courant > 0.0
-            && self.coupled_wave_courant <= MAX_COUPLED_WAVE_COURANT)
+        if let Some(cap) = self.coupled_wave_courant
+            && !(cap > 0.0 && cap <= MAX_COUPLED_WAVE_COURANT)
         {
             return Err((
                 "coupled_wave_courant",
                 format!(
-                    "must be in (0, {MAX_COUPLED_WAVE_COURANT}], got {}: the largest cap the \
-                     stability map measured stable",
-                    self.coupled_wave_courant
+                    "must be in (0, {MAX_COUPLED_WAVE_COURANT}], got {cap}: the largest cap the \
+                     stability map measured stable"
                 ),
             ));
         }

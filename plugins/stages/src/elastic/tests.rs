@@ -144,7 +144,8 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     let dt = wave_limit(&fast, &grid, &law).unwrap();
     assert!((dt.coupled - 0.3125).abs() < 1e-12, "{dt:?}");
     assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
-    // Auto: the same two limits; its refusal names both options.
+    // Auto: the same split limit and its own default cap, 200 against Coupled's 25; its
+    // refusal names both options.
     let mut auto = fast.clone();
     auto.numerics
         .update(|o: &mut crate::elastic::ElasticOptions| {
@@ -152,12 +153,13 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
         })
         .unwrap();
     let a = wave_limit(&auto, &grid, &law).unwrap();
-    assert_eq!((a.split, a.coupled), (dt.split, dt.coupled));
-    for s in [&mut fast, &mut auto] {
-        s.time.fixed_dt = Some(2.0);
+    assert_eq!(a.split, dt.split);
+    assert!((a.coupled - 2.5).abs() < 1e-12, "{a:?}");
+    for (s, limit) in [(&mut fast, "≤ 3.1250e-1"), (&mut auto, "≤ 2.5000e0")] {
+        s.time.fixed_dt = Some(3.0);
         let e = wave_limit(s, &grid, &law).unwrap_err();
         assert!(
-            e.contains("numerics.elastic.coupled_wave_courant") && e.contains("≤ 3.1250e-1"),
+            e.contains("numerics.elastic.coupled_wave_courant") && e.contains(limit),
             "{e}"
         );
     }
