@@ -691,6 +691,30 @@ fn spinning_disk(g: f64, end: f64, elastic: &str) -> String {
     )
 }
 
+/// The scene `text` (a [`spinning_disk`]) run to its end time: its steps, the kinetic
+/// energy at the end, the largest ratio of strain to kinetic energy and the largest relative
+/// drift of the solid's volume.
+fn spin(text: &str) -> (u64, f64, f64, f64) {
+    let mut s = sim(text);
+    let end = s.scene.time.end;
+    let volume =
+        |s: &Simulation| efsi_stages::vof::phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
+    let v0 = volume(&s);
+    let (mut strain, mut drift) = (0.0f64, 0.0f64);
+    run_until(&mut s, end, |s, _| {
+        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+        let ee = s
+            .state
+            .resources
+            .get::<efsi_stages::elastic::Deformation>()
+            .map_or(0.0, |d| d.elastic_energy);
+        strain = strain.max(ee / ke);
+        drift = drift.max((volume(s) - v0).abs() / v0);
+    });
+    let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+    (s.state.step, ke, strain, drift)
+}
+
 /// A stiff disk spinning (G = 1e9 Pa, ρ_s/ρ_f = 1e3, 32 × 32 cells): placed at the centre of
 /// one cell of the vortex ψ = a sin 2πx sin 2πy, where the flow is a solid-body rotation, it
 /// spins as a rigid body while the fluid around it decays. The coupled step at its cap of 25
@@ -700,27 +724,7 @@ fn spinning_disk(g: f64, end: f64, elastic: &str) -> String {
 /// the solid's volume to 1e-10, in a sixth of the steps (128 against 800).
 #[test]
 fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_step() {
-    let text = |coupling: &str| spinning_disk(1e9, 0.1, &format!("coupling: {coupling}"));
-    let run = |coupling: &str| {
-        let mut s = sim(&text(coupling));
-        let volume =
-            |s: &Simulation| efsi_stages::vof::phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
-        let v0 = volume(&s);
-        let (mut strain, mut drift) = (0.0f64, 0.0f64);
-        run_until(&mut s, 0.1, |s, _| {
-            let ke =
-                efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-            let ee = s
-                .state
-                .resources
-                .get::<efsi_stages::elastic::Deformation>()
-                .map_or(0.0, |d| d.elastic_energy);
-            strain = strain.max(ee / ke);
-            drift = drift.max((volume(s) - v0).abs() / v0);
-        });
-        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-        (s.state.step, ke, strain, drift)
-    };
+    let run = |coupling: &str| spin(&spinning_disk(1e9, 0.1, &format!("coupling: {coupling}")));
     let (split_steps, split_ke, split_strain, _) = run("Split");
     let (steps, ke, strain, drift) = run("Coupled");
     eprintln!(
@@ -746,30 +750,12 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
 #[test]
 fn auto_flies_a_stiff_solid_at_its_cap_no_less_accurately_than_a_soft_one_at_its_own_step() {
     let end = 0.1;
-    // (steps, kinetic energy at the end, largest strain/kinetic, largest volume drift)
     let run = |g: f64, coupling: &str, fixed_dt: Option<f64>| {
-        let mut text = spinning_disk(g, end, &format!("coupling: {coupling}"));
-        if let Some(dt) = fixed_dt {
-            text = text.replace("cfl: 0.5)", &format!("cfl: 0.5, fixed_dt: {dt:e})"));
-        }
-        let mut s = sim(&text);
-        let volume =
-            |s: &Simulation| efsi_stages::vof::phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
-        let v0 = volume(&s);
-        let (mut strain, mut drift) = (0.0f64, 0.0f64);
-        run_until(&mut s, end, |s, _| {
-            let ke =
-                efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-            let ee = s
-                .state
-                .resources
-                .get::<efsi_stages::elastic::Deformation>()
-                .map_or(0.0, |d| d.elastic_energy);
-            strain = strain.max(ee / ke);
-            drift = drift.max((volume(s) - v0).abs() / v0);
-        });
-        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-        (s.state.step, ke, strain, drift)
+        let text = spinning_disk(g, end, &format!("coupling: {coupling}"));
+        spin(&match fixed_dt {
+            Some(dt) => text.replace("cfl: 0.5)", &format!("cfl: 0.5, fixed_dt: {dt:e})")),
+            None => text,
+        })
     };
     let (_, stiff_ref, ..) = run(1e9, "Split", None);
     let (steps, stiff, strain, drift) = run(1e9, "Auto", None);

@@ -490,20 +490,27 @@ mod tests {
         }
     }
 
-    /// A breakdown is restarted from the true residual: the solve still reaches the exact
-    /// solution, with the iterations before the breakdown counted.
-    #[test]
-    fn a_breakdown_restarts_from_the_true_residual() {
-        let n = 50;
+    /// `Tri(n) x = 1` by Jacobi-preconditioned CG to 1e-12 with breakdowns at the products
+    /// `at` picks: the stats, the solution and the number of products taken.
+    fn solve_breaking_down(n: usize, at: fn(usize) -> bool) -> (SolveStats, Vec<f64>, usize) {
         let (b, diag) = (vec![1.0; n], vec![2.0; n]);
         let mut x = vec![0.0; n];
         let mut a = BreaksDown {
             a: Tri(n),
             calls: 0,
-            at: |c| c == 6,
+            at,
         };
         let max = |r: &[f64]| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let s = Pcg::new(n).solve(&mut a, diag.as_slice(), &b, &mut x, 1e-12, 1000, max);
+        (s, x, a.calls)
+    }
+
+    /// A breakdown is restarted from the true residual: the solve still reaches the exact
+    /// solution, with the iterations before the breakdown counted.
+    #[test]
+    fn a_breakdown_restarts_from_the_true_residual() {
+        let n = 50;
+        let (s, x, _) = solve_breaking_down(n, |c| c == 6);
         assert!(s.converged && s.iterations > 5, "{s:?}");
         for k in 0..n {
             let e = ((k + 1) * (n - k)) as f64 / 2.0;
@@ -515,18 +522,9 @@ mod tests {
     /// well before its iteration limit — no endless loop.
     #[test]
     fn a_solve_that_keeps_breaking_down_stops_unconverged() {
-        let n = 50;
-        let (b, diag) = (vec![1.0; n], vec![2.0; n]);
-        let mut x = vec![0.0; n];
-        let mut a = BreaksDown {
-            a: Tri(n),
-            calls: 0,
-            at: |c| c >= 3,
-        };
-        let max = |r: &[f64]| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let s = Pcg::new(n).solve(&mut a, diag.as_slice(), &b, &mut x, 1e-12, 1000, max);
+        let (s, x, calls) = solve_breaking_down(50, |c| c >= 3);
         assert!(!s.converged && s.iterations == 2, "{s:?}");
-        assert_eq!(a.calls, 3 + MAX_RESTARTS, "products taken");
+        assert_eq!(calls, 3 + MAX_RESTARTS, "products taken");
         assert!(x.iter().all(|v| v.is_finite()));
     }
 }
