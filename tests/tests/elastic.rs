@@ -619,20 +619,23 @@ fn coupled_step_with_the_stress_at_its_theta_keeps_more_of_an_impact() {
     }
 }
 
+/// The solid's strain energy over the whole domain's kinetic energy.
+fn strain_share(s: &Simulation) -> f64 {
+    let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+    let ee = s
+        .state
+        .resources
+        .get::<efsi_stages::elastic::Deformation>()
+        .map_or(0.0, |d| d.elastic_energy);
+    ee / ke
+}
+
 /// The map's sphere at G = 1e9 Pa (with the settings `extra`) run to `end` in coupled steps:
 /// its steps, and the largest share of its kinetic energy it held as strain.
 fn fall_under_coupled_steps(end: f64, extra: &[(&str, &str)]) -> (u64, f64) {
     let mut s = map_sphere(1e9, "Coupled", end, extra);
     let mut worst = 0.0f64;
-    run_until(&mut s, end, |s, _| {
-        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-        let ee = s
-            .state
-            .resources
-            .get::<efsi_stages::elastic::Deformation>()
-            .map_or(0.0, |d| d.elastic_energy);
-        worst = worst.max(ee / ke);
-    });
+    run_until(&mut s, end, |s, _| worst = worst.max(strain_share(s)));
     eprintln!(
         "{} steps, strain energy at most {worst:.3e} of the kinetic",
         s.state.step
@@ -702,13 +705,7 @@ fn spin(text: &str) -> (u64, f64, f64, f64) {
     let v0 = volume(&s);
     let (mut strain, mut drift) = (0.0f64, 0.0f64);
     run_until(&mut s, end, |s, _| {
-        let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-        let ee = s
-            .state
-            .resources
-            .get::<efsi_stages::elastic::Deformation>()
-            .map_or(0.0, |d| d.elastic_energy);
-        strain = strain.max(ee / ke);
+        strain = strain.max(strain_share(s));
         drift = drift.max((volume(s) - v0).abs() / v0);
     });
     let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);

@@ -298,17 +298,18 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     };
     let mut res = true_residual(a, x, r, q);
     let mut it = 0;
+    let converged = |iterations: usize, residual: f64| SolveStats {
+        iterations,
+        residual,
+        converged: true,
+    };
     // At least one iteration unless the residual is exactly zero: a warm start already
     // within the tolerance would otherwise leave its residual in place step after step, so
     // a steady state would keep an error up to the tolerance (and a solver that stops at 0
     // or 1 iterations by turns never lets it settle); one iteration per step drives it to
     // zero across steps at the cost of that iteration.
     if res == 0.0 {
-        return SolveStats {
-            iterations: 0,
-            residual: res,
-            converged: true,
-        };
+        return converged(0, res);
     }
     let mut rz = m.apply_dot(r, q);
     p.copy_from_slice(q);
@@ -328,11 +329,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             restarts += 1;
             res = true_residual(a, x, r, q);
             if res <= tol {
-                return SolveStats {
-                    iterations: it,
-                    residual: res,
-                    converged: true,
-                };
+                return converged(it, res);
             }
             rz = m.apply_dot(r, q);
             p.copy_from_slice(q);
@@ -405,11 +402,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             rz_fused = None;
             res = true_residual(a, x, r, q);
             if res <= tol {
-                return SolveStats {
-                    iterations: it,
-                    residual: res,
-                    converged: true,
-                };
+                return converged(it, res);
             }
         }
         let rz_new = rz_fused.unwrap_or_else(|| m.apply_dot(r, q));
