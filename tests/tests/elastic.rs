@@ -5,7 +5,7 @@
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{BoundarySet, Grid, Scene, Simulation, StageError, StageStats, State, StepContext};
 use efsi_run::SceneOverrides;
-use efsi_tests::{run_until, sim, sim_with};
+use efsi_tests::{run_until, scene, sim, sim_with};
 use std::path::Path;
 
 fn couette(ny: usize, law: &str, extra_numerics: &str, dt_max: &str) -> Simulation {
@@ -694,12 +694,13 @@ fn spinning_disk(g: f64, end: f64, elastic: &str) -> String {
     )
 }
 
-/// The scene `text` (a [`spinning_disk`]) run to its end time: its steps, the kinetic
-/// energy at the end, the largest ratio of strain to kinetic energy and the largest relative
-/// drift of the solid's volume.
-fn spin(text: &str) -> (u64, f64, f64, f64) {
-    let mut s = sim(text);
-    let end = s.scene.time.end;
+/// `scene` (a [`spinning_disk`]) run to its end time: its steps, the kinetic energy at the
+/// end, the largest ratio of strain to kinetic energy and the largest relative drift of the
+/// solid's volume.
+fn spin(scene: efsi_core::Scene) -> (u64, f64, f64, f64) {
+    let end = scene.time.end;
+    let mut s = efsi_run::simulation(scene, Path::new("<test>"), &efsi_stages::builtin())
+        .unwrap_or_else(|e| panic!("{e}"));
     let volume =
         |s: &Simulation| efsi_stages::vof::phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
     let v0 = volume(&s);
@@ -721,7 +722,13 @@ fn spin(text: &str) -> (u64, f64, f64, f64) {
 /// the solid's volume to 1e-10, in a sixth of the steps (128 against 800).
 #[test]
 fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_step() {
-    let run = |coupling: &str| spin(&spinning_disk(1e9, 0.1, &format!("coupling: {coupling}")));
+    let run = |coupling: &str| {
+        spin(scene(&spinning_disk(
+            1e9,
+            0.1,
+            &format!("coupling: {coupling}"),
+        )))
+    };
     let (split_steps, split_ke, split_strain, _) = run("Split");
     let (steps, ke, strain, drift) = run("Coupled");
     eprintln!(
@@ -748,11 +755,9 @@ fn a_stiff_disk_spins_rigidly_at_large_wave_courant_numbers_with_the_coupled_ste
 fn auto_flies_a_stiff_solid_at_its_cap_no_less_accurately_than_a_soft_one_at_its_own_step() {
     let end = 0.1;
     let run = |g: f64, coupling: &str, fixed_dt: Option<f64>| {
-        let text = spinning_disk(g, end, &format!("coupling: {coupling}"));
-        spin(&match fixed_dt {
-            Some(dt) => text.replace("cfl: 0.5)", &format!("cfl: 0.5, fixed_dt: {dt:e})")),
-            None => text,
-        })
+        let mut scene = scene(&spinning_disk(g, end, &format!("coupling: {coupling}")));
+        scene.time.fixed_dt = fixed_dt;
+        spin(scene)
     };
     let (_, stiff_ref, ..) = run(1e9, "Split", None);
     let (steps, stiff, strain, drift) = run(1e9, "Auto", None);

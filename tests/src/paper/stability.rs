@@ -12,8 +12,9 @@
 //! the solid 4 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
 //! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
 //!
-//! The map's runs are `Split`; `Coupled` (Δt·c/h ≤ 25) and `Auto` (≤ 200) run at G = 1e7, 1e9, 1e11 Pa
-//! × CFL 0.1, 0.5, 0.9, ratio 1e3 (quick: G = 1e9, CFL 0.9), their rebounds reported.
+//! The map's runs are `Split`; `Coupled` (Δt·c/h ≤ 25) and `Auto` (≤ 200) run at G = 1e7,
+//! 1e9, 1e11 Pa × CFL 0.1, 0.5, 0.9, ratio 1e3 (quick: G = 1e9, CFL 0.9), their rebounds
+//! reported.
 //!
 //! # What "stable" means here
 //! With `E = KE + PE + EE` (kinetic, gravitational potential of the whole domain — fluid

@@ -37,9 +37,10 @@
 //! The two corrections are made on the finest [`W_LEVELS`] = 2 levels only; below them the
 //! cycle is a V-cycle. A full W-cycle visits level `l` 2^l times, and the coarse levels (below
 //! [`par::PAR_MIN`] cells) run serially: on a 256² grid, with the threshold then at 8192 cells,
-//! they were ≈ 30 % of a cycle on one thread and ≈ 40 % on two. With the V below level 2 they are visited 4 times, and the
-//! iterations are those of the full W-cycle — the `iteration_table` test over the six problem
-//! kinds at ratios 1, 1e2, 1e4 from 64² to 512² gives the same counts everywhere but one
+//! they were ≈ 30 % of a cycle on one thread and ≈ 40 % on two. With the V below level 2 they
+//! are visited 4 times, and the iterations are those of the full W-cycle — the
+//! `iteration_table` test over the six problem kinds at ratios 1, 1e2, 1e4 from 64² to 512²
+//! gives the same counts everywhere but one
 //! (10 instead of 11 at 512²); a W on the finest level alone needed up to 11 where the full
 //! W-cycle needs 10.
 //!

@@ -78,14 +78,11 @@ pub(super) fn wave_limit(
             ));
         }
     }
-    let o = crate::options::<super::ElasticOptions>(scene)?;
-    let couples = super::may_couple(scene);
-    let s = if couples {
-        o.coupled_cap()
-    } else {
-        o.wave_courant
-    };
-    let option = match super::coupling(scene) {
+    let mut o = crate::options::<super::ElasticOptions>(scene)?;
+    // The coupling in force: `Split` where the solid has no implicit law.
+    o.coupling = super::coupling(scene);
+    let s = o.wave_cap();
+    let option = match o.coupling {
         super::ElasticCoupling::Split => "numerics.elastic.wave_courant",
         super::ElasticCoupling::Coupled => "numerics.elastic.coupled_wave_courant",
         super::ElasticCoupling::Auto => {

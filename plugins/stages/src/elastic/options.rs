@@ -105,17 +105,16 @@ pub enum ElasticCoupling {
     /// into stiff solids above an elastic-wave Courant number of ≈ 5, so Δt is capped there
     /// (`wave_courant`).
     Split,
-    /// The elastic step solves its implicit system together with the divergence constraint
-    /// (FGMRES on the saddle-point system, block-triangular preconditioner from the elastic
-    /// step's block multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so
-    /// the pressure's correction meets the solid's implicit stiffness: Δt is capped at
-    /// `coupled_wave_courant` (default 25 here) elastic-wave Courant numbers instead of 4. The stability
-    /// map's sphere at CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606)
-    /// without gaining energy, and stays stable at G = 1e11 Pa. Its B stretching is damped
-    /// (`theta` 0.75), so an impact taken in a few steps loses its rebound (at 16 ms 0.65 against
-    /// the split step's 1.03 m/s at G = 1e9; at 1e7 it stays on the wall); ≈ 1.5× the split
-    /// step's cost per step on
-    /// the seed's sphere.
+    /// The elastic step solves its implicit system together with the divergence constraint (FGMRES
+    /// on the saddle-point system, block-triangular preconditioner from the elastic step's block
+    /// multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so the pressure's
+    /// correction meets the solid's implicit stiffness: Δt is capped at `coupled_wave_courant`
+    /// (default 25 here) elastic-wave Courant numbers instead of 4. The stability map's sphere at
+    /// CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606) without gaining
+    /// energy, and stays stable at G = 1e11 Pa. Its B stretching is damped (`theta` 0.75), so an
+    /// impact taken in a few steps loses its rebound (at 16 ms 0.65 against the split step's 1.03
+    /// m/s at G = 1e9; at 1e7 it stays on the wall); ≈ 1.5× the split step's cost per step on the
+    /// seed's sphere.
     Coupled,
     /// Each step chooses: the coupled step (up to `coupled_wave_courant`) where the flow
     /// allows steps at least [`AUTO_COUPLED_GAIN`] times the split step's wave cap
