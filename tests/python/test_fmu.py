@@ -9,6 +9,7 @@ doubles and results compare bit for bit.
 """
 
 import csv
+import ctypes
 import math
 import os
 import re
@@ -468,11 +469,20 @@ def test_model_description_declares_dependencies_ranges_units_and_provenance(ver
 
 @pytest.fixture(scope="module")
 def ecos():
+    # ecospy's library links Intel TBB's runtime (libtbb.so.12). The `tbb` wheel of
+    # requirements.txt puts it in the environment's lib/, which is on no library path: load it
+    # first, so the dynamic linker finds it loaded by its soname, and no system package is needed.
+    tbb = os.path.join(sys.prefix, "lib", "libtbb.so.12")
+    if os.path.exists(tbb):
+        ctypes.CDLL(tbb, mode=ctypes.RTLD_GLOBAL)
     try:
         import ecospy
         from ecospy.lib import EcosLib
-    except OSError as e:  # its library links Intel TBB
-        pytest.fail(f"ecospy's library does not load ({e}): install Debian's libtbb12 (.ci/run does)")
+    except OSError as e:
+        pytest.fail(
+            f"ecospy's library does not load ({e}): it needs libtbb.so.12, which the `tbb` wheel "
+            f"of tests/python/requirements.txt installs into {sys.prefix}/lib"
+        )
     EcosLib.set_log_level("warn")
     return ecospy
 

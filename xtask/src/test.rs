@@ -30,7 +30,7 @@ fn python_env() -> Result<PathBuf, String> {
         .arg(&req);
         run(
             c,
-            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy, maturin, dask, pandas, pyarrow)",
+            "install the Python test requirements (vtk, numpy, pytest, fmpy, ecospy, tbb, maturin, dask, pandas, pyarrow)",
         )?;
         std::fs::write(&stamp, wanted).map_err(|e| e.to_string())?;
     }
