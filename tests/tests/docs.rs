@@ -32,7 +32,10 @@ fn named_paths(text: &str) -> Vec<String> {
         if k % 2 == 0 || span.is_empty() {
             continue;
         }
-        if span.chars().any(|c| c.is_whitespace() || "<>*{}()|,".contains(c)) {
+        if span
+            .chars()
+            .any(|c| c.is_whitespace() || "<>*{}()|,".contains(c))
+        {
             continue;
         }
         if !TOP.iter().any(|t| span.starts_with(t)) {
@@ -115,7 +118,11 @@ fn every_path_the_architecture_page_names_exists() {
 fn every_relative_link_of_the_markdown_pages_resolves() {
     let root = workspace_root();
     let pages = pages(&root);
-    assert!(pages.len() >= 9, "found only {} Markdown pages", pages.len());
+    assert!(
+        pages.len() >= 9,
+        "found only {} Markdown pages",
+        pages.len()
+    );
     let mut checked = 0;
     let mut broken = Vec::new();
     for page in &pages {
@@ -139,7 +146,11 @@ fn the_path_and_link_scanners_find_what_they_should() {
                 `Stage::save` `tests/tests/contact.rs::name` `cases/`";
     assert_eq!(
         named_paths(text),
-        ["core/efsi-core/src/grid.rs", "tests/tests/contact.rs", "cases/"]
+        [
+            "core/efsi-core/src/grid.rs",
+            "tests/tests/contact.rs",
+            "cases/"
+        ]
     );
     let md = "[a](docs/scenes.md#overrides) [b](https://example.org) [c](#top) [d](../README.md)";
     assert_eq!(relative_links(md), ["docs/scenes.md", "../README.md"]);
