@@ -1,6 +1,7 @@
 //! The documentation cannot drift silently from the repository: every repository path the
-//! architecture page names (in backticks) exists, and every relative link of the Markdown pages
-//! (README, CHANGELOG, `docs/`, the cases' and the law template's READMEs) resolves.
+//! Markdown pages (README, CHANGELOG, `docs/`, the cases' and the law template's READMEs) name
+//! in backticks exists — the architecture page, the map of the code, names most of them — and
+//! every relative link of those pages resolves.
 
 use efsi_tests::workspace_root;
 use std::path::{Path, PathBuf};
@@ -112,6 +113,22 @@ fn every_path_the_architecture_page_names_exists() {
         missing.is_empty(),
         "docs/architecture.md names paths that do not exist: {missing:?}"
     );
+}
+
+#[test]
+fn every_path_the_markdown_pages_name_exists() {
+    let root = workspace_root();
+    let mut missing = Vec::new();
+    for page in pages(&root) {
+        let text =
+            std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+        for path in named_paths(&text) {
+            if !root.join(&path).exists() {
+                missing.push(format!("{}: {path}", page.display()));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "paths that do not exist: {missing:#?}");
 }
 
 #[test]
