@@ -264,12 +264,12 @@ def test_two_instances_in_one_process_are_independent(unzipped):
 
 
 def readme_example():
-    """The co-simulation example of the README's FMU section, as code."""
-    text = (REPO / "README.md").read_text()
+    """The co-simulation example of the FMU page (docs/fmu.md), as code."""
+    text = (REPO / "docs" / "fmu.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     block = next(b for b in blocks if "def cosimulate" in b)
     namespace = {}
-    exec(compile(block, "README.md", "exec"), namespace)
+    exec(compile(block, "docs/fmu.md", "exec"), namespace)
     return namespace["cosimulate"]
 
 

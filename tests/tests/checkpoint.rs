@@ -438,8 +438,7 @@ fn checkpoint_of_a_128_cavity_is_small_and_quick() {
 /// The energy guard's baseline is part of the checkpoint: a run pumping energy in (the sphere
 /// with its elastic stress explicit at 1.2 × the explicit step's wave limit) stopped halfway to
 /// the guard's verdict and resumed is stopped at the same step with the same figures as the
-/// uninterrupted run (issue 20 item 12; the baseline used to restart at the resume, which moved
-/// or removed the verdict).
+/// uninterrupted run (a baseline restarted at the resume would move or remove the verdict).
 #[test]
 fn the_energy_guard_judges_a_resumed_run_as_the_uninterrupted_one() {
     const PUMP: &str = r#"Scene(

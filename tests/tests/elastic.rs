@@ -563,9 +563,8 @@ fn coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy() {
     }
     // The default, Auto, takes the impact with split steps and the flight with coupled ones at
     // its default cap of 200 wave Courant numbers: at G = 1e9 the split step's rebound within 2 %
-    // (1.030 m/s; Auto measured 1.025) in under a sixth of its steps (1606; Auto measured 232,
-    // 454 at the cap of 25 that was the default until 2026-11-28), stable as above (measured
-    // gain 2.9e-5 of the budget).
+    // (1.030 m/s; Auto measured 1.025) in under a sixth of its steps (1606; Auto measured 232),
+    // stable as above (measured gain 2.9e-5 of the budget).
     let (split_steps, _, _, split_rebound) = impact(1e9, "Split", &[]);
     let (steps, gain, end, rebound) = impact(1e9, "Auto", &[]);
     eprintln!(
@@ -645,10 +644,9 @@ fn fall_under_coupled_steps(end: f64, extra: &[(&str, &str)]) -> (u64, f64) {
 
 /// The map's sphere at G = 1e9 Pa falling for 1.2 ms — 10 coupled steps at a cap of 50
 /// elastic-wave Courant numbers, before it reaches the wall — stays rigid: its strain energy
-/// at most 4e-3 of its kinetic energy (measured 2.4e-9; 2.0e-3 while the fluid's one-step
-/// stretch of B still reached the solid, see the next test). A coupled step ends with the
-/// tensor its implicit stiffness was solved with; with the split step's Picard pass, a strain
-/// the stiffness never answered, the sphere stored 9.2e-3.
+/// at most 4e-3 of its kinetic energy (measured 2.4e-9). A coupled step ends with the tensor
+/// its implicit stiffness was solved with; the split step's Picard pass would leave a strain the
+/// stiffness never answered.
 #[test]
 fn a_stiff_sphere_falls_at_a_large_coupled_cap_without_storing_strain() {
     let cap = [("numerics.elastic.coupled_wave_courant", "50")];
@@ -659,10 +657,9 @@ fn a_stiff_sphere_falls_at_a_large_coupled_cap_without_storing_strain() {
 
 /// The map's sphere at G = 1e9 Pa released 4 cm above the wall at 1.22 m/s, falling clear of it
 /// for 4 ms in coupled steps of 50 elastic-wave Courant numbers: a rigid motion, whose strain
-/// energy stays at most 1e-6 of the kinetic (measured 1.3e-9). Before the end-of-step update
-/// reset the fluid's B before taking the rates (see "Pure fluid" in the elastic module), the
-/// fluid's one-step stretch flowed into the solid: 7.2e-3 within these 4 ms (33 steps),
-/// growing like Δt² with the step.
+/// energy stays at most 1e-6 of the kinetic (measured 1.3e-9). The end-of-step update resets
+/// the fluid's B before taking the rates (see "Pure fluid" in the elastic module); without
+/// that, the fluid's one-step stretch flows into the solid, growing like Δt² with the step.
 #[test]
 fn a_stiff_sphere_falling_clear_of_the_wall_keeps_no_strain_at_a_large_coupled_cap() {
     let extra = [

@@ -4,11 +4,11 @@
 //! larger than the caches (3 × 128 MiB: main memory) and over arrays that fit in the last-level
 //! cache (3 × 512 KiB), on one thread and on the bench's thread count, best of 10 passes, counting
 //! 24 bytes per element as STREAM does (the write-allocate read not counted). The threads are
-//! started once and a pass repeats the cache-sized triad up to 32 MiB, between two barriers
-//! (timed with a thread start per pass, the cache figure was the start's cost). The triad is
-//! compiled at opt-level 3 like efsi's kernels (`[profile.dev.package.xtask]` in the workspace's
-//! `Cargo.toml`: `cargo xtask` builds in the dev profile, whose opt-level 1 left the loop
-//! unvectorised and the limits 1.6× (memory) to 4× (cache) too low until 2026-11-27).
+//! started once and a pass repeats the cache-sized triad up to 32 MiB, between two barriers (a
+//! thread start per pass would be timed with the cache figure). The triad is compiled at
+//! opt-level 3 like efsi's kernels (`[profile.dev.package.xtask]` in the workspace's
+//! `Cargo.toml`: `cargo xtask` builds in the dev profile, whose opt-level 1 leaves the loop
+//! unvectorised and the limits too low).
 //!
 //! **The traffic** of a stage is a model of its *compulsory* memory traffic per cell and step:
 //! each array the stage's kernels must stream counted once per pass, 8 bytes per value, a

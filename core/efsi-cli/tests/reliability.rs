@@ -429,9 +429,7 @@ fn settings_beyond_the_elastic_wave_limit_are_refused_before_the_run() {
 /// A run that pumps energy in without a single non-finite value — the sphere with its elastic
 /// stress explicit (`numerics.elastic.implicit: false`) at the implicit step's wave limit, far
 /// beyond the explicit step's — is stopped by the energy guard: exit code 3, the message says
-/// what grew and what to change, the last good state is saved. (The Saint Venant–Kirchhoff
-/// sphere this test used pumped energy through its interface cells until the interface
-/// treatment of issue 15 evaluated the law on the solid's own B.)
+/// what grew and what to change, the last good state is saved.
 #[test]
 fn a_run_gaining_energy_is_stopped_as_unstable() {
     let d = tmp("energy");

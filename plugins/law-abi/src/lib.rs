@@ -14,7 +14,7 @@
 //!
 //! Rust authors do not use this crate directly: they implement the safe trait of `efsi-law-sdk`
 //! and call its `export_law!` macro. The ABI is documented here for everyone else (a law written
-//! in C, C++, Fortran…) and for the loader in `efsi-core`.
+//! in C, C++, Fortran…) and for the loader in `efsi-laws-host`.
 //!
 //! # Tensor layout
 //!

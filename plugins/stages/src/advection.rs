@@ -7,8 +7,8 @@
 //! then `u = (m u)/m`. With uniform density this is the usual `∂u/∂t = −∇·(u ⊗ u)`; at a
 //! fluid/solid interface with a density ratio of 1000 it keeps the light fluid's velocity from
 //! being advected at full weight into cells that carry mostly solid mass — velocity advection
-//! alone made a dense falling body lose momentum at first order in h (3.8 % of its fall at 64²),
-//! the mass-consistent form removes that (Rudman 1998; Raessi & Pitsch 2012). Each face flux is
+//! alone makes a dense falling body lose momentum at first order in h, the mass-consistent
+//! form does not (Rudman 1998; Raessi & Pitsch 2012). Each face flux is
 //! `a·m̃·q` with `a` the advecting velocity interpolated linearly to the face of the control
 //! volume and `m̃`, `q` the mass and the advected component reconstructed there by a
 //! **TVD upwind-biased MUSCL interpolation with the van Leer limiter** (van Leer 1974):
@@ -26,10 +26,11 @@
 //!
 //! **Stability.** Each Euler stage with a TVD limiter of `ψ ≤ 2` is TVD for
 //! `Δt (|u|/dx + |v|/dy) ≤ ½`; the stage limits Δt to `CFL · min(1 / (|u|/dx + |v|/dy))` with
-//! the scene's CFL (default 0.4). Beyond the bound the scheme is not guaranteed TVD but stays
-//! stable: the Re = 100 cavity at 64² and the Re = 1000 cavity at 128² reach their steady
-//! states at CFL 0.4, 0.8 and 1.0. With the `WholeStep` predictor (below) the steady state
-//! does not move with the CFL, so the CFL buys time accuracy only.
+//! the scene's CFL (default 0.4). Beyond the bound the scheme is not guaranteed TVD; the
+//! cavity scenes run at CFL 1.0. With the `WholeStep` predictor (below) the steady state does
+//! not move with the CFL (`tests/tests/cavity.rs`,
+//! `the_cavity_steady_state_does_not_depend_on_the_time_step`), so the CFL buys time accuracy
+//! only.
 //!
 //! **Where the second stage looks** (`numerics.advection.predictor`). Heun's second stage
 //! evaluates the tendency at the first stage's velocity `V¹ = Vⁿ + Δt A(Vⁿ)`, a prediction
@@ -47,10 +48,10 @@
 //! history and a scene that sets `Advection` use `V¹` from advection alone (the classical
 //! Heun stage). Default: `WholeStep` in a scene of one fluid, `Advection` in a scene with a
 //! solid: there a face the interface crosses changes density between steps by up to the
-//! density ratio, so the last step's increments predict the next one's poorly — a dense disk
-//! falling through a fluid 1000 times lighter (`tests/two_material.rs`) fell with twice the
-//! error (4.3e-3 of its fall against 2.0e-3) and lost volume (6.8e-10 against 0). The cost:
-//! two full-grid arrays kept from step to step and in snapshots.
+//! density ratio, so the last step's increments predict the next one's poorly (a dense disk
+//! falling through a fluid 1000 times lighter, `tests/tests/two_material.rs`, falls less
+//! accurately and loses volume with `WholeStep`). The cost: two full-grid arrays kept from
+//! step to step and in snapshots.
 //!
 //! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
 //! computed once and kept only for the row that needs it (no full-grid flux arrays); updates

@@ -100,9 +100,9 @@ impl Case for CouetteMr {
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
-        // The target was 2.0e-3 at 64 cells over the four times; with the second-order B
-        // update 3.54e-4 is reached (3.51e-4 over the quick version's two times), and both are
-        // held to 5.0e-4 against regressions (the lagged update erred by 2.09e-3).
+        // The target is 2.0e-3 at 64 cells over the four times; the scheme reaches
+        // 3.54e-4 (3.51e-4 over the quick version's two times), and both are held to 5.0e-4
+        // against regressions.
         let limits = (5.0e-4, if self.quick { 0.9 } else { 1.0 });
         let what = (
             "max error over the reference's times",

@@ -126,8 +126,7 @@ impl Case for SoftWall {
             // cases/soft_wall_cavity.ron --set grid.nx=N --set grid.ny=N --set time.steady=1e-12`
             // ("final max|uⁿ⁺¹ − uⁿ|/Δt" × 8): 1.003e-2, 1.005e-2, 9.97e-3, 9.82e-3, 9.87e-3 at
             // N = 32, 48, 64, 96, 128. A flow that is not steady yet fails above; an interface that
-            // lags the converged creep (8.3e-3 at 32² before the interface treatment of issue 15)
-            // fails below.
+            // lags the converged creep fails below.
             Check::within(
                 "steady at t = 8: max abs(Δu)/Δt · L/U² on 32², within 10 % of 128²'s 9.87e-3",
                 residual32 * 2.0 / 0.25,

@@ -1,4 +1,4 @@
-//! Stability at the extremes (issue 8): the sphere-impact scene, reduced, over shear modulus ×
+//! Stability at the extremes: the sphere-impact scene, reduced, over shear modulus ×
 //! density ratio × CFL number, and with solids only four and five cells across. Every run must either
 //! finish stable or be refused before it starts with a message naming the limit and the
 //! setting to change — no third outcome.
@@ -27,14 +27,12 @@
 //! - nothing is gained over the run: `E ≤ E(0) + TOTAL_END·E_b` at the end.
 //!
 //! The peak of `E − E(0)` during the contact is reported, not judged: while the solid is
-//! pressed on the wall the strain-energy probe over-reads. At the peak of a G = 1e7 sphere at
-//! 8 cells per radius half the strain energy sits in the wall row's slivers of solid (φ ≈ 0.1–0.2)
-//! that the air film's squeeze flow has strained; the reading rises to 0.3–1.4 budgets above
-//! `E(0)` in the stiff or small solids whatever the resolution (0.67, 0.60, 0.63 at 8, 16, 24
-//! cells per radius for G = 1e7, whose Hertz compression, 0.7 mm, stays below a cell), is zero
-//! for the seed's sphere at 35 and 50 cells per radius, and returns to nothing after the
-//! rebound, while the mechanical energy shows no gain — which is what a pumping instability
-//! shows first.
+//! pressed on the wall the strain-energy probe over-reads: much of the strain energy then sits
+//! in the wall row's slivers of solid (φ ≈ 0.1–0.2) that the air film's squeeze flow has
+//! strained. In stiff or small solids, whose Hertz compression stays below a cell, the reading
+//! rises above `E(0)` by a budget or so whatever the resolution; it is zero for the seed's
+//! sphere at 35 and 50 cells per radius and returns to nothing after the rebound, while the
+//! mechanical energy — what a pumping instability shows first — shows no gain.
 
 //!
 //! # Where the runs are made

@@ -19,9 +19,7 @@
 //! is twice the rediscretised coarse operator, so the plain Galerkin correction of a smooth
 //! error would come out half as large as it should. With the factor, a constant coefficient
 //! gives exactly the rediscretised operator, planar and axisymmetric (`Σ r_f dz/dr` over the
-//! two fine faces is `2 r_F dZ/dR`). Measured on random disks of density ratio 1e4: ½ needs
-//! 10 iterations where 0.55 and 0.6 need 12–14 and 14–19, and a coefficient-aware
-//! series-resistance coarsening 45–130.
+//! two fine faces is `2 r_F dZ/dR`).
 //!
 //! **Cycle.** A W-cycle: pre-smoothing by `ν` red–black Gauss–Seidel sweeps (red then black),
 //! restriction of the residual by summing the four children (`R = Pᵀ`), two coarse
@@ -30,19 +28,16 @@
 //! adjoint of the pre-smoother, so the cycle is a symmetric operator; it is positive definite
 //! because the smoother converges and each coarse correction is symmetric positive
 //! semi-definite (Tatebe 1993 for MG-CG). The coarsest system is solved exactly by a dense
-//! Cholesky factor. A V-cycle grows with the number of levels (the piecewise-constant transfer
-//! has orders `m_P + m_R = 2`, not `> 2`): measured at ratio 1e4, 11 → 14 iterations from 64²
-//! to 256², against 10 → 10 for the W-cycle, whose cycle costs ≈ 1.5× a V-cycle's.
+//! Cholesky factor. A V-cycle's iteration count grows with the number of levels (the
+//! piecewise-constant transfer has orders `m_P + m_R = 2`, not `> 2`); the W-cycle's does not,
+//! at a higher cost per cycle.
 //!
 //! The two corrections are made on the finest [`W_LEVELS`] = 2 levels only; below them the
 //! cycle is a V-cycle. A full W-cycle visits level `l` 2^l times, and the coarse levels (below
-//! [`par::PAR_MIN`] cells) run serially: on a 256² grid, with the threshold then at 8192 cells,
-//! they were ≈ 30 % of a cycle on one thread and ≈ 40 % on two. With the V below level 2 they
-//! are visited 4 times, and the iterations are those of the full W-cycle — the
-//! `iteration_table` test over the six problem kinds at ratios 1, 1e2, 1e4 from 64² to 512²
-//! gives the same counts everywhere but one
-//! (10 instead of 11 at 512²); a W on the finest level alone needed up to 11 where the full
-//! W-cycle needs 10.
+//! [`par::PAR_MIN`] cells) run serially, so they would dominate a cycle; with the V below
+//! level 2 they are visited 4 times, and the iterations stay those of the full W-cycle within
+//! one (the `iteration_table` test: six problem kinds at density ratios 1, 1e2, 1e4 from 64²
+//! to 512²).
 //!
 //! **Singular systems.** Without Dirichlet faces the matrix annihilates constants; residuals
 //! the conjugate gradient hands over then sum to zero, restriction keeps that, and the coarsest
@@ -54,10 +49,7 @@
 //! cells (the restriction counts the fine cells it reads), and so does the set-up (loading the
 //! finest level, coarsening by coarse rows); each writes disjoint entries from inputs no one
 //! writes in that loop, and every coarse entry sums its children in the same order, so results
-//! are bit-identical whatever the number of threads. (Splitting the 4096-cell level too was
-//! tried first in a benchmark of the cycle alone, where the median cycle got slower; whole runs
-//! interleaved later found the sphere impact 7–8 % faster on two threads with levels down to
-//! 2048 cells split, and the drop and the cavity unchanged — see [`par::PAR_MIN`].)
+//! are bit-identical whatever the number of threads.
 //!
 //! **Allocation.** [`Multigrid::setup`] allocates the hierarchy on the first call and reuses it
 //! for later matrices of the same shape or smaller ones (a window of the first, set up each

@@ -1,5 +1,5 @@
 //! The arrays of the VTK field files: what each one holds ([`describe`], also in `run.json`'s
-//! `vtk_arrays` and the README's output table) and how it is made from the state
+//! `vtk_arrays` and the table of `docs/outputs.md`) and how it is made from the state
 //! ([`arrays`]).
 //!
 //! Every array is cell data at the cell centres (and, with `output.vtk.point_data`, also point

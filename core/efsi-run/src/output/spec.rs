@@ -43,8 +43,8 @@ pub struct OutputSpec {
 /// The arrays of the shared fields a VTK file can hold, by name (`output.vtk.fields`):
 /// `velocity`, `pressure`, `density`, `viscosity`, `divergence` always; `solid_fraction` with a
 /// solid. The scheduled stages add theirs ([`efsi_core::StagePlugin::outputs`]: the elastic stage's
-/// `B` and `stress`). The README's output section documents each one's location, components,
-/// meaning and unit.
+/// `B` and `stress`). `docs/outputs.md` documents each one's location, components, meaning
+/// and unit.
 pub const VTK_FIELDS: &[&str] = &[
     "velocity",
     "pressure",

@@ -15,48 +15,40 @@
 //! ([`efsi_linalg::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
 //! default, `Multigrid`, or `Auto`, multigrid once the diffusion number makes Jacobi's
 //! iteration count, ~10√(max diag/mass), exceed the ~16 iterations the block preconditioner
-//! needs at ≈ 4× the cost each — measured on the drop at 256²: 7.7 against 32 ns per cell and
-//! iteration). Jacobi keeps a flow uniform along a periodic direction
-//! exactly uniform; the red–black smoother does so only to the solver tolerance.
+//! needs at about four times the cost each). Jacobi keeps a flow uniform along a periodic
+//! direction exactly uniform; the red–black smoother does so only to the solver tolerance.
 //!
 //! **Initial guess.** `δ/Δt` of the last two steps extrapolated linearly to this one, times
 //! `Δt` (zero in the first step): the stopping rule is unchanged (residual ≤ tolerance ×
-//! ‖right-hand side‖), only fewer iterations reach it — measured 11 → 7.3 per step on the
-//! Re = 1000 cavity at 128², 37.7 → 27.2 on the drop at 128². The history is stage state, kept
+//! ‖right-hand side‖), only fewer iterations reach it. The history is stage state, kept
 //! in snapshots and checkpoints ([`Stage::save`]), so a resumed run continues bit for bit.
 //!
 //! **Near a steady state** (`time.steady`), a solve stopped at the tolerance leaves an error that
 //! the history carries from step to step: the iterates wander within the tolerance, and with a
-//! steady criterion far below it a run may never stop (the 16-cell Poiseuille channel at
-//! `steady: 1e-12` still changed by 2.2e-6 at t = 50). So once `δ/Δt` of the last two steps
+//! steady criterion far below it a run may never stop. So once `δ/Δt` of the last two steps
 //! agree to `SETTLE` (100) × the tolerance (max norm, relative), each solve must also reduce
 //! its warm start's residual `CONTRACT`-fold (10×), down to a floor that keeps the solver's
 //! error `e` under a tenth of the steady criterion: `‖e‖∞ ≤ ‖r‖₂/min M ≤ 0.1·steady·Δt`. The
 //! error then shrinks geometrically across steps and the fixed point is the discretisation's,
-//! whatever the tolerance: the Re = 100 cavity at 32² reaches the same centrelines at
-//! `tolerance` 1e-3 and 1e-6 to 2.5e-10, where solves from zero (the rule before) stopped
-//! 1.7e-4 apart. It is also cheaper: to the shipped cavities' steady states, 1.4 iterations a
-//! step instead of 9.8 (Re = 1000, 128², CFL 0.8, 17,454 steps either way, centrelines 2.3e-7 from the
-//! old run's, Ghia deviation unchanged) and 3.1 instead of 19.4 (Re = 100, 64²). Where that
-//! floor is below round-off (`1e-13 ‖b‖`: the Poiseuille tests at `steady: 1e-12`) the solve
-//! starts from zero instead, a map without history, which settles bit for bit, and solves to the
-//! strict tolerance 1e-9: a solve from zero stopped at the tolerance biases the steady state by
-//! about `tolerance × U` (the Hagen–Poiseuille pipe at 32 cells: 3.7e-3 off at 1e-3 when it
-//! stopped there, against a discretisation error of 2.3e-4; with the strict stop 9e-16 from the
-//! 1e-9 run). The choice reads only the saved history, so a resumed run makes the same one.
+//! whatever the tolerance (`tests/tests/cavity.rs`,
+//! `the_cavity_steady_state_does_not_depend_on_the_viscous_tolerance`), and a warm-started solve
+//! near a steady state takes few iterations. Where that floor is below round-off
+//! (`1e-13 ‖b‖`: the Poiseuille tests at `steady: 1e-12`) the solve starts from zero instead, a
+//! map without history, which settles bit for bit, and solves to the strict tolerance 1e-9: a
+//! solve from zero stopped at the tolerance would bias the steady state by about
+//! `tolerance × U`, far above the discretisation error (`tests/tests/flows.rs`,
+//! `hagen_poiseuille_converges_second_order`). The choice reads only the saved history, so a
+//! resumed run makes the same one.
 //!
 //! **Cost.** The operator is applied from coefficients assembled once per step in one
 //! vectorised pass per component. With Jacobi the conjugate gradient is the stage's own
 //! (`ViscousSystem::solve_jacobi`): the search direction lives in the fields the stencil reads
 //! (no copy into them before each product), the update of the iterate and the residual forms
 //! `z = r·(1/d)` and both dot products in the same pass, and `p = z + βp` is written into the
-//! fields — per unknown and iteration about 18 values moved instead of 22, and no division
-//! (measured on the drop 256², one thread, shared 2-core machine: viscous ≈ 20 % less time at
-//! the same 25 iterations a step). The multigrid preconditioner goes through
-//! [`efsi_linalg::pcg::solve_norm_in`]. On the drop at 256² the block multigrid takes 7.8
-//! iterations a step against Jacobi's 25, but each costs ≈ 3× a Jacobi iteration of the old
-//! loop (one pair: 578 against 592 ns per cell-step for the stage) and ≈ 4× the new one, so
-//! `Auto` keeps Jacobi there (its diagonal-to-mass ratio is below 40).
+//! fields — per unknown and iteration about 18 values moved instead of 22, and no division.
+//! The multigrid preconditioner goes through [`efsi_linalg::pcg::solve_norm_in`]; it takes
+//! fewer iterations than Jacobi but each costs about four Jacobi iterations, so `Auto` keeps
+//! Jacobi while the diagonal-to-mass ratio is below 40 (the falling drop's case).
 //!
 //! **Parallelism.** The operator (scatter, stress divergence, gather) runs over rows in
 //! parallel and CG's reductions have a fixed order: bit-identical on any number of threads. `K(V*)`

@@ -16,10 +16,9 @@
 //! stage does not limit Δt for it (the scene's CFL number governs the step): when a step's
 //! interface Courant number, `Δt·max(2|u_r|/Δr, |v|/Δz)` there and `Δt·max(|u|/Δx, |v|/Δy)`
 //! elsewhere, exceeds ½ — a CFL above ½, an impact — the transport takes as many equal
-//! sub-steps as keep each sweep at most 0.45, and refuses a sweep above ½. (Until the
-//! stability map it capped Δt at Courant ½, so a CFL of 0.9 ran at 0.5 wherever the interface
-//! moved; sub-cycling instead saves 10–30 % of the steps of the map's CFL 0.9 runs, which
-//! stayed stable: the largest gain of mechanical energy 2.8e-3 of the budget.)
+//! sub-steps as keep each sweep at most 0.45, and refuses a sweep above ½. Sub-cycling rather
+//! than capping Δt lets a scene with a solid run at its own CFL; the stability map
+//! (`tests/src/paper/stability.rs`) holds those runs stable.
 //!
 //! **Postconditions.** `0 ≤ φ_s ≤ 1` exactly (tiny round-off excursions are clipped and the
 //! clipped volume is bounded by 1e-12 of a cell, checked in debug builds); the phase volume
