@@ -115,8 +115,9 @@ impl Solid {
 
 /// The `solid` section of a scene as a [`Solid`].
 pub trait SceneSolid {
-    /// The solid, if the scene has one; on error the section's path and the reader's message
-    /// (with the line and column in the scene file where known).
+    /// The solid, if the scene has one; on error the path of the setting that does not read
+    /// (`solid.law.parameters.G`) and the reader's message (with the line and column in the
+    /// scene file where known).
     fn solid_spec(&self) -> Result<Option<Solid>, (String, String)>;
     /// Replace the section by `solid`.
     fn set_solid(&mut self, solid: &Solid);
@@ -137,7 +138,7 @@ impl SceneSolid for Scene {
     fn solid_spec(&self) -> Result<Option<Solid>, (String, String)> {
         self.solid
             .as_ref()
-            .map(|s| s.get().map_err(|m| ("solid".to_string(), m)))
+            .map(|s| s.read("solid"))
             .transpose()
     }
 
