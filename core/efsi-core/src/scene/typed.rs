@@ -43,6 +43,20 @@ impl Options {
             )
         })
     }
+
+    /// Another stage's options, borrowed by a stage that needs one of its settings: section
+    /// `O::SECTION` as checked, or, where no plugin given to the check declares it (a pipeline
+    /// built without that stage, whose section a scene could then not set), its defaults with
+    /// the scene's `preset` applied.
+    pub fn section_or_default<O: super::StageOptions>(&self, preset: super::Preset) -> O {
+        self.get::<O>().cloned().unwrap_or_else(|| {
+            let mut o = O::default();
+            if preset == super::Preset::Strict {
+                o.strict();
+            }
+            o
+        })
+    }
 }
 
 impl std::fmt::Debug for Options {

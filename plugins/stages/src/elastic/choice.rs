@@ -3,7 +3,7 @@
 //! elastic one which it was.
 
 use super::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, law_needed};
-use efsi_core::scene::Options;
+use efsi_core::scene::{Options, Preset};
 
 /// Whether a checked scene (`options`) may take the coupled elastic step
 /// (`numerics.elastic.coupling` `Coupled` or `Auto` with a solid that has an implicit law): a
@@ -13,12 +13,14 @@ pub(crate) fn may_couple(options: &Options) -> bool {
     coupling(options) != ElasticCoupling::Split
 }
 
-/// `numerics.elastic.coupling` as checked, or `Split` where the scene has no solid with an
-/// implicit law (or no plugin of the pipeline declared the elastic options: no elastic stage).
+/// `numerics.elastic.coupling` as checked (its default where no plugin given to the check
+/// declares the section), or `Split` where the scene has no solid with an implicit law.
 pub(crate) fn coupling(options: &Options) -> ElasticCoupling {
-    match options.get::<ElasticOptions>() {
-        Some(o) if law_needed(options) && o.implicit => o.coupling,
-        _ => ElasticCoupling::Split,
+    let o: ElasticOptions = options.section_or_default(Preset::Default);
+    if law_needed(options) && o.implicit {
+        o.coupling
+    } else {
+        ElasticCoupling::Split
     }
 }
 

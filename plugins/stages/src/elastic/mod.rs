@@ -438,7 +438,9 @@ impl StagePlugin for Elastic {
             },
             scheme: schemes[0],
             theta: if crate::viscous::Viscous.needed(scene, options) {
-                options.section::<crate::viscous::ViscousOptions>()?.theta
+                options
+                    .section_or_default::<crate::viscous::ViscousOptions>(scene.numerics.preset)
+                    .theta
             } else {
                 0.0
             },
@@ -462,7 +464,8 @@ impl StagePlugin for Elastic {
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
             },
             coupling: if couples {
-                let proj: &crate::projection::ProjectionOptions = options.section()?;
+                let proj: crate::projection::ProjectionOptions =
+                    options.section_or_default(scene.numerics.preset);
                 Some(coupled::Coupling::new(
                     grid,
                     bc,

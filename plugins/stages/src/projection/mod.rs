@@ -152,14 +152,12 @@ impl StagePlugin for Projection {
 
 /// Whether a checked scene (`options`) runs the incremental pressure correction:
 /// `numerics.projection.incremental`, by default on unless the scene has an elastic solid; never
-/// where the coupled elastic step may be taken, which finds its own pressure. Never where no
-/// plugin of the pipeline declared the projection's options (no projection to predict for).
+/// where the coupled elastic step may be taken, which finds its own pressure. (The section's
+/// default where no plugin given to the check declares it.)
 pub(crate) fn incremental(options: &Options) -> bool {
     let elastic = crate::elastic::law_needed(options);
-    options
-        .get::<ProjectionOptions>()
-        .is_some_and(|o| o.incremental.unwrap_or(!elastic))
-        && !crate::elastic::may_couple(options)
+    let o: ProjectionOptions = options.section_or_default(efsi_core::scene::Preset::Default);
+    o.incremental.unwrap_or(!elastic) && !crate::elastic::may_couple(options)
 }
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last

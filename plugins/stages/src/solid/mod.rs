@@ -136,10 +136,7 @@ pub trait SceneSolid {
 
 impl SceneSolid for Scene {
     fn solid_spec(&self) -> Result<Option<Solid>, (String, String)> {
-        self.solid
-            .as_ref()
-            .map(|s| s.read("solid"))
-            .transpose()
+        self.solid.as_ref().map(|s| s.read("solid")).transpose()
     }
 
     fn set_solid(&mut self, solid: &Solid) {
