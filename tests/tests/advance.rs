@@ -1,6 +1,7 @@
 //! `Simulation::advance_to`: landing on targets, refused targets, the stop flag, the step
 //! budget, the per-step hook, and the rollback of a failed step.
 
+use efsi_core::scene::Options;
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{
     Advance, AdvanceError, Advanced, BoundarySet, EfsiError, Flow, Grid, Rollback, Scene,
@@ -219,12 +220,13 @@ impl StagePlugin for Saboteur {
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::VelocityX, FieldId::Pressure]
     }
-    fn needed(&self, _: &Scene) -> bool {
+    fn needed(&self, _: &Scene, _: &Options) -> bool {
         true
     }
     fn build(
         &self,
         _: &Scene,
+        _: &Options,
         _: &Grid,
         _: &BoundarySet,
         _: &mut efsi_core::Resources,

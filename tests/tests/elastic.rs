@@ -2,6 +2,7 @@
 //! solids run at the flow's time step thanks to the implicit elastic term, and scenes without a
 //! solid carry none of it.
 
+use efsi_core::scene::Options;
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{BoundarySet, Grid, Scene, Simulation, StageError, StageStats, State, StepContext};
 use efsi_run::SceneOverrides;
@@ -156,12 +157,13 @@ impl StagePlugin for Prescribed {
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
     }
-    fn needed(&self, _: &Scene) -> bool {
+    fn needed(&self, _: &Scene, _: &Options) -> bool {
         true
     }
     fn build(
         &self,
         _: &Scene,
+        _: &Options,
         _: &Grid,
         _: &BoundarySet,
         _: &mut efsi_core::Resources,

@@ -6,6 +6,7 @@
 //! the probe quantity `mean_age`, carries the field through checkpoints, and refuses outputs
 //! that no scheduled stage provides, naming the ones there are.
 
+use efsi_core::scene::Options;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, OutputDecl, OutputKind, Phase, Scene, Simulation, Stage,
     StageError, StagePlugin, StageStats, State, StateResource, StepContext,
@@ -89,7 +90,7 @@ impl StagePlugin for Aging {
     fn writes(&self) -> &'static [FieldId] {
         &[AGE]
     }
-    fn needed(&self, _scene: &Scene) -> bool {
+    fn needed(&self, _scene: &Scene, _options: &Options) -> bool {
         true
     }
     fn outputs(&self) -> &'static [OutputDecl] {
@@ -98,6 +99,7 @@ impl StagePlugin for Aging {
     fn build(
         &self,
         _scene: &Scene,
+        _options: &Options,
         _grid: &Grid,
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,

@@ -4,7 +4,7 @@
 //! `u ← u / (1 + rate·Δt)`, at a rate its section sets.
 
 use efsi_core::scene::options::check_iterations;
-use efsi_core::scene::{OptionsDecl, StageOptions};
+use efsi_core::scene::{Options, OptionsDecl, StageOptions};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
@@ -14,16 +14,39 @@ use efsi_run::SceneOverrides;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// `numerics.damping`.
+/// `numerics.damping`. Read through [`ReadDamping`], which counts the reads.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "ReadDamping")]
 struct DampingOptions {
+    rate: f64,
+    substeps: usize,
+}
+
+/// `numerics.damping` as the scene writes it.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReadDamping {
     /// The damping rate (1/s, default 1).
     #[serde(default = "one")]
     rate: f64,
     /// Sub-steps per step (default 1): a second field, to show ranges checked by name.
     #[serde(default = "one_step")]
     substeps: usize,
+}
+
+thread_local! {
+    /// How many times this thread read a `numerics.damping` section.
+    static READS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+impl From<ReadDamping> for DampingOptions {
+    fn from(r: ReadDamping) -> Self {
+        READS.with(|n| n.set(n.get() + 1));
+        DampingOptions {
+            rate: r.rate,
+            substeps: r.substeps,
+        }
+    }
 }
 
 fn one() -> f64 {
@@ -68,7 +91,7 @@ impl StagePlugin for Damping {
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
     }
-    fn needed(&self, _scene: &Scene) -> bool {
+    fn needed(&self, _scene: &Scene, _options: &Options) -> bool {
         true
     }
     fn options(&self) -> Option<OptionsDecl> {
@@ -76,13 +99,14 @@ impl StagePlugin for Damping {
     }
     fn build(
         &self,
-        scene: &Scene,
+        _scene: &Scene,
+        options: &Options,
         _grid: &Grid,
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let o: DampingOptions = scene.numerics.get().map_err(|(f, m)| format!("{f}: {m}"))?;
-        Ok(Box::new(DampingStage(o)))
+        let o: &DampingOptions = options.section()?;
+        Ok(Box::new(DampingStage(o.clone())))
     }
 }
 
@@ -184,4 +208,26 @@ fn the_section_is_refused_without_its_stage_and_checked_by_field_with_it() {
         Err(e) => e.to_string(),
     };
     assert!(m.contains("set numerics.damping.rate=-3.0"), "{m}");
+}
+
+/// A section is read once per build: by the check, into its type, from which the stage is
+/// built and the run steps — whatever the stages, the steps and the records read.
+#[test]
+fn the_section_is_read_once_per_build() {
+    READS.with(|n| n.set(0));
+    let mut sim = efsi_run::simulation(
+        scene("(damping: (rate: 2.0, substeps: 2))").unwrap(),
+        Path::new("own_stage.ron"),
+        &plugins(),
+    )
+    .unwrap();
+    for _ in 0..3 {
+        sim.step(0.01).unwrap();
+    }
+    assert_eq!(READS.with(|n| n.get()), 1);
+    assert_eq!(sim.options().section::<DampingOptions>().unwrap().rate, 2.0);
+    // Not in the scene: its defaults, with nothing to read.
+    READS.with(|n| n.set(0));
+    efsi_run::simulation(scene("()").unwrap(), Path::new("own_stage.ron"), &plugins()).unwrap();
+    assert_eq!(READS.with(|n| n.get()), 0);
 }

@@ -1,6 +1,7 @@
 //! The scheduler: pipelines assembled from the scene with only the stages it needs, fields
 //! allocated only when declared, and declarations checked at build time.
 
+use efsi_core::scene::Options;
 use efsi_core::schedule::{FieldId, Phase, ScheduleError, Stage, StagePlugin};
 use efsi_core::{BoundarySet, EfsiError, Grid, Scene};
 use efsi_tests::{sim, sim_with};
@@ -96,12 +97,13 @@ impl StagePlugin for Dummy {
     fn after(&self) -> &'static [&'static str] {
         self.after
     }
-    fn needed(&self, _: &Scene) -> bool {
+    fn needed(&self, _: &Scene, _: &Options) -> bool {
         true
     }
     fn build(
         &self,
         _: &Scene,
+        _: &Options,
         _: &Grid,
         _: &BoundarySet,
         _: &mut efsi_core::Resources,

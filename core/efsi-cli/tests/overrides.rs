@@ -171,6 +171,46 @@ fn an_out_of_range_value_is_refused_by_the_scene_validation() {
     );
 }
 
+/// A stage's option that does not read as its type is refused when the scene is checked, naming
+/// the setting inside the section — among them the two the projection and the elastic stages
+/// read to choose their scheme (the incremental correction, the elastic coupling).
+#[test]
+fn a_malformed_stage_option_is_refused_naming_the_setting() {
+    refused(
+        &["--set", "numerics.elastic.coupling=Sometimes"],
+        &[
+            "set numerics.elastic.coupling=Sometimes",
+            "numerics.elastic.coupling: ",
+            "`Sometimes`",
+        ],
+    );
+    refused(
+        &["--set", "numerics.projection.incremental=3"],
+        &[
+            "set numerics.projection.incremental=3",
+            "numerics.projection.incremental: ",
+        ],
+    );
+    // Written in the scene file: the setting, its line and its column.
+    let d = tmp("option_in_file");
+    let scene = scene_file(
+        &d,
+        &CAVITY.replace(
+            "    time:",
+            "    numerics: (projection: (incremental: 3), elastic: (coupling: Auto)),\n    time:",
+        ),
+    );
+    let o = efsi(&["check", &scene]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("{scene}: numerics.projection.incremental: "))
+            && err.contains("(line 5, column "),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 #[test]
 fn a_malformed_override_is_a_usage_error() {
     let d = tmp("usage");

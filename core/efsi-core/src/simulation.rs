@@ -8,7 +8,7 @@ use crate::bc::BoundarySet;
 use crate::error::EfsiError;
 use crate::field::Field;
 use crate::grid::Grid;
-use crate::scene::{InitialVelocity, Scene, Side};
+use crate::scene::{InitialVelocity, Options, Scene, Side};
 use crate::schedule::{Pipeline, StagePlugin, StepContext};
 use crate::state::State;
 use std::path::{Path, PathBuf};
@@ -45,6 +45,9 @@ pub struct Simulation {
     pub bc: BoundarySet,
     /// The fields and time.
     pub state: State,
+    /// The scene's checked sections in their owners' types ([`Options`]), from which the
+    /// stages were built.
+    options: Options,
     pipeline: Pipeline,
     previous: Option<(Field, Field)>,
     last_change: f64,
@@ -60,18 +63,35 @@ impl Simulation {
         scene_path: &Path,
         plugins: &[&dyn StagePlugin],
     ) -> Result<Self, EfsiError> {
+        // Scenes built or changed in code (the paper's cases, tools) get the loader's checks too.
+        scene
+            .validate()
+            .map_err(|(field, message)| EfsiError::Config {
+                path: scene_path.to_path_buf(),
+                field,
+                message,
+            })?;
+        // The sections the stages own (`solid`, `numerics`), checked by their plugins and read
+        // once into their types; an error an override caused names the override.
+        let options = scene.check_options(scene_path, plugins)?;
+        Simulation::with_options(scene, options, scene_path, plugins)
+    }
+
+    /// Build a simulation from a scene whose sections were checked already with the same
+    /// `plugins` ([`Scene::check_options`], which returned `options`): a driver that compares
+    /// the checked scene with another (a checkpoint's) builds from it without reading its
+    /// sections a second time.
+    pub fn with_options(
+        scene: Scene,
+        options: Options,
+        scene_path: &Path,
+        plugins: &[&dyn StagePlugin],
+    ) -> Result<Self, EfsiError> {
         let config = |field: &str, message: String| EfsiError::Config {
             path: scene_path.to_path_buf(),
             field: field.into(),
             message,
         };
-        // Scenes built or changed in code (the paper's cases, tools) get the loader's checks too.
-        scene
-            .validate()
-            .map_err(|(field, message)| config(&field, message))?;
-        // The sections the stages own (`solid`, `numerics`), checked by their plugins; an
-        // error an override caused names the override.
-        scene.check_options(scene_path, plugins)?;
         let grid = Grid::new(
             scene.geometry,
             scene.grid.nx,
@@ -80,7 +100,7 @@ impl Simulation {
             scene.domain.y,
         );
         let bc = BoundarySet::new(&scene.boundaries, &grid);
-        let pipeline = Pipeline::build(&scene, &grid, &bc, plugins)?;
+        let pipeline = Pipeline::build(&scene, &options, &grid, &bc, plugins)?;
         let mut state = State::new(
             &grid,
             scene.fluid.density,
@@ -131,6 +151,7 @@ impl Simulation {
             grid,
             bc,
             state,
+            options,
             pipeline,
             previous,
             last_change: f64::INFINITY,
@@ -159,6 +180,11 @@ impl Simulation {
             .iter()
             .filter_map(|&s| bc.moving_wall_speed(s))
             .fold(0.0, |m: f64, v| m.max(v.abs()))
+    }
+
+    /// The scene's checked sections in their owners' types, from which the stages were built.
+    pub fn options(&self) -> &Options {
+        &self.options
     }
 
     /// The pipeline (for printing, timings and statistics).

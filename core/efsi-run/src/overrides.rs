@@ -214,7 +214,7 @@ impl SceneOverrides for Scene {
         match check_sections(&mut filled, plugins) {
             // A stage's setting as the settings in force record it (a default that depends
             // on the scene resolved), else as the checked scene's text holds it.
-            Ok(()) => in_force_json(&filled, path).map_or_else(|| filled.get(path), Ok),
+            Ok(_) => in_force_json(&filled, path).map_or_else(|| filled.get(path), Ok),
             Err(_) => self.get(path),
         }
     }

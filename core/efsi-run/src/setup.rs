@@ -5,7 +5,7 @@
 use crate::output::spec::SceneOutput;
 use efsi_core::error::EfsiError;
 use efsi_core::grid::GHOST;
-use efsi_core::scene::Scene;
+use efsi_core::scene::{Options, Scene};
 use efsi_core::{Simulation, StagePlugin};
 use std::path::Path;
 
@@ -18,6 +18,17 @@ pub fn simulation(
     path: &Path,
     plugins: &[&dyn StagePlugin],
 ) -> Result<Simulation, EfsiError> {
+    simulation_with(scene, None, path, plugins)
+}
+
+/// [`simulation`] for a scene checked already ([`Scene::check_options`], which returned
+/// `options`), or checked here if `options` is `None`: its sections are read once either way.
+pub(crate) fn simulation_with(
+    mut scene: Scene,
+    options: Option<Options>,
+    path: &Path,
+    plugins: &[&dyn StagePlugin],
+) -> Result<Simulation, EfsiError> {
     // Before anything is allocated; a scene whose ranges are wrong is refused by the
     // simulation, naming the setting.
     if scene.validate().is_ok() {
@@ -27,7 +38,20 @@ pub fn simulation(
             message,
         })?;
     }
-    let mut sim = Simulation::new(scene, path, plugins)?;
+    let mut sim = match options {
+        Some(options) => Simulation::with_options(scene, options, path, plugins)?,
+        None => {
+            scene
+                .validate()
+                .map_err(|(field, message)| EfsiError::Config {
+                    path: path.to_path_buf(),
+                    field,
+                    message,
+                })?;
+            let options = scene.check_options(path, plugins)?;
+            Simulation::with_options(scene, options, path, plugins)?
+        }
+    };
     let spec = crate::output::spec::check(&sim.scene, path, sim.pipeline())?;
     sim.scene.set_output(&spec);
     sim.add_check(Box::new(crate::guard::EnergyGuard::default()));

@@ -62,8 +62,8 @@
 //! step reuse. It keeps from one step to the next only the `WholeStep` predictor's two arrays.
 
 use crate::scratch::{self, Scratch};
-use efsi_core::scene::OptionsDecl;
 use efsi_core::scene::options::StageOptions;
+use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -100,7 +100,7 @@ impl StageOptions for AdvectionOptions {
         Ok(())
     }
 
-    fn resolve(&mut self, scene: &Scene) {
+    fn resolve(&mut self, scene: &Scene, _options: &Options) {
         self.predictor.get_or_insert(default_predictor(scene));
     }
 }
@@ -116,8 +116,8 @@ fn default_predictor(scene: &Scene) -> AdvectionPredictor {
 }
 
 /// Whether `scene`'s advection predicts its second stage with the whole step's increments.
-fn whole_step(scene: &Scene) -> Result<bool, String> {
-    let o: AdvectionOptions = crate::options(scene)?;
+fn whole_step(scene: &Scene, options: &Options) -> Result<bool, String> {
+    let o: &AdvectionOptions = options.section()?;
     Ok(o.predictor.unwrap_or(default_predictor(scene)) == AdvectionPredictor::WholeStep)
 }
 
@@ -137,7 +137,7 @@ impl StagePlugin for Advection {
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
     }
-    fn needed(&self, scene: &Scene) -> bool {
+    fn needed(&self, scene: &Scene, _options: &Options) -> bool {
         scene.physics.advection
     }
     fn options(&self) -> Option<OptionsDecl> {
@@ -146,6 +146,7 @@ impl StagePlugin for Advection {
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         _bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
@@ -155,7 +156,7 @@ impl StagePlugin for Advection {
         let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
         let bands = (grid.ny + 1).div_ceil(BAND);
         let padded = stride * (grid.ny + 1 + 2 * efsi_core::GHOST);
-        let carry = if whole_step(scene)? {
+        let carry = if whole_step(scene, options)? {
             Some(Carry {
                 u: vec![0.0; padded],
                 v: vec![0.0; padded],

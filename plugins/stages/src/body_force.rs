@@ -16,6 +16,7 @@
 //! `Δt ≤ CFL · 2 / (C + √(C² + 4|g − a|/h))` (Kang, Fedkiw & Liu 2000), which equals the
 //! advective limit when `g − a = 0` and `CFL·√(h/|g − a|)` from rest.
 
+use efsi_core::scene::Options;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, EfsiError, FieldId, G, Grid, Phase, Scene, Simulation, Stage, StageError,
@@ -86,12 +87,13 @@ impl StagePlugin for BodyForce {
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
     }
-    fn needed(&self, scene: &Scene) -> bool {
+    fn needed(&self, scene: &Scene, _options: &Options) -> bool {
         scene.gravity != (0.0, 0.0)
     }
     fn build(
         &self,
         scene: &Scene,
+        _options: &Options,
         _grid: &Grid,
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,

@@ -18,17 +18,6 @@ mod viscous_operator;
 pub mod vof;
 
 use efsi_core::StagePlugin;
-use efsi_core::scene::StageOptions;
-
-/// The options `O` of `scene` (its `numerics` section, defaults filled in, the preset applied);
-/// the error names the setting. [`efsi_core::Simulation::new`] has checked them before any
-/// stage is built.
-pub(crate) fn options<O: StageOptions>(scene: &efsi_core::Scene) -> Result<O, String> {
-    scene
-        .numerics
-        .get()
-        .map_err(|(field, message)| format!("{field}: {message}"))
-}
 
 /// Whether `scene` has a second material (a `solid` section: a solid or a second fluid), whose
 /// interface the VOF stage tracks. The defaults that depend on the scene follow it: the

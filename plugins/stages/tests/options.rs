@@ -29,8 +29,11 @@ fn with(n: &str) -> Result<Scene, String> {
     Ok(s)
 }
 
+/// Section `O` as a check of `s` (a copy) reads it for the stages' builds.
 fn get<O: StageOptions>(s: &Scene) -> O {
-    s.numerics.get().unwrap()
+    let mut s = s.clone();
+    let options = check_sections(&mut s, &efsi_stages::builtin()).unwrap();
+    options.section::<O>().unwrap().clone()
 }
 
 #[test]

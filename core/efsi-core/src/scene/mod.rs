@@ -22,12 +22,15 @@
 use crate::grid::Geometry;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
 pub use section::Section;
+pub use typed::Options;
 
 mod numerics;
 mod section;
+mod typed;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
     pub use super::numerics::{OptionsDecl, Preset, StageOptions, check_sections};
+    pub use super::typed::Options;
     pub use crate::validate::{Checked, check_iterations, check_tolerance};
 }
 use serde::{Deserialize, Serialize};

@@ -4,12 +4,15 @@
 //! type implementing [`StageOptions`] — its section's name under `numerics`, its fields with
 //! their defaults, its range checks and its strict preset — and returns
 //! [`OptionsDecl::of`] from [`crate::StagePlugin::options`]. The scene keeps each section as
-//! the RON text the file wrote ([`Numerics::section`]); a stage reads its options with
-//! [`Numerics::get`]. [`crate::Simulation::new`] checks the sections against the declarations
-//! of the plugins it is given ([`check_sections`]): an unknown section, a malformed or out of
-//! range setting is refused there, naming the setting, and the scene it keeps holds every
-//! declared section with its defaults filled in and the preset applied, so `run.json` records
-//! the settings in force. Adding an option or a section touches only the stage that owns it.
+//! the RON text the file wrote ([`Numerics::section`]), which overrides edit. When a scene is
+//! checked ([`check_sections`], which [`crate::Simulation::new`] runs against the declarations
+//! of the plugins it is given) each declared section is read once into its type, validated
+//! once and kept typed in the [`Options`] the check returns; the stages are built from those
+//! (`&Options`), never from the text. An unknown section, a malformed or out of range setting
+//! is refused there, naming the setting (`numerics.elastic.coupling`), and the scene it keeps
+//! holds every declared section with its defaults filled in and the preset applied, so
+//! `run.json` records the settings in force. Adding an option or a section touches only the
+//! stage that owns it.
 //!
 //! ```text
 //! numerics: (
@@ -19,9 +22,9 @@
 //! )
 //! ```
 
-use super::{Scene, Section};
+use super::{Options, Scene, Section};
 use crate::schedule::StagePlugin;
-use crate::validate::{Checked, Failure};
+use crate::validate::Failure;
 use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeStruct;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -54,9 +57,6 @@ pub enum Preset {
 /// [`check_sections`]), for records.
 type Entry = (Section, Option<serde_json::Value>);
 
-/// A section's settings in force: as RON text and as JSON.
-type InForce = (Section, serde_json::Value);
-
 /// The options a stage reads from its `numerics` section.
 pub trait StageOptions:
     Serialize + DeserializeOwned + Default + Clone + Send + Sync + 'static
@@ -69,10 +69,12 @@ pub trait StageOptions:
     /// Tighten the tolerances to the strict preset's (idempotent).
     fn strict(&mut self) {}
     /// Fill in the settings left unset whose default depends on the scene, so that the
-    /// settings in force as JSON (`run.json`, [`Numerics::sections_json`]) name a value. The
-    /// section's text keeps them unset: a checked scene changed afterwards (a solid added)
-    /// resolves them anew. Default: nothing.
-    fn resolve(&mut self, _scene: &Scene) {}
+    /// settings in force as JSON (`run.json`, [`Numerics::sections_json`]) name a value.
+    /// `options` holds every section of the scene read into its type (and what the plugins'
+    /// [`StagePlugin::check_scene`] read), for defaults that depend on another stage's
+    /// settings. The section's text keeps them unset: a checked scene changed afterwards (a
+    /// solid added) resolves them anew. Default: nothing.
+    fn resolve(&mut self, _scene: &Scene, _options: &Options) {}
 }
 
 /// What a stage plugin declares of its options: the section's name and how to check it.
@@ -80,7 +82,12 @@ pub trait StageOptions:
 pub struct OptionsDecl {
     /// The section's name under `numerics`.
     pub section: &'static str,
-    check: fn(&Scene) -> Result<InForce, Failure>,
+    /// Read the section into its type (the preset applied), keep it in the options, and
+    /// return its text with the defaults filled in.
+    read: fn(&Scene, &mut Options) -> Result<Section, Failure>,
+    /// Check the section read, its scene-dependent defaults resolved; its settings in force as
+    /// JSON.
+    settle: fn(&Scene, &Options) -> Result<serde_json::Value, Failure>,
 }
 
 impl fmt::Debug for OptionsDecl {
@@ -96,17 +103,25 @@ impl OptionsDecl {
     pub fn of<O: StageOptions>() -> OptionsDecl {
         OptionsDecl {
             section: O::SECTION,
-            check: |scene| {
-                let o: O = scene.numerics.get()?;
-                let mut resolved = o.clone();
-                resolved.resolve(scene);
+            read: |scene, options| {
+                let o: O = scene.numerics.read()?;
+                // The text as the scene set it (defaults filled in, the preset applied).
+                let raw = Section::of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
+                options.insert(o);
+                Ok(raw)
+            },
+            settle: |scene, options| {
+                let mut resolved = options
+                    .section::<O>()
+                    .map_err(|m| (O::SECTION.into(), m))?
+                    .clone();
+                resolved.resolve(scene, options);
                 resolved
                     .validate(scene)
                     .map_err(|(field, m)| (format!("numerics.{}.{field}", O::SECTION), m))?;
-                // The text as the scene set it (defaults filled in, the preset applied); the
-                // JSON with the scene's own defaults resolved.
-                let raw = Section::of(&o).map_err(|m| (format!("numerics.{}", O::SECTION), m))?;
-                Ok((raw, serde_json::to_value(&resolved).unwrap_or_default()))
+                // The JSON with the scene's own defaults resolved.
+                serde_json::to_value(&resolved)
+                    .map_err(|e| (format!("numerics.{}", O::SECTION), e.to_string()))
             },
         }
     }
@@ -116,11 +131,13 @@ impl OptionsDecl {
 /// ([`StagePlugin::check_scene`]), then the `numerics` sections against the options `plugins`
 /// declare: each section must be declared by one of them (whether or not the scene needs that
 /// stage), parse as its type and pass its checks. On success every declared section is
-/// replaced by its settings in force (defaults filled in, the preset applied). On failure the
-/// setting's path and why.
-pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checked {
+/// replaced by its settings in force (defaults filled in, the preset applied), and the typed
+/// values — each section read once, and what the plugins' [`StagePlugin::check_scene`] read —
+/// are returned for the stages' builds. On failure the setting's path and why.
+pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Result<Options, Failure> {
+    let mut options = Options::default();
     for p in plugins {
-        p.check_scene(scene)?;
+        p.check_scene(scene, &mut options)?;
     }
     let mut decls: BTreeMap<&'static str, OptionsDecl> = BTreeMap::new();
     for d in plugins.iter().filter_map(|p| p.options()) {
@@ -141,25 +158,33 @@ pub fn check_sections(scene: &mut Scene, plugins: &[&dyn StagePlugin]) -> Checke
             ),
         ));
     }
-    let mut effective = Vec::with_capacity(decls.len());
+    // Every section read once into its type, then each checked with all of them at hand.
+    let mut texts = Vec::with_capacity(decls.len());
     for d in decls.values() {
-        effective.push((d.section, (d.check)(scene)?));
+        texts.push((d.section, (d.read)(scene, &mut options)?));
     }
-    for (name, (raw, json)) in effective {
-        let entry = (raw, Some(json));
-        scene.numerics.sections.insert(name.to_string(), entry);
+    let mut effective = Vec::with_capacity(decls.len());
+    for ((name, raw), d) in texts.into_iter().zip(decls.values()) {
+        effective.push((name, raw, (d.settle)(scene, &options)?));
     }
-    Ok(())
+    for (name, raw, json) in effective {
+        scene
+            .numerics
+            .sections
+            .insert(name.to_string(), (raw, Some(json)));
+    }
+    Ok(options)
 }
 
 impl Scene {
-    /// [`check_sections`] with the plugins `plugins`, for the scene read from `path`: an error
-    /// an override caused names the override ([`crate::overrides::attribute`]).
+    /// [`check_sections`] with the plugins `plugins`, for the scene read from `path`: the
+    /// typed sections for the stages' builds; an error an override caused names the override
+    /// ([`crate::overrides::attribute`]).
     pub fn check_options(
         &mut self,
         path: &std::path::Path,
         plugins: &[&dyn StagePlugin],
-    ) -> Result<(), super::SceneError> {
+    ) -> Result<Options, super::SceneError> {
         check_sections(self, plugins).map_err(|(field, message)| {
             crate::overrides::attribute(path, &self.overrides, field, message)
         })
@@ -167,15 +192,15 @@ impl Scene {
 }
 
 impl Numerics {
-    /// The options of section `O::SECTION`: the scene's settings, the defaults for what it
-    /// leaves out, the preset applied. On error the section's path and the reader's message
-    /// (with the line and column in the scene file where known).
-    pub fn get<O: StageOptions>(&self) -> Result<O, (String, String)> {
+    /// Read section `O::SECTION` from its text: the scene's settings, the defaults for what it
+    /// leaves out, the preset applied. On error the setting's path and the reader's message
+    /// (with the line and column in the scene file where known). Only the check
+    /// ([`check_sections`]) and an edit ([`Numerics::update`]) read the text; stages take the
+    /// checked value from [`Options`].
+    fn read<O: StageOptions>(&self) -> Result<O, (String, String)> {
         let mut o = match self.sections.get(O::SECTION) {
             None => O::default(),
-            Some((s, _)) => s
-                .get()
-                .map_err(|m| (format!("numerics.{}", O::SECTION), m))?,
+            Some((s, _)) => s.read(&format!("numerics.{}", O::SECTION))?,
         };
         if self.preset == Preset::Strict {
             o.strict();
@@ -189,14 +214,14 @@ impl Numerics {
         self.sections.insert(O::SECTION.to_string(), (raw, None));
     }
 
-    /// Change section `O::SECTION` in place: read it ([`Numerics::get`], without the preset),
-    /// apply `change`, write it back.
+    /// Change section `O::SECTION` in place, an edit of the scene before it is checked: read
+    /// its text (without the preset), apply `change`, write it back.
     pub fn update<O: StageOptions>(
         &mut self,
         change: impl FnOnce(&mut O),
     ) -> Result<(), (String, String)> {
         let preset = std::mem::take(&mut self.preset);
-        let got = self.get::<O>();
+        let got = self.read::<O>();
         self.preset = preset;
         let mut o = got?;
         change(&mut o);

@@ -43,21 +43,58 @@ impl Section {
     }
 
     /// Read the section as a `T` (RON's `implicit_some` enabled, as for the scene file). On
-    /// error the reader's message, with the line and column in the scene file where known.
+    /// error the reader's message, with the setting's path inside the section where there is
+    /// one (`coupling: …`) and the line and column in the scene file where known.
     pub fn get<T: DeserializeOwned>(&self) -> Result<T, String> {
+        self.read("").map_err(|(path, m)| {
+            if path.is_empty() {
+                m
+            } else {
+                format!("{path}: {m}")
+            }
+        })
+    }
+
+    /// Read the section as a `T`, the section being the setting `at` of the scene (`solid`,
+    /// `numerics.elastic`). On error the path of the setting that does not read (`at` and the
+    /// path inside the section, `numerics.elastic.coupling`) and the reader's message, with the
+    /// line and column in the scene file where known.
+    pub fn read<T: DeserializeOwned>(&self, at: &str) -> Result<T, (String, String)> {
         let opts = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        opts.from_str(self.raw.get_ron()).map_err(|e| {
-            let at = match self.at {
-                Some((line, col)) => {
-                    let (l, c) = (e.span.start.line, e.span.start.col);
-                    let c = if l == 1 { col + c - 1 } else { c };
-                    format!(" (line {}, column {c})", line + l - 1)
-                }
-                None => String::new(),
+        let text = self.raw.get_ron();
+        let mut de = ron::Deserializer::from_str_with_options(text, &opts)
+            .map_err(|e| (at.to_string(), self.message(e)))?;
+        let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let inside = e
+                .path()
+                .iter()
+                .next()
+                .is_some()
+                .then(|| e.path().to_string());
+            let path = match inside {
+                Some(inside) if at.is_empty() => inside,
+                Some(inside) => format!("{at}.{inside}"),
+                None => at.to_string(),
             };
-            format!("{}{at}", e.code)
-        })
+            (path, self.message(de.span_error(e.into_inner())))
+        })?;
+        de.end()
+            .map_err(|e| (at.to_string(), self.message(de.span_error(e))))?;
+        Ok(value)
+    }
+
+    /// A reader's error as a message, with the line and column in the scene file where known.
+    fn message(&self, e: ron::error::SpannedError) -> String {
+        let at = match self.at {
+            Some((line, col)) => {
+                let (l, c) = (e.span.start.line, e.span.start.col);
+                let c = if l == 1 { col + c - 1 } else { c };
+                format!(" (line {}, column {c})", line + l - 1)
+            }
+            None => String::new(),
+        };
+        format!("{}{at}", e.code)
     }
 
     /// The section's RON text.

@@ -11,7 +11,7 @@
 
 use crate::bc::BoundarySet;
 use crate::grid::Grid;
-use crate::scene::Scene;
+use crate::scene::{Options, Scene};
 use crate::state::State;
 use efsi_linalg::SolveStats;
 use std::collections::BTreeSet;
@@ -169,19 +169,21 @@ pub trait StagePlugin: Sync {
     fn limit_depends_on(&self) -> &'static str {
         "and the velocity it sees"
     }
-    /// Whether `scene` needs this stage.
-    fn needed(&self, scene: &Scene) -> bool;
+    /// Whether `scene` needs this stage; `options` are its checked sections
+    /// ([`crate::scene::options::check_sections`]).
+    fn needed(&self, scene: &Scene, options: &Options) -> bool;
     /// The `numerics` section the stage reads its options from, if it has options
     /// ([`crate::scene::options`]; default: none). Several plugins may declare one section.
     fn options(&self) -> Option<crate::scene::OptionsDecl> {
         None
     }
     /// Check the scene's sections outside `numerics` that the stage owns (the VOF stage: the
-    /// `solid` section, [`crate::scene::Section`]) and put back their settings in force; on
+    /// `solid` section, [`crate::scene::Section`]), put back their settings in force and keep
+    /// what it read in `options` ([`Options::insert`]), for the stages' builds to share; on
     /// failure the setting's path and what was expected. Run with the `numerics` checks
     /// ([`crate::scene::options::check_sections`]), whether or not the scene needs the stage
     /// (default: nothing).
-    fn check_scene(&self, _scene: &mut Scene) -> crate::validate::Checked {
+    fn check_scene(&self, _scene: &mut Scene, _options: &mut Options) -> crate::validate::Checked {
         Ok(())
     }
     /// The outputs the stage contributes (VTK arrays, probe quantities) computed from the
@@ -189,13 +191,16 @@ pub trait StagePlugin: Sync {
     fn outputs(&self) -> &'static [OutputDecl] {
         &[]
     }
-    /// Build the stage for a scene; the error says which scene value is unusable. `shared`
-    /// holds what the stages of this pipeline share while it is built (in the pipeline's
-    /// order): a stage that needs what another loads or derives from the scene (the solid's
-    /// law, for one) takes it from there instead of making it again.
+    /// Build the stage for a scene; the error says which scene value is unusable. `options`
+    /// are the scene's checked sections in their owners' types (its own `numerics` options
+    /// among them: [`Options::section`]), read once by the check; `shared` holds what the
+    /// stages of this pipeline share while it is built (in the pipeline's order): a stage that
+    /// needs what another loads or derives from the scene (the solid's law, for one) takes it
+    /// from there instead of making it again.
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut Resources,
@@ -241,9 +246,12 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Assemble the pipeline for `scene` from the available `plugins`, keeping only those the
-    /// scene needs, ordered by phase and by their `after` constraints, and check it.
+    /// scene needs, ordered by phase and by their `after` constraints, and check it. `options`
+    /// are the scene's sections as checked with the same `plugins`
+    /// ([`crate::scene::options::check_sections`]).
     pub fn build(
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         plugins: &[&dyn StagePlugin],
@@ -257,7 +265,7 @@ impl Pipeline {
         let chosen: Vec<&dyn StagePlugin> = plugins
             .iter()
             .copied()
-            .filter(|p| p.needed(scene))
+            .filter(|p| p.needed(scene, options))
             .collect();
         let order = Self::order(&chosen)?;
         // Fields: the base set plus everything written.
@@ -289,12 +297,12 @@ impl Pipeline {
                 }
                 outputs.push((p.name(), *o));
             }
-            let stage =
-                p.build(scene, grid, bc, &mut shared)
-                    .map_err(|message| ScheduleError::Build {
-                        stage: p.name().to_string(),
-                        message,
-                    })?;
+            let stage = p
+                .build(scene, options, grid, bc, &mut shared)
+                .map_err(|message| ScheduleError::Build {
+                    stage: p.name().to_string(),
+                    message,
+                })?;
             entries.push(Entry {
                 name: p.name(),
                 source: p.source(),

@@ -262,10 +262,10 @@ pub fn resume(
     }
     let mut scene = Scene::load_with(&file.scene_path, &file.overrides)?;
     // The recorded scene holds the stages' options in force: compare it with this one's.
-    scene.check_options(&file.scene_path, plugins)?;
+    let checked = scene.check_options(&file.scene_path, plugins)?;
     checkpoint::check_resumable(&file, &scene, &what, plugins)?;
     let law = checkpoint::law_identity(&scene)?;
-    let mut sim = crate::simulation(scene, &file.scene_path, plugins)?;
+    let mut sim = crate::setup::simulation_with(scene, Some(checked), &file.scene_path, plugins)?;
     let snapshot = file.record.clone().into_snapshot(sim.snapshot(), &what)?;
     sim.restore(&snapshot)?;
     let mut options = options.clone();

@@ -59,7 +59,7 @@ impl Outputs {
             scene["numerics"][name] = json.clone();
         }
         scene["output"] = crate::output::spec::json(&sim.scene);
-        scene["solid"] = efsi_stages::solid::json(&sim.scene);
+        scene["solid"] = efsi_stages::solid::checked_json(sim.options());
         let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
             "run_id": self.run_id,

@@ -3,20 +3,21 @@
 //! elastic one which it was.
 
 use super::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, law_needed};
-use efsi_core::Scene;
+use efsi_core::scene::{Options, Preset};
 
-/// Whether `scene` may take the coupled elastic step (`numerics.elastic.coupling` `Coupled` or
-/// `Auto` with a solid that has an implicit law): a coupled step leaves a pressure for the
-/// projection stage to complete, and Δt may reach `coupled_wave_courant` elastic-wave Courant
-/// numbers.
-pub(crate) fn may_couple(scene: &Scene) -> bool {
-    coupling(scene) != ElasticCoupling::Split
+/// Whether a checked scene (`options`) may take the coupled elastic step
+/// (`numerics.elastic.coupling` `Coupled` or `Auto` with a solid that has an implicit law): a
+/// coupled step leaves a pressure for the projection stage to complete, and Δt may reach
+/// `coupled_wave_courant` elastic-wave Courant numbers.
+pub(crate) fn may_couple(options: &Options) -> bool {
+    coupling(options) != ElasticCoupling::Split
 }
 
-/// `numerics.elastic.coupling`, or `Split` where the scene has no solid with an implicit law.
-pub(crate) fn coupling(scene: &Scene) -> ElasticCoupling {
-    let o: ElasticOptions = scene.numerics.get().unwrap_or_default();
-    if law_needed(scene) && o.implicit {
+/// `numerics.elastic.coupling` as checked (its default where no plugin given to the check
+/// declares the section), or `Split` where the scene has no solid with an implicit law.
+pub(crate) fn coupling(options: &Options) -> ElasticCoupling {
+    let o: ElasticOptions = options.section_or_default(Preset::Default);
+    if law_needed(options) && o.implicit {
         o.coupling
     } else {
         ElasticCoupling::Split

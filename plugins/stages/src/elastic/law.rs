@@ -2,14 +2,17 @@
 //! elastic and deformation stages of one pipeline (loaded and checked once).
 
 use efsi_core::Scene;
+use efsi_core::scene::Options;
 use efsi_laws_host::ConstitutiveLaw;
 
 /// The law named by the scene's solid: a plugin library found and checked by
 /// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
 /// tangent) — every law, test laws included, goes through the loader.
-pub fn resolve_law(scene: &Scene) -> Result<Box<dyn ConstitutiveLaw>, String> {
-    let spec = crate::solid::solid(scene)?
+/// `options` are the scene's checked sections, which hold its solid.
+pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn ConstitutiveLaw>, String> {
+    let spec = crate::solid::solid(options)?
         .law
+        .as_ref()
         .ok_or("the solid has no law")?;
     let dir = scene
         .source_dir
@@ -28,8 +31,10 @@ struct SharedLaw(std::sync::Arc<dyn ConstitutiveLaw>);
 /// that asks.
 pub(super) fn shared_law(
     scene: &Scene,
+    options: &Options,
     shared: &mut efsi_core::Resources,
 ) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, String> {
-    let law = shared.get_or_try_insert_with(|| resolve_law(scene).map(|l| SharedLaw(l.into())))?;
+    let law = shared
+        .get_or_try_insert_with(|| resolve_law(scene, options).map(|l| SharedLaw(l.into())))?;
     Ok(law.0.clone())
 }

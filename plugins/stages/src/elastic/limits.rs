@@ -1,6 +1,7 @@
 //! The solid's limits, checked before the run: the elastic-wave Courant limit on Δt and the
 //! fewest cells across a solid.
 
+use efsi_core::scene::Options;
 use efsi_core::{Grid, Scene};
 use efsi_laws_host::ConstitutiveLaw;
 
@@ -26,12 +27,13 @@ pub(super) struct WaveLimits {
 /// deformation stages.
 pub(super) fn shared_wave_limits(
     scene: &Scene,
+    options: &Options,
     grid: &Grid,
     law: &dyn ConstitutiveLaw,
     shared: &mut efsi_core::Resources,
 ) -> Result<WaveLimits, String> {
     shared
-        .get_or_try_insert_with(|| wave_limit(scene, grid, law))
+        .get_or_try_insert_with(|| wave_limit(scene, options, grid, law))
         .copied()
 }
 
@@ -40,10 +42,11 @@ pub(super) fn shared_wave_limits(
 /// [`MIN_CELLS_ACROSS`].
 pub(super) fn wave_limit(
     scene: &Scene,
+    options: &Options,
     grid: &Grid,
     law: &dyn ConstitutiveLaw,
 ) -> Result<WaveLimits, String> {
-    let solid = crate::solid::solid(scene)?;
+    let solid = crate::solid::solid(options)?;
     let mut tau = [[0.0; 4]];
     let mut tangent = [[0.0; 16]];
     law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut tau, Some(&mut tangent))
@@ -78,9 +81,9 @@ pub(super) fn wave_limit(
             ));
         }
     }
-    let mut o = crate::options::<super::ElasticOptions>(scene)?;
+    let mut o = options.section::<super::ElasticOptions>()?.clone();
     // The coupling in force: `Split` where the solid has no implicit law.
-    o.coupling = super::coupling(scene);
+    o.coupling = super::coupling(options);
     let s = o.wave_cap();
     let option = match o.coupling {
         super::ElasticCoupling::Split => "numerics.elastic.wave_courant",

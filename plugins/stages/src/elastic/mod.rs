@@ -282,7 +282,7 @@
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
 use crate::viscous_operator::Coefficients;
-use efsi_core::scene::{Boundary, OptionsDecl, Side};
+use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, G, Grid, Phase, Scene, Stage, StageError, StagePlugin,
 };
@@ -325,15 +325,15 @@ use solve::{ElasticOperator, ElasticStage, Scratch};
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
 pub const B: FieldId = FieldId::Stage("B");
 
-/// Whether the scene has an elastic solid (a solid with a constitutive law).
-pub(crate) fn law_needed(scene: &Scene) -> bool {
-    crate::solid::solid(scene).is_ok_and(|s| s.law.is_some())
+/// Whether a checked scene (`options`) has an elastic solid (a solid with a constitutive law).
+pub(crate) fn law_needed(options: &Options) -> bool {
+    crate::solid::solid(options).is_ok_and(|s| s.law.is_some())
 }
 
 /// The fluid's and the solid's viscosities, for the interface corners.
-fn viscosities(scene: &Scene) -> (f64, f64) {
+fn viscosities(scene: &Scene, options: &Options) -> (f64, f64) {
     let mu_f = scene.fluid.viscosity;
-    let mu_s = crate::solid::solid(scene).map_or(mu_f, |s| s.viscosity(&scene.fluid));
+    let mu_s = crate::solid::solid(options).map_or(mu_f, |s| s.viscosity(&scene.fluid));
     (mu_f, mu_s)
 }
 
@@ -365,8 +365,8 @@ impl StagePlugin for Elastic {
         // the projection stage to complete.
         &[FieldId::VelocityX, FieldId::VelocityY, B, FieldId::Pressure]
     }
-    fn needed(&self, scene: &Scene) -> bool {
-        law_needed(scene)
+    fn needed(&self, _scene: &Scene, options: &Options) -> bool {
+        law_needed(options)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ElasticOptions>())
@@ -377,17 +377,18 @@ impl StagePlugin for Elastic {
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let law = shared_law(scene, shared)?;
-        let (mu_f, mu_s) = viscosities(scene);
+        let law = shared_law(scene, options, shared)?;
+        let (mu_f, mu_s) = viscosities(scene, options);
         let k = Kernels::new(grid, bc, mu_f, mu_s);
         let n = k.faces.len();
-        let o: ElasticOptions = crate::options(scene)?;
-        let couples = may_couple(scene);
-        let split_dt = shared_wave_limits(scene, grid, law.as_ref(), shared)?.split;
+        let o: &ElasticOptions = options.section()?;
+        let couples = may_couple(options);
+        let split_dt = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?.split;
         let schemes = [false, true].map(|coupled| StepScheme {
             theta: o.stretch_theta(coupled),
             // The coupled step's momentum takes the stress at its stretching's θ (see `coupled`,
@@ -413,12 +414,12 @@ impl StagePlugin for Elastic {
             },
         });
         Ok(Box::new(ElasticStage {
-            mode: coupling(scene),
+            mode: coupling(options),
             split_dt,
             step_flag: {
                 // Until the first step says otherwise (the projection of the initial velocity).
                 let flag = CoupledStep::shared(shared);
-                flag.set(coupling(scene) == ElasticCoupling::Coupled);
+                flag.set(coupling(options) == ElasticCoupling::Coupled);
                 flag
             },
             law,
@@ -436,8 +437,10 @@ impl StagePlugin for Elastic {
                 dm: vec![0.0; n],
             },
             scheme: schemes[0],
-            theta: if crate::viscous::Viscous.needed(scene) {
-                crate::options::<crate::viscous::ViscousOptions>(scene)?.theta
+            theta: if crate::viscous::Viscous.needed(scene, options) {
+                options
+                    .section_or_default::<crate::viscous::ViscousOptions>(scene.numerics.preset)
+                    .theta
             } else {
                 0.0
             },
@@ -461,12 +464,13 @@ impl StagePlugin for Elastic {
                 dtau: std::array::from_fn(|_| Field::zeros(grid)),
             },
             coupling: if couples {
-                let proj: crate::projection::ProjectionOptions = crate::options(scene)?;
+                let proj: crate::projection::ProjectionOptions =
+                    options.section_or_default(scene.numerics.preset);
                 Some(coupled::Coupling::new(
                     grid,
                     bc,
                     n,
-                    &o,
+                    o,
                     proj.tolerance_in(scene),
                 ))
             } else {
@@ -500,8 +504,8 @@ impl StagePlugin for DeformationUpdate {
     fn limit_depends_on(&self) -> &'static str {
         "numerics.elastic.wave_courant (coupled_wave_courant with the coupled step) and the solid's stiffness: the elastic wave speed"
     }
-    fn needed(&self, scene: &Scene) -> bool {
-        law_needed(scene)
+    fn needed(&self, _scene: &Scene, options: &Options) -> bool {
+        law_needed(options)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ElasticOptions>())
@@ -509,18 +513,19 @@ impl StagePlugin for DeformationUpdate {
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let (mu_f, mu_s) = viscosities(scene);
-        let law = shared_law(scene, shared)?;
-        let o: ElasticOptions = crate::options(scene)?;
-        let limits = shared_wave_limits(scene, grid, law.as_ref(), shared)?;
+        let (mu_f, mu_s) = viscosities(scene, options);
+        let law = shared_law(scene, options, shared)?;
+        let o: &ElasticOptions = options.section()?;
+        let limits = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?;
         Ok(Box::new(DeformationStage {
             law,
             k: Kernels::new(grid, bc, mu_f, mu_s),
-            mode: coupling(scene),
+            mode: coupling(options),
             limits,
             walls: efsi_core::scene::Side::ALL.map(|side| {
                 matches!(

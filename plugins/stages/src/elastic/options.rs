@@ -1,7 +1,7 @@
 //! The elastic stages' options (`numerics.elastic`), read by the elastic and deformation stages.
 
 use efsi_core::Scene;
-use efsi_core::scene::options::{StageOptions, check_iterations, check_tolerance};
+use efsi_core::scene::options::{Options, StageOptions, check_iterations, check_tolerance};
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the elastic step.
@@ -274,7 +274,7 @@ fn default_elastic_iter() -> usize {
 impl StageOptions for ElasticOptions {
     const SECTION: &'static str = "elastic";
 
-    fn resolve(&mut self, _scene: &Scene) {
+    fn resolve(&mut self, _scene: &Scene, _options: &Options) {
         // The cap's default depends on `coupling`; θ's on each step's kind, so it stays unset.
         self.coupled_wave_courant = Some(self.coupled_cap());
     }

@@ -99,6 +99,18 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
     }
 }
 
+/// [`wave_limit`] of `scene` once its sections are checked by the shipped plugins.
+fn limits_of(
+    scene: &Scene,
+    grid: &Grid,
+    law: &dyn efsi_laws_host::ConstitutiveLaw,
+) -> Result<super::limits::WaveLimits, String> {
+    let mut scene = scene.clone();
+    let options = efsi_core::scene::options::check_sections(&mut scene, &crate::builtin())
+        .map_err(|(f, m)| format!("{f}: {m}"))?;
+    wave_limit(&scene, &options, grid, law)
+}
+
 #[test]
 fn laws_without_a_stable_rest_state_and_fixed_steps_beyond_the_wave_limit_are_refused() {
     let text = r#"Scene(
@@ -120,19 +132,19 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
         .unwrap();
     let grid = Grid::new(scene.geometry, 16, 16, scene.domain.x, scene.domain.y);
     // Neo-Hookean with a negative shear modulus: no stable rest state.
-    let e = wave_limit(&scene, &grid, &NeoHookeanReference { g: -1.0 }).unwrap_err();
+    let e = limits_of(&scene, &grid, &NeoHookeanReference { g: -1.0 }).unwrap_err();
     assert!(
         e.contains("shear stiffness at rest") && e.contains("not positive"),
         "{e}"
     );
     // c = √(100/4) = 5, h = 1/16: the limit is 4·h/c = 0.05; 0.01 passes, 0.1 is refused.
     let law = NeoHookeanReference { g: 100.0 };
-    let dt = wave_limit(&scene, &grid, &law).unwrap();
+    let dt = limits_of(&scene, &grid, &law).unwrap();
     assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
     assert_eq!(dt.coupled, dt.split, "no coupled step with Split");
     let mut fast = scene.clone();
     fast.time.fixed_dt = Some(0.1);
-    let e = wave_limit(&fast, &grid, &law).unwrap_err();
+    let e = limits_of(&fast, &grid, &law).unwrap_err();
     assert!(e.contains("set time.fixed_dt ≤ 5.0000e-2"), "{e}");
     // The coupled step's cap is 25 wave Courant numbers (0.3125 s here): 0.1 passes, 2 does
     // not, and the refusal names the coupled step's option.
@@ -141,7 +153,7 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
             o.coupling = crate::elastic::ElasticCoupling::Coupled
         })
         .unwrap();
-    let dt = wave_limit(&fast, &grid, &law).unwrap();
+    let dt = limits_of(&fast, &grid, &law).unwrap();
     assert!((dt.coupled - 0.3125).abs() < 1e-12, "{dt:?}");
     assert!((dt.split - 0.05).abs() < 1e-12, "{dt:?}");
     // Auto: the same split limit and its own default cap, 200 against Coupled's 25; its
@@ -152,18 +164,18 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
             o.coupling = crate::elastic::ElasticCoupling::Auto
         })
         .unwrap();
-    let a = wave_limit(&auto, &grid, &law).unwrap();
+    let a = limits_of(&auto, &grid, &law).unwrap();
     assert_eq!(a.split, dt.split);
     assert!((a.coupled - 2.5).abs() < 1e-12, "{a:?}");
     for (s, limit) in [(&mut fast, "≤ 3.1250e-1"), (&mut auto, "≤ 2.5000e0")] {
         s.time.fixed_dt = Some(3.0);
-        let e = wave_limit(s, &grid, &law).unwrap_err();
+        let e = limits_of(s, &grid, &law).unwrap_err();
         assert!(
             e.contains("numerics.elastic.coupled_wave_courant") && e.contains(limit),
             "{e}"
         );
     }
-    let e = wave_limit(&auto, &grid, &law).unwrap_err();
+    let e = limits_of(&auto, &grid, &law).unwrap_err();
     assert!(e.contains("numerics.elastic.wave_courant"), "{e}");
     // A disk 3 cells across is refused (below MIN_CELLS_ACROSS = 5); 8 cells across is not.
     let mut small = scene.clone();
@@ -175,7 +187,7 @@ boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
             }
         })
         .unwrap();
-    let e = wave_limit(&small, &grid, &law).unwrap_err();
+    let e = limits_of(&small, &grid, &law).unwrap_err();
     assert!(
         e.contains("cells across") && e.contains("refine the grid"),
         "{e}"

@@ -61,7 +61,7 @@
 
 use crate::ops;
 use crate::scratch::{self, Scratch};
-use efsi_core::scene::{Boundary, OptionsDecl, Side};
+use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext,
@@ -99,7 +99,7 @@ impl StagePlugin for Projection {
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Pressure]
     }
-    fn needed(&self, _scene: &Scene) -> bool {
+    fn needed(&self, _scene: &Scene, _options: &Options) -> bool {
         true
     }
     fn options(&self) -> Option<OptionsDecl> {
@@ -108,12 +108,13 @@ impl StagePlugin for Projection {
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let n = grid.cells();
-        let o: ProjectionOptions = crate::options(scene)?;
+        let o: &ProjectionOptions = options.section()?;
         // Multigrid's matrix is assembled in the pool, beside the work vectors.
         let (precond, pooled) = match o.solver {
             PressureSolver::Multigrid => (Precond::Multigrid(Multigrid::new(2)), MATRIX),
@@ -132,13 +133,13 @@ impl StagePlugin for Projection {
             max_iter: o.max_iterations,
             precond,
             scratch: Scratch::reserve(shared, (WORK + pooled) * n),
-            increment: (incremental(scene) || crate::elastic::may_couple(scene))
+            increment: (incremental(options) || crate::elastic::may_couple(options))
                 .then(|| efsi_core::Field::zeros(grid)),
-            incremental: incremental(scene),
-            coupled_step: crate::elastic::may_couple(scene)
+            incremental: incremental(options),
+            coupled_step: crate::elastic::may_couple(options)
                 .then(|| crate::elastic::CoupledStep::shared(shared)),
-            hydrostatic_start: incremental(scene)
-                || crate::elastic::coupling(scene) == crate::elastic::ElasticCoupling::Coupled,
+            hydrostatic_start: incremental(options)
+                || crate::elastic::coupling(options) == crate::elastic::ElasticCoupling::Coupled,
             gravity: scene.gravity,
             // A copy of the density where it decides alone whether to assemble (measured on
             // cavity256: assembling and setting up every step costs 63 -> 90 ns per cell-step
@@ -149,13 +150,14 @@ impl StagePlugin for Projection {
     }
 }
 
-/// Whether `scene` runs the incremental pressure correction: `numerics.projection.incremental`,
-/// by default on unless the scene has an elastic solid; never where the coupled elastic step may
-/// be taken, which finds its own pressure.
-pub(crate) fn incremental(scene: &Scene) -> bool {
-    let elastic = crate::elastic::law_needed(scene);
-    let o: ProjectionOptions = scene.numerics.get().unwrap_or_default();
-    o.incremental.unwrap_or(!elastic) && !crate::elastic::may_couple(scene)
+/// Whether a checked scene (`options`) runs the incremental pressure correction:
+/// `numerics.projection.incremental`, by default on unless the scene has an elastic solid; never
+/// where the coupled elastic step may be taken, which finds its own pressure. (The section's
+/// default where no plugin given to the check declares it.)
+pub(crate) fn incremental(options: &Options) -> bool {
+    let elastic = crate::elastic::law_needed(options);
+    let o: ProjectionOptions = options.section_or_default(efsi_core::scene::Preset::Default);
+    o.incremental.unwrap_or(!elastic) && !crate::elastic::may_couple(options)
 }
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last
@@ -177,8 +179,8 @@ impl StagePlugin for PressurePredictor {
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::VelocityX, FieldId::VelocityY]
     }
-    fn needed(&self, scene: &Scene) -> bool {
-        incremental(scene)
+    fn needed(&self, _scene: &Scene, options: &Options) -> bool {
+        incremental(options)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ProjectionOptions>())
@@ -186,6 +188,7 @@ impl StagePlugin for PressurePredictor {
     fn build(
         &self,
         _scene: &Scene,
+        _options: &Options,
         _grid: &Grid,
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,

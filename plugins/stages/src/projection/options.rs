@@ -1,7 +1,7 @@
 //! The projection's options (`numerics.projection`), read by the projection and its predictor.
 
 use efsi_core::Scene;
-use efsi_core::scene::options::{StageOptions, check_iterations, check_tolerance};
+use efsi_core::scene::options::{Options, StageOptions, check_iterations, check_tolerance};
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the pressure projection.
@@ -105,9 +105,9 @@ impl StageOptions for ProjectionOptions {
         self.tolerance = Some(self.tolerance.map_or(1e-10, |t| t.min(1e-10)));
     }
 
-    fn resolve(&mut self, scene: &Scene) {
+    fn resolve(&mut self, scene: &Scene, options: &Options) {
         self.tolerance = Some(self.tolerance_in(scene));
         self.incremental
-            .get_or_insert_with(|| super::incremental(scene));
+            .get_or_insert_with(|| super::incremental(options));
     }
 }

@@ -10,12 +10,13 @@
 //! ),
 //! ```
 //!
-//! The core keeps the section as RON text ([`efsi_core::scene::Section`]); the stages read it
-//! as a [`Solid`] ([`SceneSolid::solid_spec`]). The VOF stage's plugin checks it
-//! ([`check`], its [`StagePlugin::check_scene`](efsi_core::StagePlugin::check_scene)) when a
-//! simulation is built — its ranges, and that it covers a cell of the grid — each failure
-//! naming the setting's path (`solid.density`), and puts back its settings in force, so that
-//! records hold the defaults too. `efsi_run::SceneOverrides` checks its ranges when a scene
+//! The core keeps the section as RON text ([`efsi_core::scene::Section`]), which overrides
+//! edit. The VOF stage's plugin reads it once as a [`Solid`] and checks it ([`check`], its
+//! [`StagePlugin::check_scene`](efsi_core::StagePlugin::check_scene)) when a simulation is
+//! built — its ranges, and that it covers a cell of the grid — each failure naming the
+//! setting's path (`solid.density`), puts back its settings in force, so that records hold the
+//! defaults too, and keeps the [`Solid`] in the checked scene's [`Options`], from which every
+//! stage that needs it reads it. `efsi_run::SceneOverrides` checks its ranges when a scene
 //! is loaded or changed.
 
 mod shape;
@@ -23,7 +24,7 @@ mod shape;
 pub use shape::Shape;
 
 use efsi_core::grid::Geometry;
-use efsi_core::scene::{Fluid, Section};
+use efsi_core::scene::{Fluid, Options, Section};
 use efsi_core::validate::{Checked, err, finite, positive};
 use efsi_core::{Field, Grid, Scene};
 use serde::{Deserialize, Serialize};
@@ -114,8 +115,9 @@ impl Solid {
 
 /// The `solid` section of a scene as a [`Solid`].
 pub trait SceneSolid {
-    /// The solid, if the scene has one; on error the section's path and the reader's message
-    /// (with the line and column in the scene file where known).
+    /// The solid, if the scene has one; on error the path of the setting that does not read
+    /// (`solid.law.parameters.G`) and the reader's message (with the line and column in the
+    /// scene file where known).
     fn solid_spec(&self) -> Result<Option<Solid>, (String, String)>;
     /// Replace the section by `solid`.
     fn set_solid(&mut self, solid: &Solid);
@@ -134,10 +136,7 @@ pub trait SceneSolid {
 
 impl SceneSolid for Scene {
     fn solid_spec(&self) -> Result<Option<Solid>, (String, String)> {
-        self.solid
-            .as_ref()
-            .map(|s| s.get().map_err(|m| ("solid".to_string(), m)))
-            .transpose()
+        self.solid.as_ref().map(|s| s.read("solid")).transpose()
     }
 
     fn set_solid(&mut self, solid: &Solid) {
@@ -145,24 +144,25 @@ impl SceneSolid for Scene {
     }
 }
 
-/// The solid of `scene` for a stage's build, which runs after [`check`]: the error names the
-/// section.
-pub(crate) fn solid(scene: &Scene) -> Result<Solid, String> {
-    scene
-        .solid_spec()
-        .map_err(|(f, m)| format!("{f}: {m}"))?
+/// The solid of a checked scene, as [`check`] read it into `options`; an error if the scene
+/// has none.
+pub(crate) fn solid(options: &Options) -> Result<&Solid, String> {
+    options
+        .get::<Solid>()
         .ok_or_else(|| "the scene has no solid".to_string())
 }
 
-/// Check the `solid` section of `scene`, if it has one ([`Solid::validate`]), and put back its
-/// settings in force (defaults filled in).
-pub fn check(scene: &mut Scene) -> Checked {
+/// Check the `solid` section of `scene`, if it has one ([`Solid::validate`]), put back its
+/// settings in force (defaults filled in) and keep the [`Solid`] in `options`, read once for
+/// every stage that needs it.
+pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
     let Some(solid) = scene.solid_spec()? else {
         return Ok(());
     };
     solid.validate(scene)?;
     covers_a_cell(scene, &solid.shape)?;
     scene.set_solid(&solid);
+    options.insert(solid);
     Ok(())
 }
 
@@ -185,6 +185,14 @@ fn covers_a_cell(scene: &Scene, shape: &Shape) -> Checked {
         );
     }
     Ok(())
+}
+
+/// The solid of a checked scene (`options`, as [`check`] read it) as JSON, what `run.json`
+/// records: its settings, defaults filled in; null without a solid.
+pub fn checked_json(options: &Options) -> serde_json::Value {
+    options.get::<Solid>().map_or(serde_json::Value::Null, |s| {
+        serde_json::to_value(s).unwrap_or_default()
+    })
 }
 
 /// The `solid` section of `scene` as JSON, what records hold (`run.json`, a checkpoint's

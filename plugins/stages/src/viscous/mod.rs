@@ -62,7 +62,7 @@ use crate::faces::UnknownFaces;
 use crate::ops::face_density;
 use crate::scratch::{self, Scratch};
 use crate::viscous_operator::Coefficients;
-use efsi_core::scene::OptionsDecl;
+use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -96,9 +96,9 @@ impl StagePlugin for Viscous {
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
     }
-    fn needed(&self, scene: &Scene) -> bool {
+    fn needed(&self, scene: &Scene, options: &Options) -> bool {
         scene.fluid.viscosity > 0.0
-            || crate::solid::solid(scene).is_ok_and(|s| s.viscosity(&scene.fluid) > 0.0)
+            || crate::solid::solid(options).is_ok_and(|s| s.viscosity(&scene.fluid) > 0.0)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ViscousOptions>())
@@ -107,13 +107,14 @@ impl StagePlugin for Viscous {
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let faces = UnknownFaces::new(grid, bc);
         let n = faces.len();
-        let o: ViscousOptions = crate::options(scene)?;
+        let o: &ViscousOptions = options.section()?;
         Ok(Box::new(ViscousStage {
             preconditioner: o.preconditioner,
             theta: o.theta,

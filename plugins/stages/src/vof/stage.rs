@@ -28,7 +28,7 @@ use super::advect::{self, VofAdvector, VofBoundaries, VofSide};
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
-use efsi_core::scene::{Boundary, Side};
+use efsi_core::scene::{Boundary, Options, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
@@ -55,20 +55,25 @@ impl StagePlugin for Vof {
     fn writes(&self) -> &'static [FieldId] {
         &[FieldId::SolidFraction, FieldId::Density, FieldId::Viscosity]
     }
-    fn needed(&self, scene: &Scene) -> bool {
+    fn needed(&self, scene: &Scene, _options: &Options) -> bool {
         crate::second_material(scene)
     }
-    fn check_scene(&self, scene: &mut Scene) -> efsi_core::validate::Checked {
-        crate::solid::check(scene)
+    fn check_scene(
+        &self,
+        scene: &mut Scene,
+        options: &mut Options,
+    ) -> efsi_core::validate::Checked {
+        crate::solid::check(scene, options)
     }
     fn build(
         &self,
         scene: &Scene,
+        options: &Options,
         grid: &Grid,
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let solid = crate::solid::solid(scene)?;
+        let solid = crate::solid::solid(options)?;
         let side = |s: Side| match bc.get(s) {
             Boundary::Periodic => Ok(VofSide::Periodic),
             Boundary::Outflow => Err(format!(
@@ -90,7 +95,7 @@ impl StagePlugin for Vof {
             scratch: Scratch::reserve(shared, advect::WORK * cells),
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
-            shape: solid.shape,
+            shape: solid.shape.clone(),
             initial_velocity: solid.velocity,
             u_adv: Field::zeros(grid),
             v_adv: Field::zeros(grid),
