@@ -114,16 +114,20 @@ impl BodyForceStage {
 
 impl Stage for BodyForceStage {
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
-        let c = par::max_over_rows(grid.ny, grid.nx, 0.0, |j| {
-            let j = j as isize;
-            let mut c = 0.0f64;
-            for i in 0..grid.nx as isize {
-                let uu = state.u[(i, j)].abs().max(state.u[(i + 1, j)].abs());
-                let vv = state.v[(i, j)].abs().max(state.v[(i, j + 1)].abs());
-                c = c.max(uu / grid.dx + vv / grid.dy);
-            }
-            c
-        });
+        let c = par::range(grid.ny).work(grid.nx).fold(
+            0.0,
+            |j| {
+                let j = j as isize;
+                let mut c = 0.0f64;
+                for i in 0..grid.nx as isize {
+                    let uu = state.u[(i, j)].abs().max(state.u[(i + 1, j)].abs());
+                    let vv = state.v[(i, j)].abs().max(state.v[(i, j + 1)].abs());
+                    c = c.max(uu / grid.dx + vv / grid.dy);
+                }
+                c
+            },
+            f64::max,
+        );
         let (gx, gy) = self.effective(state);
         let g = gx.hypot(gy) / grid.dx.min(grid.dy);
         Some(cfl * 2.0 / (c + (c * c + 4.0 * g).sqrt()))
@@ -139,17 +143,13 @@ impl Stage for BodyForceStage {
         let s = state.u.stride();
         let (lo, hi) = ((ux.lo + G) as usize, (ux.hi + G) as usize);
         let r0 = state.u.idx(-G, 0);
-        par::for_each_row(
-            &mut state.u.data_mut()[r0..r0 + grid.ny * s],
-            s,
-            |_, row| {
-                row[lo..hi].iter_mut().for_each(|u| *u += gx);
-            },
-        );
+        par::rows(&mut state.u.data_mut()[r0..r0 + grid.ny * s], s).for_each(|_, row| {
+            row[lo..hi].iter_mut().for_each(|u| *u += gx);
+        });
         let rows = (vy.hi - vy.lo).max(0) as usize;
         let r0 = state.v.idx(-G, vy.lo);
         let (i0, i1) = (G as usize, G as usize + grid.nx);
-        par::for_each_row(&mut state.v.data_mut()[r0..r0 + rows * s], s, |_, row| {
+        par::rows(&mut state.v.data_mut()[r0..r0 + rows * s], s).for_each(|_, row| {
             row[i0..i1].iter_mut().for_each(|v| *v += gy);
         });
         Ok(StageStats::default())

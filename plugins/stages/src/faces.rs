@@ -5,7 +5,7 @@
 
 use efsi_core::bc::FaceRange;
 use efsi_core::{BoundarySet, Field, G, GHOST, Grid};
-use efsi_linalg::par::for_each_row;
+use efsi_linalg::par;
 
 /// The normal-velocity faces an implicit stage solves for, in one compact order: the u-faces row
 /// by row, then the v-faces row by row. Compact vectors of the linear solvers use this order;
@@ -91,14 +91,14 @@ impl UnknownFaces {
         let nu = self.nu();
         let (xu, xv) = x.split_at_mut(nu);
         if nur > 0 {
-            for_each_row(xu, nur, |j, row| {
+            par::rows(&mut *xu, nur).for_each(|j, row| {
                 let k0 = u.idx(ux.lo, j as isize);
                 row.copy_from_slice(&u.data()[k0..k0 + nur]);
             });
         }
         let nx = u.stride() - 1 - 2 * GHOST;
         if nx > 0 {
-            for_each_row(xv, nx, |jr, row| {
+            par::rows(&mut *xv, nx).for_each(|jr, row| {
                 let k0 = v.idx(0, vy.lo + jr as isize);
                 row.copy_from_slice(&v.data()[k0..k0 + nx]);
             });
@@ -122,7 +122,7 @@ fn each_face_row(
     if let Some(rows) = nu.checked_div(nur) {
         let r0 = u.idx(-G, 0);
         let o = (G + ux.lo) as usize;
-        for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
+        par::rows(&mut u.data_mut()[r0..r0 + rows * s], s).for_each(|j, row| {
             f(&mut row[o..o + nur], &x[j * nur..(j + 1) * nur]);
         });
     }
@@ -130,7 +130,7 @@ fn each_face_row(
     let r0 = v.idx(-G, vy.lo);
     let xv = &x[nu..];
     let o = GHOST;
-    for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
+    par::rows(&mut v.data_mut()[r0..r0 + rows * s], s).for_each(|j, row| {
         f(&mut row[o..o + nx], &xv[j * nx..(j + 1) * nx]);
     });
 }

@@ -62,31 +62,39 @@ pub fn centre_velocity(u: &Field, v: &Field, i: isize, j: isize) -> (f64, f64) {
 /// rows in parallel, summed in row order (the same bits on any number of threads).
 pub fn kinetic_energy(grid: &Grid, u: &Field, v: &Field, rho: &Field) -> f64 {
     let m = &grid.metric;
-    let [e] = efsi_linalg::par::sum_rows(grid.ny, grid.nx, |j| {
-        let j = j as isize;
-        let mut e = 0.0;
-        for i in 0..grid.nx as isize {
-            // Half of each of the cell's four faces belongs to it.
-            let eu =
-                0.5 * (m.rx(i) * u[(i, j)].powi(2) + m.rx(i + 1) * u[(i + 1, j)].powi(2)) / 2.0;
-            let ev = 0.5 * m.rc(i) * (v[(i, j)].powi(2) + v[(i, j + 1)].powi(2)) / 2.0;
-            e += rho[(i, j)] * (eu + ev) * grid.dx * grid.dy;
-        }
-        [e]
-    });
+    let [e] = efsi_linalg::par::range(grid.ny).work(grid.nx).fold(
+        [0.0; 1],
+        |j| {
+            let j = j as isize;
+            let mut e = 0.0;
+            for i in 0..grid.nx as isize {
+                // Half of each of the cell's four faces belongs to it.
+                let eu =
+                    0.5 * (m.rx(i) * u[(i, j)].powi(2) + m.rx(i + 1) * u[(i + 1, j)].powi(2)) / 2.0;
+                let ev = 0.5 * m.rc(i) * (v[(i, j)].powi(2) + v[(i, j + 1)].powi(2)) / 2.0;
+                e += rho[(i, j)] * (eu + ev) * grid.dx * grid.dy;
+            }
+            [e]
+        },
+        efsi_linalg::par::add,
+    );
     e
 }
 
 /// `−∫ρ g·x dV` over the cells (per radian in axisymmetric geometry).
 /// Rows in parallel, summed in row order (the same bits on any number of threads).
 pub fn potential_energy(grid: &Grid, rho: &Field, (gx, gy): (f64, f64)) -> f64 {
-    let [e] = efsi_linalg::par::sum_rows(grid.ny, grid.nx, |j| {
-        let j = j as isize;
-        let mut e = 0.0;
-        for i in 0..grid.nx as isize {
-            e -= rho[(i, j)] * (gx * grid.xc(i) + gy * grid.yc(j)) * grid.cell_volume(i);
-        }
-        [e]
-    });
+    let [e] = efsi_linalg::par::range(grid.ny).work(grid.nx).fold(
+        [0.0; 1],
+        |j| {
+            let j = j as isize;
+            let mut e = 0.0;
+            for i in 0..grid.nx as isize {
+                e -= rho[(i, j)] * (gx * grid.xc(i) + gy * grid.yc(j)) * grid.cell_volume(i);
+            }
+            [e]
+        },
+        efsi_linalg::par::add,
+    );
     e
 }

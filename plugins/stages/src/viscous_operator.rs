@@ -36,7 +36,7 @@
 use crate::faces::UnknownFaces;
 use efsi_core::{Field, G, Grid};
 use efsi_linalg::Stencil5;
-use efsi_linalg::par::{self, for_each_row, for_each_row_sum, for_each_row2};
+use efsi_linalg::par;
 
 /// The coefficients of `K_η` (see the module docs) for one grid and its unknown faces.
 pub(crate) struct Coefficients {
@@ -91,7 +91,7 @@ impl Coefficients {
         let r0 = mu.idx(-G, 0);
         let rows = g.ny + 1;
         let mud = mu.data();
-        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
+        par::rows(&mut self.gc.data_mut()[r0..r0 + rows * s], s).for_each(|jr, gr| {
             let k0 = r0 + jr * s;
             for i in 0..=g.nx as isize {
                 let c = (i + G) as usize;
@@ -112,7 +112,7 @@ impl Coefficients {
         let r0 = eta.idx(-G, 0);
         let rows = g.ny + 1;
         let ekd = &eta_k.data()[r0..r0 + rows * s];
-        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
+        par::rows(&mut self.gc.data_mut()[r0..r0 + rows * s], s).for_each(|jr, gr| {
             let er = &ekd[jr * s..(jr + 1) * s];
             for i in 0..=g.nx as isize {
                 let c = (i + G) as usize;
@@ -130,7 +130,7 @@ impl Coefficients {
         let ed = eta.data();
         let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
         let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
-        for_each_row2(cxx, cyy, s, |jr, cx, cy| {
+        par::rows((cxx, cyy), s).for_each(|jr, (cx, cy)| {
             let row = &ed[jr * s..(jr + 1) * s];
             for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
                 let r = m.rc(c as isize - G);
@@ -150,7 +150,7 @@ impl Coefficients {
         let nu = self.faces.nu();
         let hoop = &mut self.hoop[..nu];
         if nur > 0 {
-            for_each_row(hoop, nur, |j, hs| {
+            par::rows(&mut *hoop, nur).for_each(|j, hs| {
                 for (c, h) in hs.iter_mut().enumerate() {
                     let i = ux.lo + c as isize;
                     let k = eta.idx(i, j as isize);
@@ -178,14 +178,14 @@ impl Coefficients {
         let (dg_u, dg_v) = diag.split_at_mut(nu);
         let idx = |i: isize, j: isize| self.cxx.idx(i, j);
         if nur > 0 {
-            for_each_row(dg_u, nur, |j, dgs| {
+            par::rows(&mut *dg_u, nur).for_each(|j, dgs| {
                 for (c, dg) in dgs.iter_mut().enumerate() {
                     let k = idx(ux.lo + c as isize, j as isize);
                     *dg = dm_u[j * nur + c] + (cxx[k] + cxx[k - 1]) + alpha * (gd[k + s] + gd[k]);
                 }
             });
         }
-        for_each_row(dg_v, nx, |jr, dgs| {
+        par::rows(&mut *dg_v, nx).for_each(|jr, dgs| {
             let j = vy.lo + jr as isize;
             for (i, dg) in dgs.iter_mut().enumerate() {
                 let k = idx(i as isize, j);
@@ -266,63 +266,71 @@ impl Coefficients {
         };
         let mut xy = 0.0;
         if nur > 0 {
-            xy = for_each_row_sum(yu, nur, |j, yr| {
+            xy = par::rows(&mut *yu, nur).fold(
+                0.0,
+                |j, yr| {
+                    let n = yr.len();
+                    let k0 = u.idx(ux.lo, j as isize);
+                    let q0 = j * nur;
+                    let uc = &ud[k0..k0 + n];
+                    let ue = &ud[k0 + 1..k0 + 1 + n];
+                    let uw = &ud[k0 - 1..k0 - 1 + n];
+                    let un = &ud[k0 + s..k0 + s + n];
+                    let us = &ud[k0 - s..k0 - s + n];
+                    let vc = &vd[k0..k0 + n];
+                    let vw = &vd[k0 - 1..k0 - 1 + n];
+                    let vn = &vd[k0 + s..k0 + s + n];
+                    let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
+                    let ac = &cxx[k0..k0 + n];
+                    let aw = &cxx[k0 - 1..k0 - 1 + n];
+                    let gs = &gd[k0..k0 + n];
+                    let gn = &gd[k0 + s..k0 + s + n];
+                    let dr = &du[q0..q0 + n];
+                    let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
+                    for c in 0..n {
+                        let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
+                        let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
+                        let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+                        yr[c] = dr[c] * xr[c] - k;
+                    }
+                    let yr = &*yr;
+                    par::sum4(n, |c| xr[c] * yr[c])
+                },
+                |s, p| s + p,
+            );
+        }
+        xy + par::rows(&mut *yv, nx).fold(
+            0.0,
+            |jr, yr| {
                 let n = yr.len();
-                let k0 = u.idx(ux.lo, j as isize);
-                let q0 = j * nur;
-                let uc = &ud[k0..k0 + n];
-                let ue = &ud[k0 + 1..k0 + 1 + n];
-                let uw = &ud[k0 - 1..k0 - 1 + n];
-                let un = &ud[k0 + s..k0 + s + n];
-                let us = &ud[k0 - s..k0 - s + n];
+                let k0 = v.idx(0, vy.lo + jr as isize);
+                let q0 = jr * nx;
                 let vc = &vd[k0..k0 + n];
+                let ve = &vd[k0 + 1..k0 + 1 + n];
                 let vw = &vd[k0 - 1..k0 - 1 + n];
                 let vn = &vd[k0 + s..k0 + s + n];
-                let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
-                let ac = &cxx[k0..k0 + n];
-                let aw = &cxx[k0 - 1..k0 - 1 + n];
-                let gs = &gd[k0..k0 + n];
-                let gn = &gd[k0 + s..k0 + s + n];
-                let dr = &du[q0..q0 + n];
-                let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
+                let vs = &vd[k0 - s..k0 - s + n];
+                let uc = &ud[k0..k0 + n];
+                let us = &ud[k0 - s..k0 - s + n];
+                let ue = &ud[k0 + 1..k0 + 1 + n];
+                let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
+                let bc = &cyy[k0..k0 + n];
+                let bs = &cyy[k0 - s..k0 - s + n];
+                let gw = &gd[k0..k0 + n];
+                let ge = &gd[k0 + 1..k0 + 1 + n];
+                let dr = &dv[q0..q0 + n];
+                let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
                 for c in 0..n {
-                    let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
-                    let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
-                    let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+                    let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
+                    let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
+                    let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
                     yr[c] = dr[c] * xr[c] - k;
                 }
                 let yr = &*yr;
                 par::sum4(n, |c| xr[c] * yr[c])
-            });
-        }
-        xy + for_each_row_sum(yv, nx, |jr, yr| {
-            let n = yr.len();
-            let k0 = v.idx(0, vy.lo + jr as isize);
-            let q0 = jr * nx;
-            let vc = &vd[k0..k0 + n];
-            let ve = &vd[k0 + 1..k0 + 1 + n];
-            let vw = &vd[k0 - 1..k0 - 1 + n];
-            let vn = &vd[k0 + s..k0 + s + n];
-            let vs = &vd[k0 - s..k0 - s + n];
-            let uc = &ud[k0..k0 + n];
-            let us = &ud[k0 - s..k0 - s + n];
-            let ue = &ud[k0 + 1..k0 + 1 + n];
-            let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
-            let bc = &cyy[k0..k0 + n];
-            let bs = &cyy[k0 - s..k0 - s + n];
-            let gw = &gd[k0..k0 + n];
-            let ge = &gd[k0 + 1..k0 + 1 + n];
-            let dr = &dv[q0..q0 + n];
-            let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
-            for c in 0..n {
-                let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
-                let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
-                let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
-                yr[c] = dr[c] * xr[c] - k;
-            }
-            let yr = &*yr;
-            par::sum4(n, |c| xr[c] * yr[c])
-        })
+            },
+            |s, p| s + p,
+        )
     }
 }
 
@@ -337,7 +345,7 @@ pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
     let rows = grid.ny + 1;
     let mud = mu.data();
     let nx = grid.nx as isize;
-    for_each_row(&mut out.data_mut()[r0..r0 + rows * s], s, |jr, mr| {
+    par::rows(&mut out.data_mut()[r0..r0 + rows * s], s).for_each(|jr, mr| {
         let k0 = r0 + jr * s;
         for i in 0..=nx {
             let c = (i + G) as usize;

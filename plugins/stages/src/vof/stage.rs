@@ -161,7 +161,7 @@ impl VofStage {
         let (rf, rs) = self.rho;
         let (mf, ms) = self.mu;
         let phi = phi.data();
-        par::for_each_row2(rho.data_mut(), mu.data_mut(), REDUCE_CHUNK, |c, r, m| {
+        par::rows((rho.data_mut(), mu.data_mut()), REDUCE_CHUNK).for_each(|c, (r, m)| {
             let o = c * REDUCE_CHUNK;
             for ((r, m), f) in r.iter_mut().zip(m).zip(&phi[o..]) {
                 *r = (1.0 - f) * rf + f * rs;
@@ -232,7 +232,7 @@ impl Stage for VofStage {
         let w = if ctx.step == 0 { 0.0 } else { 0.5 };
         for (a, b) in [(&mut self.u_adv, &state.u), (&mut self.v_adv, &state.v)] {
             let b = b.data();
-            par::for_each_chunk(a.data_mut(), |o, a| {
+            par::chunks(a.data_mut()).for_each(|o, a| {
                 for (x, y) in a.iter_mut().zip(&b[o..]) {
                     *x = w * *x + (1.0 - w) * y;
                 }
@@ -307,22 +307,30 @@ const MAX_SUBSTEPS: u64 = 64;
 fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
     let m = &grid.metric;
     let (nx, ny) = (grid.nx, grid.ny);
-    let rate_u = par::max_over_rows(ny, nx + 1, 0.0, |j| {
-        let mut rate = 0.0f64;
-        for i in 0..=nx as isize {
-            let a = u[(i, j as isize)];
-            let up = if a > 0.0 { i - 1 } else { i };
-            let rc = m.rc(up);
-            let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
-            rate = rate.max(f.max(1.0) * a.abs());
-        }
-        rate
-    });
-    let rate_v = par::max_over_rows(ny + 1, nx, 0.0, |j| {
-        let k = v.idx(0, j as isize);
-        v.data()[k..k + nx]
-            .iter()
-            .fold(0.0f64, |r, a| r.max(a.abs()))
-    });
+    let rate_u = par::range(ny).work(nx + 1).fold(
+        0.0,
+        |j| {
+            let mut rate = 0.0f64;
+            for i in 0..=nx as isize {
+                let a = u[(i, j as isize)];
+                let up = if a > 0.0 { i - 1 } else { i };
+                let rc = m.rc(up);
+                let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
+                rate = rate.max(f.max(1.0) * a.abs());
+            }
+            rate
+        },
+        f64::max,
+    );
+    let rate_v = par::range(ny + 1).work(nx).fold(
+        0.0,
+        |j| {
+            let k = v.idx(0, j as isize);
+            v.data()[k..k + nx]
+                .iter()
+                .fold(0.0f64, |r, a| r.max(a.abs()))
+        },
+        f64::max,
+    );
     (rate_u / grid.dx).max(rate_v / grid.dy)
 }
