@@ -232,21 +232,10 @@ fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
 }
 
-/// Largest stable Δt of the explicit convective term at Courant number `cfl` (rows in
-/// parallel; a maximum, so the same on any thread count).
+/// Largest stable Δt of the explicit convective term at Courant number `cfl`
+/// ([`crate::ops::convective_rate`]).
 pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> {
-    let rate = par::range(grid.ny).work(grid.nx).fold(
-        0.0,
-        |j| {
-            let j = j as isize;
-            (0..grid.nx as isize).fold(0.0f64, |rate, i| {
-                let uu = u[(i, j)].abs().max(u[(i + 1, j)].abs());
-                let vv = v[(i, j)].abs().max(v[(i, j + 1)].abs());
-                rate.max(uu / grid.dx + vv / grid.dy)
-            })
-        },
-        f64::max,
-    );
+    let rate = crate::ops::convective_rate(grid, u, v);
     (rate > 0.0).then(|| cfl / rate)
 }
 
