@@ -34,7 +34,7 @@
 //! the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
-use efsi_core::{Field, G, Grid};
+use efsi_core::{Field, G, Grid, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
 use efsi_linalg::par;
 
@@ -87,17 +87,13 @@ impl Coefficients {
     pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
         self.set_cells(g, mu, scale);
         let m = &g.metric;
-        let s = mu.stride();
-        let r0 = mu.idx(-G, 0);
-        let rows = g.ny + 1;
-        let mud = mu.data();
-        par::rows(&mut self.gc.data_mut()[r0..r0 + rows * s], s).for_each(|jr, gr| {
-            let k0 = r0 + jr * s;
-            for i in 0..=g.nx as isize {
-                let c = (i + G) as usize;
-                let k = k0 + c;
-                let mk = corner_mean([mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]]);
-                gr[c] = scale * m.rx(i) * mk;
+        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
+            let (sw, se) = (mu.at(&l, [-1, -1, 0]), mu.at(&l, [0, -1, 0]));
+            let (nw, ne) = (mu.at(&l, [-1, 0, 0]), mu.at(&l, [0; 3]));
+            let rx = m.rx_on(&l, 0);
+            for n in 0..l.len {
+                let mk = corner_mean([sw[n], se[n], nw[n], ne[n]]);
+                gr[n] = scale * rx[n] * mk;
             }
         });
         self.set_hoop(g, mu, scale);
@@ -108,15 +104,10 @@ impl Coefficients {
     pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
         self.set_cells(g, eta, scale);
         let m = &g.metric;
-        let s = eta.stride();
-        let r0 = eta.idx(-G, 0);
-        let rows = g.ny + 1;
-        let ekd = &eta_k.data()[r0..r0 + rows * s];
-        par::rows(&mut self.gc.data_mut()[r0..r0 + rows * s], s).for_each(|jr, gr| {
-            let er = &ekd[jr * s..(jr + 1) * s];
-            for i in 0..=g.nx as isize {
-                let c = (i + G) as usize;
-                gr[c] = scale * m.rx(i) * er[c];
+        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
+            let (ek, rx) = (eta_k.at(&l, [0; 3]), m.rx_on(&l, 0));
+            for n in 0..l.len {
+                gr[n] = scale * rx[n] * ek[n];
             }
         });
         self.set_hoop(g, eta, scale);
@@ -144,18 +135,16 @@ impl Coefficients {
     fn set_hoop(&mut self, g: &Grid, eta: &Field, scale: f64) {
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
-        let ed = eta.data();
-        let ux = self.faces.ux;
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.faces.nu();
-        let hoop = &mut self.hoop[..nu];
-        if nur > 0 {
-            par::rows(&mut *hoop, nur).for_each(|j, hs| {
+        let faces = self.faces.u_region();
+        let hoop = &mut self.hoop[..faces.size()];
+        if !faces.is_empty() {
+            par::rows(&mut *hoop, faces.len(0)).for_each(|n, hs| {
+                let l = faces.line(n);
+                let (ew, ec) = (eta.at(&l, [-1, 0, 0]), eta.at(&l, [0; 3]));
+                let (rx, hx) = (m.rx_on(&l, 0), m.hoop_x_on(&l, 0));
                 for (c, h) in hs.iter_mut().enumerate() {
-                    let i = ux.lo + c as isize;
-                    let k = eta.idx(i, j as isize);
-                    let x = m.hoop_x(i);
-                    *h = scale * dx * dy * m.rx(i) * (ed[k - 1] + ed[k]) * x * x;
+                    let x = hx[c];
+                    *h = scale * dx * dy * rx[c] * (ew[c] + ec[c]) * x * x;
                 }
             });
         }
@@ -167,31 +156,31 @@ impl Coefficients {
     /// whatever its ghost rule (a reflected no-slip ghost doubles it in the matrix), which keeps
     /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Rows in parallel.
     pub(crate) fn diagonal(&self, dm: &[f64], diag: &mut [f64]) {
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.faces.nu();
-        let nx = self.nx;
-        let s = self.cxx.stride();
-        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
+        let (cxx, cyy, gc) = (&self.cxx, &self.cyy, &self.gc);
         let (alpha, beta) = (self.alpha, self.beta);
-        let (dm_u, dm_v) = dm.split_at(nu);
-        let (dg_u, dg_v) = diag.split_at_mut(nu);
-        let idx = |i: isize, j: isize| self.cxx.idx(i, j);
-        if nur > 0 {
-            par::rows(&mut *dg_u, nur).for_each(|j, dgs| {
-                for (c, dg) in dgs.iter_mut().enumerate() {
-                    let k = idx(ux.lo + c as isize, j as isize);
-                    *dg = dm_u[j * nur + c] + (cxx[k] + cxx[k - 1]) + alpha * (gd[k + s] + gd[k]);
+        let (dm_u, dm_v) = dm.split_at(uf.size());
+        let (dg_u, dg_v) = diag.split_at_mut(uf.size());
+        if !uf.is_empty() {
+            par::rows((&mut *dg_u, dm_u), uf.len(0)).for_each(|n, (dgs, dm)| {
+                let l = uf.line(n);
+                let (cw, ce) = (cxx.at(&l, [-1, 0, 0]), cxx.at(&l, [0; 3]));
+                let (gs, gn) = (gc.at(&l, [0; 3]), gc.at(&l, unit(1)));
+                for c in 0..l.len {
+                    dgs[c] = dm[c] + (ce[c] + cw[c]) + alpha * (gn[c] + gs[c]);
                 }
             });
         }
-        par::rows(&mut *dg_v, nx).for_each(|jr, dgs| {
-            let j = vy.lo + jr as isize;
-            for (i, dg) in dgs.iter_mut().enumerate() {
-                let k = idx(i as isize, j);
-                *dg = dm_v[jr * nx + i] + (cyy[k] + cyy[k - s]) + beta * (gd[k + 1] + gd[k]);
-            }
-        });
+        if !vf.is_empty() {
+            par::rows((&mut *dg_v, dm_v), vf.len(0)).for_each(|n, (dgs, dm)| {
+                let l = vf.line(n);
+                let (cs, cn) = (cyy.at(&l, [0, -1, 0]), cyy.at(&l, [0; 3]));
+                let (gw, ge) = (gc.at(&l, [0; 3]), gc.at(&l, unit(0)));
+                for c in 0..l.len {
+                    dgs[c] = dm[c] + (cn[c] + cs[c]) + beta * (ge[c] + gw[c]);
+                }
+            });
+        }
     }
 
     /// The u–u and v–v blocks of `diag(d) − K` — `d` the full diagonal ([`diagonal`](Self::diagonal))
