@@ -31,8 +31,8 @@ use crate::scratch::Scratch;
 use crate::solid::Shape;
 use efsi_core::scene::{Boundary, Side};
 use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext,
+    BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
+    StageStats, Stagger, State, StepContext,
 };
 use efsi_linalg::par::{self, REDUCE_CHUNK};
 
@@ -306,31 +306,20 @@ const MAX_SUBSTEPS: u64 = 64;
 /// `|u|/dx` next to the axis) and `|v|/dy` on y-faces.
 fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
     let m = &grid.metric;
-    let (nx, ny) = (grid.nx, grid.ny);
-    let rate_u = par::range(ny).work(nx + 1).fold(
-        0.0,
-        |j| {
-            let mut rate = 0.0f64;
-            for i in 0..=nx as isize {
-                let a = u[(i, j as isize)];
-                let up = if a > 0.0 { i - 1 } else { i };
-                let rc = m.rc(up);
-                let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
-                rate = rate.max(f.max(1.0) * a.abs());
-            }
-            rate
-        },
-        f64::max,
-    );
-    let rate_v = par::range(ny + 1).work(nx).fold(
-        0.0,
-        |j| {
-            let k = v.idx(0, j as isize);
-            v.data()[k..k + nx]
-                .iter()
-                .fold(0.0f64, |r, a| r.max(a.abs()))
-        },
-        f64::max,
-    );
+    let rate_u = Region::of(grid, Stagger::XFace).max(0.0, |l| {
+        let u = u.at(&l, [0; 3]);
+        let mut rate = 0.0f64;
+        for (n, [i, _, _]) in l.indices().enumerate() {
+            let a = u[n];
+            let up = if a > 0.0 { i - 1 } else { i };
+            let rc = m.rc(up);
+            let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
+            rate = rate.max(f.max(1.0) * a.abs());
+        }
+        rate
+    });
+    let rate_v = Region::of(grid, Stagger::YFace).max(0.0, |l| {
+        v.at(&l, [0; 3]).iter().fold(0.0f64, |r, a| r.max(a.abs()))
+    });
     (rate_u / grid.dx).max(rate_v / grid.dy)
 }
