@@ -193,7 +193,30 @@ impl Region {
     /// Lines in parallel when there is enough work; each writes only its own indices, so the
     /// result is the serial loop's.
     pub fn for_each<F: FieldsMut>(&self, fields: F, f: impl Fn(Line, F::Lanes) + Sync + Send) {
-        self.fold_mut(fields, (), |l, v| f(l, v), |(), ()| ());
+        if let Some((lanes, x)) = self.lanes(fields) {
+            par::rows(lanes, self.stride)
+                .work(self.len(0))
+                .for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+        }
+    }
+
+    /// The fields' storage from the region's first line's padded row to its last one's, and
+    /// the columns of a line within a row (`None` for an empty region).
+    fn lanes<F: FieldsMut>(&self, fields: F) -> Option<(F::Lanes, std::ops::Range<usize>)> {
+        if self.is_empty() {
+            return None;
+        }
+        let (stride, rows) = fields.shape();
+        assert_eq!(
+            (stride, rows),
+            (self.stride, self.rows),
+            "fields of another grid"
+        );
+        self.check();
+        // In two dimensions every padded row in that range is a line of the region.
+        let (r0, r1) = ((self.lo[1] + G) as usize, (self.hi[1] + G) as usize);
+        let x = (self.lo[0] + G) as usize..(self.hi[0] + G) as usize;
+        Some((fields.lanes(r0 * stride..r1 * stride), x))
     }
 
     /// `combine(…combine(init, f(line₀, values₀))…)`: [`Region::for_each`] whose kernel also
@@ -206,22 +229,10 @@ impl Region {
         f: impl Fn(Line, F::Lanes) -> P + Sync + Send,
         combine: impl Fn(A, P) -> A,
     ) -> A {
-        if self.is_empty() {
+        let Some((lanes, x)) = self.lanes(fields) else {
             return init;
-        }
-        let (stride, rows) = fields.shape();
-        assert_eq!(
-            (stride, rows),
-            (self.stride, self.rows),
-            "fields of another grid"
-        );
-        self.check();
-        // The padded rows from the first line's to the last one's; in two dimensions every one
-        // of them is a line of the region.
-        let (r0, r1) = ((self.lo[1] + G) as usize, (self.hi[1] + G) as usize);
-        let lanes = fields.lanes(r0 * stride..r1 * stride);
-        let x = (self.lo[0] + G) as usize..(self.hi[0] + G) as usize;
-        par::rows(lanes, stride).work(self.len(0)).fold(
+        };
+        par::rows(lanes, self.stride).work(self.len(0)).fold(
             init,
             |n, l| f(self.line(n), l.sub(x.clone())),
             combine,

@@ -548,11 +548,13 @@ pub fn add<const N: usize>(mut a: [f64; N], b: [f64; N]) -> [f64; N] {
 /// slice into owned pieces exists (a row's update reads its neighbour rows' cells of the other
 /// colour while those rows' cells of its own colour are written by other threads).
 ///
-/// Every access is bounds-checked (in release builds too): an index past the slice panics, it
-/// never touches memory outside it. What the compiler cannot check is the absence of a data
-/// race, which is the caller's proof at each `unsafe` block (the sweep's phases, whose two
-/// colours and row chunks never let one thread write an element another touches). The view
-/// borrows the slice mutably for its lifetime, so no other safe access can alias it.
+/// Bounds are checked in release builds too, once per span: a kernel passes the range a row of
+/// its loop touches to [`SharedSlice::check`] (which panics if it leaves the slice) and then
+/// reads and writes inside it with `get`/`set`, which check each index in debug builds. What
+/// the compiler cannot check is the absence of a data race, which is the caller's proof at each
+/// `unsafe` block (the sweep's phases, whose two colours and row chunks never let one thread
+/// write an element another touches). The view borrows the slice mutably for its lifetime, so
+/// no other access can alias it.
 #[derive(Clone, Copy)]
 pub(crate) struct SharedSlice<'a> {
     ptr: *mut f64,
@@ -574,24 +576,35 @@ impl<'a> SharedSlice<'a> {
             _borrow: std::marker::PhantomData,
         }
     }
-    /// Read element `k` (panics past the end).
+    /// Panics unless `r` lies within the slice: the span a kernel's `get`/`set` will touch.
+    #[inline(always)]
+    pub(crate) fn check(self, r: std::ops::Range<usize>) {
+        assert!(
+            r.start <= r.end && r.end <= self.len,
+            "SharedSlice: span {r:?} past {}",
+            self.len
+        );
+    }
+    /// Read element `k`.
     ///
     /// # Safety
-    /// No other thread writes element `k` during this parallel loop.
+    /// `k` lies in a span passed to [`check`](Self::check), and no other thread writes
+    /// element `k` during this parallel loop.
     #[inline(always)]
     pub(crate) unsafe fn get(self, k: usize) -> f64 {
-        assert!(k < self.len, "SharedSlice: index {k} past {}", self.len);
-        // SAFETY: in bounds (checked above), valid for 'a, not concurrently written (caller).
+        debug_assert!(k < self.len);
+        // SAFETY: in bounds (a checked span, caller), valid for 'a, not concurrently written.
         unsafe { *self.ptr.add(k) }
     }
-    /// Write element `k` (panics past the end).
+    /// Write element `k`.
     ///
     /// # Safety
-    /// No other thread reads or writes element `k` during this parallel loop.
+    /// `k` lies in a span passed to [`check`](Self::check), and no other thread reads or
+    /// writes element `k` during this parallel loop.
     #[inline(always)]
     pub(crate) unsafe fn set(self, k: usize, v: f64) {
-        assert!(k < self.len, "SharedSlice: index {k} past {}", self.len);
-        // SAFETY: in bounds (checked above), valid for 'a, exclusively owned here (caller).
+        debug_assert!(k < self.len);
+        // SAFETY: in bounds (a checked span, caller), valid for 'a, exclusively owned here.
         unsafe { *self.ptr.add(k) = v }
     }
 }

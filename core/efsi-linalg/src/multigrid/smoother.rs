@@ -29,6 +29,8 @@ impl Level {
             let base = (j + 1) * s + 1;
             let o = base + ((colour + j) & 1);
             let end = base + nx;
+            // Everything this row touches: its cells, their neighbours and the row's ghosts.
+            xs.check(base - 1 - s..end + 1 + s);
             if o < end {
                 // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
                 // exactly the length it touches, so that no index needs a bounds check.
@@ -40,8 +42,9 @@ impl Level {
                 for m in 0..cnt {
                     let t = 2 * m;
                     let k = o + t;
-                    // SAFETY: a row update writes only cells of `colour` in row j and reads
-                    // their neighbours (the other colour) and row j's ghosts. The phases below
+                    // SAFETY: inside the span checked above. A row update writes only cells of
+                    // `colour` in row j and reads their neighbours (the other colour) and row
+                    // j's ghosts. The phases below
                     // never run two updates concurrently where one writes what the other
                     // touches: in phase 1 a chunk updates the second colour only of rows whose
                     // neighbour rows are in the same chunk; in phase 2 only second-colour
@@ -86,8 +89,9 @@ impl Level {
         par::range(chunks).work(chunk * nx).for_each(phase1);
         if self.periodic_y {
             // The second colour of rows 0 and ny − 1 reads the first colour across the wrap.
+            xs.check(0..(ny + 2) * s);
             for i in 1..=nx {
-                // SAFETY: serial code between the two parallel phases.
+                // SAFETY: serial code between the two parallel phases, inside the checked span.
                 unsafe {
                     xs.set(i, xs.get(ny * s + i));
                     xs.set((ny + 1) * s + i, xs.get(s + i));
