@@ -126,7 +126,7 @@ impl Fgmres {
         let mut target = tol;
         let mut iterations = 0;
         a.apply(x, r);
-        par::chunks((&mut r[..], &b[..]))
+        par::chunks((&mut r[..], b))
             .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
         let mut beta = dot(r, r).sqrt();
         loop {
@@ -238,7 +238,7 @@ impl Fgmres {
             subtract(&z[..k], &y[..k], x);
             // The true residual.
             a.apply(x, r);
-            par::chunks((&mut r[..], &b[..]))
+            par::chunks((&mut r[..], b))
                 .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
             beta = dot(r, r).sqrt();
             if k > 0 && !est.is_finite() {
