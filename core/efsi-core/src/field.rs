@@ -134,9 +134,11 @@ impl Field {
         };
         // The common case, all finite, in one vectorised pass over rows in parallel; only a
         // field that fails it is searched for its first bad value.
-        let bad = efsi_linalg::par::max_over_rows(je, ie, 0.0, |j| {
-            if all_finite(row(j)) { 0.0 } else { 1.0 }
-        });
+        let bad = efsi_linalg::par::range(je).work(ie).fold(
+            0.0,
+            |j| if all_finite(row(j)) { 0.0 } else { 1.0 },
+            f64::max,
+        );
         if bad == 0.0 {
             return None;
         }

@@ -70,6 +70,31 @@ impl Metric {
     pub fn rx_row(&self, n: usize) -> &[f64] {
         &self.rx[GHOST..GHOST + n]
     }
+    /// `r_c` at the columns of `line` shifted by `di` (a slice of the line's length).
+    #[inline(always)]
+    pub fn rc_on(&self, line: &crate::loops::Line, di: isize) -> &[f64] {
+        Self::on(&self.rc, line, di)
+    }
+    /// `r_f` at the columns of `line` shifted by `di`.
+    #[inline(always)]
+    pub fn rx_on(&self, line: &crate::loops::Line, di: isize) -> &[f64] {
+        Self::on(&self.rx, line, di)
+    }
+    /// The hoop factor at cell centres on the columns of `line` shifted by `di`.
+    #[inline(always)]
+    pub fn hoop_c_on(&self, line: &crate::loops::Line, di: isize) -> &[f64] {
+        Self::on(&self.hoop_c, line, di)
+    }
+    /// The hoop factor at x-faces on the columns of `line` shifted by `di`.
+    #[inline(always)]
+    pub fn hoop_x_on(&self, line: &crate::loops::Line, di: isize) -> &[f64] {
+        Self::on(&self.hoop_x, line, di)
+    }
+    #[inline(always)]
+    fn on<'a>(v: &'a [f64], line: &crate::loops::Line, di: isize) -> &'a [f64] {
+        let o = (line.start[0] + di + G) as usize;
+        &v[o..o + line.len]
+    }
     /// Hoop factor at cell centres: `1/r_c` (axisymmetric) or 0 (planar).
     #[inline(always)]
     pub fn hoop_c(&self, i: isize) -> f64 {

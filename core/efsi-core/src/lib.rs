@@ -12,6 +12,7 @@ pub mod bc;
 pub mod error;
 pub mod field;
 pub mod grid;
+pub mod loops;
 pub mod overrides;
 pub mod scene;
 pub mod schedule;
@@ -25,6 +26,7 @@ pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
+pub use loops::{Index, Line, Region, unit};
 pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{

@@ -12,7 +12,7 @@
 //! iteration besides the two products and preconditioner applications, with the same chunk
 //! sums, in the same order, as separate passes.
 
-use super::par::{dot, dot_serial, dot2, for_each_chunk, reduce_chunks, reduce_chunks3};
+use super::par::{self, dot, dot_serial, dot2};
 use super::pcg::{LinearOperator, Preconditioner, SolveStats};
 
 /// Reusable BiCGSTAB workspace for systems of one size.
@@ -66,8 +66,7 @@ impl BiCgStab {
         } = self;
         a.apply(x, t);
         // r = b − A x and ‖r‖², in one pass.
-        let rr = reduce_chunks(
-            r,
+        let rr = par::chunks(&mut r[..]).fold(
             0.0,
             |o, r| {
                 for (k, r) in r.iter_mut().enumerate() {
@@ -103,7 +102,7 @@ impl BiCgStab {
             }
             let beta = (rho_new / rho) * (alpha / omega);
             rho = rho_new;
-            for_each_chunk(p, |o, p| {
+            par::chunks(&mut p[..]).for_each(|o, p| {
                 for (k, p) in p.iter_mut().enumerate() {
                     *p = r[o + k] + beta * (*p - omega * v[o + k]);
                 }
@@ -112,8 +111,7 @@ impl BiCgStab {
             a.apply(ph, v);
             alpha = rho / dot(r0, v);
             // s = r − α v and ‖s‖², in one pass.
-            let ss = reduce_chunks(
-                s,
+            let ss = par::chunks(&mut s[..]).fold(
                 0.0,
                 |o, s| {
                     for (k, s) in s.iter_mut().enumerate() {
@@ -125,7 +123,7 @@ impl BiCgStab {
             );
             let sn = ss.sqrt();
             if sn <= tol {
-                for_each_chunk(x, |o, x| {
+                par::chunks(x).for_each(|o, x| {
                     for (k, x) in x.iter_mut().enumerate() {
                         *x += alpha * ph[o + k];
                     }
@@ -141,12 +139,9 @@ impl BiCgStab {
             let (tt, ts) = dot2(t, t, s);
             omega = if tt > 0.0 { ts / tt } else { 0.0 };
             // x += α p̂ + ω ŝ, r = s − ω t, and ‖r‖², (r₀, r), in one pass (`s` is only read).
-            let (rr, r0r_new) = reduce_chunks3(
-                x,
-                r,
-                s,
+            let (rr, r0r_new) = par::chunks((&mut *x, &mut r[..], &mut s[..])).fold(
                 (0.0, 0.0),
-                |o, x, r, s| {
+                |o, (x, r, s)| {
                     for (k, x) in x.iter_mut().enumerate() {
                         *x += alpha * ph[o + k] + omega * sh[o + k];
                     }
@@ -186,7 +181,10 @@ impl BiCgStab {
 mod tests {
     use super::*;
 
-    use crate::par::for_each_mut;
+    /// `f(k, &mut y[k])` over `y`, in parallel chunks.
+    fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync + Send) {
+        par::chunks(y).for_each(|o, y| y.iter_mut().enumerate().for_each(|(k, v)| f(o + k, v)));
+    }
     use crate::test_systems::AdvDiff;
 
     #[test]

@@ -13,7 +13,7 @@
 //! Dot products sum fixed chunks in order ([`super::par`]), so the iterates do not depend on the
 //! number of threads.
 
-use super::par::{REDUCE_CHUNK, dot, dot_serial, for_each_chunk, for_each_mut};
+use super::par::{self, REDUCE_CHUNK, dot, dot_serial};
 use rayon::prelude::*;
 
 /// Reorthogonalise once when cancellation left less than this fraction of the new vector.
@@ -126,7 +126,8 @@ impl Fgmres {
         let mut target = tol;
         let mut iterations = 0;
         a.apply(x, r);
-        for_each_mut(r, |k, r| *r = b[k] - *r);
+        par::chunks((&mut r[..], b))
+            .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
         let mut beta = dot(r, r).sqrt();
         loop {
             if !beta.is_finite() {
@@ -166,7 +167,8 @@ impl Fgmres {
             // One restart cycle from r.
             {
                 let v0 = &mut v[0];
-                for_each_mut(v0, |k, v| *v = r[k] / beta);
+                par::chunks((&mut v0[..], &r[..]))
+                    .for_each(|_, (v, r)| v.iter_mut().zip(r).for_each(|(v, r)| *v = r / beta));
             }
             g.fill(0.0);
             g[0] = beta;
@@ -196,7 +198,7 @@ impl Fgmres {
                 }
                 col[k + 1] = hn;
                 if hn > 0.0 {
-                    for_each_mut(w, |_, w| *w /= hn);
+                    par::chunks(&mut w[..]).for_each(|_, w| w.iter_mut().for_each(|w| *w /= hn));
                 }
                 for i in 0..k {
                     let (p, q) = (col[i], col[i + 1]);
@@ -236,7 +238,8 @@ impl Fgmres {
             subtract(&z[..k], &y[..k], x);
             // The true residual.
             a.apply(x, r);
-            for_each_mut(r, |q, r| *r = b[q] - *r);
+            par::chunks((&mut r[..], b))
+                .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
             beta = dot(r, r).sqrt();
             if k > 0 && !est.is_finite() {
                 beta = est;
@@ -276,7 +279,7 @@ fn project(basis: &[Vec<f64>], w: &[f64], parts: &mut [f64], proj: &mut [f64]) -
 
 /// `w −= Σ_i c_i basis[i]`, chunk by chunk (each chunk of `w` stays in cache).
 fn subtract(basis: &[Vec<f64>], c: &[f64], w: &mut [f64]) {
-    for_each_chunk(w, |lo, wc| {
+    par::chunks(&mut w[..]).for_each(|lo, wc| {
         for (v, &ci) in basis.iter().zip(c) {
             let vc = &v[lo..lo + wc.len()];
             for (w, v) in wc.iter_mut().zip(vc) {

@@ -1,9 +1,19 @@
 //! Data-parallel loops (rayon) whose results do not depend on the number of threads.
 //!
-//! Every parallel loop here either writes disjoint elements from read-only inputs (bit-identical
-//! to the serial loop by construction) or, for reductions, sums fixed-size chunks and then adds
-//! the chunk sums in order — the same summation tree whatever the pool size, so a solve run on
-//! one thread and on many gives bit-identical iterates.
+//! Three loops, each with a `for_each` and a `fold`: [`rows`] (slices cut into rows of a given
+//! length — the grid loops of `efsi_core::loops` are built on it), [`chunks`] (rows of
+//! [`REDUCE_CHUNK`] elements: the solvers' vector updates and reductions) and [`range`] (plain
+//! indices, for kernels that write through their own means). What they run over is one slice
+//! or a pair or triple of them, mutable or shared ([`Lanes`]), plus, where each row needs its
+//! own scratch or partial, one item per row ([`per_row`]).
+//!
+//! A `for_each` writes disjoint rows from read-only inputs, bit-identical to the serial loop by
+//! construction. A `fold` computes one partial per row (in parallel when there is enough work)
+//! and folds the partials in row order — the same summation tree whatever the pool size, so a
+//! solve run on one thread and on many gives bit-identical iterates. Whether a loop is split,
+//! and how finely, depends only on its amount of work ([`PAR_MIN`]), never on its results.
+//! [`dot`] and [`dot2`] are the fixed-order inner products; `SharedSlice` is the one unsafe
+//! view, kept for the red–black smoother.
 
 use rayon::prelude::*;
 
@@ -38,199 +48,44 @@ pub(crate) fn dot_serial(a: &[f64], b: &[f64]) -> f64 {
     t
 }
 
-/// `Σ a_k b_k`, summed in fixed chunks of [`REDUCE_CHUNK`] added in order: the result is the
-/// same bit for bit whatever the number of threads.
+/// `Σ a_k b_k`, summed in fixed chunks of [`REDUCE_CHUNK`] added in order (blocks of
+/// `MAX_PARTS` chunks summed first on vectors longer than one block): the result is the same
+/// bit for bit whatever the number of threads.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
-    if a.len() < PAR_MIN {
-        return a
-            .chunks(REDUCE_CHUNK)
-            .zip(b.chunks(REDUCE_CHUNK))
-            .map(|(a, b)| dot_serial(a, b))
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    if a.len() > big {
+        return rows((a, b), big)
+            .serial()
+            .map(|(a, b)| dot(a, b))
             .fold(0.0, |s, v| s + v);
     }
-    let n = a.len().div_ceil(REDUCE_CHUNK);
-    // At most a few hundred chunk sums: a small stack buffer, folded in order.
-    const MAX: usize = 512;
-    if n <= MAX {
-        let mut parts = [0.0f64; MAX];
-        parts[..n]
-            .par_iter_mut()
-            .zip(a.par_chunks(REDUCE_CHUNK).zip(b.par_chunks(REDUCE_CHUNK)))
-            .for_each(|(p, (a, b))| *p = dot_serial(a, b));
-        parts[..n].iter().fold(0.0, |s, v| s + v)
-    } else {
-        a.chunks(REDUCE_CHUNK * MAX)
-            .zip(b.chunks(REDUCE_CHUNK * MAX))
-            .map(|(a, b)| dot(a, b))
-            .fold(0.0, |s, v| s + v)
-    }
+    chunks((a, b)).fold(0.0, |_, (a, b)| dot_serial(a, b), |s, v| s + v)
 }
 
 /// `(Σ a_k b_k, Σ a_k c_k)` in one pass, each summed as [`dot`] sums it (the same bits as
 /// two calls, on any number of threads).
 pub fn dot2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
-    assert!(a.len() == b.len() && a.len() == c.len());
     let add = |s: (f64, f64), v: (f64, f64)| (s.0 + v.0, s.1 + v.1);
-    let part = |o: usize, a: &[f64]| {
-        let n = a.len();
-        (dot_serial(a, &b[o..o + n]), dot_serial(a, &c[o..o + n]))
-    };
-    if a.len() < PAR_MIN {
-        return a
-            .chunks(REDUCE_CHUNK)
-            .enumerate()
-            .map(|(k, a)| part(k * REDUCE_CHUNK, a))
+    let big = REDUCE_CHUNK * MAX_PARTS;
+    if a.len() > big {
+        return rows((a, b, c), big)
+            .serial()
+            .map(|(a, b, c)| dot2(a, b, c))
             .fold((0.0, 0.0), add);
     }
-    let big = REDUCE_CHUNK * MAX_PARTS;
-    if a.len() <= big {
-        let n = a.len().div_ceil(REDUCE_CHUNK);
-        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(a.par_chunks(REDUCE_CHUNK))
-            .enumerate()
-            .for_each(|(k, (p, a))| *p = part(k * REDUCE_CHUNK, a));
-        parts[..n].iter().fold((0.0, 0.0), |s, v| add(s, *v))
-    } else {
-        // As `dot` does: each block of chunks folded, then the blocks.
-        (0..a.len().div_ceil(big))
-            .map(|m| {
-                let r = m * big..((m + 1) * big).min(a.len());
-                dot2(&a[r.clone()], &b[r.clone()], &c[r])
-            })
-            .fold((0.0, 0.0), add)
-    }
+    chunks((a, b, c)).fold(
+        (0.0, 0.0),
+        |_, (a, b, c)| (dot_serial(a, b), dot_serial(a, c)),
+        add,
+    )
 }
 
 /// Largest number of chunk partials a reduction keeps on the stack at once.
 const MAX_PARTS: usize = 512;
 
-/// `f(offset, a_chunk, b_chunk)` over the fixed chunks of [`REDUCE_CHUNK`] elements of two
-/// equal-length slices (in parallel when they are long), each returning a partial result;
-/// the partials are folded in chunk order, `combine(…combine(combine(init, p₀), p₁)…)`. The
-/// chunks and the fold do not depend on the number of threads, so neither does the result.
-/// This fuses an element-wise update with a reduction over its results (one pass over
-/// memory instead of two).
-pub fn reduce_chunks2(
-    a: &mut [f64],
-    b: &mut [f64],
-    init: f64,
-    f: impl Fn(usize, &mut [f64], &mut [f64]) -> f64 + Sync + Send,
-    combine: impl Fn(f64, f64) -> f64,
-) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let mut acc = init;
-    if a.len() < PAR_MIN {
-        for (c, (x, y)) in a
-            .chunks_mut(REDUCE_CHUNK)
-            .zip(b.chunks_mut(REDUCE_CHUNK))
-            .enumerate()
-        {
-            acc = combine(acc, f(c * REDUCE_CHUNK, x, y));
-        }
-        return acc;
-    }
-    let big = REDUCE_CHUNK * MAX_PARTS;
-    for (s, (a, b)) in a.chunks_mut(big).zip(b.chunks_mut(big)).enumerate() {
-        let n = a.len().div_ceil(REDUCE_CHUNK);
-        let mut parts = [0.0f64; MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(
-                a.par_chunks_mut(REDUCE_CHUNK)
-                    .zip(b.par_chunks_mut(REDUCE_CHUNK)),
-            )
-            .enumerate()
-            .for_each(|(c, (p, (x, y)))| *p = f(s * big + c * REDUCE_CHUNK, x, y));
-        for p in &parts[..n] {
-            acc = combine(acc, *p);
-        }
-    }
-    acc
-}
-
-/// [`reduce_chunks2`] over three equal-length slices, with a pair of partials per chunk
-/// (two reductions in one pass), folded in chunk order.
-pub fn reduce_chunks3(
-    a: &mut [f64],
-    b: &mut [f64],
-    c: &mut [f64],
-    init: (f64, f64),
-    f: impl Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> (f64, f64) + Sync + Send,
-    combine: impl Fn((f64, f64), (f64, f64)) -> (f64, f64),
-) -> (f64, f64) {
-    assert!(a.len() == b.len() && a.len() == c.len());
-    let mut acc = init;
-    if a.len() < PAR_MIN {
-        for (k, ((x, y), z)) in a
-            .chunks_mut(REDUCE_CHUNK)
-            .zip(b.chunks_mut(REDUCE_CHUNK))
-            .zip(c.chunks_mut(REDUCE_CHUNK))
-            .enumerate()
-        {
-            acc = combine(acc, f(k * REDUCE_CHUNK, x, y, z));
-        }
-        return acc;
-    }
-    let big = REDUCE_CHUNK * MAX_PARTS;
-    for (s, ((a, b), c)) in a
-        .chunks_mut(big)
-        .zip(b.chunks_mut(big))
-        .zip(c.chunks_mut(big))
-        .enumerate()
-    {
-        let n = a.len().div_ceil(REDUCE_CHUNK);
-        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(
-                a.par_chunks_mut(REDUCE_CHUNK)
-                    .zip(b.par_chunks_mut(REDUCE_CHUNK))
-                    .zip(c.par_chunks_mut(REDUCE_CHUNK)),
-            )
-            .enumerate()
-            .for_each(|(k, (p, ((x, y), z)))| *p = f(s * big + k * REDUCE_CHUNK, x, y, z));
-        for p in &parts[..n] {
-            acc = combine(acc, *p);
-        }
-    }
-    acc
-}
-
-/// [`reduce_chunks2`] over one slice.
-pub fn reduce_chunks(
-    a: &mut [f64],
-    init: f64,
-    f: impl Fn(usize, &mut [f64]) -> f64 + Sync + Send,
-    combine: impl Fn(f64, f64) -> f64,
-) -> f64 {
-    let mut acc = init;
-    if a.len() < PAR_MIN {
-        for (c, x) in a.chunks_mut(REDUCE_CHUNK).enumerate() {
-            acc = combine(acc, f(c * REDUCE_CHUNK, x));
-        }
-        return acc;
-    }
-    let big = REDUCE_CHUNK * MAX_PARTS;
-    for (s, a) in a.chunks_mut(big).enumerate() {
-        let n = a.len().div_ceil(REDUCE_CHUNK);
-        let mut parts = [0.0f64; MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(a.par_chunks_mut(REDUCE_CHUNK))
-            .enumerate()
-            .for_each(|(c, (p, x))| *p = f(s * big + c * REDUCE_CHUNK, x));
-        for p in &parts[..n] {
-            acc = combine(acc, *p);
-        }
-    }
-    acc
-}
-
-/// Four-lane sum of `f(k)` for `k in 0..n` (vectorises when `f` does), for the partials of
-/// [`reduce_chunks`] and [`reduce_chunks2`].
+/// Four-lane sum of `f(k)` for `k in 0..n` (vectorises when `f` does), for the partials of a
+/// [`Rows::fold`] or [`Chunks::fold`].
 #[inline(always)]
 pub fn sum4(n: usize, f: impl Fn(usize) -> f64) -> f64 {
     let mut s = [0.0f64; 4];
@@ -246,290 +101,6 @@ pub fn sum4(n: usize, f: impl Fn(usize) -> f64) -> f64 {
         t += f(k);
     }
     t
-}
-
-/// Run `f(offset, y_chunk)` over chunks of `y` (in parallel when it is long): an element-wise
-/// loop whose body the compiler sees whole (it vectorises, unlike a closure per element).
-pub fn for_each_chunk(y: &mut [f64], f: impl Fn(usize, &mut [f64]) + Sync + Send) {
-    if y.len() < PAR_MIN {
-        f(0, y);
-    } else {
-        y.par_chunks_mut(REDUCE_CHUNK)
-            .enumerate()
-            .for_each(|(c, x)| f(c * REDUCE_CHUNK, x));
-    }
-}
-
-/// Run `f(k, &mut y[k], …)` over the elements of `y`, in parallel when it is long.
-pub fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync + Send) {
-    if y.len() < PAR_MIN {
-        y.iter_mut().enumerate().for_each(|(k, v)| f(k, v));
-    } else {
-        y.par_iter_mut()
-            .enumerate()
-            .with_min_len(PAR_MIN / 2)
-            .for_each(|(k, v)| f(k, v));
-    }
-}
-
-/// Run `f(j, row)` over the rows (`row_len` long) of `y`, in parallel when `y` is long.
-pub fn for_each_row(y: &mut [f64], row_len: usize, f: impl Fn(usize, &mut [f64]) + Sync + Send) {
-    for_each_row_weighted(y, row_len, row_len, f);
-}
-
-/// [`for_each_row`] for rows that each cost `work` element operations, which decides whether
-/// (and how finely) to split the loop: a coarse row that sums several fine rows is worth more
-/// than its length.
-pub fn for_each_row_weighted(
-    y: &mut [f64],
-    row_len: usize,
-    work: usize,
-    f: impl Fn(usize, &mut [f64]) + Sync + Send,
-) {
-    if row_len == 0 {
-        return;
-    }
-    let rows = y.len().div_ceil(row_len);
-    if rows * work < PAR_MIN {
-        y.chunks_mut(row_len).enumerate().for_each(|(j, r)| f(j, r));
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(work.max(1)).max(1);
-        y.par_chunks_mut(row_len)
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, r)| f(j, r));
-    }
-}
-
-/// Run `f(j, row) -> partial` over the rows (`row_len` long) of `y`, in parallel when `y` is
-/// long, and return the partials summed in row order (the same bits on any number of
-/// threads): a row loop that also reduces over what it writes, in one pass.
-pub fn for_each_row_sum(
-    y: &mut [f64],
-    row_len: usize,
-    f: impl Fn(usize, &mut [f64]) -> f64 + Sync + Send,
-) -> f64 {
-    if row_len == 0 {
-        return 0.0;
-    }
-    if y.len() < PAR_MIN {
-        return y
-            .chunks_mut(row_len)
-            .enumerate()
-            .fold(0.0, |s, (j, r)| s + f(j, r));
-    }
-    let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
-    let mut acc = 0.0;
-    for (b, block) in y.chunks_mut(row_len * MAX_PARTS).enumerate() {
-        let n = block.len().div_ceil(row_len);
-        let mut parts = [0.0f64; MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(block.par_chunks_mut(row_len))
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, (p, r))| *p = f(b * MAX_PARTS + j, r));
-        for p in &parts[..n] {
-            acc += p;
-        }
-    }
-    acc
-}
-
-/// Run `f(j, a_row, b_row, c_row) -> (p, q)` over the rows (`row_len` long) of three
-/// equal-length slices, in parallel when they are long, and return the partials summed
-/// component-wise in row order (the same bits on any number of threads): an element-wise
-/// update of three vectors fused with two reductions over what it writes, in one pass.
-pub fn for_each_row3_sum2(
-    a: &mut [f64],
-    b: &mut [f64],
-    c: &mut [f64],
-    row_len: usize,
-    f: impl Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> (f64, f64) + Sync + Send,
-) -> (f64, f64) {
-    assert!(a.len() == b.len() && a.len() == c.len());
-    let mut acc = (0.0, 0.0);
-    if row_len == 0 {
-        return acc;
-    }
-    if a.len() < PAR_MIN {
-        for (j, ((x, y), z)) in a
-            .chunks_mut(row_len)
-            .zip(b.chunks_mut(row_len))
-            .zip(c.chunks_mut(row_len))
-            .enumerate()
-        {
-            let p = f(j, x, y, z);
-            acc = (acc.0 + p.0, acc.1 + p.1);
-        }
-        return acc;
-    }
-    let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
-    let block = row_len * MAX_PARTS;
-    for (k, ((a, b), c)) in a
-        .chunks_mut(block)
-        .zip(b.chunks_mut(block))
-        .zip(c.chunks_mut(block))
-        .enumerate()
-    {
-        let n = a.len().div_ceil(row_len);
-        let mut parts = [(0.0f64, 0.0f64); MAX_PARTS];
-        parts[..n]
-            .par_iter_mut()
-            .zip(
-                a.par_chunks_mut(row_len)
-                    .zip(b.par_chunks_mut(row_len))
-                    .zip(c.par_chunks_mut(row_len)),
-            )
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, (p, ((x, y), z)))| *p = f(k * MAX_PARTS + j, x, y, z));
-        for p in &parts[..n] {
-            acc = (acc.0 + p.0, acc.1 + p.1);
-        }
-    }
-    acc
-}
-
-/// Run `f(j, a_row, b_row)` over the rows (`row_len` long) of two equal-length slices, in
-/// parallel when they are long.
-pub fn for_each_row2(
-    a: &mut [f64],
-    b: &mut [f64],
-    row_len: usize,
-    f: impl Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
-) {
-    assert_eq!(a.len(), b.len());
-    if row_len == 0 {
-        return;
-    }
-    if a.len() < PAR_MIN {
-        a.chunks_mut(row_len)
-            .zip(b.chunks_mut(row_len))
-            .enumerate()
-            .for_each(|(j, (x, y))| f(j, x, y));
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
-        a.par_chunks_mut(row_len)
-            .zip(b.par_chunks_mut(row_len))
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, (x, y))| f(j, x, y));
-    }
-}
-
-/// Run `f(j, row, &mut out[j])` over the rows (`row_len` long) of `y`, in parallel when `y` is
-/// long: each row also writes its own partial result (`out` holds one per row), which the
-/// caller folds in row order — a reduction, or several at once, whose result does not depend
-/// on the number of threads.
-pub fn for_each_row_with<T: Send>(
-    y: &mut [f64],
-    row_len: usize,
-    out: &mut [T],
-    f: impl Fn(usize, &mut [f64], &mut T) + Sync + Send,
-) {
-    if row_len == 0 {
-        return;
-    }
-    assert_eq!(out.len(), y.len().div_ceil(row_len), "one partial per row");
-    if y.len() < PAR_MIN {
-        y.chunks_mut(row_len)
-            .zip(out.iter_mut())
-            .enumerate()
-            .for_each(|(j, (r, o))| f(j, r, o));
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
-        y.par_chunks_mut(row_len)
-            .zip(out.par_iter_mut())
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, (r, o))| f(j, r, o));
-    }
-}
-
-/// [`for_each_row_with`] over the rows of two equal-length slices: `f(j, a_row, b_row,
-/// &mut out[j])`.
-pub fn for_each_row2_with<T: Send>(
-    a: &mut [f64],
-    b: &mut [f64],
-    row_len: usize,
-    out: &mut [T],
-    f: impl Fn(usize, &mut [f64], &mut [f64], &mut T) + Sync + Send,
-) {
-    assert_eq!(a.len(), b.len());
-    if row_len == 0 {
-        return;
-    }
-    assert_eq!(out.len(), a.len().div_ceil(row_len), "one partial per row");
-    if a.len() < PAR_MIN {
-        a.chunks_mut(row_len)
-            .zip(b.chunks_mut(row_len))
-            .zip(out.iter_mut())
-            .enumerate()
-            .for_each(|(j, ((x, y), o))| f(j, x, y, o));
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len).max(1);
-        a.par_chunks_mut(row_len)
-            .zip(b.par_chunks_mut(row_len))
-            .zip(out.par_iter_mut())
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, ((x, y), o))| f(j, x, y, o));
-    }
-}
-
-/// `Σ_j f(j)` for `j in 0..rows` (rows of `row_len` elements), component-wise for `N`
-/// sums at once, in parallel when there is enough work: each row's partials are added in row
-/// order, so the result is the same bit for bit on any number of threads.
-pub fn sum_rows<const N: usize>(
-    rows: usize,
-    row_len: usize,
-    f: impl Fn(usize) -> [f64; N] + Sync + Send,
-) -> [f64; N] {
-    let mut acc = [0.0f64; N];
-    let mut add = |p: [f64; N]| {
-        for (a, v) in acc.iter_mut().zip(p) {
-            *a += v;
-        }
-    };
-    if rows * row_len < PAR_MIN {
-        (0..rows).for_each(|j| add(f(j)));
-        return acc;
-    }
-    let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
-    const BLOCK: usize = 256;
-    let mut parts = [[0.0f64; N]; BLOCK];
-    for b in (0..rows).step_by(BLOCK) {
-        let n = BLOCK.min(rows - b);
-        parts[..n]
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(min_rows)
-            .for_each(|(j, p)| *p = f(b + j));
-        parts[..n].iter().for_each(|p| add(*p));
-    }
-    acc
-}
-
-/// `max(init, max_j f(j))` for `j in 0..rows` (rows of `row_len` elements), in parallel when
-/// there is enough work; a maximum does not depend on the order, so neither on the number of
-/// threads.
-pub fn max_over_rows(
-    rows: usize,
-    row_len: usize,
-    init: f64,
-    f: impl Fn(usize) -> f64 + Sync + Send,
-) -> f64 {
-    if rows * row_len < PAR_MIN {
-        (0..rows).map(f).fold(init, f64::max)
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
-        (0..rows)
-            .into_par_iter()
-            .with_min_len(min_rows)
-            .map(f)
-            .reduce(|| init, f64::max)
-    }
 }
 
 /// Run `f` — serial work between parallel loops — while another thread of the pool, if one
@@ -571,64 +142,469 @@ pub fn serial_warm<R: Send>(f: impl FnOnce() -> R + Send) -> R {
 
 /// `dst ← src` (equal lengths), in parallel chunks when long.
 pub fn copy(dst: &mut [f64], src: &[f64]) {
-    assert_eq!(dst.len(), src.len());
-    for_each_chunk(dst, |o, d| {
-        let n = d.len();
-        d.copy_from_slice(&src[o..o + n]);
-    });
+    chunks((dst, src)).for_each(|_, (d, s)| d.copy_from_slice(s));
 }
 
-/// Run `f(j)` for `j in 0..rows` (rows of `row_len` elements), in parallel when there is
-/// enough work. `f` must only touch data disjoint between rows.
-pub fn for_each_index(rows: usize, row_len: usize, f: impl Fn(usize) + Sync + Send) {
-    if rows * row_len < PAR_MIN {
-        (0..rows).for_each(f);
-    } else {
-        let min_rows = (PAR_MIN / 2).div_ceil(row_len.max(1)).max(1);
-        (0..rows).into_par_iter().with_min_len(min_rows).for_each(f);
+/// Slices split together into rows: one slice, or a pair or triple of equal-length slices,
+/// each mutable or shared. A kernel of [`rows`], [`chunks`] and their folds receives one row of
+/// each, in the same shape (`&mut [f64]`, `(&mut [f64], &[f64])`, …).
+pub trait Lanes: Send + Sized {
+    /// The common length (asserted equal for a tuple).
+    fn len(&self) -> usize;
+    /// Whether the slices are empty.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The two halves at `mid`.
+    fn split_at(self, mid: usize) -> (Self, Self);
+    /// The sub-slices `r` of each slice (bounds-checked).
+    fn sub(self, r: std::ops::Range<usize>) -> Self;
+    /// Consecutive rows of `n` elements (the last may be shorter), in order.
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self>;
+    /// The same rows as a parallel iterator.
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self>;
+}
+
+impl<T: Send> Lanes for &mut [T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        self.split_at_mut(mid)
+    }
+    fn sub(self, r: std::ops::Range<usize>) -> Self {
+        &mut self[r]
+    }
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self> {
+        self.chunks_mut(n)
+    }
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self> {
+        self.par_chunks_mut(n)
     }
 }
 
-/// A raw view of a mutable slice that several threads may write at **disjoint** indices while
-/// others read indices nobody writes in the same parallel loop (the red–black Gauss–Seidel
-/// sweep: one colour is written, only the other is read).
-#[derive(Clone, Copy)]
-pub(crate) struct SharedSlice {
-    ptr: *mut f64,
+impl<T: Sync> Lanes for &[T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        <[T]>::split_at(self, mid)
+    }
+    fn sub(self, r: std::ops::Range<usize>) -> Self {
+        &self[r]
+    }
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self> {
+        self.chunks(n)
+    }
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self> {
+        self.par_chunks(n)
+    }
+}
+
+impl<A: Lanes, B: Lanes> Lanes for (A, B) {
+    fn len(&self) -> usize {
+        assert_eq!(self.0.len(), self.1.len(), "lanes of unequal length");
+        self.0.len()
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        let ((a0, a1), (b0, b1)) = (self.0.split_at(mid), self.1.split_at(mid));
+        ((a0, b0), (a1, b1))
+    }
+    fn sub(self, r: std::ops::Range<usize>) -> Self {
+        (self.0.sub(r.clone()), self.1.sub(r))
+    }
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self> {
+        self.0.serial_rows(n).zip(self.1.serial_rows(n))
+    }
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self> {
+        self.0.par_rows(n).zip(self.1.par_rows(n))
+    }
+}
+
+impl<A: Lanes, B: Lanes, C: Lanes> Lanes for (A, B, C) {
+    fn len(&self) -> usize {
+        assert!(
+            self.0.len() == self.1.len() && self.0.len() == self.2.len(),
+            "lanes of unequal length"
+        );
+        self.0.len()
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        let (a, b, c) = (
+            self.0.split_at(mid),
+            self.1.split_at(mid),
+            self.2.split_at(mid),
+        );
+        ((a.0, b.0, c.0), (a.1, b.1, c.1))
+    }
+    fn sub(self, r: std::ops::Range<usize>) -> Self {
+        (self.0.sub(r.clone()), self.1.sub(r.clone()), self.2.sub(r))
+    }
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self> {
+        self.0
+            .serial_rows(n)
+            .zip(self.1.serial_rows(n))
+            .zip(self.2.serial_rows(n))
+            .map(|((a, b), c)| (a, b, c))
+    }
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self> {
+        self.0
+            .par_rows(n)
+            .zip(self.1.par_rows(n))
+            .zip(self.2.par_rows(n))
+            .map(|((a, b), c)| (a, b, c))
+    }
+}
+
+/// One item of `items` per row of `row_len` elements of slices `len` long: a lane that gives
+/// each row its own scratch or partial result (`items.len()` must be the number of rows). A
+/// row's kernel takes its item with [`PerRow::item`].
+pub fn per_row<T: Send>(items: &mut [T], row_len: usize, len: usize) -> PerRow<'_, T> {
+    assert_eq!(
+        items.len(),
+        len.div_ceil(row_len.max(1)),
+        "one item per row"
+    );
+    PerRow {
+        items,
+        row_len,
+        len,
+    }
+}
+
+/// The lane of [`per_row`].
+pub struct PerRow<'a, T> {
+    items: &'a mut [T],
+    row_len: usize,
     len: usize,
 }
 
-// SAFETY: access is through `get`/`set`, whose callers guarantee no element is written by one
-// thread while another reads or writes it.
-unsafe impl Send for SharedSlice {}
-unsafe impl Sync for SharedSlice {}
+impl<'a, T: Send> PerRow<'a, T> {
+    /// The item of a one-row lane (the kernel's).
+    pub fn item(self) -> &'a mut T {
+        assert_eq!(self.items.len(), 1, "a row has one item");
+        &mut self.items[0]
+    }
+}
 
-impl SharedSlice {
-    /// A view of `s` (which must outlive every use of the view).
-    pub(crate) fn new(s: &mut [f64]) -> Self {
+impl<T: Send> Lanes for PerRow<'_, T> {
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        assert_eq!(mid % self.row_len, 0, "split between rows");
+        let (a, b) = self.items.split_at_mut(mid / self.row_len);
+        let (n, len) = (self.row_len, self.len);
+        (
+            PerRow {
+                items: a,
+                row_len: n,
+                len: mid,
+            },
+            PerRow {
+                items: b,
+                row_len: n,
+                len: len - mid,
+            },
+        )
+    }
+    fn sub(self, _: std::ops::Range<usize>) -> Self {
+        self
+    }
+    fn serial_rows(self, n: usize) -> impl Iterator<Item = Self> {
+        assert_eq!(n, self.row_len, "rows of the item's length");
+        let len = self.len;
+        self.items
+            .chunks_mut(1)
+            .enumerate()
+            .map(move |(j, t)| PerRow {
+                items: t,
+                row_len: n,
+                len: n.min(len - j * n),
+            })
+    }
+    fn par_rows(self, n: usize) -> impl IndexedParallelIterator<Item = Self> {
+        assert_eq!(n, self.row_len, "rows of the item's length");
+        let len = self.len;
+        self.items
+            .par_chunks_mut(1)
+            .enumerate()
+            .map(move |(j, t)| PerRow {
+                items: t,
+                row_len: n,
+                len: n.min(len - j * n),
+            })
+    }
+}
+
+/// The rows of `lanes`, `row_len` elements each: [`Rows::for_each`] and [`Rows::fold`].
+pub fn rows<L: Lanes>(lanes: L, row_len: usize) -> Rows<L> {
+    Rows {
+        lanes,
+        row_len,
+        work: row_len,
+    }
+}
+
+/// The fixed chunks of [`REDUCE_CHUNK`] elements of `lanes` (the rows of [`rows`]); a kernel
+/// receives the chunk's first element's offset, `j · REDUCE_CHUNK`, instead of its number.
+pub fn chunks<L: Lanes>(lanes: L) -> Chunks<L> {
+    Chunks(rows(lanes, REDUCE_CHUNK))
+}
+
+/// The indices `0..n`, each standing for `work` element operations (default 1):
+/// [`Indices::for_each`] and [`Indices::fold`].
+pub fn range(n: usize) -> Indices {
+    Indices { n, work: 1 }
+}
+
+/// Rows of slices, split across threads when there is enough work (see [`rows`]).
+pub struct Rows<L> {
+    lanes: L,
+    row_len: usize,
+    work: usize,
+}
+
+impl<L: Lanes> Rows<L> {
+    /// Rows that each cost `work` element operations (default: their length), which decides
+    /// whether and how finely the loop is split: a coarse row that sums several fine rows is
+    /// worth more than its length.
+    pub fn work(self, work: usize) -> Self {
+        Rows { work, ..self }
+    }
+
+    /// The rows in order, on this thread (for an outer loop around parallel inner ones).
+    pub fn serial(self) -> impl Iterator<Item = L> {
+        self.lanes.serial_rows(self.row_len.max(1))
+    }
+
+    /// Number of rows, and the fewest rows a thread takes (`None`: run serially).
+    fn split(&self) -> (usize, Option<usize>) {
+        let rows = self.lanes.len().div_ceil(self.row_len);
+        let par = rows * self.work >= PAR_MIN;
+        (
+            rows,
+            par.then(|| (PAR_MIN / 2).div_ceil(self.work.max(1)).max(1)),
+        )
+    }
+
+    /// Run `f(j, row_j)` over the rows; rows write disjoint elements, so the result is the
+    /// serial loop's on any number of threads.
+    pub fn for_each(self, f: impl Fn(usize, L) + Sync + Send) {
+        if self.row_len == 0 {
+            return;
+        }
+        match self.split() {
+            (_, None) => self
+                .lanes
+                .serial_rows(self.row_len)
+                .enumerate()
+                .for_each(|(j, r)| f(j, r)),
+            (_, Some(min)) => self
+                .lanes
+                .par_rows(self.row_len)
+                .enumerate()
+                .with_min_len(min)
+                .for_each(|(j, r)| f(j, r)),
+        }
+    }
+
+    /// `combine(…combine(combine(init, f(0, row₀)), f(1, row₁))…)`: each row's partial,
+    /// computed in parallel when there is enough work, folded in row order — the same bits on
+    /// any number of threads. The kernel may also write its rows (an update fused with a
+    /// reduction over what it writes, in one pass over memory).
+    pub fn fold<A, P: Copy + Default + Send>(
+        self,
+        init: A,
+        f: impl Fn(usize, L) -> P + Sync + Send,
+        combine: impl Fn(A, P) -> A,
+    ) -> A {
+        let mut acc = init;
+        if self.row_len == 0 {
+            return acc;
+        }
+        let (_, min) = self.split();
+        let Some(min) = min else {
+            for (j, r) in self.lanes.serial_rows(self.row_len).enumerate() {
+                acc = combine(acc, f(j, r));
+            }
+            return acc;
+        };
+        // Blocks of at most MAX_PARTS rows: their partials on the stack, folded in order.
+        let block = self.row_len * MAX_PARTS;
+        let mut rest = self.lanes;
+        let mut j0 = 0;
+        while !rest.is_empty() {
+            let mid = block.min(rest.len());
+            let (a, b) = rest.split_at(mid);
+            rest = b;
+            let n = a.len().div_ceil(self.row_len);
+            let mut parts = [P::default(); MAX_PARTS];
+            parts[..n]
+                .par_iter_mut()
+                .zip(a.par_rows(self.row_len))
+                .enumerate()
+                .with_min_len(min)
+                .for_each(|(j, (p, r))| *p = f(j0 + j, r));
+            for p in &parts[..n] {
+                acc = combine(acc, *p);
+            }
+            j0 += n;
+        }
+        acc
+    }
+}
+
+/// The chunks of [`chunks`].
+pub struct Chunks<L>(Rows<L>);
+
+impl<L: Lanes> Chunks<L> {
+    /// Run `f(offset, chunk)` over the chunks (element-wise loops whose body the compiler sees
+    /// whole, so it vectorises).
+    pub fn for_each(self, f: impl Fn(usize, L) + Sync + Send) {
+        self.0.for_each(|c, l| f(c * REDUCE_CHUNK, l));
+    }
+
+    /// [`Rows::fold`] over the chunks: `f(offset, chunk)` partials folded in chunk order.
+    pub fn fold<A, P: Copy + Default + Send>(
+        self,
+        init: A,
+        f: impl Fn(usize, L) -> P + Sync + Send,
+        combine: impl Fn(A, P) -> A,
+    ) -> A {
+        self.0.fold(init, |c, l| f(c * REDUCE_CHUNK, l), combine)
+    }
+}
+
+/// The indices of [`range`].
+pub struct Indices {
+    n: usize,
+    work: usize,
+}
+
+impl Indices {
+    /// Indices that each cost `work` element operations (see [`Rows::work`]).
+    pub fn work(self, work: usize) -> Self {
+        Indices { work, ..self }
+    }
+
+    fn min_len(&self) -> Option<usize> {
+        (self.n * self.work >= PAR_MIN).then(|| (PAR_MIN / 2).div_ceil(self.work.max(1)).max(1))
+    }
+
+    /// Run `f(j)` for `j in 0..n`, in parallel when there is enough work. `f` must only touch
+    /// data disjoint between indices (a safe `f` can only write through its own captures'
+    /// interior mutability, so this is the loop for kernels that write by other means).
+    pub fn for_each(self, f: impl Fn(usize) + Sync + Send) {
+        match self.min_len() {
+            None => (0..self.n).for_each(f),
+            Some(min) => (0..self.n).into_par_iter().with_min_len(min).for_each(f),
+        }
+    }
+
+    /// `combine(…combine(init, f(0))…, f(n − 1))`, the partials computed in parallel when
+    /// there is enough work and folded in index order (the same bits on any number of threads).
+    pub fn fold<A, P: Copy + Default + Send>(
+        self,
+        init: A,
+        f: impl Fn(usize) -> P + Sync + Send,
+        combine: impl Fn(A, P) -> A,
+    ) -> A {
+        let mut acc = init;
+        let Some(min) = self.min_len() else {
+            for j in 0..self.n {
+                acc = combine(acc, f(j));
+            }
+            return acc;
+        };
+        let mut parts = [P::default(); MAX_PARTS];
+        for b in (0..self.n).step_by(MAX_PARTS) {
+            let n = MAX_PARTS.min(self.n - b);
+            parts[..n]
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(min)
+                .for_each(|(j, p)| *p = f(b + j));
+            for p in &parts[..n] {
+                acc = combine(acc, *p);
+            }
+        }
+        acc
+    }
+}
+
+/// Component-wise `a + b`, the combiner of several sums folded at once.
+#[inline]
+pub fn add<const N: usize>(mut a: [f64; N], b: [f64; N]) -> [f64; N] {
+    for (a, b) in a.iter_mut().zip(b) {
+        *a += b;
+    }
+    a
+}
+
+/// A view of a mutable slice that several threads may write at **disjoint** indices while
+/// others read indices nobody writes in the same parallel loop: the red–black Gauss–Seidel
+/// sweep, where one colour is written and only the other is read, so no safe split of the
+/// slice into owned pieces exists (a row's update reads its neighbour rows' cells of the other
+/// colour while those rows' cells of its own colour are written by other threads).
+///
+/// Bounds are checked in release builds too, once per span: a kernel passes the range a row of
+/// its loop touches to [`SharedSlice::check`] (which panics if it leaves the slice) and then
+/// reads and writes inside it with `get`/`set`, which check each index in debug builds. What
+/// the compiler cannot check is the absence of a data race, which is the caller's proof at each
+/// `unsafe` block (the sweep's phases, whose two colours and row chunks never let one thread
+/// write an element another touches). The view borrows the slice mutably for its lifetime, so
+/// no other access can alias it.
+#[derive(Clone, Copy)]
+pub(crate) struct SharedSlice<'a> {
+    ptr: *mut f64,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [f64]>,
+}
+
+// SAFETY: access is through `get`/`set`, whose callers guarantee no element is written by one
+// thread while another reads or writes it; the pointer is valid for `len` elements for 'a.
+unsafe impl Send for SharedSlice<'_> {}
+unsafe impl Sync for SharedSlice<'_> {}
+
+impl<'a> SharedSlice<'a> {
+    /// A view of `s`, which stays mutably borrowed while the view lives.
+    pub(crate) fn new(s: &'a mut [f64]) -> Self {
         SharedSlice {
             ptr: s.as_mut_ptr(),
             len: s.len(),
+            _borrow: std::marker::PhantomData,
         }
+    }
+    /// Panics unless `r` lies within the slice: the span a kernel's `get`/`set` will touch.
+    #[inline(always)]
+    pub(crate) fn check(self, r: std::ops::Range<usize>) {
+        assert!(
+            r.start <= r.end && r.end <= self.len,
+            "SharedSlice: span {r:?} past {}",
+            self.len
+        );
     }
     /// Read element `k`.
     ///
     /// # Safety
-    /// No other thread writes element `k` during this parallel loop.
+    /// `k` lies in a span passed to [`check`](Self::check), and no other thread writes
+    /// element `k` during this parallel loop.
     #[inline(always)]
     pub(crate) unsafe fn get(self, k: usize) -> f64 {
         debug_assert!(k < self.len);
-        // SAFETY: in bounds (checked in debug builds) and not concurrently written (caller).
+        // SAFETY: in bounds (a checked span, caller), valid for 'a, not concurrently written.
         unsafe { *self.ptr.add(k) }
     }
     /// Write element `k`.
     ///
     /// # Safety
-    /// No other thread reads or writes element `k` during this parallel loop.
+    /// `k` lies in a span passed to [`check`](Self::check), and no other thread reads or
+    /// writes element `k` during this parallel loop.
     #[inline(always)]
     pub(crate) unsafe fn set(self, k: usize, v: f64) {
         debug_assert!(k < self.len);
-        // SAFETY: in bounds (checked in debug builds) and exclusively owned here (caller).
+        // SAFETY: in bounds (a checked span, caller), valid for 'a, exclusively owned here.
         unsafe { *self.ptr.add(k) = v }
     }
 }
@@ -657,27 +633,87 @@ mod tests {
         assert!((d1 - exact).abs() <= 1e-12 * exact.abs());
     }
 
+    fn pool(t: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+    }
+
     #[test]
-    fn row_sums_are_the_same_on_one_and_two_threads() {
+    fn index_folds_are_the_same_on_one_and_two_threads_and_in_index_order() {
         let (rows, len) = (700, 300);
         let f = |j: usize| {
             let r = (0..len).fold(0.0, |a, i| a + ((i * 31 + j * 17) % 101) as f64 / 7.0);
             [r, -0.5 * r, 1.0]
         };
-        let run = |t| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap()
-                .install(|| sum_rows(rows, len, f))
-        };
+        let run = |t| pool(t).install(|| range(rows).work(len).fold([0.0; 3], f, add));
         let (a, b) = (run(1), run(2));
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
-        let serial = (0..rows).fold([0.0; 3], |s, j| {
-            let p = f(j);
-            [s[0] + p[0], s[1] + p[1], s[2] + p[2]]
-        });
-        assert_eq!(a, serial, "row partials added in row order");
+        let serial = (0..rows).fold([0.0; 3], |s, j| add(s, f(j)));
+        assert_eq!(a, serial, "partials added in index order");
         assert_eq!(a[2], rows as f64);
+    }
+
+    #[test]
+    fn fused_row_updates_and_reductions_do_not_depend_on_the_threads() {
+        // Three lanes, two written and one read; rows of an odd length with a short last row,
+        // long enough for several blocks of partials.
+        let n = 3 * 4096 * 512 / 7 + 5;
+        let c: Vec<f64> = (0..n)
+            .map(|k| ((k * 7919) % 1013) as f64 / 17.0 - 20.0)
+            .collect();
+        let run = |t: usize, row: usize| {
+            let (mut a, mut b) = (vec![1.0; n], vec![0.0; n]);
+            let s = pool(t).install(|| {
+                rows((&mut a[..], &mut b[..], &c[..]), row).fold(
+                    (0.0, 0.0),
+                    |j, (a, b, c)| {
+                        let mut p = (0.0, 0.0);
+                        for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                            *a = c * 0.5 + j as f64;
+                            *b = c - *a;
+                            p = (p.0 + *a, p.1 + *a * *b);
+                        }
+                        p
+                    },
+                    |s, p| (s.0 + p.0, s.1 + p.1),
+                )
+            });
+            (s.0.to_bits(), s.1.to_bits(), a, b)
+        };
+        for row in [1, 97, REDUCE_CHUNK] {
+            assert_eq!(run(1, row), run(2, row), "rows of {row}");
+        }
+        // The chunks' offsets, and the rows' numbers, are those of the serial loop.
+        let mut y = vec![0.0; 3 * REDUCE_CHUNK + 5];
+        pool(2).install(|| {
+            chunks(&mut y[..]).for_each(|o, y| {
+                y.iter_mut()
+                    .enumerate()
+                    .for_each(|(k, v)| *v = (o + k) as f64)
+            })
+        });
+        assert!(y.iter().enumerate().all(|(k, v)| *v == k as f64));
+        let mut y = vec![0.0; 10_001];
+        pool(2).install(|| {
+            rows(&mut y[..], 10)
+                .work(1000)
+                .for_each(|j, r| r.fill(j as f64))
+        });
+        assert!(y.iter().enumerate().all(|(k, v)| *v == (k / 10) as f64));
+    }
+
+    #[test]
+    fn dot2_is_two_dots() {
+        let n: usize = 4096 * 512 + 4099;
+        let a: Vec<f64> = (0..n).map(|k| ((k * 7919) % 1013) as f64 / 17.0).collect();
+        let b: Vec<f64> = (0..n).map(|k| ((k * 31) % 97) as f64 - 40.0).collect();
+        let c: Vec<f64> = (0..n).map(|k| ((k * 13) % 89) as f64 / 3.0).collect();
+        let (x, y) = pool(2).install(|| dot2(&a, &b, &c));
+        assert_eq!(
+            (x.to_bits(), y.to_bits()),
+            (dot(&a, &b).to_bits(), dot(&a, &c).to_bits())
+        );
     }
 }

@@ -65,7 +65,7 @@ fn jacobi_chunk(r: &[f64], d: &[f64], z: &mut [f64]) -> f64 {
 /// Diagonal (Jacobi) preconditioning.
 impl Preconditioner for [f64] {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
-        par::for_each_chunk(z, |o, z| {
+        par::chunks(z).for_each(|o, z| {
             let (r, d) = (&r[o..o + z.len()], &self[o..o + z.len()]);
             for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
                 *z = r / d;
@@ -75,8 +75,7 @@ impl Preconditioner for [f64] {
 
     /// One pass: the quotient and the product together.
     fn apply_dot(&self, r: &[f64], z: &mut [f64]) -> f64 {
-        par::reduce_chunks(
-            z,
+        par::chunks(z).fold(
             0.0,
             |o, z| jacobi_chunk(&r[o..], &self[o..], z),
             |a, b| a + b,
@@ -279,8 +278,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             // The difference and its measure in one pass (the chunks and their fold are
             // `Norm::of`'s).
             Measure::Norm(n) => {
-                let v = par::reduce_chunks(
-                    r,
+                let v = par::chunks(&mut *r).fold(
                     0.0,
                     |o, r| {
                         diff(o, r);
@@ -291,7 +289,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
                 n.finish(v)
             }
             Measure::Closure(f) => {
-                par::for_each_chunk(r, diff);
+                par::chunks(&mut *r).for_each(diff);
                 f(r)
             }
         }
@@ -354,12 +352,9 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
         let mut rz_fused = None;
         res = match (measure, m.jacobi_diagonal()) {
             (Measure::Norm(nm), Some(d)) => {
-                let (v, rz_new) = par::reduce_chunks3(
-                    x,
-                    r,
-                    q,
+                let (v, rz_new) = par::chunks((&mut *x, &mut *r, &mut *q)).fold(
                     (0.0, 0.0),
-                    |o, x, r, q| {
+                    |o, (x, r, q)| {
                         update(o, x, r, q);
                         (nm.chunk(o, r), jacobi_chunk(r, &d[o..], q))
                     },
@@ -370,11 +365,9 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             }
             (Measure::Norm(nm), None) => {
                 let qv = &*q;
-                nm.finish(par::reduce_chunks2(
-                    x,
-                    r,
+                nm.finish(par::chunks((&mut *x, &mut *r)).fold(
                     0.0,
-                    |o, x, r| {
+                    |o, (x, r)| {
                         update(o, x, r, &qv[o..]);
                         nm.chunk(o, r)
                     },
@@ -383,16 +376,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             }
             (Measure::Closure(f), _) => {
                 let qv = &*q;
-                par::reduce_chunks2(
-                    x,
-                    r,
-                    0.0,
-                    |o, x, r| {
-                        update(o, x, r, &qv[o..]);
-                        0.0
-                    },
-                    |a, _| a,
-                );
+                par::chunks((&mut *x, &mut *r)).for_each(|o, (x, r)| update(o, x, r, &qv[o..]));
                 f(r)
             }
         };
@@ -409,7 +393,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
         let beta = rz_new / rz;
         rz = rz_new;
         let z = &*q;
-        par::for_each_chunk(p, |o, p| {
+        par::chunks(&mut *p).for_each(|o, p| {
             let z = &z[o..o + p.len()];
             for (p, z) in p.iter_mut().zip(z) {
                 *p = z + beta * *p;

@@ -185,7 +185,7 @@ impl Stencil5 {
         assert_eq!(y.len(), nx * ny);
         // Row by row in passes over contiguous slices (they vectorise): diagonal, east, west,
         // north, south, then the periodic wraps.
-        super::par::for_each_row(y, nx, |j, yr| {
+        super::par::rows(y, nx).for_each(|j, yr| {
             let r = j * nx;
             let (xr, dr, er) = (&x[r..r + nx], &d[r..r + nx], &e[r..r + nx]);
             for ((y, d), x) in yr.iter_mut().zip(dr).zip(xr) {

@@ -147,10 +147,10 @@ pub struct SolidMoments {
 /// The moments of `phi` over the grid (rows in parallel, summed in row order: the same bits
 /// on any number of threads).
 pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
-    let [v, mx, my, mu, mv] = efsi_linalg::par::sum_rows(grid.ny, grid.nx, |j| {
-        let j = j as isize;
+    let cells = efsi_core::Region::of(grid, efsi_core::Stagger::Cell);
+    let [v, mx, my, mu, mv] = cells.sum(|line| {
         let mut s = [0.0; 5];
-        for i in 0..grid.nx as isize {
+        for [i, j, _] in line.indices() {
             let w = phi[(i, j)] * grid.cell_volume(i);
             if w == 0.0 {
                 continue;

@@ -69,7 +69,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
-use efsi_linalg::par::{copy, for_each_row, for_each_row2, for_each_row2_with, max_over_rows};
+use efsi_linalg::par::{self, copy};
 use serde::{Deserialize, Serialize};
 
 /// The advection's options (`numerics.advection`).
@@ -234,17 +234,10 @@ fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
 }
 
-/// Largest stable Δt of the explicit convective term at Courant number `cfl` (rows in
-/// parallel; a maximum, so the same on any thread count).
+/// Largest stable Δt of the explicit convective term at Courant number `cfl`
+/// ([`crate::ops::convective_rate`]).
 pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> {
-    let rate = max_over_rows(grid.ny, grid.nx, 0.0, |j| {
-        let j = j as isize;
-        (0..grid.nx as isize).fold(0.0f64, |rate, i| {
-            let uu = u[(i, j)].abs().max(u[(i + 1, j)].abs());
-            let vv = v[(i, j)].abs().max(v[(i, j + 1)].abs());
-            rate.max(uu / grid.dx + vv / grid.dy)
-        })
-    });
+    let rate = crate::ops::convective_rate(grid, u, v);
     (rate > 0.0).then(|| cfl / rate)
 }
 
@@ -378,11 +371,17 @@ fn tendencies(
     let nb = rows.div_ceil(BAND);
     let (em, eq) = (&mut edge_m[..(nb + 1) * s], &mut edge_q[..(nb + 1) * s]);
     let (c0, c1) = ((i0 + efsi_core::G) as usize, (i1 + efsi_core::G) as usize);
-    for_each_row2(em, eq, s, |b, fm, fq| {
+    par::rows((&mut *em, &mut *eq), s).for_each(|b, (fm, fq)| {
         y_row(fam, r0 + (b * BAND).min(rows) * s, c0..c1, fm, fq);
     });
     let (em, eq) = (&*em, &*eq);
-    for_each_row2_with(qt, mt, BAND * s, &mut row_x[..nb], |b, qb, mb, x| {
+    let len = qt.len();
+    par::rows(
+        (qt, mt, par::per_row(&mut row_x[..nb], BAND * s, len)),
+        BAND * s,
+    )
+    .for_each(|b, (qb, mb, x)| {
+        let x = x.item();
         let n = qb.len() / s;
         let (xm, xq) = x.split_at_mut(s);
         qb[c0..c1].copy_from_slice(&eq[b * s + c0..b * s + c1]);
@@ -511,14 +510,14 @@ fn face_masses(rho: &Field, mu: &mut [f64], mv: &mut [f64]) {
     let r = rho.data();
     mu[(rows - 1) * s..].fill(0.0);
     mv.iter_mut().skip(s - 1).step_by(s).for_each(|m| *m = 0.0);
-    for_each_row(&mut mu[..(rows - 1) * s], s, |j, row| {
+    par::rows(&mut mu[..(rows - 1) * s], s).for_each(|j, row| {
         let rr = &r[j * s..(j + 1) * s];
         for c in 1..s {
             row[c] = crate::ops::face_density(rr[c - 1], rr[c]);
         }
         row[0] = row[1];
     });
-    for_each_row(mv, s, |j, row| {
+    par::rows(&mut *mv, s).for_each(|j, row| {
         let j = j.max(1);
         let (lo, hi) = (&r[(j - 1) * s..j * s], &r[j * s..(j + 1) * s]);
         for c in 0..s - 1 {
@@ -598,7 +597,7 @@ impl Stage for AdvectionStage {
                 let (dmd, qd, x0d) = (dm, q, x0);
                 let xd = &mut x.data_mut()[r0..r0 + n];
                 let m1d = &mut m1[r0..r0 + n];
-                for_each_row2(xd, m1d, s, |jr, xr, mr| {
+                par::rows((xd, m1d), s).for_each(|jr, (xr, mr)| {
                     for i in i0..i1 {
                         let c = (i + efsi_core::G) as usize;
                         let k = r0 + jr * s + c;

@@ -252,7 +252,7 @@ impl Preconditioner for ViscousBlocks {
                 m.apply(r, z);
             } else {
                 // Jacobi outside the window, multigrid inside (it overwrites the window).
-                efsi_linalg::par::for_each_chunk(z, |o, z| {
+                efsi_linalg::par::chunks(&mut *z).for_each(|o, z| {
                     let (r, d) = (&r[o..o + z.len()], &a.diag[o..o + z.len()]);
                     for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
                         *z = r / d;

@@ -19,10 +19,9 @@
 use efsi_core::scene::Options;
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
-    BoundarySet, EfsiError, FieldId, G, Grid, Phase, Scene, Simulation, Stage, StageError,
-    StagePlugin, StageStats, State, StepContext,
+    BoundarySet, EfsiError, FieldId, Grid, Phase, Region, Scene, Simulation, Stage, StageError,
+    StagePlugin, StageStats, Stagger, State, StepContext,
 };
-use efsi_linalg::par;
 
 /// The body-force stage plugin.
 pub struct BodyForce;
@@ -116,16 +115,7 @@ impl BodyForceStage {
 
 impl Stage for BodyForceStage {
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
-        let c = par::max_over_rows(grid.ny, grid.nx, 0.0, |j| {
-            let j = j as isize;
-            let mut c = 0.0f64;
-            for i in 0..grid.nx as isize {
-                let uu = state.u[(i, j)].abs().max(state.u[(i + 1, j)].abs());
-                let vv = state.v[(i, j)].abs().max(state.v[(i, j + 1)].abs());
-                c = c.max(uu / grid.dx + vv / grid.dy);
-            }
-            c
-        });
+        let c = crate::ops::convective_rate(grid, &state.u, &state.v);
         let (gx, gy) = self.effective(state);
         let g = gx.hypot(gy) / grid.dx.min(grid.dy);
         Some(cfl * 2.0 / (c + (c * c + 4.0 * g).sqrt()))
@@ -137,23 +127,13 @@ impl Stage for BodyForceStage {
         let vy = ctx.bc.normal_faces(1, grid.ny);
         let (gx, gy) = self.effective(state);
         let (gx, gy) = (gx * ctx.dt, gy * ctx.dt);
-        // Rows in parallel: the unknown u faces of rows 0..ny, the unknown v rows.
-        let s = state.u.stride();
-        let (lo, hi) = ((ux.lo + G) as usize, (ux.hi + G) as usize);
-        let r0 = state.u.idx(-G, 0);
-        par::for_each_row(
-            &mut state.u.data_mut()[r0..r0 + grid.ny * s],
-            s,
-            |_, row| {
-                row[lo..hi].iter_mut().for_each(|u| *u += gx);
-            },
-        );
-        let rows = (vy.hi - vy.lo).max(0) as usize;
-        let r0 = state.v.idx(-G, vy.lo);
-        let (i0, i1) = (G as usize, G as usize + grid.nx);
-        par::for_each_row(&mut state.v.data_mut()[r0..r0 + rows * s], s, |_, row| {
-            row[i0..i1].iter_mut().for_each(|v| *v += gy);
-        });
+        // The unknown faces of each velocity component.
+        Region::of(grid, Stagger::XFace)
+            .range(0, ux.lo, ux.hi)
+            .for_each(&mut state.u, |_, u| u.iter_mut().for_each(|u| *u += gx));
+        Region::of(grid, Stagger::YFace)
+            .range(1, vy.lo, vy.hi)
+            .for_each(&mut state.v, |_, v| v.iter_mut().for_each(|v| *v += gy));
         Ok(StageStats::default())
     }
 }

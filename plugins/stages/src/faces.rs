@@ -1,74 +1,81 @@
 //! The normal-velocity faces an implicit stage solves for ([`UnknownFaces`]) and the compact
-//! vectors of the linear solvers on them: one order (the u-faces row by row, then the v-faces
-//! row by row) shared by the viscous stage, the elastic system and their preconditioners, and
+//! vectors of the linear solvers on them: one order (the u-faces line by line, then the v-faces
+//! line by line) shared by the viscous stage, the elastic system and their preconditioners, and
 //! the scatter / gather between a compact vector and the velocity fields, rows in parallel.
 
 use efsi_core::bc::FaceRange;
-use efsi_core::{BoundarySet, Field, G, GHOST, Grid};
-use efsi_linalg::par::for_each_row;
+use efsi_core::{BoundarySet, Field, Grid, Region, Stagger};
+use efsi_linalg::par;
 
-/// The normal-velocity faces an implicit stage solves for, in one compact order: the u-faces row
-/// by row, then the v-faces row by row. Compact vectors of the linear solvers use this order;
-/// [`UnknownFaces::for_each`] maps it to the fields' linear index.
+/// The normal-velocity faces an implicit stage solves for, in one compact order: the u-faces line
+/// by line, then the v-faces line by line. Compact vectors of the linear solvers use this order;
+/// [`UnknownFaces::for_each`] maps it to the fields' storage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct UnknownFaces {
     /// Unknown u-faces along x (all rows).
     pub(crate) ux: FaceRange,
     /// Unknown v-faces along y (all columns).
     pub(crate) vy: FaceRange,
-    nx: usize,
-    ny: usize,
+    /// The unknown u- and v-faces as grid regions.
+    u: Region,
+    v: Region,
 }
 
 impl UnknownFaces {
     /// The unknown faces of `grid` under `bc`.
     pub(crate) fn new(grid: &Grid, bc: &BoundarySet) -> Self {
+        let (ux, vy) = (bc.normal_faces(0, grid.nx), bc.normal_faces(1, grid.ny));
         UnknownFaces {
-            ux: bc.normal_faces(0, grid.nx),
-            vy: bc.normal_faces(1, grid.ny),
-            nx: grid.nx,
-            ny: grid.ny,
+            ux,
+            vy,
+            u: Region::of(grid, Stagger::XFace).range(0, ux.lo, ux.hi),
+            v: Region::of(grid, Stagger::YFace).range(1, vy.lo, vy.hi),
         }
+    }
+
+    /// The unknown u-faces as a grid region (the first part of a compact vector, line by line).
+    pub(crate) fn u_region(&self) -> Region {
+        self.u
+    }
+
+    /// The unknown v-faces as a grid region (the second part of a compact vector).
+    pub(crate) fn v_region(&self) -> Region {
+        self.v
     }
 
     /// Number of unknown u-faces (they come first).
     pub(crate) fn nu(&self) -> usize {
-        (self.ux.hi - self.ux.lo) as usize * self.ny
+        self.u.size()
     }
 
     /// Number of unknowns.
     pub(crate) fn len(&self) -> usize {
-        self.nu() + (self.vy.hi - self.vy.lo) as usize * self.nx
+        self.nu() + self.v.size()
     }
 
-    /// Call `f(compact index, is_u, linear field index)` for every unknown face, in order.
+    /// Call `f(compact index, is_u, storage index)` for every unknown face, in order.
     #[inline]
     pub(crate) fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
-        let stride = self.nx + 1 + 2 * GHOST;
-        let idx = |i: isize, j: isize| (j + G) as usize * stride + (i + G) as usize;
         let mut c = 0;
-        for j in 0..self.ny as isize {
-            for i in self.ux.lo..self.ux.hi {
-                f(c, true, idx(i, j));
-                c += 1;
-            }
-        }
-        for j in self.vy.lo..self.vy.hi {
-            for i in 0..self.nx as isize {
-                f(c, false, idx(i, j));
-                c += 1;
+        for (r, is_u) in [(&self.u, true), (&self.v, false)] {
+            for n in 0..r.lines() {
+                let l = r.line(n);
+                for m in 0..l.len {
+                    f(c, is_u, l.linear(m));
+                    c += 1;
+                }
             }
         }
     }
 
     /// Write the compact vector `x` into the unknown faces of `u`, `v`.
     pub(crate) fn scatter(&self, x: &[f64], u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| a.copy_from_slice(b));
+        self.each_line(x, u, v, |a, b| a.copy_from_slice(b));
     }
 
     /// `u, v += x` on the unknown faces.
     pub(crate) fn add(&self, x: &[f64], u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| {
+        self.each_line(x, u, v, |a, b| {
             for (a, b) in a.iter_mut().zip(b) {
                 *a += b;
             }
@@ -77,7 +84,7 @@ impl UnknownFaces {
 
     /// `u, v ← x + β (u, v)` on the unknown faces.
     pub(crate) fn xpby(&self, x: &[f64], beta: f64, u: &mut Field, v: &mut Field) {
-        each_face_row(self, x, u, v, |a, b| {
+        self.each_line(x, u, v, |a, b| {
             for (a, b) in a.iter_mut().zip(b) {
                 *a = b + beta * *a;
             }
@@ -86,51 +93,28 @@ impl UnknownFaces {
 
     /// Write the unknown faces of `u`, `v` into the compact vector `x`.
     pub(crate) fn gather(&self, u: &Field, v: &Field, x: &mut [f64]) {
-        let (ux, vy) = (self.ux, self.vy);
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.nu();
-        let (xu, xv) = x.split_at_mut(nu);
-        if nur > 0 {
-            for_each_row(xu, nur, |j, row| {
-                let k0 = u.idx(ux.lo, j as isize);
-                row.copy_from_slice(&u.data()[k0..k0 + nur]);
-            });
-        }
-        let nx = u.stride() - 1 - 2 * GHOST;
-        if nx > 0 {
-            for_each_row(xv, nx, |jr, row| {
-                let k0 = v.idx(0, vy.lo + jr as isize);
-                row.copy_from_slice(&v.data()[k0..k0 + nx]);
-            });
+        let (xu, xv) = x.split_at_mut(self.nu());
+        for (r, f, x) in [(&self.u, u, xu), (&self.v, v, xv)] {
+            if !r.is_empty() {
+                par::rows(x, r.len(0))
+                    .for_each(|n, row| row.copy_from_slice(f.at(&r.line(n), [0; 3])));
+            }
         }
     }
-}
 
-/// `f(field row's unknown faces, x's row)` for every row of u- then v-faces, in parallel.
-fn each_face_row(
-    faces: &UnknownFaces,
-    x: &[f64],
-    u: &mut Field,
-    v: &mut Field,
-    f: impl Fn(&mut [f64], &[f64]) + Sync + Send,
-) {
-    let (ux, vy) = (faces.ux, faces.vy);
-    let s = u.stride();
-    let nur = (ux.hi - ux.lo).max(0) as usize;
-    let nx = s - 1 - 2 * GHOST;
-    let nu = faces.nu();
-    if let Some(rows) = nu.checked_div(nur) {
-        let r0 = u.idx(-G, 0);
-        let o = (G + ux.lo) as usize;
-        for_each_row(&mut u.data_mut()[r0..r0 + rows * s], s, |j, row| {
-            f(&mut row[o..o + nur], &x[j * nur..(j + 1) * nur]);
-        });
+    /// `f(the field's unknown faces on a line, x's row for that line)` for every line of u-
+    /// then v-faces, lines in parallel.
+    fn each_line(
+        &self,
+        x: &[f64],
+        u: &mut Field,
+        v: &mut Field,
+        f: impl Fn(&mut [f64], &[f64]) + Sync + Send,
+    ) {
+        let (xu, xv) = x.split_at(self.nu());
+        self.u
+            .for_each(u, |l, row| f(row, &xu[l.n * l.len..(l.n + 1) * l.len]));
+        self.v
+            .for_each(v, |l, row| f(row, &xv[l.n * l.len..(l.n + 1) * l.len]));
     }
-    let rows = (vy.hi - vy.lo).max(0) as usize;
-    let r0 = v.idx(-G, vy.lo);
-    let xv = &x[nu..];
-    let o = GHOST;
-    for_each_row(&mut v.data_mut()[r0..r0 + rows * s], s, |j, row| {
-        f(&mut row[o..o + nx], &xv[j * nx..(j + 1) * nx]);
-    });
 }

@@ -34,9 +34,9 @@
 //! the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
-use efsi_core::{Field, G, Grid};
+use efsi_core::{Field, G, Grid, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
-use efsi_linalg::par::{self, for_each_row, for_each_row_sum, for_each_row2};
+use efsi_linalg::par;
 
 /// The coefficients of `K_η` (see the module docs) for one grid and its unknown faces.
 pub(crate) struct Coefficients {
@@ -87,17 +87,13 @@ impl Coefficients {
     pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
         self.set_cells(g, mu, scale);
         let m = &g.metric;
-        let s = mu.stride();
-        let r0 = mu.idx(-G, 0);
-        let rows = g.ny + 1;
-        let mud = mu.data();
-        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
-            let k0 = r0 + jr * s;
-            for i in 0..=g.nx as isize {
-                let c = (i + G) as usize;
-                let k = k0 + c;
-                let mk = corner_mean([mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]]);
-                gr[c] = scale * m.rx(i) * mk;
+        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
+            let (sw, se) = (mu.at(&l, [-1, -1, 0]), mu.at(&l, [0, -1, 0]));
+            let (nw, ne) = (mu.at(&l, [-1, 0, 0]), mu.at(&l, [0; 3]));
+            let rx = m.rx_on(&l, 0);
+            for n in 0..l.len {
+                let mk = corner_mean([sw[n], se[n], nw[n], ne[n]]);
+                gr[n] = scale * rx[n] * mk;
             }
         });
         self.set_hoop(g, mu, scale);
@@ -108,15 +104,10 @@ impl Coefficients {
     pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
         self.set_cells(g, eta, scale);
         let m = &g.metric;
-        let s = eta.stride();
-        let r0 = eta.idx(-G, 0);
-        let rows = g.ny + 1;
-        let ekd = &eta_k.data()[r0..r0 + rows * s];
-        for_each_row(&mut self.gc.data_mut()[r0..r0 + rows * s], s, |jr, gr| {
-            let er = &ekd[jr * s..(jr + 1) * s];
-            for i in 0..=g.nx as isize {
-                let c = (i + G) as usize;
-                gr[c] = scale * m.rx(i) * er[c];
+        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
+            let (ek, rx) = (eta_k.at(&l, [0; 3]), m.rx_on(&l, 0));
+            for n in 0..l.len {
+                gr[n] = scale * rx[n] * ek[n];
             }
         });
         self.set_hoop(g, eta, scale);
@@ -130,7 +121,7 @@ impl Coefficients {
         let ed = eta.data();
         let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
         let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
-        for_each_row2(cxx, cyy, s, |jr, cx, cy| {
+        par::rows((cxx, cyy), s).for_each(|jr, (cx, cy)| {
             let row = &ed[jr * s..(jr + 1) * s];
             for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
                 let r = m.rc(c as isize - G);
@@ -144,18 +135,16 @@ impl Coefficients {
     fn set_hoop(&mut self, g: &Grid, eta: &Field, scale: f64) {
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
-        let ed = eta.data();
-        let ux = self.faces.ux;
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.faces.nu();
-        let hoop = &mut self.hoop[..nu];
-        if nur > 0 {
-            for_each_row(hoop, nur, |j, hs| {
+        let faces = self.faces.u_region();
+        let hoop = &mut self.hoop[..faces.size()];
+        if !faces.is_empty() {
+            par::rows(&mut *hoop, faces.len(0)).for_each(|n, hs| {
+                let l = faces.line(n);
+                let (ew, ec) = (eta.at(&l, [-1, 0, 0]), eta.at(&l, [0; 3]));
+                let (rx, hx) = (m.rx_on(&l, 0), m.hoop_x_on(&l, 0));
                 for (c, h) in hs.iter_mut().enumerate() {
-                    let i = ux.lo + c as isize;
-                    let k = eta.idx(i, j as isize);
-                    let x = m.hoop_x(i);
-                    *h = scale * dx * dy * m.rx(i) * (ed[k - 1] + ed[k]) * x * x;
+                    let x = hx[c];
+                    *h = scale * dx * dy * rx[c] * (ew[c] + ec[c]) * x * x;
                 }
             });
         }
@@ -167,31 +156,31 @@ impl Coefficients {
     /// whatever its ghost rule (a reflected no-slip ghost doubles it in the matrix), which keeps
     /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Rows in parallel.
     pub(crate) fn diagonal(&self, dm: &[f64], diag: &mut [f64]) {
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = (ux.hi - ux.lo).max(0) as usize;
-        let nu = self.faces.nu();
-        let nx = self.nx;
-        let s = self.cxx.stride();
-        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
+        let (cxx, cyy, gc) = (&self.cxx, &self.cyy, &self.gc);
         let (alpha, beta) = (self.alpha, self.beta);
-        let (dm_u, dm_v) = dm.split_at(nu);
-        let (dg_u, dg_v) = diag.split_at_mut(nu);
-        let idx = |i: isize, j: isize| self.cxx.idx(i, j);
-        if nur > 0 {
-            for_each_row(dg_u, nur, |j, dgs| {
-                for (c, dg) in dgs.iter_mut().enumerate() {
-                    let k = idx(ux.lo + c as isize, j as isize);
-                    *dg = dm_u[j * nur + c] + (cxx[k] + cxx[k - 1]) + alpha * (gd[k + s] + gd[k]);
+        let (dm_u, dm_v) = dm.split_at(uf.size());
+        let (dg_u, dg_v) = diag.split_at_mut(uf.size());
+        if !uf.is_empty() {
+            par::rows((&mut *dg_u, dm_u), uf.len(0)).for_each(|n, (dgs, dm)| {
+                let l = uf.line(n);
+                let (cw, ce) = (cxx.at(&l, [-1, 0, 0]), cxx.at(&l, [0; 3]));
+                let (gs, gn) = (gc.at(&l, [0; 3]), gc.at(&l, unit(1)));
+                for c in 0..l.len {
+                    dgs[c] = dm[c] + (ce[c] + cw[c]) + alpha * (gn[c] + gs[c]);
                 }
             });
         }
-        for_each_row(dg_v, nx, |jr, dgs| {
-            let j = vy.lo + jr as isize;
-            for (i, dg) in dgs.iter_mut().enumerate() {
-                let k = idx(i as isize, j);
-                *dg = dm_v[jr * nx + i] + (cyy[k] + cyy[k - s]) + beta * (gd[k + 1] + gd[k]);
-            }
-        });
+        if !vf.is_empty() {
+            par::rows((&mut *dg_v, dm_v), vf.len(0)).for_each(|n, (dgs, dm)| {
+                let l = vf.line(n);
+                let (cs, cn) = (cyy.at(&l, [0, -1, 0]), cyy.at(&l, [0; 3]));
+                let (gw, ge) = (gc.at(&l, [0; 3]), gc.at(&l, unit(0)));
+                for c in 0..l.len {
+                    dgs[c] = dm[c] + (cn[c] + cs[c]) + beta * (ge[c] + gw[c]);
+                }
+            });
+        }
     }
 
     /// The u–u and v–v blocks of `diag(d) − K` — `d` the full diagonal ([`diagonal`](Self::diagonal))
@@ -266,63 +255,71 @@ impl Coefficients {
         };
         let mut xy = 0.0;
         if nur > 0 {
-            xy = for_each_row_sum(yu, nur, |j, yr| {
+            xy = par::rows(&mut *yu, nur).fold(
+                0.0,
+                |j, yr| {
+                    let n = yr.len();
+                    let k0 = u.idx(ux.lo, j as isize);
+                    let q0 = j * nur;
+                    let uc = &ud[k0..k0 + n];
+                    let ue = &ud[k0 + 1..k0 + 1 + n];
+                    let uw = &ud[k0 - 1..k0 - 1 + n];
+                    let un = &ud[k0 + s..k0 + s + n];
+                    let us = &ud[k0 - s..k0 - s + n];
+                    let vc = &vd[k0..k0 + n];
+                    let vw = &vd[k0 - 1..k0 - 1 + n];
+                    let vn = &vd[k0 + s..k0 + s + n];
+                    let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
+                    let ac = &cxx[k0..k0 + n];
+                    let aw = &cxx[k0 - 1..k0 - 1 + n];
+                    let gs = &gd[k0..k0 + n];
+                    let gn = &gd[k0 + s..k0 + s + n];
+                    let dr = &du[q0..q0 + n];
+                    let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
+                    for c in 0..n {
+                        let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
+                        let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
+                        let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+                        yr[c] = dr[c] * xr[c] - k;
+                    }
+                    let yr = &*yr;
+                    par::sum4(n, |c| xr[c] * yr[c])
+                },
+                |s, p| s + p,
+            );
+        }
+        xy + par::rows(&mut *yv, nx).fold(
+            0.0,
+            |jr, yr| {
                 let n = yr.len();
-                let k0 = u.idx(ux.lo, j as isize);
-                let q0 = j * nur;
-                let uc = &ud[k0..k0 + n];
-                let ue = &ud[k0 + 1..k0 + 1 + n];
-                let uw = &ud[k0 - 1..k0 - 1 + n];
-                let un = &ud[k0 + s..k0 + s + n];
-                let us = &ud[k0 - s..k0 - s + n];
+                let k0 = v.idx(0, vy.lo + jr as isize);
+                let q0 = jr * nx;
                 let vc = &vd[k0..k0 + n];
+                let ve = &vd[k0 + 1..k0 + 1 + n];
                 let vw = &vd[k0 - 1..k0 - 1 + n];
                 let vn = &vd[k0 + s..k0 + s + n];
-                let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
-                let ac = &cxx[k0..k0 + n];
-                let aw = &cxx[k0 - 1..k0 - 1 + n];
-                let gs = &gd[k0..k0 + n];
-                let gn = &gd[k0 + s..k0 + s + n];
-                let dr = &du[q0..q0 + n];
-                let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
+                let vs = &vd[k0 - s..k0 - s + n];
+                let uc = &ud[k0..k0 + n];
+                let us = &ud[k0 - s..k0 - s + n];
+                let ue = &ud[k0 + 1..k0 + 1 + n];
+                let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
+                let bc = &cyy[k0..k0 + n];
+                let bs = &cyy[k0 - s..k0 - s + n];
+                let gw = &gd[k0..k0 + n];
+                let ge = &gd[k0 + 1..k0 + 1 + n];
+                let dr = &dv[q0..q0 + n];
+                let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
                 for c in 0..n {
-                    let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
-                    let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
-                    let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+                    let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
+                    let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
+                    let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
                     yr[c] = dr[c] * xr[c] - k;
                 }
                 let yr = &*yr;
                 par::sum4(n, |c| xr[c] * yr[c])
-            });
-        }
-        xy + for_each_row_sum(yv, nx, |jr, yr| {
-            let n = yr.len();
-            let k0 = v.idx(0, vy.lo + jr as isize);
-            let q0 = jr * nx;
-            let vc = &vd[k0..k0 + n];
-            let ve = &vd[k0 + 1..k0 + 1 + n];
-            let vw = &vd[k0 - 1..k0 - 1 + n];
-            let vn = &vd[k0 + s..k0 + s + n];
-            let vs = &vd[k0 - s..k0 - s + n];
-            let uc = &ud[k0..k0 + n];
-            let us = &ud[k0 - s..k0 - s + n];
-            let ue = &ud[k0 + 1..k0 + 1 + n];
-            let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
-            let bc = &cyy[k0..k0 + n];
-            let bs = &cyy[k0 - s..k0 - s + n];
-            let gw = &gd[k0..k0 + n];
-            let ge = &gd[k0 + 1..k0 + 1 + n];
-            let dr = &dv[q0..q0 + n];
-            let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
-            for c in 0..n {
-                let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
-                let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
-                let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
-                yr[c] = dr[c] * xr[c] - k;
-            }
-            let yr = &*yr;
-            par::sum4(n, |c| xr[c] * yr[c])
-        })
+            },
+            |s, p| s + p,
+        )
     }
 }
 
@@ -337,7 +334,7 @@ pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
     let rows = grid.ny + 1;
     let mud = mu.data();
     let nx = grid.nx as isize;
-    for_each_row(&mut out.data_mut()[r0..r0 + rows * s], s, |jr, mr| {
+    par::rows(&mut out.data_mut()[r0..r0 + rows * s], s).for_each(|jr, mr| {
         let k0 = r0 + jr * s;
         for i in 0..=nx {
             let c = (i + G) as usize;

@@ -3,7 +3,7 @@
 
 use super::level::Level;
 use super::transfer::RUN;
-use crate::par::{self, SharedSlice};
+use crate::par;
 use crate::stencil5::{Stencil5, Stencil5View};
 
 /// Cells per aggregate along a direction of `n` cells: 2, or 1 once `n ≤ 2`.
@@ -40,77 +40,67 @@ pub(super) fn coarsen_view_into(a: Stencil5View<'_>, c: &mut Stencil5, excess_sc
     // (they vectorise), then added to the coarse row's sums fine row by fine row, child by
     // child — every coarse entry sums its children in the order (j, i), so the sums do not
     // depend on the number of threads.
-    let (ce, cn, cd) = (
-        SharedSlice::new(&mut c.east),
-        SharedSlice::new(&mut c.north),
-        SharedSlice::new(&mut c.diag),
-    );
-    par::for_each_index(cy, fy * nx, |jc| {
-        let row0 = jc * cx;
-        for kc in row0..row0 + cx {
-            // SAFETY: coarse row jc writes only its own entries (here and below).
-            unsafe {
-                ce.set(kc, 0.0);
-                cn.set(kc, 0.0);
-                cd.set(kc, 0.0);
-            }
-        }
-        let j1 = (fy * jc + fy).min(ny);
-        let (mut e, mut n, mut x) = ([0.0f64; RUN], [0.0f64; RUN], [0.0f64; RUN]);
-        for j in fy * jc..j1 {
-            let last_y = j + 1 == ny;
-            let north_face = j + 1 == j1 && cy > 1;
-            let mut i0 = 0;
-            while i0 < nx {
-                let len = (nx - i0).min(RUN);
-                let k0 = j * nx + i0;
-                let (e, n, x) = (&mut e[..len], &mut n[..len], &mut x[..len]);
-                e.copy_from_slice(&a.east[k0..k0 + len]);
-                if i0 + len == nx && !a.periodic_x {
-                    e[len - 1] = 0.0;
-                }
-                if last_y && !a.periodic_y {
-                    n.fill(0.0);
-                } else {
-                    n.copy_from_slice(&a.north[k0..k0 + len]);
-                }
-                for t in 0..len {
-                    let k = k0 + t;
-                    let i = i0 + t;
-                    let excess = a.diag[k] - (e[t] + n[t] + a.west(k, i) + a.south(k, j));
-                    x[t] = if excess > 1e-12 * a.diag[k] {
-                        se * excess
+    let n = cx * cy;
+    let lanes = (&mut c.east[..n], &mut c.north[..n], &mut c.diag[..n]);
+    par::rows(lanes, cx)
+        .work(fy * nx)
+        .for_each(|jc, (ce, cn, cd)| {
+            ce.fill(0.0);
+            cn.fill(0.0);
+            cd.fill(0.0);
+            let j1 = (fy * jc + fy).min(ny);
+            let (mut e, mut n, mut x) = ([0.0f64; RUN], [0.0f64; RUN], [0.0f64; RUN]);
+            for j in fy * jc..j1 {
+                let last_y = j + 1 == ny;
+                let north_face = j + 1 == j1 && cy > 1;
+                let mut i0 = 0;
+                while i0 < nx {
+                    let len = (nx - i0).min(RUN);
+                    let k0 = j * nx + i0;
+                    let (e, n, x) = (&mut e[..len], &mut n[..len], &mut x[..len]);
+                    e.copy_from_slice(&a.east[k0..k0 + len]);
+                    if i0 + len == nx && !a.periodic_x {
+                        e[len - 1] = 0.0;
+                    }
+                    if last_y && !a.periodic_y {
+                        n.fill(0.0);
                     } else {
-                        0.0
-                    };
-                }
-                for t in 0..len {
-                    let i = i0 + t;
-                    let kc = row0 + (i >> lx);
-                    // A fine face between two aggregates (or across the periodic wrap)
-                    // couples them; a periodic direction of one coarse cell couples the cell
-                    // to itself: no coupling.
-                    let east_face = (i + 1 == nx || (i + 1) >> lx != i >> lx) && cx > 1;
-                    // SAFETY: as above.
-                    unsafe {
+                        n.copy_from_slice(&a.north[k0..k0 + len]);
+                    }
+                    for t in 0..len {
+                        let k = k0 + t;
+                        let i = i0 + t;
+                        let excess = a.diag[k] - (e[t] + n[t] + a.west(k, i) + a.south(k, j));
+                        x[t] = if excess > 1e-12 * a.diag[k] {
+                            se * excess
+                        } else {
+                            0.0
+                        };
+                    }
+                    for t in 0..len {
+                        let i = i0 + t;
+                        let kc = i >> lx;
+                        // A fine face between two aggregates (or across the periodic wrap)
+                        // couples them; a periodic direction of one coarse cell couples the cell
+                        // to itself: no coupling.
+                        let east_face = (i + 1 == nx || (i + 1) >> lx != i >> lx) && cx > 1;
                         if east_face {
-                            ce.set(kc, ce.get(kc) + sx * e[t]);
+                            ce[kc] += sx * e[t];
                         }
                         if north_face {
-                            cn.set(kc, cn.get(kc) + sy * n[t]);
+                            cn[kc] += sy * n[t];
                         }
                         if x[t] != 0.0 {
-                            cd.set(kc, cd.get(kc) + x[t]);
+                            cd[kc] += x[t];
                         }
                     }
+                    i0 += len;
                 }
-                i0 += len;
             }
-        }
-    });
+        });
     let mut diag = std::mem::take(&mut c.diag);
     let cc = &*c;
-    par::for_each_row(&mut diag, cx, |jc, row| {
+    par::rows(&mut diag[..], cx).for_each(|jc, row| {
         for (ic, d) in row.iter_mut().enumerate() {
             let kc = jc * cx + ic;
             *d += cc.east[kc] + cc.north[kc] + cc.west(kc, ic) + cc.south(kc, jc);

@@ -43,7 +43,7 @@ pub(super) fn cycle(
             c.fill_ghosts();
             let mut t = std::mem::take(&mut c.t);
             let (cnx, cs) = (c.nx, c.s);
-            par::for_each_row(&mut t[cs..(c.ny + 1) * cs], cs, |j, row| {
+            par::rows(&mut t[cs..(c.ny + 1) * cs], cs).for_each(|j, row| {
                 c.residual_run(c.p(0, j), &mut row[1..=cnx]);
             });
             c.t = t;
@@ -59,7 +59,7 @@ pub(super) fn cycle(
         if k > 0 {
             let c = &mut levels[l + 1];
             let t = &c.t;
-            par::for_each_chunk(&mut c.x, |o, x| {
+            par::chunks(&mut c.x[..]).for_each(|o, x| {
                 let n = x.len();
                 for (x, t) in x.iter_mut().zip(&t[o..o + n]) {
                     *x += t;

@@ -46,7 +46,7 @@ impl FineMatrix<'_> {
             return;
         }
         let (d, ce, cn) = (&l.diag[..], &l.ce[..], &l.cn[..]);
-        par::for_each_row(y, nx, |j, yr| {
+        par::rows(y, nx).for_each(|j, yr| {
             let r = j * nx;
             // Padded index of cell (0, j); row j's couplings are those of `Stencil5` row j.
             let p = (j + 1) * s + 1;

@@ -92,7 +92,7 @@ impl Level {
         let (nx, ny, s) = (self.nx, self.ny, self.s);
         let (px, py) = (a.periodic_x, a.periodic_y);
         let rows = s..(ny + 1) * s;
-        par::for_each_row(&mut self.ce[rows.clone()], s, |j, row| {
+        par::rows(&mut self.ce[rows.clone()], s).for_each(|j, row| {
             let src = &a.east[j * nx..(j + 1) * nx];
             row[1..=nx].copy_from_slice(src);
             // The closed east side has no coupling; the west ghost holds the wrap coupling.
@@ -101,7 +101,7 @@ impl Level {
             }
             row[0] = if px { src[nx - 1] } else { 0.0 };
         });
-        par::for_each_row(&mut self.cn[rows.clone()], s, |j, row| {
+        par::rows(&mut self.cn[rows.clone()], s).for_each(|j, row| {
             if j + 1 < ny || py {
                 row[1..=nx].copy_from_slice(&a.north[j * nx..(j + 1) * nx]);
             } else {
@@ -111,11 +111,8 @@ impl Level {
         for i in 0..nx {
             self.cn[i + 1] = if py { a.north[(ny - 1) * nx + i] } else { 0.0 };
         }
-        par::for_each_row2(
-            &mut self.diag[rows.clone()],
-            &mut self.dinv[rows],
-            s,
-            |j, d, di| {
+        par::rows((&mut self.diag[rows.clone()], &mut self.dinv[rows]), s).for_each(
+            |j, (d, di)| {
                 let src = &a.diag[j * nx..(j + 1) * nx];
                 d[1..=nx].copy_from_slice(src);
                 for (di, d) in di[1..=nx].iter_mut().zip(src) {

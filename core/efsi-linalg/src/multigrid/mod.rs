@@ -270,7 +270,7 @@ impl Multigrid {
         {
             let l0 = &mut levels[0];
             let s = l0.s;
-            par::for_each_row(&mut l0.b[s..(ny + 1) * s], s, |j, row| {
+            par::rows(&mut l0.b[s..(ny + 1) * s], s).for_each(|j, row| {
                 let o = origin + j * stride;
                 row[1..=nx].copy_from_slice(&r[o..o + nx]);
             });
@@ -280,12 +280,12 @@ impl Multigrid {
         let s = l0.s;
         let x = &l0.x;
         if stride == nx && origin == 0 {
-            par::for_each_row(&mut z[..nx * ny], nx, |j, row| {
+            par::rows(&mut z[..nx * ny], nx).for_each(|j, row| {
                 row.copy_from_slice(&x[(j + 1) * s + 1..(j + 1) * s + 1 + nx]);
             });
         } else {
             let zw = &mut z[origin..origin + (ny - 1) * stride + nx];
-            par::for_each_row_weighted(zw, stride, nx, |j, row| {
+            par::rows(zw, stride).work(nx).for_each(|j, row| {
                 let n = row.len().min(nx);
                 row[..n].copy_from_slice(&x[(j + 1) * s + 1..(j + 1) * s + 1 + n]);
             });

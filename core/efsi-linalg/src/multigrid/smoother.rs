@@ -16,6 +16,12 @@ impl Level {
         self.fill_ghosts();
         let (nx, ny, s, px) = (self.nx, self.ny, self.s, self.periodic_x);
         let second = 1 - first;
+        let threads = rayon::current_num_threads();
+        let chunk = if self.is_serial() || threads == 1 {
+            ny
+        } else {
+            ny.div_ceil(2 * threads).max(4)
+        };
         let xs = SharedSlice::new(&mut self.x);
         let (b, ce, cn, dinv) = (&self.b[..], &self.ce[..], &self.cn[..], &self.dinv[..]);
         // Update the cells of `colour` in row j, then refresh the row's periodic ghosts.
@@ -23,6 +29,8 @@ impl Level {
             let base = (j + 1) * s + 1;
             let o = base + ((colour + j) & 1);
             let end = base + nx;
+            // Everything this row touches: its cells, their neighbours and the row's ghosts.
+            xs.check(base - 1 - s..end + 1 + s);
             if o < end {
                 // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
                 // exactly the length it touches, so that no index needs a bounds check.
@@ -34,8 +42,9 @@ impl Level {
                 for m in 0..cnt {
                     let t = 2 * m;
                     let k = o + t;
-                    // SAFETY: a row update writes only cells of `colour` in row j and reads
-                    // their neighbours (the other colour) and row j's ghosts. The phases below
+                    // SAFETY: inside the span checked above. A row update writes only cells of
+                    // `colour` in row j and reads their neighbours (the other colour) and row
+                    // j's ghosts. The phases below
                     // never run two updates concurrently where one writes what the other
                     // touches: in phase 1 a chunk updates the second colour only of rows whose
                     // neighbour rows are in the same chunk; in phase 2 only second-colour
@@ -60,12 +69,6 @@ impl Level {
                 }
             }
         };
-        let threads = rayon::current_num_threads();
-        let chunk = if self.is_serial() || threads == 1 {
-            ny
-        } else {
-            ny.div_ceil(2 * threads).max(4)
-        };
         let chunks = ny.div_ceil(chunk);
         let phase1 = |c: usize| {
             let (r0, r1) = (c * chunk, ((c + 1) * chunk).min(ny));
@@ -83,16 +86,19 @@ impl Level {
                 row(second, r1 - 1);
             }
         };
-        par::for_each_index(chunks, chunk * nx, phase1);
+        par::range(chunks).work(chunk * nx).for_each(phase1);
         if self.periodic_y {
             // The second colour of rows 0 and ny − 1 reads the first colour across the wrap.
-            let x = &mut self.x;
+            xs.check(0..(ny + 2) * s);
             for i in 1..=nx {
-                x[i] = x[ny * s + i];
-                x[(ny + 1) * s + i] = x[s + i];
+                // SAFETY: serial code between the two parallel phases, inside the checked span.
+                unsafe {
+                    xs.set(i, xs.get(ny * s + i));
+                    xs.set((ny + 1) * s + i, xs.get(s + i));
+                }
             }
         }
         // Phase 2 touches two rows per chunk: split only when that is worth a fork.
-        par::for_each_index(chunks, 2 * nx, phase2);
+        par::range(chunks).work(2 * nx).for_each(phase2);
     }
 }

@@ -15,35 +15,37 @@ pub(super) fn restrict(f: &Level, c: &mut Level) {
     let fy = if c.ny < f.ny { 2 } else { 1 };
     let (fnx, fny, cnx, cs) = (f.nx, f.ny, c.nx, c.s);
     // A coarse row sums `fy` fine rows: split the loop by the fine work.
-    par::for_each_row_weighted(&mut c.b[cs..(c.ny + 1) * cs], cs, fy * f.s, |jc, row| {
-        let out = &mut row[1..=cnx];
-        out.fill(0.0);
-        let mut r = [0.0f64; RUN];
-        for j in fy * jc..(fy * jc + fy).min(fny) {
-            let base = f.p(0, j);
-            let mut i0 = 0;
-            while i0 < fnx {
-                let len = (fnx - i0).min(RUN);
-                let r = &mut r[..len];
-                f.residual_run(base + i0, r);
-                if fx == 2 {
-                    let o = &mut out[i0 / 2..];
-                    let pairs = len / 2;
-                    for (m, o) in o[..pairs].iter_mut().enumerate() {
-                        *o = *o + r[2 * m] + r[2 * m + 1];
+    par::rows(&mut c.b[cs..(c.ny + 1) * cs], cs)
+        .work(fy * f.s)
+        .for_each(|jc, row| {
+            let out = &mut row[1..=cnx];
+            out.fill(0.0);
+            let mut r = [0.0f64; RUN];
+            for j in fy * jc..(fy * jc + fy).min(fny) {
+                let base = f.p(0, j);
+                let mut i0 = 0;
+                while i0 < fnx {
+                    let len = (fnx - i0).min(RUN);
+                    let r = &mut r[..len];
+                    f.residual_run(base + i0, r);
+                    if fx == 2 {
+                        let o = &mut out[i0 / 2..];
+                        let pairs = len / 2;
+                        for (m, o) in o[..pairs].iter_mut().enumerate() {
+                            *o = *o + r[2 * m] + r[2 * m + 1];
+                        }
+                        if len % 2 == 1 {
+                            o[pairs] += r[len - 1];
+                        }
+                    } else {
+                        for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
+                            *o += r;
+                        }
                     }
-                    if len % 2 == 1 {
-                        o[pairs] += r[len - 1];
-                    }
-                } else {
-                    for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
-                        *o += r;
-                    }
+                    i0 += len;
                 }
-                i0 += len;
             }
-        }
-    });
+        });
 }
 
 /// `f.x += P c.x`: piecewise-constant prolongation of the coarse correction.
@@ -51,7 +53,7 @@ pub(super) fn prolong(f: &mut Level, c: &Level) {
     let fx = if c.nx < f.nx { 2 } else { 1 };
     let fy = if c.ny < f.ny { 2 } else { 1 };
     let (fnx, fs) = (f.nx, f.s);
-    par::for_each_row(&mut f.x[fs..(f.ny + 1) * fs], fs, |j, row| {
+    par::rows(&mut f.x[fs..(f.ny + 1) * fs], fs).for_each(|j, row| {
         let crow = &c.x[c.p(0, j / fy)..];
         let row = &mut row[1..=fnx];
         if fx == 2 {

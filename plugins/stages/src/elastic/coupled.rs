@@ -159,7 +159,7 @@ use crate::faces::UnknownFaces;
 use crate::ops;
 use crate::projection;
 use efsi_core::{BoundarySet, Field, Grid, StageError, State, StepContext};
-use efsi_linalg::par::for_each_row;
+use efsi_linalg::par;
 use efsi_linalg::{
     Accept, Fgmres, FlexiblePreconditioner, LinearOperator, Multigrid, Preconditioner, SolveStats,
     Stencil5,
@@ -233,7 +233,7 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]
     let lo = faces.ux.lo;
     let nur = (faces.ux.hi - lo).max(0) as usize;
     if nur > 0 {
-        for_each_row(yu, nur, |j, row| {
+        par::rows(&mut *yu, nur).for_each(|j, row| {
             let j = j as isize;
             for (t, y) in row.iter_mut().enumerate() {
                 let i = lo + t as isize;
@@ -242,7 +242,7 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]
         });
     }
     let vlo = faces.vy.lo;
-    for_each_row(yv, g.nx, |r, row| {
+    par::rows(&mut *yv, g.nx).for_each(|r, row| {
         let j = vlo + r as isize;
         for (i, y) in row.iter_mut().enumerate() {
             let i = i as isize;
@@ -255,7 +255,7 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]
 /// parallel.
 fn outflux_per_volume(g: &Grid, u: &Field, v: &Field, dt_vol: &[f64], c: f64, out: &mut [f64]) {
     let nx = g.nx;
-    for_each_row(out, nx, |j, row| {
+    par::rows(&mut *out, nx).for_each(|j, row| {
         for (i, y) in row.iter_mut().enumerate() {
             *y = c * dt_vol[j * nx + i] * ops::net_outflux(g, u, v, i as isize, j as isize);
         }
@@ -334,7 +334,7 @@ impl FlexiblePreconditioner for BlockTriangular<'_> {
         let nx = g.nx;
         // The pressure: with the flux residual v = dV r_c/(ωΔt), solve the Poisson equation
         // `−dV ∇·(∇s/ρ) = v/Δt` (one cycle) and add `2η v/(Δt dV)`.
-        for_each_row(self.pb, nx, |j, row| {
+        par::rows(&mut *self.pb, nx).for_each(|j, row| {
             for (i, b) in row.iter_mut().enumerate() {
                 *b = g.cell_volume(i as isize) * rc[j * nx + i] / (om * dt * dt);
             }
@@ -345,7 +345,7 @@ impl FlexiblePreconditioner for BlockTriangular<'_> {
         }
         self.poisson.apply(self.pb, self.ps);
         let (ps, eta) = (&*self.ps, self.eta);
-        for_each_row(zp, nx, |j, row| {
+        par::rows(&mut *zp, nx).for_each(|j, row| {
             let jj = j as isize;
             for (i, z) in row.iter_mut().enumerate() {
                 let c = j * nx + i;
@@ -402,7 +402,7 @@ impl ElasticStage {
         let nx = g.nx;
         let nf = self.delta.len();
         if dt != cp.weight_dt {
-            for_each_row(&mut cp.dt_vol, nx, |_, row| {
+            par::rows(&mut cp.dt_vol[..], nx).for_each(|_, row| {
                 for (i, w) in row.iter_mut().enumerate() {
                     *w = dt / g.cell_volume(i as isize);
                 }
@@ -460,7 +460,7 @@ impl ElasticStage {
         {
             let xp = &mut cp.x[nf..];
             let p = &state.p;
-            for_each_row(xp, nx, |j, row| {
+            par::rows(&mut *xp, nx).for_each(|j, row| {
                 for (i, x) in row.iter_mut().enumerate() {
                     *x = p[(i as isize, j as isize)];
                 }

@@ -13,7 +13,7 @@ impl Kernels {
         let (nx, ny) = self.nxy();
         // Every entry, ghosts included (one padded shape for all fields), in parallel chunks.
         let pd = phi.data();
-        par::for_each_chunk(self.w.data_mut(), |o, w| {
+        par::chunks(self.w.data_mut()).for_each(|o, w| {
             for (w, f) in w.iter_mut().zip(&pd[o..]) {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }

@@ -156,7 +156,7 @@ impl Kernels {
         let (ci0, ci1) = (cw.i0.max(0), cw.i1.min(nx - 1));
         for c in 0..3 {
             let bd = b[c].data();
-            par::for_each_row(out[c].data_mut(), s, |jp, row| {
+            par::rows(out[c].data_mut(), s).for_each(|jp, row| {
                 let j = jp as isize - efsi_core::G;
                 if j < 0 || j >= ny || j < cw.j0 || j > cw.j1 {
                     return;
@@ -174,7 +174,7 @@ impl Kernels {
             });
         }
         let bd = b[3].data();
-        par::for_each_row(out[3].data_mut(), s, |jp, row| {
+        par::rows(out[3].data_mut(), s).for_each(|jp, row| {
             let j = jp as isize - efsi_core::G;
             if j < 0 || j > ny || j < kw.j0 || j > kw.j1 {
                 return;

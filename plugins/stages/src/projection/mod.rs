@@ -66,7 +66,7 @@ use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
     StepContext,
 };
-use efsi_linalg::par::{for_each_mut, for_each_row};
+use efsi_linalg::par;
 use efsi_linalg::{
     IncompleteCholesky, Multigrid, Norm, Stencil5, Stencil5View, pcg::solve_norm_in,
 };
@@ -281,7 +281,7 @@ fn assemble_into(
     let (dx, dy) = (grid.dx, grid.dy);
     let px = bc.periodic(0);
     let py = bc.periodic(1);
-    for_each_row(east, nx, |j, row| {
+    par::rows(&mut *east, nx).for_each(|j, row| {
         let jj = j as isize;
         for (i, e) in row.iter_mut().enumerate() {
             let ii = i as isize;
@@ -293,7 +293,7 @@ fn assemble_into(
             };
         }
     });
-    for_each_row(north, nx, |j, row| {
+    par::rows(&mut *north, nx).for_each(|j, row| {
         let jj = j as isize;
         for (i, n) in row.iter_mut().enumerate() {
             let ii = i as isize;
@@ -313,7 +313,7 @@ fn assemble_into(
         outflow(Side::YMax),
     );
     let (east, north) = (&*east, &*north);
-    for_each_row(diag, nx, |j, row| {
+    par::rows(&mut *diag, nx).for_each(|j, row| {
         let jj = j as isize;
         for (i, dk) in row.iter_mut().enumerate() {
             let k = j * nx + i;
@@ -474,7 +474,7 @@ impl ProjectionStage {
             u.stride(),
         );
         let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
-        for_each_row(b, nx, |j, row| {
+        par::rows(&mut *b, nx).for_each(|j, row| {
             let k0 = u.idx(0, j as isize);
             let (uw, ue) = (&ud[k0..k0 + nx], &ud[k0 + 1..k0 + 1 + nx]);
             let (vs, vn) = (&vd[k0..k0 + nx], &vd[k0 + s..k0 + s + nx]);
@@ -484,7 +484,7 @@ impl ProjectionStage {
                 row[i] = -out / dt;
             }
         });
-        for_each_row(weight, nx, |_, row| {
+        par::rows(&mut *weight, nx).for_each(|_, row| {
             for (i, w) in row.iter_mut().enumerate() {
                 *w = dt * dt / grid.cell_volume(i as isize);
             }
@@ -495,7 +495,7 @@ impl ProjectionStage {
         if incremental {
             x.fill(0.0);
         } else {
-            for_each_row(x, nx, |j, row| {
+            par::rows(&mut *x, nx).for_each(|j, row| {
                 for (i, x) in row.iter_mut().enumerate() {
                     *x = p[(i as isize, j as isize)];
                 }
@@ -529,7 +529,7 @@ impl ProjectionStage {
         }
         if singular {
             let mean = x.iter().sum::<f64>() / x.len() as f64;
-            for_each_mut(x, |_, p| *p -= mean);
+            par::chunks(&mut *x).for_each(|_, x| x.iter_mut().for_each(|p| *p -= mean));
         }
         let (x, ps) = (&*x, state.p.stride());
         let p0 = state.p.idx(0, 0);
@@ -537,7 +537,7 @@ impl ProjectionStage {
             Some(f) if incremental => f,
             _ => &mut state.p,
         };
-        for_each_row(&mut target.data_mut()[p0..p0 + ny * ps], ps, |j, row| {
+        par::rows(&mut target.data_mut()[p0..p0 + ny * ps], ps).for_each(|j, row| {
             row[..nx].copy_from_slice(&x[j * nx..(j + 1) * nx]);
         });
         ctx.bc.fill_scalar(grid, target, true);
@@ -601,7 +601,7 @@ pub(crate) fn subtract_gradient(
     let base = p.idx(0, 0);
     let ud = &mut u.data_mut()[base..base + ny * s];
     let (lo, hi) = (ux.lo.max(0) as usize, ux.hi.max(0) as usize);
-    for_each_row(ud, s, |j, row| {
+    par::rows(&mut *ud, s).for_each(|j, row| {
         if hi <= lo {
             return;
         }
@@ -617,7 +617,7 @@ pub(crate) fn subtract_gradient(
     let v0 = p.idx(0, vy.lo);
     let vrows = (vy.hi - vy.lo).max(0) as usize;
     let vd = &mut v.data_mut()[v0..v0 + vrows * s];
-    for_each_row(vd, s, |j, row| {
+    par::rows(&mut *vd, s).for_each(|j, row| {
         let k = v0 + j * s;
         let (pn, ps) = (&pd[k..k + nx], &pd[k - s..k - s + nx]);
         let (rn, rs) = (&rd[k..k + nx], &rd[k - s..k - s + nx]);

@@ -68,7 +68,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext, bc::WallTime,
 };
-use efsi_linalg::par::{self, dot, for_each_row};
+use efsi_linalg::par::{self, dot};
 use efsi_linalg::{LinearOperator, Norm, SolveStats, pcg::solve_norm_in};
 
 mod options;
@@ -228,13 +228,13 @@ impl ViscousSystem {
         let nur = u_row(faces);
         let (dm_u, dm_v) = self.dm.split_at_mut(faces.nu());
         if nur > 0 {
-            for_each_row(dm_u, nur, |j, dms| {
+            par::rows(&mut *dm_u, nur).for_each(|j, dms| {
                 for (c, dm) in dms.iter_mut().enumerate() {
                     *dm = mass_u(g, faces, rho, c, j) + hoop[j * nur + c];
                 }
             });
         }
-        for_each_row(dm_v, g.nx, |jr, dms| {
+        par::rows(&mut *dm_v, g.nx).for_each(|jr, dms| {
             for (i, dm) in dms.iter_mut().enumerate() {
                 *dm = mass_v(g, faces, rho, i, jr);
             }
@@ -300,7 +300,7 @@ impl ViscousSystem {
     /// `r = b − A x` (and `q = A x`; the fields then hold `x`).
     fn residual(&mut self, b: &[f64], x: &[f64], r: &mut [f64], q: &mut [f64]) {
         self.product(x, q);
-        par::for_each_chunk(r, |o, r| {
+        par::chunks(&mut *r).for_each(|o, r| {
             let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
             for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
                 *r = b - q;
@@ -336,8 +336,7 @@ impl ViscousSystem {
     ) -> SolveStats {
         // z = r·dinv over q, returning r·z.
         let precondition = |r: &[f64], q: &mut [f64]| {
-            par::reduce_chunks(
-                q,
+            par::chunks(&mut *q).fold(
                 0.0,
                 |o, z| {
                     let n = z.len();
@@ -400,15 +399,23 @@ impl ViscousSystem {
             let (ux, vy) = (self.faces.ux, self.faces.vy);
             let (mut rr, mut rz_new) = (0.0, 0.0);
             if nur > 0 {
-                (rr, rz_new) = par::for_each_row3_sum2(xu, ru, qu, nur, |j, x, r, q| {
-                    let k0 = self.xu.idx(ux.lo, j as isize);
-                    row(&ud[k0..], &du[j * nur..], x, r, q)
-                });
+                (rr, rz_new) = par::rows((xu, ru, qu), nur).fold(
+                    (0.0, 0.0),
+                    |j, (x, r, q)| {
+                        let k0 = self.xu.idx(ux.lo, j as isize);
+                        row(&ud[k0..], &du[j * nur..], x, r, q)
+                    },
+                    |s, p| (s.0 + p.0, s.1 + p.1),
+                );
             }
-            let (rr_v, rz_v) = par::for_each_row3_sum2(xv, rv, qv, nx, |jr, x, r, q| {
-                let k0 = self.xv.idx(0, vy.lo + jr as isize);
-                row(&vd[k0..], &dv[jr * nx..], x, r, q)
-            });
+            let (rr_v, rz_v) = par::rows((xv, rv, qv), nx).fold(
+                (0.0, 0.0),
+                |jr, (x, r, q)| {
+                    let k0 = self.xv.idx(0, vy.lo + jr as isize);
+                    row(&vd[k0..], &dv[jr * nx..], x, r, q)
+                },
+                |s, p| (s.0 + p.0, s.1 + p.1),
+            );
             res = (rr + rr_v).sqrt();
             let mut rz_new = rz_new + rz_v;
             it += 1;
@@ -471,7 +478,7 @@ impl WarmStart {
             }
         };
         let [p1, p2] = &mut self.prev;
-        par::for_each_chunk(p2, |o, d| {
+        par::chunks(&mut p2[..]).for_each(|o, d| {
             let p1 = &p1[o..o + d.len()];
             for (d, a) in d.iter_mut().zip(p1) {
                 *d = c1 * a + c2 * *d;
@@ -577,7 +584,7 @@ impl Stage for ViscousStage {
         ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
         op.k.apply(&state.u, &state.v, op.k.hoop(), None, rhs);
         let scale = -1.0 / self.theta;
-        for_each_row(rhs, g.nx.max(1), |_, row| {
+        par::rows(&mut *rhs, g.nx.max(1)).for_each(|_, row| {
             row.iter_mut().for_each(|r| *r *= scale);
         });
         let bnorm = dot(rhs, rhs).sqrt();
@@ -635,7 +642,7 @@ impl Stage for ViscousStage {
                 )
             } else {
                 // The reciprocal of the diagonal, in place.
-                par::for_each_chunk(diag, |_, d| d.iter_mut().for_each(|d| *d = 1.0 / *d));
+                par::chunks(&mut *diag).for_each(|_, d| d.iter_mut().for_each(|d| *d = 1.0 / *d));
                 op.solve_jacobi([r, q, p], diag, rhs, delta, tol, self.max_iter)
             };
             // A solve short of the tighter stop near a steady state but within the tolerance

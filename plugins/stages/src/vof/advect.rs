@@ -371,7 +371,7 @@ impl VofAdvector {
         let mut w = Work::cut(work, self.cells);
         let (nx, ny, s) = (self.nx, self.ny, phi.stride());
         let src = phi.data();
-        par::for_each_row(w.cc, s, |jp, row| {
+        par::rows(&mut *w.cc, s).for_each(|jp, row| {
             if (GU..GU + ny).contains(&jp) {
                 let o = jp * s + GU;
                 for (c, f) in row[GU..GU + nx].iter_mut().zip(&src[o..o + nx]) {
@@ -441,7 +441,7 @@ impl VofAdvector {
         let (dx, dy) = (self.dx, self.dy);
         let c = phi.data();
         let r_left = &self.r_left;
-        par::for_each_row(lines, 3 * s, |jp, row| {
+        par::rows(&mut *lines, 3 * s).for_each(|jp, row| {
             let j = jp as isize - G;
             if j < j0 || j >= j1 {
                 return;
@@ -516,7 +516,14 @@ impl VofAdvector {
         let (r_face, r_centre, inv_vol) = (&self.r_face, &self.r_centre, &self.inv_vol);
         let c = phi.data();
         let v = vel.data();
-        par::for_each_row2_with(w.vflux, w.flux, s, &mut self.rows, |jp, urow, frow, st| {
+        let len = w.flux.len();
+        let lanes = (
+            &mut *w.vflux,
+            &mut *w.flux,
+            par::per_row(&mut self.rows, s, len),
+        );
+        par::rows(lanes, s).for_each(|jp, (urow, frow, st)| {
+            let st = st.item();
             *st = RowStats::default();
             let j = jp as isize - G;
             // The high periodic face of a y sweep is the low one: copied below.
@@ -585,45 +592,46 @@ impl VofAdvector {
 
         // Update and clip.
         let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
-        par::for_each_row2_with(
+        let len = w.divsum.len();
+        let lanes = (
             phi.data_mut(),
-            w.divsum,
-            s,
-            &mut self.rows,
-            |jp, crow, drow, st| {
-                *st = RowStats::default();
-                let j = jp as isize - G;
-                if j < 0 || j >= ny {
-                    return;
-                }
-                for i in 0..nx {
-                    let il = (i + G) as usize;
-                    let k = jp * s + il;
-                    let iv = inv_vol[il];
-                    let d = uu[k + o] - uu[k];
-                    let mut val = crow[il] + (f[k] - f[k + o] + cc[k] * d) * iv;
-                    if last {
-                        // Only the projection's residual (a volume change below 1e-8 of the
-                        // cell per step): a genuinely compressing field keeps W&Y's
-                        // treatment, which keeps a full cell full.
-                        let net = (drow[il] + d) * iv;
-                        if net.abs() <= 1e-8 {
-                            val -= cc[k] * net;
-                        }
-                    } else {
-                        drow[il] = d;
-                    }
-                    debug_assert!(val.is_finite(), "VOF: non-finite φ at ({i}, {j})");
-                    let clipped = val.clamp(0.0, 1.0);
-                    if clipped != val {
-                        st.max_clipped = st.max_clipped.max((clipped - val).abs());
-                        st.volume += (clipped - val) / iv;
-                        val = clipped;
-                    }
-                    crow[il] = val;
-                }
-            },
+            &mut *w.divsum,
+            par::per_row(&mut self.rows, s, len),
         );
+        par::rows(lanes, s).for_each(|jp, (crow, drow, st)| {
+            let st = st.item();
+            *st = RowStats::default();
+            let j = jp as isize - G;
+            if j < 0 || j >= ny {
+                return;
+            }
+            for i in 0..nx {
+                let il = (i + G) as usize;
+                let k = jp * s + il;
+                let iv = inv_vol[il];
+                let d = uu[k + o] - uu[k];
+                let mut val = crow[il] + (f[k] - f[k + o] + cc[k] * d) * iv;
+                if last {
+                    // Only the projection's residual (a volume change below 1e-8 of the
+                    // cell per step): a genuinely compressing field keeps W&Y's
+                    // treatment, which keeps a full cell full.
+                    let net = (drow[il] + d) * iv;
+                    if net.abs() <= 1e-8 {
+                        val -= cc[k] * net;
+                    }
+                } else {
+                    drow[il] = d;
+                }
+                debug_assert!(val.is_finite(), "VOF: non-finite φ at ({i}, {j})");
+                let clipped = val.clamp(0.0, 1.0);
+                if clipped != val {
+                    st.max_clipped = st.max_clipped.max((clipped - val).abs());
+                    st.volume += (clipped - val) / iv;
+                    val = clipped;
+                }
+                crow[il] = val;
+            }
+        });
         let mut st = AdvectStats {
             cfl,
             ..Default::default()
@@ -637,7 +645,10 @@ impl VofAdvector {
         // interface cells, in proportion to their room `φ(1 − φ)`.
         if st.clipped_volume != 0.0 {
             let interior = |jp: usize| (GU..GU + ny as usize).contains(&jp);
-            par::for_each_row_with(phi.data_mut(), s, &mut self.rows, |jp, crow, st| {
+            let len = phi.data().len();
+            let lanes = (phi.data_mut(), par::per_row(&mut self.rows, s, len));
+            par::rows(lanes, s).for_each(|jp, (crow, st)| {
+                let st = st.item();
                 st.volume = 0.0;
                 if interior(jp) {
                     for (c, iv) in crow[GU..GU + nx as usize].iter().zip(&inv_vol[GU..]) {
@@ -648,7 +659,7 @@ impl VofAdvector {
             let room = self.rows.iter().fold(0.0, |a, r| a + r.volume);
             if room > 0.0 {
                 let scale = st.clipped_volume / room;
-                par::for_each_row(phi.data_mut(), s, |jp, crow| {
+                par::rows(phi.data_mut(), s).for_each(|jp, crow| {
                     if interior(jp) {
                         for c in &mut crow[GU..GU + nx as usize] {
                             *c -= scale * *c * (1.0 - *c);

@@ -30,8 +30,8 @@ use crate::scratch::Scratch;
 use crate::solid::Shape;
 use efsi_core::scene::{Boundary, Options, Side};
 use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext,
+    BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
+    StageStats, Stagger, State, StepContext,
 };
 use efsi_linalg::par::{self, REDUCE_CHUNK};
 
@@ -165,7 +165,7 @@ impl VofStage {
         let (rf, rs) = self.rho;
         let (mf, ms) = self.mu;
         let phi = phi.data();
-        par::for_each_row2(rho.data_mut(), mu.data_mut(), REDUCE_CHUNK, |c, r, m| {
+        par::rows((rho.data_mut(), mu.data_mut()), REDUCE_CHUNK).for_each(|c, (r, m)| {
             let o = c * REDUCE_CHUNK;
             for ((r, m), f) in r.iter_mut().zip(m).zip(&phi[o..]) {
                 *r = (1.0 - f) * rf + f * rs;
@@ -236,7 +236,7 @@ impl Stage for VofStage {
         let w = if ctx.step == 0 { 0.0 } else { 0.5 };
         for (a, b) in [(&mut self.u_adv, &state.u), (&mut self.v_adv, &state.v)] {
             let b = b.data();
-            par::for_each_chunk(a.data_mut(), |o, a| {
+            par::chunks(a.data_mut()).for_each(|o, a| {
                 for (x, y) in a.iter_mut().zip(&b[o..]) {
                     *x = w * *x + (1.0 - w) * y;
                 }
@@ -310,11 +310,11 @@ const MAX_SUBSTEPS: u64 = 64;
 /// `|u|/dx` next to the axis) and `|v|/dy` on y-faces.
 fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
     let m = &grid.metric;
-    let (nx, ny) = (grid.nx, grid.ny);
-    let rate_u = par::max_over_rows(ny, nx + 1, 0.0, |j| {
+    let rate_u = Region::of(grid, Stagger::XFace).max(0.0, |l| {
+        let u = u.at(&l, [0; 3]);
         let mut rate = 0.0f64;
-        for i in 0..=nx as isize {
-            let a = u[(i, j as isize)];
+        for (n, [i, _, _]) in l.indices().enumerate() {
+            let a = u[n];
             let up = if a > 0.0 { i - 1 } else { i };
             let rc = m.rc(up);
             let f = if rc > 0.0 { m.rx(i) / rc } else { 1.0 };
@@ -322,11 +322,8 @@ fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
         }
         rate
     });
-    let rate_v = par::max_over_rows(ny + 1, nx, 0.0, |j| {
-        let k = v.idx(0, j as isize);
-        v.data()[k..k + nx]
-            .iter()
-            .fold(0.0f64, |r, a| r.max(a.abs()))
+    let rate_v = Region::of(grid, Stagger::YFace).max(0.0, |l| {
+        v.at(&l, [0; 3]).iter().fold(0.0f64, |r, a| r.max(a.abs()))
     });
     (rate_u / grid.dx).max(rate_v / grid.dy)
 }

@@ -1,0 +1,485 @@
+//! Loops over a grid location: the one way a stage visits cells, faces or corners.
+//!
+//! A [`Region`] is a box of grid indices at one location of the MAC grid ([`Stagger`]): the
+//! interior of cell centres, of one face family or of the corners ([`Region::of`]), narrowed
+//! along an axis where a stage needs fewer (the unknown faces of a wall-bounded direction,
+//! [`Region::range`]). An index is the grid's [`Index`] `[i, j, k]`: a two-dimensional grid is
+//! a three-dimensional one whose third axis has size one (`k = 0`, no ghosts across it), as in
+//! Oceananigans' flat axes, so a kernel written over an `Index` and shifts along axes works
+//! unchanged when the grid gets its third axis. A region is visited as [`Line`]s — the runs of
+//! indices along the first axis, which are contiguous in memory — so kernels work on slices
+//! and vectorise:
+//!
+//! - [`Region::for_each`] writes one or more fields on each line (`&mut Field`, a pair or a
+//!   triple): the kernel gets the line and the fields' values on it, exactly the line's length;
+//! - [`Region::fold`] and [`Region::fold_mut`] reduce over the lines (a partial per line,
+//!   folded in line order), [`Region::sum`] and [`Region::max`] are the common folds;
+//! - [`Field::at`] reads a field on a line shifted by a grid offset (`u` at `I + x̂` is
+//!   `u.at(&line, [1, 0, 0])`), [`Field::at_mut`] likewise for an output the loop does not
+//!   own; both are bounds-checked slices, so no kernel writes an index by hand.
+//!
+//! The ghost layers and the fields' padded layout live here only: a stage never adds `G` or a
+//! stride. Parallel chunking is [`efsi_linalg::par`]'s: lines run in parallel when there is
+//! enough work, each line's partial result is folded in line order, so every loop gives the
+//! same bits on any number of threads. This module lives in efsi-core because it needs the
+//! grid and the fields (which efsi-linalg, the solvers' crate, does not know); the row and
+//! chunk engine below it is in efsi-linalg because the solvers' vectors need it too.
+
+use crate::field::{Field, Stagger};
+use crate::grid::{G, GHOST, Grid};
+use efsi_linalg::par::{self, Lanes};
+
+/// A grid index `[i, j, k]` (ghosts are negative or past the interior). On a two-dimensional
+/// grid `k` is always 0.
+pub type Index = [isize; 3];
+
+/// A shift by one along axis `a` (0, 1 or 2): `I + unit(a)` is the neighbour above `I`.
+#[inline(always)]
+pub const fn unit(a: usize) -> Index {
+    let mut s = [0; 3];
+    s[a] = 1;
+    s
+}
+
+/// A box of grid indices `lo ≤ I < hi` (component-wise) at one grid location.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Region {
+    lo: Index,
+    hi: Index,
+    /// The padded layout of the grid's fields: row stride and number of padded rows.
+    stride: usize,
+    rows: usize,
+}
+
+/// One run of a [`Region`] along the first axis: the indices `start + [n, 0, 0]` for
+/// `n in 0..len`, contiguous in every field's storage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Line {
+    /// The first index of the run.
+    pub start: Index,
+    /// Its length.
+    pub len: usize,
+    /// Its ordinal among the region's lines (`0..`[`Region::lines`]), in storage order: the
+    /// row of a compact vector that holds one value per index of the region.
+    pub n: usize,
+    /// Linear storage index of `start`, and the row stride it was computed with.
+    offset: usize,
+    stride: usize,
+}
+
+impl Line {
+    /// The `n`-th index of the run.
+    #[inline(always)]
+    pub fn index(&self, n: usize) -> Index {
+        [self.start[0] + n as isize, self.start[1], self.start[2]]
+    }
+
+    /// The storage index of the `n`-th index of the run in every field of the grid (for
+    /// kernels that address storage shared by several fields, e.g. a per-face matrix).
+    #[inline(always)]
+    pub fn linear(&self, n: usize) -> usize {
+        self.offset + n
+    }
+
+    /// The indices of the run, in order.
+    pub fn indices(&self) -> impl Iterator<Item = Index> + '_ {
+        (0..self.len).map(|n| self.index(n))
+    }
+
+    /// The storage range of the run shifted by `s`, in a layout of row stride `stride`.
+    #[inline(always)]
+    fn span(&self, s: Index, stride: usize) -> std::ops::Range<usize> {
+        assert_eq!(stride, self.stride, "field of another grid");
+        assert_eq!(
+            s[2], 0,
+            "a two-dimensional field has no third-axis neighbours"
+        );
+        let o = self.offset as isize + s[0] + s[1] * stride as isize;
+        let o = usize::try_from(o).expect("shift below the ghost layers");
+        o..o + self.len
+    }
+}
+
+impl Region {
+    /// The interior of location `at` of `grid` (see the table in [`crate::grid`]).
+    pub fn of(grid: &Grid, at: Stagger) -> Self {
+        let (ie, je) = at.extent(grid.nx, grid.ny);
+        Region {
+            lo: [0, 0, 0],
+            hi: [ie as isize, je as isize, 1],
+            stride: grid.nx + 1 + 2 * GHOST,
+            rows: grid.ny + 1 + 2 * GHOST,
+        }
+    }
+
+    /// The same box with axis `a` restricted to `lo..hi` (which may reach into the ghosts).
+    pub fn range(self, a: usize, lo: isize, hi: isize) -> Self {
+        let mut r = self;
+        r.lo[a] = lo;
+        r.hi[a] = hi.max(lo);
+        r
+    }
+
+    /// Lower corner (included).
+    pub fn lo(&self) -> Index {
+        self.lo
+    }
+
+    /// Upper corner (excluded).
+    pub fn hi(&self) -> Index {
+        self.hi
+    }
+
+    /// Number of indices along axis `a`.
+    pub fn len(&self, a: usize) -> usize {
+        (self.hi[a] - self.lo[a]).max(0) as usize
+    }
+
+    /// Whether the box holds no index.
+    pub fn is_empty(&self) -> bool {
+        (0..3).any(|a| self.len(a) == 0)
+    }
+
+    /// Number of indices.
+    pub fn size(&self) -> usize {
+        self.len(0) * self.len(1) * self.len(2)
+    }
+
+    /// Number of lines (runs along the first axis).
+    pub fn lines(&self) -> usize {
+        if self.is_empty() {
+            0
+        } else {
+            self.len(1) * self.len(2)
+        }
+    }
+
+    /// Line `n` (`0..`[`Region::lines`]) of the region, for a kernel that walks lines itself
+    /// (e.g. filling the rows of a compact vector, [`efsi_linalg::par::rows`]).
+    pub fn line(&self, n: usize) -> Line {
+        let stride = self.stride;
+        let (j, k) = (n % self.len(1), n / self.len(1));
+        let start = [self.lo[0], self.lo[1] + j as isize, self.lo[2] + k as isize];
+        Line {
+            start,
+            len: self.len(0),
+            n,
+            offset: (start[1] + G) as usize * stride + (start[0] + G) as usize,
+            stride,
+        }
+    }
+
+    /// Checks that the region fits the padded layout of a field (`stride × rows`).
+    fn check(&self) {
+        let (stride, rows) = (self.stride, self.rows);
+        assert!(
+            self.lo[2] >= 0 && self.hi[2] <= 1,
+            "a two-dimensional field has only k = 0"
+        );
+        assert!(
+            self.is_empty()
+                || (self.lo[0] >= -G
+                    && self.hi[0] + G <= stride as isize
+                    && self.lo[1] >= -G
+                    && self.hi[1] + G <= rows as isize),
+            "region {:?}..{:?} outside the field's ghost layers",
+            self.lo,
+            self.hi
+        );
+    }
+
+    /// Run `f(line, values)` over the lines, writing `fields` (a `&mut Field`, or a pair or
+    /// triple of them) on each: `values` are the fields' slices on the line, in the same shape.
+    /// Lines in parallel when there is enough work; each writes only its own indices, so the
+    /// result is the serial loop's.
+    pub fn for_each<F: FieldsMut>(&self, fields: F, f: impl Fn(Line, F::Lanes) + Sync + Send) {
+        if let Some((lanes, x)) = self.lanes(fields) {
+            par::rows(lanes, self.stride)
+                .work(self.len(0))
+                .for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+        }
+    }
+
+    /// The fields' storage from the region's first line's padded row to its last one's, and
+    /// the columns of a line within a row (`None` for an empty region).
+    fn lanes<F: FieldsMut>(&self, fields: F) -> Option<(F::Lanes, std::ops::Range<usize>)> {
+        if self.is_empty() {
+            return None;
+        }
+        let (stride, rows) = fields.shape();
+        assert_eq!(
+            (stride, rows),
+            (self.stride, self.rows),
+            "fields of another grid"
+        );
+        self.check();
+        // In two dimensions every padded row in that range is a line of the region.
+        let (r0, r1) = ((self.lo[1] + G) as usize, (self.hi[1] + G) as usize);
+        let x = (self.lo[0] + G) as usize..(self.hi[0] + G) as usize;
+        Some((fields.lanes(r0 * stride..r1 * stride), x))
+    }
+
+    /// `combine(…combine(init, f(line₀, values₀))…)`: [`Region::for_each`] whose kernel also
+    /// returns a partial result (a reduction over what it writes, in the same pass), folded in
+    /// line order — the same bits on any number of threads.
+    pub fn fold_mut<F: FieldsMut, A, P: Copy + Default + Send>(
+        &self,
+        fields: F,
+        init: A,
+        f: impl Fn(Line, F::Lanes) -> P + Sync + Send,
+        combine: impl Fn(A, P) -> A,
+    ) -> A {
+        let Some((lanes, x)) = self.lanes(fields) else {
+            return init;
+        };
+        par::rows(lanes, self.stride).work(self.len(0)).fold(
+            init,
+            |n, l| f(self.line(n), l.sub(x.clone())),
+            combine,
+        )
+    }
+
+    /// `combine(…combine(init, f(line₀))…)` over the lines, each partial computed in parallel
+    /// when there is enough work and folded in line order (the same bits on any number of
+    /// threads).
+    pub fn fold<A, P: Copy + Default + Send>(
+        &self,
+        init: A,
+        f: impl Fn(Line) -> P + Sync + Send,
+        combine: impl Fn(A, P) -> A,
+    ) -> A {
+        self.check();
+        par::range(self.lines())
+            .work(self.len(0))
+            .fold(init, |n| f(self.line(n)), combine)
+    }
+
+    /// `Σ f(line)` component-wise, `N` sums at once, lines added in order.
+    pub fn sum<const N: usize>(&self, f: impl Fn(Line) -> [f64; N] + Sync + Send) -> [f64; N]
+    where
+        [f64; N]: Default,
+    {
+        self.fold([0.0; N], f, par::add)
+    }
+
+    /// `max(init, max over lines of f(line))`.
+    pub fn max(&self, init: f64, f: impl Fn(Line) -> f64 + Sync + Send) -> f64 {
+        self.fold(init, f, f64::max)
+    }
+}
+
+/// Fields a [`Region`] loop writes: `&mut Field`, or a pair or triple of them (of one grid).
+pub trait FieldsMut {
+    /// The fields' storage, as [`Lanes`] (one slice per field).
+    type Lanes: Lanes;
+    /// Row stride and number of padded rows (equal for all the fields).
+    fn shape(&self) -> (usize, usize);
+    /// The storage range `r` of each field.
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes;
+}
+
+impl<'a> FieldsMut for &'a mut Field {
+    type Lanes = &'a mut [f64];
+    fn shape(&self) -> (usize, usize) {
+        (self.stride(), self.rows())
+    }
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
+        &mut self.data_mut()[r]
+    }
+}
+
+impl<A: FieldsMut, B: FieldsMut> FieldsMut for (A, B) {
+    type Lanes = (A::Lanes, B::Lanes);
+    fn shape(&self) -> (usize, usize) {
+        assert_eq!(self.0.shape(), self.1.shape(), "fields of different grids");
+        self.0.shape()
+    }
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
+        (self.0.lanes(r.clone()), self.1.lanes(r))
+    }
+}
+
+impl<A: FieldsMut, B: FieldsMut, C: FieldsMut> FieldsMut for (A, B, C) {
+    type Lanes = (A::Lanes, B::Lanes, C::Lanes);
+    fn shape(&self) -> (usize, usize) {
+        assert!(
+            self.0.shape() == self.1.shape() && self.0.shape() == self.2.shape(),
+            "fields of different grids"
+        );
+        self.0.shape()
+    }
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
+        (
+            self.0.lanes(r.clone()),
+            self.1.lanes(r.clone()),
+            self.2.lanes(r),
+        )
+    }
+}
+
+impl Field {
+    /// The values at `I + shift` for the indices `I` of `line`: a bounds-checked slice of the
+    /// line's length (a shift may reach the ghost layers, not past them).
+    #[inline(always)]
+    pub fn at(&self, line: &Line, shift: Index) -> &[f64] {
+        &self.data()[line.span(shift, self.stride())]
+    }
+
+    /// [`Field::at`], mutable: for an output that a line owns but the loop was not given.
+    #[inline(always)]
+    pub fn at_mut(&mut self, line: &Line, shift: Index) -> &mut [f64] {
+        let r = line.span(shift, self.stride());
+        &mut self.data_mut()[r]
+    }
+}
+
+impl std::ops::Index<Index> for Field {
+    type Output = f64;
+    #[inline(always)]
+    fn index(&self, [i, j, k]: Index) -> &f64 {
+        debug_assert_eq!(k, 0, "a two-dimensional field has only k = 0");
+        &self[(i, j)]
+    }
+}
+
+impl std::ops::IndexMut<Index> for Field {
+    #[inline(always)]
+    fn index_mut(&mut self, [i, j, k]: Index) -> &mut f64 {
+        debug_assert_eq!(k, 0, "a two-dimensional field has only k = 0");
+        &mut self[(i, j)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Geometry;
+
+    fn pool(t: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn regions_have_a_size_one_third_axis_and_lines_along_the_first() {
+        let g = Grid::new(Geometry::Planar, 5, 3, (0.0, 1.0), (0.0, 1.0));
+        let r = Region::of(&g, Stagger::XFace);
+        assert_eq!((r.lo(), r.hi()), ([0, 0, 0], [6, 3, 1]));
+        assert_eq!((r.size(), r.lines(), r.len(2)), (18, 3, 1));
+        let r = Region::of(&g, Stagger::YFace).range(1, 1, 3);
+        assert_eq!(
+            (r.lines(), r.line(1).start, r.line(1).len),
+            (2, [0, 2, 0], 5)
+        );
+        assert!(Region::of(&g, Stagger::Cell).range(0, 2, 1).is_empty());
+        let mut f = Field::zeros(&g);
+        f[[4, 2, 0]] = 7.0;
+        assert_eq!(f[(4, 2)], 7.0);
+        let l = Region::of(&g, Stagger::Cell).line(2);
+        assert_eq!(f.at(&l, [0, 0, 0])[4], 7.0);
+        assert_eq!(f.at(&l, [1, 0, 0])[3], 7.0, "u at I + x̂");
+        assert_eq!(f.at(&l, [0, 1, 0]), &[0.0; 5], "a row of ghosts above");
+        assert_eq!(l.indices().nth(4), Some([4, 2, 0]));
+        assert_eq!(unit(1), [0, 1, 0]);
+    }
+
+    #[test]
+    fn for_each_writes_the_region_only_and_hides_the_ghosts() {
+        let g = Grid::new(Geometry::Planar, 70, 60, (0.0, 1.0), (0.0, 1.0));
+        let (mut a, mut b) = (Field::filled(&g, -1.0), Field::zeros(&g));
+        let r = Region::of(&g, Stagger::XFace).range(0, 1, 70);
+        r.for_each((&mut a, &mut b), |l, (a, b)| {
+            for (n, (a, b)) in a.iter_mut().zip(b).enumerate() {
+                let [i, j, _] = l.index(n);
+                *a = (i * 1000 + j) as f64;
+                *b = l.n as f64;
+            }
+        });
+        for j in -G..60 + 1 + G {
+            for i in -G..70 + 1 + G {
+                let inside = (1..70).contains(&i) && (0..60).contains(&j);
+                let want = if inside { (i * 1000 + j) as f64 } else { -1.0 };
+                assert_eq!(a[(i, j)], want, "({i}, {j})");
+                assert_eq!(b[(i, j)], if inside { j as f64 } else { 0.0 });
+            }
+        }
+    }
+
+    #[test]
+    fn reductions_are_the_same_on_one_and_two_threads_and_fold_in_line_order() {
+        let g = Grid::new(Geometry::Planar, 301, 257, (0.0, 1.0), (0.0, 1.0));
+        let mut u = Field::zeros(&g);
+        Region::of(&g, Stagger::XFace).for_each(&mut u, |l, u| {
+            for (n, u) in u.iter_mut().enumerate() {
+                let [i, j, _] = l.index(n);
+                *u = ((i * 7919 + j * 104_729) % 1013) as f64 / 17.0 - 20.0;
+            }
+        });
+        let cells = Region::of(&g, Stagger::Cell);
+        let div = |l: Line| {
+            let (w, e) = (u.at(&l, [0, 0, 0]), u.at(&l, unit(0)));
+            let s = w.iter().zip(e).fold(0.0, |s, (w, e)| s + (e - w) * (e + w));
+            [s, s.abs()]
+        };
+        let (one, two) = (
+            pool(1).install(|| cells.sum(div)),
+            pool(2).install(|| cells.sum(div)),
+        );
+        assert_eq!(one.map(f64::to_bits), two.map(f64::to_bits));
+        let serial = (0..cells.lines()).fold([0.0; 2], |s, n| par::add(s, div(cells.line(n))));
+        assert_eq!(one, serial, "line partials added in line order");
+        let m = pool(2).install(|| cells.max(0.0, |l| div(l)[1]));
+        assert_eq!(
+            m,
+            (0..257).map(|n| div(cells.line(n))[1]).fold(0.0, f64::max)
+        );
+        // A fused update and reduction gives the same bits on one and two threads.
+        let fused = |t| {
+            let mut v = u.clone();
+            let s = pool(t).install(|| {
+                cells.fold_mut(
+                    &mut v,
+                    0.0,
+                    |_, v| {
+                        v.iter_mut().fold(0.0, |s, v| {
+                            *v *= 0.5;
+                            s + *v
+                        })
+                    },
+                    |a, p| a + p,
+                )
+            });
+            (s.to_bits(), v)
+        };
+        assert_eq!(fused(1), fused(2));
+    }
+
+    #[test]
+    #[should_panic(expected = "outside the field's ghost layers")]
+    fn a_region_past_the_ghosts_is_refused() {
+        let g = Grid::new(Geometry::Planar, 4, 4, (0.0, 1.0), (0.0, 1.0));
+        let mut f = Field::zeros(&g);
+        Region::of(&g, Stagger::Cell)
+            .range(1, -3, 4)
+            .for_each(&mut f, |_, _| {});
+    }
+
+    #[test]
+    #[should_panic(expected = "out of range")]
+    fn a_shift_past_the_storage_is_refused() {
+        let g = Grid::new(Geometry::Planar, 4, 4, (0.0, 1.0), (0.0, 1.0));
+        let f = Field::zeros(&g);
+        let top = Region::of(&g, Stagger::Corner).line(4);
+        let _ = f.at(&top, [0, 3, 0]);
+    }
+
+    #[test]
+    #[should_panic(expected = "no third-axis neighbours")]
+    fn a_third_axis_shift_is_refused_in_two_dimensions() {
+        let g = Grid::new(Geometry::Planar, 4, 4, (0.0, 1.0), (0.0, 1.0));
+        let f = Field::zeros(&g);
+        let _ = f.at(&Region::of(&g, Stagger::Cell).line(0), unit(2));
+    }
+}
