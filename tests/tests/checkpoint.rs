@@ -294,9 +294,10 @@ fn damaged_or_missing_checkpoints_are_refused_with_a_reason() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A checkpoint written by efsi before the postcard format (layout version 4: the same
-/// 16² cavity stopped at step 0, written by `efsi run` of that version): refused by version,
-/// with what to do, never misread.
+/// A checkpoint of the format before postcard (version 4), written by `efsi run` of that
+/// format (commit 4e6fb80) for [`CAVITY`] with `--set grid.nx=8 --set grid.ny=8 --set
+/// time.end=0.05 --set output.profiles[0].at=[0.05] --checkpoint-every 0.05`: refused by its
+/// version, saying what to do, never misread.
 #[test]
 fn a_checkpoint_of_an_earlier_format_is_refused_naming_its_version() {
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/checkpoint-format-4.efsick");
