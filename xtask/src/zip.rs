@@ -37,3 +37,38 @@ impl Zip {
         Ok(self.writer.finish()?.into_inner())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read;
+
+    fn archive() -> Vec<u8> {
+        let mut z = Zip::default();
+        z.add("modelDescription.xml", b"<fmiModelDescription/>")
+            .unwrap();
+        z.add("binaries/linux64/m.so", &[7u8; 5000]).unwrap();
+        z.finish().unwrap()
+    }
+
+    #[test]
+    fn entries_read_back_deflated_dated_and_reproducible() {
+        let bytes = archive();
+        assert_eq!(bytes, archive());
+        let mut a = zip::ZipArchive::new(Cursor::new(bytes)).unwrap();
+        assert_eq!(a.len(), 2);
+        let mut f = a.by_name("binaries/linux64/m.so").unwrap();
+        assert_eq!(f.compression(), CompressionMethod::Deflated);
+        assert_eq!(f.unix_mode(), Some(0o100644));
+        assert!(f.compressed_size() < 100, "{}", f.compressed_size());
+        let d = f.last_modified().unwrap();
+        assert_eq!((d.year(), d.month(), d.day(), d.hour()), (1980, 1, 1, 0));
+        let mut data = Vec::new();
+        f.read_to_end(&mut data).unwrap();
+        assert_eq!(data, [7u8; 5000]);
+        drop(f);
+        let mut text = String::new();
+        a.by_index(0).unwrap().read_to_string(&mut text).unwrap();
+        assert_eq!(text, "<fmiModelDescription/>");
+    }
+}
