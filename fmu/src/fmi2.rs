@@ -1,5 +1,6 @@
 //! The FMI 2.0 Co-Simulation C API (all 34 functions an importer such as fmpy binds; those
-//! this model does not support log why and return `fmi2Error`).
+//! this model does not support log why and return `fmi2Error`), with the bodies and macros it
+//! shares with FMI 3.0 ([`crate::shim`]).
 //!
 //! Supported: instantiation (Co-Simulation only), parameters and the input before and during
 //! initialisation, the input between steps, outputs at any time, `fmi2DoStep` with any

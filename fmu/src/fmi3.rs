@@ -1,6 +1,7 @@
-//! The FMI 3.0 Co-Simulation C API, hand-written over the same [`Model`] as FMI 2.0 (every
-//! function of the standard is exported, as importers such as fmpy bind them all; those this
-//! model does not support log why and return `fmi3Error`).
+//! The FMI 3.0 Co-Simulation C API over the same [`Model`] as FMI 2.0, with the bodies and
+//! macros both share ([`crate::shim`]). Every function of the standard is exported, as
+//! importers such as fmpy bind them all; those this model does not support log why and return
+//! `fmi3Error`.
 //!
 //! Supported: `fmi3InstantiateCoSimulation` (no event mode, no intermediate update), the
 //! Float64 / Int32 / Int64 / String variables, `fmi3DoStep` with any communication step, reset,
@@ -208,45 +209,6 @@ pub unsafe extern "C" fn fmi3DoStep(
     })
 }
 
-/// `fmi3GetFloat64`.
-///
-/// # Safety
-/// `vr` `nvr` values, `values` `n_values` writable values.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetFloat64(
-    instance: Fmi3Instance,
-    vr: *const ValueReference,
-    nvr: usize,
-    values: *mut f64,
-    n_values: usize,
-) -> c_int {
-    with_instance(instance, "fmi3GetFloat64", |i| {
-        check_counts(nvr, n_values)?;
-        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
-        shim::get_reals(i, vr, out)
-    })
-}
-
-/// `fmi3SetFloat64`: parameters before initialisation ends, the input at any time; a value
-/// outside the variable's range is refused with `fmi3Discard` (nothing changes).
-///
-/// # Safety
-/// `vr` `nvr` values, `values` `n_values` values.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFloat64(
-    instance: Fmi3Instance,
-    vr: *const ValueReference,
-    nvr: usize,
-    values: *const f64,
-    n_values: usize,
-) -> c_int {
-    with_instance(instance, "fmi3SetFloat64", |i| {
-        check_counts(nvr, n_values)?;
-        let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
-        shim::set_reals(i, vr, values, |f| f)
-    })
-}
-
 fn check_counts(nvr: usize, n_values: usize) -> Result<(), Fault> {
     if nvr == n_values {
         Ok(())
@@ -255,57 +217,6 @@ fn check_counts(nvr: usize, n_values: usize) -> Result<(), Fault> {
             "{nvr} value references but {n_values} values (the model has scalar variables only)"
         )))
     }
-}
-
-macro_rules! integers {
-    ($get:ident, $set:ident, $ty:ty, $kind:expr) => {
-        #[doc = concat!("`", stringify!($get), "`.")]
-        ///
-        /// # Safety
-        /// `vr` `nvr` values, `values` `n_values` writable values.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $get(
-            instance: Fmi3Instance,
-            vr: *const ValueReference,
-            nvr: usize,
-            values: *mut $ty,
-            n_values: usize,
-        ) -> c_int {
-            with_instance(instance, stringify!($get), |i| {
-                check_counts(nvr, n_values)?;
-                let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
-                for (r, o) in vr.iter().zip(out) {
-                    check_kind(&i.model, *r, $kind)?;
-                    let v = i.model.get_integer(*r)?;
-                    *o = <$ty>::try_from(v).map_err(|_| format!("{v} does not fit"))?;
-                }
-                Ok(Status::Ok)
-            })
-        }
-
-        #[doc = concat!("`", stringify!($set), "`: out of the variable's range: `fmi3Discard`.")]
-        ///
-        /// # Safety
-        /// `vr` `nvr` values, `values` `n_values` values.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $set(
-            instance: Fmi3Instance,
-            vr: *const ValueReference,
-            nvr: usize,
-            values: *const $ty,
-            n_values: usize,
-        ) -> c_int {
-            with_instance(instance, stringify!($set), |i| {
-                check_counts(nvr, n_values)?;
-                let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
-                for (r, v) in vr.iter().zip(values) {
-                    check_kind(&i.model, *r, $kind)?;
-                    i.model.set_integer(*r, *v as i64)?;
-                }
-                Ok(Status::Ok)
-            })
-        }
-    };
 }
 
 fn check_kind(model: &Model, vr: ValueReference, kind: Kind) -> Result<(), Fault> {
@@ -321,67 +232,127 @@ fn check_kind(model: &Model, vr: ValueReference, kind: Kind) -> Result<(), Fault
     }
 }
 
-integers!(fmi3GetInt32, fmi3SetInt32, i32, Kind::Int32);
-integers!(fmi3GetInt64, fmi3SetInt64, i64, Kind::Int64);
+/// The body of `fmi3GetInt32` / `fmi3GetInt64`: each variable must be of `kind`.
+fn get_integers<T: TryFrom<i64>>(
+    i: &mut Instance,
+    vr: &[ValueReference],
+    out: &mut [T],
+    kind: Kind,
+) -> Result<Status, Fault> {
+    for (r, o) in vr.iter().zip(out) {
+        check_kind(&i.model, *r, kind)?;
+        let v = i.model.get_integer(*r)?;
+        *o = T::try_from(v).map_err(|_| format!("{v} does not fit"))?;
+    }
+    Ok(Status::Ok)
+}
+
+/// The body of `fmi3SetInt32` / `fmi3SetInt64`: each variable must be of `kind`; out of the
+/// variable's range is `fmi3Discard`.
+fn set_integers<T: Copy + Into<i64>>(
+    i: &mut Instance,
+    vr: &[ValueReference],
+    values: &[T],
+    kind: Kind,
+) -> Result<Status, Fault> {
+    for (r, v) in vr.iter().zip(values) {
+        check_kind(&i.model, *r, kind)?;
+        i.model.set_integer(*r, (*v).into())?;
+    }
+    Ok(Status::Ok)
+}
+
+/// The getter and the setter of one variable type: the counts checked equal (the model has
+/// scalar variables only), the arrays taken from the importer's pointers, then the bodies
+/// `$getter(instance, vrs, out)` and `$setter(instance, vrs, values)`.
+macro_rules! values {
+    ($($get:ident, $set:ident, $ty:ty, $get_doc:literal, $set_doc:literal,
+       $getter:expr, $setter:expr;)*) => {
+        $(
+            #[doc = concat!("`", stringify!($get), "`", $get_doc)]
+            ///
+            /// # Safety
+            /// `vr` `nvr` values, `values` `n_values` writable values.
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn $get(
+                instance: Fmi3Instance,
+                vr: *const ValueReference,
+                nvr: usize,
+                values: *mut $ty,
+                n_values: usize,
+            ) -> c_int {
+                with_instance(instance, stringify!($get), |i| {
+                    check_counts(nvr, n_values)?;
+                    let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
+                    $getter(i, vr, out)
+                })
+            }
+
+            #[doc = concat!("`", stringify!($set), "`", $set_doc)]
+            ///
+            /// # Safety
+            /// `vr` `nvr` values, `values` `n_values` values (strings NUL-terminated).
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn $set(
+                instance: Fmi3Instance,
+                vr: *const ValueReference,
+                nvr: usize,
+                values: *const $ty,
+                n_values: usize,
+            ) -> c_int {
+                with_instance(instance, stringify!($set), |i| {
+                    check_counts(nvr, n_values)?;
+                    let (vr, values) = unsafe { (slice(vr, nvr)?, slice(values, n_values)?) };
+                    $setter(i, vr, values)
+                })
+            }
+        )*
+    };
+}
+
+values! {
+    fmi3GetFloat64, fmi3SetFloat64, f64, ".",
+    ": parameters before initialisation ends, the input at any time; a value outside the \
+     variable's range is refused with `fmi3Discard` (nothing changes).",
+    shim::get_reals, |i, vr, v| shim::set_reals(i, vr, v, |f| f);
+    fmi3GetInt32, fmi3SetInt32, i32, ".", ": out of the variable's range: `fmi3Discard`.",
+    |i, vr, o| get_integers(i, vr, o, Kind::Int32),
+    |i, vr, v| set_integers::<i32>(i, vr, v, Kind::Int32);
+    fmi3GetInt64, fmi3SetInt64, i64, ".", ": out of the variable's range: `fmi3Discard`.",
+    |i, vr, o| get_integers(i, vr, o, Kind::Int64),
+    |i, vr, v| set_integers::<i64>(i, vr, v, Kind::Int64);
+    fmi3GetString, fmi3SetString, *const c_char,
+    ": the pointers stay valid until the next call on this instance.", ".",
+    shim::get_strings,
+    |i, vr, v| unsafe { shim::set_strings(i, vr, v, |f| f) };
+}
+
+/// Types without variables whose getter and setter have the common signature (`values`,
+/// `n_values` after the value references): one row each.
+macro_rules! no_scalars {
+    ($($what:literal: $get:ident, $set:ident, $ty:ty;)*) => {
+        shim::no_variables! { Fmi3Instance;
+            $($what: $get(values: *mut $ty, n_values: usize),
+                $set(values: *const $ty, n_values: usize);)*
+        }
+    };
+}
+
+no_scalars! {
+    "Float32": fmi3GetFloat32, fmi3SetFloat32, f32;
+    "Int8": fmi3GetInt8, fmi3SetInt8, i8;
+    "UInt8": fmi3GetUInt8, fmi3SetUInt8, u8;
+    "Int16": fmi3GetInt16, fmi3SetInt16, i16;
+    "UInt16": fmi3GetUInt16, fmi3SetUInt16, u16;
+    "UInt32": fmi3GetUInt32, fmi3SetUInt32, u32;
+    "UInt64": fmi3GetUInt64, fmi3SetUInt64, u64;
+    "Boolean": fmi3GetBoolean, fmi3SetBoolean, bool;
+}
 
 shim::no_variables! { Fmi3Instance;
-    "Float32": fmi3GetFloat32(values: *mut f32, n_values: usize),
-        fmi3SetFloat32(values: *const f32, n_values: usize);
-    "Int8": fmi3GetInt8(values: *mut i8, n_values: usize),
-        fmi3SetInt8(values: *const i8, n_values: usize);
-    "UInt8": fmi3GetUInt8(values: *mut u8, n_values: usize),
-        fmi3SetUInt8(values: *const u8, n_values: usize);
-    "Int16": fmi3GetInt16(values: *mut i16, n_values: usize),
-        fmi3SetInt16(values: *const i16, n_values: usize);
-    "UInt16": fmi3GetUInt16(values: *mut u16, n_values: usize),
-        fmi3SetUInt16(values: *const u16, n_values: usize);
-    "UInt32": fmi3GetUInt32(values: *mut u32, n_values: usize),
-        fmi3SetUInt32(values: *const u32, n_values: usize);
-    "UInt64": fmi3GetUInt64(values: *mut u64, n_values: usize),
-        fmi3SetUInt64(values: *const u64, n_values: usize);
-    "Boolean": fmi3GetBoolean(values: *mut bool, n_values: usize),
-        fmi3SetBoolean(values: *const bool, n_values: usize);
     "Binary": fmi3GetBinary(value_sizes: *mut usize, values: *mut *const u8, n_values: usize),
         fmi3SetBinary(value_sizes: *const usize, values: *const *const u8, n_values: usize);
     "Clock": fmi3GetClock(values: *mut bool), fmi3SetClock(values: *const bool);
-}
-
-/// `fmi3GetString`: the pointers stay valid until the next call on this instance.
-///
-/// # Safety
-/// `vr` `nvr` values, `values` `n_values` writable pointers.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetString(
-    instance: Fmi3Instance,
-    vr: *const ValueReference,
-    nvr: usize,
-    values: *mut *const c_char,
-    n_values: usize,
-) -> c_int {
-    with_instance(instance, "fmi3GetString", |i| {
-        check_counts(nvr, n_values)?;
-        let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(values, n_values)?) };
-        shim::get_strings(i, vr, out)
-    })
-}
-
-/// `fmi3SetString`.
-///
-/// # Safety
-/// `vr` `nvr` values, `values` `n_values` NUL-terminated strings.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetString(
-    instance: Fmi3Instance,
-    vr: *const ValueReference,
-    nvr: usize,
-    values: *const *const c_char,
-    n_values: usize,
-) -> c_int {
-    with_instance(instance, "fmi3SetString", |i| unsafe {
-        check_counts(nvr, n_values)?;
-        let (vr, values) = (slice(vr, nvr)?, slice(values, n_values)?);
-        shim::set_strings(i, vr, values, |f| f)
-    })
 }
 
 shim::fmu_states!(Fmi3Instance, FmuStatePtr, u8; get: fmi3GetFMUState,
