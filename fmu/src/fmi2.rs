@@ -1,5 +1,6 @@
 //! The FMI 2.0 Co-Simulation C API (all 34 functions an importer such as fmpy binds; those
-//! this model does not support log why and return `fmi2Error`).
+//! this model does not support log why and return `fmi2Error`), with the bodies and macros it
+//! shares with FMI 3.0 ([`crate::shim`]).
 //!
 //! Supported: instantiation (Co-Simulation only), parameters and the input before and during
 //! initialisation, the input between steps, outputs at any time, `fmi2DoStep` with any
@@ -7,11 +8,11 @@
 //! get, set, free, serialise and deserialise. Not supported: input or output derivatives,
 //! directional derivatives, asynchronous steps (`fmi2CancelStep`, the other status queries).
 
-use crate::instance::{Instance, slice, slice_mut, state_slot, text, with_instance};
-use crate::log::{Fmi2Logger, Logger, Status, c_string, guard};
+use crate::instance::{Instance, slice, slice_mut, text, with_instance};
+use crate::log::{Fmi2Logger, Logger, Status, guard};
 use crate::machine::Version;
 use crate::model::Fault;
-use crate::state::FmuState;
+use crate::shim;
 use std::ffi::{c_char, c_int, c_void};
 
 /// FMI 2.0 defines `fmi2Discard` for steps only: a setter's refusal is an `fmi2Error`.
@@ -68,14 +69,8 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     n_categories: usize,
     categories: *const *const c_char,
 ) -> c_int {
-    with_instance(c, "fmi2SetDebugLogging", |i| {
-        let names = unsafe { slice(categories, n_categories) }?
-            .iter()
-            .map(|p| unsafe { text(*p) }.map(|t| t.into_owned()))
-            .collect::<Option<Vec<_>>>()
-            .ok_or("a null category name")?;
-        i.log.set_categories(logging_on == FMI2_TRUE, &names)?;
-        Ok(Status::Ok)
+    with_instance(c, "fmi2SetDebugLogging", |i| unsafe {
+        shim::set_debug_logging(i, logging_on == FMI2_TRUE, n_categories, categories)
     })
 }
 
@@ -120,13 +115,6 @@ pub unsafe extern "C" fn fmi2Instantiate(
     )
 }
 
-/// `fmi2FreeInstance`: frees the instance and its FMU states; an unknown or already freed
-/// handle is ignored.
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2FreeInstance(c: Component) {
-    guard(|| crate::instance::free(c), |_| ());
-}
-
 /// `fmi2SetupExperiment`: start and optional stop time (the tolerance is not used). A
 /// `fmi2DoStep` past the stop time is refused.
 #[unsafe(no_mangle)]
@@ -154,34 +142,8 @@ pub extern "C" fn fmi2EnterInitializationMode(c: Component) -> c_int {
     })
 }
 
-/// `fmi2ExitInitializationMode`: checks the parameters (a bad one is named in the log) and
-/// builds the simulation.
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2ExitInitializationMode(c: Component) -> c_int {
-    with_instance(c, "fmi2ExitInitializationMode", |i| {
-        i.model.exit_initialization()?;
-        Ok(Status::Ok)
-    })
-}
-
-/// `fmi2Terminate`: after initialisation, once.
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2Terminate(c: Component) -> c_int {
-    with_instance(c, "fmi2Terminate", |i| {
-        i.model.terminate();
-        Ok(Status::Ok)
-    })
-}
-
-/// `fmi2Reset`: back to the instantiated state with the default parameters (the instance's
-/// FMU states stay valid).
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2Reset(c: Component) -> c_int {
-    with_instance(c, "fmi2Reset", |i| {
-        i.model.reset();
-        Ok(Status::Ok)
-    })
-}
+shim::life_cycle!(Component; free: fmi2FreeInstance, exit: fmi2ExitInitializationMode,
+    terminate: fmi2Terminate, reset: fmi2Reset);
 
 /// `fmi2GetReal`.
 ///
@@ -196,10 +158,7 @@ pub unsafe extern "C" fn fmi2GetReal(
 ) -> c_int {
     with_instance(c, "fmi2GetReal", |i| {
         let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(value, nvr)?) };
-        for (r, o) in vr.iter().zip(out) {
-            *o = i.model.get_real(*r)?;
-        }
-        Ok(Status::Ok)
+        shim::get_reals(i, vr, out)
     })
 }
 
@@ -226,29 +185,8 @@ pub unsafe extern "C" fn fmi2GetInteger(
     })
 }
 
-/// `fmi2GetBoolean`: the model has no Boolean variables.
-///
-/// # Safety
-/// `vr` an array of `nvr` elements.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: Component,
-    vr: *const u32,
-    nvr: usize,
-    _value: *mut c_int,
-) -> c_int {
-    with_instance(c, "fmi2GetBoolean", |_| {
-        no_booleans(unsafe { slice(vr, nvr) }?)
-    })
-}
-
-fn no_booleans(vr: &[u32]) -> Result<Status, Fault> {
-    match vr.first() {
-        None => Ok(Status::Ok),
-        Some(r) => Err(Fault::error(format!(
-            "no Boolean variable has the value reference {r}"
-        ))),
-    }
+shim::no_variables! { Component;
+    "Boolean": fmi2GetBoolean(value: *mut c_int), fmi2SetBoolean(value: *const c_int);
 }
 
 /// `fmi2GetString`: the pointers stay valid until the next call on this instance.
@@ -264,14 +202,7 @@ pub unsafe extern "C" fn fmi2GetString(
 ) -> c_int {
     with_instance(c, "fmi2GetString", |i| {
         let (vr, out) = unsafe { (slice(vr, nvr)?, slice_mut(value, nvr)?) };
-        i.strings = vr
-            .iter()
-            .map(|r| i.model.get_string(*r).map(|s| c_string(&s)))
-            .collect::<Result<_, _>>()?;
-        for (s, o) in i.strings.iter().zip(out) {
-            *o = s.as_ptr();
-        }
-        Ok(Status::Ok)
+        shim::get_strings(i, vr, out)
     })
 }
 
@@ -289,10 +220,7 @@ pub unsafe extern "C" fn fmi2SetReal(
 ) -> c_int {
     with_instance(c, "fmi2SetReal", |i| {
         let (vr, value) = unsafe { (slice(vr, nvr)?, slice(value, nvr)?) };
-        for (r, v) in vr.iter().zip(value) {
-            i.model.set_real(*r, *v).map_err(as_error)?;
-        }
-        Ok(Status::Ok)
+        shim::set_reals(i, vr, value, as_error)
     })
 }
 
@@ -316,22 +244,6 @@ pub unsafe extern "C" fn fmi2SetInteger(
     })
 }
 
-/// `fmi2SetBoolean`: the model has no Boolean variables.
-///
-/// # Safety
-/// `vr` an array of `nvr` elements.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: Component,
-    vr: *const u32,
-    nvr: usize,
-    _value: *const c_int,
-) -> c_int {
-    with_instance(c, "fmi2SetBoolean", |_| {
-        no_booleans(unsafe { slice(vr, nvr) }?)
-    })
-}
-
 /// `fmi2SetString`.
 ///
 /// # Safety
@@ -343,153 +255,30 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const *const c_char,
 ) -> c_int {
-    with_instance(c, "fmi2SetString", |i| {
-        let (vr, value) = unsafe { (slice(vr, nvr)?, slice(value, nvr)?) };
-        for (r, v) in vr.iter().zip(value) {
-            let s = unsafe { text(*v) }.ok_or("a null string")?;
-            i.model.set_string(*r, &s).map_err(as_error)?;
-        }
-        Ok(Status::Ok)
+    with_instance(c, "fmi2SetString", |i| unsafe {
+        let (vr, value) = (slice(vr, nvr)?, slice(value, nvr)?);
+        shim::set_strings(i, vr, value, as_error)
     })
 }
 
-/// `fmi2GetFMUstate`: a new state when `*state` is null, else `*state` (one of this
-/// instance's states) overwritten.
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2GetFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
-    with_instance(c, "fmi2GetFMUstate", |i| {
-        let slot = state_slot(state)?;
-        if slot.is_null() {
-            let s = i.model.get_state()?;
-            *slot = i.add_state(s) as FmuStatePtr;
-        } else {
-            i.refresh_state(*slot)?;
-        }
-        Ok(Status::Ok)
-    })
-}
+shim::fmu_states!(Component, FmuStatePtr, c_char; get: fmi2GetFMUstate,
+    set: fmi2SetFMUstate, free: fmi2FreeFMUstate, size: fmi2SerializedFMUstateSize,
+    serialize: fmi2SerializeFMUstate, deserialize: fmi2DeSerializeFMUstate);
 
-/// `fmi2SetFMUstate`: any state of this instance, in any mode (also before initialisation).
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2SetFMUstate(c: Component, state: FmuStatePtr) -> c_int {
-    with_instance(c, "fmi2SetFMUstate", |i| {
-        let s = i.state(state)?.clone();
-        i.model.set_state(&s)?;
-        Ok(Status::Ok)
-    })
+shim::unsupported! { Component, "fmi2Error";
+    fmi2GetDirectionalDerivative, "providesDirectionalDerivative is false",
+        (v_unknown: *const u32, n_unknown: usize, v_known: *const u32, n_known: usize,
+         dv_known: *const f64, dv_unknown: *mut f64);
+    fmi2SetRealInputDerivatives, "canInterpolateInputs is false",
+        (vr: *const u32, nvr: usize, order: *const c_int, value: *const f64);
+    fmi2GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0",
+        (vr: *const u32, nvr: usize, order: *const c_int, value: *mut f64);
+    fmi2CancelStep, "canRunAsynchronuously is false", ();
+    fmi2GetStatus, "steps are synchronous: no pending status", (kind: c_int, value: *mut c_int);
+    fmi2GetIntegerStatus, "no integer status is defined", (kind: c_int, value: *mut c_int);
+    fmi2GetStringStatus, "steps are synchronous: no pending status",
+        (kind: c_int, value: *mut *const c_char);
 }
-
-/// `fmi2FreeFMUstate`: frees `*state` (a state of this instance) and sets it to null; null is
-/// nothing to free.
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2FreeFMUstate(c: Component, state: *mut FmuStatePtr) -> c_int {
-    with_instance(c, "fmi2FreeFMUstate", |i| {
-        let slot = state_slot(state)?;
-        if !slot.is_null() {
-            i.remove_state(*slot)?;
-            *slot = std::ptr::null_mut();
-        }
-        Ok(Status::Ok)
-    })
-}
-
-/// `fmi2SerializedFMUstateSize`.
-///
-/// # Safety
-/// `size` writable.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-    c: Component,
-    state: FmuStatePtr,
-    size: *mut usize,
-) -> c_int {
-    with_instance(c, "fmi2SerializedFMUstateSize", |i| {
-        let token = i.model.spec().token();
-        let n = i.state_mut(state)?.serialize(&token).len();
-        *unsafe { size.as_mut() }.ok_or("a null size pointer")? = n;
-        Ok(Status::Ok)
-    })
-}
-
-/// `fmi2SerializeFMUstate`: `size` must be what `fmi2SerializedFMUstateSize` said.
-///
-/// # Safety
-/// `bytes` `size` writable bytes.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializeFMUstate(
-    c: Component,
-    state: FmuStatePtr,
-    bytes: *mut c_char,
-    size: usize,
-) -> c_int {
-    with_instance(c, "fmi2SerializeFMUstate", |i| {
-        let token = i.model.spec().token();
-        let data = i.state_mut(state)?.serialize(&token);
-        if data.len() != size {
-            return Err(Fault::error(format!(
-                "the buffer has {size} bytes, the state {} (ask fmi2SerializedFMUstateSize)",
-                data.len()
-            )));
-        }
-        unsafe { slice_mut(bytes as *mut u8, size) }?.copy_from_slice(data);
-        Ok(Status::Ok)
-    })
-}
-
-/// `fmi2DeSerializeFMUstate`: a state serialised by any instance of this FMU's build (another
-/// process or extraction too); into a new state when `*state` is null, else into `*state`.
-///
-/// # Safety
-/// `bytes` `size` readable bytes.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-    c: Component,
-    bytes: *const c_char,
-    size: usize,
-    state: *mut FmuStatePtr,
-) -> c_int {
-    with_instance(c, "fmi2DeSerializeFMUstate", |i| {
-        let s = FmuState::deserialize(
-            unsafe { slice(bytes as *const u8, size) }?,
-            &i.model.spec().token(),
-        )?;
-        let slot = state_slot(state)?;
-        if slot.is_null() {
-            *slot = i.add_state(s) as FmuStatePtr;
-        } else {
-            *i.state_mut(*slot)? = s;
-        }
-        Ok(Status::Ok)
-    })
-}
-
-macro_rules! unsupported {
-    ($name:ident, $why:literal, ($($arg:ident : $ty:ty),*)) => {
-        #[doc = concat!("`", stringify!($name), "`: not supported (", $why, "); returns `fmi2Error`.")]
-        #[unsafe(no_mangle)]
-        pub extern "C" fn $name(c: Component, $($arg: $ty),*) -> c_int {
-            $(let _ = $arg;)*
-            with_instance(c, stringify!($name), |_| {
-                Err(Fault::error(concat!("not supported: ", $why)))
-            })
-        }
-    };
-}
-
-unsupported!(fmi2GetDirectionalDerivative, "providesDirectionalDerivative is false",
-    (v_unknown: *const u32, n_unknown: usize, v_known: *const u32, n_known: usize,
-     dv_known: *const f64, dv_unknown: *mut f64));
-unsupported!(fmi2SetRealInputDerivatives, "canInterpolateInputs is false",
-    (vr: *const u32, nvr: usize, order: *const c_int, value: *const f64));
-unsupported!(fmi2GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0",
-    (vr: *const u32, nvr: usize, order: *const c_int, value: *mut f64));
-unsupported!(fmi2CancelStep, "canRunAsynchronuously is false", ());
-unsupported!(fmi2GetStatus, "steps are synchronous: no pending status",
-    (kind: c_int, value: *mut c_int));
-unsupported!(fmi2GetIntegerStatus, "no integer status is defined",
-    (kind: c_int, value: *mut c_int));
-unsupported!(fmi2GetStringStatus, "steps are synchronous: no pending status",
-    (kind: c_int, value: *mut *const c_char));
 
 /// `fmi2DoStep`: advance by `h` with as many solver steps as needed (at most
 /// `max_solver_steps_per_step`), landing on `t + h`. A step refused or failed with the

@@ -19,6 +19,7 @@ pub mod instance;
 pub mod log;
 pub mod machine;
 pub mod model;
+pub mod shim;
 pub mod spec;
 pub mod state;
 pub mod stepping;

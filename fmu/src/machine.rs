@@ -15,7 +15,7 @@ pub enum Version {
 }
 
 /// Where an instance is in its life cycle.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Mode {
     /// After instantiation or reset: parameters and inputs may be set.
     Instantiated,

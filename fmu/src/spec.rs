@@ -418,19 +418,18 @@ impl Spec {
         Ok(v)
     }
 
-    /// The FMI 2.0 GUID and FMI 3.0 instantiation token: a hash of the spec and the crate
-    /// version, as `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
+    /// The FMI 2.0 GUID and FMI 3.0 instantiation token: the 128-bit XXH3 hash of the spec
+    /// and the crate version, as `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
     pub fn token(&self) -> String {
         let text = format!("efsi-fmu {}\n{}", env!("CARGO_PKG_VERSION"), self.to_ron());
-        let a = fnv(0xcbf2_9ce4_8422_2325, &text);
-        let b = fnv(a ^ 0x9e37_79b9_7f4a_7c15, &text);
+        let h = xxhash_rust::xxh3::xxh3_128(text.as_bytes());
         format!(
             "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-            a >> 32,
-            (a >> 16) & 0xffff,
-            a & 0xffff,
-            b >> 48,
-            b & 0xffff_ffff_ffff
+            h >> 96,
+            (h >> 80) & 0xffff,
+            (h >> 64) & 0xffff,
+            (h >> 48) & 0xffff,
+            h & 0xffff_ffff_ffff
         )
     }
 
@@ -451,14 +450,6 @@ impl Spec {
         Scene::from_str_with(&self.scene, Path::new("resources/scene.ron"), &overrides)
             .map_err(|e| e.to_string())
     }
-}
-
-fn fnv(seed: u64, text: &str) -> u64 {
-    let mut h = seed;
-    for b in text.bytes() {
-        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
 }
 
 /// The probe columns of a scene, in `probes.csv` order (time excluded).

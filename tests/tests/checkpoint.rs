@@ -294,6 +294,29 @@ fn damaged_or_missing_checkpoints_are_refused_with_a_reason() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A checkpoint of the format before postcard (version 4), written by `efsi run` of that
+/// format (commit 4e6fb80) for [`CAVITY`] with `--set grid.nx=8 --set grid.ny=8 --set
+/// time.end=0.05 --set output.profiles[0].at=[0.05] --checkpoint-every 0.05`: refused by its
+/// version, saying what to do, never misread.
+#[test]
+fn a_checkpoint_of_an_earlier_format_is_refused_naming_its_version() {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/checkpoint-format-4.efsick");
+    let old = std::fs::read(&fixture).unwrap();
+    assert_eq!(&old[..12], b"EFSICKPT\x04\0\0\0");
+    let expected = "checkpoint format version 4 (written by an earlier efsi); this efsi reads \
+                    version 5 only; finish that run with the efsi that wrote the checkpoint, or \
+                    start it again";
+    let e = CheckpointFile::read(&fixture).unwrap_err();
+    assert_eq!(e.to_string(), format!("{}: {expected}", fixture.display()));
+    let dir = cavity_checkpoint("format-4");
+    let path = dir.join("out").join(checkpoint::LATEST);
+    std::fs::write(&path, &old).unwrap();
+    let e = resume_err(&dir);
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert_eq!(e.to_string(), format!("{}: {expected}", path.display()));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn a_changed_scene_is_refused_naming_what_differs() {
     let dir = cavity_checkpoint("changed");

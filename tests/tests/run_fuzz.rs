@@ -565,7 +565,7 @@ fn reseal(bytes: &mut [u8]) {
     }
     let len = (bytes.len() - 28) as u64;
     bytes[12..20].copy_from_slice(&len.to_le_bytes());
-    let sum = efsi_run::checkpoint::fnv1a(&bytes[28..]);
+    let sum = efsi_run::binary::checksum(&bytes[28..]);
     bytes[20..28].copy_from_slice(&sum.to_le_bytes());
 }
 

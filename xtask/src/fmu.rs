@@ -93,7 +93,8 @@ pub(crate) fn fmu(args: &[String]) -> Result<[PathBuf; 2], String> {
             &read(&staging.join("license.txt"))?,
         )?;
         let path = dir.join(&file);
-        std::fs::write(&path, z.finish()).map_err(|e| format!("{}: {e}", path.display()))?;
+        let archive = z.finish().map_err(|e| format!("{file}: {e}"))?;
+        std::fs::write(&path, archive).map_err(|e| format!("{}: {e}", path.display()))?;
         let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
         eprintln!(
             "wrote {} (FMI {version}.0 Co-Simulation, {:.2} MB; library {:.2} MB)",

@@ -10,20 +10,21 @@
 //!
 //! # File format (version [`FORMAT_VERSION`])
 //!
-//! Little-endian throughout: the 8-byte magic [`MAGIC`], `u32` format version, `u64` payload
-//! length, `u64` checksum of the payload (64-bit FNV-1a over 8-byte words), then the payload.
-//! In the payload a string is a `u64` byte length and UTF-8 bytes, an array of `f64` a `u64`
-//! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
-//! (efsi version, scene path, scene RON, the overrides applied to the scene file as RON, law
-//! identity), output bookkeeping (ending with the run's identity), the snapshot
-//! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
-//! frame acceleration and the elastic energy), then named stage
-//! data, then the energy guard's record, [`crate::guard`]). A 128² cavity checkpoints in ≈ 0.7 MB.
+//! A [`crate::binary`] file of magic [`MAGIC`]: the prefix (magic, version, body length,
+//! checksum), then the body in postcard. The body is three serde structs, in order: the
+//! header (efsi version, scene path, scene RON, the overrides applied to the scene file, law
+//! identity), the output bookkeeping ([`OutputState`], ending with the run's identity) and the
+//! snapshot (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named
+//! scalars (the frame acceleration and the elastic energy), named stage data and the energy
+//! guard's record, [`crate::guard`]). A change to any of them is a new [`FORMAT_VERSION`]; a
+//! file of another version (versions 1–4 are the hand-written little-endian layout of earlier
+//! efsi) is refused naming its version, never misread.
 //!
 //! Files are written atomically ([`crate::output::atomic`]): a reader or a resumed run sees
 //! the previous complete checkpoint or the new complete one, never a torn one; a truncated or
 //! corrupted file fails its length or checksum test with a clear message.
 
+use crate::binary::{self, Format};
 use efsi_core::Snapshot;
 use efsi_core::error::EfsiError;
 use efsi_core::overrides::Override;
@@ -31,17 +32,19 @@ use efsi_core::scene::Scene;
 use efsi_core::state::State;
 use efsi_laws_host::loader::{describe, resolve_law};
 use efsi_stages::solid::SceneSolid;
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 /// The version of the file layout this efsi reads and writes.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
 
 /// What identifies the law library a scene uses, to refuse resuming with another one.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LawIdentity {
     /// The name the scene gives (a shipped law's name or a library path).
     pub spec: String,
@@ -53,7 +56,7 @@ pub struct LawIdentity {
     pub library: String,
     /// Its size in bytes.
     pub bytes: u64,
-    /// 64-bit FNV-1a hash of its content.
+    /// Its content hash ([`content_hash`]).
     pub hash: u64,
     /// Its parameter table, one line per parameter: name, unit, default, range.
     pub parameters: Vec<String>,
@@ -90,7 +93,7 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
         abi_version: info.abi_version,
         library: path.display().to_string(),
         bytes: bytes.len() as u64,
-        hash: fnv1a(&bytes),
+        hash: content_hash(&bytes),
         parameters: info
             .parameters
             .iter()
@@ -205,7 +208,7 @@ pub fn scene_differences(old: &Scene, new: &Scene) -> Vec<String> {
 
 /// The run loop's output bookkeeping at a checkpoint: what has been written, and what is due
 /// next, so that a resumed run appends to the same files without duplicating or losing rows.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct OutputState {
     /// VTK outputs due so far (the next is at `vtk_count × vtk_every`).
     pub vtk_count: u64,
@@ -380,291 +383,132 @@ impl CheckpointFile {
     }
 }
 
-/// 64-bit FNV-1a over 8-byte little-endian words (the tail zero-padded), then the length.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    const PRIME: u64 = 0x0000_0100_0000_01b3;
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut chunks = bytes.chunks_exact(8);
-    for c in &mut chunks {
-        h = (h ^ u64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).wrapping_mul(PRIME);
-    }
-    let rest = chunks.remainder();
-    if !rest.is_empty() {
-        let mut w = [0u8; 8];
-        w[..rest.len()].copy_from_slice(rest);
-        h = (h ^ u64::from_le_bytes(w)).wrapping_mul(PRIME);
-    }
-    (h ^ bytes.len() as u64).wrapping_mul(PRIME)
+/// The checkpoint file kind of [`crate::binary`]: magic [`MAGIC`], version [`FORMAT_VERSION`].
+pub const FORMAT: Format = Format {
+    magic: MAGIC,
+    version: FORMAT_VERSION,
+    kind: "checkpoint",
+};
+
+/// The 64-bit content hash identifying a file (XXH3), e.g. a law library in [`LawIdentity`].
+pub fn content_hash(bytes: &[u8]) -> u64 {
+    xxhash_rust::xxh3::xxh3_64(bytes)
 }
 
-struct Writer(Vec<u8>);
-
-impl Writer {
-    fn u32(&mut self, x: u32) {
-        self.0.extend_from_slice(&x.to_le_bytes());
-    }
-    fn u64(&mut self, x: u64) {
-        self.0.extend_from_slice(&x.to_le_bytes());
-    }
-    fn f64(&mut self, x: f64) {
-        self.0.extend_from_slice(&x.to_le_bytes());
-    }
-    fn str(&mut self, s: &str) {
-        self.u64(s.len() as u64);
-        self.0.extend_from_slice(s.as_bytes());
-    }
-    fn f64s(&mut self, xs: &[f64]) {
-        self.u64(xs.len() as u64);
-        self.0.reserve(8 * xs.len());
-        for x in xs {
-            self.0.extend_from_slice(&x.to_le_bytes());
-        }
-    }
+/// The body of a checkpoint file (format [`FORMAT_VERSION`]): the one definition of its
+/// layout, written from a [`Checkpoint`] by reference and read into a [`CheckpointFile`].
+#[derive(Serialize, Deserialize)]
+struct Body<'a> {
+    header: Header<'a>,
+    outputs: Cow<'a, OutputState>,
+    snapshot: SnapshotBody<'a>,
 }
 
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
+/// What a resumed run checks before it continues: who wrote the file, the scene and the law.
+#[derive(Serialize, Deserialize)]
+struct Header<'a> {
+    efsi_version: Cow<'a, str>,
+    scene_path: Cow<'a, str>,
+    scene_ron: Cow<'a, str>,
+    overrides: Cow<'a, [Override]>,
+    law: Cow<'a, Option<LawIdentity>>,
 }
 
-impl Reader<'_> {
-    fn take(&mut self, n: usize) -> Result<&[u8], String> {
-        if n > self.bytes.len() - self.at {
-            return Err(format!(
-                "the file ends early (wanted {n} bytes at offset {})",
-                self.at
-            ));
-        }
-        let s = &self.bytes[self.at..self.at + n];
-        self.at += n;
-        Ok(s)
-    }
-    fn u32(&mut self) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().unwrap_or([0; 4]),
-        ))
-    }
-    fn u64(&mut self) -> Result<u64, String> {
-        Ok(u64::from_le_bytes(
-            self.take(8)?.try_into().unwrap_or([0; 8]),
-        ))
-    }
-    fn f64(&mut self) -> Result<f64, String> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    fn len(&mut self, unit: usize) -> Result<usize, String> {
-        let n = self.u64()?;
-        let left = (self.bytes.len() - self.at) / unit;
-        if n > left as u64 {
-            return Err(format!(
-                "a length of {n} at offset {} exceeds the rest of the file",
-                self.at - 8
-            ));
-        }
-        Ok(n as usize)
-    }
-    fn str(&mut self) -> Result<String, String> {
-        let n = self.len(1)?;
-        String::from_utf8(self.take(n)?.to_vec())
-            .map_err(|_| format!("invalid UTF-8 in a string at offset {}", self.at - n))
-    }
-    fn f64s(&mut self) -> Result<Vec<f64>, String> {
-        let n = self.len(8)?;
-        Ok(self
-            .take(8 * n)?
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-            .collect())
-    }
-}
-
-fn opt(x: Option<f64>) -> f64 {
-    x.unwrap_or(f64::NAN)
-}
-
-fn unopt(x: f64) -> Option<f64> {
-    (!x.is_nan()).then_some(x)
+/// The snapshot's content, by name: fitted into a simulation's own snapshot on resume.
+#[derive(Serialize, Deserialize)]
+struct SnapshotBody<'a> {
+    t: f64,
+    step: u64,
+    dt_prev: f64,
+    last_change: f64,
+    velocity_scale: f64,
+    arrays: Vec<(Cow<'a, str>, Cow<'a, [f64]>)>,
+    scalars: Vec<(Cow<'a, str>, f64)>,
+    stages: Cow<'a, [(String, Vec<f64>)]>,
+    /// The energy guard's record ([`crate::guard`]), empty when the run has none.
+    guard: Cow<'a, [f64]>,
 }
 
 /// The bytes of a checkpoint file (see the module docs for the layout).
 pub fn encode(c: &Checkpoint) -> Vec<u8> {
     let s = &c.snapshot;
-    let mut w = Writer(Vec::with_capacity(4096 + s.size_bytes()));
-    w.str(&c.efsi_version);
-    w.str(&c.scene_path.display().to_string());
-    w.str(&c.scene_ron);
-    w.str(&ron::to_string(&c.overrides).unwrap_or_default());
-    match &c.law {
-        None => w.u32(0),
-        Some(l) => {
-            w.u32(1);
-            w.str(&l.spec);
-            w.str(&l.name);
-            w.u32(l.abi_version);
-            w.str(&l.library);
-            w.u64(l.bytes);
-            w.u64(l.hash);
-            w.u64(l.parameters.len() as u64);
-            for p in &l.parameters {
-                w.str(p);
-            }
-        }
-    }
-    let o = &c.outputs;
-    w.u64(o.vtk_count);
-    w.u64(o.probe_count);
-    w.u64(o.probe_bytes);
-    w.u64(o.pvd.len() as u64);
-    for (t, f) in &o.pvd {
-        w.f64(*t);
-        w.str(f);
-    }
-    w.u64(o.profile_times.len() as u64);
-    for times in &o.profile_times {
-        w.f64s(times);
-    }
-    w.f64(opt(o.checkpoint_every));
-    w.u64(o.checkpoint_count);
-    w.str(&o.run_id);
-    w.f64(s.state.t);
-    w.u64(s.state.step);
-    w.f64(s.state.dt_prev);
-    w.f64(s.last_change);
-    w.f64(s.velocity_scale);
-    let arrays = s.state.arrays();
-    w.u64(arrays.len() as u64);
-    for (name, f) in arrays {
-        w.str(&name);
-        w.f64s(f.data());
-    }
-    let scalars = s.state.scalars();
-    w.u64(scalars.len() as u64);
-    for (name, v) in scalars {
-        w.str(name);
-        w.f64(v);
-    }
-    w.u64(s.stages.len() as u64);
-    for (name, data) in &s.stages {
-        w.str(name);
-        w.f64s(data);
-    }
+    let scene_path = c.scene_path.display().to_string();
     let guard = s.checks.iter().find(|(n, _)| *n == crate::guard::NAME);
-    w.f64s(guard.map_or(&[], |(_, r)| r.as_slice()));
-    let payload = w.0;
-    let mut out = Vec::with_capacity(28 + payload.len());
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&fnv1a(&payload).to_le_bytes());
-    out.extend_from_slice(&payload);
-    out
+    let body = Body {
+        header: Header {
+            efsi_version: Cow::Borrowed(&c.efsi_version),
+            scene_path: Cow::Owned(scene_path),
+            scene_ron: Cow::Borrowed(&c.scene_ron),
+            overrides: Cow::Borrowed(&c.overrides),
+            law: Cow::Borrowed(&c.law),
+        },
+        outputs: Cow::Borrowed(&c.outputs),
+        snapshot: SnapshotBody {
+            t: s.state.t,
+            step: s.state.step,
+            dt_prev: s.state.dt_prev,
+            last_change: s.last_change,
+            velocity_scale: s.velocity_scale,
+            arrays: s
+                .state
+                .arrays()
+                .into_iter()
+                .map(|(name, f)| (Cow::Owned(name), Cow::Borrowed(f.data())))
+                .collect(),
+            scalars: s
+                .state
+                .scalars()
+                .into_iter()
+                .map(|(name, v)| (Cow::Borrowed(name), v))
+                .collect(),
+            stages: Cow::Borrowed(&s.stages),
+            guard: Cow::Borrowed(guard.map_or(&[], |(_, r)| r.as_slice())),
+        },
+    };
+    binary::encode(&FORMAT, &body)
 }
 
 /// Decode checkpoint bytes; `what` (the file) names it in errors.
 pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
-    let fail = |message: String| EfsiError::Checkpoint {
-        what: what.to_string(),
-        message,
-    };
-    if bytes.len() < 28 || &bytes[..8] != MAGIC {
-        return Err(fail("not an efsi checkpoint (no EFSICKPT header)".into()));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap_or([0; 4]));
-    if version != FORMAT_VERSION {
-        return Err(fail(format!(
-            "checkpoint format version {version}; this efsi reads version {FORMAT_VERSION}"
-        )));
-    }
-    let len = u64::from_le_bytes(bytes[12..20].try_into().unwrap_or([0; 8]));
-    let sum = u64::from_le_bytes(bytes[20..28].try_into().unwrap_or([0; 8]));
-    let payload = &bytes[28..];
-    if payload.len() as u64 != len {
-        return Err(fail(format!(
-            "truncated or padded: the header announces {len} bytes of data, the file has {}",
-            payload.len()
-        )));
-    }
-    if fnv1a(payload) != sum {
-        return Err(fail("corrupted: the checksum does not match".into()));
-    }
-    let mut r = Reader {
-        bytes: payload,
-        at: 0,
-    };
-    (|| -> Result<CheckpointFile, String> {
-        let efsi_version = r.str()?;
-        let scene_path = PathBuf::from(r.str()?);
-        let scene_ron = r.str()?;
-        let overrides = ron::from_str(&r.str()?)
-            .map_err(|e| format!("the recorded overrides cannot be read: {e}"))?;
-        let law = match r.u32()? {
-            0 => None,
-            _ => Some(LawIdentity {
-                spec: r.str()?,
-                name: r.str()?,
-                abi_version: r.u32()?,
-                library: r.str()?,
-                bytes: r.u64()?,
-                hash: r.u64()?,
-                parameters: (0..r.len(8)?).map(|_| r.str()).collect::<Result<_, _>>()?,
-            }),
-        };
-        let vtk_count = r.u64()?;
-        let probe_count = r.u64()?;
-        let probe_bytes = r.u64()?;
-        let pvd = (0..r.len(16)?)
-            .map(|_| Ok((r.f64()?, r.str()?)))
-            .collect::<Result<_, String>>()?;
-        let profile_times = (0..r.len(8)?).map(|_| r.f64s()).collect::<Result<_, _>>()?;
-        let outputs = OutputState {
-            vtk_count,
-            probe_count,
-            probe_bytes,
-            pvd,
-            profile_times,
-            checkpoint_every: unopt(r.f64()?),
-            checkpoint_count: r.u64()?,
-            run_id: r.str()?,
-        };
-        let (t, step, dt_prev, last_change, velocity_scale) =
-            (r.f64()?, r.u64()?, r.f64()?, r.f64()?, r.f64()?);
-        let arrays = (0..r.len(16)?)
-            .map(|_| Ok((r.str()?, r.f64s()?)))
-            .collect::<Result<_, String>>()?;
-        let scalars = (0..r.len(16)?)
-            .map(|_| Ok((r.str()?, r.f64()?)))
-            .collect::<Result<_, String>>()?;
-        let stages = (0..r.len(16)?)
-            .map(|_| Ok((r.str()?, r.f64s()?)))
-            .collect::<Result<_, String>>()?;
-        let guard = r.f64s()?;
-        if r.at != payload.len() {
-            return Err(format!(
-                "{} unexpected bytes after the data",
-                payload.len() - r.at
-            ));
+    let body: Body = binary::decode(bytes, &FORMAT).map_err(|mut message| {
+        if binary::version_of(bytes, &FORMAT).is_some_and(|v| v < FORMAT_VERSION) {
+            message.push_str(
+                "; finish that run with the efsi that wrote the checkpoint, or start it again",
+            );
         }
-        Ok(CheckpointFile {
-            efsi_version,
-            scene_path,
-            scene_ron,
-            overrides,
-            law,
-            outputs,
-            record: SnapshotRecord {
-                t,
-                step,
-                dt_prev,
-                last_change,
-                velocity_scale,
-                arrays,
-                scalars,
-                stages,
-                guard,
-            },
-        })
-    })()
-    .map_err(fail)
+        EfsiError::Checkpoint {
+            what: what.to_string(),
+            message,
+        }
+    })?;
+    let (h, s) = (body.header, body.snapshot);
+    Ok(CheckpointFile {
+        efsi_version: h.efsi_version.into_owned(),
+        scene_path: PathBuf::from(h.scene_path.into_owned()),
+        scene_ron: h.scene_ron.into_owned(),
+        overrides: h.overrides.into_owned(),
+        law: h.law.into_owned(),
+        outputs: body.outputs.into_owned(),
+        record: SnapshotRecord {
+            t: s.t,
+            step: s.step,
+            dt_prev: s.dt_prev,
+            last_change: s.last_change,
+            velocity_scale: s.velocity_scale,
+            arrays: s
+                .arrays
+                .into_iter()
+                .map(|(n, d)| (n.into_owned(), d.into_owned()))
+                .collect(),
+            scalars: s
+                .scalars
+                .into_iter()
+                .map(|(n, x)| (n.into_owned(), x))
+                .collect(),
+            stages: s.stages.into_owned(),
+            guard: s.guard.into_owned(),
+        },
+    })
 }
 
 /// Check that a checkpoint may resume with `scene` and the law it names now: the scene must

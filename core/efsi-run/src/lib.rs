@@ -9,6 +9,7 @@
 //! and Python parameters), and the set-up of a simulation for a run ([`simulation`]: the memory
 //! check, the `output` section's). The CLI, the FMU and other drivers use them.
 
+pub mod binary;
 pub mod checkpoint;
 pub mod guard;
 pub mod lock;

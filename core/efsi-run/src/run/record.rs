@@ -17,7 +17,7 @@ pub(super) fn new_run_id(dir: &Path) -> String {
     bytes.extend_from_slice(&std::process::id().to_le_bytes());
     let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
     bytes.extend_from_slice(dir.as_os_str().as_encoded_bytes());
-    format!("{:016x}", checkpoint::fnv1a(&bytes))
+    format!("{:016x}", checkpoint::content_hash(&bytes))
 }
 
 /// The run identity recorded in `dir/run.json`, if any.
