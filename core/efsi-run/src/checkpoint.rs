@@ -15,7 +15,8 @@
 //! In the payload a string is a `u64` byte length and UTF-8 bytes, an array of `f64` a `u64`
 //! count and the raw values, an optional `f64` is NaN when absent. Sections, in order: header
 //! (efsi version, scene path, scene RON, the overrides applied to the scene file as RON, law
-//! identity), output bookkeeping (ending with the run's identity), the snapshot
+//! identity), output bookkeeping (ending with the run's identity and the hash of the
+//! `probes.csv` it continues), the snapshot
 //! (t, step, Δt_prev, last rate of change, velocity scale, then named arrays, named scalars (the
 //! frame acceleration and the elastic energy), then named stage
 //! data, then the energy guard's record, [`crate::guard`]). A 128² cavity checkpoints in ≈ 0.7 MB.
@@ -36,7 +37,7 @@ use std::path::{Path, PathBuf};
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"EFSICKPT";
 /// The version of the file layout this efsi reads and writes.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Where a run keeps its latest checkpoint, relative to its output folder.
 pub const LATEST: &str = "checkpoint/latest.efsick";
 
@@ -225,7 +226,23 @@ pub struct OutputState {
     /// refuses a checkpoint whose run is not the one of the folder it is resumed in. Empty
     /// where no output folder belongs to the snapshot (an FMU's state).
     pub run_id: String,
+    /// 64-bit FNV-1a ([`fnv1a_bytes`]) of the first `probe_bytes` bytes of `probes.csv`: binds
+    /// the checkpoint to the folder's own files, so that a checkpoint put in another run's
+    /// folder (its `run.json` edited to match) is refused (0 where there is no folder).
+    pub probes_hash: u64,
 }
+
+/// 64-bit FNV-1a of `bytes` continued from `h` (start from [`FNV_OFFSET`]), one byte at a time:
+/// a hash that can be extended as a file grows ([`OutputState::probes_hash`]).
+pub fn fnv1a_bytes(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The starting value of [`fnv1a_bytes`].
+pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// A checkpoint: a [`Snapshot`] and what a resumed run checks and continues.
 #[derive(Clone, Debug)]
@@ -526,6 +543,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     w.f64(opt(o.checkpoint_every));
     w.u64(o.checkpoint_count);
     w.str(&o.run_id);
+    w.u64(o.probes_hash);
     w.f64(s.state.t);
     w.u64(s.state.step);
     w.f64(s.state.dt_prev);
@@ -625,6 +643,7 @@ pub fn decode(bytes: &[u8], what: &str) -> Result<CheckpointFile, EfsiError> {
             checkpoint_every: unopt(r.f64()?),
             checkpoint_count: r.u64()?,
             run_id: r.str()?,
+            probes_hash: r.u64()?,
         };
         let (t, step, dt_prev, last_change, velocity_scale) =
             (r.f64()?, r.u64()?, r.f64()?, r.f64()?, r.f64()?);
