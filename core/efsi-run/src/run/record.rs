@@ -5,7 +5,6 @@ use super::{Outputs, RunOutcome};
 use crate::checkpoint;
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
-use std::fs;
 use std::path::Path;
 
 /// A new run's identity: a hash of the clock, the process and the folder.

@@ -22,8 +22,9 @@
 //!   a loadable segment's memory, each symbol index inside the dynamic symbol table;
 //! - the section header table, when there is one, and every section's bytes within the file;
 //!   every section the program uses mapped where it was linked (its address and file offset
-//!   in one loadable segment), executable or writable as it needs, and only the sections meant
-//!   for it made read-only after relocation (`PT_GNU_RELRO`);
+//!   in one loadable segment), executable or writable as it needs, and none of the data the
+//!   program writes as it runs (`.data`, `.bss`) made read-only after relocation
+//!   (`PT_GNU_RELRO`);
 //! - the dynamic symbol table's names inside its string table, its defined symbols inside a
 //!   loadable segment (functions and the initialiser in an executable one); the hash tables'
 //!   chains inside the symbol table; relocations writing only to writable segments unless the
@@ -203,7 +204,7 @@ mod imp {
                         filesz,
                         memsz,
                         offset,
-                        flags: ph.p_flags(endian),
+                        flags: ph.p_flags(endian).0,
                     });
                 }
                 elf::PT_DYNAMIC => dynamic = Some((k, ph)),
@@ -352,7 +353,7 @@ mod imp {
                 ));
             };
             let code = matches!(sym.st_type(), elf::STT_FUNC | elf::STT_GNU_IFUNC);
-            if code && l.flags & elf::PF_X == 0 {
+            if code && l.flags & elf::PF_X.0 == 0 {
                 return Err(format!(
                     "dynamic symbol {i} is a function at address {v:#x}, in a segment that is not executable"
                 ));
@@ -362,7 +363,7 @@ mod imp {
             if let Some(v) = value(tag)
                 && !loads
                     .iter()
-                    .any(|l| l.holds_memory(v, 1) && l.flags & elf::PF_X != 0)
+                    .any(|l| l.holds_memory(v, 1) && l.flags & elf::PF_X.0 != 0)
             {
                 return Err(format!(
                     "its {what} at address {v:#x} is not in an executable segment"
@@ -371,10 +372,9 @@ mod imp {
         }
         // The code was linked against the sections' addresses: each section the program uses
         // must be where a loadable segment maps it, in a segment with the access it needs.
-        let names = sections.strings();
         for (i, sh) in sections.iter().enumerate() {
-            let flags = sh.sh_flags(endian);
-            if flags & u64::from(elf::SHF_ALLOC) == 0 || sh.sh_size(endian) == 0 {
+            let flags = sh.sh_flags(endian).0;
+            if flags & elf::SHF_ALLOC.0 == 0 || sh.sh_size(endian) == 0 {
                 continue;
             }
             let (addr, size) = (sh.sh_addr(endian), sh.sh_size(endian));
@@ -383,37 +383,31 @@ mod imp {
                 l.holds_memory(addr, size)
                     && (nobits || l.file_offset(addr) == sh.sh_offset(endian))
             });
-            let name = String::from_utf8_lossy(sh.name(endian, names).unwrap_or(b"?"));
+            let name = String::from_utf8_lossy(sections.section_name(endian, sh).unwrap_or(b"?"));
             let Some(l) = placed else {
                 return Err(format!(
                     "section {i} ({name}, address {addr:#x}, {size} bytes) is not where a loadable segment maps it: the program headers or section headers are corrupted"
                 ));
             };
-            let needs_x = flags & u64::from(elf::SHF_EXECINSTR) != 0;
-            let needs_w = flags & u64::from(elf::SHF_WRITE) != 0;
-            if (needs_x && l.flags & elf::PF_X == 0) || (needs_w && l.flags & elf::PF_W == 0) {
+            let needs_x = flags & elf::SHF_EXECINSTR.0 != 0;
+            let needs_w = flags & elf::SHF_WRITE.0 != 0;
+            if (needs_x && l.flags & elf::PF_X.0 == 0) || (needs_w && l.flags & elf::PF_W.0 == 0) {
                 return Err(format!(
                     "section {i} ({name}) needs a {} segment, and the one that maps it is not",
                     if needs_x { "executable" } else { "writable" }
                 ));
             }
-            // Made read-only after relocation (RELRO): only the sections meant for it.
+            // Made read-only after relocation (RELRO): never the data the program writes as it
+            // runs (`.data`, `.bss`; linkers put `.data.rel.ro`, `.got`, the init arrays and
+            // padding there, which only the loader writes).
+            let run_time_data = (name.starts_with(".data") && !name.starts_with(".data.rel.ro"))
+                || name.starts_with(".bss")
+                || name.starts_with(".tm_clone_table");
             if let Some((lo, len)) = relro
                 && needs_w
+                && run_time_data
                 && addr < lo.saturating_add(len)
                 && lo < addr.saturating_add(size)
-                && ![
-                    ".data.rel.ro",
-                    ".init_array",
-                    ".fini_array",
-                    ".preinit_array",
-                    ".dynamic",
-                    ".got",
-                    ".tdata",
-                    ".tbss",
-                ]
-                .iter()
-                .any(|p| name.starts_with(p))
             {
                 return Err(format!(
                     "its read-only-after-relocation range (PT_GNU_RELRO) covers section {i} ({name}), which the program writes"
@@ -455,10 +449,10 @@ mod imp {
         // The relocations the loader applies: their targets and symbols.
         // Without text relocations, the loader writes only to writable segments.
         let textrel = value(elf::DT_TEXTREL).is_some()
-            || value(elf::DT_FLAGS).is_some_and(|f| f & u64::from(elf::DF_TEXTREL) != 0);
+            || value(elf::DT_FLAGS).is_some_and(|f| f & elf::DF_TEXTREL.0 != 0);
         let target_ok = |addr: u64| {
             loads.iter().any(|l| {
-                l.holds_memory(addr, 8) && (textrel || l.flags & elf::PF_W != 0)
+                l.holds_memory(addr, 8) && (textrel || l.flags & elf::PF_W.0 != 0)
             })
         };
         let bad_reloc = |what: &str, i: usize, offset: u64, sym: u32| {
