@@ -378,8 +378,7 @@ fn messages_say_what_is_wrong_in_the_scene_s_terms() {
         (
             broken.display().to_string(),
             format!(
-                "{} is not a loadable library: {}",
-                broken.display(),
+                "{} is not a loadable library: not an ELF shared library (no ELF magic number at its start)",
                 broken.display()
             ),
         ),

@@ -7,7 +7,8 @@
 //! the start, with a quarter more for the bookkeeping that grows, plus `run.json` twice and
 //! [`MARGIN`]), its blocks allocated (`posix_fallocate` where the system has it, else written),
 //! and removes it — freeing that space — before it writes them after a failure, and when it
-//! ends. The room grows when a checkpoint outgrows it.
+//! ends. The room grows when a checkpoint outgrows it. Under a file-size limit (`ulimit -f`)
+//! smaller than the room none is kept: that limit is per file and takes no space from the disk.
 
 use std::fs::File;
 use std::io;
@@ -24,15 +25,27 @@ pub(super) struct Room {
 }
 
 impl Room {
-    /// Keep `bytes` in `dir/checkpoint/room`.
+    /// Keep `bytes` in `dir/checkpoint/room`. Under a file-size limit smaller than the room
+    /// (`EFBIG`) no room is kept: such a limit is per file and takes no space from the disk,
+    /// and the files the room is for are each smaller than it.
     pub(super) fn keep(dir: &Path, bytes: u64) -> io::Result<Room> {
         let mut room = Room {
             path: dir.join("checkpoint").join("room"),
             bytes: 0,
             held: false,
         };
-        room.grow(bytes)?;
-        Ok(room)
+        match room.grow(bytes) {
+            Err(e) if is_file_size_limit(&e) => {
+                room.release();
+                room.bytes = u64::MAX;
+                Ok(room)
+            }
+            Err(e) => {
+                room.release();
+                Err(e)
+            }
+            Ok(()) => Ok(room),
+        }
     }
 
     /// The room needed for a checkpoint of `checkpoint` bytes and a `run.json` of `record`
@@ -41,7 +54,8 @@ impl Room {
         checkpoint + checkpoint / 4 + 2 * record + MARGIN
     }
 
-    /// Make the room at least `bytes` (no-op once released).
+    /// Make the room at least `bytes` (no-op once released, or where a file-size limit
+    /// keeps it from being made).
     pub(super) fn grow(&mut self, bytes: u64) -> io::Result<()> {
         if bytes <= self.bytes || (self.bytes > 0 && !self.held) {
             return Ok(());
@@ -52,9 +66,18 @@ impl Room {
             .truncate(false)
             .open(&self.path)?;
         self.held = true;
-        allocate(&file, bytes)?;
-        self.bytes = bytes;
-        Ok(())
+        match allocate(&file, bytes) {
+            Ok(()) => {
+                self.bytes = bytes;
+                Ok(())
+            }
+            // Past a file-size limit: the room keeps what it had (the limit takes no space).
+            Err(e) if is_file_size_limit(&e) && self.bytes > 0 => {
+                let _ = file.set_len(self.bytes);
+                Ok(())
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// Free the room (before the writes it was kept for).
@@ -70,6 +93,14 @@ impl Drop for Room {
     fn drop(&mut self) {
         self.release();
     }
+}
+
+/// Whether `e` is a write past the process's file-size limit (`EFBIG`).
+fn is_file_size_limit(e: &io::Error) -> bool {
+    #[cfg(unix)]
+    return e.raw_os_error() == Some(libc::EFBIG);
+    #[cfg(not(unix))]
+    return false;
 }
 
 /// Allocate the blocks of `file`'s first `bytes` bytes.
