@@ -676,19 +676,23 @@ fn generated_overrides_are_refused_by_name_or_run_cleanly() {
 
 /// A copy of a real law library, broken: cut short, bytes of its ELF header, program headers,
 /// dynamic table or section headers overwritten, or both.
-fn broken_library(len: usize, tables: Vec<(usize, usize)>) -> BoxedStrategy<(Option<usize>, Vec<(usize, u8)>)> {
+fn broken_library(
+    len: usize,
+    tables: Vec<(usize, usize)>,
+) -> BoxedStrategy<(Option<usize>, Vec<(usize, u8)>)> {
     let regions: Vec<(usize, usize)> = tables;
     let pokes = prop::collection::vec(
-        (prop::sample::select(regions), any::<usize>(), any::<u8>()).prop_map(
-            |((at, n), k, v)| (at + k % n.max(1), v),
-        ),
+        (prop::sample::select(regions), any::<usize>(), any::<u8>())
+            .prop_map(|((at, n), k, v)| (at + k % n.max(1), v)),
         0..6,
     );
     (
         prop_oneof![1 => Just(None), 2 => (1usize..len).prop_map(Some)],
         pokes,
     )
-        .prop_filter("a change", |(cut, pokes)| cut.is_some() || !pokes.is_empty())
+        .prop_filter("a change", |(cut, pokes)| {
+            cut.is_some() || !pokes.is_empty()
+        })
         .boxed()
 }
 
@@ -758,7 +762,13 @@ fn broken_law_libraries_are_refused_with_the_file_named() {
     // Another ABI: the real test library built with a wrong version.
     let bad_abi = efsi_laws_host::loader::search_dirs()
         .iter()
-        .map(|d| d.join(format!("{}efsi_test_law_bad_abi{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX)))
+        .map(|d| {
+            d.join(format!(
+                "{}efsi_test_law_bad_abi{}",
+                std::env::consts::DLL_PREFIX,
+                std::env::consts::DLL_SUFFIX
+            ))
+        })
         .find(|p| p.is_file());
     if let Some(p) = bad_abi {
         let e = efsi_laws_host::describe(&p).unwrap_err().to_string();

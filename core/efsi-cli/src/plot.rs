@@ -111,11 +111,9 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
 
 /// `probes.csv` as column names and columns (the first is `t`).
 fn read_probes(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
-    let text = efsi_run::output::read::read_regular_text(
-        path,
-        efsi_run::output::read::MAX_PROBES_BYTES,
-    )
-    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let text =
+        efsi_run::output::read::read_regular_text(path, efsi_run::output::read::MAX_PROBES_BYTES)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
     let mut lines = text.lines();
     let header: Vec<String> = lines
         .next()

@@ -44,7 +44,10 @@ fn program_headers(b: &[u8], p_type: u32) -> Vec<usize> {
 /// The file offset of the value of the dynamic entry `tag`.
 fn dynamic_entry(b: &[u8], tag: u64) -> usize {
     let dynamic = program_headers(b, 2)[0];
-    let (offset, size) = (u64_at(b, dynamic + 8) as usize, u64_at(b, dynamic + 32) as usize);
+    let (offset, size) = (
+        u64_at(b, dynamic + 8) as usize,
+        u64_at(b, dynamic + 32) as usize,
+    );
     (offset..offset + size)
         .step_by(16)
         .find(|&e| u64_at(b, e) == tag)
@@ -72,11 +75,7 @@ fn broken_copies(good: &[u8]) -> Vec<(String, Vec<u8>, &'static str)> {
     let load = program_headers(&b, 1)[0];
     put_u64(&mut b, load + 32, good.len() as u64 * 4);
     put_u64(&mut b, load + 40, good.len() as u64 * 4);
-    out.push((
-        "long_segment".into(),
-        b,
-        "(loadable) declares file bytes",
-    ));
+    out.push(("long_segment".into(), b, "(loadable) declares file bytes"));
     let mut b = good.to_vec();
     let strtab = dynamic_entry(&b, 5);
     put_u64(&mut b, strtab, 0xdead_0000_0000);
@@ -115,10 +114,7 @@ fn broken_law_libraries_are_refused_by_name_and_skipped_on_the_search_path() {
         let why = format!("{lib_s} is not a loadable library: ");
 
         // Described, checked, loaded for a scene and a run: refused, exit code 2.
-        for args in [
-            vec!["laws", lib_s],
-            vec!["laws", "--check", lib_s],
-        ] {
+        for args in [vec!["laws", lib_s], vec!["laws", "--check", lib_s]] {
             let o = common::efsi(&args);
             let err = stderr(&o);
             assert_eq!(o.status.code(), Some(2), "{name} {args:?}: {err}");

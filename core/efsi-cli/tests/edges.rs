@@ -76,7 +76,11 @@ fn deeply_nested_override_values_are_refused_by_name() {
         &d,
         &scene,
         &["--set", &set],
-        &["set name=((((", "name: must be a non-empty name", "of at most 200 bytes"],
+        &[
+            "set name=((((",
+            "name: must be a non-empty name",
+            "of at most 200 bytes",
+        ],
     );
     // At the limit a value is read (and refused for its type, not its depth).
     let ok = format!("{}1{}", "(".repeat(120), ")".repeat(120));
@@ -90,9 +94,13 @@ fn deeply_nested_override_values_are_refused_by_name() {
 #[test]
 fn intervals_tiny_against_the_run_are_refused_and_dense_runs_stop() {
     let d = tmp("intervals");
-    let base = cavity("c", 8, 1.0, "probes: [KineticEnergy]").replace("cfl: 0.5", "cfl: 0.5, dt_min: 1e-300");
+    let base = cavity("c", 8, 1.0, "probes: [KineticEnergy]")
+        .replace("cfl: 0.5", "cfl: 0.5, dt_min: 1e-300");
     for (field, out) in [
-        ("probe_every", "probe_every: 1e-300, probes: [KineticEnergy]"),
+        (
+            "probe_every",
+            "probe_every: 1e-300, probes: [KineticEnergy]",
+        ),
         ("vtk_every", "vtk_every: 1e-300, probes: [KineticEnergy]"),
     ] {
         let scene = write(
@@ -130,7 +138,10 @@ fn intervals_tiny_against_the_run_are_refused_and_dense_runs_stop() {
     let scene = write(
         &d,
         "dense.ron",
-        &base.replace("probes: [KineticEnergy]", "probe_every: 1e-12, probes: [KineticEnergy]"),
+        &base.replace(
+            "probes: [KineticEnergy]",
+            "probe_every: 1e-12, probes: [KineticEnergy]",
+        ),
     );
     let out = d.join("dense_out");
     let mut child = spawn(&[
@@ -155,16 +166,34 @@ fn run_files_that_are_devices_are_refused_unread() {
     let scene = write(
         &d,
         "c.ron",
-        &cavity("c", 8, 0.2, "vtk_every: 0.1, probe_every: 0.05, probes: [KineticEnergy]"),
+        &cavity(
+            "c",
+            8,
+            0.2,
+            "vtk_every: 0.1, probe_every: 0.05, probes: [KineticEnergy]",
+        ),
     );
     let out = d.join("out");
-    let o = efsi(&["run", scene.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()]);
+    let o = efsi(&[
+        "run",
+        scene.to_str().unwrap(),
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out_s = out.to_str().unwrap();
 
     // A .pvd entry pointing at /dev/zero.
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
-    let first = pvd.split("file=\"").nth(1).unwrap().split('"').next().unwrap().to_string();
+    let first = pvd
+        .split("file=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .to_string();
     std::fs::write(out.join("fields.pvd"), pvd.replace(&first, "/dev/zero")).unwrap();
     let o = efsi(&["plot", out_s, "--time", "0"]);
     let err = stderr(&o);
@@ -195,10 +224,17 @@ fn run_files_that_are_devices_are_refused_unread() {
 #[test]
 fn thread_counts_beyond_a_multiple_of_the_cores_are_refused() {
     let d = tmp("threads");
-    let scene = write(&d, "c.ron", &cavity("c", 8, 0.05, "probes: [KineticEnergy]"));
+    let scene = write(
+        &d,
+        "c.ron",
+        &cavity("c", 8, 0.05, "probes: [KineticEnergy]"),
+    );
     let out = d.join("out");
     let cores = std::thread::available_parallelism().unwrap().get();
-    let limit = format!("at most {} (4 per core; this machine has {cores} cores)", 4 * cores);
+    let limit = format!(
+        "at most {} (4 per core; this machine has {cores} cores)",
+        4 * cores
+    );
     let o = efsi(&[
         "run",
         scene.to_str().unwrap(),
@@ -216,13 +252,22 @@ fn thread_counts_beyond_a_multiple_of_the_cores_are_refused() {
     );
     assert!(!out.exists());
     let o = Command::new(env!("CARGO_BIN_EXE_efsi"))
-        .args(["run", scene.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()])
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "-q",
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .env("RAYON_NUM_THREADS", "100000")
         .output()
         .unwrap();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("$RAYON_NUM_THREADS: worker threads: 100000 asked for"), "{err}");
+    assert!(
+        err.contains("$RAYON_NUM_THREADS: worker threads: 100000 asked for"),
+        "{err}"
+    );
     // At the limit it runs.
     let n = (4 * cores).to_string();
     let o = efsi(&[
@@ -274,13 +319,20 @@ fn a_file_size_limit_stops_a_run_with_a_checkpoint_and_a_record() {
     let out = d.join("out");
     let limit = 512 * 1024;
     let o = efsi_limited(
-        &["run", scene.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()],
+        &[
+            "run",
+            scene.to_str().unwrap(),
+            "-q",
+            "--out",
+            out.to_str().unwrap(),
+        ],
         limit,
     );
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("probes.csv: File too large") && err.contains("the file ends with its last whole row"),
+        err.contains("probes.csv: File too large")
+            && err.contains("the file ends with its last whole row"),
         "{err}"
     );
     assert!(err.contains("was saved to the checkpoint"), "{err}");
@@ -308,14 +360,20 @@ fn a_file_size_limit_stops_a_run_with_a_checkpoint_and_a_record() {
 #[test]
 fn grids_under_the_minimum_and_overflowing_domains_are_refused() {
     let d = tmp("grids");
-    let scene = write(&d, "c.ron", &cavity("c", 64, 0.1, "probes: [KineticEnergy]"));
+    let scene = write(
+        &d,
+        "c.ron",
+        &cavity("c", 64, 0.1, "probes: [KineticEnergy]"),
+    );
     for f in ["1e-308", "0.01"] {
         refused(
             &d,
             &scene,
             &["--refine", f],
             &[
-                &format!("refine {f}: grid.nx: must be at least 2 cells between sides that are not periodic"),
+                &format!(
+                    "refine {f}: grid.nx: must be at least 2 cells between sides that are not periodic"
+                ),
                 "got 1",
             ],
         );
@@ -336,7 +394,9 @@ fn grids_under_the_minimum_and_overflowing_domains_are_refused() {
         &d,
         &scene,
         &["--set", "domain.y=(0.0,1e-300)"],
-        &["set domain.y=(0.0,1e-300): domain.y: (0, 1e-300) with grid.ny = 64 gives cells of size 1.5625e-302"],
+        &[
+            "set domain.y=(0.0,1e-300): domain.y: (0, 1e-300) with grid.ny = 64 gives cells of size 1.5625e-302",
+        ],
     );
     refused(
         &d,
@@ -357,12 +417,24 @@ fn grids_under_the_minimum_and_overflowing_domains_are_refused() {
 fn huge_and_tiny_numbers_are_printed_compactly() {
     let d = tmp("numbers");
     let law = law_library("efsi_law_neo_hookean");
-    let solid = write(&d, "s.ron", &solid_scene(law.to_str().unwrap(), "\"G\": 1e4"));
+    let solid = write(
+        &d,
+        "s.ron",
+        &solid_scene(law.to_str().unwrap(), "\"G\": 1e4"),
+    );
     let cavity = write(&d, "c.ron", &cavity("c", 8, 0.1, "probes: [KineticEnergy]"));
     // Refused, the number compact in the message.
     for (scene, set, needle) in [
-        (&solid, "solid.law.parameters.G=-1e308", "parameter `G` = -1e308 Pa is out of range"),
-        (&solid, "solid.density=1e308", "the density ratio solid/fluid 1e308"),
+        (
+            &solid,
+            "solid.law.parameters.G=-1e308",
+            "parameter `G` = -1e308 Pa is out of range",
+        ),
+        (
+            &solid,
+            "solid.density=1e308",
+            "the density ratio solid/fluid 1e308",
+        ),
         (&solid, "numerics.elastic.wave_courant=1e308", "got 1e308"),
         (&solid, "numerics.elastic.theta=1e308", "got 1e308"),
         (&cavity, "time.cfl=1e308", "got 1e308"),
@@ -380,7 +452,10 @@ fn huge_and_tiny_numbers_are_printed_compactly() {
         (&cavity, "fluid.density=1e308"),
         (&cavity, "fluid.density=5e-324"),
         (&cavity, "boundaries.y_max.speed=1e308"),
-        (&cavity, "output.probes[0]=Point(name: \"q\", field: \"u\", at: (1e308, 0.5))"),
+        (
+            &cavity,
+            "output.probes[0]=Point(name: \"q\", field: \"u\", at: (1e308, 0.5))",
+        ),
         (&solid, "solid.law.parameters.G=1e-300"),
     ] {
         let o = efsi(&["check", scene.to_str().unwrap(), "--set", set]);
@@ -448,6 +523,8 @@ fn a_profile_naming_a_field_twice_is_refused() {
         &d,
         &scene,
         &[],
-        &["output.profiles[0].fields[1]: `u` is listed twice (each field is one column of the CSV)"],
+        &[
+            "output.profiles[0].fields[1]: `u` is listed twice (each field is one column of the CSV)",
+        ],
     );
 }

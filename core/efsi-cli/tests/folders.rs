@@ -60,7 +60,9 @@ fn a_checkpoint_from_another_run_is_refused_on_resume() {
     let json_a: serde_json::Value =
         serde_json::from_slice(&std::fs::read(a.join("run.json")).unwrap()).unwrap();
     let id_a = json_a["run_id"].as_str().unwrap();
-    let forged = String::from_utf8(json_b.clone()).unwrap().replace(&id_b, id_a);
+    let forged = String::from_utf8(json_b.clone())
+        .unwrap()
+        .replace(&id_b, id_a);
     std::fs::write(b.join("run.json"), &forged).unwrap();
     let o = efsi(&["resume", b.to_str().unwrap(), "-q"]);
     let err = stderr(&o);

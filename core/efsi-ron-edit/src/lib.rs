@@ -116,7 +116,10 @@ pub(crate) fn elide(text: &str) -> std::borrow::Cow<'_, str> {
     match text.char_indices().nth(SHOWN + 20) {
         None => text.into(),
         Some(_) => {
-            let cut = text.char_indices().nth(SHOWN).map_or(text.len(), |(i, _)| i);
+            let cut = text
+                .char_indices()
+                .nth(SHOWN)
+                .map_or(text.len(), |(i, _)| i);
             format!("{}… ({} characters)", &text[..cut], text.chars().count()).into()
         }
     }

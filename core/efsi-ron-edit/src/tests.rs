@@ -116,7 +116,10 @@ fn nesting_is_capped_at_the_scene_readers_limit() {
     for n in [MAX_DEPTH + 1, 10_000, 1_000_000] {
         let (at, m) = parse_ron(&nested(n)).unwrap_err();
         assert_eq!(at, MAX_DEPTH + 1, "{n}");
-        assert_eq!(m, "nested deeper than 128 levels, the most a scene may nest");
+        assert_eq!(
+            m,
+            "nested deeper than 128 levels, the most a scene may nest"
+        );
     }
     let lists = format!("{}{}", "[".repeat(10_000), "]".repeat(10_000));
     assert!(parse_ron(&lists).unwrap_err().1.contains("nested deeper"));
@@ -135,6 +138,9 @@ fn nesting_is_capped_at_the_scene_readers_limit() {
     assert!(e.contains("… (20001 characters)"), "{e}");
     assert!(e.len() < 300, "{}", e.len());
     let o = overrides::Override::set("a", Value::Ron(nested(10_000)));
-    assert_eq!(o.brief().chars().count(), 60 + "… (20007 characters)".chars().count());
+    assert_eq!(
+        o.brief().chars().count(),
+        60 + "… (20007 characters)".chars().count()
+    );
     assert_eq!(o.to_string().len(), 20_007);
 }

@@ -42,7 +42,7 @@ fn first_step(sim: &Simulation, path: &Path) -> Result<(), EfsiError> {
     let t = &sim.scene.time;
     let (dt, cause) = sim.step_limit(t.end);
     let dt_min = t.dt_min_or_default();
-    if sim.state.step != 0 || !(dt < dt_min) || !(dt > 0.0) {
+    if sim.state.step != 0 || dt.is_nan() || dt >= dt_min || dt <= 0.0 {
         return Ok(());
     }
     use efsi_core::scene::num;

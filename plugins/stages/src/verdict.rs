@@ -18,7 +18,7 @@ pub(crate) fn unconverged(
     advice: &str,
     cause: &str,
 ) -> String {
-    if !(relative < 1.0) {
+    if relative >= 1.0 || relative.is_nan() {
         format!(
             "{solver} diverged: after {iterations} iterations the relative residual is {relative:.3e}, \
              no smaller than where it started (1), so more iterations will not help \
@@ -40,13 +40,27 @@ mod tests {
     /// divergence, not a lack of iterations; one that fell short is the other.
     #[test]
     fn a_grown_residual_is_a_divergence() {
-        let m = |r| unconverged("BiCGSTAB", 5000, r, 1e-8, "tol", "cap", "raise cap", "check");
+        let m = |r| {
+            unconverged(
+                "BiCGSTAB",
+                5000,
+                r,
+                1e-8,
+                "tol",
+                "cap",
+                "raise cap",
+                "check",
+            )
+        };
         let grown = m(3.2e58);
         assert!(
             grown.starts_with("BiCGSTAB diverged: after 5000 iterations the relative residual is 3.200e58, no smaller than where it started (1), so more iterations will not help"),
             "{grown}"
         );
-        assert!(grown.ends_with("; check") && !grown.contains("raise cap"), "{grown}");
+        assert!(
+            grown.ends_with("; check") && !grown.contains("raise cap"),
+            "{grown}"
+        );
         assert!(m(f64::NAN).contains("diverged"));
         assert!(m(1.0).contains("diverged"));
         let short = m(3e-3);

@@ -64,8 +64,11 @@ pub fn read_regular(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
             "not a regular file (a device, a pipe or a socket)".into()
         }));
     }
-    let too_long =
-        |n: u64| plain(format!("{n} bytes or more, more than the {limit} a file of its kind may have"));
+    let too_long = |n: u64| {
+        plain(format!(
+            "{n} bytes or more, more than the {limit} a file of its kind may have"
+        ))
+    };
     if meta.len() > limit {
         return Err(too_long(meta.len()));
     }

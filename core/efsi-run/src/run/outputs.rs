@@ -532,7 +532,10 @@ mod tests {
         // NaN: a bounded number of steps, at least the count.
         for (t, e) in [(0.0, 1e-300), (1e-12, 1e-300), (1.0, 1e-300)] {
             let n = events_due(t, e, 1);
-            assert!(n > 1 << 53 && due(t, (n - 1) as f64 * e), "t = {t}, e = {e}");
+            assert!(
+                n > 1 << 53 && due(t, (n - 1) as f64 * e),
+                "t = {t}, e = {e}"
+            );
         }
         assert_eq!(events_due(1.0, f64::NAN, 7), 7);
         assert_eq!(events_due(0.0, 1e-22, 0), counted(0.0, 1e-22, 0));

@@ -23,11 +23,9 @@ pub(super) fn new_run_id(dir: &Path) -> String {
 /// — absent, not a regular file, longer than a record can be — or names no run).
 pub(super) fn recorded_run_id(dir: &Path) -> Result<String, String> {
     let path = dir.join("run.json");
-    let text = crate::output::read::read_regular_text(
-        &path,
-        crate::output::read::MAX_RUN_JSON_BYTES,
-    )
-    .map_err(|e| format!("{} cannot be read ({e})", path.display()))?;
+    let text =
+        crate::output::read::read_regular_text(&path, crate::output::read::MAX_RUN_JSON_BYTES)
+            .map_err(|e| format!("{} cannot be read ({e})", path.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| format!("{} is not a run record ({e})", path.display()))?;
     json.get("run_id")

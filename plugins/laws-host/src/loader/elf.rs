@@ -56,17 +56,29 @@ pub fn check_library_file(path: &Path) -> Result<(), String> {
     check_bytes(&data)
 }
 
-#[cfg(all(not(target_vendor = "apple"), not(windows), target_pointer_width = "64"))]
+#[cfg(all(
+    not(target_vendor = "apple"),
+    not(windows),
+    target_pointer_width = "64"
+))]
 fn check_bytes(data: &[u8]) -> Result<(), String> {
     imp::check(data)
 }
 
-#[cfg(not(all(not(target_vendor = "apple"), not(windows), target_pointer_width = "64")))]
+#[cfg(not(all(
+    not(target_vendor = "apple"),
+    not(windows),
+    target_pointer_width = "64"
+)))]
 fn check_bytes(_data: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-#[cfg(all(not(target_vendor = "apple"), not(windows), target_pointer_width = "64"))]
+#[cfg(all(
+    not(target_vendor = "apple"),
+    not(windows),
+    target_pointer_width = "64"
+))]
 mod imp {
     use object::elf::{self, FileHeader64};
     use object::read::elf::{Dyn as _, FileHeader, ProgramHeader, Rel as _, Rela as _};
@@ -193,8 +205,7 @@ mod imp {
                             "loadable segment {k} ends past the end of the address space"
                         ));
                     }
-                    if align > 1 && (!align.is_power_of_two() || vaddr % align != offset % align)
-                    {
+                    if align > 1 && (!align.is_power_of_two() || vaddr % align != offset % align) {
                         return Err(format!(
                             "loadable segment {k}'s alignment {align} is not a power of two or does not fit its offset {offset} and address {vaddr:#x}"
                         ));
@@ -267,13 +278,37 @@ mod imp {
             (elf::DT_SYMTAB, "symbol table", None),
             (elf::DT_HASH, "hash table", None),
             (elf::DT_GNU_HASH, "GNU hash table", None),
-            (elf::DT_RELA, "relocation table (RELA)", Some(elf::DT_RELASZ)),
+            (
+                elf::DT_RELA,
+                "relocation table (RELA)",
+                Some(elf::DT_RELASZ),
+            ),
             (elf::DT_REL, "relocation table (REL)", Some(elf::DT_RELSZ)),
-            (elf::DT_RELR, "relocation table (RELR)", Some(elf::DT_RELRSZ)),
-            (elf::DT_JMPREL, "PLT relocation table", Some(elf::DT_PLTRELSZ)),
-            (elf::DT_INIT_ARRAY, "initialiser array", Some(elf::DT_INIT_ARRAYSZ)),
-            (elf::DT_FINI_ARRAY, "finaliser array", Some(elf::DT_FINI_ARRAYSZ)),
-            (elf::DT_PREINIT_ARRAY, "pre-initialiser array", Some(elf::DT_PREINIT_ARRAYSZ)),
+            (
+                elf::DT_RELR,
+                "relocation table (RELR)",
+                Some(elf::DT_RELRSZ),
+            ),
+            (
+                elf::DT_JMPREL,
+                "PLT relocation table",
+                Some(elf::DT_PLTRELSZ),
+            ),
+            (
+                elf::DT_INIT_ARRAY,
+                "initialiser array",
+                Some(elf::DT_INIT_ARRAYSZ),
+            ),
+            (
+                elf::DT_FINI_ARRAY,
+                "finaliser array",
+                Some(elf::DT_FINI_ARRAYSZ),
+            ),
+            (
+                elf::DT_PREINIT_ARRAY,
+                "pre-initialiser array",
+                Some(elf::DT_PREINIT_ARRAYSZ),
+            ),
             (elf::DT_VERSYM, "symbol version table", None),
             (elf::DT_VERDEF, "version definitions", None),
             (elf::DT_VERNEED, "version needs", None),
@@ -285,12 +320,7 @@ mod imp {
             let Some(addr) = value(tag) else { continue };
             let size = size_tag.and_then(value).unwrap_or(1);
             match file_bytes(addr, size) {
-                Some(l) => places.push((
-                    tag,
-                    l.file_offset(addr),
-                    size,
-                    l.offset + l.filesz,
-                )),
+                Some(l) => places.push((tag, l.file_offset(addr), size, l.offset + l.filesz)),
                 None => {
                     return Err(format!(
                         "its dynamic table puts the {what} at address {addr:#x} ({size} bytes), outside the file's loadable bytes: the file is truncated or corrupted"
@@ -298,7 +328,8 @@ mod imp {
                 }
             }
         }
-        let place = |tag: elf::DynamicTag| places.iter().find(|p| p.0 == tag).map(|p| (p.1, p.2, p.3));
+        let place =
+            |tag: elf::DynamicTag| places.iter().find(|p| p.0 == tag).map(|p| (p.1, p.2, p.3));
         let strsz = value(elf::DT_STRSZ).unwrap_or(0);
         for d in entries {
             if d.is_string(endian) && d.val(endian) >= strsz {
@@ -451,9 +482,9 @@ mod imp {
         let textrel = value(elf::DT_TEXTREL).is_some()
             || value(elf::DT_FLAGS).is_some_and(|f| f & elf::DF_TEXTREL.0 != 0);
         let target_ok = |addr: u64| {
-            loads.iter().any(|l| {
-                l.holds_memory(addr, 8) && (textrel || l.flags & elf::PF_W.0 != 0)
-            })
+            loads
+                .iter()
+                .any(|l| l.holds_memory(addr, 8) && (textrel || l.flags & elf::PF_W.0 != 0))
         };
         let bad_reloc = |what: &str, i: usize, offset: u64, sym: u32| {
             if !target_ok(offset) {

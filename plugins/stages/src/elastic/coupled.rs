@@ -523,7 +523,7 @@ impl ElasticStage {
                 worst
             };
             let relative = mu / scale.max(f64::MIN_POSITIVE);
-            if !(relative < 1.0) {
+            if relative >= 1.0 || relative.is_nan() {
                 return Err(err(
                     "elastic",
                     format!(

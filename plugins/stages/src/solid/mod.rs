@@ -95,7 +95,10 @@ impl Solid {
             if !(mu.is_finite() && mu >= 0.0) {
                 return err(
                     "solid.viscosity",
-                    format!("must be a finite number ≥ 0, got {}", efsi_core::scene::num(mu)),
+                    format!(
+                        "must be a finite number ≥ 0, got {}",
+                        efsi_core::scene::num(mu)
+                    ),
                 );
             }
             scene.check_diffusion("solid.viscosity", mu, self.density)?;

@@ -60,7 +60,10 @@ impl Shape {
         match self {
             Shape::Disk { center, radius } => {
                 if !fin(&[center.0, center.1]) {
-                    return at(".center", format!("Disk: center must be finite, got {center:?}"));
+                    return at(
+                        ".center",
+                        format!("Disk: center must be finite, got {center:?}"),
+                    );
                 }
                 if !radius.is_finite() || *radius <= 0.0 {
                     return at(
@@ -80,7 +83,10 @@ impl Shape {
             }
             Shape::HalfPlane { normal, offset } => {
                 if !fin(&[*offset]) {
-                    return at(".offset", format!("HalfPlane: offset must be finite, got {}", num(*offset)));
+                    return at(
+                        ".offset",
+                        format!("HalfPlane: offset must be finite, got {}", num(*offset)),
+                    );
                 }
                 if !fin(&[normal.0, normal.1]) || (normal.0 == 0.0 && normal.1 == 0.0) {
                     return at(
