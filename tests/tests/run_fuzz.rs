@@ -674,13 +674,12 @@ fn generated_overrides_are_refused_by_name_or_run_cleanly() {
     assert!(t.refused_by_loader > 0 && t.reached_a_step > 0, "{t:?}");
 }
 
+/// How a library is broken: the length it is cut to, and bytes overwritten (offset, value).
+type Breakage = (Option<usize>, Vec<(usize, u8)>);
+
 /// A copy of a real law library, broken: cut short, bytes of its ELF header, program headers,
-/// dynamic table or section headers overwritten, or both.
-fn broken_library(
-    len: usize,
-    tables: Vec<(usize, usize)>,
-) -> BoxedStrategy<(Option<usize>, Vec<(usize, u8)>)> {
-    let regions: Vec<(usize, usize)> = tables;
+/// dynamic table or section headers (`regions`, as offset and length) overwritten, or both.
+fn broken_library(len: usize, regions: Vec<(usize, usize)>) -> BoxedStrategy<Breakage> {
     let pokes = prop::collection::vec(
         (prop::sample::select(regions), any::<usize>(), any::<u8>())
             .prop_map(|((at, n), k, v)| (at + k % n.max(1), v)),
