@@ -523,7 +523,9 @@ Scene(
         );
         refused(
             &[Override::set("solid.shape.radius", -1.0)],
-            &["set solid.shape.radius=-1.0: solid.shape:"],
+            &[
+                "set solid.shape.radius=-1.0: solid.shape.radius: Disk: radius must be finite and > 0, got -1",
+            ],
         );
         refused(
             &[Override::set("time.cfl", 2.0)],

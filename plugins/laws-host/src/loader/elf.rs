@@ -14,7 +14,9 @@
 //!   segment (`PT_LOAD`) no larger in the file than in memory, with an alignment that is a
 //!   power of two and congruent file offset and address, and at least one of them;
 //! - the dynamic table (`PT_DYNAMIC`): inside the file and inside a loadable segment's file
-//!   bytes, ended by `DT_NULL`; every table it points to (strings, symbols, hash tables,
+//!   bytes, ended by `DT_NULL`, no tag outside the defined ranges, each table with its size,
+//!   entries of the standard sizes, the tables where the section headers (if any) put them,
+//!   the relocations it counts relative (`DT_RELACOUNT`) relative; every table it points to (strings, symbols, hash tables,
 //!   relocations, version tables, initialisers) inside a loadable segment's file bytes, with
 //!   its declared size where the table declares one, and every string offset (`DT_NEEDED`,
 //!   `DT_SONAME`, …) inside the string table;
@@ -315,6 +317,51 @@ mod imp {
             (elf::DT_INIT, "initialiser", None),
             (elf::DT_FINI, "finaliser", None),
         ];
+        // Each table with a size has its size (the loader reads it unchecked), entries of the
+        // standard sizes (it asserts them), and no tag outside the defined ranges.
+        for (tag, what, size_tag) in tables {
+            if let Some(size_tag) = size_tag
+                && value(tag).is_some()
+                && value(size_tag).is_none()
+            {
+                return Err(format!(
+                    "its dynamic table gives the {what} without its size: the table is corrupted"
+                ));
+            }
+        }
+        for (tag, what, size) in [
+            (elf::DT_RELAENT, "RELA entries", 24),
+            (elf::DT_RELENT, "REL entries", 16),
+            (elf::DT_SYMENT, "symbols", 24),
+            (elf::DT_RELRENT, "RELR entries", 8),
+        ] {
+            if let Some(v) = value(tag)
+                && v != size
+            {
+                return Err(format!(
+                    "its dynamic table declares {what} of {v} bytes, the format's are {size}"
+                ));
+            }
+        }
+        if let Some(v) = value(elf::DT_PLTREL)
+            && v != elf::DT_RELA.0 as u64
+            && v != elf::DT_REL.0 as u64
+        {
+            return Err(format!(
+                "its dynamic table declares PLT relocations of kind {v}, neither RELA nor REL"
+            ));
+        }
+        for d in entries {
+            let t = d.tag(endian).0;
+            let known = (0..=elf::DT_RELR.0 as i64 + 8).contains(&t)
+                || (0x6000_0000..=0x6fff_ffff).contains(&t)
+                || (0x7000_0000..=0x7fff_ffff).contains(&t);
+            if !known {
+                return Err(format!(
+                    "its dynamic table holds an entry of tag {t:#x}, outside every defined range: the table is corrupted"
+                ));
+            }
+        }
         let mut places = Vec::new();
         for (tag, what, size_tag) in tables {
             let Some(addr) = value(tag) else { continue };
@@ -445,6 +492,57 @@ mod imp {
                 ));
             }
         }
+        // Where the file has section headers, the dynamic table must name the very sections
+        // the linker made for its tables (a changed address or size is corruption).
+        for (tag, section, size_tag) in [
+            (elf::DT_INIT, ".init", None),
+            (elf::DT_FINI, ".fini", None),
+            (elf::DT_INIT_ARRAY, ".init_array", Some(elf::DT_INIT_ARRAYSZ)),
+            (elf::DT_FINI_ARRAY, ".fini_array", Some(elf::DT_FINI_ARRAYSZ)),
+            (elf::DT_PREINIT_ARRAY, ".preinit_array", Some(elf::DT_PREINIT_ARRAYSZ)),
+            (elf::DT_RELA, ".rela.dyn", Some(elf::DT_RELASZ)),
+            (elf::DT_JMPREL, ".rela.plt", Some(elf::DT_PLTRELSZ)),
+            (elf::DT_SYMTAB, ".dynsym", None),
+            (elf::DT_STRTAB, ".dynstr", Some(elf::DT_STRSZ)),
+            (elf::DT_GNU_HASH, ".gnu.hash", None),
+            (elf::DT_HASH, ".hash", None),
+            (elf::DT_VERSYM, ".gnu.version", None),
+            (elf::DT_VERNEED, ".gnu.version_r", None),
+            (elf::DT_VERDEF, ".gnu.version_d", None),
+        ] {
+            let Some(sh) = sections
+                .iter()
+                .find(|sh| sections.section_name(endian, sh).ok() == Some(section.as_bytes()))
+            else {
+                continue;
+            };
+            let (addr, size) = (sh.sh_addr(endian), sh.sh_size(endian));
+            let given = value(tag);
+            let given_size = size_tag.and_then(value);
+            if given.is_some_and(|a| a != addr) || given_size.is_some_and(|n| n != size) {
+                return Err(format!(
+                    "its dynamic table puts {section} at {:#x} ({} bytes), where the section is at {addr:#x} ({size} bytes): the file is corrupted",
+                    given.unwrap_or(0),
+                    given_size.map_or_else(|| "?".to_string(), |n| n.to_string())
+                ));
+            }
+        }
+        for (tag, section) in [
+            (elf::DT_VERNEEDNUM, ".gnu.version_r"),
+            (elf::DT_VERDEFNUM, ".gnu.version_d"),
+        ] {
+            let sh = sections
+                .iter()
+                .find(|sh| sections.section_name(endian, sh).ok() == Some(section.as_bytes()));
+            if let (Some(sh), Some(n)) = (sh, value(tag))
+                && n != u64::from(sh.sh_info(endian))
+            {
+                return Err(format!(
+                    "its dynamic table counts {n} entries in {section}, which holds {}: the file is corrupted",
+                    sh.sh_info(endian)
+                ));
+            }
+        }
         // The hash tables the loader looks symbols up with: every chain they lead to inside
         // the symbol table.
         if let Some((offset, _, end)) = place(elf::DT_GNU_HASH) {
@@ -527,6 +625,34 @@ mod imp {
                         return Err(format!("its {m}"));
                     }
                 }
+            }
+        }
+        // The loader applies the first RELACOUNT entries as relative relocations unchecked:
+        // they must be that many, and relative.
+        let relative: Option<u32> = match std::env::consts::ARCH {
+            "x86_64" => Some(8),
+            "aarch64" => Some(1027),
+            _ => None,
+        };
+        if let Some(count) = value(elf::DT_RELACOUNT) {
+            let (offset, size, _) = place(elf::DT_RELA).unwrap_or((0, 0, 0));
+            let bytes = &data[offset as usize..(offset + size) as usize];
+            let table = pod::slice_from_all_bytes::<elf::Rela64<Endianness>>(bytes)
+                .map_err(|()| "its relocation table (RELA) is not a whole number of entries")?;
+            if count > table.len() as u64 {
+                return Err(format!(
+                    "its dynamic table counts {count} relative relocations of {} in all",
+                    table.len()
+                ));
+            }
+            if let Some(kind) = relative
+                && let Some(i) = table[..count as usize]
+                    .iter()
+                    .position(|r| r.r_type(endian, false).0 != kind)
+            {
+                return Err(format!(
+                    "its relocation {i} is counted relative (DT_RELACOUNT = {count}) but is not"
+                ));
             }
         }
         Ok(())
