@@ -35,7 +35,7 @@
 //! the file named (or loads, where the bytes changed are ones the loader does not use), never
 //! a crash.
 //!
-//! `EFSI_RUN_FUZZ_CASES=N` runs N scenes (default 48; ≈ a second), N scenes with overrides,
+//! `EFSI_RUN_FUZZ_CASES=N` runs N scenes (default 200; ≈ 2 s), N scenes with overrides,
 //! N·4 law libraries and N·8 checkpoints; the seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it).
 //! The figures are printed (`--nocapture`).
 
@@ -185,11 +185,16 @@ fn solid() -> BoxedStrategy<Solid> {
         .boxed()
 }
 
+/// Cells along one axis: 2 to 10, sometimes 1 (refused between sides that are not periodic).
+fn cells() -> BoxedStrategy<usize> {
+    prop_oneof![50 => 2usize..=10, 1 => Just(1usize)].boxed()
+}
+
 /// An output interval: mostly a fraction of the run, sometimes at or below the smallest step
 /// or the run's length / 1e12 (1e-300, 1e-13, 1e-12 × a run of ≤ 0.5).
 fn interval() -> BoxedStrategy<f64> {
     prop_oneof![
-        12 => num(0.005, 0.2),
+        100 => num(0.005, 0.2),
         1 => Just(1e-300),
         1 => Just(1e-13),
         1 => Just(1e-12),
@@ -208,7 +213,7 @@ fn scene() -> impl Strategy<Value = Scene> {
         // The smallest step: mostly the default, sometimes as low as 1e-300 (which must not
         // let an output interval as small pass, see `interval`).
         prop::option::weighted(
-            0.2,
+            0.05,
             prop_oneof![num(1e-6, 1e-3), Just(1e-300), Just(1e-13), Just(1e-12)],
         ),
     );
@@ -221,7 +226,8 @@ fn scene() -> impl Strategy<Value = Scene> {
     (
         name(),
         prop::bool::weighted(0.2),
-        (1usize..=10, 1usize..=10),
+        // Mostly at least the 2 cells a non-periodic direction needs; sometimes 1.
+        (cells(), cells()),
         time,
         (num(0.5, 2.0), num(0.0, 0.1)),
         prop::bool::weighted(0.3),
@@ -550,7 +556,7 @@ fn runner(cases: u64) -> TestRunner {
 
 #[test]
 fn generated_scenes_run_stop_and_resume_cleanly() {
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48);
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200);
     let root = std::env::temp_dir().join(format!("efsi-run-fuzz-{}", std::process::id()));
     let tally = RefCell::new(Tally::default());
     let start = std::time::Instant::now();
@@ -633,7 +639,17 @@ fn an_override() -> BoxedStrategy<Override> {
         "solid.shape.center[1]",
         "solid.law.parameters.G",
     ]);
+    // Settings any generated scene takes, so that runs are reached with overrides too.
+    let benign = prop::sample::select(vec![
+        ("time.cfl", "0.3"),
+        ("grid.nx", "6"),
+        ("grid.ny", "5"),
+        ("fluid.viscosity", "0.05"),
+        ("time.dt_max", "0.01"),
+        ("gravity.1", "-1.0"),
+    ]);
     prop_oneof![
+        8 => benign.prop_map(|(p, v)| Override::set(p, OverrideValue::Ron(v.into()))),
         8 => (paths, override_value())
             .prop_map(|(p, v)| Override::set(p, OverrideValue::Ron(v))),
         1 => prop_oneof![Just(1e-308), Just(0.01), Just(0.5), Just(2.0), Just(1e308)]
@@ -647,7 +663,7 @@ fn an_override() -> BoxedStrategy<Override> {
 /// override, with a message of sane length, or runs, stops and resumes as the scenes do.
 #[test]
 fn generated_overrides_are_refused_by_name_or_run_cleanly() {
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48);
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200);
     let root = std::env::temp_dir().join(format!("efsi-override-fuzz-{}", std::process::id()));
     let tally = RefCell::new(Tally::default());
     let start = std::time::Instant::now();
@@ -716,7 +732,7 @@ fn structure(b: &[u8]) -> Vec<(usize, usize)> {
 /// crash (the loader checks a file before the dynamic loader maps it).
 #[test]
 fn broken_law_libraries_are_refused_with_the_file_named() {
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48) * 4;
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200) * 4;
     let root = std::env::temp_dir().join(format!("efsi-law-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&root).unwrap();
     let good_path = efsi_laws_host::loader::resolve_law("neo_hookean", Path::new("."))
@@ -835,7 +851,7 @@ fn the_checkpoint_decoder_refuses_or_decodes_mutated_files() {
     let template = efsi_run::simulation(scene, Path::new("ck.ron"), &efsi_stages::builtin())
         .unwrap()
         .snapshot();
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48) * 8;
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200) * 8;
     let n = valid.len();
     // Mutations: bytes set (lengths and counts among them: 0, 0xff, small), a range cut out,
     // a range repeated, the file cut short; then resealed (or not).

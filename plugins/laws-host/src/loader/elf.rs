@@ -343,6 +343,14 @@ mod imp {
                 ));
             }
         }
+        if (value(elf::DT_VERNEED).is_some() || value(elf::DT_VERDEF).is_some())
+            && value(elf::DT_VERSYM).is_none()
+        {
+            return Err(
+                "its dynamic table gives version tables without the symbol versions (DT_VERSYM)"
+                    .into(),
+            );
+        }
         if let Some(v) = value(elf::DT_PLTREL)
             && v != elf::DT_RELA.0 as u64
             && v != elf::DT_REL.0 as u64
@@ -353,9 +361,13 @@ mod imp {
         }
         for d in entries {
             let t = d.tag(endian).0;
-            let known = (0..=elf::DT_RELR.0 as i64 + 8).contains(&t)
-                || (0x6000_0000..=0x6fff_ffff).contains(&t)
-                || (0x7000_0000..=0x7fff_ffff).contains(&t);
+            // The loader files an entry by its tag's range (the GNU value, address and
+            // version ranges, the processor's): a tag elsewhere in the OS range can land on
+            // another table's slot.
+            let known = (0..=elf::DT_RELRENT.0).contains(&t)
+                || (0x6fff_fd00..=0x6fff_ffff).contains(&t)
+                || (0x7000_0000..=0x7000_00ff).contains(&t)
+                || (0x7fff_fffd..=0x7fff_ffff).contains(&t);
             if !known {
                 return Err(format!(
                     "its dynamic table holds an entry of tag {t:#x}, outside every defined range: the table is corrupted"
@@ -497,9 +509,21 @@ mod imp {
         for (tag, section, size_tag) in [
             (elf::DT_INIT, ".init", None),
             (elf::DT_FINI, ".fini", None),
-            (elf::DT_INIT_ARRAY, ".init_array", Some(elf::DT_INIT_ARRAYSZ)),
-            (elf::DT_FINI_ARRAY, ".fini_array", Some(elf::DT_FINI_ARRAYSZ)),
-            (elf::DT_PREINIT_ARRAY, ".preinit_array", Some(elf::DT_PREINIT_ARRAYSZ)),
+            (
+                elf::DT_INIT_ARRAY,
+                ".init_array",
+                Some(elf::DT_INIT_ARRAYSZ),
+            ),
+            (
+                elf::DT_FINI_ARRAY,
+                ".fini_array",
+                Some(elf::DT_FINI_ARRAYSZ),
+            ),
+            (
+                elf::DT_PREINIT_ARRAY,
+                ".preinit_array",
+                Some(elf::DT_PREINIT_ARRAYSZ),
+            ),
             (elf::DT_RELA, ".rela.dyn", Some(elf::DT_RELASZ)),
             (elf::DT_JMPREL, ".rela.plt", Some(elf::DT_PLTRELSZ)),
             (elf::DT_SYMTAB, ".dynsym", None),
