@@ -23,6 +23,16 @@ use efsi_core::due;
 use efsi_core::overrides::OverrideValue;
 use std::sync::Arc;
 
+/// A number in a message or a log line: compact ([`efsi_core::scene::num`]: `5e-324`, never
+/// 324 digits).
+pub(crate) struct Num(pub(crate) f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&efsi_core::scene::num(self.0))
+    }
+}
+
 /// A refused call: its status (`Discard` or `Error`) and what to tell the importer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fault {
@@ -266,40 +276,44 @@ impl Model {
             .as_mut()
             .ok_or_else(|| Fault::error("no simulation: initialise the instance first"))?;
         let now = run.sim.state.t;
+        // Numbers in messages and logs: compact (`5e-324`, never 324 digits).
+        let (t_, h_, now_) = (Num(t), Num(h), Num(now));
         if !t.is_finite() {
             return Err(Fault::error(format!(
-                "the communication point {t} is not a finite number (the model's time is {now})"
+                "the communication point {t_} is not a finite number (the model's time is {now_})"
             )));
         }
         if !(h.is_finite() && h > 0.0) {
             return Err(Fault::error(format!(
-                "the communication step size {h} must be a finite number > 0"
+                "the communication step size {h_} must be a finite number > 0"
             )));
         }
         if (t - now).abs() > 1e-9 * t.abs().max(h) {
             return Err(Fault::error(format!(
-                "the communication point {t} is not the model's time {now}"
+                "the communication point {t_} is not the model's time {now_}"
             )));
         }
         let target = t + h;
+        let target_ = Num(target);
         if let Some(stop) = stop
             && target - stop > 1e-9 * stop.abs().max(h)
         {
+            let stop_ = Num(stop);
             return Err(Fault::error(format!(
-                "a step from t = {t} by {h} ends at {target}, past the stop time {stop} given at initialisation"
+                "a step from t = {t_} by {h_} ends at {target_}, past the stop time {stop_} given at initialisation"
             )));
         }
         let smallest = run.smallest_step();
         if due(t, target) || h < smallest {
             return Err(Fault::discard(format!(
-                "the communication step size {h} s is too small to resolve at t = {t} s (the smallest is {:e} s: the solver's smallest step, and 1e-9 of the time); the instance stays at t = {t}",
+                "the communication step size {h_} s is too small to resolve at t = {t_} s (the smallest is {:e} s: the solver's smallest step, and 1e-9 of the time); the instance stays at t = {t_}",
                 smallest.max(1e-9 * t.abs())
             )));
         }
         let result = run.advance(t, h, max_steps);
         if let Some(why) = run.rebuilt.take() {
             self.notes.push(format!(
-                "the simulation did not take back the state of t = {t} ({why}): it was rebuilt from its scene and given that state"
+                "the simulation did not take back the state of t = {t_} ({why}): it was rebuilt from its scene and given that state"
             ));
             // A rebuilt simulation has the scene's wall speeds: give it the inputs again.
             run.apply_inputs(&self.spec, &self.values.inputs)?;
@@ -307,7 +321,7 @@ impl Model {
         match result {
             Ok(n) => {
                 self.notes
-                    .push(format!("doStep t = {t} h = {h}: {n} solver steps"));
+                    .push(format!("doStep t = {t_} h = {h_}: {n} solver steps"));
                 Ok(())
             }
             Err(StepFailure::Discarded(m)) => Err(Fault::discard(m)),

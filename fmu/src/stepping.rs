@@ -252,6 +252,7 @@ impl Run {
     /// back ([`StepFailure::Broken`]).
     pub fn advance(&mut self, t: f64, h: f64, max_steps: u64) -> Result<u64, StepFailure> {
         let target = t + h;
+        let t_ = crate::model::Num(t);
         // The importer's clock is the reference: absorb round-off between the two.
         self.sim.state.t = t;
         match &mut self.start {
@@ -270,10 +271,10 @@ impl Run {
             }
             Err(e) => match self.recover() {
                 Ok(()) => Err(StepFailure::Discarded(format!(
-                    "{e}; the instance is back at t = {t} exactly, its state before this call"
+                    "{e}; the instance is back at t = {t_} exactly, its state before this call"
                 ))),
                 Err(r) => Err(StepFailure::Broken(format!(
-                    "{e}; and the state at t = {t} could not be put back ({r})"
+                    "{e}; and the state at t = {t_} could not be put back ({r})"
                 ))),
             },
         }
@@ -284,14 +285,16 @@ impl Run {
     /// [`advance`](Self::advance)'s, which kept the call's start before anything ran.
     fn solver_steps(&mut self, target: f64, max_steps: u64) -> Result<(), String> {
         let t = self.sim.state.t;
+        let (t_, target_) = (crate::model::Num(t), crate::model::Num(target));
         let dt = self
             .sim
             .next_dt(target)
-            .map_err(|e| format!("the solver cannot step from t = {t}: {e}"))?;
+            .map_err(|e| format!("the solver cannot step from t = {t_}: {e}"))?;
         let needed = ((target - t) / dt).round();
+        let needed_ = crate::model::Num(needed);
         if needed > max_steps as f64 {
             return Err(format!(
-                "the communication step from t = {t} to {target} needs about {needed} solver steps of {dt:.3e} s, more than max_solver_steps_per_step = {max_steps}: take shorter communication steps or raise max_solver_steps_per_step"
+                "the communication step from t = {t_} to {target_} needs about {needed_} solver steps of {dt:.3e} s, more than max_solver_steps_per_step = {max_steps}: take shorter communication steps or raise max_solver_steps_per_step"
             ));
         }
         let control = Advance {
@@ -304,11 +307,11 @@ impl Run {
                 error: EfsiError::StepBudget { .. },
                 ..
             }) => Err(format!(
-                "the communication step from t = {t} to {target} took max_solver_steps_per_step = {max_steps} solver steps and reached only t = {}: take shorter communication steps or raise max_solver_steps_per_step",
+                "the communication step from t = {t_} to {target_} took max_solver_steps_per_step = {max_steps} solver steps and reached only t = {}: take shorter communication steps or raise max_solver_steps_per_step",
                 self.sim.state.t
             )),
             Err(e) => Err(format!(
-                "the solver failed between t = {t} and {target}: {e}"
+                "the solver failed between t = {t_} and {target_}: {e}"
             )),
         }
     }

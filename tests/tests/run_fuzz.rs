@@ -21,13 +21,28 @@
 //! the checksum: it must refuse or decode, never panic, and what it decodes must fit or be
 //! refused by the simulation.
 //!
-//! `EFSI_RUN_FUZZ_CASES=N` runs N scenes (default 48; ≈ a second) and N·8 checkpoints; the
-//! seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it). The figures are printed (`--nocapture`).
+//! The time settings include `time.dt_min` down to 1e-300 and the output intervals go down to
+//! 1e-300 too: an interval below the smallest step or below `time.end / 1e12` is refused (it
+//! once hung the run in its event count before step 1), and one just above runs and stops.
+//!
+//! A third target applies generated `--set` / `--refine` overrides to the generated scenes
+//! (hostile values among them: ±1e308, 5e-324, NaN, values nested 10,000 levels, strings of
+//! 100,000 characters, `time.dt_min` and output intervals of 1e-300): a refusal names the file
+//! and the override in a message of sane length without numbers in hundreds of digits, else
+//! the run behaves as above. A fourth feeds the law loader copies of the real neo-Hookean
+//! library cut short anywhere and with bytes of its ELF header, program headers, dynamic table
+//! and section headers overwritten, and a library built for another ABI: each is refused with
+//! the file named (or loads, where the bytes changed are ones the loader does not use), never
+//! a crash.
+//!
+//! `EFSI_RUN_FUZZ_CASES=N` runs N scenes (default 200; ≈ 2 s), N scenes with overrides,
+//! N·4 law libraries and N·8 checkpoints; the seed is fixed (`EFSI_RUN_FUZZ_SEED` changes it).
+//! The figures are printed (`--nocapture`).
 
 use efsi_core::scene::{
     Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, WallMotion, WallProfile,
 };
-use efsi_core::{Geometry, Scene};
+use efsi_core::{Geometry, Override, OverrideValue, Scene};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};
 use efsi_run::{OutputSpec, ProbeSpec, ProfileSpec, SceneOverrides};
 use efsi_stages::solid::{LawSpec, Shape, Solid};
@@ -170,6 +185,24 @@ fn solid() -> BoxedStrategy<Solid> {
         .boxed()
 }
 
+/// Cells along one axis: 2 to 10, sometimes 1 (refused between sides that are not periodic).
+fn cells() -> BoxedStrategy<usize> {
+    prop_oneof![50 => 2usize..=10, 1 => Just(1usize)].boxed()
+}
+
+/// An output interval: mostly a fraction of the run, sometimes at or below the smallest step
+/// or the run's length / 1e12 (1e-300, 1e-13, 1e-12 × a run of ≤ 0.5).
+fn interval() -> BoxedStrategy<f64> {
+    prop_oneof![
+        100 => num(0.005, 0.2),
+        1 => Just(1e-300),
+        1 => Just(1e-13),
+        1 => Just(1e-12),
+        1 => Just(5e-13),
+    ]
+    .boxed()
+}
+
 /// A generated scene (see the module docs).
 fn scene() -> impl Strategy<Value = Scene> {
     let time = (
@@ -177,17 +210,24 @@ fn scene() -> impl Strategy<Value = Scene> {
         num(0.1, 1.0),
         prop::option::of(num(0.001, 0.05)),
         prop::option::of(num(0.001, 0.05)),
+        // The smallest step: mostly the default, sometimes as low as 1e-300 (which must not
+        // let an output interval as small pass, see `interval`).
+        prop::option::weighted(
+            0.05,
+            prop_oneof![num(1e-6, 1e-3), Just(1e-300), Just(1e-13), Just(1e-12)],
+        ),
     );
     let output = (
-        prop::option::of(num(0.005, 0.2)),
-        prop::option::of(num(0.005, 0.2)),
+        prop::option::of(interval()),
+        prop::option::of(interval()),
         prop::collection::vec(probe(), 0..4),
         prop::collection::vec(profile(), 0..2),
     );
     (
         name(),
         prop::bool::weighted(0.2),
-        (1usize..=10, 1usize..=10),
+        // Mostly at least the 2 cells a non-periodic direction needs; sometimes 1.
+        (cells(), cells()),
         time,
         (num(0.5, 2.0), num(0.0, 0.1)),
         prop::bool::weighted(0.3),
@@ -200,7 +240,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 name,
                 axi,
                 (nx, ny),
-                (end, cfl, dt_max, fixed_dt),
+                (end, cfl, dt_max, fixed_dt, dt_min),
                 (density, viscosity),
                 gravity,
                 b,
@@ -228,7 +268,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                         end,
                         cfl,
                         dt_max,
-                        dt_min: None,
+                        dt_min,
                         fixed_dt: fixed_dt.filter(|_| dt_max.is_none()),
                         steady: None,
                     },
@@ -325,6 +365,7 @@ fn options(stop_at: u64) -> (RunOptions, Arc<AtomicUsize>) {
 
 fn one_case(
     scene: &Scene,
+    overrides: &[Override],
     stop_at: u64,
     more: u64,
     root: &Path,
@@ -340,7 +381,7 @@ fn one_case(
     let path = case.join("scene.ron");
     std::fs::write(&path, &text).unwrap();
     let shown = path.display().to_string();
-    let loaded = match Scene::load(&path) {
+    let loaded = match Scene::load_with(&path, overrides) {
         Ok(s) => s,
         Err(e) => {
             let m = e.to_string();
@@ -350,6 +391,18 @@ fn one_case(
                 m,
                 text
             );
+            // An override's error names the override (cut short when long), and no message
+            // runs to thousands of characters or prints a number in hundreds of digits.
+            if let efsi_core::SceneError::Override { setting, .. } = &e {
+                prop_assert!(
+                    overrides.iter().any(|o| o.brief() == *setting),
+                    "{} names no override of {:?}",
+                    m,
+                    overrides
+                );
+            }
+            prop_assert!(m.len() < 2_000, "a message of {} bytes", m.len());
+            prop_assert!(!has_long_number(&m), "a long number in: {}", m);
             if std::env::var_os("EFSI_RUN_FUZZ_SHOW").is_some() {
                 eprintln!("refused: {m}");
             }
@@ -429,7 +482,9 @@ fn one_case(
             }
         });
         let whole = case.join("whole");
-        let mut sim = efsi_run::simulation(Scene::load(&path).unwrap(), &path, &plugins).unwrap();
+        let mut sim =
+            efsi_run::simulation(Scene::load_with(&path, overrides).unwrap(), &path, &plugins)
+                .unwrap();
         let (opts, flag) = options(target);
         let straight = run_with(&mut sim, &whole, &opts, &mut |p| {
             if p.step >= target {
@@ -501,12 +556,12 @@ fn runner(cases: u64) -> TestRunner {
 
 #[test]
 fn generated_scenes_run_stop_and_resume_cleanly() {
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48);
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200);
     let root = std::env::temp_dir().join(format!("efsi-run-fuzz-{}", std::process::id()));
     let tally = RefCell::new(Tally::default());
     let start = std::time::Instant::now();
     let result = runner(cases).run(&(scene(), 1u64..=3, 1u64..=2), |(s, stop_at, more)| {
-        one_case(&s, stop_at, more, &root, &tally)
+        one_case(&s, &[], stop_at, more, &root, &tally)
     });
     let secs = start.elapsed().as_secs_f64();
     let _ = std::fs::remove_dir_all(&root);
@@ -525,6 +580,220 @@ fn generated_scenes_run_stop_and_resume_cleanly() {
         "{t:?}"
     );
     assert!(t.resumed > 0, "{t:?}");
+}
+
+/// Whether `m` holds a run of more than 20 digits (a number printed in full, `1e308` as 309
+/// digits).
+fn has_long_number(m: &str) -> bool {
+    let mut run = 0;
+    for c in m.chars() {
+        run = if c.is_ascii_digit() { run + 1 } else { 0 };
+        if run > 20 {
+            return true;
+        }
+    }
+    false
+}
+
+/// An override's value as the command line gives it (RON text): mostly in range, sometimes
+/// hostile — numbers at the ends of `f64`, NaN, nesting 10,000 levels deep, a long string.
+fn override_value() -> BoxedStrategy<String> {
+    prop_oneof![
+        6 => num(0.0, 2.0).prop_map(|x| format!("{x:?}")),
+        3 => (1i64..200).prop_map(|n| n.to_string()),
+        1 => Just("1e308".to_string()),
+        1 => Just("-1e308".to_string()),
+        1 => Just("1e-308".to_string()),
+        1 => Just("5e-324".to_string()),
+        1 => Just("NaN".to_string()),
+        1 => Just("(-1e308, 1e308)".to_string()),
+        1 => Just("(0.0, 1e-300)".to_string()),
+        1 => Just(format!("{}1{}", "(".repeat(10_000), ")".repeat(10_000))),
+        1 => Just(format!("{}{}", "[".repeat(129), "]".repeat(129))),
+        1 => Just("x".repeat(100_000)),
+        1 => Just("[1, 2]".to_string()),
+        1 => Just("abc".to_string()),
+    ]
+    .boxed()
+}
+
+/// A `--set PATH=VALUE` on a setting the generated scenes have (or can take), or a
+/// `--refine F`.
+fn an_override() -> BoxedStrategy<Override> {
+    let paths = prop::sample::select(vec![
+        "grid.nx",
+        "grid.ny",
+        "time.end",
+        "time.cfl",
+        "time.dt_min",
+        "time.dt_max",
+        "output.probe_every",
+        "output.vtk_every",
+        "fluid.density",
+        "fluid.viscosity",
+        "domain.x",
+        "domain.y",
+        "gravity.1",
+        "name",
+        "solid.shape.radius",
+        "solid.shape.center[1]",
+        "solid.law.parameters.G",
+    ]);
+    // Settings any generated scene takes, so that runs are reached with overrides too.
+    let benign = prop::sample::select(vec![
+        ("time.cfl", "0.3"),
+        ("grid.nx", "6"),
+        ("grid.ny", "5"),
+        ("fluid.viscosity", "0.05"),
+        ("time.dt_max", "0.01"),
+        ("gravity.1", "-1.0"),
+    ]);
+    prop_oneof![
+        8 => benign.prop_map(|(p, v)| Override::set(p, OverrideValue::Ron(v.into()))),
+        8 => (paths, override_value())
+            .prop_map(|(p, v)| Override::set(p, OverrideValue::Ron(v))),
+        1 => prop_oneof![Just(1e-308), Just(0.01), Just(0.5), Just(2.0), Just(1e308)]
+            .prop_map(Override::Refine),
+    ]
+    .boxed()
+}
+
+/// Generated scenes with generated `--set` / `--refine` overrides (and `time.dt_min` with
+/// output intervals as small as 1e-300 among them): each is refused naming the file and the
+/// override, with a message of sane length, or runs, stops and resumes as the scenes do.
+#[test]
+fn generated_overrides_are_refused_by_name_or_run_cleanly() {
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200);
+    let root = std::env::temp_dir().join(format!("efsi-override-fuzz-{}", std::process::id()));
+    let tally = RefCell::new(Tally::default());
+    let start = std::time::Instant::now();
+    let strategy = (
+        scene(),
+        prop::collection::vec(an_override(), 1..4),
+        1u64..=3,
+        1u64..=2,
+    );
+    let result = runner(cases).run(&strategy, |(s, overrides, stop_at, more)| {
+        one_case(&s, &overrides, stop_at, more, &root, &tally)
+    });
+    let secs = start.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&root);
+    let t = tally.into_inner();
+    eprintln!(
+        "{} cases with overrides (with shrinking) in {secs:.2} s = {:.0} cases/s: {t:?}",
+        t.cases,
+        t.cases as f64 / secs
+    );
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+    assert!(t.refused_by_loader > 0 && t.reached_a_step > 0, "{t:?}");
+}
+
+/// How a library is broken: the length it is cut to, and bytes overwritten (offset, value).
+type Breakage = (Option<usize>, Vec<(usize, u8)>);
+
+/// A copy of a real law library, broken: cut short, bytes of its ELF header, program headers,
+/// dynamic table or section headers (`regions`, as offset and length) overwritten, or both.
+fn broken_library(len: usize, regions: Vec<(usize, usize)>) -> BoxedStrategy<Breakage> {
+    let pokes = prop::collection::vec(
+        (prop::sample::select(regions), any::<usize>(), any::<u8>())
+            .prop_map(|((at, n), k, v)| (at + k % n.max(1), v)),
+        0..6,
+    );
+    (
+        prop_oneof![1 => Just(None), 2 => (1usize..len).prop_map(Some)],
+        pokes,
+    )
+        .prop_filter("a change", |(cut, pokes)| {
+            cut.is_some() || !pokes.is_empty()
+        })
+        .boxed()
+}
+
+/// The byte ranges of `b` (ELF64, little-endian) the loader reads first: the ELF header, the
+/// program header table, the dynamic table, the section header table.
+fn structure(b: &[u8]) -> Vec<(usize, usize)> {
+    let u16_at = |at: usize| u16::from_le_bytes([b[at], b[at + 1]]) as usize;
+    let u64_at = |at: usize| u64::from_le_bytes(b[at..at + 8].try_into().unwrap()) as usize;
+    let (phoff, phnum, shoff, shnum) = (u64_at(32), u16_at(56), u64_at(40), u16_at(60));
+    let mut out = vec![(0, 64), (phoff, phnum * 56), (shoff, shnum * 64)];
+    for k in 0..phnum {
+        let h = phoff + k * 56;
+        if u32::from_le_bytes(b[h..h + 4].try_into().unwrap()) == 2 {
+            out.push((u64_at(h + 8), u64_at(h + 32)));
+        }
+    }
+    out
+}
+
+/// Law libraries made from a real one — truncated anywhere, structure bytes overwritten, and
+/// a library built for another ABI — are refused with the file named, never loaded into a
+/// crash (the loader checks a file before the dynamic loader maps it).
+#[test]
+fn broken_law_libraries_are_refused_with_the_file_named() {
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200) * 4;
+    let root = std::env::temp_dir().join(format!("efsi-law-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&root).unwrap();
+    let good_path = efsi_laws_host::loader::resolve_law("neo_hookean", Path::new("."))
+        .expect("the shipped neo_hookean law is built (cargo build --workspace)");
+    let good = std::fs::read(&good_path).unwrap();
+    let counts = RefCell::new((0usize, 0usize, 0usize));
+    let start = std::time::Instant::now();
+    let result = runner(cases).run(
+        &broken_library(good.len(), structure(&good)),
+        |(cut, pokes)| {
+            let mut b = good.clone();
+            for (at, v) in pokes {
+                if at < b.len() {
+                    b[at] = v;
+                }
+            }
+            if let Some(n) = cut {
+                b.truncate(n);
+            }
+            let mut c = counts.borrow_mut();
+            c.0 += 1;
+            let lib = root.join(format!("libefsi_law_case{}.so", c.0));
+            std::fs::write(&lib, &b).unwrap();
+            match efsi_laws_host::describe(&lib) {
+                Err(e) => {
+                    c.1 += 1;
+                    let m = e.to_string();
+                    prop_assert!(m.contains(&lib.display().to_string()), "{}", m);
+                }
+                Ok(_) => c.2 += 1,
+            }
+            let _ = std::fs::remove_file(&lib);
+            Ok(())
+        },
+    );
+    let (all, refused, loaded) = counts.into_inner();
+    eprintln!(
+        "{all} broken law libraries in {:.2} s = {:.0} cases/s: {refused} refused, {loaded} loaded (bytes the loader does not use)",
+        start.elapsed().as_secs_f64(),
+        all as f64 / start.elapsed().as_secs_f64()
+    );
+    // Another ABI: the real test library built with a wrong version.
+    let bad_abi = efsi_laws_host::loader::search_dirs()
+        .iter()
+        .map(|d| {
+            d.join(format!(
+                "{}efsi_test_law_bad_abi{}",
+                std::env::consts::DLL_PREFIX,
+                std::env::consts::DLL_SUFFIX
+            ))
+        })
+        .find(|p| p.is_file());
+    if let Some(p) = bad_abi {
+        let e = efsi_laws_host::describe(&p).unwrap_err().to_string();
+        assert!(e.contains("ABI"), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&root);
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+    assert!(refused > all / 2, "{refused} of {all}");
 }
 
 /// A valid checkpoint of a small solid scene.
@@ -582,7 +851,7 @@ fn the_checkpoint_decoder_refuses_or_decodes_mutated_files() {
     let template = efsi_run::simulation(scene, Path::new("ck.ron"), &efsi_stages::builtin())
         .unwrap()
         .snapshot();
-    let cases = env("EFSI_RUN_FUZZ_CASES", 48) * 8;
+    let cases = env("EFSI_RUN_FUZZ_CASES", 200) * 8;
     let n = valid.len();
     // Mutations: bytes set (lengths and counts among them: 0, 0xff, small), a range cut out,
     // a range repeated, the file cut short; then resealed (or not).
@@ -674,7 +943,7 @@ fn defects_found_by_the_fuzzers_stay_fixed() {
     .unwrap_err()
     .to_string();
     assert!(
-        e.contains("solid.shape: Disk: center must be finite, got (NaN, 0.5)"),
+        e.contains("solid.shape.center: Disk: center must be finite, got (NaN, 0.5)"),
         "{e}"
     );
     // A fluid of viscosity 1e308 ran into a conjugate gradient "not converged in 0 iterations

@@ -6,7 +6,9 @@
 //! non-finite values, collapsing step; the last good state is saved as VTK and checkpoint),
 //! 130 stopped by SIGINT and 143 by SIGTERM (128 + signal number, the shell convention).
 //!
-//! **Signals.** During `run` and `resume`, SIGINT (Ctrl-C) or SIGTERM ends the run at the end of
+//! **Signals.** SIGXFSZ is ignored: a write past a file-size limit (`ulimit -f`) fails with
+//! EFBIG, and the run stops as on a full disk (exit code 1, a checkpoint to resume from,
+//! `run.json` saying why). During `run` and `resume`, SIGINT (Ctrl-C) or SIGTERM ends the run at the end of
 //! the current step: it writes a checkpoint (`DIR/checkpoint/latest.efsick`), leaves the VTK
 //! files, `fields.pvd` and `probes.csv` complete and `run.json` saying `Interrupted`, and exits
 //! with 130 / 143; `efsi resume DIR` continues it. A second signal while stopping exits at once.
@@ -23,6 +25,7 @@ mod plot;
 
 use clap::{Parser, Subcommand};
 use efsi_core::{EfsiError, Override, Scene, Simulation};
+use efsi_laws_host::Listed;
 use efsi_run::SceneOutput;
 use efsi_run::SceneOverrides as _;
 use efsi_run::run::{Progress, RunOptions, RunOutcome, StopReason, resume, run_with};
@@ -87,7 +90,8 @@ enum Command {
         /// when a step fails.
         #[arg(long, value_name = "T")]
         checkpoint_every: Option<f64>,
-        /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores).
+        /// Worker threads of the parallel stages (default: $RAYON_NUM_THREADS, else all cores; at
+        /// most 4 per core).
         #[arg(long)]
         threads: Option<usize>,
         /// Replace the outputs of an earlier run in the output folder (run.json, probes.csv,
@@ -181,6 +185,13 @@ fn load(path: &Path, overrides: &[Override]) -> Result<Simulation, EfsiError> {
 }
 
 fn main() -> ExitCode {
+    // Past a file-size limit a write fails with EFBIG instead of the signal killing the
+    // process: the run then stops as on a full disk, with its checkpoint and run.json.
+    // SAFETY: setting a signal's disposition to SIG_IGN before any thread starts.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { scene, overrides } => load(&scene, &overrides.list()).map(|sim| {
@@ -209,9 +220,16 @@ fn main() -> ExitCode {
         } => {
             // The run loop runs on a worker of the pool, so the stages' parallel loops start
             // from inside it (cheaper than injecting each from outside, and allocation-free).
+            let threads = match efsi_run::setup::worker_threads(threads, "--threads") {
+                Ok(n) => n,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(e.exit_code() as u8);
+                }
+            };
             let mut pool = rayon::ThreadPoolBuilder::new();
             if let Some(n) = threads {
-                pool = pool.num_threads(n.max(1));
+                pool = pool.num_threads(n);
             }
             match pool.build() {
                 Ok(pool) => pool.install(|| {
@@ -235,9 +253,16 @@ fn main() -> ExitCode {
             dir,
             checkpoint_every,
             quiet,
-        } => match rayon::ThreadPoolBuilder::new().build() {
-            Ok(pool) => pool.install(|| resume_run(&dir, quiet, checkpoint_every)),
-            Err(e) => {
+        } => match efsi_run::setup::worker_threads(None, "--threads").map(|n| {
+            let pool = rayon::ThreadPoolBuilder::new();
+            match n {
+                Some(n) => pool.num_threads(n).build(),
+                None => pool.build(),
+            }
+        }) {
+            Err(e) => Err(e),
+            Ok(Ok(pool)) => pool.install(|| resume_run(&dir, quiet, checkpoint_every)),
+            Ok(Err(e)) => {
                 eprintln!("error: cannot start the worker threads: {e}");
                 return ExitCode::from(1);
             }
@@ -461,7 +486,11 @@ fn report(sim: &Simulation, outcome: &RunOutcome, dir: &Path) -> Option<usize> {
 /// `efsi describe-output DIR`: the `vtk` section of `DIR/run.json` as text.
 fn describe_output(dir: &Path) -> Result<String, String> {
     let path = dir.join("run.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = efsi_run::output::read::read_regular_text(
+        &path,
+        efsi_run::output::read::MAX_RUN_JSON_BYTES,
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
     let vtk = json.get("vtk").ok_or_else(|| {
@@ -510,8 +539,9 @@ fn check_laws(paths: &[PathBuf]) -> ExitCode {
     if libraries.is_empty() {
         for law in efsi_laws_host::list_laws(&[]) {
             match law {
-                Ok(info) => libraries.push(info.path),
-                Err(e) => {
+                Listed::Law(info) => libraries.push(info.path),
+                Listed::Skipped(e) => eprintln!("warning: skipped {e}"),
+                Listed::Failed(e) => {
                     eprintln!("error: {e}");
                     failed = true;
                 }
@@ -581,7 +611,9 @@ fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
     }
 }
 
-/// `efsi laws`: describes every law found; exit code 2 if any library could not be read.
+/// `efsi laws`: describes every law found; a file on the search path that cannot be trusted
+/// (truncated, corrupted, another ABI) is skipped with a warning naming it and why; exit code 2
+/// if a library given could not be read.
 fn list_laws(paths: &[PathBuf]) -> ExitCode {
     let laws = efsi_laws_host::list_laws(paths);
     if laws.is_empty() {
@@ -597,11 +629,12 @@ fn list_laws(paths: &[PathBuf]) -> ExitCode {
     let mut failed = false;
     for law in laws {
         match law {
-            Ok(info) => {
+            Listed::Law(info) => {
                 use std::io::Write as _;
                 let _ = write!(std::io::stdout(), "{info}");
             }
-            Err(e) => {
+            Listed::Skipped(e) => eprintln!("warning: skipped {e}"),
+            Listed::Failed(e) => {
                 eprintln!("error: {e}");
                 failed = true;
             }

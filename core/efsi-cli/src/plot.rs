@@ -53,6 +53,13 @@ pub struct FieldRequest {
 
 /// Draw the plots of the run in `dir` into `out`; returns the files written.
 pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBuf>, String> {
+    if let Some(t) = request.time
+        && !t.is_finite()
+    {
+        return Err(format!(
+            "--time must be a finite time (the nearest output time is plotted), got {t}"
+        ));
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     if !font() {
         eprintln!(
@@ -104,7 +111,9 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
 
 /// `probes.csv` as column names and columns (the first is `t`).
 fn read_probes(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text =
+        efsi_run::output::read::read_regular_text(path, efsi_run::output::read::MAX_PROBES_BYTES)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
     let mut lines = text.lines();
     let header: Vec<String> = lines
         .next()

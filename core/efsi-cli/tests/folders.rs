@@ -55,12 +55,44 @@ fn a_checkpoint_from_another_run_is_refused_on_resume() {
     // Nothing of B was touched.
     assert_eq!(std::fs::read(b.join("probes.csv")).unwrap(), probes_b);
     assert_eq!(std::fs::read(b.join("run.json")).unwrap(), json_b);
-    // Without a run.json nothing ties the checkpoint to the folder's outputs either.
+    // B's run.json edited to name A's run (issue 44 item 16): the checkpoint is bound to A's
+    // probes.csv too, and B's differs.
+    let json_a: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("run.json")).unwrap()).unwrap();
+    let id_a = json_a["run_id"].as_str().unwrap();
+    let forged = String::from_utf8(json_b.clone())
+        .unwrap()
+        .replace(&id_b, id_a);
+    std::fs::write(b.join("run.json"), &forged).unwrap();
+    let o = efsi(&["resume", b.to_str().unwrap(), "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("probes.csv: its first ")
+            && err.contains(
+                "bytes are not the rows the checkpoint's run wrote: the checkpoint belongs to another run's folder"
+            ),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(b.join("probes.csv")).unwrap(), probes_b);
+    // Without a run.json nothing ties the checkpoint to the folder's outputs either; a
+    // run.json that is a device is not read (issue 44 item 8).
     std::fs::remove_file(b.join("run.json")).unwrap();
     let o = efsi(&["resume", b.to_str().unwrap(), "-q"]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("run.json is missing or names no run"), "{err}");
+    assert!(
+        err.contains("run.json cannot be read (") && err.contains("No such file"),
+        "{err}"
+    );
+    std::os::unix::fs::symlink("/dev/zero", b.join("run.json")).unwrap();
+    let o = efsi(&["resume", b.to_str().unwrap(), "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("run.json cannot be read (not a regular file (a device, a pipe or a socket))"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -125,7 +125,10 @@ impl BoundarySet {
             return Err(format!("{side:?} is not a moving wall"));
         }
         if !speed.is_finite() {
-            return Err(format!("the wall speed must be finite, got {speed}"));
+            return Err(format!(
+                "the wall speed must be finite, got {}",
+                crate::scene::num(speed)
+            ));
         }
         self.speeds[side as usize].store(speed.to_bits(), Ordering::Relaxed);
         Ok(())

@@ -37,7 +37,7 @@ pub fn attribute(
     match blame(overrides, &field, FIELD_ALIASES) {
         Some(o) => SceneError::Override {
             path: path.to_path_buf(),
-            setting: o.to_string(),
+            setting: o.brief(),
             message: format!("{field}: {message}"),
         },
         None => SceneError::Invalid {

@@ -212,13 +212,14 @@ impl Simulation {
         self.velocity_scale = velocity_scale;
     }
 
-    /// The Δt for the next step, at most `until − t` (to land on an output time or the end).
-    pub fn next_dt(&self, until: f64) -> Result<f64, EfsiError> {
+    /// The step the scene's limits allow next, before it is shortened to land on `until`, and
+    /// what sets it: `time.fixed_dt`, else the smallest of the stages' stability limits (or
+    /// the advective CFL limit) and `time.dt_max`, else the time left to `until`.
+    pub fn step_limit(&self, until: f64) -> (f64, String) {
         let t = &self.scene.time;
         let remaining = until - self.state.t;
         let h = self.grid.dx.min(self.grid.dy);
-        // Each candidate limit with what sets it (for the message when Δt collapses).
-        let (dt, cause) = if let Some(fixed) = t.fixed_dt {
+        if let Some(fixed) = t.fixed_dt {
             (fixed, "time.fixed_dt".to_string())
         } else {
             let stage = self
@@ -251,7 +252,14 @@ impl Simulation {
                 .flatten()
                 .reduce(|a, b| if b.0 < a.0 { b } else { a })
                 .unwrap_or((remaining, "the time left".to_string()))
-        };
+        }
+    }
+
+    /// The Δt for the next step, at most `until − t` (to land on an output time or the end).
+    pub fn next_dt(&self, until: f64) -> Result<f64, EfsiError> {
+        let t = &self.scene.time;
+        let remaining = until - self.state.t;
+        let (dt, cause) = self.step_limit(until);
         let dt_min = t.dt_min_or_default();
         if dt.is_nan() || dt < dt_min {
             let floor = if t.dt_min.is_some() {

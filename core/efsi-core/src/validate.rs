@@ -13,6 +13,23 @@ pub type Failure = (String, String);
 /// A check: nothing, or a [`Failure`].
 pub type Checked = Result<(), Failure>;
 
+/// The longest scene name (bytes): it names a folder and the files in it (`<name>_<step>.vtr`),
+/// which file systems limit to 255 bytes.
+pub const MAX_NAME_BYTES: usize = 200;
+
+/// The fewest cells a grid may have between two sides that are not periodic: the stages'
+/// differences need a neighbour (a single cell has no inside face across that direction, and
+/// the VOF stage needs 2 × 2). One cell is allowed across a periodic direction (a flow that
+/// does not vary along it).
+pub const MIN_CELLS_ACROSS: usize = 2;
+
+/// The smallest cell size (1e-150): its square and the inverse square the viscous and
+/// pressure systems hold stay finite and normal.
+pub const MIN_CELL_SIZE: f64 = 1e-150;
+
+/// The largest cell size (1e150), for the same reason.
+pub const MAX_CELL_SIZE: f64 = 1e150;
+
 /// The failure of the setting at `field` (its path), saying `msg`.
 pub fn err<T>(field: &str, msg: impl Into<String>) -> Result<T, Failure> {
     Err((field.to_string(), msg.into()))
@@ -82,6 +99,7 @@ impl Scene {
         // The name is a folder (`out/<name>/`) and a file stem: nothing that leaves the folder,
         // names it again or breaks a line.
         if self.name.trim().is_empty()
+            || self.name.len() > MAX_NAME_BYTES
             || self.name.contains(['/', '\\'])
             || self.name.chars().any(char::is_control)
             || self.name.trim_matches('.').is_empty()
@@ -90,8 +108,9 @@ impl Scene {
                 "name",
                 format!(
                     "must be a non-empty name without path separators or control characters, \
-                     and not `.` or `..` (it names the output folder out/<name>/), got {:?}",
-                    self.name
+                     and not `.` or `..`, of at most {MAX_NAME_BYTES} bytes (it names the output \
+                     folder out/<name>/ and its files), got {:?}",
+                    efsi_ron_edit::elide_text(&self.name)
                 ),
             );
         }
@@ -104,7 +123,22 @@ impl Scene {
             if !(a.is_finite() && b.is_finite() && b > a) {
                 return err(
                     f,
-                    format!("must be (min, max) with max > min, got ({a}, {b})"),
+                    format!(
+                        "must be (min, max) with max > min, got ({}, {})",
+                        num(a),
+                        num(b)
+                    ),
+                );
+            }
+            if !(b - a).is_finite() {
+                return err(
+                    f,
+                    format!(
+                        "its extent {} − {} overflows: the domain must be narrower than {:e}",
+                        num(b),
+                        num(a),
+                        f64::MAX
+                    ),
                 );
             }
         }
@@ -117,17 +151,64 @@ impl Scene {
                 ),
             );
         }
-        for (f, n) in [("grid.nx", self.grid.nx), ("grid.ny", self.grid.ny)] {
-            if n == 0 {
-                return err(f, "must be at least 1 cell, got 0");
-            }
-        }
         if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
             return err(
                 "grid",
                 "more than 1e8 cells is beyond a 2-D run on this machine",
             );
         }
+        let b = &self.boundaries;
+        for (f, n, periodic, (lo, hi), d) in [
+            (
+                "grid.nx",
+                self.grid.nx,
+                b.x_min == Boundary::Periodic,
+                self.domain.x,
+                "domain.x",
+            ),
+            (
+                "grid.ny",
+                self.grid.ny,
+                b.y_min == Boundary::Periodic,
+                self.domain.y,
+                "domain.y",
+            ),
+        ] {
+            if n == 0 {
+                return err(f, "must be at least 1 cell, got 0");
+            }
+            if n < MIN_CELLS_ACROSS && !periodic {
+                return err(
+                    f,
+                    format!(
+                        "must be at least {MIN_CELLS_ACROSS} cells between sides that are not \
+                         periodic (the stages' differences need a neighbour; one cell has no \
+                         face inside), got {n}"
+                    ),
+                );
+            }
+            // Cell sizes whose square (the viscous and pressure systems' 1/h²) over- or
+            // underflows, or too small against the coordinates to tell cells apart.
+            let h = (hi - lo) / n as f64;
+            let scale = lo.abs().max(hi.abs());
+            if !(MIN_CELL_SIZE..=MAX_CELL_SIZE).contains(&h) || h < 1e3 * f64::EPSILON * scale {
+                return err(
+                    d,
+                    format!(
+                        "({}, {}) with {f} = {n} gives cells of size {}: a cell size must be \
+                         in [{:e}, {:e}] (its square and inverse square finite) and at least \
+                         {:e} of the coordinates (else neighbouring cells round to one position)",
+                        num(lo),
+                        num(hi),
+                        num(h),
+                        MIN_CELL_SIZE,
+                        MAX_CELL_SIZE,
+                        1e3 * f64::EPSILON
+                    ),
+                );
+            }
+        }
+
         Ok(())
     }
 

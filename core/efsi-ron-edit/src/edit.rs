@@ -249,7 +249,10 @@ pub(crate) fn render(value: &Value, target: Option<Atom>) -> Result<String, Stri
                     _ => Ok(t.to_string()),
                 },
                 Err(_) if target == Some(Atom::Str) => Ok(ron_string(t)),
-                Err((at, m)) => Err(format!("the value `{t}` is not RON: {m} (at byte {at})")),
+                Err((at, m)) => Err(format!(
+                    "the value `{}` is not RON: {m} (at byte {at})",
+                    crate::elide(t)
+                )),
             }
         }
     }

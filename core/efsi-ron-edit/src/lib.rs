@@ -27,6 +27,11 @@ mod tree;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// How deep values may nest in the text this crate reads: a document, or a value to set (the
+/// scene reader's own limit, `efsi_core::scene::RECURSION_LIMIT`). Deeper text is refused
+/// with an error rather than read by recursion without bound.
+pub const MAX_DEPTH: usize = 128;
+
 /// Field-name aliases as `(alias, canonical)`: a path or a struct field may use either.
 pub type Aliases = &'static [(&'static str, &'static str)];
 
@@ -92,6 +97,37 @@ impl fmt::Display for Value {
             Value::Ron(t) => f.write_str(t),
         }
     }
+}
+
+/// A number for a message or a record: plain where that is short (`0.05`, `128`), else in
+/// exponent form, shortest round trip (`1e308`, `5e-324`, not 309 digits).
+pub fn number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// `text` for a message: whole when short, else its first 60 characters, `…` and its length
+/// (a value of megabytes, or nested thousands of levels, must not become the message).
+pub(crate) fn elide(text: &str) -> std::borrow::Cow<'_, str> {
+    const SHOWN: usize = 60;
+    match text.char_indices().nth(SHOWN + 20) {
+        None => text.into(),
+        Some(_) => {
+            let cut = text
+                .char_indices()
+                .nth(SHOWN)
+                .map_or(text.len(), |(i, _)| i);
+            format!("{}… ({} characters)", &text[..cut], text.chars().count()).into()
+        }
+    }
+}
+
+/// [`elide`] for other crates' messages: `text` whole when short, else cut with its length.
+pub fn elide_text(text: &str) -> String {
+    elide(text).into_owned()
 }
 
 /// A path to a value: keys (aliases resolved) and indices.

@@ -45,6 +45,13 @@ impl Override {
         Ok(Override::set(path, Value::Ron(value.to_string())))
     }
 
+    /// The override for a message: as [`Display`](fmt::Display) shows it, with a long value
+    /// cut short (a value of thousands of characters must not become the message; records
+    /// keep the whole text).
+    pub fn brief(&self) -> String {
+        crate::elide(&self.to_string()).into_owned()
+    }
+
     /// The setting it changes, `aliases` resolved (`grid` for a refinement).
     pub fn path(&self, aliases: Aliases) -> Path {
         match self {
@@ -59,7 +66,7 @@ impl fmt::Display for Override {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Override::Set { path, value } => write!(f, "set {path}={value}"),
-            Override::Refine(x) => write!(f, "refine {x}"),
+            Override::Refine(x) => write!(f, "refine {}", crate::number(*x)),
         }
     }
 }

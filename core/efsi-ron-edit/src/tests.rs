@@ -106,3 +106,41 @@ fn paths_overlap_when_one_holds_the_other() {
     assert!(!Path::default().overlaps(&p("grid")));
     assert_eq!(p("output.probes[2].at").to_string(), "output.probes[2].at");
 }
+
+/// Text nested deeper than [`MAX_DEPTH`] is refused with a message, whatever its depth (the
+/// parser must not run off its stack), and text at the limit is read.
+#[test]
+fn nesting_is_capped_at_the_scene_readers_limit() {
+    let nested = |n: usize| format!("{}1{}", "(".repeat(n), ")".repeat(n));
+    assert!(parse_ron(&nested(MAX_DEPTH)).is_ok());
+    for n in [MAX_DEPTH + 1, 10_000, 1_000_000] {
+        let (at, m) = parse_ron(&nested(n)).unwrap_err();
+        assert_eq!(at, MAX_DEPTH + 1, "{n}");
+        assert_eq!(
+            m,
+            "nested deeper than 128 levels, the most a scene may nest"
+        );
+    }
+    let lists = format!("{}{}", "[".repeat(10_000), "]".repeat(10_000));
+    assert!(parse_ron(&lists).unwrap_err().1.contains("nested deeper"));
+    let maps = "{1:".repeat(10_000);
+    assert!(parse_ron(&maps).unwrap_err().1.contains("nested deeper"));
+    // A value to set is read by the same parser; the message quotes it cut short.
+    let doc = Document::parse("S(a: (1, 2))", ALIASES).unwrap();
+    let e = doc
+        .set(
+            None,
+            &Path::parse("a", ALIASES).unwrap(),
+            &Value::Ron(nested(10_000)),
+        )
+        .unwrap_err();
+    assert!(e.contains("nested deeper than 128 levels"), "{e}");
+    assert!(e.contains("… (20001 characters)"), "{e}");
+    assert!(e.len() < 300, "{}", e.len());
+    let o = overrides::Override::set("a", Value::Ron(nested(10_000)));
+    assert_eq!(
+        o.brief().chars().count(),
+        60 + "… (20007 characters)".chars().count()
+    );
+    assert_eq!(o.to_string().len(), 20_007);
+}

@@ -95,6 +95,7 @@ pub(crate) fn parse_ron(text: &str) -> Result<Node, (usize, String)> {
     let mut p = Parser {
         s: text.as_bytes(),
         at: 0,
+        depth: 0,
     };
     p.skip();
     while p.s[p.at..].starts_with(b"#![") {
@@ -115,6 +116,8 @@ pub(crate) fn parse_ron(text: &str) -> Result<Node, (usize, String)> {
 pub(crate) struct Parser<'a> {
     s: &'a [u8],
     at: usize,
+    /// How many containers enclose the value being read (at most [`crate::MAX_DEPTH`]).
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -186,7 +189,26 @@ impl Parser<'_> {
             .to_string()
     }
 
+    /// One value; a container counts one level of nesting while its contents are read, and a
+    /// value nested deeper than [`crate::MAX_DEPTH`] is refused (the parser recurses once per
+    /// level, so the cap keeps it on its stack whatever the text).
     fn value(&mut self) -> Result<Node, (usize, String)> {
+        if self.depth > crate::MAX_DEPTH {
+            return Err((
+                self.at,
+                format!(
+                    "nested deeper than {} levels, the most a scene may nest",
+                    crate::MAX_DEPTH
+                ),
+            ));
+        }
+        self.depth += 1;
+        let node = self.value_here();
+        self.depth -= 1;
+        node
+    }
+
+    fn value_here(&mut self) -> Result<Node, (usize, String)> {
         self.skip();
         let start = self.at;
         let atom = |p: &Self, a| Node {

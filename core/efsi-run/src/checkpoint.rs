@@ -228,6 +228,10 @@ pub struct OutputState {
     /// refuses a checkpoint whose run is not the one of the folder it is resumed in. Empty
     /// where no output folder belongs to the snapshot (an FMU's state).
     pub run_id: String,
+    /// XXH3 (64-bit) of the first `probe_bytes` bytes of `probes.csv`: binds the checkpoint to
+    /// the folder's own files, so that a checkpoint put in another run's folder (its `run.json`
+    /// edited to match) is refused (0 where there is no folder).
+    pub probes_hash: u64,
 }
 
 /// A checkpoint: a [`Snapshot`] and what a resumed run checks and continues.

@@ -142,7 +142,7 @@ impl SceneOverrides for Scene {
         let mut scene = apply_sets(text, parsed, overrides, FIELD_ALIASES, hints, read).map_err(
             |(o, message)| SceneError::Override {
                 path: path.to_path_buf(),
-                setting: o.to_string(),
+                setting: o.brief(),
                 message,
             },
         )?;
@@ -150,7 +150,7 @@ impl SceneOverrides for Scene {
             if let Override::Refine(f) = o {
                 refine_grid(&mut scene, *f).map_err(|message| SceneError::Override {
                     path: path.to_path_buf(),
-                    setting: o.to_string(),
+                    setting: o.brief(),
                     message,
                 })?;
             }
@@ -290,7 +290,10 @@ fn with_defaults(scene: &Scene) -> String {
 
 fn refine_grid(scene: &mut Scene, f: f64) -> Result<(), String> {
     if !(f.is_finite() && f > 0.0) {
-        return Err(format!("the factor must be a finite number > 0, got {f}"));
+        return Err(format!(
+            "the factor must be a finite number > 0, got {}",
+            efsi_core::scene::num(f)
+        ));
     }
     let scale = |n: usize| ((n as f64) * f).round().clamp(1.0, 1e15) as usize;
     scene.grid.nx = scale(scene.grid.nx);
@@ -520,7 +523,9 @@ Scene(
         );
         refused(
             &[Override::set("solid.shape.radius", -1.0)],
-            &["set solid.shape.radius=-1.0: solid.shape:"],
+            &[
+                "set solid.shape.radius=-1.0: solid.shape.radius: Disk: radius must be finite and > 0, got -1",
+            ],
         );
         refused(
             &[Override::set("time.cfl", 2.0)],

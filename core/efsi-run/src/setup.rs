@@ -55,7 +55,39 @@ pub(crate) fn simulation_with(
     let spec = crate::output::spec::check(&sim.scene, path, sim.pipeline())?;
     sim.scene.set_output(&spec);
     sim.add_check(Box::new(crate::guard::EnergyGuard::default()));
+    first_step(&sim, path)?;
     Ok(sim)
+}
+
+/// A scene whose own limits set a first step below its smallest allowed step (`time.dt_min`,
+/// by default 1e-12·`time.end`) is refused before it runs, naming `time.dt_min` and the limit:
+/// that is a conflict between its settings, not an unstable run (nothing has moved yet).
+fn first_step(sim: &Simulation, path: &Path) -> Result<(), EfsiError> {
+    let t = &sim.scene.time;
+    let (dt, cause) = sim.step_limit(t.end);
+    let dt_min = t.dt_min_or_default();
+    if sim.state.step != 0 || dt.is_nan() || dt >= dt_min || dt <= 0.0 {
+        return Ok(());
+    }
+    use efsi_core::scene::num;
+    let floor = match t.dt_min {
+        Some(_) => format!("time.dt_min = {}", num(dt_min)),
+        None => format!(
+            "time.dt_min's default 1e-12·time.end = {} (time.end = {})",
+            num(dt_min),
+            num(t.end)
+        ),
+    };
+    Err(EfsiError::Config {
+        path: path.to_path_buf(),
+        field: "time.dt_min".into(),
+        message: format!(
+            "the first step, Δt = {}, set by {cause}, is below {floor}: every step would be \
+             refused before anything moves; set time.dt_min lower, or change the setting that \
+             limits Δt",
+            num(dt)
+        ),
+    })
 }
 
 /// Memory a run needs per grid cell, ghost layers included (bytes): the fields, the stages'
@@ -98,4 +130,50 @@ fn check_memory(scene: &Scene) -> Result<(), String> {
         available / 1e9,
         (available / need).sqrt() * 0.9
     ))
+}
+
+/// Worker threads per core a run may ask for ([`worker_threads`]): the stages' parallel loops
+/// gain nothing past one thread per core, and a few per core leave room for timing tests of
+/// oversubscription; thousands would only exhaust the process's threads and memory.
+pub const THREADS_PER_CORE: usize = 4;
+
+/// The worker threads a run asked for — `requested` (a `--threads` option), else
+/// `$RAYON_NUM_THREADS` — checked against [`THREADS_PER_CORE`] × this machine's cores; `None`:
+/// the default (one per core). A requested 0 is one thread; `$RAYON_NUM_THREADS=0` the
+/// default, as the thread pool reads it. The error names where the number came from, the number and the
+/// limit.
+pub fn worker_threads(requested: Option<usize>, option: &str) -> Result<Option<usize>, EfsiError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let limit = THREADS_PER_CORE * cores;
+    let (n, from) = match requested {
+        Some(n) => (n, option.to_string()),
+        None => match std::env::var("RAYON_NUM_THREADS") {
+            Ok(v) => match v.trim().parse::<usize>() {
+                Ok(n) => (n, "$RAYON_NUM_THREADS".to_string()),
+                Err(_) => {
+                    return Err(EfsiError::Config {
+                        path: "$RAYON_NUM_THREADS".into(),
+                        field: "worker threads".into(),
+                        message: format!("must be a whole number, got `{v}`"),
+                    });
+                }
+            },
+            Err(_) => return Ok(None),
+        },
+    };
+    if n > limit {
+        return Err(EfsiError::Config {
+            path: from.into(),
+            field: "worker threads".into(),
+            message: format!(
+                "{n} asked for, at most {limit} ({THREADS_PER_CORE} per core; this machine has {cores} cores)"
+            ),
+        });
+    }
+    Ok(match requested {
+        // At least one.
+        Some(n) => Some(n.max(1)),
+        // 0 is the thread pool's own default: one per core.
+        None => (n > 0).then_some(n),
+    })
 }

@@ -282,8 +282,11 @@ pub fn range_text(min: f64, max: f64, min_exclusive: bool, max_exclusive: bool) 
             "∞".to_string()
         } else if x == f64::NEG_INFINITY {
             "-∞".to_string()
-        } else {
+        } else if x == 0.0 || (1e-4..1e16).contains(&x.abs()) {
             format!("{x}")
+        } else {
+            // `1e308`, not 309 digits.
+            format!("{x:e}")
         }
     };
     let open = min_exclusive || min == f64::NEG_INFINITY;

@@ -28,7 +28,7 @@ use std::fmt;
 pub mod loader;
 
 pub use loader::{
-    FD_TANGENT_TOLERANCE, LawInfo, LoadedLaw, ParamInfo, TangentCheck, check_library,
+    FD_TANGENT_TOLERANCE, LawInfo, Listed, LoadedLaw, ParamInfo, TangentCheck, check_library,
     check_tangent, describe, list_laws, load_law,
 };
 

@@ -13,6 +13,7 @@ pub mod ops;
 pub mod projection;
 mod scratch;
 pub mod solid;
+mod verdict;
 pub mod viscous;
 mod viscous_operator;
 pub mod vof;

@@ -195,7 +195,21 @@ impl TimeSpec {
     pub fn dt_min_or_default(&self) -> f64 {
         self.dt_min.unwrap_or(1e-12 * self.end)
     }
+
+    /// The shortest output or checkpoint interval: [`dt_min_or_default`](Self::dt_min_or_default)
+    /// (a shorter interval would force shorter steps), and at least `end /`
+    /// [`MAX_EVENTS`]: a run has at most that many events of one kind, so that an event's time
+    /// `n·interval` is exact in `f64` and its count fits in any integer the run keeps — a
+    /// `dt_min` set far below the default must not let an interval of 1e-300 ask for 1e300
+    /// outputs.
+    pub fn shortest_interval(&self) -> f64 {
+        self.dt_min_or_default().max(self.end / MAX_EVENTS)
+    }
 }
+
+/// The most outputs (or checkpoints) of one kind a run may schedule over `time.end`: output and
+/// checkpoint intervals are at least `time.end / MAX_EVENTS` ([`TimeSpec::shortest_interval`]).
+pub const MAX_EVENTS: f64 = 1e12;
 
 /// A Newtonian fluid.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -426,11 +440,7 @@ pub const RECURSION_LIMIT: usize = 128;
 /// A number for a message: plain where that is short, else in exponent form (`1e308`, not 309
 /// digits).
 pub fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
+    efsi_ron_edit::number(v)
 }
 
 /// The largest diffusion number μ·time.end/(ρh²) a scene may reach (1e200): far beyond any

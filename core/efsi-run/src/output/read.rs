@@ -50,6 +50,54 @@ impl VtrData {
     }
 }
 
+/// The bytes of the regular file at `path`, at most `limit` of them: a device (`/dev/zero`), a
+/// pipe or a folder is refused before it is opened, and a file longer than `limit` is refused
+/// without reading past it — what a reader of a run's files must do, since any of them can be
+/// replaced by something endless. The error says what is wrong (the caller names the file).
+pub fn read_regular(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    let plain = |what: String| io::Error::new(io::ErrorKind::InvalidData, what);
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(plain(if meta.is_dir() {
+            "a folder, not a file".into()
+        } else {
+            "not a regular file (a device, a pipe or a socket)".into()
+        }));
+    }
+    let too_long = |n: u64| {
+        plain(format!(
+            "{n} bytes or more, more than the {limit} a file of its kind may have"
+        ))
+    };
+    if meta.len() > limit {
+        return Err(too_long(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_long(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// [`read_regular`] as UTF-8 text.
+pub fn read_regular_text(path: &Path, limit: u64) -> io::Result<String> {
+    String::from_utf8(read_regular(path, limit)?)
+        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
+/// The most bytes of a `run.json` read (64 MiB): it holds a scene (at most 4 MiB), its
+/// overrides and a few lines per stage.
+pub const MAX_RUN_JSON_BYTES: u64 = 64 << 20;
+/// The most bytes of a `.pvd` collection read (256 MiB: two million entries).
+pub const MAX_PVD_BYTES: u64 = 256 << 20;
+/// The most bytes of one `.vtr` file read (16 GiB: a 4096² grid's fields several times over).
+pub const MAX_VTR_BYTES: u64 = 16 << 30;
+/// The most bytes of a `probes.csv` read for a plot (1 GiB: millions of rows).
+pub const MAX_PROBES_BYTES: u64 = 1 << 30;
+
 fn bad(path: &Path, what: impl std::fmt::Display) -> io::Error {
     io::Error::new(
         io::ErrorKind::InvalidData,
@@ -67,7 +115,7 @@ fn attr<'a>(tag: &'a str, key: &str) -> Option<&'a str> {
 
 /// Read the `.vtr` file at `path`.
 pub fn read_vtr(path: &Path) -> io::Result<VtrData> {
-    let bytes = std::fs::read(path)?;
+    let bytes = read_regular(path, MAX_VTR_BYTES).map_err(|e| bad(path, e))?;
     let marker = b"<AppendedData encoding=\"raw\">";
     let at = bytes
         .windows(marker.len())
@@ -203,7 +251,7 @@ fn block(data: &[u8], offset: usize, zlib: bool) -> Result<Vec<u8>, String> {
 /// The `(time, file)` entries of the `.pvd` collection at `path`, the files resolved against
 /// its folder.
 pub fn read_pvd(path: &Path) -> io::Result<Vec<(f64, PathBuf)>> {
-    let text = std::fs::read_to_string(path)?;
+    let text = read_regular_text(path, MAX_PVD_BYTES).map_err(|e| bad(path, e))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut out = Vec::new();
     for l in text

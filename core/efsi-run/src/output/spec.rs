@@ -9,7 +9,7 @@
 //! changes it through [`SceneOutput`].
 
 use efsi_core::error::EfsiError;
-use efsi_core::scene::{Scene, Section, Side, num};
+use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
 use efsi_stages::solid::SceneSolid;
@@ -302,26 +302,41 @@ pub fn json(scene: &Scene) -> serde_json::Value {
     }
 }
 
+/// Why `every` cannot be an interval of outputs or checkpoints in a run timed by `time`, if it
+/// cannot: shorter than the smallest step (`time.dt_min`), or than `time.end /`
+/// [`MAX_EVENTS`](efsi_core::scene::MAX_EVENTS) ([`TimeSpec::shortest_interval`]).
+pub fn interval(time: &TimeSpec, every: f64) -> Result<(), String> {
+    let dt_min = time.dt_min_or_default();
+    if every < dt_min {
+        return Err(format!(
+            "must be at least time.dt_min = {dt_min:e} (the smallest step; by default \
+             1e-12·time.end), got {every:e}: shorter intervals would force shorter steps"
+        ));
+    }
+    let floor = time.shortest_interval();
+    if every < floor {
+        return Err(format!(
+            "must be at least time.end/{} = {}, got {}: a run has at most {} outputs of \
+             one kind",
+            num(MAX_EVENTS),
+            num(floor),
+            num(every),
+            num(MAX_EVENTS)
+        ));
+    }
+    Ok(())
+}
+
 /// The section's ranges and consistency with the scene: intervals, VTK options, probes and
 /// profiles.
 fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
-    let dt_min = scene.time.dt_min_or_default();
     for (f, v) in [
         ("output.vtk_every", o.vtk_every),
         ("output.probe_every", o.probe_every),
     ] {
         if let Some(v) = v {
             positive(f, v)?;
-            if v < dt_min {
-                return err(
-                    f,
-                    format!(
-                        "must be at least time.dt_min = {dt_min:e} (the smallest step; by \
-                         default 1e-12·time.end), got {v:e}: shorter intervals would force \
-                         shorter steps"
-                    ),
-                );
-            }
+            interval(&scene.time, v).or_else(|m| err(f, m))?;
         }
     }
     if let Some(fields) = &o.vtk.fields {
@@ -446,11 +461,18 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
         if !inside(*from) || !inside(*to) {
             return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
         }
-        for field in fields {
+        for (j, field) in fields.iter().enumerate() {
             if field == "solid_fraction" && scene.solid.is_none() {
                 return err(
                     &format!("{f}.fields"),
                     "solid_fraction needs a solid, and the scene has none",
+                );
+            }
+            // Each is a column of the profile's CSV: a repeated one would repeat a header name.
+            if fields[..j].contains(field) {
+                return err(
+                    &format!("{f}.fields[{j}]"),
+                    format!("`{field}` is listed twice (each field is one column of the CSV)"),
                 );
             }
         }
@@ -461,7 +483,7 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
             if !(t.is_finite() && *t >= 0.0 && *t <= scene.time.end) {
                 return err(
                     &format!("{f}.at"),
-                    format!("time {t} is outside [0, time.end]"),
+                    format!("time {} is outside [0, time.end]", num(*t)),
                 );
             }
         }

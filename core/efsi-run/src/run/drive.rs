@@ -2,6 +2,7 @@
 //! checkpoints after every step, and what a stop request, a failed step or a failed output
 //! leaves behind (a checkpoint, the last good state, `run.json`'s `"Failed"`).
 
+use super::room::Room;
 use super::{Outputs, Progress, RunOptions, RunOutcome, StopReason};
 use crate::checkpoint::{self, Checkpoint, LawIdentity, OutputState};
 use efsi_core::error::EfsiError;
@@ -9,6 +10,24 @@ use efsi_core::simulation::Simulation;
 use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The checkpoint of `snapshot` with the output bookkeeping `outputs`.
+fn checkpoint_of(
+    sim: &Simulation,
+    law: &Option<LawIdentity>,
+    outputs: OutputState,
+    snapshot: efsi_core::Snapshot,
+) -> Checkpoint {
+    Checkpoint {
+        efsi_version: env!("CARGO_PKG_VERSION").to_string(),
+        scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
+        scene_ron: sim.scene.to_ron(),
+        overrides: sim.scene.overrides.clone(),
+        law: law.clone(),
+        outputs,
+        snapshot,
+    }
+}
 
 /// Write the checkpoint of `snapshot` with the output bookkeeping `outputs`.
 fn save_checkpoint(
@@ -19,17 +38,42 @@ fn save_checkpoint(
     dir: &Path,
 ) -> Result<PathBuf, EfsiError> {
     let path = dir.join(checkpoint::LATEST);
-    let c = Checkpoint {
-        efsi_version: env!("CARGO_PKG_VERSION").to_string(),
-        scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
-        scene_ron: sim.scene.to_ron(),
-        overrides: sim.scene.overrides.clone(),
-        law: law.clone(),
-        outputs,
-        snapshot,
-    };
-    c.write(&path)?;
+    checkpoint_of(sim, law, outputs, snapshot).write(&path)?;
     Ok(path)
+}
+
+/// Keep room on disk for the run's last checkpoint and `run.json` ([`super::room`]), sized by
+/// the checkpoint of the current state and the `run.json` written.
+pub(super) fn make_room(
+    sim: &Simulation,
+    law: &Option<LawIdentity>,
+    out: &mut Outputs,
+) -> Result<(), EfsiError> {
+    let bytes = checkpoint::encode(&checkpoint_of(sim, law, out.state(), sim.snapshot())).len();
+    let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
+    let needed = Room::needed(bytes as u64, record);
+    let room = Room::keep(&out.dir, needed).map_err(|e| {
+        EfsiError::io(
+            out.dir.join("checkpoint").join("room"),
+            std::io::Error::new(
+                e.kind(),
+                format!("cannot keep {needed} bytes for the run's last checkpoint: {e}"),
+            ),
+        )
+    })?;
+    out.room = Some(room);
+    Ok(())
+}
+
+/// Grow the room after a checkpoint of `path` was written, if the checkpoint outgrew it.
+fn grow_room(out: &mut Outputs, path: &Path) -> Result<(), EfsiError> {
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
+    if let Some(room) = &mut out.room {
+        room.grow(Room::needed(bytes, record))
+            .map_err(|e| EfsiError::io(out.dir.join("checkpoint").join("room"), e))?;
+    }
+    Ok(())
 }
 
 /// The step loop shared by [`run_with`](super::run_with) and [`resume`](super::resume).
@@ -67,13 +111,9 @@ pub(super) fn drive(
                 wall: start.elapsed().as_secs_f64(),
             });
             if out.checkpoint_due(sim.state.t) {
-                latest = Some(save_checkpoint(
-                    sim,
-                    law,
-                    out.state(),
-                    sim.snapshot(),
-                    &out.dir,
-                )?);
+                let path = save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir)?;
+                grow_room(out, &path)?;
+                latest = Some(path);
             }
             Ok(if sim.is_steady() {
                 Flow::Stop
@@ -97,6 +137,8 @@ pub(super) fn drive(
                 break;
             }
             Ok(Advanced::Stopped { signal }) => {
+                // The run ends here: the room kept for this checkpoint is free.
+                out.release_room();
                 match save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir) {
                     Ok(c) => latest = Some(c),
                     Err(error) => return Err(failed(sim, out, start, first_step, error)),
@@ -106,6 +148,7 @@ pub(super) fn drive(
             }
             // The simulation is back at the start of the failed step: the last good state.
             Err(AdvanceError::Failed { error, good: true }) => {
+                out.release_room();
                 let good = sim.snapshot();
                 let error = save_failure(sim, out, law, good, error);
                 return Err(failed(sim, out, start, first_step, error));
@@ -113,6 +156,9 @@ pub(super) fn drive(
             // An output or a checkpoint could not be written after a good step: save the state
             // at the start of that step, whose outputs a resume writes again.
             Err(AdvanceError::Hook(error)) => {
+                // A full disk or a file-size limit, most likely: the room kept makes the
+                // checkpoint and run.json below possible.
+                out.release_room();
                 let error = match last_good.take() {
                     Some(good) => {
                         let (step, t) = (good.step(), good.t());
@@ -145,6 +191,7 @@ pub(super) fn drive(
         checkpoint: latest,
         warnings: out.warnings().to_vec(),
     };
+    out.release_room();
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
 }
@@ -153,11 +200,12 @@ pub(super) fn drive(
 /// and return it.
 fn failed(
     sim: &Simulation,
-    out: &Outputs,
+    out: &mut Outputs,
     start: Instant,
     first_step: u64,
     error: EfsiError,
 ) -> EfsiError {
+    out.release_room();
     let stop = serde_json::json!({ "Failed": { "error": error.to_string(), "exit_code": error.exit_code() } });
     let _ = out.write_run_json(
         sim,

@@ -34,16 +34,20 @@
 //! run the same way: the state at the start of that step is saved as the checkpoint, with the
 //! output bookkeeping as it was before that step's outputs, so a resume writes them again. A
 //! `probes.csv` append that fails part-way is cut back to the last whole row. Every failure is
-//! recorded in `run.json` (`"stop": {"Failed": {"error", "exit_code"}}`), as far as it can
-//! still be written.
+//! recorded in `run.json` (`"stop": {"Failed": {"error", "exit_code"}}`). Room for that last
+//! checkpoint and `run.json` is kept on disk from the start of the run ([`room`]:
+//! `checkpoint/room`, freed before they are written), so a full disk or a file-size limit
+//! (`EFBIG`; the CLI ignores SIGXFSZ so that such a write fails rather than killing it) still
+//! leaves a run that can be resumed and a record of why it stopped.
 //!
 //! **One run per folder.** A run holds the folder's lock ([`crate::lock`]) while it writes;
 //! `run.json` is written at the start (`"stop": "Running"`) with the run's identity (`run_id`),
 //! which its checkpoints record too. A folder holding an earlier run's outputs is refused unless
 //! [`RunOptions::overwrite`].
 //!
-//! **Intervals.** Output and checkpoint intervals are at least `time.dt_min` (validated), and
-//! the number of events due at a time is computed, not counted one period at a time.
+//! **Intervals.** Output and checkpoint intervals are at least `time.dt_min` and at least
+//! `time.end / 1e12` (validated; [`efsi_core::scene::TimeSpec::shortest_interval`]), and the
+//! number of events due at a time is computed, not counted one period at a time.
 //!
 //! [`resume`] continues a run from its latest checkpoint, appending to the same outputs, after
 //! checking that the checkpoint's run is the folder's (its `run.json`).
@@ -64,6 +68,7 @@ mod drive;
 mod folder;
 mod outputs;
 mod record;
+mod room;
 
 use drive::drive;
 pub use outputs::Outputs;
@@ -185,24 +190,29 @@ pub fn run_with(
     let law = checkpoint::law_identity(&sim.scene)?;
     let mut out = Outputs::new(sim, dir, options.checkpoint_every, options.overwrite)?;
     out.write_run_json(sim, serde_json::json!("Running"), 0, None, 0.0)?;
+    drive::make_room(sim, &law, &mut out)?;
     out.emit(sim, false)?;
     drive(sim, &mut out, &law, options, progress, start, None)
 }
 
-/// A checkpoint interval must be at least the scene's smallest step (`time.dt_min`, default
-/// 1e-12·`time.end`): below it, checkpoints could not be told apart from one step to the next.
+/// A checkpoint interval is bounded as an output interval is
+/// ([`crate::output::spec::interval`]): at least the scene's smallest step (`time.dt_min`,
+/// default 1e-12·`time.end`; below it, checkpoints could not be told apart from one step to the
+/// next) and at least `time.end / 1e12`.
 fn check_checkpoint_every(sim: &Simulation, every: Option<f64>) -> Result<(), EfsiError> {
     let Some(e) = every else { return Ok(()) };
-    let floor = sim.scene.time.dt_min_or_default();
-    if e.is_finite() && e >= floor {
-        return Ok(());
-    }
-    Err(EfsiError::Config {
+    let checked = if e.is_finite() {
+        crate::output::spec::interval(&sim.scene.time, e)
+    } else {
+        Err(format!(
+            "must be a finite time, got {}",
+            efsi_core::scene::num(e)
+        ))
+    };
+    checked.map_err(|message| EfsiError::Config {
         path: PathBuf::from("--checkpoint-every"),
         field: "checkpoint_every".into(),
-        message: format!(
-            "must be a time of at least time.dt_min = {floor:e} (the smallest step), got {e:e}"
-        ),
+        message,
     })
 }
 
@@ -236,14 +246,11 @@ pub fn resume(
     }
     let file = CheckpointFile::read(&path)?;
     match recorded_run_id(dir) {
-        Some(id) if id == file.outputs.run_id => {}
+        Ok(id) if id == file.outputs.run_id => {}
         recorded => {
             let folder = match recorded {
-                Some(id) => format!("this folder's run.json is of run {id}"),
-                None => format!(
-                    "{} is missing or names no run",
-                    dir.join("run.json").display()
-                ),
+                Ok(id) => format!("this folder's run.json is of run {id}"),
+                Err(why) => why,
             };
             return Err(EfsiError::Checkpoint {
                 what,
@@ -283,6 +290,7 @@ pub fn resume(
         Some(snapshot.step()),
         0.0,
     )?;
+    drive::make_room(&sim, &law, &mut out)?;
     let outcome = drive(&mut sim, &mut out, &law, &options, progress, start, from)?;
     Ok((sim, outcome))
 }

@@ -5,11 +5,12 @@
 use super::folder::{earlier_outputs, make_dirs, open_append, probe_header, replace_earlier_run};
 use super::record::new_run_id;
 use super::time_label;
-use crate::checkpoint::OutputState;
+use crate::checkpoint::{self, OutputState};
 use crate::lock::FolderLock;
 use crate::output::spec::{ProbeSpec, ProfileSpec};
 use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
 use crate::probes;
+use xxhash_rust::xxh3::Xxh3;
 use efsi_core::due;
 use efsi_core::error::EfsiError;
 use efsi_core::grid::Grid;
@@ -34,6 +35,9 @@ pub struct Outputs {
     probe_path: PathBuf,
     probe_file: File,
     probe_bytes: u64,
+    /// XXH3 of `probes.csv`'s `probe_bytes` bytes, fed as rows are appended (its digest is
+    /// [`OutputState::probes_hash`]).
+    probes_hash: Xxh3,
     row: Vec<f64>,
     profiles: Vec<(ProfileSpec, Vec<f64>)>,
     end: f64,
@@ -43,6 +47,8 @@ pub struct Outputs {
     pub(super) run_id: String,
     /// The bookkeeping at the start of the latest [`Outputs::emit`] (see [`Outputs::state_before_emit`]).
     mark: Mark,
+    /// The room kept for the last checkpoint and `run.json` ([`super::room`]), once made.
+    pub(super) room: Option<super::room::Room>,
     _lock: FolderLock,
 }
 
@@ -53,6 +59,7 @@ struct Mark {
     vtk_count: u64,
     probe_count: u64,
     probe_bytes: u64,
+    probes_hash: u64,
     pvd_len: usize,
     checkpoint_count: u64,
     /// Profile times written by the call: (profile, time).
@@ -61,17 +68,33 @@ struct Mark {
 
 /// The number of events of period `every` due by time `t` ([`due`]), at least `count`: the
 /// smallest `n ≥ count` whose event `n·every` is not yet due. Computed, not counted, so that a
-/// period tiny against `t` costs nothing.
+/// period tiny against `t` costs nothing: whatever the arguments, a bounded number of steps.
 fn events_due(t: f64, every: f64, count: u64) -> u64 {
-    // `due(t, x)` holds for x ≤ t / (1 − 1e-9) (x not tiny): start there, then correct the
-    // rounding by single steps.
-    let mut n = (t / (every * (1.0 - 1e-9))).floor().max(0.0) as u64;
-    n = n.saturating_add(1).max(count);
-    while n > count && !due(t, (n - 1) as f64 * every) {
-        n -= 1;
+    // `due(t, x)` holds for x ≤ t / (1 − 1e-9) when x ≥ 1e-12, and for x ≤ t + 1e-21 below
+    // (its absolute floor): start past the latest such x, then correct the rounding by single
+    // steps. The start is capped at 2⁵³, where n·every stops being exact.
+    const EXACT: f64 = 9_007_199_254_740_992.0;
+    let reach = (t / (1.0 - 1e-9)).max((t + 1e-21).min(1e-12));
+    let start = (reach / every).floor() + 1.0;
+    let mut n = if start >= 0.0 {
+        start.min(EXACT) as u64
+    } else {
+        0
     }
-    while due(t, n as f64 * every) {
-        n += 1;
+    .max(count);
+    for _ in 0..64 {
+        if n > count && !due(t, (n - 1) as f64 * every) {
+            n -= 1;
+        } else {
+            break;
+        }
+    }
+    for _ in 0..64 {
+        if due(t, n as f64 * every) {
+            n = n.saturating_add(1);
+        } else {
+            break;
+        }
     }
     n
 }
@@ -122,6 +145,7 @@ impl Outputs {
             probe_file: open_append(&probe_path)?,
             probe_path,
             probe_bytes: header.len() as u64,
+            probes_hash: hasher_of(header.as_bytes()),
             row: Vec::new(),
             profiles,
             end: sim.scene.time.end,
@@ -130,6 +154,7 @@ impl Outputs {
             warnings: Vec::new(),
             run_id: new_run_id(dir),
             mark: Mark::default(),
+            room: None,
             _lock: lock,
         })
     }
@@ -172,6 +197,20 @@ impl Outputs {
                 state.probe_bytes
             )));
         }
+        // The rows the checkpoint's run wrote must be this file's: a checkpoint carried into
+        // another run's folder (its run.json edited to match) continues nothing here.
+        let mut kept = Vec::new();
+        File::open(&probe_path)
+            .and_then(|f| f.take(state.probe_bytes).read_to_end(&mut kept))
+            .map_err(|e| EfsiError::io(&probe_path, e))?;
+        let probes_hash = hasher_of(&kept);
+        if probes_hash.digest() != state.probes_hash {
+            return Err(fail(format!(
+                "its first {} bytes are not the rows the checkpoint's run wrote: the checkpoint \
+                 belongs to another run's folder; resume in the folder it was written in",
+                state.probe_bytes
+            )));
+        }
         let file = open_append(&probe_path)?;
         file.set_len(state.probe_bytes)
             .map_err(|e| EfsiError::io(&probe_path, e))?;
@@ -206,6 +245,7 @@ impl Outputs {
             probe_file: file,
             probe_path,
             probe_bytes: state.probe_bytes,
+            probes_hash,
             row: Vec::new(),
             profiles,
             end: sim.scene.time.end,
@@ -214,6 +254,7 @@ impl Outputs {
             warnings: Vec::new(),
             run_id: state.run_id.clone(),
             mark: Mark::default(),
+            room: None,
             _lock: lock,
         })
     }
@@ -229,6 +270,7 @@ impl Outputs {
             checkpoint_every: self.checkpoint_every,
             checkpoint_count: self.checkpoint_count,
             run_id: self.run_id.clone(),
+            probes_hash: self.probes_hash.digest(),
         }
     }
 
@@ -240,6 +282,7 @@ impl Outputs {
         s.vtk_count = m.vtk_count;
         s.probe_count = m.probe_count;
         s.probe_bytes = m.probe_bytes;
+        s.probes_hash = m.probes_hash;
         s.pvd.truncate(m.pvd_len);
         s.checkpoint_count = m.checkpoint_count;
         for &(k, t) in m.popped.iter().rev() {
@@ -283,6 +326,7 @@ impl Outputs {
         self.mark.vtk_count = self.vtk_count;
         self.mark.probe_count = self.probe_count;
         self.mark.probe_bytes = self.probe_bytes;
+        self.mark.probes_hash = self.probes_hash.digest();
         self.mark.pvd_len = self.pvd.entries().len();
         self.mark.checkpoint_count = self.checkpoint_count;
         self.mark.popped.clear();
@@ -323,6 +367,7 @@ impl Outputs {
                 ));
             }
             self.probe_bytes += line.len() as u64;
+            self.probes_hash.update(line.as_bytes());
             if let Some(e) = self.probe_every {
                 self.probe_count = events_due(t, e, self.probe_count);
             }
@@ -434,6 +479,14 @@ impl Outputs {
         Ok(path)
     }
 
+    /// Free the room kept for the last checkpoint and `run.json` (before writing them after a
+    /// failure, or at the end).
+    pub(super) fn release_room(&mut self) {
+        if let Some(r) = &mut self.room {
+            r.release();
+        }
+    }
+
     /// What the outputs have to tell the user about this run (a profile written at the end
     /// instead of at its times), in the order it happened; also in `run.json`'s `warnings`.
     pub fn warnings(&self) -> &[String] {
@@ -478,5 +531,23 @@ mod tests {
         let n = events_due(1.0, 1e-12, 1);
         assert!(t0.elapsed().as_secs_f64() < 0.01);
         assert!(due(1.0, (n - 1) as f64 * 1e-12) && !due(1.0, n as f64 * 1e-12));
+        // Periods under `due`'s absolute floor (1e-21) at t = 0, periods of 1e-300 at any time,
+        // NaN: a bounded number of steps, at least the count.
+        for (t, e) in [(0.0, 1e-300), (1e-12, 1e-300), (1.0, 1e-300)] {
+            let n = events_due(t, e, 1);
+            assert!(
+                n > 1 << 53 && due(t, (n - 1) as f64 * e),
+                "t = {t}, e = {e}"
+            );
+        }
+        assert_eq!(events_due(1.0, f64::NAN, 7), 7);
+        assert_eq!(events_due(0.0, 1e-22, 0), counted(0.0, 1e-22, 0));
     }
+}
+
+/// An XXH3 hasher fed with `bytes` (a streamed hash equals the one-shot hash of all it was fed).
+fn hasher_of(bytes: &[u8]) -> Xxh3 {
+    let mut h = Xxh3::new();
+    h.update(bytes);
+    h
 }

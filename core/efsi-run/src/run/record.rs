@@ -5,7 +5,6 @@ use super::{Outputs, RunOutcome};
 use crate::checkpoint;
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
-use std::fs;
 use std::path::Path;
 
 /// A new run's identity: a hash of the clock, the process and the folder.
@@ -20,11 +19,19 @@ pub(super) fn new_run_id(dir: &Path) -> String {
     format!("{:016x}", checkpoint::content_hash(&bytes))
 }
 
-/// The run identity recorded in `dir/run.json`, if any.
-pub(super) fn recorded_run_id(dir: &Path) -> Option<String> {
-    let text = fs::read_to_string(dir.join("run.json")).ok()?;
-    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
-    Some(json.get("run_id")?.as_str()?.to_string())
+/// The run identity recorded in `dir/run.json`, or why there is none (the file cannot be read
+/// — absent, not a regular file, longer than a record can be — or names no run).
+pub(super) fn recorded_run_id(dir: &Path) -> Result<String, String> {
+    let path = dir.join("run.json");
+    let text =
+        crate::output::read::read_regular_text(&path, crate::output::read::MAX_RUN_JSON_BYTES)
+            .map_err(|e| format!("{} cannot be read ({e})", path.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| format!("{} is not a run record ({e})", path.display()))?;
+    json.get("run_id")
+        .and_then(|v| v.as_str())
+        .map(str::to_string)
+        .ok_or_else(|| format!("{} names no run", path.display()))
 }
 
 impl Outputs {

@@ -14,7 +14,8 @@
 //!    `libefsi_law_X.so` looked up in [`search_dirs`]: `$EFSI_LAW_PATH` (a `:`-separated list),
 //!    the running executable's folder, its parent and its `deps` subfolder, then `target/release`
 //!    and `target/debug` of the workspace efsi was built from.
-//! 2. **Open** it and check it: a library, with the entry symbol, built for this ABI version, with
+//! 2. **Open** it and check it: its file's ELF structure first ([`elf`]: a truncated or
+//!    corrupted file is refused, never handed to the dynamic loader), then a library with the entry symbol, built for this ABI version, with
 //!    the descriptor size this efsi expects, and a well-formed parameter table.
 //! 3. **Parameters**: every scene parameter must be declared (else the known ones are listed),
 //!    finite and in its range (name, value, range and unit in the message); the others take their
@@ -31,6 +32,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod elf;
 mod law;
 mod open;
 mod params;
@@ -179,9 +181,25 @@ pub fn describe(path: &Path) -> Result<LawInfo, LawError> {
     open(path, &label).map(|o| o.info)
 }
 
+/// One entry of a listing of laws ([`list_laws`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Listed {
+    /// A law library, described.
+    Law(LawInfo),
+    /// A file on the search path that looks like a shipped law (by its name) but cannot be
+    /// trusted or read — truncated, corrupted, another ABI: skipped, and why (a listing warns
+    /// and goes on; naming the law in a scene is refused with the same error).
+    Skipped(LawError),
+    /// A library given by path that could not be described: an error.
+    Failed(LawError),
+}
+
 /// Describes every shipped law found on the search path (the first of each name, in
-/// [`search_dirs`] order), then each library in `extra`.
-pub fn list_laws(extra: &[PathBuf]) -> Vec<Result<LawInfo, LawError>> {
+/// [`search_dirs`] order), then each library in `extra`. A file on the search path that cannot
+/// be described is [`Listed::Skipped`]; a library in `extra` that cannot is
+/// [`Listed::Failed`]. No file is handed to the dynamic loader before its structure is checked
+/// ([`elf`]), so a broken file on the path cannot end the listing.
+pub fn list_laws(extra: &[PathBuf]) -> Vec<Listed> {
     let prefix = format!("{}efsi_law_", std::env::consts::DLL_PREFIX);
     let suffix = std::env::consts::DLL_SUFFIX;
     let mut seen = std::collections::BTreeSet::new();
@@ -204,11 +222,15 @@ pub fn list_laws(extra: &[PathBuf]) -> Vec<Result<LawInfo, LawError>> {
         found.sort();
         for (name, path) in found {
             if seen.insert(name) {
-                out.push(describe(&path));
+                out.push(describe(&path).map_or_else(Listed::Skipped, Listed::Law));
             }
         }
     }
-    out.extend(extra.iter().map(|p| describe(p)));
+    out.extend(
+        extra
+            .iter()
+            .map(|p| describe(p).map_or_else(Listed::Failed, Listed::Law)),
+    );
     out
 }
 

@@ -1,5 +1,6 @@
-//! Opening a law library and checking it before anything else runs: the entry symbol, the ABI
-//! version and descriptor size, the strings and the parameter table of its descriptor.
+//! Opening a law library and checking it before anything else runs: its file's structure
+//! ([`super::elf`], before the dynamic loader sees it), the entry symbol, the ABI version and
+//! descriptor size, the strings and the parameter table of its descriptor.
 
 use super::LawInfo;
 use super::params::ParamInfo;
@@ -29,8 +30,16 @@ pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
         message,
         cell: None,
     };
+    // The loader maps the file as its headers say: a truncated or corrupted file would kill
+    // the process (SIGBUS, SIGSEGV) before any error could be reported.
+    super::elf::check_library_file(path).map_err(|why| {
+        fail(
+            &law,
+            format!("{} is not a loadable library: {why}", path.display()),
+        )
+    })?;
     // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
-    // (the user named it), and the checks below guard the ABI.
+    // (the user named it); its file was checked above, and the checks below guard the ABI.
     let library = unsafe { Library::new(path) }.map_err(|e| {
         // The loader's own words (`dlerror`) are the error's source, not its summary.
         let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
@@ -141,7 +150,7 @@ pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
                 format!(
                     "parameter `{}`'s declared default {} is outside its declared range {}",
                     info.name,
-                    info.default,
+                    super::number(info.default),
                     info.range_text()
                 ),
             ));

@@ -104,7 +104,7 @@ pub(super) fn instantiate(
             return Err(fail(
                 format!(
                     "parameter `{name}` = {} is out of range: allowed {} {}",
-                    p.with_unit(value),
+                    p.with_unit(super::number(value)),
                     p.range_text(),
                     p.unit
                 )
@@ -144,7 +144,7 @@ pub(super) fn describe_values(info: &LawInfo, values: &[f64]) -> String {
     info.parameters
         .iter()
         .zip(values)
-        .map(|(p, v)| format!("{} = {}", p.name, p.with_unit(v)))
+        .map(|(p, v)| format!("{} = {}", p.name, p.with_unit(super::number(*v))))
         .collect::<Vec<_>>()
         .join(", ")
 }

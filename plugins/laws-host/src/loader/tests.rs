@@ -48,3 +48,24 @@ fn range_text() {
     assert_eq!(p.range_text(), "(0, ∞)");
     assert!(!p.contains(0.0) && p.contains(1e9) && !p.contains(f64::INFINITY));
 }
+
+/// Every law library built beside the tests (the shipped laws and the test plugins) passes the
+/// file check that runs before `dlopen`; a copy cut short anywhere in its loadable bytes fails
+/// it.
+#[test]
+fn built_law_libraries_pass_the_file_check() {
+    let mut checked = 0;
+    for dir in search_dirs() {
+        for e in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+            let p = e.path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            if (name.starts_with("libefsi_law_") || name.starts_with("libefsi_test_law_"))
+                && name.ends_with(".so")
+            {
+                elf::check_library_file(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 3, "{checked} libraries found");
+}

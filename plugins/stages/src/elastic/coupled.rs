@@ -522,6 +522,20 @@ impl ElasticStage {
             } else {
                 worst
             };
+            let relative = mu / scale.max(f64::MIN_POSITIVE);
+            if relative >= 1.0 || relative.is_nan() {
+                return Err(err(
+                    "elastic",
+                    format!(
+                        "coupled step: FGMRES diverged: after {} iterations the momentum \
+                         residual is {relative:.3e} of the scale, no smaller than where it \
+                         started, so more iterations will not help (max |∇·V|·Δt {mc:.3e} \
+                         against {div_tol:.1e}); check the solid's parameters or reduce the \
+                         time step (time.cfl, numerics.elastic.wave_courant)",
+                        st.iterations,
+                    ),
+                ));
+            }
             return Err(err(
                 "elastic",
                 format!(

@@ -288,7 +288,7 @@ impl StageOptions for ElasticOptions {
                 format!(
                     "must be in (0, {MAX_WAVE_COURANT}], got {}: above {MAX_WAVE_COURANT} the \
                      split projection pumps energy into stiff solids (stability map)",
-                    self.wave_courant
+                    efsi_core::scene::num(self.wave_courant)
                 ),
             ));
         }
@@ -298,8 +298,9 @@ impl StageOptions for ElasticOptions {
             return Err((
                 "coupled_wave_courant",
                 format!(
-                    "must be in (0, {MAX_COUPLED_WAVE_COURANT}], got {cap}: the largest cap the \
-                     stability map measured stable"
+                    "must be in (0, {MAX_COUPLED_WAVE_COURANT}], got {}: the largest cap the \
+                     stability map measured stable",
+                    efsi_core::scene::num(cap)
                 ),
             ));
         }
@@ -308,7 +309,7 @@ impl StageOptions for ElasticOptions {
                 "coupling_tolerance",
                 format!(
                     "must be in (0, 1) (a fraction of the elastic step's divergence), got {}",
-                    self.coupling_tolerance
+                    efsi_core::scene::num(self.coupling_tolerance)
                 ),
             ));
         }
@@ -317,7 +318,10 @@ impl StageOptions for ElasticOptions {
         {
             return Err((
                 "theta",
-                format!("must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {t}"),
+                format!(
+                    "must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {}",
+                    efsi_core::scene::num(t)
+                ),
             ));
         }
         check_iterations("coupling_iterations", self.coupling_iterations)?;

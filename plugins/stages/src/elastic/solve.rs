@@ -416,16 +416,22 @@ impl ElasticStage {
             if !st.converged {
                 return Err(err(
                     "elastic",
-                    format!(
-                        "BiCGSTAB did not converge in {} iterations, the limit numerics.elastic.max_iterations (relative residual {:.3e} > numerics.elastic.tolerance {:.1e}); {}",
+                    crate::verdict::unconverged(
+                        "BiCGSTAB",
                         st.iterations,
                         st.residual / bnorm,
                         self.tol,
+                        "numerics.elastic.tolerance",
+                        "numerics.elastic.max_iterations",
                         if self.max_iter < 20 {
                             "raise numerics.elastic.max_iterations"
                         } else {
                             "raise numerics.elastic.max_iterations or reduce the time step"
-                        }
+                        },
+                        "the implicit elastic system is too ill-conditioned for it: check the \
+                         solid's parameters (a solid viscosity many orders below the fluid's, a \
+                         modulus far above the scene's scale), or reduce the time step \
+                         (time.cfl, numerics.elastic.wave_courant)",
                     ),
                 ));
             }

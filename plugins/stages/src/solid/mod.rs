@@ -76,8 +76,8 @@ impl Solid {
     /// and velocity; on failure the setting's path and what was expected.
     pub fn validate(&self, scene: &Scene) -> Checked {
         self.shape
-            .validate()
-            .map_err(|m| ("solid.shape".to_string(), m))?;
+            .check()
+            .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
         positive("solid.density", self.density)?;
         // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
         // equation's coefficients 1/ρ span more than floating point resolves.
@@ -87,7 +87,8 @@ impl Solid {
                 "solid.density",
                 format!(
                     "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
-                    self.density, scene.fluid.density
+                    efsi_core::scene::num(self.density),
+                    efsi_core::scene::num(scene.fluid.density)
                 ),
             );
         }
@@ -95,7 +96,10 @@ impl Solid {
             if !(mu.is_finite() && mu >= 0.0) {
                 return err(
                     "solid.viscosity",
-                    format!("must be a finite number ≥ 0, got {mu}"),
+                    format!(
+                        "must be a finite number ≥ 0, got {}",
+                        efsi_core::scene::num(mu)
+                    ),
                 );
             }
             scene.check_diffusion("solid.viscosity", mu, self.density)?;

@@ -47,41 +47,65 @@ impl Shape {
     /// Check the parameters: positive radius, non-empty rectangle, non-zero normal, finite
     /// numbers, non-empty unions and intersections.
     pub fn validate(&self) -> Result<(), String> {
+        self.check().map_err(|(_, m)| m)
+    }
+
+    /// [`Shape::validate`], with where the fault is below the shape as a path suffix
+    /// (`.radius`, `[1].center`, empty for the shape itself): the setting to name, and to
+    /// blame an override for.
+    pub fn check(&self) -> Result<(), (String, String)> {
+        use efsi_core::scene::num;
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let at = |field: &str, m: String| Err((field.to_string(), m));
         match self {
             Shape::Disk { center, radius } => {
                 if !fin(&[center.0, center.1]) {
-                    return Err(format!("Disk: center must be finite, got {center:?}"));
+                    return at(
+                        ".center",
+                        format!("Disk: center must be finite, got {center:?}"),
+                    );
                 }
                 if !radius.is_finite() || *radius <= 0.0 {
-                    return Err(format!(
-                        "Disk: radius must be finite and > 0, got {radius:e}"
-                    ));
+                    return at(
+                        ".radius",
+                        format!("Disk: radius must be finite and > 0, got {}", num(*radius)),
+                    );
                 }
             }
             Shape::Rectangle { min, max } => {
                 if !fin(&[min.0, min.1, max.0, max.1]) || min.0 >= max.0 || min.1 >= max.1 {
-                    return Err(format!("Rectangle: need min < max, got {min:?}, {max:?}"));
+                    let field = if fin(&[min.0, min.1]) { ".max" } else { ".min" };
+                    return at(
+                        field,
+                        format!("Rectangle: need min < max, got {min:?}, {max:?}"),
+                    );
                 }
             }
             Shape::HalfPlane { normal, offset } => {
-                if !fin(&[normal.0, normal.1, *offset]) || (normal.0 == 0.0 && normal.1 == 0.0) {
-                    return Err(format!(
-                        "HalfPlane: normal must be finite and non-zero, got {normal:?}"
-                    ));
+                if !fin(&[*offset]) {
+                    return at(
+                        ".offset",
+                        format!("HalfPlane: offset must be finite, got {}", num(*offset)),
+                    );
+                }
+                if !fin(&[normal.0, normal.1]) || (normal.0 == 0.0 && normal.1 == 0.0) {
+                    return at(
+                        ".normal",
+                        format!("HalfPlane: normal must be finite and non-zero, got {normal:?}"),
+                    );
                 }
             }
             Shape::Union(v) | Shape::Intersection(v) => {
                 if v.is_empty() {
-                    return Err("Union/Intersection: needs at least one shape".into());
+                    return at("", "Union/Intersection: needs at least one shape".into());
                 }
-                for s in v {
-                    s.validate()?;
+                for (k, s) in v.iter().enumerate() {
+                    s.check().map_err(|(f, m)| (format!("[{k}]{f}"), m))?;
                 }
             }
             Shape::Difference(a, b) => {
-                a.validate()?;
-                b.validate()?;
+                a.check().map_err(|(f, m)| (format!("[0]{f}"), m))?;
+                b.check().map_err(|(f, m)| (format!("[1]{f}"), m))?;
             }
         }
         Ok(())

@@ -653,12 +653,16 @@ impl Stage for ViscousStage {
                 self.warm.history = self.warm.history.min(1);
                 return Err(StageError {
                     stage: "viscous".into(),
-                    message: format!(
-                        "conjugate gradient did not converge in {} iterations (relative residual {:.3e} > {:.1e}); \
-                         raise numerics.viscous.max_iterations or reduce the time step",
+                    message: crate::verdict::unconverged(
+                        "conjugate gradient",
                         st.iterations,
                         st.residual / bnorm,
-                        self.tol
+                        self.tol,
+                        "numerics.viscous.tolerance",
+                        "numerics.viscous.max_iterations",
+                        "raise numerics.viscous.max_iterations or reduce the time step",
+                        "the viscous system is not positive definite or too ill-conditioned: \
+                         check the viscosities and densities, or reduce the time step",
                     ),
                 });
             }

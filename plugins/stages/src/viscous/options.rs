@@ -76,7 +76,13 @@ impl StageOptions for ViscousOptions {
 
     fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
         if !(0.5..=1.0).contains(&self.theta) {
-            return Err(("theta", format!("must be in [0.5, 1], got {}", self.theta)));
+            return Err((
+                "theta",
+                format!(
+                    "must be in [0.5, 1], got {}",
+                    efsi_core::scene::num(self.theta)
+                ),
+            ));
         }
         check_tolerance("tolerance", self.tolerance)?;
         check_iterations("max_iterations", self.max_iterations)
