@@ -333,7 +333,11 @@ def test_after_an_unstable_step_the_simulation_is_back_at_its_last_good_state():
     assert steps > 10 and 0 < t < 0.6, (steps, t)
     message = str(e.value)
     assert "stage `elastic`: law `test_nan`: non-finite stress" in message, message
-    assert f"the simulation is back at its last good state (step {steps}, t = {t:.6e})" in message, message
+    import re
+
+    said = re.search(r"the simulation is back at its last good state \(step (\d+), t = ([0-9.e+-]+)\)", message)
+    assert said, message
+    assert int(said[1]) == steps and abs(float(said[2]) - t) <= 1e-6 * t, message
     fields = {name: sim.field(name)[0] for name in ("u", "v", "p", "solid_fraction")}
     assert all(np.all(np.isfinite(f)) for f in fields.values())
     rows = sim.probes(frame=False)
