@@ -79,12 +79,12 @@ fn laws_with_a_library_lists_that_library_only() {
     let o = efsi(&["laws", nan.to_str().unwrap()]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{out}");
-    assert!(out.starts_with("test_nan ("), "{out}");
+    assert!(out.starts_with("test_nan — "), "{out}");
     assert!(!out.contains("neo_hookean"), "{out}");
     let o = efsi(&["laws"]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("neo_hookean ("), "{out}");
-    assert!(!out.contains("test_nan ("), "{out}");
+    assert!(out.contains("neo_hookean — "), "{out}");
+    assert!(!out.contains("test_nan — "), "{out}");
 }
 
 /// A law undefined at B = 0 (NaN below a floor of b11, as an Ogden law with logarithms)
