@@ -22,6 +22,12 @@
 //! (`SceneError`, `UnstableError` with `stage`, `field` and `cell`, `EfsiError`), carrying
 //! efsi's message; a panic inside efsi is caught at this boundary and raised as `EfsiError`
 //! (`internal error: …`), never as a Rust panic crossing into Python.
+//!
+//! **A failed step is rolled back** (as `efsi run` and the FMU do): `advance_to` keeps the state
+//! at the start of every step and puts it back when the step fails, so after an
+//! `UnstableError` the simulation is at its last good state, which the message names. A
+//! snapshot fits only a simulation of the same scene: `restore` refuses another scene's,
+//! naming the settings that differ, as `resume` refuses another run's checkpoint.
 
 use efsi_core::{
     Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Rollback, Scene, Simulation,
