@@ -9,7 +9,10 @@ efsi's axisymmetric files hold the r-z half-plane at theta = 0 in the X-Z plane:
 script writes into --out (default RUN/revolved/):
 
 - ``slice_<k>.vtu``: the slice and its mirror image about the axis (X -> -X), the full meridian
-  section, with every array as cell data; in a planar run, the slice itself;
+  section, with every array as cell data (mirrored: the X component of vectors and the XY, XZ
+  components of symmetric tensors change sign); every quad of both halves is ordered
+  counter-clockwise seen from -Y, so the whole section faces one way and renders evenly (a
+  reflection alone turns the mirrored cells inside out); in a planar run, the slice itself;
 - ``surface_<k>.vtp`` (runs with a solid): the phi = 1/2 contour of the solid fraction
   (interpolated linearly between the cell centres, the axis included), revolved about Z through 360 degrees in --resolution steps
   (default 128) - a closed surface carrying every array interpolated from the nodes (colour it
@@ -18,7 +21,10 @@ script writes into --out (default RUN/revolved/):
 
 It uses only VTK's Python modules (``vtkmodules``), which both the VTK wheel (``pip install
 vtk``) and ParaView's pvpython provide; under pvpython it then opens the two collections in
-ParaView (``paraview.simple``) and shows them. ``revolved_surface`` and ``mirrored_slice`` can be
+ParaView (``paraview.simple``) and shows them (the slice coloured by the speed, the
+surface by the pressure), and with ``--screenshot FILE.png`` saves the view of the last output
+time to FILE.png (headless, with a 24-bit virtual screen: ``xvfb-run -a -s "-screen 0
+1280x1024x24" pvpython tools/paraview_revolve.py RUN --screenshot shot.png``). ``revolved_surface`` and ``mirrored_slice`` can be
 imported and used on a ``vtkRectilinearGrid`` directly.
 
 At t = 0 the revolved surface of the sphere impact encloses 98.2 % of 4/3 pi R^3 at 15 cells per
@@ -32,16 +38,15 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
-from vtkmodules.vtkCommonCore import vtkCommand
-from vtkmodules.vtkCommonDataModel import vtkRectilinearGrid
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray, vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkCommand, vtkPoints
+from vtkmodules.vtkCommonDataModel import VTK_QUAD, vtkCellArray, vtkRectilinearGrid, vtkUnstructuredGrid
 from vtkmodules.vtkFiltersCore import (
     vtkAppendFilter,
     vtkCleanPolyData,
     vtkContourFilter,
     vtkTriangleFilter,
 )
-from vtkmodules.vtkFiltersGeneral import vtkReflectionFilter
 from vtkmodules.vtkFiltersModeling import vtkRotationalExtrusionFilter
 from vtkmodules.vtkIOXML import (
     vtkXMLPolyDataWriter,
@@ -86,18 +91,64 @@ def is_axisymmetric(grid):
 
 def mirrored_slice(grid):
     """The slice and its mirror image about the axis X = 0 (axisymmetric), as an unstructured
-    grid with the cell data; a planar slice as it is."""
+    grid of quads with the cell data (the mirror's first); a planar slice as it is.
+
+    Every quad's normal (p1 - p0) x (p3 - p0) points along -Y: the mirror image of a quad is
+    reordered, not only reflected (a reflection alone turns it inside out), so that both halves
+    face the same way."""
     if not is_axisymmetric(grid):
         append = vtkAppendFilter()
         append.AddInputData(grid)
         append.Update()
         return append.GetOutput()
-    reflect = vtkReflectionFilter()
-    reflect.SetInputData(grid)
-    reflect.SetPlaneToXMin()  # the axis r = 0 is the grid's X minimum
-    reflect.CopyInputOn()
-    reflect.Update()
-    return reflect.GetOutput()
+    x = vtk_to_numpy(grid.GetXCoordinates()).astype(np.float64)
+    z = vtk_to_numpy(grid.GetZCoordinates()).astype(np.float64)
+    n1, n2 = len(x) - 1, len(z) - 1
+    # Nodes: the mirror's columns (-x, outermost first), then the original's; x[0] = 0 on the
+    # axis is shared.
+    xs = np.concatenate([-x[:0:-1], x]) if x[0] == 0.0 else np.concatenate([-x[::-1], x])
+    m = len(xs)
+    X, Z = np.meshgrid(xs, z)
+    points = np.column_stack([X.ravel(), np.zeros(X.size), Z.ravel()])
+    first = m - (n1 + 1)  # the node column of x[0]
+    cells = []
+    for k in range(n2):
+        for i in range(n1):
+            # Mirror of cell (i, k): between columns first - i - 1 and first - i, reordered so
+            # that it is counter-clockwise like the original.
+            a = first - i - 1
+            cells.append((k * m + a, k * m + a + 1, (k + 1) * m + a + 1, (k + 1) * m + a))
+    for k in range(n2):
+        for i in range(n1):
+            a = first + i
+            cells.append((k * m + a, k * m + a + 1, (k + 1) * m + a + 1, (k + 1) * m + a))
+    out = vtkUnstructuredGrid()
+    pts = vtkPoints()
+    pts.SetData(numpy_to_vtk(np.ascontiguousarray(points), deep=True))
+    out.SetPoints(pts)
+    conn = np.asarray(cells, dtype=np.int64)
+    ids = vtkCellArray()
+    ids.SetData(numpy_to_vtkIdTypeArray(np.arange(0, 4 * len(cells) + 1, 4, dtype=np.int64), deep=True),
+                numpy_to_vtkIdTypeArray(conn.ravel(), deep=True))
+    out.SetCells(VTK_QUAD, ids)
+    cd = grid.GetCellData()
+    for k in range(cd.GetNumberOfArrays()):
+        array = cd.GetArray(k)
+        c = array.GetNumberOfComponents()
+        values = vtk_to_numpy(array).reshape(n2, n1, c).astype(np.float64)
+        mirror = values.copy()
+        # The mirror of cell (i, k) is listed in the order of the originals (row by row, i
+        # increasing): the same values, reflected.
+        if c == 3:
+            mirror[..., 0] *= -1.0  # vectors: X -> -X
+        elif c == 6:
+            mirror[..., 3] *= -1.0  # symmetric tensors (XX, YY, ZZ, XY, YZ, XZ)
+            mirror[..., 5] *= -1.0
+        both = np.concatenate([mirror.reshape(-1, c), values.reshape(-1, c)])
+        v = numpy_to_vtk(np.ascontiguousarray(both), deep=True)
+        v.SetName(array.GetName())
+        out.GetCellData().AddArray(v)
+    return out
 
 
 def centre_grid(grid):
@@ -215,19 +266,41 @@ def process(run, out=None, time=None, resolution=128):
     return out / "slice.pvd", (out / "surface.pvd" if surfaces else None)
 
 
-def _show_in_paraview(collections):
-    """Under pvpython: open the collections in ParaView and show them."""
+def _show_in_paraview(collections, screenshot=None):
+    """Under pvpython: open the collections in ParaView and show them at their last time (the
+    slice coloured by the solid fraction, the surface by the pressure); with `screenshot`, save
+    the view to that PNG. Returns False outside pvpython."""
     try:
         from paraview import simple  # noqa: PLC0415 (only pvpython has it)
     except ImportError:
         return False
     view = simple.GetActiveViewOrCreate("RenderView")
-    for path in collections:
+    view.ViewSize = [1000, 800]
+    times = []
+    sources = []
+    for path, colour in zip(collections, (("CELLS", "velocity", "Magnitude"), ("POINTS", "pressure"))):
         if path is not None:
             source = simple.OpenDataFile(str(path))
-            simple.Show(source, view)
+            sources.append(source)
+            times += list(getattr(source, "TimestepValues", None) or [])
+            shown = simple.Show(source, view)
+            simple.ColorBy(shown, colour)
+            shown.RescaleTransferFunctionToDataRange(True, False)
+    if times:
+        view.ViewTime = max(times)
+    # Looking at the section from -Y (its quads face that way), Z up, a little from above.
+    view.CameraPosition = [0.6, -3.0, 1.2]
+    view.CameraFocalPoint = [0.0, 0.0, 0.0]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
     simple.ResetCamera(view)
     simple.Render(view)
+    if screenshot is not None:
+        simple.SaveScreenshot(str(screenshot), view, ImageResolution=[1000, 800])
+        # Headless, nothing more to show: release the pipeline before the interpreter exits
+        # (ParaView 5.11's pvpython can crash tearing it down afterwards).
+        for source in sources:
+            simple.Delete(source)
+        simple.Delete(view)
     return True
 
 
@@ -238,12 +311,19 @@ def main(argv=None):
     p.add_argument("--resolution", type=int, default=128,
                    help="steps of the revolution through 360 degrees (default 128)")
     p.add_argument("--out", help="output folder (default RUN/revolved)")
+    p.add_argument("--screenshot", metavar="PNG",
+                   help="under pvpython: save the view of the last output time to this PNG")
     a = p.parse_args(argv)
     if a.resolution < 3:
         p.error(f"--resolution must be at least 3, got {a.resolution}")
     slices, surfaces = process(a.run, a.out, a.time, a.resolution)
     print(f"wrote {slices}" + (f" and {surfaces}" if surfaces else " (no solid: no surface)"))
-    _show_in_paraview([slices, surfaces])
+    shown = _show_in_paraview([slices, surfaces], a.screenshot)
+    if a.screenshot is not None:
+        if not shown:
+            print("--screenshot needs ParaView: run the script with pvpython", file=sys.stderr)
+            return 2
+        print(f"wrote {a.screenshot}")
     return 0
 
 

@@ -366,8 +366,8 @@ pub fn documentation(spec: &Spec, vars: &[Variable]) -> String {
             (None, None) => String::new(),
             (a, b) => format!(
                 "[{}, {}]",
-                a.map_or("−∞".into(), |x| format!("{x}")),
-                b.map_or("∞".into(), |x| format!("{x}"))
+                a.map_or("−∞".into(), crate::spec::short),
+                b.map_or("∞".into(), crate::spec::short)
             ),
         };
         let _ = writeln!(

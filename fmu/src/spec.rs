@@ -27,6 +27,7 @@ use efsi_core::overrides::{Override, OverrideValue};
 use efsi_core::scene::{Boundary, Side};
 use efsi_run::SceneOutput;
 use efsi_run::SceneOverrides;
+use efsi_stages::solid::SceneSolid;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;
@@ -55,6 +56,18 @@ pub enum Causality {
     Input,
     /// Computed by the model.
     Output,
+}
+
+/// `x` as a short decimal: plain (`0.045`, `1000`) when that takes at most 12 characters, else
+/// scientific (`5e-324`, `1e13`), so that a declared bound such as the smallest double above 0
+/// reads as one.
+pub fn short(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// One variable of the model description.
@@ -94,7 +107,7 @@ impl Variable {
             .unit
             .as_deref()
             .map_or(String::new(), |u| format!(" {u}"));
-        let bound = |b: Option<f64>| b.map_or("unbounded".to_string(), |b| format!("{b}"));
+        let bound = |b: Option<f64>| b.map_or("unbounded".to_string(), short);
         Err(format!(
             "{} `{}` = {value}{unit}: outside its range [{}, {}]{unit}",
             match self.causality {
@@ -253,16 +266,31 @@ impl Spec {
             let (lo, hi) = bounds
                 .split_once("..")
                 .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
-            let num = |s: &str| -> Result<Option<f64>, String> {
+            // A bound is a finite number; empty, `-inf` (MIN) or `inf` (MAX) for none.
+            let num = |s: &str, upper: bool| -> Result<Option<f64>, String> {
                 let s = s.trim();
                 if s.is_empty() {
                     return Ok(None);
                 }
-                s.parse()
-                    .map(Some)
-                    .map_err(|_| format!("--range {r}: `{s}` is not a number"))
+                let x: f64 = s
+                    .parse()
+                    .map_err(|_| format!("--range {r}: `{s}` is not a number"))?;
+                match (x.is_nan(), x.is_infinite(), upper, x > 0.0) {
+                    (true, ..) => Err(format!("--range {r}: `{s}` is not a number")),
+                    (false, true, true, true) | (false, true, false, false) => Ok(None),
+                    (false, true, ..) => Err(format!(
+                        "--range {r}: {} cannot be {s}",
+                        if upper { "MAX" } else { "MIN" }
+                    )),
+                    _ => Ok(Some(x)),
+                }
             };
-            let range = (num(lo)?, num(hi)?);
+            let range = (num(lo, false)?, num(hi, true)?);
+            if let (Some(a), Some(b)) = range
+                && a > b
+            {
+                return Err(format!("--range {r}: MIN {a} is above MAX {b}"));
+            }
             let target = spec
                 .parameters
                 .iter_mut()
@@ -270,6 +298,15 @@ impl Spec {
                 .find(|p| p.name == name.trim())
                 .ok_or_else(|| format!("--range {r}: no parameter or input `{name}`"))?;
             target.range = range;
+        }
+        for p in &mut spec.parameters {
+            if p.range != (None, None) {
+                p.range = declared_range(&spec.scene, path, &scene, p)?;
+            }
+        }
+        for i in &spec.inputs {
+            let start = input_start(&scene, &i.name);
+            check_start(&i.name, i.range, start)?;
         }
         let mut names: Vec<&str> = spec
             .parameters
@@ -366,13 +403,7 @@ impl Spec {
             });
         }
         for (k, i) in self.inputs.iter().enumerate() {
-            let start = match input_target(&i.name) {
-                Some(InputTarget::WallSpeed(side)) => match scene.boundaries.get(side) {
-                    Boundary::MovingWall { speed, .. } => *speed,
-                    _ => 0.0,
-                },
-                _ => 0.0,
-            };
+            let start = input_start(&scene, &i.name);
             v.push(Variable {
                 vr: VR_INPUTS + k as u32,
                 name: i.name.clone(),
@@ -460,6 +491,133 @@ pub fn probe_columns(scene: &Scene) -> Result<Vec<String>, String> {
         .iter()
         .flat_map(efsi_run::probes::columns)
         .collect())
+}
+
+/// The FMI 2 Integer's range (a 32-bit signed integer).
+const INT32: (f64, f64) = (i32::MIN as f64, i32::MAX as f64);
+
+/// Refuse a start value outside its variable's range.
+fn check_start(name: &str, (lo, hi): (Option<f64>, Option<f64>), start: f64) -> Result<(), String> {
+    if lo.is_some_and(|l| start < l) || hi.is_some_and(|h| start > h) {
+        let bound = |b: Option<f64>, none: &str| b.map_or(none.to_string(), |b| b.to_string());
+        return Err(format!(
+            "--range {name}={}..{}: the start value {start} (the scene's) is outside the range",
+            bound(lo, ""),
+            bound(hi, "")
+        ));
+    }
+    Ok(())
+}
+
+/// The start value of input `name` (a moving wall's speed in the scene, else 0).
+fn input_start(scene: &Scene, name: &str) -> f64 {
+    match input_target(name) {
+        Some(InputTarget::WallSpeed(side)) => match scene.boundaries.get(side) {
+            Boundary::MovingWall { speed, .. } => *speed,
+            _ => 0.0,
+        },
+        _ => 0.0,
+    }
+}
+
+/// The range parameter `p` declares: its `--range` checked against the scene (the start value
+/// inside it; an Integer's bounds whole numbers within FMI 2's 32 bits), and each bound the
+/// scene refuses (an open bound: `G > 0`, a radius > 0) replaced by the nearest value it
+/// accepts — the next double inward — so that every value inside the declared range passes
+/// `exitInitializationMode`'s checks of the scene and the law's parameter table. A bound
+/// whose neighbour is refused too is an error naming it and why.
+fn declared_range(
+    text: &str,
+    path: &Path,
+    scene: &Scene,
+    p: &Port,
+) -> Result<(Option<f64>, Option<f64>), String> {
+    let (lo, hi) = p.range;
+    let shown = |b: Option<f64>| b.map_or(String::new(), |b| b.to_string());
+    let flag = format!("--range {}={}..{}", p.name, shown(lo), shown(hi));
+    let start = scene_value(scene, &p.name)?;
+    let integer = matches!(start, OverrideValue::Int(_));
+    let start = match start {
+        OverrideValue::Int(i) => i as f64,
+        OverrideValue::Float(x) => x,
+        other => return Err(format!("{flag}: the parameter is {other}, not a number")),
+    };
+    if integer {
+        for b in [lo, hi].into_iter().flatten() {
+            if b.fract() != 0.0 || b < INT32.0 || b > INT32.1 {
+                return Err(format!(
+                    "{flag}: `{}` is an Integer: its bounds must be whole numbers in [{}, {}] (FMI 2's 32-bit Integer), got {b}",
+                    p.name, INT32.0, INT32.1
+                ));
+            }
+        }
+    }
+    check_start(&p.name, (lo, hi), start)?;
+    let value = |x: f64| {
+        if integer {
+            OverrideValue::Int(x as i64)
+        } else {
+            OverrideValue::Float(x)
+        }
+    };
+    let refused = |x: f64| accepted(text, path, &p.name, value(x)).err();
+    let mut declared = (lo, hi);
+    for (bound, inward, slot) in [(lo, 1.0, &mut declared.0), (hi, -1.0, &mut declared.1)] {
+        let Some(b) = bound else { continue };
+        let Some(why) = refused(b) else { continue };
+        let next = if integer {
+            b + inward
+        } else if inward > 0.0 {
+            b.next_up()
+        } else {
+            b.next_down()
+        };
+        if refused(next).is_some() {
+            return Err(format!("{flag}: the bound {b} is refused: {why}"));
+        }
+        *slot = Some(next);
+    }
+    Ok(declared)
+}
+
+/// Whether the scene of `text` with the setting `name` = `value` passes the checks of
+/// `exitInitializationMode` before the simulation is built: the scene's own and, for a law
+/// parameter, the law's declared range. The error says why not.
+fn accepted(text: &str, path: &Path, name: &str, value: OverrideValue) -> Result<(), String> {
+    let set = if name == REFINE {
+        match value {
+            OverrideValue::Float(f) => Override::Refine(f),
+            OverrideValue::Int(i) => Override::Refine(i as f64),
+            _ => return Err("not a number".into()),
+        }
+    } else {
+        Override::set(name.to_string(), value.clone())
+    };
+    let scene = Scene::from_str_with(text, path, &[set]).map_err(|e| e.to_string())?;
+    let Some(param) = name.strip_prefix("solid.law.parameters.") else {
+        return Ok(());
+    };
+    let x = match value {
+        OverrideValue::Float(x) => x,
+        OverrideValue::Int(i) => i as f64,
+        _ => return Ok(()),
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let solid = scene.solid_spec().map_err(|(f, m)| format!("{f}: {m}"))?;
+    let Some(law) = solid.and_then(|s| s.law) else {
+        return Ok(());
+    };
+    let info = efsi_laws_host::loader::resolve_law(&law.name, dir)
+        .and_then(|lib| efsi_laws_host::describe(&lib))
+        .map_err(|e| e.to_string())?;
+    match info.parameters.iter().find(|d| d.name == param) {
+        Some(d) if !d.contains(x) => Err(format!(
+            "law `{}`: {param} = {x} is outside its range {}",
+            info.name,
+            d.range_text()
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The value of the setting at `path` in `scene` (with its defaults, the stages' too);
@@ -652,5 +810,76 @@ mod tests {
             let e = Spec::from_args(&sphere(), &args(a)).unwrap_err();
             assert!(e.contains(needle), "{a:?}: {e}");
         }
+    }
+
+    /// `--range` against the scene: a start value outside, a bound that is not a number, MIN
+    /// above MAX, an Integer's bounds outside FMI 2's 32 bits are refused by name; `inf` is no
+    /// bound (never written as a number); a bound the scene refuses (an open one) is declared
+    /// as the nearest value it accepts.
+    #[test]
+    fn ranges_are_checked_against_the_scene() {
+        let with = |extra: &[&str]| {
+            let mut a: Vec<&str> = vec!["--parameter", "solid.law.parameters.G=Pa"];
+            a.extend_from_slice(extra);
+            Spec::from_args(&sphere(), &args(&a))
+        };
+        let refused: [(&[&str], &str); 6] = [
+            (
+                &["--range", "solid.law.parameters.G=5..1"],
+                "MIN 5 is above MAX 1",
+            ),
+            (
+                &["--range", "solid.law.parameters.G=1e7..1e8"],
+                "the start value 180000 (the scene's) is outside the range",
+            ),
+            (
+                &["--range", "solid.law.parameters.G=nan..1"],
+                "`nan` is not a number",
+            ),
+            (
+                &["--range", "solid.law.parameters.G=inf..1e10"],
+                "MIN cannot be inf",
+            ),
+            (
+                &[
+                    "--parameter",
+                    "grid.nr",
+                    "--range",
+                    "grid.nr=1..9223372036854775807",
+                ],
+                "`grid.nr` is an Integer: its bounds must be whole numbers in [-2147483648, 2147483647]",
+            ),
+            (
+                &["--parameter", "grid.nr", "--range", "grid.nr=1.5..100"],
+                "got 1.5",
+            ),
+        ];
+        for (a, needle) in refused {
+            let e = with(a).unwrap_err();
+            assert!(e.contains(needle), "{a:?}: {e}");
+        }
+        // No upper bound: none declared.
+        let spec = with(&["--range", "solid.law.parameters.G=1..inf"]).unwrap();
+        let vars = spec.variables().unwrap();
+        let g = vars
+            .iter()
+            .find(|v| v.name == "solid.law.parameters.G")
+            .unwrap();
+        assert_eq!((g.min, g.max), (Some(1.0), None));
+        let xml = crate::description::fmi2(&spec, &vars);
+        assert!(!xml.contains("inf") && !xml.contains("NaN"), "{xml}");
+        // Open bounds: G > 0 (the law's range), a radius > 0, time.cfl > 0 are declared as the
+        // smallest double above 0, which the scene and the law accept.
+        let spec = Spec::from_args(&sphere(), &args(SPHERE)).unwrap();
+        let vars = spec.variables().unwrap();
+        let smallest = f64::from_bits(1);
+        for name in ["solid.law.parameters.G", "solid.shape.radius", "time.cfl"] {
+            let v = vars.iter().find(|v| v.name == name).unwrap();
+            assert_eq!(v.min, Some(smallest), "{name}");
+            assert!(v.check_range(0.0).is_err(), "{name}");
+        }
+        // A closed bound the scene accepts stays as given.
+        let nr = vars.iter().find(|v| v.name == "grid.nr").unwrap();
+        assert_eq!((nr.min, nr.max), (Some(1.0), Some(1000.0)));
     }
 }

@@ -1,8 +1,16 @@
 """``python -m efsi sweep SCENE --grid PATH=v1,v2 … [--scheduler ADDRESS]`` (what
 ``efsi sweep`` runs): a sweep from the command line; the table is printed and written to
-``--out`` (CSV or Parquet), the summary of each run being its final probe values."""
+``--out`` (CSV, Parquet or JSON) as its rows arrive, the summary of each run being its final
+probe values.
+
+Exit codes: 0 the table is complete (whatever the runs' outcomes); 2 an argument refused
+before any run — a malformed ``--grid`` or ``--runs`` (not a JSON list of objects of single
+values), a ``refine`` value that is not a positive number, ``--workers`` below 1, an
+``--until`` that is not a finite time ≥ 0, an ``--out`` or ``--save-probes`` that cannot be
+written, a scene efsi refuses."""
 
 import argparse
+import os
 import sys
 
 
@@ -13,6 +21,44 @@ def _value(text):
         except ValueError:
             pass
     return text
+
+
+def _positive_int(text):
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"`{text}` is not a whole number") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
+    return n
+
+
+def _time(text):
+    try:
+        t = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"`{text}` is not a number") from None
+    if not t >= 0 or t == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite time ≥ 0, got {text}")
+    return t
+
+
+def _read_runs(path):
+    """The runs of a ``--runs`` file: a JSON list of objects. Raises ``ValueError``."""
+    import json
+
+    try:
+        with open(path) as f:
+            runs = json.load(f)
+    except OSError as e:
+        raise ValueError(f"--runs {path}: {e.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"--runs {path}: not JSON: {e}") from None
+    if not isinstance(runs, list):
+        raise ValueError(f"--runs {path}: expected a JSON list of objects [{{PATH: VALUE, …}}, …], got {type(runs).__name__}")
+    if not runs:
+        raise ValueError(f"--runs {path}: the list has no runs")
+    return runs
 
 
 def _grid_option(text):
@@ -45,9 +91,13 @@ def main(argv=None):
         help="write each run's probe rows to DIR/<run>/probes.csv (column probes_dir)",
     )
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler's address (default: a LocalCluster)")
-    parser.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
+    parser.add_argument(
+        "--workers", type=_positive_int, help="LocalCluster worker processes, ≥ 1 (default: one per core)"
+    )
     parser.add_argument("--serial", action="store_true", help="run in this process, one after the other (no Dask)")
-    parser.add_argument("--until", type=float, help="stop each run at this time (default: the scene's end)")
+    parser.add_argument(
+        "--until", type=_time, help="stop each run at this time, finite and ≥ 0 (default: the scene's end)"
+    )
     parser.add_argument("--out", default="sweep.csv", help="the table: .csv, .parquet or .json (default sweep.csv)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
@@ -55,21 +105,28 @@ def main(argv=None):
         parser.error("give either --grid PATH=V1,V2 … or --runs FILE")
 
     from . import SceneError, Scene
-    from .sweeps import SaveProbes, final_probes, sweep
+    from .sweeps import SaveProbes, check, final_probes, runs, sweep
 
-    if args.runs:
-        import json
+    def refuse(message):
+        print(f"error: {message}", file=sys.stderr)
+        return 2
 
-        with open(args.runs) as f:
-            grid = json.load(f)
-    else:
-        grid = dict(args.grid)
-
+    try:
+        grid = _read_runs(args.runs) if args.runs else dict(args.grid)
+        runs(grid)
+        check(until=args.until, workers=args.workers, out=args.out)
+        if args.save_probes:
+            os.makedirs(args.save_probes, exist_ok=True)
+            if not os.access(args.save_probes, os.W_OK | os.X_OK):
+                raise ValueError(f"--save-probes {args.save_probes}: the folder is not writable")
+    except (ValueError, TypeError) as e:
+        return refuse(e)
+    except OSError as e:
+        return refuse(f"--save-probes {args.save_probes}: {e.strerror}")
     try:
         scene = Scene.load(args.scene)
     except SceneError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+        return refuse(e)
     client = None
     if args.serial:
         client = False

@@ -8,7 +8,10 @@
   code 2.)
 - :class:`UnstableError`: a run that failed numerically — a NaN or infinity after a stage, a
   solver that did not converge, a collapsing time step, energy growth. ``stage``, ``field`` and
-  ``cell`` name where, when efsi's message says. (``efsi run``'s exit code 3.)
+  ``cell`` name where, when efsi's message says. (``efsi run``'s exit code 3.) The simulation
+  is then back at the start of the failed step, its last good state (time, step count, fields,
+  probe rows), as the message's last line says; it can be advanced again (after changing what
+  made it fail, it fails the same way) or restored to a snapshot.
 """
 
 

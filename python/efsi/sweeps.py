@@ -13,8 +13,9 @@ and advances it to the scene's end (or ``until``); ``summary(sim)`` then returns
 **The table.** One row per run, in the order of the grid: the settings, ``wall_time`` (s, the
 stepping alone), ``steps``, ``t``, the summary's figures, and ``outcome``: ``ok``,
 ``refused: <message>`` (a setting or scene efsi refuses: the run never started),
-``unstable: <message>`` (the run failed numerically) or ``failed: <message>`` (anything else,
-a summary that raised included). A refused or unstable run is a row, never a failed sweep.
+``unstable: <message>`` (the run failed numerically), ``crashed: <message>`` (the run killed
+its worker process) or ``failed: <message>`` (anything else, a summary that raised included).
+Every run is a row, never a failed sweep.
 
 **Where it runs.** On a ``distributed.LocalCluster`` made for the sweep (``workers`` processes
 of one thread each, default one per core; closed afterwards), or on the cluster of ``client``
@@ -23,29 +24,75 @@ runs are tasks, so a worker lost mid-sweep has its tasks run again elsewhere by 
 ``client=False`` the runs are made one after the other in this process (no Dask). Each run's
 result depends only on its settings, so every way gives the same numbers.
 
-Progress is Dask's progress bar (``progress=False`` for none); ``out`` writes the table as CSV
-(``.csv``), Parquet (``.parquet``, needs pyarrow) or JSON records (``.json``).
+**Arguments are checked before the first run**: a grid that is not a dict of lists or a list of
+dicts of single values, a ``refine`` value that is not a positive number, an ``until`` that is
+not a finite time ≥ 0, ``workers`` or ``threads_per_run`` below 1, and an ``out`` that cannot
+be written raise ``ValueError`` / ``TypeError`` naming what is wrong, nothing run.
+
+**Rows are kept as they arrive.** ``out`` (CSV ``.csv``, Parquet ``.parquet`` — needs pyarrow —,
+or JSON records ``.json``) is rewritten (atomically) each time a run finishes, with the rows
+finished so far in the grid's order: a sweep stopped half way leaves the finished half. A run
+that kills its worker process (a crash inside a law library, the operating system's
+out-of-memory killer) is a row, ``crashed: <why>``; on the sweep's own LocalCluster a task is
+not given to a second worker after it killed one (Dask's ``allowed-failures`` = 0), so one bad
+run costs one worker restart. On a cluster of the caller's, Dask's own ``allowed-failures``
+decides (default 3) before the run becomes that row. Progress is a line on stderr
+(``progress=False`` for none). With ``client=False`` a crash takes this process with it.
 """
 
 import itertools
 import math
+import numbers
 import os
+import sys
 import time
 
 REFINE = "refine"
 
 
+def _is_value(v):
+    """Whether ``v`` is a single setting value (bool, number or str; numpy scalars too)."""
+    if getattr(v, "shape", None) == () and hasattr(v, "item"):
+        v = v.item()
+    return isinstance(v, (bool, numbers.Number, str))
+
+
 def runs(grid):
-    """The runs of ``grid`` as a list of dicts (settings in the order given)."""
+    """The runs of ``grid`` as a list of dicts (settings in the order given), checked: every
+    key a setting path (str), every value a single bool, number or str, ``refine`` a finite
+    positive number. Raises ``TypeError`` / ``ValueError`` naming the run and the setting."""
     if isinstance(grid, dict):
         keys = list(grid)
+        if not keys:
+            raise ValueError("sweep: the grid has no settings (give PATH: [values, …])")
         for k in keys:
-            if isinstance(grid[k], (str, bytes)) or not hasattr(grid[k], "__iter__"):
+            if isinstance(grid[k], (str, bytes, dict)) or not hasattr(grid[k], "__iter__"):
                 raise TypeError(f"sweep: the values of `{k}` must be a list, got {grid[k]!r}")
-        return [dict(zip(keys, values)) for values in itertools.product(*(list(grid[k]) for k in keys))]
-    out = [dict(r) for r in grid]
+        out = [dict(zip(keys, values)) for values in itertools.product(*(list(grid[k]) for k in keys))]
+        where = lambda n: "grid"  # noqa: E731
+    elif isinstance(grid, (str, bytes)) or not hasattr(grid, "__iter__"):
+        raise TypeError(f"sweep: the grid must be a dict of lists or a list of dicts, got {grid!r}")
+    else:
+        out = []
+        for n, r in enumerate(grid):
+            if not isinstance(r, dict):
+                raise TypeError(f"sweep: run {n} must be a dict of settings {{PATH: VALUE}}, got {r!r}")
+            out.append(dict(r))
+        where = lambda n: f"run {n}"  # noqa: E731
     if not out:
         raise ValueError("sweep: the grid has no runs")
+    for n, r in enumerate(out):
+        for k, v in r.items():
+            if not isinstance(k, str) or not k.strip():
+                raise TypeError(f"sweep: {where(n)}: a setting path must be a non-empty str, got {k!r}")
+            if not _is_value(v):
+                raise TypeError(
+                    f"sweep: {where(n)}: `{k}` must be one value (a bool, number or str), got {v!r}"
+                )
+            if k == REFINE and (
+                isinstance(v, (bool, str)) or not math.isfinite(float(v)) or float(v) <= 0
+            ):
+                raise ValueError(f"sweep: {where(n)}: `refine` must be a finite number > 0, got {v!r}")
     return out
 
 
@@ -103,7 +150,8 @@ def run_one(scene, settings, summary=None, until=None):
             else:
                 s.set(path, value)
         sim = Simulation(s)
-    except SceneError as e:
+    except (SceneError, TypeError, ValueError) as e:
+        # efsi's refusal, or a value of a type no setting takes.
         row["outcome"] = f"refused: {e}"
         return row
     except EfsiError as e:
@@ -130,6 +178,38 @@ def run_one(scene, settings, summary=None, until=None):
     return row
 
 
+def check(until=None, workers=None, threads_per_run=1, out=None):
+    """Check a sweep's arguments (see the module's documentation) before any run; raises
+    ``ValueError`` naming the argument."""
+    if until is not None:
+        if isinstance(until, bool) or not isinstance(until, numbers.Real) or not math.isfinite(until) or until < 0:
+            raise ValueError(f"sweep: until must be a finite time ≥ 0, got {until!r}")
+    for name, n in (("workers", workers), ("threads_per_run", threads_per_run)):
+        if n is None and name == "workers":
+            continue
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+            raise ValueError(f"sweep: {name} must be a whole number ≥ 1, got {n!r}")
+    if out is not None:
+        writable(out)
+
+
+def writable(path):
+    """Refuse an output path the table cannot be written to (its suffix, its folder, the file),
+    without creating anything."""
+    path = os.path.abspath(os.fspath(path))
+    if not path.endswith((".csv", ".parquet", ".json")):
+        raise ValueError(f"sweep: {path}: the output must end in .csv, .parquet or .json")
+    folder = os.path.dirname(path)
+    if not os.path.isdir(folder):
+        raise ValueError(f"sweep: {path}: cannot write the table: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"sweep: {path}: cannot write the table: the folder {folder} is not writable")
+    if os.path.isdir(path):
+        raise ValueError(f"sweep: {path}: cannot write the table: it is a folder")
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise ValueError(f"sweep: {path}: cannot write the table: the file is not writable")
+
+
 def sweep(
     scene,
     grid,
@@ -143,48 +223,92 @@ def sweep(
 ):
     """Run ``scene`` (an ``efsi.Scene`` or a path) over ``grid`` and return the table as a
     pandas DataFrame (see the module's documentation)."""
+    import pandas  # noqa: F401  (needed for the table: fail before any run without it)
+
+    todo = runs(grid)
+    check(until, workers, threads_per_run, out)
+    scene = _scene(scene)
+    rows = [None] * len(todo)
+    state = {"done": 0, "start": time.monotonic()}
+
+    def arrived(k, row):
+        rows[k] = row
+        state["done"] += 1
+        if out is not None:
+            write(_table(todo, [r for r in rows if r is not None]), out)
+        if progress:
+            print(
+                f"\refsi sweep: {state['done']}/{len(todo)} runs ({time.monotonic() - state['start']:.0f} s)",
+                end="\n" if state["done"] == len(todo) else "",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    if client is False:
+        for k, r in enumerate(todo):
+            arrived(k, run_one(scene, r, summary, until))
+    else:
+        _on_dask(scene, todo, client, summary, until, workers, threads_per_run, arrived)
+    return _table(todo, rows)
+
+
+def _table(todo, rows):
+    """The table of ``rows`` (settings first, in the grid's order of keys; outcome last)."""
     import pandas
 
-    scene = _scene(scene)
-    todo = runs(grid)
-    if client is False:
-        rows = [run_one(scene, r, summary, until) for r in todo]
-    else:
-        rows = _on_dask(scene, todo, client, summary, until, progress, workers, threads_per_run)
     table = pandas.DataFrame(rows)
-    columns = list(todo[0]) + [c for c in table.columns if c not in todo[0] and c != "outcome"]
-    table = table[columns + ["outcome"]]
-    if out is not None:
-        write(table, out)
-    return table
+    keys = list(dict.fromkeys(k for r in todo for k in r))
+    columns = keys + [c for c in table.columns if c not in keys and c != "outcome"]
+    return table.reindex(columns=columns + ["outcome"])
 
 
-def _on_dask(scene, todo, client, summary, until, progress, workers, threads_per_run):
-    from distributed import Client, LocalCluster, wait
-    from distributed import progress as bar
+def _crashed(settings, exc):
+    """The row of a run whose task failed outside ``run_one`` (its worker died)."""
+    row = dict(settings)
+    row.update(wall_time=math.nan, steps=0, t=math.nan)
+    name = type(exc).__name__
+    if name == "KilledWorker":
+        row["outcome"] = f"crashed: the run killed its worker process ({exc})"
+    else:
+        row["outcome"] = f"failed: {name}: {exc}"
+    return row
+
+
+def _on_dask(scene, todo, client, summary, until, workers, threads_per_run, arrived):
+    import dask
+    from distributed import Client, LocalCluster, as_completed
 
     own = None
     if client is None:
         n = workers or os.cpu_count() or 1
-        # One thread per worker process; each run's stages use `threads_per_run` threads.
-        cluster = LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            env={"RAYON_NUM_THREADS": str(threads_per_run)},
-        )
+        # One thread per worker process; each run's stages use `threads_per_run` threads. A
+        # task that killed its worker is not retried (it would kill the next one), and a
+        # worker holds one task at a time (so a crash takes no other run with it).
+        with dask.config.set(
+            {"distributed.scheduler.allowed-failures": 0, "distributed.scheduler.worker-saturation": 1.0}
+        ):
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                env={"RAYON_NUM_THREADS": str(threads_per_run)},
+            )
         own = (cluster, Client(cluster))
         client = own[1]
     try:
-        futures = [
-            client.submit(run_one, scene, r, summary, until, pure=False, key=f"efsi-run-{k}-{os.urandom(4).hex()}")
+        futures = {
+            client.submit(run_one, scene, r, summary, until, pure=False, key=f"efsi-run-{k}-{os.urandom(4).hex()}"): k
             for k, r in enumerate(todo)
-        ]
-        if progress:
-            bar(futures)
-        wait(futures)
-        return client.gather(futures)
+        }
+        for future in as_completed(list(futures)):
+            k = futures[future]
+            if future.status == "finished":
+                row = future.result()
+            else:
+                row = _crashed(todo[k], future.exception())
+            future.release()
+            arrived(k, row)
     finally:
         if own is not None:
             own[1].close()
@@ -192,13 +316,20 @@ def _on_dask(scene, todo, client, summary, until, progress, workers, threads_per
 
 
 def write(table, path):
-    """Write the table as CSV (``.csv``), Parquet (``.parquet``) or JSON records (``.json``)."""
-    path = os.fspath(path)
-    if path.endswith(".parquet"):
-        table.to_parquet(path, index=False)
-    elif path.endswith(".json"):
-        table.to_json(path, orient="records", double_precision=15)
-    elif path.endswith(".csv"):
-        table.to_csv(path, index=False)
-    else:
-        raise ValueError(f"sweep: {path}: the output must end in .csv, .parquet or .json")
+    """Write the table as CSV (``.csv``), Parquet (``.parquet``) or JSON records (``.json``),
+    atomically (a temporary file beside it, renamed)."""
+    path = os.path.abspath(os.fspath(path))
+    writable(path)
+    folder, name = os.path.split(path)
+    tmp = os.path.join(folder, f".{name}.{os.getpid()}.tmp")
+    try:
+        if path.endswith(".parquet"):
+            table.to_parquet(tmp, index=False)
+        elif path.endswith(".json"):
+            table.to_json(tmp, orient="records", double_precision=15)
+        else:
+            table.to_csv(tmp, index=False)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)

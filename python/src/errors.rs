@@ -108,6 +108,18 @@ pub(crate) fn efsi_err(py: Python<'_>, e: impl Into<EfsiError>) -> PyErr {
     classify(&e.into()).raise(py)
 }
 
+/// [`efsi_err`] with `note` as a last line of the message (what state the simulation is in).
+pub(crate) fn efsi_err_noted(py: Python<'_>, e: EfsiError, note: &str) -> PyErr {
+    let mut failure = classify(&e);
+    match &mut failure {
+        Failure::Scene(m) | Failure::Other(m) | Failure::Unstable { message: m, .. } => {
+            m.push('\n');
+            m.push_str(note);
+        }
+    }
+    failure.raise(py)
+}
+
 pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     let what = payload
         .downcast_ref::<&str>()

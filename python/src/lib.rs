@@ -22,10 +22,16 @@
 //! (`SceneError`, `UnstableError` with `stage`, `field` and `cell`, `EfsiError`), carrying
 //! efsi's message; a panic inside efsi is caught at this boundary and raised as `EfsiError`
 //! (`internal error: …`), never as a Rust panic crossing into Python.
+//!
+//! **A failed step is rolled back** (as `efsi run` and the FMU do): `advance_to` keeps the state
+//! at the start of every step and puts it back when the step fails, so after an
+//! `UnstableError` the simulation is at its last good state, which the message names. A
+//! snapshot fits only a simulation of the same scene: `restore` refuses another scene's,
+//! naming the settings that differ, as `resume` refuses another run's checkpoint.
 
 use efsi_core::{
-    Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Scene, Simulation, Snapshot,
-    Stagger, StepInfo, due,
+    Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Rollback, Scene, Simulation,
+    Snapshot, Stagger, StepInfo, due,
 };
 use efsi_run::SceneOverrides;
 use efsi_run::{ProbeSpec, SceneOutput};
@@ -39,7 +45,7 @@ use std::sync::{Condvar, Mutex, MutexGuard, TryLockError};
 use std::time::Duration;
 
 mod errors;
-use errors::{Failure, efsi_err, guarded, panic_message};
+use errors::{Failure, efsi_err, efsi_err_noted, guarded, panic_message};
 
 /// The stop flag's value when a Python signal handler raised (SIGINT's number, as the CLI).
 const STOPPED_BY_PYTHON: usize = 2;
@@ -337,15 +343,39 @@ struct Driver {
     sim: Simulation,
     recorder: Recorder,
     steady: bool,
+    /// The state at the start of the step under way, put back when the step fails (the run
+    /// loop's rollback; reused from step to step).
+    last_good: Option<Snapshot>,
+    /// Why the simulation cannot be used any more: a failed step whose state could not be put
+    /// back (cleared by `restore`).
+    broken: Option<String>,
+}
+
+/// Why [`Driver::advance`] failed: the error, and the step and time of the last good state the
+/// simulation was put back to, when it was.
+struct Failed {
+    error: EfsiError,
+    rolled_back: Option<(u64, f64)>,
+}
+
+impl From<EfsiError> for Failed {
+    fn from(error: EfsiError) -> Failed {
+        Failed {
+            error,
+            rolled_back: None,
+        }
+    }
 }
 
 impl Driver {
     /// Step to `target` landing on the scene's output times (the run loop's targets), recording
-    /// probe rows; stops early on a steady flow or a non-zero `stop`.
-    fn advance(&mut self, target: f64, stop: &AtomicUsize) -> Result<Advanced, EfsiError> {
+    /// probe rows; stops early on a steady flow or a non-zero `stop`. A step that fails puts
+    /// the state at its start back (as `efsi run` and the FMU do): the simulation is then at
+    /// its last good state, its time, step count and probe rows those of that state.
+    fn advance(&mut self, target: f64, stop: &AtomicUsize) -> Result<Advanced, Failed> {
         let t0 = self.sim.state.t;
         if !target.is_finite() || !due(target, t0) {
-            return Err(EfsiError::Target {
+            return Err(Failed::from(EfsiError::Target {
                 target,
                 t: t0,
                 why: if target.is_finite() {
@@ -353,7 +383,7 @@ impl Driver {
                 } else {
                     "it is not a finite time"
                 },
-            });
+            }));
         }
         let end = self.recorder.end;
         while !due(self.sim.state.t, target) {
@@ -381,14 +411,25 @@ impl Driver {
             };
             let control = Advance {
                 stop: Some(stop),
+                rollback: Rollback::Step(&mut self.last_good),
                 on_step: Some(&mut each),
                 ..Advance::default()
             };
             match self.sim.advance_to(until, control) {
                 Ok(Advanced::Reached) => {}
                 Ok(other) => return Ok(other),
-                Err(AdvanceError::Refused(e)) | Err(AdvanceError::Hook(e)) => return Err(e),
-                Err(AdvanceError::Failed { error, .. }) => return Err(error),
+                Err(AdvanceError::Refused(e)) | Err(AdvanceError::Hook(e)) => return Err(e.into()),
+                Err(AdvanceError::Failed { error, good: true }) => {
+                    let (step, t) = (self.sim.state.step, self.sim.state.t);
+                    return Err(Failed {
+                        error,
+                        rolled_back: Some((step, t)),
+                    });
+                }
+                Err(AdvanceError::Failed { error, good: false }) => {
+                    self.broken = Some(error.to_string());
+                    return Err(error.into());
+                }
             }
         }
         Ok(Advanced::Reached)
@@ -401,6 +442,9 @@ struct PySnapshot {
     snapshot: Snapshot,
     recorder: Recorder,
     steady: bool,
+    /// The effective scene of the simulation it was taken from (a snapshot fits only a
+    /// simulation of the same scene).
+    scene: Scene,
 }
 
 #[pymethods]
@@ -468,6 +512,8 @@ impl PySimulation {
                     sim,
                     recorder,
                     steady: false,
+                    last_good: None,
+                    broken: None,
                 }),
             })
         })
@@ -476,10 +522,16 @@ impl PySimulation {
     /// Step to time `t` (landing on it exactly, and on the scene's output times on the way).
     /// Returns `True` when `t` was reached, `False` when the flow became steady first
     /// (`time.steady`). Ctrl-C stops at the end of the step under way and raises
-    /// `KeyboardInterrupt`; a failed step raises `efsi.UnstableError` (the state is then the
-    /// failing stage's).
+    /// `KeyboardInterrupt`; a failed step raises `efsi.UnstableError` with the simulation put
+    /// back to the state at the start of that step (its last good state: time, step count,
+    /// fields and probe rows), which the message names. A step whose state could not be put
+    /// back leaves the simulation unusable: every later call raises `efsi.EfsiError` until
+    /// `restore`.
     fn advance_to(&self, py: Python<'_>, t: f64) -> PyResult<bool> {
         let mut driver = self.lock()?;
+        if let Some(why) = &driver.broken {
+            return Err(broken_error(py, why));
+        }
         let driver: &mut Driver = &mut driver;
         let stop = AtomicUsize::new(0);
         let mut raised: Option<PyErr> = None;
@@ -514,13 +566,27 @@ impl PySimulation {
         });
         let result = match outcome {
             Ok(Ok(r)) => r,
-            Ok(Err(p)) | Err(p) => return Err(Failure::Other(panic_message(p.as_ref())).raise(py)),
+            Ok(Err(p)) | Err(p) => {
+                // A panic inside a step: the state is neither that step's start nor its end.
+                let message = panic_message(p.as_ref());
+                driver.broken = Some(message.clone());
+                return Err(Failure::Other(message).raise(py));
+            }
         };
         match (result, raised) {
             (_, Some(e)) => Err(e),
             (Ok(Advanced::Reached), None) => Ok(true),
             (Ok(_), None) => Ok(false),
-            (Err(e), None) => Err(efsi_err(py, e)),
+            (Err(Failed { error, rolled_back }), None) => Err(match rolled_back {
+                Some((step, t)) => efsi_err_noted(
+                    py,
+                    error,
+                    &format!(
+                        "the simulation is back at its last good state (step {step}, t = {t:.6e}): fix the cause (e.g. a smaller time.cfl or time.dt_max) and advance again, or restore a snapshot"
+                    ),
+                ),
+                None => efsi_err(py, error),
+            }),
         }
     }
 
@@ -613,25 +679,40 @@ impl PySimulation {
     }
 
     /// Save the state (and the probe rows recorded so far) to come back to with `restore`.
-    fn snapshot(&self) -> PyResult<PySnapshot> {
+    fn snapshot(&self, py: Python<'_>) -> PyResult<PySnapshot> {
         let d = self.lock()?;
+        if let Some(why) = &d.broken {
+            return Err(broken_error(py, why));
+        }
         Ok(PySnapshot {
             snapshot: d.sim.snapshot(),
             recorder: d.recorder.clone(),
             steady: d.steady,
+            scene: d.sim.scene.clone(),
         })
     }
 
-    /// Go back to a snapshot of this simulation: its state, time and probe rows. Raises
-    /// `efsi.SceneError` when the snapshot is of another scene.
+    /// Go back to a snapshot of a simulation of the same scene: its state, time and probe rows.
+    /// Raises `efsi.SceneError` naming the settings that differ when the snapshot is of another
+    /// scene (as a checkpoint of another run is refused), the simulation then unchanged.
     fn restore(&self, py: Python<'_>, snapshot: &PySnapshot) -> PyResult<()> {
         guarded(py, || {
             let mut d = self.lock()?;
+            let diffs = efsi_run::checkpoint::scene_differences(&snapshot.scene, &d.sim.scene);
+            if !diffs.is_empty() {
+                return Err(Failure::Scene(format!(
+                    "the snapshot is of another scene ({}): {}",
+                    snapshot.scene.name,
+                    diffs.join("; ")
+                ))
+                .raise(py));
+            }
             d.sim
                 .restore(&snapshot.snapshot)
                 .map_err(|e| efsi_err(py, e))?;
             d.recorder = snapshot.recorder.clone();
             d.steady = snapshot.steady;
+            d.broken = None;
             Ok(())
         })
     }
@@ -673,6 +754,14 @@ impl PySimulation {
             Err(_) => "efsi.Simulation(advancing)".into(),
         }
     }
+}
+
+/// The error of a simulation left unusable by a failed step whose state could not be put back.
+fn broken_error(py: Python<'_>, why: &str) -> PyErr {
+    Failure::Other(format!(
+        "the simulation cannot be used: a failed step left it in the failing stage's state and it could not be put back ({why}); restore a snapshot or build a new Simulation"
+    ))
+    .raise(py)
 }
 
 /// Write the current state of `sim` into `dir` with efsi-run's outputs (the scene's output

@@ -455,6 +455,10 @@ def test_model_description_declares_dependencies_ranges_units_and_provenance(ver
     for name, lo, hi in [("base_acceleration", -1000.0, 1000.0), ("solid.velocity[1]", -100.0, 100.0),
                          ("grid.nr", 1, 1000), ("max_solver_steps_per_step", 1, 10**9)]:
         assert (float(variables[name].min), float(variables[name].max)) == (lo, hi), name
+    # Open bounds (G > 0, a radius > 0, a CFL number > 0, refused at 0 when initialisation
+    # ends): declared as the smallest value accepted, the smallest double above 0.
+    for name in ("solid.law.parameters.G", "solid.shape.radius", "time.cfl"):
+        assert float(variables[name].min) == 5e-324, name
     assert variables["solid.law.parameters.G"].unit == "Pa"
     import zipfile
     names = zipfile.ZipFile(FMUS[version]).namelist()

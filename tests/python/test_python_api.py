@@ -320,3 +320,57 @@ def test_a_simulation_advancing_in_another_thread_is_busy_not_deadlocked():
     worker.join()
     assert busy == "the simulation is busy: advance_to is running on it in another thread"
     assert sim.time == 2.0
+
+
+def test_after_an_unstable_step_the_simulation_is_back_at_its_last_good_state():
+    """A failed step puts back the state at its start (as efsi run and the FMU do) and says so;
+    retrying fails the same step again from the same state, never from a corrupted one."""
+    lib = law_library("efsi_test_law_nan")
+    sim = efsi.Simulation(efsi.Scene.from_str(nan_law_scene(lib)))
+    with pytest.raises(efsi.UnstableError) as e:
+        sim.advance_to(0.6)
+    steps, t = sim.steps, sim.time
+    assert steps > 10 and 0 < t < 0.6, (steps, t)
+    message = str(e.value)
+    assert "stage `elastic`: law `test_nan`: non-finite stress" in message, message
+    import re
+
+    said = re.search(r"the simulation is back at its last good state \(step (\d+), t = ([0-9.e+-]+)\)", message)
+    assert said, message
+    assert int(said[1]) == steps and abs(float(said[2]) - t) <= 1e-6 * t, message
+    fields = {name: sim.field(name)[0] for name in ("u", "v", "p", "solid_fraction")}
+    assert all(np.all(np.isfinite(f)) for f in fields.values())
+    rows = sim.probes(frame=False)
+    assert rows["t"][-1] <= t
+    for _ in range(3):
+        with pytest.raises(efsi.UnstableError) as again:
+            sim.advance_to(0.6)
+        assert (sim.steps, sim.time) == (steps, t)
+        assert str(again.value) == message
+        for name, f in fields.items():
+            assert np.array_equal(sim.field(name)[0], f), name
+        assert len(sim.probes(frame=False)["t"]) == len(rows["t"])
+    # The state is a good one: a snapshot of it restores and fails the same step again.
+    snap = sim.snapshot()
+    assert (snap.time, snap.steps) == (t, steps)
+
+
+def test_restore_refuses_a_snapshot_of_another_scene():
+    sim = efsi.Simulation(efsi.Scene.from_str(CAVITY))
+    sim.advance_to(0.2)
+    snap = sim.snapshot()
+    thicker = efsi.Scene.from_str(CAVITY)
+    thicker.set("fluid.viscosity", 0.06)
+    other = efsi.Simulation(thicker)
+    other.advance_to(0.1)
+    with pytest.raises(efsi.SceneError) as e:
+        other.restore(snap)
+    assert "the snapshot is of another scene (py_api_cavity): fluid.viscosity: 0.05 → 0.06" in str(e.value), str(e.value)
+    assert other.time == 0.1 and other.steps > 0
+    # A simulation of the same scene takes it, and goes on as the one it was taken from.
+    same = efsi.Simulation(efsi.Scene.from_str(CAVITY))
+    same.restore(snap)
+    assert (same.time, same.steps) == (0.2, snap.steps)
+    sim.advance_to(0.4)
+    same.advance_to(0.4)
+    assert np.array_equal(same.field("u")[0], sim.field("u")[0])

@@ -2,7 +2,8 @@
 localhost, a 6-run sweep of the sphere impact at low resolution (shear modulus × cells per
 radius) through `Client(address)`, one worker killed mid-sweep; every row comes back, with the
 numbers of the same six runs made one after the other in this process. Also the outcomes of
-refused and unstable runs, the table's files, and `efsi sweep` from the command line.
+refused and unstable runs, the table's files, and `efsi sweep` from the command line; arguments
+refused before any run, rows written as they arrive, a run that kills its worker as a row.
 """
 
 import os
@@ -204,3 +205,119 @@ def test_efsi_sweep_from_the_command_line(tmp_path):
         env=dict(os.environ, EFSI_PYTHON=sys.executable),
     )
     assert bad.returncode == 2 and "PATH=V1,V2" in bad.stderr, bad.stderr
+
+
+def crash_at_high_g(sim):
+    """A summary that kills its process (as a crashing law library would) for G = 1.8e5."""
+    if sim.scene.get("solid.law.parameters.G") == 1.8e5:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return {"final_solid_v": float(sim.probes(frame=False)["solid_v"][-1])}
+
+
+def test_a_run_that_kills_its_worker_is_a_row_and_the_others_survive(tmp_path):
+    out = tmp_path / "crash.csv"
+    grid = {"solid.law.parameters.G": [1e5, 1.8e5, 1e6], "refine": [0.2]}
+    table = efsi.sweep(SPHERE, grid, summary=crash_at_high_g, until=0.002, out=out, progress=False, workers=2)
+    outcome = list(table["outcome"])
+    assert outcome[0] == "ok" and outcome[2] == "ok", outcome
+    assert outcome[1].startswith("crashed: the run killed its worker process"), outcome[1]
+    assert np.isnan(table["final_solid_v"][1]) and np.all(np.isfinite(table["final_solid_v"][[0, 2]]))
+    written = pandas.read_csv(out)
+    assert list(written["outcome"]) == outcome
+    serial = efsi.sweep(SPHERE, {"solid.law.parameters.G": [1e5, 1e6], "refine": [0.2]}, client=False,
+                        summary=crash_at_high_g, until=0.002, progress=False)
+    assert list(serial["final_solid_v"]) == [table["final_solid_v"][0], table["final_solid_v"][2]]
+
+
+def test_rows_are_written_as_they_arrive(tmp_path):
+    out = tmp_path / "rows.csv"
+    seen = []
+
+    def summary(sim):
+        # Each run's summary sees the rows of the runs before it already in the file.
+        seen.append(len(pandas.read_csv(out)) if out.exists() else 0)
+        return {"steps_seen": sim.steps}
+
+    runs = [{"time.end": 0.001, "refine": 0.2}] * 3
+    table = efsi.sweep(SPHERE, runs, client=False, summary=summary, out=out, progress=False)
+    assert seen == [0, 1, 2]
+    assert list(table["outcome"]) == ["ok"] * 3
+    pandas.testing.assert_frame_equal(pandas.read_csv(out), table, check_exact=False)
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, needle",
+    [
+        ({"grid": {"refine": ["abc"]}}, ValueError, "`refine` must be a finite number > 0, got 'abc'"),
+        ({"grid": {"refine": [0.0]}}, ValueError, "`refine` must be a finite number > 0, got 0.0"),
+        ({"grid": []}, ValueError, "the grid has no runs"),
+        ({"grid": {}}, ValueError, "the grid has no settings"),
+        ({"grid": [1, 2]}, TypeError, "run 0 must be a dict of settings"),
+        ({"grid": [{"grid.nx": [1, 2]}]}, TypeError, "run 0: `grid.nx` must be one value"),
+        ({"grid": {"grid.nx": 8}}, TypeError, "the values of `grid.nx` must be a list"),
+        ({"until": float("nan")}, ValueError, "until must be a finite time ≥ 0, got nan"),
+        ({"until": -1.0}, ValueError, "until must be a finite time ≥ 0, got -1.0"),
+        ({"workers": -3}, ValueError, "workers must be a whole number ≥ 1, got -3"),
+        ({"threads_per_run": 0}, ValueError, "threads_per_run must be a whole number ≥ 1, got 0"),
+        ({"out": "/nonexistent-efsi-folder/t.csv"}, ValueError, "the folder /nonexistent-efsi-folder does not exist"),
+        ({"out": "t.xlsx"}, ValueError, "the output must end in .csv, .parquet or .json"),
+    ],
+)
+def test_sweep_arguments_are_refused_before_any_run(kwargs, error, needle, tmp_path):
+    ran = []
+    args = dict(grid={"refine": [0.2]}, client=False, summary=lambda sim: ran.append(1), progress=False)
+    args.update(kwargs)
+    with pytest.raises(error) as e:
+        efsi.sweep(SPHERE, **args)
+    assert needle in str(e.value), str(e.value)
+    assert ran == []
+
+
+def test_an_existing_folder_as_out_is_refused(tmp_path):
+    folder = tmp_path / "d.csv"
+    folder.mkdir()
+    with pytest.raises(ValueError, match="cannot write the table: it is a folder"):
+        efsi.sweep(SPHERE, {"refine": [0.2]}, client=False, out=folder)
+
+
+def efsi_sweep(*args):
+    return subprocess.run(
+        [EFSI, "sweep", str(SPHERE), *args, "-q"],
+        capture_output=True,
+        text=True,
+        env=dict(os.environ, EFSI_PYTHON=sys.executable),
+        timeout=120,
+    )
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--grid", "refine=abc"], "`refine` must be a finite number > 0, got 'abc'"),
+        (["--runs", "{missing}"], "No such file or directory"),
+        (["--runs", "[]"], "the list has no runs"),
+        (["--runs", "{}"], "expected a JSON list of objects"),
+        (["--runs", "[1, 2]"], "run 0 must be a dict of settings"),
+        (["--runs", '[{"grid.nx": [8, 16]}]'], "run 0: `grid.nx` must be one value"),
+        (["--runs", "not json"], "not JSON"),
+        (["--grid", "refine=0.2", "--workers", "-3"], "--workers: must be at least 1, got -3"),
+        (["--grid", "refine=0.2", "--until", "NaN"], "--until: must be a finite time ≥ 0, got NaN"),
+        (["--grid", "refine=0.2", "--out", "/nonexistent-efsi-folder/t.csv"], "does not exist"),
+    ],
+)
+def test_efsi_sweep_refuses_bad_arguments_with_exit_code_2(args, needle, tmp_path):
+    args = list(args)
+    if "--runs" in args:
+        k = args.index("--runs") + 1
+        if args[k] == "{missing}":
+            args[k] = str(tmp_path / "missing.json")
+        else:
+            (tmp_path / "runs.json").write_text(args[k])
+            args[k] = str(tmp_path / "runs.json")
+    if "--out" not in args:
+        args += ["--out", str(tmp_path / "t.csv")]
+    done = efsi_sweep(*args)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert needle in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    assert not (tmp_path / "t.csv").exists()

@@ -152,14 +152,15 @@ enum Command {
     },
     /// List the constitutive laws, with their parameters, units, defaults and ranges.
     ///
-    /// Shows the shipped laws found on the law search path ($EFSI_LAW_PATH, next to efsi, the
-    /// build's target folders) and every law library given.
+    /// Shows the law libraries given, or without any, every law found on the law search path
+    /// ($EFSI_LAW_PATH, next to efsi, the build's target folders).
     ///
     /// With --check, runs the tangent check (the one every law passes when loaded: the tangent
     /// against central differences of the stress at 26 deformed states, default parameters) on
     /// each library given, or on every law found if none is; exit code 2 if a law fails it.
     Laws {
-        /// Law libraries to describe as well (e.g. one built from plugins/law-template).
+        /// Law libraries to describe (e.g. one built from plugins/law-template); none: every
+        /// law on the search path.
         paths: Vec<PathBuf>,
         /// Run the tangent check on the libraries instead of describing them.
         #[arg(long)]
@@ -611,11 +612,18 @@ fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
     }
 }
 
-/// `efsi laws`: describes every law found; a file on the search path that cannot be trusted
-/// (truncated, corrupted, another ABI) is skipped with a warning naming it and why; exit code 2
-/// if a library given could not be read.
+/// `efsi laws [LIB…]`: describes the libraries given, or without any every law found on the
+/// search path, where a file that cannot be trusted (truncated, corrupted, another ABI) is
+/// skipped with a warning naming it and why; exit code 2 if a library given could not be read.
 fn list_laws(paths: &[PathBuf]) -> ExitCode {
-    let laws = efsi_laws_host::list_laws(paths);
+    let laws = if paths.is_empty() {
+        efsi_laws_host::list_laws(&[])
+    } else {
+        paths
+            .iter()
+            .map(|p| efsi_laws_host::describe(p).map_or_else(Listed::Failed, Listed::Law))
+            .collect()
+    };
     if laws.is_empty() {
         out!(
             "no laws found; searched: {}",

@@ -1,6 +1,14 @@
 //! `efsi plot DIR`: a run looked at without ParaView — PNGs of the probe time series
 //! (`probes.png`, one panel per column) and of a field at an output time
-//! (`<field>_t<time>.png`, a colour map with the solid's φ = ½ contour drawn over it).
+//! (`<field>_t<time>.png`, a colour map with the solid's φ = ½ contour drawn over it in red).
+//!
+//! **What is drawn by default:** the velocity magnitude with arrows of the velocity (white, on
+//! a coarse lattice, the longest as long as the lattice's spacing), the solid's φ = ½ contour
+//! over it when there is a solid — what a person looks at a flow for. The colour range is the
+//! 1st to 99th percentile of the field's finite values (a corner singularity of the pressure,
+//! a few interface cells, do not make the rest one colour); values beyond it take the end
+//! colours, and the colour bar says so (`≤`, `≥`). Axis and colour-bar labels are plain
+//! decimals where they fit in a few digits (`0.02`, `1500`), scientific otherwise.
 //!
 //! Text uses a TrueType font found on the system (DejaVu Sans or Liberation Sans); without
 //! one the plots are drawn without text and a warning says so.
@@ -43,7 +51,7 @@ fn font() -> bool {
 
 /// What `efsi plot` draws besides the probes.
 pub struct FieldRequest {
-    /// The cell array (default: `solid_fraction` if the run has a solid, else `pressure`).
+    /// The cell array (default: `velocity`, its magnitude with arrows).
     pub field: Option<String>,
     /// Its component (default: see [`scalar`]).
     pub component: Option<usize>,
@@ -88,8 +96,7 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
         let data = read_vtr(&file).map_err(|e| e.to_string())?;
         let name = match &request.field {
             Some(f) => f.clone(),
-            None if data.cell("solid_fraction").is_some() => "solid_fraction".into(),
-            None => "pressure".into(),
+            None => "velocity".into(),
         };
         let p = out.join(format!("{name}_t{}.png", efsi_run::run::time_label(t)));
         plot_field(&data, &name, request.component, &p)?;
@@ -164,11 +171,12 @@ fn plot_probes(csv: &Path, png: &Path) -> Result<(), String> {
             }
             let mut chart = b.build_cartesian_2d(x0..x1, y0..y1)?;
             let mut mesh = chart.configure_mesh();
+            let (fx, fy) = (|v: &f64| tick(*v, x1 - x0), |v: &f64| tick(*v, y1 - y0));
             if text {
                 mesh.x_desc("t")
                     .label_style((FAMILY, 12))
-                    .x_label_formatter(&|v| format!("{v:.3e}"))
-                    .y_label_formatter(&|v| format!("{v:.3e}"));
+                    .x_label_formatter(&fx)
+                    .y_label_formatter(&fy);
             }
             mesh.draw()?;
             chart.draw_series(LineSeries::new(pts, BLUE.stroke_width(2)))?;
@@ -189,6 +197,68 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
     let w = (hi - lo).max(1e-12 * hi.abs().max(1e-300));
     (lo - 0.05 * w, hi + 0.05 * w)
+}
+
+/// A label for the value `v` on an axis spanning `span`: a plain decimal with the digits the
+/// span needs (`0.02`, `1500`, `-0.375`) when that takes at most 8 characters, else scientific
+/// with 3 significant digits (`2.50e-7`).
+pub fn tick(v: f64, span: f64) -> String {
+    if !v.is_finite() {
+        return v.to_string();
+    }
+    let span = if span.is_finite() && span > 0.0 {
+        span
+    } else {
+        v.abs().max(1e-300)
+    };
+    // Enough decimals to tell ticks a tenth of the span apart.
+    let decimals = (-(span / 10.0).log10().floor()).max(0.0) as usize;
+    if decimals <= 6 {
+        let text = format!("{v:.decimals$}");
+        let text = if text.contains('.') {
+            text.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            text
+        };
+        let text = if text == "-0" { "0".to_string() } else { text };
+        if text.len() <= 8 {
+            return text;
+        }
+    }
+    format!("{v:.2e}")
+}
+
+/// The `p`-quantile (`p` in [0, 1], nearest rank) of the finite values; None if there are none.
+pub fn percentile(values: &[f64], p: f64) -> Option<f64> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let k = ((p * (v.len() - 1) as f64).round() as usize).min(v.len() - 1);
+    Some(v[k])
+}
+
+/// The colour range of a field plot: the 1st and 99th percentiles of its finite values (from 0
+/// for a field that is never negative, such as a magnitude, when the 1st percentile is within
+/// 5 % of the range from it), the full range if those coincide (e.g. a field that is one value
+/// almost everywhere); (0, 1) without finite values.
+pub fn colour_range(values: &[f64]) -> (f64, f64) {
+    let (Some(lo), Some(hi)) = (percentile(values, 0.01), percentile(values, 0.99)) else {
+        return (0.0, 1.0);
+    };
+    if hi > lo {
+        let never_negative = percentile(values, 0.0).is_some_and(|m| m >= 0.0);
+        if never_negative && lo <= 0.05 * (hi - lo) {
+            return (0.0, hi);
+        }
+        return (lo, hi);
+    }
+    let (a, b) = (percentile(values, 0.0), percentile(values, 1.0));
+    match (a, b) {
+        (Some(a), Some(b)) if b > a => (a, b),
+        _ => (lo, lo + 1.0),
+    }
 }
 
 /// The scalar plotted for a cell array: component `component` if given, else the value of a
@@ -272,6 +342,65 @@ pub fn contour(
     segments
 }
 
+/// The colour of the solid's φ = ½ contour.
+const CONTOUR: RGBColor = RGBColor(230, 30, 30);
+
+/// Arrows across the longer side of a field plot.
+const ARROWS_ACROSS: usize = 24;
+
+/// Arrows of the cell vectors `v` (3 components a cell; `n1 × n2` cells between the edges `e1`,
+/// `e2`; in-plane components 0 and 2 for an axisymmetric r–z slice, else 0 and 1) on a lattice
+/// of about [`ARROWS_ACROSS`] along the longer side, each the polyline shaft and head; the
+/// longest is 0.9 of the lattice spacing. None where the field is zero or not finite.
+pub fn arrows(
+    v: &[f64],
+    (n1, n2): (usize, usize),
+    e1: &[f64],
+    e2: &[f64],
+    axisymmetric: bool,
+) -> Vec<[(f64, f64); 5]> {
+    let (w, h) = (e1[n1] - e1[0], e2[n2] - e2[0]);
+    let spacing = w.max(h) / ARROWS_ACROSS as f64;
+    let (m1, m2) = (
+        ((w / spacing).round() as usize).max(1),
+        ((h / spacing).round() as usize).max(1),
+    );
+    let second = if axisymmetric { 2 } else { 1 };
+    let cell = |e: &[f64], n: usize, x: f64| e.partition_point(|&a| a <= x).clamp(1, n) - 1;
+    let mut picked = Vec::new();
+    for b in 0..m2 {
+        for a in 0..m1 {
+            let x = e1[0] + (a as f64 + 0.5) * w / m1 as f64;
+            let y = e2[0] + (b as f64 + 0.5) * h / m2 as f64;
+            let k = cell(e2, n2, y) * n1 + cell(e1, n1, x);
+            let (u, vv) = (v[3 * k], v[3 * k + second]);
+            if u.is_finite() && vv.is_finite() {
+                picked.push((x, y, u, vv));
+            }
+        }
+    }
+    let longest = picked.iter().fold(0.0_f64, |m, p| m.max(p.2.hypot(p.3)));
+    if longest <= 0.0 {
+        return Vec::new();
+    }
+    let scale = 0.9 * spacing / longest;
+    picked
+        .into_iter()
+        .filter(|p| p.2 != 0.0 || p.3 != 0.0)
+        .map(|(x, y, u, vv)| {
+            let (dx, dy) = (u * scale, vv * scale);
+            let (tx, ty) = (x + 0.5 * dx, y + 0.5 * dy);
+            let (bx, by) = (x - 0.5 * dx, y - 0.5 * dy);
+            // The head: two barbs at ±25° back from the tip, a third of the arrow long.
+            let (c, s) = (0.906_307_787, 0.422_618_262);
+            let (hx, hy) = (-dx / 3.0, -dy / 3.0);
+            let left = (tx + c * hx - s * hy, ty + s * hx + c * hy);
+            let right = (tx + c * hx + s * hy, ty - s * hx + c * hy);
+            [(bx, by), (tx, ty), left, (tx, ty), right]
+        })
+        .collect()
+}
+
 fn plot_field(
     data: &VtrData,
     name: &str,
@@ -301,11 +430,15 @@ fn plot_field(
     let [x, y, z] = &data.coordinates;
     let (e1, e2) = if y.len() == 1 { (x, z) } else { (x, y) };
     let axes = if y.len() == 1 { ("r", "z") } else { ("x", "y") };
-    let (lo, hi) = values
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-    let span = if hi > lo { hi - lo } else { 1.0 };
+    let (lo, hi) = colour_range(&values);
+    let span = hi - lo;
+    let (below, above) = (
+        values.iter().any(|&v| v < lo),
+        values.iter().any(|&v| v > hi),
+    );
+    // Arrows of a vector field plotted as its magnitude.
+    let arrows = (component.is_none() && array.components == 3)
+        .then(|| arrows(&array.values, (n1, n2), e1, e2, y.len() == 1));
     let text = font();
     let label = match component {
         Some(k) => format!("{name}[{k}]"),
@@ -329,8 +462,13 @@ fn plot_field(
         let mut b = ChartBuilder::on(&main);
         b.margin(12);
         if text {
+            let what = if arrows.is_some() {
+                format!("{label} and its direction")
+            } else {
+                label.clone()
+            };
             b.caption(
-                format!("{label} at t = {}", efsi_run::run::time_label(data.time)),
+                format!("{what} at t = {}", efsi_run::run::time_label(data.time)),
                 (FAMILY, 22),
             )
             .x_label_area_size(40)
@@ -339,8 +477,14 @@ fn plot_field(
         let mut chart = b.build_cartesian_2d(x0..x1, y0..y1)?;
         let mut mesh = chart.configure_mesh();
         mesh.disable_mesh();
+        let (sx, sy) = (x1 - x0, y1 - y0);
+        let (fx, fy) = (move |v: &f64| tick(*v, sx), move |v: &f64| tick(*v, sy));
         if text {
-            mesh.x_desc(axes.0).y_desc(axes.1).label_style((FAMILY, 13));
+            mesh.x_desc(axes.0)
+                .y_desc(axes.1)
+                .label_style((FAMILY, 13))
+                .x_label_formatter(&fx)
+                .y_label_formatter(&fy);
         }
         mesh.draw()?;
         chart.draw_series((0..n2).flat_map(|j| {
@@ -360,7 +504,14 @@ fn plot_field(
             chart.draw_series(
                 segments
                     .into_iter()
-                    .map(|(a, b)| PathElement::new(vec![a, b], WHITE.stroke_width(2))),
+                    .map(|(a, b)| PathElement::new(vec![a, b], CONTOUR.stroke_width(3))),
+            )?;
+        }
+        if let Some(arrows) = &arrows {
+            chart.draw_series(
+                arrows
+                    .iter()
+                    .map(|a| PathElement::new(a.to_vec(), WHITE.stroke_width(1))),
             )?;
         }
         // The colour bar: its range top to bottom.
@@ -375,11 +526,75 @@ fn plot_field(
         }
         if text {
             let style = (FAMILY, 13).into_font().color(&BLACK);
-            bar.draw_text(&format!("{hi:.3e}"), &style, (0, -18))?;
-            bar.draw_text(&format!("{lo:.3e}"), &style, (0, bh as i32 + 4))?;
+            let top = if above { "≥ " } else { "" };
+            let bottom = if below { "≤ " } else { "" };
+            // One digit more than an axis tick: the ends are values, not steps.
+            bar.draw_text(&format!("{top}{}", tick(hi, span / 10.0)), &style, (0, -18))?;
+            bar.draw_text(
+                &format!("{bottom}{}", tick(lo, span / 10.0)),
+                &style,
+                (0, bh as i32 + 4),
+            )?;
         }
         root.present()?;
         Ok(())
     };
     draw().map_err(|e| format!("{}: {e}", png.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_plain_numbers_where_they_fit() {
+        assert_eq!(tick(0.02, 0.1), "0.02");
+        assert_eq!(tick(0.020000000000000004, 0.1), "0.02");
+        assert_eq!(tick(1500.0, 5000.0), "1500");
+        assert_eq!(tick(-0.25, 0.5), "-0.25");
+        assert_eq!(tick(0.0, 0.5), "0");
+        assert_eq!(tick(-1e-17, 0.5), "0");
+        assert_eq!(tick(0.045, 0.09), "0.045");
+        assert_eq!(tick(2.5e-7, 1e-6), "2.50e-7");
+        assert_eq!(tick(3.0e9, 1e10), "3.00e9");
+    }
+
+    #[test]
+    fn the_colour_range_is_the_1st_to_99th_percentile() {
+        // 1000 values in [0, 1) and two spikes, as a lid's corners give the pressure.
+        let mut v: Vec<f64> = (0..1000).map(|k| k as f64 / 1000.0).collect();
+        v.extend([1e6, -1e6, f64::NAN]);
+        let (lo, hi) = colour_range(&v);
+        assert!(
+            (0.0..0.02).contains(&lo) && (0.97..1.0).contains(&hi),
+            "{lo} {hi}"
+        );
+        // A magnitude starts at 0.
+        let speeds: Vec<f64> = (0..1000).map(|k| 0.001 + k as f64 / 1000.0).collect();
+        assert_eq!(colour_range(&speeds).0, 0.0);
+        // One value almost everywhere: the full range.
+        let mut flat = vec![1.0; 1000];
+        flat[3] = 2.0;
+        assert_eq!(colour_range(&flat), (1.0, 2.0));
+        assert_eq!(colour_range(&[f64::NAN]), (0.0, 1.0));
+    }
+
+    #[test]
+    fn arrows_follow_the_velocity() {
+        // A uniform flow along +x on a 10 × 5 grid of unit cells.
+        let e1: Vec<f64> = (0..=10).map(|k| k as f64).collect();
+        let e2: Vec<f64> = (0..=5).map(|k| k as f64).collect();
+        let v: Vec<f64> = (0..50).flat_map(|_| [2.0, 0.0, 0.0]).collect();
+        let a = arrows(&v, (10, 5), &e1, &e2, false);
+        assert!(!a.is_empty());
+        let spacing = 10.0 / ARROWS_ACROSS as f64;
+        for [base, tip, left, _, right] in a {
+            assert!((tip.0 - base.0 - 0.9 * spacing).abs() < 1e-12 && tip.1 == base.1);
+            // The barbs point back from the tip, one on each side.
+            assert!(left.0 < tip.0 && right.0 < tip.0);
+            assert!((left.1 - tip.1) * (right.1 - tip.1) < 0.0);
+        }
+        // No flow, no arrows.
+        assert!(arrows(&vec![0.0; 150], (10, 5), &e1, &e2, false).is_empty());
+    }
 }

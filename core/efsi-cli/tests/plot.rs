@@ -23,6 +23,55 @@ const DROP: &str = r#"Scene(
 )
 "#;
 
+/// The number of pixels of colour `rgb`.
+fn count(path: &Path, rgb: [u8; 3]) -> usize {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.pixels().filter(|p| p.0 == rgb).count()
+}
+
+/// A lid-driven cavity whose corners make the pressure's range a thousand times its interior's.
+const CAVITY: &str = r#"Scene(
+    name: "plot_cavity",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 24, ny: 24),
+    time: (end: 0.5),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    output: (vtk_every: 0.5, probe_every: 0.05, probes: [KineticEnergy]),
+)
+"#;
+
+/// A fluid scene's default picture is its velocity magnitude with arrows (no contour); the
+/// pressure's colour range is its 1st–99th percentile, not the lid corners' spikes.
+#[test]
+fn a_fluid_scene_shows_its_velocity_with_arrows() {
+    let d = tmp("cavity");
+    let scene = d.join("cavity.ron");
+    std::fs::write(&scene, CAVITY).unwrap();
+    let run = d.join("run");
+    let o = efsi(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = efsi(&["plot", run.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let field = run.join("plots/velocity_t0.5.png");
+    let (w, h, coloured, colours) = inspect(&field);
+    assert_eq!((w, h), (900, 900));
+    assert!(coloured > 0.3 && colours > 20, "{coloured} {colours}");
+    assert_eq!(count(&field, [230, 30, 30]), 0, "no solid, no contour");
+    // The pressure: a spread of colours, not one colour for the interior.
+    let o = efsi(&["plot", run.to_str().unwrap(), "--field", "pressure"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, _, colours) = inspect(&run.join("plots/pressure_t0.5.png"));
+    assert!(colours > 40, "{colours} colours");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// Width, height, the share of non-white pixels and the number of distinct colours.
 fn inspect(path: &Path) -> (u32, u32, f64, usize) {
     let img = image::open(path)
@@ -62,12 +111,15 @@ fn plot_writes_probe_and_field_pngs() {
     let (w, h, coloured, colours) = inspect(&run.join("plots/probes.png"));
     assert_eq!((w, h), (1200, 3 * 300));
     assert!(coloured > 0.02 && colours > 3, "{coloured} {colours}");
-    // The default field of a run with a solid, at the last output time.
-    let field = run.join("plots/solid_fraction_t0.2.png");
+    // The default picture, at the last output time: the velocity magnitude with its arrows
+    // (white) and the solid's φ = ½ contour (red) over it.
+    let field = run.join("plots/velocity_t0.2.png");
     assert!(out.contains(&field.display().to_string()), "{out}");
     let (w, h, coloured, colours) = inspect(&field);
     assert_eq!((w, h), (900, 900));
     assert!(coloured > 0.3 && colours > 20, "{coloured} {colours}");
+    let contour = count(&field, [230, 30, 30]);
+    assert!(contour > 200, "{contour} contour pixels");
 
     // A chosen field, component and time (the nearest output time, 0.1).
     let o = efsi(&[

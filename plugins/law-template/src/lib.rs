@@ -45,7 +45,8 @@ impl HyperelasticLaw for Gent {
     // EDIT: the law's name (shown by `efsi laws` and in error messages).
     const NAME: &'static str = "gent";
     // EDIT: one line saying what the law is.
-    const DESCRIPTION: &'static str = "Gent, τ = G Jm / (Jm − tr(B̃) + 3) B̃ (the law template)";
+    const DESCRIPTION: &'static str =
+        "Gent, τ(B) = G Jm / (Jm − tr(B) + 3) B of the solid's own B (the law template)";
 
     // EDIT: the parameters: name (as written in scenes), unit, description, default, range.
     // `new` receives the values in this order, each already checked against its range.

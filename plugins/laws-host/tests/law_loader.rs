@@ -164,6 +164,27 @@ fn wrong_tangent_is_refused_naming_the_law() {
     );
 }
 
+/// Saint Venant–Kirchhoff with λ = 0 or a small λ, inside its declared range (λ ≥ 0), passes
+/// the tangent check: at `B̃ = 0.5 I` its tangent is exactly zero (λ = 0) or of order λ, and the
+/// differences' round-off is judged against the law's stiffness at rest, not that zero.
+#[test]
+fn a_tangent_that_vanishes_at_a_state_is_judged_against_the_law_stiffness() {
+    for lambda in [0.0, 1e-3, 1.0] {
+        let law = load("saint_venant_kirchhoff", &[("lambda", lambda), ("mu", 1e5)])
+            .unwrap_or_else(|e| panic!("λ = {lambda}: {e}"));
+        let check = law.tangent_check();
+        assert!(check.passed(), "λ = {lambda}: {check}");
+        assert!(check.worst_relative_error < 1e-8, "λ = {lambda}: {check}");
+        // The state where the tangent vanishes is tested: |J(0.5 I)| ≤ λ (0 for λ = 0).
+        let (_, j) = eval(&law, &[[0.5, 0.5, 0.5, 0.0]]).unwrap();
+        let biggest = j[0].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        assert!(biggest <= lambda, "λ = {lambda}: {biggest}");
+    }
+    // A wrong tangent is still refused.
+    let path = test_plugin("efsi_test_law_wrong_tangent");
+    assert!(load(path.to_str().unwrap(), &[]).is_err());
+}
+
 #[test]
 fn missing_library_file() {
     let e = load("definitely_not_a_law", &[]).unwrap_err();

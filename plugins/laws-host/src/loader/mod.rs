@@ -48,11 +48,14 @@ pub use resolve::{library_file_name, resolve_law, search_dirs};
 pub use tangent::{TangentCheck, check_tangent, tangent_check_states};
 
 /// Relative tolerance of the load-time tangent check: at every test state,
-/// `max_ab |J_ab − J_fd,ab| ≤ FD_TANGENT_TOLERANCE · max(max|J|, max|J_fd|)`, with `J_fd` the
-/// central difference of the stress, step `h = 1e-6 · max(1, max|B̃|)`. Central differences
-/// of a smooth law at that step err by ~1e-10 relative (round-off `ε/h`, truncation `h²`), so
-/// the tolerance leaves a wide margin while a wrong term or factor fails it by orders of
-/// magnitude.
+/// `max_ab |J_ab − J_fd,ab| ≤ FD_TANGENT_TOLERANCE · max(max|J|, max|J_fd|, max|J(I)|)`, with
+/// `J_fd` the central difference of the stress, step `h = 1e-6 · max(1, max|B̃|)`, and `J(I)` the
+/// law's tangent at rest. Central differences of a smooth law at that step err by ~1e-10 of the
+/// stress scale (round-off `ε|τ|/h`, truncation `h²`), so the tolerance leaves a wide margin
+/// while a wrong term or factor fails it by orders of magnitude. The floor `max|J(I)|` is the
+/// law's own stiffness: at a state where the tangent vanishes or nearly does (Saint
+/// Venant–Kirchhoff with λ = 0 has `J = 0` at `B̃ = 0.5 I`, and `J ≈ λ` with a small λ) the
+/// round-off of the differences is judged against it, not against that zero.
 pub const FD_TANGENT_TOLERANCE: f64 = 1e-5;
 
 /// Environment variable with extra folders (`:`-separated) to look for shipped-law libraries in,

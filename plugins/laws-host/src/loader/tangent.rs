@@ -13,7 +13,9 @@ pub struct TangentCheck {
     /// Number of states skipped because the law could not evaluate them (outside its domain,
     /// e.g. past a locking stretch); at most half.
     pub skipped: usize,
-    /// The worst `max|J − J_fd| / max(max|J|, max|J_fd|)` over the states.
+    /// The worst `max|J − J_fd| / max(max|J|, max|J_fd|, max|J(I)|)` over the states (the
+    /// error relative to the state's tangent, floored by the law's stiffness at rest: see
+    /// [`FD_TANGENT_TOLERANCE`]).
     pub worst_relative_error: f64,
     /// The state where it occurred.
     pub worst_state: Sym,
@@ -103,9 +105,16 @@ pub fn check_tangent(law: &dyn ConstitutiveLaw) -> Result<TangentCheck, LawError
             (pairs, skipped)
         }
     };
+    // The law's stiffness at rest, `max|J(I)|` (B̃ = I is the first state, which must
+    // evaluate): the floor of every state's scale, so that a state where the tangent is
+    // (nearly) zero — Saint Venant–Kirchhoff with λ = 0 at B̃ = 0.5 I — is judged against the
+    // law's own scale, not against round-off.
+    let magnitude =
+        |j: &Tangent, fd: &Tangent| j.iter().chain(fd).fold(0.0_f64, |m, x| m.max(x.abs()));
+    let rest = magnitude(&pairs[0].1, &pairs[0].2);
     let mut worst: Option<TangentCheck> = None;
     for (b, j, fd) in &pairs {
-        let scale = j.iter().chain(fd).fold(0.0_f64, |m, x| m.max(x.abs()));
+        let scale = magnitude(j, fd).max(rest);
         let (i, err) = (0..16)
             .map(|i| (i, (j[i] - fd[i]).abs()))
             .fold((0, 0.0), |best, e| if e.1 > best.1 { e } else { best });

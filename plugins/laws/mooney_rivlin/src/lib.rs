@@ -36,8 +36,7 @@ pub struct MooneyRivlin {
 
 impl HyperelasticLaw for MooneyRivlin {
     const NAME: &'static str = "mooney_rivlin";
-    const DESCRIPTION: &'static str =
-        "Mooney–Rivlin, τ = 2C1 B̃ + 2C2 [tr(B̃) B̃ − B̃·B̃] + 4C3 [tr(B̃) − 3] B̃ (seed Eq. 7)";
+    const DESCRIPTION: &'static str = "Mooney–Rivlin, τ(B) = 2C1 B + 2C2 [tr(B) B − B·B] + 4C3 [tr(B) − 3] B of the solid's own B (seed Eq. 7)";
 
     fn parameters() -> &'static [ParamDecl] {
         const P: &[ParamDecl] = &[

@@ -19,7 +19,7 @@ pub struct NeoHookean {
 
 impl HyperelasticLaw for NeoHookean {
     const NAME: &'static str = "neo_hookean";
-    const DESCRIPTION: &'static str = "neo-Hookean, τ = G B̃ (seed Eq. 9)";
+    const DESCRIPTION: &'static str = "neo-Hookean, τ(B) = G B of the solid's own B (seed Eq. 9)";
 
     fn parameters() -> &'static [ParamDecl] {
         const P: &[ParamDecl] =

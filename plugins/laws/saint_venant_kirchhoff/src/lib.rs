@@ -35,8 +35,7 @@ pub struct SaintVenantKirchhoff {
 
 impl HyperelasticLaw for SaintVenantKirchhoff {
     const NAME: &'static str = "saint_venant_kirchhoff";
-    const DESCRIPTION: &'static str =
-        "Saint Venant–Kirchhoff, τ = (λ/2)[tr(B̃) − 3] B̃ + μ (B̃·B̃ − B̃) (seed Eqs. 7, 10)";
+    const DESCRIPTION: &'static str = "Saint Venant–Kirchhoff, τ(B) = (λ/2)[tr(B) − 3] B + μ (B·B − B) of the solid's own B (seed Eqs. 7, 10)";
 
     fn parameters() -> &'static [ParamDecl] {
         const P: &[ParamDecl] = &[

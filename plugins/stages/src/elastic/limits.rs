@@ -16,7 +16,10 @@ pub const MIN_CELLS_ACROSS: f64 = 5.0;
 /// the largest diagonal entry of the law's tangent at `B̃ = I` (the shear modulus for the
 /// shipped laws): `split` at `s` = [`super::ElasticOptions::wave_courant`], `coupled` at
 /// [`super::ElasticOptions::coupled_wave_courant`] where the scene may take the coupled step
-/// (else equal to `split`).
+/// (else equal to `split`). The stiffness is the rest state's: a law that stiffens under strain
+/// (Gent near its locking stretch, Mooney–Rivlin with `C3 > 0`) carries faster waves where the
+/// solid is deformed than this limit allows for — it is under-limited there, and a run that
+/// goes unstable at large strain needs a smaller `time.cfl` or `wave_courant`.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct WaveLimits {
     pub(super) split: f64,

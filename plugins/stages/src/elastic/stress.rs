@@ -4,6 +4,7 @@
 use super::{Kernels, PAR_POINTS, at, avg4, rows1, rows3};
 use efsi_core::Field;
 use efsi_laws_host::ConstitutiveLaw;
+use efsi_laws_host::{LawError, Sym, Tangent};
 
 /// The law's stress in the undeformed state `B = I` (the same at every point).
 pub(super) fn rest_stress(law: &dyn ConstitutiveLaw) -> Result<efsi_laws_host::Sym, String> {
@@ -13,10 +14,91 @@ pub(super) fn rest_stress(law: &dyn ConstitutiveLaw) -> Result<efsi_laws_host::S
     Ok(r[0])
 }
 
+/// `eval(b, tau, tangent)` on the points `q` of a batch with `live(q)` only, in one call: the
+/// live points are moved to the front (a sequence of swaps), evaluated, and the swaps undone,
+/// so that every array is back in the batch's order with the live points' results, the stress
+/// `dead` and a zero tangent at the others, and `b` unchanged. An error's cell is the batch
+/// index `q` of the live point it names.
+fn live_only(
+    live: impl Fn(usize) -> bool,
+    dead: Sym,
+    b: &mut [Sym],
+    tau: &mut [Sym],
+    mut tangent: Option<&mut [Tangent]>,
+    eval: impl FnOnce(&[Sym], &mut [Sym], Option<&mut [Tangent]>) -> Result<(), LawError>,
+) -> Result<(), LawError> {
+    let n = b.len();
+    let mut m = 0;
+    for q in 0..n {
+        if live(q) {
+            b.swap(m, q);
+            m += 1;
+        }
+    }
+    let result = eval(
+        &b[..m],
+        &mut tau[..m],
+        tangent.as_deref_mut().map(|j| &mut j[..m]),
+    );
+    tau[m..].fill(dead);
+    if let Some(j) = tangent.as_deref_mut() {
+        j[m..].fill([0.0; 16]);
+    }
+    for q in (0..n).rev() {
+        if live(q) {
+            m -= 1;
+            b.swap(m, q);
+            tau.swap(m, q);
+            if let Some(j) = tangent.as_deref_mut() {
+                j.swap(m, q);
+            }
+        }
+    }
+    result.map_err(|mut e| {
+        e.cell = e.cell.and_then(|c| (0..n).filter(|&q| live(q)).nth(c));
+        e
+    })
+}
+
 impl Kernels {
+    /// The law on the centre batch (`cb` into `ct`, and `cj` if `tangent`), or on the corner
+    /// batch (`kb`, `kt`, `kj`) if `corners`, at the points with a weight only (`w > 0` at a
+    /// centre, `w_k > 0` at a corner: those holding or touching solid), in one call; the
+    /// others get the stress `dead` and a zero tangent ([`live_only`]). A law's error names
+    /// the grid point.
+    pub(super) fn batch(
+        &mut self,
+        law: &dyn ConstitutiveLaw,
+        corners: bool,
+        tangent: bool,
+        dead: Sym,
+    ) -> Result<(), String> {
+        let (win, weights) = if corners {
+            (self.solid_k, &self.wk)
+        } else {
+            (self.solid_c, &self.w)
+        };
+        let n = win.points();
+        let width = (win.i1 - win.i0 + 1).max(1) as usize;
+        let live = |q: usize| {
+            weights[(win.i0 + (q % width) as isize, win.j0 + (q / width) as isize)] != 0.0
+        };
+        let (b, t, j) = if corners {
+            (&mut self.kb[..n], &mut self.kt[..n], &mut self.kj[..n])
+        } else {
+            (&mut self.cb[..n], &mut self.ct[..n], &mut self.cj[..n])
+        };
+        let result = live_only(live, dead, b, t, tangent.then_some(j), |b, t, j| {
+            law.evaluate(b, t, j)
+        });
+        result.map_err(|e| self.locate(e, corners))
+    }
+
     /// τ (and J if `tangent`) of `b` into the batches and `tau`. The law sees the solid's
     /// centres and corners only ([`Kernels::solid_c`], `solid_k`, packed in that order: see
-    /// [`Kernels::ci`]); elsewhere the weights `w`, `1/κ` vanish and so does `tau`.
+    /// [`Kernels::ci`]), and of those only the ones with a weight (`w > 0`, `w_k > 0`): it is
+    /// never called on a point without solid. Elsewhere the weights `w`, `1/κ` vanish and so
+    /// does `tau`.
     pub(super) fn evaluate(
         &mut self,
         law: &dyn ConstitutiveLaw,
@@ -25,7 +107,7 @@ impl Kernels {
         tangent: bool,
     ) -> Result<(), String> {
         let (cw, kw) = (self.solid_c, self.solid_k);
-        let (nc, nk) = (cw.points(), kw.points());
+        let nc = cw.points();
         let s = b[0].stride();
         let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
         for j in cw.j0..=cw.j1 {
@@ -59,22 +141,17 @@ impl Kernels {
         if nc == 0 {
             return Ok(());
         }
-        law.evaluate(
-            &self.cb[..nc],
-            &mut self.ct[..nc],
-            tangent.then_some(&mut self.cj[..nc]),
-        )
-        .map_err(|e| self.locate(e, false))?;
-        law.evaluate(
-            &self.kb[..nk],
-            &mut self.kt[..nk],
-            tangent.then_some(&mut self.kj[..nk]),
-        )
-        .map_err(|e| self.locate(e, true))?;
+        // The law is called only where the weight is not zero (centres with solid, corners
+        // touching it): the window's other points hold no solid — the fluid's B = I at a
+        // centre, nothing (B̃ = 0, outside many laws' domains) at a corner. Their stress is the
+        // rest stress at a centre (nothing once it is subtracted) and zero at a corner, their
+        // tangent zero; all of it is weighted by zero.
+        let r = rest_stress(law)?;
+        self.batch(law, false, tangent, r)?;
+        self.batch(law, true, tangent, [0.0; 4])?;
         // Subtract the stress of the stress-free state B = I (B̃ = w I): isotropic, so only a
         // change of pressure — but it jumps across the interface, and fed through the implicit
         // solve it would not stay a pure gradient (see "Stress-free reference" in the docs).
-        let r = rest_stress(law)?;
         for t in &mut self.ct[..nc] {
             for c in 0..3 {
                 t[c] -= r[c];

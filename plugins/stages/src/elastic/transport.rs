@@ -240,9 +240,8 @@ impl Kernels {
         if !any {
             return Ok(());
         }
-        let nk = kw.points();
-        law.evaluate(&self.kb[..nk], &mut self.kt[..nk], Some(&mut self.kj[..nk]))
-            .map_err(|e| self.locate(e, true))?;
+        // At the corners touching solid only (the law may be undefined at B = 0).
+        self.batch(law, true, true, [0.0; 4])?;
         for j in kw.j0..=kw.j1 {
             for i in kw.i0..=kw.i1 {
                 let k = start[0].idx(i, j);
