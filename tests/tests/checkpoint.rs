@@ -303,9 +303,11 @@ fn a_checkpoint_of_an_earlier_format_is_refused_naming_its_version() {
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/checkpoint-format-4.efsick");
     let old = std::fs::read(&fixture).unwrap();
     assert_eq!(&old[..12], b"EFSICKPT\x04\0\0\0");
-    let expected = "checkpoint format version 4 (written by an earlier efsi); this efsi reads \
-                    version 5 only; finish that run with the efsi that wrote the checkpoint, or \
-                    start it again";
+    let expected = format!(
+        "checkpoint format version 4 (written by an earlier efsi); this efsi reads version {} \
+         only; finish that run with the efsi that wrote the checkpoint, or start it again",
+        checkpoint::FORMAT_VERSION
+    );
     let e = CheckpointFile::read(&fixture).unwrap_err();
     assert_eq!(e.to_string(), format!("{}: {expected}", fixture.display()));
     let dir = cavity_checkpoint("format-4");
