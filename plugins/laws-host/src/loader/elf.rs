@@ -239,6 +239,30 @@ mod imp {
             }
         }
         for (k, ph) in phdrs.iter().enumerate() {
+            // The loader finds the program headers in memory by PT_PHDR, and protects the
+            // PT_GNU_RELRO range read-only: both must be where the loadable segments put them.
+            if ph.p_type(endian) == elf::PT_PHDR {
+                let (addr, size) = (ph.p_vaddr(endian), ph.p_filesz(endian));
+                let placed = loads.iter().any(|l| {
+                    l.holds_file(addr, size) && l.file_offset(addr) == header.e_phoff(endian)
+                });
+                if !placed || ph.p_offset(endian) != header.e_phoff(endian) {
+                    return Err(format!(
+                        "its program header segment (segment {k}, address {addr:#x}) is not where a loadable segment maps the program headers"
+                    ));
+                }
+            }
+            if ph.p_type(endian) == elf::PT_GNU_RELRO {
+                let (addr, size) = (ph.p_vaddr(endian), ph.p_memsz(endian));
+                if !loads
+                    .iter()
+                    .any(|l| l.holds_memory(addr, size) && l.flags & elf::PF_W.0 != 0)
+                {
+                    return Err(format!(
+                        "its read-only-after-relocation range (segment {k}, address {addr:#x}, {size} bytes) is not inside one writable loadable segment"
+                    ));
+                }
+            }
             if ph.p_type(endian) == elf::PT_TLS
                 && (ph.p_filesz(endian) > ph.p_memsz(endian) || ph.p_memsz(endian) > 1 << 30)
             {
@@ -321,13 +345,20 @@ mod imp {
         // standard sizes (it asserts them), and no tag outside the defined ranges.
         for (tag, what, size_tag) in tables {
             if let Some(size_tag) = size_tag
-                && value(tag).is_some()
-                && value(size_tag).is_none()
+                && value(tag).is_some() != value(size_tag).is_some()
             {
                 return Err(format!(
-                    "its dynamic table gives the {what} without its size: the table is corrupted"
+                    "its dynamic table gives the {what} without its size, or its size without \
+                     it: the table is corrupted"
                 ));
             }
+        }
+        if value(elf::DT_PLTREL).is_some() != value(elf::DT_JMPREL).is_some() {
+            return Err(
+                "its dynamic table gives the PLT relocations' kind without the table, or the \
+                 table without its kind: the table is corrupted"
+                    .into(),
+            );
         }
         for (tag, what, size) in [
             (elf::DT_RELAENT, "RELA entries", 24),
@@ -359,6 +390,23 @@ mod imp {
                 "its dynamic table declares PLT relocations of kind {v}, neither RELA nor REL"
             ));
         }
+        // Each tag once (the loader keeps the last of a repeated one, this check the first),
+        // but for the lists (needed libraries, filters).
+        for (k, d) in entries.iter().enumerate() {
+            let t = d.tag(endian);
+            let list = [
+                elf::DT_NEEDED,
+                elf::DT_AUXILIARY,
+                elf::DT_FILTER,
+                elf::DT_POSFLAG_1,
+            ];
+            if !list.contains(&t) && entries[..k].iter().any(|e| e.tag(endian) == t) {
+                return Err(format!(
+                    "its dynamic table gives tag {:#x} twice: the table is corrupted",
+                    t.0
+                ));
+            }
+        }
         for d in entries {
             let t = d.tag(endian).0;
             // The loader files an entry by its tag's range (the GNU value, address and
@@ -366,7 +414,7 @@ mod imp {
             // another table's slot.
             let known = (0..=elf::DT_RELRENT.0).contains(&t)
                 || (0x6fff_fd00..=0x6fff_ffff).contains(&t)
-                || (0x7000_0000..=0x7000_00ff).contains(&t)
+                || (std::env::consts::ARCH != "x86_64" && (0x7000_0000..=0x7000_00ff).contains(&t))
                 || (0x7fff_fffd..=0x7fff_ffff).contains(&t);
             if !known {
                 return Err(format!(
