@@ -10,7 +10,6 @@ use crate::lock::FolderLock;
 use crate::output::spec::{ProbeSpec, ProfileSpec};
 use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
 use crate::probes;
-use xxhash_rust::xxh3::Xxh3;
 use efsi_core::due;
 use efsi_core::error::EfsiError;
 use efsi_core::grid::Grid;
@@ -19,6 +18,7 @@ use efsi_core::state::State;
 use std::fs::{self, File};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use xxhash_rust::xxh3::Xxh3;
 
 /// The writers of one run.
 pub struct Outputs {
