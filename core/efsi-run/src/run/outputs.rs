@@ -5,7 +5,7 @@
 use super::folder::{earlier_outputs, make_dirs, open_append, probe_header, replace_earlier_run};
 use super::record::new_run_id;
 use super::time_label;
-use crate::checkpoint::{self, OutputState};
+use crate::checkpoint::OutputState;
 use crate::lock::FolderLock;
 use crate::output::spec::{ProbeSpec, ProfileSpec};
 use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
