@@ -494,6 +494,13 @@ impl Outputs {
     }
 }
 
+/// An XXH3 hasher fed with `bytes` (a streamed hash equals the one-shot hash of all it was fed).
+fn hasher_of(bytes: &[u8]) -> Xxh3 {
+    let mut h = Xxh3::new();
+    h.update(bytes);
+    h
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -543,11 +550,4 @@ mod tests {
         assert_eq!(events_due(1.0, f64::NAN, 7), 7);
         assert_eq!(events_due(0.0, 1e-22, 0), counted(0.0, 1e-22, 0));
     }
-}
-
-/// An XXH3 hasher fed with `bytes` (a streamed hash equals the one-shot hash of all it was fed).
-fn hasher_of(bytes: &[u8]) -> Xxh3 {
-    let mut h = Xxh3::new();
-    h.update(bytes);
-    h
 }
