@@ -304,7 +304,7 @@ pub fn json(scene: &Scene) -> serde_json::Value {
 
 /// Why `every` cannot be an interval of outputs or checkpoints in a run timed by `time`, if it
 /// cannot: shorter than the smallest step (`time.dt_min`), or than `time.end /`
-/// [`MAX_EVENTS`](efsi_core::scene::MAX_EVENTS) ([`TimeSpec::shortest_interval`]).
+/// [`MAX_EVENTS`] ([`TimeSpec::shortest_interval`]).
 pub fn interval(time: &TimeSpec, every: f64) -> Result<(), String> {
     let dt_min = time.dt_min_or_default();
     if every < dt_min {

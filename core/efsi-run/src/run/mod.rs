@@ -35,7 +35,7 @@
 //! output bookkeeping as it was before that step's outputs, so a resume writes them again. A
 //! `probes.csv` append that fails part-way is cut back to the last whole row. Every failure is
 //! recorded in `run.json` (`"stop": {"Failed": {"error", "exit_code"}}`). Room for that last
-//! checkpoint and `run.json` is kept on disk from the start of the run ([`room`]:
+//! checkpoint and `run.json` is kept on disk from the start of the run (`room`:
 //! `checkpoint/room`, freed before they are written), so a full disk or a file-size limit
 //! (`EFBIG`; the CLI ignores SIGXFSZ so that such a write fails rather than killing it) still
 //! leaves a run that can be resumed and a record of why it stopped.
