@@ -125,7 +125,7 @@ pub(crate) fn elide(text: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
-/// [`elide`] for other crates' messages: `text` whole when short, else cut with its length.
+/// `elide` for other crates' messages: `text` whole when short, else cut with its length.
 pub fn elide_text(text: &str) -> String {
     elide(text).into_owned()
 }
