@@ -712,11 +712,11 @@ pub const SPHERE: &[&str] = &[
     "--parameter",
     "grid.nr",
     "--range",
-    "grid.nr=1..1000",
+    "grid.nr=2..1000",
     "--parameter",
     "grid.nz",
     "--range",
-    "grid.nz=1..2000",
+    "grid.nz=2..2000",
     "--parameter",
     "refine",
     "--range",
@@ -880,6 +880,6 @@ mod tests {
         }
         // A closed bound the scene accepts stays as given.
         let nr = vars.iter().find(|v| v.name == "grid.nr").unwrap();
-        assert_eq!((nr.min, nr.max), (Some(1.0), Some(1000.0)));
+        assert_eq!((nr.min, nr.max), (Some(2.0), Some(1000.0)));
     }
 }

@@ -453,7 +453,7 @@ def test_model_description_declares_dependencies_ranges_units_and_provenance(ver
     # No output depends directly on the input: no algebraic loop for an importer to break.
     assert md.outputs and all(u.dependencies == [] for u in md.outputs)
     for name, lo, hi in [("base_acceleration", -1000.0, 1000.0), ("solid.velocity[1]", -100.0, 100.0),
-                         ("grid.nr", 1, 1000), ("max_solver_steps_per_step", 1, 10**9)]:
+                         ("grid.nr", 2, 1000), ("max_solver_steps_per_step", 1, 10**9)]:
         assert (float(variables[name].min), float(variables[name].max)) == (lo, hi), name
     # Open bounds (G > 0, a radius > 0, a CFL number > 0, refused at 0 when initialisation
     # ends): declared as the smallest value accepted, the smallest double above 0.
