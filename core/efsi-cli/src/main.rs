@@ -594,7 +594,7 @@ fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
         use std::os::unix::process::CommandExt as _;
         let e = c.exec();
         eprintln!(
-            "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+            "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see docs/python.md)",
             Path::new(&python).display()
         );
         ExitCode::from(2)
@@ -604,7 +604,7 @@ fn sweep(args: &[std::ffi::OsString]) -> ExitCode {
         Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
         Err(e) => {
             eprintln!(
-                "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see the README's Python section)",
+                "error: efsi sweep needs the efsi Python package: cannot start {} ({e}); set EFSI_PYTHON to the Python that has it (see docs/python.md)",
                 Path::new(&python).display()
             );
             ExitCode::from(2)

@@ -25,7 +25,7 @@ pub struct ElasticOptions {
     /// Iteration cap (default 5000).
     #[serde(default = "default_elastic_iter")]
     pub max_iterations: usize,
-    /// Preconditioner of BiCGSTAB (default `Multigrid`).
+    /// Preconditioner of BiCGSTAB (default `Auto`).
     #[serde(default)]
     pub preconditioner: ElasticPreconditioner,
     /// The largest elastic-wave Courant number `Δt·c/h` a step may take (default and largest
