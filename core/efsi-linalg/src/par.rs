@@ -20,14 +20,10 @@ use rayon::prelude::*;
 /// Length of the fixed chunks of a reduction (a multiple of 4).
 pub const REDUCE_CHUNK: usize = 4096;
 
-/// Below this many elements a loop runs serially (a fork costs a few microseconds).
-///
-/// Chosen by measurement (whole processes on two threads, interleaved, each round started on a
-/// quiet machine, 2026-11-28): 2048 instead of 8192 made the 35-cells-per-radius sphere's
-/// two-thread run 7–8 % faster (medians of 6, 8 and 10 rounds: 0.967, 0.917, 0.927 of 8192's
-/// time), with the drop 256² (0.985) and the cavity 128² (1.042 and 0.915 in two sets of
-/// rounds) within the noise and one thread unchanged (0.995–1.004); 1024 and 512 were no better
-/// than 2048 (sphere 0.916–0.934 and 0.897–0.914), 16384 and 32768 9 % and 16 % slower.
+/// Below this many elements a loop runs serially (a fork costs a few microseconds). Small
+/// enough that the multigrid's coarse levels and the vector operations on them still fork on
+/// two threads, large enough that a fork is paid for; the choice only moves time, never bits
+/// (`tests/tests/parallel.rs`).
 pub const PAR_MIN: usize = 2048;
 
 /// Four-lane dot product of two equal-length slices (vectorises).

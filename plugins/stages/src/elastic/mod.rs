@@ -249,9 +249,8 @@
 //!   SPD approximation `M − vol·∇·(2ηD)` with `η = θΔt μ + (Δt²/2) G_eff` (`Kernels::stiffness`:
 //!   `G_eff` from the tangent's diagonal and B̃, and at the interface corners the series
 //!   factors) is preconditioned by one multigrid V-cycle on each of its u–u and v–v blocks
-//!   (`block_multigrid`). On the sphere impact at 35 cells per radius: 11.7 iterations
-//!   per step at 1e-10 (12.2 on 2026-11-27; 6.0 at the default 1e-6) where Jacobi needs 37.7 (Jacobi's count grows with the elastic wave's
-//!   Courant number `Δt√(G/ρ)/h`, the block multigrid's hardly).
+//!   (`block_multigrid`). Jacobi's iteration count grows with the elastic wave's Courant
+//!   number `Δt√(G/ρ)/h`, the block multigrid's hardly.
 //! - `Jacobi`: a bound of the diagonal (the mass plus the stiffness over `h²`).
 //! - `Auto` (the default): `Multigrid`, but `Jacobi` in scenes with a periodic boundary — the
 //!   red–black smoother keeps a flow uniform along the periodic direction uniform only to the

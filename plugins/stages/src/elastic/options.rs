@@ -66,9 +66,8 @@ pub struct ElasticOptions {
     /// θ's damping: at a cap of 200, 0.6 and 0.55 lose 1.48e-3 and 1.82e-3 against 1.17e-3.
     #[serde(default)]
     pub theta: Option<f64>,
-    /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500; the stability map's
-    /// sphere at the tolerance 1e-10, the default until 2026-11-27, took 37 a step on average
-    /// at G = 1e9 Pa).
+    /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500, an order of
+    /// magnitude above what the stability map's stiffest spheres take).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
     /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
@@ -83,16 +82,10 @@ pub struct ElasticOptions {
     /// 454, 339, 284 and 232 steps at caps of 25, 50, 100 and 200 (1.030, 1.029, 1.025,
     /// 1.025 m/s; no energy gained beyond 2.9e-5 of the budget).
     ///
-    /// What a long coupled step costs away from walls is the time error any step of that
-    /// length has: a stiff disk spinning rigidly in a vortex cell (G = 1e9 Pa, 32², to t = 0.1,
-    /// where the cap sets Δt) ends 1.9e-4, 4.2e-4, 9.1e-4 and 1.17e-3 of its kinetic energy
-    /// below the split step's 800 steps at caps of 25, 50, 100 and 200 (128, 64, 32, 16 steps;
-    /// first order in time). A disk as rigid there but softer, G = 4e5 Pa, whose split wave cap
-    /// gives the same 16 steps of 6.25e-3 s, ends 2.49e-3 below its own 800-step run under
-    /// `Split` (1.94e-3 under `Coupled`); the vortex without the disk, in 16 fixed steps,
-    /// within 1.2e-4 of its 800-step run. So `Auto` takes its flights at 200: a stiff solid is
-    /// then no less accurate than a soft one at the step its own wave cap allows (measured
-    /// 2026-11-28, `tests/tests/elastic.rs`; the cap of 25 was the one default until then).
+    /// A long coupled step away from walls costs the time error any step of that length has
+    /// (first order in time), no more: so `Auto` takes its flights at the largest cap, and a
+    /// stiff solid is no less accurate than a soft one at the step its own wave cap allows
+    /// (`tests/tests/elastic.rs`, the spinning disk).
     #[serde(default)]
     pub coupled_wave_courant: Option<f64>,
 }
