@@ -25,6 +25,19 @@ pub(super) struct Profiles {
     pub dt64: f64,
 }
 
+/// The Couette cases' viscous step: Crank–Nicolson (`numerics.viscous.theta` ½) instead of the
+/// default backward Euler, whose `O(Δt)` error in the fluid layer is what a second-order
+/// elastic step would otherwise leave (with the elastic step's stress and the interface
+/// corners' relaxation at θ → ½, the 64-cell error moves by 2 % from Δt = 1e-3 to 2.5e-4 with
+/// it and by 2× with backward Euler). Only the benchmark's scenes take it: the default stays
+/// the seed's (fluid-only scenes are unchanged).
+pub(super) fn crank_nicolson_viscosity(scene: &mut Scene) {
+    scene.numerics.set(&efsi_stages::viscous::ViscousOptions {
+        theta: 0.5,
+        ..Default::default()
+    });
+}
+
 /// One run of a Couette case: cells across and Δt.
 pub type Setting = (usize, f64);
 
@@ -345,6 +358,7 @@ impl Case for Couette {
         let (mut scene, path) = load_case("oscillating_couette.ron")?;
         scene.grid.ny = n;
         scene.time.dt_max = Some(dt);
+        crank_nicolson_viscosity(&mut scene);
         scene.update_output(|o| o.vtk_every = None)?;
         let x = 0.5 * (scene.domain.x.0 + scene.domain.x.1);
         let h = 1.0 / n as f64;
