@@ -316,12 +316,16 @@ impl Profiles {
         let p = o.combined_orders.last().copied().unwrap_or(f64::NAN);
         let finest = o.combined.last().map_or(n, |c| c.0);
         let ef = o.combined.last().map_or(e, |c| c.2);
+        let finer = if finest == n {
+            String::new()
+        } else {
+            format!("; {finest} cells: {ef:.2e} in {:.1} s", wall(finest))
+        };
         format!(
-            "{n} cells (Δt = {dt:.1e}): {e:.2e} in {:.1} s; {finest} cells: {ef:.2e} in {:.1} s. \
-             Between the two finest grids the error falls by 2^{p:.2} = {:.2}× per halving of h \
-             and Δt, so an error ε takes about {finest}·({ef:.2e}/ε)^(1/{p:.2}) cells",
+            "{n} cells (Δt = {dt:.1e}): {e:.2e} in {:.1} s{finer}. Between the two finest grids \
+             the error falls by 2^{p:.2} = {:.2}× per halving of h and Δt, so an error ε takes \
+             about {finest}·({ef:.2e}/ε)^(1/{p:.2}) cells",
             wall(n),
-            wall(finest),
             2f64.powf(p)
         )
     }
