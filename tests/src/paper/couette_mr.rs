@@ -51,7 +51,7 @@ pub fn scene(
     );
     let path = cases_dir().join("oscillating_couette_mr.ron");
     let mut scene = Scene::from_str_at(&text, &path).map_err(|e| e.to_string())?;
-    super::couette::crank_nicolson_viscosity(&mut scene);
+    super::couette::couette_numerics(&mut scene);
     let x = 2.0 * h;
     // The profile at the cell centres, where u lives: no interpolation of the solution.
     scene.update_output(|o| {
