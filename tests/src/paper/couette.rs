@@ -335,7 +335,7 @@ impl Profiles {
 }
 
 /// The case: 16, 32, 64 (quick) or 32 … 256 cells across, Δt ∝ h, and the time and space
-/// series of [`Profiles::plan`].
+/// series of `Profiles::plan`.
 pub struct Couette(Profiles);
 
 impl Case for Couette {
