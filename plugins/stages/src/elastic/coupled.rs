@@ -62,8 +62,10 @@
 //! velocity: with `B(V) = Bⁿ + E + θΔt H(V; Bⁿ)` (see the parent module) it solves
 //! `ρ δ/Δt = ∇·[θ τ(B(V)) + (1 − θ) τ(Bⁿ)]`, linearised about `B^{n+1/3}` as the split step is:
 //! `(M − θ_v Δt K_v − θ² Δt² K_J) δ = Δt·vol·∇·[θ τ^{n+1/3} + (1 − θ) τⁿ]` (one more law
-//! evaluation a step, `τ(Bⁿ)` without its tangent). The split step keeps the stress at the
-//! step's end (θ = ½, weight 1 on `τ^{n+1}`), whose damping it needs: with the midpoint
+//! evaluation a step, `τ(Bⁿ)` without its tangent). The split step near its wave cap keeps
+//! the stress at the step's end (θ = ½, weight 1 on `τ^{n+1}`; below an elastic-wave Courant
+//! number of 1 it takes the midpoint, see the parent module's "θ of the stress"), whose
+//! damping it needs there: with the midpoint
 //! `½(τⁿ + τ^{n+1})` the map's sphere under `Split` gains 2.1 % of its budget at G = 1e9 Pa and
 //! 3.1 % at 1e7 (total at 16 ms +4.4 % and +21 %).
 //!

@@ -24,6 +24,8 @@ pub const MIN_CELLS_ACROSS: f64 = 5.0;
 pub(super) struct WaveLimits {
     pub(super) split: f64,
     pub(super) coupled: f64,
+    /// `h/c`: the Δt of one elastic-wave Courant number.
+    pub(super) wave_step: f64,
 }
 
 /// The scene's [`WaveLimits`], worked out once per pipeline and shared by the elastic and
@@ -115,5 +117,6 @@ pub(super) fn wave_limit(
     Ok(WaveLimits {
         split: o.wave_courant * h / c,
         coupled: dt,
+        wave_step: h / c,
     })
 }

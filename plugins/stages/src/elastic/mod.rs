@@ -49,7 +49,9 @@
 //! ```
 //!
 //! with amplification 0.9975, 0.82, 0.58, 0.43, 0.67, 0.98 at s = 0.1, 1, 2, 3, 5, 20: stable
-//! for every Δt, the same damping as the seed's where both are stable (`1 − s²/40` at small s),
+//! for every Δt, the same damping as the seed's where both are stable (`1 − s²/40` at small s:
+//! a damping rate `∝ Δt`, first order in time, which is why a slow step weights the stress as
+//! below, "θ of the stress"),
 //! and for a neo-Hookean solid near rest (`J = G I`, `B̃ ≈ I`, `H(δ) ≈ 2D(δ)`) the implicit term
 //! is `GΔt ∇·D(δ)`: an extra viscosity `GΔt/2`, which is what keeps stiff solids stable at the
 //! flow's time step. Multiplied by the face volumes the system is
@@ -100,6 +102,20 @@
 //! still loses `½ ∫ w G |ΔB|²` (the stress at the step's end). The coupled step takes the
 //! stress at θ instead, `θ τ^{n+1} + (1 − θ) τⁿ`, which loses only the θ-method's share (see
 //! `coupled`, "The stress at θ"; its long steps' limits in "Limits").
+//!
+//! **θ of the stress.** The momentum step generalises to
+//! `ρ δ/Δt = ∇·[α τ^{n+2/3} + (1 − α) τⁿ]`, i.e.
+//! `(M − θ_v Δt K_v − αθΔt² K_J) δ = Δt·vol·∇·[α τ^{n+1/3} + (1 − α) τⁿ]` (one more law
+//! evaluation a step, `τ(Bⁿ)` without its tangent, where α < 1). With α = θ the step is the
+//! θ-method on the pair (velocity, strain): at θ = ½ Crank–Nicolson, second order and without
+//! damping (`|amplification| = 1` for the 1-D wave at every s). The split projection, though,
+//! pumps energy into an undamped stiff solid (see `coupled`, "The stress at θ": the midpoint
+//! stress gained 2–3 % of the map's budget at the wave cap). So a split step takes α = θ up to
+//! an elastic-wave Courant number `Δt·c/h` of [`CN_WAVE_COURANT`] (1: `s ≤ π` for the
+//! grid's shortest wave), α = 1 from [`DAMPED_WAVE_COURANT`] (2) on, linear in between
+//! (`numerics.elastic.stress_theta` sets α outright). A smooth flow resolved in time runs well
+//! below 1 (the Couette layers at 0.14 and 0.03); the stiff solids of the stability map run at
+//! the cap, 4, where nothing changes. The coupled step takes α = θ always.
 //!
 //! # Coupling with the viscous step
 //!
@@ -210,10 +226,15 @@
 //! × q: the full explicit rate blew the sphere in air up within 1 ms). With the corner's mixed
 //! gradient instead, the last solid cell's `B₁₁` lagged, and with it the `tr B` a law sees at the
 //! interface corner: the Mooney–Rivlin Couette case (τ = 2c₁γ + 4c₃γ³) at 64 cells erred by
-//! 5.2e-3, against 2.1e-3. The relaxation is implicit (backward Euler, linearised
-//! with the law's `∂τ₁₂/∂B₁₂` at Bⁿ), which makes `B₁₂(V)` still affine in V: the step's
-//! `B₁₂ = q (Bⁿ + E' + (Δt/2) H(V; Bⁿ))` with `q = 1/(1 + Δt r b̄ J₁₂₁₂)` and `E'` the explicit
-//! part less the relaxation's linearisation remainder (`Deformation::relax` holds q).
+//! 5.2e-3, against 2.1e-3. The relaxation is implicit (a θ_r-step, linearised with the
+//! law's `∂τ₁₂/∂B₁₂` at Bⁿ), which makes `B₁₂(V)` still affine in V: the step's
+//! `B₁₂ = q (Bⁿ + E' + (Δt/2) H(V; Bⁿ))` with `q = 1/(1 + θ_r z)`, `z = Δt r b̄ J₁₂₁₂`, and `E'`
+//! the explicit part less the relaxation's linearisation remainder (`Deformation::relax` holds
+//! q). `θ_r = ½ + ½ z/(1 + z)`: trapezoidal where the relaxation is slow over a step
+//! (`θ_r − ½ = O(Δt)`, so second order in time: a backward-Euler relaxation made the Couette
+//! layer's interface first order in time), backward Euler where it is stiff (a solid in air,
+//! `z ≫ 1`), and monotone for every z (the amplification `(1 − (1 − θ_r) z)/(1 + θ_r z)` lies
+//! in `(0, 1)`).
 //!
 //! **The corner's solid fraction** `a` is the solid volume of the four quarter cells around the
 //! corner over theirs, each quarter's share cut by its cell's PLIC line (Youngs normal, planar
@@ -313,9 +334,9 @@ use law::shared_law;
 pub use limits::MIN_CELLS_ACROSS;
 use limits::shared_wave_limits;
 pub use options::{
-    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, DEFAULT_AUTO_COUPLED_WAVE_COURANT,
-    DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling, ElasticOptions, ElasticPreconditioner,
-    MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, CN_WAVE_COURANT, DAMPED_WAVE_COURANT,
+    DEFAULT_AUTO_COUPLED_WAVE_COURANT, DEFAULT_COUPLED_WAVE_COURANT, ElasticCoupling,
+    ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
 use rows::{PAR_POINTS, Window, at, rows1, rows2, rows3};
@@ -387,11 +408,12 @@ impl StagePlugin for Elastic {
         let n = k.faces.len();
         let o: &ElasticOptions = options.section()?;
         let couples = may_couple(options);
-        let split_dt = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?.split;
+        let limits = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?;
         let schemes = [false, true].map(|coupled| StepScheme {
             theta: o.stretch_theta(coupled),
             // The coupled step's momentum takes the stress at its stretching's θ (see `coupled`,
-            // "The stress at θ"); the split step keeps the stress at the step's end.
+            // "The stress at θ"); the split step's weight depends on the step's elastic-wave
+            // Courant number, set per step (`ElasticStage::set_scheme`).
             alpha: if coupled { o.stretch_theta(true) } else { 1.0 },
             preconditioner: match o.preconditioner {
                 // The coupled step keeps the multigrid: with Jacobi for its velocity block
@@ -414,7 +436,9 @@ impl StagePlugin for Elastic {
         });
         Ok(Box::new(ElasticStage {
             mode: coupling(options),
-            split_dt,
+            split_dt: limits.split,
+            wave_step: limits.wave_step,
+            options: o.clone(),
             step_flag: {
                 // Until the first step says otherwise (the projection of the initial velocity).
                 let flag = CoupledStep::shared(shared);
@@ -423,7 +447,7 @@ impl StagePlugin for Elastic {
             },
             law,
             tau: std::array::from_fn(|_| Field::zeros(grid)),
-            tau_n: couples.then(|| std::array::from_fn(|_| Field::zeros(grid))),
+            tau_n: std::array::from_fn(|_| Field::zeros(grid)),
             op: ElasticOperator {
                 k,
                 db: std::array::from_fn(|_| Field::zeros(grid)),

@@ -66,6 +66,16 @@ pub struct ElasticOptions {
     /// θ's damping: at a cap of 200, 0.6 and 0.55 lose 1.48e-3 and 1.82e-3 against 1.17e-3.
     #[serde(default)]
     pub theta: Option<f64>,
+    /// The weight α of the step-end stress in a split step's momentum,
+    /// `ρ δ/Δt = ∇·[α τ(B^{n+1}) + (1 − α) τ(Bⁿ)]`, in [½, 1]. Unset (the default), α is the
+    /// stretching's θ — the θ-method, second order in time at θ = ½ — while the step's
+    /// elastic-wave Courant number `Δt·c/h` is at most [`CN_WAVE_COURANT`], rising linearly to
+    /// 1 (the stress at the step's end, which damps the stiff modes) at
+    /// [`DAMPED_WAVE_COURANT`] and beyond: the split projection pumps energy into an undamped
+    /// stiff solid (see the elastic module's "θ of the stress"). The coupled step always takes
+    /// its stretching's θ.
+    #[serde(default)]
+    pub stress_theta: Option<f64>,
     /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500, an order of
     /// magnitude above what the stability map's stiffest spheres take).
     #[serde(default = "default_coupling_iter")]
@@ -186,6 +196,19 @@ impl ElasticOptions {
     pub fn stretch_theta(&self, coupled: bool) -> f64 {
         self.theta.unwrap_or(if coupled { 0.75 } else { 0.5 })
     }
+
+    /// The weight α of the step-end stress in a split step at the elastic-wave Courant number
+    /// `courant` (`Δt·c/h`): `stress_theta` if set, else the split stretching's θ up to
+    /// [`CN_WAVE_COURANT`], 1 from [`DAMPED_WAVE_COURANT`], linear in between.
+    pub fn split_stress_weight(&self, courant: f64) -> f64 {
+        if let Some(alpha) = self.stress_theta {
+            return alpha;
+        }
+        let theta = self.stretch_theta(false);
+        let ramp =
+            ((courant - CN_WAVE_COURANT) / (DAMPED_WAVE_COURANT - CN_WAVE_COURANT)).clamp(0.0, 1.0);
+        theta + (1.0 - theta) * ramp
+    }
 }
 
 fn default_coupling_tolerance() -> f64 {
@@ -213,6 +236,16 @@ pub const DEFAULT_COUPLED_WAVE_COURANT: f64 = 25.0;
 /// [`ElasticOptions::coupled_wave_courant`]).
 pub const DEFAULT_AUTO_COUPLED_WAVE_COURANT: f64 = MAX_COUPLED_WAVE_COURANT;
 
+/// Up to this elastic-wave Courant number `Δt·c/h` a split step takes the stress at its
+/// stretching's θ (Crank–Nicolson at the default θ = ½: second order in time), see
+/// [`ElasticOptions::stress_theta`].
+pub const CN_WAVE_COURANT: f64 = 1.0;
+
+/// From this elastic-wave Courant number `Δt·c/h` on a split step takes the stress at its end
+/// (α = 1), whose damping the split projection needs for stiff solids at the wave cap; see
+/// [`ElasticOptions::stress_theta`].
+pub const DAMPED_WAVE_COURANT: f64 = 2.0;
+
 /// The largest elastic-wave Courant number `Δt·c/h` allowed (see
 /// [`ElasticOptions::wave_courant`]): the largest at which every run of the stability map kept
 /// its energy bounded.
@@ -230,6 +263,7 @@ impl Default for ElasticOptions {
             coupling_tolerance: default_coupling_tolerance(),
             coupling_iterations: default_coupling_iter(),
             theta: None,
+            stress_theta: None,
             coupled_wave_courant: None,
         }
     }
@@ -314,6 +348,16 @@ impl StageOptions for ElasticOptions {
                 format!(
                     "must be in [0.5, 1] (0.5: Crank–Nicolson, 1: backward Euler), got {}",
                     efsi_core::scene::num(t)
+                ),
+            ));
+        }
+        if let Some(a) = self.stress_theta
+            && !(0.5..=1.0).contains(&a)
+        {
+            return Err((
+                "stress_theta",
+                format!(
+                    "must be in [0.5, 1] (0.5: the stress at mid-step, 1: at the step's end), got {a}"
                 ),
             ));
         }

@@ -25,11 +25,16 @@ pub(super) struct ElasticStage {
     /// the later stages which step this is.
     pub(super) mode: super::ElasticCoupling,
     pub(super) split_dt: f64,
+    /// `h/c`, the Δt of one elastic-wave Courant number, and the scene's options: a split
+    /// step's stress weight follows its Courant number
+    /// ([`super::ElasticOptions::split_stress_weight`]).
+    pub(super) wave_step: f64,
+    pub(super) options: super::ElasticOptions,
     pub(super) step_flag: super::CoupledStep,
     pub(super) tau: [Field; 4],
-    /// τ(Bⁿ) with this step's weights (the coupled step's old-time stress); only in a scene
-    /// that may take coupled steps.
-    pub(super) tau_n: Option<[Field; 4]>,
+    /// τ(Bⁿ) with this step's weights: the old-time stress of a step whose stress weight α is
+    /// below 1 (evaluated only then).
+    pub(super) tau_n: [Field; 4],
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
     pub(super) delta: Vec<f64>,
@@ -186,7 +191,7 @@ impl ElasticStage {
     ) -> Result<StageStats, StageError> {
         let coupled =
             self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
-        self.set_scheme(coupled);
+        self.set_scheme(coupled, ctx.dt);
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
         let stats = if !coupled {
@@ -202,7 +207,7 @@ impl ElasticStage {
                     for c in 0..4 {
                         d.b[c].copy_from(&d.start[c]);
                     }
-                    self.set_scheme(false);
+                    self.set_scheme(false, ctx.dt);
                     self.predict(ctx, state, d)?;
                     let (bnorm, scale) = self.assemble(ctx, state);
                     self.solve(ctx, state, d, bnorm, scale)?
@@ -214,10 +219,14 @@ impl ElasticStage {
         Ok(StageStats { solve: Some(stats) })
     }
 
-    /// θ and the preconditioner of a coupled or a split step, and the flag telling the later
-    /// stages which it is.
-    fn set_scheme(&mut self, coupled: bool) {
+    /// θ, the stress weight and the preconditioner of a coupled or a split step of `dt`, and
+    /// the flag telling the later stages which it is.
+    fn set_scheme(&mut self, coupled: bool, dt: f64) {
         self.scheme = self.schemes[usize::from(coupled)];
+        // The explicit elastic step (`implicit: false`) keeps the stress at the step's end.
+        if !coupled && self.implicit {
+            self.scheme.alpha = self.options.split_stress_weight(dt / self.wave_step);
+        }
         self.step_flag.set(coupled);
     }
 
@@ -261,8 +270,8 @@ impl ElasticStage {
             }
         }
         let k = &mut self.op.k;
-        if let Some(tau_n) = self.tau_n.as_mut().filter(|_| self.scheme.alpha < 1.0) {
-            k.evaluate(self.law.as_ref(), &d.start, tau_n, false)
+        if self.scheme.alpha < 1.0 {
+            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
                 .map_err(|m| err("elastic", m))?;
         }
         k.relaxation(
@@ -295,9 +304,9 @@ impl ElasticStage {
         let k = &mut self.op.k;
         k.force(&self.tau, &mut self.rhs);
         let alpha = self.scheme.alpha;
-        if let Some(tau_n) = self.tau_n.as_ref().filter(|_| alpha < 1.0) {
+        if alpha < 1.0 {
             self.rhs.iter_mut().for_each(|r| *r *= alpha);
-            k.force_sub(tau_n, alpha - 1.0, &mut self.rhs);
+            k.force_sub(&self.tau_n, alpha - 1.0, &mut self.rhs);
         }
         let g = ctx.grid;
         let m = &g.metric;

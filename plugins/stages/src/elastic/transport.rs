@@ -255,8 +255,13 @@ impl Kernels {
                 let bbar = fy * self.kb[q][1] + (1.0 - fy) * self.kb[q][0];
                 let jt = self.kj[q][15].max(0.0);
                 let lambda = dt * rc * bbar;
-                relax.data_mut()[k] = 1.0 / (1.0 + lambda * jt);
-                explicit[3].data_mut()[k] -= lambda * (self.kt[q][3] - jt * b12[k]);
+                // The relaxation at θ_r = ½ + ½ z/(1 + z), `z = λ J` its stiffness over the
+                // step: trapezoidal where it is slow (θ_r − ½ = O(Δt), second order), backward
+                // Euler where it is stiff (a solid in air; monotone for every z).
+                let z = lambda * jt;
+                let th = 0.5 + 0.5 * z / (1.0 + z);
+                relax.data_mut()[k] = 1.0 / (1.0 + th * z);
+                explicit[3].data_mut()[k] -= lambda * (self.kt[q][3] - th * jt * b12[k]);
                 // The same relaxation of the solid's shear rate stretches the normal components
                 // of the four cells around (explicit, at Bⁿ): `Ḃ₁₁ = 2 L₁₂ B₁₂`, `Ḃ₂₂ = 2 L₂₁ B₁₂`
                 // averaged over a centre's corners, with the share n_y² to L₁₂.
