@@ -164,7 +164,9 @@ fn the_benchmarks_page_is_what_its_json_snapshots_render() {
     xtask::bench_page::check(&root).unwrap_or_else(|e| panic!("{e}"));
     // The generated section shows both benchmarks, with where and when they ran.
     let page = std::fs::read_to_string(root.join(xtask::bench_page::PAGE)).expect("the page");
-    let start = page.find(xtask::bench_page::BEGIN).expect("a generated section");
+    let start = page
+        .find(xtask::bench_page::BEGIN)
+        .expect("a generated section");
     let section = &page[start..];
     for heading in [
         "## Speed per stage: measured",
@@ -175,7 +177,10 @@ fn the_benchmarks_page_is_what_its_json_snapshots_render() {
     assert_eq!(section.matches(" at commit ").count(), 2, "{section}");
     // A page whose figures differ from the snapshots' is refused.
     let edited = page.replacen("| case | threads |", "| case | thread |", 1);
-    assert_ne!(edited, page, "the speed table's header is where the test expects it");
+    assert_ne!(
+        edited, page,
+        "the speed table's header is where the test expects it"
+    );
     let dir = std::env::temp_dir().join(format!("efsi-docs-check-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("docs/bench")).expect("a scratch folder");
     std::fs::write(dir.join(xtask::bench_page::PAGE), &edited).expect("the edited page");
