@@ -25,6 +25,15 @@ struct Case {
 }
 
 fn case(name: &str, quick: bool) -> Result<Case, String> {
+    let bad = || {
+        format!(
+            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
+             optionally -ej"
+        )
+    };
+    if let Some(rest) = name.strip_prefix("sphere") {
+        return sphere_case(name, rest, quick).ok_or_else(bad)?;
+    }
     // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
     // step instead of the default Jacobi).
     let (rest, viscous) = match name.strip_suffix("-vmg") {
@@ -35,42 +44,6 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
         Some(b) => (b, "IncompleteCholesky"),
         None => (rest, "Multigrid"),
     };
-    let bad = || {
-        format!(
-            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
-             optionally -ej"
-        )
-    };
-    if let Some(rest) = name.strip_prefix("sphere") {
-        // The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until
-        // t = 0.03, just after first contact. Suffix -ej: Jacobi-preconditioned elastic step.
-        let elastic = match rest {
-            "" => "Multigrid",
-            "-ej" => "Jacobi",
-            _ => return Err(bad()),
-        };
-        // The scene as shipped, changed by overrides (not by editing its text, which broke
-        // whenever the scene's layout changed).
-        let path = root().join("cases/sphere_impact.ron");
-        let scene =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut sets = vec![format!("numerics.elastic.preconditioner={elastic}")];
-        if quick {
-            sets.push("time.end=0.03".into());
-        }
-        return Ok(Case {
-            name: name.to_string(),
-            scene,
-            sets,
-            drop: false,
-            cells: 82 * 164,
-            block_multigrid: if elastic == "Multigrid" {
-                &["elastic"]
-            } else {
-                &[]
-            },
-        });
-    }
     let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
         (false, n.parse::<usize>().map_err(|_| bad())?)
     } else if let Some(n) = base.strip_prefix("drop") {
@@ -81,42 +54,13 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
     if n < 8 {
         return Err(bad());
     }
+    let numerics = format!(
+        "numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),"
+    );
     let scene = if drop {
-        let end = if quick { 0.25 } else { 1.0 };
-        format!(
-            r#"// Axisymmetric drop falling from rest (cargo xtask bench).
-Scene(
-    name: "{name}",
-    geometry: Axisymmetric,
-    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
-    grid: (nr: {n}, nz: {n}),
-    time: (end: {end}, fixed_dt: {dt:e}),
-    fluid: (density: 1e-3, viscosity: 2e-4),
-    gravity: (0.0, -1.0),
-    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
-    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
-    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
-    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
-)
-"#,
-            dt = 0.5 / n as f64
-        )
+        drop_scene(name, n, quick, &numerics)
     } else {
-        let end = if quick { 0.5 } else { 2.0 };
-        format!(
-            r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
-Scene(
-    name: "{name}",
-    geometry: Planar,
-    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-    grid: (nx: {n}, ny: {n}),
-    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
-    fluid: (density: 1.0, viscosity: 0.001),
-    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
-    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
-)
-"#
-        )
+        cavity_scene(name, n, quick, &numerics)
     };
     Ok(Case {
         name: name.to_string(),
@@ -130,6 +74,82 @@ Scene(
             &[]
         },
     })
+}
+
+/// The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until t = 0.03,
+/// just after first contact. Suffix (`rest`) -ej: the Jacobi-preconditioned elastic step; None
+/// for another suffix.
+fn sphere_case(name: &str, rest: &str, quick: bool) -> Option<Result<Case, String>> {
+    let elastic = match rest {
+        "" => "Multigrid",
+        "-ej" => "Jacobi",
+        _ => return None,
+    };
+    // The scene as shipped, changed by overrides (not by editing its text, which broke
+    // whenever the scene's layout changed).
+    let path = root().join("cases/sphere_impact.ron");
+    let scene = match std::fs::read_to_string(&path) {
+        Ok(s) => s,
+        Err(e) => return Some(Err(format!("{}: {e}", path.display()))),
+    };
+    let mut sets = vec![format!("numerics.elastic.preconditioner={elastic}")];
+    if quick {
+        sets.push("time.end=0.03".into());
+    }
+    Some(Ok(Case {
+        name: name.to_string(),
+        scene,
+        sets,
+        drop: false,
+        cells: 82 * 164,
+        block_multigrid: if elastic == "Multigrid" {
+            &["elastic"]
+        } else {
+            &[]
+        },
+    }))
+}
+
+/// The axisymmetric drop on `n`², t ∈ [0, 1] (quick: [0, 0.25]), Δt = 0.5/n.
+fn drop_scene(name: &str, n: usize, quick: bool, numerics: &str) -> String {
+    let end = if quick { 0.25 } else { 1.0 };
+    format!(
+        r#"// Axisymmetric drop falling from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
+    grid: (nr: {n}, nz: {n}),
+    time: (end: {end}, fixed_dt: {dt:e}),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    gravity: (0.0, -1.0),
+    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    {numerics}
+    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
+)
+"#,
+        dt = 0.5 / n as f64
+    )
+}
+
+/// The Re = 1000 lid-driven cavity on `n`², t ∈ [0, 2] (quick: [0, 0.5]).
+fn cavity_scene(name: &str, n: usize, quick: bool, numerics: &str) -> String {
+    let end = if quick { 0.5 } else { 2.0 };
+    format!(
+        r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Planar,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: {n}, ny: {n}),
+    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
+    fluid: (density: 1.0, viscosity: 0.001),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    {numerics}
+)
+"#
+    )
 }
 
 /// One run's figures.
