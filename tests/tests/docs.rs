@@ -1,7 +1,8 @@
 //! The documentation cannot drift silently from the repository: every repository path the
 //! Markdown pages (README, CHANGELOG, `docs/`, the cases' and the law template's READMEs) name
 //! in backticks exists — the architecture page, the map of the code, names most of them — and
-//! every relative link of those pages resolves.
+//! every relative link of those pages resolves; and the figures of `docs/benchmarks.md` are
+//! what its committed snapshots `docs/bench/*.json` render (`cargo xtask docs`).
 
 use efsi_tests::workspace_root;
 use std::path::{Path, PathBuf};
@@ -155,6 +156,41 @@ fn every_relative_link_of_the_markdown_pages_resolves() {
     }
     assert!(checked >= 20, "only {checked} relative links found");
     assert!(broken.is_empty(), "links that do not resolve: {broken:#?}");
+}
+
+#[test]
+fn the_benchmarks_page_is_what_its_json_snapshots_render() {
+    let root = workspace_root();
+    xtask::bench_page::check(&root).unwrap_or_else(|e| panic!("{e}"));
+    // The generated section shows both benchmarks, with where and when they ran.
+    let page = std::fs::read_to_string(root.join(xtask::bench_page::PAGE)).expect("the page");
+    let start = page
+        .find(xtask::bench_page::BEGIN)
+        .expect("a generated section");
+    let section = &page[start..];
+    for heading in [
+        "## Speed per stage: measured",
+        "## The paper's cases: measured",
+    ] {
+        assert!(section.contains(heading), "no `{heading}` in the section");
+    }
+    assert_eq!(section.matches(" at commit ").count(), 2, "{section}");
+    // A page whose figures differ from the snapshots' is refused.
+    let edited = page.replacen("| case | threads |", "| case | thread |", 1);
+    assert_ne!(
+        edited, page,
+        "the speed table's header is where the test expects it"
+    );
+    let dir = std::env::temp_dir().join(format!("efsi-docs-check-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("docs/bench")).expect("a scratch folder");
+    std::fs::write(dir.join(xtask::bench_page::PAGE), &edited).expect("the edited page");
+    for snapshot in [xtask::bench_page::BENCH_JSON, xtask::bench_page::PAPER_JSON] {
+        std::fs::copy(root.join(snapshot), dir.join(snapshot)).expect("a snapshot");
+    }
+    let refused = xtask::bench_page::check(&dir);
+    std::fs::remove_dir_all(&dir).ok();
+    let message = refused.expect_err("an edited figure is refused");
+    assert!(message.contains("cargo xtask docs"), "{message}");
 }
 
 #[test]

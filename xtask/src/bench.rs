@@ -25,6 +25,15 @@ struct Case {
 }
 
 fn case(name: &str, quick: bool) -> Result<Case, String> {
+    let bad = || {
+        format!(
+            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
+             optionally -ej"
+        )
+    };
+    if let Some(rest) = name.strip_prefix("sphere") {
+        return sphere_case(name, rest, quick).ok_or_else(bad)?;
+    }
     // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
     // step instead of the default Jacobi).
     let (rest, viscous) = match name.strip_suffix("-vmg") {
@@ -35,42 +44,6 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
         Some(b) => (b, "IncompleteCholesky"),
         None => (rest, "Multigrid"),
     };
-    let bad = || {
-        format!(
-            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
-             optionally -ej"
-        )
-    };
-    if let Some(rest) = name.strip_prefix("sphere") {
-        // The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until
-        // t = 0.03, just after first contact. Suffix -ej: Jacobi-preconditioned elastic step.
-        let elastic = match rest {
-            "" => "Multigrid",
-            "-ej" => "Jacobi",
-            _ => return Err(bad()),
-        };
-        // The scene as shipped, changed by overrides (not by editing its text, which broke
-        // whenever the scene's layout changed).
-        let path = root().join("cases/sphere_impact.ron");
-        let scene =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut sets = vec![format!("numerics.elastic.preconditioner={elastic}")];
-        if quick {
-            sets.push("time.end=0.03".into());
-        }
-        return Ok(Case {
-            name: name.to_string(),
-            scene,
-            sets,
-            drop: false,
-            cells: 82 * 164,
-            block_multigrid: if elastic == "Multigrid" {
-                &["elastic"]
-            } else {
-                &[]
-            },
-        });
-    }
     let (drop, n) = if let Some(n) = base.strip_prefix("cavity") {
         (false, n.parse::<usize>().map_err(|_| bad())?)
     } else if let Some(n) = base.strip_prefix("drop") {
@@ -81,42 +54,13 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
     if n < 8 {
         return Err(bad());
     }
+    let numerics = format!(
+        "numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),"
+    );
     let scene = if drop {
-        let end = if quick { 0.25 } else { 1.0 };
-        format!(
-            r#"// Axisymmetric drop falling from rest (cargo xtask bench).
-Scene(
-    name: "{name}",
-    geometry: Axisymmetric,
-    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
-    grid: (nr: {n}, nz: {n}),
-    time: (end: {end}, fixed_dt: {dt:e}),
-    fluid: (density: 1e-3, viscosity: 2e-4),
-    gravity: (0.0, -1.0),
-    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
-    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
-    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
-    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
-)
-"#,
-            dt = 0.5 / n as f64
-        )
+        drop_scene(name, n, quick, &numerics)
     } else {
-        let end = if quick { 0.5 } else { 2.0 };
-        format!(
-            r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
-Scene(
-    name: "{name}",
-    geometry: Planar,
-    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
-    grid: (nx: {n}, ny: {n}),
-    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
-    fluid: (density: 1.0, viscosity: 0.001),
-    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
-    numerics: (projection: (solver: {solver}), viscous: (preconditioner: {viscous})),
-)
-"#
-        )
+        cavity_scene(name, n, quick, &numerics)
     };
     Ok(Case {
         name: name.to_string(),
@@ -130,6 +74,82 @@ Scene(
             &[]
         },
     })
+}
+
+/// The sphere impact as shipped (35 cells per radius, t ∈ [0, 0.06]); quick: until t = 0.03,
+/// just after first contact. Suffix (`rest`) -ej: the Jacobi-preconditioned elastic step; None
+/// for another suffix.
+fn sphere_case(name: &str, rest: &str, quick: bool) -> Option<Result<Case, String>> {
+    let elastic = match rest {
+        "" => "Multigrid",
+        "-ej" => "Jacobi",
+        _ => return None,
+    };
+    // The scene as shipped, changed by overrides (not by editing its text, which broke
+    // whenever the scene's layout changed).
+    let path = root().join("cases/sphere_impact.ron");
+    let scene = match std::fs::read_to_string(&path) {
+        Ok(s) => s,
+        Err(e) => return Some(Err(format!("{}: {e}", path.display()))),
+    };
+    let mut sets = vec![format!("numerics.elastic.preconditioner={elastic}")];
+    if quick {
+        sets.push("time.end=0.03".into());
+    }
+    Some(Ok(Case {
+        name: name.to_string(),
+        scene,
+        sets,
+        drop: false,
+        cells: 82 * 164,
+        block_multigrid: if elastic == "Multigrid" {
+            &["elastic"]
+        } else {
+            &[]
+        },
+    }))
+}
+
+/// The axisymmetric drop on `n`², t ∈ [0, 1] (quick: [0, 0.25]), Δt = 0.5/n.
+fn drop_scene(name: &str, n: usize, quick: bool, numerics: &str) -> String {
+    let end = if quick { 0.25 } else { 1.0 };
+    format!(
+        r#"// Axisymmetric drop falling from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Axisymmetric,
+    domain: (r: (0.0, 4.0), z: (0.0, 4.0)),
+    grid: (nr: {n}, nz: {n}),
+    time: (end: {end}, fixed_dt: {dt:e}),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    gravity: (0.0, -1.0),
+    solid: (shape: Disk(center: (0.0, 3.0), radius: 0.5), density: 1.0, viscosity: 1e-2),
+    boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
+    {numerics}
+    output: (probe_every: {end}, probes: [SolidCentroid, SolidVelocity]),
+)
+"#,
+        dt = 0.5 / n as f64
+    )
+}
+
+/// The Re = 1000 lid-driven cavity on `n`², t ∈ [0, 2] (quick: [0, 0.5]).
+fn cavity_scene(name: &str, n: usize, quick: bool, numerics: &str) -> String {
+    let end = if quick { 0.5 } else { 2.0 };
+    format!(
+        r#"// Lid-driven cavity, Re = 1000, from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Planar,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: {n}, ny: {n}),
+    time: (end: {end}, cfl: 0.4, dt_max: 1.0),
+    fluid: (density: 1.0, viscosity: 0.001),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
+    {numerics}
+)
+"#
+    )
 }
 
 /// One run's figures.
@@ -223,26 +243,35 @@ fn median_figures(runs: &[Figures]) -> Figures {
     f
 }
 
-pub(crate) fn bench(args: &[String]) -> Result<(), String> {
+/// What `cargo xtask bench` is asked for.
+struct Request {
+    quick: bool,
+    roofline: bool,
+    /// Copy `bench.json` to the page's snapshot and render `docs/benchmarks.md` again.
+    write_docs: bool,
+    out: PathBuf,
+    /// The thread counts each case runs on: 1, and N unless N is 1.
+    pools: Vec<usize>,
+    repeat: usize,
+    cases: Vec<Case>,
+    /// `--binary PATH`: time that build of efsi instead of building this one.
+    binary: Option<PathBuf>,
+    /// The command as given, for the JSON.
+    command: String,
+}
+
+fn parse(args: &[String]) -> Result<Request, String> {
     let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
-    let quick = args.iter().any(|a| a == "--quick");
-    let with_roofline = args.iter().any(|a| a == "--roofline");
-    let out = value("--out")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join("target/bench"));
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let threads: usize = match value("--threads") {
-        Some(t) => t
-            .parse()
-            .map_err(|_| format!("--threads {t}: not a number"))?,
-        None => all,
+    let count = |flag: &str, default: usize| match value(flag) {
+        Some(t) => t.parse().map_err(|_| format!("{flag} {t}: not a number")),
+        None => Ok(default),
     };
-    let repeat: usize = match value("--repeat") {
-        Some(t) => t
-            .parse()
-            .map_err(|_| format!("--repeat {t}: not a number"))?,
-        None => 1,
-    };
+    let has = |flag: &str| args.iter().any(|a| a == flag);
+    let quick = has("--quick");
+    let threads = count(
+        "--threads",
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+    )?;
     let names = value("--cases").unwrap_or_else(|| {
         if quick {
             "cavity128,drop128".into()
@@ -254,195 +283,283 @@ pub(crate) fn bench(args: &[String]) -> Result<(), String> {
         .split(',')
         .map(|n| case(n.trim(), quick))
         .collect::<Result<Vec<_>, _>>()?;
-    // `--binary PATH`: time another build of efsi (a baseline), else build and time this one.
-    let binary = match value("--binary") {
-        Some(b) => PathBuf::from(b),
-        None => {
-            let mut c = cargo();
-            c.args(["build", "--quiet", "--release", "-p", "efsi"]);
-            run(c, "build efsi (release)")?;
-            root().join("target/release/efsi")
-        }
-    };
-    std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
-    let mut pools = vec![1];
-    if threads != 1 {
-        pools.push(threads);
+    let given: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .filter(|a| *a != "--write-docs")
+        .collect();
+    Ok(Request {
+        quick,
+        roofline: has("--roofline"),
+        write_docs: has("--write-docs"),
+        out: value("--out")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root().join("target/bench")),
+        pools: if threads == 1 {
+            vec![1]
+        } else {
+            vec![1, threads]
+        },
+        repeat: count("--repeat", 1)?.max(1),
+        cases,
+        binary: value("--binary").map(PathBuf::from),
+        command: ["cargo xtask bench"]
+            .into_iter()
+            .chain(given)
+            .collect::<Vec<_>>()
+            .join(" "),
+    })
+}
+
+/// The efsi binary to time: `--binary`, else this workspace's, built in release.
+fn efsi_binary(req: &Request) -> Result<PathBuf, String> {
+    if let Some(b) = &req.binary {
+        return Ok(b.clone());
     }
+    let mut c = cargo();
+    c.args(["build", "--quiet", "--release", "-p", "efsi"]);
+    run(c, "build efsi (release)")?;
+    Ok(root().join("target/release/efsi"))
+}
+
+/// The runs of one case, per pool size. The runs alternate between the pool sizes, so that a
+/// load change on the machine affects both alike and the ratio is measured within one run of
+/// the bench.
+fn measure(c: &Case, req: &Request, binary: &Path) -> Result<Vec<Vec<Figures>>, String> {
+    let mut runs: Vec<Vec<Figures>> = vec![Vec::new(); req.pools.len()];
+    for _ in 0..req.repeat {
+        for (k, &t) in req.pools.iter().enumerate() {
+            runs[k].push(run_case(c, t, &req.out, binary)?);
+        }
+    }
+    Ok(runs)
+}
+
+/// The range `(lo, hi)` of `v`, positive figures.
+fn range(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)))
+}
+
+/// One line of the roofline table.
+struct RoofRow {
+    case: String,
+    threads: usize,
+    stage: String,
+    ns: f64,
+    bytes: f64,
+    bandwidth: f64,
+    of_memory: f64,
+    of_cache: f64,
+}
+
+/// The roofline figures of a case's median run `f` on `t` threads, against the triad
+/// bandwidths `mem` and `llc`; appends its lines to `rows`.
+fn roofline_json(
+    c: &Case,
+    t: usize,
+    f: &Figures,
+    (mem, llc): (f64, f64),
+    rows: &mut Vec<RoofRow>,
+) -> serde_json::Value {
+    let bytes = |n: &String, it: f64| {
+        roofline::model(n, c.block_multigrid.contains(&n.as_str())).map(|m| roofline::bytes(m, it))
+    };
+    let mut row = |stage: &str, ns: f64, b: f64| {
+        let bw = b / (ns * 1e-9);
+        rows.push(RoofRow {
+            case: c.name.clone(),
+            threads: t,
+            stage: stage.to_string(),
+            ns,
+            bytes: b,
+            bandwidth: bw,
+            of_memory: bw / mem,
+            of_cache: bw / llc,
+        });
+        bw
+    };
+    let per_stage: Vec<serde_json::Value> = f
+        .stages
+        .iter()
+        .filter_map(|(n, ns, it)| {
+            let b = bytes(n, *it)?;
+            let bw = row(n, *ns, b);
+            Some(serde_json::json!({
+                "name": n, "bytes_per_cell_step": b, "achieved_bytes_per_s": bw,
+                "fraction_of_memory_triad": bw / mem,
+                "fraction_of_cache_triad": bw / llc,
+            }))
+        })
+        .collect();
+    let total_bytes: f64 = f.stages.iter().filter_map(|(n, _, it)| bytes(n, *it)).sum();
+    let bw = row("total", f.total, total_bytes);
+    serde_json::json!({
+        "memory_triad_bytes_per_s": mem, "cache_triad_bytes_per_s": llc,
+        "bytes_per_cell_step": total_bytes, "achieved_bytes_per_s": bw,
+        "fraction_of_memory_triad": bw / mem, "fraction_of_cache_triad": bw / llc,
+        "stages": per_stage,
+    })
+}
+
+/// Print the table line of case `c` on `pools[k]` threads and return its JSON; `limits` are
+/// the triad bandwidths per pool size when `--roofline` measured them.
+fn report_case(
+    c: &Case,
+    req: &Request,
+    runs: &[Vec<Figures>],
+    k: usize,
+    limits: &[(f64, f64)],
+    rows: &mut Vec<RoofRow>,
+) -> serde_json::Value {
+    let t = req.pools[k];
+    let base = median_figures(&runs[0]).total;
+    let f = median_figures(&runs[k]);
+    let totals: Vec<f64> = runs[k].iter().map(|r| r.total).collect();
+    let spread = {
+        let (lo, hi) = range(&totals);
+        (hi - lo) / f.total
+    };
+    let stages = f
+        .stages
+        .iter()
+        .map(|(n, ns, it)| {
+            if *it > 0.0 {
+                format!("{n} {ns:.0} ({it:.1})")
+            } else {
+                format!("{n} {ns:.0}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    // The speed-up of each alternating pair of runs: on a VM whose second core comes and goes,
+    // their spread says how far to trust the ratio of the medians.
+    let pairs: Vec<f64> = runs[0]
+        .iter()
+        .zip(&runs[k])
+        .map(|(a, b)| a.total / b.total)
+        .collect();
+    let pair_note = if k > 0 && pairs.len() > 1 {
+        let (lo, hi) = range(&pairs);
+        format!(" (pairs {lo:.2}–{hi:.2}×)")
+    } else {
+        String::new()
+    };
+    // ½gt² at the drop's end time (g = 1): its free fall.
+    let free_fall = f.fall.map(|_| 0.5 * if req.quick { 0.0625 } else { 1.0 });
+    let fall = f
+        .fall
+        .zip(free_fall)
+        .map(|(z, ff)| format!("; fall {z:.4} (½gt² = {ff:.4})"))
+        .unwrap_or_default();
+    println!(
+        "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{pair_note}",
+        c.name,
+        t,
+        f.steps,
+        f.total,
+        base / f.total,
+        f.wall
+    );
+    let roof = limits.get(k).map(|&l| roofline_json(c, t, &f, l, rows));
+    serde_json::json!({
+        "roofline": roof,
+        "case": c.name,
+        "threads": t,
+        "cells": c.cells,
+        "steps": f.steps,
+        "repeats": runs[k].len(),
+        "ns_per_cell_step": f.total,
+        "ns_per_cell_step_runs": totals,
+        "spread": spread,
+        "speedup_vs_1_thread": base / f.total,
+        "speedup_pairs": pairs,
+        "wall_seconds": f.wall,
+        "fall": f.fall,
+        "free_fall": free_fall,
+        "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({
+            "name": n, "ns_per_cell_step": ns, "solver_iterations_per_step": it
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn print_roofline(rows: &[RoofRow]) {
+    println!(
+        "\nroofline (compulsory traffic model: xtask/src/roofline.rs)\n{:<14} {:>3} {:<12} {:>10} {:>10} {:>8} {:>8} {:>8}",
+        "case", "thr", "stage", "ns/cell·st", "B/cell·st", "GB/s", "of mem", "of LLC"
+    );
+    for r in rows {
+        println!(
+            "{:<14} {:>3} {:<12} {:>10.1} {:>10.0} {:>8.2} {:>7.0}% {:>7.0}%",
+            r.case,
+            r.threads,
+            r.stage,
+            r.ns,
+            r.bytes,
+            r.bandwidth / 1e9,
+            100.0 * r.of_memory,
+            100.0 * r.of_cache
+        );
+    }
+}
+
+/// Write `bench.json` into the output folder (and, with `--write-docs`, the page's snapshot
+/// and the page).
+fn write_json(req: &Request, cases: Vec<serde_json::Value>) -> Result<(), String> {
+    let text = serde_json::to_string_pretty(&serde_json::json!({
+        "command": req.command,
+        "provenance": xtask::provenance::provenance(&root()),
+        "quick": req.quick,
+        "threads": req.pools,
+        "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
+            "stage": m.stage, "block_multigrid": m.block_multigrid,
+            "values_per_cell_step": m.fixed,
+            "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
+        })).collect::<Vec<_>>(),
+        "cases": cases,
+    }))
+    .map_err(|e| e.to_string())?;
+    let path = req.out.join("bench.json");
+    std::fs::write(&path, &text).map_err(|e| e.to_string())?;
+    eprintln!("figures: {}", path.display());
+    if req.write_docs {
+        crate::docs::snapshot(&path, xtask::bench_page::BENCH_JSON)?;
+    }
+    Ok(())
+}
+
+pub(crate) fn bench(args: &[String]) -> Result<(), String> {
+    let req = parse(args)?;
+    let binary = efsi_binary(&req)?;
+    std::fs::create_dir_all(&req.out).map_err(|e| e.to_string())?;
     // The bandwidth limits, measured in this run (main memory, last-level cache) per pool size.
-    let limits: Vec<(f64, f64)> = if with_roofline {
-        pools.iter().map(|&t| roofline::limits(t)).collect()
+    let limits: Vec<(f64, f64)> = if req.roofline {
+        req.pools.iter().map(|&t| roofline::limits(t)).collect()
     } else {
         Vec::new()
     };
-    for (&t, (mem, llc)) in pools.iter().zip(&limits) {
+    for (&t, (mem, llc)) in req.pools.iter().zip(&limits) {
         println!(
             "triad, {t} thread(s): main memory {:.1} GB/s, last-level cache {:.1} GB/s",
             mem / 1e9,
             llc / 1e9
         );
     }
-    let mut json = Vec::new();
-    let mut rows = Vec::new();
     println!(
         "{:<14} {:>3} {:>6} {:>10} {:>8}  per stage: ns/cell-step (solver iterations/step)",
         "case", "thr", "steps", "ns/cell·st", "speedup"
     );
-    for c in &cases {
-        // Runs alternate between the pool sizes, so that a load change on the machine affects
-        // both alike and the ratio is measured within one run of the bench.
-        let mut runs: Vec<Vec<Figures>> = vec![Vec::new(); pools.len()];
-        for _ in 0..repeat.max(1) {
-            for (k, &t) in pools.iter().enumerate() {
-                runs[k].push(run_case(c, t, &out, &binary)?);
-            }
-        }
-        let base = median_figures(&runs[0]).total;
-        for (k, &t) in pools.iter().enumerate() {
-            let f = median_figures(&runs[k]);
-            let spread = {
-                let v: Vec<f64> = runs[k].iter().map(|r| r.total).collect();
-                let (lo, hi) = v
-                    .iter()
-                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
-                (hi - lo) / f.total
-            };
-            let stages = f
-                .stages
-                .iter()
-                .map(|(n, ns, it)| {
-                    if *it > 0.0 {
-                        format!("{n} {ns:.0} ({it:.1})")
-                    } else {
-                        format!("{n} {ns:.0}")
-                    }
-                })
-                .collect::<Vec<_>>()
-                .join(", ");
-            // The speed-up of each alternating pair of runs: on a VM whose second core comes
-            // and goes, their spread says how far to trust the ratio of the medians.
-            let pairs: Vec<f64> = runs[0]
-                .iter()
-                .zip(&runs[k])
-                .map(|(a, b)| a.total / b.total)
-                .collect();
-            let pair_note = if k > 0 && pairs.len() > 1 {
-                let (lo, hi) = pairs
-                    .iter()
-                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
-                format!(" (pairs {lo:.2}–{hi:.2}×)")
-            } else {
-                String::new()
-            };
-            let fall = f
-                .fall
-                .map(|z| {
-                    format!(
-                        "; fall {z:.4} (½gt² = {:.4})",
-                        0.5 * if quick { 0.0625 } else { 1.0 }
-                    )
-                })
-                .unwrap_or_default();
-            println!(
-                "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{pair_note}",
-                c.name,
-                t,
-                f.steps,
-                f.total,
-                base / f.total,
-                f.wall
-            );
-            let roof = limits.get(k).map(|&(mem, llc)| {
-                let per_stage: Vec<serde_json::Value> = f
-                    .stages
-                    .iter()
-                    .filter_map(|(n, ns, it)| {
-                        let m = roofline::model(n, c.block_multigrid.contains(&n.as_str()))?;
-                        let b = roofline::bytes(m, *it);
-                        let bw = b / (ns * 1e-9);
-                        rows.push((c.name.clone(), t, n.clone(), *ns, b, bw, bw / mem, bw / llc));
-                        Some(serde_json::json!({
-                            "name": n, "bytes_per_cell_step": b, "achieved_bytes_per_s": bw,
-                            "fraction_of_memory_triad": bw / mem,
-                            "fraction_of_cache_triad": bw / llc,
-                        }))
-                    })
-                    .collect();
-                let total_bytes: f64 = f
-                    .stages
-                    .iter()
-                    .filter_map(|(n, _, it)| {
-                        roofline::model(n, c.block_multigrid.contains(&n.as_str()))
-                            .map(|m| roofline::bytes(m, *it))
-                    })
-                    .sum();
-                let bw = total_bytes / (f.total * 1e-9);
-                rows.push((
-                    c.name.clone(),
-                    t,
-                    "total".into(),
-                    f.total,
-                    total_bytes,
-                    bw,
-                    bw / mem,
-                    bw / llc,
-                ));
-                serde_json::json!({
-                    "memory_triad_bytes_per_s": mem, "cache_triad_bytes_per_s": llc,
-                    "bytes_per_cell_step": total_bytes, "achieved_bytes_per_s": bw,
-                    "fraction_of_memory_triad": bw / mem, "fraction_of_cache_triad": bw / llc,
-                    "stages": per_stage,
-                })
-            });
-            json.push(serde_json::json!({
-                "roofline": roof,
-                "case": c.name,
-                "threads": t,
-                "cells": c.cells,
-                "steps": f.steps,
-                "repeats": runs[k].len(),
-                "ns_per_cell_step": f.total,
-                "ns_per_cell_step_runs": runs[k].iter().map(|r| r.total).collect::<Vec<_>>(),
-                "spread": spread,
-                "speedup_vs_1_thread": base / f.total,
-                "speedup_pairs": pairs,
-                "wall_seconds": f.wall,
-                "fall": f.fall,
-                "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({
-                    "name": n, "ns_per_cell_step": ns, "solver_iterations_per_step": it
-                })).collect::<Vec<_>>(),
-            }));
+    let (mut json, mut rows) = (Vec::new(), Vec::new());
+    for c in &req.cases {
+        let runs = measure(c, &req, &binary)?;
+        for k in 0..req.pools.len() {
+            json.push(report_case(c, &req, &runs, k, &limits, &mut rows));
         }
     }
-    if with_roofline {
-        println!(
-            "\nroofline (compulsory traffic model: xtask/src/roofline.rs)\n{:<14} {:>3} {:<12} {:>10} {:>10} {:>8} {:>8} {:>8}",
-            "case", "thr", "stage", "ns/cell·st", "B/cell·st", "GB/s", "of mem", "of LLC"
-        );
-        for (case, t, stage, ns, b, bw, fm, fc) in &rows {
-            println!(
-                "{case:<14} {t:>3} {stage:<12} {ns:>10.1} {b:>10.0} {:>8.2} {:>7.0}% {:>7.0}%",
-                bw / 1e9,
-                100.0 * fm,
-                100.0 * fc
-            );
-        }
+    if req.roofline {
+        print_roofline(&rows);
     }
-    let path = out.join("bench.json");
-    let text = serde_json::to_string_pretty(&serde_json::json!({
-        "quick": quick,
-        "threads": pools,
-        "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
-            "stage": m.stage, "block_multigrid": m.block_multigrid,
-            "values_per_cell_step": m.fixed,
-            "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
-        })).collect::<Vec<_>>(),
-        "cases": json,
-    }))
-    .map_err(|e| e.to_string())?;
-    std::fs::write(&path, text).map_err(|e| e.to_string())?;
-    eprintln!("figures: {}", path.display());
-    Ok(())
+    write_json(&req, json)
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@
 //!   profiles (`DIR/profiles/u_x0.5_t*.csv`, `v_y0.5_t*.csv`) from Ghia et al. (1982); refuses a
 //!   run whose Reynolds number (`ρ U L / μ` of the scene in `DIR/run.json`) is not `RE`, and names
 //!   the Reynolds numbers the reference has when it has no column for `RE`.
-//! - `cargo xtask bench [--quick] [--cases LIST] [--threads N] [--repeat R] [--out DIR]
-//!   [--binary PATH]`: the
+//! - `cargo xtask bench [--quick] [--roofline] [--cases LIST] [--threads N] [--repeat R]
+//!   [--out DIR] [--binary PATH] [--write-docs]`: the
 //!   Re = 1000 lid-driven cavity and the axisymmetric falling drop (cases `cavity<N>`,
 //!   `drop<N>`, suffix `-ic` for the IC(0) pressure preconditioner, `-vmg` for the block
 //!   multigrid viscous one) and the sphere impact at 35 cells per radius (case `sphere`, the
@@ -25,7 +25,15 @@
 //!   it also measures the machine's triad bandwidth and prints, per case and stage, the bytes
 //!   per cell-step of a compulsory-traffic model, the achieved bandwidth and its fraction of the
 //!   limit ([`roofline`]). `--binary PATH` times that build of `efsi` instead of building this
-//!   one (a baseline for before/after figures).
+//!   one (a baseline for before/after figures). `--write-docs` copies `bench.json` to
+//!   `docs/bench/bench.json` and renders `docs/benchmarks.md` again.
+//! - `cargo xtask bench-paper [--quick] [--case NAME]… [--out DIR] [--set PATH=VALUE]…
+//!   [--write-docs]`: build the workspace in release and run the paper's cases
+//!   (`tests/src/paper/`), writing `DIR/REPORT.md` and `DIR/summary.json` (default
+//!   `target/bench-paper`); `--write-docs` copies `summary.json` to `docs/bench/paper.json` and
+//!   renders `docs/benchmarks.md` again.
+//! - `cargo xtask docs [--check]`: render the generated section of `docs/benchmarks.md` from
+//!   `docs/bench/*.json` ([`xtask::bench_page`]), or only check that it is in sync.
 //! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
 //!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
 //!   laws (profile `fmu-release`: release code, stripped) and package the scene as
@@ -34,6 +42,7 @@
 
 mod bench;
 mod csv;
+mod docs;
 mod fmu;
 mod ghia;
 mod roofline;
@@ -97,10 +106,11 @@ fn main() -> ExitCode {
         Some("run") => run_scene(&args[1..]),
         Some("bench-paper") => bench_paper(&args[1..]),
         Some("fmu") => fmu::fmu(&args[1..]).map(|_| ()),
+        Some("docs") => docs::docs(&args[1..]),
         _ => Err(
             "usage: cargo xtask <run SCENE | test | fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]] [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…] | bench [--quick] [--roofline] [--cases LIST] \
-             [--threads N] [--repeat R] [--out DIR] [--binary PATH] | bench-paper [--quick] [--case NAME]… \
-             [--out DIR] | ghia DIR RE>"
+             [--threads N] [--repeat R] [--out DIR] [--binary PATH] [--write-docs] | bench-paper [--quick] [--case NAME]… \
+             [--out DIR] [--set PATH=VALUE]… [--write-docs] | docs [--check] | ghia DIR RE>"
                 .into(),
         ),
     };
@@ -113,18 +123,31 @@ fn main() -> ExitCode {
     }
 }
 
-/// `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR]`: build the workspace (release,
-/// so the law libraries exist) and run the paper's cases (`tests/src/paper/`). Exits with the
-/// runner's status (1 if a check failed).
+/// `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR] [--set PATH=VALUE]…
+/// [--write-docs]`: build the workspace (release, so the law libraries exist) and run the
+/// paper's cases (`tests/src/paper/`). Exits with the runner's status (1 if a check failed);
+/// with `--write-docs`, a run that finished (its checks passed or not) becomes the page's
+/// snapshot.
 fn bench_paper(args: &[String]) -> Result<(), String> {
+    let write_docs = args.iter().any(|a| a == "--write-docs");
+    let args: Vec<&String> = args.iter().filter(|a| *a != "--write-docs").collect();
     let mut c = cargo();
     c.args(["build", "--quiet", "--release", "--workspace"]);
     run(c, "build efsi, the law plugins and bench-paper (release)")?;
     let mut c = Command::new(root().join("target/release/bench-paper"));
-    c.args(args).current_dir(root());
+    c.args(&args).current_dir(root());
     let status = c
         .status()
         .map_err(|e| format!("cannot start bench-paper: {e}"))?;
+    // 0: every check passed; 1: the run finished and some check failed.
+    let finished = matches!(status.code(), Some(0 | 1));
+    if write_docs && finished {
+        let out = args
+            .windows(2)
+            .find(|w| *w[0] == "--out")
+            .map_or_else(|| root().join("target/bench-paper"), |w| root().join(w[1]));
+        docs::snapshot(&out.join("summary.json"), xtask::bench_page::PAPER_JSON)?;
+    }
     if status.success() {
         Ok(())
     } else {

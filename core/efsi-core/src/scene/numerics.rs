@@ -44,8 +44,8 @@ pub struct Numerics {
 /// Solver-tolerance presets (`numerics.preset`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Preset {
-    /// The tolerances as set, or their defaults, chosen by the measured error/time trade
-    /// (README, *Accuracy, speed and the defaults*).
+    /// The tolerances as set, or their defaults, chosen by the error/time trade of the
+    /// paper's cases (`docs/benchmarks.md`).
     #[default]
     Default,
     /// Each tolerance at most its strict value (the stage's [`StageOptions::strict`]; a
