@@ -60,8 +60,9 @@
 //!     otherwise             the root of the cubic of case 3 or 4 in its interval
 //! ```
 //!
-//! The first three are closed forms (the fast path: most cells of a smooth interface at a fine
-//! grid are in them). The cubic `−a³ + 3m₁₂a² − 3(m₁² + m₂²)a + m₁³ + m₂³ − 6m₁m₂m₃V = 0`
+//! The first three are closed forms (the fast path, taken by three calls in five for uniformly
+//! random normals and fractions; the forward [`cuboid_fraction`] is closed-form throughout). The
+//! cubic `−a³ + 3m₁₂a² − 3(m₁² + m₂²)a + m₁³ + m₂³ − 6m₁m₂m₃V = 0`
 //! (case 3) or `−2a³ + 3a² − 3Σmᵢ²a + Σmᵢ³ − 6m₁m₂m₃V = 0` (case 4) has three real roots and
 //! the wanted one is the middle one (where `V` increases); it is taken from the trigonometric
 //! formula, `t = 2√(−p/3) cos(φ/3 − 2π/3)` for the depressed cubic `t³ + pt + q = 0`,
