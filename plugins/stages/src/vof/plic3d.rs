@@ -725,7 +725,12 @@ mod tests {
         let mut worst = 0.0f64;
         for k in 0..400_000 {
             let n = rng.normal(k);
-            let d = [0.3 + rng.next(), 0.3 + rng.next(), 0.3 + rng.next()];
+            let mut d = [0.3 + rng.next(), 0.3 + rng.next(), 0.3 + rng.next()];
+            if k % 17 == 0 {
+                // Stretched cells, aspect ratios up to 10⁶.
+                d[k % 3] *= 1e-3;
+                d[(k + 1) % 3] *= 1e3;
+            }
             let f = match k % 13 {
                 0 => 1e-12 * rng.next(),
                 1 => 1.0 - 1e-12 * rng.next(),
