@@ -136,8 +136,8 @@ fn len((a, b): (f64, f64)) -> f64 {
     (b - a).max(0.0)
 }
 
-/// The columns of the cell `[lo, lo + d]` along the axis of `shape`'s normal at its centre,
-/// `m × m` of them: calls `f(p, axis, w0, w1, weight)` with the column's transverse point.
+/// The `m × m` columns along `axis` of the cell `[lo, lo + d]`: calls `f(p, w0, w1, weight)`
+/// with the column's centre point `p`, its extent `[w0, w1]` along `axis` and its cross-section.
 fn columns(
     lo: [f64; 3],
     d: [f64; 3],
@@ -249,8 +249,8 @@ fn plane_normal_errors(samples: usize) -> Vec<(Scheme, f64, f64, f64)> {
         .collect()
 }
 
-/// Shape error `E / (A h)` of reconstructing `shape` on the `n³` grid of the unit cube, from
-/// the exact fractions `phi` (computed with column quadrature), per scheme.
+/// Shape error `E / (A h)` of reconstructing `shape` on the `n³` grid of the unit cube from its
+/// cell fractions `exact_fraction(lo, d)`, per scheme (cut cells off the boundary layer).
 fn shape_errors(
     shape: &impl Shape,
     area: f64,
