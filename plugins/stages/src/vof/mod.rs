@@ -6,9 +6,12 @@
 //!
 //! - [`plic`]: PLIC lines in cells, Youngs normals (also used by the elastic stage's interface
 //!   corners); [`shapes`]: the exact cell fractions of a scene's [`Shape`] (the initial φ_s).
+//! - [`plic3d`]: the same geometry in three dimensions: the plane–cuboid volume and its
+//!   inverse, the fluxed volume of a split sweep, Youngs / centred / mixed normals.
 
 pub mod advect;
 pub mod plic;
+pub mod plic3d;
 pub mod shapes;
 pub mod stage;
 
