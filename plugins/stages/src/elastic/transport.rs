@@ -77,15 +77,15 @@ impl Kernels {
         let d4 = |d: &[f64], k: usize, o: usize| {
             BULK_NEAR * (d[k] - d[k - o]) + BULK_FAR * (d[k + o] - d[k - 2 * o])
         };
+        let (g0, nx, ny) = (-efsi_core::G, g.nx as isize, g.ny as isize);
         let par = kw.points() >= PAR_POINTS;
         let [g12, g21] = &mut self.lk;
         rows2([g12, g21], kw.rows(), par, |j, [r12, r21]| {
             for i in kw.i0..=kw.i1 {
                 let k = u.idx(i, j);
                 // The stencil's rows (columns) within the ghosts.
-                let (g0, nx, ny) = (-efsi_core::G, g.nx as isize, g.ny as isize);
-                let rows_in = j - 2 >= g0 && j + 1 < ny - g0 && i - 1 >= g0;
-                let cols_in = i - 2 >= g0 && i + 1 < nx - g0 && j - 1 >= g0;
+                let rows_in = j - 2 >= g0 && j + 1 < ny - g0 && i > g0;
+                let cols_in = i - 2 >= g0 && i + 1 < nx - g0 && j > g0;
                 let l12 = if rows_in && bulk(k, s, 1) {
                     d4(ud, k, s) / g.dy
                 } else {
