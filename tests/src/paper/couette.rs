@@ -389,7 +389,7 @@ impl Case for Couette {
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let what = ("max error over the four times", "Couette");
-        let (checks, recommendation) = self.0.conclude(h, done, (0.005, 1.0), what);
+        let (checks, recommendation) = self.0.conclude(h, done, (0.005, 1.5), what);
         let axes = (
             "Couette: error vs wall time",
             "wall time (s)",
