@@ -389,7 +389,7 @@ impl Case for Couette {
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let what = ("max error over the four times", "Couette");
-        let (checks, recommendation) = self.0.conclude(h, done, (0.005, 1.0), what);
+        let (checks, recommendation) = self.0.conclude(h, done, (0.005, 1.5), what);
         let axes = (
             "Couette: error vs wall time",
             "wall time (s)",
@@ -408,5 +408,50 @@ impl Case for Couette {
             checks,
             recommendation,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Max abs(u − u_ref) at t = 1 at the cell centres of the Couette case at `n` cells, with
+    /// the combined series' Δt (∝ h) and numerics.
+    fn error_at_1(n: usize) -> f64 {
+        let reference = "oscillating_couette/from_rest";
+        let case = Couette(Profiles {
+            grids: &[],
+            times: &[1.0],
+            reference,
+            dt64: 0.001,
+        });
+        let (mut scene, path) = case.scene(&(n, case.0.dt(n))).unwrap();
+        scene.output = Default::default();
+        let mut sim = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
+            .unwrap_or_else(|e| panic!("{e}"));
+        crate::run_until(&mut sim, 1.0, |_, _| {});
+        let h = 1.0 / n as f64;
+        let y: Vec<f64> = (0..n).map(|j| (j as f64 + 0.5) * h).collect();
+        let u: Vec<f64> = (0..n as isize).map(|j| sim.state.u[(0, j)]).collect();
+        let (rh, rc) =
+            crate::read_csv(&crate::reference(&format!("{reference}/u_profile_t_1.csv")));
+        let col = |name: &str| &rc[rh.iter().position(|c| c == name).unwrap()];
+        deviation(&y, &u, (col("y"), col("u")))
+    }
+
+    /// The start-up front the impulsive start sends through the inviscid layer converges at
+    /// second order already at 16 and 32 cells: with the two-point shear gradient its
+    /// dispersion made the error first order (3.10e-3, 1.58e-3: order 0.97), with the bulk
+    /// four-point gradient 2.03e-3, 4.95e-4 (order 2.04).
+    #[test]
+    fn couette_converges_at_second_order_on_coarse_grids() {
+        let e = [error_at_1(16), error_at_1(32)];
+        let order = (e[0] / e[1]).log2();
+        eprintln!(
+            "t = 1: max errors {:.3e}, {:.3e}; order {order:.3}",
+            e[0], e[1]
+        );
+        assert!(e[1] <= 6e-4, "32 cells: {:.3e}", e[1]);
+        assert!(order >= 1.8, "order {order:.3}");
     }
 }
