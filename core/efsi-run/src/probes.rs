@@ -3,10 +3,10 @@
 use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::Grid;
+use efsi_core::ops::{self, potential_energy};
 use efsi_core::scene::Side;
 use efsi_core::state::State;
 use efsi_core::{OutputDecl, OutputKind};
-use efsi_stages::ops::{self, potential_energy};
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).

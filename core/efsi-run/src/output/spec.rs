@@ -9,10 +9,10 @@
 //! changes it through [`SceneOutput`].
 
 use efsi_core::error::EfsiError;
+use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
-use efsi_stages::solid::SceneSolid;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

@@ -187,7 +187,7 @@ pub fn run_with(
 ) -> Result<RunOutcome, EfsiError> {
     let start = Instant::now();
     check_checkpoint_every(sim, options.checkpoint_every)?;
-    let law = checkpoint::law_identity(&sim.scene)?;
+    let law = checkpoint::law_identity(&sim.scene, sim.options())?;
     let mut out = Outputs::new(sim, dir, options.checkpoint_every, options.overwrite)?;
     out.write_run_json(sim, serde_json::json!("Running"), 0, None, 0.0)?;
     drive::make_room(sim, &law, &mut out)?;
@@ -271,7 +271,7 @@ pub fn resume(
     // The recorded scene holds the stages' options in force: compare it with this one's.
     let checked = scene.check_options(&file.scene_path, plugins)?;
     checkpoint::check_resumable(&file, &scene, &what, plugins)?;
-    let law = checkpoint::law_identity(&scene)?;
+    let law = checkpoint::law_identity(&scene, &checked)?;
     let mut sim = crate::setup::simulation_with(scene, Some(checked), &file.scene_path, plugins)?;
     let snapshot = file.record.clone().into_snapshot(sim.snapshot(), &what)?;
     sim.restore(&snapshot)?;

@@ -66,7 +66,7 @@ impl Outputs {
             scene["numerics"][name] = json.clone();
         }
         scene["output"] = crate::output::spec::json(&sim.scene);
-        scene["solid"] = efsi_stages::solid::checked_json(sim.options());
+        scene["solid"] = efsi_core::scene::solid::checked_json(sim.options());
         let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
             "run_id": self.run_id,
