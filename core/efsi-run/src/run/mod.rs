@@ -71,7 +71,7 @@ mod record;
 mod room;
 
 use drive::drive;
-pub use outputs::Outputs;
+pub use outputs::{Checkpoints, Output, Outputs, RunAt, Schedule, Writer};
 use record::recorded_run_id;
 
 /// What the progress display is told after each step.
@@ -188,7 +188,10 @@ pub fn run_with(
     let start = Instant::now();
     check_checkpoint_every(sim, options.checkpoint_every)?;
     let law = checkpoint::law_identity(&sim.scene, sim.options())?;
-    let mut out = Outputs::new(sim, dir, options.checkpoint_every, options.overwrite)?;
+    let checkpoints = options
+        .checkpoint_every
+        .map(|every| Checkpoints::new(every, law.clone()));
+    let mut out = Outputs::new(sim, dir, checkpoints, options.overwrite)?;
     out.write_run_json(sim, serde_json::json!("Running"), 0, None, 0.0)?;
     drive::make_room(sim, &law, &mut out)?;
     out.emit(sim, false)?;
@@ -281,7 +284,10 @@ pub fn resume(
     let Some(lock) = lock else {
         return Err(EfsiError::io(dir, std::io::ErrorKind::NotFound.into()));
     };
-    let mut out = Outputs::resume(&sim, dir, &file.outputs, options.checkpoint_every, lock)?;
+    let checkpoints = options
+        .checkpoint_every
+        .map(|every| Checkpoints::new(every, law.clone()));
+    let mut out = Outputs::resume(&sim, dir, &file.outputs, checkpoints, lock)?;
     let from = Some((snapshot.step(), snapshot.t(), file.efsi_version.clone()));
     out.write_run_json(
         &sim,
