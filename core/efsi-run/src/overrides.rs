@@ -402,9 +402,17 @@ Scene(
             s.initial_velocity,
             efsi_core::scene::InitialVelocity::Uniform((1.0, 2.0))
         ));
+        let OverrideValue::Ron(shape) = s.get("solid.shape").unwrap() else {
+            panic!("{:?}", s.get("solid.shape"))
+        };
+        assert!(shape.starts_with("Rectangle("), "{shape}");
         assert_eq!(
-            s.get("solid.shape").unwrap(),
-            OverrideValue::Ron("Rectangle(min: (0.0, 0.01), max: (0.01, 0.04))".into())
+            s.get("solid.shape.max[1]").unwrap(),
+            OverrideValue::Float(0.04)
+        );
+        assert_eq!(
+            s.get("solid.shape.min").unwrap(),
+            OverrideValue::Ron("(0.0, 0.01)".into())
         );
     }
 

@@ -2,7 +2,7 @@
 //! the run loop lands Δt on.
 //!
 //! Every kind of output of a run (the VTK series, `probes.csv`, each line profile, the
-//! periodic checkpoint) is a schedule and a writer ([`super::Writer`]). A schedule says
+//! periodic checkpoint) is a schedule and a writer ([`crate::run::Writer`]). A schedule says
 //! whether its writer is due at a time, advances past the events it consumed and names the
 //! next time the run must land on; it counts events by computing them, not one period at a
 //! time, so that a period tiny against the time costs nothing.
