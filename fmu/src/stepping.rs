@@ -177,7 +177,7 @@ impl Run {
         let label = Path::new(SCENE_LABEL);
         let sim = efsi_run::simulation(scene, label, &efsi_stages::builtin())
             .map_err(|e| format!("the simulation could not be set up: {e}"))?;
-        let mut law = law_identity(&sim.scene).map_err(|e| e.to_string())?;
+        let mut law = law_identity(&sim.scene, sim.options()).map_err(|e| e.to_string())?;
         if let (Some(l), Some(f)) = (&mut law, file) {
             l.library = f;
         }

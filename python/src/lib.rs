@@ -34,6 +34,7 @@ use efsi_core::{
     Snapshot, Stagger, StepInfo, due,
 };
 use efsi_run::SceneOverrides;
+use efsi_run::run::Schedule;
 use efsi_run::{ProbeSpec, SceneOutput};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -237,15 +238,14 @@ fn restore_override(text: &str) -> Option<efsi_core::Override> {
 }
 
 /// What `efsi run`'s outputs would do, without files: the output times it lands on and the
-/// probe rows it writes (efsi-run's `Outputs`, its schedule only).
+/// probe rows it writes (efsi-run's `Outputs` with their schedules, the probes' rows kept in
+/// memory and nothing else written).
 #[derive(Clone)]
 struct Recorder {
     end: f64,
-    vtk_every: Option<f64>,
-    vtk_count: u64,
-    probe_every: Option<f64>,
-    probe_count: u64,
-    profiles: Vec<Vec<f64>>,
+    /// The probes' schedule, then the VTK series' and each profile's.
+    probe_schedule: Schedule,
+    schedules: Vec<Schedule>,
     probes: Vec<ProbeSpec>,
     columns: Vec<String>,
     rows: Vec<f64>,
@@ -259,23 +259,12 @@ impl Recorder {
         for p in &o.probes {
             columns.extend(efsi_run::probes::columns(p));
         }
-        let profiles = o
-            .profiles
-            .iter()
-            .map(|p| {
-                let efsi_run::ProfileSpec::Line { at, .. } = p;
-                let mut times = at.clone();
-                times.sort_by(f64::total_cmp);
-                times
-            })
-            .collect();
+        let vtk = o.vtk_every.map(|e| Schedule::every(Some(e)));
+        let profiles = o.profiles.iter().map(|p| Schedule::times(p.times()));
         let mut r = Recorder {
             end: sim.scene.time.end,
-            vtk_every: o.vtk_every,
-            vtk_count: 0,
-            probe_every: o.probe_every,
-            probe_count: 0,
-            profiles,
+            probe_schedule: Schedule::every(o.probe_every),
+            schedules: vtk.into_iter().chain(profiles).collect(),
             probes: o.probes.clone(),
             columns,
             rows: Vec::new(),
@@ -286,28 +275,19 @@ impl Recorder {
 
     /// The next output time after `t` (or the end), as efsi-run's `Outputs::next_event`.
     fn next_event(&self, t: f64) -> f64 {
-        let mut next = self.end;
-        if let Some(e) = self.vtk_every {
-            next = next.min(self.vtk_count as f64 * e);
-        }
-        if let Some(e) = self.probe_every {
-            next = next.min(self.probe_count as f64 * e);
-        }
-        for times in &self.profiles {
-            if let Some(&tt) = times.first() {
-                next = next.min(tt);
-            }
-        }
-        next.max(t)
+        std::iter::once(&self.probe_schedule)
+            .chain(&self.schedules)
+            .filter_map(Schedule::next)
+            .fold(self.end, f64::min)
+            .max(t)
     }
 
-    /// Record what is due at the simulation's time, as efsi-run's `Outputs::emit`.
+    /// Record what is due at the simulation's time, as efsi-run's `Outputs::emit`: a probe row
+    /// (also at the end, `last`), and the other outputs' times consumed (the simulation goes on
+    /// after a `run`, so a profile's later times stay due).
     fn emit(&mut self, sim: &Simulation, last: bool) {
         let t = sim.state.t;
-        let probe_due = self
-            .probe_every
-            .is_none_or(|e| due(t, self.probe_count as f64 * e));
-        if probe_due || last {
+        if self.probe_schedule.take(t, last).write {
             self.rows.push(t);
             for p in &self.probes {
                 efsi_run::probes::evaluate(
@@ -319,21 +299,9 @@ impl Recorder {
                     &mut self.rows,
                 );
             }
-            if let Some(e) = self.probe_every {
-                while due(t, self.probe_count as f64 * e) {
-                    self.probe_count += 1;
-                }
-            }
         }
-        if let Some(e) = self.vtk_every {
-            while due(t, self.vtk_count as f64 * e) {
-                self.vtk_count += 1;
-            }
-        }
-        for times in &mut self.profiles {
-            while times.first().is_some_and(|&tt| due(t, tt)) {
-                times.remove(0);
-            }
+        for s in &mut self.schedules {
+            s.take(t, false);
         }
     }
 }

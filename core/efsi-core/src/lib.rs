@@ -3,9 +3,11 @@
 //! The framework of efsi, a full-Eulerian fluid–structure interaction solver: the MAC grid and
 //! its axisymmetric metric, fields, boundary conditions, the RON scene model, the stage contract
 //! and scheduler, and the simulation that steps them. No physics stage lives here; the stages
-//! are plugins (crate `efsi-stages`) that attach to the phases named by [`schedule`]. The
-//! linear solvers and the parallel loops are in `efsi-linalg`, the law plugins' host in
-//! `efsi-laws-host`, the run loop, outputs, probes and checkpoints in `efsi-run`.
+//! are plugins (crate `efsi-stages`) that attach to the phases named by [`schedule`], and the
+//! rest of what the framework needs from a plugin it reaches through [`plugin_api`]; no crate of
+//! the framework depends on a plugin crate. The linear solvers and the parallel loops are in
+//! `efsi-linalg`, the run loop, outputs, probes and checkpoints in `efsi-run`; the law plugins'
+//! host (`efsi-laws-host`) is a plugin crate.
 
 pub mod advance;
 pub mod bc;
@@ -13,7 +15,9 @@ pub mod error;
 pub mod field;
 pub mod grid;
 pub mod loops;
+pub mod ops;
 pub mod overrides;
+pub mod plugin_api;
 pub mod scene;
 pub mod schedule;
 pub mod simulation;

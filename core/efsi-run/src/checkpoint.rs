@@ -28,10 +28,11 @@ use crate::binary::{self, Format};
 use efsi_core::Snapshot;
 use efsi_core::error::EfsiError;
 use efsi_core::overrides::Override;
+use efsi_core::plugin_api::Laws;
+use efsi_core::scene::Options;
 use efsi_core::scene::Scene;
+use efsi_core::scene::solid::SceneSolid;
 use efsi_core::state::State;
-use efsi_laws_host::loader::{describe, resolve_law};
-use efsi_stages::solid::SceneSolid;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -62,9 +63,10 @@ pub struct LawIdentity {
     pub parameters: Vec<String>,
 }
 
-/// The identity of the law `scene` names (None without a solid law). The library is resolved
-/// as the elastic stage resolves it (relative to the scene's folder, else the search path).
-pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
+/// The identity of the law `scene` names (None without a solid law), by the law loader the
+/// plugins put in the checked scene's `options` ([`Laws`]). The library is resolved as the
+/// elastic stage resolves it (relative to the scene's folder, else the search path).
+pub fn law_identity(scene: &Scene, options: &Options) -> Result<Option<LawIdentity>, EfsiError> {
     let dir = scene
         .source_dir
         .clone()
@@ -79,13 +81,19 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
     let Some(spec) = solid.and_then(|s| s.law) else {
         return Ok(None);
     };
-    let refuse = |e: efsi_laws_host::LawError| EfsiError::Config {
+    let refuse = |message: String| EfsiError::Config {
         path: dir.clone(),
         field: "solid.law".into(),
-        message: e.to_string(),
+        message,
     };
-    let path = resolve_law(&spec.name, &dir).map_err(refuse)?;
-    let info = describe(&path).map_err(refuse)?;
+    let loader = Laws::of(options).ok_or_else(|| {
+        refuse(format!(
+            "the scene names the law `{}`, and no plugin of this simulation loads laws",
+            spec.name
+        ))
+    })?;
+    let info = loader.describe(&spec.name, &dir).map_err(refuse)?;
+    let path = info.library;
     let bytes = std::fs::read(&path).map_err(|e| EfsiError::io(&path, e))?;
     Ok(Some(LawIdentity {
         spec: spec.name.clone(),
@@ -94,19 +102,7 @@ pub fn law_identity(scene: &Scene) -> Result<Option<LawIdentity>, EfsiError> {
         library: path.display().to_string(),
         bytes: bytes.len() as u64,
         hash: content_hash(&bytes),
-        parameters: info
-            .parameters
-            .iter()
-            .map(|p| {
-                format!(
-                    "{} [{}] default {:e} range {}",
-                    p.name,
-                    p.unit,
-                    p.default,
-                    p.range_text()
-                )
-            })
-            .collect(),
+        parameters: info.parameters,
     }))
 }
 
@@ -190,8 +186,8 @@ pub fn scene_differences(old: &Scene, new: &Scene) -> Vec<String> {
     // The output sections are RON text in the scenes: compared setting by setting.
     a["output"] = crate::output::spec::json(old);
     b["output"] = crate::output::spec::json(new);
-    a["solid"] = efsi_stages::solid::json(old);
-    b["solid"] = efsi_stages::solid::json(new);
+    a["solid"] = efsi_core::scene::solid::json(old);
+    b["solid"] = efsi_core::scene::solid::json(new);
     // A stage's numerics section is RON text in the scene; where both scenes hold it checked
     // (its settings in force), compare it setting by setting.
     let old_sections: std::collections::BTreeMap<_, _> = old.numerics.sections_json().collect();
@@ -528,7 +524,8 @@ pub fn check_resumable(
     plugins: &[&dyn efsi_core::StagePlugin],
 ) -> Result<(), EfsiError> {
     let mut recorded = file.scene()?;
-    recorded.check_options(&file.scene_path, plugins)?;
+    // The same plugins check both scenes: the recorded one's law loader is `scene`'s too.
+    let options = recorded.check_options(&file.scene_path, plugins)?;
     let mut diffs = Vec::new();
     // `time.end` alone may change, to a time after the checkpoint's: a stopped or finished
     // run continues to a later end (no step before the checkpoint depends on it).
@@ -548,7 +545,7 @@ pub fn check_resumable(
             .map(|d| format!("scene: {d}")),
     );
     if diffs.is_empty() {
-        diffs.extend(law_differences(&file.law, &law_identity(scene)?));
+        diffs.extend(law_differences(&file.law, &law_identity(scene, &options)?));
     }
     if diffs.is_empty() {
         return Ok(());

@@ -25,9 +25,9 @@
 
 use efsi_core::error::EfsiError;
 use efsi_core::grid::Grid;
+use efsi_core::ops::{kinetic_energy, potential_energy};
 use efsi_core::scene::{Boundary, Scene, Side};
 use efsi_core::{State, StepCheck, StepContext};
-use efsi_stages::ops::{kinetic_energy, potential_energy};
 
 /// How far the kinetic + potential energy may rise above its start, as a multiple of the energy
 /// the initial motion, the initial strain and gravity can have supplied, before a run is

@@ -7,7 +7,13 @@
 //! process ([`lock`]), the energy guard that stops a run gaining energy nothing supplied
 //! ([`guard`]), reading scene files and overrides ([`overrides`]: `--set`, `--refine`, FMU
 //! and Python parameters), and the set-up of a simulation for a run ([`simulation`]: the memory
-//! check, the `output` section's). The CLI, the FMU and other drivers use them.
+//! check, the `output` section's). The outputs are `(schedule, writer)` pairs
+//! ([`run::Writer`], [`output::schedule`]).
+//!
+//! Part of the framework: it knows stages, laws and shapes only through efsi-core's plugin API
+//! (the stage contract, the scene model, [`efsi_core::plugin_api`]) and depends on no plugin
+//! crate. The front ends — the `efsi` command, the FMU, the Python module — compose it with the
+//! shipped plugins, passing them to [`simulation`] and [`run::resume`].
 
 pub mod binary;
 pub mod checkpoint;

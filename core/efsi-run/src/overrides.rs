@@ -74,10 +74,10 @@
 use efsi_core::StagePlugin;
 use efsi_core::overrides::{FIELD_ALIASES, Override, OverrideValue, attribute};
 use efsi_core::scene::options::check_sections;
+use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{Scene, SceneError};
 use efsi_ron_edit::overrides::apply_sets;
 use efsi_ron_edit::{Document, Path as SettingPath};
-use efsi_stages::solid::SceneSolid;
 use std::path::{Path, PathBuf};
 
 /// Overrides applied to a scene: read a scene file with them, set, refine and read its
@@ -275,7 +275,7 @@ pub fn read_file(path: &Path) -> Result<String, SceneError> {
 }
 
 /// `scene` as RON text with the defaults of its sections filled in where the core knows them,
-/// and its `solid` section's (the stages' type, [`efsi_stages::solid::Solid`]) where it reads
+/// and its `solid` section's ([`efsi_core::scene::solid::Solid`]) where it reads
 /// as one: what a path is read from, and the shape of a setting the file leaves out.
 fn with_defaults(scene: &Scene) -> String {
     match scene.solid_spec() {
@@ -368,12 +368,14 @@ Scene(
         ])
         .unwrap();
         assert_eq!((s.grid.nx, s.grid.ny), (64, 96));
-        let efsi_stages::solid::Shape::Disk { center, radius } =
-            s.solid_spec().unwrap().unwrap().shape
-        else {
-            panic!("{:?}", s.solid_spec())
-        };
-        assert_eq!((center, radius), ((0.0, 0.06), 0.02));
+        assert_eq!(
+            s.get("solid.shape.radius").unwrap(),
+            OverrideValue::Float(0.02)
+        );
+        assert_eq!(
+            s.get("solid.shape.center").unwrap(),
+            OverrideValue::Ron("(0.0, 0.06)".into())
+        );
         assert!(
             s.output.text().contains("at: (0.02, 0.03)"),
             "{}",
@@ -400,13 +402,18 @@ Scene(
             s.initial_velocity,
             efsi_core::scene::InitialVelocity::Uniform((1.0, 2.0))
         ));
-        assert!(matches!(
-            s.solid_spec().unwrap().unwrap().shape,
-            efsi_stages::solid::Shape::Rectangle {
-                max: (0.01, 0.04),
-                ..
-            }
-        ));
+        let OverrideValue::Ron(shape) = s.get("solid.shape").unwrap() else {
+            panic!("{:?}", s.get("solid.shape"))
+        };
+        assert!(shape.starts_with("Rectangle("), "{shape}");
+        assert_eq!(
+            s.get("solid.shape.max[1]").unwrap(),
+            OverrideValue::Float(0.04)
+        );
+        assert_eq!(
+            s.get("solid.shape.min").unwrap(),
+            OverrideValue::Ron("(0.0, 0.01)".into())
+        );
     }
 
     #[test]

@@ -3,10 +3,10 @@
 use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::Grid;
+use efsi_core::ops::{self, potential_energy};
 use efsi_core::scene::Side;
 use efsi_core::state::State;
 use efsi_core::{OutputDecl, OutputKind};
-use efsi_stages::ops::{self, potential_energy};
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).
@@ -76,8 +76,143 @@ pub fn quantity(grid: &Grid, state: &State, outputs: &[OutputDecl], name: &str) 
         .unwrap_or(f64::NAN)
 }
 
+/// What a probe is evaluated on: the simulation's grid and state, the scene's gravity and the
+/// scheduled stages' outputs ([`efsi_core::Pipeline::outputs`]).
+#[derive(Clone, Copy)]
+pub struct Probed<'a> {
+    /// The grid.
+    pub grid: &'a Grid,
+    /// The state.
+    pub state: &'a State,
+    /// The scene's gravity.
+    pub gravity: (f64, f64),
+    /// The scheduled stages' outputs.
+    pub outputs: &'a [OutputDecl],
+}
+
+/// A quantity of the framework: one or more columns of `probes.csv`, declared as the stages
+/// declare theirs ([`OutputKind::Quantity`]) and found, as theirs are, by its name
+/// ([`evaluate_quantity`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Quantity {
+    /// Its name (`Quantity("name")` in a scene).
+    pub name: &'static str,
+    /// Its columns, in order.
+    pub columns: &'static [&'static str],
+    /// Whether it needs a solid in the scene.
+    pub needs_solid: bool,
+    /// Its values, appended (one per column).
+    pub eval: fn(&Probed, &mut Vec<f64>),
+}
+
+/// The framework's quantities (see [`ProbeSpec`] for each one's definition); a probe names one
+/// as `Quantity("name")` or by its own variant (`KineticEnergy`).
+pub const QUANTITIES: &[Quantity] = &[
+    Quantity {
+        name: "kinetic_energy",
+        columns: &["kinetic_energy"],
+        needs_solid: false,
+        eval: |p, out| {
+            let s = p.state;
+            out.push(ops::kinetic_energy(p.grid, &s.u, &s.v, &s.rho))
+        },
+    },
+    Quantity {
+        name: "potential_energy",
+        columns: &["potential_energy"],
+        needs_solid: false,
+        eval: |p, out| out.push(potential_energy(p.grid, &p.state.rho, p.gravity)),
+    },
+    Quantity {
+        name: "max_divergence",
+        columns: &["max_divergence"],
+        needs_solid: false,
+        eval: |p, out| out.push(ops::max_abs_div(p.grid, &p.state.u, &p.state.v)),
+    },
+    Quantity {
+        name: "max_speed",
+        columns: &["max_speed"],
+        needs_solid: false,
+        eval: |p, out| out.push(max_speed(p.grid, p.state)),
+    },
+    Quantity {
+        name: "solid_volume",
+        columns: &["solid_volume"],
+        needs_solid: true,
+        eval: |p, out| match moments(p) {
+            Some(m) => out.push(m.volume),
+            None => out.push(f64::NAN),
+        },
+    },
+    Quantity {
+        name: "solid_centroid",
+        columns: &["solid_x", "solid_y"],
+        needs_solid: true,
+        eval: |p, out| match moments(p) {
+            Some(m) => out.extend([m.centroid.0, m.centroid.1]),
+            None => out.extend([f64::NAN, f64::NAN]),
+        },
+    },
+    Quantity {
+        name: "solid_velocity",
+        columns: &["solid_u", "solid_v"],
+        needs_solid: true,
+        eval: |p, out| match moments(p) {
+            Some(m) => out.extend([m.velocity.0, m.velocity.1]),
+            None => out.extend([f64::NAN, f64::NAN]),
+        },
+    },
+    Quantity {
+        name: "solid_pieces",
+        columns: &["solid_pieces", "solid_largest_piece"],
+        needs_solid: true,
+        eval: |p, out| match &p.state.phi {
+            Some(phi) => {
+                let s = solid_pieces(p.grid, phi);
+                out.extend([s.count as f64, s.largest]);
+            }
+            None => out.extend([f64::NAN, f64::NAN]),
+        },
+    },
+];
+
+/// The framework's quantity `name`, if it has one.
+pub fn framework_quantity(name: &str) -> Option<&'static Quantity> {
+    QUANTITIES.iter().find(|q| q.name == name)
+}
+
+/// Append the values of the quantity `name`: the framework's ([`QUANTITIES`]), else a
+/// scheduled stage's ([`OutputKind::Quantity`], one column; NaN if no stage reports it).
+pub fn evaluate_quantity(name: &str, probed: &Probed, out: &mut Vec<f64>) {
+    match framework_quantity(name) {
+        Some(q) => (q.eval)(probed, out),
+        None => out.push(quantity(probed.grid, probed.state, probed.outputs, name)),
+    }
+}
+
+/// The largest speed at the cell centres.
+fn max_speed(grid: &Grid, state: &State) -> f64 {
+    let mut m = 0.0f64;
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
+            m = m.max(a.hypot(b));
+        }
+    }
+    m
+}
+
+/// The solid's moments, if the state has a solid.
+fn moments(p: &Probed) -> Option<SolidMoments> {
+    p.state
+        .phi
+        .as_ref()
+        .map(|phi| solid_moments(p.grid, p.state, phi))
+}
+
 /// Append the probe's values to `out`; `gravity` is the scene's, `outputs` the scheduled
-/// stages' ([`efsi_core::Pipeline::outputs`]).
+/// stages' ([`efsi_core::Pipeline::outputs`]). A probe of a quantity is evaluated by name
+/// ([`evaluate_quantity`]), whichever way the scene names it.
 pub fn evaluate(
     p: &ProbeSpec,
     grid: &Grid,
@@ -86,50 +221,24 @@ pub fn evaluate(
     outputs: &[OutputDecl],
     out: &mut Vec<f64>,
 ) {
+    let probed = Probed {
+        grid,
+        state,
+        gravity,
+        outputs,
+    };
     match p {
         ProbeSpec::Point { field, at, .. } => out.push(sample_in(grid, state, outputs, field, *at)),
-        ProbeSpec::KineticEnergy => {
-            out.push(ops::kinetic_energy(grid, &state.u, &state.v, &state.rho))
-        }
-        ProbeSpec::PotentialEnergy => out.push(potential_energy(grid, &state.rho, gravity)),
-        ProbeSpec::MaxDivergence => out.push(ops::max_abs_div(grid, &state.u, &state.v)),
-        ProbeSpec::MaxSpeed => {
-            let mut m = 0.0f64;
-            for j in 0..grid.ny as isize {
-                for i in 0..grid.nx as isize {
-                    let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
-                    m = m.max(a.hypot(b));
-                }
-            }
-            out.push(m)
-        }
-        ProbeSpec::ElasticEnergy => out.push(quantity(grid, state, outputs, "elastic_energy")),
-        ProbeSpec::Quantity(name) => out.push(quantity(grid, state, outputs, name)),
         ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, outputs, *wall)),
         ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, outputs, *wall)),
         ProbeSpec::SolidExtent { at } => {
             let (b, t) = solid_extent(grid, state, *at);
             out.extend([b, t]);
         }
-        ProbeSpec::SolidPieces => match &state.phi {
-            Some(phi) => {
-                let p = solid_pieces(grid, phi);
-                out.extend([p.count as f64, p.largest]);
-            }
-            None => out.extend([f64::NAN, f64::NAN]),
+        quantity => match quantity.quantity() {
+            Some(name) => evaluate_quantity(name, &probed, out),
+            None => out.extend(std::iter::repeat_n(f64::NAN, columns(p).len())),
         },
-        ProbeSpec::SolidVolume | ProbeSpec::SolidCentroid | ProbeSpec::SolidVelocity => {
-            let Some(phi) = &state.phi else {
-                out.extend(std::iter::repeat_n(f64::NAN, columns(p).len()));
-                return;
-            };
-            let m = solid_moments(grid, state, phi);
-            match p {
-                ProbeSpec::SolidVolume => out.push(m.volume),
-                ProbeSpec::SolidCentroid => out.extend([m.centroid.0, m.centroid.1]),
-                _ => out.extend([m.velocity.0, m.velocity.1]),
-            }
-        }
     }
 }
 
@@ -385,7 +494,69 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use efsi_core::FieldId;
     use efsi_core::grid::Geometry;
+
+    #[test]
+    fn a_quantity_is_one_probe_whichever_way_the_scene_names_it() {
+        let grid = Grid::new(Geometry::Planar, 6, 4, (0.0, 1.5), (0.0, 1.0));
+        let fields = [FieldId::SolidFraction].into_iter().collect();
+        let mut state = State::new(&grid, 2.0, 0.1, &fields);
+        for j in 0..4 {
+            for i in 0..7 {
+                state.u[(i, j)] = 0.25 * i as f64 - 0.1 * j as f64;
+            }
+        }
+        let phi = state.phi.as_mut().unwrap();
+        phi[(1, 1)] = 1.0;
+        phi[(2, 1)] = 0.5;
+        let values = |p: &ProbeSpec| {
+            let mut out = Vec::new();
+            evaluate(p, &grid, &state, (0.0, -9.81), &[], &mut out);
+            out
+        };
+        for (variant, name) in [
+            (ProbeSpec::KineticEnergy, "kinetic_energy"),
+            (ProbeSpec::PotentialEnergy, "potential_energy"),
+            (ProbeSpec::MaxDivergence, "max_divergence"),
+            (ProbeSpec::MaxSpeed, "max_speed"),
+            (ProbeSpec::SolidVolume, "solid_volume"),
+            (ProbeSpec::SolidCentroid, "solid_centroid"),
+            (ProbeSpec::SolidVelocity, "solid_velocity"),
+            (ProbeSpec::SolidPieces, "solid_pieces"),
+        ] {
+            let by_name = ProbeSpec::Quantity(name.into());
+            assert_eq!(variant.quantity(), Some(name));
+            assert_eq!(variant.columns(), by_name.columns(), "{name}");
+            assert_eq!(variant.needs_solid(), by_name.needs_solid(), "{name}");
+            let (a, b) = (values(&variant), values(&by_name));
+            assert_eq!(a.len(), variant.columns().len(), "{name}");
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}: {a:?} {b:?}"
+            );
+        }
+        // The numbers: 1.5 cells of solid of volume 0.0625 each, its centroid; ½∫ρ|u|² dV with
+        // u = 0.25 i − 0.1 j on the x-faces (density 2, cells of 0.25 × 0.25, half of each
+        // face's ½ρu² to each of its cells).
+        let v = values(&ProbeSpec::SolidCentroid);
+        assert_eq!(values(&ProbeSpec::SolidVolume), vec![1.5 * 0.0625]);
+        assert!((v[0] - (0.375 + 0.5 * 0.625) / 1.5).abs() < 1e-15 && (v[1] - 0.375).abs() < 1e-15);
+        let mut ke = 0.0;
+        for j in 0..4 {
+            for i in 0..6 {
+                let u = |i: i32| 0.25 * i as f64 - 0.1 * j as f64;
+                ke += 2.0 * 0.5 * (u(i).powi(2) + u(i + 1).powi(2)) / 2.0 * 0.0625;
+            }
+        }
+        let got = values(&ProbeSpec::KineticEnergy)[0];
+        assert!(ke > 0.1 && (got - ke).abs() < 1e-12 * ke, "{got} vs {ke}");
+        // A stage's quantity no scheduled stage reports is NaN, one column named after it.
+        let elastic = ProbeSpec::Quantity("elastic_energy".into());
+        assert_eq!(elastic.columns(), ["elastic_energy"]);
+        assert!(values(&elastic)[0].is_nan());
+        assert_eq!(ProbeSpec::ElasticEnergy.quantity(), Some("elastic_energy"));
+    }
 
     #[test]
     fn solid_pieces_counts_face_connected_regions_and_the_largest_share() {

@@ -26,6 +26,8 @@ pub use typed::Options;
 
 mod numerics;
 mod section;
+mod shape;
+pub mod solid;
 mod typed;
 pub mod options {
     //! What a stage plugin needs to declare its `numerics` section.
@@ -107,8 +109,8 @@ pub struct Scene {
     #[serde(default)]
     pub initial_velocity: InitialVelocity,
     /// The solid, if any: its shape at t = 0 and its material (one material; several bodies
-    /// are a `Union` of shapes). A [`Section`] whose type and checks the stages own
-    /// (`efsi_stages::solid::Solid`).
+    /// are a `Union` of shapes). A [`Section`], read as a [`solid::Solid`]
+    /// ([`solid::SceneSolid`]).
     #[serde(default)]
     pub solid: Option<Section>,
     /// Boundary conditions per side.

@@ -194,7 +194,7 @@ pub fn arrays(
                 let vy = if grid.is_axisymmetric() { 2 } else { 1 };
                 let mut vel = vec![0.0; 3 * n];
                 for (k, (i, j)) in cells().enumerate() {
-                    let (a, b) = efsi_stages::ops::centre_velocity(&state.u, &state.v, i, j);
+                    let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
                     vel[3 * k] = a;
                     vel[3 * k + vy] = b;
                 }
@@ -207,7 +207,7 @@ pub fn arrays(
                 name,
                 1,
                 cells()
-                    .map(|(i, j)| efsi_stages::ops::div(grid, &state.u, &state.v, i, j))
+                    .map(|(i, j)| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
                     .collect(),
             )),
             "solid_fraction" => {

@@ -1,8 +1,10 @@
-//! What a run writes ([`spec`]: the scene's `output` section) and the writers: VTK XML for
-//! ParaView, CSV probes and profiles.
+//! What a run writes ([`spec`]: the scene's `output` section), when ([`schedule`]) and the
+//! formats: VTK XML for ParaView, CSV probes and profiles. The run's writers, each paired with
+//! its schedule, are in [`crate::run`]'s outputs.
 
 pub mod atomic;
 pub mod fields;
 pub mod read;
+pub mod schedule;
 pub mod spec;
 pub mod vtk;

@@ -9,10 +9,10 @@
 //! changes it through [`SceneOutput`].
 
 use efsi_core::error::EfsiError;
+use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
-use efsi_stages::solid::SceneSolid;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -164,45 +164,66 @@ pub enum ProbeSpec {
     /// `solid_largest_piece` is the largest region's share of the solid volume (1 for a solid
     /// in one piece). Periodic sides are not wrapped: a solid crossing one counts as two.
     SolidPieces,
-    /// A quantity a scheduled stage reports ([`efsi_core::StagePlugin::outputs`]), by name; the
-    /// column is named after it.
+    /// A quantity by name: the framework's ([`crate::probes::QUANTITIES`]: the variants above
+    /// that take no argument, by their column's name, `solid_centroid`, `solid_velocity` and
+    /// `solid_pieces` for the two-column ones) or one a scheduled stage reports
+    /// ([`efsi_core::StagePlugin::outputs`]: `elastic_energy`), whose column is named after it.
     Quantity(String),
 }
 
 impl ProbeSpec {
-    /// The probe's column names in `probes.csv`, in order.
+    /// The name of the quantity the probe reports, for a probe of a quantity (every variant
+    /// but `Point`, `ContactForce`, `ContactRadius` and `SolidExtent`, which take arguments):
+    /// the framework's ([`crate::probes::QUANTITIES`]) or a stage's, found by this name.
+    pub fn quantity(&self) -> Option<&str> {
+        Some(match self {
+            ProbeSpec::KineticEnergy => "kinetic_energy",
+            ProbeSpec::PotentialEnergy => "potential_energy",
+            ProbeSpec::MaxDivergence => "max_divergence",
+            ProbeSpec::MaxSpeed => "max_speed",
+            ProbeSpec::SolidVolume => "solid_volume",
+            ProbeSpec::SolidCentroid => "solid_centroid",
+            ProbeSpec::SolidVelocity => "solid_velocity",
+            ProbeSpec::ElasticEnergy => "elastic_energy",
+            ProbeSpec::SolidPieces => "solid_pieces",
+            ProbeSpec::Quantity(name) => name,
+            ProbeSpec::Point { .. }
+            | ProbeSpec::ContactForce { .. }
+            | ProbeSpec::ContactRadius { .. }
+            | ProbeSpec::SolidExtent { .. } => return None,
+        })
+    }
+
+    /// The probe's column names in `probes.csv`, in order: a quantity's columns (one named
+    /// after a stage's quantity), or the probe's own.
     pub fn columns(&self) -> Vec<String> {
+        if let Some(name) = self.quantity() {
+            return match crate::probes::framework_quantity(name) {
+                Some(q) => q.columns.iter().map(|c| c.to_string()).collect(),
+                None => vec![name.to_string()],
+            };
+        }
         match self {
             ProbeSpec::Point { name, .. } => vec![name.clone()],
-            ProbeSpec::KineticEnergy => vec!["kinetic_energy".into()],
-            ProbeSpec::PotentialEnergy => vec!["potential_energy".into()],
-            ProbeSpec::MaxDivergence => vec!["max_divergence".into()],
-            ProbeSpec::MaxSpeed => vec!["max_speed".into()],
-            ProbeSpec::SolidVolume => vec!["solid_volume".into()],
-            ProbeSpec::SolidCentroid => vec!["solid_x".into(), "solid_y".into()],
-            ProbeSpec::SolidVelocity => vec!["solid_u".into(), "solid_v".into()],
-            ProbeSpec::ElasticEnergy => vec!["elastic_energy".into()],
             ProbeSpec::ContactForce { .. } => vec!["contact_force".into()],
             ProbeSpec::ContactRadius { .. } => vec!["contact_radius".into()],
             ProbeSpec::SolidExtent { .. } => vec!["solid_bottom".into(), "solid_top".into()],
-            ProbeSpec::SolidPieces => vec!["solid_pieces".into(), "solid_largest_piece".into()],
-            ProbeSpec::Quantity(name) => vec![name.clone()],
+            _ => Vec::new(),
         }
     }
 
     /// Whether the probe needs a solid in the scene.
     pub fn needs_solid(&self) -> bool {
-        matches!(
-            self,
-            ProbeSpec::SolidVolume
-                | ProbeSpec::SolidCentroid
-                | ProbeSpec::SolidVelocity
-                | ProbeSpec::ElasticEnergy
-                | ProbeSpec::ContactForce { .. }
-                | ProbeSpec::ContactRadius { .. }
-                | ProbeSpec::SolidExtent { .. }
-                | ProbeSpec::SolidPieces
-        )
+        match self {
+            ProbeSpec::ElasticEnergy
+            | ProbeSpec::ContactForce { .. }
+            | ProbeSpec::ContactRadius { .. }
+            | ProbeSpec::SolidExtent { .. } => true,
+            p => p
+                .quantity()
+                .and_then(crate::probes::framework_quantity)
+                .is_some_and(|q| q.needs_solid),
+        }
     }
 }
 
@@ -249,6 +270,13 @@ impl ProfileSpec {
     pub fn name(&self) -> &str {
         match self {
             ProfileSpec::Line { name, .. } => name,
+        }
+    }
+
+    /// The times at which to write it, as the scene lists them (none: only at the end).
+    pub fn times(&self) -> &[f64] {
+        match self {
+            ProfileSpec::Line { at, .. } => at,
         }
     }
 }
@@ -544,7 +572,8 @@ fn check_names(o: &OutputSpec, pipeline: &Pipeline) -> Checked {
     for (k, p) in o.probes.iter().enumerate() {
         if let ProbeSpec::Quantity(q) = p {
             let quantities: Vec<&str> = stage(false).collect();
-            if !quantities.contains(&q.as_str()) {
+            let framework = crate::probes::framework_quantity(q).is_some();
+            if !framework && !quantities.contains(&q.as_str()) {
                 return err(
                     &format!("output.probes[{k}]"),
                     if quantities.is_empty() {

@@ -2,45 +2,14 @@
 //! checkpoints after every step, and what a stop request, a failed step or a failed output
 //! leaves behind (a checkpoint, the last good state, `run.json`'s `"Failed"`).
 
+use super::outputs::checkpoints::{checkpoint_of, save_checkpoint};
 use super::room::Room;
 use super::{Outputs, Progress, RunOptions, RunOutcome, StopReason};
-use crate::checkpoint::{self, Checkpoint, LawIdentity, OutputState};
+use crate::checkpoint::{self, LawIdentity};
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
 use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
-use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// The checkpoint of `snapshot` with the output bookkeeping `outputs`.
-fn checkpoint_of(
-    sim: &Simulation,
-    law: &Option<LawIdentity>,
-    outputs: OutputState,
-    snapshot: efsi_core::Snapshot,
-) -> Checkpoint {
-    Checkpoint {
-        efsi_version: env!("CARGO_PKG_VERSION").to_string(),
-        scene_path: std::path::absolute(&sim.scene_path).unwrap_or(sim.scene_path.clone()),
-        scene_ron: sim.scene.to_ron(),
-        overrides: sim.scene.overrides.clone(),
-        law: law.clone(),
-        outputs,
-        snapshot,
-    }
-}
-
-/// Write the checkpoint of `snapshot` with the output bookkeeping `outputs`.
-fn save_checkpoint(
-    sim: &Simulation,
-    law: &Option<LawIdentity>,
-    outputs: OutputState,
-    snapshot: efsi_core::Snapshot,
-    dir: &Path,
-) -> Result<PathBuf, EfsiError> {
-    let path = dir.join(checkpoint::LATEST);
-    checkpoint_of(sim, law, outputs, snapshot).write(&path)?;
-    Ok(path)
-}
 
 /// Keep room on disk for the run's last checkpoint and `run.json` ([`super::room`]), sized by
 /// the checkpoint of the current state and the `run.json` written.
@@ -62,17 +31,6 @@ pub(super) fn make_room(
         )
     })?;
     out.room = Some(room);
-    Ok(())
-}
-
-/// Grow the room after a checkpoint of `path` was written, if the checkpoint outgrew it.
-fn grow_room(out: &mut Outputs, path: &Path) -> Result<(), EfsiError> {
-    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
-    let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
-    if let Some(room) = &mut out.room {
-        room.grow(Room::needed(bytes, record))
-            .map_err(|e| EfsiError::io(out.dir.join("checkpoint").join("room"), e))?;
-    }
     Ok(())
 }
 
@@ -98,8 +56,8 @@ pub(super) fn drive(
         } else {
             until
         };
-        // After every step: the outputs due, the progress, a periodic checkpoint; a steady
-        // flow ends the run.
+        // After every step: the outputs due (a periodic checkpoint among them), the progress;
+        // a steady flow ends the run.
         let mut each = |sim: &mut Simulation, step: &StepInfo| -> Result<Flow, EfsiError> {
             let finished = due(sim.state.t, end) || sim.is_steady();
             out.emit(sim, finished)?;
@@ -110,11 +68,6 @@ pub(super) fn drive(
                 dt: step.dt,
                 wall: start.elapsed().as_secs_f64(),
             });
-            if out.checkpoint_due(sim.state.t) {
-                let path = save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir)?;
-                grow_room(out, &path)?;
-                latest = Some(path);
-            }
             Ok(if sim.is_steady() {
                 Flow::Stop
             } else {
@@ -188,7 +141,7 @@ pub(super) fn drive(
         out_dir: out.dir.clone(),
         steps_this_run: sim.state.step - first_step,
         resumed_from,
-        checkpoint: latest,
+        checkpoint: latest.or_else(|| out.latest_checkpoint().cloned()),
         warnings: out.warnings().to_vec(),
     };
     out.release_room();
@@ -229,13 +182,9 @@ fn save_failure(
 ) -> EfsiError {
     let (step, t) = (good.step(), good.t());
     let state = out.state();
-    let vtk = if out.vtk_every.is_some() {
-        match out.write_fields(&sim.grid, &good.state, &sim.scene.name, "_last_good") {
-            Ok(p) => Some(p),
-            Err(_) => return error,
-        }
-    } else {
-        None
+    let vtk = match out.write_last_good(sim, &good.state) {
+        Ok(p) => p,
+        Err(_) => return error,
     };
     match save_checkpoint(sim, law, state, good, &out.dir) {
         Ok(checkpoint) => EfsiError::Saved {

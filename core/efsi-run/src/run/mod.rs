@@ -71,7 +71,7 @@ mod record;
 mod room;
 
 use drive::drive;
-pub use outputs::Outputs;
+pub use outputs::{Checkpoints, Output, Outputs, RunAt, Schedule, Writer};
 use record::recorded_run_id;
 
 /// What the progress display is told after each step.
@@ -187,8 +187,11 @@ pub fn run_with(
 ) -> Result<RunOutcome, EfsiError> {
     let start = Instant::now();
     check_checkpoint_every(sim, options.checkpoint_every)?;
-    let law = checkpoint::law_identity(&sim.scene)?;
-    let mut out = Outputs::new(sim, dir, options.checkpoint_every, options.overwrite)?;
+    let law = checkpoint::law_identity(&sim.scene, sim.options())?;
+    let checkpoints = options
+        .checkpoint_every
+        .map(|every| Checkpoints::new(every, law.clone()));
+    let mut out = Outputs::new(sim, dir, checkpoints, options.overwrite)?;
     out.write_run_json(sim, serde_json::json!("Running"), 0, None, 0.0)?;
     drive::make_room(sim, &law, &mut out)?;
     out.emit(sim, false)?;
@@ -271,7 +274,7 @@ pub fn resume(
     // The recorded scene holds the stages' options in force: compare it with this one's.
     let checked = scene.check_options(&file.scene_path, plugins)?;
     checkpoint::check_resumable(&file, &scene, &what, plugins)?;
-    let law = checkpoint::law_identity(&scene)?;
+    let law = checkpoint::law_identity(&scene, &checked)?;
     let mut sim = crate::setup::simulation_with(scene, Some(checked), &file.scene_path, plugins)?;
     let snapshot = file.record.clone().into_snapshot(sim.snapshot(), &what)?;
     sim.restore(&snapshot)?;
@@ -281,7 +284,10 @@ pub fn resume(
     let Some(lock) = lock else {
         return Err(EfsiError::io(dir, std::io::ErrorKind::NotFound.into()));
     };
-    let mut out = Outputs::resume(&sim, dir, &file.outputs, options.checkpoint_every, lock)?;
+    let checkpoints = options
+        .checkpoint_every
+        .map(|every| Checkpoints::new(every, law.clone()));
+    let mut out = Outputs::resume(&sim, dir, &file.outputs, checkpoints, lock)?;
     let from = Some((snapshot.step(), snapshot.t(), file.efsi_version.clone()));
     out.write_run_json(
         &sim,

@@ -66,7 +66,7 @@ impl Outputs {
             scene["numerics"][name] = json.clone();
         }
         scene["output"] = crate::output::spec::json(&sim.scene);
-        scene["solid"] = efsi_stages::solid::checked_json(sim.options());
+        scene["solid"] = efsi_core::scene::solid::checked_json(sim.options());
         let projection_tolerance = scene["numerics"]["projection"]["tolerance"].clone();
         let json = serde_json::json!({
             "run_id": self.run_id,
@@ -76,7 +76,7 @@ impl Outputs {
             "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
             "stop": stop,
             "warnings": self.warnings,
-            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk, &self.outputs),
+            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk, sim.pipeline().outputs()),
             "t_end": sim.state.t,
             "steps": sim.state.step,
             "steps_this_run": steps_this_run,

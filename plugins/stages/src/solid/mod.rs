@@ -1,152 +1,22 @@
-//! The scene's `solid` section: the solid body (or several, as a union of shapes) of one
-//! material, and its checks.
+//! The scene's `solid` section for the stages: its check when a simulation is built, and the
+//! law loader the framework reaches through the checked scene.
 //!
-//! ```ron
-//! solid: (
-//!     shape: Disk(center: (0.0, 0.0573), radius: 0.0192),
-//!     density: 1106.0,
-//!     velocity: (0.0, -1.22),
-//!     law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
-//! ),
-//! ```
-//!
-//! The core keeps the section as RON text ([`efsi_core::scene::Section`]), which overrides
-//! edit. The VOF stage's plugin reads it once as a [`Solid`] and checks it ([`check`], its
-//! [`StagePlugin::check_scene`](efsi_core::StagePlugin::check_scene)) when a simulation is
-//! built — its ranges, and that it covers a cell of the grid — each failure naming the
-//! setting's path (`solid.density`), puts back its settings in force, so that records hold the
-//! defaults too, and keeps the [`Solid`] in the checked scene's [`Options`], from which every
-//! stage that needs it reads it. `efsi_run::SceneOverrides` checks its ranges when a scene
-//! is loaded or changed.
+//! The section's type and the checks of its settings are the scene model's
+//! ([`efsi_core::scene::solid`]). The VOF stage's plugin reads it once as a [`Solid`] and checks
+//! it ([`check`], its [`StagePlugin::check_scene`](efsi_core::StagePlugin::check_scene)) when a
+//! simulation is built — its ranges, and that it covers a cell of the grid — each failure naming
+//! the setting's path (`solid.density`), puts back its settings in force, so that records hold
+//! the defaults too, and keeps the [`Solid`] in the checked scene's [`Options`], from which every
+//! stage that needs it reads it, with the law loader ([`Laws`]) through which the run loop
+//! identifies the law library a checkpoint records.
 
-mod shape;
+pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_json, json};
 
-pub use shape::Shape;
-
-use efsi_core::grid::Geometry;
-use efsi_core::scene::{Fluid, Options, Section};
-use efsi_core::validate::{Checked, err, finite, positive};
+use efsi_core::plugin_api::{LawDescription, LawLoader, Laws};
+use efsi_core::scene::Options;
+use efsi_core::validate::{Checked, err};
 use efsi_core::{Field, Grid, Scene};
-use serde::{Deserialize, Serialize};
-
-/// A solid body (or several, as a union of shapes) of one material.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Solid {
-    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
-    pub shape: Shape,
-    /// Density ρ_s (kg/m³, > 0).
-    pub density: f64,
-    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
-    #[serde(default)]
-    pub viscosity: Option<f64>,
-    /// Initial velocity of the solid (default: at rest).
-    #[serde(default)]
-    pub velocity: Option<(f64, f64)>,
-    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
-    #[serde(default)]
-    pub law: Option<LawSpec>,
-}
-
-/// A constitutive law named in a scene.
-///
-/// ```ron
-/// law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
-/// law: (name: "plugins/my_law/target/release/libmy_law.so", parameters: {"k": 2.0}),
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LawSpec {
-    /// A shipped law's name (`neo_hookean`, `saint_venant_kirchhoff`, `mooney_rivlin`), or the
-    /// path of a law library (relative paths are relative to the scene file's folder).
-    pub name: String,
-    /// Parameter values by name; the law declares which exist, their units, defaults and ranges.
-    #[serde(default)]
-    pub parameters: std::collections::BTreeMap<String, f64>,
-}
-
-impl Solid {
-    /// μ_s: the scene's value, or the seed's rule μ_f ρ_s/ρ_f.
-    pub fn viscosity(&self, fluid: &Fluid) -> f64 {
-        self.viscosity
-            .unwrap_or(fluid.viscosity * self.density / fluid.density)
-    }
-
-    /// Check the solid against `scene`: its shape, density (and the density ratio), viscosity
-    /// and velocity; on failure the setting's path and what was expected.
-    pub fn validate(&self, scene: &Scene) -> Checked {
-        self.shape
-            .check()
-            .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
-        positive("solid.density", self.density)?;
-        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
-        // equation's coefficients 1/ρ span more than floating point resolves.
-        let ratio = self.density / scene.fluid.density;
-        if !(1e-6..=1e6).contains(&ratio) {
-            return err(
-                "solid.density",
-                format!(
-                    "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
-                    efsi_core::scene::num(self.density),
-                    efsi_core::scene::num(scene.fluid.density)
-                ),
-            );
-        }
-        if let Some(mu) = self.viscosity {
-            if !(mu.is_finite() && mu >= 0.0) {
-                return err(
-                    "solid.viscosity",
-                    format!(
-                        "must be a finite number ≥ 0, got {}",
-                        efsi_core::scene::num(mu)
-                    ),
-                );
-            }
-            scene.check_diffusion("solid.viscosity", mu, self.density)?;
-        }
-        if let Some(v) = self.velocity {
-            finite("solid.velocity", v)?;
-        }
-        if scene.geometry == Geometry::Axisymmetric && self.velocity.is_some_and(|v| v.0 != 0.0) {
-            return err(
-                "solid.velocity",
-                "an axisymmetric body can only move along the axis: (0, v_z)",
-            );
-        }
-        Ok(())
-    }
-}
-
-/// The `solid` section of a scene as a [`Solid`].
-pub trait SceneSolid {
-    /// The solid, if the scene has one; on error the path of the setting that does not read
-    /// (`solid.law.parameters.G`) and the reader's message (with the line and column in the
-    /// scene file where known).
-    fn solid_spec(&self) -> Result<Option<Solid>, (String, String)>;
-    /// Replace the section by `solid`.
-    fn set_solid(&mut self, solid: &Solid);
-    /// Change the solid in place: read it, apply `change`, write it back. An error if the
-    /// scene has no solid or its section does not read as one.
-    fn update_solid(&mut self, change: impl FnOnce(&mut Solid)) -> Result<(), String> {
-        let mut solid = self
-            .solid_spec()
-            .map_err(|(f, m)| format!("{f}: {m}"))?
-            .ok_or("the scene has no solid")?;
-        change(&mut solid);
-        self.set_solid(&solid);
-        Ok(())
-    }
-}
-
-impl SceneSolid for Scene {
-    fn solid_spec(&self) -> Result<Option<Solid>, (String, String)> {
-        self.solid.as_ref().map(|s| s.read("solid")).transpose()
-    }
-
-    fn set_solid(&mut self, solid: &Solid) {
-        self.solid = Some(Section::of(solid).expect("the solid section serialises to RON"));
-    }
-}
+use std::path::Path;
 
 /// The solid of a checked scene, as [`check`] read it into `options`; an error if the scene
 /// has none.
@@ -158,7 +28,7 @@ pub(crate) fn solid(options: &Options) -> Result<&Solid, String> {
 
 /// Check the `solid` section of `scene`, if it has one ([`Solid::validate`]), put back its
 /// settings in force (defaults filled in) and keep the [`Solid`] in `options`, read once for
-/// every stage that needs it.
+/// every stage that needs it, with the law loader ([`Laws`]).
 pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
     let Some(solid) = scene.solid_spec()? else {
         return Ok(());
@@ -167,6 +37,7 @@ pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
     covers_a_cell(scene, &solid.shape)?;
     scene.set_solid(&solid);
     options.insert(solid);
+    options.insert(Laws(&LOADER));
     Ok(())
 }
 
@@ -191,26 +62,33 @@ fn covers_a_cell(scene: &Scene, shape: &Shape) -> Checked {
     Ok(())
 }
 
-/// The solid of a checked scene (`options`, as [`check`] read it) as JSON, what `run.json`
-/// records: its settings, defaults filled in; null without a solid.
-pub fn checked_json(options: &Options) -> serde_json::Value {
-    options.get::<Solid>().map_or(serde_json::Value::Null, |s| {
-        serde_json::to_value(s).unwrap_or_default()
-    })
-}
+/// The law loader of `efsi-laws-host` as the framework's [`LawLoader`].
+struct Loader;
 
-/// The `solid` section of `scene` as JSON, what records hold (`run.json`, a checkpoint's
-/// comparison of scenes): its settings, defaults filled in; the section's RON text where it
-/// does not read as a [`Solid`]; null without a solid.
-pub fn json(scene: &Scene) -> serde_json::Value {
-    match scene.solid_spec() {
-        Ok(solid) => serde_json::to_value(solid).unwrap_or_default(),
-        Err(_) => serde_json::Value::String(
-            scene
-                .solid
-                .as_ref()
-                .map(|s| s.text().to_string())
-                .unwrap_or_default(),
-        ),
+/// The one [`Loader`].
+static LOADER: Loader = Loader;
+
+impl LawLoader for Loader {
+    fn describe(&self, name: &str, dir: &Path) -> Result<LawDescription, String> {
+        let library = efsi_laws_host::loader::resolve_law(name, dir).map_err(|e| e.to_string())?;
+        let info = efsi_laws_host::describe(&library).map_err(|e| e.to_string())?;
+        Ok(LawDescription {
+            name: info.name,
+            abi_version: info.abi_version,
+            parameters: info
+                .parameters
+                .iter()
+                .map(|p| {
+                    format!(
+                        "{} [{}] default {:e} range {}",
+                        p.name,
+                        p.unit,
+                        p.default,
+                        p.range_text()
+                    )
+                })
+                .collect(),
+            library,
+        })
     }
 }

@@ -106,7 +106,7 @@ fn a_law_undefined_without_solid_runs_the_sphere() {
         r#"solid.law=(name: "{}", parameters: {{"G": 180000.0, "limit": 100.0, "floor": 0.01}})"#,
         lib.display()
     );
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../cases/sphere_impact.ron");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/sphere_impact.ron");
     let o = efsi(&[
         "run",
         scene,

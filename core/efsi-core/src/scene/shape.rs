@@ -1,5 +1,5 @@
 //! The shapes a scene's solid is made of ([`Shape`]): their parameters, checks and
-//! point membership. Their exact cell fractions are the VOF stage's ([`crate::vof::shapes`]).
+//! point membership. Their exact cell fractions are the VOF stage's (crate `efsi-stages`).
 
 use serde::{Deserialize, Serialize};
 
@@ -54,7 +54,7 @@ impl Shape {
     /// (`.radius`, `[1].center`, empty for the shape itself): the setting to name, and to
     /// blame an override for.
     pub fn check(&self) -> Result<(), (String, String)> {
-        use efsi_core::scene::num;
+        use crate::scene::num;
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
         let at = |field: &str, m: String| Err((field.to_string(), m));
         match self {

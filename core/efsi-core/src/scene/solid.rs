@@ -1,0 +1,165 @@
+//! The scene's `solid` section: the solid body (or several, as a union of shapes) of one
+//! material, and the checks of its settings.
+//!
+//! ```ron
+//! solid: (
+//!     shape: Disk(center: (0.0, 0.0573), radius: 0.0192),
+//!     density: 1106.0,
+//!     velocity: (0.0, -1.22),
+//!     law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
+//! ),
+//! ```
+//!
+//! Part of the scene model: the scene keeps the section as RON text ([`Section`]), which
+//! overrides edit; [`SceneSolid`] reads it as a [`Solid`]. What the section means for a time
+//! step belongs to the stage plugins: the VOF stage turns the shape into cell fractions and
+//! checks that it covers a cell, the elastic stage loads the law the section names. A plugin
+//! reads the section once when a simulation is built and keeps the [`Solid`] in the checked
+//! scene's [`Options`](super::Options), from which every stage that needs it reads it.
+
+use super::{Fluid, Scene, Section};
+use crate::grid::Geometry;
+use crate::validate::{Checked, err, finite, positive};
+use serde::{Deserialize, Serialize};
+
+pub use super::shape::Shape;
+
+/// A solid body (or several, as a union of shapes) of one material.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solid {
+    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
+    pub shape: Shape,
+    /// Density ρ_s (kg/m³, > 0).
+    pub density: f64,
+    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
+    #[serde(default)]
+    pub viscosity: Option<f64>,
+    /// Initial velocity of the solid (default: at rest).
+    #[serde(default)]
+    pub velocity: Option<(f64, f64)>,
+    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
+    #[serde(default)]
+    pub law: Option<LawSpec>,
+}
+
+/// A constitutive law named in a scene.
+///
+/// ```ron
+/// law: (name: "neo_hookean", parameters: {"G": 0.18e6}),
+/// law: (name: "plugins/my_law/target/release/libmy_law.so", parameters: {"k": 2.0}),
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LawSpec {
+    /// A shipped law's name (`neo_hookean`, `saint_venant_kirchhoff`, `mooney_rivlin`), or the
+    /// path of a law library (relative paths are relative to the scene file's folder).
+    pub name: String,
+    /// Parameter values by name; the law declares which exist, their units, defaults and ranges.
+    #[serde(default)]
+    pub parameters: std::collections::BTreeMap<String, f64>,
+}
+
+impl Solid {
+    /// μ_s: the scene's value, or the seed's rule μ_f ρ_s/ρ_f.
+    pub fn viscosity(&self, fluid: &Fluid) -> f64 {
+        self.viscosity
+            .unwrap_or(fluid.viscosity * self.density / fluid.density)
+    }
+
+    /// Check the solid against `scene`: its shape, density (and the density ratio), viscosity
+    /// and velocity; on failure the setting's path and what was expected.
+    pub fn validate(&self, scene: &Scene) -> Checked {
+        self.shape
+            .check()
+            .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
+        positive("solid.density", self.density)?;
+        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
+        // equation's coefficients 1/ρ span more than floating point resolves.
+        let ratio = self.density / scene.fluid.density;
+        if !(1e-6..=1e6).contains(&ratio) {
+            return err(
+                "solid.density",
+                format!(
+                    "the density ratio solid/fluid {ratio:e} is outside [1e-6, 1e6] (solid {} kg/m³, fluid {} kg/m³)",
+                    crate::scene::num(self.density),
+                    crate::scene::num(scene.fluid.density)
+                ),
+            );
+        }
+        if let Some(mu) = self.viscosity {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return err(
+                    "solid.viscosity",
+                    format!("must be a finite number ≥ 0, got {}", crate::scene::num(mu)),
+                );
+            }
+            scene.check_diffusion("solid.viscosity", mu, self.density)?;
+        }
+        if let Some(v) = self.velocity {
+            finite("solid.velocity", v)?;
+        }
+        if scene.geometry == Geometry::Axisymmetric && self.velocity.is_some_and(|v| v.0 != 0.0) {
+            return err(
+                "solid.velocity",
+                "an axisymmetric body can only move along the axis: (0, v_z)",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The `solid` section of a scene as a [`Solid`].
+pub trait SceneSolid {
+    /// The solid, if the scene has one; on error the path of the setting that does not read
+    /// (`solid.law.parameters.G`) and the reader's message (with the line and column in the
+    /// scene file where known).
+    fn solid_spec(&self) -> Result<Option<Solid>, (String, String)>;
+    /// Replace the section by `solid`.
+    fn set_solid(&mut self, solid: &Solid);
+    /// Change the solid in place: read it, apply `change`, write it back. An error if the
+    /// scene has no solid or its section does not read as one.
+    fn update_solid(&mut self, change: impl FnOnce(&mut Solid)) -> Result<(), String> {
+        let mut solid = self
+            .solid_spec()
+            .map_err(|(f, m)| format!("{f}: {m}"))?
+            .ok_or("the scene has no solid")?;
+        change(&mut solid);
+        self.set_solid(&solid);
+        Ok(())
+    }
+}
+
+impl SceneSolid for Scene {
+    fn solid_spec(&self) -> Result<Option<Solid>, (String, String)> {
+        self.solid.as_ref().map(|s| s.read("solid")).transpose()
+    }
+
+    fn set_solid(&mut self, solid: &Solid) {
+        self.solid = Some(Section::of(solid).expect("the solid section serialises to RON"));
+    }
+}
+
+/// The `solid` section of `scene` as JSON, what records hold (`run.json`, a checkpoint's
+/// comparison of scenes): its settings, defaults filled in; the section's RON text where it
+/// does not read as a [`Solid`]; null without a solid.
+pub fn json(scene: &Scene) -> serde_json::Value {
+    match scene.solid_spec() {
+        Ok(solid) => serde_json::to_value(solid).unwrap_or_default(),
+        Err(_) => serde_json::Value::String(
+            scene
+                .solid
+                .as_ref()
+                .map(|s| s.text().to_string())
+                .unwrap_or_default(),
+        ),
+    }
+}
+
+/// The solid of a checked scene (`options`, as the plugin that checks the section read it) as JSON, what `run.json`
+/// records: its settings, defaults filled in; null without a solid.
+pub fn checked_json(options: &super::Options) -> serde_json::Value {
+    options.get::<Solid>().map_or(serde_json::Value::Null, |s| {
+        serde_json::to_value(s).unwrap_or_default()
+    })
+}
