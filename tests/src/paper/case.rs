@@ -54,7 +54,8 @@ pub trait Case: Sized {
         Ok((Some(run), m))
     }
 
-    /// Make the runs of the plan, in order (one after the other unless overridden).
+    /// Make the runs of the plan, in order (one after the other unless overridden). A run
+    /// that fails is recorded in [`Done::failed`] and the others still run.
     fn runs(
         &self,
         h: &mut Harness,
@@ -63,11 +64,16 @@ pub trait Case: Sized {
         let mut done = Done {
             runs: Vec::new(),
             measured: Vec::new(),
+            failed: Vec::new(),
         };
         for (label, s) in plan {
-            let (run, m) = self.run(h, &label, &s)?;
-            done.runs.extend(run);
-            done.measured.push((s, m));
+            match self.run(h, &label, &s) {
+                Ok((run, m)) => {
+                    done.runs.extend(run);
+                    done.measured.push((s, m));
+                }
+                Err(e) => done.failed.push((label, e)),
+            }
         }
         Ok(done)
     }
@@ -87,8 +93,20 @@ pub type RunResult<M> = Result<(Option<Run>, M), String>;
 pub struct Done<C: Case> {
     /// The records, in order (one per setting that ran).
     pub runs: Vec<Run>,
-    /// Each setting and what its run showed, in order.
+    /// Each setting and what its run showed, in order (the failed runs' settings left out).
     pub measured: Vec<(C::Setting, C::Measured)>,
+    /// The runs that failed: label and error. Each becomes a failed check of the report.
+    pub failed: Vec<(String, String)>,
+}
+
+/// The failed check of a run that did not complete: it names the run and its error.
+pub fn failed_run(label: &str, error: &str) -> Check {
+    Check {
+        what: format!("run {label} completes"),
+        value: format!("failed: {error}"),
+        target: "completes".into(),
+        pass: false,
+    }
 }
 
 /// A case's judgement and the words of its report.
@@ -183,7 +201,21 @@ pub fn run<C: Case>(opts: &Options) -> Result<Report, String> {
         schedule: Vec::new(),
     };
     let mut done = case.runs(&mut h, plan)?;
-    let v = case.conclude(&mut h, &mut done)?;
+    let failed: Vec<Check> = done.failed.iter().map(|(l, e)| failed_run(l, e)).collect();
+    let mut v = match case.conclude(&mut h, &mut done) {
+        Ok(v) => v,
+        // The verdict may need the failed runs: the report still says what did run and why
+        // it could not conclude.
+        Err(e) if !failed.is_empty() => Verdict {
+            title: C::NAME.into(),
+            reference: String::new(),
+            error_metric: String::new(),
+            checks: vec![failed_run("verdict", &e)],
+            recommendation: "none: runs failed".into(),
+        },
+        Err(e) => return Err(e),
+    };
+    v.checks.extend(failed);
     Ok(Report {
         name: C::NAME.into(),
         title: v.title,

@@ -372,7 +372,8 @@ pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
             continue;
         }
         let t0 = std::time::Instant::now();
-        let report = (case.run)(opts).map_err(|e| format!("case {}: {e}", case.name))?;
+        // A case that cannot complete is a failed check of the report, not the bench's end.
+        let report = (case.run)(opts).unwrap_or_else(|e| failed_case(case.name, &e));
         eprintln!(
             "{}: {}/{} checks passed ({:.0} s)",
             case.name,
@@ -384,6 +385,22 @@ pub fn bench(opts: &Options, names: &[String]) -> Result<Vec<Report>, String> {
     }
     write_report(opts, &reports, start.elapsed().as_secs_f64())?;
     Ok(reports)
+}
+
+/// The report of a case that could not complete: one failed check naming its error.
+fn failed_case(name: &str, error: &str) -> Report {
+    Report {
+        name: name.into(),
+        title: name.into(),
+        reference: String::new(),
+        error_metric: String::new(),
+        runs: Vec::new(),
+        checks: vec![case::failed_run(name, error)],
+        plots: Vec::new(),
+        notes: Vec::new(),
+        schedule: Vec::new(),
+        recommendation: "none: the case failed".into(),
+    }
 }
 
 /// A named series of (x, y) points of a plot.

@@ -560,6 +560,7 @@ impl Case for Stability {
         Ok(Done {
             measured: measured.collect(),
             runs,
+            failed: Vec::new(),
         })
     }
 

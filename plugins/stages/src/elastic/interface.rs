@@ -6,6 +6,30 @@ use super::{Kernels, NEAR, PHI_MIN, Window};
 use efsi_core::Field;
 use efsi_linalg::par;
 
+/// The least `aκ` the series corner's rates take (see [`sliver_rates`]).
+const SLIVER: f64 = 0.1;
+
+/// The solid shear-rate factor `s` and the relaxation coefficient `r` of a series corner
+/// (`a` its solid fraction, `aκ = a + μ_s (1 − a)/μ_f > 0`): `s = 1/max(aκ, A)` and
+/// `r = (1 − a)/(μ_f max(aκ, A))` with `A` = 0.1.
+///
+/// In series the solid of a corner is a spring of length `aκ` (`a` for an inviscid solid) in
+/// series with the fluid's dashpot: its stiffness `G/(aκ)` and relaxation rate `G r` grow without
+/// bound as the corner's solid share goes to zero, a sliver of a cut cell, which only a solid
+/// viscosity keeps finite. A purely elastic solid (`μ_s = 0`) whose interface cuts cells
+/// arbitrarily (the oscillating disk) then pumps energy in whatever the time step. Below `A`
+/// the spring is taken `A` long: `s` and `r` both scale by `aκ/A`, so their ratio, and with it
+/// the stress the corner settles to under a sustained shear (`τ_e = (s/r) 2D = μ_f 2D/(1 − a)`,
+/// the fluid's), is unchanged; only the relaxation time `μ_f A/((1 − a) G)` is longer than the
+/// sliver's own, which matters only where it is not short against the flow. The stress weight
+/// `1/κ = a/(aκ)` is untouched. A corner with `aκ ≥ A` (every corner of a solid with
+/// `μ_s ≥ A μ_f`, and of an interface on the grid's faces, `a ∈ {0, ½, 1}`) keeps the series
+/// closure exactly.
+fn sliver_rates(a: f64, ak: f64, mu_f: f64) -> (f64, f64) {
+    let k = ak.max(SLIVER);
+    (1.0 / k, (1.0 - a) / (mu_f * k))
+}
+
 impl Kernels {
     /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`
     /// with ghosts filled.
@@ -116,7 +140,8 @@ impl Kernels {
                     // solid (a = 0) beside a cell that does.
                     let ak = a + mu_s * (1.0 - a) / mu_f;
                     if ak > 0.0 {
-                        (1.0, 1.0 / ak, a / ak, (1.0 - a) / (mu_f * ak))
+                        let (sf, rc) = sliver_rates(a, ak, mu_f);
+                        (1.0, sf, a / ak, rc)
                     } else {
                         // No solid at an inviscid solid's corner: no shear carried.
                         (1.0, 1.0, 0.0, 0.0)
