@@ -13,6 +13,7 @@ pub mod error;
 pub mod field;
 pub mod grid;
 pub mod loops;
+pub mod operators;
 pub mod overrides;
 pub mod scene;
 pub mod schedule;
