@@ -27,7 +27,7 @@ pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
-pub use loops::{Index, Line, Region, unit};
+pub use loops::{Index, Line, Region, Storage, unit};
 pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{

@@ -72,6 +72,8 @@ pub struct Line {
     offset: usize,
     stride: usize,
     plane: usize,
+    /// Length of the padded storage of the grid's fields.
+    size: usize,
 }
 
 impl Line {
@@ -86,6 +88,15 @@ impl Line {
     #[inline(always)]
     pub fn linear(&self, n: usize) -> usize {
         self.offset + n
+    }
+
+    /// The values at `I + shift` for the indices `I` of the line in `data`, an array laid out
+    /// like the grid's fields (a work array from a pool, a solver's history): [`Field::at`]
+    /// for storage that is not a [`Field`]. Bounds-checked.
+    #[inline(always)]
+    pub fn on<'a>(&self, data: &'a [f64], shift: Index) -> &'a [f64] {
+        assert_eq!(data.len(), self.size, "an array of another grid");
+        &data[self.span(shift, self.stride, self.plane)]
     }
 
     /// The indices of the run, in order.
@@ -122,6 +133,22 @@ impl Region {
             rows,
             planes,
             gz: grid.gz(),
+        }
+    }
+
+    /// Every index of the padded storage of `grid`'s fields, ghosts included (for arrays
+    /// defined everywhere, e.g. coefficients computed from a field whose ghosts are filled).
+    pub fn whole(grid: &Grid) -> Self {
+        let r = Region::of(grid, Stagger::Cell);
+        let gz = r.gz as isize;
+        Region {
+            lo: [-G, -G, -gz],
+            hi: [
+                r.stride as isize - G,
+                r.rows as isize - G,
+                r.planes as isize - gz,
+            ],
+            ..r
         }
     }
 
@@ -181,6 +208,7 @@ impl Region {
             offset: row * stride + (start[0] + G) as usize,
             stride,
             plane: self.plane(),
+            size: stride * self.rows * self.planes,
         }
     }
 
@@ -336,7 +364,39 @@ impl Region {
     }
 }
 
-/// Fields a [`Region`] loop writes: `&mut Field`, or a pair or triple of them (of one grid).
+/// An array laid out like the grid's fields but not held by a [`Field`] (a work array from a
+/// pool), for a [`Region`] loop to write ([`Region::storage`]).
+pub struct Storage<'a> {
+    data: &'a mut [f64],
+    layout: [usize; 3],
+}
+
+impl Region {
+    /// `data`, laid out like the fields of the region's grid, as an output of
+    /// [`Region::for_each`] (its length is checked against the layout).
+    pub fn storage<'a>(&self, data: &'a mut [f64]) -> Storage<'a> {
+        let layout = [self.stride, self.rows, self.planes];
+        assert_eq!(
+            data.len(),
+            layout.iter().product::<usize>(),
+            "an array of another grid"
+        );
+        Storage { data, layout }
+    }
+}
+
+impl<'a> FieldsMut for Storage<'a> {
+    type Lanes = &'a mut [f64];
+    fn layout(&self) -> [usize; 3] {
+        self.layout
+    }
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
+        &mut self.data[r]
+    }
+}
+
+/// Fields a [`Region`] loop writes: `&mut Field` or a [`Storage`], or a pair or triple of them
+/// (of one grid).
 pub trait FieldsMut {
     /// The fields' storage, as [`Lanes`] (one slice per field).
     type Lanes: Lanes;

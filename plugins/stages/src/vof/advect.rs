@@ -484,37 +484,69 @@ impl VofAdvector {
         dt: f64,
         last: bool,
     ) -> AdvectStats {
-        let (nx, ny) = (self.nx as isize, self.ny as isize);
-        let (dx, dy) = (self.dx, self.dy);
-        let (lo_side, hi_side) = if D == X {
-            (self.bounds.x_lo, self.bounds.x_hi)
-        } else {
-            (self.bounds.y_lo, self.bounds.y_hi)
-        };
-        let periodic = lo_side == VofSide::Periodic;
-        let s = phi.stride();
-        let o = if D == X { 1 } else { s };
-        let nd = if D == X { nx } else { ny };
-
         self.fill_ghosts(phi);
         // Lines in the interior, plus the ghost layer that can be upwind of a periodic face.
-        let g = if periodic { 1 } else { 0 };
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        let g = if self.sides::<D>().0 == VofSide::Periodic {
+            1
+        } else {
+            0
+        };
         if D == X {
             self.reconstruct::<AXI>(w.lines, phi, -g, nx + g, 0, ny);
         } else {
             self.reconstruct::<AXI>(w.lines, phi, 0, nx, -g, ny + g);
         }
+        let cfl = self.fluxes::<AXI, D>(w, phi, vel, dt);
+        let mut st = self.update::<D>(w, phi, last);
+        st.cfl = cfl;
+        // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
+        // thousands of cells and steps): to the interface cells, in proportion to their room
+        // `φ(1 − φ)`.
+        if st.clipped_volume != 0.0 {
+            self.give_back(phi, st.clipped_volume);
+        }
+        st
+    }
 
-        // Face fluxes; face (i, j) shares the linear index of cell (i, j) (its high neighbour).
+    /// The low and high sides along `D`.
+    fn sides<const D: u8>(&self) -> (VofSide, VofSide) {
+        if D == X {
+            (self.bounds.x_lo, self.bounds.x_hi)
+        } else {
+            (self.bounds.y_lo, self.bounds.y_hi)
+        }
+    }
+
+    /// The phase flux `F` and volume flux `U` of every face normal to `D` into `w.flux`,
+    /// `w.vflux` (face `(i, j)` shares the linear index of cell `(i, j)`, its high neighbour),
+    /// rows in parallel; returns the sweep's CFL number `max |U|/V` of the upwind cells.
+    fn fluxes<const AXI: bool, const D: u8>(
+        &mut self,
+        w: &mut Work,
+        phi: &Field,
+        vel: &Field,
+        dt: f64,
+    ) -> f64 {
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        let (lo_side, hi_side) = self.sides::<D>();
+        let periodic = lo_side == VofSide::Periodic;
+        let s = phi.stride();
+        let nd = if D == X { nx } else { ny };
         let (fi1, fj1) = if D == X { (nx + 1, ny) } else { (nx, ny + 1) };
-        let slab = Slab {
-            dx,
-            dy,
-            lines: &*w.lines,
-            r_left: &self.r_left,
+        let face = Face {
+            slab: Slab {
+                dx: self.dx,
+                dy: self.dy,
+                lines: &*w.lines,
+                r_left: &self.r_left,
+            },
+            o: if D == X { 1 } else { s },
+            c: phi.data(),
+            r_face: &self.r_face,
+            r_centre: &self.r_centre,
+            inv_vol: &self.inv_vol,
         };
-        let (r_face, r_centre, inv_vol) = (&self.r_face, &self.r_centre, &self.inv_vol);
-        let c = phi.data();
         let v = vel.data();
         let len = w.flux.len();
         let lanes = (
@@ -532,54 +564,21 @@ impl VofAdvector {
             }
             for i in 0..fi1 {
                 let il = (i + G) as usize;
-                let k = jp * s + il;
                 let p = if D == X { i } else { j };
-                let (mut big_u, mut big_f) = (0.0, 0.0);
-                let closed = (p == 0 && lo_side == VofSide::Closed)
-                    || (p == nd && hi_side == VofSide::Closed);
                 if D == X && p == nd && periodic {
                     urow[il] = urow[GU];
                     frow[il] = frow[GU];
                     continue;
                 }
+                let closed = (p == 0 && lo_side == VofSide::Closed)
+                    || (p == nd && hi_side == VofSide::Closed);
+                let k = jp * s + il;
                 let sv = v[k] * dt;
-                if !closed && sv != 0.0 {
-                    let pos = sv > 0.0;
-                    let (ku, iu) = if !pos {
-                        (k, i)
-                    } else if D == X {
-                        (k - o, i - 1)
-                    } else {
-                        (k - o, i)
-                    };
-                    let (area, w) = if D == X {
-                        let rf = r_face[il];
-                        let w = if AXI {
-                            let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
-                            2.0 * rf * sv.abs() / (rf + disc.sqrt())
-                        } else {
-                            sv.abs()
-                        };
-                        (rf * dy, w.min(dx))
-                    } else {
-                        (r_centre[il] * dx, sv.abs().min(dy))
-                    };
-                    big_u = area * sv;
-                    if big_u != 0.0 {
-                        st.cfl = st.cfl.max(big_u.abs() * inv_vol[(iu + G) as usize]);
-                        let cu = c[ku];
-                        let frac = if cu <= 0.0 {
-                            0.0
-                        } else if cu >= 1.0 {
-                            1.0
-                        } else {
-                            slab.fraction::<AXI, D>(ku, iu, w, pos)
-                        };
-                        big_f = big_u * frac;
-                    }
-                }
-                urow[il] = big_u;
-                frow[il] = big_f;
+                (urow[il], frow[il]) = if closed || sv == 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    face.flux::<AXI, D>(k, i, sv, st)
+                };
             }
         });
         if D == Y && periodic {
@@ -588,9 +587,17 @@ impl VofAdvector {
             w.vflux.copy_within(bot..bot + n, top);
             w.flux.copy_within(bot..bot + n, top);
         }
-        let cfl = self.rows.iter().fold(0.0f64, |m, r| m.max(r.cfl));
+        self.rows.iter().fold(0.0f64, |m, r| m.max(r.cfl))
+    }
 
-        // Update and clip.
+    /// `φ += (F_low − F_high + c_c (U_high − U_low))/V` along `D`, clipped to `[0, 1]` (the
+    /// statistics of the clipping returned), rows in parallel; the divergence of the first
+    /// sweep is kept in `w.divsum` for the `last` one.
+    fn update<const D: u8>(&mut self, w: &mut Work, phi: &mut Field, last: bool) -> AdvectStats {
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        let s = phi.stride();
+        let o = if D == X { 1 } else { s };
+        let inv_vol = &self.inv_vol;
         let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
         let len = w.divsum.len();
         let lanes = (
@@ -632,43 +639,104 @@ impl VofAdvector {
                 crow[il] = val;
             }
         });
-        let mut st = AdvectStats {
-            cfl,
-            ..Default::default()
-        };
+        let mut st = AdvectStats::default();
         for r in &self.rows {
             st.max_clipped = st.max_clipped.max(r.max_clipped);
             st.clipped_volume += r.volume;
         }
-        // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
-        // thousands of cells and steps: 3e-9 of the soft wall's volume over its run): to the
-        // interface cells, in proportion to their room `φ(1 − φ)`.
-        if st.clipped_volume != 0.0 {
-            let interior = |jp: usize| (GU..GU + ny as usize).contains(&jp);
-            let len = phi.data().len();
-            let lanes = (phi.data_mut(), par::per_row(&mut self.rows, s, len));
-            par::rows(lanes, s).for_each(|jp, (crow, st)| {
-                let st = st.item();
-                st.volume = 0.0;
+        st
+    }
+
+    /// `φ −= volume·φ(1 − φ)/Σ φ(1 − φ)V` on the interior: `volume` given back to the
+    /// interface cells in proportion to their room (nothing if there is none).
+    fn give_back(&mut self, phi: &mut Field, volume: f64) {
+        let (nx, ny, s) = (self.nx, self.ny, phi.stride());
+        let inv_vol = &self.inv_vol;
+        let interior = |jp: usize| (GU..GU + ny).contains(&jp);
+        let len = phi.data().len();
+        let lanes = (phi.data_mut(), par::per_row(&mut self.rows, s, len));
+        par::rows(lanes, s).for_each(|jp, (crow, st)| {
+            let st = st.item();
+            st.volume = 0.0;
+            if interior(jp) {
+                for (c, iv) in crow[GU..GU + nx].iter().zip(&inv_vol[GU..]) {
+                    st.volume += c * (1.0 - c) / iv;
+                }
+            }
+        });
+        let room = self.rows.iter().fold(0.0, |a, r| a + r.volume);
+        if room > 0.0 {
+            let scale = volume / room;
+            par::rows(phi.data_mut(), s).for_each(|jp, crow| {
                 if interior(jp) {
-                    for (c, iv) in crow[GU..GU + nx as usize].iter().zip(&inv_vol[GU..]) {
-                        st.volume += c * (1.0 - c) / iv;
+                    for c in &mut crow[GU..GU + nx] {
+                        *c -= scale * *c * (1.0 - *c);
                     }
                 }
             });
-            let room = self.rows.iter().fold(0.0, |a, r| a + r.volume);
-            if room > 0.0 {
-                let scale = st.clipped_volume / room;
-                par::rows(phi.data_mut(), s).for_each(|jp, crow| {
-                    if interior(jp) {
-                        for c in &mut crow[GU..GU + nx as usize] {
-                            *c -= scale * *c * (1.0 - *c);
-                        }
-                    }
-                });
-            }
         }
-        st
+    }
+}
+
+/// What the flux of one face reads: the fluxed slab's geometry, the volume fractions `c` and
+/// the metric per padded column; `o` is the storage offset to the low neighbour along the
+/// sweep.
+struct Face<'a> {
+    slab: Slab<'a>,
+    o: usize,
+    c: &'a [f64],
+    r_face: &'a [f64],
+    r_centre: &'a [f64],
+    inv_vol: &'a [f64],
+}
+
+impl Face<'_> {
+    /// The volume flux `U` and phase flux `F` of the face at storage index `k` (column `i`)
+    /// for the displacement `sv = vel·Δt ≠ 0`, recording the upwind cell's CFL in `st`.
+    #[inline(always)]
+    fn flux<const AXI: bool, const D: u8>(
+        &self,
+        k: usize,
+        i: isize,
+        sv: f64,
+        st: &mut RowStats,
+    ) -> (f64, f64) {
+        let (dx, dy) = (self.slab.dx, self.slab.dy);
+        let il = (i + G) as usize;
+        let pos = sv > 0.0;
+        let (ku, iu) = if !pos {
+            (k, i)
+        } else if D == X {
+            (k - self.o, i - 1)
+        } else {
+            (k - self.o, i)
+        };
+        let (area, w) = if D == X {
+            let rf = self.r_face[il];
+            let w = if AXI {
+                let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
+                2.0 * rf * sv.abs() / (rf + disc.sqrt())
+            } else {
+                sv.abs()
+            };
+            (rf * dy, w.min(dx))
+        } else {
+            (self.r_centre[il] * dx, sv.abs().min(dy))
+        };
+        let big_u = area * sv;
+        if big_u == 0.0 {
+            return (big_u, 0.0);
+        }
+        st.cfl = st.cfl.max(big_u.abs() * self.inv_vol[(iu + G) as usize]);
+        let cu = self.c[ku];
+        let frac = if cu <= 0.0 {
+            0.0
+        } else if cu >= 1.0 {
+            1.0
+        } else {
+            self.slab.fraction::<AXI, D>(ku, iu, w, pos)
+        };
+        (big_u, big_u * frac)
     }
 }
 
