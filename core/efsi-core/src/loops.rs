@@ -99,6 +99,15 @@ impl Line {
         &data[self.span(shift, self.stride, self.plane)]
     }
 
+    /// The entries at the line's columns shifted by `di` of a per-column array (one value per
+    /// padded column `i ∈ [−G, nx + 1 + G)`, like the metric's radius factors): a
+    /// bounds-checked slice of the line's length.
+    #[inline(always)]
+    pub fn cols<'a>(&self, v: &'a [f64], di: isize) -> &'a [f64] {
+        let o = usize::try_from(self.start[0] + di + G).expect("column below the ghost layers");
+        &v[o..o + self.len]
+    }
+
     /// The indices of the run, in order.
     pub fn indices(&self) -> impl Iterator<Item = Index> + '_ {
         (0..self.len).map(|n| self.index(n))

@@ -154,9 +154,10 @@ impl StagePlugin for Advection {
     ) -> Result<Box<dyn Stage>, String> {
         // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
         // an outflow side have ny + 1 rows), plus the top edge.
-        let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
+        // A band edge holds one padded row of the fields.
+        let [row, rows, planes] = grid.padded();
         let bands = (grid.ny + 1).div_ceil(BAND);
-        let padded = stride * (grid.ny + 1 + 2 * efsi_core::GHOST);
+        let padded = row * rows * planes;
         let carry = if whole_step(scene, options)? {
             Some(Carry {
                 u: vec![0.0; padded],
@@ -168,10 +169,10 @@ impl StagePlugin for Advection {
         };
         Ok(Box::new(AdvectionStage {
             carry,
-            scratch: Scratch::reserve(shared, WORK * stride * (grid.ny + 1 + 2 * efsi_core::GHOST)),
-            edge_m: vec![0.0; (bands + 1) * stride],
-            edge_q: vec![0.0; (bands + 1) * stride],
-            row_x: (0..bands).map(|_| vec![0.0; 2 * stride]).collect(),
+            scratch: Scratch::reserve(shared, WORK * padded),
+            edge_m: vec![0.0; (bands + 1) * row],
+            edge_q: vec![0.0; (bands + 1) * row],
+            row_x: (0..bands).map(|_| vec![0.0; 2 * row]).collect(),
         }))
     }
 }

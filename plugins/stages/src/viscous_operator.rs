@@ -424,9 +424,7 @@ mod tests {
         let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
         // Beside an outflow side (x_max here) the zero-gradient ghosts make the rows of its
         // last column of faces non-symmetric; everywhere else the matrix is symmetric.
-        let (ux, vy) = (faces.ux, faces.vy);
-        let nur = (ux.hi - ux.lo) as usize;
-        let nvr = (vy.hi - vy.lo) as usize;
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
         let outflow = matches!(bc.get(efsi_core::scene::Side::XMax), Boundary::Outflow);
         let last_column = |c: usize| {
             outflow
@@ -446,10 +444,27 @@ mod tests {
                 );
             }
         }
-        // The diagonal is the matrix's own away from the boundaries, and the blocks' couplings
-        // are the matrix's entries.
+        let diag = check_diagonal(&label, &grid, &faces, &k, &dm, &a, scale);
+        check_blocks(&grid, &bc, &faces, &k, &diag, &a, scale);
+        check_definite(&a);
+    }
+
+    /// The diagonal is the matrix's own away from the boundaries (and never below it); returns
+    /// it.
+    fn check_diagonal(
+        label: &str,
+        grid: &Grid,
+        faces: &UnknownFaces,
+        k: &Coefficients,
+        dm: &[f64],
+        a: &[Vec<f64>],
+        scale: f64,
+    ) -> Vec<f64> {
+        let n = faces.len();
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
+        let nvr = (faces.vy.hi - faces.vy.lo) as usize;
         let mut diag = vec![0.0; n];
-        k.diagonal(&dm, &mut diag);
+        k.diagonal(dm, &mut diag);
         let inner = |a: usize, n: usize| a >= 1 && a + 2 <= n;
         let mut checked = 0;
         for c in 0..n {
@@ -469,9 +484,24 @@ mod tests {
             assert!(diag[c] >= a[c][c] - 1e-13 * scale || c >= faces.nu() || !interior);
         }
         assert!(checked >= 10, "{label}: {checked} interior rows");
+        diag
+    }
+
+    /// The blocks' couplings are the matrix's entries.
+    fn check_blocks(
+        grid: &Grid,
+        bc: &BoundarySet,
+        faces: &UnknownFaces,
+        k: &Coefficients,
+        diag: &[f64],
+        a: &[Vec<f64>],
+        scale: f64,
+    ) {
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
+        let nvr = (faces.vy.hi - faces.vy.lo) as usize;
         let mut au = Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1));
         let mut av = Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1));
-        k.blocks(&diag, &mut au, &mut av);
+        k.blocks(diag, &mut au, &mut av);
         let nu = faces.nu();
         let wrap = |c: usize, n: usize| if c + 1 < n { c + 1 } else { 0 };
         for j in 0..grid.ny {
@@ -509,7 +539,11 @@ mod tests {
                 }
             }
         }
-        // Positive definite with a positive mass: xᵀAx > 0 for a few vectors.
+    }
+
+    /// Positive definite with a positive mass: `xᵀAx > 0` for a few vectors.
+    fn check_definite(a: &[Vec<f64>]) {
+        let n = a.len();
         for seed in 1..5u64 {
             let x: Vec<f64> = (0..n)
                 .map(|c| ((c as u64 * 2654435761 + seed * 97) % 1000) as f64 / 500.0 - 1.0)
