@@ -515,6 +515,59 @@ impl WarmStart {
     }
 }
 
+impl ViscousStage {
+    /// The right-hand side `Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ)` into `rhs`; returns its 2-norm. `K`
+    /// is affine in the boundary data `b`, so this is the θ-weighted sum of the implicit and
+    /// explicit parts' boundary forcing; the stencil with the hoop term as its diagonal gives
+    /// `−θΔt·K(V*)`.
+    fn right_hand_side(&self, ctx: &StepContext, state: &mut State, rhs: &mut [f64]) -> f64 {
+        let g = ctx.grid;
+        let when = WallTime::Blend {
+            t0: ctx.t,
+            t1: ctx.t + ctx.dt,
+            theta: self.theta,
+        };
+        ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
+        let k = &self.op.k;
+        k.apply(&state.u, &state.v, k.hoop(), None, rhs);
+        let scale = -1.0 / self.theta;
+        par::rows(&mut *rhs, g.nx.max(1)).for_each(|_, row| {
+            row.iter_mut().for_each(|r| *r *= scale);
+        });
+        dot(rhs, rhs).sqrt()
+    }
+}
+
+/// The warm start of a solve (in `warm.delta()`) and its tolerance, from the relative
+/// tolerance `rel` and the right-hand side's norm `bnorm`. Near a steady state (module docs):
+/// the warm start's residual reduced CONTRACT-fold, down to what keeps the solver's error
+/// under a share of the steady criterion; a criterion at round-off starts from zero and solves
+/// to the strict tolerance (a solve from zero biases the steady state by its error). `r` and
+/// `q` are work vectors.
+fn warm_start(
+    warm: &mut WarmStart,
+    op: &mut ViscousSystem,
+    dt: f64,
+    rel: f64,
+    bnorm: f64,
+    [rhs, r, q]: [&mut [f64]; 3],
+) -> f64 {
+    let tol = rel * bnorm;
+    let Some(steady) = warm.settled() else {
+        warm.guess(dt);
+        return tol;
+    };
+    let floor = STEADY_SHARE * steady * dt * op.min_mass();
+    if floor < ROUND_OFF * bnorm {
+        warm.delta().fill(0.0);
+        tol.min(STRICT_TOLERANCE * bnorm)
+    } else {
+        warm.guess(dt);
+        op.residual(rhs, warm.delta(), r, q);
+        tol.min(CONTRACT * dot(r, r).sqrt()).max(floor)
+    }
+}
+
 impl Stage for ViscousStage {
     /// Forget the warm start's history (a new run starts from zero).
     fn initialize(
@@ -572,27 +625,13 @@ impl Stage for ViscousStage {
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        let g = ctx.grid;
+        let scratch = self.scratch.clone();
+        let mut pool = scratch.lock();
+        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.op.faces.len());
+        self.op.theta_dt = self.theta * ctx.dt;
+        self.op.assemble(&state.mu, &state.rho, diag);
+        let bnorm = self.right_hand_side(ctx, state, rhs);
         let op = &mut self.op;
-        op.theta_dt = self.theta * ctx.dt;
-        let mut pool = self.scratch.lock();
-        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, op.faces.len());
-        op.assemble(&state.mu, &state.rho, diag);
-        // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
-        // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing. The
-        // stencil with the hoop term as its diagonal gives −θΔt·K(V*).
-        let when = WallTime::Blend {
-            t0: ctx.t,
-            t1: ctx.t + ctx.dt,
-            theta: self.theta,
-        };
-        ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
-        op.k.apply(&state.u, &state.v, op.k.hoop(), None, rhs);
-        let scale = -1.0 / self.theta;
-        par::rows(&mut *rhs, g.nx.max(1)).for_each(|_, row| {
-            row.iter_mut().for_each(|r| *r *= scale);
-        });
-        let bnorm = dot(rhs, rhs).sqrt();
         let stats = if bnorm == 0.0 {
             self.warm.delta().fill(0.0);
             self.warm.remember(ctx.dt);
@@ -602,32 +641,21 @@ impl Stage for ViscousStage {
                 converged: true,
             }
         } else {
-            let mut tol = self.tol * bnorm;
-            match self.warm.settled() {
-                None => self.warm.guess(ctx.dt),
-                // Near a steady state (module docs): the warm start's residual reduced
-                // CONTRACT-fold, down to what keeps the solver's error under a share of the
-                // steady criterion; a criterion at round-off starts from zero and solves to the
-                // strict tolerance (a solve from zero biases the steady state by its error).
-                Some(steady) => {
-                    let floor = STEADY_SHARE * steady * ctx.dt * op.min_mass();
-                    if floor < ROUND_OFF * bnorm {
-                        self.warm.delta().fill(0.0);
-                        tol = tol.min(STRICT_TOLERANCE * bnorm);
-                    } else {
-                        self.warm.guess(ctx.dt);
-                        op.residual(rhs, self.warm.delta(), r, q);
-                        tol = tol.min(CONTRACT * dot(r, r).sqrt()).max(floor);
-                    }
-                }
-            }
+            let tol = warm_start(
+                &mut self.warm,
+                op,
+                ctx.dt,
+                self.tol,
+                bnorm,
+                [&mut *rhs, &mut *r, &mut *q],
+            );
             let use_mg = match self.preconditioner {
                 ViscousPreconditioner::Jacobi => false,
                 ViscousPreconditioner::Multigrid => true,
                 ViscousPreconditioner::Auto => {
                     // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs
                     // ~10√κ iterations at 1e-9, at a quarter of the block multigrid's cost
-                    // per iteration, which needs ~16: break-even near κ ≈ 40.
+                    // per iteration: break-even near κ ≈ 40.
                     op.max_diag_to_mass(&state.rho, diag) > AUTO_MULTIGRID_RATIO
                 }
             };
