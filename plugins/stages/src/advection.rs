@@ -555,10 +555,20 @@ impl Euler<'_> {
         let below = efsi_core::operators::minus(a);
         let m1 = region.storage(m1);
         region.for_each((x, m1), |l, (xr, mr)| {
-            let (x0, q, dm) = (l.on(x0, [0; 3]), l.on(q, [0; 3]), l.on(dm, [0; 3]));
-            let y = if lag != 0.0 { l.on(y, [0; 3]) } else { &[] };
-            let (rho_lo, rho_hi) = (self.rho.at(&l, below), self.rho.at(&l, [0; 3]));
-            for c in 0..l.len {
+            let n = l.len;
+            let (x0, q, dm) = (
+                &l.on(x0, [0; 3])[..n],
+                &l.on(q, [0; 3])[..n],
+                &l.on(dm, [0; 3])[..n],
+            );
+            let y = if lag != 0.0 {
+                &l.on(y, [0; 3])[..n]
+            } else {
+                &[]
+            };
+            let (rho_lo, rho_hi) = (&self.rho.at(&l, below)[..n], &self.rho.at(&l, [0; 3])[..n]);
+            let (xr, mr) = (&mut xr[..n], &mut mr[..n]);
+            for c in 0..n {
                 // The other stages' increment added to the first stage's velocity.
                 let other = if lag != 0.0 {
                     lag * (x0[c] - y[c])

@@ -281,14 +281,21 @@ impl Coefficients {
     ) -> f64 {
         let n = y.len();
         let alpha = self.alpha;
-        let (uc, ue, uw) = (u.at(l, [0; 3]), u.at(l, unit(0)), u.at(l, [-1, 0, 0]));
-        let (un, us) = (u.at(l, unit(1)), u.at(l, [0, -1, 0]));
-        let (vc, vw) = (v.at(l, [0; 3]), v.at(l, [-1, 0, 0]));
-        let (vn, vnw) = (v.at(l, unit(1)), v.at(l, [-1, 1, 0]));
-        let (ac, aw) = (self.cxx.at(l, [0; 3]), self.cxx.at(l, [-1, 0, 0]));
-        let (gs, gn) = (self.gc.at(l, [0; 3]), self.gc.at(l, unit(1)));
+        let (uc, ue, uw) = (
+            &u.at(l, [0; 3])[..n],
+            &u.at(l, unit(0))[..n],
+            &u.at(l, [-1, 0, 0])[..n],
+        );
+        let (un, us) = (&u.at(l, unit(1))[..n], &u.at(l, [0, -1, 0])[..n]);
+        let (vc, vw) = (&v.at(l, [0; 3])[..n], &v.at(l, [-1, 0, 0])[..n]);
+        let (vn, vnw) = (&v.at(l, unit(1))[..n], &v.at(l, [-1, 1, 0])[..n]);
+        let (ac, aw) = (
+            &self.cxx.at(l, [0; 3])[..n],
+            &self.cxx.at(l, [-1, 0, 0])[..n],
+        );
+        let (gs, gn) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(1))[..n]);
         let dr = &d[..n];
-        let xr = x.unwrap_or(uc);
+        let xr = &x.unwrap_or(uc)[..n];
         for c in 0..n {
             let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
             let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
@@ -312,14 +319,21 @@ impl Coefficients {
     ) -> f64 {
         let n = y.len();
         let beta = self.beta;
-        let (vc, ve, vw) = (v.at(l, [0; 3]), v.at(l, unit(0)), v.at(l, [-1, 0, 0]));
-        let (vn, vs) = (v.at(l, unit(1)), v.at(l, [0, -1, 0]));
-        let (uc, us) = (u.at(l, [0; 3]), u.at(l, [0, -1, 0]));
-        let (ue, use_) = (u.at(l, unit(0)), u.at(l, [1, -1, 0]));
-        let (bc, bs) = (self.cyy.at(l, [0; 3]), self.cyy.at(l, [0, -1, 0]));
-        let (gw, ge) = (self.gc.at(l, [0; 3]), self.gc.at(l, unit(0)));
+        let (vc, ve, vw) = (
+            &v.at(l, [0; 3])[..n],
+            &v.at(l, unit(0))[..n],
+            &v.at(l, [-1, 0, 0])[..n],
+        );
+        let (vn, vs) = (&v.at(l, unit(1))[..n], &v.at(l, [0, -1, 0])[..n]);
+        let (uc, us) = (&u.at(l, [0; 3])[..n], &u.at(l, [0, -1, 0])[..n]);
+        let (ue, use_) = (&u.at(l, unit(0))[..n], &u.at(l, [1, -1, 0])[..n]);
+        let (bc, bs) = (
+            &self.cyy.at(l, [0; 3])[..n],
+            &self.cyy.at(l, [0, -1, 0])[..n],
+        );
+        let (gw, ge) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(0))[..n]);
         let dr = &d[..n];
-        let xr = x.unwrap_or(vc);
+        let xr = &x.unwrap_or(vc)[..n];
         for c in 0..n {
             let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
             let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
