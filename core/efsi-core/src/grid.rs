@@ -12,6 +12,20 @@
 //!
 //! Every field carries [`GHOST`] layers of ghost cells on each side.
 //!
+//! # The third axis
+//!
+//! A grid is three-dimensional in its data model: indices are `[i, j, k]` and every location
+//! above has a z extent as well — `k ∈ [0, nz)` for cell centres, x- and y-faces and corners
+//! (which in three dimensions are the edges along z, where `τ_xy` lives), `k ∈ [0, nz]` for the
+//! z-faces ([`crate::Stagger::ZFace`], `w`) and for the edges along x and y
+//! ([`crate::Stagger::XEdge`], [`crate::Stagger::YEdge`]). The ghost policy:
+//!
+//! - a **two-dimensional** grid ([`Grid::new`]) has `nz = 1`, `dz = 1` (a planar grid is per unit
+//!   depth) and **no ghost layers along z** ([`Grid::gz`] is 0): its fields are one plane, laid
+//!   out exactly as a 2-D array, so 2-D results do not depend on the third axis existing;
+//! - a **three-dimensional** grid ([`Grid::new_3d`], Cartesian, metric all ones) has `nz ≥ 1`
+//!   cells along z and [`GHOST`] ghost layers on each side along z as along x and y.
+//!
 //! # Axisymmetry as metric factors
 //!
 //! In axisymmetric geometry `x` is the radius `r` and `y` is the axial coordinate `z`. A finite
@@ -124,6 +138,14 @@ pub struct Grid {
     pub dx: f64,
     /// Cell height.
     pub dy: f64,
+    /// Number of cells along z (1 on a two-dimensional grid).
+    pub nz: usize,
+    /// Lower z bound of the domain (0 on a two-dimensional grid).
+    pub z0: f64,
+    /// Cell depth (1 on a two-dimensional grid: a planar grid is per unit depth).
+    pub dz: f64,
+    /// Ghost layers along z: 0 on a two-dimensional grid, [`GHOST`] on a three-dimensional one.
+    gz: usize,
     /// The radius factors.
     pub metric: Metric,
 }
@@ -165,6 +187,10 @@ impl Grid {
             y0: y.0,
             dx,
             dy,
+            nz: 1,
+            z0: 0.0,
+            dz: 1.0,
+            gz: 0,
             metric: Metric {
                 rc,
                 rx,
@@ -174,6 +200,66 @@ impl Grid {
         }
     }
 
+    /// A three-dimensional Cartesian grid of `nx × ny × nz` cells over `[x0,x1] × [y0,y1] ×
+    /// [z0,z1]`, with [`GHOST`] ghost layers along every axis and the planar (unit) metric.
+    pub fn new_3d(n: [usize; 3], x: (f64, f64), y: (f64, f64), z: (f64, f64)) -> Self {
+        assert!(n[2] >= 1 && z.1 > z.0);
+        Grid {
+            nz: n[2],
+            z0: z.0,
+            dz: (z.1 - z.0) / n[2] as f64,
+            gz: GHOST,
+            ..Grid::new(Geometry::Planar, n[0], n[1], x, y)
+        }
+    }
+
+    /// Whether the grid has a third axis with ghost layers (see the ghost policy above).
+    pub fn is_3d(&self) -> bool {
+        self.gz > 0
+    }
+
+    /// Number of axes: 2, or 3 on a three-dimensional grid.
+    pub fn dims(&self) -> usize {
+        if self.is_3d() { 3 } else { 2 }
+    }
+
+    /// Number of ghost layers along z: 0 in two dimensions, [`GHOST`] in three.
+    pub fn gz(&self) -> usize {
+        self.gz
+    }
+
+    /// Number of cells along each axis, `[nx, ny, nz]`.
+    pub fn n(&self) -> [usize; 3] {
+        [self.nx, self.ny, self.nz]
+    }
+
+    /// Cell size along each axis, `[dx, dy, dz]`.
+    pub fn h(&self) -> [f64; 3] {
+        [self.dx, self.dy, self.dz]
+    }
+
+    /// The padded layout every field of this grid shares: `[row stride, rows per plane,
+    /// planes]`, i.e. `nx + 1 + 2G`, `ny + 1 + 2G` and `nz + 1 + 2G` (3-D) or 1 (2-D).
+    pub fn padded(&self) -> [usize; 3] {
+        let planes = if self.is_3d() {
+            self.nz + 1 + 2 * GHOST
+        } else {
+            1
+        };
+        [self.nx + 1 + 2 * GHOST, self.ny + 1 + 2 * GHOST, planes]
+    }
+
+    /// z of the centre of layer `k`.
+    #[inline]
+    pub fn zc(&self, k: isize) -> f64 {
+        self.z0 + (k as f64 + 0.5) * self.dz
+    }
+    /// z of the z-face `k` (bottom of layer `k`).
+    #[inline]
+    pub fn zf(&self, k: isize) -> f64 {
+        self.z0 + k as f64 * self.dz
+    }
+
     /// Whether this grid is axisymmetric.
     pub fn is_axisymmetric(&self) -> bool {
         self.geometry == Geometry::Axisymmetric
@@ -181,7 +267,7 @@ impl Grid {
 
     /// Total number of cells.
     pub fn cells(&self) -> usize {
-        self.nx * self.ny
+        self.nx * self.ny * self.nz
     }
 
     /// x of the centre of column `i`.
@@ -219,12 +305,17 @@ impl Grid {
         self.metric.rc(i) * self.dx * self.dy
     }
 
-    /// Total domain volume (per radian in axisymmetric geometry).
+    /// Total domain volume (per radian in axisymmetric geometry, per unit depth in planar).
     pub fn domain_volume(&self) -> f64 {
-        (0..self.nx as isize)
+        let a = (0..self.nx as isize)
             .map(|i| self.cell_volume(i))
             .sum::<f64>()
-            * self.ny as f64
+            * self.ny as f64;
+        if self.is_3d() {
+            a * self.nz as f64 * self.dz
+        } else {
+            a
+        }
     }
 }
 
@@ -255,5 +346,18 @@ mod tests {
             "ghost mirrors the axis"
         );
         assert!((g.metric.hoop_x(2) - 1.0 / 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn two_dimensional_grids_have_one_plane_and_three_dimensional_ones_z_ghosts() {
+        let g = Grid::new(Geometry::Planar, 4, 3, (0.0, 1.0), (0.0, 1.0));
+        assert_eq!((g.nz, g.gz(), g.dz, g.is_3d()), (1, 0, 1.0, false));
+        assert_eq!(g.padded(), [4 + 5, 3 + 5, 1]);
+        let g = Grid::new_3d([4, 3, 6], (0.0, 1.0), (0.0, 1.5), (-1.0, 2.0));
+        assert_eq!((g.n(), g.gz(), g.is_3d()), ([4, 3, 6], GHOST, true));
+        assert_eq!(g.padded(), [9, 8, 11]);
+        assert_eq!(g.h(), [0.25, 0.5, 0.5]);
+        assert_eq!((g.zc(0), g.zf(6), g.cells()), (-0.75, 2.0, 72));
+        assert!((g.domain_volume() - 4.5).abs() < 1e-14);
     }
 }

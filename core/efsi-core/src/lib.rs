@@ -15,6 +15,7 @@ pub mod error;
 pub mod field;
 pub mod grid;
 pub mod loops;
+pub mod operators;
 pub mod ops;
 pub mod overrides;
 pub mod plugin_api;
@@ -30,7 +31,7 @@ pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};
 pub use grid::{G, GHOST, Geometry, Grid};
-pub use loops::{Index, Line, Region, unit};
+pub use loops::{Index, Line, Region, Storage, unit};
 pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{

@@ -5,8 +5,9 @@
 //! along an axis where a stage needs fewer (the unknown faces of a wall-bounded direction,
 //! [`Region::range`]). An index is the grid's [`Index`] `[i, j, k]`: a two-dimensional grid is
 //! a three-dimensional one whose third axis has size one (`k = 0`, no ghosts across it), as in
-//! Oceananigans' flat axes, so a kernel written over an `Index` and shifts along axes works
-//! unchanged when the grid gets its third axis. A region is visited as [`Line`]s — the runs of
+//! Oceananigans' flat axes, and a three-dimensional grid ([`Grid::new_3d`]) has its planes and
+//! z ghosts, so a kernel written over an `Index` and shifts along axes runs unchanged on both.
+//! A region is visited as [`Line`]s — the runs of
 //! indices along the first axis, which are contiguous in memory — so kernels work on slices
 //! and vectorise:
 //!
@@ -19,14 +20,15 @@
 //!   own; both are bounds-checked slices, so no kernel writes an index by hand.
 //!
 //! The ghost layers and the fields' padded layout live here only: a stage never adds `G` or a
-//! stride. Parallel chunking is [`efsi_linalg::par`]'s: lines run in parallel when there is
+//! stride. On a three-dimensional grid the region's lines are its rows of every plane, in
+//! storage order (`k` outer, then `j`), and the loops skip the padded rows between them. Parallel chunking is [`efsi_linalg::par`]'s: lines run in parallel when there is
 //! enough work, each line's partial result is folded in line order, so every loop gives the
 //! same bits on any number of threads. This module lives in efsi-core because it needs the
 //! grid and the fields (which efsi-linalg, the solvers' crate, does not know); the row and
 //! chunk engine below it is in efsi-linalg because the solvers' vectors need it too.
 
 use crate::field::{Field, Stagger};
-use crate::grid::{G, GHOST, Grid};
+use crate::grid::{G, Grid};
 use efsi_linalg::par::{self, Lanes};
 
 /// A grid index `[i, j, k]` (ghosts are negative or past the interior). On a two-dimensional
@@ -46,9 +48,12 @@ pub const fn unit(a: usize) -> Index {
 pub struct Region {
     lo: Index,
     hi: Index,
-    /// The padded layout of the grid's fields: row stride and number of padded rows.
+    /// The padded layout of the grid's fields: row stride, padded rows per plane, padded
+    /// planes and ghost planes below `k = 0` (1 and 0 in two dimensions).
     stride: usize,
     rows: usize,
+    planes: usize,
+    gz: usize,
 }
 
 /// One run of a [`Region`] along the first axis: the indices `start + [n, 0, 0]` for
@@ -62,9 +67,13 @@ pub struct Line {
     /// Its ordinal among the region's lines (`0..`[`Region::lines`]), in storage order: the
     /// row of a compact vector that holds one value per index of the region.
     pub n: usize,
-    /// Linear storage index of `start`, and the row stride it was computed with.
+    /// Linear storage index of `start`, the row stride it was computed with and the plane
+    /// size (0 on a two-dimensional grid, which has no neighbours along z).
     offset: usize,
     stride: usize,
+    plane: usize,
+    /// Length of the padded storage of the grid's fields.
+    size: usize,
 }
 
 impl Line {
@@ -81,20 +90,42 @@ impl Line {
         self.offset + n
     }
 
+    /// The values at `I + shift` for the indices `I` of the line in `data`, an array laid out
+    /// like the grid's fields (a work array from a pool, a solver's history): [`Field::at`]
+    /// for storage that is not a [`Field`]. Bounds-checked.
+    #[inline(always)]
+    pub fn on<'a>(&self, data: &'a [f64], shift: Index) -> &'a [f64] {
+        assert_eq!(data.len(), self.size, "an array of another grid");
+        &data[self.span(shift, self.stride, self.plane)]
+    }
+
+    /// The entries at the line's columns shifted by `di` of a per-column array (one value per
+    /// padded column `i ∈ [−G, nx + 1 + G)`, like the metric's radius factors): a
+    /// bounds-checked slice of the line's length.
+    #[inline(always)]
+    pub fn cols<'a>(&self, v: &'a [f64], di: isize) -> &'a [f64] {
+        let o = usize::try_from(self.start[0] + di + G).expect("column below the ghost layers");
+        &v[o..o + self.len]
+    }
+
     /// The indices of the run, in order.
     pub fn indices(&self) -> impl Iterator<Item = Index> + '_ {
         (0..self.len).map(|n| self.index(n))
     }
 
-    /// The storage range of the run shifted by `s`, in a layout of row stride `stride`.
+    /// The storage range of the run shifted by `s`, in a layout of row stride `stride` and
+    /// plane size `plane` (0 in two dimensions).
     #[inline(always)]
-    fn span(&self, s: Index, stride: usize) -> std::ops::Range<usize> {
-        assert_eq!(stride, self.stride, "field of another grid");
-        assert_eq!(
-            s[2], 0,
+    fn span(&self, s: Index, stride: usize, plane: usize) -> std::ops::Range<usize> {
+        assert!(
+            stride == self.stride && plane == self.plane,
+            "field of another grid"
+        );
+        assert!(
+            s[2] == 0 || plane != 0,
             "a two-dimensional field has no third-axis neighbours"
         );
-        let o = self.offset as isize + s[0] + s[1] * stride as isize;
+        let o = self.offset as isize + s[0] + s[1] * stride as isize + s[2] * plane as isize;
         let o = usize::try_from(o).expect("shift below the ghost layers");
         o..o + self.len
     }
@@ -103,12 +134,30 @@ impl Line {
 impl Region {
     /// The interior of location `at` of `grid` (see the table in [`crate::grid`]).
     pub fn of(grid: &Grid, at: Stagger) -> Self {
-        let (ie, je) = at.extent(grid.nx, grid.ny);
+        let [stride, rows, planes] = grid.padded();
         Region {
             lo: [0, 0, 0],
-            hi: [ie as isize, je as isize, 1],
-            stride: grid.nx + 1 + 2 * GHOST,
-            rows: grid.ny + 1 + 2 * GHOST,
+            hi: at.extent3(grid).map(|n| n as isize),
+            stride,
+            rows,
+            planes,
+            gz: grid.gz(),
+        }
+    }
+
+    /// Every index of the padded storage of `grid`'s fields, ghosts included (for arrays
+    /// defined everywhere, e.g. coefficients computed from a field whose ghosts are filled).
+    pub fn whole(grid: &Grid) -> Self {
+        let r = Region::of(grid, Stagger::Cell);
+        let gz = r.gz as isize;
+        Region {
+            lo: [-G, -G, -gz],
+            hi: [
+                r.stride as isize - G,
+                r.rows as isize - G,
+                r.planes as isize - gz,
+            ],
+            ..r
         }
     }
 
@@ -160,21 +209,55 @@ impl Region {
         let stride = self.stride;
         let (j, k) = (n % self.len(1), n / self.len(1));
         let start = [self.lo[0], self.lo[1] + j as isize, self.lo[2] + k as isize];
+        let row = self.padded_row(start[1], start[2]);
         Line {
             start,
             len: self.len(0),
             n,
-            offset: (start[1] + G) as usize * stride + (start[0] + G) as usize,
+            offset: row * stride + (start[0] + G) as usize,
             stride,
+            plane: self.plane(),
+            size: stride * self.rows * self.planes,
         }
     }
 
-    /// Checks that the region fits the padded layout of a field (`stride × rows`).
+    /// The plane size of the layout as a [`Line`] shifts by it (0 in two dimensions).
+    fn plane(&self) -> usize {
+        if self.gz == 0 {
+            0
+        } else {
+            self.stride * self.rows
+        }
+    }
+
+    /// The padded row (in storage order, counted over all planes) of index `[·, j, k]`.
+    #[inline(always)]
+    fn padded_row(&self, j: isize, k: isize) -> usize {
+        (k + self.gz as isize) as usize * self.rows + (j + G) as usize
+    }
+
+    /// The line number of padded row `r` of the storage, if that row is one of the region's.
+    #[inline(always)]
+    fn line_of_row(&self, r: usize) -> Option<usize> {
+        let (k, j) = (
+            (r / self.rows) as isize - self.gz as isize,
+            (r % self.rows) as isize - G,
+        );
+        ((self.lo[1]..self.hi[1]).contains(&j) && (self.lo[2]..self.hi[2]).contains(&k))
+            .then(|| (k - self.lo[2]) as usize * self.len(1) + (j - self.lo[1]) as usize)
+    }
+
+    /// Checks that the region fits the padded layout of a field (`stride × rows × planes`).
     fn check(&self) {
-        let (stride, rows) = (self.stride, self.rows);
+        let (stride, rows, gz) = (self.stride, self.rows, self.gz as isize);
         assert!(
-            self.lo[2] >= 0 && self.hi[2] <= 1,
-            "a two-dimensional field has only k = 0"
+            self.is_empty() || (self.lo[2] >= -gz && self.hi[2] <= self.planes as isize - gz),
+            "{}",
+            if gz == 0 {
+                "a two-dimensional field has only k = 0"
+            } else {
+                "region outside the field's ghost planes"
+            }
         );
         assert!(
             self.is_empty()
@@ -193,30 +276,41 @@ impl Region {
     /// Lines in parallel when there is enough work; each writes only its own indices, so the
     /// result is the serial loop's.
     pub fn for_each<F: FieldsMut>(&self, fields: F, f: impl Fn(Line, F::Lanes) + Sync + Send) {
-        if let Some((lanes, x)) = self.lanes(fields) {
-            par::rows(lanes, self.stride)
-                .work(self.len(0))
-                .for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+        let Some((lanes, x, r0)) = self.lanes(fields) else {
+            return;
+        };
+        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        if self.len(2) == 1 {
+            rows.for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+        } else {
+            rows.for_each(|m, l| {
+                if let Some(n) = self.line_of_row(r0 + m) {
+                    f(self.line(n), l.sub(x.clone()))
+                }
+            });
         }
     }
 
-    /// The fields' storage from the region's first line's padded row to its last one's, and
-    /// the columns of a line within a row (`None` for an empty region).
-    fn lanes<F: FieldsMut>(&self, fields: F) -> Option<(F::Lanes, std::ops::Range<usize>)> {
+    /// The fields' storage from the region's first line's padded row to its last one's, the
+    /// columns of a line within a row, and the padded row the storage starts at (`None` for
+    /// an empty region). Within one plane every padded row of that range is a line of the
+    /// region; across planes the rows between them are not (`Region::line_of_row`).
+    #[allow(clippy::type_complexity)]
+    fn lanes<F: FieldsMut>(&self, fields: F) -> Option<(F::Lanes, std::ops::Range<usize>, usize)> {
         if self.is_empty() {
             return None;
         }
-        let (stride, rows) = fields.shape();
         assert_eq!(
-            (stride, rows),
-            (self.stride, self.rows),
+            fields.layout(),
+            [self.stride, self.rows, self.planes],
             "fields of another grid"
         );
         self.check();
-        // In two dimensions every padded row in that range is a line of the region.
-        let (r0, r1) = ((self.lo[1] + G) as usize, (self.hi[1] + G) as usize);
+        let r0 = self.padded_row(self.lo[1], self.lo[2]);
+        let r1 = self.padded_row(self.hi[1] - 1, self.hi[2] - 1) + 1;
         let x = (self.lo[0] + G) as usize..(self.hi[0] + G) as usize;
-        Some((fields.lanes(r0 * stride..r1 * stride), x))
+        let stride = self.stride;
+        Some((fields.lanes(r0 * stride..r1 * stride), x, r0))
     }
 
     /// `combine(…combine(init, f(line₀, values₀))…)`: [`Region::for_each`] whose kernel also
@@ -229,13 +323,24 @@ impl Region {
         f: impl Fn(Line, F::Lanes) -> P + Sync + Send,
         combine: impl Fn(A, P) -> A,
     ) -> A {
-        let Some((lanes, x)) = self.lanes(fields) else {
+        let Some((lanes, x, r0)) = self.lanes(fields) else {
             return init;
         };
-        par::rows(lanes, self.stride).work(self.len(0)).fold(
+        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        if self.len(2) == 1 {
+            return rows.fold(init, |n, l| f(self.line(n), l.sub(x.clone())), combine);
+        }
+        // Across planes a padded row between two planes' lines contributes nothing.
+        rows.fold(
             init,
-            |n, l| f(self.line(n), l.sub(x.clone())),
-            combine,
+            |m, l| {
+                self.line_of_row(r0 + m)
+                    .map(|n| f(self.line(n), l.sub(x.clone())))
+            },
+            |a, p| match p {
+                Some(p) => combine(a, p),
+                None => a,
+            },
         )
     }
 
@@ -268,20 +373,57 @@ impl Region {
     }
 }
 
-/// Fields a [`Region`] loop writes: `&mut Field`, or a pair or triple of them (of one grid).
+/// An array laid out like the grid's fields but not held by a [`Field`] (a work array from a
+/// pool), for a [`Region`] loop to write ([`Region::storage`]).
+pub struct Storage<'a> {
+    data: &'a mut [f64],
+    layout: [usize; 3],
+}
+
+impl Region {
+    /// `data`, laid out like the fields of the region's grid, as an output of
+    /// [`Region::for_each`] (its length is checked against the layout).
+    pub fn storage<'a>(&self, data: &'a mut [f64]) -> Storage<'a> {
+        let layout = [self.stride, self.rows, self.planes];
+        assert_eq!(
+            data.len(),
+            layout.iter().product::<usize>(),
+            "an array of another grid"
+        );
+        Storage { data, layout }
+    }
+}
+
+impl<'a> FieldsMut for Storage<'a> {
+    type Lanes = &'a mut [f64];
+    fn layout(&self) -> [usize; 3] {
+        self.layout
+    }
+    fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
+        &mut self.data[r]
+    }
+}
+
+/// Fields a [`Region`] loop writes: `&mut Field` or a [`Storage`], or a pair or triple of them
+/// (of one grid).
 pub trait FieldsMut {
     /// The fields' storage, as [`Lanes`] (one slice per field).
     type Lanes: Lanes;
     /// Row stride and number of padded rows (equal for all the fields).
-    fn shape(&self) -> (usize, usize);
+    fn shape(&self) -> (usize, usize) {
+        let [s, r, _] = self.layout();
+        (s, r)
+    }
+    /// Row stride, padded rows per plane and padded planes (equal for all the fields).
+    fn layout(&self) -> [usize; 3];
     /// The storage range `r` of each field.
     fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes;
 }
 
 impl<'a> FieldsMut for &'a mut Field {
     type Lanes = &'a mut [f64];
-    fn shape(&self) -> (usize, usize) {
-        (self.stride(), self.rows())
+    fn layout(&self) -> [usize; 3] {
+        [self.stride(), self.rows(), self.planes()]
     }
     fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
         &mut self.data_mut()[r]
@@ -290,9 +432,13 @@ impl<'a> FieldsMut for &'a mut Field {
 
 impl<A: FieldsMut, B: FieldsMut> FieldsMut for (A, B) {
     type Lanes = (A::Lanes, B::Lanes);
-    fn shape(&self) -> (usize, usize) {
-        assert_eq!(self.0.shape(), self.1.shape(), "fields of different grids");
-        self.0.shape()
+    fn layout(&self) -> [usize; 3] {
+        assert_eq!(
+            self.0.layout(),
+            self.1.layout(),
+            "fields of different grids"
+        );
+        self.0.layout()
     }
     fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
         (self.0.lanes(r.clone()), self.1.lanes(r))
@@ -301,12 +447,12 @@ impl<A: FieldsMut, B: FieldsMut> FieldsMut for (A, B) {
 
 impl<A: FieldsMut, B: FieldsMut, C: FieldsMut> FieldsMut for (A, B, C) {
     type Lanes = (A::Lanes, B::Lanes, C::Lanes);
-    fn shape(&self) -> (usize, usize) {
+    fn layout(&self) -> [usize; 3] {
         assert!(
-            self.0.shape() == self.1.shape() && self.0.shape() == self.2.shape(),
+            self.0.layout() == self.1.layout() && self.0.layout() == self.2.layout(),
             "fields of different grids"
         );
-        self.0.shape()
+        self.0.layout()
     }
     fn lanes(self, r: std::ops::Range<usize>) -> Self::Lanes {
         (
@@ -322,13 +468,19 @@ impl Field {
     /// line's length (a shift may reach the ghost layers, not past them).
     #[inline(always)]
     pub fn at(&self, line: &Line, shift: Index) -> &[f64] {
-        &self.data()[line.span(shift, self.stride())]
+        &self.data()[line.span(shift, self.stride(), self.zstride())]
+    }
+
+    /// The plane size as a [`Line`] shifts by it: 0 on a two-dimensional grid.
+    #[inline(always)]
+    fn zstride(&self) -> usize {
+        if self.gz() == 0 { 0 } else { self.plane() }
     }
 
     /// [`Field::at`], mutable: for an output that a line owns but the loop was not given.
     #[inline(always)]
     pub fn at_mut(&mut self, line: &Line, shift: Index) -> &mut [f64] {
-        let r = line.span(shift, self.stride());
+        let r = line.span(shift, self.stride(), self.zstride());
         &mut self.data_mut()[r]
     }
 }
@@ -336,17 +488,16 @@ impl Field {
 impl std::ops::Index<Index> for Field {
     type Output = f64;
     #[inline(always)]
-    fn index(&self, [i, j, k]: Index) -> &f64 {
-        debug_assert_eq!(k, 0, "a two-dimensional field has only k = 0");
-        &self[(i, j)]
+    fn index(&self, i: Index) -> &f64 {
+        &self.data()[self.idx3(i)]
     }
 }
 
 impl std::ops::IndexMut<Index> for Field {
     #[inline(always)]
-    fn index_mut(&mut self, [i, j, k]: Index) -> &mut f64 {
-        debug_assert_eq!(k, 0, "a two-dimensional field has only k = 0");
-        &mut self[(i, j)]
+    fn index_mut(&mut self, i: Index) -> &mut f64 {
+        let n = self.idx3(i);
+        &mut self.data_mut()[n]
     }
 }
 
@@ -481,5 +632,149 @@ mod tests {
         let g = Grid::new(Geometry::Planar, 4, 4, (0.0, 1.0), (0.0, 1.0));
         let f = Field::zeros(&g);
         let _ = f.at(&Region::of(&g, Stagger::Cell).line(0), unit(2));
+    }
+
+    #[test]
+    fn three_dimensional_fields_round_trip_indices_and_strides() {
+        let g = Grid::new_3d([5, 4, 3], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let f = Field::zeros(&g);
+        assert_eq!((f.stride(), f.rows(), f.planes()), (10, 9, 8));
+        assert_eq!(f.data().len(), 10 * 9 * 8);
+        let mut seen = vec![false; f.data().len()];
+        for k in -G..3 + 1 + G {
+            for j in -G..4 + 1 + G {
+                for i in -G..5 + 1 + G {
+                    let n = f.idx3([i, j, k]);
+                    assert_eq!(f.index_of(n), [i, j, k]);
+                    assert!(!std::mem::replace(&mut seen[n], true), "one slot per index");
+                    for a in 0..3 {
+                        let mut s = [i, j, k];
+                        s[a] += 1;
+                        if s[a] < [5, 4, 3][a] + 1 + G {
+                            let step = f.idx3(s) as isize - n as isize;
+                            assert_eq!(step, f.offset(unit(a)), "axis {a}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "every slot is an index");
+        assert_eq!(f.offset(unit(2)), (10 * 9) as isize);
+        assert_eq!(f.idx3([0, 0, 0]), f.idx(0, 0));
+        // Locations: z-faces and the edges along x and y have nz + 1 planes.
+        let ext = |at| Region::of(&g, at).hi();
+        assert_eq!(ext(Stagger::Cell), [5, 4, 3]);
+        assert_eq!(ext(Stagger::ZFace), [5, 4, 4]);
+        assert_eq!(ext(Stagger::Corner), [6, 5, 3]);
+        assert_eq!(ext(Stagger::XEdge), [5, 5, 4]);
+        assert_eq!(ext(Stagger::YEdge), [6, 4, 4]);
+        let g2 = Grid::new(Geometry::Planar, 5, 4, (0.0, 1.0), (0.0, 1.0));
+        assert_eq!(Region::of(&g2, Stagger::ZFace).hi(), [5, 4, 1]);
+    }
+
+    /// A 3-D field holding a different value at every index, ghosts included.
+    fn labelled(g: &Grid) -> Field {
+        let mut f = Field::zeros(g);
+        for n in 0..f.data().len() {
+            let [i, j, k] = f.index_of(n);
+            f.data_mut()[n] = ((i * 7919 + j * 104_729 + k * 1_299_709) % 1013) as f64 / 17.0;
+        }
+        f
+    }
+
+    #[test]
+    fn three_dimensional_loops_visit_the_region_in_storage_order_and_shift_along_z() {
+        let g = Grid::new_3d([9, 7, 6], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let src = labelled(&g);
+        let r = Region::of(&g, Stagger::ZFace)
+            .range(0, -1, 8)
+            .range(1, 2, 7)
+            .range(2, -1, 5);
+        assert_eq!((r.lines(), r.size()), (5 * 6, 9 * 5 * 6));
+        let (mut a, mut b) = (Field::filled(&g, -1.0), Field::zeros(&g));
+        for t in [1, 2] {
+            pool(t).install(|| {
+                r.for_each((&mut a, &mut b), |l, (a, b)| {
+                    let (below, here) = (src.at(&l, [0, 0, -1]), src.at(&l, [0; 3]));
+                    for n in 0..l.len {
+                        a[n] = here[n] - below[n];
+                        b[n] = l.n as f64;
+                    }
+                })
+            });
+        }
+        for n in 0..a.data().len() {
+            let [i, j, k] = a.index_of(n);
+            let inside = (-1..8).contains(&i) && (2..7).contains(&j) && (-1..5).contains(&k);
+            if inside {
+                assert_eq!(a[[i, j, k]], src[[i, j, k]] - src[[i, j, k - 1]]);
+                assert_eq!(
+                    b[[i, j, k]],
+                    ((k + 1) * 5 + j - 2) as f64,
+                    "k-major line order"
+                );
+            } else {
+                assert_eq!((a.data()[n], b.data()[n]), (-1.0, 0.0), "[{i}, {j}, {k}]");
+            }
+        }
+    }
+
+    #[test]
+    fn three_dimensional_reductions_are_the_same_on_one_and_two_threads() {
+        // Enough lines and planes for the parallel path and several rows between planes.
+        let g = Grid::new_3d([61, 40, 30], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let u = labelled(&g);
+        let cells = Region::of(&g, Stagger::Cell);
+        let f = |l: Line| {
+            let (c, up) = (u.at(&l, [0; 3]), u.at(&l, unit(2)));
+            let s = c
+                .iter()
+                .zip(up)
+                .fold(0.0, |s, (c, up)| s + c * up - 0.1 * c);
+            [s, s.abs()]
+        };
+        let (one, two) = (
+            pool(1).install(|| cells.sum(f)),
+            pool(2).install(|| cells.sum(f)),
+        );
+        assert_eq!(one.map(f64::to_bits), two.map(f64::to_bits));
+        let serial = (0..cells.lines()).fold([0.0; 2], |s, n| par::add(s, f(cells.line(n))));
+        assert_eq!(one, serial, "line partials added in line order");
+        let fused = |t| {
+            let mut v = u.clone();
+            let s = pool(t).install(|| {
+                cells.fold_mut(
+                    &mut v,
+                    0.0,
+                    |_, v| {
+                        v.iter_mut().fold(0.0, |s, v| {
+                            *v *= 0.75;
+                            s + *v
+                        })
+                    },
+                    |a, p| a + p,
+                )
+            });
+            (s.to_bits(), v)
+        };
+        let (f1, f2) = (fused(1), fused(2));
+        assert_eq!(f1, f2);
+        let want = (0..cells.lines()).fold(0.0, |s, n| {
+            s + u
+                .at(&cells.line(n), [0; 3])
+                .iter()
+                .fold(0.0, |s, v| s + v * 0.75)
+        });
+        assert_eq!(f64::from_bits(f1.0), want, "fused partials in line order");
+    }
+
+    #[test]
+    #[should_panic(expected = "outside the field's ghost planes")]
+    fn a_region_past_the_z_ghosts_is_refused() {
+        let g = Grid::new_3d([4, 4, 4], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let mut f = Field::zeros(&g);
+        Region::of(&g, Stagger::Cell)
+            .range(2, -3, 4)
+            .for_each(&mut f, |_, _| {});
     }
 }

@@ -65,24 +65,10 @@ impl BiCgStab {
             sh,
         } = self;
         a.apply(x, t);
-        // r = b − A x and ‖r‖², in one pass.
-        let rr = par::chunks(&mut r[..]).fold(
-            0.0,
-            |o, r| {
-                for (k, r) in r.iter_mut().enumerate() {
-                    *r = b[o + k] - t[o + k];
-                }
-                dot_serial(r, r)
-            },
-            |a, p| a + p,
-        );
+        let rr = sub_norm2(r, b, 1.0, t);
         let mut res = rr.sqrt();
         if res <= tol {
-            return SolveStats {
-                iterations: 0,
-                residual: res,
-                converged: true,
-            };
+            return SolveStats::new(0, res, true);
         }
         r0.copy_from_slice(r);
         let (mut rho, mut alpha, mut omega) = (1.0f64, 1.0f64, 1.0f64);
@@ -94,87 +80,92 @@ impl BiCgStab {
         for it in 1..=max_iter {
             let rho_new = r0r;
             if rho_new == 0.0 || !rho_new.is_finite() {
-                return SolveStats {
-                    iterations: it,
-                    residual: res,
-                    converged: false,
-                };
+                return SolveStats::new(it, res, false);
             }
             let beta = (rho_new / rho) * (alpha / omega);
             rho = rho_new;
-            par::chunks(&mut p[..]).for_each(|o, p| {
-                for (k, p) in p.iter_mut().enumerate() {
-                    *p = r[o + k] + beta * (*p - omega * v[o + k]);
-                }
-            });
+            new_direction(p, r, v, beta, omega);
             m.apply(p, ph);
             a.apply(ph, v);
             alpha = rho / dot(r0, v);
-            // s = r − α v and ‖s‖², in one pass.
-            let ss = par::chunks(&mut s[..]).fold(
-                0.0,
-                |o, s| {
-                    for (k, s) in s.iter_mut().enumerate() {
-                        *s = r[o + k] - alpha * v[o + k];
-                    }
-                    dot_serial(s, s)
-                },
-                |a, p| a + p,
-            );
-            let sn = ss.sqrt();
+            let sn = sub_norm2(s, r, alpha, v).sqrt();
             if sn <= tol {
-                par::chunks(x).for_each(|o, x| {
-                    for (k, x) in x.iter_mut().enumerate() {
-                        *x += alpha * ph[o + k];
-                    }
-                });
-                return SolveStats {
-                    iterations: it,
-                    residual: sn,
-                    converged: true,
-                };
+                axpy(x, alpha, ph);
+                return SolveStats::new(it, sn, true);
             }
             m.apply(s, sh);
             a.apply(sh, t);
             let (tt, ts) = dot2(t, t, s);
             omega = if tt > 0.0 { ts / tt } else { 0.0 };
-            // x += α p̂ + ω ŝ, r = s − ω t, and ‖r‖², (r₀, r), in one pass (`s` is only read).
-            let (rr, r0r_new) = par::chunks((&mut *x, &mut r[..], &mut s[..])).fold(
-                (0.0, 0.0),
-                |o, (x, r, s)| {
-                    for (k, x) in x.iter_mut().enumerate() {
-                        *x += alpha * ph[o + k] + omega * sh[o + k];
-                    }
-                    for (k, r) in r.iter_mut().enumerate() {
-                        *r = s[k] - omega * t[o + k];
-                    }
-                    (dot_serial(r, r), dot_serial(&r0[o..o + r.len()], r))
-                },
-                |a, p| (a.0 + p.0, a.1 + p.1),
-            );
-            r0r = r0r_new;
+            let rr;
+            (rr, r0r) = finish_iteration(x, r, s, [ph, sh, t, r0], alpha, omega);
             res = rr.sqrt();
             if res <= tol {
-                return SolveStats {
-                    iterations: it,
-                    residual: res,
-                    converged: true,
-                };
+                return SolveStats::new(it, res, true);
             }
             if omega == 0.0 || !res.is_finite() {
-                return SolveStats {
-                    iterations: it,
-                    residual: res,
-                    converged: false,
-                };
+                return SolveStats::new(it, res, false);
             }
         }
-        SolveStats {
-            iterations: max_iter,
-            residual: res,
-            converged: false,
-        }
+        SolveStats::new(max_iter, res, false)
     }
+}
+
+/// `y ← a − c·b` and `‖y‖²`, in one pass.
+fn sub_norm2(y: &mut [f64], a: &[f64], c: f64, b: &[f64]) -> f64 {
+    par::chunks(y).fold(
+        0.0,
+        |o, y| {
+            for (k, y) in y.iter_mut().enumerate() {
+                *y = a[o + k] - c * b[o + k];
+            }
+            dot_serial(y, y)
+        },
+        |a, p| a + p,
+    )
+}
+
+/// The search direction `p ← r + β (p − ω v)`.
+fn new_direction(p: &mut [f64], r: &[f64], v: &[f64], beta: f64, omega: f64) {
+    par::chunks(p).for_each(|o, p| {
+        for (k, p) in p.iter_mut().enumerate() {
+            *p = r[o + k] + beta * (*p - omega * v[o + k]);
+        }
+    });
+}
+
+/// `x ← x + a·y`.
+fn axpy(x: &mut [f64], a: f64, y: &[f64]) {
+    par::chunks(x).for_each(|o, x| {
+        for (k, x) in x.iter_mut().enumerate() {
+            *x += a * y[o + k];
+        }
+    });
+}
+
+/// The end of an iteration in one pass (`s` is only read): `x += α p̂ + ω ŝ`, `r = s − ω t`,
+/// and the new `‖r‖²` and `(r₀, r)`.
+fn finish_iteration(
+    x: &mut [f64],
+    r: &mut [f64],
+    s: &mut [f64],
+    [ph, sh, t, r0]: [&[f64]; 4],
+    alpha: f64,
+    omega: f64,
+) -> (f64, f64) {
+    par::chunks((x, r, s)).fold(
+        (0.0, 0.0),
+        |o, (x, r, s)| {
+            for (k, x) in x.iter_mut().enumerate() {
+                *x += alpha * ph[o + k] + omega * sh[o + k];
+            }
+            for (k, r) in r.iter_mut().enumerate() {
+                *r = s[k] - omega * t[o + k];
+            }
+            (dot_serial(r, r), dot_serial(&r0[o..o + r.len()], r))
+        },
+        |a, p| (a.0 + p.0, a.1 + p.1),
+    )
 }
 
 #[cfg(test)]

@@ -109,143 +109,150 @@ impl Fgmres {
         M: FlexiblePreconditioner + ?Sized,
         F: FnMut(&[f64]) -> Accept,
     {
-        let Fgmres {
-            restart,
-            v,
-            z,
-            h,
-            cs,
-            sn,
-            g,
-            y,
-            r,
-            parts,
-            proj,
-        } = self;
-        let restart = *restart;
         let mut target = tol;
         let mut iterations = 0;
-        a.apply(x, r);
-        par::chunks((&mut r[..], b))
-            .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
-        let mut beta = dot(r, r).sqrt();
+        let mut beta = residual(a, x, b, &mut self.r);
         loop {
             if !beta.is_finite() {
-                return SolveStats {
-                    iterations,
-                    residual: beta,
-                    converged: false,
-                };
+                return SolveStats::new(iterations, beta, false);
             }
             if beta <= target {
-                match accept(r) {
-                    Accept::Done => {
-                        return SolveStats {
-                            iterations,
-                            residual: beta,
-                            converged: true,
-                        };
-                    }
+                match accept(&self.r) {
+                    Accept::Done => return SolveStats::new(iterations, beta, true),
                     Accept::Continue(t) => target = t.min(0.5 * beta),
                 }
                 if beta == 0.0 {
                     // Nothing left to reduce: the rule cannot be met by iterating.
-                    return SolveStats {
-                        iterations,
-                        residual: beta,
-                        converged: false,
-                    };
+                    return SolveStats::new(iterations, beta, false);
                 }
             }
             if iterations >= max_iter {
-                return SolveStats {
-                    iterations,
-                    residual: beta,
-                    converged: false,
-                };
+                return SolveStats::new(iterations, beta, false);
             }
-            // One restart cycle from r.
-            {
-                let v0 = &mut v[0];
-                par::chunks((&mut v0[..], &r[..]))
-                    .for_each(|_, (v, r)| v.iter_mut().zip(r).for_each(|(v, r)| *v = r / beta));
-            }
-            g.fill(0.0);
-            g[0] = beta;
-            let mut k = 0;
-            let mut est = beta;
-            while k < restart && iterations < max_iter {
-                iterations += 1;
-                m.apply(&v[k], &mut z[k]);
-                let (head, tail) = v.split_at_mut(k + 1);
-                let w = &mut tail[0];
-                a.apply(&z[k], w);
-                let col = &mut h[k];
-                col[..=k].fill(0.0);
-                let w2 = project(head, w, parts, proj);
-                subtract(head, &proj[..=k], w);
-                let mut hn = dot(w, w).sqrt();
-                for (c, p) in col.iter_mut().zip(&proj[..=k]) {
-                    *c += p;
-                }
-                if hn < REORTH * w2.sqrt() {
-                    project(head, w, parts, proj);
-                    subtract(head, &proj[..=k], w);
-                    hn = dot(w, w).sqrt();
-                    for (c, p) in col.iter_mut().zip(&proj[..=k]) {
-                        *c += p;
-                    }
-                }
-                col[k + 1] = hn;
-                if hn > 0.0 {
-                    par::chunks(&mut w[..]).for_each(|_, w| w.iter_mut().for_each(|w| *w /= hn));
-                }
-                for i in 0..k {
-                    let (p, q) = (col[i], col[i + 1]);
-                    col[i] = cs[i] * p + sn[i] * q;
-                    col[i + 1] = -sn[i] * p + cs[i] * q;
-                }
-                let (p, q) = (col[k], col[k + 1]);
-                let rr = p.hypot(q);
-                let (c, s) = if rr > 0.0 {
-                    (p / rr, q / rr)
-                } else {
-                    (1.0, 0.0)
-                };
-                cs[k] = c;
-                sn[k] = s;
-                col[k] = rr;
-                col[k + 1] = 0.0;
-                g[k + 1] = -s * g[k];
-                g[k] *= c;
-                est = g[k + 1].abs();
-                k += 1;
-                if est <= target || hn == 0.0 || !est.is_finite() {
-                    break;
-                }
-            }
-            // x += Z y, with H y = g (upper triangular).
-            for i in (0..k).rev() {
-                let mut s = g[i];
-                for j in i + 1..k {
-                    s -= h[j][i] * y[j];
-                }
-                y[i] = if h[i][i] != 0.0 { s / h[i][i] } else { 0.0 };
-            }
-            for c in y[..k].iter_mut() {
-                *c = -*c;
-            }
-            subtract(&z[..k], &y[..k], x);
-            // The true residual.
-            a.apply(x, r);
-            par::chunks((&mut r[..], b))
-                .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
-            beta = dot(r, r).sqrt();
+            let (k, est) = self.cycle(a, m, beta, target, max_iter, &mut iterations);
+            self.update_iterate(k, x);
+            beta = residual(a, x, b, &mut self.r);
             if k > 0 && !est.is_finite() {
                 beta = est;
             }
         }
     }
+
+    /// One restart cycle from the residual `r` of norm `beta`: Arnoldi vectors until the
+    /// residual estimate meets `target`, `restart` vectors are kept or `max_iter` products
+    /// are spent. Returns the number of vectors and the estimate.
+    fn cycle<A, M>(
+        &mut self,
+        a: &mut A,
+        m: &mut M,
+        beta: f64,
+        target: f64,
+        max_iter: usize,
+        iterations: &mut usize,
+    ) -> (usize, f64)
+    where
+        A: LinearOperator + ?Sized,
+        M: FlexiblePreconditioner + ?Sized,
+    {
+        par::chunks((&mut self.v[0][..], &self.r[..]))
+            .for_each(|_, (v, r)| v.iter_mut().zip(r).for_each(|(v, r)| *v = r / beta));
+        self.g.fill(0.0);
+        self.g[0] = beta;
+        let mut k = 0;
+        let mut est = beta;
+        while k < self.restart && *iterations < max_iter {
+            *iterations += 1;
+            m.apply(&self.v[k], &mut self.z[k]);
+            let hn = self.arnoldi(a, k);
+            est = self.rotate(k);
+            k += 1;
+            if est <= target || hn == 0.0 || !est.is_finite() {
+                break;
+            }
+        }
+        (k, est)
+    }
+
+    /// The Arnoldi vector `v_{k+1} ∝ A z_k`, orthogonalised against `v_0..=v_k` by modified
+    /// Gram–Schmidt (twice when cancellation left less than [`REORTH`] of it), normalised;
+    /// fills column `k` of the Hessenberg matrix and returns the new vector's norm.
+    fn arnoldi<A: LinearOperator + ?Sized>(&mut self, a: &mut A, k: usize) -> f64 {
+        let (head, tail) = self.v.split_at_mut(k + 1);
+        let w = &mut tail[0];
+        a.apply(&self.z[k], w);
+        let col = &mut self.h[k];
+        col[..=k].fill(0.0);
+        let (parts, proj) = (&mut self.parts, &mut self.proj);
+        let w2 = project(head, w, parts, proj);
+        subtract(head, &proj[..=k], w);
+        let mut hn = dot(w, w).sqrt();
+        for (c, p) in col.iter_mut().zip(&proj[..=k]) {
+            *c += p;
+        }
+        if hn < REORTH * w2.sqrt() {
+            project(head, w, parts, proj);
+            subtract(head, &proj[..=k], w);
+            hn = dot(w, w).sqrt();
+            for (c, p) in col.iter_mut().zip(&proj[..=k]) {
+                *c += p;
+            }
+        }
+        col[k + 1] = hn;
+        if hn > 0.0 {
+            par::chunks(&mut w[..]).for_each(|_, w| w.iter_mut().for_each(|w| *w /= hn));
+        }
+        hn
+    }
+
+    /// Applies the previous Givens rotations to column `k` of the Hessenberg matrix, forms
+    /// the one that zeroes its subdiagonal, rotates the right-hand side `g`; returns the
+    /// residual estimate `|g_{k+1}|`.
+    fn rotate(&mut self, k: usize) -> f64 {
+        let (col, cs, sn, g) = (&mut self.h[k], &mut self.cs, &mut self.sn, &mut self.g);
+        for i in 0..k {
+            let (p, q) = (col[i], col[i + 1]);
+            col[i] = cs[i] * p + sn[i] * q;
+            col[i + 1] = -sn[i] * p + cs[i] * q;
+        }
+        let (p, q) = (col[k], col[k + 1]);
+        let rr = p.hypot(q);
+        let (c, s) = if rr > 0.0 {
+            (p / rr, q / rr)
+        } else {
+            (1.0, 0.0)
+        };
+        cs[k] = c;
+        sn[k] = s;
+        col[k] = rr;
+        col[k + 1] = 0.0;
+        g[k + 1] = -s * g[k];
+        g[k] *= c;
+        g[k + 1].abs()
+    }
+
+    /// `x += Z y` with `H y = g` (upper triangular, the first `k` columns).
+    fn update_iterate(&mut self, k: usize, x: &mut [f64]) {
+        let (h, g, y) = (&self.h, &self.g, &mut self.y);
+        for i in (0..k).rev() {
+            let mut s = g[i];
+            for j in i + 1..k {
+                s -= h[j][i] * y[j];
+            }
+            y[i] = if h[i][i] != 0.0 { s / h[i][i] } else { 0.0 };
+        }
+        for c in y[..k].iter_mut() {
+            *c = -*c;
+        }
+        subtract(&self.z[..k], &y[..k], x);
+    }
+}
+
+/// `r = b − A x`; returns `‖r‖₂`.
+fn residual<A: LinearOperator + ?Sized>(a: &mut A, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
+    a.apply(x, r);
+    par::chunks((&mut r[..], b))
+        .for_each(|_, (r, b)| r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r));
+    dot(r, r).sqrt()
 }
 
 /// `proj[i] = basis[i]·w` for every basis vector, in one pass over `w`; returns `w·w`. The

@@ -145,6 +145,17 @@ pub struct SolveStats {
     pub converged: bool,
 }
 
+impl SolveStats {
+    /// The statistics of a solve that stopped after `iterations` at `residual`.
+    pub(crate) fn new(iterations: usize, residual: f64, converged: bool) -> Self {
+        SolveStats {
+            iterations,
+            residual,
+            converged,
+        }
+    }
+}
+
 /// Reusable conjugate-gradient workspace for systems of one size: three vectors, the residual
 /// `r`, the search direction `p` and `q`, which holds `A p` until the residual is updated and
 /// the preconditioned residual `z = M⁻¹ r` after (the two are never needed at once).
@@ -264,37 +275,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
         "PCG: work vector length ≠ system size"
     );
     assert_eq!(n, x.len());
-    // r = b − A x and its measure.
-    let true_residual = |a: &mut A, x: &[f64], r: &mut [f64], q: &mut [f64]| {
-        a.apply(x, q);
-        let q = &*q;
-        let diff = |o: usize, r: &mut [f64]| {
-            let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
-            for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
-                *r = b - q;
-            }
-        };
-        match measure {
-            // The difference and its measure in one pass (the chunks and their fold are
-            // `Norm::of`'s).
-            Measure::Norm(n) => {
-                let v = par::chunks(&mut *r).fold(
-                    0.0,
-                    |o, r| {
-                        diff(o, r);
-                        n.chunk(o, r)
-                    },
-                    |a, b| n.combine(a, b),
-                );
-                n.finish(v)
-            }
-            Measure::Closure(f) => {
-                par::chunks(&mut *r).for_each(diff);
-                f(r)
-            }
-        }
-    };
-    let mut res = true_residual(a, x, r, q);
+    let mut res = true_residual(a, b, x, r, q, measure);
     let mut it = 0;
     let converged = |iterations: usize, residual: f64| SolveStats {
         iterations,
@@ -318,14 +299,12 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             // Breakdown: p is in the null space (singular system) or the operator is not SPD.
             // In a singular system the recursively updated residual drifts off the range by
             // round-off until the preconditioned direction is nearly a null vector; restarting
-            // from the true residual removes the drift (the stability map's sphere at a density
-            // ratio of 1e4 and a projection tolerance of 1e-10 broke down after 10 iterations
-            // at 4.4e-7 and converged 11 iterations after one restart).
+            // from the true residual removes the drift.
             if !pq.is_finite() || restarts == MAX_RESTARTS {
                 break;
             }
             restarts += 1;
-            res = true_residual(a, x, r, q);
+            res = true_residual(a, b, x, r, q, measure);
             if res <= tol {
                 return converged(it, res);
             }
@@ -333,78 +312,128 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
             p.copy_from_slice(q);
             continue;
         }
-        let alpha = rz / pq;
-        // x += α p, r −= α q, and the measure of r, in one pass.
-        let pv = &*p;
-        let update = |o: usize, x: &mut [f64], r: &mut [f64], q: &[f64]| {
-            let n = x.len();
-            let (p, q) = (&pv[o..o + n], &q[..n]);
-            for (x, p) in x.iter_mut().zip(p) {
-                *x += alpha * p;
-            }
-            for (r, q) in r.iter_mut().zip(q) {
-                *r -= alpha * q;
-            }
-        };
-        // With a Jacobi preconditioner and a norm, the same pass also forms z = r / d and
-        // r·z (`rz_fused`), z over `A p` chunk by chunk once the chunk has used it; it
-        // stays valid unless the true residual replaces r below.
-        let mut rz_fused = None;
-        res = match (measure, m.jacobi_diagonal()) {
-            (Measure::Norm(nm), Some(d)) => {
-                let (v, rz_new) = par::chunks((&mut *x, &mut *r, &mut *q)).fold(
-                    (0.0, 0.0),
-                    |o, (x, r, q)| {
-                        update(o, x, r, q);
-                        (nm.chunk(o, r), jacobi_chunk(r, &d[o..], q))
-                    },
-                    |a, b| (nm.combine(a.0, b.0), a.1 + b.1),
-                );
-                rz_fused = Some(rz_new);
-                nm.finish(v)
-            }
-            (Measure::Norm(nm), None) => {
-                let qv = &*q;
-                nm.finish(par::chunks((&mut *x, &mut *r)).fold(
-                    0.0,
-                    |o, (x, r)| {
-                        update(o, x, r, &qv[o..]);
-                        nm.chunk(o, r)
-                    },
-                    |a, b| nm.combine(a, b),
-                ))
-            }
-            (Measure::Closure(f), _) => {
-                let qv = &*q;
-                par::chunks((&mut *x, &mut *r)).for_each(|o, (x, r)| update(o, x, r, &qv[o..]));
-                f(r)
-            }
-        };
+        let mut rz_fused;
+        (res, rz_fused) = update(x, r, q, p, rz / pq, measure, m.jacobi_diagonal());
         it += 1;
         if res <= tol {
-            // Confirm with the true residual.
+            // Confirm with the true residual (which replaces r, so a fused r·z is stale).
             rz_fused = None;
-            res = true_residual(a, x, r, q);
+            res = true_residual(a, b, x, r, q, measure);
             if res <= tol {
                 return converged(it, res);
             }
         }
         let rz_new = rz_fused.unwrap_or_else(|| m.apply_dot(r, q));
-        let beta = rz_new / rz;
+        new_direction(p, q, rz_new / rz);
         rz = rz_new;
-        let z = &*q;
-        par::chunks(&mut *p).for_each(|o, p| {
-            let z = &z[o..o + p.len()];
-            for (p, z) in p.iter_mut().zip(z) {
-                *p = z + beta * *p;
-            }
-        });
     }
     SolveStats {
         iterations: it,
         residual: res,
         converged: res <= tol,
     }
+}
+
+/// `r = b − A x` (with `q` as the product's scratch) and its measure, in one pass when the
+/// measure is a [`Norm`] (the chunks and their fold are `Norm::of`'s).
+fn true_residual<A: LinearOperator + ?Sized>(
+    a: &mut A,
+    b: &[f64],
+    x: &[f64],
+    r: &mut [f64],
+    q: &mut [f64],
+    measure: Measure,
+) -> f64 {
+    a.apply(x, q);
+    let q = &*q;
+    let diff = |o: usize, r: &mut [f64]| {
+        let (b, q) = (&b[o..o + r.len()], &q[o..o + r.len()]);
+        for ((r, b), q) in r.iter_mut().zip(b).zip(q) {
+            *r = b - q;
+        }
+    };
+    match measure {
+        Measure::Norm(n) => {
+            let v = par::chunks(&mut *r).fold(
+                0.0,
+                |o, r| {
+                    diff(o, r);
+                    n.chunk(o, r)
+                },
+                |a, b| n.combine(a, b),
+            );
+            n.finish(v)
+        }
+        Measure::Closure(f) => {
+            par::chunks(&mut *r).for_each(diff);
+            f(r)
+        }
+    }
+}
+
+/// `x += α p`, `r −= α q` (`q = A p`) and the measure of `r`, in one pass. With a Jacobi
+/// preconditioner (diagonal `d`) and a norm, the same pass also forms `z = r / d` over `q`
+/// chunk by chunk, once the chunk has used it, and returns `r·z`.
+#[allow(clippy::too_many_arguments)]
+fn update(
+    x: &mut [f64],
+    r: &mut [f64],
+    q: &mut [f64],
+    p: &[f64],
+    alpha: f64,
+    measure: Measure,
+    jacobi: Option<&[f64]>,
+) -> (f64, Option<f64>) {
+    let step = |o: usize, x: &mut [f64], r: &mut [f64], q: &[f64]| {
+        let n = x.len();
+        let (p, q) = (&p[o..o + n], &q[..n]);
+        for (x, p) in x.iter_mut().zip(p) {
+            *x += alpha * p;
+        }
+        for (r, q) in r.iter_mut().zip(q) {
+            *r -= alpha * q;
+        }
+    };
+    match (measure, jacobi) {
+        (Measure::Norm(nm), Some(d)) => {
+            let (v, rz) = par::chunks((x, r, q)).fold(
+                (0.0, 0.0),
+                |o, (x, r, q)| {
+                    step(o, x, r, q);
+                    (nm.chunk(o, r), jacobi_chunk(r, &d[o..], q))
+                },
+                |a, b| (nm.combine(a.0, b.0), a.1 + b.1),
+            );
+            (nm.finish(v), Some(rz))
+        }
+        (Measure::Norm(nm), None) => {
+            let q = &*q;
+            let v = par::chunks((x, r)).fold(
+                0.0,
+                |o, (x, r)| {
+                    step(o, x, r, &q[o..]);
+                    nm.chunk(o, r)
+                },
+                |a, b| nm.combine(a, b),
+            );
+            (nm.finish(v), None)
+        }
+        (Measure::Closure(f), _) => {
+            let q = &*q;
+            par::chunks((x, &mut *r)).for_each(|o, (x, r)| step(o, x, r, &q[o..]));
+            (f(r), None)
+        }
+    }
+}
+
+/// The next search direction `p ← z + β p`.
+fn new_direction(p: &mut [f64], z: &[f64], beta: f64) {
+    par::chunks(p).for_each(|o, p| {
+        let z = &z[o..o + p.len()];
+        for (p, z) in p.iter_mut().zip(z) {
+            *p = z + beta * *p;
+        }
+    });
 }
 
 /// The stopping measure: a caller's function of the whole residual, or a fusable [`Norm`].

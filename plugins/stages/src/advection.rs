@@ -61,13 +61,14 @@
 //! — taken from the pipeline's pool of work vectors (`scratch`), which the later stages of the
 //! step reuse. It keeps from one step to the next only the `WholeStep` predictor's two arrays.
 
+use crate::faces::UnknownFaces;
 use crate::scratch::{self, Scratch};
 use efsi_core::scene::options::StageOptions;
 use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
-    State, StepContext,
+    BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
+    StageStats, State, StepContext,
 };
 use efsi_linalg::par::{self, copy};
 use serde::{Deserialize, Serialize};
@@ -153,9 +154,10 @@ impl StagePlugin for Advection {
     ) -> Result<Box<dyn Stage>, String> {
         // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
         // an outflow side have ny + 1 rows), plus the top edge.
-        let stride = grid.nx + 1 + 2 * efsi_core::GHOST;
+        // A band edge holds one padded row of the fields.
+        let [row, rows, planes] = grid.padded();
         let bands = (grid.ny + 1).div_ceil(BAND);
-        let padded = stride * (grid.ny + 1 + 2 * efsi_core::GHOST);
+        let padded = row * rows * planes;
         let carry = if whole_step(scene, options)? {
             Some(Carry {
                 u: vec![0.0; padded],
@@ -167,10 +169,10 @@ impl StagePlugin for Advection {
         };
         Ok(Box::new(AdvectionStage {
             carry,
-            scratch: Scratch::reserve(shared, WORK * stride * (grid.ny + 1 + 2 * efsi_core::GHOST)),
-            edge_m: vec![0.0; (bands + 1) * stride],
-            edge_q: vec![0.0; (bands + 1) * stride],
-            row_x: (0..bands).map(|_| vec![0.0; 2 * stride]).collect(),
+            scratch: Scratch::reserve(shared, WORK * padded),
+            edge_m: vec![0.0; (bands + 1) * row],
+            edge_q: vec![0.0; (bands + 1) * row],
+            row_x: (0..bands).map(|_| vec![0.0; 2 * row]).collect(),
         }))
     }
 }
@@ -526,6 +528,78 @@ fn face_masses(rho: &Field, mu: &mut [f64], mv: &mut [f64]) {
     });
 }
 
+/// One Euler stage of SSP-RK2 on the unknown faces of one family ([`Euler::update`]).
+struct Euler<'a> {
+    dt: f64,
+    /// `Δt/Δtₙ₋₁` of the `WholeStep` predictor, 0 without history.
+    lag: f64,
+    /// Whether this is the second stage (averaged with the start of the step).
+    second: bool,
+    rho: &'a Field,
+}
+
+impl Euler<'_> {
+    /// The velocity `x` and face mass `m1` of the faces of `region` (normal to axis `a`) after
+    /// an Euler stage from the current values with the tendencies `q` (momentum) and `dm`
+    /// (mass); `x0` is the start-of-step velocity and `y` the velocity this stage left at the
+    /// previous step (empty without history). Lines in parallel, each writing its own faces.
+    fn update(
+        &self,
+        region: Region,
+        a: usize,
+        x: &mut Field,
+        m1: &mut [f64],
+        [x0, y, q, dm]: [&[f64]; 4],
+    ) {
+        let (dt, lag, second) = (self.dt, self.lag, self.second);
+        let below = efsi_core::operators::minus(a);
+        let m1 = region.storage(m1);
+        region.for_each((x, m1), |l, (xr, mr)| {
+            let n = l.len;
+            let (x0, q, dm) = (
+                &l.on(x0, [0; 3])[..n],
+                &l.on(q, [0; 3])[..n],
+                &l.on(dm, [0; 3])[..n],
+            );
+            let y = if lag != 0.0 {
+                &l.on(y, [0; 3])[..n]
+            } else {
+                &[]
+            };
+            let (rho_lo, rho_hi) = (&self.rho.at(&l, below)[..n], &self.rho.at(&l, [0; 3])[..n]);
+            let (xr, mr) = (&mut xr[..n], &mut mr[..n]);
+            for c in 0..n {
+                // The other stages' increment added to the first stage's velocity.
+                let other = if lag != 0.0 {
+                    lag * (x0[c] - y[c])
+                } else {
+                    0.0
+                };
+                // (m, m u) after an Euler step from the current stage values (the second
+                // stage from the first's momentum, without that increment).
+                let m_e = mr[c] + dt * dm[c];
+                let q_e = if second && lag != 0.0 {
+                    mr[c] * (xr[c] - other) + dt * q[c]
+                } else {
+                    mr[c] * xr[c] + dt * q[c]
+                };
+                let (m_new, q_new) = if !second {
+                    (m_e, q_e)
+                } else {
+                    // The start-of-step face mass, as `face_masses` gave it.
+                    let a = crate::ops::face_density(rho_lo[c], rho_hi[c]);
+                    (0.5 * (a + m_e), 0.5 * (a * x0[c] + q_e))
+                };
+                mr[c] = m_new;
+                xr[c] = q_new / m_new;
+                if !second && lag != 0.0 {
+                    xr[c] += other;
+                }
+            }
+        });
+    }
+}
+
 impl Stage for AdvectionStage {
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
         advective_dt(grid, &state.u, &state.v, cfl)
@@ -544,10 +618,7 @@ impl Stage for AdvectionStage {
         face_masses(&state.rho, m1u, m1v);
         copy(u0, state.u.data());
         copy(v0, state.v.data());
-        let ux = ctx.bc.normal_faces(0, g.nx);
-        let vy = ctx.bc.normal_faces(1, g.ny);
-        let (nx, ny) = (g.nx as isize, g.ny as isize);
-        let s = state.u.stride();
+        let faces = UnknownFaces::new(g, ctx.bc);
         // The other stages' increments of the last step, rescaled to this Δt (module docs).
         let mut carry = self.carry.take();
         let (lag, yu, yv): (f64, &[f64], &[f64]) = match &carry {
@@ -562,75 +633,26 @@ impl Stage for AdvectionStage {
                 [m1u, m1v],
                 [&mut *qu, &mut *qv, &mut *mu_, &mut *mv_],
             );
-            let faces = [
-                (
-                    &mut state.u,
-                    &mut *m1u,
-                    &*u0,
-                    yu,
-                    1,
-                    &*qu,
-                    &*mu_,
-                    ux.lo,
-                    ux.hi,
-                    0,
-                    ny,
-                ),
-                (
-                    &mut state.v,
-                    &mut *m1v,
-                    &*v0,
-                    yv,
-                    s,
-                    &*qv,
-                    &*mv_,
-                    0,
-                    nx,
-                    vy.lo,
-                    vy.hi,
-                ),
-            ];
-            let rho = state.rho.data();
-            for (x, m1, x0, y, o, q, dm, i0, i1, j0, j1) in faces {
-                let r0 = x.idx(-efsi_core::G, j0);
-                let n = (j1 - j0).max(0) as usize * s;
-                let (dmd, qd, x0d) = (dm, q, x0);
-                let xd = &mut x.data_mut()[r0..r0 + n];
-                let m1d = &mut m1[r0..r0 + n];
-                par::rows((xd, m1d), s).for_each(|jr, (xr, mr)| {
-                    for i in i0..i1 {
-                        let c = (i + efsi_core::G) as usize;
-                        let k = r0 + jr * s + c;
-                        // The other stages' increment added to the first stage's velocity.
-                        let other = if lag != 0.0 {
-                            lag * (x0d[k] - y[k])
-                        } else {
-                            0.0
-                        };
-                        // (m, m u) after an Euler step from the current stage values (the
-                        // second stage from the first's momentum, without that increment).
-                        let m_e = mr[c] + dt * dmd[k];
-                        let q_e = if stage == 1 && lag != 0.0 {
-                            mr[c] * (xr[c] - other) + dt * qd[k]
-                        } else {
-                            mr[c] * xr[c] + dt * qd[k]
-                        };
-                        let (m_new, q_new) = if stage == 0 {
-                            (m_e, q_e)
-                        } else {
-                            // The start-of-step face mass, as `face_masses` gave it.
-                            let a = crate::ops::face_density(rho[k - o], rho[k]);
-                            let b = x0d[k];
-                            (0.5 * (a + m_e), 0.5 * (a * b + q_e))
-                        };
-                        mr[c] = m_new;
-                        xr[c] = q_new / m_new;
-                        if stage == 0 && lag != 0.0 {
-                            xr[c] += other;
-                        }
-                    }
-                });
-            }
+            let step = Euler {
+                dt,
+                lag,
+                second: stage == 1,
+                rho: &state.rho,
+            };
+            step.update(
+                faces.u_region(),
+                0,
+                &mut state.u,
+                m1u,
+                [&*u0, yu, &*qu, &*mu_],
+            );
+            step.update(
+                faces.v_region(),
+                1,
+                &mut state.v,
+                m1v,
+                [&*v0, yv, &*qv, &*mv_],
+            );
             if stage == 0 {
                 ctx.bc
                     .fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);

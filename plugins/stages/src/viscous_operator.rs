@@ -34,7 +34,7 @@
 //! the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
-use efsi_core::{Field, G, Grid, Region, Stagger, unit};
+use efsi_core::{Field, Grid, Line, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
 use efsi_linalg::par;
 
@@ -117,14 +117,10 @@ impl Coefficients {
     fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
         let m = &g.metric;
         let (dx, dy) = (g.dx, g.dy);
-        let s = eta.stride();
-        let ed = eta.data();
         let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
-        let (cxx, cyy) = (self.cxx.data_mut(), self.cyy.data_mut());
-        par::rows((cxx, cyy), s).for_each(|jr, (cx, cy)| {
-            let row = &ed[jr * s..(jr + 1) * s];
-            for (c, ((cx, cy), e)) in cx.iter_mut().zip(cy.iter_mut()).zip(row).enumerate() {
-                let r = m.rc(c as isize - G);
+        Region::whole(g).for_each((&mut self.cxx, &mut self.cyy), |l, (cx, cy)| {
+            let (e, rc) = (eta.at(&l, [0; 3]), m.rc_on(&l, 0));
+            for (((cx, cy), e), r) in cx.iter_mut().zip(cy.iter_mut()).zip(e).zip(rc) {
                 *cx = ax * r * e;
                 *cy = ay * r * e;
             }
@@ -186,20 +182,17 @@ impl Coefficients {
     /// The u–u and v–v blocks of `diag(d) − K` — `d` the full diagonal ([`diagonal`](Self::diagonal))
     /// — as five-point stencils (couplings `≥ 0`, zero across a closed boundary).
     pub(crate) fn blocks(&self, diag: &[f64], au: &mut Stencil5, av: &mut Stencil5) {
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = au.nx;
-        let nx = self.nx;
-        let s = self.cxx.stride();
-        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
+        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
         let (px, py) = (au.periodic_x, au.periodic_y);
-        let ny = au.ny;
-        for j in 0..ny {
+        let (nur, ny) = (au.nx, au.ny);
+        for j in 0..uf.lines() {
+            let l = uf.line(j);
+            let (ce, gn) = (self.cxx.at(&l, [0; 3]), self.gc.at(&l, unit(1)));
             for c in 0..nur {
-                let k = self.cxx.idx(ux.lo + c as isize, j as isize);
                 let kc = j * nur + c;
-                au.east[kc] = if c + 1 < nur || px { cxx[k] } else { 0.0 };
+                au.east[kc] = if c + 1 < nur || px { ce[c] } else { 0.0 };
                 au.north[kc] = if j + 1 < ny || py {
-                    self.alpha * gd[k + s]
+                    self.alpha * gn[c]
                 } else {
                     0.0
                 };
@@ -207,18 +200,18 @@ impl Coefficients {
             }
         }
         let nu = nur * ny;
-        let nvr = av.ny;
-        for jr in 0..nvr {
-            let j = vy.lo + jr as isize;
+        let (nx, nvr) = (self.nx, av.ny);
+        for jr in 0..vf.lines() {
+            let l = vf.line(jr);
+            let (cn, ge) = (self.cyy.at(&l, [0; 3]), self.gc.at(&l, unit(0)));
             for i in 0..nx {
-                let k = self.cxx.idx(i as isize, j);
                 let kc = jr * nx + i;
                 av.east[kc] = if i + 1 < nx || px {
-                    self.beta * gd[k + 1]
+                    self.beta * ge[i]
                 } else {
                     0.0
                 };
-                av.north[kc] = if jr + 1 < nvr || py { cyy[k] } else { 0.0 };
+                av.north[kc] = if jr + 1 < nvr || py { cn[i] } else { 0.0 };
                 av.diag[kc] = diag[nu + kc];
             }
         }
@@ -236,14 +229,7 @@ impl Coefficients {
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
-        let (alpha, beta) = (self.alpha, self.beta);
-        let s = u.stride();
-        let (ud, vd) = (u.data(), v.data());
-        let (cxx, cyy, gd) = (self.cxx.data(), self.cyy.data(), self.gc.data());
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = (ux.hi - ux.lo).max(0) as usize;
         let nu = self.faces.nu();
-        let nx = self.nx;
         let (yu, yv) = y.split_at_mut(nu);
         let (du, dv) = d.split_at(nu);
         let (xu, xv) = match x {
@@ -253,73 +239,109 @@ impl Coefficients {
             }
             None => (None, None),
         };
+        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
         let mut xy = 0.0;
-        if nur > 0 {
-            xy = par::rows(&mut *yu, nur).fold(
+        if !uf.is_empty() {
+            let n = uf.len(0);
+            xy = par::rows(&mut *yu, n).fold(
                 0.0,
-                |j, yr| {
-                    let n = yr.len();
-                    let k0 = u.idx(ux.lo, j as isize);
-                    let q0 = j * nur;
-                    let uc = &ud[k0..k0 + n];
-                    let ue = &ud[k0 + 1..k0 + 1 + n];
-                    let uw = &ud[k0 - 1..k0 - 1 + n];
-                    let un = &ud[k0 + s..k0 + s + n];
-                    let us = &ud[k0 - s..k0 - s + n];
-                    let vc = &vd[k0..k0 + n];
-                    let vw = &vd[k0 - 1..k0 - 1 + n];
-                    let vn = &vd[k0 + s..k0 + s + n];
-                    let vnw = &vd[k0 + s - 1..k0 + s - 1 + n];
-                    let ac = &cxx[k0..k0 + n];
-                    let aw = &cxx[k0 - 1..k0 - 1 + n];
-                    let gs = &gd[k0..k0 + n];
-                    let gn = &gd[k0 + s..k0 + s + n];
-                    let dr = &du[q0..q0 + n];
-                    let xr = xu.map_or(uc, |x| &x[q0..q0 + n]);
-                    for c in 0..n {
-                        let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
-                        let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
-                        let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
-                        yr[c] = dr[c] * xr[c] - k;
-                    }
-                    let yr = &*yr;
-                    par::sum4(n, |c| xr[c] * yr[c])
+                |j, y| {
+                    let x = xu.map(|x| &x[j * n..(j + 1) * n]);
+                    self.u_line(&uf.line(j), u, v, &du[j * n..], x, y)
                 },
                 |s, p| s + p,
             );
         }
-        xy + par::rows(&mut *yv, nx).fold(
-            0.0,
-            |jr, yr| {
-                let n = yr.len();
-                let k0 = v.idx(0, vy.lo + jr as isize);
-                let q0 = jr * nx;
-                let vc = &vd[k0..k0 + n];
-                let ve = &vd[k0 + 1..k0 + 1 + n];
-                let vw = &vd[k0 - 1..k0 - 1 + n];
-                let vn = &vd[k0 + s..k0 + s + n];
-                let vs = &vd[k0 - s..k0 - s + n];
-                let uc = &ud[k0..k0 + n];
-                let us = &ud[k0 - s..k0 - s + n];
-                let ue = &ud[k0 + 1..k0 + 1 + n];
-                let use_ = &ud[k0 + 1 - s..k0 + 1 - s + n];
-                let bc = &cyy[k0..k0 + n];
-                let bs = &cyy[k0 - s..k0 - s + n];
-                let gw = &gd[k0..k0 + n];
-                let ge = &gd[k0 + 1..k0 + 1 + n];
-                let dr = &dv[q0..q0 + n];
-                let xr = xv.map_or(vc, |x| &x[q0..q0 + n]);
-                for c in 0..n {
-                    let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
-                    let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
-                    let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
-                    yr[c] = dr[c] * xr[c] - k;
-                }
-                let yr = &*yr;
-                par::sum4(n, |c| xr[c] * yr[c])
-            },
-            |s, p| s + p,
-        )
+        let mut xy_v = 0.0;
+        if !vf.is_empty() {
+            let n = vf.len(0);
+            xy_v = par::rows(&mut *yv, n).fold(
+                0.0,
+                |j, y| {
+                    let x = xv.map(|x| &x[j * n..(j + 1) * n]);
+                    self.v_line(&vf.line(j), u, v, &dv[j * n..], x, y)
+                },
+                |s, p| s + p,
+            );
+        }
+        xy + xy_v
+    }
+
+    /// [`apply`](Self::apply) on one line of unknown u-faces: `y = d∘x − K(u, v)` there
+    /// (`x` the line's unknowns, or `u` itself), returning `x·y`.
+    #[inline(always)]
+    fn u_line(
+        &self,
+        l: &Line,
+        u: &Field,
+        v: &Field,
+        d: &[f64],
+        x: Option<&[f64]>,
+        y: &mut [f64],
+    ) -> f64 {
+        let n = y.len();
+        let alpha = self.alpha;
+        let (uc, ue, uw) = (
+            &u.at(l, [0; 3])[..n],
+            &u.at(l, unit(0))[..n],
+            &u.at(l, [-1, 0, 0])[..n],
+        );
+        let (un, us) = (&u.at(l, unit(1))[..n], &u.at(l, [0, -1, 0])[..n]);
+        let (vc, vw) = (&v.at(l, [0; 3])[..n], &v.at(l, [-1, 0, 0])[..n]);
+        let (vn, vnw) = (&v.at(l, unit(1))[..n], &v.at(l, [-1, 1, 0])[..n]);
+        let (ac, aw) = (
+            &self.cxx.at(l, [0; 3])[..n],
+            &self.cxx.at(l, [-1, 0, 0])[..n],
+        );
+        let (gs, gn) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(1))[..n]);
+        let dr = &d[..n];
+        let xr = &x.unwrap_or(uc)[..n];
+        for c in 0..n {
+            let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
+            let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
+            let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
+            y[c] = dr[c] * xr[c] - k;
+        }
+        let y = &*y;
+        par::sum4(n, |c| xr[c] * y[c])
+    }
+
+    /// [`apply`](Self::apply) on one line of unknown v-faces.
+    #[inline(always)]
+    fn v_line(
+        &self,
+        l: &Line,
+        u: &Field,
+        v: &Field,
+        d: &[f64],
+        x: Option<&[f64]>,
+        y: &mut [f64],
+    ) -> f64 {
+        let n = y.len();
+        let beta = self.beta;
+        let (vc, ve, vw) = (
+            &v.at(l, [0; 3])[..n],
+            &v.at(l, unit(0))[..n],
+            &v.at(l, [-1, 0, 0])[..n],
+        );
+        let (vn, vs) = (&v.at(l, unit(1))[..n], &v.at(l, [0, -1, 0])[..n]);
+        let (uc, us) = (&u.at(l, [0; 3])[..n], &u.at(l, [0, -1, 0])[..n]);
+        let (ue, use_) = (&u.at(l, unit(0))[..n], &u.at(l, [1, -1, 0])[..n]);
+        let (bc, bs) = (
+            &self.cyy.at(l, [0; 3])[..n],
+            &self.cyy.at(l, [0, -1, 0])[..n],
+        );
+        let (gw, ge) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(0))[..n]);
+        let dr = &d[..n];
+        let xr = &x.unwrap_or(vc)[..n];
+        for c in 0..n {
+            let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
+            let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
+            let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
+            y[c] = dr[c] * xr[c] - k;
+        }
+        let y = &*y;
+        par::sum4(n, |c| xr[c] * y[c])
     }
 }
 
@@ -329,17 +351,11 @@ impl Coefficients {
 /// viscosity is the harmonic mean — the arithmetic mean would let the more viscous phase drag
 /// the other along (an O(1) error in the first cell beside an interface, first order overall).
 pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
-    let s = mu.stride();
-    let r0 = mu.idx(-G, 0);
-    let rows = grid.ny + 1;
-    let mud = mu.data();
-    let nx = grid.nx as isize;
-    par::rows(&mut out.data_mut()[r0..r0 + rows * s], s).for_each(|jr, mr| {
-        let k0 = r0 + jr * s;
-        for i in 0..=nx {
-            let c = (i + G) as usize;
-            let k = k0 + c;
-            mr[c] = corner_mean([mud[k - s - 1], mud[k - s], mud[k - 1], mud[k]]);
+    Region::of(grid, Stagger::Corner).for_each(out, |l, o| {
+        let (sw, se) = (mu.at(&l, [-1, -1, 0]), mu.at(&l, [0, -1, 0]));
+        let (nw, ne) = (mu.at(&l, [-1, 0, 0]), mu.at(&l, [0; 3]));
+        for n in 0..l.len {
+            o[n] = corner_mean([sw[n], se[n], nw[n], ne[n]]);
         }
     });
 }
@@ -422,9 +438,7 @@ mod tests {
         let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
         // Beside an outflow side (x_max here) the zero-gradient ghosts make the rows of its
         // last column of faces non-symmetric; everywhere else the matrix is symmetric.
-        let (ux, vy) = (faces.ux, faces.vy);
-        let nur = (ux.hi - ux.lo) as usize;
-        let nvr = (vy.hi - vy.lo) as usize;
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
         let outflow = matches!(bc.get(efsi_core::scene::Side::XMax), Boundary::Outflow);
         let last_column = |c: usize| {
             outflow
@@ -444,10 +458,27 @@ mod tests {
                 );
             }
         }
-        // The diagonal is the matrix's own away from the boundaries, and the blocks' couplings
-        // are the matrix's entries.
+        let diag = check_diagonal(&label, &grid, &faces, &k, &dm, &a, scale);
+        check_blocks(&grid, &bc, &faces, &k, &diag, &a, scale);
+        check_definite(&a);
+    }
+
+    /// The diagonal is the matrix's own away from the boundaries (and never below it); returns
+    /// it.
+    fn check_diagonal(
+        label: &str,
+        grid: &Grid,
+        faces: &UnknownFaces,
+        k: &Coefficients,
+        dm: &[f64],
+        a: &[Vec<f64>],
+        scale: f64,
+    ) -> Vec<f64> {
+        let n = faces.len();
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
+        let nvr = (faces.vy.hi - faces.vy.lo) as usize;
         let mut diag = vec![0.0; n];
-        k.diagonal(&dm, &mut diag);
+        k.diagonal(dm, &mut diag);
         let inner = |a: usize, n: usize| a >= 1 && a + 2 <= n;
         let mut checked = 0;
         for c in 0..n {
@@ -467,9 +498,24 @@ mod tests {
             assert!(diag[c] >= a[c][c] - 1e-13 * scale || c >= faces.nu() || !interior);
         }
         assert!(checked >= 10, "{label}: {checked} interior rows");
+        diag
+    }
+
+    /// The blocks' couplings are the matrix's entries.
+    fn check_blocks(
+        grid: &Grid,
+        bc: &BoundarySet,
+        faces: &UnknownFaces,
+        k: &Coefficients,
+        diag: &[f64],
+        a: &[Vec<f64>],
+        scale: f64,
+    ) {
+        let nur = (faces.ux.hi - faces.ux.lo) as usize;
+        let nvr = (faces.vy.hi - faces.vy.lo) as usize;
         let mut au = Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1));
         let mut av = Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1));
-        k.blocks(&diag, &mut au, &mut av);
+        k.blocks(diag, &mut au, &mut av);
         let nu = faces.nu();
         let wrap = |c: usize, n: usize| if c + 1 < n { c + 1 } else { 0 };
         for j in 0..grid.ny {
@@ -507,7 +553,11 @@ mod tests {
                 }
             }
         }
-        // Positive definite with a positive mass: xᵀAx > 0 for a few vectors.
+    }
+
+    /// Positive definite with a positive mass: `xᵀAx > 0` for a few vectors.
+    fn check_definite(a: &[Vec<f64>]) {
+        let n = a.len();
         for seed in 1..5u64 {
             let x: Vec<f64> = (0..n)
                 .map(|c| ((c as u64 * 2654435761 + seed * 97) % 1000) as f64 / 500.0 - 1.0)

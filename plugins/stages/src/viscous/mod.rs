@@ -268,18 +268,15 @@ fn u_row(faces: &UnknownFaces) -> usize {
 /// the two cells).
 #[inline(always)]
 fn mass_u(g: &Grid, faces: &UnknownFaces, rho: &Field, c: usize, j: usize) -> f64 {
-    let i = faces.ux.lo + c as isize;
-    let k = rho.idx(i, j as isize);
-    let rd = rho.data();
-    face_density(rd[k - 1], rd[k]) * g.metric.rx(i) * g.dx * g.dy
+    let (i, j) = (faces.ux.lo + c as isize, j as isize);
+    face_density(rho[(i - 1, j)], rho[(i, j)]) * g.metric.rx(i) * g.dx * g.dy
 }
 
 /// The mass of v-face `i` in the `jr`-th row of unknown v-faces.
 #[inline(always)]
 fn mass_v(g: &Grid, faces: &UnknownFaces, rho: &Field, i: usize, jr: usize) -> f64 {
-    let k = rho.idx(i as isize, faces.vy.lo + jr as isize);
-    let rd = rho.data();
-    face_density(rd[k - rho.stride()], rd[k]) * g.metric.rc(i as isize) * g.dx * g.dy
+    let (i, j) = (i as isize, faces.vy.lo + jr as isize);
+    face_density(rho[(i, j - 1)], rho[(i, j)]) * g.metric.rc(i) * g.dx * g.dy
 }
 
 impl ViscousSystem {
@@ -334,25 +331,7 @@ impl ViscousSystem {
         tol: f64,
         max_iter: usize,
     ) -> SolveStats {
-        // z = r·dinv over q, returning r·z.
-        let precondition = |r: &[f64], q: &mut [f64]| {
-            par::chunks(&mut *q).fold(
-                0.0,
-                |o, z| {
-                    let n = z.len();
-                    let (r, d) = (&r[o..o + n], &dinv[o..o + n]);
-                    for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
-                        *z = r * d;
-                    }
-                    let z = &*z;
-                    par::sum4(n, |k| r[k] * z[k])
-                },
-                |a, b| a + b,
-            )
-        };
-        let nu = self.faces.nu();
-        let nur = u_row(&self.faces);
-        let nx = self.grid.nx;
+        let precondition = |r: &[f64], q: &mut [f64]| jacobi(r, dinv, q);
         // r = b − A x and ‖r‖₂ (the fields then hold x).
         let true_residual = |sys: &mut Self, x: &[f64], r: &mut [f64], q: &mut [f64]| {
             sys.residual(b, x, r, q);
@@ -376,48 +355,8 @@ impl ViscousSystem {
             if pq <= 0.0 || !pq.is_finite() {
                 break;
             }
-            let alpha = rz / pq;
-            // x += α p, r −= α q, z = r·dinv over q, and ‖r‖², r·z: one pass, rows in parallel.
-            let (ud, vd) = (self.xu.data(), self.xv.data());
-            let (xu, xv) = x.split_at_mut(nu);
-            let (ru, rv) = r.split_at_mut(nu);
-            let (qu, qv) = q.split_at_mut(nu);
-            let (du, dv) = dinv.split_at(nu);
-            let row = |p: &[f64], d: &[f64], x: &mut [f64], r: &mut [f64], q: &mut [f64]| {
-                let n = x.len();
-                let (p, d, r, q) = (&p[..n], &d[..n], &mut r[..n], &mut q[..n]);
-                for (x, p) in x.iter_mut().zip(p) {
-                    *x += alpha * p;
-                }
-                for ((r, q), d) in r.iter_mut().zip(q.iter_mut()).zip(d) {
-                    *r -= alpha * *q;
-                    *q = *r * d;
-                }
-                let (r, q) = (&*r, &*q);
-                (par::sum4(n, |k| r[k] * r[k]), par::sum4(n, |k| r[k] * q[k]))
-            };
-            let (ux, vy) = (self.faces.ux, self.faces.vy);
-            let (mut rr, mut rz_new) = (0.0, 0.0);
-            if nur > 0 {
-                (rr, rz_new) = par::rows((xu, ru, qu), nur).fold(
-                    (0.0, 0.0),
-                    |j, (x, r, q)| {
-                        let k0 = self.xu.idx(ux.lo, j as isize);
-                        row(&ud[k0..], &du[j * nur..], x, r, q)
-                    },
-                    |s, p| (s.0 + p.0, s.1 + p.1),
-                );
-            }
-            let (rr_v, rz_v) = par::rows((xv, rv, qv), nx).fold(
-                (0.0, 0.0),
-                |jr, (x, r, q)| {
-                    let k0 = self.xv.idx(0, vy.lo + jr as isize);
-                    row(&vd[k0..], &dv[jr * nx..], x, r, q)
-                },
-                |s, p| (s.0 + p.0, s.1 + p.1),
-            );
-            res = (rr + rr_v).sqrt();
-            let mut rz_new = rz_new + rz_v;
+            let (rr, mut rz_new) = self.update(rz / pq, dinv, x, r, q);
+            res = rr.sqrt();
             it += 1;
             if res <= tol {
                 // Confirm with the true residual; keep p aside while it uses the fields.
@@ -444,6 +383,72 @@ impl ViscousSystem {
             converged: res <= tol,
         }
     }
+
+    /// One pass of the iteration, lines of unknown faces in parallel: `x += α p` (`p` in the
+    /// fields), `r −= α q`, `z = r·dinv` over `q`; returns `‖r‖²` and `r·z`, partials added in
+    /// line order (u-lines, then v-lines).
+    fn update(
+        &self,
+        alpha: f64,
+        dinv: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        q: &mut [f64],
+    ) -> (f64, f64) {
+        let nu = self.faces.nu();
+        let (xu, xv) = x.split_at_mut(nu);
+        let (ru, rv) = r.split_at_mut(nu);
+        let (qu, qv) = q.split_at_mut(nu);
+        let (du, dv) = dinv.split_at(nu);
+        let row = |p: &[f64], d: &[f64], x: &mut [f64], r: &mut [f64], q: &mut [f64]| {
+            let n = x.len();
+            let (p, d, r, q) = (&p[..n], &d[..n], &mut r[..n], &mut q[..n]);
+            for (x, p) in x.iter_mut().zip(p) {
+                *x += alpha * p;
+            }
+            for ((r, q), d) in r.iter_mut().zip(q.iter_mut()).zip(d) {
+                *r -= alpha * *q;
+                *q = *r * d;
+            }
+            let (r, q) = (&*r, &*q);
+            (par::sum4(n, |k| r[k] * r[k]), par::sum4(n, |k| r[k] * q[k]))
+        };
+        let add = |s: (f64, f64), p: (f64, f64)| (s.0 + p.0, s.1 + p.1);
+        let (mut rr, mut rz) = (0.0, 0.0);
+        let (u, v) = (self.faces.u_region(), self.faces.v_region());
+        for (region, p, d, x, r, q) in
+            [(u, &self.xu, du, xu, ru, qu), (v, &self.xv, dv, xv, rv, qv)]
+        {
+            if region.is_empty() {
+                continue;
+            }
+            let len = region.len(0);
+            let (a, b) = par::rows((x, r, q), len).fold(
+                (0.0, 0.0),
+                |j, (x, r, q)| row(p.at(&region.line(j), [0; 3]), &d[j * len..], x, r, q),
+                add,
+            );
+            (rr, rz) = (rr + a, rz + b);
+        }
+        (rr, rz)
+    }
+}
+
+/// `z = r·dinv` over `q`, returning `r·z` (chunk partials added in order).
+fn jacobi(r: &[f64], dinv: &[f64], q: &mut [f64]) -> f64 {
+    par::chunks(q).fold(
+        0.0,
+        |o, z| {
+            let n = z.len();
+            let (r, d) = (&r[o..o + n], &dinv[o..o + n]);
+            for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
+                *z = r * d;
+            }
+            let z = &*z;
+            par::sum4(n, |k| r[k] * z[k])
+        },
+        |a, b| a + b,
+    )
 }
 
 impl LinearOperator for ViscousSystem {
@@ -510,6 +515,59 @@ impl WarmStart {
     }
 }
 
+impl ViscousStage {
+    /// The right-hand side `Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ)` into `rhs`; returns its 2-norm. `K`
+    /// is affine in the boundary data `b`, so this is the θ-weighted sum of the implicit and
+    /// explicit parts' boundary forcing; the stencil with the hoop term as its diagonal gives
+    /// `−θΔt·K(V*)`.
+    fn right_hand_side(&self, ctx: &StepContext, state: &mut State, rhs: &mut [f64]) -> f64 {
+        let g = ctx.grid;
+        let when = WallTime::Blend {
+            t0: ctx.t,
+            t1: ctx.t + ctx.dt,
+            theta: self.theta,
+        };
+        ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
+        let k = &self.op.k;
+        k.apply(&state.u, &state.v, k.hoop(), None, rhs);
+        let scale = -1.0 / self.theta;
+        par::rows(&mut *rhs, g.nx.max(1)).for_each(|_, row| {
+            row.iter_mut().for_each(|r| *r *= scale);
+        });
+        dot(rhs, rhs).sqrt()
+    }
+}
+
+/// The warm start of a solve (in `warm.delta()`) and its tolerance, from the relative
+/// tolerance `rel` and the right-hand side's norm `bnorm`. Near a steady state (module docs):
+/// the warm start's residual reduced CONTRACT-fold, down to what keeps the solver's error
+/// under a share of the steady criterion; a criterion at round-off starts from zero and solves
+/// to the strict tolerance (a solve from zero biases the steady state by its error). `r` and
+/// `q` are work vectors.
+fn warm_start(
+    warm: &mut WarmStart,
+    op: &mut ViscousSystem,
+    dt: f64,
+    rel: f64,
+    bnorm: f64,
+    [rhs, r, q]: [&mut [f64]; 3],
+) -> f64 {
+    let tol = rel * bnorm;
+    let Some(steady) = warm.settled() else {
+        warm.guess(dt);
+        return tol;
+    };
+    let floor = STEADY_SHARE * steady * dt * op.min_mass();
+    if floor < ROUND_OFF * bnorm {
+        warm.delta().fill(0.0);
+        tol.min(STRICT_TOLERANCE * bnorm)
+    } else {
+        warm.guess(dt);
+        op.residual(rhs, warm.delta(), r, q);
+        tol.min(CONTRACT * dot(r, r).sqrt()).max(floor)
+    }
+}
+
 impl Stage for ViscousStage {
     /// Forget the warm start's history (a new run starts from zero).
     fn initialize(
@@ -567,27 +625,13 @@ impl Stage for ViscousStage {
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        let g = ctx.grid;
+        let scratch = self.scratch.clone();
+        let mut pool = scratch.lock();
+        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.op.faces.len());
+        self.op.theta_dt = self.theta * ctx.dt;
+        self.op.assemble(&state.mu, &state.rho, diag);
+        let bnorm = self.right_hand_side(ctx, state, rhs);
         let op = &mut self.op;
-        op.theta_dt = self.theta * ctx.dt;
-        let mut pool = self.scratch.lock();
-        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, op.faces.len());
-        op.assemble(&state.mu, &state.rho, diag);
-        // Right-hand side Δt·K(V*, θ bⁿ⁺¹ + (1−θ) bⁿ): K is affine in the boundary data b, so
-        // this is the θ-weighted sum of the implicit and explicit parts' boundary forcing. The
-        // stencil with the hoop term as its diagonal gives −θΔt·K(V*).
-        let when = WallTime::Blend {
-            t0: ctx.t,
-            t1: ctx.t + ctx.dt,
-            theta: self.theta,
-        };
-        ctx.bc.fill_velocity_at(g, &mut state.u, &mut state.v, when);
-        op.k.apply(&state.u, &state.v, op.k.hoop(), None, rhs);
-        let scale = -1.0 / self.theta;
-        par::rows(&mut *rhs, g.nx.max(1)).for_each(|_, row| {
-            row.iter_mut().for_each(|r| *r *= scale);
-        });
-        let bnorm = dot(rhs, rhs).sqrt();
         let stats = if bnorm == 0.0 {
             self.warm.delta().fill(0.0);
             self.warm.remember(ctx.dt);
@@ -597,32 +641,21 @@ impl Stage for ViscousStage {
                 converged: true,
             }
         } else {
-            let mut tol = self.tol * bnorm;
-            match self.warm.settled() {
-                None => self.warm.guess(ctx.dt),
-                // Near a steady state (module docs): the warm start's residual reduced
-                // CONTRACT-fold, down to what keeps the solver's error under a share of the
-                // steady criterion; a criterion at round-off starts from zero and solves to the
-                // strict tolerance (a solve from zero biases the steady state by its error).
-                Some(steady) => {
-                    let floor = STEADY_SHARE * steady * ctx.dt * op.min_mass();
-                    if floor < ROUND_OFF * bnorm {
-                        self.warm.delta().fill(0.0);
-                        tol = tol.min(STRICT_TOLERANCE * bnorm);
-                    } else {
-                        self.warm.guess(ctx.dt);
-                        op.residual(rhs, self.warm.delta(), r, q);
-                        tol = tol.min(CONTRACT * dot(r, r).sqrt()).max(floor);
-                    }
-                }
-            }
+            let tol = warm_start(
+                &mut self.warm,
+                op,
+                ctx.dt,
+                self.tol,
+                bnorm,
+                [&mut *rhs, &mut *r, &mut *q],
+            );
             let use_mg = match self.preconditioner {
                 ViscousPreconditioner::Jacobi => false,
                 ViscousPreconditioner::Multigrid => true,
                 ViscousPreconditioner::Auto => {
                     // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs
                     // ~10√κ iterations at 1e-9, at a quarter of the block multigrid's cost
-                    // per iteration, which needs ~16: break-even near κ ≈ 40.
+                    // per iteration: break-even near κ ≈ 40.
                     op.max_diag_to_mass(&state.rho, diag) > AUTO_MULTIGRID_RATIO
                 }
             };

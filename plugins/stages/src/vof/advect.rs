@@ -69,8 +69,7 @@
 //! - S. Popinet, Basilisk `src/vof.h` (the same scheme; the reference errors of the tests).
 
 use super::plic::{axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal};
-use efsi_core::{Field, G, Grid};
-use efsi_linalg::par;
+use efsi_core::{Field, G, Grid, Region, Stagger, unit};
 
 /// What a side of the domain does to the transported fraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,10 +167,10 @@ impl AdvectStats {
 
 /// The VOF PLIC advection kernel: owns its scratch arrays (allocated once in [`Self::new`]).
 ///
-/// Every pass of a sweep (indicator, reconstruction, face fluxes, update) runs over rows in
-/// parallel ([`par`]); each row writes only its own entries and its own partial statistics,
-/// which are folded in row order, so the result is the same bit for bit on any number of
-/// threads.
+/// Every pass of a sweep (indicator, reconstruction, face fluxes, update) runs over the lines
+/// of a grid region in parallel ([`Region`]); each line writes only its own entries and
+/// returns its own partial statistics, which are folded in line order, so the result is the
+/// same bit for bit on any number of threads.
 #[derive(Clone, Debug)]
 pub struct VofAdvector {
     bounds: VofBoundaries,
@@ -182,12 +181,12 @@ pub struct VofAdvector {
     dy: f64,
     /// Values per padded array of the grid.
     cells: usize,
+    /// The grid's cell centres.
+    interior: Region,
     /// The work arrays of a step ([`Work`], [`WORK`] padded arrays) when the advector owns
     /// them; empty when its stage lends them from the pipeline's pool ([`Self::step_in`]).
     own: Vec<f64>,
-    /// Per padded row: the partial statistics of the current pass.
-    rows: Vec<RowStats>,
-    /// Per padded column (`i + G`): `1/V`, the radius of the left edge, the face radius.
+    /// Per padded column ([`efsi_core::Line::cols`]): `1/V`, the radius of the left edge, the face radius.
     inv_vol: Vec<f64>,
     r_left: Vec<f64>,
     r_face: Vec<f64>,
@@ -202,8 +201,8 @@ pub(crate) const WORK: usize = 7;
 struct Work<'a> {
     /// Frozen indicator `c_c = [φⁿ > ½]` (interior cells).
     cc: &'a mut [f64],
-    /// PLIC line per padded cell, interleaved: normal x, normal y, α (cell-local coordinates).
-    lines: &'a mut [f64],
+    /// PLIC line per padded cell: normal x, normal y, α (cell-local coordinates).
+    lines: [&'a mut [f64]; 3],
     /// Phase flux `F` and volume flux `U` per face of the current sweep.
     flux: &'a mut [f64],
     vflux: &'a mut [f64],
@@ -214,12 +213,14 @@ struct Work<'a> {
 impl<'a> Work<'a> {
     fn cut(block: &'a mut [f64], cells: usize) -> Self {
         let (cc, rest) = block[..WORK * cells].split_at_mut(cells);
-        let (lines, rest) = rest.split_at_mut(3 * cells);
+        let (mx, rest) = rest.split_at_mut(cells);
+        let (my, rest) = rest.split_at_mut(cells);
+        let (al, rest) = rest.split_at_mut(cells);
         let (flux, rest) = rest.split_at_mut(cells);
         let (vflux, divsum) = rest.split_at_mut(cells);
         Work {
             cc,
-            lines,
+            lines: [mx, my, al],
             flux,
             vflux,
             divsum,
@@ -227,41 +228,31 @@ impl<'a> Work<'a> {
     }
 }
 
-/// One row's share of a pass's statistics (folded in row order).
+/// One line's share of the clipping statistics of an update (folded in line order).
 #[derive(Clone, Copy, Debug, Default)]
 struct RowStats {
-    cfl: f64,
     max_clipped: f64,
-    /// Clipped volume (update pass) or the row's room `Σ φ(1 − φ) V` (give-back pass).
+    /// Clipped volume.
     volume: f64,
 }
 
-/// What the flux pass reads of the cell geometry and the reconstructed lines.
-struct Slab<'a> {
+/// The fluxed slab of a face's upwind cell: the cell size, and the cell's PLIC line and the
+/// radius of its left edge (0 in planar geometry).
+struct Slab {
     dx: f64,
     dy: f64,
-    lines: &'a [f64],
-    r_left: &'a [f64],
+    line: [f64; 3],
+    r_left: f64,
 }
 
-impl Slab<'_> {
+impl Slab {
     /// Fraction (r-weighted in axisymmetric geometry) of the fluxed slab of the upwind cell
-    /// `ku` (column `iu`) below its line; `w` is the slab width, `pos` whether the flow is
-    /// towards `+d` (slab at the high side of the cell).
+    /// below its line; `w` is the slab width, `pos` whether the flow is towards `+d` (slab at
+    /// the high side of the cell).
     #[inline(always)]
-    fn fraction<const AXI: bool, const D: u8>(
-        &self,
-        ku: usize,
-        iu: isize,
-        w: f64,
-        pos: bool,
-    ) -> f64 {
+    fn fraction<const AXI: bool, const D: u8>(&self, w: f64, pos: bool) -> f64 {
         let (dx, dy) = (self.dx, self.dy);
-        let (mx, my, al) = (
-            self.lines[3 * ku],
-            self.lines[3 * ku + 1],
-            self.lines[3 * ku + 2],
-        );
+        let [mx, my, al] = self.line;
         // Slab origin in cell-local coordinates and its size.
         let (ox, oy, sw, sh) = match (D, pos) {
             (X, true) => (dx - w, 0.0, w, dy),
@@ -271,7 +262,7 @@ impl Slab<'_> {
         };
         let a = al - mx * ox - my * oy;
         if AXI {
-            let r0 = self.r_left[(iu + G) as usize] + ox;
+            let r0 = self.r_left + ox;
             let (area, m1) = half_plane_moments(mx, my, a, sw, sh);
             let slab = (r0 + 0.5 * sw) * sw * sh;
             ((r0 * area + m1) / slab).clamp(0.0, 1.0)
@@ -305,11 +296,11 @@ impl VofAdvector {
     /// ([`Self::step_in`]).
     pub(crate) fn lending(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
         bounds.validate(grid)?;
-        let ncol = grid.nx + 1 + 2 * G as usize;
-        let col = |k: usize| k as isize - G;
         let axi = grid.is_axisymmetric();
-        let rows = grid.ny + 1 + 2 * G as usize;
-        let cells = ncol * rows;
+        let cells = grid.padded().iter().product();
+        // The padded columns, in storage order.
+        let padded_row = Region::whole(grid).line(0);
+        let columns = || padded_row.indices().map(|[i, _, _]| i);
         Ok(VofAdvector {
             bounds,
             axi,
@@ -318,14 +309,14 @@ impl VofAdvector {
             dx: grid.dx,
             dy: grid.dy,
             cells,
+            interior: Region::of(grid, Stagger::Cell),
             own: Vec::new(),
-            rows: vec![RowStats::default(); rows],
-            inv_vol: (0..ncol).map(|k| 1.0 / grid.cell_volume(col(k))).collect(),
-            r_left: (0..ncol)
-                .map(|k| if axi { grid.xf(col(k)) } else { 0.0 })
+            inv_vol: columns().map(|i| 1.0 / grid.cell_volume(i)).collect(),
+            r_left: columns()
+                .map(|i| if axi { grid.xf(i) } else { 0.0 })
                 .collect(),
-            r_face: (0..ncol).map(|k| grid.metric.rx(col(k))).collect(),
-            r_centre: (0..ncol).map(|k| grid.metric.rc(col(k))).collect(),
+            r_face: columns().map(|i| grid.metric.rx(i)).collect(),
+            r_centre: columns().map(|i| grid.metric.rc(i)).collect(),
         })
     }
 
@@ -369,16 +360,13 @@ impl VofAdvector {
         debug_assert!(grid.nx == self.nx && grid.ny == self.ny, "grid mismatch");
         debug_assert_eq!(phi.data().len(), self.cells);
         let mut w = Work::cut(work, self.cells);
-        let (nx, ny, s) = (self.nx, self.ny, phi.stride());
-        let src = phi.data();
-        par::rows(&mut *w.cc, s).for_each(|jp, row| {
-            if (GU..GU + ny).contains(&jp) {
-                let o = jp * s + GU;
-                for (c, f) in row[GU..GU + nx].iter_mut().zip(&src[o..o + nx]) {
+        let src = &*phi;
+        self.interior
+            .for_each(self.interior.storage(w.cc), |l, cc| {
+                for (c, f) in cc.iter_mut().zip(src.at(&l, [0; 3])) {
                     *c = if *f > 0.5 { 1.0 } else { 0.0 };
                 }
-            }
-        });
+            });
         let mut stats = AdvectStats::default();
         let order = if step_index.is_multiple_of(2) {
             [X, Y]
@@ -427,44 +415,36 @@ impl VofAdvector {
         }
     }
 
-    /// Reconstruct the PLIC line of every cut cell in `[i0,i1) × [j0,j1)`, rows in parallel.
-    fn reconstruct<const AXI: bool>(
-        &self,
-        lines: &mut [f64],
-        phi: &Field,
-        i0: isize,
-        i1: isize,
-        j0: isize,
-        j1: isize,
-    ) {
-        let s = phi.stride();
+    /// Reconstruct the PLIC line of every cut cell of `cells`, lines in parallel.
+    fn reconstruct<const AXI: bool>(&self, lines: [&mut [f64]; 3], phi: &Field, cells: Region) {
         let (dx, dy) = (self.dx, self.dy);
-        let c = phi.data();
         let r_left = &self.r_left;
-        par::rows(&mut *lines, 3 * s).for_each(|jp, row| {
-            let j = jp as isize - G;
-            if j < j0 || j >= j1 {
-                return;
-            }
-            for i in i0..i1 {
-                let il = (i + G) as usize;
-                let k = jp * s + il;
-                let f = c[k];
+        let [mx, my, al] = lines.map(|l| cells.storage(l));
+        cells.for_each((mx, my, al), |l, (mx, my, al)| {
+            let c = |di: isize, dj: isize| phi.at(&l, [di, dj, 0]);
+            let (s, m, n) = (
+                [c(-1, -1), c(0, -1), c(1, -1)],
+                [c(-1, 0), c(0, 0), c(1, 0)],
+                [c(-1, 1), c(0, 1), c(1, 1)],
+            );
+            let rl = l.cols(r_left, 0);
+            for k in 0..l.len {
+                let f = m[1][k];
                 if f <= 0.0 || f >= 1.0 {
                     continue;
                 }
                 let b = [
-                    [c[k - s - 1], c[k - s], c[k - s + 1]],
-                    [c[k - 1], c[k], c[k + 1]],
-                    [c[k + s - 1], c[k + s], c[k + s + 1]],
+                    [s[0][k], s[1][k], s[2][k]],
+                    [m[0][k], m[1][k], m[2][k]],
+                    [n[0][k], n[1][k], n[2][k]],
                 ];
-                let (mx, my) = youngs_normal(&b, dx, dy);
+                let (x, y) = youngs_normal(&b, dx, dy);
                 let alpha = if AXI {
-                    axi_alpha(mx, my, f, r_left[il], dx, dy)
+                    axi_alpha(x, y, f, rl[k], dx, dy)
                 } else {
-                    rect_alpha(mx, my, f, dx, dy)
+                    rect_alpha(x, y, f, dx, dy)
                 };
-                row[3 * il..3 * il + 3].copy_from_slice(&[mx, my, alpha]);
+                (mx[k], my[k], al[k]) = (x, y, alpha);
             }
         });
     }
@@ -484,196 +464,271 @@ impl VofAdvector {
         dt: f64,
         last: bool,
     ) -> AdvectStats {
-        let (nx, ny) = (self.nx as isize, self.ny as isize);
-        let (dx, dy) = (self.dx, self.dy);
-        let (lo_side, hi_side) = if D == X {
+        self.fill_ghosts(phi);
+        // Lines in the interior, plus the ghost layer that can be upwind of a periodic face.
+        let g = if self.sides::<D>().0 == VofSide::Periodic {
+            1
+        } else {
+            0
+        };
+        let n = (if D == X { self.nx } else { self.ny }) as isize;
+        let cells = self.interior.range(D as usize, -g, n + g);
+        let [mx, my, al] = &mut w.lines;
+        self.reconstruct::<AXI>([mx, my, al], phi, cells);
+        let cfl = self.fluxes::<AXI, D>(w, phi, vel, dt);
+        let mut st = self.update::<D>(w, phi, last);
+        st.cfl = cfl;
+        // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
+        // thousands of cells and steps): to the interface cells, in proportion to their room
+        // `φ(1 − φ)`.
+        if st.clipped_volume != 0.0 {
+            self.give_back(phi, st.clipped_volume);
+        }
+        st
+    }
+
+    /// The low and high sides along `D`.
+    fn sides<const D: u8>(&self) -> (VofSide, VofSide) {
+        if D == X {
             (self.bounds.x_lo, self.bounds.x_hi)
         } else {
             (self.bounds.y_lo, self.bounds.y_hi)
-        };
+        }
+    }
+
+    /// The phase flux `F` and volume flux `U` of every face normal to `D` into `w.flux`,
+    /// `w.vflux` (face `I` shares the storage index of cell `I`, its high neighbour), lines in
+    /// parallel; returns the sweep's CFL number `max |U|/V` of the upwind cells.
+    fn fluxes<const AXI: bool, const D: u8>(
+        &mut self,
+        w: &mut Work,
+        phi: &Field,
+        vel: &Field,
+        dt: f64,
+    ) -> f64 {
+        let (lo_side, hi_side) = self.sides::<D>();
         let periodic = lo_side == VofSide::Periodic;
-        let s = phi.stride();
-        let o = if D == X { 1 } else { s };
-        let nd = if D == X { nx } else { ny };
-
-        self.fill_ghosts(phi);
-        // Lines in the interior, plus the ghost layer that can be upwind of a periodic face.
-        let g = if periodic { 1 } else { 0 };
-        if D == X {
-            self.reconstruct::<AXI>(w.lines, phi, -g, nx + g, 0, ny);
-        } else {
-            self.reconstruct::<AXI>(w.lines, phi, 0, nx, -g, ny + g);
-        }
-
-        // Face fluxes; face (i, j) shares the linear index of cell (i, j) (its high neighbour).
-        let (fi1, fj1) = if D == X { (nx + 1, ny) } else { (nx, ny + 1) };
-        let slab = Slab {
-            dx,
-            dy,
-            lines: &*w.lines,
+        let nd = (if D == X { self.nx } else { self.ny }) as isize;
+        // The faces normal to D; the high periodic face of a y sweep is the low one (copied
+        // below), that of an x sweep is copied on its line.
+        let all = self
+            .interior
+            .range(D as usize, 0, nd + if D == Y && periodic { 0 } else { 1 });
+        let [mx, my, al] = &w.lines;
+        let face = Face {
+            dx: self.dx,
+            dy: self.dy,
+            lines: [&**mx, &**my, &**al],
+            c: phi,
+            r_face: &self.r_face,
+            r_centre: &self.r_centre,
             r_left: &self.r_left,
+            inv_vol: &self.inv_vol,
         };
-        let (r_face, r_centre, inv_vol) = (&self.r_face, &self.r_centre, &self.inv_vol);
-        let c = phi.data();
-        let v = vel.data();
-        let len = w.flux.len();
-        let lanes = (
-            &mut *w.vflux,
-            &mut *w.flux,
-            par::per_row(&mut self.rows, s, len),
-        );
-        par::rows(lanes, s).for_each(|jp, (urow, frow, st)| {
-            let st = st.item();
-            *st = RowStats::default();
-            let j = jp as isize - G;
-            // The high periodic face of a y sweep is the low one: copied below.
-            if j < 0 || j >= fj1 || (D == Y && j == nd && periodic) {
-                return;
-            }
-            for i in 0..fi1 {
-                let il = (i + G) as usize;
-                let k = jp * s + il;
-                let p = if D == X { i } else { j };
-                let (mut big_u, mut big_f) = (0.0, 0.0);
-                let closed = (p == 0 && lo_side == VofSide::Closed)
-                    || (p == nd && hi_side == VofSide::Closed);
-                if D == X && p == nd && periodic {
-                    urow[il] = urow[GU];
-                    frow[il] = frow[GU];
-                    continue;
-                }
-                let sv = v[k] * dt;
-                if !closed && sv != 0.0 {
-                    let pos = sv > 0.0;
-                    let (ku, iu) = if !pos {
-                        (k, i)
-                    } else if D == X {
-                        (k - o, i - 1)
-                    } else {
-                        (k - o, i)
-                    };
-                    let (area, w) = if D == X {
-                        let rf = r_face[il];
-                        let w = if AXI {
-                            let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
-                            2.0 * rf * sv.abs() / (rf + disc.sqrt())
-                        } else {
-                            sv.abs()
-                        };
-                        (rf * dy, w.min(dx))
-                    } else {
-                        (r_centre[il] * dx, sv.abs().min(dy))
-                    };
-                    big_u = area * sv;
-                    if big_u != 0.0 {
-                        st.cfl = st.cfl.max(big_u.abs() * inv_vol[(iu + G) as usize]);
-                        let cu = c[ku];
-                        let frac = if cu <= 0.0 {
-                            0.0
-                        } else if cu >= 1.0 {
-                            1.0
-                        } else {
-                            slab.fraction::<AXI, D>(ku, iu, w, pos)
-                        };
-                        big_f = big_u * frac;
+        let out = (all.storage(w.vflux), all.storage(w.flux));
+        let cfl = all.fold_mut(
+            out,
+            0.0f64,
+            |l, (u, f)| {
+                let v = vel.at(&l, [0; 3]);
+                let face = face.on::<D>(&l);
+                let mut cfl = 0.0f64;
+                for n in 0..l.len {
+                    let p = l.index(n)[D as usize];
+                    if D == X && p == nd && periodic {
+                        (u[n], f[n]) = (u[0], f[0]);
+                        continue;
                     }
+                    let closed = (p == 0 && lo_side == VofSide::Closed)
+                        || (p == nd && hi_side == VofSide::Closed);
+                    let sv = v[n] * dt;
+                    (u[n], f[n]) = if closed || sv == 0.0 {
+                        (0.0, 0.0)
+                    } else {
+                        face.flux::<AXI, D>(n, sv, &mut cfl)
+                    };
                 }
-                urow[il] = big_u;
-                frow[il] = big_f;
-            }
-        });
-        if D == Y && periodic {
-            let (top, bot) = (phi.idx(0, ny), phi.idx(0, 0));
-            let n = nx as usize;
-            w.vflux.copy_within(bot..bot + n, top);
-            w.flux.copy_within(bot..bot + n, top);
-        }
-        let cfl = self.rows.iter().fold(0.0f64, |m, r| m.max(r.cfl));
-
-        // Update and clip.
-        let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
-        let len = w.divsum.len();
-        let lanes = (
-            phi.data_mut(),
-            &mut *w.divsum,
-            par::per_row(&mut self.rows, s, len),
+                cfl
+            },
+            f64::max,
         );
-        par::rows(lanes, s).for_each(|jp, (crow, drow, st)| {
-            let st = st.item();
-            *st = RowStats::default();
-            let j = jp as isize - G;
-            if j < 0 || j >= ny {
-                return;
-            }
-            for i in 0..nx {
-                let il = (i + G) as usize;
-                let k = jp * s + il;
-                let iv = inv_vol[il];
-                let d = uu[k + o] - uu[k];
-                let mut val = crow[il] + (f[k] - f[k + o] + cc[k] * d) * iv;
+        if D == Y && periodic {
+            let faces = self.interior.range(1, 0, nd + 1);
+            let (bot, top) = (faces.line(0), faces.line(faces.lines() - 1));
+            let n = bot.len;
+            w.vflux
+                .copy_within(bot.linear(0)..bot.linear(n), top.linear(0));
+            w.flux
+                .copy_within(bot.linear(0)..bot.linear(n), top.linear(0));
+        }
+        cfl
+    }
+
+    /// `φ += (F_low − F_high + c_c (U_high − U_low))/V` along `D`, clipped to `[0, 1]` (the
+    /// statistics of the clipping returned), rows in parallel; the divergence of the first
+    /// sweep is kept in `w.divsum` for the `last` one.
+    fn update<const D: u8>(&mut self, w: &mut Work, phi: &mut Field, last: bool) -> AdvectStats {
+        let o = unit(D as usize);
+        let inv_vol = &self.inv_vol;
+        let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
+        let cells = self.interior;
+        let line = |l: efsi_core::Line, (phi, div): (&mut [f64], &mut [f64])| {
+            let (f0, f1, u0, u1) = (l.on(f, [0; 3]), l.on(f, o), l.on(uu, [0; 3]), l.on(uu, o));
+            let (cc, iv) = (l.on(cc, [0; 3]), l.cols(inv_vol, 0));
+            let mut st = RowStats::default();
+            for n in 0..l.len {
+                let d = u1[n] - u0[n];
+                let mut val = phi[n] + (f0[n] - f1[n] + cc[n] * d) * iv[n];
                 if last {
                     // Only the projection's residual (a volume change below 1e-8 of the
                     // cell per step): a genuinely compressing field keeps W&Y's
                     // treatment, which keeps a full cell full.
-                    let net = (drow[il] + d) * iv;
+                    let net = (div[n] + d) * iv[n];
                     if net.abs() <= 1e-8 {
-                        val -= cc[k] * net;
+                        val -= cc[n] * net;
                     }
                 } else {
-                    drow[il] = d;
+                    div[n] = d;
                 }
-                debug_assert!(val.is_finite(), "VOF: non-finite φ at ({i}, {j})");
+                debug_assert!(val.is_finite(), "VOF: non-finite φ at {:?}", l.index(n));
                 let clipped = val.clamp(0.0, 1.0);
                 if clipped != val {
                     st.max_clipped = st.max_clipped.max((clipped - val).abs());
-                    st.volume += (clipped - val) / iv;
+                    st.volume += (clipped - val) / iv[n];
                     val = clipped;
                 }
-                crow[il] = val;
+                phi[n] = val;
             }
-        });
-        let mut st = AdvectStats {
-            cfl,
-            ..Default::default()
+            st
         };
-        for r in &self.rows {
-            st.max_clipped = st.max_clipped.max(r.max_clipped);
-            st.clipped_volume += r.volume;
-        }
-        // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
-        // thousands of cells and steps: 3e-9 of the soft wall's volume over its run): to the
-        // interface cells, in proportion to their room `φ(1 − φ)`.
-        if st.clipped_volume != 0.0 {
-            let interior = |jp: usize| (GU..GU + ny as usize).contains(&jp);
-            let len = phi.data().len();
-            let lanes = (phi.data_mut(), par::per_row(&mut self.rows, s, len));
-            par::rows(lanes, s).for_each(|jp, (crow, st)| {
-                let st = st.item();
-                st.volume = 0.0;
-                if interior(jp) {
-                    for (c, iv) in crow[GU..GU + nx as usize].iter().zip(&inv_vol[GU..]) {
-                        st.volume += c * (1.0 - c) / iv;
-                    }
+        cells.fold_mut(
+            (phi, cells.storage(w.divsum)),
+            AdvectStats::default(),
+            line,
+            |mut st, r: RowStats| {
+                st.max_clipped = st.max_clipped.max(r.max_clipped);
+                st.clipped_volume += r.volume;
+                st
+            },
+        )
+    }
+
+    /// `φ −= volume·φ(1 − φ)/Σ φ(1 − φ)V` on the interior: `volume` given back to the
+    /// interface cells in proportion to their room (nothing if there is none).
+    fn give_back(&self, phi: &mut Field, volume: f64) {
+        let inv_vol = &self.inv_vol;
+        let [room] = self.interior.sum(|l| {
+            let (c, iv) = (phi.at(&l, [0; 3]), l.cols(inv_vol, 0));
+            let mut room = 0.0;
+            for (c, iv) in c.iter().zip(iv) {
+                room += c * (1.0 - c) / iv;
+            }
+            [room]
+        });
+        if room > 0.0 {
+            let scale = volume / room;
+            self.interior.for_each(phi, |_, phi| {
+                for c in phi {
+                    *c -= scale * *c * (1.0 - *c);
                 }
             });
-            let room = self.rows.iter().fold(0.0, |a, r| a + r.volume);
-            if room > 0.0 {
-                let scale = st.clipped_volume / room;
-                par::rows(phi.data_mut(), s).for_each(|jp, crow| {
-                    if interior(jp) {
-                        for c in &mut crow[GU..GU + nx as usize] {
-                            *c -= scale * *c * (1.0 - *c);
-                        }
-                    }
-                });
-            }
         }
-        st
     }
 }
 
-/// The ghost width as an index offset.
-const GU: usize = G as usize;
+/// What the flux of a face reads: the cell size, the reconstructed lines and the
+/// volume fractions `c`, and the metric per padded column.
+struct Face<'a> {
+    dx: f64,
+    dy: f64,
+    lines: [&'a [f64]; 3],
+    c: &'a Field,
+    r_face: &'a [f64],
+    r_centre: &'a [f64],
+    r_left: &'a [f64],
+    inv_vol: &'a [f64],
+}
+
+/// [`Face`] on one line of faces normal to `D`: the values of the faces' two cells, `[low
+/// neighbour, own (high) cell]`, and the face area's metric factor.
+struct FaceLine<'a> {
+    dx: f64,
+    dy: f64,
+    c: [&'a [f64]; 2],
+    lines: [[&'a [f64]; 3]; 2],
+    r_left: [&'a [f64]; 2],
+    inv_vol: [&'a [f64]; 2],
+    /// `r_f` (x-faces) or `r_c` (y-faces).
+    r_area: &'a [f64],
+}
+
+impl<'a> Face<'a> {
+    /// The values a line of faces normal to `D` reads.
+    #[inline(always)]
+    fn on<const D: u8>(&self, l: &efsi_core::Line) -> FaceLine<'a> {
+        let lo = efsi_core::operators::minus(D as usize);
+        FaceLine {
+            dx: self.dx,
+            dy: self.dy,
+            c: [self.c.at(l, lo), self.c.at(l, [0; 3])],
+            lines: [
+                self.lines.map(|a| l.on(a, lo)),
+                self.lines.map(|a| l.on(a, [0; 3])),
+            ],
+            r_left: [l.cols(self.r_left, lo[0]), l.cols(self.r_left, 0)],
+            inv_vol: [l.cols(self.inv_vol, lo[0]), l.cols(self.inv_vol, 0)],
+            r_area: if D == X {
+                l.cols(self.r_face, 0)
+            } else {
+                l.cols(self.r_centre, 0)
+            },
+        }
+    }
+}
+
+impl FaceLine<'_> {
+    /// The volume flux `U` and phase flux `F` of the line's `n`-th face for the displacement
+    /// `sv = vel·Δt ≠ 0`, raising `cfl` to the upwind cell's `|U|/V`.
+    #[inline(always)]
+    fn flux<const AXI: bool, const D: u8>(&self, n: usize, sv: f64, cfl: &mut f64) -> (f64, f64) {
+        let (dx, dy) = (self.dx, self.dy);
+        let pos = sv > 0.0;
+        // The upwind cell: the low neighbour along D (0) or the face's own cell (1).
+        let up = usize::from(!pos);
+        let (area, w) = if D == X {
+            let rf = self.r_area[n];
+            let w = if AXI {
+                let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
+                2.0 * rf * sv.abs() / (rf + disc.sqrt())
+            } else {
+                sv.abs()
+            };
+            (rf * dy, w.min(dx))
+        } else {
+            (self.r_area[n] * dx, sv.abs().min(dy))
+        };
+        let big_u = area * sv;
+        if big_u == 0.0 {
+            return (big_u, 0.0);
+        }
+        *cfl = cfl.max(big_u.abs() * self.inv_vol[up][n]);
+        let cu = self.c[up][n];
+        let frac = if cu <= 0.0 {
+            0.0
+        } else if cu >= 1.0 {
+            1.0
+        } else {
+            let slab = Slab {
+                dx,
+                dy,
+                line: self.lines[up].map(|a| a[n]),
+                r_left: self.r_left[up][n],
+            };
+            slab.fraction::<AXI, D>(w, pos)
+        };
+        (big_u, big_u * frac)
+    }
+}
 
 /// The phase volume `Σ φ V` over the interior (per radian in axisymmetric geometry), summed
 /// with Neumaier's compensated summation so it can be compared to round-off.
