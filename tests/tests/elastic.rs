@@ -248,10 +248,12 @@ fn rigid(
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases/x.ron");
     let mut scene = Scene::from_str_at(&text, &path).unwrap();
     scene.source_dir = path.parent().map(Path::to_path_buf);
+    // The implicit-momentum stage projects too (the projection's plugin, not needed with an
+    // elastic solid, declares its options).
     let plugins: [&dyn StagePlugin; 4] = [
         &Prescribed(field),
-        &efsi_stages::elastic::Elastic,
-        &efsi_stages::elastic::DeformationUpdate,
+        &efsi_stages::elastic::Momentum,
+        &efsi_stages::projection::Projection,
         &efsi_stages::vof::Vof,
     ];
     let mut s = efsi_run::simulation(scene, &path, &plugins).unwrap_or_else(|e| panic!("{e}"));
