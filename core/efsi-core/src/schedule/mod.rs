@@ -329,16 +329,8 @@ impl Pipeline {
     ) -> Result<Pipeline, ScheduleError> {
         let mut names = BTreeSet::new();
         for p in plugins {
-            // A sub-step's name may repeat its own stage's, no other stage's or sub-step's.
-            let subs = p
-                .sub_steps()
-                .iter()
-                .map(|s| s.name)
-                .filter(|&n| n != p.name());
-            for n in std::iter::once(p.name()).chain(subs) {
-                if !names.insert(n) {
-                    return Err(ScheduleError::DuplicateName(n.to_string()));
-                }
+            if !names.insert(p.name()) {
+                return Err(ScheduleError::DuplicateName(p.name().to_string()));
             }
         }
         let chosen: Vec<&dyn StagePlugin> = plugins
@@ -346,6 +338,20 @@ impl Pipeline {
             .copied()
             .filter(|p| p.needed(scene, options))
             .collect();
+        // What runs is named uniquely within the pipeline: each stage, or in its place its
+        // sub-steps, which may take the name of a stage not scheduled with them (the
+        // implicit-momentum stage's `projection`).
+        let mut steps = BTreeSet::new();
+        for p in &chosen {
+            let own = [p.name()];
+            let subs: Vec<&'static str> = p.sub_steps().iter().map(|s| s.name).collect();
+            let run = if subs.is_empty() { &own[..] } else { &subs[..] };
+            for &n in run {
+                if !steps.insert(n) {
+                    return Err(ScheduleError::DuplicateName(n.to_string()));
+                }
+            }
+        }
         let order = Self::order(&chosen)?;
         // Fields: the base set plus everything written.
         let mut fields: BTreeSet<FieldId> = FieldId::BASE.into_iter().collect();
