@@ -329,7 +329,7 @@ impl FlexiblePreconditioner for BlockTriangular<'_> {
 impl ElasticStage {
     /// The coupled step in place of the split solve (see the module docs): FGMRES on the
     /// saddle-point system for the velocity increment and the pressure, both applied; the
-    /// projection stage removes what divergence is left and adds its pressure.
+    /// projection sub-step removes what divergence is left and adds its pressure.
     pub(super) fn solve_coupled(
         &mut self,
         ctx: &StepContext,

@@ -1,5 +1,5 @@
 //! The implicit viscous–elastic system and its solve: the operator
-//! `M − θΔt K_v − (Δt²/2) K_J` (see the module docs of [`super`]) and the elastic stage.
+//! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
 use super::{Kernels, err, missing};

@@ -19,7 +19,7 @@
 //! 1986; Guermond, Minev & Shen 2006). The viscous step thereby sees the whole force balance:
 //! a viscous fluid at rest under gravity stays at rest, where the seed's scheme shears the
 //! increment `gΔt` at no-slip side walls into a flow the projection cannot remove. The starting
-//! pressure is the one that balances gravity in the grid's frame ([`Projector::initialize`]:
+//! pressure is the one that balances gravity in the grid's frame (`Projector::initialize`:
 //! `g − a` projected with Δt = 1, the hydrostatic pressure where the density is layered). With
 //! the classical Heun predictor of the advection a steady state depends on Δt through the
 //! split advection; the default `WholeStep` predictor of a scene of one fluid removes that
@@ -63,8 +63,8 @@ use crate::ops;
 use crate::scratch::{self, Scratch};
 use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
-    BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
-    StepContext,
+    BoundarySet, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin, StageStats,
+    Stagger, State, StepContext,
 };
 use efsi_linalg::par;
 use efsi_linalg::{
@@ -578,14 +578,13 @@ fn correct(
     incremental: bool,
 ) {
     let grid = ctx.grid;
-    let (nx, ny) = (grid.nx, grid.ny);
-    let (ps, p0) = (state.p.stride(), state.p.idx(0, 0));
+    let nx = grid.nx;
     let target = match increment {
         Some(f) if incremental => f,
         _ => &mut state.p,
     };
-    par::rows(&mut target.data_mut()[p0..p0 + ny * ps], ps).for_each(|j, row| {
-        row[..nx].copy_from_slice(&x[j * nx..(j + 1) * nx]);
+    Region::of(grid, Stagger::Cell).for_each(&mut *target, |line, row| {
+        row.copy_from_slice(&x[line.n * nx..(line.n + 1) * nx]);
     });
     ctx.bc.fill_scalar(grid, target, true);
     let increment = increment.as_ref().filter(|_| incremental);
@@ -603,16 +602,13 @@ fn correct(
 /// (it vectorises).
 fn divergence_rhs(grid: &Grid, u: &efsi_core::Field, v: &efsi_core::Field, dt: f64, b: &mut [f64]) {
     let nx = grid.nx;
-    let (rx, rc, s) = (
-        grid.metric.rx_row(nx + 1),
-        grid.metric.rc_row(nx),
-        u.stride(),
-    );
-    let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
+    let (rx, rc) = (grid.metric.rx_row(nx + 1), grid.metric.rc_row(nx));
+    let (dx, dy) = (grid.dx, grid.dy);
+    let cells = Region::of(grid, Stagger::Cell);
     par::rows(b, nx).for_each(|j, row| {
-        let k0 = u.idx(0, j as isize);
-        let (uw, ue) = (&ud[k0..k0 + nx], &ud[k0 + 1..k0 + 1 + nx]);
-        let (vs, vn) = (&vd[k0..k0 + nx], &vd[k0 + s..k0 + s + nx]);
+        let line = cells.line(j);
+        let (uw, ue) = (u.at(&line, [0, 0, 0]), u.at(&line, [1, 0, 0]));
+        let (vs, vn) = (v.at(&line, [0, 0, 0]), v.at(&line, [0, 1, 0]));
         let (rw, re) = (&rx[..nx], &rx[1..=nx]);
         for i in 0..nx {
             let out = (re[i] * ue[i] - rw[i] * uw[i]) * dy + rc[i] * (vn[i] - vs[i]) * dx;
@@ -648,37 +644,24 @@ pub(crate) fn subtract_gradient(
     u: &mut efsi_core::Field,
     v: &mut efsi_core::Field,
 ) {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let ux = bc.normal_faces(0, nx);
-    let vy = bc.normal_faces(1, ny);
-    let s = p.stride();
-    let (pd, rd) = (p.data(), rho.data());
-    let cx = dt / grid.dx;
-    let cy = dt / grid.dy;
-    let base = p.idx(0, 0);
-    let ud = &mut u.data_mut()[base..base + ny * s];
-    let (lo, hi) = (ux.lo.max(0) as usize, ux.hi.max(0) as usize);
-    par::rows(&mut *ud, s).for_each(|j, row| {
-        if hi <= lo {
-            return;
-        }
-        // Over slices (it vectorises): faces lo..hi of row j.
-        let k = base + j * s + lo;
-        let n = hi - lo;
-        let (pe, pw) = (&pd[k..k + n], &pd[k - 1..k - 1 + n]);
-        let (re, rw) = (&rd[k..k + n], &rd[k - 1..k - 1 + n]);
-        for (t, u) in row[lo..hi].iter_mut().enumerate() {
+    let ux = bc.normal_faces(0, grid.nx);
+    let vy = bc.normal_faces(1, grid.ny);
+    let (cx, cy) = (dt / grid.dx, dt / grid.dy);
+    // Over lines of faces (it vectorises): the cells east and west of each x-face, north
+    // and south of each y-face.
+    let faces = Region::of(grid, Stagger::XFace).range(0, ux.lo.max(0), ux.hi.max(0));
+    faces.for_each(u, |line, u| {
+        let (pe, pw) = (p.at(&line, [0, 0, 0]), p.at(&line, [-1, 0, 0]));
+        let (re, rw) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [-1, 0, 0]));
+        for (t, u) in u.iter_mut().enumerate() {
             *u -= cx * (pe[t] - pw[t]) / ops::face_density(re[t], rw[t]);
         }
     });
-    let v0 = p.idx(0, vy.lo);
-    let vrows = (vy.hi - vy.lo).max(0) as usize;
-    let vd = &mut v.data_mut()[v0..v0 + vrows * s];
-    par::rows(&mut *vd, s).for_each(|j, row| {
-        let k = v0 + j * s;
-        let (pn, ps) = (&pd[k..k + nx], &pd[k - s..k - s + nx]);
-        let (rn, rs) = (&rd[k..k + nx], &rd[k - s..k - s + nx]);
-        for (i, v) in row[..nx].iter_mut().enumerate() {
+    let faces = Region::of(grid, Stagger::YFace).range(1, vy.lo, vy.hi);
+    faces.for_each(v, |line, v| {
+        let (pn, ps) = (p.at(&line, [0, 0, 0]), p.at(&line, [0, -1, 0]));
+        let (rn, rs) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [0, -1, 0]));
+        for (i, v) in v.iter_mut().enumerate() {
             *v -= cy * (pn[i] - ps[i]) / ops::face_density(rn[i], rs[i]);
         }
     });
