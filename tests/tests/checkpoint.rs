@@ -191,7 +191,7 @@ fn snapshot_and_restore_rewind_a_simulation_exactly() {
     // the state's between steps).
     let padded = s.state.u.data().len();
     assert_eq!(snap.stage_data("vof"), Some(&[][..]));
-    assert_eq!(snap.stage_data("elastic"), Some(&[][..]));
+    assert_eq!(snap.stage_data("momentum"), Some(&[][..]));
     assert_eq!(snap.stage_data("body_force"), Some(&[][..]));
     assert_eq!(snap.stage_data("no_such_stage"), None);
     assert!(snap.size_bytes() > 30 * 8 * padded);

@@ -36,7 +36,7 @@ pub use overrides::{Override, OverrideValue};
 pub use scene::{Scene, SceneError};
 pub use schedule::{
     FieldId, OutputDecl, OutputKind, Phase, Pipeline, Resources, Stage, StageError, StagePlugin,
-    StageStats, StepContext,
+    StageStats, StepContext, SubStep,
 };
 pub use simulation::{Simulation, StepCheck};
 pub use snapshot::Snapshot;

@@ -27,6 +27,25 @@ pub(crate) fn second_material(scene: &efsi_core::Scene) -> bool {
     scene.solid.is_some()
 }
 
+/// Whether a checked scene (`options`) has an elastic solid (a solid with a constitutive law):
+/// its momentum step after the viscous one is then the implicit-momentum stage's
+/// ([`elastic::Momentum`]: the elastic solve, the projection and the deformation update as its
+/// sub-steps), else the [`projection`] stage's.
+pub(crate) fn elastic_solid(options: &efsi_core::scene::Options) -> bool {
+    solid::solid(options).is_ok_and(|s| s.law.is_some())
+}
+
+/// Whether a checked scene (`options`) runs the incremental pressure correction (its predictor
+/// stage and increments in the projection): `numerics.projection.incremental`, by default on
+/// unless the scene has an elastic solid; never where the implicit-momentum stage may take the
+/// coupled step ([`elastic::may_couple`]), which finds its own pressure. (The section's default
+/// where no plugin given to the check declares it.)
+pub(crate) fn incremental_pressure(options: &efsi_core::scene::Options) -> bool {
+    let o: projection::ProjectionOptions =
+        options.section_or_default(efsi_core::scene::Preset::Default);
+    o.incremental.unwrap_or(!elastic_solid(options)) && !elastic::may_couple(options)
+}
+
 /// Every stage plugin shipped with efsi.
 pub fn builtin() -> Vec<&'static dyn StagePlugin> {
     vec![
@@ -34,9 +53,8 @@ pub fn builtin() -> Vec<&'static dyn StagePlugin> {
         &body_force::BodyForce,
         &projection::PressurePredictor,
         &viscous::Viscous,
-        &elastic::Elastic,
+        &elastic::Momentum,
         &projection::Projection,
-        &elastic::DeformationUpdate,
         &vof::Vof,
     ]
 }

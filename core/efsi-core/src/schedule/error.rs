@@ -37,8 +37,8 @@ pub enum ScheduleError {
         /// Why.
         why: &'static str,
     },
-    /// Two plugins share a name.
-    #[error("two stage plugins are named `{0}`")]
+    /// Two plugins share a name, or two steps of one pipeline (stages, sub-steps).
+    #[error("two stage plugins (or sub-steps of scheduled stages) are named `{0}`")]
     DuplicateName(String),
     /// Two scheduled stages declare an output of one name.
     #[error("stages `{first}` and `{second}` both declare the output `{output}`")]

@@ -8,6 +8,15 @@
 //! phase that touch the same field are explicitly ordered), allocates only the declared fields,
 //! and afterwards runs and times the stages. Nobody edits the time-step function to add
 //! physics (STYLE.md §2–3).
+//!
+//! A stage may run as several **sub-steps** ([`StagePlugin::sub_steps`], [`Stage::run_sub`]):
+//! one algorithm whose parts decide together within a step (the implicit-momentum stage: its
+//! elastic solve, projection and deformation update, where the elastic solve's outcome — a
+//! coupled or a split step — decides what the other two do). The scheduler runs and times
+//! each sub-step as it runs a stage (the ghosts of what it writes refreshed after it, what it
+//! wrote checked to be finite, errors named after it), prints them under their stage and
+//! lists them in the timings; the stage keeps one name, one set of options and one entry in
+//! snapshots.
 
 use crate::bc::BoundarySet;
 use crate::grid::Grid;
@@ -63,6 +72,20 @@ pub trait Stage: Send {
     /// Advance the state by this stage's part of the step.
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError>;
 
+    /// Run sub-step `k` of the stage's [`StagePlugin::sub_steps`], in order, each once per
+    /// step: the scheduler calls this instead of [`run`](Self::run) for a stage that declares
+    /// sub-steps, and refreshes the ghosts of what sub-step `k` writes before the next one
+    /// runs. What one sub-step decides for the next (e.g. the kind of step the elastic solve
+    /// took) stays in the stage. Default: [`run`](Self::run) (a stage of one step).
+    fn run_sub(
+        &mut self,
+        _k: usize,
+        ctx: &StepContext,
+        state: &mut State,
+    ) -> Result<StageStats, StageError> {
+        self.run(ctx, state)
+    }
+
     /// Initialise the fields this stage writes, before the first step (default: nothing). It
     /// may run more than once (see [`Pipeline::initialize`]) and must set the stage's state
     /// from the current fields each time.
@@ -101,7 +124,9 @@ pub trait Stage: Send {
     }
 
     /// Whether this stage makes the velocity divergence-free (the projection). The pipeline
-    /// also runs such a stage once on the initial velocity (default: no).
+    /// also runs such a stage once on the initial velocity (default: no). A stage with
+    /// sub-steps says it of a sub-step instead ([`SubStep::projects`]): that sub-step alone
+    /// runs on the initial velocity.
     fn projects(&self) -> bool {
         false
     }
@@ -160,6 +185,12 @@ pub trait StagePlugin: Sync {
     fn reads(&self) -> &'static [FieldId];
     /// Fields it writes.
     fn writes(&self) -> &'static [FieldId];
+    /// The sub-steps it runs in order ([`Stage::run_sub`]), each with its name and the fields
+    /// it writes (among the stage's [`writes`](Self::writes)); default: none (the stage runs as
+    /// one step, [`Stage::run`]).
+    fn sub_steps(&self) -> &'static [SubStep] {
+        &[]
+    }
     /// Names of stages of the same phase that must run before it (default: none).
     fn after(&self) -> &'static [&'static str] {
         &[]
@@ -207,6 +238,19 @@ pub trait StagePlugin: Sync {
     ) -> Result<Box<dyn Stage>, String>;
 }
 
+/// A part of a stage's step that the scheduler runs, refreshes after and times on its own
+/// ([`StagePlugin::sub_steps`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SubStep {
+    /// Its name (in `--print-schedule`, the timings and errors; unique in the pipeline).
+    pub name: &'static str,
+    /// The fields it writes: their ghosts are refreshed after it and their values checked.
+    pub writes: &'static [FieldId],
+    /// Whether it makes the velocity divergence-free: it alone runs once on the initial
+    /// velocity ([`Pipeline::initialize`]).
+    pub projects: bool,
+}
+
 struct Entry {
     name: &'static str,
     source: &'static str,
@@ -218,10 +262,37 @@ struct Entry {
     /// [`StagePlugin::limit_depends_on`].
     limit: &'static str,
     stage: Box<dyn Stage>,
+    /// Whether the stage runs by [`Stage::run_sub`] (it declares sub-steps).
+    by_sub_steps: bool,
+    /// What the scheduler runs of it: its sub-steps, or the stage itself as one step.
+    steps: Vec<Timed>,
+}
+
+/// One step the scheduler runs and times: a stage's sub-step, or a stage of one step.
+struct Timed {
+    name: &'static str,
+    writes: &'static [FieldId],
+    /// [`SubStep::projects`] (for a stage of one step: [`Stage::projects`], asked when the
+    /// initial velocity is projected).
+    projects: bool,
     time: Duration,
     calls: u64,
     iterations: u64,
     last: StageStats,
+}
+
+impl Timed {
+    fn new(name: &'static str, writes: &'static [FieldId], projects: bool) -> Timed {
+        Timed {
+            name,
+            writes,
+            projects,
+            time: Duration::ZERO,
+            calls: 0,
+            iterations: 0,
+            last: StageStats::default(),
+        }
+    }
 }
 
 /// Timing and solver statistics of one stage over a run.
@@ -267,6 +338,20 @@ impl Pipeline {
             .copied()
             .filter(|p| p.needed(scene, options))
             .collect();
+        // What runs is named uniquely within the pipeline: each stage, or in its place its
+        // sub-steps, which may take the name of a stage not scheduled with them (the
+        // implicit-momentum stage's `projection`).
+        let mut steps = BTreeSet::new();
+        for p in &chosen {
+            let own = [p.name()];
+            let subs: Vec<&'static str> = p.sub_steps().iter().map(|s| s.name).collect();
+            let run = if subs.is_empty() { &own[..] } else { &subs[..] };
+            for &n in run {
+                if !steps.insert(n) {
+                    return Err(ScheduleError::DuplicateName(n.to_string()));
+                }
+            }
+        }
         let order = Self::order(&chosen)?;
         // Fields: the base set plus everything written.
         let mut fields: BTreeSet<FieldId> = FieldId::BASE.into_iter().collect();
@@ -303,6 +388,14 @@ impl Pipeline {
                     stage: p.name().to_string(),
                     message,
                 })?;
+            let subs = p.sub_steps();
+            let steps = if subs.is_empty() {
+                vec![Timed::new(p.name(), p.writes(), stage.projects())]
+            } else {
+                subs.iter()
+                    .map(|s| Timed::new(s.name, s.writes, s.projects))
+                    .collect()
+            };
             entries.push(Entry {
                 name: p.name(),
                 source: p.source(),
@@ -312,10 +405,8 @@ impl Pipeline {
                 options: p.options().map(|d| d.section),
                 limit: p.limit_depends_on(),
                 stage,
-                time: Duration::ZERO,
-                calls: 0,
-                iterations: 0,
-                last: StageStats::default(),
+                by_sub_steps: !subs.is_empty(),
+                steps,
             });
         }
         Ok(Pipeline {
@@ -432,9 +523,13 @@ impl Pipeline {
         }
     }
 
-    /// Stage names in execution order.
+    /// The names of what runs, in execution order: each stage's, or in its place its
+    /// sub-steps' ([`StagePlugin::sub_steps`]).
     pub fn stage_names(&self) -> Vec<&'static str> {
-        self.entries.iter().map(|e| e.name).collect()
+        self.entries
+            .iter()
+            .flat_map(|e| e.steps.iter().map(|s| s.name))
+            .collect()
     }
 
     /// Whether a stage of `phase` runs in this pipeline.
@@ -483,8 +578,17 @@ impl Pipeline {
             step: 0,
         };
         for e in &mut self.entries {
-            if e.stage.projects() {
-                e.stage.run(&ctx, state)?;
+            for (k, s) in e.steps.iter().enumerate() {
+                // A stage of one step is asked now (its answer may follow its build).
+                let projects = if e.by_sub_steps {
+                    s.projects
+                } else {
+                    e.stage.projects()
+                };
+                if !projects {
+                    continue;
+                }
+                e.stage.run_sub(k, &ctx, state)?;
                 bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
                 state.p.copy_from(&p0);
                 // An initial velocity too large for floating point (e.g. 1e308) projects to
@@ -495,7 +599,7 @@ impl Pipeline {
                 ] {
                     if let Some((i, j)) = f.first_non_finite(stagger, grid.nx, grid.ny) {
                         return Err(StageError {
-                            stage: e.name.to_string(),
+                            stage: s.name.to_string(),
                             message: format!(
                                 "projecting the initial velocity produced a non-finite value at cell ({i}, {j}): is the initial velocity finite and of a sensible size?"
                             ),
@@ -588,74 +692,26 @@ impl Pipeline {
         }
     }
 
-    /// Run every stage once, in order. After each stage the ghosts of what it wrote are
-    /// refreshed (velocity for the end-of-step time `t + Δt`), and what it wrote is checked to
-    /// be finite: a NaN or infinity is reported with the stage, the field and the cell.
+    /// Run every stage once, in order (a stage's sub-steps in theirs). After each step the
+    /// ghosts of what it wrote are refreshed (velocity for the end-of-step time `t + Δt`), and
+    /// what it wrote is checked to be finite: a NaN or infinity is reported with the stage (or
+    /// sub-step), the field and the cell.
     pub fn run_step(&mut self, ctx: &StepContext, state: &mut State) -> Result<(), StageError> {
-        let (nx, ny) = (ctx.grid.nx, ctx.grid.ny);
         for e in &mut self.entries {
-            let t0 = Instant::now();
-            let stats = e.stage.run(ctx, state)?;
-            e.time += t0.elapsed();
-            e.calls += 1;
-            if let Some(s) = stats.solve {
-                e.iterations += s.iterations as u64;
-            }
-            e.last = stats;
-            if e.writes
-                .iter()
-                .any(|f| matches!(f, FieldId::VelocityX | FieldId::VelocityY))
-            {
-                ctx.bc
-                    .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
-            }
-            for &f in e.writes {
-                match f {
-                    FieldId::Pressure => ctx.bc.fill_scalar(ctx.grid, &mut state.p, true),
-                    FieldId::Density => ctx.bc.fill_scalar(ctx.grid, &mut state.rho, false),
-                    FieldId::Viscosity => ctx.bc.fill_scalar(ctx.grid, &mut state.mu, false),
-                    FieldId::SolidFraction => {
-                        if let Some(phi) = &mut state.phi {
-                            ctx.bc.fill_scalar(ctx.grid, phi, false);
-                        }
-                    }
-                    FieldId::VelocityX | FieldId::VelocityY | FieldId::Stage(_) => {}
+            for (k, s) in e.steps.iter_mut().enumerate() {
+                let t0 = Instant::now();
+                let stats = if e.by_sub_steps {
+                    e.stage.run_sub(k, ctx, state)?
+                } else {
+                    e.stage.run(ctx, state)?
+                };
+                s.time += t0.elapsed();
+                s.calls += 1;
+                if let Some(st) = stats.solve {
+                    s.iterations += st.iterations as u64;
                 }
-            }
-            if e.writes.iter().any(|f| matches!(f, FieldId::Stage(_)))
-                && let Some((c, (i, j))) = state
-                    .resources
-                    .iter()
-                    .find_map(|r| r.first_non_finite(nx, ny))
-            {
-                return Err(StageError {
-                    stage: e.name.to_string(),
-                    message: format!(
-                        "produced a non-finite {c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
-                        ctx.step, ctx.t, ctx.dt
-                    ),
-                });
-            }
-            for &f in e.writes {
-                if let Some(field) = state.field(f) {
-                    let stagger = match f {
-                        FieldId::VelocityX => crate::Stagger::XFace,
-                        FieldId::VelocityY => crate::Stagger::YFace,
-                        _ => crate::Stagger::Cell,
-                    };
-                    if let Some((i, j)) = field.first_non_finite(stagger, nx, ny) {
-                        return Err(StageError {
-                            stage: e.name.to_string(),
-                            message: format!(
-                                "produced a non-finite `{}` at cell ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
-                                f.name(),
-                                ctx.step,
-                                ctx.t,
-                                ctx.dt
-                            ),
-                        });
-                    }
-                }
+                s.last = stats;
+                after_step(ctx, state, s.name, s.writes)?;
             }
         }
         Ok(())
@@ -691,6 +747,9 @@ impl Pipeline {
         let names: Vec<&str> = self.entries.iter().map(|e| e.name).collect();
         let theirs: Vec<&str> = saved.iter().map(|(n, _)| n.as_str()).collect();
         if names != theirs {
+            if let Some(gathered) = self.gathered(saved) {
+                return self.restore_stages(&gathered);
+            }
             return Err(StageError {
                 stage: "pipeline".into(),
                 message: format!(
@@ -709,6 +768,35 @@ impl Pipeline {
         Ok(())
     }
 
+    /// `saved` as this pipeline names it, if it was taken when each stage with sub-steps ran
+    /// them as stages of their own (a snapshot of an earlier efsi): the sub-steps' entries in
+    /// order, each holding no data, stand for their stage with no data. `None` if it is not
+    /// such a snapshot, or if any of those entries holds data (which the stage could misread).
+    fn gathered(&self, saved: &[(String, Vec<f64>)]) -> Option<Vec<(String, Vec<f64>)>> {
+        let mut out = Vec::with_capacity(self.entries.len());
+        let mut rest = saved;
+        for e in &self.entries {
+            if !e.by_sub_steps {
+                let ((n, data), tail) = rest.split_first()?;
+                (n == e.name).then_some(())?;
+                out.push((n.clone(), data.clone()));
+                rest = tail;
+                continue;
+            }
+            let k = e.steps.len();
+            (rest.len() >= k).then_some(())?;
+            let (subs, tail) = rest.split_at(k);
+            let matches = subs
+                .iter()
+                .zip(&e.steps)
+                .all(|((n, data), s)| n == s.name && data.is_empty());
+            matches.then_some(())?;
+            out.push((e.name.to_string(), Vec::new()));
+            rest = tail;
+        }
+        rest.is_empty().then_some(out)
+    }
+
     /// Each stage's [`Stage::restored`], once a snapshot's state is back.
     pub fn restored(&mut self, state: &State) {
         for e in &mut self.entries {
@@ -716,23 +804,95 @@ impl Pipeline {
         }
     }
 
-    /// The statistics each stage reported in the last step, in order.
+    /// The statistics each stage (each sub-step) reported in the last step, in order.
     pub fn last_stats(&self) -> Vec<(&'static str, StageStats)> {
-        self.entries.iter().map(|e| (e.name, e.last)).collect()
+        self.steps().map(|s| (s.name, s.last)).collect()
     }
 
-    /// Accumulated timings per stage.
+    /// Accumulated timings per stage, a stage with sub-steps as its sub-steps.
     pub fn timings(&self) -> Vec<StageTiming> {
-        self.entries
-            .iter()
-            .map(|e| StageTiming {
-                name: e.name,
-                seconds: e.time.as_secs_f64(),
-                calls: e.calls,
-                iterations: e.iterations,
+        self.steps()
+            .map(|s| StageTiming {
+                name: s.name,
+                seconds: s.time.as_secs_f64(),
+                calls: s.calls,
+                iterations: s.iterations,
             })
             .collect()
     }
+
+    /// What the scheduler runs and times, in order.
+    fn steps(&self) -> impl Iterator<Item = &Timed> {
+        self.entries.iter().flat_map(|e| &e.steps)
+    }
+}
+
+/// What the scheduler does after a step named `name` that wrote `writes`: refresh their
+/// ghosts (the velocity's for the step's end) and check them (and, if it wrote a stage's
+/// field, every stage resource) for a non-finite value, reported with the step and the cell.
+fn after_step(
+    ctx: &StepContext,
+    state: &mut State,
+    name: &str,
+    writes: &[FieldId],
+) -> Result<(), StageError> {
+    let (nx, ny) = (ctx.grid.nx, ctx.grid.ny);
+    if writes
+        .iter()
+        .any(|f| matches!(f, FieldId::VelocityX | FieldId::VelocityY))
+    {
+        ctx.bc
+            .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+    }
+    for &f in writes {
+        match f {
+            FieldId::Pressure => ctx.bc.fill_scalar(ctx.grid, &mut state.p, true),
+            FieldId::Density => ctx.bc.fill_scalar(ctx.grid, &mut state.rho, false),
+            FieldId::Viscosity => ctx.bc.fill_scalar(ctx.grid, &mut state.mu, false),
+            FieldId::SolidFraction => {
+                if let Some(phi) = &mut state.phi {
+                    ctx.bc.fill_scalar(ctx.grid, phi, false);
+                }
+            }
+            FieldId::VelocityX | FieldId::VelocityY | FieldId::Stage(_) => {}
+        }
+    }
+    if writes.iter().any(|f| matches!(f, FieldId::Stage(_)))
+        && let Some((c, (i, j))) = state
+            .resources
+            .iter()
+            .find_map(|r| r.first_non_finite(nx, ny))
+    {
+        return Err(StageError {
+            stage: name.to_string(),
+            message: format!(
+                "produced a non-finite {c} at ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                ctx.step, ctx.t, ctx.dt
+            ),
+        });
+    }
+    for &f in writes {
+        if let Some(field) = state.field(f) {
+            let stagger = match f {
+                FieldId::VelocityX => crate::Stagger::XFace,
+                FieldId::VelocityY => crate::Stagger::YFace,
+                _ => crate::Stagger::Cell,
+            };
+            if let Some((i, j)) = field.first_non_finite(stagger, nx, ny) {
+                return Err(StageError {
+                    stage: name.to_string(),
+                    message: format!(
+                        "produced a non-finite `{}` at cell ({i}, {j}) in step {} (t = {:.6e}, Δt = {:.3e})",
+                        f.name(),
+                        ctx.step,
+                        ctx.t,
+                        ctx.dt
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 impl fmt::Display for Pipeline {
@@ -753,6 +913,16 @@ impl fmt::Display for Pipeline {
                 names(e.writes),
                 e.source
             )?;
+            if e.by_sub_steps {
+                for (s, letter) in e.steps.iter().zip('a'..) {
+                    writeln!(
+                        f,
+                        "    {letter}. {:<16} writes [{}]",
+                        s.name,
+                        names(s.writes)
+                    )?;
+                }
+            }
         }
         let fields: Vec<_> = self.fields.iter().map(|x| x.name()).collect();
         write!(f, "fields: {}", fields.join(", "))

@@ -1,13 +1,12 @@
 //! Which kind of elastic step a step is (`numerics.elastic.coupling`): the split step, the
-//! coupled one, or `Auto`'s choice between them, and the flag that tells the stages after the
-//! elastic one which it was.
+//! coupled one, or `Auto`'s choice between them.
 
-use super::{ElasticCoupling, ElasticOptions, ElasticPreconditioner, law_needed};
+use super::{ElasticCoupling, ElasticOptions, ElasticPreconditioner};
 use efsi_core::scene::{Options, Preset};
 
 /// Whether a checked scene (`options`) may take the coupled elastic step
 /// (`numerics.elastic.coupling` `Coupled` or `Auto` with a solid that has an implicit law): a
-/// coupled step leaves a pressure for the projection stage to complete, and Δt may reach
+/// coupled step leaves a pressure for the projection to complete, and Δt may reach
 /// `coupled_wave_courant` elastic-wave Courant numbers.
 pub(crate) fn may_couple(options: &Options) -> bool {
     coupling(options) != ElasticCoupling::Split
@@ -17,35 +16,10 @@ pub(crate) fn may_couple(options: &Options) -> bool {
 /// declares the section), or `Split` where the scene has no solid with an implicit law.
 pub(crate) fn coupling(options: &Options) -> ElasticCoupling {
     let o: ElasticOptions = options.section_or_default(Preset::Default);
-    if law_needed(options) && o.implicit {
+    if crate::elastic_solid(options) && o.implicit {
         o.coupling
     } else {
         ElasticCoupling::Split
-    }
-}
-
-/// Whether the step under way is a coupled one, set by the elastic stage at the start of each
-/// step and read by the stages after it in the same step (the deformation update's θ, the
-/// projection's increment). Shared through the pipeline's [`efsi_core::Resources`]; nothing of
-/// it outlives the step, so snapshots and checkpoints do not carry it.
-#[derive(Clone, Default)]
-pub(crate) struct CoupledStep(std::sync::Arc<std::sync::atomic::AtomicBool>);
-
-impl CoupledStep {
-    /// The pipeline's flag (made by the first stage that asks).
-    pub(crate) fn shared(shared: &mut efsi_core::Resources) -> CoupledStep {
-        shared
-            .get_or_try_insert_with(|| Ok::<_, ()>(CoupledStep::default()))
-            .cloned()
-            .unwrap_or_default()
-    }
-
-    pub(crate) fn get(&self) -> bool {
-        self.0.load(std::sync::atomic::Ordering::Relaxed)
-    }
-
-    pub(super) fn set(&self, coupled: bool) {
-        self.0.store(coupled, std::sync::atomic::Ordering::Relaxed)
     }
 }
 

@@ -1,19 +1,17 @@
-//! The `deformation` stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
+//! The `deformation` sub-step of the implicit-momentum stage: the end-of-step update `B̃^{n+1} = B̃(V^{n+1})` (seed Eqs. 24–25),
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
 use super::{
     AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing,
 };
-use efsi_core::{Grid, Stage, StageError, StageStats, State, StepContext};
+use efsi_core::{Grid, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
     pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
     pub(super) k: Kernels,
-    /// θ of B's stretching (`numerics.elastic.theta`) in a split step and in a coupled one, and
-    /// the pipeline's flag saying which this step is (set by the elastic stage).
+    /// θ of B's stretching (`numerics.elastic.theta`) in a split step and in a coupled one.
     pub(super) thetas: [f64; 2],
-    pub(super) step_flag: super::CoupledStep,
     /// `numerics.elastic.coupling` (`Split` where the scene cannot couple).
     pub(super) mode: super::ElasticCoupling,
     /// Which sides are walls (x min, x max, y min, y max): `NoSlip`, `MovingWall`, `FreeSlip`.
@@ -24,16 +22,16 @@ pub(super) struct DeformationStage {
     pub(super) limits: super::limits::WaveLimits,
 }
 
-impl Stage for DeformationStage {
-    /// B and its history, shared with the elastic stage ([`Deformation`](super::Deformation)).
-    fn init_state(&self, grid: &Grid, state: &mut State) {
+impl DeformationStage {
+    /// B and its history, shared with the elastic sub-step ([`Deformation`](super::Deformation)).
+    pub(super) fn init_state(&self, grid: &Grid, state: &mut State) {
         if state.resources.get::<super::Deformation>().is_none() {
             state.resources.insert(super::Deformation::zeros(grid));
         }
     }
 
     /// The split step's wave limit, or the coupled step's with `Coupled`.
-    fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
+    pub(super) fn max_dt(&self, _grid: &Grid, _state: &State, _cfl: f64) -> Option<f64> {
         let dt = match self.mode {
             ElasticCoupling::Coupled => self.limits.coupled,
             ElasticCoupling::Split | ElasticCoupling::Auto => self.limits.split,
@@ -44,7 +42,13 @@ impl Stage for DeformationStage {
     /// With `Auto`, the coupled step's wave limit where the other stages allow steps at least
     /// [`AUTO_COUPLED_GAIN`] times the split step's and the solid is not busy deforming: its
     /// strain energy at most [`AUTO_STRAIN_SHARE`] of the flow's kinetic energy.
-    fn lift_dt(&self, grid: &Grid, state: &State, own: f64, others: Option<f64>) -> Option<f64> {
+    pub(super) fn lift_dt(
+        &self,
+        grid: &Grid,
+        state: &State,
+        own: f64,
+        others: Option<f64>,
+    ) -> Option<f64> {
         let lifted = self.mode == ElasticCoupling::Auto
             && others.is_none_or(|o| o >= AUTO_COUPLED_GAIN * own)
             && self.limits.coupled.is_finite();
@@ -60,7 +64,13 @@ impl Stage for DeformationStage {
             .then_some(self.limits.coupled)
     }
 
-    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+    /// The update after the projection of a step that was `coupled` or split.
+    pub(super) fn run(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        coupled: bool,
+    ) -> Result<StageStats, StageError> {
         let d = state
             .resources
             .get_mut::<super::Deformation>()
@@ -73,7 +83,6 @@ impl Stage for DeformationStage {
         k.set_weights(phi);
         // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
         k.gradient(&state.u, &state.v);
-        let coupled = self.step_flag.get();
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
         // The Picard pass, except in a coupled step beyond the split step's wave limit, which
         // ends with B̃^{n+1} = B̃(V^{n+1}), the tensor its implicit stiffness was solved with
@@ -110,9 +119,7 @@ impl Stage for DeformationStage {
             .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
     }
-}
 
-impl DeformationStage {
     /// Whether a cell mostly solid (φ > ½) is within [`AUTO_WALL_CELLS`] cells of a wall, or
     /// would be after a step of `dt` at its velocity: an impact `Auto` takes with split steps.
     fn near_wall(&self, grid: &Grid, state: &State, dt: f64) -> bool {

@@ -1,5 +1,5 @@
 //! The solid's constitutive law: resolved by name through the law loader, and shared by the
-//! elastic and deformation stages of one pipeline (loaded and checked once).
+//! elastic and deformation sub-steps of the implicit-momentum stage (loaded and checked once).
 
 use efsi_core::Scene;
 use efsi_core::scene::Options;
@@ -23,7 +23,7 @@ pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn Constitut
     Ok(Box::new(law))
 }
 
-/// The solid's law as the elastic and deformation stages of one pipeline share it: loaded and
+/// The solid's law as the elastic and deformation sub-steps share it: loaded and
 /// checked once, by whichever of them is built first ([`efsi_core::Resources`]).
 struct SharedLaw(std::sync::Arc<dyn ConstitutiveLaw>);
 

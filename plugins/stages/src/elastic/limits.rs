@@ -29,7 +29,7 @@ pub(super) struct WaveLimits {
 }
 
 /// The scene's [`WaveLimits`], worked out once per pipeline and shared by the elastic and
-/// deformation stages.
+/// deformation sub-steps.
 pub(super) fn shared_wave_limits(
     scene: &Scene,
     options: &Options,

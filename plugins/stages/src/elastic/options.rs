@@ -1,4 +1,8 @@
-//! The elastic stages' options (`numerics.elastic`), read by the elastic and deformation stages.
+//! The implicit-momentum stage's options (`numerics.elastic`): the elastic solve, its coupling
+//! with the projection and the caps on Δt. What each default rests on is asserted by a test or
+//! measured by a benchmark, cited where it is set: `tests/tests/elastic.rs` and the stability
+//! map (`cargo xtask bench-paper --case stability`, `tests/src/paper/stability.rs`: the sphere
+//! of 8 cells per radius falling onto a wall at G = 1e7–1e11 Pa).
 
 use efsi_core::Scene;
 use efsi_core::scene::options::{Options, StageOptions, check_iterations, check_tolerance};
@@ -9,17 +13,15 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct ElasticOptions {
     /// Treat the elastic stress implicitly (default true). `false` makes the elastic force
-    /// explicit — stable only for `Δt ≲ h √(ρ/G)`; it exists to show what the implicit term buys.
+    /// explicit — stable only for `Δt ≲ h √(ρ/G)`; it exists to show what the implicit term
+    /// buys (`tests/tests/elastic.rs`,
+    /// `stiff_solid_runs_at_the_flow_time_step_only_with_the_implicit_term`).
     #[serde(default = "yes")]
     pub implicit: bool,
     /// Relative residual at which BiCGSTAB stops: `‖r‖ ≤ tolerance · max(‖b‖, ‖M V‖)`, the
     /// step's elastic–viscous increment or the momentum, whichever is larger (default 1e-6;
-    /// the `Strict` preset 1e-10). Chosen by the measured trade: the sphere impact at 35
-    /// cells per radius takes 6.0 iterations a step instead of 12.2 at 1e-10 with its
-    /// restitution 5e-6 apart (0.948607 against 0.948602) and its contact time, compression and
-    /// volume drift unchanged; the paper's quick cases move by at most 2 % of their error (the
-    /// oscillating Couette flows, whose elastic layer this solve drives; at 1e-5 they moved by
-    /// up to 14 %).
+    /// the `Strict` preset 1e-10). The default moves the paper's quick cases by a small
+    /// fraction of their error against their references (`tests/tests/paper_quick.rs`).
     #[serde(default = "default_elastic_tol")]
     pub tolerance: f64,
     /// Iteration cap (default 5000).
@@ -28,42 +30,33 @@ pub struct ElasticOptions {
     /// Preconditioner of BiCGSTAB (default `Auto`).
     #[serde(default)]
     pub preconditioner: ElasticPreconditioner,
-    /// The largest elastic-wave Courant number `Δt·c/h` a step may take (default and largest
-    /// allowed: [`MAX_WAVE_COURANT`]), `c = √(G₀/ρ_s)` the solid's shear-wave speed at rest
-    /// (`G₀` the law's stiffness at `B̃ = I`) and `h` the smaller cell side. The elastic step
-    /// is implicit, but the pressure projection after it is not coupled to it: the strain its
-    /// correction leaves in the solid is stored at stiffness G and given back at the next
-    /// step, which pumps energy into stiff solids once `Δt·c/h` passes ≈ 5 (measured by the
-    /// stability map, `cargo xtask bench-paper --case stability`). The time step is capped so;
-    /// a `time.fixed_dt` above the cap is refused.
+    /// The largest elastic-wave Courant number `Δt·c/h` a split step may take (default and
+    /// largest allowed: [`MAX_WAVE_COURANT`]), `c = √(G₀/ρ_s)` the solid's shear-wave speed at
+    /// rest (`G₀` the law's stiffness at `B̃ = I`) and `h` the smaller cell side. The elastic
+    /// step is implicit, but the projection after a split step is not coupled to it: the strain
+    /// its correction leaves in the solid is stored at stiffness G and given back the next
+    /// step, which pumps energy into stiff solids at larger Courant numbers. A `time.fixed_dt`
+    /// above the cap is refused.
     #[serde(default = "default_wave_courant")]
     pub wave_courant: f64,
-    /// How the elastic step and the pressure projection are coupled (default `Auto`: per step,
-    /// the split step or the coupled one).
+    /// The strategy of the implicit-momentum stage: how the elastic step and the pressure
+    /// projection share a time step (default `Auto`).
     #[serde(default)]
     pub coupling: ElasticCoupling,
-    /// `Coupled`/`Auto` only: the coupled solve stops once `max |∇·V|·Δt` is at most this fraction
-    /// of the step's divergence scale (that of the velocity before the step or of the
+    /// `Coupled`/`Auto` only: the coupled solve stops once `max |∇·V|·Δt` is at most this
+    /// fraction of the step's divergence scale (that of the velocity before the step or of the
     /// explicit elastic increment, whichever is larger; default 1e-3) or the projection's
-    /// tolerance, whichever is larger; the projection stage removes the rest.
+    /// tolerance, whichever is larger; the projection sub-step removes the rest.
     #[serde(default = "default_coupling_tolerance")]
     pub coupling_tolerance: f64,
     /// The implicit weight θ of B's stretching over a step, `B^{n+1} = Bⁿ + Δt[(1 − θ) H(Vⁿ) +
-    /// θ H(V^{n+1})] + …` (default: 0.5, Crank–Nicolson, in a split step; 0.75 in a coupled one).
-    /// At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the velocity's
-    /// amplification per step tends to `−(1 − θ)/θ`: −1 (an undamped two-step oscillation) at
-    /// 0.5, −1/3 at 0.75; above 0.5 the step is first order in time for the solid. With
-    /// `Coupled`, 0.5 keeps more of an impact's rebound (the map's G = 1e9 sphere at a cap of
-    /// 12: 0.97 against 0.90 m/s), but its stiff modes are undamped: the map's sphere at
-    /// G = 1e7 Pa and CFL 0.9 gained 18 % of its energy budget at 6 cells per radius, and
-    /// 1.3 % at 12; at 0.75 every run of the map is stable. In between (the map's sphere at
-    /// G = 1e9 Pa, CFL 0.5, `Coupled`, at 16 ms; `Split` 1.030 m/s): 0.6 keeps the rebound at
-    /// caps of 4, 8 and 12 (1.060, 1.048, 1.042 against 1.019, 0.958, 0.911 at 0.75) and
-    /// gains no energy, but at caps of 100 and 200 it rests on the wall as 0.75 does; 0.55 at a
-    /// cap of 25 gains 0.4 % of the budget (1.087 m/s) and 0.5 at 200 leaves the wall faster
-    /// than it came (1.30 against 1.23 m/s, +51 % of the budget at the end). The stiff spinning
-    /// disk's extra loss of kinetic energy at large caps (see `coupled_wave_courant`) is not
-    /// θ's damping: at a cap of 200, 0.6 and 0.55 lose 1.48e-3 and 1.82e-3 against 1.17e-3.
+    /// θ H(V^{n+1})] + …`, in [½, 1] (default: ½, Crank–Nicolson, in a split step; ¾ in a
+    /// coupled one). At an elastic-wave Courant number `s = kΔt√(G/ρ)` far above 1 the
+    /// velocity's amplification per step tends to `−(1 − θ)/θ` (the elastic module's table):
+    /// −1, an undamped two-step oscillation, at ½; −⅓ at ¾. Above ½ the step is first order in
+    /// time for the solid. A coupled step's long steps need the damping: at ½ its stiff modes
+    /// are undamped and the stability map's soft sphere gains energy; at ¾ every run of the
+    /// map is stable.
     #[serde(default)]
     pub theta: Option<f64>,
     /// The weight α of the step-end stress in a split step's momentum,
@@ -72,68 +65,57 @@ pub struct ElasticOptions {
     /// elastic-wave Courant number `Δt·c/h` is at most [`CN_WAVE_COURANT`], rising linearly to
     /// 1 (the stress at the step's end, which damps the stiff modes) at
     /// [`DAMPED_WAVE_COURANT`] and beyond: the split projection pumps energy into an undamped
-    /// stiff solid (see the elastic module's "θ of the stress"). The coupled step always takes
-    /// its stretching's θ.
+    /// stiff solid (the elastic module's "θ of the stress"). The coupled step always takes its
+    /// stretching's θ.
     #[serde(default)]
     pub stress_theta: Option<f64>,
     /// `Coupled`/`Auto` only: the most FGMRES iterations per step (default 500, an order of
     /// magnitude above what the stability map's stiffest spheres take).
     #[serde(default = "default_coupling_iter")]
     pub coupling_iterations: usize,
-    /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a step may take
-    /// (at most [`MAX_COUPLED_WAVE_COURANT`]; default [`DEFAULT_COUPLED_WAVE_COURANT`] with
-    /// `Coupled`, [`DEFAULT_AUTO_COUPLED_WAVE_COURANT`] with `Auto`). The coupled step is stable
-    /// far beyond the split step's [`MAX_WAVE_COURANT`]; what the cap limits is accuracy: an
-    /// impact taken in few coupled steps is damped (see the `coupled` module's "Limits"). The
-    /// stability map's sphere (8 cells per radius, CFL 0.5) at G = 1e9 Pa under `Coupled` moves
-    /// up at 16 ms at 0.65 m/s with a cap of 25, 0.10 at 50, and rests on the wall at 200
-    /// (split: 1.03), hence 25 there. `Auto` takes impacts with split steps (within
-    /// [`AUTO_WALL_CELLS`] of a wall), so its cap only sets the step of a stiff solid's flight:
-    /// 454, 339, 284 and 232 steps at caps of 25, 50, 100 and 200 (1.030, 1.029, 1.025,
-    /// 1.025 m/s; no energy gained beyond 2.9e-5 of the budget).
-    ///
-    /// A long coupled step away from walls costs the time error any step of that length has
-    /// (first order in time), no more: so `Auto` takes its flights at the largest cap, and a
-    /// stiff solid is no less accurate than a soft one at the step its own wave cap allows
-    /// (`tests/tests/elastic.rs`, the spinning disk).
+    /// `Coupled`/`Auto` only: the largest elastic-wave Courant number `Δt·c/h` a coupled step
+    /// may take (at most [`MAX_COUPLED_WAVE_COURANT`]; default [`DEFAULT_COUPLED_WAVE_COURANT`]
+    /// with `Coupled`, [`DEFAULT_AUTO_COUPLED_WAVE_COURANT`] with `Auto`). The coupled step is
+    /// stable far beyond the split step's [`MAX_WAVE_COURANT`]; the cap limits what long steps
+    /// cost in accuracy: an impact taken in few coupled steps loses its rebound (the `coupled`
+    /// module's "Limits"). `Auto` takes impacts with split steps (within [`AUTO_WALL_CELLS`] of
+    /// a wall), so its cap only sets the step of a stiff solid's flight, where a long coupled
+    /// step costs the time error any step of that length has: a stiff solid is no less
+    /// accurate than a soft one at the step its own wave cap allows (`tests/tests/elastic.rs`,
+    /// `auto_flies_a_stiff_solid_at_its_cap_no_less_accurately_than_a_soft_one_at_its_own_step`).
     #[serde(default)]
     pub coupled_wave_courant: Option<f64>,
 }
 
-/// How the implicit elastic step and the pressure projection share a time step.
+/// The implicit-momentum stage's strategy: how the implicit elastic step and the pressure
+/// projection share a time step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ElasticCoupling {
     /// The elastic step, then the projection (seed Fig. 1): the projection's correction
     /// strains the solid without its stiffness answering within the step, which pumps energy
-    /// into stiff solids above an elastic-wave Courant number of ≈ 5, so Δt is capped there
-    /// (`wave_courant`).
+    /// into stiff solids, so Δt is capped at `wave_courant` elastic-wave Courant numbers.
     Split,
-    /// The elastic step solves its implicit system together with the divergence constraint (FGMRES
-    /// on the saddle-point system, block-triangular preconditioner from the elastic step's block
-    /// multigrid and the projection's Poisson multigrid — Cahouet–Chabard), so the pressure's
-    /// correction meets the solid's implicit stiffness: Δt is capped at `coupled_wave_courant`
-    /// (default 25 here) elastic-wave Courant numbers instead of 4. The stability map's sphere at
-    /// CFL 0.5 takes 32 and 257 steps at G = 1e7 and 1e9 Pa (split: 161, 1606) without gaining
-    /// energy, and stays stable at G = 1e11 Pa. Its B stretching is damped (`theta` 0.75), so an
-    /// impact taken in a few steps loses its rebound (at 16 ms 0.65 against the split step's 1.03
-    /// m/s at G = 1e9; at 1e7 it stays on the wall); ≈ 1.5× the split step's cost per step on the
-    /// seed's sphere.
+    /// The elastic step solves its implicit system together with the divergence constraint
+    /// (FGMRES on the saddle-point system, block-triangular preconditioner from the elastic
+    /// step's block multigrid and the projection's Poisson multigrid, Cahouet–Chabard; the
+    /// `coupled` module), so the pressure's correction meets the solid's implicit stiffness: Δt
+    /// is capped at `coupled_wave_courant` instead. Its stretching is damped (`theta` ¾), so an
+    /// impact taken in a few steps loses its rebound. A solve that does not converge is an
+    /// error. `tests/tests/elastic.rs`:
+    /// `coupled_step_runs_a_stiff_sphere_at_the_flow_step_without_gaining_energy`.
     Coupled,
     /// Each step chooses: the coupled step (up to `coupled_wave_courant`) where the flow
-    /// allows steps at least [`AUTO_COUPLED_GAIN`] times the split step's wave cap
-    /// (`wave_courant`) and the solid is not busy deforming (its strain energy at most
-    /// [`AUTO_STRAIN_SHARE`] of the kinetic energy), else the split step at its cap. A soft
-    /// solid runs as with `Split`; a stiff one crosses the flow at the flow's step and takes
-    /// an impact at the split step's, which resolves the rebound the coupled step's long steps
-    /// damp. A coupled solve that does not converge within `coupling_iterations` is retaken as a
-    /// split step (with `Coupled` it is an error). The stability map's sphere (8 cells per
-    /// radius, CFL 0.5) at G = 1e9 Pa: 232 steps and 1.025 m/s at 16 ms (cap 200, the default
-    /// with `Auto`), against Split's 1606 and 1.030 and Coupled's 257 and 0.647; at 1e7 Pa: 70
-    /// steps and 0.943, against 161 and 0.943, and 30 and none (on the wall). Each step's θ is
-    /// its scheme's (`theta`, when set, applies to both); with `implicit: false`, every step is
-    /// split. The default: where the flow never
-    /// allows longer steps than the split step's cap (the seed's sphere, every shipped case) it
-    /// is `Split` to the last bit.
+    /// allows steps at least [`AUTO_COUPLED_GAIN`] times the split step's wave cap and the
+    /// solid is not busy deforming (its strain energy at most [`AUTO_STRAIN_SHARE`] of the
+    /// kinetic energy) nor near a wall ([`AUTO_WALL_CELLS`]), else the split step at its cap.
+    /// A soft solid runs as with `Split`; a stiff one crosses the flow at the flow's step and
+    /// takes an impact at the split step's, which resolves the rebound. A coupled solve that
+    /// does not converge within `coupling_iterations` is retaken as a split step, from the
+    /// step's start. Each step's θ is its kind's (`theta`, when set, applies to both); with
+    /// `implicit: false` every step is split. Where the flow never allows longer steps than
+    /// the split step's cap (the seed's sphere, every shipped case) it is `Split` to the last
+    /// bit. `tests/tests/elastic.rs`: `auto_coupling_runs_a_soft_solid_split_and_a_stiff_one_coupled`,
+    /// `auto_takes_a_step_split_when_its_coupled_solve_does_not_converge`.
     #[default]
     Auto,
 }
@@ -141,32 +123,22 @@ pub enum ElasticCoupling {
 /// With `coupling: Auto`, the coupled step is taken only while the solid's strain energy is at
 /// most this share of the flow's kinetic energy: above it the solid is exchanging energy with
 /// its deformation (an impact, an oscillation) at a rate the split step's shorter steps
-/// resolve. Measured on the stability map's sphere (G = 1e9 Pa, CFL 0.5, without the wall
-/// rule [`AUTO_WALL_CELLS`]): a share of 0.1 left the wall at 0.974 m/s in 282 steps, 0.01 at
-/// 0.994 in 341, 0.001 at 0.994 in 747.
+/// resolve (the stability map: a smaller share takes more split steps for no better rebound,
+/// a larger one loses rebound).
 pub const AUTO_STRAIN_SHARE: f64 = 1e-2;
 
-/// With `coupling: Auto`, the coupled step is not taken while a cell mostly solid is within this
-/// many cells of a wall, or would be after the coupled step at its velocity: the impact is
-/// taken with split steps from its first contact. Measured on the stability map's sphere (CFL
-/// 0.5): at G = 1e9 Pa a margin of 1 cell took 369 steps and left the wall at 1.038 m/s, 2
-/// cells 484 and 1.039, none (the strain-energy rule alone) 341 and 0.994 (`Split`: 1606 and
-/// 1.032); at G = 1e10 Pa 1 cell took 1285 steps and left at 0.975 (`Split`: 5079, 0.973).
-/// Since the end-of-step update resets the fluid's B before it takes the rates (see the
-/// elastic module's "Pure fluid"), a coupled step taken while the leaving sphere's bottom
-/// cells were one cell off the wall lost 13 % of its kinetic energy in that step (at 16 ms
-/// 0.953 m/s against `Split`'s 1.030 at G = 1e9 Pa, 0.850 against 0.943 at 1e7); with 1.5
-/// cells: 454 steps and 1.030, and 64 steps and 0.928 (2 cells: 491 and 1.029, 70 and
-/// 0.942). The step loses there because the wall row's cell on the axis still holds a sliver
-/// of solid (φ ≈ 2e-3): the coupled step stretches it with the whole cell's rate, the air
-/// filling the gap under the leaving sphere (B₂₂ − 1 from −0.010 to +0.044 at the stiffness
-/// `φ^{1/2} G`), which pulls the sphere back, and resets its strain a step later (see the
-/// `coupled` module's "Limits").
+/// With `coupling: Auto`, the coupled step is not taken while a cell mostly solid is within
+/// this many cells of a wall, or would be after the coupled step at its velocity: the impact
+/// is taken with split steps from its first contact to its release. The margin covers the
+/// release too: a coupled step taken while the leaving solid is about a cell off the wall
+/// stretches the sliver of solid the wall row's cell still holds with the rate of the fluid
+/// filling the gap, which pulls the solid back (the `coupled` module's "Limits"; the
+/// stability map keeps the split step's rebound at 1.5 cells).
 pub const AUTO_WALL_CELLS: f64 = 1.5;
 
 /// With `coupling: Auto`, the coupled step is taken only where it lengthens the step at least
-/// this much over the split step's wave cap: a coupled step costs 1.4–1.5 split steps on the
-/// seed's sphere (35 cells per radius), so a shorter gain would not pay for it.
+/// this much over the split step's wave cap: a coupled step costs about 1.5 split steps, so a
+/// shorter gain would not pay for it.
 pub const AUTO_COUPLED_GAIN: f64 = 1.5;
 
 impl ElasticOptions {
@@ -219,16 +191,14 @@ fn default_coupling_iter() -> usize {
 }
 
 /// The largest elastic-wave Courant number `Δt·c/h` the coupled step may take (see
-/// [`ElasticOptions::coupled_wave_courant`]): the runs of the stability map's sphere measured
-/// there kept their energy (8 cells per radius, G = 1e7 and 1e9 Pa, caps up to 200; 6 cells
-/// per radius, CFL 0.5 and 0.9, G = 1e7, 1e9, 1e11 Pa at 100 and 200: at most 3e-5 of the
-/// budget gained). Before the fluid's B was reset ahead of the end-of-step rates, 100 gained
-/// 15–25 % and 200 failed, and the maximum was 50.
+/// [`ElasticOptions::coupled_wave_courant`]): the largest at which the runs of the stability
+/// map keep their energy.
 pub const MAX_COUPLED_WAVE_COURANT: f64 = 200.0;
 
-/// The coupled step's default cap on `Δt·c/h` with `Coupled`: an impact taken with `Coupled`
-/// keeps some of its rebound (0.65 m/s against the split step's 1.03 on the map's sphere at
-/// G = 1e9 Pa; see [`ElasticOptions::coupled_wave_courant`]).
+/// The coupled step's default cap on `Δt·c/h` with `Coupled`, which takes impacts with coupled
+/// steps too: low enough that an impact keeps part of its rebound (see
+/// [`ElasticOptions::coupled_wave_courant`]; `tests/tests/elastic.rs`,
+/// `coupled_step_with_the_stress_at_its_theta_keeps_more_of_an_impact`).
 pub const DEFAULT_COUPLED_WAVE_COURANT: f64 = 25.0;
 
 /// The coupled step's default cap on `Δt·c/h` with `Auto`, which takes impacts with split
@@ -276,13 +246,13 @@ pub enum ElasticPreconditioner {
     /// number `Δt √(G/ρ) / h`.
     Jacobi,
     /// Multigrid V-cycles on the u–u and v–v blocks of an SPD approximation of the system, the
-    /// viscous operator with an effective viscosity `θΔt μ + (Δt/2) G_eff`.
+    /// viscous operator with an effective viscosity `θ_v Δt μ + αθΔt² G_eff`.
     Multigrid,
     /// Multigrid, except with the split step in scenes with a periodic boundary, where Jacobi
     /// (the default; the coupled step keeps the multigrid, with which its FGMRES converges): the
     /// red–black smoother keeps a flow uniform along a periodic direction uniform only to the
-    /// solver's tolerance (a velocity of 1e-12 across a flat interface, solid fraction leaking
-    /// into the fluid), where Jacobi keeps it exactly.
+    /// solver's tolerance (a cross-flow across a flat interface, solid fraction leaking into
+    /// the fluid), where Jacobi keeps it exactly.
     #[default]
     Auto,
 }

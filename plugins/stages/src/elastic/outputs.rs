@@ -1,4 +1,4 @@
-//! The elastic stages' outputs ([`StagePlugin::outputs`](efsi_core::StagePlugin::outputs)):
+//! The implicit-momentum stage's outputs ([`StagePlugin::outputs`](efsi_core::StagePlugin::outputs)):
 //! the VTK arrays `B` (B̃ = φ^{1/2} B) and `stress` (the elastic extra stress), and the probe
 //! quantity `elastic_energy`, all from the [`Deformation`] resource.
 

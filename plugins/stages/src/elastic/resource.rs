@@ -1,11 +1,11 @@
-//! The elastic stages' data in the [`State`](efsi_core::State): the solid's tensor B and the history its
+//! The implicit-momentum stage's data in the [`State`](efsi_core::State): the solid's tensor B and the history its
 //! transport carries from step to step ([`Deformation`], a [`StateResource`] the deformation
 //! stage adds to the state), saved in checkpoints and snapshots under the names `B.<part>.<c>`
 //! and `elastic_energy`.
 
 use efsi_core::{Field, Grid, StateResource};
 
-/// The left Cauchy–Green tensor B of the solid, from which the elastic stages form the seed's
+/// The left Cauchy–Green tensor B of the solid, from which the elastic sub-steps form the seed's
 /// modified tensor `B̃ = φ_s^{1/2} B` (Eq. 8) with the current solid fraction. Since φ_s is
 /// materially conserved, B and B̃ obey the same transport law; storing B (the identity in pure
 /// fluid, where it is reset every step) keeps B̃ and the VOF interface consistent — rigid motion
@@ -36,7 +36,7 @@ pub struct Deformation {
     /// This step's explicit part.
     pub explicit: [Field; 4],
     /// This step's implicit-relaxation divisor of the corner shear `B₁₂` at interface corners
-    /// (1 elsewhere): set by the elastic stage, used again by the end-of-step update. Scratch
+    /// (1 elsewhere): set by the elastic sub-step, used again by the end-of-step update. Scratch
     /// of one step: it is recomputed before use, so it carries no history.
     pub relax: Field,
     /// The elastic stress `τ(B̃) − τ(φ^{1/2} I)` at the end of the step (the law's stress less
@@ -44,7 +44,7 @@ pub struct Deformation {
     pub stress: [Field; 4],
     /// The elastic (strain) energy in the solid at the end of the step, `∫ W dV` (per radian in
     /// axisymmetric geometry), from the law's stress by integration along the isochoric path
-    /// `exp(s log B)` (see the elastic stage).
+    /// `exp(s log B)` (see the elastic sub-step).
     pub elastic_energy: f64,
 }
 

@@ -1,12 +1,12 @@
 //! The implicit viscous–elastic system and its solve: the operator
-//! `M − θΔt K_v − (Δt²/2) K_J` (see the module docs of [`super`]) and the elastic stage.
+//! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
 use super::{Kernels, err, missing};
 use crate::block_multigrid::ViscousBlocks;
 use crate::ops::face_density;
 use crate::viscous_operator::Coefficients;
-use efsi_core::{BoundarySet, Field, Grid, Stage, StageError, StageStats, State, StepContext};
+use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
 
@@ -20,9 +20,8 @@ pub(super) struct ElasticStage {
     pub(super) scheme: super::StepScheme,
     /// The split step's scheme and the coupled step's.
     pub(super) schemes: [super::StepScheme; 2],
-    /// `numerics.elastic.coupling` (`Split` where the scene cannot couple), the split step's
-    /// wave limit on Δt (the step above which `Auto` couples), and the pipeline's flag telling
-    /// the later stages which step this is.
+    /// `numerics.elastic.coupling` (`Split` where the scene cannot couple) and the split
+    /// step's wave limit on Δt (the step above which `Auto` couples).
     pub(super) mode: super::ElasticCoupling,
     pub(super) split_dt: f64,
     /// `h/c`, the Δt of one elastic-wave Courant number, and the scene's options: a split
@@ -30,7 +29,6 @@ pub(super) struct ElasticStage {
     /// ([`super::ElasticOptions::split_stress_weight`]).
     pub(super) wave_step: f64,
     pub(super) options: super::ElasticOptions,
-    pub(super) step_flag: super::CoupledStep,
     pub(super) tau: [Field; 4],
     /// τ(Bⁿ) with this step's weights: the old-time stress of a step whose stress weight α is
     /// below 1 (evaluated only then).
@@ -130,13 +128,10 @@ impl LinearOperator for OperatorCtx<'_> {
     }
 }
 
-impl Stage for ElasticStage {
-    fn initialize(
-        &mut self,
-        _grid: &Grid,
-        _bc: &BoundarySet,
-        state: &mut State,
-    ) -> Result<(), StageError> {
+impl ElasticStage {
+    /// B = I and its rates from the initial velocity (the solid fraction set: the stages
+    /// writing material fields initialise first).
+    pub(super) fn initialize(&mut self, state: &mut State) -> Result<(), StageError> {
         let d = state
             .resources
             .get_mut::<super::Deformation>()
@@ -163,10 +158,15 @@ impl Stage for ElasticStage {
         Ok(())
     }
 
-    /// Takes B̃ out of the state for the step and puts it back on every exit, failed or not:
-    /// a failed step leaves the state complete, so the run loop (or an FMU) can restore the
-    /// step's start into it.
-    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+    /// The elastic sub-step; whether it was a coupled one besides its statistics. Takes B̃
+    /// out of the state for the step and puts it back on every exit, failed or not: a failed
+    /// step leaves the state complete, so the run loop (or an FMU) can restore the step's
+    /// start into it.
+    pub(super) fn run(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+    ) -> Result<(StageStats, bool), StageError> {
         let mut d = state
             .resources
             .take::<super::Deformation>()
@@ -175,30 +175,29 @@ impl Stage for ElasticStage {
         state.resources.put(d);
         result
     }
-}
 
-impl ElasticStage {
     /// One elastic step with B̃ (`d`) held outside the state: choose the split or the coupled
     /// step (`numerics.elastic.coupling`; with `Auto` by Δt), [`predict`](Self::predict) the
     /// deformation at the step's first third and its stress, [`assemble`](Self::assemble) the
     /// implicit system, [`solve`](Self::solve) it for the velocity increment and add it, then
-    /// [`correct`](Self::correct) the deformation with the new velocity.
+    /// [`correct`](Self::correct) the deformation with the new velocity. Returns whether the
+    /// step taken was a coupled one (`Auto`'s failed coupled solve is retaken split).
     fn advance(
         &mut self,
         ctx: &StepContext,
         state: &mut State,
         d: &mut super::Deformation,
-    ) -> Result<StageStats, StageError> {
+    ) -> Result<(StageStats, bool), StageError> {
         let coupled =
             self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
         self.set_scheme(coupled, ctx.dt);
         self.predict(ctx, state, d)?;
         let (bnorm, scale) = self.assemble(ctx, state);
-        let stats = if !coupled {
-            self.solve(ctx, state, d, bnorm, scale)?
+        let (stats, coupled) = if !coupled {
+            (self.solve(ctx, state, d, bnorm, scale)?, false)
         } else {
             match self.solve_coupled(ctx, state, d, bnorm, scale) {
-                Ok(stats) => stats,
+                Ok(stats) => (stats, true),
                 // `Auto` chose the coupled step and its solve did not converge: the step is
                 // taken split instead, from the same start (the velocity is as it was; B back
                 // to Bⁿ). One split step above its wave cap does not pump energy in the way a
@@ -210,24 +209,22 @@ impl ElasticStage {
                     self.set_scheme(false, ctx.dt);
                     self.predict(ctx, state, d)?;
                     let (bnorm, scale) = self.assemble(ctx, state);
-                    self.solve(ctx, state, d, bnorm, scale)?
+                    (self.solve(ctx, state, d, bnorm, scale)?, false)
                 }
                 Err(e) => return Err(e),
             }
         };
         self.correct(ctx, state, d);
-        Ok(StageStats { solve: Some(stats) })
+        Ok((StageStats { solve: Some(stats) }, coupled))
     }
 
-    /// θ, the stress weight and the preconditioner of a coupled or a split step of `dt`, and
-    /// the flag telling the later stages which it is.
+    /// θ, the stress weight and the preconditioner of a coupled or a split step of `dt`.
     fn set_scheme(&mut self, coupled: bool, dt: f64) {
         self.scheme = self.schemes[usize::from(coupled)];
         // The explicit elastic step (`implicit: false`) keeps the stress at the step's end.
         if !coupled && self.implicit {
             self.scheme.alpha = self.options.split_stress_weight(dt / self.wave_step);
         }
-        self.step_flag.set(coupled);
     }
 
     /// Bⁿ and the explicit part E of the step, the interface corners' relaxation, then

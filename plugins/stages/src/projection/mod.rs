@@ -16,20 +16,20 @@
 //! step's pressure gradient, `V* ← V* − Δt ∇pⁿ/ρ`, and the projection solves for the
 //! increment `φ = pⁿ⁺¹ − pⁿ` (from zero: the same initial residual as a solve for `pⁿ⁺¹`
 //! warm-started from `pⁿ`), then `V^{n+1} = V^{n+2/3} − Δt ∇φ/ρ`, `pⁿ⁺¹ = pⁿ + φ` (van Kan
-//! 1986; Guermond, Minev & Shen 2006). The viscous step thereby sees the whole force balance: a
-//! viscous fluid at rest under gravity stays at rest (the seed's scheme sheared the increment
-//! `gΔt` at no-slip side walls into a flow the projection cannot remove, and the energy guard
-//! stopped the run). The starting pressure is the one that balances gravity in the grid's
-//! frame ([`Stage::initialize`]: `g − a` projected with Δt = 1, the hydrostatic pressure where
-//! the density is layered). A steady state depends on Δt through the explicit, split advection
-//! with the classical Heun stage (`numerics.advection.predictor: Advection`; the Re = 100 cavity
-//! at 32² steady at CFL 0.4 and 0.8 differs by 3.8e-3 on its centrelines with either
-//! projection scheme); the default `WholeStep` predictor of a scene of one fluid removes that
-//! (1.3e-7, `tests/tests/cavity.rs`). With an elastic solid the seed's scheme stays the
-//! default: with the semi-implicit elastic step the incremental predictor pumped energy in (a
-//! Saint Venant–Kirchhoff sphere gained 16× its energy budget by step 151, the stability map's
-//! G = 1e9 sphere failed). The coupled elastic step (`numerics.elastic.coupling: Coupled`)
-//! finds its own pressure and has no predictor.
+//! 1986; Guermond, Minev & Shen 2006). The viscous step thereby sees the whole force balance:
+//! a viscous fluid at rest under gravity stays at rest, where the seed's scheme shears the
+//! increment `gΔt` at no-slip side walls into a flow the projection cannot remove. The starting
+//! pressure is the one that balances gravity in the grid's frame (`Projector::initialize`:
+//! `g − a` projected with Δt = 1, the hydrostatic pressure where the density is layered). With
+//! the classical Heun predictor of the advection a steady state depends on Δt through the
+//! split advection; the default `WholeStep` predictor of a scene of one fluid removes that
+//! (`tests/tests/cavity.rs`). With an elastic solid the seed's scheme stays the default: the
+//! predictor's old pressure gradient, applied before the semi-implicit elastic step, feeds
+//! energy into the solid (the stability map's stiff sphere fails with it). With an elastic
+//! solid the projection is a sub-step of the implicit-momentum stage
+//! (`efsi_stages::elastic::Momentum`), which tells it per step whether it completes the
+//! pressure of a coupled elastic step (an increment on it) or finds the whole pressure; a
+//! strategy that may couple never runs the incremental scheme.
 //!
 //! **Solver.** Conjugate gradient warm-started from the previous pressure (from zero for an
 //! increment), preconditioned by
@@ -63,8 +63,8 @@ use crate::ops;
 use crate::scratch::{self, Scratch};
 use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
-    BoundarySet, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats, State,
-    StepContext,
+    BoundarySet, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin, StageStats,
+    Stagger, State, StepContext,
 };
 use efsi_linalg::par;
 use efsi_linalg::{
@@ -97,10 +97,12 @@ impl StagePlugin for Projection {
         &READS
     }
     fn writes(&self) -> &'static [FieldId] {
-        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Pressure]
+        &WRITES
     }
-    fn needed(&self, _scene: &Scene, _options: &Options) -> bool {
-        true
+    /// In every scene without an elastic solid; with one, the implicit-momentum stage
+    /// (`efsi_stages::elastic::Momentum`) projects as a sub-step of its own.
+    fn needed(&self, _scene: &Scene, options: &Options) -> bool {
+        !crate::elastic_solid(options)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ProjectionOptions>())
@@ -113,52 +115,17 @@ impl StagePlugin for Projection {
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let n = grid.cells();
+        let incremental = crate::incremental_pressure(options);
         let o: &ProjectionOptions = options.section()?;
-        // Multigrid's matrix is assembled in the pool, beside the work vectors.
-        let (precond, pooled) = match o.solver {
-            PressureSolver::Multigrid => (Precond::Multigrid(Multigrid::new(2)), MATRIX),
-            PressureSolver::IncompleteCholesky => (
-                Precond::IncompleteCholesky(
-                    IncompleteCholesky::new(),
-                    Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
-                ),
-                0,
-            ),
-        };
-        let keep_density =
-            matches!(precond, Precond::IncompleteCholesky(..)) || !crate::second_material(scene);
         Ok(Box::new(ProjectionStage {
-            tol: o.tolerance_in(scene),
-            max_iter: o.max_iterations,
-            precond,
-            scratch: Scratch::reserve(shared, (WORK + pooled) * n),
-            increment: (incremental(options) || crate::elastic::may_couple(options))
-                .then(|| efsi_core::Field::zeros(grid)),
-            incremental: incremental(options),
-            coupled_step: crate::elastic::may_couple(options)
-                .then(|| crate::elastic::CoupledStep::shared(shared)),
-            hydrostatic_start: incremental(options)
-                || crate::elastic::coupling(options) == crate::elastic::ElasticCoupling::Coupled,
-            gravity: scene.gravity,
-            // A copy of the density where it decides alone whether to assemble (measured on
-            // cavity256: assembling and setting up every step costs 63 -> 90 ns per cell-step
-            // in the projection); where a second material changes the density nearly every
-            // step, the multigrid's own matrix is compared with the assembled one instead.
-            set_up_for: keep_density.then(Vec::new),
+            projector: Projector::new(scene, o, grid, bc, shared, incremental),
+            incremental,
         }))
     }
 }
 
-/// Whether a checked scene (`options`) runs the incremental pressure correction:
-/// `numerics.projection.incremental`, by default on unless the scene has an elastic solid; never
-/// where the coupled elastic step may be taken, which finds its own pressure. (The section's
-/// default where no plugin given to the check declares it.)
-pub(crate) fn incremental(options: &Options) -> bool {
-    let elastic = crate::elastic::law_needed(options);
-    let o: ProjectionOptions = options.section_or_default(efsi_core::scene::Preset::Default);
-    o.incremental.unwrap_or(!elastic) && !crate::elastic::may_couple(options)
-}
+/// What the projection writes: the velocity and the pressure.
+pub(crate) const WRITES: [FieldId; 3] = [FieldId::VelocityX, FieldId::VelocityY, FieldId::Pressure];
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last
 /// step's pressure, before the viscous and elastic steps (module docs). Scheduled when
@@ -180,7 +147,7 @@ impl StagePlugin for PressurePredictor {
         &[FieldId::VelocityX, FieldId::VelocityY]
     }
     fn needed(&self, _scene: &Scene, options: &Options) -> bool {
-        incremental(options)
+        crate::incremental_pressure(options)
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ProjectionOptions>())
@@ -228,7 +195,17 @@ enum Precond {
     IncompleteCholesky(IncompleteCholesky, Stencil5),
 }
 
+/// The projection of a scene without an elastic solid: the seed's scheme or the incremental
+/// one, the same every step.
 struct ProjectionStage {
+    projector: Projector,
+    /// Whether the scene runs the incremental scheme (`crate::incremental_pressure`).
+    incremental: bool,
+}
+
+/// The pressure projection (module docs) with its solver and work space: the projection
+/// stage's, and the implicit-momentum stage's sub-step.
+pub(crate) struct Projector {
     tol: f64,
     max_iter: usize,
     precond: Precond,
@@ -236,22 +213,12 @@ struct ProjectionStage {
     /// right-hand side, the pressure solved for, the residual weights and the solver's three),
     /// then, with multigrid, the [`MATRIX`] vectors of the matrix being assembled.
     scratch: Scratch,
-    /// With the coupled elastic step (`numerics.elastic.coupling: Coupled`), which has already
-    /// made the velocity nearly divergence-free and left its pressure in the state: the
-    /// pressure increment that removes what remains, solved for from zero, applied to the
-    /// velocity and added to that pressure; likewise in the incremental scheme, after the
-    /// predictor applied the last step's pressure. `None` in the seed's non-incremental scheme.
+    /// The pressure increment of a projection that completes a pressure already applied (the
+    /// incremental scheme's predictor's, or the coupled elastic step's): solved for from zero,
+    /// applied to the velocity and added to that pressure. `None` where no projection is one.
     increment: Option<efsi_core::Field>,
-    /// Whether the scene runs the incremental scheme (every step solves for an increment);
-    /// else, where the coupled elastic step may be taken, the flag saying whether this step is
-    /// one (its pressure is then already applied and the projection solves for an increment).
-    incremental: bool,
-    coupled_step: Option<crate::elastic::CoupledStep>,
-    /// Whether the run starts from the hydrostatic pressure (the incremental scheme, and the
-    /// coupled step's `Coupled`) rather than from zero.
-    hydrostatic_start: bool,
-    /// Gravity, whose hydrostatic pressure (in the grid's frame) the incremental scheme starts
-    /// from.
+    /// Gravity, whose hydrostatic pressure (in the grid's frame) a run may start from
+    /// ([`Projector::initialize`]).
     gravity: (f64, f64),
     /// The density (with its ghosts) the matrix and its preconditioner were last set up for;
     /// empty before the first solve. They depend on nothing else that changes during a run, so
@@ -260,6 +227,53 @@ struct ProjectionStage {
     /// and sets up only a matrix the multigrid does not hold already
     /// ([`Multigrid::is_set_up_for`]), no copy of the density kept (0.55 MB at 256²).
     set_up_for: Option<Vec<f64>>,
+}
+
+impl Projector {
+    /// The projector of the options `o` (`numerics.projection`); `increments` if any of its
+    /// projections may complete a pressure already applied ([`Projector::project`]'s
+    /// `increment`).
+    pub(crate) fn new(
+        scene: &Scene,
+        o: &ProjectionOptions,
+        grid: &Grid,
+        bc: &BoundarySet,
+        shared: &mut efsi_core::Resources,
+        increments: bool,
+    ) -> Projector {
+        let n = grid.cells();
+        // Multigrid's matrix is assembled in the pool, beside the work vectors.
+        let (precond, pooled) = match o.solver {
+            PressureSolver::Multigrid => (Precond::Multigrid(Multigrid::new(2)), MATRIX),
+            PressureSolver::IncompleteCholesky => (
+                Precond::IncompleteCholesky(
+                    IncompleteCholesky::new(),
+                    Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
+                ),
+                0,
+            ),
+        };
+        let keep_density =
+            matches!(precond, Precond::IncompleteCholesky(..)) || !crate::second_material(scene);
+        Projector {
+            tol: o.tolerance_in(scene),
+            max_iter: o.max_iterations,
+            precond,
+            scratch: Scratch::reserve(shared, (WORK + pooled) * n),
+            increment: increments.then(|| efsi_core::Field::zeros(grid)),
+            gravity: scene.gravity,
+            // A copy of the density where it decides alone whether to assemble (assembling
+            // and setting up every step is dearer than the comparison); where a second
+            // material changes the density nearly every step, the multigrid's own matrix is
+            // compared with the assembled one instead.
+            set_up_for: keep_density.then(Vec::new),
+        }
+    }
+
+    /// The scene's divergence tolerance (`numerics.projection.tolerance` in force).
+    pub(crate) fn tolerance(&self) -> f64 {
+        self.tol
+    }
 }
 
 /// Assemble the projection's five-point matrix `Σ_f (A_f/(ρ_f h)) (p_C − p_F)` from the density
@@ -357,21 +371,42 @@ impl Stage for ProjectionStage {
         true
     }
 
-    /// The incremental scheme's starting pressure: the one that balances gravity, `p⁰` with
-    /// `g − ∇p⁰/ρ` divergence-free (the hydrostatic pressure where the density is layered), so
-    /// that the first step's predictor already cancels what gravity cannot move. Zero without
-    /// gravity or in the seed's scheme.
+    /// The incremental scheme starts from the hydrostatic pressure, the seed's from zero
+    /// ([`Projector::initialize`]).
     fn initialize(
         &mut self,
         grid: &Grid,
         bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
+        self.projector.initialize(grid, bc, state, self.incremental)
+    }
+
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let tol = self.projector.tol;
+        self.projector.project(ctx, state, tol, self.incremental)
+    }
+}
+
+impl Projector {
+    /// The starting pressure: with `hydrostatic` (the incremental scheme, and the coupled
+    /// elastic step's `Coupled`) the one that balances gravity, `p⁰` with `g − ∇p⁰/ρ`
+    /// divergence-free (the hydrostatic pressure where the density is layered), so that the
+    /// first step's predictor already cancels what gravity cannot move; else, or without
+    /// gravity, zero. The solve is an increment's where this projector's are
+    /// ([`Projector::new`]), as the first step's will be.
+    pub(crate) fn initialize(
+        &mut self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+        hydrostatic: bool,
+    ) -> Result<(), StageError> {
         state.p.fill(0.0);
         // Gravity in the grid's frame (a frame acceleration set before the first step counts).
         let a = state.frame_acceleration;
         let (gx, gy) = (self.gravity.0 - a.0, self.gravity.1 - a.1);
-        if !self.hydrostatic_start || (gx, gy) == (0.0, 0.0) {
+        if !hydrostatic || (gx, gy) == (0.0, 0.0) {
             return Ok(());
         }
         // Project the field g (on the faces the flow may cross) with Δt = 1: what the
@@ -399,7 +434,8 @@ impl Stage for ProjectionStage {
             dt: 1.0,
             step: 0,
         };
-        let solved = self.project(&ctx, state, 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy));
+        let tol = 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy);
+        let solved = self.project(&ctx, state, tol, self.increment.is_some());
         state.u.copy_from(&u0);
         state.v.copy_from(&v0);
         if solved.is_err() || !state.p.data().iter().all(|p| p.is_finite()) {
@@ -409,93 +445,42 @@ impl Stage for ProjectionStage {
         }
         Ok(())
     }
-
-    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        self.project(ctx, state, self.tol)
-    }
 }
 
-impl ProjectionStage {
+impl Projector {
     /// The projection with the divergence tolerance `tol` (the scene's in a step; a stricter
-    /// one for the starting pressure of [`Stage::initialize`]).
-    fn project(
+    /// one for the starting pressure of [`Projector::initialize`]): the whole pressure from the
+    /// last step's, or with `increment` (the incremental scheme, a coupled elastic step) the
+    /// increment on the pressure already applied.
+    pub(crate) fn project(
         &mut self,
         ctx: &StepContext,
         state: &mut State,
         tol: f64,
+        increment: bool,
     ) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
-        let (nx, ny) = (grid.nx, grid.ny);
         let dt = ctx.dt;
-        let rho = state.rho.data();
-        let same = self.set_up_for.as_ref().is_some_and(|s| {
-            s.len() == rho.len() && s.iter().zip(rho).all(|(a, b)| a.to_bits() == b.to_bits())
-        });
+        self.set_up(grid, ctx.bc, &state.rho);
         let mut pool = self.scratch.lock();
-        let (vectors, matrix) = pool.split_at_mut(WORK * grid.cells());
-        if !same {
-            match &mut self.precond {
-                Precond::Multigrid(mg) => {
-                    let [diag, east, north] = scratch::take::<MATRIX>(matrix, grid.cells());
-                    assemble_into([diag, east, north], grid, ctx.bc, &state.rho);
-                    let a = Stencil5View {
-                        nx,
-                        ny,
-                        periodic_x: ctx.bc.periodic(0),
-                        periodic_y: ctx.bc.periodic(1),
-                        diag,
-                        east,
-                        north,
-                    };
-                    // Without a copy of the density, the matrix is compared with the one the
-                    // multigrid holds.
-                    if self.set_up_for.is_some() || !mg.is_set_up_for(a) {
-                        mg.setup_view(a);
-                    }
-                }
-                Precond::IncompleteCholesky(ic, a) => {
-                    assemble(a, grid, ctx.bc, &state.rho);
-                    ic.factor(a);
-                }
-            }
-            if let Some(s) = &mut self.set_up_for {
-                s.clear();
-                s.extend_from_slice(rho);
-            }
-        }
-        // Right-hand side, the residual weights Δt²/dV and the initial guess.
+        let (vectors, _) = pool.split_at_mut(WORK * grid.cells());
         let [b, x, weight, r, pw, q] = scratch::take::<WORK>(vectors, grid.cells());
-        let (u, v, p) = (&state.u, &state.v, &state.p);
-        // −(net volume outflux)/Δt, as `ops::net_outflux` computes it, over slices (it
-        // vectorises).
-        let (rx, rc, s) = (
-            grid.metric.rx_row(nx + 1),
-            grid.metric.rc_row(nx),
-            u.stride(),
-        );
-        let (ud, vd, (dx, dy)) = (u.data(), v.data(), (grid.dx, grid.dy));
-        par::rows(&mut *b, nx).for_each(|j, row| {
-            let k0 = u.idx(0, j as isize);
-            let (uw, ue) = (&ud[k0..k0 + nx], &ud[k0 + 1..k0 + 1 + nx]);
-            let (vs, vn) = (&vd[k0..k0 + nx], &vd[k0 + s..k0 + s + nx]);
-            let (rw, re) = (&rx[..nx], &rx[1..=nx]);
-            for i in 0..nx {
-                let out = (re[i] * ue[i] - rw[i] * uw[i]) * dy + rc[i] * (vn[i] - vs[i]) * dx;
-                row[i] = -out / dt;
-            }
-        });
-        par::rows(&mut *weight, nx).for_each(|_, row| {
+        divergence_rhs(grid, &state.u, &state.v, dt, b);
+        // The residual weights Δt²/dV.
+        par::rows(&mut *weight, grid.nx).for_each(|_, row| {
             for (i, w) in row.iter_mut().enumerate() {
                 *w = dt * dt / grid.cell_volume(i as isize);
             }
         });
         // An increment on the pressure already applied (the incremental scheme's predictor,
-        // or the coupled elastic step's), else the whole pressure from the last step's.
-        let incremental = self.incremental || self.coupled_step.as_ref().is_some_and(|c| c.get());
+        // or the coupled elastic step's) from zero, else the whole pressure from the last
+        // step's.
+        let incremental = increment && self.increment.is_some();
         if incremental {
             x.fill(0.0);
         } else {
-            par::rows(&mut *x, nx).for_each(|j, row| {
+            let p = &state.p;
+            par::rows(&mut *x, grid.nx).for_each(|j, row| {
                 for (i, x) in row.iter_mut().enumerate() {
                     *x = p[(i as isize, j as isize)];
                 }
@@ -531,52 +516,120 @@ impl ProjectionStage {
             let mean = x.iter().sum::<f64>() / x.len() as f64;
             par::chunks(&mut *x).for_each(|_, x| x.iter_mut().for_each(|p| *p -= mean));
         }
-        let (x, ps) = (&*x, state.p.stride());
-        let p0 = state.p.idx(0, 0);
-        let target = match &mut self.increment {
-            Some(f) if incremental => f,
-            _ => &mut state.p,
-        };
-        par::rows(&mut target.data_mut()[p0..p0 + ny * ps], ps).for_each(|j, row| {
-            row[..nx].copy_from_slice(&x[j * nx..(j + 1) * nx]);
-        });
-        ctx.bc.fill_scalar(grid, target, true);
-        if let Some(f) = self.increment.as_ref().filter(|_| incremental) {
-            // The pressure is the one already there (the last step's, or the coupled step's)
-            // plus the increment found here.
-            for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
-                *p += x;
-            }
-        }
-        // V^{n+1} = V^{n+2/3} − Δt ∇φ/ρ on the unknown faces, φ the increment (or the whole
-        // pressure in the seed's non-incremental scheme).
-        subtract_gradient(
-            grid,
-            ctx.bc,
-            self.increment
-                .as_ref()
-                .filter(|_| incremental)
-                .unwrap_or(&state.p),
-            &state.rho,
-            dt,
-            &mut state.u,
-            &mut state.v,
-        );
+        correct(&mut self.increment, ctx, state, x, incremental);
+        drop(pool);
         if cfg!(debug_assertions) {
-            ctx.bc
-                .fill_velocity(grid, &mut state.u, &mut state.v, ctx.t + dt, false);
-            let d = ops::max_abs_div(grid, &state.u, &state.v) * dt;
-            // A non-finite divergence is not this check's to report: the scheduler names the
-            // first non-finite velocity (and the stage) right after the stage.
-            debug_assert!(
-                !d.is_finite()
-                    || d <= tol * (1.0 + 1e-6) + 1e-15
-                    || singular_inconsistent(ctx, state),
-                "projection postcondition: max|∇·u|·Δt = {d:e} > {tol:e}"
-            );
+            check_divergence(ctx, state, tol);
         }
         Ok(StageStats { solve: Some(st) })
     }
+
+    /// The matrix and its preconditioner for the density `rho`, unless they are set up for
+    /// it already (see [`Projector::set_up_for`]).
+    fn set_up(&mut self, grid: &Grid, bc: &BoundarySet, rho: &efsi_core::Field) {
+        let rd = rho.data();
+        let same = self.set_up_for.as_ref().is_some_and(|s| {
+            s.len() == rd.len() && s.iter().zip(rd).all(|(a, b)| a.to_bits() == b.to_bits())
+        });
+        if same {
+            return;
+        }
+        match &mut self.precond {
+            Precond::Multigrid(mg) => {
+                let mut pool = self.scratch.lock();
+                let (_, matrix) = pool.split_at_mut(WORK * grid.cells());
+                let [diag, east, north] = scratch::take::<MATRIX>(matrix, grid.cells());
+                assemble_into([diag, east, north], grid, bc, rho);
+                let a = Stencil5View {
+                    nx: grid.nx,
+                    ny: grid.ny,
+                    periodic_x: bc.periodic(0),
+                    periodic_y: bc.periodic(1),
+                    diag,
+                    east,
+                    north,
+                };
+                // Without a copy of the density, the matrix is compared with the one the
+                // multigrid holds.
+                if self.set_up_for.is_some() || !mg.is_set_up_for(a) {
+                    mg.setup_view(a);
+                }
+            }
+            Precond::IncompleteCholesky(ic, a) => {
+                assemble(a, grid, bc, rho);
+                ic.factor(a);
+            }
+        }
+        if let Some(s) = &mut self.set_up_for {
+            s.clear();
+            s.extend_from_slice(rd);
+        }
+    }
+}
+
+/// The pressure solved for, `x` (per cell), applied: `V^{n+1} = V^{n+2/3} − Δt ∇φ/ρ` on the
+/// unknown faces with `φ` the increment (held in `increment`) added to the pressure already
+/// there (`incremental`), or the whole pressure in the seed's scheme.
+fn correct(
+    increment: &mut Option<efsi_core::Field>,
+    ctx: &StepContext,
+    state: &mut State,
+    x: &[f64],
+    incremental: bool,
+) {
+    let grid = ctx.grid;
+    let nx = grid.nx;
+    let target = match increment {
+        Some(f) if incremental => f,
+        _ => &mut state.p,
+    };
+    Region::of(grid, Stagger::Cell).for_each(&mut *target, |line, row| {
+        row.copy_from_slice(&x[line.n * nx..(line.n + 1) * nx]);
+    });
+    ctx.bc.fill_scalar(grid, target, true);
+    let increment = increment.as_ref().filter(|_| incremental);
+    if let Some(f) = increment {
+        for (p, x) in state.p.data_mut().iter_mut().zip(f.data()) {
+            *p += x;
+        }
+    }
+    let (bc, dt) = (ctx.bc, ctx.dt);
+    let phi = increment.unwrap_or(&state.p);
+    subtract_gradient(grid, bc, phi, &state.rho, dt, &mut state.u, &mut state.v);
+}
+
+/// `b = −(net volume outflux)/Δt` per cell, as `ops::net_outflux` computes it, over slices
+/// (it vectorises).
+fn divergence_rhs(grid: &Grid, u: &efsi_core::Field, v: &efsi_core::Field, dt: f64, b: &mut [f64]) {
+    let nx = grid.nx;
+    let (rx, rc) = (grid.metric.rx_row(nx + 1), grid.metric.rc_row(nx));
+    let (dx, dy) = (grid.dx, grid.dy);
+    let cells = Region::of(grid, Stagger::Cell);
+    par::rows(b, nx).for_each(|j, row| {
+        let line = cells.line(j);
+        let (uw, ue) = (u.at(&line, [0, 0, 0]), u.at(&line, [1, 0, 0]));
+        let (vs, vn) = (v.at(&line, [0, 0, 0]), v.at(&line, [0, 1, 0]));
+        let (rw, re) = (&rx[..nx], &rx[1..=nx]);
+        for i in 0..nx {
+            let out = (re[i] * ue[i] - rw[i] * uw[i]) * dy + rc[i] * (vn[i] - vs[i]) * dx;
+            row[i] = -out / dt;
+        }
+    });
+}
+
+/// The postcondition `max |∇·V^{n+1}|·Δt ≤ tol` (debug builds), the velocity's ghosts
+/// filled for the step's end first.
+fn check_divergence(ctx: &StepContext, state: &mut State, tol: f64) {
+    let grid = ctx.grid;
+    ctx.bc
+        .fill_velocity(grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+    let d = ops::max_abs_div(grid, &state.u, &state.v) * ctx.dt;
+    // A non-finite divergence is not this check's to report: the scheduler names the first
+    // non-finite velocity (and the stage) right after the stage.
+    debug_assert!(
+        !d.is_finite() || d <= tol * (1.0 + 1e-6) + 1e-15 || singular_inconsistent(ctx, state),
+        "projection postcondition: max|∇·u|·Δt = {d:e} > {tol:e}"
+    );
 }
 
 /// `V ← V − Δt ∇p/ρ` on the unknown faces (`bc.normal_faces`), with the face density of
@@ -591,37 +644,24 @@ pub(crate) fn subtract_gradient(
     u: &mut efsi_core::Field,
     v: &mut efsi_core::Field,
 ) {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let ux = bc.normal_faces(0, nx);
-    let vy = bc.normal_faces(1, ny);
-    let s = p.stride();
-    let (pd, rd) = (p.data(), rho.data());
-    let cx = dt / grid.dx;
-    let cy = dt / grid.dy;
-    let base = p.idx(0, 0);
-    let ud = &mut u.data_mut()[base..base + ny * s];
-    let (lo, hi) = (ux.lo.max(0) as usize, ux.hi.max(0) as usize);
-    par::rows(&mut *ud, s).for_each(|j, row| {
-        if hi <= lo {
-            return;
-        }
-        // Over slices (it vectorises): faces lo..hi of row j.
-        let k = base + j * s + lo;
-        let n = hi - lo;
-        let (pe, pw) = (&pd[k..k + n], &pd[k - 1..k - 1 + n]);
-        let (re, rw) = (&rd[k..k + n], &rd[k - 1..k - 1 + n]);
-        for (t, u) in row[lo..hi].iter_mut().enumerate() {
+    let ux = bc.normal_faces(0, grid.nx);
+    let vy = bc.normal_faces(1, grid.ny);
+    let (cx, cy) = (dt / grid.dx, dt / grid.dy);
+    // Over lines of faces (it vectorises): the cells east and west of each x-face, north
+    // and south of each y-face.
+    let faces = Region::of(grid, Stagger::XFace).range(0, ux.lo.max(0), ux.hi.max(0));
+    faces.for_each(u, |line, u| {
+        let (pe, pw) = (p.at(&line, [0, 0, 0]), p.at(&line, [-1, 0, 0]));
+        let (re, rw) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [-1, 0, 0]));
+        for (t, u) in u.iter_mut().enumerate() {
             *u -= cx * (pe[t] - pw[t]) / ops::face_density(re[t], rw[t]);
         }
     });
-    let v0 = p.idx(0, vy.lo);
-    let vrows = (vy.hi - vy.lo).max(0) as usize;
-    let vd = &mut v.data_mut()[v0..v0 + vrows * s];
-    par::rows(&mut *vd, s).for_each(|j, row| {
-        let k = v0 + j * s;
-        let (pn, ps) = (&pd[k..k + nx], &pd[k - s..k - s + nx]);
-        let (rn, rs) = (&rd[k..k + nx], &rd[k - s..k - s + nx]);
-        for (i, v) in row[..nx].iter_mut().enumerate() {
+    let faces = Region::of(grid, Stagger::YFace).range(1, vy.lo, vy.hi);
+    faces.for_each(v, |line, v| {
+        let (pn, ps) = (p.at(&line, [0, 0, 0]), p.at(&line, [0, -1, 0]));
+        let (rn, rs) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [0, -1, 0]));
+        for (i, v) in v.iter_mut().enumerate() {
             *v -= cy * (pn[i] - ps[i]) / ops::face_density(rn[i], rs[i]);
         }
     });

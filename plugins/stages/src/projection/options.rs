@@ -14,15 +14,13 @@ pub struct ProjectionOptions {
     /// preset's is 1e-10. Default (unset; [`Self::tolerance_in`]):
     ///
     /// - [`INTERFACE_TOLERANCE`] (1e-6) in a scene with a second material (its `solid`
-    ///   section: a solid or a second fluid), where what a step leaves moves the interface
-    ///   and adds up in the tracked volume: on the axisymmetric drop at 128² (2,000 steps)
-    ///   the fall is the 1e-10 run's to seven digits and the volume drifts by 5e-12, with 1.9
-    ///   iterations a step instead of 4.7; at 1e-4 the drift is 1.1e-7.
+    ///   section: a solid or a second fluid), where what a step leaves moves the interface and
+    ///   adds up in the tracked volume (the volume-drift targets of `tests/tests/two_material.rs`
+    ///   and the drop benchmark).
     /// - [`ONE_FLUID_TOLERANCE`] (1e-4) in a scene of one fluid, where nothing carries the
-    ///   divergence from step to step (each projection acts on the whole velocity): the
-    ///   Re = 1000 cavity at 128² to t = 2 takes 1.1 iterations a step instead of 2.2 with its
-    ///   centrelines 3.3e-7 from the 1e-6 run's (its discretisation error is 9e-4), and reaches
-    ///   the same steady state.
+    ///   divergence from step to step (each projection acts on the whole velocity): what it
+    ///   leaves changes a cavity's centrelines far less than their discretisation error, at
+    ///   about half the iterations of 1e-6.
     #[serde(default)]
     pub tolerance: Option<f64>,
     /// Iteration cap of the preconditioned conjugate gradient (default 10000).
@@ -33,13 +31,12 @@ pub struct ProjectionOptions {
     pub solver: PressureSolver,
     /// Incremental pressure correction: the last step's pressure gradient joins the predicted
     /// velocity before the viscous step, and the projection solves for the pressure's
-    /// increment, so a viscous fluid at rest under gravity stays at rest (the seed's scheme
-    /// sheared `gΔt` at no-slip side walls into a flow; `efsi_stages::projection`). `false` is the seed's scheme
-    /// (Eqs. 11–23), the whole pressure found by the projection. Default (unset): incremental,
-    /// except in a scene with an elastic solid, where the seed's scheme is kept — with the
-    /// semi-implicit elastic step the incremental predictor pumped energy in (a Saint
-    /// Venant–Kirchhoff sphere gained 16× its energy budget by step 151; the stability map's
-    /// G = 1e9 sphere failed).
+    /// increment, so a viscous fluid at rest under gravity stays at rest
+    /// (`efsi_stages::projection`). `false` is the seed's scheme (Eqs. 11–23), the whole
+    /// pressure found by the projection. Default (unset): incremental, except in a scene with
+    /// an elastic solid, where the seed's scheme is kept (the predictor feeds energy into a
+    /// stiff solid). Never with an elastic strategy that may take the coupled step
+    /// (`numerics.elastic.coupling` `Coupled` or `Auto`), which finds its own pressure.
     #[serde(default)]
     pub incremental: Option<bool>,
 }
@@ -108,6 +105,6 @@ impl StageOptions for ProjectionOptions {
     fn resolve(&mut self, scene: &Scene, options: &Options) {
         self.tolerance = Some(self.tolerance_in(scene));
         self.incremental
-            .get_or_insert_with(|| super::incremental(options));
+            .get_or_insert_with(|| crate::incremental_pressure(options));
     }
 }
