@@ -197,7 +197,10 @@
 //! Staggered like the viscous stress: `B̃₁₁, B̃₂₂, B̃₃₃` and `τ₁₁, τ₂₂, τ₃₃` at cell centres,
 //! `B̃₁₂`, `τ₁₂` at corners, so `∂τ₁₂/∂y` on a u-face is a compact difference. `L₁₁, L₂₂, L₃₃`
 //! live at centres, `L₁₂ = ∂u/∂y`, `L₂₁ = ∂v/∂x` at corners; a component needed at the other
-//! location is the average of its four neighbours. The law is evaluated in two batches
+//! location is the average of its four neighbours. The shear rate is a two-point difference
+//! near the interface and a four-point one in the solid's bulk, whose dispersion cancels the
+//! two-point stress divergence's, so a shear wave crossing the solid lags by `O(h⁴)` in phase
+//! (`Kernels::gradient_in`). The law is evaluated in two batches
 //! (centres and corners). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
 //! face values, as the momentum advection.
 //!
@@ -307,7 +310,8 @@ struct Kernels {
     wc: Field,
     /// Interface shear in series (see "Interface corners" in the module docs): the corner's
     /// B̃ weight `w_k` (1 with any solid, else 0), its solid shear-rate factor `s = 1/(aκ)`,
-    /// stress factor `1/κ` and relaxation coefficient `r = (1 − a)/(μ_f a κ)`.
+    /// stress factor `1/κ` and relaxation coefficient `r = (1 − a)/(μ_f a κ)` (`aκ` taken no
+    /// less than a sliver's floor in `s` and `r`: see `interface::sliver_rates`).
     wk: Field,
     sf: Field,
     ks: Field,
