@@ -418,7 +418,7 @@ mod tests {
         json!({
             "command": "cargo xtask bench --quick",
             "provenance": {
-                "date": "2026-11-29T01:00:00Z",
+                "date": "2000-01-01T00:00:00Z",
                 "commit": "0123456789abcdef0123456789abcdef01234567-dirty",
                 "machine": {"cpu": "Some CPU", "logical_cpus": 2, "memory_gib": 7.75,
                             "os": "linux x86_64"},
@@ -446,7 +446,7 @@ mod tests {
     fn the_bench_section_shows_the_figures_and_where_they_were_measured() {
         let s = bench_section(&bench());
         assert!(s.contains(
-            "`cargo xtask bench --quick`, run 2026-11-29T01:00:00Z at commit 0123456789ab with \
+            "`cargo xtask bench --quick`, run 2000-01-01T00:00:00Z at commit 0123456789ab with \
              uncommitted changes on Some CPU, 2 logical CPUs, 7.8 GiB, linux x86_64."
         ));
         assert!(s.contains(
@@ -477,7 +477,7 @@ mod tests {
     fn a_paper_case_renders_its_checks_runs_and_stages() {
         let summary = json!({
             "mode": "quick", "wall_seconds": 12.4, "command": "cargo xtask bench-paper --quick",
-            "provenance": {"date": "2026-11-29T01:00:00Z", "commit": null, "machine": {}},
+            "provenance": {"date": "2000-01-01T00:00:00Z", "commit": null, "machine": {}},
             "cases": [{
                 "name": "couette", "title": "Couette", "reference": "exact",
                 "error_metric": "L2 error", "schedule": ["viscous", "projection"],
@@ -493,7 +493,7 @@ mod tests {
         });
         let page = paper_section(&summary);
         assert!(
-            page.contains("run 2026-11-29T01:00:00Z at an unknown commit on unknown processor.")
+            page.contains("run 2000-01-01T00:00:00Z at an unknown commit on unknown processor.")
         );
         assert!(page.contains("| couette | 1/2 |"));
         assert!(page.contains("### couette — Couette"));

@@ -72,7 +72,7 @@ mod tests {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let p = provenance(&root);
         let date = p["date"].as_str().expect("a date");
-        // RFC 3339 in UTC to the second: 2026-11-29T01:23:45Z.
+        // RFC 3339 in UTC to the second, e.g. 2000-01-01T00:00:00Z.
         assert_eq!(date.len(), 20, "{date}");
         assert!(date.ends_with('Z') && &date[4..5] == "-" && &date[10..11] == "T");
         assert!(p["machine"]["logical_cpus"].as_u64().unwrap() >= 1);

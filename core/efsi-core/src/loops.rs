@@ -506,6 +506,26 @@ mod tests {
     use super::*;
     use crate::grid::Geometry;
 
+    /// `u` scaled by `factor` in place and summed in one fused pass on `t` threads: the sum's
+    /// bits and the scaled field.
+    fn scaled_and_summed(cells: &Region, u: &Field, factor: f64, t: usize) -> (u64, Field) {
+        let mut v = u.clone();
+        let s = pool(t).install(|| {
+            cells.fold_mut(
+                &mut v,
+                0.0,
+                |_, v| {
+                    v.iter_mut().fold(0.0, |s, v| {
+                        *v *= factor;
+                        s + *v
+                    })
+                },
+                |a, p| a + p,
+            )
+        });
+        (s.to_bits(), v)
+    }
+
     fn pool(t: usize) -> rayon::ThreadPool {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
@@ -587,23 +607,7 @@ mod tests {
             (0..257).map(|n| div(cells.line(n))[1]).fold(0.0, f64::max)
         );
         // A fused update and reduction gives the same bits on one and two threads.
-        let fused = |t| {
-            let mut v = u.clone();
-            let s = pool(t).install(|| {
-                cells.fold_mut(
-                    &mut v,
-                    0.0,
-                    |_, v| {
-                        v.iter_mut().fold(0.0, |s, v| {
-                            *v *= 0.5;
-                            s + *v
-                        })
-                    },
-                    |a, p| a + p,
-                )
-            });
-            (s.to_bits(), v)
-        };
+        let fused = |t| scaled_and_summed(&cells, &u, 0.5, t);
         assert_eq!(fused(1), fused(2));
     }
 
@@ -740,23 +744,7 @@ mod tests {
         assert_eq!(one.map(f64::to_bits), two.map(f64::to_bits));
         let serial = (0..cells.lines()).fold([0.0; 2], |s, n| par::add(s, f(cells.line(n))));
         assert_eq!(one, serial, "line partials added in line order");
-        let fused = |t| {
-            let mut v = u.clone();
-            let s = pool(t).install(|| {
-                cells.fold_mut(
-                    &mut v,
-                    0.0,
-                    |_, v| {
-                        v.iter_mut().fold(0.0, |s, v| {
-                            *v *= 0.75;
-                            s + *v
-                        })
-                    },
-                    |a, p| a + p,
-                )
-            });
-            (s.to_bits(), v)
-        };
+        let fused = |t| scaled_and_summed(&cells, &u, 0.75, t);
         let (f1, f2) = (fused(1), fused(2));
         assert_eq!(f1, f2);
         let want = (0..cells.lines()).fold(0.0, |s, n| {
