@@ -202,6 +202,7 @@ fn main() -> ExitCode {
                 match sim.grid.geometry {
                     efsi_core::Geometry::Planar => "planar",
                     efsi_core::Geometry::Axisymmetric => "axisymmetric",
+                    efsi_core::Geometry::Cartesian3D => "three-dimensional",
                 },
                 sim.grid.nx,
                 sim.grid.ny,

@@ -43,13 +43,15 @@ pub const GHOST: usize = 2;
 /// [`GHOST`] as a signed index offset.
 pub const G: isize = GHOST as isize;
 
-/// Planar (x, y) or axisymmetric (r, z) geometry.
+/// Planar (x, y), axisymmetric (r, z) or three-dimensional Cartesian (x, y, z) geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Geometry {
     /// Two-dimensional planar flow in the x–y plane (plane strain for solids).
     Planar,
     /// Axisymmetric flow without swirl; `x` is the radius `r`, `y` the axis `z`.
     Axisymmetric,
+    /// Three-dimensional flow in an x–y–z box ([`Grid::new_3d`]).
+    Cartesian3D,
 }
 
 /// Radius factors of the axisymmetric metric (all ones in planar geometry).
@@ -205,6 +207,7 @@ impl Grid {
     pub fn new_3d(n: [usize; 3], x: (f64, f64), y: (f64, f64), z: (f64, f64)) -> Self {
         assert!(n[2] >= 1 && z.1 > z.0);
         Grid {
+            geometry: Geometry::Cartesian3D,
             nz: n[2],
             z0: z.0,
             dz: (z.1 - z.0) / n[2] as f64,

@@ -22,6 +22,8 @@ pub struct State {
     pub u: Field,
     /// Velocity component on y-faces (v, or u_z).
     pub v: Field,
+    /// Velocity component on z-faces (w), on a three-dimensional grid only.
+    pub w: Option<Field>,
     /// Pressure at cell centres (Pa).
     pub p: Field,
     /// Density at cell centres (kg/m³).
@@ -152,6 +154,7 @@ impl State {
             dt_prev: 0.0,
             u: Field::zeros(grid),
             v: Field::zeros(grid),
+            w: grid.is_3d().then(|| Field::zeros(grid)),
             p: Field::zeros(grid),
             rho: Field::filled(grid, density),
             mu: Field::filled(grid, viscosity),
@@ -164,7 +167,7 @@ impl State {
     }
 
     /// Every stored array with a stable name, in a fixed order: `u`, `v`, `p`, `rho`, `mu`, then
-    /// `phi` when allocated, then each resource's arrays ([`StateResource::arrays`]). What a
+    /// `w` on a three-dimensional grid, then `phi` when allocated, then each resource's arrays ([`StateResource::arrays`]). What a
     /// checkpoint saves: with `t`, `step` and `dt_prev` this is the whole state, ghosts included.
     pub fn arrays(&self) -> Vec<(String, &Field)> {
         let base = [&self.u, &self.v, &self.p, &self.rho, &self.mu];
@@ -173,6 +176,7 @@ impl State {
             .map(String::from)
             .zip(base)
             .collect();
+        out.extend(self.w.iter().map(|f| ("w".to_string(), f)));
         out.extend(self.phi.iter().map(|f| ("phi".to_string(), f)));
         for r in self.resources.iter() {
             out.extend(r.arrays());
@@ -194,6 +198,7 @@ impl State {
             .map(String::from)
             .zip(base)
             .collect();
+        out.extend(self.w.iter_mut().map(|f| ("w".to_string(), f)));
         out.extend(self.phi.iter_mut().map(|f| ("phi".to_string(), f)));
         for r in self.resources.iter_mut() {
             out.extend(r.arrays_mut());
@@ -240,6 +245,7 @@ impl State {
     pub fn copy_from(&mut self, other: &State) -> bool {
         let base = |s: &State| [&s.u, &s.v, &s.p, &s.rho, &s.mu].map(|f| f.data().len());
         let fits = base(self) == base(other)
+            && self.w.as_ref().map(|f| f.data().len()) == other.w.as_ref().map(|f| f.data().len())
             && self.phi.as_ref().map(|f| f.data().len())
                 == other.phi.as_ref().map(|f| f.data().len())
             && self.resources.0.len() == other.resources.0.len()
@@ -266,6 +272,9 @@ impl State {
         ] {
             f.copy_from(g);
         }
+        if let (Some(f), Some(g)) = (&mut self.w, &other.w) {
+            f.copy_from(g);
+        }
         if let (Some(f), Some(g)) = (&mut self.phi, &other.phi) {
             f.copy_from(g);
         }
@@ -282,6 +291,7 @@ impl State {
         match id {
             FieldId::VelocityX => Some(&self.u),
             FieldId::VelocityY => Some(&self.v),
+            FieldId::VelocityZ => self.w.as_ref(),
             FieldId::Pressure => Some(&self.p),
             FieldId::Density => Some(&self.rho),
             FieldId::Viscosity => Some(&self.mu),

@@ -119,6 +119,12 @@ impl Scene {
 
     /// The domain and the grid.
     fn validate_domain_and_grid(&self) -> Checked {
+        if self.geometry == Geometry::Cartesian3D {
+            return err(
+                "geometry",
+                "Cartesian3D: three-dimensional scenes are not supported by this build (planar and axisymmetric are)".to_string(),
+            );
+        }
         for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
             if !(a.is_finite() && b.is_finite() && b > a) {
                 return err(

@@ -41,6 +41,8 @@ pub enum FieldId {
     VelocityX,
     /// Velocity component on y-faces.
     VelocityY,
+    /// Velocity component on z-faces (three-dimensional grids only).
+    VelocityZ,
     /// Pressure.
     Pressure,
     /// Density.
@@ -70,6 +72,7 @@ impl FieldId {
         match self {
             FieldId::VelocityX => "u",
             FieldId::VelocityY => "v",
+            FieldId::VelocityZ => "w",
             FieldId::Pressure => "pressure",
             FieldId::Density => "density",
             FieldId::Viscosity => "viscosity",

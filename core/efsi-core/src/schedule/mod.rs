@@ -854,7 +854,7 @@ fn after_step(
                     ctx.bc.fill_scalar(ctx.grid, phi, false);
                 }
             }
-            FieldId::VelocityX | FieldId::VelocityY | FieldId::Stage(_) => {}
+            FieldId::VelocityX | FieldId::VelocityY | FieldId::VelocityZ | FieldId::Stage(_) => {}
         }
     }
     if writes.iter().any(|f| matches!(f, FieldId::Stage(_)))
@@ -876,6 +876,7 @@ fn after_step(
             let stagger = match f {
                 FieldId::VelocityX => crate::Stagger::XFace,
                 FieldId::VelocityY => crate::Stagger::YFace,
+                FieldId::VelocityZ => crate::Stagger::ZFace,
                 _ => crate::Stagger::Cell,
             };
             if let Some((i, j)) = field.first_non_finite(stagger, nx, ny) {

@@ -41,6 +41,7 @@ pub fn notes(geometry: Geometry) -> [(&'static str, &'static str); 2] {
                 Geometry::Planar => {
                     "planar: X = x, Y = y, Z out of the plane (one cell layer at Z = 0)"
                 }
+                Geometry::Cartesian3D => "three-dimensional: X = x, Y = y, Z = z",
                 Geometry::Axisymmetric => {
                     "axisymmetric: the r-z half-plane at theta = 0; X = r (radius), Z = z (the axis), Y = theta (hoop direction); revolve about Z for the body"
                 }

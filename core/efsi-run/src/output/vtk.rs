@@ -180,9 +180,10 @@ fn xml_attr(s: &str) -> String {
 }
 
 /// The `WholeExtent`/`Extent` string of `grid`: `0 nx 0 ny 0 0` planar, `0 nx 0 0 0 ny`
-/// axisymmetric.
+/// axisymmetric, `0 nx 0 ny 0 nz` three-dimensional.
 pub fn extent_string(grid: &Grid) -> String {
     match grid.geometry {
+        Geometry::Cartesian3D => format!("0 {} 0 {} 0 {}", grid.nx, grid.ny, grid.nz),
         Geometry::Planar => format!("0 {} 0 {} 0 0", grid.nx, grid.ny),
         Geometry::Axisymmetric => format!("0 {} 0 0 0 {}", grid.nx, grid.ny),
     }
@@ -194,6 +195,7 @@ pub fn node_coordinates(grid: &Grid) -> [Vec<f64>; 3] {
     let ys: Vec<f64> = (0..=grid.ny as isize).map(|j| grid.yf(j)).collect();
     match grid.geometry {
         Geometry::Planar => [xs, ys, vec![0.0]],
+        Geometry::Cartesian3D => [xs, ys, (0..=grid.nz as isize).map(|k| grid.zf(k)).collect()],
         Geometry::Axisymmetric => [xs, vec![0.0], ys],
     }
 }

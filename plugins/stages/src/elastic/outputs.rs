@@ -15,6 +15,7 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
             components: |g| match g {
                 Geometry::Planar => vec!["B̃xx", "B̃yy", "B̃zz (out of plane)", "B̃xy", "0", "0"],
                 Geometry::Axisymmetric => vec!["B̃rr", "B̃θθ", "B̃zz", "0", "0", "B̃rz"],
+                Geometry::Cartesian3D => vec!["B̃xx", "B̃yy", "B̃zz", "B̃xy", "B̃yz", "B̃xz"],
             },
             values: |grid, state| {
                 let d = state.resources.get::<Deformation>()?;
@@ -30,6 +31,7 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
             components: |g| match g {
                 Geometry::Planar => vec!["τxx", "τyy", "τzz (out of plane)", "τxy", "0", "0"],
                 Geometry::Axisymmetric => vec!["τrr", "τθθ", "τzz", "0", "0", "τrz"],
+                Geometry::Cartesian3D => vec!["τxx", "τyy", "τzz", "τxy", "τyz", "τxz"],
             },
             values: |grid, state| {
                 state.phi.as_ref()?;
