@@ -50,41 +50,22 @@ pub(super) fn drive(
     let mut last_good = options.save_last_good.then(|| sim.snapshot());
     let mut latest = None;
     while !due(sim.state.t, end) {
-        let until = out.next_event(sim.state.t);
-        let until = if due(sim.state.t, until) {
-            end.min(out.next_event(sim.state.t + 1e-9 * end))
-        } else {
-            until
+        let until = next_stop(out, sim.state.t, end);
+        let advanced = {
+            let mut each = after_step(out, progress, start, end);
+            let control = Advance {
+                stop: options.stop.as_deref(),
+                rollback: match &mut last_good {
+                    Some(_) => Rollback::Step(&mut last_good),
+                    None => Rollback::None,
+                },
+                on_step: Some(&mut each),
+                ..Advance::default()
+            };
+            sim.advance_to(until, control)
         };
-        // After every step: the outputs due (a periodic checkpoint among them), the progress;
-        // a steady flow ends the run.
-        let mut each = |sim: &mut Simulation, step: &StepInfo| -> Result<Flow, EfsiError> {
-            let finished = due(sim.state.t, end) || sim.is_steady();
-            out.emit(sim, finished)?;
-            progress(&Progress {
-                t: sim.state.t,
-                end,
-                step: sim.state.step,
-                dt: step.dt,
-                wall: start.elapsed().as_secs_f64(),
-            });
-            Ok(if sim.is_steady() {
-                Flow::Stop
-            } else {
-                Flow::Continue
-            })
-        };
-        let control = Advance {
-            stop: options.stop.as_deref(),
-            rollback: match &mut last_good {
-                Some(_) => Rollback::Step(&mut last_good),
-                None => Rollback::None,
-            },
-            on_step: Some(&mut each),
-            ..Advance::default()
-        };
-        match sim.advance_to(until, control) {
-            Ok(Advanced::Reached) => {}
+        let error = match advanced {
+            Ok(Advanced::Reached) => continue,
             Ok(Advanced::Halted) => {
                 stop = StopReason::Steady;
                 break;
@@ -93,45 +74,28 @@ pub(super) fn drive(
                 // The run ends here: the room kept for this checkpoint is free.
                 out.release_room();
                 match save_checkpoint(sim, law, out.state(), sim.snapshot(), &out.dir) {
-                    Ok(c) => latest = Some(c),
-                    Err(error) => return Err(failed(sim, out, start, first_step, error)),
+                    Ok(c) => {
+                        latest = Some(c);
+                        stop = StopReason::Interrupted { signal };
+                        break;
+                    }
+                    Err(error) => error,
                 }
-                stop = StopReason::Interrupted { signal };
-                break;
             }
             // The simulation is back at the start of the failed step: the last good state.
             Err(AdvanceError::Failed { error, good: true }) => {
                 out.release_room();
                 let good = sim.snapshot();
-                let error = save_failure(sim, out, law, good, error);
-                return Err(failed(sim, out, start, first_step, error));
+                save_failure(sim, out, law, good, error)
             }
             // An output or a checkpoint could not be written after a good step: save the state
             // at the start of that step, whose outputs a resume writes again.
             Err(AdvanceError::Hook(error)) => {
-                // A full disk or a file-size limit, most likely: the room kept makes the
-                // checkpoint and run.json below possible.
-                out.release_room();
-                let error = match last_good.take() {
-                    Some(good) => {
-                        let (step, t) = (good.step(), good.t());
-                        match save_checkpoint(sim, law, out.state_before_emit(), good, &out.dir) {
-                            Ok(checkpoint) => EfsiError::Saved {
-                                error: Box::new(error),
-                                step,
-                                t,
-                                vtk: None,
-                                checkpoint,
-                            },
-                            Err(_) => error,
-                        }
-                    }
-                    None => error,
-                };
-                return Err(failed(sim, out, start, first_step, error));
+                save_before_failed_output(sim, out, law, last_good.take(), error)
             }
-            Err(e) => return Err(failed(sim, out, start, first_step, e.into())),
-        }
+            Err(e) => e.into(),
+        };
+        return Err(failed(sim, out, start, first_step, error));
     }
     let outcome = RunOutcome {
         steps: sim.state.step,
@@ -147,6 +111,71 @@ pub(super) fn drive(
     out.release_room();
     out.write_summary(sim, &outcome)?;
     Ok(outcome)
+}
+
+/// What the loop does after every step: the outputs due (a periodic checkpoint among them),
+/// the progress; a steady flow ends the run.
+fn after_step<'a>(
+    out: &'a mut Outputs,
+    progress: &'a mut dyn FnMut(&Progress),
+    start: Instant,
+    end: f64,
+) -> impl FnMut(&mut Simulation, &StepInfo) -> Result<Flow, EfsiError> + 'a {
+    move |sim: &mut Simulation, step: &StepInfo| {
+        let finished = due(sim.state.t, end) || sim.is_steady();
+        out.emit(sim, finished)?;
+        progress(&Progress {
+            t: sim.state.t,
+            end,
+            step: sim.state.step,
+            dt: step.dt,
+            wall: start.elapsed().as_secs_f64(),
+        });
+        Ok(if sim.is_steady() {
+            Flow::Stop
+        } else {
+            Flow::Continue
+        })
+    }
+}
+
+/// The time the loop advances to next: the next output event after `t`, or after a sliver
+/// past `t` when that event is already due (the outputs at `t` were written).
+fn next_stop(out: &Outputs, t: f64, end: f64) -> f64 {
+    let until = out.next_event(t);
+    if due(t, until) {
+        end.min(out.next_event(t + 1e-9 * end))
+    } else {
+        until
+    }
+}
+
+/// An output or a checkpoint could not be written after a good step (a full disk or a
+/// file-size limit, most likely): free the room kept for this moment and save the state at the
+/// start of that step, `good`, whose outputs a resume writes again. Returns the error to
+/// report: [`EfsiError::Saved`] when the checkpoint was written, `error` itself otherwise.
+fn save_before_failed_output(
+    sim: &Simulation,
+    out: &mut Outputs,
+    law: &Option<LawIdentity>,
+    good: Option<efsi_core::Snapshot>,
+    error: EfsiError,
+) -> EfsiError {
+    out.release_room();
+    let Some(good) = good else {
+        return error;
+    };
+    let (step, t) = (good.step(), good.t());
+    match save_checkpoint(sim, law, out.state_before_emit(), good, &out.dir) {
+        Ok(checkpoint) => EfsiError::Saved {
+            error: Box::new(error),
+            step,
+            t,
+            vtk: None,
+            checkpoint,
+        },
+        Err(_) => error,
+    }
 }
 
 /// The run failed with `error`: record it in `run.json` (as far as that can still be written)

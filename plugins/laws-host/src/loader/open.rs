@@ -24,142 +24,16 @@ pub(super) struct Opened {
 
 /// Opens `path` and checks its descriptor; `label` names the law until the descriptor does.
 pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
-    let mut law = label.to_string();
-    let fail = |law: &str, message: String| LawError {
-        law: law.to_string(),
-        message,
-        cell: None,
-    };
-    // The loader maps the file as its headers say: a truncated or corrupted file would kill
-    // the process (SIGBUS, SIGSEGV) before any error could be reported.
-    super::elf::check_library_file(path).map_err(|why| {
-        fail(
-            &law,
-            format!("{} is not a loadable library: {why}", path.display()),
-        )
-    })?;
-    // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
-    // (the user named it); its file was checked above, and the checks below guard the ABI.
-    let library = unsafe { Library::new(path) }.map_err(|e| {
-        // The loader's own words (`dlerror`) are the error's source, not its summary.
-        let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
-        fail(
-            &law,
-            format!("{} is not a loadable library: {why}", path.display()),
-        )
-    })?;
-    // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.
-    let entry: EntryFn = unsafe { library.get::<EntryFn>(ENTRY_SYMBOL) }
-        .map(|s| *s)
-        .map_err(|_| {
-            fail(
-                &law,
-                format!(
-                    "{} is not an efsi law library: it has no `{ENTRY_SYMBOL_NAME}` symbol (build it with efsi-law-sdk's `export_law!`)",
-                    path.display()
-                ),
-            )
-        })?;
-    // SAFETY: `entry` has the ABI's signature; it takes no arguments.
-    let ptr = unsafe { entry() };
-    if ptr.is_null() {
-        return Err(fail(
-            &law,
-            format!(
-                "{}: `{ENTRY_SYMBOL_NAME}` returned no descriptor (the library could not describe its law)",
-                path.display()
-            ),
-        ));
-    }
-    // The first two u32 fields are frozen across ABI versions: read them before anything else.
-    // SAFETY: every version's descriptor starts with these two fields.
-    let [version, size] = unsafe { ptr.cast::<[u32; 2]>().read() };
-    if version != ABI_VERSION {
-        return Err(fail(
-            &law,
-            format!(
-                "{} was built for ABI v{version}, efsi expects v{ABI_VERSION}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
-                path.display()
-            ),
-        ));
-    }
-    if size != DESCRIPTOR_SIZE {
-        return Err(fail(
-            &law,
-            format!(
-                "{}: descriptor size {size} bytes, efsi expects {DESCRIPTOR_SIZE} for ABI v{ABI_VERSION}: the library's layout does not match its version; rebuild it against efsi-law-sdk {CRATE_VERSION}",
-                path.display()
-            ),
-        ));
-    }
-    // SAFETY: version and size match this crate's definition; it lives as long as `library`.
-    let d: &LawDescriptor = unsafe { &*ptr };
+    let library = load(path, label)?;
+    let (d, version) = descriptor(&library, path, label)?;
     // SAFETY: descriptor strings are NUL-terminated, live as long as the library (ABI rule).
     let text = |p: *const c_char, what: &str, law: &str| unsafe { c_text(p, what, law, path) };
-    let name = text(d.name, "name", &law)?;
-    law = name.clone();
-    let description = text(d.description, "description", &law)?;
-    if d.param_desc_size != std::mem::size_of::<ParamDesc>() {
-        return Err(fail(
-            &law,
-            format!(
-                "{}: parameter entries of {} bytes, efsi expects {}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
-                path.display(),
-                d.param_desc_size,
-                std::mem::size_of::<ParamDesc>()
-            ),
-        ));
-    }
-    let table: &[ParamDesc] = match (d.param_count, d.params.is_null()) {
-        (0, _) => &[],
-        (_, true) => {
-            return Err(fail(
-                &law,
-                format!(
-                    "{}: declares {} parameters but no table",
-                    path.display(),
-                    d.param_count
-                ),
-            ));
-        }
-        // SAFETY: non-null, `param_count` entries of the checked size (ABI rule).
-        (n, false) => unsafe { std::slice::from_raw_parts(d.params, n) },
-    };
-    let mut parameters: Vec<ParamInfo> = Vec::with_capacity(table.len());
-    for (k, p) in table.iter().enumerate() {
-        let what = format!("parameter {k}'s name");
-        let info = ParamInfo {
-            name: text(p.name, &what, &law)?,
-            unit: text(p.unit, "parameter unit", &law)?,
-            description: text(p.description, "parameter description", &law)?,
-            default: p.default,
-            min: p.min,
-            max: p.max,
-            min_exclusive: p.flags & PARAM_MIN_EXCLUSIVE != 0,
-            max_exclusive: p.flags & PARAM_MAX_EXCLUSIVE != 0,
-        };
-        if parameters.iter().any(|q| q.name == info.name) {
-            return Err(fail(
-                &law,
-                format!("declares parameter `{}` twice", info.name),
-            ));
-        }
-        if !info.contains(info.default) {
-            return Err(fail(
-                &law,
-                format!(
-                    "parameter `{}`'s declared default {} is outside its declared range {}",
-                    info.name,
-                    super::number(info.default),
-                    info.range_text()
-                ),
-            ));
-        }
-        parameters.push(info);
-    }
+    let name = text(d.name, "name", label)?;
+    let description = text(d.description, "description", &name)?;
+    let parameters = parameters(d, path, &name)?;
     let (Some(create), Some(destroy), Some(evaluate)) = (d.create, d.destroy, d.evaluate) else {
         return Err(fail(
-            &law,
+            &name,
             format!(
                 "{}: the descriptor lacks a create, destroy or evaluate function",
                 path.display()
@@ -179,6 +53,156 @@ pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
         evaluate,
         library,
     })
+}
+
+/// A law error of `law` (no cell).
+fn fail(law: &str, message: String) -> LawError {
+    LawError {
+        law: law.to_string(),
+        message,
+        cell: None,
+    }
+}
+
+/// The library at `path`, its file's structure checked before the dynamic loader maps it.
+fn load(path: &Path, law: &str) -> Result<Library, LawError> {
+    // The loader maps the file as its headers say: a truncated or corrupted file would kill
+    // the process (SIGBUS, SIGSEGV) before any error could be reported.
+    super::elf::check_library_file(path).map_err(|why| {
+        fail(
+            law,
+            format!("{} is not a loadable library: {why}", path.display()),
+        )
+    })?;
+    // SAFETY: loading a library runs its initialisers; a law library is trusted code by design
+    // (the user named it); its file was checked above, and the checks below guard the ABI.
+    unsafe { Library::new(path) }.map_err(|e| {
+        // The loader's own words (`dlerror`) are the error's source, not its summary.
+        let why = std::error::Error::source(&e).map_or_else(|| e.to_string(), |s| s.to_string());
+        fail(
+            law,
+            format!("{} is not a loadable library: {why}", path.display()),
+        )
+    })
+}
+
+/// The descriptor `library`'s entry symbol returns, after its frozen header (ABI version and
+/// descriptor size) matched this build's; with the version.
+fn descriptor<'l>(
+    library: &'l Library,
+    path: &Path,
+    law: &str,
+) -> Result<(&'l LawDescriptor, u32), LawError> {
+    // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.
+    let entry: EntryFn = unsafe { library.get::<EntryFn>(ENTRY_SYMBOL) }
+        .map(|s| *s)
+        .map_err(|_| {
+            fail(
+                law,
+                format!(
+                    "{} is not an efsi law library: it has no `{ENTRY_SYMBOL_NAME}` symbol (build it with efsi-law-sdk's `export_law!`)",
+                    path.display()
+                ),
+            )
+        })?;
+    // SAFETY: `entry` has the ABI's signature; it takes no arguments.
+    let ptr = unsafe { entry() };
+    if ptr.is_null() {
+        return Err(fail(
+            law,
+            format!(
+                "{}: `{ENTRY_SYMBOL_NAME}` returned no descriptor (the library could not describe its law)",
+                path.display()
+            ),
+        ));
+    }
+    // The first two u32 fields are frozen across ABI versions: read them before anything else.
+    // SAFETY: every version's descriptor starts with these two fields.
+    let [version, size] = unsafe { ptr.cast::<[u32; 2]>().read() };
+    if version != ABI_VERSION {
+        return Err(fail(
+            law,
+            format!(
+                "{} was built for ABI v{version}, efsi expects v{ABI_VERSION}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                path.display()
+            ),
+        ));
+    }
+    if size != DESCRIPTOR_SIZE {
+        return Err(fail(
+            law,
+            format!(
+                "{}: descriptor size {size} bytes, efsi expects {DESCRIPTOR_SIZE} for ABI v{ABI_VERSION}: the library's layout does not match its version; rebuild it against efsi-law-sdk {CRATE_VERSION}",
+                path.display()
+            ),
+        ));
+    }
+    // SAFETY: version and size match this crate's definition; it lives as long as `library`.
+    Ok((unsafe { &*ptr }, version))
+}
+
+/// The parameter table of descriptor `d`, each entry's strings, uniqueness and default checked.
+fn parameters(d: &LawDescriptor, path: &Path, law: &str) -> Result<Vec<ParamInfo>, LawError> {
+    // SAFETY: descriptor strings are NUL-terminated, live as long as the library (ABI rule).
+    let text = |p: *const c_char, what: &str| unsafe { c_text(p, what, law, path) };
+    if d.param_desc_size != std::mem::size_of::<ParamDesc>() {
+        return Err(fail(
+            law,
+            format!(
+                "{}: parameter entries of {} bytes, efsi expects {}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                path.display(),
+                d.param_desc_size,
+                std::mem::size_of::<ParamDesc>()
+            ),
+        ));
+    }
+    let table: &[ParamDesc] = match (d.param_count, d.params.is_null()) {
+        (0, _) => &[],
+        (_, true) => {
+            return Err(fail(
+                law,
+                format!(
+                    "{}: declares {} parameters but no table",
+                    path.display(),
+                    d.param_count
+                ),
+            ));
+        }
+        // SAFETY: non-null, `param_count` entries of the checked size (ABI rule).
+        (n, false) => unsafe { std::slice::from_raw_parts(d.params, n) },
+    };
+    let mut parameters: Vec<ParamInfo> = Vec::with_capacity(table.len());
+    for (k, p) in table.iter().enumerate() {
+        let info = ParamInfo {
+            name: text(p.name, &format!("parameter {k}'s name"))?,
+            unit: text(p.unit, "parameter unit")?,
+            description: text(p.description, "parameter description")?,
+            default: p.default,
+            min: p.min,
+            max: p.max,
+            min_exclusive: p.flags & PARAM_MIN_EXCLUSIVE != 0,
+            max_exclusive: p.flags & PARAM_MAX_EXCLUSIVE != 0,
+        };
+        if parameters.iter().any(|q| q.name == info.name) {
+            return Err(fail(
+                law,
+                format!("declares parameter `{}` twice", info.name),
+            ));
+        }
+        if !info.contains(info.default) {
+            return Err(fail(
+                law,
+                format!(
+                    "parameter `{}`'s declared default {} is outside its declared range {}",
+                    info.name,
+                    super::number(info.default),
+                    info.range_text()
+                ),
+            ));
+        }
+        parameters.push(info);
+    }
+    Ok(parameters)
 }
 
 /// A descriptor string.
