@@ -295,6 +295,9 @@ fn colour(s: f64) -> RGBColor {
     RGBColor(l(a.0, b.0), l(a.1, b.1), l(a.2, b.2))
 }
 
+/// A line segment from one point to another.
+type Segment = ((f64, f64), (f64, f64));
+
 /// The segments of the `level` contour of the cell-centred `values` (`n1 × n2`, first index
 /// fastest; centres at `c1`, `c2`), by marching squares over the squares between centres.
 pub fn contour(
@@ -303,7 +306,7 @@ pub fn contour(
     c1: &[f64],
     c2: &[f64],
     level: f64,
-) -> Vec<((f64, f64), (f64, f64))> {
+) -> Vec<Segment> {
     let mut segments = Vec::new();
     let at = |i: usize, j: usize| values[j * n1 + i] - level;
     for j in 0..n2.saturating_sub(1) {
@@ -401,12 +404,12 @@ pub fn arrows(
         .collect()
 }
 
-fn plot_field(
-    data: &VtrData,
+/// The cell array `name` of `data` and the component asked for, checked.
+fn field_array<'a>(
+    data: &'a VtrData,
     name: &str,
     component: Option<usize>,
-    png: &Path,
-) -> Result<(), String> {
+) -> Result<&'a efsi_run::output::read::ReadArray, String> {
     let array = data.cell(name).ok_or_else(|| {
         format!(
             "no field `{name}` in the VTK output; it has: {}",
@@ -425,6 +428,111 @@ fn plot_field(
             array.components
         ));
     }
+    Ok(array)
+}
+
+/// The plotted quantity's label: the component, the magnitude of a vector, or the name.
+fn field_label(name: &str, components: usize, component: Option<usize>) -> String {
+    match component {
+        Some(k) => format!("{name}[{k}]"),
+        None if components == 3 => format!("|{name}|"),
+        None if components > 1 => format!("{name}[0]"),
+        None => name.to_string(),
+    }
+}
+
+/// The segments of the solid's interface (the `solid_fraction` = ½ contour) over the cells
+/// with edges `e1`, `e2`, when the output has a solid fraction.
+fn interface_segments(data: &VtrData, e1: &[f64], e2: &[f64]) -> Option<Vec<Segment>> {
+    let phi = data.cell("solid_fraction")?;
+    let centre = |e: &[f64]| {
+        e.windows(2)
+            .map(|p| 0.5 * (p[0] + p[1]))
+            .collect::<Vec<_>>()
+    };
+    let shape = (e1.len() - 1, e2.len() - 1);
+    Some(contour(&phi.values, shape, &centre(e1), &centre(e2), 0.5))
+}
+
+/// The plot window `(x0, x1, y0, y1)` around edges `e1`, `e2` with the domain's aspect ratio.
+fn square_window(e1: &[f64], e2: &[f64]) -> (f64, f64, f64, f64) {
+    let (n1, n2) = (e1.len() - 1, e2.len() - 1);
+    let (w, h) = (e1[n1] - e1[0], e2[n2] - e2[0]);
+    if w >= h {
+        let pad = 0.5 * (w - h);
+        (e1[0], e1[n1], e2[0] - pad, e2[n2] + pad)
+    } else {
+        let pad = 0.5 * (h - w);
+        (e1[0] - pad, e1[n1] + pad, e2[0], e2[n2])
+    }
+}
+
+/// The axes of a field plot, named `axes` and ticked for the window's spans, without a grid;
+/// without text when no font is available.
+fn draw_axes(
+    chart: &mut ChartContext<
+        '_,
+        BitMapBackend<'_>,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    axes: (&str, &str),
+    (sx, sy): (f64, f64),
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut mesh = chart.configure_mesh();
+    mesh.disable_mesh();
+    let (fx, fy) = (move |v: &f64| tick(*v, sx), move |v: &f64| tick(*v, sy));
+    if text {
+        mesh.x_desc(axes.0)
+            .y_desc(axes.1)
+            .label_style((FAMILY, 13))
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy);
+    }
+    mesh.draw()?;
+    Ok(())
+}
+
+/// The colour bar of the range `lo..hi` top to bottom, its ends labelled (`≥`/`≤` when values
+/// lie beyond them) when `text`.
+fn draw_colour_bar(
+    bar: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    (lo, hi): (f64, f64),
+    (below, above): (bool, bool),
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let span = hi - lo;
+    let bar = bar.margin(60, 60, 20, 40);
+    let (bw, bh) = bar.dim_in_pixel();
+    for py in 0..bh {
+        let s = 1.0 - py as f64 / (bh.max(2) - 1) as f64;
+        bar.draw(&Rectangle::new(
+            [(0, py as i32), (bw as i32 / 2, py as i32 + 1)],
+            colour(s).filled(),
+        ))?;
+    }
+    if text {
+        let style = (FAMILY, 13).into_font().color(&BLACK);
+        let top = if above { "≥ " } else { "" };
+        let bottom = if below { "≤ " } else { "" };
+        // One digit more than an axis tick: the ends are values, not steps.
+        bar.draw_text(&format!("{top}{}", tick(hi, span / 10.0)), &style, (0, -18))?;
+        bar.draw_text(
+            &format!("{bottom}{}", tick(lo, span / 10.0)),
+            &style,
+            (0, bh as i32 + 4),
+        )?;
+    }
+    Ok(())
+}
+
+fn plot_field(
+    data: &VtrData,
+    name: &str,
+    component: Option<usize>,
+    png: &Path,
+) -> Result<(), String> {
+    let array = field_array(data, name, component)?;
     let values = scalar(&array.values, array.components, component);
     let (n1, n2) = data.shape();
     let [x, y, z] = &data.coordinates;
@@ -432,61 +540,37 @@ fn plot_field(
     let axes = if y.len() == 1 { ("r", "z") } else { ("x", "y") };
     let (lo, hi) = colour_range(&values);
     let span = hi - lo;
-    let (below, above) = (
+    let beyond = (
         values.iter().any(|&v| v < lo),
         values.iter().any(|&v| v > hi),
     );
     // Arrows of a vector field plotted as its magnitude.
     let arrows = (component.is_none() && array.components == 3)
         .then(|| arrows(&array.values, (n1, n2), e1, e2, y.len() == 1));
+    let interface = interface_segments(data, e1, e2);
     let text = font();
-    let label = match component {
-        Some(k) => format!("{name}[{k}]"),
-        None if array.components == 3 => format!("|{name}|"),
-        None if array.components > 1 => format!("{name}[0]"),
-        None => name.to_string(),
+    let label = field_label(name, array.components, component);
+    let and_arrows = if arrows.is_some() {
+        " and its direction"
+    } else {
+        ""
     };
+    let time = efsi_run::run::time_label(data.time);
+    let caption = format!("{label}{and_arrows} at t = {time}");
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
         let root = BitMapBackend::new(png, FIELD_SIZE).into_drawing_area();
         root.fill(&WHITE)?;
         let (main, bar) = root.split_horizontally(FIELD_SIZE.0 - 110);
-        // Keep the domain's aspect ratio inside the main area.
-        let (w, h) = (e1[n1] - e1[0], e2[n2] - e2[0]);
-        let (x0, x1, y0, y1) = if w >= h {
-            let pad = 0.5 * (w - h);
-            (e1[0], e1[n1], e2[0] - pad, e2[n2] + pad)
-        } else {
-            let pad = 0.5 * (h - w);
-            (e1[0] - pad, e1[n1] + pad, e2[0], e2[n2])
-        };
+        let (x0, x1, y0, y1) = square_window(e1, e2);
         let mut b = ChartBuilder::on(&main);
         b.margin(12);
         if text {
-            let what = if arrows.is_some() {
-                format!("{label} and its direction")
-            } else {
-                label.clone()
-            };
-            b.caption(
-                format!("{what} at t = {}", efsi_run::run::time_label(data.time)),
-                (FAMILY, 22),
-            )
-            .x_label_area_size(40)
-            .y_label_area_size(70);
+            b.caption(&caption, (FAMILY, 22))
+                .x_label_area_size(40)
+                .y_label_area_size(70);
         }
         let mut chart = b.build_cartesian_2d(x0..x1, y0..y1)?;
-        let mut mesh = chart.configure_mesh();
-        mesh.disable_mesh();
-        let (sx, sy) = (x1 - x0, y1 - y0);
-        let (fx, fy) = (move |v: &f64| tick(*v, sx), move |v: &f64| tick(*v, sy));
-        if text {
-            mesh.x_desc(axes.0)
-                .y_desc(axes.1)
-                .label_style((FAMILY, 13))
-                .x_label_formatter(&fx)
-                .y_label_formatter(&fy);
-        }
-        mesh.draw()?;
+        draw_axes(&mut chart, axes, (x1 - x0, y1 - y0), text)?;
         chart.draw_series((0..n2).flat_map(|j| {
             let values = &values;
             (0..n1).map(move |i| {
@@ -494,17 +578,11 @@ fn plot_field(
                 Rectangle::new([(e1[i], e2[j]), (e1[i + 1], e2[j + 1])], c.filled())
             })
         }))?;
-        if let Some(phi) = data.cell("solid_fraction") {
-            let centre = |e: &[f64]| {
-                e.windows(2)
-                    .map(|p| 0.5 * (p[0] + p[1]))
-                    .collect::<Vec<_>>()
-            };
-            let segments = contour(&phi.values, (n1, n2), &centre(e1), &centre(e2), 0.5);
+        if let Some(segments) = &interface {
             chart.draw_series(
                 segments
-                    .into_iter()
-                    .map(|(a, b)| PathElement::new(vec![a, b], CONTOUR.stroke_width(3))),
+                    .iter()
+                    .map(|&(a, b)| PathElement::new(vec![a, b], CONTOUR.stroke_width(3))),
             )?;
         }
         if let Some(arrows) = &arrows {
@@ -514,28 +592,7 @@ fn plot_field(
                     .map(|a| PathElement::new(a.to_vec(), WHITE.stroke_width(1))),
             )?;
         }
-        // The colour bar: its range top to bottom.
-        let bar = bar.margin(60, 60, 20, 40);
-        let (bw, bh) = bar.dim_in_pixel();
-        for py in 0..bh {
-            let s = 1.0 - py as f64 / (bh.max(2) - 1) as f64;
-            bar.draw(&Rectangle::new(
-                [(0, py as i32), (bw as i32 / 2, py as i32 + 1)],
-                colour(s).filled(),
-            ))?;
-        }
-        if text {
-            let style = (FAMILY, 13).into_font().color(&BLACK);
-            let top = if above { "≥ " } else { "" };
-            let bottom = if below { "≤ " } else { "" };
-            // One digit more than an axis tick: the ends are values, not steps.
-            bar.draw_text(&format!("{top}{}", tick(hi, span / 10.0)), &style, (0, -18))?;
-            bar.draw_text(
-                &format!("{bottom}{}", tick(lo, span / 10.0)),
-                &style,
-                (0, bh as i32 + 4),
-            )?;
-        }
+        draw_colour_bar(&bar, (lo, hi), beyond, text)?;
         root.present()?;
         Ok(())
     };
