@@ -132,6 +132,17 @@ pub struct Port {
     pub range: (Option<f64>, Option<f64>),
 }
 
+impl Port {
+    /// A port called `name`, without unit or range.
+    fn named(name: &str) -> Port {
+        Port {
+            name: name.to_string(),
+            unit: None,
+            range: (None, None),
+        }
+    }
+}
+
 /// A scene FMU's definition (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spec {
@@ -145,6 +156,129 @@ pub struct Spec {
     pub inputs: Vec<Port>,
     /// Outputs: probe columns.
     pub outputs: Vec<Port>,
+}
+
+/// The variable of parameter `p` at value reference `vr`: its kind and start from the scene.
+fn parameter_variable(scene: &Scene, vr: u32, p: &Port) -> Result<Variable, String> {
+    let (kind, start) = match scene_value(scene, &p.name)? {
+        OverrideValue::Int(i) => (Kind::Int32, i.to_string()),
+        OverrideValue::Float(x) => (Kind::Real, format!("{x:?}")),
+        OverrideValue::Str(s) => (Kind::String, s),
+        other => {
+            return Err(format!(
+                "parameter `{}`: {other} is not a number or a string",
+                p.name
+            ));
+        }
+    };
+    Ok(Variable {
+        vr,
+        name: p.name.clone(),
+        kind,
+        causality: Causality::Parameter,
+        unit: p.unit.clone(),
+        start: Some(start),
+        min: p.range.0,
+        max: p.range.1,
+        description: if p.name == REFINE {
+            "Grid refinement: every grid dimension multiplied by this factor (rounded), the domain kept, as efsi run --refine".into()
+        } else {
+            format!("The scene setting `{}`", p.name)
+        },
+    })
+}
+
+/// The variable of input `i` at value reference `vr`, starting from the scene's value.
+fn input_variable(scene: &Scene, vr: u32, i: &Port) -> Variable {
+    let start = input_start(scene, &i.name);
+    Variable {
+        vr,
+        name: i.name.clone(),
+        kind: Kind::Real,
+        causality: Causality::Input,
+        unit: i.unit.clone(),
+        start: Some(format!("{start:?}")),
+        min: i.range.0,
+        max: i.range.1,
+        description: match input_target(&i.name) {
+            Some(InputTarget::BaseAcceleration) => "Acceleration of the grid's frame along y (z), positive up: the body force is gravity - base_acceleration".into(),
+            _ => format!("Speed of the moving wall `{}` (its profile and motion multiply it)", i.name),
+        },
+    }
+}
+
+/// The ports the flags name — parameters, inputs and outputs, in order — and the `--range`
+/// values, unchecked.
+fn parse_flags(args: &[String]) -> Result<([Vec<Port>; 3], Vec<String>), String> {
+    let port = |arg: &str| {
+        let (name, unit) = match arg.split_once('=') {
+            Some((n, u)) => (n.trim(), Some(u.trim().to_string())),
+            None => (arg.trim(), None),
+        };
+        Port {
+            unit,
+            ..Port::named(name)
+        }
+    };
+    let mut ports: [Vec<Port>; 3] = Default::default();
+    let mut ranges = Vec::new();
+    let mut k = 0;
+    while k < args.len() {
+        let flag = args[k].as_str();
+        let value = args
+            .get(k + 1)
+            .ok_or_else(|| format!("{flag}: a value is missing"))?;
+        match flag {
+            "--parameter" => ports[0].push(port(value)),
+            "--input" => ports[1].push(port(value)),
+            "--output" => ports[2].push(port(value)),
+            "--range" => ranges.push(value.clone()),
+            _ => {
+                return Err(format!(
+                    "unknown flag `{flag}`: expected --parameter PATH[=UNIT], --input NAME[=UNIT], --output PROBE[=UNIT], --range NAME=MIN..MAX"
+                ));
+            }
+        }
+        k += 2;
+    }
+    Ok((ports, ranges))
+}
+
+/// A `--range NAME=MIN..MAX` value: the name and the bounds (`None` for an empty bound, `-inf`
+/// as MIN or `inf` as MAX), checked finite and ordered.
+fn parse_range(r: &str) -> Result<(&str, (Option<f64>, Option<f64>)), String> {
+    let (name, bounds) = r
+        .split_once('=')
+        .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
+    let (lo, hi) = bounds
+        .split_once("..")
+        .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
+    // A bound is a finite number; empty, `-inf` (MIN) or `inf` (MAX) for none.
+    let num = |s: &str, upper: bool| -> Result<Option<f64>, String> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Ok(None);
+        }
+        let x: f64 = s
+            .parse()
+            .map_err(|_| format!("--range {r}: `{s}` is not a number"))?;
+        match (x.is_nan(), x.is_infinite(), upper, x > 0.0) {
+            (true, ..) => Err(format!("--range {r}: `{s}` is not a number")),
+            (false, true, true, true) | (false, true, false, false) => Ok(None),
+            (false, true, ..) => Err(format!(
+                "--range {r}: {} cannot be {s}",
+                if upper { "MAX" } else { "MIN" }
+            )),
+            _ => Ok(Some(x)),
+        }
+    };
+    let range = (num(lo, false)?, num(hi, true)?);
+    if let (Some(a), Some(b)) = range
+        && a > b
+    {
+        return Err(format!("--range {r}: MIN {a} is above MAX {b}"));
+    }
+    Ok((name.trim(), range))
 }
 
 /// What an input acts on.
@@ -195,54 +329,17 @@ impl Spec {
     pub fn from_args(path: &Path, args: &[String]) -> Result<Spec, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let scene = Scene::from_str_at(&text, path).map_err(|e| e.to_string())?;
+        let ([parameters, inputs, outputs], ranges) = parse_flags(args)?;
         let mut spec = Spec {
             name: scene.name.clone(),
             scene: text,
-            parameters: Vec::new(),
-            inputs: Vec::new(),
-            outputs: Vec::new(),
+            parameters,
+            inputs,
+            outputs,
         };
-        let port = |arg: &str| {
-            let (name, unit) = match arg.split_once('=') {
-                Some((n, u)) => (n.trim(), Some(u.trim().to_string())),
-                None => (arg.trim(), None),
-            };
-            Port {
-                name: name.to_string(),
-                unit,
-                range: (None, None),
-            }
-        };
-        let mut ranges = Vec::new();
-        let mut k = 0;
-        while k < args.len() {
-            let flag = args[k].as_str();
-            let value = args
-                .get(k + 1)
-                .ok_or_else(|| format!("{flag}: a value is missing"))?;
-            match flag {
-                "--parameter" => spec.parameters.push(port(value)),
-                "--input" => spec.inputs.push(port(value)),
-                "--output" => spec.outputs.push(port(value)),
-                "--range" => ranges.push(value.clone()),
-                _ => {
-                    return Err(format!(
-                        "unknown flag `{flag}`: expected --parameter PATH[=UNIT], --input NAME[=UNIT], --output PROBE[=UNIT], --range NAME=MIN..MAX"
-                    ));
-                }
-            }
-            k += 2;
-        }
         let columns = probe_columns(&scene)?;
         if spec.outputs.is_empty() {
-            spec.outputs = columns
-                .iter()
-                .map(|c| Port {
-                    name: c.clone(),
-                    unit: None,
-                    range: (None, None),
-                })
-                .collect();
+            spec.outputs = columns.iter().map(|c| Port::named(c)).collect();
         }
         for o in &spec.outputs {
             if !columns.contains(&o.name) {
@@ -260,42 +357,12 @@ impl Spec {
             check_input(&scene, &i.name).map_err(|e| format!("--input {}: {e}", i.name))?;
         }
         for r in ranges {
-            let (name, bounds) = r
-                .split_once('=')
-                .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
-            let (lo, hi) = bounds
-                .split_once("..")
-                .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
-            // A bound is a finite number; empty, `-inf` (MIN) or `inf` (MAX) for none.
-            let num = |s: &str, upper: bool| -> Result<Option<f64>, String> {
-                let s = s.trim();
-                if s.is_empty() {
-                    return Ok(None);
-                }
-                let x: f64 = s
-                    .parse()
-                    .map_err(|_| format!("--range {r}: `{s}` is not a number"))?;
-                match (x.is_nan(), x.is_infinite(), upper, x > 0.0) {
-                    (true, ..) => Err(format!("--range {r}: `{s}` is not a number")),
-                    (false, true, true, true) | (false, true, false, false) => Ok(None),
-                    (false, true, ..) => Err(format!(
-                        "--range {r}: {} cannot be {s}",
-                        if upper { "MAX" } else { "MIN" }
-                    )),
-                    _ => Ok(Some(x)),
-                }
-            };
-            let range = (num(lo, false)?, num(hi, true)?);
-            if let (Some(a), Some(b)) = range
-                && a > b
-            {
-                return Err(format!("--range {r}: MIN {a} is above MAX {b}"));
-            }
+            let (name, range) = parse_range(&r)?;
             let target = spec
                 .parameters
                 .iter_mut()
                 .chain(spec.inputs.iter_mut())
-                .find(|p| p.name == name.trim())
+                .find(|p| p.name == name)
                 .ok_or_else(|| format!("--range {r}: no parameter or input `{name}`"))?;
             target.range = range;
         }
@@ -375,49 +442,10 @@ impl Spec {
             },
         ];
         for (k, p) in self.parameters.iter().enumerate() {
-            let (kind, start) = match scene_value(&scene, &p.name)? {
-                OverrideValue::Int(i) => (Kind::Int32, i.to_string()),
-                OverrideValue::Float(x) => (Kind::Real, format!("{x:?}")),
-                OverrideValue::Str(s) => (Kind::String, s),
-                other => {
-                    return Err(format!(
-                        "parameter `{}`: {other} is not a number or a string",
-                        p.name
-                    ));
-                }
-            };
-            v.push(Variable {
-                vr: VR_PARAMETERS + k as u32,
-                name: p.name.clone(),
-                kind,
-                causality: Causality::Parameter,
-                unit: p.unit.clone(),
-                start: Some(start),
-                min: p.range.0,
-                max: p.range.1,
-                description: if p.name == REFINE {
-                    "Grid refinement: every grid dimension multiplied by this factor (rounded), the domain kept, as efsi run --refine".into()
-                } else {
-                    format!("The scene setting `{}`", p.name)
-                },
-            });
+            v.push(parameter_variable(&scene, VR_PARAMETERS + k as u32, p)?);
         }
         for (k, i) in self.inputs.iter().enumerate() {
-            let start = input_start(&scene, &i.name);
-            v.push(Variable {
-                vr: VR_INPUTS + k as u32,
-                name: i.name.clone(),
-                kind: Kind::Real,
-                causality: Causality::Input,
-                unit: i.unit.clone(),
-                start: Some(format!("{start:?}")),
-                min: i.range.0,
-                max: i.range.1,
-                description: match input_target(&i.name) {
-                    Some(InputTarget::BaseAcceleration) => "Acceleration of the grid's frame along y (z), positive up: the body force is gravity - base_acceleration".into(),
-                    _ => format!("Speed of the moving wall `{}` (its profile and motion multiply it)", i.name),
-                },
-            });
+            v.push(input_variable(&scene, VR_INPUTS + k as u32, i));
         }
         for (k, o) in self.outputs.iter().enumerate() {
             v.push(Variable {

@@ -42,7 +42,6 @@ pub(crate) fn fmu(args: &[String]) -> Result<[PathBuf; 2], String> {
         "build the FMU library and the shipped laws (stripped release)",
     )?;
     let release = root().join("target").join(FMU_PROFILE);
-    let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
     let dir = root().join("target/fmu");
     let staging = dir.join(".staging");
     let _ = std::fs::remove_dir_all(&staging);
@@ -57,52 +56,24 @@ pub(crate) fn fmu(args: &[String]) -> Result<[PathBuf; 2], String> {
     let identifier = String::from_utf8(read(&staging.join("identifier"))?)
         .map_err(|_| "identifier: not UTF-8".to_string())?;
     let library = read(&release.join("libefsi_fmu.so"))?;
-    let laws = LAWS
-        .iter()
-        .map(|(_, stem)| {
-            let name = format!("lib{stem}.so");
-            read(&release.join(&name)).map(|d| (name, d))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut files = vec![(String::new(), library)];
+    for (_, stem) in LAWS {
+        let name = format!("lib{stem}.so");
+        let data = read(&release.join(&name))?;
+        files.push((name, data));
+    }
     let mut made = Vec::new();
     for (version, platform, file) in [
         ("2", "linux64", format!("{identifier}.fmu")),
         ("3", "x86_64-linux", format!("{identifier}_fmi3.fmu")),
     ] {
-        let mut z = zip::Zip::default();
-        let mut add = |name: &str, data: &[u8]| {
-            z.add(name, data)
-                .map_err(|e| format!("{file}: {name}: {e}"))
+        let archive = FmuArchive {
+            version,
+            platform,
+            identifier: &identifier,
+            staging: &staging,
         };
-        add(
-            "modelDescription.xml",
-            &read(&staging.join(format!("modelDescription-{version}.xml")))?,
-        )?;
-        add(&format!("binaries/{platform}/{identifier}.so"), &library)?;
-        for (name, data) in &laws {
-            add(&format!("binaries/{platform}/{name}"), data)?;
-        }
-        add("resources/fmu.ron", &read(&staging.join("fmu.ron"))?)?;
-        add("resources/scene.ron", &read(&staging.join("scene.ron"))?)?;
-        add(
-            "documentation/index.html",
-            &read(&staging.join("index.html"))?,
-        )?;
-        add(
-            "documentation/licenses/license.txt",
-            &read(&staging.join("license.txt"))?,
-        )?;
-        let path = dir.join(&file);
-        let archive = z.finish().map_err(|e| format!("{file}: {e}"))?;
-        std::fs::write(&path, archive).map_err(|e| format!("{}: {e}", path.display()))?;
-        let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
-        eprintln!(
-            "wrote {} (FMI {version}.0 Co-Simulation, {:.2} MB; library {:.2} MB)",
-            path.display(),
-            bytes as f64 / 1e6,
-            library.len() as f64 / 1e6
-        );
-        made.push(path);
+        made.push(archive.write(&files, &dir.join(file))?);
     }
     // The reference result (FMI Cross-Check layout) beside the FMUs, where there is one.
     let compat = root().join("fmu/compat").join(&identifier);
@@ -116,4 +87,64 @@ pub(crate) fn fmu(args: &[String]) -> Result<[PathBuf; 2], String> {
     }
     let [a, b] = <[PathBuf; 2]>::try_from(made).map_err(|_| "two FMUs".to_string())?;
     Ok([a, b])
+}
+
+/// The bytes of `p`, or an error naming it.
+fn read(p: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// One FMU archive of a staged scene: its FMI version and platform folder.
+struct FmuArchive<'a> {
+    version: &'a str,
+    platform: &'a str,
+    identifier: &'a str,
+    staging: &'a Path,
+}
+
+impl FmuArchive<'_> {
+    /// Write the archive to `path`: the model description of its version, the `binaries` —
+    /// `files`' first entry is the model library, the others the laws beside it — and the
+    /// staged resources and documentation.
+    fn write(&self, files: &[(String, Vec<u8>)], path: &Path) -> Result<PathBuf, String> {
+        let (version, platform, identifier) = (self.version, self.platform, self.identifier);
+        let file = path
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+        let mut z = zip::Zip::default();
+        let mut add = |name: &str, data: &[u8]| {
+            z.add(name, data)
+                .map_err(|e| format!("{file}: {name}: {e}"))
+        };
+        let staged = |name: &str| read(&self.staging.join(name));
+        add(
+            "modelDescription.xml",
+            &staged(&format!("modelDescription-{version}.xml"))?,
+        )?;
+        for (k, (name, data)) in files.iter().enumerate() {
+            let name = if k == 0 {
+                format!("{identifier}.so")
+            } else {
+                name.clone()
+            };
+            add(&format!("binaries/{platform}/{name}"), data)?;
+        }
+        add("resources/fmu.ron", &staged("fmu.ron")?)?;
+        add("resources/scene.ron", &staged("scene.ron")?)?;
+        add("documentation/index.html", &staged("index.html")?)?;
+        add(
+            "documentation/licenses/license.txt",
+            &staged("license.txt")?,
+        )?;
+        let archive = z.finish().map_err(|e| format!("{file}: {e}"))?;
+        std::fs::write(path, archive).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+        eprintln!(
+            "wrote {} (FMI {version}.0 Co-Simulation, {:.2} MB; library {:.2} MB)",
+            path.display(),
+            bytes as f64 / 1e6,
+            files[0].1.len() as f64 / 1e6
+        );
+        Ok(path.to_path_buf())
+    }
 }
