@@ -244,9 +244,12 @@ fn parse_flags(args: &[String]) -> Result<([Vec<Port>; 3], Vec<String>), String>
     Ok((ports, ranges))
 }
 
+/// The bounds of a port's range, each optional.
+type Range = (Option<f64>, Option<f64>);
+
 /// A `--range NAME=MIN..MAX` value: the name and the bounds (`None` for an empty bound, `-inf`
 /// as MIN or `inf` as MAX), checked finite and ordered.
-fn parse_range(r: &str) -> Result<(&str, (Option<f64>, Option<f64>)), String> {
+fn parse_range(r: &str) -> Result<(&str, Range), String> {
     let (name, bounds) = r
         .split_once('=')
         .ok_or_else(|| format!("--range {r}: expected NAME=MIN..MAX"))?;
