@@ -298,50 +298,7 @@ pub fn fmi3(spec: &Spec, vars: &[Variable]) -> String {
         if v.causality == Causality::Output {
             outputs.push(v.vr);
         }
-        let element = match v.kind {
-            Kind::Real => "Float64",
-            Kind::Int32 => "Int32",
-            Kind::Int64 => "Int64",
-            Kind::String => "String",
-        };
-        let initial = if v.causality == Causality::Output {
-            r#" initial="calculated""#
-        } else {
-            ""
-        };
-        let unit = v
-            .unit
-            .as_deref()
-            .map_or(String::new(), |u| format!(r#" unit="{}""#, escape(u)));
-        let attributes = format!(
-            r#"name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}"{initial}"#,
-            name = escape(&v.name),
-            vr = v.vr,
-            causality = causality(v),
-            variability = variability(v),
-        );
-        let description = escape(&v.description);
-        match (v.kind, v.start.as_deref()) {
-            (Kind::String, Some(s)) => {
-                let _ = writeln!(
-                    out,
-                    r#"    <String {attributes}
-      description="{description}">
-      <Start value="{}"/>
-    </String>"#,
-                    escape(s)
-                );
-            }
-            (_, start) => {
-                let start = start.map_or(String::new(), |s| format!(r#" start="{s}""#));
-                let _ = writeln!(
-                    out,
-                    r#"    <{element} {attributes}{start}{unit}{range}
-      description="{description}"/>"#,
-                    range = range(v),
-                );
-            }
-        }
+        fmi3_variable(&mut out, v);
     }
     out.push_str("  </ModelVariables>\n  <ModelStructure>\n");
     for vr in &outputs {
@@ -355,6 +312,54 @@ pub fn fmi3(spec: &Spec, vars: &[Variable]) -> String {
     }
     out.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
     out
+}
+
+/// One FMI 3.0 variable element of `v` (a `<Start>` child for a string's start).
+fn fmi3_variable(out: &mut String, v: &Variable) {
+    let element = match v.kind {
+        Kind::Real => "Float64",
+        Kind::Int32 => "Int32",
+        Kind::Int64 => "Int64",
+        Kind::String => "String",
+    };
+    let initial = if v.causality == Causality::Output {
+        r#" initial="calculated""#
+    } else {
+        ""
+    };
+    let unit = v
+        .unit
+        .as_deref()
+        .map_or(String::new(), |u| format!(r#" unit="{}""#, escape(u)));
+    let attributes = format!(
+        r#"name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}"{initial}"#,
+        name = escape(&v.name),
+        vr = v.vr,
+        causality = causality(v),
+        variability = variability(v),
+    );
+    let description = escape(&v.description);
+    match (v.kind, v.start.as_deref()) {
+        (Kind::String, Some(s)) => {
+            let _ = writeln!(
+                out,
+                r#"    <String {attributes}
+      description="{description}">
+      <Start value="{}"/>
+    </String>"#,
+                escape(s)
+            );
+        }
+        (_, start) => {
+            let start = start.map_or(String::new(), |s| format!(r#" start="{s}""#));
+            let _ = writeln!(
+                out,
+                r#"    <{element} {attributes}{start}{unit}{range}
+      description="{description}"/>"#,
+                range = range(v),
+            );
+        }
+    }
 }
 
 /// `documentation/index.html`: what the model is, its variables (from the table) and how it
