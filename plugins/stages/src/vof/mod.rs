@@ -7,15 +7,18 @@
 //! - [`plic`]: PLIC lines in cells, Youngs normals (also used by the elastic stage's interface
 //!   corners); [`shapes`]: the exact cell fractions of a scene's [`Shape`] (the initial φ_s).
 //! - [`plic3d`]: the same geometry in three dimensions: the plane–cuboid volume and its
-//!   inverse, the fluxed volume of a split sweep, Youngs / centred / mixed normals.
+//!   inverse, the fluxed volume of a split sweep, Youngs / centred / mixed normals;
+//!   [`shapes3d`]: the cell fractions of the three-dimensional shapes.
 
 pub mod advect;
 pub mod plic;
 pub mod plic3d;
 pub mod shapes;
+pub mod shapes3d;
 pub mod stage;
 
 pub use crate::solid::Shape;
 pub use advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide, phase_volume};
+pub use efsi_core::scene::solid::Axis;
 pub use shapes::{ShapeVolume, fill_fraction, section_width};
 pub use stage::Vof;

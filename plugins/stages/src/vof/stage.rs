@@ -86,13 +86,12 @@ impl StagePlugin for Vof {
             x_hi: side(Side::XMax)?,
             y_lo: side(Side::YMin)?,
             y_hi: side(Side::YMax)?,
+            ..VofBoundaries::closed()
         };
         let advector = VofAdvector::lending(grid, bounds)?;
-        let pad = 2 * efsi_core::GHOST;
-        let cells = (grid.nx + 1 + pad) * (grid.ny + 1 + pad);
         Ok(Box::new(VofStage {
             advector,
-            scratch: Scratch::reserve(shared, advect::WORK * cells),
+            scratch: Scratch::reserve(shared, advect::work_len(grid)),
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
@@ -106,7 +105,7 @@ impl StagePlugin for Vof {
 struct VofStage {
     /// The advector, whose work arrays come from `scratch`.
     advector: VofAdvector,
-    /// The pipeline's work vectors (the advector's [`advect::WORK`] padded arrays while the
+    /// The pipeline's work vectors (the advector's [`advect::work_len`] values while the
     /// stage runs).
     scratch: Scratch,
     rho: (f64, f64),
@@ -268,8 +267,7 @@ impl Stage for VofStage {
                 &mut pool,
                 ctx.grid,
                 &mut phi,
-                &self.u_adv,
-                &self.v_adv,
+                &[&self.u_adv, &self.v_adv],
                 ctx.dt / n as f64,
                 ctx.step * n + k,
             );
