@@ -13,8 +13,8 @@
 //!
 //! Every step must conserve the phase volume to 1e-12 relative and keep `0 ≤ φ ≤ 1` (the largest
 //! clipped excursion ≤ 1e-12). Run with `--nocapture` to see the measured errors and timings;
-//! `EFSI_VOF3D_N=64 cargo test --release … deformation_3d_report -- --ignored --nocapture`
-//! runs the deformation test at other resolutions.
+//! `EFSI_VOF3D_N=64 cargo test -p efsi-stages --test vof_advection3d -- --ignored --nocapture`
+//! runs the deformation and slotted-sphere tests at other resolutions (minutes at 64³).
 
 use efsi_core::{Field, Grid, Region, Stagger};
 use efsi_stages::vof::{Shape, VofAdvector, VofBoundaries, fill_fraction, phase_volume};
@@ -241,7 +241,7 @@ const MEASURED_DEFORMATION_32: f64 = 7.561558e-3;
 
 /// The deformation test at `EFSI_VOF3D_N` cells per side (default 64), for the report.
 #[test]
-#[ignore = "minutes in release; the figures of the module docs"]
+#[ignore = "minutes at 64³: the report's figures"]
 fn deformation_3d_report() {
     let n = std::env::var("EFSI_VOF3D_N")
         .ok()
@@ -299,7 +299,7 @@ const MEASURED_ZALESAK_32: f64 = 2.106231e-3;
 
 /// The slotted sphere at `EFSI_VOF3D_N` cells per unit length (default 64), for the report.
 #[test]
-#[ignore = "a minute in release; the figures of the module docs"]
+#[ignore = "minutes at 64³: the report's figures"]
 fn zalesak_3d_report() {
     let n = std::env::var("EFSI_VOF3D_N")
         .ok()
