@@ -892,6 +892,32 @@ mod tests {
     }
 
     #[test]
+    fn ghosts_wrap_and_reflect_in_three_dimensions() {
+        let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 0.75), (0.0, 1.25));
+        let mut phi = Field::zeros(&g);
+        for k in 0..5 {
+            for j in 0..3 {
+                for i in 0..4 {
+                    phi[[i, j, k]] = (100 * k + 10 * j + i) as f64;
+                }
+            }
+        }
+        let a = VofAdvector::new(&g, VofBoundaries::periodic_axes([true, false, true]));
+        a.fill_ghosts(&mut phi);
+        // x: wrap; y: reflect; z: wrap.
+        assert_eq!(phi[[-1, 1, 2]], phi[[3, 1, 2]]);
+        assert_eq!(phi[[5, 1, 2]], phi[[1, 1, 2]]);
+        assert_eq!(phi[[2, -2, 2]], phi[[2, 1, 2]]);
+        assert_eq!(phi[[2, 3, 2]], phi[[2, 2, 2]]);
+        assert_eq!(phi[[2, 1, -1]], phi[[2, 1, 4]]);
+        assert_eq!(phi[[2, 1, 6]], phi[[2, 1, 1]]);
+        // Edge and corner ghosts: the composition of the three.
+        assert_eq!(phi[[-1, -1, 2]], phi[[3, 0, 2]]);
+        assert_eq!(phi[[-2, 4, -2]], phi[[2, 1, 3]]);
+        assert_eq!(phi[[4, -1, 5]], phi[[0, 0, 0]]);
+    }
+
+    #[test]
     fn uniform_translation_of_a_full_block_is_exact() {
         // A band of full cells moved by exactly one cell per two steps (CFL ½) along x, periodic:
         // after 2·n steps it is back where it started, bit for bit up to round-off.
