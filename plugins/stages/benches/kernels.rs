@@ -72,7 +72,7 @@ fn vof_step(c: &mut Criterion) {
                 if k.is_multiple_of(512) {
                     phi.copy_from(&phi0);
                 }
-                black_box(adv.step(&grid, &mut phi, &u, &v, dt, k));
+                black_box(adv.step(&grid, &mut phi, &[&u, &v], dt, k));
             })
         });
     }

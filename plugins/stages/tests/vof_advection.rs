@@ -156,7 +156,7 @@ fn run(
             vel(t + 0.5 * dt, &mut u, &mut v);
         }
         let t0 = Instant::now();
-        let st = adv.step(grid, phi, &u, &v, dt, n as u64);
+        let st = adv.step(grid, phi, &[&u, &v], dt, n as u64);
         t += dt;
         r.secs += t0.elapsed().as_secs_f64();
         let drift = (phase_volume(grid, phi) - vol0).abs() / vol0;

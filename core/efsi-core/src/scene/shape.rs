@@ -1,15 +1,27 @@
 //! The shapes a scene's solid is made of ([`Shape`]): their parameters, checks and
 //! point membership. Their exact cell fractions are the VOF stage's (crate `efsi-stages`).
+//!
+//! A shape is two-dimensional (`Disk`, `Rectangle`, `HalfPlane`: regions of the x–y plane, or
+//! of the r–z half-plane in axisymmetric geometry) or three-dimensional (`Sphere`,
+//! `Ellipsoid`, `Box`, `Cylinder`, `HalfSpace`: regions of x–y–z space); the combinations
+//! (`Union`, `Intersection`, `Difference`) take the dimension of their parts, which must agree
+//! ([`Shape::dims`]).
 
 use serde::{Deserialize, Serialize};
 
-/// A region of the plane (x–y, or r–z in axisymmetric geometry), as written in scenes.
+/// A region of the plane (x–y, or r–z in axisymmetric geometry) or of space, as written in
+/// scenes.
 ///
 /// ```ron
 /// Difference(
 ///     Disk(center: (0.5, 0.75), radius: 0.15),
 ///     Rectangle(min: (0.475, 0.5), max: (0.525, 0.85)),
 /// )
+/// Difference(
+///     Sphere(center: (0.5, 0.75, 0.5), radius: 0.15),
+///     Box(min: (0.475, 0.5, 0.0), max: (0.525, 0.725, 1.0)),
+/// )
+/// Cylinder(axis: Z, center: (0.5, 0.5, 0.5), radius: 0.1, length: 0.4)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -35,6 +47,47 @@ pub enum Shape {
         /// Offset `c` in `normal · x < c`.
         offset: f64,
     },
+    /// The open ball `|x − center| < radius` (three dimensions).
+    Sphere {
+        /// Centre `(x, y, z)`.
+        center: (f64, f64, f64),
+        /// Radius, > 0.
+        radius: f64,
+    },
+    /// The open axis-aligned ellipsoid `Σ ((x_i − center_i)/semi_axes_i)² < 1` (three
+    /// dimensions).
+    Ellipsoid {
+        /// Centre `(x, y, z)`.
+        center: (f64, f64, f64),
+        /// Semi-axes along x, y and z, each > 0.
+        semi_axes: (f64, f64, f64),
+    },
+    /// The open axis-aligned box `min < x < max` (three dimensions).
+    Box {
+        /// Lowest corner.
+        min: (f64, f64, f64),
+        /// Highest corner.
+        max: (f64, f64, f64),
+    },
+    /// The open circular cylinder of `radius` around the line through `center` along `axis`,
+    /// `length` long and centred on `center` (three dimensions).
+    Cylinder {
+        /// The axis the cylinder's own axis is parallel to.
+        axis: Axis,
+        /// Centre `(x, y, z)`.
+        center: (f64, f64, f64),
+        /// Radius, > 0.
+        radius: f64,
+        /// Length along the axis, > 0.
+        length: f64,
+    },
+    /// The half-space `normal · x < offset` (three dimensions; `normal` non-zero).
+    HalfSpace {
+        /// Outward normal.
+        normal: (f64, f64, f64),
+        /// Offset `c` in `normal · x < c`.
+        offset: f64,
+    },
     /// Points in any of the shapes.
     Union(Vec<Shape>),
     /// Points in all of the shapes.
@@ -43,9 +96,51 @@ pub enum Shape {
     Difference(Box<Shape>, Box<Shape>),
 }
 
+/// A coordinate axis (a [`Shape::Cylinder`]'s direction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Axis {
+    /// Along x.
+    X,
+    /// Along y.
+    Y,
+    /// Along z.
+    Z,
+}
+
+impl Axis {
+    /// The axis' index: 0, 1 or 2.
+    pub fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
 impl Shape {
-    /// Check the parameters: positive radius, non-empty rectangle, non-zero normal, finite
-    /// numbers, non-empty unions and intersections.
+    /// The shape's dimension: 2 for `Disk`, `Rectangle` and `HalfPlane`, 3 for `Sphere`,
+    /// `Ellipsoid`, `Box`, `Cylinder` and `HalfSpace`, that of their parts for the
+    /// combinations (a combination of parts of both dimensions is refused by [`Shape::check`];
+    /// here it counts as three-dimensional).
+    pub fn dims(&self) -> usize {
+        match self {
+            Shape::Disk { .. } | Shape::Rectangle { .. } | Shape::HalfPlane { .. } => 2,
+            Shape::Sphere { .. }
+            | Shape::Ellipsoid { .. }
+            | Shape::Box { .. }
+            | Shape::Cylinder { .. }
+            | Shape::HalfSpace { .. } => 3,
+            Shape::Union(v) | Shape::Intersection(v) => {
+                v.iter().map(Shape::dims).max().unwrap_or(2)
+            }
+            Shape::Difference(a, b) => a.dims().max(b.dims()),
+        }
+    }
+
+    /// Check the parameters: positive radii, semi-axes and lengths, non-empty rectangles and
+    /// boxes, non-zero normals, finite numbers, non-empty unions and intersections whose parts
+    /// all have the same dimension.
     pub fn validate(&self) -> Result<(), String> {
         self.check().map_err(|(_, m)| m)
     }
@@ -95,6 +190,91 @@ impl Shape {
                     );
                 }
             }
+            Shape::Sphere { center, radius } => {
+                if !fin(&[center.0, center.1, center.2]) {
+                    return at(
+                        ".center",
+                        format!("Sphere: center must be finite, got {center:?}"),
+                    );
+                }
+                if !radius.is_finite() || *radius <= 0.0 {
+                    return at(
+                        ".radius",
+                        format!(
+                            "Sphere: radius must be finite and > 0, got {}",
+                            num(*radius)
+                        ),
+                    );
+                }
+            }
+            Shape::Ellipsoid { center, semi_axes } => {
+                if !fin(&[center.0, center.1, center.2]) {
+                    return at(
+                        ".center",
+                        format!("Ellipsoid: center must be finite, got {center:?}"),
+                    );
+                }
+                let a = [semi_axes.0, semi_axes.1, semi_axes.2];
+                if !fin(&a) || a.iter().any(|&a| a <= 0.0) {
+                    return at(
+                        ".semi_axes",
+                        format!("Ellipsoid: semi_axes must be finite and > 0, got {semi_axes:?}"),
+                    );
+                }
+            }
+            Shape::Box { min, max } => {
+                let (lo, hi) = ([min.0, min.1, min.2], [max.0, max.1, max.2]);
+                if !fin(&lo) || !fin(&hi) || (0..3).any(|a| lo[a] >= hi[a]) {
+                    let field = if fin(&lo) { ".max" } else { ".min" };
+                    return at(field, format!("Box: need min < max, got {min:?}, {max:?}"));
+                }
+            }
+            Shape::Cylinder {
+                center,
+                radius,
+                length,
+                ..
+            } => {
+                if !fin(&[center.0, center.1, center.2]) {
+                    return at(
+                        ".center",
+                        format!("Cylinder: center must be finite, got {center:?}"),
+                    );
+                }
+                if !radius.is_finite() || *radius <= 0.0 {
+                    return at(
+                        ".radius",
+                        format!(
+                            "Cylinder: radius must be finite and > 0, got {}",
+                            num(*radius)
+                        ),
+                    );
+                }
+                if !length.is_finite() || *length <= 0.0 {
+                    return at(
+                        ".length",
+                        format!(
+                            "Cylinder: length must be finite and > 0, got {}",
+                            num(*length)
+                        ),
+                    );
+                }
+            }
+            Shape::HalfSpace { normal, offset } => {
+                if !fin(&[*offset]) {
+                    return at(
+                        ".offset",
+                        format!("HalfSpace: offset must be finite, got {}", num(*offset)),
+                    );
+                }
+                let n = [normal.0, normal.1, normal.2];
+                if !fin(&n) || n.iter().all(|&c| c == 0.0) {
+                    return at(
+                        ".normal",
+                        format!("HalfSpace: normal must be finite and non-zero, got {normal:?}"),
+                    );
+                }
+            }
             Shape::Union(v) | Shape::Intersection(v) => {
                 if v.is_empty() {
                     return at("", "Union/Intersection: needs at least one shape".into());
@@ -102,27 +282,85 @@ impl Shape {
                 for (k, s) in v.iter().enumerate() {
                     s.check().map_err(|(f, m)| (format!("[{k}]{f}"), m))?;
                 }
+                Self::same_dims(v.iter())?;
             }
             Shape::Difference(a, b) => {
                 a.check().map_err(|(f, m)| (format!("[0]{f}"), m))?;
                 b.check().map_err(|(f, m)| (format!("[1]{f}"), m))?;
+                Self::same_dims([&**a, &**b].into_iter())?;
             }
         }
         Ok(())
     }
 
-    /// Whether the point `(x, y)` is inside the shape.
+    /// An error naming the first part whose dimension differs from the first part's.
+    fn same_dims<'a>(parts: impl Iterator<Item = &'a Shape>) -> Result<(), (String, String)> {
+        let mut first = None;
+        for (k, s) in parts.enumerate() {
+            let d = s.dims();
+            match first {
+                None => first = Some(d),
+                Some(f) if f != d => {
+                    return Err((
+                        format!("[{k}]"),
+                        format!(
+                            "a {d}-D shape combined with a {f}-D one: the parts of a combination \
+                             are all two-dimensional or all three-dimensional"
+                        ),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the point `(x, y)` is inside the two-dimensional shape (a three-dimensional
+    /// shape: its section `z = 0`).
     pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.contains3(x, y, 0.0)
+    }
+
+    /// Whether the point `(x, y, z)` is inside the shape (a two-dimensional shape: its
+    /// extrusion along z).
+    pub fn contains3(&self, x: f64, y: f64, z: f64) -> bool {
         match self {
+            Shape::Sphere { center, radius } => {
+                let (a, b, c) = (x - center.0, y - center.1, z - center.2);
+                a * a + b * b + c * c < radius * radius
+            }
+            Shape::Ellipsoid { center, semi_axes } => {
+                let a = (x - center.0) / semi_axes.0;
+                let b = (y - center.1) / semi_axes.1;
+                let c = (z - center.2) / semi_axes.2;
+                a * a + b * b + c * c < 1.0
+            }
+            Shape::Box { min, max } => {
+                min.0 < x && x < max.0 && min.1 < y && y < max.1 && min.2 < z && z < max.2
+            }
+            Shape::Cylinder {
+                axis,
+                center,
+                radius,
+                length,
+            } => {
+                let p = [x - center.0, y - center.1, z - center.2];
+                let a = axis.index();
+                let (e, f) = (p[(a + 1) % 3], p[(a + 2) % 3]);
+                e * e + f * f < radius * radius && p[a].abs() < 0.5 * length
+            }
+            Shape::HalfSpace { normal, offset } => {
+                normal.0 * x + normal.1 * y + normal.2 * z < *offset
+            }
             Shape::Disk { center, radius } => {
                 let (a, b) = (x - center.0, y - center.1);
                 a * a + b * b < radius * radius
             }
             Shape::Rectangle { min, max } => min.0 < x && x < max.0 && min.1 < y && y < max.1,
             Shape::HalfPlane { normal, offset } => normal.0 * x + normal.1 * y < *offset,
-            Shape::Union(v) => v.iter().any(|s| s.contains(x, y)),
-            Shape::Intersection(v) => v.iter().all(|s| s.contains(x, y)),
-            Shape::Difference(a, b) => a.contains(x, y) && !b.contains(x, y),
+            Shape::Union(v) => v.iter().any(|s| s.contains3(x, y, z)),
+            Shape::Intersection(v) => v.iter().all(|s| s.contains3(x, y, z)),
+            Shape::Difference(a, b) => a.contains3(x, y, z) && !b.contains3(x, y, z),
         }
     }
 }

@@ -22,13 +22,14 @@ use crate::grid::Geometry;
 use crate::validate::{Checked, err, finite, positive};
 use serde::{Deserialize, Serialize};
 
-pub use super::shape::Shape;
+pub use super::shape::{Axis, Shape};
 
 /// A solid body (or several, as a union of shapes) of one material.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Solid {
-    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry).
+    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry; a
+    /// three-dimensional shape in a three-dimensional scene).
     pub shape: Shape,
     /// Density ρ_s (kg/m³, > 0).
     pub density: f64,
@@ -73,6 +74,27 @@ impl Solid {
         self.shape
             .check()
             .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
+        let dims = if scene.geometry == Geometry::Cartesian3D {
+            3
+        } else {
+            2
+        };
+        if self.shape.dims() != dims {
+            return err(
+                "solid.shape",
+                format!(
+                    "a {}-D shape in a {dims}-D scene (geometry {:?}): the shapes of a \
+                     {dims}-D scene are {}",
+                    self.shape.dims(),
+                    scene.geometry,
+                    if dims == 3 {
+                        "Sphere, Ellipsoid, Box, Cylinder, HalfSpace and their combinations"
+                    } else {
+                        "Disk, Rectangle, HalfPlane and their combinations"
+                    }
+                ),
+            );
+        }
         positive("solid.density", self.density)?;
         // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
         // equation's coefficients 1/ρ span more than floating point resolves.

@@ -1,4 +1,5 @@
-//! Geometric, direction-split, mass-conserving advection of the solid fraction φ_s.
+//! Geometric, direction-split, mass-conserving advection of the solid fraction φ_s, in planar,
+//! axisymmetric and three-dimensional Cartesian geometry.
 //!
 //! # Equation
 //!
@@ -8,68 +9,98 @@
 //!     ∂φ/∂t + ∇·(φ u) − φ ∇·u = 0,        ∇·u = 0,
 //! ```
 //!
-//! on a prescribed MAC velocity (u on x-faces, v on y-faces). In axisymmetric geometry
-//! (`x = r`, `y = z`) the divergence is `(1/r) ∂(r φ u)/∂r + ∂(φ v)/∂z`, and the conserved
-//! quantity is `Σ φ · r_c Δr Δz` (per radian).
+//! on a prescribed MAC velocity (u on x-faces, v on y-faces, w on z-faces in three dimensions).
+//! In axisymmetric geometry (`x = r`, `y = z`) the divergence is
+//! `(1/r) ∂(r φ u)/∂r + ∂(φ v)/∂z`, and the conserved quantity is `Σ φ · r_c Δr Δz` (per
+//! radian); in three dimensions it is `Σ φ Δx Δy Δz`.
 //!
 //! # Scheme (Weymouth & Yue 2010, the algorithm of Basilisk's `vof.h`)
 //!
-//! One step is two one-dimensional sweeps, `x` then `y` on even steps and `y` then `x` on odd
-//! steps (Strang-like alternation). Before the first sweep the cell-centred indicator
-//! `c_c = [φⁿ > ½]` is frozen for both sweeps. A sweep along `d` does, for every cell `i`,
+//! One step is one one-dimensional sweep per axis of the grid ([`Grid::dims`]): `x, y` then
+//! `y, x` on alternate steps in two dimensions, `x, y, z` then `z, y, x` in three (each pair of
+//! steps a symmetric, Strang-like composition). Before the first sweep the cell-centred
+//! indicator `c_c = [φⁿ > ½]` is frozen for all the sweeps. A sweep along axis `d` does, for
+//! every cell `I`,
 //!
 //! ```text
-//!     φ* = φ + (F_{i−½} − F_{i+½} + c_c (U_{i+½} − U_{i−½})) / V_i,
+//!     φ* = φ + (F_{I−½e_d} − F_{I+½e_d} + c_c (U_{I+½e_d} − U_{I−½e_d})) / V_I,
 //! ```
 //!
 //! where
-//! - `V_i` is the cell volume ([`Grid::cell_volume`]: `Δx Δy`, or `r_c Δr Δz`);
+//! - `V_I` is the cell volume: `Δx Δy` (planar, per unit depth), `r_c Δr Δz` (axisymmetric,
+//!   per radian), `Δx Δy Δz` (three dimensions);
 //! - `U` is the volume swept through a face during `Δt`, the discrete face flux
-//!   `U = A_f u_f Δt` with face area `A_f = Δy` / `Δx` (planar), `r_f Δz` (r-faces) or
-//!   `r_c Δr` (z-faces) — the same fluxes whose per-cell sum is the discrete divergence, so that
-//!   for a discretely divergence-free velocity `Σ_sweeps c_c (U_out − U_in) = 0` in every cell;
+//!   `U = A_f u_f Δt` with the face area `A_f` (the product of the two other cell sizes; `r_f Δz`
+//!   on r-faces and `r_c Δr` on z-faces in axisymmetric geometry) — the same fluxes whose per-cell
+//!   sum is the discrete divergence, so that for a discretely divergence-free velocity
+//!   `Σ_sweeps c_c (U_out − U_in) = 0` in every cell;
 //! - `F = U · f_up` is the phase volume carried through the face: `f_up` is the exact fraction
 //!   of the **fluxed region** — the slab of the upwind cell adjacent to the face whose volume is
-//!   `|U|` — that lies below the upwind cell's PLIC line ([`super::plic`]). In planar geometry
-//!   (and along z) the slab has width `|u|Δt`; along r its width `w` solves
-//!   `∫_slab r dA = r_f |u| Δt Δz`, i.e. `w = 2 r_f |s| / (r_f + √(r_f² − 2 r_f s))` with
-//!   `s = u Δt`, and `f_up` is its r-weighted fraction (`∫ r dA` of the polygon below the line
-//!   over `∫ r dA` of the slab). A full (empty) upwind cell gives `F = U` (`F = 0`) exactly.
+//!   `|U|` — that lies below the upwind cell's PLIC interface. In Cartesian geometry (and along
+//!   z) the slab has width `|u|Δt`; along r its width `w` solves `∫_slab r dA = r_f |u| Δt Δz`,
+//!   i.e. `w = 2 r_f |s| / (r_f + √(r_f² − 2 r_f s))` with `s = u Δt`, and `f_up` is its
+//!   r-weighted fraction (`∫ r dA` of the polygon below the line over `∫ r dA` of the slab).
+//!   In two dimensions the interface is a line ([`super::plic`]: Youngs normals, planar `α`
+//!   analytic, axisymmetric `α` by bracketed Newton); in three a plane ([`super::plic3d`]: the
+//!   mixed Youngs–centred normal, the analytic plane–cuboid volume and its inverse, the slab's
+//!   fraction [`Plane::slab_fraction`]). A full (empty) upwind cell gives `F = U` (`F = 0`)
+//!   exactly.
 //!
 //! The phase volume `Σ φ V` changes by `Σ (F_in − F_out)` (which telescopes to the boundary
 //! fluxes: zero at closed sides, equal and opposite at periodic sides) plus `Σ c_c·(∇·U)`,
 //! which vanishes cell by cell for a discretely divergence-free velocity: **volume is conserved
-//! to round-off**, in both geometries. Lines are reconstructed before each sweep from the
-//! current φ (Youngs normals; planar `α` analytic, axisymmetric `α` by bracketed Newton).
+//! to round-off**, in every geometry. Interfaces are reconstructed before each sweep from the
+//! current φ.
+//!
+//! One sweep serves every geometry: its passes run over [`Region`] lines and shifts `unit(d)`
+//! along the sweep's axis, and only the two cell-local operations — reconstructing a cell's
+//! interface from its neighbourhood and the fraction of a slab below it — depend on the
+//! geometry.
 //!
 //! # Boundaries
 //!
 //! Each side is [`VofSide::Closed`] (no flux through it, whatever the face velocity there; the
 //! axis `r = 0` is closed) or [`VofSide::Periodic`] (paired with the opposite side; the face
 //! velocity of the high side is taken equal to that of the low side). Ghost cells of φ are
-//! filled by even reflection (closed) or wrap-around (periodic) before each reconstruction.
+//! filled by even reflection (closed) or wrap-around (periodic) before each reconstruction,
+//! axis by axis, each axis over the ghosts of the axes before it, so edge and corner ghosts are
+//! consistent.
 //!
 //! # Stability and boundedness
 //!
 //! The fluxed slab must fit in its upwind cell (`|U| ≤ V_up`) and Weymouth & Yue show that
-//! the update keeps `0 ≤ φ ≤ 1` (to round-off) for Courant numbers `≤ ½`. The Courant number
-//! reported in [`AdvectStats::cfl`] is the flux form `max |U_f| / V_upwind`, which equals
-//! `max(|u|Δt/Δx, |v|Δt/Δy)` in planar geometry and is larger than `|u|Δt/Δr` for outward
-//! radial flow next to the axis (up to 2× in the first column). After each sweep φ is clipped to
-//! `[0, 1]`; the largest clipped amount and the volume it added are reported, so a caller can
-//! check that the clipping stayed at round-off (excursions ≤ 1e-12 at Courant ≤ ½).
+//! the update keeps `0 ≤ φ ≤ 1` (to round-off) for Courant numbers `≤ ½` in each sweep. The
+//! Courant number reported in [`AdvectStats::cfl`] is the flux form `max |U_f| / V_upwind`,
+//! which equals `max_d |u_d|Δt/Δx_d` in Cartesian geometry and is larger than `|u|Δt/Δr` for
+//! outward radial flow next to the axis (up to 2× in the first column). After each sweep φ is
+//! clipped to `[0, 1]`; the largest clipped amount and the volume it added are reported, so a
+//! caller can check that the clipping stayed at round-off (excursions ≤ 1e-12 at Courant ≤ ½),
+//! and the clipped volume is given back to the interface cells.
+//!
+//! # Limits
+//!
+//! The split scheme's error is first order in the splitting and second order at best in
+//! space: the shape error of a resolved interface converges at about second order (the
+//! mixed normal in three dimensions), and filaments thinner than a cell break into droplets
+//! (flotsam), as with every PLIC scheme; the volume stays exact.
 //!
 //! # References
 //!
 //! - G. D. Weymouth & D. K.-P. Yue (2010), *Conservative volume-of-fluid method for free-surface
 //!   simulations on Cartesian grids*, J. Comput. Phys. 229:2853–2865.
 //! - D. L. Youngs (1982), see [`super::plic`]; R. Scardovelli & S. Zaleski (2000), ibid.
+//! - E. Aulisa, S. Manservisi, R. Scardovelli & S. Zaleski (2007), *Interface reconstruction
+//!   with least-squares fit and split advection in three-dimensional Cartesian geometry*,
+//!   J. Comput. Phys. 225:2301–2319 (the mixed normal, the 3-D test problems).
 //! - W. J. Rider & D. B. Kothe (1998), *Reconstructing volume tracking*, J. Comput. Phys.
-//!   141:112–152, and E. Aulisa et al. (2007), J. Comput. Phys. 225:2301 (the test problems).
+//!   141:112–152; D. Enright, R. Fedkiw, J. Ferziger & I. Mitchell (2002), *A hybrid particle
+//!   level set method for improved interface capturing*, J. Comput. Phys. 183:83–116 (the
+//!   two- and three-dimensional test problems).
 //! - S. Popinet, Basilisk `src/vof.h` (the same scheme; the reference errors of the tests).
 
 use super::plic::{axi_alpha, half_plane_moments, rect_alpha, rect_fraction, youngs_normal};
-use efsi_core::{Field, G, Grid, Region, Stagger, unit};
+use super::plic3d::{Block, Plane, myc_normal};
+use efsi_core::{Field, G, Grid, Line, Region, Stagger, unit};
 
 /// What a side of the domain does to the transported fraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,7 +111,8 @@ pub enum VofSide {
     Periodic,
 }
 
-/// The side kinds of the four sides of the domain.
+/// The side kinds of the sides of the domain (the z sides count on a three-dimensional grid
+/// only).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VofBoundaries {
     /// Low-x (low-r, the axis when `x0 = 0`) side.
@@ -91,21 +123,25 @@ pub struct VofBoundaries {
     pub y_lo: VofSide,
     /// High-y (high-z) side.
     pub y_hi: VofSide,
+    /// Low-z side of a three-dimensional grid.
+    pub z_lo: VofSide,
+    /// High-z side of a three-dimensional grid.
+    pub z_hi: VofSide,
 }
 
 impl VofBoundaries {
-    /// All four sides closed.
+    /// All sides closed.
     pub fn closed() -> Self {
-        VofBoundaries {
-            x_lo: VofSide::Closed,
-            x_hi: VofSide::Closed,
-            y_lo: VofSide::Closed,
-            y_hi: VofSide::Closed,
-        }
+        Self::periodic_axes([false; 3])
     }
 
     /// Periodic in x and/or y, closed otherwise.
     pub fn periodic(x: bool, y: bool) -> Self {
+        Self::periodic_axes([x, y, false])
+    }
+
+    /// Periodic along the axes `p[a]`, closed otherwise.
+    pub fn periodic_axes(p: [bool; 3]) -> Self {
         let k = |p: bool| {
             if p {
                 VofSide::Periodic
@@ -114,31 +150,48 @@ impl VofBoundaries {
             }
         };
         VofBoundaries {
-            x_lo: k(x),
-            x_hi: k(x),
-            y_lo: k(y),
-            y_hi: k(y),
+            x_lo: k(p[0]),
+            x_hi: k(p[0]),
+            y_lo: k(p[1]),
+            y_hi: k(p[1]),
+            z_lo: k(p[2]),
+            z_hi: k(p[2]),
         }
     }
 
-    /// Check the sides against a grid: periodic sides come in pairs, the grid is at least 2×2
-    /// cells, and an axisymmetric grid is not periodic in `r`.
+    /// The low and high sides along axis `a`.
+    pub fn along(&self, a: usize) -> (VofSide, VofSide) {
+        match a {
+            0 => (self.x_lo, self.x_hi),
+            1 => (self.y_lo, self.y_hi),
+            _ => (self.z_lo, self.z_hi),
+        }
+    }
+
+    /// Check the sides against a grid: periodic sides come in pairs, the grid has at least two
+    /// cells along each of its axes, and an axisymmetric grid is not periodic in `r`.
     pub fn validate(&self, grid: &Grid) -> Result<(), String> {
-        let per = |s: VofSide| s == VofSide::Periodic;
-        if per(self.x_lo) != per(self.x_hi) {
-            return Err("VOF boundaries: a periodic x side needs a periodic opposite side".into());
+        for (a, name) in ["x", "y", "z"].into_iter().enumerate().take(grid.dims()) {
+            let (lo, hi) = self.along(a);
+            if (lo == VofSide::Periodic) != (hi == VofSide::Periodic) {
+                return Err(format!(
+                    "VOF boundaries: a periodic {name} side needs a periodic opposite side"
+                ));
+            }
         }
-        if per(self.y_lo) != per(self.y_hi) {
-            return Err("VOF boundaries: a periodic y side needs a periodic opposite side".into());
-        }
-        if grid.is_axisymmetric() && per(self.x_lo) {
+        if grid.is_axisymmetric() && self.x_lo == VofSide::Periodic {
             return Err("VOF boundaries: an axisymmetric grid cannot be periodic in r".into());
         }
         if grid.is_axisymmetric() && grid.x0 < 0.0 {
             return Err("VOF boundaries: an axisymmetric grid must have r ≥ 0".into());
         }
-        if grid.nx < 2 || grid.ny < 2 {
-            return Err("VOF advection needs at least 2 × 2 cells".into());
+        let n = grid.n();
+        if n[..grid.dims()].iter().any(|&n| n < 2) {
+            return Err(if grid.is_3d() {
+                "VOF advection needs at least 2 × 2 × 2 cells".into()
+            } else {
+                "VOF advection needs at least 2 × 2 cells".into()
+            });
         }
         Ok(())
     }
@@ -153,7 +206,7 @@ pub struct AdvectStats {
     /// Net volume `Σ (φ_clipped − φ) V` added by that clipping (the only departure from exact
     /// conservation besides round-off).
     pub clipped_volume: f64,
-    /// Flux Courant number `max |U_f| / V_upwind` over both sweeps (see the module docs).
+    /// Flux Courant number `max |U_f| / V_upwind` over the sweeps (see the module docs).
     pub cfl: f64,
 }
 
@@ -165,6 +218,12 @@ impl AdvectStats {
     }
 }
 
+/// The cell geometries of the kernels (a const-generic parameter): what a cell's interface is
+/// and how a slab of it is cut.
+const PLANAR: u8 = 0;
+const AXI: u8 = 1;
+const CUBE: u8 = 2;
+
 /// The VOF PLIC advection kernel: owns its scratch arrays (allocated once in [`Self::new`]).
 ///
 /// Every pass of a sweep (indicator, reconstruction, face fluxes, update) runs over the lines
@@ -174,16 +233,19 @@ impl AdvectStats {
 #[derive(Clone, Debug)]
 pub struct VofAdvector {
     bounds: VofBoundaries,
-    axi: bool,
-    nx: usize,
-    ny: usize,
-    dx: f64,
-    dy: f64,
+    /// [`PLANAR`], [`AXI`] or [`CUBE`].
+    kind: u8,
+    /// Cells and cell size along each axis (`nz = 1`, `dz = 1` in two dimensions).
+    n: [usize; 3],
+    h: [f64; 3],
+    /// Area of a face normal to each axis without its radius factor: the product of the two
+    /// other cell sizes.
+    area: [f64; 3],
     /// Values per padded array of the grid.
     cells: usize,
     /// The grid's cell centres.
     interior: Region,
-    /// The work arrays of a step ([`Work`], [`WORK`] padded arrays) when the advector owns
+    /// The work arrays of a step ([`Work`], [`work_len`] values) when the advector owns
     /// them; empty when its stage lends them from the pipeline's pool ([`Self::step_in`]).
     own: Vec<f64>,
     /// Per padded column ([`efsi_core::Line::cols`]): `1/V`, the radius of the left edge, the face radius.
@@ -193,16 +255,20 @@ pub struct VofAdvector {
     r_centre: Vec<f64>,
 }
 
-/// Padded full-grid arrays a step works in ([`Work`]); nothing in them carries over between
-/// steps.
-pub(crate) const WORK: usize = 7;
+/// Values of the work arrays a step on `grid` needs ([`Work`]): the indicator, the interface
+/// (a normal component per axis and its constant), two face fluxes and the divergence sum, one
+/// padded array each. Nothing in them carries over between steps.
+pub(crate) fn work_len(grid: &Grid) -> usize {
+    (5 + grid.dims()) * grid.padded().iter().product::<usize>()
+}
 
-/// A step's work arrays, cut from one block of [`WORK`] padded arrays.
+/// A step's work arrays, cut from one block of [`work_len`] values.
 struct Work<'a> {
     /// Frozen indicator `c_c = [φⁿ > ½]` (interior cells).
     cc: &'a mut [f64],
-    /// PLIC line per padded cell: normal x, normal y, α (cell-local coordinates).
-    lines: [&'a mut [f64]; 3],
+    /// Interface per padded cell: normal x, normal y, normal z (empty in two dimensions), and
+    /// its constant α (cell-local coordinates).
+    plane: [&'a mut [f64]; 4],
     /// Phase flux `F` and volume flux `U` per face of the current sweep.
     flux: &'a mut [f64],
     vflux: &'a mut [f64],
@@ -211,16 +277,17 @@ struct Work<'a> {
 }
 
 impl<'a> Work<'a> {
-    fn cut(block: &'a mut [f64], cells: usize) -> Self {
-        let (cc, rest) = block[..WORK * cells].split_at_mut(cells);
+    fn cut(block: &'a mut [f64], cells: usize, dims: usize) -> Self {
+        let (cc, rest) = block[..(5 + dims) * cells].split_at_mut(cells);
         let (mx, rest) = rest.split_at_mut(cells);
         let (my, rest) = rest.split_at_mut(cells);
+        let (mz, rest) = rest.split_at_mut(if dims == 3 { cells } else { 0 });
         let (al, rest) = rest.split_at_mut(cells);
         let (flux, rest) = rest.split_at_mut(cells);
         let (vflux, divsum) = rest.split_at_mut(cells);
         Work {
             cc,
-            lines: [mx, my, al],
+            plane: [mx, my, mz, al],
             flux,
             vflux,
             divsum,
@@ -236,8 +303,8 @@ struct RowStats {
     volume: f64,
 }
 
-/// The fluxed slab of a face's upwind cell: the cell size, and the cell's PLIC line and the
-/// radius of its left edge (0 in planar geometry).
+/// The fluxed slab of a face's upwind cell in two dimensions: the cell size, and the cell's
+/// PLIC line and the radius of its left edge (0 in planar geometry).
 struct Slab {
     dx: f64,
     dy: f64,
@@ -250,18 +317,18 @@ impl Slab {
     /// below its line; `w` is the slab width, `pos` whether the flow is towards `+d` (slab at
     /// the high side of the cell).
     #[inline(always)]
-    fn fraction<const AXI: bool, const D: u8>(&self, w: f64, pos: bool) -> f64 {
+    fn fraction<const K: u8, const D: usize>(&self, w: f64, pos: bool) -> f64 {
         let (dx, dy) = (self.dx, self.dy);
         let [mx, my, al] = self.line;
         // Slab origin in cell-local coordinates and its size.
         let (ox, oy, sw, sh) = match (D, pos) {
-            (X, true) => (dx - w, 0.0, w, dy),
-            (X, false) => (0.0, 0.0, w, dy),
+            (0, true) => (dx - w, 0.0, w, dy),
+            (0, false) => (0.0, 0.0, w, dy),
             (_, true) => (0.0, dy - w, dx, w),
             (_, false) => (0.0, 0.0, dx, w),
         };
         let a = al - mx * ox - my * oy;
-        if AXI {
+        if K == AXI {
             let r0 = self.r_left + ox;
             let (area, m1) = half_plane_moments(mx, my, a, sw, sh);
             let slab = (r0 + 0.5 * sw) * sw * sh;
@@ -271,10 +338,6 @@ impl Slab {
         }
     }
 }
-
-/// The sweep directions (const-generic parameter of the kernels).
-const X: u8 = 0;
-const Y: u8 = 1;
 
 impl VofAdvector {
     /// An advector for `grid` with the given sides.
@@ -288,7 +351,7 @@ impl VofAdvector {
     /// An advector for `grid` with the given sides, or why the sides do not fit the grid.
     pub fn try_new(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
         let mut a = Self::lending(grid, bounds)?;
-        a.own = vec![0.0; WORK * a.cells];
+        a.own = vec![0.0; work_len(grid)];
         Ok(a)
     }
 
@@ -297,21 +360,30 @@ impl VofAdvector {
     pub(crate) fn lending(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
         bounds.validate(grid)?;
         let axi = grid.is_axisymmetric();
+        let kind = if grid.is_3d() {
+            CUBE
+        } else if axi {
+            AXI
+        } else {
+            PLANAR
+        };
         let cells = grid.padded().iter().product();
         // The padded columns, in storage order.
         let padded_row = Region::whole(grid).line(0);
         let columns = || padded_row.indices().map(|[i, _, _]| i);
+        let [dx, dy, dz] = grid.h();
         Ok(VofAdvector {
             bounds,
-            axi,
-            nx: grid.nx,
-            ny: grid.ny,
-            dx: grid.dx,
-            dy: grid.dy,
+            kind,
+            n: grid.n(),
+            h: grid.h(),
+            area: [dy * dz, dx * dz, dx * dy],
             cells,
             interior: Region::of(grid, Stagger::Cell),
             own: Vec::new(),
-            inv_vol: columns().map(|i| 1.0 / grid.cell_volume(i)).collect(),
+            inv_vol: columns()
+                .map(|i| 1.0 / (grid.cell_volume(i) * dz))
+                .collect(),
             r_left: columns()
                 .map(|i| if axi { grid.xf(i) } else { 0.0 })
                 .collect(),
@@ -325,41 +397,41 @@ impl VofAdvector {
         self.bounds
     }
 
-    /// Advance `phi` (cell-centred, interior `[0,nx)×[0,ny)`) by `dt` on the face velocities
-    /// `u` (x-faces) and `v` (y-faces). `step_index` selects the sweep order (even: x then y).
+    /// Advance `phi` (cell-centred) by `dt` on the face velocities `vel`, one per axis of the
+    /// grid (u on x-faces, v on y-faces, w on z-faces). `step_index` selects the sweep order
+    /// (even: x first).
     ///
     /// Ghost cells of `phi` are overwritten. No heap allocation.
     pub fn step(
         &mut self,
         grid: &Grid,
         phi: &mut Field,
-        u: &Field,
-        v: &Field,
+        vel: &[&Field],
         dt: f64,
         step_index: u64,
     ) -> AdvectStats {
         let mut own = std::mem::take(&mut self.own);
-        let st = self.step_in(&mut own, grid, phi, u, v, dt, step_index);
+        let st = self.step_in(&mut own, grid, phi, vel, dt, step_index);
         self.own = own;
         st
     }
 
-    /// [`step`](Self::step) in the borrowed work arrays `work` (at least [`WORK`] padded
-    /// arrays; their contents on entry do not matter).
-    #[allow(clippy::too_many_arguments)]
+    /// [`step`](Self::step) in the borrowed work arrays `work` (at least [`work_len`]
+    /// values; their contents on entry do not matter).
     pub(crate) fn step_in(
         &mut self,
         work: &mut [f64],
         grid: &Grid,
         phi: &mut Field,
-        u: &Field,
-        v: &Field,
+        vel: &[&Field],
         dt: f64,
         step_index: u64,
     ) -> AdvectStats {
-        debug_assert!(grid.nx == self.nx && grid.ny == self.ny, "grid mismatch");
+        let dims = grid.dims();
+        assert_eq!(vel.len(), dims, "one velocity component per axis");
+        debug_assert!(grid.n() == self.n, "grid mismatch");
         debug_assert_eq!(phi.data().len(), self.cells);
-        let mut w = Work::cut(work, self.cells);
+        let mut w = Work::cut(work, self.cells, dims);
         let src = &*phi;
         self.interior
             .for_each(self.interior.storage(w.cc), |l, cc| {
@@ -368,59 +440,95 @@ impl VofAdvector {
                 }
             });
         let mut stats = AdvectStats::default();
-        let order = if step_index.is_multiple_of(2) {
-            [X, Y]
-        } else {
-            [Y, X]
-        };
-        for (n, d) in order.into_iter().enumerate() {
-            let last = n == 1;
-            let s = match (self.axi, d) {
-                (false, X) => self.sweep::<false, X>(&mut w, phi, u, dt, last),
-                (false, _) => self.sweep::<false, Y>(&mut w, phi, v, dt, last),
-                (true, X) => self.sweep::<true, X>(&mut w, phi, u, dt, last),
-                (true, _) => self.sweep::<true, Y>(&mut w, phi, v, dt, last),
+        let mut order = [0, 1, 2];
+        let order = &mut order[..dims];
+        if !step_index.is_multiple_of(2) {
+            order.reverse();
+        }
+        for (n, &d) in order.iter().enumerate() {
+            let pass = Pass {
+                first: n == 0,
+                last: n == dims - 1,
+            };
+            let v = vel[d];
+            let s = match (self.kind, d) {
+                (PLANAR, 0) => self.sweep::<PLANAR, 0>(&mut w, phi, v, dt, pass),
+                (PLANAR, _) => self.sweep::<PLANAR, 1>(&mut w, phi, v, dt, pass),
+                (AXI, 0) => self.sweep::<AXI, 0>(&mut w, phi, v, dt, pass),
+                (AXI, _) => self.sweep::<AXI, 1>(&mut w, phi, v, dt, pass),
+                (_, 0) => self.sweep::<CUBE, 0>(&mut w, phi, v, dt, pass),
+                (_, 1) => self.sweep::<CUBE, 1>(&mut w, phi, v, dt, pass),
+                (_, _) => self.sweep::<CUBE, 2>(&mut w, phi, v, dt, pass),
             };
             stats.merge(s);
         }
         stats
     }
 
-    /// Fill the ghost layers of `phi` (even reflection at closed sides, wrap at periodic ones).
+    /// Fill the ghost layers of `phi` (even reflection at closed sides, wrap at periodic ones),
+    /// axis by axis: the ghosts along axis `a` over the interior of the later axes and the
+    /// ghosts of the earlier ones, so edge and corner ghosts are consistent.
     pub fn fill_ghosts(&self, phi: &mut Field) {
-        let (nx, ny) = (self.nx as isize, self.ny as isize);
-        let per_x = self.bounds.x_lo == VofSide::Periodic;
-        let per_y = self.bounds.y_lo == VofSide::Periodic;
-        for j in 0..ny {
-            for g in 1..=G {
-                let (lo, hi) = if per_x {
-                    (nx - g, g - 1)
-                } else {
-                    (g - 1, nx - g)
-                };
-                phi[(-g, j)] = phi[(lo, j)];
-                phi[(nx - 1 + g, j)] = phi[(hi, j)];
+        let dims = if self.kind == CUBE { 3 } else { 2 };
+        for a in 0..dims {
+            let n = self.n[a] as isize;
+            let per = self.bounds.along(a).0 == VofSide::Periodic;
+            let mut across = self.interior;
+            for b in 0..a {
+                across = across.range(b, -G, self.n[b] as isize + G);
             }
-        }
-        for g in 1..=G {
-            let (lo, hi) = if per_y {
-                (ny - g, g - 1)
-            } else {
-                (g - 1, ny - g)
-            };
-            for i in -G..nx + G {
-                phi[(i, -g)] = phi[(i, lo)];
-                phi[(i, ny - 1 + g)] = phi[(i, hi)];
+            let step = phi.offset(unit(a));
+            for g in 1..=G {
+                // Ghost `−g` from `lo`, ghost `n − 1 + g` from `hi`.
+                let (lo, hi) = if per { (n - g, g - 1) } else { (g - 1, n - g) };
+                for (ghost, from) in [(-g, lo), (n - 1 + g, hi)] {
+                    let plane = across.range(a, ghost, ghost + 1);
+                    let shift = (from - ghost) * step;
+                    let data = phi.data_mut();
+                    for k in 0..plane.lines() {
+                        let l = plane.line(k);
+                        let to = l.linear(0);
+                        let src = to.checked_add_signed(shift).expect("inside the storage");
+                        data.copy_within(src..src + l.len, to);
+                    }
+                }
             }
         }
     }
 
-    /// Reconstruct the PLIC line of every cut cell of `cells`, lines in parallel.
-    fn reconstruct<const AXI: bool>(&self, lines: [&mut [f64]; 3], phi: &Field, cells: Region) {
-        let (dx, dy) = (self.dx, self.dy);
+    /// Reconstruct the interface of every cut cell of `cells`, lines in parallel.
+    fn reconstruct<const K: u8>(&self, plane: &mut [&mut [f64]; 4], phi: &Field, cells: Region) {
+        let [dx, dy, _] = self.h;
         let r_left = &self.r_left;
-        let [mx, my, al] = lines.map(|l| cells.storage(l));
-        cells.for_each((mx, my, al), |l, (mx, my, al)| {
+        let [mx, my, mz, al] = plane;
+        if K == CUBE {
+            let h = self.h;
+            let out = (
+                (cells.storage(mx), cells.storage(my)),
+                (cells.storage(mz), cells.storage(al)),
+            );
+            cells.for_each(out, |l, ((mx, my), (mz, al))| {
+                let c: [[[&[f64]; 3]; 3]; 3] = std::array::from_fn(|c| {
+                    std::array::from_fn(|b| {
+                        std::array::from_fn(|a| {
+                            phi.at(&l, [a as isize - 1, b as isize - 1, c as isize - 1])
+                        })
+                    })
+                });
+                for k in 0..l.len {
+                    let f = c[1][1][1][k];
+                    if f <= 0.0 || f >= 1.0 {
+                        continue;
+                    }
+                    let b: Block = c.map(|c| c.map(|b| b.map(|a| a[k])));
+                    let p = Plane::new(myc_normal(&b, h), f, h);
+                    (mx[k], my[k], mz[k], al[k]) = (p.n[0], p.n[1], p.n[2], p.alpha);
+                }
+            });
+            return;
+        }
+        let out = (cells.storage(mx), cells.storage(my), cells.storage(al));
+        cells.for_each(out, |l, (mx, my, al)| {
             let c = |di: isize, dj: isize| phi.at(&l, [di, dj, 0]);
             let (s, m, n) = (
                 [c(-1, -1), c(0, -1), c(1, -1)],
@@ -439,7 +547,7 @@ impl VofAdvector {
                     [n[0][k], n[1][k], n[2][k]],
                 ];
                 let (x, y) = youngs_normal(&b, dx, dy);
-                let alpha = if AXI {
+                let alpha = if K == AXI {
                     axi_alpha(x, y, f, rl[k], dx, dy)
                 } else {
                     rect_alpha(x, y, f, dx, dy)
@@ -449,34 +557,33 @@ impl VofAdvector {
         });
     }
 
-    /// One sweep along `D` with the face velocity `vel` (u for x, v for y). The `last` sweep of
-    /// a step also takes back the net divergence of the step's correction terms: `c_c ∇·u` is
+    /// One sweep along `D` with the face velocity `vel` normal to it. The `last` sweep of a
+    /// step also takes back the net divergence of the step's correction terms: `c_c ∇·u` is
     /// what the split needs between its sweeps, but summed over the step, `c_c (∇·u) Δt`, it is
     /// not zero for a velocity that is divergence-free only to the projection's tolerance, and
     /// it changed the phase's volume by ~3e-12 per step (3.7e-9 over the soft-wall run).
     /// Without it the step is in flux form: conservative to round-off. (A cell whose net
     /// divergence exceeds that residual, 1e-8 of its volume per step, keeps the correction.)
-    fn sweep<const AXI: bool, const D: u8>(
+    fn sweep<const K: u8, const D: usize>(
         &mut self,
         w: &mut Work,
         phi: &mut Field,
         vel: &Field,
         dt: f64,
-        last: bool,
+        pass: Pass,
     ) -> AdvectStats {
         self.fill_ghosts(phi);
-        // Lines in the interior, plus the ghost layer that can be upwind of a periodic face.
-        let g = if self.sides::<D>().0 == VofSide::Periodic {
+        // Cells in the interior, plus the ghost layer that can be upwind of a periodic face.
+        let g = if self.bounds.along(D).0 == VofSide::Periodic {
             1
         } else {
             0
         };
-        let n = (if D == X { self.nx } else { self.ny }) as isize;
-        let cells = self.interior.range(D as usize, -g, n + g);
-        let [mx, my, al] = &mut w.lines;
-        self.reconstruct::<AXI>([mx, my, al], phi, cells);
-        let cfl = self.fluxes::<AXI, D>(w, phi, vel, dt);
-        let mut st = self.update::<D>(w, phi, last);
+        let n = self.n[D] as isize;
+        let cells = self.interior.range(D, -g, n + g);
+        self.reconstruct::<K>(&mut w.plane, phi, cells);
+        let cfl = self.fluxes::<K, D>(w, phi, vel, dt);
+        let mut st = self.update::<D>(w, phi, pass);
         st.cfl = cfl;
         // Give the clipped volume back (round-off overshoots of ~1e-13 per cell add up over
         // thousands of cells and steps): to the interface cells, in proportion to their room
@@ -487,41 +594,31 @@ impl VofAdvector {
         st
     }
 
-    /// The low and high sides along `D`.
-    fn sides<const D: u8>(&self) -> (VofSide, VofSide) {
-        if D == X {
-            (self.bounds.x_lo, self.bounds.x_hi)
-        } else {
-            (self.bounds.y_lo, self.bounds.y_hi)
-        }
-    }
-
     /// The phase flux `F` and volume flux `U` of every face normal to `D` into `w.flux`,
     /// `w.vflux` (face `I` shares the storage index of cell `I`, its high neighbour), lines in
     /// parallel; returns the sweep's CFL number `max |U|/V` of the upwind cells.
-    fn fluxes<const AXI: bool, const D: u8>(
+    fn fluxes<const K: u8, const D: usize>(
         &mut self,
         w: &mut Work,
         phi: &Field,
         vel: &Field,
         dt: f64,
     ) -> f64 {
-        let (lo_side, hi_side) = self.sides::<D>();
+        let (lo_side, hi_side) = self.bounds.along(D);
         let periodic = lo_side == VofSide::Periodic;
-        let nd = (if D == X { self.nx } else { self.ny }) as isize;
-        // The faces normal to D; the high periodic face of a y sweep is the low one (copied
-        // below), that of an x sweep is copied on its line.
+        let nd = self.n[D] as isize;
+        // The faces normal to D; the high periodic face of a sweep across lines is the low one
+        // (copied below), that of a sweep along them is copied on its line.
         let all = self
             .interior
-            .range(D as usize, 0, nd + if D == Y && periodic { 0 } else { 1 });
-        let [mx, my, al] = &w.lines;
+            .range(D, 0, nd + if D != 0 && periodic { 0 } else { 1 });
+        let [mx, my, mz, al] = &w.plane;
         let face = Face {
-            dx: self.dx,
-            dy: self.dy,
-            lines: [&**mx, &**my, &**al],
+            h: self.h,
+            area: self.area[D],
+            plane: [&**mx, &**my, &**mz, &**al],
             c: phi,
-            r_face: &self.r_face,
-            r_centre: &self.r_centre,
+            r_area: if D == 0 { &self.r_face } else { &self.r_centre },
             r_left: &self.r_left,
             inv_vol: &self.inv_vol,
         };
@@ -534,8 +631,8 @@ impl VofAdvector {
                 let face = face.on::<D>(&l);
                 let mut cfl = 0.0f64;
                 for n in 0..l.len {
-                    let p = l.index(n)[D as usize];
-                    if D == X && p == nd && periodic {
+                    let p = l.index(n)[D];
+                    if D == 0 && p == nd && periodic {
                         (u[n], f[n]) = (u[0], f[0]);
                         continue;
                     }
@@ -545,41 +642,42 @@ impl VofAdvector {
                     (u[n], f[n]) = if closed || sv == 0.0 {
                         (0.0, 0.0)
                     } else {
-                        face.flux::<AXI, D>(n, sv, &mut cfl)
+                        face.flux::<K, D>(n, sv, &mut cfl)
                     };
                 }
                 cfl
             },
             f64::max,
         );
-        if D == Y && periodic {
-            let faces = self.interior.range(1, 0, nd + 1);
-            let (bot, top) = (faces.line(0), faces.line(faces.lines() - 1));
-            let n = bot.len;
-            w.vflux
-                .copy_within(bot.linear(0)..bot.linear(n), top.linear(0));
-            w.flux
-                .copy_within(bot.linear(0)..bot.linear(n), top.linear(0));
+        if D != 0 && periodic {
+            let across = phi.offset(unit(D)) * nd;
+            let low = self.interior.range(D, 0, 1);
+            for k in 0..low.lines() {
+                let l = low.line(k);
+                let (from, to) = (l.linear(0), l.linear(0).wrapping_add_signed(across));
+                w.vflux.copy_within(from..from + l.len, to);
+                w.flux.copy_within(from..from + l.len, to);
+            }
         }
         cfl
     }
 
     /// `φ += (F_low − F_high + c_c (U_high − U_low))/V` along `D`, clipped to `[0, 1]` (the
-    /// statistics of the clipping returned), rows in parallel; the divergence of the first
-    /// sweep is kept in `w.divsum` for the `last` one.
-    fn update<const D: u8>(&mut self, w: &mut Work, phi: &mut Field, last: bool) -> AdvectStats {
-        let o = unit(D as usize);
+    /// statistics of the clipping returned), lines in parallel; the divergence of the sweeps
+    /// before the last is summed in `w.divsum` for the last one.
+    fn update<const D: usize>(&mut self, w: &mut Work, phi: &mut Field, pass: Pass) -> AdvectStats {
+        let o = unit(D);
         let inv_vol = &self.inv_vol;
         let (f, uu, cc) = (&*w.flux, &*w.vflux, &*w.cc);
         let cells = self.interior;
-        let line = |l: efsi_core::Line, (phi, div): (&mut [f64], &mut [f64])| {
+        let line = |l: Line, (phi, div): (&mut [f64], &mut [f64])| {
             let (f0, f1, u0, u1) = (l.on(f, [0; 3]), l.on(f, o), l.on(uu, [0; 3]), l.on(uu, o));
             let (cc, iv) = (l.on(cc, [0; 3]), l.cols(inv_vol, 0));
             let mut st = RowStats::default();
             for n in 0..l.len {
                 let d = u1[n] - u0[n];
                 let mut val = phi[n] + (f0[n] - f1[n] + cc[n] * d) * iv[n];
-                if last {
+                if pass.last {
                     // Only the projection's residual (a volume change below 1e-8 of the
                     // cell per step): a genuinely compressing field keeps W&Y's
                     // treatment, which keeps a full cell full.
@@ -587,8 +685,10 @@ impl VofAdvector {
                     if net.abs() <= 1e-8 {
                         val -= cc[n] * net;
                     }
-                } else {
+                } else if pass.first {
                     div[n] = d;
+                } else {
+                    div[n] += d;
                 }
                 debug_assert!(val.is_finite(), "VOF: non-finite φ at {:?}", l.index(n));
                 let clipped = val.clamp(0.0, 1.0);
@@ -636,52 +736,57 @@ impl VofAdvector {
     }
 }
 
-/// What the flux of a face reads: the cell size, the reconstructed lines and the
-/// volume fractions `c`, and the metric per padded column.
+/// Where a sweep stands in its step: the first sweep starts the step's divergence sum, the
+/// last takes it back.
+#[derive(Clone, Copy, Debug)]
+struct Pass {
+    first: bool,
+    last: bool,
+}
+
+/// What the flux of a face reads: the cell size, the face area without its radius factor, the
+/// reconstructed interfaces and the volume fractions `c`, and the metric per padded column.
 struct Face<'a> {
-    dx: f64,
-    dy: f64,
-    lines: [&'a [f64]; 3],
+    h: [f64; 3],
+    area: f64,
+    plane: [&'a [f64]; 4],
     c: &'a Field,
-    r_face: &'a [f64],
-    r_centre: &'a [f64],
+    /// `r_f` (x-faces) or `r_c` (the other faces): the face area's radius factor.
+    r_area: &'a [f64],
     r_left: &'a [f64],
     inv_vol: &'a [f64],
 }
 
 /// [`Face`] on one line of faces normal to `D`: the values of the faces' two cells, `[low
-/// neighbour, own (high) cell]`, and the face area's metric factor.
+/// neighbour, own (high) cell]`, and the face area's radius factor.
 struct FaceLine<'a> {
-    dx: f64,
-    dy: f64,
+    h: [f64; 3],
+    area: f64,
     c: [&'a [f64]; 2],
-    lines: [[&'a [f64]; 3]; 2],
+    plane: [[&'a [f64]; 4]; 2],
     r_left: [&'a [f64]; 2],
     inv_vol: [&'a [f64]; 2],
-    /// `r_f` (x-faces) or `r_c` (y-faces).
     r_area: &'a [f64],
 }
 
 impl<'a> Face<'a> {
     /// The values a line of faces normal to `D` reads.
     #[inline(always)]
-    fn on<const D: u8>(&self, l: &efsi_core::Line) -> FaceLine<'a> {
-        let lo = efsi_core::operators::minus(D as usize);
+    fn on<const D: usize>(&self, l: &Line) -> FaceLine<'a> {
+        let lo = efsi_core::operators::minus(D);
+        // The z component of a two-dimensional interface is absent (an empty array).
+        let at = |a: &'a [f64], s: efsi_core::Index| if a.is_empty() { a } else { l.on(a, s) };
         FaceLine {
-            dx: self.dx,
-            dy: self.dy,
+            h: self.h,
+            area: self.area,
             c: [self.c.at(l, lo), self.c.at(l, [0; 3])],
-            lines: [
-                self.lines.map(|a| l.on(a, lo)),
-                self.lines.map(|a| l.on(a, [0; 3])),
+            plane: [
+                self.plane.map(|a| at(a, lo)),
+                self.plane.map(|a| at(a, [0; 3])),
             ],
             r_left: [l.cols(self.r_left, lo[0]), l.cols(self.r_left, 0)],
             inv_vol: [l.cols(self.inv_vol, lo[0]), l.cols(self.inv_vol, 0)],
-            r_area: if D == X {
-                l.cols(self.r_face, 0)
-            } else {
-                l.cols(self.r_centre, 0)
-            },
+            r_area: l.cols(self.r_area, 0),
         }
     }
 }
@@ -690,23 +795,18 @@ impl FaceLine<'_> {
     /// The volume flux `U` and phase flux `F` of the line's `n`-th face for the displacement
     /// `sv = vel·Δt ≠ 0`, raising `cfl` to the upwind cell's `|U|/V`.
     #[inline(always)]
-    fn flux<const AXI: bool, const D: u8>(&self, n: usize, sv: f64, cfl: &mut f64) -> (f64, f64) {
-        let (dx, dy) = (self.dx, self.dy);
+    fn flux<const K: u8, const D: usize>(&self, n: usize, sv: f64, cfl: &mut f64) -> (f64, f64) {
         let pos = sv > 0.0;
         // The upwind cell: the low neighbour along D (0) or the face's own cell (1).
         let up = usize::from(!pos);
-        let (area, w) = if D == X {
-            let rf = self.r_area[n];
-            let w = if AXI {
-                let disc = (rf * rf - 2.0 * rf * sv).max(0.0);
-                2.0 * rf * sv.abs() / (rf + disc.sqrt())
-            } else {
-                sv.abs()
-            };
-            (rf * dy, w.min(dx))
+        let r = self.r_area[n];
+        let w = if K == AXI && D == 0 {
+            let disc = (r * r - 2.0 * r * sv).max(0.0);
+            2.0 * r * sv.abs() / (r + disc.sqrt())
         } else {
-            (self.r_area[n] * dx, sv.abs().min(dy))
+            sv.abs()
         };
+        let (area, w) = (r * self.area, w.min(self.h[D]));
         let big_u = area * sv;
         if big_u == 0.0 {
             return (big_u, 0.0);
@@ -718,25 +818,37 @@ impl FaceLine<'_> {
         } else if cu >= 1.0 {
             1.0
         } else {
-            let slab = Slab {
-                dx,
-                dy,
-                line: self.lines[up].map(|a| a[n]),
-                r_left: self.r_left[up][n],
-            };
-            slab.fraction::<AXI, D>(w, pos)
+            let p = &self.plane[up];
+            if K == CUBE {
+                let plane = Plane {
+                    n: [p[0][n], p[1][n], p[2][n]],
+                    alpha: p[3][n],
+                };
+                plane.slab_fraction(self.h, D, w, pos)
+            } else {
+                let slab = Slab {
+                    dx: self.h[0],
+                    dy: self.h[1],
+                    line: [p[0][n], p[1][n], p[3][n]],
+                    r_left: self.r_left[up][n],
+                };
+                slab.fraction::<K, D>(w, pos)
+            }
         };
         (big_u, big_u * frac)
     }
 }
 
-/// The phase volume `Σ φ V` over the interior (per radian in axisymmetric geometry), summed
-/// with Neumaier's compensated summation so it can be compared to round-off.
+/// The phase volume `Σ φ V` over the interior (per radian in axisymmetric geometry, per unit
+/// depth in planar), summed in storage order with Neumaier's compensated summation so it can
+/// be compared to round-off.
 pub fn phase_volume(grid: &Grid, phi: &Field) -> f64 {
     let (mut sum, mut comp) = (0.0f64, 0.0f64);
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
-            let x = phi[(i, j)] * grid.cell_volume(i);
+    let cells = Region::of(grid, Stagger::Cell);
+    for n in 0..cells.lines() {
+        let l = cells.line(n);
+        for (c, [i, _, _]) in phi.at(&l, [0; 3]).iter().zip(l.indices()) {
+            let x = c * grid.cell_volume(i) * grid.dz;
             let t = sum + x;
             comp += if sum.abs() >= x.abs() {
                 (sum - t) + x
@@ -780,6 +892,32 @@ mod tests {
     }
 
     #[test]
+    fn ghosts_wrap_and_reflect_in_three_dimensions() {
+        let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 0.75), (0.0, 1.25));
+        let mut phi = Field::zeros(&g);
+        for k in 0..5 {
+            for j in 0..3 {
+                for i in 0..4 {
+                    phi[[i, j, k]] = (100 * k + 10 * j + i) as f64;
+                }
+            }
+        }
+        let a = VofAdvector::new(&g, VofBoundaries::periodic_axes([true, false, true]));
+        a.fill_ghosts(&mut phi);
+        // x: wrap; y: reflect; z: wrap.
+        assert_eq!(phi[[-1, 1, 2]], phi[[3, 1, 2]]);
+        assert_eq!(phi[[5, 1, 2]], phi[[1, 1, 2]]);
+        assert_eq!(phi[[2, -2, 2]], phi[[2, 1, 2]]);
+        assert_eq!(phi[[2, 3, 2]], phi[[2, 2, 2]]);
+        assert_eq!(phi[[2, 1, -1]], phi[[2, 1, 4]]);
+        assert_eq!(phi[[2, 1, 6]], phi[[2, 1, 1]]);
+        // Edge and corner ghosts: the composition of the three.
+        assert_eq!(phi[[-1, -1, 2]], phi[[3, 0, 2]]);
+        assert_eq!(phi[[-2, 4, -2]], phi[[2, 1, 3]]);
+        assert_eq!(phi[[4, -1, 5]], phi[[0, 0, 0]]);
+    }
+
+    #[test]
     fn uniform_translation_of_a_full_block_is_exact() {
         // A band of full cells moved by exactly one cell per two steps (CFL ½) along x, periodic:
         // after 2·n steps it is back where it started, bit for bit up to round-off.
@@ -799,7 +937,7 @@ mod tests {
             let mut a = VofAdvector::new(&g, VofBoundaries::periodic(true, true));
             let dt = 0.5 * g.dx;
             for s in 0..2 * n as u64 {
-                let st = a.step(&g, &mut phi, &u, &v, dt, s);
+                let st = a.step(&g, &mut phi, &[&u, &v], dt, s);
                 assert!((st.cfl - 0.5).abs() < 1e-14);
                 assert!(st.max_clipped < 1e-14);
             }
@@ -819,7 +957,7 @@ mod tests {
         let v = Field::filled(&g, -0.7);
         let mut a = VofAdvector::new(&g, VofBoundaries::closed());
         let v0 = phase_volume(&g, &phi);
-        let st = a.step(&g, &mut phi, &u, &v, 0.05, 0);
+        let st = a.step(&g, &mut phi, &[&u, &v], 0.05, 0);
         // Not divergence-free, but a full domain stays full: F = U everywhere and c_c = 1.
         assert!(st.max_clipped == 0.0);
         assert!((phase_volume(&g, &phi) - v0).abs() < 1e-15);

@@ -187,6 +187,13 @@ fn cover(this: &Shape, r: Rect, axi: bool) -> Cover {
                 })
             }
         }
+        // A three-dimensional shape on a two-dimensional grid (refused by the scene check):
+        // its section z = 0, by point membership.
+        Shape::Sphere { .. }
+        | Shape::Ellipsoid { .. }
+        | Shape::Box { .. }
+        | Shape::Cylinder { .. }
+        | Shape::HalfSpace { .. } => Cover::Mixed,
         Shape::Union(v) => {
             let mut only = None;
             for s in v {
@@ -255,7 +262,7 @@ fn disk_cover(c: (f64, f64), rad: f64, r: Rect, axi: bool) -> Cover {
 
 /// `∫∫ (a + bX) dX dY` over `{X² + Y² < R²} ∩ [xa,xb] × [ya,yb]` (coordinates relative to the
 /// centre), with the weight `w = (a, b)`; piecewise closed form.
-fn disk_volume(rad: f64, xa: f64, xb: f64, ya: f64, yb: f64, w: (f64, f64)) -> f64 {
+pub(crate) fn disk_volume(rad: f64, xa: f64, xb: f64, ya: f64, yb: f64, w: (f64, f64)) -> f64 {
     let (x0, x1) = (xa.max(-rad), xb.min(rad));
     if x0 >= x1 {
         return 0.0;
@@ -327,8 +334,12 @@ fn disk_volume(rad: f64, xa: f64, xb: f64, ya: f64, yb: f64, w: (f64, f64)) -> f
 }
 
 /// Set the interior of `phi` to the fraction of each cell covered by `shape` (r-weighted in
-/// axisymmetric geometry). Ghost cells are left untouched.
+/// axisymmetric geometry; on a three-dimensional grid the volume fraction of
+/// [`super::shapes3d`]). Ghost cells are left untouched.
 pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
+    if grid.is_3d() {
+        return super::shapes3d::fill_fraction(grid, shape, phi);
+    }
     let axi = grid.is_axisymmetric();
     for j in 0..grid.ny as isize {
         for i in 0..grid.nx as isize {

@@ -28,6 +28,7 @@ use super::advect::{self, VofAdvector, VofBoundaries, VofSide};
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
+use efsi_core::operators::minus;
 use efsi_core::scene::{Boundary, Options, Side};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
@@ -86,13 +87,13 @@ impl StagePlugin for Vof {
             x_hi: side(Side::XMax)?,
             y_lo: side(Side::YMin)?,
             y_hi: side(Side::YMax)?,
+            // The z sides of a three-dimensional grid: a scene names none.
+            ..VofBoundaries::closed()
         };
         let advector = VofAdvector::lending(grid, bounds)?;
-        let pad = 2 * efsi_core::GHOST;
-        let cells = (grid.nx + 1 + pad) * (grid.ny + 1 + pad);
         Ok(Box::new(VofStage {
             advector,
-            scratch: Scratch::reserve(shared, advect::WORK * cells),
+            scratch: Scratch::reserve(shared, advect::work_len(grid)),
             rho: (scene.fluid.density, solid.density),
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
@@ -106,7 +107,7 @@ impl StagePlugin for Vof {
 struct VofStage {
     /// The advector, whose work arrays come from `scratch`.
     advector: VofAdvector,
-    /// The pipeline's work vectors (the advector's [`advect::WORK`] padded arrays while the
+    /// The pipeline's work vectors (the advector's [`advect::work_len`] values while the
     /// stage runs).
     scratch: Scratch,
     rho: (f64, f64),
@@ -145,17 +146,19 @@ impl VofStage {
                 vf
             }
         };
-        for j in 0..grid.ny as isize {
-            for i in 0..=grid.nx as isize {
-                let f = 0.5 * (phi[(i - 1, j)] + phi[(i, j)]);
-                state.u[(i, j)] = blend(f, us, state.u[(i, j)]);
-            }
-        }
-        for j in 0..=grid.ny as isize {
-            for i in 0..grid.nx as isize {
-                let f = 0.5 * (phi[(i, j - 1)] + phi[(i, j)]);
-                state.v[(i, j)] = blend(f, vs, state.v[(i, j)]);
-            }
+        let faces = [Stagger::XFace, Stagger::YFace];
+        for (a, (vel, solid)) in [&mut state.u, &mut state.v]
+            .into_iter()
+            .zip([us, vs])
+            .enumerate()
+        {
+            Region::of(grid, faces[a]).for_each(vel, |l, vel| {
+                // φ_f: the face average of the fractions of the face's two cells.
+                let (lo, hi) = (phi.at(&l, minus(a)), phi.at(&l, [0; 3]));
+                for (n, v) in vel.iter_mut().enumerate() {
+                    *v = blend(0.5 * (lo[n] + hi[n]), solid, *v);
+                }
+            });
         }
         bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
     }
@@ -268,8 +271,7 @@ impl Stage for VofStage {
                 &mut pool,
                 ctx.grid,
                 &mut phi,
-                &self.u_adv,
-                &self.v_adv,
+                &[&self.u_adv, &self.v_adv],
                 ctx.dt / n as f64,
                 ctx.step * n + k,
             );
