@@ -543,11 +543,14 @@ impl Projector {
                 let a = Stencil5View {
                     nx: grid.nx,
                     ny: grid.ny,
+                    nz: 1,
                     periodic_x: bc.periodic(0),
                     periodic_y: bc.periodic(1),
+                    periodic_z: false,
                     diag,
                     east,
                     north,
+                    top: &[],
                 };
                 // Without a copy of the density, the matrix is compared with the one the
                 // multigrid holds.
