@@ -1,4 +1,5 @@
-//! Geometric multigrid (W-cycle on the fine levels) for five-point (seven-point in 3-D) SPD matrices on the cell grid, used as the
+//! Geometric multigrid (W-cycle on the fine levels) for five-point (seven-point in 3-D) SPD
+//! matrices on the cell grid, used as the
 //! preconditioner of conjugate gradient ("MG-PCG").
 //!
 //! It works from the assembled [`Stencil5`] alone — the diagonal and the east/north couplings,
