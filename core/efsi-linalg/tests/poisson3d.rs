@@ -332,8 +332,8 @@ fn random_matrix(n: [usize; 3], periodic: [bool; 3], seed: usize) -> Stencil5 {
 }
 
 /// The multigrid's copy of the matrix multiplies as the matrix does, bit for bit; the cycle is
-/// a symmetric operator (conjugate gradient needs it); and it gives the same bits on one
-/// thread and on two.
+/// a symmetric operator (conjugate gradient needs it); it gives the same bits on one thread
+/// and on two; and it knows the matrix it was set up for.
 #[test]
 fn fine_matrix_symmetry_and_threads() {
     for (n, periodic) in [
@@ -373,5 +373,9 @@ fn fine_matrix_symmetry_and_threads() {
         };
         let (z1, z2) = (on(1), on(2));
         assert!(z1.iter().zip(&z2).all(|(p, q)| p.to_bits() == q.to_bits()));
+        // The set-up is recognised bit for bit, and a changed coupling is not.
+        assert!(mg.is_set_up_for(a.view()));
+        a.top[len / 2] *= 1.0 + f64::EPSILON;
+        assert!(!mg.is_set_up_for(a.view()));
     }
 }

@@ -52,6 +52,11 @@
 //! `dV·∇·V^{n+1} = −Δt·r` for the residual `r`, the criterion is `max Δt²|r|/dV ≤ tol`, checked
 //! on the true residual.
 //!
+//! **Three dimensions.** On a three-dimensional grid the matrix is seven-point (the z-faces'
+//! couplings `h_x h_y/(ρ_f h_z)`), the right-hand side takes the z-face velocity `w` and the
+//! correction subtracts the gradient from `u`, `v` and `w`; multigrid only (incomplete
+//! Cholesky is two-dimensional and refused). The module `three_d` holds these kernels.
+//!
 //! **Postcondition** (checked in debug builds): `max |∇·V^{n+1}|·Δt ≤ tol` after the update.
 //!
 //! **Parallelism.** Assembly, right-hand side, the solver's vector work and the velocity update
