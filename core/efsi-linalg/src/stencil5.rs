@@ -1,10 +1,13 @@
-//! Symmetric five-point matrices on the cell grid and their incomplete-Cholesky factor.
+//! Symmetric five-point matrices on the cell grid (seven-point on a three-dimensional grid) and
+//! their incomplete-Cholesky factor.
 //!
-//! Unknowns are the cells, numbered `k = j·nx + i`. The matrix is stored by its couplings:
-//! `A x |_k = d_k x_k − e_k x_E − e_W x_W − n_k x_N − n_S x_S`, with `e_k ≥ 0` the coupling of
-//! cell k to its east neighbour and `n_k ≥ 0` to its north neighbour (an M-matrix, as every
-//! diffusion operator here is). Periodic directions wrap: the east neighbour of the last column
-//! is the first column.
+//! Unknowns are the cells, numbered `k = (c·ny + j)·nx + i` (`c` the plane along z, 0 on a
+//! two-dimensional grid). The matrix is stored by its couplings:
+//! `A x |_k = d_k x_k − e_k x_E − e_W x_W − n_k x_N − n_S x_S − t_k x_T − t_B x_B`, with
+//! `e_k ≥ 0` the coupling of cell k to its east (+x) neighbour, `n_k ≥ 0` to its north (+y) and
+//! `t_k ≥ 0` to its top (+z) neighbour (an M-matrix, as every diffusion operator here is); a
+//! two-dimensional matrix (`nz = 1`) has no top couplings. Periodic directions wrap: the east
+//! neighbour of the last column is the first column.
 //!
 //! [`IncompleteCholesky`] is IC(0) with the sparsity of `A` (Meijerink & van der Vorst 1977),
 //! in its diagonal form `M = (D̃ + L) D̃⁻¹ (D̃ + Lᵀ)` where `L` is the strictly lower part of `A`
@@ -14,23 +17,31 @@
 
 use super::pcg::{LinearOperator, Preconditioner};
 
-/// A symmetric five-point matrix on an `nx × ny` cell grid.
+/// A symmetric five-point matrix on an `nx × ny` cell grid, or seven-point on an
+/// `nx × ny × nz` one ([`Stencil5::new_3d`]).
 #[derive(Clone, Debug)]
 pub struct Stencil5 {
     /// Cells along x.
     pub nx: usize,
     /// Cells along y.
     pub ny: usize,
+    /// Cells along z (1: a two-dimensional matrix, whose `top` is empty).
+    pub nz: usize,
     /// Whether x wraps around.
     pub periodic_x: bool,
     /// Whether y wraps around.
     pub periodic_y: bool,
+    /// Whether z wraps around (false on a two-dimensional matrix).
+    pub periodic_z: bool,
     /// Diagonal `d_k`.
     pub diag: Vec<f64>,
     /// Coupling to the east neighbour `e_k` (≥ 0; 0 on a closed east boundary).
     pub east: Vec<f64>,
     /// Coupling to the north neighbour `n_k` (≥ 0; 0 on a closed north boundary).
     pub north: Vec<f64>,
+    /// Coupling to the top neighbour `t_k` (≥ 0; 0 on a closed top boundary; empty when
+    /// `nz = 1`).
+    pub top: Vec<f64>,
 }
 
 /// A [`Stencil5`] whose arrays are borrowed (from a work pool, say): what
@@ -42,16 +53,22 @@ pub struct Stencil5View<'a> {
     pub nx: usize,
     /// Cells along y.
     pub ny: usize,
+    /// Cells along z (1 on a two-dimensional matrix).
+    pub nz: usize,
     /// Whether x wraps around.
     pub periodic_x: bool,
     /// Whether y wraps around.
     pub periodic_y: bool,
-    /// Diagonal `d_k` (`nx·ny` values).
+    /// Whether z wraps around.
+    pub periodic_z: bool,
+    /// Diagonal `d_k` (`nx·ny·nz` values).
     pub diag: &'a [f64],
     /// Coupling to the east neighbour `e_k`.
     pub east: &'a [f64],
     /// Coupling to the north neighbour `n_k`.
     pub north: &'a [f64],
+    /// Coupling to the top neighbour `t_k` (empty when `nz = 1`).
+    pub top: &'a [f64],
 }
 
 impl Stencil5View<'_> {
@@ -79,6 +96,28 @@ impl Stencil5View<'_> {
             0.0
         }
     }
+
+    /// The coupling of cell `k` (in plane `c`) to its bottom neighbour (as
+    /// [`west`](Self::west)); 0 on a two-dimensional matrix.
+    #[inline(always)]
+    pub fn bottom(&self, k: usize, c: usize) -> f64 {
+        let plane = self.nx * self.ny;
+        if self.nz <= 1 {
+            0.0
+        } else if c > 0 {
+            self.top[k - plane]
+        } else if self.periodic_z {
+            self.top[k + (self.nz - 1) * plane]
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether the matrix is three-dimensional (`nz > 1`).
+    #[inline(always)]
+    pub fn is_3d(&self) -> bool {
+        self.nz > 1
+    }
 }
 
 impl Stencil5 {
@@ -87,50 +126,82 @@ impl Stencil5 {
         Stencil5View {
             nx: self.nx,
             ny: self.ny,
+            nz: self.nz,
             periodic_x: self.periodic_x,
             periodic_y: self.periodic_y,
+            periodic_z: self.periodic_z,
             diag: &self.diag,
             east: &self.east,
             north: &self.north,
+            top: &self.top,
         }
     }
 
-    /// A zero matrix of the given shape.
+    /// A zero two-dimensional matrix of the given shape.
     pub fn new(nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) -> Self {
         let n = nx * ny;
         Stencil5 {
             nx,
             ny,
+            nz: 1,
             periodic_x,
             periodic_y,
+            periodic_z: false,
             diag: vec![0.0; n],
             east: vec![0.0; n],
             north: vec![0.0; n],
+            top: Vec::new(),
         }
     }
 
-    /// Reshape to `nx × ny`, every entry zero, reusing the storage when it is large enough.
+    /// A zero seven-point matrix on `nx × ny × nz` cells, `periodic` per axis (x, y, z).
+    /// With `nz = 1` it is the two-dimensional matrix of [`Stencil5::new`].
+    pub fn new_3d(nx: usize, ny: usize, nz: usize, periodic: [bool; 3]) -> Self {
+        let mut a = Stencil5::new(0, 0, false, false);
+        a.reshape_3d(nx, ny, nz, periodic);
+        a
+    }
+
+    /// Reshape to `nx × ny` (two-dimensional), every entry zero, reusing the storage when it is
+    /// large enough.
     pub fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
-        let n = nx * ny;
-        (self.nx, self.ny) = (nx, ny);
-        (self.periodic_x, self.periodic_y) = (periodic_x, periodic_y);
+        self.reshape_3d(nx, ny, 1, [periodic_x, periodic_y, false]);
+    }
+
+    /// Reshape to `nx × ny × nz`, every entry zero, reusing the storage when it is large
+    /// enough (`nz = 1`: two-dimensional, `top` empty and z not periodic).
+    pub fn reshape_3d(&mut self, nx: usize, ny: usize, nz: usize, periodic: [bool; 3]) {
+        let n = nx * ny * nz;
+        (self.nx, self.ny, self.nz) = (nx, ny, nz);
+        (self.periodic_x, self.periodic_y) = (periodic[0], periodic[1]);
+        self.periodic_z = nz > 1 && periodic[2];
         for v in [&mut self.diag, &mut self.east, &mut self.north] {
             v.clear();
             v.resize(n, 0.0);
         }
+        self.top.clear();
+        if nz > 1 {
+            self.top.resize(n, 0.0);
+        }
+    }
+
+    /// Whether the matrix is three-dimensional (`nz > 1`).
+    pub fn is_3d(&self) -> bool {
+        self.nz > 1
     }
 
     /// The principal submatrix of the rectangle of `nx × ny` cells whose first cell is
     /// `(i0, j0)`, into `out` (reshaped, its storage reused): the same rows, diagonal included,
     /// without the couplings to cells outside — the matrix of the equations inside with the
     /// unknowns outside held at zero. A direction the rectangle spans whole keeps its periodic
-    /// wrap.
+    /// wrap. Two-dimensional matrices only.
     pub fn window_into(
         &self,
         (i0, j0): (usize, usize),
         (nx, ny): (usize, usize),
         out: &mut Stencil5,
     ) {
+        assert!(!self.is_3d(), "window_into: a two-dimensional matrix only");
         assert!(
             i0 + nx <= self.nx && j0 + ny <= self.ny,
             "window {nx} × {ny} at ({i0}, {j0}) outside the {} × {} matrix",
@@ -166,6 +237,13 @@ impl Stencil5 {
         self.view().south(k, j)
     }
 
+    /// The coupling of cell `k` (in plane `c`) to its bottom neighbour (as
+    /// [`west`](Self::west)); 0 on a two-dimensional matrix.
+    #[inline(always)]
+    pub fn bottom(&self, k: usize, c: usize) -> f64 {
+        self.view().bottom(k, c)
+    }
+
     /// Number of unknowns.
     pub fn len(&self) -> usize {
         self.diag.len()
@@ -178,6 +256,10 @@ impl Stencil5 {
 
     /// `y = A x` (in parallel over rows for large grids; the same bits on any thread count).
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        if self.is_3d() {
+            mul_3d(self.view(), x, y);
+            return;
+        }
         let (nx, ny) = (self.nx, self.ny);
         let (d, e, n) = (&self.diag[..], &self.east[..], &self.north[..]);
         let (px, py) = (self.periodic_x, self.periodic_y);
@@ -227,6 +309,79 @@ impl Stencil5 {
     }
 }
 
+/// `y = A x` for a three-dimensional matrix: rows (a line of cells along x, one per `(j, c)`)
+/// in parallel, each cell's terms in the order diagonal, east, west, north, south, top,
+/// bottom, a periodic neighbour read across the wrap.
+pub(crate) fn mul_3d(a: Stencil5View<'_>, x: &[f64], y: &mut [f64]) {
+    let (nx, ny, nz) = (a.nx, a.ny, a.nz);
+    let plane = nx * ny;
+    assert_eq!(x.len(), plane * nz);
+    assert_eq!(y.len(), plane * nz);
+    if plane == 0 {
+        return;
+    }
+    super::par::rows(y, nx).for_each(|r, yr| {
+        let (j, c) = (r % ny, r / ny);
+        let r0 = r * nx;
+        // The row's north/south/top/bottom neighbour rows, where they exist.
+        let north = if j + 1 < ny {
+            Some(r0 + nx)
+        } else if a.periodic_y {
+            Some(r0 + nx - plane)
+        } else {
+            None
+        };
+        let south = if j > 0 {
+            Some(r0 - nx)
+        } else if a.periodic_y {
+            Some(r0 + plane - nx)
+        } else {
+            None
+        };
+        let top = if c + 1 < nz {
+            Some(r0 + plane)
+        } else if a.periodic_z {
+            Some(r0 - (nz - 1) * plane)
+        } else {
+            None
+        };
+        let bottom = if c > 0 {
+            Some(r0 - plane)
+        } else if a.periodic_z {
+            Some(r0 + (nz - 1) * plane)
+        } else {
+            None
+        };
+        for (i, y) in yr.iter_mut().enumerate() {
+            let k = r0 + i;
+            let mut v = a.diag[k] * x[k];
+            if i + 1 < nx {
+                v -= a.east[k] * x[k + 1];
+            } else if a.periodic_x {
+                v -= a.east[k] * x[r0];
+            }
+            if i > 0 {
+                v -= a.east[k - 1] * x[k - 1];
+            } else if a.periodic_x {
+                v -= a.east[r0 + nx - 1] * x[r0 + nx - 1];
+            }
+            if let Some(n) = north {
+                v -= a.north[k] * x[n + i];
+            }
+            if let Some(s) = south {
+                v -= a.north[s + i] * x[s + i];
+            }
+            if let Some(t) = top {
+                v -= a.top[k] * x[t + i];
+            }
+            if let Some(b) = bottom {
+                v -= a.top[b + i] * x[b + i];
+            }
+            *y = v;
+        }
+    });
+}
+
 impl LinearOperator for Stencil5 {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         self.mul(x, y);
@@ -253,8 +408,12 @@ impl IncompleteCholesky {
         Self::default()
     }
 
-    /// Factor `a` (reusing storage).
+    /// Factor `a` (reusing storage); a two-dimensional matrix only.
     pub fn factor(&mut self, a: &Stencil5) {
+        assert!(
+            !a.is_3d(),
+            "incomplete Cholesky: a two-dimensional matrix only"
+        );
         let (nx, ny) = (a.nx, a.ny);
         let n = a.len();
         self.nx = nx;

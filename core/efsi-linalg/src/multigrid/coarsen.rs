@@ -22,6 +22,10 @@ pub fn coarsen_into(a: &Stencil5, c: &mut Stencil5, excess_scale: f64) {
 
 /// [`coarsen_into`] from a borrowed matrix.
 pub(super) fn coarsen_view_into(a: Stencil5View<'_>, c: &mut Stencil5, excess_scale: f64) {
+    if a.is_3d() {
+        coarsen_3d(a, c, excess_scale);
+        return;
+    }
     let (nx, ny) = (a.nx, a.ny);
     let (fx, fy) = (factor(nx), factor(ny));
     let (cx, cy) = (nx.div_ceil(fx), ny.div_ceil(fy));
@@ -107,6 +111,76 @@ pub(super) fn coarsen_view_into(a: Stencil5View<'_>, c: &mut Stencil5, excess_sc
         }
     });
     c.diag = diag;
+}
+
+/// [`coarsen_view_into`] of a three-dimensional matrix: the same rule along z (a top coupling
+/// across a coarse face scaled by ½ when z is coarsened; the excess by `excess_scale` when all
+/// three directions are), fine cell by fine cell in the order (i, j, c).
+fn coarsen_3d(a: Stencil5View<'_>, c: &mut Stencil5, excess_scale: f64) {
+    let (nx, ny, nz) = (a.nx, a.ny, a.nz);
+    let (fx, fy, fz) = (factor(nx), factor(ny), factor(nz));
+    let (cx, cy, cz) = (nx.div_ceil(fx), ny.div_ceil(fy), nz.div_ceil(fz));
+    let periodic = [a.periodic_x, a.periodic_y, a.periodic_z];
+    c.reshape_3d(cx, cy, cz, periodic);
+    let half = |f: usize| if f == 2 { 0.5 } else { 1.0 };
+    let (sx, sy, sz) = (half(fx), half(fy), half(fz));
+    let se = if fx * fy * fz == 8 { excess_scale } else { 1.0 };
+    let (lx, ly, lz) = (
+        fx.trailing_zeros(),
+        fy.trailing_zeros(),
+        fz.trailing_zeros(),
+    );
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let f = (k * ny + j) * nx + i;
+                let kc = ((k >> lz) * cy + (j >> ly)) * cx + (i >> lx);
+                let e = if i + 1 == nx && !a.periodic_x {
+                    0.0
+                } else {
+                    a.east[f]
+                };
+                let n = if j + 1 == ny && !a.periodic_y {
+                    0.0
+                } else {
+                    a.north[f]
+                };
+                let t = if k + 1 == nz && !a.periodic_z {
+                    0.0
+                } else {
+                    a.top[f]
+                };
+                let excess =
+                    a.diag[f] - (e + n + t + a.west(f, i) + a.south(f, j) + a.bottom(f, k));
+                // A fine face between two aggregates (or across the periodic wrap) couples
+                // them; a periodic direction of one coarse cell couples the cell to itself: no
+                // coupling.
+                if (i + 1 == nx || (i + 1) >> lx != i >> lx) && cx > 1 {
+                    c.east[kc] += sx * e;
+                }
+                if (j + 1 == ny || (j + 1) >> ly != j >> ly) && cy > 1 {
+                    c.north[kc] += sy * n;
+                }
+                if (k + 1 == nz || (k + 1) >> lz != k >> lz) && cz > 1 {
+                    c.top[kc] += sz * t;
+                }
+                if excess > 1e-12 * a.diag[f] {
+                    c.diag[kc] += se * excess;
+                }
+            }
+        }
+    }
+    for k in 0..cz {
+        for j in 0..cy {
+            for i in 0..cx {
+                let kc = (k * cy + j) * cx + i;
+                let off = c.east[kc] + c.north[kc] + c.top[kc];
+                let v = c.view();
+                let off = off + v.west(kc, i) + v.south(kc, j) + v.bottom(kc, k);
+                c.diag[kc] += off;
+            }
+        }
+    }
 }
 
 /// Levels `range` of the hierarchy from their finer neighbours (`a` is level 0's matrix,

@@ -22,6 +22,16 @@ impl Coarsest {
     }
 
     pub(super) fn factor(&mut self, lv: &Level) {
+        if lv.is_3d() {
+            self.assemble_3d(lv);
+        } else {
+            self.assemble_2d(lv);
+        }
+        self.cholesky();
+    }
+
+    /// The dense matrix of a two-dimensional level into `l`, one unknown pinned if singular.
+    fn assemble_2d(&mut self, lv: &Level) {
         let m = lv.nx * lv.ny;
         self.m = m;
         self.l.clear();
@@ -55,6 +65,56 @@ impl Coarsest {
                 }
             }
         }
+        self.pin(singular);
+    }
+
+    /// The dense matrix of a three-dimensional level into `l`, one unknown pinned if singular.
+    fn assemble_3d(&mut self, lv: &Level) {
+        let (nx, ny, nz) = (lv.nx, lv.ny, lv.nz);
+        let m = nx * ny * nz;
+        self.m = m;
+        self.l.clear();
+        self.l.resize(m * m, 0.0);
+        self.y.resize(m, 0.0);
+        let (s, sp) = (lv.s, lv.sp);
+        let mut singular = true;
+        let a = &mut self.l;
+        for c in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let k = (c * ny + j) * nx + i;
+                    let p = lv.p3(i, j, c);
+                    let off = lv.ce[p]
+                        + lv.ce[p - 1]
+                        + lv.cn[p]
+                        + lv.cn[p - s]
+                        + lv.ct[p]
+                        + lv.ct[p - sp];
+                    singular &= lv.diag[p] - off <= 1e-12 * lv.diag[p];
+                    a[k * m + k] += lv.diag[p];
+                    let at = |ii: usize, jj: usize, cc: usize| (cc * ny + jj) * nx + ii;
+                    let nb = [
+                        (lv.ce[p], at((i + 1) % nx, j, c)),
+                        (lv.ce[p - 1], at((i + nx - 1) % nx, j, c)),
+                        (lv.cn[p], at(i, (j + 1) % ny, c)),
+                        (lv.cn[p - s], at(i, (j + ny - 1) % ny, c)),
+                        (lv.ct[p], at(i, j, (c + 1) % nz)),
+                        (lv.ct[p - sp], at(i, j, (c + nz - 1) % nz)),
+                    ];
+                    for (v, q) in nb {
+                        if v != 0.0 {
+                            a[k * m + q] -= v;
+                        }
+                    }
+                }
+            }
+        }
+        self.pin(singular);
+    }
+
+    /// Pin unknown 0 of a singular matrix (its row and column replaced by the identity's).
+    fn pin(&mut self, singular: bool) {
+        let (m, a) = (self.m, &mut self.l);
         if singular {
             for k in 0..m {
                 a[k] = 0.0;
@@ -62,6 +122,12 @@ impl Coarsest {
             }
             a[0] = 1.0;
         }
+        self.singular_pin = singular;
+    }
+
+    /// Factor `l` in place.
+    fn cholesky(&mut self) {
+        let (m, a) = (self.m, &mut self.l);
         // In-place Cholesky, lower triangle.
         for c in 0..m {
             let mut d = a[c * m + c];
@@ -78,16 +144,17 @@ impl Coarsest {
                 a[r * m + c] = v / d;
             }
         }
-        self.singular_pin = singular;
     }
 }
 
 impl Coarsest {
     pub(super) fn solve(&mut self, lv: &mut Level) {
-        let (m, nx) = (self.m, lv.nx);
+        let (m, nx, ny) = (self.m, lv.nx, lv.ny);
         let (l, y) = (&self.l, &mut self.y);
+        // Padded index of unknown k ((i, j) on a two-dimensional level, (i, j, c) otherwise).
+        let p = |k: usize| lv.p3(k % nx, (k / nx) % ny, k / (nx * ny));
         for k in 0..m {
-            y[k] = lv.b[lv.p(k % nx, k / nx)];
+            y[k] = lv.b[p(k)];
         }
         if self.singular_pin {
             y[0] = 0.0;
@@ -106,9 +173,9 @@ impl Coarsest {
             }
             y[r] = v / l[r * m + r];
         }
-        for k in 0..m {
-            let p = lv.p(k % nx, k / nx);
-            lv.x[p] = y[k];
+        for (k, y) in y.iter().enumerate() {
+            let q = lv.p3(k % nx, (k / nx) % ny, k / (nx * ny));
+            lv.x[q] = *y;
         }
     }
 }

@@ -43,9 +43,19 @@ pub(super) fn cycle(
             c.fill_ghosts();
             let mut t = std::mem::take(&mut c.t);
             let (cnx, cs) = (c.nx, c.s);
-            par::rows(&mut t[cs..(c.ny + 1) * cs], cs).for_each(|j, row| {
-                c.residual_run(c.p(0, j), &mut row[1..=cnx]);
-            });
+            if c.is_3d() {
+                let span = c.rows_span();
+                let o = span.start;
+                par::rows(&mut t[span], cs).for_each(|r, row| {
+                    if c.row_jc(r).is_some() {
+                        c.residual_run_3d(o + r * cs + 1, &mut row[1..=cnx]);
+                    }
+                });
+            } else {
+                par::rows(&mut t[cs..(c.ny + 1) * cs], cs).for_each(|j, row| {
+                    c.residual_run(c.p(0, j), &mut row[1..=cnx]);
+                });
+            }
             c.t = t;
             std::mem::swap(&mut c.b, &mut c.t);
             std::mem::swap(&mut c.x, &mut c.t);

@@ -30,6 +30,10 @@ impl FineMatrix<'_> {
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
         let h = self.0.lock();
         let l = &h.levels[0];
+        if l.is_3d() {
+            mul_3d(l, x, y);
+            return;
+        }
         let (nx, ny, s) = (l.nx, l.ny, l.s);
         let (px, py) = (l.periodic_x, l.periodic_y);
         assert_eq!(
@@ -98,4 +102,79 @@ impl LinearOperator for FineMatrix<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         self.mul(x, y);
     }
+}
+
+/// [`FineMatrix::mul`] of a three-dimensional level: the terms of
+/// [`Stencil5::mul`](crate::Stencil5::mul) in its order (diagonal, east, west, north, south,
+/// top, bottom; a periodic neighbour across the wrap, whose coupling the ghost entry holds),
+/// so the same bits.
+fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
+    let (nx, ny, nz, s, sp) = (l.nx, l.ny, l.nz, l.s, l.sp);
+    let plane = nx * ny;
+    assert_eq!(
+        x.len(),
+        plane * nz,
+        "multigrid matrix: vector length ≠ matrix size"
+    );
+    assert_eq!(
+        y.len(),
+        plane * nz,
+        "multigrid matrix: vector length ≠ matrix size"
+    );
+    if plane == 0 {
+        return;
+    }
+    let (px, py, pz) = (l.periodic_x, l.periodic_y, l.periodic_z);
+    par::rows(y, nx).for_each(|r, yr| {
+        let (j, c) = (r % ny, r / ny);
+        let r0 = r * nx;
+        let p0 = l.p3(0, j, c);
+        let north = if j + 1 < ny {
+            Some(r0 + nx)
+        } else {
+            py.then(|| r0 + nx - plane)
+        };
+        let south = if j > 0 {
+            Some(r0 - nx)
+        } else {
+            py.then(|| r0 + plane - nx)
+        };
+        let top = if c + 1 < nz {
+            Some(r0 + plane)
+        } else {
+            pz.then(|| r0 - (nz - 1) * plane)
+        };
+        let bottom = if c > 0 {
+            Some(r0 - plane)
+        } else {
+            pz.then(|| r0 + (nz - 1) * plane)
+        };
+        for (i, y) in yr.iter_mut().enumerate() {
+            let (k, p) = (r0 + i, p0 + i);
+            let mut v = l.diag[p] * x[k];
+            if i + 1 < nx {
+                v -= l.ce[p] * x[k + 1];
+            } else if px {
+                v -= l.ce[p] * x[r0];
+            }
+            if i > 0 {
+                v -= l.ce[p - 1] * x[k - 1];
+            } else if px {
+                v -= l.ce[p - 1] * x[r0 + nx - 1];
+            }
+            if let Some(n) = north {
+                v -= l.cn[p] * x[n + i];
+            }
+            if let Some(q) = south {
+                v -= l.cn[p - s] * x[q + i];
+            }
+            if let Some(t) = top {
+                v -= l.ct[p] * x[t + i];
+            }
+            if let Some(b) = bottom {
+                v -= l.ct[p - sp] * x[b + i];
+            }
+            *y = v;
+        }
+    });
 }

@@ -5,15 +5,24 @@ use super::W_LEVELS;
 use crate::par;
 use crate::stencil5::Stencil5View;
 
-/// One level: the matrix in a padded layout (one ghost ring), and the work vectors.
+/// One level: the matrix in a padded layout (one ghost ring; on a three-dimensional level
+/// also a ghost plane below and above), and the work vectors.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Level {
     pub(super) nx: usize,
     pub(super) ny: usize,
+    /// Cells along z (1 on a two-dimensional level, which has no ghost planes).
+    pub(super) nz: usize,
     pub(super) periodic_x: bool,
     pub(super) periodic_y: bool,
+    pub(super) periodic_z: bool,
     /// Padded row length `nx + 2`.
     pub(super) s: usize,
+    /// Padded plane length `(nx + 2)(ny + 2)`.
+    pub(super) sp: usize,
+    /// Offset of plane 0: `sp` on a three-dimensional level (below it the ghost plane), 0 on a
+    /// two-dimensional one.
+    pub(super) zo: usize,
     pub(super) diag: Vec<f64>,
     pub(super) dinv: Vec<f64>,
     /// Coupling to the east neighbour; the west coupling of cell `k` is `ce[k − 1]` (the ghost
@@ -21,6 +30,9 @@ pub(super) struct Level {
     pub(super) ce: Vec<f64>,
     /// Coupling to the north neighbour; the south coupling of `k` is `cn[k − s]`.
     pub(super) cn: Vec<f64>,
+    /// Coupling to the top neighbour; the bottom coupling of `k` is `ct[k − sp]` (empty on a
+    /// two-dimensional level).
+    pub(super) ct: Vec<f64>,
     pub(super) x: Vec<f64>,
     pub(super) b: Vec<f64>,
     /// The first coarse correction while a W-cycle computes the second: allocated only on the
@@ -29,19 +41,38 @@ pub(super) struct Level {
 }
 
 impl Level {
-    /// A zero level of `nx × ny` cells.
-    pub(super) fn shape(nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) -> Self {
+    /// A zero level of `nx × ny × nz` cells (`nz = 1`: two-dimensional).
+    pub(super) fn shape(n: [usize; 3], periodic: [bool; 3]) -> Self {
         let mut l = Level::default();
-        l.reshape(nx, ny, periodic_x, periodic_y);
+        l.reshape(n, periodic);
         l
     }
 
-    /// Reshape to `nx × ny` cells, every vector zero, reusing the storage when it is large
+    /// Whether the level is three-dimensional.
+    #[inline(always)]
+    pub(super) fn is_3d(&self) -> bool {
+        self.nz > 1
+    }
+
+    /// Length of the padded vectors.
+    pub(super) fn padded_len(&self) -> usize {
+        let planes = if self.is_3d() { self.nz + 2 } else { 1 };
+        self.sp * planes
+    }
+
+    /// Reshape to `nx × ny × nz` cells, every vector zero, reusing the storage when it is large
     /// enough (`t` is left to [`Level::size_t`]).
-    pub(super) fn reshape(&mut self, nx: usize, ny: usize, periodic_x: bool, periodic_y: bool) {
-        let m = (nx + 2) * (ny + 2);
-        (self.nx, self.ny, self.s) = (nx, ny, nx + 2);
-        (self.periodic_x, self.periodic_y) = (periodic_x, periodic_y);
+    pub(super) fn reshape(&mut self, [nx, ny, nz]: [usize; 3], periodic: [bool; 3]) {
+        (self.nx, self.ny, self.nz, self.s) = (nx, ny, nz, nx + 2);
+        self.sp = (nx + 2) * (ny + 2);
+        self.zo = if nz > 1 { self.sp } else { 0 };
+        (self.periodic_x, self.periodic_y) = (periodic[0], periodic[1]);
+        self.periodic_z = nz > 1 && periodic[2];
+        let m = self.padded_len();
+        self.ct.clear();
+        if nz > 1 {
+            self.ct.resize(m, 0.0);
+        }
         for v in [
             &mut self.diag,
             &mut self.dinv,
@@ -66,7 +97,7 @@ impl Level {
     /// the coarse levels' were never read), reusing its storage.
     pub(super) fn size_t(&mut self, l: usize, n: usize, gamma: usize) {
         let len = if Self::needs_t(l, n, gamma) {
-            (self.nx + 2) * (self.ny + 2)
+            self.padded_len()
         } else {
             0
         };
@@ -78,7 +109,7 @@ impl Level {
 
     /// Whether the level is below [`par::PAR_MIN`] cells, so its sweeps run on one thread.
     pub(super) fn is_serial(&self) -> bool {
-        self.nx * self.ny < par::PAR_MIN
+        self.nx * self.ny * self.nz < par::PAR_MIN
     }
 
     #[inline(always)]
@@ -86,9 +117,36 @@ impl Level {
         (j + 1) * self.s + i + 1
     }
 
+    /// Padded index of cell `(i, j, c)` (`c = 0` on a two-dimensional level: [`p`](Self::p)).
+    #[inline(always)]
+    pub(super) fn p3(&self, i: usize, j: usize, c: usize) -> usize {
+        self.zo + c * self.sp + (j + 1) * self.s + i + 1
+    }
+
+    /// The span of the padded vectors from the first row of plane 0 to the last row of the last
+    /// plane; split into rows of `s`, row `r` is cell row `j = r mod (ny + 2)` of plane
+    /// `c = r div (ny + 2)` when `j < ny` (the others are ghost rows). On a two-dimensional
+    /// level it is the `ny` rows of cells.
+    pub(super) fn rows_span(&self) -> std::ops::Range<usize> {
+        let start = self.zo + self.s;
+        start..start + ((self.nz - 1) * (self.ny + 2) + self.ny) * self.s
+    }
+
+    /// The cell row `(j, c)` of row `r` of [`rows_span`](Self::rows_span), `None` for a
+    /// ghost row.
+    #[inline(always)]
+    pub(super) fn row_jc(&self, r: usize) -> Option<(usize, usize)> {
+        let (j, c) = (r % (self.ny + 2), r / (self.ny + 2));
+        (j < self.ny).then_some((j, c))
+    }
+
     /// Copy the coefficients of `a` (same shape) into the padded layout: row copies in
     /// parallel, one array at a time (they vectorise).
     pub(super) fn load(&mut self, a: Stencil5View<'_>) {
+        if self.is_3d() {
+            self.load_3d(a);
+            return;
+        }
         let (nx, ny, s) = (self.nx, self.ny, self.s);
         let (px, py) = (a.periodic_x, a.periodic_y);
         let rows = s..(ny + 1) * s;
@@ -128,8 +186,13 @@ impl Level {
     /// those entries.
     pub(super) fn holds(&self, a: Stencil5View<'_>) -> bool {
         let (nx, ny, s) = (self.nx, self.ny, self.s);
-        if (nx, ny, self.periodic_x, self.periodic_y) != (a.nx, a.ny, a.periodic_x, a.periodic_y) {
+        if (nx, ny, self.periodic_x, self.periodic_y) != (a.nx, a.ny, a.periodic_x, a.periodic_y)
+            || (self.nz, self.periodic_z) != (a.nz, a.periodic_z)
+        {
             return false;
+        }
+        if self.is_3d() {
+            return self.holds_3d(a);
         }
         let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
         let east = if a.periodic_x {
@@ -148,6 +211,10 @@ impl Level {
 
     /// Periodic ghosts of `x` (closed sides keep zero ghosts, multiplied by zero couplings).
     pub(super) fn fill_ghosts(&mut self) {
+        if self.is_3d() {
+            self.fill_ghosts_3d();
+            return;
+        }
         let (nx, ny, s) = (self.nx, self.ny, self.s);
         if self.periodic_x {
             for j in 1..=ny {
@@ -178,6 +245,136 @@ impl Level {
         for t in 0..n {
             out[t] =
                 b[t] - d[t] * xc[t] + ce[t] * xe[t] + cw[t] * xw[t] + cn[t] * xn[t] + cs[t] * xs[t];
+        }
+    }
+}
+
+/// The three-dimensional arms: plane by plane, a line of cells along x the unit of work.
+impl Level {
+    /// [`load`](Self::load) of a three-dimensional matrix: every ghost coupling holds the
+    /// periodic wrap's coupling or 0, a closed side's coupling is 0.
+    fn load_3d(&mut self, a: Stencil5View<'_>) {
+        let (nx, ny, nz) = (self.nx, self.ny, self.nz);
+        let (px, py, pz) = (a.periodic_x, a.periodic_y, a.periodic_z);
+        let plane = nx * ny;
+        for v in [
+            &mut self.ce,
+            &mut self.cn,
+            &mut self.ct,
+            &mut self.diag,
+            &mut self.dinv,
+        ] {
+            v.fill(0.0);
+        }
+        for c in 0..nz {
+            for j in 0..ny {
+                let r = (c * ny + j) * nx;
+                let p = self.p3(0, j, c);
+                let src = &a.east[r..r + nx];
+                self.ce[p..p + nx].copy_from_slice(src);
+                if !px {
+                    self.ce[p + nx - 1] = 0.0;
+                } else {
+                    self.ce[p - 1] = src[nx - 1];
+                }
+                if j + 1 < ny || py {
+                    self.cn[p..p + nx].copy_from_slice(&a.north[r..r + nx]);
+                }
+                if j == 0 && py {
+                    let t = r + (ny - 1) * nx;
+                    self.cn[p - self.s..p - self.s + nx].copy_from_slice(&a.north[t..t + nx]);
+                }
+                if c + 1 < nz || pz {
+                    self.ct[p..p + nx].copy_from_slice(&a.top[r..r + nx]);
+                }
+                if c == 0 && pz {
+                    let t = r + (nz - 1) * plane;
+                    self.ct[p - self.sp..p - self.sp + nx].copy_from_slice(&a.top[t..t + nx]);
+                }
+                self.diag[p..p + nx].copy_from_slice(&a.diag[r..r + nx]);
+                for (di, d) in self.dinv[p..p + nx].iter_mut().zip(&a.diag[r..r + nx]) {
+                    *di = if *d > 0.0 { 1.0 / d } else { 0.0 };
+                }
+            }
+        }
+    }
+
+    /// [`holds`](Self::holds) of a three-dimensional matrix of the level's shape.
+    fn holds_3d(&self, a: Stencil5View<'_>) -> bool {
+        let (nx, ny, nz) = (self.nx, self.ny, self.nz);
+        let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
+        let east = if a.periodic_x {
+            nx
+        } else {
+            nx.saturating_sub(1)
+        };
+        (0..nz).all(|c| {
+            (0..ny).all(|j| {
+                let (p, r) = (self.p3(0, j, c), (c * ny + j) * nx);
+                same(&self.diag[p..p + nx], &a.diag[r..r + nx])
+                    && same(&self.ce[p..p + east], &a.east[r..r + east])
+                    && ((j + 1 == ny && !a.periodic_y)
+                        || same(&self.cn[p..p + nx], &a.north[r..r + nx]))
+                    && ((c + 1 == nz && !a.periodic_z)
+                        || same(&self.ct[p..p + nx], &a.top[r..r + nx]))
+            })
+        })
+    }
+
+    /// [`fill_ghosts`](Self::fill_ghosts) of a three-dimensional level: the x ghosts of every
+    /// row, then the y ghost rows of every plane, then the z ghost planes (cells only: the
+    /// seven-point stencil reads no edge or corner ghost).
+    fn fill_ghosts_3d(&mut self) {
+        let (nx, ny, nz, s, sp) = (self.nx, self.ny, self.nz, self.s, self.sp);
+        if self.periodic_x {
+            for c in 0..nz {
+                for j in 0..ny {
+                    let p = self.p3(0, j, c);
+                    self.x[p - 1] = self.x[p + nx - 1];
+                    self.x[p + nx] = self.x[p];
+                }
+            }
+        }
+        if self.periodic_y {
+            for c in 0..nz {
+                let (bot, top) = (self.p3(0, 0, c), self.p3(0, ny - 1, c));
+                self.x.copy_within(top..top + nx, bot - s);
+                self.x.copy_within(bot..bot + nx, top + s);
+            }
+        }
+        if self.periodic_z {
+            for j in 0..ny {
+                let (bot, top) = (self.p3(0, j, 0), self.p3(0, j, nz - 1));
+                self.x.copy_within(top..top + nx, bot - sp);
+                self.x.copy_within(bot..bot + nx, top + sp);
+            }
+        }
+    }
+
+    /// [`residual_run`](Self::residual_run) on a three-dimensional level.
+    #[inline(always)]
+    pub(super) fn residual_run_3d(&self, k0: usize, out: &mut [f64]) {
+        let (n, s, sp) = (out.len(), self.s, self.sp);
+        let x = &self.x[k0 - sp..k0 + sp + n];
+        let (xc, xe, xw) = (
+            &x[sp..sp + n],
+            &x[sp + 1..sp + 1 + n],
+            &x[sp - 1..sp - 1 + n],
+        );
+        let (xn, xs) = (&x[sp + s..sp + s + n], &x[sp - s..sp - s + n]);
+        let (xt, xb) = (&x[2 * sp..2 * sp + n], &x[..n]);
+        let (b, d) = (&self.b[k0..k0 + n], &self.diag[k0..k0 + n]);
+        let (ce, cw) = (&self.ce[k0..k0 + n], &self.ce[k0 - 1..k0 - 1 + n]);
+        let (cn, cs) = (&self.cn[k0..k0 + n], &self.cn[k0 - s..k0 - s + n]);
+        let (ct, cb) = (&self.ct[k0..k0 + n], &self.ct[k0 - sp..k0 - sp + n]);
+        for t in 0..n {
+            out[t] = b[t] - d[t] * xc[t]
+                + ce[t] * xe[t]
+                + cw[t] * xw[t]
+                + cn[t] * xn[t]
+                + cs[t] * xs[t]
+                + ct[t] * xt[t]
+                + cb[t] * xb[t];
         }
     }
 }

@@ -1,4 +1,5 @@
-//! Geometric multigrid (W-cycle on the fine levels) for five-point SPD matrices on the cell grid, used as the
+//! Geometric multigrid (W-cycle on the fine levels) for five-point (seven-point in 3-D) SPD
+//! matrices on the cell grid, used as the
 //! preconditioner of conjugate gradient ("MG-PCG").
 //!
 //! It works from the assembled [`Stencil5`] alone — the diagonal and the east/north couplings,
@@ -38,6 +39,16 @@
 //! level 2 they are visited 4 times, and the iterations stay those of the full W-cycle within
 //! one (the `iteration_table` test: six problem kinds at density ratios 1, 1e2, 1e4 from 64²
 //! to 512²).
+//!
+//! **Three dimensions.** A seven-point [`Stencil5`] (`nz > 1`, [`Stencil5::new_3d`]) gets the
+//! same multigrid: aggregates of 2 × 2 × 2 cells (a direction of ≤ 2 cells no longer
+//! coarsened), the same coarse rule (the Galerkin coupling across a coarse face scaled by ½
+//! when its direction is coarsened — for a constant coefficient again the rediscretised
+//! operator, `4·h_f = 2·h_c` per face; the diagonal's excess by the excess scale when all three
+//! directions are), the same cycles, the dense Cholesky on ≤ [`COARSEST_CELLS`] cells. The
+//! smoother's two half-sweeps run one after the other, each over the lines of cells along x in
+//! parallel ((i + j + c) mod 2 the colour), and a three-dimensional matrix is applied to whole
+//! vectors only (no window).
 //!
 //! **Singular systems.** Without Dirichlet faces the matrix annihilates constants; residuals
 //! the conjugate gradient hands over then sum to zero, restriction keeps that, and the coarsest
@@ -190,28 +201,31 @@ impl Multigrid {
             let l = &h.levels[0];
             l.nx == a.nx
                 && l.ny == a.ny
+                && l.nz == a.nz
                 && l.periodic_x == a.periodic_x
                 && l.periodic_y == a.periodic_y
+                && l.periodic_z == a.periodic_z
         };
         if !same {
-            let (px, py) = (a.periodic_x, a.periodic_y);
-            let reshape = |levels: &mut Vec<Level>, l: usize, nx: usize, ny: usize| {
+            let periodic = [a.periodic_x, a.periodic_y, a.periodic_z];
+            let reshape = |levels: &mut Vec<Level>, l: usize, shape: [usize; 3]| {
                 if l < levels.len() {
-                    levels[l].reshape(nx, ny, px, py);
+                    levels[l].reshape(shape, periodic);
                 } else {
-                    levels.push(Level::shape(nx, ny, px, py));
+                    levels.push(Level::shape(shape, periodic));
                 }
             };
-            reshape(&mut h.levels, 0, a.nx, a.ny);
-            let (mut nx, mut ny, mut n) = (a.nx, a.ny, 1);
-            while nx * ny > COARSEST_CELLS && (nx > 2 || ny > 2) {
+            reshape(&mut h.levels, 0, [a.nx, a.ny, a.nz]);
+            let (mut nx, mut ny, mut nz, mut n) = (a.nx, a.ny, a.nz, 1);
+            while nx * ny * nz > COARSEST_CELLS && (nx > 2 || ny > 2 || nz > 2) {
                 nx = nx.div_ceil(factor(nx));
                 ny = ny.div_ceil(factor(ny));
-                reshape(&mut h.levels, n, nx, ny);
+                nz = nz.div_ceil(factor(nz));
+                reshape(&mut h.levels, n, [nx, ny, nz]);
                 if n - 1 < self.mats.len() {
-                    self.mats[n - 1].reshape(nx, ny, px, py);
+                    self.mats[n - 1].reshape_3d(nx, ny, nz, periodic);
                 } else {
-                    self.mats.push(Stencil5::new(nx, ny, px, py));
+                    self.mats.push(Stencil5::new_3d(nx, ny, nz, periodic));
                 }
                 n += 1;
             }
@@ -263,6 +277,14 @@ impl Multigrid {
         if nx == 0 || ny == 0 {
             return;
         }
+        if levels[0].is_3d() {
+            assert!(
+                stride == nx && origin == 0,
+                "multigrid: a three-dimensional matrix is applied to whole vectors only"
+            );
+            apply_3d(levels, coarsest, r, z, self.sweeps, self.gamma);
+            return;
+        }
         assert!(
             nx <= stride && (ny == 0 || origin + (ny - 1) * stride + nx <= r.len().min(z.len())),
             "multigrid: the {nx} × {ny} window at {origin} (rows of {stride}) exceeds the vectors"
@@ -293,11 +315,45 @@ impl Multigrid {
     }
 }
 
+/// One cycle on a three-dimensional hierarchy: `r` into the finest level's padded right-hand
+/// side, the cycle, its solution out into `z` (rows in parallel).
+fn apply_3d(
+    levels: &mut [Level],
+    coarsest: &mut Coarsest,
+    r: &[f64],
+    z: &mut [f64],
+    sweeps: usize,
+    gamma: usize,
+) {
+    let l0 = &mut levels[0];
+    let (nx, ny, nz, s) = (l0.nx, l0.ny, l0.nz, l0.s);
+    assert!(
+        r.len() == nx * ny * nz && z.len() == nx * ny * nz,
+        "multigrid: vector length ≠ matrix size"
+    );
+    let span = l0.rows_span();
+    par::rows(&mut l0.b[span], s).for_each(|q, row| {
+        let (j, c) = (q % (ny + 2), q / (ny + 2));
+        if j < ny {
+            let o = (c * ny + j) * nx;
+            row[1..=nx].copy_from_slice(&r[o..o + nx]);
+        }
+    });
+    cycle(levels, coarsest, 0, sweeps, gamma);
+    let l0 = &levels[0];
+    let x = &l0.x;
+    par::rows(z, nx).for_each(|q, row| {
+        let (j, c) = (q % ny, q / ny);
+        let p = l0.p3(0, j, c);
+        row.copy_from_slice(&x[p..p + nx]);
+    });
+}
+
 impl Preconditioner for Multigrid {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let (nx, ny) = {
             let h = self.lock();
-            (h.levels[0].nx, h.levels[0].ny)
+            (h.levels[0].nx, h.levels[0].ny * h.levels[0].nz)
         };
         assert_eq!(r.len(), nx * ny, "multigrid: vector length ≠ matrix size");
         self.apply_window(r, z, nx, 0);

@@ -13,6 +13,10 @@ impl Level {
     /// in two separate half-sweeps, so the result is the same bit for bit, whatever the
     /// chunking and the number of threads.
     pub(super) fn sweep(&mut self, first: usize) {
+        if self.is_3d() {
+            self.sweep_3d(first);
+            return;
+        }
         self.fill_ghosts();
         let (nx, ny, s, px) = (self.nx, self.ny, self.s, self.periodic_x);
         let second = 1 - first;
@@ -100,5 +104,55 @@ impl Level {
         }
         // Phase 2 touches two rows per chunk: split only when that is worth a fork.
         par::range(chunks).work(2 * nx).for_each(phase2);
+    }
+}
+
+impl Level {
+    /// One red–black Gauss–Seidel sweep of a three-dimensional level: the cells of colour
+    /// `first` ((i + j + c) mod 2), then the others, each half-sweep over the rows in parallel
+    /// after the periodic ghosts are refreshed. A cell's neighbours have the other colour, so
+    /// the rows of one half-sweep are independent and the result is the same bit for bit
+    /// whatever the threads (across an odd periodic wrap a neighbour of the same colour is
+    /// read from its ghost, as it was before the half-sweep).
+    fn sweep_3d(&mut self, first: usize) {
+        let (nx, ny, nz, s, sp) = (self.nx, self.ny, self.nz, self.s, self.sp);
+        let serial = self.is_serial();
+        for colour in [first, 1 - first] {
+            self.fill_ghosts();
+            let zo = self.zo;
+            let xs = SharedSlice::new(&mut self.x);
+            let (b, dinv) = (&self.b[..], &self.dinv[..]);
+            let (ce, cn, ct) = (&self.ce[..], &self.cn[..], &self.ct[..]);
+            let row = |r: usize| {
+                let (j, c) = (r % ny, r / ny);
+                let base = zo + c * sp + (j + 1) * s + 1;
+                let o = base + ((colour + j + c) & 1);
+                let end = base + nx;
+                xs.check(base - 1 - sp..end + 1 + sp);
+                let mut k = o;
+                while k < end {
+                    // SAFETY: inside the span checked above; a half-sweep writes only cells
+                    // of `colour`, each row its own, and reads cells of the other colour and
+                    // ghosts, which no one writes during it.
+                    unsafe {
+                        let v = (b[k]
+                            + ce[k] * xs.get(k + 1)
+                            + ce[k - 1] * xs.get(k - 1)
+                            + cn[k] * xs.get(k + s)
+                            + cn[k - s] * xs.get(k - s)
+                            + ct[k] * xs.get(k + sp)
+                            + ct[k - sp] * xs.get(k - sp))
+                            * dinv[k];
+                        xs.set(k, v);
+                    }
+                    k += 2;
+                }
+            };
+            if serial {
+                (0..ny * nz).for_each(row);
+            } else {
+                par::range(ny * nz).work(nx).for_each(row);
+            }
+        }
     }
 }

@@ -52,6 +52,11 @@
 //! `dV·∇·V^{n+1} = −Δt·r` for the residual `r`, the criterion is `max Δt²|r|/dV ≤ tol`, checked
 //! on the true residual.
 //!
+//! **Three dimensions.** On a three-dimensional grid the matrix is seven-point (the z-faces'
+//! couplings `h_x h_y/(ρ_f h_z)`), the right-hand side takes the z-face velocity `w` and the
+//! correction subtracts the gradient from `u`, `v` and `w`; multigrid only (incomplete
+//! Cholesky is two-dimensional and refused). The module `three_d` holds these kernels.
+//!
 //! **Postcondition** (checked in debug builds): `max |∇·V^{n+1}|·Δt ≤ tol` after the update.
 //!
 //! **Parallelism.** Assembly, right-hand side, the solver's vector work and the velocity update
@@ -72,6 +77,7 @@ use efsi_linalg::{
 };
 
 mod options;
+mod three_d;
 pub use options::{INTERFACE_TOLERANCE, ONE_FLUID_TOLERANCE, PressureSolver, ProjectionOptions};
 
 /// The projection stage plugin.
@@ -117,6 +123,13 @@ impl StagePlugin for Projection {
     ) -> Result<Box<dyn Stage>, String> {
         let incremental = crate::incremental_pressure(options);
         let o: &ProjectionOptions = options.section()?;
+        if grid.is_3d() && o.solver == PressureSolver::IncompleteCholesky {
+            return Err(
+                "numerics.projection.solver: IncompleteCholesky is two-dimensional; \
+                 a three-dimensional grid takes Multigrid"
+                    .into(),
+            );
+        }
         Ok(Box::new(ProjectionStage {
             projector: Projector::new(scene, o, grid, bc, shared, incremental),
             incremental,
@@ -168,15 +181,21 @@ struct PredictorStage;
 
 impl Stage for PredictorStage {
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        subtract_gradient(
-            ctx.grid,
-            ctx.bc,
-            &state.p,
-            &state.rho,
-            ctx.dt,
-            &mut state.u,
-            &mut state.v,
-        );
+        if let Some(w) = state.w.as_mut().filter(|_| ctx.grid.is_3d()) {
+            let faces = three_d::unknown_faces(ctx.bc, ctx.grid);
+            let vel = [&mut state.u, &mut state.v, w];
+            three_d::subtract_gradient_3d(ctx.grid, faces, &state.p, &state.rho, ctx.dt, vel);
+        } else {
+            subtract_gradient(
+                ctx.grid,
+                ctx.bc,
+                &state.p,
+                &state.rho,
+                ctx.dt,
+                &mut state.u,
+                &mut state.v,
+            );
+        }
         Ok(StageStats::default())
     }
 }
@@ -244,7 +263,10 @@ impl Projector {
         let n = grid.cells();
         // Multigrid's matrix is assembled in the pool, beside the work vectors.
         let (precond, pooled) = match o.solver {
-            PressureSolver::Multigrid => (Precond::Multigrid(Multigrid::new(2)), MATRIX),
+            PressureSolver::Multigrid => (
+                Precond::Multigrid(Multigrid::new(2)),
+                MATRIX + usize::from(grid.is_3d()),
+            ),
             PressureSolver::IncompleteCholesky => (
                 Precond::IncompleteCholesky(
                     IncompleteCholesky::new(),
@@ -412,18 +434,28 @@ impl Projector {
         // Project the field g (on the faces the flow may cross) with Δt = 1: what the
         // projection removes is ∇p⁰/ρ. The divergence to 1e-12 of its initial size.
         let (u0, v0) = (state.u.clone(), state.v.clone());
+        let w0 = state.w.clone();
         let (nx, ny) = (grid.nx, grid.ny);
         let (ux, vy) = (bc.normal_faces(0, nx), bc.normal_faces(1, ny));
         state.u.fill(0.0);
         state.v.fill(0.0);
-        for j in 0..ny as isize {
-            for i in ux.lo..ux.hi {
-                state.u[(i, j)] = gx;
+        if let Some(w) = state.w.as_mut().filter(|_| grid.is_3d()) {
+            // Gravity has no z component: w = 0; u and v on the unknown faces of every plane.
+            w.fill(0.0);
+            let x = Region::of(grid, Stagger::XFace).range(0, ux.lo, ux.hi);
+            x.for_each(&mut state.u, |_, u| u.fill(gx));
+            let y = Region::of(grid, Stagger::YFace).range(1, vy.lo, vy.hi);
+            y.for_each(&mut state.v, |_, v| v.fill(gy));
+        } else {
+            for j in 0..ny as isize {
+                for i in ux.lo..ux.hi {
+                    state.u[(i, j)] = gx;
+                }
             }
-        }
-        for j in vy.lo..vy.hi {
-            for i in 0..nx as isize {
-                state.v[(i, j)] = gy;
+            for j in vy.lo..vy.hi {
+                for i in 0..nx as isize {
+                    state.v[(i, j)] = gy;
+                }
             }
         }
         bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, true);
@@ -438,6 +470,9 @@ impl Projector {
         let solved = self.project(&ctx, state, tol, self.increment.is_some());
         state.u.copy_from(&u0);
         state.v.copy_from(&v0);
+        if let (Some(w), Some(w0)) = (state.w.as_mut(), w0.as_ref()) {
+            w.copy_from(w0);
+        }
         if solved.is_err() || !state.p.data().iter().all(|p| p.is_finite()) {
             // A gravity too large for floating point (1e300): start from p = 0 as the seed's
             // scheme does; the first step then reports what overflows, stage and cell named.
@@ -465,19 +500,31 @@ impl Projector {
         let mut pool = self.scratch.lock();
         let (vectors, _) = pool.split_at_mut(WORK * grid.cells());
         let [b, x, weight, r, pw, q] = scratch::take::<WORK>(vectors, grid.cells());
-        divergence_rhs(grid, &state.u, &state.v, dt, b);
-        // The residual weights Δt²/dV.
-        par::rows(&mut *weight, grid.nx).for_each(|_, row| {
-            for (i, w) in row.iter_mut().enumerate() {
-                *w = dt * dt / grid.cell_volume(i as isize);
-            }
-        });
+        if let Some(w) = state.w.as_ref().filter(|_| grid.is_3d()) {
+            three_d::divergence_rhs_3d(grid, [&state.u, &state.v, w], dt, b);
+            weight.fill(dt * dt / (grid.dx * grid.dy * grid.dz));
+        } else {
+            divergence_rhs(grid, &state.u, &state.v, dt, b);
+            // The residual weights Δt²/dV.
+            par::rows(&mut *weight, grid.nx).for_each(|_, row| {
+                for (i, w) in row.iter_mut().enumerate() {
+                    *w = dt * dt / grid.cell_volume(i as isize);
+                }
+            });
+        }
         // An increment on the pressure already applied (the incremental scheme's predictor,
         // or the coupled elastic step's) from zero, else the whole pressure from the last
         // step's.
         let incremental = increment && self.increment.is_some();
         if incremental {
             x.fill(0.0);
+        } else if grid.is_3d() {
+            let nx = grid.nx;
+            let p = &state.p;
+            let cells = Region::of(grid, Stagger::Cell);
+            par::rows(&mut *x, nx).for_each(|r, row| {
+                row.copy_from_slice(p.at(&cells.line(r), [0; 3]));
+            });
         } else {
             let p = &state.p;
             par::rows(&mut *x, grid.nx).for_each(|j, row| {
@@ -535,6 +582,28 @@ impl Projector {
             return;
         }
         match &mut self.precond {
+            Precond::Multigrid(mg) if grid.is_3d() => {
+                let mut pool = self.scratch.lock();
+                let (_, matrix) = pool.split_at_mut(WORK * grid.cells());
+                let [diag, east, north, top] = scratch::take::<4>(matrix, grid.cells());
+                let periodic = three_d::periodic_axes(bc, grid);
+                three_d::assemble_3d_into([diag, east, north, top], grid, periodic, rho);
+                let a = Stencil5View {
+                    nx: grid.nx,
+                    ny: grid.ny,
+                    nz: grid.nz,
+                    periodic_x: periodic[0],
+                    periodic_y: periodic[1],
+                    periodic_z: periodic[2],
+                    diag,
+                    east,
+                    north,
+                    top,
+                };
+                if self.set_up_for.is_some() || !mg.is_set_up_for(a) {
+                    mg.setup_view(a);
+                }
+            }
             Precond::Multigrid(mg) => {
                 let mut pool = self.scratch.lock();
                 let (_, matrix) = pool.split_at_mut(WORK * grid.cells());
@@ -543,11 +612,14 @@ impl Projector {
                 let a = Stencil5View {
                     nx: grid.nx,
                     ny: grid.ny,
+                    nz: 1,
                     periodic_x: bc.periodic(0),
                     periodic_y: bc.periodic(1),
+                    periodic_z: false,
                     diag,
                     east,
                     north,
+                    top: &[],
                 };
                 // Without a copy of the density, the matrix is compared with the one the
                 // multigrid holds.
@@ -595,7 +667,13 @@ fn correct(
     }
     let (bc, dt) = (ctx.bc, ctx.dt);
     let phi = increment.unwrap_or(&state.p);
-    subtract_gradient(grid, bc, phi, &state.rho, dt, &mut state.u, &mut state.v);
+    if let Some(w) = state.w.as_mut().filter(|_| grid.is_3d()) {
+        let faces = three_d::unknown_faces(bc, grid);
+        let vel = [&mut state.u, &mut state.v, w];
+        three_d::subtract_gradient_3d(grid, faces, phi, &state.rho, dt, vel);
+    } else {
+        subtract_gradient(grid, bc, phi, &state.rho, dt, &mut state.u, &mut state.v);
+    }
 }
 
 /// `b = −(net volume outflux)/Δt` per cell, as `ops::net_outflux` computes it, over slices
@@ -623,7 +701,10 @@ fn check_divergence(ctx: &StepContext, state: &mut State, tol: f64) {
     let grid = ctx.grid;
     ctx.bc
         .fill_velocity(grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
-    let d = ops::max_abs_div(grid, &state.u, &state.v) * ctx.dt;
+    let d = match state.w.as_ref().filter(|_| grid.is_3d()) {
+        Some(w) => three_d::max_abs_div_3d(grid, [&state.u, &state.v, w]),
+        None => ops::max_abs_div(grid, &state.u, &state.v),
+    } * ctx.dt;
     // A non-finite divergence is not this check's to report: the scheduler names the first
     // non-finite velocity (and the stage) right after the stage.
     debug_assert!(
@@ -671,6 +752,10 @@ pub(crate) fn subtract_gradient(
 /// everywhere; the postcondition does not apply (only reachable with inconsistent scenes).
 fn singular_inconsistent(ctx: &StepContext, state: &State) -> bool {
     let g = ctx.grid;
+    if let Some(w) = state.w.as_ref().filter(|_| g.is_3d()) {
+        let net = three_d::net_outflux_3d(g, [&state.u, &state.v, w]);
+        return !ctx.bc.has_pressure_reference() && net.abs() > 1e-12;
+    }
     let mut net = 0.0;
     for j in 0..g.ny as isize {
         for i in 0..g.nx as isize {
