@@ -154,10 +154,11 @@ impl Coefficients {
             let s = depth(g, axes, scale);
             let lo = edge_cells(axes);
             Region::of(g, at).for_each(e, |l, gr| {
-                let q = lo.map(|d| mu.at(&l, d));
-                let r = edge_radius(g, at, &l);
-                for n in 0..l.len {
-                    let mk = harmonic_mean([q[0][n], q[1][n], q[2][n], q[3][n]]);
+                let len = l.len;
+                let [sw, se, nw, ne] = lo.map(|d| &mu.at(&l, d)[..len]);
+                let (r, gr) = (&edge_radius(g, at, &l)[..len], &mut gr[..len]);
+                for n in 0..len {
+                    let mk = harmonic_mean([sw[n], se[n], nw[n], ne[n]]);
                     gr[n] = s * r[n] * mk;
                 }
             });
@@ -380,17 +381,33 @@ impl Coefficients {
             &u.at(l, unit(a))[..n],
         );
         let (chi, clo) = (&c.at(l, [0; 3])[..n], &c.at(l, minus(a))[..n]);
-        let sh = across.map(|b| Shear::new(self, a, b, l, vel, n));
         let dr = &d[..n];
         let xr = &x.unwrap_or(uc)[..n];
-        for k in 0..n {
-            let mut s = chi[k] * (uhi[k] - uc[k]) - clo[k] * (uc[k] - ulo[k]);
-            for q in &sh {
-                let f_lo = q.glo[k] * (q.rho * (uc[k] - q.own_lo[k]) + (q.lo[k] - q.lo_m[k]));
-                let f_hi = q.ghi[k] * (q.rho * (q.own_hi[k] - uc[k]) + (q.hi[k] - q.hi_m[k]));
-                s += f_hi - f_lo;
+        // The normal stresses and the first shear pair; each further pair adds its fluxes in a
+        // pass of its own (the sum in the same order), the last one forming `y`.
+        for (m, &b) in across.iter().enumerate() {
+            let Shear {
+                rho,
+                glo,
+                ghi,
+                own_lo,
+                own_hi,
+                lo,
+                lo_m,
+                hi,
+                hi_m,
+            } = Shear::new(self, a, b, l, vel, n);
+            let last = m + 1 == S;
+            for k in 0..n {
+                let f_lo = glo[k] * (rho * (uc[k] - own_lo[k]) + (lo[k] - lo_m[k]));
+                let f_hi = ghi[k] * (rho * (own_hi[k] - uc[k]) + (hi[k] - hi_m[k]));
+                let s = if m == 0 {
+                    chi[k] * (uhi[k] - uc[k]) - clo[k] * (uc[k] - ulo[k])
+                } else {
+                    y[k]
+                } + (f_hi - f_lo);
+                y[k] = if last { dr[k] * xr[k] - s } else { s };
             }
-            y[k] = dr[k] * xr[k] - s;
         }
         let y = &*y;
         par::sum4(n, |k| xr[k] * y[k])
@@ -460,6 +477,7 @@ fn depth(g: &Grid, axes: [usize; 2], scale: f64) -> f64 {
 
 /// The radius factor on the edges `at` of `l`: at x-faces where the edges sit on them, else at
 /// cell centres (all ones off the axisymmetric geometry).
+#[inline(always)]
 fn edge_radius<'g>(g: &'g Grid, at: Stagger, l: &Line) -> &'g [f64] {
     if at.nodal()[0] == 1 {
         g.metric.rx_on(l, 0)
@@ -809,10 +827,12 @@ mod tests {
             let mut own = 0;
             faces.for_each_axis(|c, a, q| {
                 let i = mu.index_of(q);
-                let beside = (0..3).any(|b| {
-                    b != a && !periodic[b] && (i[b] == 0 || i[b] == size[b] - 1)
-                });
-                assert!(diag[c] <= a_(c) + 1e-13 * scale, "{periodic:?}: diagonal {c}");
+                let beside =
+                    (0..3).any(|b| b != a && !periodic[b] && (i[b] == 0 || i[b] == size[b] - 1));
+                assert!(
+                    diag[c] <= a_(c) + 1e-13 * scale,
+                    "{periodic:?}: diagonal {c}"
+                );
                 if !beside {
                     assert!((diag[c] - a_(c)).abs() <= 1e-13 * scale, "diagonal {c}");
                     own += 1;

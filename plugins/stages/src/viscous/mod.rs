@@ -343,11 +343,12 @@ fn mass(g: &Grid, a: usize, l: &Line, rho: &Field, out: &mut [f64]) {
     } else {
         g.metric.rc_on(l, 0)
     };
-    let h = &g.h()[..g.dims()];
-    for (k, m) in out[..l.len].iter_mut().enumerate() {
-        *m = h
-            .iter()
-            .fold(face_density(lo[k], hi[k]) * r[k], |m, h| m * h);
+    let ([hx, hy, hz], n) = (g.h(), l.len);
+    let (lo, hi, r) = (&lo[..n], &hi[..n], &r[..n]);
+    let three = g.dims() == 3;
+    for (k, m) in out[..n].iter_mut().enumerate() {
+        let area = face_density(lo[k], hi[k]) * r[k] * hx * hy;
+        *m = if three { area * hz } else { area };
     }
 }
 
