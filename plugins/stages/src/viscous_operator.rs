@@ -1,138 +1,231 @@
 //! The one discretisation of `K_η = vol·∇·(2η D)` on the MAC grid, shared by the viscous stage,
-//! the elastic stage's implicit system and the block multigrid preconditioner of both.
+//! the elastic stage's implicit system and the block multigrid preconditioner of both, written
+//! once for two and three dimensions.
 //!
-//! **Operator.** `D = ½(∇V + ∇Vᵀ)`; normal stresses `2η ∂u/∂x`, `2η ∂v/∂y` at cell centres with
-//! the cell coefficient `η`, shear `η_k (∂u/∂y + ∂v/∂x)` at corners with the corner coefficient
-//! `η_k`, their divergence on the staggered control volumes, and in axisymmetric geometry
-//! (x = r) the hoop term `−2η u_r/r²` on the u-faces; the radius factors come from the grid's
-//! metric (zero hoop factor in planar geometry). `η` is an effective viscosity times a time:
-//! `θΔt μ` for the viscous step, `θΔt μ + (Δt²/2) G_eff` for the elastic step's preconditioner
-//! (see [`crate::elastic`]). The corner coefficient of a viscosity is the harmonic mean of the
-//! four cells' ([`corner_viscosity`]).
+//! **Operator.** `D = ½(∇V + ∇Vᵀ)`. With `e_a` the unit shift and `h_a` the cell size along
+//! axis `a`, `V` the cell volume and `u_a` the velocity on the `a`-faces:
 //!
-//! **Coefficients**, assembled once per step ([`Coefficients`]): `a_c = 2η_c r_c Δy/Δx` on
-//! cells for the u-equation's normal stress, `b_c = 2η_c r_c Δx/Δy` for the v-equation's, one
-//! corner weight `g = r η_k`, and the hoop term `h = η_f r ΔxΔy χ²` (the two cells' sum
-//! `η_f`, hoop factor `χ = 1/r`) per unknown u-face. Per u-face `(i, j)`:
+//! - the normal stresses `2η ∂u_a/∂x_a` at cell centres with the cell coefficient `η`;
+//! - the shear stress of each pair of axes `a < b`, `η_e (∂u_a/∂x_b + ∂u_b/∂x_a)`, on the
+//!   edges along the remaining axis ([`SHEAR`]: xy on the corners of a two-dimensional grid,
+//!   which are the edges along z of a three-dimensional one, yz on the edges along x, xz on
+//!   those along y), with the edge coefficient `η_e`;
+//! - their divergence on each component's staggered control volume, and in axisymmetric
+//!   geometry (x = r) the hoop term `−2η u_r/r²` on the u-faces; the radius factors come from
+//!   the grid's metric (all ones and no hoop term in planar and Cartesian geometry).
+//!
+//! `η` is an effective viscosity times a time: `θΔt μ` for the viscous step,
+//! `θΔt μ + (Δt²/2) G_eff` for the elastic step's preconditioner (see [`crate::elastic`]). The
+//! edge coefficient of a viscosity is the harmonic mean of the four cells around the edge
+//! ([`edge_viscosity`]).
+//!
+//! **Coefficients**, assembled once per step ([`Coefficients`]): for each axis `a` the
+//! normal-stress coefficient `c_a = 2η r V/h_a²` at cells, for each pair one edge weight
+//! `g = r η_e V/(h_a h_b)`, and the hoop term `h = η_f r V χ²` (the two cells' sum `η_f`, hoop
+//! factor `χ = 1/r`) per unknown u-face (`r` the radius factor of the location; in two
+//! dimensions `V = h_x h_y`, per unit depth). Per unknown `a`-face `I`:
 //!
 //! ```text
-//!   (K u)_ij = a_i (u_{i+1} − u_i) − a_{i−1} (u_i − u_{i−1})
-//!            + g_{j+1} (α (u_{j+1} − u_j) + (v_{i,j+1} − v_{i−1,j+1}))
-//!            − g_j     (α (u_j − u_{j−1}) + (v_{ij} − v_{i−1,j}))     − h u_ij,     α = Δx/Δy,
+//!   (K u)_a[I] = c_a[I] (u_a[I+e_a] − u_a[I]) − c_a[I−e_a] (u_a[I] − u_a[I−e_a])
+//!      + Σ_{b≠a} ( g_ab[I+e_b] (ρ_ab (u_a[I+e_b] − u_a[I]) + (u_b[I+e_b] − u_b[I+e_b−e_a]))
+//!                − g_ab[I]     (ρ_ab (u_a[I] − u_a[I−e_b]) + (u_b[I] − u_b[I−e_a])) )
+//!      − h[I] u_a[I],                                               ρ_ab = h_a/h_b,
 //! ```
 //!
-//! and per v-face the transposed pattern with `b` and `β = Δy/Δx`. The coefficient of `v` in a
-//! u-row is that of `u` in the v-row: `−K` is symmetric (positive semi-definite, the gradient of
-//! the dissipation `Σ 2η D:D dV`) by construction with walls, periodic sides and the axis; the
-//! zero-gradient ghosts of an `Outflow` side make the rows of the faces beside it non-symmetric
-//! (a test checks both statements on a dense copy of the matrix).
+//! the edge `I` of a pair being the one at the low faces of cell `I` along both its axes. The
+//! coefficient of `u_b` in an `a`-row is that of `u_a` in the `b`-row: `−K` is symmetric
+//! (positive semi-definite, the gradient of the dissipation `Σ 2η D:D dV`) by construction with
+//! walls, periodic sides and the axis; the zero-gradient ghosts of an `Outflow` side make the
+//! rows of the faces beside it non-symmetric (the tests check both statements on a dense copy
+//! of the matrix, in two and three dimensions).
 //!
-//! **Products.** [`Coefficients::apply`] computes `y = d∘x − K(u, v)` on the compact unknown
-//! faces in one vectorised pass per component, rows in parallel, and returns `x·y` summed by rows
-//! in order: bit-identical on any number of threads. [`Coefficients::diagonal`] gives the
-//! matrix's diagonal, [`Coefficients::blocks`] its u–u and v–v blocks as five-point stencils for
-//! the block multigrid ([`crate::block_multigrid`]).
+//! **Products.** [`Coefficients::product`] computes `y = d∘x − K(V)` on the compact unknown
+//! faces in one vectorised pass per component, lines in parallel, and returns `x·y` summed by
+//! lines in order: bit-identical on any number of threads. [`Coefficients::diagonal`] gives the
+//! matrix's diagonal; [`Coefficients::blocks`] the u–u and v–v blocks of a two-dimensional
+//! grid as five-point stencils for the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
-use efsi_core::{Field, Grid, Line, Region, Stagger, unit};
+use efsi_core::operators::minus;
+use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
 use efsi_linalg::par;
+use std::borrow::{Borrow, BorrowMut};
+
+/// The shear stresses: each pair of axes `[a, b]` (`a < b`) and the edges its stress lives
+/// on. A two-dimensional grid has the first only.
+pub(crate) const SHEAR: [([usize; 2], Stagger); 3] = [
+    ([0, 1], Stagger::Corner),
+    ([1, 2], Stagger::XEdge),
+    ([0, 2], Stagger::YEdge),
+];
+
+/// The shear pairs of a grid of `dims` axes.
+pub(crate) fn shear_pairs(dims: usize) -> &'static [([usize; 2], Stagger)] {
+    &SHEAR[..if dims == 3 { 3 } else { 1 }]
+}
+
+/// The index in [`SHEAR`] of the pair of axes `a ≠ b`.
+fn pair(a: usize, b: usize) -> usize {
+    match (a.min(b), a.max(b)) {
+        (0, 1) => 0,
+        (1, 2) => 1,
+        (0, 2) => 2,
+        _ => panic!("no shear pair of axes {a} and {b}"),
+    }
+}
+
+/// `p + q`.
+#[inline(always)]
+fn add(p: Index, q: Index) -> Index {
+    [p[0] + q[0], p[1] + q[1], p[2] + q[2]]
+}
 
 /// The coefficients of `K_η` (see the module docs) for one grid and its unknown faces.
 pub(crate) struct Coefficients {
     faces: UnknownFaces,
-    /// `Δx/Δy`, `Δy/Δx`.
-    alpha: f64,
-    beta: f64,
-    nx: usize,
-    /// Normal-stress coefficients of the u- and v-equations at cells.
-    cxx: Field,
-    cyy: Field,
-    /// Corner weights `r η_k`.
-    gc: Field,
-    /// The hoop term of each unknown face (zero on v-faces and in planar geometry).
+    dims: usize,
+    /// `h_a/h_b`: the weight of a row's own component in a shear flux.
+    ratio: [[f64; 3]; 3],
+    /// The normal-stress coefficient `c_a` of each axis at cells.
+    normal: Vec<Field>,
+    /// The weight `g` of each shear pair ([`shear_pairs`]) on its edges.
+    edge: Vec<Field>,
+    /// The hoop term of each unknown face (zero off the u-faces and in planar geometry).
     hoop: Vec<f64>,
 }
 
 impl Coefficients {
     /// Zero coefficients (`K = 0`) for `grid` and its unknown `faces`.
     pub(crate) fn new(grid: &Grid, faces: UnknownFaces) -> Self {
+        let dims = grid.dims();
+        let h = grid.h();
         Coefficients {
             hoop: vec![0.0; faces.len()],
             faces,
-            alpha: grid.dx / grid.dy,
-            beta: grid.dy / grid.dx,
-            nx: grid.nx,
-            cxx: Field::zeros(grid),
-            cyy: Field::zeros(grid),
-            gc: Field::zeros(grid),
+            dims,
+            ratio: std::array::from_fn(|a| std::array::from_fn(|b| h[a] / h[b])),
+            normal: (0..dims).map(|_| Field::zeros(grid)).collect(),
+            edge: shear_pairs(dims)
+                .iter()
+                .map(|_| Field::zeros(grid))
+                .collect(),
         }
     }
 
-    /// The hoop term per unknown face (compact; zero on v-faces).
+    /// The hoop term per unknown face (compact; zero off the u-faces).
     pub(crate) fn hoop(&self) -> &[f64] {
         &self.hoop
     }
 
-    /// The coefficients of `scale·K_μ` for the cell viscosities `mu` (ghosts filled); the
-    /// corner viscosities ([`corner_viscosity`]) are written to `corner`. Rows in parallel.
-    pub(crate) fn set_viscosity(&mut self, g: &Grid, mu: &Field, scale: f64, corner: &mut Field) {
-        corner_viscosity(g, mu, corner);
-        self.set(g, mu, corner, scale);
+    /// The coefficients of `scale·K_μ` for the cell viscosities `mu` (ghosts filled); the edge
+    /// viscosities ([`edge_viscosity`]) are written to `edges`, one field per shear pair
+    /// ([`shear_pairs`]). Lines in parallel.
+    pub(crate) fn set_viscosity_edges<F: BorrowMut<Field>>(
+        &mut self,
+        g: &Grid,
+        mu: &Field,
+        scale: f64,
+        edges: &mut [F],
+    ) {
+        assert_eq!(edges.len(), self.edge.len(), "one field per shear pair");
+        self.set_cells(g, mu, scale);
+        for (p, e) in edges.iter_mut().enumerate() {
+            let (axes, at) = SHEAR[p];
+            let e: &mut Field = e.borrow_mut();
+            edge_viscosity(g, mu, axes, at, e);
+            self.set_edge(g, p, e, scale);
+        }
+        self.set_hoop(g, mu, scale);
     }
 
-    /// [`set_viscosity`](Self::set_viscosity) without keeping the corner viscosities: each
-    /// corner's harmonic mean goes straight into its weight (the same values, bit for bit, and
-    /// no corner array). Rows in parallel.
+    /// [`set_viscosity_edges`](Self::set_viscosity_edges) on a two-dimensional grid, whose one
+    /// shear pair lives on the corners (`corner`).
+    pub(crate) fn set_viscosity(&mut self, g: &Grid, mu: &Field, scale: f64, corner: &mut Field) {
+        self.set_viscosity_edges(g, mu, scale, std::slice::from_mut(corner));
+    }
+
+    /// [`set_viscosity_edges`](Self::set_viscosity_edges) without keeping the edge viscosities:
+    /// each edge's harmonic mean goes straight into its weight (the same values, bit for bit,
+    /// and no edge array). Lines in parallel.
     pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
         self.set_cells(g, mu, scale);
-        let m = &g.metric;
-        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
-            let (sw, se) = (mu.at(&l, [-1, -1, 0]), mu.at(&l, [0, -1, 0]));
-            let (nw, ne) = (mu.at(&l, [-1, 0, 0]), mu.at(&l, [0; 3]));
-            let rx = m.rx_on(&l, 0);
-            for n in 0..l.len {
-                let mk = corner_mean([sw[n], se[n], nw[n], ne[n]]);
-                gr[n] = scale * rx[n] * mk;
-            }
-        });
+        for (e, &(axes, at)) in self.edge.iter_mut().zip(shear_pairs(self.dims)) {
+            let s = depth(g, axes, scale);
+            let lo = edge_cells(axes);
+            Region::of(g, at).for_each(e, |l, gr| {
+                let len = l.len;
+                let [sw, se, nw, ne] = lo.map(|d| &mu.at(&l, d)[..len]);
+                let (r, gr) = (&edge_radius(g, at, &l)[..len], &mut gr[..len]);
+                for n in 0..len {
+                    let mk = harmonic_mean([sw[n], se[n], nw[n], ne[n]]);
+                    gr[n] = s * r[n] * mk;
+                }
+            });
+        }
         self.set_hoop(g, mu, scale);
     }
 
     /// The coefficients of `scale·K_η` for the cell coefficients `eta` (ghosts filled) and the
-    /// corner coefficients `eta_k`. Rows in parallel.
-    pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
+    /// edge coefficients `eta_e`, one field per shear pair ([`shear_pairs`]). Lines in
+    /// parallel.
+    pub(crate) fn set_edges<F: Borrow<Field> + Sync>(
+        &mut self,
+        g: &Grid,
+        eta: &Field,
+        eta_e: &[F],
+        scale: f64,
+    ) {
+        assert_eq!(eta_e.len(), self.edge.len(), "one field per shear pair");
         self.set_cells(g, eta, scale);
-        let m = &g.metric;
-        Region::of(g, Stagger::Corner).for_each(&mut self.gc, |l, gr| {
-            let (ek, rx) = (eta_k.at(&l, [0; 3]), m.rx_on(&l, 0));
-            for n in 0..l.len {
-                gr[n] = scale * rx[n] * ek[n];
-            }
-        });
+        for (p, ek) in eta_e.iter().enumerate() {
+            self.set_edge(g, p, ek.borrow(), scale);
+        }
         self.set_hoop(g, eta, scale);
     }
 
-    /// The normal-stress coefficients `cxx`, `cyy` of `scale·K_η` from the cell coefficients.
-    fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        let (ax, ay) = (scale * 2.0 * dy / dx, scale * 2.0 * dx / dy);
-        Region::whole(g).for_each((&mut self.cxx, &mut self.cyy), |l, (cx, cy)| {
-            let (e, rc) = (eta.at(&l, [0; 3]), m.rc_on(&l, 0));
-            for (((cx, cy), e), r) in cx.iter_mut().zip(cy.iter_mut()).zip(e).zip(rc) {
-                *cx = ax * r * e;
-                *cy = ay * r * e;
+    /// The weights of shear pair `p` of `scale·K_η` from its edge coefficients `eta_e`.
+    fn set_edge(&mut self, g: &Grid, p: usize, eta_e: &Field, scale: f64) {
+        let (axes, at) = SHEAR[p];
+        let s = depth(g, axes, scale);
+        Region::of(g, at).for_each(&mut self.edge[p], |l, gr| {
+            let (ek, r) = (eta_e.at(&l, [0; 3]), edge_radius(g, at, &l));
+            for n in 0..l.len {
+                gr[n] = s * r[n] * ek[n];
             }
         });
+    }
+
+    /// [`set_edges`](Self::set_edges) on a two-dimensional grid, whose one shear pair lives on
+    /// the corners (`eta_k`).
+    pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
+        self.set_edges(g, eta, &[eta_k], scale);
+    }
+
+    /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients.
+    fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
+        let (m, h) = (&g.metric, g.h());
+        for (a, c) in self.normal.iter_mut().enumerate() {
+            // 2 scale V/h_a², as 2 scale (Π_{b≠a} h_b)/h_a.
+            let area = (0..self.dims)
+                .filter(|&b| b != a)
+                .fold(scale * 2.0, |s, b| s * h[b]);
+            let ca = area / h[a];
+            Region::whole(g).for_each(c, |l, c| {
+                let (e, rc) = (eta.at(&l, [0; 3]), m.rc_on(&l, 0));
+                for ((c, e), r) in c.iter_mut().zip(e).zip(rc) {
+                    *c = ca * r * e;
+                }
+            });
+        }
     }
 
     /// The hoop term of `scale·K_η` on each unknown u-face, from the cell coefficients.
     fn set_hoop(&mut self, g: &Grid, eta: &Field, scale: f64) {
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
+        let (m, h) = (&g.metric, g.h());
         let faces = self.faces.u_region();
         let hoop = &mut self.hoop[..faces.size()];
+        let sv = h[..self.dims].iter().fold(scale, |s, h| s * h);
         if !faces.is_empty() {
             par::rows(&mut *hoop, faces.len(0)).for_each(|n, hs| {
                 let l = faces.line(n);
@@ -140,7 +233,7 @@ impl Coefficients {
                 let (rx, hx) = (m.rx_on(&l, 0), m.hoop_x_on(&l, 0));
                 for (c, h) in hs.iter_mut().enumerate() {
                     let x = hx[c];
-                    *h = scale * dx * dy * rx[c] * (ew[c] + ec[c]) * x * x;
+                    *h = sv * rx[c] * (ew[c] + ec[c]) * x * x;
                 }
             });
         }
@@ -150,77 +243,72 @@ impl Coefficients {
     /// plus the hoop term ([`hoop`](Self::hoop)) of each unknown face: the diagonal of
     /// `diag(dm) − K` away from the boundaries; beside a wall the wall's coupling counts once
     /// whatever its ghost rule (a reflected no-slip ghost doubles it in the matrix), which keeps
-    /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Rows in parallel.
+    /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Lines in parallel.
     pub(crate) fn diagonal(&self, dm: &[f64], diag: &mut [f64]) {
-        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
-        let (cxx, cyy, gc) = (&self.cxx, &self.cyy, &self.gc);
-        let (alpha, beta) = (self.alpha, self.beta);
-        let (dm_u, dm_v) = dm.split_at(uf.size());
-        let (dg_u, dg_v) = diag.split_at_mut(uf.size());
-        if !uf.is_empty() {
-            par::rows((&mut *dg_u, dm_u), uf.len(0)).for_each(|n, (dgs, dm)| {
-                let l = uf.line(n);
-                let (cw, ce) = (cxx.at(&l, [-1, 0, 0]), cxx.at(&l, [0; 3]));
-                let (gs, gn) = (gc.at(&l, [0; 3]), gc.at(&l, unit(1)));
-                for c in 0..l.len {
-                    dgs[c] = dm[c] + (ce[c] + cw[c]) + alpha * (gn[c] + gs[c]);
+        let dms = self.faces.split(dm);
+        for (a, dg) in self.faces.split_mut(diag).into_iter().enumerate() {
+            let r = self.faces.region(a);
+            if r.is_empty() {
+                continue;
+            }
+            let c = &self.normal[a];
+            let dm = dms[a];
+            par::rows(dg, r.len(0)).for_each(|n, dgs| {
+                let l = r.line(n);
+                let dm = &dm[n * l.len..];
+                let (clo, chi) = (c.at(&l, minus(a)), c.at(&l, [0; 3]));
+                for k in 0..l.len {
+                    dgs[k] = dm[k] + (chi[k] + clo[k]);
                 }
-            });
-        }
-        if !vf.is_empty() {
-            par::rows((&mut *dg_v, dm_v), vf.len(0)).for_each(|n, (dgs, dm)| {
-                let l = vf.line(n);
-                let (cs, cn) = (cyy.at(&l, [0, -1, 0]), cyy.at(&l, [0; 3]));
-                let (gw, ge) = (gc.at(&l, [0; 3]), gc.at(&l, unit(0)));
-                for c in 0..l.len {
-                    dgs[c] = dm[c] + (cn[c] + cs[c]) + beta * (ge[c] + gw[c]);
+                for b in (0..self.dims).filter(|&b| b != a) {
+                    let (g, rho) = (&self.edge[pair(a, b)], self.ratio[a][b]);
+                    let (glo, ghi) = (g.at(&l, [0; 3]), g.at(&l, unit(b)));
+                    for k in 0..l.len {
+                        dgs[k] += rho * (ghi[k] + glo[k]);
+                    }
                 }
             });
         }
     }
 
-    /// The u–u and v–v blocks of `diag(d) − K` — `d` the full diagonal ([`diagonal`](Self::diagonal))
-    /// — as five-point stencils (couplings `≥ 0`, zero across a closed boundary).
+    /// The u–u and v–v blocks of `diag(d) − K` on a two-dimensional grid — `d` the full
+    /// diagonal ([`diagonal`](Self::diagonal)) — as five-point stencils (couplings `≥ 0`, zero
+    /// across a closed boundary).
     pub(crate) fn blocks(&self, diag: &[f64], au: &mut Stencil5, av: &mut Stencil5) {
-        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
+        assert_eq!(self.dims, 2, "five-point blocks of a two-dimensional grid");
         let (px, py) = (au.periodic_x, au.periodic_y);
-        let (nur, ny) = (au.nx, au.ny);
-        for j in 0..uf.lines() {
-            let l = uf.line(j);
-            let (ce, gn) = (self.cxx.at(&l, [0; 3]), self.gc.at(&l, unit(1)));
-            for c in 0..nur {
-                let kc = j * nur + c;
-                au.east[kc] = if c + 1 < nur || px { ce[c] } else { 0.0 };
-                au.north[kc] = if j + 1 < ny || py {
-                    self.alpha * gn[c]
-                } else {
-                    0.0
-                };
-                au.diag[kc] = diag[kc];
-            }
-        }
-        let nu = nur * ny;
-        let (nx, nvr) = (self.nx, av.ny);
-        for jr in 0..vf.lines() {
-            let l = vf.line(jr);
-            let (cn, ge) = (self.cyy.at(&l, [0; 3]), self.gc.at(&l, unit(0)));
-            for i in 0..nx {
-                let kc = jr * nx + i;
-                av.east[kc] = if i + 1 < nx || px {
-                    self.beta * ge[i]
-                } else {
-                    0.0
-                };
-                av.north[kc] = if jr + 1 < nvr || py { cn[i] } else { 0.0 };
-                av.diag[kc] = diag[nu + kc];
+        let [du, dv, _] = self.faces.split(diag);
+        for (a, s, d) in [(0, au, du), (1, av, dv)] {
+            let r = self.faces.region(a);
+            let (nr, nl) = (r.len(0), r.len(1));
+            let (c, g, rho) = (&self.normal[a], &self.edge[0], self.ratio[a][1 - a]);
+            for j in 0..r.lines() {
+                let l = r.line(j);
+                // The coupling to the next face along the own axis is the normal stress's,
+                // across it the shear's.
+                let (own, across) = (c.at(&l, [0; 3]), g.at(&l, unit(1 - a)));
+                let (along_x, along_y) = if a == 0 { (own, across) } else { (across, own) };
+                let (wx, wy) = if a == 0 { (1.0, rho) } else { (rho, 1.0) };
+                for i in 0..nr {
+                    let kc = j * nr + i;
+                    s.east[kc] = if i + 1 < nr || px {
+                        wx * along_x[i]
+                    } else {
+                        0.0
+                    };
+                    s.north[kc] = if j + 1 < nl || py {
+                        wy * along_y[i]
+                    } else {
+                        0.0
+                    };
+                    s.diag[kc] = d[kc];
+                }
             }
         }
     }
 
-    /// `y = d∘x − K(u, v)` on the unknown faces, with `u`, `v` the fields (ghosts filled) and `x`
-    /// their compact vector of unknowns, or the fields' own values when `None` (rows in
-    /// parallel; each row writes its own entries). Returns `x·y`, summed by rows in order (the
-    /// same on any number of threads).
+    /// `y = d∘x − K(u, v)` on a two-dimensional grid ([`product`](Self::product) with the
+    /// velocity `[u, v]`).
     pub(crate) fn apply(
         &self,
         u: &Field,
@@ -229,141 +317,207 @@ impl Coefficients {
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
-        let nu = self.faces.nu();
-        let (yu, yv) = y.split_at_mut(nu);
-        let (du, dv) = d.split_at(nu);
-        let (xu, xv) = match x {
-            Some(x) => {
-                let (a, b) = x.split_at(nu);
-                (Some(a), Some(b))
-            }
-            None => (None, None),
-        };
-        let (uf, vf) = (self.faces.u_region(), self.faces.v_region());
-        let mut xy = 0.0;
-        if !uf.is_empty() {
-            let n = uf.len(0);
-            xy = par::rows(&mut *yu, n).fold(
-                0.0,
-                |j, y| {
-                    let x = xu.map(|x| &x[j * n..(j + 1) * n]);
-                    self.u_line(&uf.line(j), u, v, &du[j * n..], x, y)
-                },
-                |s, p| s + p,
-            );
-        }
-        let mut xy_v = 0.0;
-        if !vf.is_empty() {
-            let n = vf.len(0);
-            xy_v = par::rows(&mut *yv, n).fold(
-                0.0,
-                |j, y| {
-                    let x = xv.map(|x| &x[j * n..(j + 1) * n]);
-                    self.v_line(&vf.line(j), u, v, &dv[j * n..], x, y)
-                },
-                |s, p| s + p,
-            );
-        }
-        xy + xy_v
+        self.product(&[u, v], d, x, y)
     }
 
-    /// [`apply`](Self::apply) on one line of unknown u-faces: `y = d∘x − K(u, v)` there
-    /// (`x` the line's unknowns, or `u` itself), returning `x·y`.
-    #[inline(always)]
-    fn u_line(
+    /// `y = d∘x − K(V)` on the unknown faces, with `vel` the velocity (one field per axis,
+    /// ghosts filled) and `x` its compact vector of unknowns, or the fields' own values when
+    /// `None` (lines in parallel; each line writes its own entries). Returns `x·y`, summed by
+    /// lines in order, component after component (the same on any number of threads).
+    pub(crate) fn product<F: Borrow<Field> + Sync>(
         &self,
+        vel: &[F],
+        d: &[f64],
+        x: Option<&[f64]>,
+        y: &mut [f64],
+    ) -> f64 {
+        assert_eq!(vel.len(), self.dims, "one velocity component per axis");
+        let ds = self.faces.split(d);
+        let xs = x.map(|x| self.faces.split(x));
+        let mut xy = [0.0; 3];
+        for (a, y) in self.faces.split_mut(y).into_iter().enumerate() {
+            let r = self.faces.region(a);
+            if r.is_empty() {
+                continue;
+            }
+            let (n, d) = (r.len(0), ds[a]);
+            let x = xs.map(|x| x[a]);
+            xy[a] = par::rows(y, n).fold(
+                0.0,
+                |j, y| {
+                    let x = x.map(|x| &x[j * n..(j + 1) * n]);
+                    let (l, d) = (r.line(j), &d[j * n..]);
+                    match self.dims {
+                        2 => self.line::<1, F>(a, [1 - a], &l, vel, d, x, y),
+                        _ => self.line::<2, F>(a, others(a), &l, vel, d, x, y),
+                    }
+                },
+                |s, p| s + p,
+            );
+        }
+        (1..self.dims).fold(xy[0], |s, a| s + xy[a])
+    }
+
+    /// [`product`](Self::product) on one line of unknown `a`-faces, whose shear pairs are with
+    /// the axes `across`: `y = d∘x − K(V)` there (`x` the line's unknowns, or `u_a` itself),
+    /// returning `x·y`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn line<const S: usize, F: Borrow<Field>>(
+        &self,
+        a: usize,
+        across: [usize; S],
         l: &Line,
-        u: &Field,
-        v: &Field,
+        vel: &[F],
         d: &[f64],
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
         let n = y.len();
-        let alpha = self.alpha;
-        let (uc, ue, uw) = (
+        let (u, c) = (vel[a].borrow(), &self.normal[a]);
+        let (uc, ulo, uhi) = (
             &u.at(l, [0; 3])[..n],
-            &u.at(l, unit(0))[..n],
-            &u.at(l, [-1, 0, 0])[..n],
+            &u.at(l, minus(a))[..n],
+            &u.at(l, unit(a))[..n],
         );
-        let (un, us) = (&u.at(l, unit(1))[..n], &u.at(l, [0, -1, 0])[..n]);
-        let (vc, vw) = (&v.at(l, [0; 3])[..n], &v.at(l, [-1, 0, 0])[..n]);
-        let (vn, vnw) = (&v.at(l, unit(1))[..n], &v.at(l, [-1, 1, 0])[..n]);
-        let (ac, aw) = (
-            &self.cxx.at(l, [0; 3])[..n],
-            &self.cxx.at(l, [-1, 0, 0])[..n],
-        );
-        let (gs, gn) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(1))[..n]);
+        let (chi, clo) = (&c.at(l, [0; 3])[..n], &c.at(l, minus(a))[..n]);
         let dr = &d[..n];
         let xr = &x.unwrap_or(uc)[..n];
-        for c in 0..n {
-            let f_s = gs[c] * (alpha * (uc[c] - us[c]) + (vc[c] - vw[c]));
-            let f_n = gn[c] * (alpha * (un[c] - uc[c]) + (vn[c] - vnw[c]));
-            let k = ac[c] * (ue[c] - uc[c]) - aw[c] * (uc[c] - uw[c]) + (f_n - f_s);
-            y[c] = dr[c] * xr[c] - k;
+        // The normal stresses and the first shear pair; each further pair adds its fluxes in a
+        // pass of its own (the sum in the same order), the last one forming `y`.
+        for (m, &b) in across.iter().enumerate() {
+            let Shear {
+                rho,
+                glo,
+                ghi,
+                own_lo,
+                own_hi,
+                lo,
+                lo_m,
+                hi,
+                hi_m,
+            } = Shear::new(self, a, b, l, vel, n);
+            let last = m + 1 == S;
+            for k in 0..n {
+                let f_lo = glo[k] * (rho * (uc[k] - own_lo[k]) + (lo[k] - lo_m[k]));
+                let f_hi = ghi[k] * (rho * (own_hi[k] - uc[k]) + (hi[k] - hi_m[k]));
+                let s = if m == 0 {
+                    chi[k] * (uhi[k] - uc[k]) - clo[k] * (uc[k] - ulo[k])
+                } else {
+                    y[k]
+                } + (f_hi - f_lo);
+                y[k] = if last { dr[k] * xr[k] - s } else { s };
+            }
         }
         let y = &*y;
-        par::sum4(n, |c| xr[c] * y[c])
-    }
-
-    /// [`apply`](Self::apply) on one line of unknown v-faces.
-    #[inline(always)]
-    fn v_line(
-        &self,
-        l: &Line,
-        u: &Field,
-        v: &Field,
-        d: &[f64],
-        x: Option<&[f64]>,
-        y: &mut [f64],
-    ) -> f64 {
-        let n = y.len();
-        let beta = self.beta;
-        let (vc, ve, vw) = (
-            &v.at(l, [0; 3])[..n],
-            &v.at(l, unit(0))[..n],
-            &v.at(l, [-1, 0, 0])[..n],
-        );
-        let (vn, vs) = (&v.at(l, unit(1))[..n], &v.at(l, [0, -1, 0])[..n]);
-        let (uc, us) = (&u.at(l, [0; 3])[..n], &u.at(l, [0, -1, 0])[..n]);
-        let (ue, use_) = (&u.at(l, unit(0))[..n], &u.at(l, [1, -1, 0])[..n]);
-        let (bc, bs) = (
-            &self.cyy.at(l, [0; 3])[..n],
-            &self.cyy.at(l, [0, -1, 0])[..n],
-        );
-        let (gw, ge) = (&self.gc.at(l, [0; 3])[..n], &self.gc.at(l, unit(0))[..n]);
-        let dr = &d[..n];
-        let xr = &x.unwrap_or(vc)[..n];
-        for c in 0..n {
-            let f_w = gw[c] * ((uc[c] - us[c]) + beta * (vc[c] - vw[c]));
-            let f_e = ge[c] * ((ue[c] - use_[c]) + beta * (ve[c] - vc[c]));
-            let k = bc[c] * (vn[c] - vc[c]) - bs[c] * (vc[c] - vs[c]) + (f_e - f_w);
-            y[c] = dr[c] * xr[c] - k;
-        }
-        let y = &*y;
-        par::sum4(n, |c| xr[c] * y[c])
+        par::sum4(n, |k| xr[k] * y[k])
     }
 }
 
-/// Corner viscosities: the harmonic mean of the four cells around each corner (zero if any is
-/// inviscid), corner rows in parallel. The corner carries the shear stress
-/// `μ (∂u/∂y + ∂v/∂x)`; across an interface the two phases shear in series, whose effective
-/// viscosity is the harmonic mean — the arithmetic mean would let the more viscous phase drag
-/// the other along (an O(1) error in the first cell beside an interface, first order overall).
-pub(crate) fn corner_viscosity(grid: &Grid, mu: &Field, out: &mut Field) {
-    Region::of(grid, Stagger::Corner).for_each(out, |l, o| {
-        let (sw, se) = (mu.at(&l, [-1, -1, 0]), mu.at(&l, [0, -1, 0]));
-        let (nw, ne) = (mu.at(&l, [-1, 0, 0]), mu.at(&l, [0; 3]));
+/// The axes other than `a` of a three-dimensional grid.
+#[inline(always)]
+fn others(a: usize) -> [usize; 2] {
+    match a {
+        0 => [1, 2],
+        1 => [0, 2],
+        _ => [0, 1],
+    }
+}
+
+/// The values one shear pair `(a, b)` contributes to a line of `a`-faces `I`
+/// ([`Coefficients::product`]): the weights on the edges `I` and `I + e_b`, `u_a` at `I ∓ e_b`,
+/// and `u_b` at the ends of both edges' other side.
+struct Shear<'a> {
+    rho: f64,
+    glo: &'a [f64],
+    ghi: &'a [f64],
+    own_lo: &'a [f64],
+    own_hi: &'a [f64],
+    /// `u_b[I]`, `u_b[I − e_a]`, `u_b[I + e_b]`, `u_b[I + e_b − e_a]`.
+    lo: &'a [f64],
+    lo_m: &'a [f64],
+    hi: &'a [f64],
+    hi_m: &'a [f64],
+}
+
+impl<'a> Shear<'a> {
+    #[inline(always)]
+    fn new<F: Borrow<Field>>(
+        k: &'a Coefficients,
+        a: usize,
+        b: usize,
+        l: &Line,
+        vel: &'a [F],
+        n: usize,
+    ) -> Self {
+        let (ua, ub, g) = (vel[a].borrow(), vel[b].borrow(), &k.edge[pair(a, b)]);
+        let up = unit(b);
+        Shear {
+            rho: k.ratio[a][b],
+            glo: &g.at(l, [0; 3])[..n],
+            ghi: &g.at(l, up)[..n],
+            own_lo: &ua.at(l, minus(b))[..n],
+            own_hi: &ua.at(l, up)[..n],
+            lo: &ub.at(l, [0; 3])[..n],
+            lo_m: &ub.at(l, minus(a))[..n],
+            hi: &ub.at(l, up)[..n],
+            hi_m: &ub.at(l, add(up, minus(a)))[..n],
+        }
+    }
+}
+
+/// `scale` times the cell size along the axis a shear pair `axes` leaves out (three
+/// dimensions; `scale` itself in two).
+fn depth(g: &Grid, axes: [usize; 2], scale: f64) -> f64 {
+    let h = g.h();
+    (0..g.dims())
+        .filter(|c| !axes.contains(c))
+        .fold(scale, |s, c| s * h[c])
+}
+
+/// The radius factor on the edges `at` of `l`: at x-faces where the edges sit on them, else at
+/// cell centres (all ones off the axisymmetric geometry).
+#[inline(always)]
+fn edge_radius<'g>(g: &'g Grid, at: Stagger, l: &Line) -> &'g [f64] {
+    if at.nodal()[0] == 1 {
+        g.metric.rx_on(l, 0)
+    } else {
+        g.metric.rc_on(l, 0)
+    }
+}
+
+/// The shifts from an edge of the pair `[a, b]` to its four cells, in the order of the
+/// harmonic mean's sum: `−e_a−e_b`, `−e_b`, `−e_a`, `0`.
+fn edge_cells([a, b]: [usize; 2]) -> [Index; 4] {
+    [add(minus(a), minus(b)), minus(b), minus(a), [0; 3]]
+}
+
+/// Edge viscosities of the shear pair `axes` on its edges `at`: the harmonic mean of the four
+/// cells around each edge (zero if any is inviscid), lines in parallel. The edge carries the
+/// shear stress `μ (∂u_a/∂x_b + ∂u_b/∂x_a)`; across an interface the two phases shear in
+/// series, whose effective viscosity is the harmonic mean — the arithmetic mean would let the
+/// more viscous phase drag the other along (an O(1) error in the first cell beside an
+/// interface, first order overall).
+pub(crate) fn edge_viscosity(
+    grid: &Grid,
+    mu: &Field,
+    axes: [usize; 2],
+    at: Stagger,
+    out: &mut Field,
+) {
+    let lo = edge_cells(axes);
+    Region::of(grid, at).for_each(out, |l, o| {
+        let q = lo.map(|d| mu.at(&l, d));
         for n in 0..l.len {
-            o[n] = corner_mean([sw[n], se[n], nw[n], ne[n]]);
+            o[n] = harmonic_mean([q[0][n], q[1][n], q[2][n], q[3][n]]);
         }
     });
 }
 
-/// The harmonic mean of the four cell viscosities around a corner, zero if any is inviscid
-/// ([`corner_viscosity`]).
+/// The harmonic mean of the four cell viscosities around an edge, zero if any is inviscid
+/// ([`edge_viscosity`]).
 #[inline(always)]
-fn corner_mean(q: [f64; 4]) -> f64 {
+fn harmonic_mean(q: [f64; 4]) -> f64 {
     if q.iter().all(|&x| x > 0.0) {
         4.0 / q.iter().map(|x| 1.0 / x).sum::<f64>()
     } else {
@@ -374,7 +528,10 @@ fn corner_mean(q: [f64; 4]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::viscous::VelocityGhosts;
+    use crate::viscous::box_ghosts::BoxGhosts;
     use efsi_core::BoundarySet;
+    use efsi_core::bc::WallTime;
     use efsi_core::grid::Geometry;
     use efsi_core::scene::{Boundaries, Boundary};
 
@@ -576,5 +733,299 @@ mod tests {
         check(Geometry::Planar, [Periodic, Periodic, NoSlip, FreeSlip]);
         check(Geometry::Planar, [NoSlip, Outflow, Periodic, Periodic]);
         check(Geometry::Axisymmetric, [Axis, NoSlip, NoSlip, FreeSlip]);
+    }
+
+    /// The dense matrix of `diag(dm) − K` of a grid whose ghosts `walls` fills, column by
+    /// column (`a[c]` is the product with the `c`-th unit vector).
+    fn dense(grid: &Grid, walls: &BoxGhosts, k: &Coefficients, dm: &[f64]) -> Vec<Vec<f64>> {
+        let faces = UnknownFaces::with_ranges(grid, &walls.ranges(grid));
+        let n = faces.len();
+        let mut vel: Vec<Field> = (0..grid.dims()).map(|_| Field::zeros(grid)).collect();
+        (0..n)
+            .map(|c| {
+                let mut x = vec![0.0; n];
+                x[c] = 1.0;
+                vel.iter_mut().for_each(|f| f.fill(0.0));
+                faces.scatter_to(&x, &mut vel);
+                walls.fill(grid, &mut vel, WallTime::Homogeneous);
+                let mut y = vec![0.0; n];
+                let xy = k.product(&vel, dm, Some(&x), &mut y);
+                assert_eq!(xy, y[c]);
+                y
+            })
+            .collect()
+    }
+
+    /// Whether the symmetric part of `a` plus `shift` on the diagonal has a Cholesky factor
+    /// (all pivots positive).
+    fn cholesky(a: &[Vec<f64>], shift: f64) -> bool {
+        let n = a.len();
+        let mut l = vec![vec![0.0; n]; n];
+        for j in 0..n {
+            for i in j..n {
+                let mut s = 0.5 * (a[i][j] + a[j][i]) + if i == j { shift } else { 0.0 };
+                for q in 0..j {
+                    s -= l[i][q] * l[j][q];
+                }
+                if i == j {
+                    if s <= 0.0 {
+                        return false;
+                    }
+                    l[j][j] = s.sqrt();
+                } else {
+                    l[i][j] = s / l[j][j];
+                }
+            }
+        }
+        true
+    }
+
+    /// A three-dimensional box grid of `n` cells, unequal cell sizes along the axes.
+    fn box_grid(n: [usize; 3]) -> Grid {
+        Grid::new_3d(n, (0.0, 1.0), (0.0, 0.9), (0.0, 0.6))
+    }
+
+    #[test]
+    fn the_three_dimensional_matrix_is_symmetric_and_positive_semi_definite() {
+        for periodic in [[true; 3], [false, true, false], [false; 3]] {
+            let grid = box_grid([4, 4, 3]);
+            let walls = BoxGhosts { periodic };
+            let faces = UnknownFaces::with_ranges(&grid, &walls.ranges(&grid));
+            let mut mu = viscosity(&grid);
+            walls.fill_scalar(&grid, &mut mu);
+            let mut k = Coefficients::new(&grid, faces);
+            k.set_viscosity_weights(&grid, &mu, 0.3);
+            // −K alone: symmetric, positive semi-definite.
+            let n = faces.len();
+            let a = dense(&grid, &walls, &k, &vec![0.0; n]);
+            let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            let a_ = |c: usize| a[c][c];
+            for i in 0..n {
+                for j in 0..n {
+                    assert!(
+                        (a[i][j] - a[j][i]).abs() <= 1e-13 * scale,
+                        "{periodic:?}: A[{i}][{j}] = {} but A[{j}][{i}] = {}",
+                        a[i][j],
+                        a[j][i]
+                    );
+                }
+            }
+            assert!(
+                cholesky(&a, 1e-10 * scale),
+                "{periodic:?}: not semi-definite"
+            );
+            // With a wall anywhere nothing moves freely: definite. (Periodic on every side a
+            // uniform translation is free: singular, checked below.)
+            if periodic != [true; 3] {
+                assert!(cholesky(&a, 0.0), "{periodic:?}: not definite");
+            }
+            // −K's diagonal is its own, except beside a wall parallel to the face, whose
+            // reflected ghost doubles the coupling in the matrix and not in the diagonal.
+            let mut diag = vec![0.0; n];
+            k.diagonal(&vec![0.0; n], &mut diag);
+            let size = grid.n().map(|n| n as isize);
+            let mut own = 0;
+            faces.for_each_axis(|c, a, q| {
+                let i = mu.index_of(q);
+                let beside =
+                    (0..3).any(|b| b != a && !periodic[b] && (i[b] == 0 || i[b] == size[b] - 1));
+                assert!(
+                    diag[c] <= a_(c) + 1e-13 * scale,
+                    "{periodic:?}: diagonal {c}"
+                );
+                if !beside {
+                    assert!((diag[c] - a_(c)).abs() <= 1e-13 * scale, "diagonal {c}");
+                    own += 1;
+                }
+            });
+            assert!(own >= n / 8, "{periodic:?}: {own} rows away from walls");
+            if periodic == [true; 3] {
+                // A uniform translation along each axis is in the kernel.
+                for t in 0..3 {
+                    let [x0, x1, _] = faces.split(&a[0]).map(<[f64]>::len);
+                    let part = |c: usize| usize::from(c >= x0) + usize::from(c >= x0 + x1);
+                    let ones: Vec<f64> =
+                        (0..n).map(|c| f64::from(u8::from(part(c) == t))).collect();
+                    for row in 0..n {
+                        let r: f64 = (0..n).map(|c| a[c][row] * ones[c]).sum();
+                        assert!(r.abs() <= 1e-12 * scale, "translation {t}, row {row}: {r}");
+                    }
+                }
+            }
+            // Keeping the edge viscosities gives the same operator, bit for bit.
+            let mut kept = Coefficients::new(&grid, faces);
+            let mut edges: Vec<Field> = (0..3).map(|_| Field::zeros(&grid)).collect();
+            kept.set_viscosity_edges(&grid, &mu, 0.3, &mut edges);
+            assert!(dense(&grid, &walls, &kept, &vec![0.0; n]) == a);
+        }
+    }
+
+    #[test]
+    fn a_two_dimensional_field_extruded_in_z_gives_the_planar_operator_plane_by_plane() {
+        use Boundary::*;
+        for (sides, periodic) in [
+            ([NoSlip, NoSlip, NoSlip, NoSlip], [false, false, true]),
+            ([Periodic, Periodic, NoSlip, NoSlip], [true, false, true]),
+        ] {
+            let (g2, bc) = setup(Geometry::Planar, sides.clone());
+            let nz = 3;
+            // dz = 1: the planar operator is per unit depth.
+            let g3 = Grid::new_3d([g2.nx, g2.ny, nz], (0.0, 1.0), (0.0, 0.6), (0.0, nz as f64));
+            let walls = BoxGhosts { periodic };
+            let (f2, f3) = (
+                UnknownFaces::new(&g2, &bc),
+                UnknownFaces::with_ranges(&g3, &walls.ranges(&g3)),
+            );
+            let value = |i: isize, j: isize, c: usize| {
+                ((i * 7919 + j * 104_729 + c as isize * 31) % 1013) as f64 / 500.0 - 1.0
+            };
+            let mut v2: Vec<Field> = (0..2).map(|_| Field::zeros(&g2)).collect();
+            let mut v3: Vec<Field> = (0..3).map(|_| Field::zeros(&g3)).collect();
+            let (mut mu2, mut mu3) = (viscosity(&g2), Field::zeros(&g3));
+            for (c, f) in v2.iter_mut().enumerate() {
+                for q in 0..f.data().len() {
+                    let [i, j, _] = f.index_of(q);
+                    f.data_mut()[q] = value(i, j, c);
+                }
+            }
+            for q in 0..mu3.data().len() {
+                let [i, j, _] = mu3.index_of(q);
+                mu3.data_mut()[q] = mu2[(i, j)];
+            }
+            for (c, f) in v3.iter_mut().enumerate().take(2) {
+                for q in 0..f.data().len() {
+                    let [i, j, _] = f.index_of(q);
+                    f.data_mut()[q] = value(i, j, c);
+                }
+            }
+            let [u, v] = &mut v2[..] else { unreachable!() };
+            bc.fill_velocity(&g2, u, v, 0.0, true);
+            bc.fill_scalar(&g2, &mut mu2, false);
+            walls.fill(&g3, &mut v3, WallTime::Homogeneous);
+            walls.fill_scalar(&g3, &mut mu3);
+            let (mut k2, mut k3) = (Coefficients::new(&g2, f2), Coefficients::new(&g3, f3));
+            k2.set_viscosity_weights(&g2, &mu2, 0.3);
+            k3.set_viscosity_weights(&g3, &mu3, 0.3);
+            let (mut y2, mut y3) = (vec![0.0; f2.len()], vec![0.0; f3.len()]);
+            k2.product(&v2, &vec![1.0; f2.len()], None, &mut y2);
+            k3.product(&v3, &vec![1.0; f3.len()], None, &mut y3);
+            let (p2, p3) = (f2.split(&y2), f3.split(&y3));
+            for a in 0..2 {
+                let (r2, r3) = (f2.region(a), f3.region(a));
+                assert_eq!(
+                    (r3.len(0), r3.len(1), r3.len(2)),
+                    (r2.len(0), r2.len(1), nz)
+                );
+                let line = r2.size();
+                for k in 0..nz {
+                    assert!(
+                        p3[a][k * line..(k + 1) * line] == *p2[a],
+                        "{sides:?}: component {a}, plane {k}"
+                    );
+                }
+            }
+            assert!(p3[2].iter().all(|&y| y == 0.0), "no w from a planar field");
+            assert!(p2[0].iter().any(|&y| y != 0.0));
+        }
+    }
+
+    /// `c Π_d t_d(2π x_d)`, `t_d` = sin where `sin[d]`, else cos: a periodic product whose
+    /// derivatives are products of the same kind.
+    #[derive(Clone, Copy)]
+    struct Trig {
+        c: f64,
+        sin: [bool; 3],
+    }
+
+    impl Trig {
+        fn at(&self, x: [f64; 3]) -> f64 {
+            let k = 2.0 * std::f64::consts::PI;
+            (0..3).fold(self.c, |p, d| {
+                p * if self.sin[d] {
+                    (k * x[d]).sin()
+                } else {
+                    (k * x[d]).cos()
+                }
+            })
+        }
+        fn d(&self, a: usize) -> Trig {
+            let k = 2.0 * std::f64::consts::PI;
+            let mut t = *self;
+            t.c *= if self.sin[a] { k } else { -k };
+            t.sin[a] = !self.sin[a];
+            t
+        }
+    }
+
+    /// The largest error of `K(V)/vol` against `∇·(2η D(V))` over the faces of a periodic unit
+    /// cube of `n³` cells, for a smooth periodic velocity and viscosity.
+    fn manufactured_error(n: usize) -> (f64, f64) {
+        let grid = Grid::new_3d([n; 3], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let t = |c, s: [u8; 3]| Trig {
+            c,
+            sin: s.map(|s| s == 1),
+        };
+        let vel_exact = [t(1.0, [1, 0, 1]), t(0.7, [0, 1, 0]), t(-0.4, [1, 1, 0])];
+        let bump = t(0.5, [1, 1, 1]);
+        let eta = |x: [f64; 3]| 1.0 + bump.at(x);
+        // ∂_b(η (∂_b V_a + ∂_a V_b)), summed over b.
+        let force = |a: usize, x: [f64; 3]| {
+            (0..3)
+                .map(|b| {
+                    let s = vel_exact[a].d(b).at(x) + vel_exact[b].d(a).at(x);
+                    let ds = vel_exact[a].d(b).d(b).at(x) + vel_exact[b].d(a).d(b).at(x);
+                    bump.d(b).at(x) * s + eta(x) * ds
+                })
+                .sum::<f64>()
+        };
+        let h = grid.h();
+        let pos = |[i, j, k]: Index, nodal: usize| {
+            let mut x = [i, j, k].map(|i| i as f64 + 0.5);
+            x[nodal] -= 0.5;
+            [0, 1, 2].map(|d| x[d] * h[d])
+        };
+        let mut mu = Field::zeros(&grid);
+        for q in 0..mu.data().len() {
+            let i = mu.index_of(q);
+            mu.data_mut()[q] = eta([0, 1, 2].map(|d| (i[d] as f64 + 0.5) * h[d]));
+        }
+        let vel: Vec<Field> = (0..3)
+            .map(|a| {
+                let mut f = Field::zeros(&grid);
+                for q in 0..f.data().len() {
+                    f.data_mut()[q] = vel_exact[a].at(pos(f.index_of(q), a));
+                }
+                f
+            })
+            .collect();
+        let ranges = BoxGhosts {
+            periodic: [true; 3],
+        }
+        .ranges(&grid);
+        let faces = UnknownFaces::with_ranges(&grid, &ranges);
+        let mut k = Coefficients::new(&grid, faces);
+        k.set_viscosity_weights(&grid, &mu, 1.0);
+        let mut y = vec![0.0; faces.len()];
+        k.product(&vel, &vec![0.0; faces.len()], None, &mut y);
+        let vol = h.iter().product::<f64>();
+        let (mut err, mut size) = (0.0f64, 0.0f64);
+        faces.for_each_axis(|c, a, q| {
+            let f = force(a, pos(vel[a].index_of(q), a));
+            err = err.max((-y[c] / vol - f).abs());
+            size = size.max(f.abs());
+        });
+        (err, size)
+    }
+
+    #[test]
+    fn the_three_dimensional_operator_is_second_order_for_a_smooth_field() {
+        let (e16, size) = manufactured_error(16);
+        let (e32, _) = manufactured_error(32);
+        let order = (e16 / e32).log2();
+        assert!(
+            order > 1.9 && order < 2.1,
+            "order {order} ({e16:e}, {e32:e})"
+        );
+        assert!(e32 < 0.01 * size, "{e32:e} of {size:e}");
     }
 }
