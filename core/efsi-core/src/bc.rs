@@ -336,13 +336,14 @@ impl BoundarySet {
             grid.is_3d(),
             "w is filled exactly on a three-dimensional grid"
         );
-        let mut c: Vec<&mut Field> = vec![u, v];
-        c.extend(w);
+        let mut c = [Some(u), Some(v), w];
         for axis in 0..grid.dims() {
-            self.fill_normal(grid, c[axis], axis);
-            for t in 0..grid.dims() {
-                if t != axis {
-                    self.fill_tangential(grid, c[t], axis, t, when);
+            if let Some(f) = c[axis].as_deref_mut() {
+                self.fill_normal(grid, f, axis);
+            }
+            for t in (0..grid.dims()).filter(|&t| t != axis) {
+                if let Some(f) = c[t].as_deref_mut() {
+                    self.fill_tangential(grid, f, axis, t, when);
                 }
             }
         }
@@ -661,7 +662,7 @@ mod tests {
     fn a_moving_lid_on_z_max_drives_u_and_holds_v() {
         let mut sides = [const { Boundary::NoSlip }; 6];
         sides[5] = lid(2.0, WallProfile::Uniform);
-        let (g, _, [u, v, w]) = filled3(sides, WallTime::At(0.0));
+        let (g, _, [u, v, w]) = filled3(sides.clone(), WallTime::At(0.0));
         let nz = g.nz as isize;
         for (i, j) in [(0, 0), (1, 2), (3, 3)] {
             assert_eq!(across(&u, nz, 2, true, [i, j, 0]).0, 2.0);

@@ -670,7 +670,7 @@ mod tests {
         phi[(2, 1)] = 0.5;
         let values = |p: &ProbeSpec| {
             let mut out = Vec::new();
-            evaluate(p, &grid, &state, (0.0, -9.81), &[], &mut out);
+            evaluate(p, &grid, &state, (0.0, -9.81).into(), &[], &mut out);
             out
         };
         for (variant, name) in [

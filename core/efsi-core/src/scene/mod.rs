@@ -238,6 +238,12 @@ impl Vector {
     }
 }
 
+impl From<(f64, f64)> for Vector {
+    fn from((x, y): (f64, f64)) -> Self {
+        Vector(x, y, None)
+    }
+}
+
 /// A two-component vector equals `(x, y)` when its third component is absent or zero.
 impl PartialEq<(f64, f64)> for Vector {
     fn eq(&self, other: &(f64, f64)) -> bool {
