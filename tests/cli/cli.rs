@@ -139,7 +139,10 @@ fn a_lid_driven_cube_is_checked_up_to_the_stages_without_three_dimensional_kerne
     );
     refused(
         "planar_with_z_min",
-        &GOOD.replace("MovingWall(speed: 1.0)", "MovingWall(speed: 1.0), z_min: NoSlip"),
+        &GOOD.replace(
+            "MovingWall(speed: 1.0)",
+            "MovingWall(speed: 1.0), z_min: NoSlip",
+        ),
         &["boundaries.z_min", "Cartesian3D"],
     );
 }

@@ -23,7 +23,7 @@
 //! (`output.probes[2].at`, `solid.shape.center[1]`, `gravity.1`), map entries by key
 //! (`solid.law.parameters.G`). An `Option` that holds a value (`Some(…)`) and a variant that
 //! wraps one value (`Union([…])`) are looked through. The scene's aliases (`nr`, `nz`, `r`,
-//! `z`, `r_min`, …; [`FIELD_ALIASES`]) name the same fields as their canonical names.
+//! `z`, `r_min`, …; [`efsi_core::overrides::FIELD_ALIASES`]) name the same fields as their canonical names.
 //!
 //! A setting absent from the file, whose default applies, is inserted (with the containers it
 //! needs: `numerics.projection.solver` in a scene without `numerics` inserts
@@ -72,7 +72,7 @@
 //! refuses a file changed since).
 
 use efsi_core::StagePlugin;
-use efsi_core::overrides::{FIELD_ALIASES, Override, OverrideValue, attribute, field_aliases};
+use efsi_core::overrides::{Override, OverrideValue, attribute, field_aliases};
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{Scene, SceneError};
@@ -585,7 +585,7 @@ Scene(
 
     #[test]
     fn every_alias_names_its_field() {
-        for (alias, field) in FIELD_ALIASES {
+        for (alias, field) in efsi_core::overrides::FIELD_ALIASES {
             let scene = if ["r", "z"].contains(alias) {
                 format!("domain.{alias}")
             } else if alias.starts_with('n') {
