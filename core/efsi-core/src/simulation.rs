@@ -234,7 +234,10 @@ impl Simulation {
     pub fn step_limit(&self, until: f64) -> (f64, String) {
         let t = &self.scene.time;
         let remaining = until - self.state.t;
-        let h = self.grid.dx.min(self.grid.dy);
+        let mut h = self.grid.dx.min(self.grid.dy);
+        if self.grid.is_3d() {
+            h = h.min(self.grid.dz);
+        }
         if let Some(fixed) = t.fixed_dt {
             (fixed, "time.fixed_dt".to_string())
         } else {

@@ -147,7 +147,9 @@ impl Scene {
                     return err(
                         f,
                         format!(
-                            "a {g:?} scene has two axes: `{}` beside `{}` would be a third                              (`{}` is `{}`'s axisymmetric spelling only where `{}` is not                              written); a three-dimensional scene is `geometry: Cartesian3D`",
+                            "a {g:?} scene has two axes: `{}` beside `{}` would be a third \
+                             (`{}` is `{}`'s axisymmetric spelling only where `{}` is not \
+                             written); a three-dimensional scene is `geometry: Cartesian3D`",
                             leaf(f),
                             leaf(y),
                             leaf(f),
@@ -186,7 +188,8 @@ impl Scene {
                 return err(
                     &format!("{section}.{meaning}"),
                     format!(
-                        "missing: `{a}` is {meaning}'s axisymmetric spelling, which a                          Cartesian3D scene does not use (there x, y, z are the axes{})",
+                        "missing: `{a}` is {meaning}'s axisymmetric spelling, which a \
+                         Cartesian3D scene does not use (there x, y, z are the axes{})",
                         if a.starts_with('z') || *a == "nz" {
                             format!(" and `{a}` belongs to the third)")
                         } else {

@@ -265,3 +265,35 @@ pub fn arrays(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What `efsi describe-output` prints for a three-dimensional run: the velocity's three
+    /// components and the axes.
+    #[test]
+    fn three_dimensional_files_are_described_with_their_axes() {
+        let grid = Grid::new_3d([2, 3, 4], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let state = State::new(&grid, 1.0, 0.1, &Default::default());
+        let s = summary(&grid, &state, &VtkOptions::default(), &[]);
+        assert_eq!(
+            s["arrays"][0]["components"],
+            serde_json::json!(["u_x", "u_y", "u_z"])
+        );
+        assert_eq!(
+            s["field_data"]["geometry"],
+            "three-dimensional: X = x, Y = y, Z = z"
+        );
+        let names: Vec<&str> = s["arrays"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            ["velocity", "pressure", "density", "viscosity", "divergence"]
+        );
+    }
+}
