@@ -196,16 +196,20 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { scene, overrides } => load(&scene, &overrides.list()).map(|sim| {
+            let g = &sim.grid;
             out!(
-                "{}: ok — {} {}×{} cells, stages: {}",
+                "{}: ok — {} {} cells, stages: {}",
                 scene.display(),
-                match sim.grid.geometry {
+                match g.geometry {
                     efsi_core::Geometry::Planar => "planar",
                     efsi_core::Geometry::Axisymmetric => "axisymmetric",
                     efsi_core::Geometry::Cartesian3D => "three-dimensional",
                 },
-                sim.grid.nx,
-                sim.grid.ny,
+                if g.is_3d() {
+                    format!("{}×{}×{}", g.nx, g.ny, g.nz)
+                } else {
+                    format!("{}×{}", g.nx, g.ny)
+                },
                 sim.pipeline().stage_names().join(" → ")
             );
             None

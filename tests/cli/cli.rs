@@ -102,6 +102,51 @@ fn non_positive_end_time_is_refused() {
     }
 }
 
+/// A lid-driven cube at Re = 100 on 16³ cells.
+const CUBE: &str = r#"Scene(
+    name: "lid_driven_cube",
+    geometry: Cartesian3D,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (0.0, 1.0)),
+    grid: (nx: 16, ny: 16, nz: 16),
+    time: (end: 1.0, cfl: 0.5),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0),
+                 z_min: NoSlip, z_max: NoSlip),
+    output: (probes: [Point(name: "u_c", field: "u", at: (0.5, 0.5, 0.5)), KineticEnergy, MaxDivergence],
+             profiles: [Line(name: "u_x", from: (0.5, 0.0, 0.5), to: (0.5, 1.0, 0.5), points: 17, fields: ["u", "w"])]),
+)
+"#;
+
+#[test]
+fn a_lid_driven_cube_is_checked_up_to_the_stages_without_three_dimensional_kernels() {
+    // Scene, grid and boundaries are read in three dimensions; what refuses it is the fluid
+    // stages that have no 3-D kernels yet, named with the grid.
+    refused(
+        "cube",
+        CUBE,
+        &[
+            "Cartesian3D scene (16×16×16 cells)",
+            "do not support Cartesian3D",
+            "`advection`",
+            "`projection`",
+        ],
+    );
+    // Mixing two- and three-dimensional keys is refused by name.
+    refused(
+        "cube_without_nz",
+        &CUBE.replace(", nz: 16", ""),
+        &["grid.nz", "missing"],
+    );
+    refused(
+        "planar_with_z_min",
+        &GOOD.replace(
+            "MovingWall(speed: 1.0)",
+            "MovingWall(speed: 1.0), z_min: NoSlip",
+        ),
+        &["boundaries.z_min", "Cartesian3D"],
+    );
+}
+
 #[test]
 fn missing_scene_file_is_reported() {
     let out = efsi(&["check", "/nonexistent/scene.ron"]);

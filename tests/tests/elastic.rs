@@ -428,7 +428,7 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
     scene.time.dt_max = Some(2e-4);
     let mut s = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
         .unwrap_or_else(|e| panic!("{e}"));
-    let g = s.scene.gravity;
+    let g = s.scene.gravity.planar();
     let energies = |s: &Simulation| {
         (
             efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho),
@@ -497,7 +497,7 @@ fn map_sphere(g: f64, coupling: &str, end: f64, extra: &[(&str, &str)]) -> Simul
 /// the potential energy released), and its vertical velocity at the end.
 fn impact(g: f64, coupling: &str, extra: &[(&str, &str)]) -> (u64, f64, f64, f64) {
     let mut s = map_sphere(g, coupling, 0.016, extra);
-    let gv = s.scene.gravity;
+    let gv = s.scene.gravity.planar();
     let energy = |s: &Simulation| {
         (
             efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)

@@ -40,7 +40,8 @@
 //! The figures are printed (`--nocapture`).
 
 use efsi_core::scene::{
-    Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, WallMotion, WallProfile,
+    Boundaries, Boundary, Domain, Fluid, GridSpec, Section, Side, TimeSpec, Vector, WallMotion,
+    WallProfile,
 };
 use efsi_core::{Geometry, Override, OverrideValue, Scene};
 use efsi_run::run::{RunOptions, StopReason, resume, run_with};
@@ -129,7 +130,7 @@ fn probe() -> BoxedStrategy<ProbeSpec> {
     let field = prop::sample::select(vec!["u", "v", "p", "speed", "density", "solid_fraction"]);
     let side = prop::sample::select(Side::ALL.to_vec());
     prop_oneof![
-        4 => (name(), field, point()).prop_map(|(name, f, at)| ProbeSpec::Point { name, field: f.into(), at }),
+        4 => (name(), field, point()).prop_map(|(name, f, at)| ProbeSpec::Point { name, field: f.into(), at: at.into() }),
         2 => Just(ProbeSpec::KineticEnergy),
         1 => Just(ProbeSpec::PotentialEnergy),
         1 => Just(ProbeSpec::MaxDivergence),
@@ -156,8 +157,8 @@ fn profile() -> BoxedStrategy<ProfileSpec> {
     )
         .prop_map(|(name, from, to, points, fields, at)| ProfileSpec::Line {
             name,
-            from,
-            to,
+            from: from.into(),
+            to: to.into(),
             points,
             fields: fields.into_iter().map(String::from).collect(),
             at,
@@ -259,11 +260,8 @@ fn scene() -> impl Strategy<Value = Scene> {
                 Scene {
                     name,
                     geometry,
-                    domain: Domain {
-                        x: (0.0, 1.0),
-                        y: (0.0, 1.0),
-                    },
-                    grid: GridSpec { nx, ny },
+                    domain: Domain::planar((0.0, 1.0), (0.0, 1.0)),
+                    grid: GridSpec::planar(nx, ny),
                     time: TimeSpec {
                         end,
                         cfl,
@@ -273,7 +271,11 @@ fn scene() -> impl Strategy<Value = Scene> {
                         steady: None,
                     },
                     fluid: Fluid { density, viscosity },
-                    gravity: if gravity { (0.0, -9.81) } else { (0.0, 0.0) },
+                    gravity: if gravity {
+                        Vector(0.0, -9.81, None)
+                    } else {
+                        Vector::default()
+                    },
                     initial_velocity: Default::default(),
                     solid: solid.map(|s| Section::of(&s).expect("a solid serialises to RON")),
                     boundaries: {
@@ -287,12 +289,12 @@ fn scene() -> impl Strategy<Value = Scene> {
                                 b[c] = Boundary::Periodic;
                             }
                         }
-                        Boundaries {
-                            x_min: if axi { Boundary::Axis } else { b[0].clone() },
-                            x_max: b[1].clone(),
-                            y_min: b[2].clone(),
-                            y_max: b[3].clone(),
-                        }
+                        Boundaries::planar(
+                            if axi { Boundary::Axis } else { b[0].clone() },
+                            b[1].clone(),
+                            b[2].clone(),
+                            b[3].clone(),
+                        )
                     },
                     physics: Default::default(),
                     numerics: Default::default(),

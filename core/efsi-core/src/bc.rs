@@ -9,6 +9,7 @@
 //! | NoSlip      | 0                 | odd reflection   | odd reflection (t = 0)    | even      | even      |
 //! | MovingWall  | 0                 | odd reflection   | `2·U_w − t` (t = U_w)     | even      | even      |
 //! | FreeSlip    | 0                 | odd reflection   | even (∂t/∂n = 0)          | even      | even      |
+//! | Symmetry    | 0                 | odd reflection   | even (∂t/∂n = 0)          | even      | even      |
 //! | Axis        | 0                 | odd reflection   | even                      | even      | even      |
 //! | Periodic    | wraps             | wraps            | wraps                     | wraps     | wraps     |
 //! | Outflow     | from the solvers  | constant         | constant                  | even      | odd (p=0) |
@@ -16,6 +17,20 @@
 //! Wall values are second-order accurate (the wall lies half a cell from the tangential
 //! unknowns). The *homogeneous* variant (wall speed 0) serves implicit solves for corrections:
 //! the full condition is affine in the unknowns, so a correction obeys the homogeneous one.
+//! Symmetry is FreeSlip's rule under the name of what it models, a mirror plane of the flow.
+//!
+//! # Three dimensions
+//!
+//! On a three-dimensional grid ([`Grid::new_3d`]) the same rules hold on all six sides, for the
+//! three velocity components ([`BoundarySet::fill_velocity3`]: `w` on the z-faces is normal on
+//! the z sides and tangential on the others) and for scalars along z. A side has two
+//! tangential components: a moving wall drives one of them — `+x` on the y and z sides, `+y` on
+//! the x sides, as in two dimensions — and holds the other at zero; its profile
+//! ([`crate::scene::WallProfile`]) is the product of the factors along both in-wall axes (a
+//! `Sin2Ramp` lid vanishes at all four edges). Ghosts are filled one axis after the other (x,
+//! then y, then z), each pass over the whole padded extent of the other axes, so edge and
+//! corner ghosts take the value the later axis's rule gives the earlier one's ghosts, as the
+//! corners do in two dimensions.
 
 use crate::field::Field;
 use crate::grid::{G, Grid};
@@ -50,33 +65,64 @@ pub enum WallTime {
     Homogeneous,
 }
 
-/// The two sides normal to one axis, with the cell counts along (`n`) and across (`m`) it.
-struct Frame {
+/// The lines of a field across the sides normal to `axis`: every padded index of the other
+/// two axes (the third has the single index 0 on a two-dimensional grid).
+struct Lines {
+    /// Cells along `axis`.
     n: isize,
-    m: isize,
-    lo_side: Side,
-    hi_side: Side,
+    /// Storage stride along `axis`.
+    step: isize,
+    /// Storage index of `[0, 0, 0]`.
+    origin: isize,
+    /// Storage strides and padded index ranges of the two other axes.
+    across: [(isize, std::ops::Range<isize>); 2],
 }
 
-impl Frame {
-    fn new(grid: &Grid, axis: usize) -> Frame {
-        let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-        if axis == 0 {
-            Frame {
-                n: nx,
-                m: ny,
-                lo_side: Side::XMin,
-                hi_side: Side::XMax,
+impl Lines {
+    fn new(grid: &Grid, f: &Field, axis: usize) -> Lines {
+        let n = grid.n();
+        let range = |a: usize| -> std::ops::Range<isize> {
+            if a == 2 && !grid.is_3d() {
+                0..1
+            } else {
+                let g = if a == 2 { grid.gz() as isize } else { G };
+                -g..n[a] as isize + 1 + g
             }
-        } else {
-            Frame {
-                n: ny,
-                m: nx,
-                lo_side: Side::YMin,
-                hi_side: Side::YMax,
-            }
+        };
+        let stride = |a: usize| f.offset(crate::loops::unit(a));
+        let [o1, o2] = others(axis);
+        Lines {
+            n: n[axis] as isize,
+            step: stride(axis),
+            origin: f.idx3([0, 0, 0]) as isize,
+            across: [(stride(o1), range(o1)), (stride(o2), range(o2))],
         }
     }
+
+    /// Each line as (storage index of its index 0 along the axis, its indices along the two
+    /// other axes), the second other axis outermost.
+    fn each(&self) -> impl Iterator<Item = (isize, [isize; 2])> + '_ {
+        let [(s1, r1), (s2, r2)] = &self.across;
+        r2.clone().flat_map(move |c| {
+            r1.clone()
+                .map(move |b| (self.origin + b * s1 + c * s2, [b, c]))
+        })
+    }
+}
+
+/// The two axes other than `axis`, in order.
+fn others(axis: usize) -> [usize; 2] {
+    match axis {
+        0 => [1, 2],
+        1 => [0, 2],
+        _ => [0, 1],
+    }
+}
+
+/// The component a moving wall on a side normal to `axis` drives: y on the x sides, x on the
+/// others.
+fn driven(axis: usize) -> usize {
+    if axis == 0 { 1 } else { 0 }
 }
 
 /// The boundary conditions of a run, ready to fill ghosts.
@@ -86,42 +132,65 @@ impl Frame {
 /// shared by every copy of the set, so the copies stages keep follow the change.
 #[derive(Clone, Debug)]
 pub struct BoundarySet {
-    sides: [Boundary; 4],
-    lx: f64,
-    ly: f64,
+    /// The condition of each side of [`Side::of`] the grid's dimensions (four or six).
+    sides: Vec<Boundary>,
+    /// Extent of the box along each axis.
+    len: [f64; 3],
     /// Each side's moving-wall speed as `f64` bits (the scene's until set).
-    speeds: Arc<[AtomicU64; 4]>,
+    speeds: Arc<[AtomicU64; 6]>,
 }
 
 impl BoundarySet {
-    /// From the scene's boundary conditions.
+    /// From the scene's boundary conditions: the four sides of a two-dimensional grid, the six
+    /// of a three-dimensional one.
+    ///
+    /// # Panics
+    ///
+    /// On a three-dimensional grid if `b` has no z sides (a validated Cartesian3D scene has).
     pub fn new(b: &Boundaries, grid: &Grid) -> Self {
-        let sides = Side::ALL.map(|s| b.get(s).clone());
-        let speeds = Arc::new(sides.clone().map(|b| {
-            AtomicU64::new(match b {
-                Boundary::MovingWall { speed, .. } => speed.to_bits(),
+        let sides: Vec<Boundary> = Side::of(grid.dims())
+            .iter()
+            .map(|&s| b.get(s).clone())
+            .collect();
+        let speeds = Arc::new(std::array::from_fn(|k| {
+            AtomicU64::new(match sides.get(k) {
+                Some(Boundary::MovingWall { speed, .. }) => speed.to_bits(),
                 _ => 0f64.to_bits(),
             })
         }));
         BoundarySet {
             sides,
-            lx: grid.x1() - grid.x0,
-            ly: grid.y1() - grid.y0,
+            len: [
+                grid.x1() - grid.x0,
+                grid.y1() - grid.y0,
+                grid.nz as f64 * grid.dz,
+            ],
             speeds,
         }
+    }
+
+    /// The sides this set has: [`Side::ALL`] in two dimensions, [`Side::ALL3`] in three.
+    pub fn sides(&self) -> &'static [Side] {
+        Side::of(if self.sides.len() == 6 { 3 } else { 2 })
     }
 
     /// The speed of the moving wall on `side` (its profile and motion multiply it), if the side
     /// is one.
     pub fn moving_wall_speed(&self, side: Side) -> Option<f64> {
-        matches!(self.get(side), Boundary::MovingWall { .. })
-            .then(|| f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed)))
+        matches!(
+            self.sides.get(side as usize),
+            Some(Boundary::MovingWall { .. })
+        )
+        .then(|| f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed)))
     }
 
     /// Set the speed of the moving wall on `side` from the next fill on, for this set and every
     /// copy of it. Refused for a side that is not a moving wall or a speed that is not finite.
     pub fn set_wall_speed(&self, side: Side, speed: f64) -> Result<(), String> {
-        if !matches!(self.get(side), Boundary::MovingWall { .. }) {
+        if !matches!(
+            self.sides.get(side as usize),
+            Some(Boundary::MovingWall { .. })
+        ) {
             return Err(format!("{side:?} is not a moving wall"));
         }
         if !speed.is_finite() {
@@ -135,14 +204,19 @@ impl BoundarySet {
     }
 
     /// The condition on `side`.
+    ///
+    /// # Panics
+    ///
+    /// On a z side of a two-dimensional set (iterate [`sides`](Self::sides)).
     pub fn get(&self, side: Side) -> &Boundary {
-        &self.sides[side as usize]
+        self.sides
+            .get(side as usize)
+            .unwrap_or_else(|| panic!("{side}: a two-dimensional grid has no z sides"))
     }
 
-    /// Whether x (or y, `axis = 1`) is periodic.
+    /// Whether x (`axis = 0`), y (1) or z (2) is periodic.
     pub fn periodic(&self, axis: usize) -> bool {
-        let s = if axis == 0 { Side::XMin } else { Side::YMin };
-        *self.get(s) == Boundary::Periodic
+        *self.get(Side::normal_to(axis, false)) == Boundary::Periodic
     }
 
     /// Whether the pressure is fixed somewhere (an outflow side); else it is defined up to a constant.
@@ -150,19 +224,15 @@ impl BoundarySet {
         self.sides.contains(&Boundary::Outflow)
     }
 
-    /// Unknown u faces along x (`axis = 0`) or v faces along y (`axis = 1`).
+    /// Unknown u faces along x (`axis = 0`), v faces along y (1) or w faces along z (2), of
+    /// `n` cells along that axis.
     pub fn normal_faces(&self, axis: usize, n: usize) -> FaceRange {
-        let (lo_side, hi_side) = if axis == 0 {
-            (Side::XMin, Side::XMax)
-        } else {
-            (Side::YMin, Side::YMax)
-        };
         let n = n as isize;
-        let lo = match self.get(lo_side) {
+        let lo = match self.get(Side::normal_to(axis, false)) {
             Boundary::Periodic | Boundary::Outflow => 0,
             _ => 1,
         };
-        let hi = match self.get(hi_side) {
+        let hi = match self.get(Side::normal_to(axis, true)) {
             Boundary::Periodic => n,
             Boundary::Outflow => n + 1,
             _ => n,
@@ -170,25 +240,39 @@ impl BoundarySet {
         FaceRange { lo, hi }
     }
 
-    /// Tangential wall velocity on `side` at position `s` along it (from its start) and time `t`.
-    fn wall_speed(&self, side: Side, s: f64, t: f64) -> f64 {
-        match self.get(side) {
-            Boundary::MovingWall {
-                profile, motion, ..
-            } => {
-                let len = if matches!(side, Side::XMin | Side::XMax) {
-                    self.ly
-                } else {
-                    self.lx
-                };
-                let speed = f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed));
-                speed * profile.factor(s, len) * motion.factor(t)
+    /// Speed of the moving wall on `side` at `when`, at the position `s` along the driven
+    /// component's axis `c` and, in three dimensions, `e` along the other in-wall axis `o`
+    /// (each from the wall's start).
+    fn wall_speed(
+        &self,
+        side: Side,
+        (c, s): (usize, f64),
+        other: Option<(usize, f64)>,
+        when: WallTime,
+    ) -> f64 {
+        let Boundary::MovingWall {
+            profile, motion, ..
+        } = self.get(side)
+        else {
+            return 0.0;
+        };
+        let at = |t: f64| {
+            let speed = f64::from_bits(self.speeds[side as usize].load(Ordering::Relaxed));
+            let v = speed * profile.factor(s, self.len[c]) * motion.factor(t);
+            match other {
+                Some((o, e)) => v * profile.factor(e, self.len[o]),
+                None => v,
             }
-            _ => 0.0,
+        };
+        match when {
+            WallTime::Homogeneous => 0.0,
+            WallTime::At(t) => at(t),
+            WallTime::Blend { t0, t1, theta } => (1.0 - theta) * at(t0) + theta * at(t1),
         }
     }
 
-    /// Fill the velocity ghosts (and boundary normal faces) for time `t`.
+    /// Fill the velocity ghosts (and boundary normal faces) of a two-dimensional grid for time
+    /// `t` ([`fill_velocity3`](Self::fill_velocity3) with no `w`).
     ///
     /// With `homogeneous`, moving walls count as fixed (for corrections in implicit solves).
     pub fn fill_velocity(
@@ -199,111 +283,178 @@ impl BoundarySet {
         t: f64,
         homogeneous: bool,
     ) {
-        let w = if homogeneous {
+        self.fill_velocity3(grid, u, v, None, t, homogeneous);
+    }
+
+    /// Fill the velocity ghosts (and boundary normal faces) for time `t`: `u`, `v` and, on a
+    /// three-dimensional grid, `w` (`None` on a two-dimensional one).
+    ///
+    /// With `homogeneous`, moving walls count as fixed (for corrections in implicit solves).
+    ///
+    /// # Panics
+    ///
+    /// If `w` is given on a two-dimensional grid or missing on a three-dimensional one.
+    pub fn fill_velocity3(
+        &self,
+        grid: &Grid,
+        u: &mut Field,
+        v: &mut Field,
+        w: Option<&mut Field>,
+        t: f64,
+        homogeneous: bool,
+    ) {
+        let when = if homogeneous {
             WallTime::Homogeneous
         } else {
             WallTime::At(t)
         };
-        self.fill_velocity_at(grid, u, v, w);
+        self.fill_velocity3_at(grid, u, v, w, when);
     }
 
-    /// Fill the velocity ghosts with the wall speeds of `when`.
+    /// Fill the velocity ghosts of a two-dimensional grid with the wall speeds of `when`.
     pub fn fill_velocity_at(&self, grid: &Grid, u: &mut Field, v: &mut Field, when: WallTime) {
-        // Pass 1: x-sides (u normal, v tangential) over all padded rows.
-        self.fill_normal(grid, u, 0);
-        self.fill_tangential(grid, v, 0, when);
-        // Pass 2: y-sides (v normal, u tangential) over all padded columns, corners included.
-        self.fill_normal(grid, v, 1);
-        self.fill_tangential(grid, u, 1, when);
+        self.fill_velocity3_at(grid, u, v, None, when);
+    }
+
+    /// Fill the velocity ghosts with the wall speeds of `when`: `u`, `v` and, on a
+    /// three-dimensional grid, `w`. Axis by axis (x, y, z): the normal component's boundary
+    /// face and ghosts, then the tangential components' ghosts.
+    ///
+    /// # Panics
+    ///
+    /// If `w` is given on a two-dimensional grid or missing on a three-dimensional one.
+    pub fn fill_velocity3_at(
+        &self,
+        grid: &Grid,
+        u: &mut Field,
+        v: &mut Field,
+        w: Option<&mut Field>,
+        when: WallTime,
+    ) {
+        assert_eq!(
+            w.is_some(),
+            grid.is_3d(),
+            "w is filled exactly on a three-dimensional grid"
+        );
+        let mut c = [Some(u), Some(v), w];
+        for axis in 0..grid.dims() {
+            if let Some(f) = c[axis].as_deref_mut() {
+                self.fill_normal(grid, f, axis);
+            }
+            for t in (0..grid.dims()).filter(|&t| t != axis) {
+                if let Some(f) = c[t].as_deref_mut() {
+                    self.fill_tangential(grid, f, axis, t, when);
+                }
+            }
+        }
     }
 
     /// Normal component `f` along `axis`: boundary face and ghosts.
     fn fill_normal(&self, grid: &Grid, f: &mut Field, axis: usize) {
-        let Frame {
-            n,
-            m,
-            lo_side,
-            hi_side,
-        } = Frame::new(grid, axis);
-        // Accessor along the normal direction `a` at transverse position `b`.
-        let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
-        let lo = self.get(lo_side).clone();
-        let hi = self.get(hi_side).clone();
-        for b in -G..(m + 1 + G) {
+        let lines = Lines::new(grid, f, axis);
+        let (n, step) = (lines.n, lines.step);
+        let lo = self.get(Side::normal_to(axis, false)).clone();
+        let hi = self.get(Side::normal_to(axis, true)).clone();
+        let d = f.data_mut();
+        let at = |base: isize, a: isize| (base + a * step) as usize;
+        for (base, _) in lines.each() {
             if lo == Boundary::Periodic {
-                f[at(n, b)] = f[at(0, b)];
+                d[at(base, n)] = d[at(base, 0)];
                 for g in 1..=G {
-                    f[at(-g, b)] = f[at(n - g, b)];
-                    f[at(n + g, b)] = f[at(g, b)];
+                    d[at(base, -g)] = d[at(base, n - g)];
+                    d[at(base, n + g)] = d[at(base, g)];
                 }
                 continue;
             }
             match lo {
                 Boundary::Outflow => {
                     for g in 1..=G {
-                        f[at(-g, b)] = f[at(0, b)];
+                        d[at(base, -g)] = d[at(base, 0)];
                     }
                 }
                 _ => {
-                    f[at(0, b)] = 0.0;
+                    d[at(base, 0)] = 0.0;
                     for g in 1..=G {
-                        f[at(-g, b)] = -f[at(g, b)];
+                        d[at(base, -g)] = -d[at(base, g)];
                     }
                 }
             }
             match hi {
                 Boundary::Outflow => {
                     for g in 1..=G {
-                        f[at(n + g, b)] = f[at(n, b)];
+                        d[at(base, n + g)] = d[at(base, n)];
                     }
                 }
                 _ => {
-                    f[at(n, b)] = 0.0;
+                    d[at(base, n)] = 0.0;
                     for g in 1..=G {
-                        f[at(n + g, b)] = -f[at(n - g, b)];
+                        d[at(base, n + g)] = -d[at(base, n - g)];
                     }
                 }
             }
         }
     }
 
-    /// Tangential component `f` at the sides normal to `axis`.
-    fn fill_tangential(&self, grid: &Grid, f: &mut Field, axis: usize, when: WallTime) {
-        let Frame {
-            n,
-            m,
-            lo_side,
-            hi_side,
-        } = Frame::new(grid, axis);
-        let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
-        // The tangential component along a side normal to `axis` lives at the faces of the
-        // transverse direction: its position along the wall is s = b·h.
-        let h = if axis == 0 { grid.dy } else { grid.dx };
-        for b in -G..(m + 1 + G) {
-            let s = b as f64 * h;
-            for (side, first, dir) in [(lo_side, 0isize, -1isize), (hi_side, n - 1, 1)] {
+    /// Tangential component `f` (the velocity along axis `comp`) at the sides normal to `axis`.
+    fn fill_tangential(
+        &self,
+        grid: &Grid,
+        f: &mut Field,
+        axis: usize,
+        comp: usize,
+        when: WallTime,
+    ) {
+        let lines = Lines::new(grid, f, axis);
+        let (n, step) = (lines.n, lines.step);
+        let [o1, o2] = others(axis);
+        let h = grid.h();
+        // The component lives on the faces of its own axis (position index·h from the wall's
+        // start) and at cell centres of the other in-wall axis ((index + ½)·h).
+        let position = |t: [isize; 2], a: usize| {
+            let b = if a == o1 { t[0] } else { t[1] };
+            if a == comp {
+                b as f64 * h[a]
+            } else {
+                (b as f64 + 0.5) * h[a]
+            }
+        };
+        let other = if grid.is_3d() {
+            Some(if o1 == comp { o2 } else { o1 })
+        } else {
+            None
+        };
+        let d = f.data_mut();
+        let at = |base: isize, a: isize| (base + a * step) as usize;
+        for (base, t) in lines.each() {
+            for (side, first, dir) in [
+                (Side::normal_to(axis, false), 0isize, -1isize),
+                (Side::normal_to(axis, true), n - 1, 1),
+            ] {
                 let bc = self.get(side);
+                let speed = match bc {
+                    Boundary::MovingWall { .. } if comp == driven(axis) => self.wall_speed(
+                        side,
+                        (comp, position(t, comp)),
+                        other.map(|o| (o, position(t, o))),
+                        when,
+                    ),
+                    _ => 0.0,
+                };
                 for g in 1..=G {
                     let ghost = first + dir * g;
                     let mirror = first - dir * (g - 1);
                     let val = match bc {
-                        Boundary::Periodic => f[at(if dir < 0 { ghost + n } else { ghost - n }, b)],
-                        Boundary::NoSlip => -f[at(mirror, b)],
-                        Boundary::MovingWall { .. } => {
-                            let w = match when {
-                                WallTime::Homogeneous => 0.0,
-                                WallTime::At(t) => self.wall_speed(side, s, t),
-                                WallTime::Blend { t0, t1, theta } => {
-                                    (1.0 - theta) * self.wall_speed(side, s, t0)
-                                        + theta * self.wall_speed(side, s, t1)
-                                }
-                            };
-                            2.0 * w - f[at(mirror, b)]
+                        Boundary::Periodic => {
+                            d[at(base, if dir < 0 { ghost + n } else { ghost - n })]
                         }
-                        Boundary::FreeSlip | Boundary::Axis => f[at(mirror, b)],
-                        Boundary::Outflow => f[at(first, b)],
+                        Boundary::NoSlip => -d[at(base, mirror)],
+                        Boundary::MovingWall { .. } => 2.0 * speed - d[at(base, mirror)],
+                        Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => {
+                            d[at(base, mirror)]
+                        }
+                        Boundary::Outflow => d[at(base, first)],
                     };
-                    f[at(ghost, b)] = val;
+                    d[at(base, ghost)] = val;
                 }
             }
         }
@@ -311,28 +462,29 @@ impl BoundarySet {
 
     /// Fill ghosts of a cell-centred scalar with even reflection at walls (zero normal
     /// gradient), wrapping at periodic sides; `dirichlet_outflow` makes it odd (zero on the
-    /// boundary) at outflow sides, as for the pressure.
+    /// boundary) at outflow sides, as for the pressure. Along every axis of the grid (z too in
+    /// three dimensions).
     pub fn fill_scalar(&self, grid: &Grid, f: &mut Field, dirichlet_outflow: bool) {
-        for axis in 0..2 {
-            let Frame {
-                n,
-                m,
-                lo_side,
-                hi_side,
-            } = Frame::new(grid, axis);
-            let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
-            for b in -G..(m + 1 + G) {
-                for (side, first, dir) in [(lo_side, 0isize, -1isize), (hi_side, n - 1, 1)] {
+        for axis in 0..grid.dims() {
+            let lines = Lines::new(grid, f, axis);
+            let (n, step) = (lines.n, lines.step);
+            let d = f.data_mut();
+            let at = |base: isize, a: isize| (base + a * step) as usize;
+            for (base, _) in lines.each() {
+                for (side, first, dir) in [
+                    (Side::normal_to(axis, false), 0isize, -1isize),
+                    (Side::normal_to(axis, true), n - 1, 1),
+                ] {
                     let bc = self.get(side);
                     for g in 1..=G {
                         let ghost = first + dir * g;
                         let mirror = first - dir * (g - 1);
-                        f[at(ghost, b)] = match bc {
+                        d[at(base, ghost)] = match bc {
                             Boundary::Periodic => {
-                                f[at(if dir < 0 { ghost + n } else { ghost - n }, b)]
+                                d[at(base, if dir < 0 { ghost + n } else { ghost - n })]
                             }
-                            Boundary::Outflow if dirichlet_outflow => -f[at(mirror, b)],
-                            _ => f[at(mirror, b)],
+                            Boundary::Outflow if dirichlet_outflow => -d[at(base, mirror)],
+                            _ => d[at(base, mirror)],
                         };
                     }
                 }
@@ -348,12 +500,7 @@ mod tests {
     use crate::scene::{WallMotion, WallProfile};
 
     fn set(x0: Boundary, x1: Boundary, y0: Boundary, y1: Boundary) -> Boundaries {
-        Boundaries {
-            x_min: x0,
-            x_max: x1,
-            y_min: y0,
-            y_max: y1,
-        }
+        Boundaries::planar(x0, x1, y0, y1)
     }
 
     #[test]
@@ -418,5 +565,220 @@ mod tests {
         assert_eq!(u[(2, -1)], -u[(2, 0)], "no slip: odd");
         assert_eq!(bs.normal_faces(0, 4), FaceRange { lo: 0, hi: 4 });
         assert_eq!(bs.normal_faces(1, 3), FaceRange { lo: 1, hi: 3 });
+    }
+
+    /// A 3 × 4 × 5 grid over [0, 3] × [0, 4] × [0, 5] (unit cells).
+    fn grid3() -> Grid {
+        Grid::new_3d([3, 4, 5], (0.0, 3.0), (0.0, 4.0), (0.0, 5.0))
+    }
+
+    /// Six sides: `xyz` for x_min … z_max.
+    fn set3(sides: [Boundary; 6]) -> Boundaries {
+        let [x0, x1, y0, y1, z0, z1] = sides;
+        Boundaries {
+            z_min: Some(z0),
+            z_max: Some(z1),
+            ..Boundaries::planar(x0, x1, y0, y1)
+        }
+    }
+
+    /// A field whose every entry, ghosts included, is distinct: `1 + i + 10j + 100k + c`.
+    fn distinct(g: &Grid, c: f64) -> Field {
+        let mut f = Field::zeros(g);
+        for n in 0..f.data().len() {
+            let [i, j, k] = f.index_of(n);
+            f.data_mut()[n] = 1.0 + i as f64 + 10.0 * j as f64 + 100.0 * k as f64 + c;
+        }
+        f
+    }
+
+    fn lid(speed: f64, profile: WallProfile) -> Boundary {
+        Boundary::MovingWall {
+            speed,
+            profile,
+            motion: WallMotion::Steady,
+        }
+    }
+
+    /// Filled `u`, `v`, `w` of a 3 × 4 × 5 grid under `sides`.
+    fn filled3(sides: [Boundary; 6], when: WallTime) -> (Grid, BoundarySet, [Field; 3]) {
+        let g = grid3();
+        let bs = BoundarySet::new(&set3(sides), &g);
+        let (mut u, mut v, mut w) = (distinct(&g, 0.25), distinct(&g, 0.5), distinct(&g, 0.75));
+        bs.fill_velocity3_at(&g, &mut u, &mut v, Some(&mut w), when);
+        (g, bs, [u, v, w])
+    }
+
+    /// The mean of `f` across the side normal to `axis` (`hi`: the upper one) at transverse
+    /// indices `t` (a cell-centred or tangential location) — the value on the wall — and the
+    /// ghost–mirror pairs of the second layer.
+    fn across(f: &Field, n: isize, axis: usize, hi: bool, t: [isize; 3]) -> (f64, f64, f64) {
+        let at = |a: isize| {
+            let mut i = t;
+            i[axis] = a;
+            f[i]
+        };
+        if hi {
+            ((at(n - 1) + at(n)) / 2.0, at(n + 1), at(n - 2))
+        } else {
+            ((at(0) + at(-1)) / 2.0, at(-2), at(1))
+        }
+    }
+
+    #[test]
+    fn no_slip_on_six_sides_zeroes_normal_faces_and_reflects_tangential_ones_oddly() {
+        let (g, _, c) = filled3([const { Boundary::NoSlip }; 6], WallTime::At(0.0));
+        let n = g.n().map(|n| n as isize);
+        for a in 0..3 {
+            // The normal component: zero on the boundary faces, odd ghosts.
+            let t = [1, 2, 3];
+            let at = |f: isize| {
+                let mut i = t;
+                i[a] = f;
+                i
+            };
+            assert_eq!(c[a][at(0)], 0.0);
+            assert_eq!(c[a][at(n[a])], 0.0);
+            assert_eq!(c[a][at(-1)], -c[a][at(1)]);
+            assert_eq!(c[a][at(-2)], -c[a][at(2)]);
+            assert_eq!(c[a][at(n[a] + 2)], -c[a][at(n[a] - 2)]);
+            // The tangential components along the sides normal to `a`: zero on the wall.
+            for comp in (0..3).filter(|&b| b != a) {
+                for hi in [false, true] {
+                    let (wall, ghost, mirror) = across(&c[comp], n[a], a, hi, t);
+                    assert_eq!(
+                        wall,
+                        0.0,
+                        "component {comp} at side {:?}",
+                        Side::normal_to(a, hi)
+                    );
+                    assert_eq!(ghost, -mirror);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_moving_lid_on_z_max_drives_u_and_holds_v() {
+        let mut sides = [const { Boundary::NoSlip }; 6];
+        sides[5] = lid(2.0, WallProfile::Uniform);
+        let (g, _, [u, v, w]) = filled3(sides.clone(), WallTime::At(0.0));
+        let nz = g.nz as isize;
+        for (i, j) in [(0, 0), (1, 2), (3, 3)] {
+            assert_eq!(across(&u, nz, 2, true, [i, j, 0]).0, 2.0);
+            assert_eq!(across(&v, nz, 2, true, [j.min(2), i, 0]).0, 0.0);
+            assert_eq!(across(&u, nz, 2, false, [i, j, 0]).0, 0.0);
+        }
+        assert_eq!(w[[1, 1, nz]], 0.0);
+        // Homogeneous: the same lid counts as fixed.
+        let (_, _, [u, ..]) = filled3(sides, WallTime::Homogeneous);
+        assert_eq!(across(&u, nz, 2, true, [1, 1, 0]).0, 0.0);
+    }
+
+    #[test]
+    fn a_moving_wall_on_x_min_drives_v_and_holds_w_and_its_ramp_spans_both_wall_axes() {
+        let mut sides = [const { Boundary::NoSlip }; 6];
+        sides[0] = lid(3.0, WallProfile::Sin2Ramp { width: 2.0 });
+        let (_, bs, [_, v, w]) = filled3(sides, WallTime::At(0.0));
+        assert_eq!(bs.moving_wall_speed(Side::XMin), Some(3.0));
+        // v at y-face j = 2 (s = 2 along y, the wall's middle: factor 1) and z-centre k = 0
+        // (e = 0.5 along z: factor sin²(π·0.5/4)).
+        let f = (std::f64::consts::PI * 0.5 / 4.0).sin().powi(2);
+        let (wall, ..) = across(&v, 3, 0, false, [0, 2, 0]);
+        assert!((wall - 3.0 * f).abs() < 1e-14, "{wall}");
+        // At z-centre k = 2 (e = 2.5, 2.5 from the far end too: factor 1).
+        let (wall, ..) = across(&v, 3, 0, false, [0, 2, 2]);
+        assert!((wall - 3.0).abs() < 1e-14, "{wall}");
+        assert_eq!(across(&w, 3, 0, false, [0, 2, 2]).0, 0.0);
+    }
+
+    #[test]
+    fn symmetry_and_free_slip_reflect_tangential_components_evenly_on_every_side() {
+        for b in [Boundary::Symmetry, Boundary::FreeSlip] {
+            let (g, _, c) = filled3(std::array::from_fn(|_| b.clone()), WallTime::At(0.0));
+            let n = g.n().map(|n| n as isize);
+            for a in 0..3 {
+                for comp in (0..3).filter(|&x| x != a) {
+                    for hi in [false, true] {
+                        let t = [1, 1, 1];
+                        let at = |f: isize| {
+                            let mut i = t;
+                            i[a] = f;
+                            i
+                        };
+                        let (first, ghost) = if hi { (n[a] - 1, n[a]) } else { (0, -1) };
+                        assert_eq!(c[comp][at(ghost)], c[comp][at(first)], "{b:?}");
+                    }
+                }
+                let mut i = [1, 1, 1];
+                i[a] = n[a];
+                assert_eq!(c[a][i], 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn periodic_z_wraps_every_component_and_the_scalars() {
+        let mut sides = [const { Boundary::NoSlip }; 6];
+        sides[4] = Boundary::Periodic;
+        sides[5] = Boundary::Periodic;
+        let (g, bs, [u, v, w]) = filled3(sides, WallTime::At(0.0));
+        let nz = g.nz as isize;
+        assert_eq!(w[[1, 1, nz]], w[[1, 1, 0]]);
+        assert_eq!(w[[1, 1, -1]], w[[1, 1, nz - 1]]);
+        assert_eq!(w[[1, 1, nz + 2]], w[[1, 1, 2]]);
+        assert_eq!(u[[1, 2, -2]], u[[1, 2, nz - 2]]);
+        assert_eq!(v[[2, 1, nz]], v[[2, 1, 0]]);
+        assert_eq!(v[[2, 1, nz + 1]], v[[2, 1, 1]]);
+        assert!(bs.periodic(2) && !bs.periodic(0));
+        assert_eq!(bs.normal_faces(2, g.nz), FaceRange { lo: 0, hi: 5 });
+        assert_eq!(bs.normal_faces(0, g.nx), FaceRange { lo: 1, hi: 3 });
+        let mut p = distinct(&g, 0.0);
+        bs.fill_scalar(&g, &mut p, true);
+        assert_eq!(p[[1, 1, -1]], p[[1, 1, nz - 1]]);
+        assert_eq!(p[[1, 1, nz + 1]], p[[1, 1, 1]]);
+        assert_eq!(p[[-1, 1, 1]], p[[0, 1, 1]], "even at a wall");
+    }
+
+    #[test]
+    fn outflow_on_z_max_extends_velocity_and_zeroes_the_pressure_there() {
+        let mut sides = [const { Boundary::NoSlip }; 6];
+        sides[5] = Boundary::Outflow;
+        let (g, bs, [u, _, w]) = filled3(sides, WallTime::At(0.0));
+        let nz = g.nz as isize;
+        let before = distinct(&g, 0.75)[[1, 1, nz]];
+        assert_eq!(w[[1, 1, nz]], before, "the outflow face is the solvers'");
+        assert_eq!(w[[1, 1, nz + 1]], w[[1, 1, nz]]);
+        assert_eq!(w[[1, 1, nz + 2]], w[[1, 1, nz]]);
+        assert_eq!(u[[1, 1, nz]], u[[1, 1, nz - 1]]);
+        assert_eq!(bs.normal_faces(2, g.nz), FaceRange { lo: 1, hi: 6 });
+        assert!(bs.has_pressure_reference());
+        let mut p = distinct(&g, 0.0);
+        bs.fill_scalar(&g, &mut p, true);
+        assert_eq!(p[[1, 2, nz]], -p[[1, 2, nz - 1]]);
+        assert_eq!(p[[1, 2, -1]], p[[1, 2, 0]]);
+        let mut rho = distinct(&g, 0.0);
+        bs.fill_scalar(&g, &mut rho, false);
+        assert_eq!(rho[[1, 2, nz]], rho[[1, 2, nz - 1]]);
+        assert_eq!(rho[[1, 2, nz + 1]], rho[[1, 2, nz - 2]]);
+    }
+
+    #[test]
+    fn edge_ghosts_take_the_later_axis_rule() {
+        // An x–z edge ghost of v: filled along x first (odd), then along z from the x-ghost
+        // column (odd again).
+        let (g, _, [_, v, _]) = filled3([const { Boundary::NoSlip }; 6], WallTime::At(0.0));
+        let nz = g.nz as isize;
+        assert_eq!(v[[-1, 1, nz]], -v[[-1, 1, nz - 1]]);
+        assert_eq!(v[[-1, 1, nz - 1]], -v[[0, 1, nz - 1]]);
+    }
+
+    #[test]
+    #[should_panic(expected = "w is filled exactly on a three-dimensional grid")]
+    fn a_three_dimensional_grid_needs_w() {
+        let g = grid3();
+        let bs = BoundarySet::new(&set3([const { Boundary::NoSlip }; 6]), &g);
+        let (mut u, mut v) = (Field::zeros(&g), Field::zeros(&g));
+        bs.fill_velocity(&g, &mut u, &mut v, 0.0, false);
     }
 }

@@ -25,6 +25,17 @@ pub const FIELD_ALIASES: efsi_ron_edit::Aliases = &[
     ("z_max", "y_max"),
 ];
 
+/// The aliases of a scene of `geometry`: [`FIELD_ALIASES`] in two dimensions, none in
+/// `Cartesian3D`, where `z`, `nz`, `z_min` and `z_max` name the third axis (and the `r`
+/// spellings are refused, [`crate::scene`]'s "Three dimensions").
+pub fn field_aliases(geometry: crate::grid::Geometry) -> efsi_ron_edit::Aliases {
+    if geometry == crate::grid::Geometry::Cartesian3D {
+        &[]
+    } else {
+        FIELD_ALIASES
+    }
+}
+
 /// A validation error of the scene read from `path`, attributed to the last of the scene's
 /// `overrides` whose path it names (or that lies inside the field it names): an
 /// [`SceneError::Override`] naming it, else [`SceneError::Invalid`].

@@ -7,7 +7,9 @@
 use crate::bc::BoundarySet;
 use crate::error::EfsiError;
 use crate::field::Field;
-use crate::grid::Grid;
+use crate::field::Stagger;
+use crate::grid::{Geometry, Grid};
+use crate::loops::Region;
 use crate::scene::{InitialVelocity, Options, Scene, Side};
 use crate::schedule::{Pipeline, StagePlugin, StepContext};
 use crate::state::State;
@@ -49,7 +51,9 @@ pub struct Simulation {
     /// stages were built.
     options: Options,
     pipeline: Pipeline,
-    previous: Option<(Field, Field)>,
+    /// The velocity components `u`, `v`, `w` (`None` in two dimensions) before the step, when
+    /// the scene stops at steady state.
+    previous: Option<[Option<Field>; 3]>,
     last_change: f64,
     velocity_scale: f64,
     /// The step checks, in the order added.
@@ -92,13 +96,7 @@ impl Simulation {
             field: field.into(),
             message,
         };
-        let grid = Grid::new(
-            scene.geometry,
-            scene.grid.nx,
-            scene.grid.ny,
-            scene.domain.x,
-            scene.domain.y,
-        );
+        let grid = scene.build_grid();
         let bc = BoundarySet::new(&scene.boundaries, &grid);
         let pipeline = Pipeline::build(&scene, &options, &grid, &bc, plugins)?;
         let mut state = State::new(
@@ -111,7 +109,14 @@ impl Simulation {
         set_initial_velocity(&scene.initial_velocity, &grid, &mut state);
         // A solid's initial velocity is blended in by the stage that owns the solid fraction
         // (the VOF stage's initialize).
-        bc.fill_velocity(&grid, &mut state.u, &mut state.v, 0.0, false);
+        bc.fill_velocity3(
+            &grid,
+            &mut state.u,
+            &mut state.v,
+            state.w.as_mut(),
+            0.0,
+            false,
+        );
         bc.fill_scalar(&grid, &mut state.rho, false);
         bc.fill_scalar(&grid, &mut state.mu, false);
         let mut pipeline = pipeline;
@@ -123,9 +128,17 @@ impl Simulation {
         let mut scale = Self::wall_speed(&bc);
         let lx = grid.x1() - grid.x0;
         let ly = grid.y1() - grid.y0;
-        scale = scale.max((scene.gravity.0.hypot(scene.gravity.1) * lx.max(ly)).sqrt());
+        let lz = if grid.is_3d() {
+            grid.nz as f64 * grid.dz
+        } else {
+            0.0
+        };
+        scale = scale.max((scene.gravity.norm() * lx.max(ly).max(lz)).sqrt());
         scale = scale.max(state.u.max_abs(crate::Stagger::XFace, grid.nx, grid.ny));
         scale = scale.max(state.v.max_abs(crate::Stagger::YFace, grid.nx, grid.ny));
+        if let Some(w) = &state.w {
+            scale = scale.max(w.max_abs(crate::Stagger::ZFace, grid.nx, grid.ny));
+        }
         if scene.time.fixed_dt.is_none()
             && scene.time.dt_max.is_none()
             && (!scene.physics.advection || scale == 0.0)
@@ -141,10 +154,13 @@ impl Simulation {
                 },
             ));
         }
-        let previous = scene
-            .time
-            .steady
-            .map(|_| (state.u.clone(), state.v.clone()));
+        let previous = scene.time.steady.map(|_| {
+            [
+                Some(state.u.clone()),
+                Some(state.v.clone()),
+                state.w.clone(),
+            ]
+        });
         Ok(Simulation {
             scene,
             scene_path: scene_path.to_path_buf(),
@@ -176,7 +192,7 @@ impl Simulation {
 
     /// The largest moving-wall speed of `bc`.
     fn wall_speed(bc: &BoundarySet) -> f64 {
-        Side::ALL
+        bc.sides()
             .iter()
             .filter_map(|&s| bc.moving_wall_speed(s))
             .fold(0.0, |m: f64, v| m.max(v.abs()))
@@ -218,7 +234,10 @@ impl Simulation {
     pub fn step_limit(&self, until: f64) -> (f64, String) {
         let t = &self.scene.time;
         let remaining = until - self.state.t;
-        let h = self.grid.dx.min(self.grid.dy);
+        let mut h = self.grid.dx.min(self.grid.dy);
+        if self.grid.is_3d() {
+            h = h.min(self.grid.dz);
+        }
         if let Some(fixed) = t.fixed_dt {
             (fixed, "time.fixed_dt".to_string())
         } else {
@@ -297,9 +316,12 @@ impl Simulation {
 
     /// Advance by one step of size `dt`.
     pub fn step(&mut self, dt: f64) -> Result<(), EfsiError> {
-        if let Some((pu, pv)) = &mut self.previous {
-            pu.copy_from(&self.state.u);
-            pv.copy_from(&self.state.v);
+        if let Some(before) = &mut self.previous {
+            for (b, now) in before.iter_mut().zip(velocity(&self.state)) {
+                if let (Some(b), Some(now)) = (b, now) {
+                    b.copy_from(now);
+                }
+            }
         }
         let ctx = StepContext {
             grid: &self.grid,
@@ -318,20 +340,24 @@ impl Simulation {
         for c in &mut self.checks {
             c.after(&self.scene, &ctx, &self.state)?;
         }
-        if let Some((pu, pv)) = &self.previous {
-            let (nx, ny) = (self.grid.nx as isize, self.grid.ny as isize);
-            let ux = self.bc.normal_faces(0, self.grid.nx);
-            let vy = self.bc.normal_faces(1, self.grid.ny);
+        if let Some(before) = &self.previous {
+            // The largest change over the unknown faces of each component (max is exact, so
+            // the order of the visit does not matter).
             let mut m = 0.0f64;
-            for j in 0..ny {
-                for i in ux.lo..ux.hi {
-                    m = m.max((self.state.u[(i, j)] - pu[(i, j)]).abs());
-                }
-            }
-            for j in vy.lo..vy.hi {
-                for i in 0..nx {
-                    m = m.max((self.state.v[(i, j)] - pv[(i, j)]).abs());
-                }
+            let n = self.grid.n();
+            for (a, (b, now)) in before.iter().zip(velocity(&self.state)).enumerate() {
+                let (Some(b), Some(now)) = (b, now) else {
+                    continue;
+                };
+                let faces = self.bc.normal_faces(a, n[a]);
+                let at = [Stagger::XFace, Stagger::YFace, Stagger::ZFace][a];
+                let region = Region::of(&self.grid, at).range(a, faces.lo, faces.hi);
+                m = m.max(region.max(0.0, |line| {
+                    let (x, y) = (now.at(&line, [0; 3]), b.at(&line, [0; 3]));
+                    x.iter()
+                        .zip(y)
+                        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+                }));
             }
             self.last_change = m / dt;
         }
@@ -388,6 +414,30 @@ impl Simulation {
     }
 }
 
+/// The velocity components of `state`: `u`, `v` and `w` (`None` in two dimensions).
+fn velocity(state: &State) -> [Option<&Field>; 3] {
+    [Some(&state.u), Some(&state.v), state.w.as_ref()]
+}
+
+impl Scene {
+    /// The grid of this scene: [`Grid::new`] in two dimensions, [`Grid::new_3d`] for a
+    /// Cartesian3D scene (whose validation guarantees `domain.z` and `grid.nz`).
+    pub fn build_grid(&self) -> Grid {
+        match (self.geometry, self.domain.z, self.grid.nz) {
+            (Geometry::Cartesian3D, Some(z), Some(nz)) => Grid::new_3d(
+                [self.grid.nx, self.grid.ny, nz],
+                self.domain.x,
+                self.domain.y,
+                z,
+            ),
+            (Geometry::Cartesian3D, ..) => {
+                panic!("a Cartesian3D scene without domain.z or grid.nz (validate it first)")
+            }
+            (g, ..) => Grid::new(g, self.grid.nx, self.grid.ny, self.domain.x, self.domain.y),
+        }
+    }
+}
+
 /// Set the fluid's initial velocity of the scene (`initial_velocity`) on every face, ghosts
 /// included: a uniform one, or the velocity of the stream function
 /// `ψ = A sin(k_x x) sin(k_y y)` (`SinSinStream`, planar only: [`Scene::validate`] refuses it in
@@ -399,6 +449,7 @@ fn set_initial_velocity(initial: &InitialVelocity, grid: &Grid, state: &mut Stat
         InitialVelocity::Uniform((a, b)) => {
             state.u.fill(*a);
             state.v.fill(*b);
+            // In three dimensions the uniform velocity is in the x–y plane (w = 0).
         }
         InitialVelocity::SinSinStream {
             amplitude,

@@ -23,6 +23,16 @@ pub const MAX_NAME_BYTES: usize = 200;
 /// does not vary along it).
 pub const MIN_CELLS_ACROSS: usize = 2;
 
+/// The most cells a grid may have (1e8), in two dimensions as in three: beyond it the fields
+/// alone outgrow this machine's memory. (The run crate's memory estimate refuses, before
+/// allocation, a smaller scene whose stages need more than the machine has.)
+pub const MAX_CELLS: usize = 100_000_000;
+
+/// The last segment of a setting's path.
+fn leaf(path: &str) -> &str {
+    path.rsplit('.').next().unwrap_or(path)
+}
+
 /// The smallest cell size (1e-150): its square and the inverse square the viscous and
 /// pressure systems hold stay finite and normal.
 pub const MIN_CELL_SIZE: f64 = 1e-150;
@@ -117,15 +127,120 @@ impl Scene {
         Ok(())
     }
 
-    /// The domain and the grid.
-    fn validate_domain_and_grid(&self) -> Checked {
-        if self.geometry == Geometry::Cartesian3D {
+    /// The keys that tell two dimensions from three: a two-dimensional scene has no third
+    /// axis, a Cartesian3D one has all of it and none of the axisymmetric spellings (see
+    /// [`crate::scene`]'s "Three dimensions").
+    fn validate_dimensions(&self) -> Checked {
+        let g = self.geometry;
+        let d = &self.domain;
+        let n = &self.grid;
+        let b = &self.boundaries;
+        if g != Geometry::Cartesian3D {
+            let third = [
+                ("domain.z", d.z.is_some(), "domain.y"),
+                ("grid.nz", n.nz.is_some(), "grid.ny"),
+                ("boundaries.z_min", b.z_min.is_some(), "boundaries.y_min"),
+                ("boundaries.z_max", b.z_max.is_some(), "boundaries.y_max"),
+            ];
+            for (f, given, y) in third {
+                if given {
+                    return err(
+                        f,
+                        format!(
+                            "a {g:?} scene has two axes: `{}` beside `{}` would be a third \
+                             (`{}` is `{}`'s axisymmetric spelling only where `{}` is not \
+                             written); a three-dimensional scene is `geometry: Cartesian3D`",
+                            leaf(f),
+                            leaf(y),
+                            leaf(f),
+                            leaf(y),
+                            leaf(y)
+                        ),
+                    );
+                }
+            }
+            if self.gravity.2.is_some() {
+                return err(
+                    "gravity",
+                    format!(
+                        "a {g:?} scene has two axes: gravity is (gx, gy), got three components"
+                    ),
+                );
+            }
+            return Ok(());
+        }
+        for (section, aliases) in [
+            ("domain", &d.aliases),
+            ("grid", &n.aliases),
+            ("boundaries", &b.aliases),
+        ] {
+            if let Some(a) = aliases.first() {
+                let meaning = match *a {
+                    "r" => "x",
+                    "nr" => "nx",
+                    "r_min" => "x_min",
+                    "r_max" => "x_max",
+                    "z" => "y",
+                    "nz" => "ny",
+                    "z_min" => "y_min",
+                    _ => "y_max",
+                };
+                return err(
+                    &format!("{section}.{meaning}"),
+                    format!(
+                        "missing: `{a}` is {meaning}'s axisymmetric spelling, which a \
+                         Cartesian3D scene does not use (there x, y, z are the axes{})",
+                        if a.starts_with('z') || *a == "nz" {
+                            format!(" and `{a}` belongs to the third)")
+                        } else {
+                            ")".into()
+                        }
+                    ),
+                );
+            }
+        }
+        let missing = [
+            ("domain.z", d.z.is_none(), "(min, max) along the third axis"),
+            (
+                "grid.nz",
+                n.nz.is_none(),
+                "the cell count along the third axis",
+            ),
+            (
+                "boundaries.z_min",
+                b.z_min.is_none(),
+                "the condition on z = z_min",
+            ),
+            (
+                "boundaries.z_max",
+                b.z_max.is_none(),
+                "the condition on z = z_max",
+            ),
+        ];
+        for (f, absent, what) in missing {
+            if absent {
+                return err(f, format!("missing: a Cartesian3D scene needs {what}"));
+            }
+        }
+        if self.gravity.2.is_none() && self.gravity != (0.0, 0.0) {
             return err(
-                "geometry",
-                "Cartesian3D: three-dimensional scenes are not supported by this build (planar and axisymmetric are)".to_string(),
+                "gravity",
+                "a Cartesian3D scene's gravity has three components (gx, gy, gz), got two: \
+                 which axis is vertical is the scene's to say",
             );
         }
-        for (f, (a, b)) in [("domain.x", self.domain.x), ("domain.y", self.domain.y)] {
+        Ok(())
+    }
+
+    /// The domain and the grid.
+    fn validate_domain_and_grid(&self) -> Checked {
+        self.validate_dimensions()?;
+        let three = self.geometry == Geometry::Cartesian3D;
+        let mut axes = vec![("domain.x", self.domain.x), ("domain.y", self.domain.y)];
+        if let Some(z) = self.domain.z {
+            axes.push(("domain.z", z));
+        }
+        for (f, (a, b)) in axes {
             if !(a.is_finite() && b.is_finite() && b > a) {
                 return err(
                     f,
@@ -157,29 +272,41 @@ impl Scene {
                 ),
             );
         }
-        if self.grid.nx.saturating_mul(self.grid.ny) > 100_000_000 {
+        let [nx, ny, nz] = self.grid.n();
+        let cells = nx.saturating_mul(ny).saturating_mul(nz);
+        if cells > MAX_CELLS {
             return err(
                 "grid",
-                "more than 1e8 cells is beyond a 2-D run on this machine",
+                if three {
+                    format!(
+                        "more than 1e8 cells ({nx} × {ny} × {nz}) is beyond a 3-D run on this machine"
+                    )
+                } else {
+                    "more than 1e8 cells is beyond a 2-D run on this machine".into()
+                },
             );
         }
         let b = &self.boundaries;
-        for (f, n, periodic, (lo, hi), d) in [
+        let mut axes = vec![
             (
                 "grid.nx",
-                self.grid.nx,
+                nx,
                 b.x_min == Boundary::Periodic,
                 self.domain.x,
                 "domain.x",
             ),
             (
                 "grid.ny",
-                self.grid.ny,
+                ny,
                 b.y_min == Boundary::Periodic,
                 self.domain.y,
                 "domain.y",
             ),
-        ] {
+        ];
+        if let (Some(z), Some(zb)) = (self.domain.z, &b.z_min) {
+            axes.push(("grid.nz", nz, *zb == Boundary::Periodic, z, "domain.z"));
+        }
+        for (f, n, periodic, (lo, hi), d) in axes {
             if n == 0 {
                 return err(f, "must be at least 1 cell, got 0");
             }
@@ -293,7 +420,10 @@ impl Scene {
             );
         }
         self.check_diffusion("fluid.viscosity", self.fluid.viscosity, self.fluid.density)?;
-        finite("gravity", self.gravity)?;
+        finite("gravity", self.gravity.planar())?;
+        if self.gravity.2.is_some_and(|z| !z.is_finite()) {
+            return err("gravity", "must be finite");
+        }
         if self.geometry == Geometry::Axisymmetric && self.gravity.0 != 0.0 {
             return err(
                 "gravity",
@@ -304,11 +434,14 @@ impl Scene {
             finite("initial_velocity", v)?;
         }
         if let InitialVelocity::SinSinStream { .. } = self.initial_velocity
-            && self.geometry == Geometry::Axisymmetric
+            && self.geometry != Geometry::Planar
         {
             return err(
                 "initial_velocity",
-                "SinSinStream is a planar stream function; not available in axisymmetric geometry",
+                format!(
+                    "SinSinStream is a planar stream function; not available in {:?} geometry",
+                    self.geometry
+                ),
             );
         }
         Ok(())
@@ -319,8 +452,11 @@ impl Scene {
     /// [`MAX_DIFFUSION_NUMBER`] their products overflow, and the solver starts from a NaN
     /// residual. (Also the check of the stages' `solid.viscosity`.)
     pub fn check_diffusion(&self, field: &str, mu: f64, rho: f64) -> Checked {
-        let h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
+        let mut h = ((self.domain.x.1 - self.domain.x.0) / self.grid.nx as f64)
             .min((self.domain.y.1 - self.domain.y.0) / self.grid.ny as f64);
+        if let (Some(z), Some(nz)) = (self.domain.z, self.grid.nz) {
+            h = h.min((z.1 - z.0) / nz as f64);
+        }
         let d = mu * self.time.end / (rho * h * h);
         if d.is_finite() && d > MAX_DIFFUSION_NUMBER {
             return err(
@@ -349,7 +485,12 @@ impl Scene {
     /// The boundary conditions.
     fn validate_boundaries(&self) -> Checked {
         // Boundaries.
-        for side in Side::ALL {
+        let dims = if self.geometry == Geometry::Cartesian3D {
+            3
+        } else {
+            2
+        };
+        for &side in Side::of(dims) {
             let b = self.boundaries.get(side);
             let f = format!("boundaries.{}", side.field_name());
             let partner = self.boundaries.get(side.opposite());

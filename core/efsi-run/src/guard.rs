@@ -23,9 +23,9 @@
 //! resumed run is judged against the same start as the run it continues. An empty record (a
 //! snapshot taken before the first step) starts it afresh at the next step.
 
+use crate::probes::{kinetic_energy, potential_energy_of};
 use efsi_core::error::EfsiError;
 use efsi_core::grid::Grid;
-use efsi_core::ops::{kinetic_energy, potential_energy};
 use efsi_core::scene::{Boundary, Scene, Side};
 use efsi_core::{State, StepCheck, StepContext};
 
@@ -70,29 +70,36 @@ impl Baseline {
         // Fluid leaving or entering through an outflow, or gravity along a periodic direction
         // (a flow driven round and round), changes the energy without a potential for it.
         let b = &scene.boundaries;
-        let open = Side::ALL
+        let sides = Side::of(grid.dims());
+        let open = sides
             .iter()
             .any(|&side| matches!(b.get(side), Boundary::Outflow));
         let periodic = |side: Side| matches!(b.get(side), Boundary::Periodic);
-        let driven = (periodic(Side::XMin) && scene.gravity.0 != 0.0)
-            || (periodic(Side::YMin) && scene.gravity.1 != 0.0);
+        let g = scene.gravity.xyz();
+        let driven = (0..grid.dims()).any(|a| periodic(Side::normal_to(a, false)) && g[a] != 0.0);
         if open || driven {
             return None;
         }
-        let ke = kinetic_energy(grid, &state.u, &state.v, &state.rho);
-        let pe = potential_energy(grid, &state.rho, scene.gravity);
+        let ke = kinetic_energy(grid, state);
+        let pe = potential_energy_of(grid, &state.rho, scene.gravity);
         let ee = state
             .resources
             .iter()
             .fold(0.0, |e, r| e + r.stored_energy().max(0.0));
         let mut mass = 0.0;
-        for j in 0..grid.ny as isize {
-            for i in 0..grid.nx as isize {
-                mass += state.rho[(i, j)] * grid.cell_volume(i);
+        for k in 0..if grid.is_3d() { grid.nz as isize } else { 1 } {
+            for j in 0..grid.ny as isize {
+                for i in 0..grid.nx as isize {
+                    mass += state.rho[[i, j, k]] * grid.cell_volume(i) * grid.dz;
+                }
             }
         }
-        let reach =
-            scene.gravity.0.hypot(scene.gravity.1) * (grid.x1() - grid.x0).max(grid.y1() - grid.y0);
+        let lz = if grid.is_3d() {
+            grid.nz as f64 * grid.dz
+        } else {
+            0.0
+        };
+        let reach = scene.gravity.norm() * (grid.x1() - grid.x0).max(grid.y1() - grid.y0).max(lz);
         let floor = (1e-9 * (ke + ee + mass * reach)).max(1e-300);
         [ke, pe, ee]
             .iter()
@@ -114,7 +121,9 @@ impl StepCheck for EnergyGuard {
 
     fn before(&mut self, scene: &Scene, ctx: &StepContext, state: &State) {
         // A moving wall or an accelerating frame does work the guard does not account for.
-        let wall = Side::ALL
+        let wall = ctx
+            .bc
+            .sides()
             .iter()
             .any(|&s| ctx.bc.moving_wall_speed(s).is_some_and(|w| w != 0.0));
         if wall || state.frame_acceleration != (0.0, 0.0) {
@@ -129,8 +138,8 @@ impl StepCheck for EnergyGuard {
         let Some(Some(g)) = &mut self.baseline else {
             return Ok(());
         };
-        let ke = kinetic_energy(ctx.grid, &state.u, &state.v, &state.rho);
-        let pe = potential_energy(ctx.grid, &state.rho, scene.gravity);
+        let ke = kinetic_energy(ctx.grid, state);
+        let pe = potential_energy_of(ctx.grid, &state.rho, scene.gravity);
         g.release = g.release.max(g.pe0 - pe);
         let supplied = g.supply0 + g.release;
         let gain = ke + pe - g.mech0;

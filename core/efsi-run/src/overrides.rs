@@ -23,7 +23,7 @@
 //! (`output.probes[2].at`, `solid.shape.center[1]`, `gravity.1`), map entries by key
 //! (`solid.law.parameters.G`). An `Option` that holds a value (`Some(…)`) and a variant that
 //! wraps one value (`Union([…])`) are looked through. The scene's aliases (`nr`, `nz`, `r`,
-//! `z`, `r_min`, …; [`FIELD_ALIASES`]) name the same fields as their canonical names.
+//! `z`, `r_min`, …; [`efsi_core::overrides::FIELD_ALIASES`]) name the same fields as their canonical names.
 //!
 //! A setting absent from the file, whose default applies, is inserted (with the containers it
 //! needs: `numerics.projection.solver` in a scene without `numerics` inserts
@@ -72,7 +72,7 @@
 //! refuses a file changed since).
 
 use efsi_core::StagePlugin;
-use efsi_core::overrides::{FIELD_ALIASES, Override, OverrideValue, attribute};
+use efsi_core::overrides::{Override, OverrideValue, attribute, field_aliases};
 use efsi_core::scene::options::check_sections;
 use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{Scene, SceneError};
@@ -139,13 +139,15 @@ impl SceneOverrides for Scene {
             },
             other => other.map_err(|e| e.to_string()),
         };
-        let mut scene = apply_sets(text, parsed, overrides, FIELD_ALIASES, hints, read).map_err(
-            |(o, message)| SceneError::Override {
-                path: path.to_path_buf(),
-                setting: o.brief(),
-                message,
-            },
-        )?;
+        let aliases = field_aliases(parsed.geometry);
+        let mut scene =
+            apply_sets(text, parsed, overrides, aliases, hints, read).map_err(|(o, message)| {
+                SceneError::Override {
+                    path: path.to_path_buf(),
+                    setting: o.brief(),
+                    message,
+                }
+            })?;
         for o in overrides {
             if let Override::Refine(f) = o {
                 refine_grid(&mut scene, *f).map_err(|message| SceneError::Override {
@@ -197,8 +199,9 @@ impl SceneOverrides for Scene {
             setting: format!("get {path}"),
             message,
         };
-        let setting = SettingPath::parse(path, FIELD_ALIASES).map_err(fail)?;
-        let doc = Document::parse(with_defaults(self), FIELD_ALIASES)
+        let aliases = field_aliases(self.geometry);
+        let setting = SettingPath::parse(path, aliases).map_err(fail)?;
+        let doc = Document::parse(with_defaults(self), aliases)
             .map_err(|(_, m)| fail(format!("cannot read the scene: {m}")))?;
         doc.get(&setting)
             .map_err(fail)?
@@ -298,6 +301,7 @@ fn refine_grid(scene: &mut Scene, f: f64) -> Result<(), String> {
     let scale = |n: usize| ((n as f64) * f).round().clamp(1.0, 1e15) as usize;
     scene.grid.nx = scale(scene.grid.nx);
     scene.grid.ny = scale(scene.grid.ny);
+    scene.grid.nz = scene.grid.nz.map(scale);
     Ok(())
 }
 
@@ -581,7 +585,7 @@ Scene(
 
     #[test]
     fn every_alias_names_its_field() {
-        for (alias, field) in FIELD_ALIASES {
+        for (alias, field) in efsi_core::overrides::FIELD_ALIASES {
             let scene = if ["r", "z"].contains(alias) {
                 format!("domain.{alias}")
             } else if alias.starts_with('n') {

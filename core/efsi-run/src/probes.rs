@@ -4,9 +4,9 @@ use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::Grid;
 use efsi_core::ops::{self, potential_energy};
-use efsi_core::scene::Side;
+use efsi_core::scene::{Side, Vector};
 use efsi_core::state::State;
-use efsi_core::{OutputDecl, OutputKind};
+use efsi_core::{OutputDecl, OutputKind, Region, Stagger, unit};
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).
@@ -20,6 +20,140 @@ pub fn interpolate(grid: &Grid, f: &Field, (ox, oy): (f64, f64), (x, y): (f64, f
     let wy = (fj - j0 as f64).clamp(0.0, 1.0);
     (1.0 - wy) * ((1.0 - wx) * f[(i0, j0)] + wx * f[(i0 + 1, j0)])
         + wy * ((1.0 - wx) * f[(i0, j0 + 1)] + wx * f[(i0 + 1, j0 + 1)])
+}
+
+/// Trilinear interpolation of a staggered field of a three-dimensional grid at `at`; `o` is the
+/// position of index `[0, 0, 0]` in cell units (`[0.5; 3]` for cell centres, `[0, 0.5, 0.5]`
+/// for x-faces, …). Ghost values are used near the boundary, as by [`interpolate`].
+pub fn interpolate3(grid: &Grid, f: &Field, o: [f64; 3], at: [f64; 3]) -> f64 {
+    let (lo, h, n) = ([grid.x0, grid.y0, grid.z0], grid.h(), grid.n());
+    let mut i0 = [0isize; 3];
+    let mut w = [0.0; 3];
+    for a in 0..3 {
+        let fi = (at[a] - lo[a]) / h[a] - o[a];
+        i0[a] = (fi.floor() as isize).clamp(-1, n[a] as isize);
+        w[a] = (fi - i0[a] as f64).clamp(0.0, 1.0);
+    }
+    let mut v = 0.0;
+    for c in 0..8usize {
+        let mut weight = 1.0;
+        let mut at = i0;
+        for a in 0..3 {
+            let up = (c >> a) & 1 == 1;
+            weight *= if up { w[a] } else { 1.0 - w[a] };
+            at[a] += up as isize;
+        }
+        v += weight * f[at];
+    }
+    v
+}
+
+/// A named field sampled at a point of a three-dimensional grid ([`interpolate3`]; names from
+/// [`crate::output::spec::FIELD_NAMES`], `w` among them); NaN for an unknown name.
+pub fn sample3(grid: &Grid, state: &State, field: &str, at: [f64; 3]) -> f64 {
+    let u = || interpolate3(grid, &state.u, [0.0, 0.5, 0.5], at);
+    let v = || interpolate3(grid, &state.v, [0.5, 0.0, 0.5], at);
+    let w = || {
+        state
+            .w
+            .as_ref()
+            .map_or(f64::NAN, |w| interpolate3(grid, w, [0.5, 0.5, 0.0], at))
+    };
+    let cell = |f: &Field| interpolate3(grid, f, [0.5; 3], at);
+    match field {
+        "u" => u(),
+        "v" => v(),
+        "w" => w(),
+        "speed" => u().hypot(v()).hypot(w()),
+        "p" => cell(&state.p),
+        "density" => cell(&state.rho),
+        "viscosity" => cell(&state.mu),
+        "solid_fraction" => state.phi.as_ref().map_or(f64::NAN, cell),
+        _ => f64::NAN,
+    }
+}
+
+/// A named field at a point of the grid's dimension: [`sample_in`] at `(x, y)` in two
+/// dimensions, [`sample3`] (or a stage's field, [`interpolate3`]) at `(x, y, z)` in three.
+pub fn sample_at(
+    grid: &Grid,
+    state: &State,
+    outputs: &[OutputDecl],
+    field: &str,
+    at: Vector,
+) -> f64 {
+    if !grid.is_3d() {
+        return sample_in(grid, state, outputs, field, at.planar());
+    }
+    let stage = outputs.iter().find_map(|o| match o.kind {
+        OutputKind::Field(f) if o.name == field => Some(f),
+        _ => None,
+    });
+    match stage {
+        Some(f) => f(state).map_or(f64::NAN, |f| interpolate3(grid, f, [0.5; 3], at.xyz())),
+        None => sample3(grid, state, field, at.xyz()),
+    }
+}
+
+/// Kinetic energy `½∫ρ|u|² dV` of the state: [`ops::kinetic_energy`] in two dimensions; in
+/// three, the same face-centred quadrature with the z-faces' `w` (half of each of the cell's
+/// six faces belongs to it). Lines summed in order (the same bits on any number of threads).
+pub fn kinetic_energy(grid: &Grid, state: &State) -> f64 {
+    let Some(w) = &state.w else {
+        return ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
+    };
+    let vol = grid.dx * grid.dy * grid.dz;
+    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
+        let c = [&state.u, &state.v, w];
+        let rho = state.rho.at(&l, [0; 3]);
+        let mut e = 0.0;
+        for (a, f) in c.iter().enumerate() {
+            let (lo, hi) = (f.at(&l, [0; 3]), f.at(&l, unit(a)));
+            for n in 0..l.len {
+                e += rho[n] * 0.25 * (lo[n].powi(2) + hi[n].powi(2)) * vol;
+            }
+        }
+        [e]
+    });
+    e
+}
+
+/// Gravitational potential energy `−∫ρ g·x dV` of the state ([`ops::potential_energy`] in two
+/// dimensions).
+pub fn potential_energy_of(grid: &Grid, rho: &Field, gravity: Vector) -> f64 {
+    if !grid.is_3d() {
+        return potential_energy(grid, rho, gravity.planar());
+    }
+    let [gx, gy, gz] = gravity.xyz();
+    let vol = grid.dx * grid.dy * grid.dz;
+    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
+        let rho = rho.at(&l, [0; 3]);
+        let mut e = 0.0;
+        for (n, [i, j, k]) in l.indices().enumerate() {
+            e -= rho[n] * (gx * grid.xc(i) + gy * grid.yc(j) + gz * grid.zc(k)) * vol;
+        }
+        [e]
+    });
+    e
+}
+
+/// `max |∇·u|` over the cells ([`ops::max_abs_div`] in two dimensions).
+pub fn max_divergence(grid: &Grid, state: &State) -> f64 {
+    let Some(w) = &state.w else {
+        return ops::max_abs_div(grid, &state.u, &state.v);
+    };
+    let h = grid.h();
+    Region::of(grid, Stagger::Cell).max(0.0, |l| {
+        let c = [&state.u, &state.v, w];
+        let mut m = 0.0f64;
+        for n in 0..l.len {
+            let d: f64 = (0..3)
+                .map(|a| (c[a].at(&l, unit(a))[n] - c[a].at(&l, [0; 3])[n]) / h[a])
+                .sum();
+            m = m.max(d.abs());
+        }
+        m
+    })
 }
 
 /// A named field sampled at a point (names from [`crate::output::spec::FIELD_NAMES`]).
@@ -85,7 +219,7 @@ pub struct Probed<'a> {
     /// The state.
     pub state: &'a State,
     /// The scene's gravity.
-    pub gravity: (f64, f64),
+    pub gravity: Vector,
     /// The scheduled stages' outputs.
     pub outputs: &'a [OutputDecl],
 }
@@ -112,22 +246,19 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "kinetic_energy",
         columns: &["kinetic_energy"],
         needs_solid: false,
-        eval: |p, out| {
-            let s = p.state;
-            out.push(ops::kinetic_energy(p.grid, &s.u, &s.v, &s.rho))
-        },
+        eval: |p, out| out.push(kinetic_energy(p.grid, p.state)),
     },
     Quantity {
         name: "potential_energy",
         columns: &["potential_energy"],
         needs_solid: false,
-        eval: |p, out| out.push(potential_energy(p.grid, &p.state.rho, p.gravity)),
+        eval: |p, out| out.push(potential_energy_of(p.grid, &p.state.rho, p.gravity)),
     },
     Quantity {
         name: "max_divergence",
         columns: &["max_divergence"],
         needs_solid: false,
-        eval: |p, out| out.push(ops::max_abs_div(p.grid, &p.state.u, &p.state.v)),
+        eval: |p, out| out.push(max_divergence(p.grid, p.state)),
     },
     Quantity {
         name: "max_speed",
@@ -190,8 +321,21 @@ pub fn evaluate_quantity(name: &str, probed: &Probed, out: &mut Vec<f64>) {
     }
 }
 
-/// The largest speed at the cell centres.
+/// The largest speed at the cell centres (each component the mean of its two faces).
 fn max_speed(grid: &Grid, state: &State) -> f64 {
+    if let Some(w) = &state.w {
+        return Region::of(grid, Stagger::Cell).max(0.0, |l| {
+            let c = [&state.u, &state.v, w];
+            let mut m = 0.0f64;
+            for n in 0..l.len {
+                let s = (0..3)
+                    .map(|a| 0.5 * (c[a].at(&l, [0; 3])[n] + c[a].at(&l, unit(a))[n]))
+                    .fold(0.0f64, f64::hypot);
+                m = m.max(s);
+            }
+            m
+        });
+    }
     let mut m = 0.0f64;
     for j in 0..grid.ny as isize {
         for i in 0..grid.nx as isize {
@@ -217,7 +361,7 @@ pub fn evaluate(
     p: &ProbeSpec,
     grid: &Grid,
     state: &State,
-    gravity: (f64, f64),
+    gravity: Vector,
     outputs: &[OutputDecl],
     out: &mut Vec<f64>,
 ) {
@@ -228,7 +372,7 @@ pub fn evaluate(
         outputs,
     };
     match p {
-        ProbeSpec::Point { field, at, .. } => out.push(sample_in(grid, state, outputs, field, *at)),
+        ProbeSpec::Point { field, at, .. } => out.push(sample_at(grid, state, outputs, field, *at)),
         ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, outputs, *wall)),
         ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, outputs, *wall)),
         ProbeSpec::SolidExtent { at } => {
@@ -284,6 +428,7 @@ pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
 /// The cells of the first row along `wall`: for each, its index `(i, j)`, its wall-face area
 /// (per radian when axisymmetric) and its distance along the wall from the wall's start.
 fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
+    let wall = planar_wall(wall);
     let m = &grid.metric;
     let (nx, ny) = (grid.nx as isize, grid.ny as isize);
     match wall {
@@ -293,7 +438,8 @@ fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
                 .map(|i| ((i, j), m.rc(i) * grid.dx, (i as f64 + 0.5) * grid.dx))
                 .collect()
         }
-        Side::XMin | Side::XMax => {
+        // The x sides (`planar_wall` left no z side).
+        _ => {
             let i = if wall == Side::XMin { 0 } else { nx - 1 };
             let r = if wall == Side::XMin {
                 m.rx(0)
@@ -304,6 +450,17 @@ fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
                 .map(|j| ((i, j), r * grid.dy, (j as f64 + 0.5) * grid.dy))
                 .collect()
         }
+    }
+}
+
+/// A wall of a two-dimensional scene: `ZMin` and `ZMax` are the axisymmetric spellings of
+/// `YMin` and `YMax` (the contact probes are two-dimensional: the output checks refuse them in
+/// a Cartesian3D scene).
+pub fn planar_wall(wall: Side) -> Side {
+    match wall {
+        Side::ZMin => Side::YMin,
+        Side::ZMax => Side::YMax,
+        w => w,
     }
 }
 
@@ -330,6 +487,7 @@ fn contact_cells(grid: &Grid, state: &State, tau: &[f64], wall: Side) -> Vec<(f6
     let Some(phi) = &state.phi else {
         return Vec::new();
     };
+    let wall = planar_wall(wall);
     let cells = wall_cells(grid, wall);
     // The normal component's place in the VTK tensor (XX, YY, ZZ, …; r–z in the X–Z plane).
     let normal = match wall {
@@ -373,7 +531,7 @@ pub fn contact_radius(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: 
     let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
         return f64::NAN;
     };
-    let h = if matches!(wall, Side::YMin | Side::YMax) {
+    let h = if matches!(planar_wall(wall), Side::YMin | Side::YMax) {
         grid.dx
     } else {
         grid.dy
@@ -512,7 +670,7 @@ mod tests {
         phi[(2, 1)] = 0.5;
         let values = |p: &ProbeSpec| {
             let mut out = Vec::new();
-            evaluate(p, &grid, &state, (0.0, -9.81), &[], &mut out);
+            evaluate(p, &grid, &state, (0.0, -9.81).into(), &[], &mut out);
             out
         };
         for (variant, name) in [

@@ -95,16 +95,32 @@ fn first_step(sim: &Simulation, path: &Path) -> Result<(), EfsiError> {
 /// (fluid only, and with an elastic solid).
 pub const BYTES_PER_CELL: (f64, f64) = (790.0, 2800.0);
 
+/// [`BYTES_PER_CELL`] of a three-dimensional grid: the two-dimensional figures × 3/2, as the
+/// arrays that grow with the dimension do — one velocity component and its stage work arrays
+/// more (3 against 2), six tensor components against four — while the cell scalars do not (so
+/// the bound is on the safe side).
+pub const BYTES_PER_CELL_3D: (f64, f64) = (1185.0, 4200.0);
+
 /// Refuse a scene whose estimated memory (cells with ghost layers × [`BYTES_PER_CELL`]) exceeds
 /// the memory the machine has available now (`MemAvailable` of `/proc/meminfo`; no check where
 /// that cannot be read), before anything is allocated.
 fn check_memory(scene: &Scene) -> Result<(), String> {
     let (nx, ny) = (scene.grid.nx, scene.grid.ny);
-    let padded = ((nx + 1 + 2 * GHOST) * (ny + 1 + 2 * GHOST)) as f64;
-    let per_cell = if scene.solid.is_some() {
-        BYTES_PER_CELL.1
+    let three = scene.geometry == efsi_core::Geometry::Cartesian3D;
+    let planes = match scene.grid.nz {
+        Some(nz) if three => (nz + 1 + 2 * GHOST) as f64,
+        _ => 1.0,
+    };
+    let padded = ((nx + 1 + 2 * GHOST) * (ny + 1 + 2 * GHOST)) as f64 * planes;
+    let bytes = if three {
+        BYTES_PER_CELL_3D
     } else {
-        BYTES_PER_CELL.0
+        BYTES_PER_CELL
+    };
+    let per_cell = if scene.solid.is_some() {
+        bytes.1
+    } else {
+        bytes.0
     };
     let need = padded * per_cell;
     let Some(available) = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
@@ -128,7 +144,11 @@ fn check_memory(scene: &Scene) -> Result<(), String> {
             ""
         },
         available / 1e9,
-        (available / need).sqrt() * 0.9
+        {
+            // The factor that brings the cell count under what is available.
+            let r = available / need;
+            if three { r.cbrt() } else { r.sqrt() }
+        } * 0.9
     ))
 }
 

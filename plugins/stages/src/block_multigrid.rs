@@ -306,12 +306,12 @@ mod tests {
     /// Blocks of a 40 × 30 planar box with walls, mass `mass` per face and viscosity 1.
     fn blocks(mass: f64) -> (ViscousBlocks, Coefficients, Vec<f64>) {
         let grid = Grid::new(Geometry::Planar, 40, 30, (0.0, 1.0), (0.0, 0.75));
-        let b = Boundaries {
-            x_min: Boundary::NoSlip,
-            x_max: Boundary::NoSlip,
-            y_min: Boundary::NoSlip,
-            y_max: Boundary::NoSlip,
-        };
+        let b = Boundaries::planar(
+            Boundary::NoSlip,
+            Boundary::NoSlip,
+            Boundary::NoSlip,
+            Boundary::NoSlip,
+        );
         let bc = BoundarySet::new(&b, &grid);
         let faces = UnknownFaces::new(&grid, &bc);
         let mut k = Coefficients::new(&grid, faces);

@@ -97,7 +97,9 @@ impl StagePlugin for BodyForce {
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        Ok(Box::new(BodyForceStage { g: scene.gravity }))
+        Ok(Box::new(BodyForceStage {
+            g: scene.gravity.planar(),
+        }))
     }
 }
 

@@ -539,12 +539,7 @@ mod tests {
     fn setup(geometry: Geometry, sides: [Boundary; 4]) -> (Grid, BoundarySet) {
         let grid = Grid::new(geometry, 7, 5, (0.0, 1.0), (0.0, 0.6));
         let [x_min, x_max, y_min, y_max] = sides;
-        let b = Boundaries {
-            x_min,
-            x_max,
-            y_min,
-            y_max,
-        };
+        let b = Boundaries::planar(x_min, x_max, y_min, y_max);
         let bc = BoundarySet::new(&b, &grid);
         (grid, bc)
     }

@@ -373,8 +373,8 @@ impl Case for Couette {
         scene.update_output(|o| {
             o.profiles = vec![ProfileSpec::Line {
                 name: "u".into(),
-                from: (x, 0.5 * h),
-                to: (x, 1.0 - 0.5 * h),
+                from: (x, 0.5 * h).into(),
+                to: (x, 1.0 - 0.5 * h).into(),
                 points: n,
                 fields: vec!["u".into()],
                 at: TIMES.to_vec(),

@@ -57,8 +57,8 @@ pub fn scene(
     scene.update_output(|o| {
         o.profiles = vec![ProfileSpec::Line {
             name: "u".into(),
-            from: (x, 0.5 * h),
-            to: (x, 0.4 - 0.5 * h),
+            from: (x, 0.5 * h).into(),
+            to: (x, 0.4 - 0.5 * h).into(),
             points: n,
             fields: vec!["u".into()],
             at: times.to_vec(),

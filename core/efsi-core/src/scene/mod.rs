@@ -17,7 +17,19 @@
 //! the field (values out of range) and says what was expected. Optional values may be written
 //! bare (`steady: 1e-8`) thanks to RON's `implicit_some` extension, which the loader enables.
 //! In axisymmetric geometry `x` is the radius r and `y` the axis z; the aliases `r`, `z`,
-//! `r_min`, `r_max`, `z_min`, `z_max` are accepted.
+//! `nr`, `nz`, `r_min`, `r_max`, `z_min`, `z_max` are accepted.
+//!
+//! # Three dimensions
+//!
+//! `geometry: Cartesian3D` is a box in x, y and z: `domain: (x: …, y: …, z: …)`,
+//! `grid: (nx: …, ny: …, nz: …)`, six `boundaries` (`x_min` … `z_max`) and `gravity: (gx, gy,
+//! gz)`. There `z`, `nz`, `z_min` and `z_max` name the third axis; in a two-dimensional scene
+//! they are the axisymmetric spellings of `y`, `ny`, `y_min` and `y_max`, allowed only where
+//! the `y` key itself is not written. A scene that mixes the two readings is refused, naming
+//! the key: a two-dimensional scene with a third axis (`z` beside `y`, `nz` beside `ny`,
+//! `z_min` beside `y_min`, a third gravity component), and a Cartesian3D scene without one
+//! (no `z`, `nz`, `z_min` or `z_max`, two gravity components) or with the axisymmetric
+//! spellings `r`, `nr`, `r_min`, `r_max` ([`Scene::validate`]).
 
 use crate::grid::Geometry;
 pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
@@ -102,9 +114,10 @@ pub struct Scene {
     pub time: TimeSpec,
     /// The fluid's material.
     pub fluid: Fluid,
-    /// Gravity (acceleration vector; default zero). In axisymmetric geometry it must be along z.
+    /// Gravity (acceleration vector; default zero): `(gx, gy)` in two dimensions, `(gx, gy,
+    /// gz)` in Cartesian3D. In axisymmetric geometry it must be along z.
     #[serde(default)]
-    pub gravity: (f64, f64),
+    pub gravity: Vector,
     /// Initial velocity of the fluid (default at rest).
     #[serde(default)]
     pub initial_velocity: InitialVelocity,
@@ -139,28 +152,143 @@ fn default_geometry() -> Geometry {
     Geometry::Planar
 }
 
-/// Extents of the box. `x` is r and `y` is z in axisymmetric geometry.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Extents of the box. `x` is r and `y` is z in axisymmetric geometry; `z` is the third axis
+/// of a Cartesian3D box (see the module's "Three dimensions").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "keys::Domain")]
 pub struct Domain {
     /// `(min, max)` along x (r).
-    #[serde(alias = "r")]
     pub x: (f64, f64),
-    /// `(min, max)` along y (z).
-    #[serde(alias = "z")]
+    /// `(min, max)` along y (z in axisymmetric geometry).
     pub y: (f64, f64),
+    /// `(min, max)` along the third axis z (Cartesian3D only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<(f64, f64)>,
+    /// The axisymmetric spellings the file used (`r`, `z` for y), which a Cartesian3D scene
+    /// refuses.
+    #[serde(skip)]
+    pub aliases: Vec<&'static str>,
+}
+
+impl Domain {
+    /// A two-dimensional box `x × y`.
+    pub fn planar(x: (f64, f64), y: (f64, f64)) -> Self {
+        Domain {
+            x,
+            y,
+            z: None,
+            aliases: Vec::new(),
+        }
+    }
 }
 
 /// Cell counts.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "keys::GridSpec")]
 pub struct GridSpec {
     /// Cells along x (r).
-    #[serde(alias = "nr")]
     pub nx: usize,
-    /// Cells along y (z).
-    #[serde(alias = "nz")]
+    /// Cells along y (z in axisymmetric geometry).
     pub ny: usize,
+    /// Cells along the third axis z (Cartesian3D only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nz: Option<usize>,
+    /// The axisymmetric spellings the file used (`nr`, `nz` for ny).
+    #[serde(skip)]
+    pub aliases: Vec<&'static str>,
+}
+
+impl GridSpec {
+    /// A two-dimensional grid of `nx × ny` cells.
+    pub fn planar(nx: usize, ny: usize) -> Self {
+        GridSpec {
+            nx,
+            ny,
+            nz: None,
+            aliases: Vec::new(),
+        }
+    }
+
+    /// Cells along each axis, `[nx, ny, nz]` (`nz` = 1 in two dimensions).
+    pub fn n(&self) -> [usize; 3] {
+        [self.nx, self.ny, self.nz.unwrap_or(1)]
+    }
+}
+
+/// A vector setting (gravity): two components `(x, y)` in a two-dimensional scene, three
+/// `(x, y, z)` in a Cartesian3D one; the third is `None` where the file wrote two.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vector(pub f64, pub f64, pub Option<f64>);
+
+impl Vector {
+    /// The in-plane components `(x, y)`.
+    pub fn planar(self) -> (f64, f64) {
+        (self.0, self.1)
+    }
+
+    /// All three components, z = 0 where none was written.
+    pub fn xyz(self) -> [f64; 3] {
+        [self.0, self.1, self.2.unwrap_or(0.0)]
+    }
+
+    /// The Euclidean length.
+    pub fn norm(self) -> f64 {
+        let [a, b, c] = self.xyz();
+        a.hypot(b).hypot(c)
+    }
+}
+
+impl From<(f64, f64)> for Vector {
+    fn from((x, y): (f64, f64)) -> Self {
+        Vector(x, y, None)
+    }
+}
+
+/// A two-component vector equals `(x, y)` when its third component is absent or zero.
+impl PartialEq<(f64, f64)> for Vector {
+    fn eq(&self, other: &(f64, f64)) -> bool {
+        self.2.unwrap_or(0.0) == 0.0 && (self.0, self.1) == *other
+    }
+}
+
+impl Serialize for Vector {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple;
+        let mut t = s.serialize_tuple(if self.2.is_some() { 3 } else { 2 })?;
+        t.serialize_element(&self.0)?;
+        t.serialize_element(&self.1)?;
+        if let Some(z) = self.2 {
+            t.serialize_element(&z)?;
+        }
+        t.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Vector {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Vector;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a vector of two (x, y) or three (x, y, z) numbers")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Vector, A::Error> {
+                use serde::de::Error;
+                let x = a
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(0, &self))?;
+                let y = a
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(1, &self))?;
+                let z = a.next_element()?;
+                if a.next_element::<f64>()?.is_some() {
+                    return Err(A::Error::invalid_length(4, &self));
+                }
+                Ok(Vector(x, y, z))
+            }
+        }
+        d.deserialize_tuple(3, V)
+    }
 }
 
 /// Time span and step control.
@@ -242,7 +370,7 @@ pub enum InitialVelocity {
     },
 }
 
-/// One of the four sides of the box.
+/// One of the sides of the box: four in two dimensions, six in three.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Side {
     /// x = x_min (r = r_min).
@@ -252,16 +380,48 @@ pub enum Side {
     #[serde(alias = "RMax")]
     XMax,
     /// y = y_min.
-    #[serde(alias = "ZMin")]
     YMin,
     /// y = y_max.
-    #[serde(alias = "ZMax")]
     YMax,
+    /// z = z_min (Cartesian3D).
+    ZMin,
+    /// z = z_max (Cartesian3D).
+    ZMax,
 }
 
 impl Side {
-    /// All sides, in the order x_min, x_max, y_min, y_max.
+    /// The four sides of a two-dimensional box, in the order x_min, x_max, y_min, y_max.
     pub const ALL: [Side; 4] = [Side::XMin, Side::XMax, Side::YMin, Side::YMax];
+
+    /// The six sides of a three-dimensional box: [`Side::ALL`], then z_min, z_max.
+    pub const ALL3: [Side; 6] = [
+        Side::XMin,
+        Side::XMax,
+        Side::YMin,
+        Side::YMax,
+        Side::ZMin,
+        Side::ZMax,
+    ];
+
+    /// The sides of a box with `dims` axes (2 or 3): [`Side::ALL`] or [`Side::ALL3`].
+    pub fn of(dims: usize) -> &'static [Side] {
+        if dims == 3 { &Side::ALL3 } else { &Side::ALL }
+    }
+
+    /// The side normal to `axis` (0, 1, 2) at its lower (`hi = false`) or upper end.
+    pub fn normal_to(axis: usize, hi: bool) -> Side {
+        Side::ALL3[2 * axis + hi as usize]
+    }
+
+    /// The axis this side is normal to (0 for x, 1 for y, 2 for z).
+    pub fn axis(self) -> usize {
+        self as usize / 2
+    }
+
+    /// Whether this is the upper side along its axis.
+    pub fn is_upper(self) -> bool {
+        self as usize % 2 == 1
+    }
 
     /// The scene field name of this side.
     pub fn field_name(self) -> &'static str {
@@ -270,17 +430,14 @@ impl Side {
             Side::XMax => "x_max",
             Side::YMin => "y_min",
             Side::YMax => "y_max",
+            Side::ZMin => "z_min",
+            Side::ZMax => "z_max",
         }
     }
 
     /// The opposite side (the partner of a periodic pair).
     pub fn opposite(self) -> Side {
-        match self {
-            Side::XMin => Side::XMax,
-            Side::XMax => Side::XMin,
-            Side::YMin => Side::YMax,
-            Side::YMax => Side::YMin,
-        }
+        Side::normal_to(self.axis(), !self.is_upper())
     }
 }
 
@@ -290,32 +447,188 @@ impl fmt::Display for Side {
     }
 }
 
-/// Boundary conditions on the four sides.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Boundary conditions on the four sides of a two-dimensional box or the six of a
+/// three-dimensional one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "keys::Boundaries")]
 pub struct Boundaries {
     /// Side x = x_min (r_min; the axis when r_min = 0).
-    #[serde(alias = "r_min")]
     pub x_min: Boundary,
     /// Side x = x_max.
-    #[serde(alias = "r_max")]
     pub x_max: Boundary,
-    /// Side y = y_min.
-    #[serde(alias = "z_min")]
+    /// Side y = y_min (z_min in axisymmetric geometry).
     pub y_min: Boundary,
     /// Side y = y_max.
-    #[serde(alias = "z_max")]
     pub y_max: Boundary,
+    /// Side z = z_min (Cartesian3D only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z_min: Option<Boundary>,
+    /// Side z = z_max (Cartesian3D only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z_max: Option<Boundary>,
+    /// The axisymmetric spellings the file used (`r_min`, `r_max`, and `z_min`/`z_max` for
+    /// y_min/y_max).
+    #[serde(skip)]
+    pub aliases: Vec<&'static str>,
 }
 
 impl Boundaries {
-    /// The condition on `side`.
-    pub fn get(&self, side: Side) -> &Boundary {
+    /// The four sides of a two-dimensional box.
+    pub fn planar(x_min: Boundary, x_max: Boundary, y_min: Boundary, y_max: Boundary) -> Self {
+        Boundaries {
+            x_min,
+            x_max,
+            y_min,
+            y_max,
+            z_min: None,
+            z_max: None,
+            aliases: Vec::new(),
+        }
+    }
+
+    /// The condition on `side`, if the scene has that side (the z sides exist in Cartesian3D
+    /// only).
+    pub fn side(&self, side: Side) -> Option<&Boundary> {
         match side {
-            Side::XMin => &self.x_min,
-            Side::XMax => &self.x_max,
-            Side::YMin => &self.y_min,
-            Side::YMax => &self.y_max,
+            Side::XMin => Some(&self.x_min),
+            Side::XMax => Some(&self.x_max),
+            Side::YMin => Some(&self.y_min),
+            Side::YMax => Some(&self.y_max),
+            Side::ZMin => self.z_min.as_ref(),
+            Side::ZMax => self.z_max.as_ref(),
+        }
+    }
+
+    /// The condition on `side`.
+    ///
+    /// # Panics
+    ///
+    /// On a z side the scene does not have (a two-dimensional scene: iterate
+    /// [`Side::of`] the grid's dimensions, or use [`side`](Self::side)).
+    pub fn get(&self, side: Side) -> &Boundary {
+        self.side(side)
+            .unwrap_or_else(|| panic!("boundaries.{side}: a two-dimensional scene has no z sides"))
+    }
+}
+
+/// The scene's keys as written, before they are read by geometry: the axisymmetric spellings
+/// and the third axis share `z`, `nz`, `z_min`, `z_max`.
+mod keys {
+    use super::Boundary;
+    use serde::Deserialize;
+
+    /// `x` or `r`, and the spellings used.
+    fn either<T>(
+        a: Option<T>,
+        b: Option<T>,
+        names: [&'static str; 2],
+        aliases: &mut Vec<&'static str>,
+    ) -> Result<T, String> {
+        match (a, b) {
+            (Some(a), None) => Ok(a),
+            (None, Some(b)) => {
+                aliases.push(names[1]);
+                Ok(b)
+            }
+            (Some(_), Some(_)) => Err(format!(
+                "`{}` and its axisymmetric spelling `{}` are both given: write one",
+                names[0], names[1]
+            )),
+            (None, None) => Err(format!("missing field `{}`", names[0])),
+        }
+    }
+
+    /// `y` or, where `y` is not written, `z` read as its axisymmetric spelling; else `z` is
+    /// the third axis.
+    fn second<T>(
+        y: Option<T>,
+        z: Option<T>,
+        names: [&'static str; 2],
+        aliases: &mut Vec<&'static str>,
+    ) -> Result<(T, Option<T>), String> {
+        match (y, z) {
+            (Some(y), z) => Ok((y, z)),
+            (None, Some(z)) => {
+                aliases.push(names[1]);
+                Ok((z, None))
+            }
+            (None, None) => Err(format!("missing field `{}`", names[0])),
+        }
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Domain {
+        x: Option<(f64, f64)>,
+        r: Option<(f64, f64)>,
+        y: Option<(f64, f64)>,
+        z: Option<(f64, f64)>,
+    }
+
+    impl TryFrom<Domain> for super::Domain {
+        type Error = String;
+        fn try_from(k: Domain) -> Result<Self, String> {
+            let mut aliases = Vec::new();
+            let x = either(k.x, k.r, ["x", "r"], &mut aliases)?;
+            let (y, z) = second(k.y, k.z, ["y", "z"], &mut aliases)?;
+            Ok(super::Domain { x, y, z, aliases })
+        }
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct GridSpec {
+        nx: Option<usize>,
+        nr: Option<usize>,
+        ny: Option<usize>,
+        nz: Option<usize>,
+    }
+
+    impl TryFrom<GridSpec> for super::GridSpec {
+        type Error = String;
+        fn try_from(k: GridSpec) -> Result<Self, String> {
+            let mut aliases = Vec::new();
+            let nx = either(k.nx, k.nr, ["nx", "nr"], &mut aliases)?;
+            let (ny, nz) = second(k.ny, k.nz, ["ny", "nz"], &mut aliases)?;
+            Ok(super::GridSpec {
+                nx,
+                ny,
+                nz,
+                aliases,
+            })
+        }
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Boundaries {
+        x_min: Option<Boundary>,
+        r_min: Option<Boundary>,
+        x_max: Option<Boundary>,
+        r_max: Option<Boundary>,
+        y_min: Option<Boundary>,
+        y_max: Option<Boundary>,
+        z_min: Option<Boundary>,
+        z_max: Option<Boundary>,
+    }
+
+    impl TryFrom<Boundaries> for super::Boundaries {
+        type Error = String;
+        fn try_from(k: Boundaries) -> Result<Self, String> {
+            let mut aliases = Vec::new();
+            let x_min = either(k.x_min, k.r_min, ["x_min", "r_min"], &mut aliases)?;
+            let x_max = either(k.x_max, k.r_max, ["x_max", "r_max"], &mut aliases)?;
+            let (y_min, z_min) = second(k.y_min, k.z_min, ["y_min", "z_min"], &mut aliases)?;
+            let (y_max, z_max) = second(k.y_max, k.z_max, ["y_max", "z_max"], &mut aliases)?;
+            Ok(super::Boundaries {
+                x_min,
+                x_max,
+                y_min,
+                y_max,
+                z_min,
+                z_max,
+                aliases,
+            })
         }
     }
 }
@@ -329,7 +642,8 @@ pub enum Boundary {
     /// Wall moving in its own plane: zero normal velocity, tangential velocity
     /// `speed · profile(position) · motion(t)`.
     MovingWall {
-        /// Peak tangential speed (m/s), along +x on y-sides and +y on x-sides.
+        /// Peak tangential speed (m/s), along +x on y- and z-sides and +y on x-sides (the
+        /// other tangential component is zero, as at a fixed wall).
         speed: f64,
         /// Shape along the wall (default uniform).
         #[serde(default)]
@@ -340,6 +654,11 @@ pub enum Boundary {
     },
     /// Impermeable wall without friction: zero normal velocity and zero tangential stress.
     FreeSlip,
+    /// A mirror plane: zero normal velocity, zero normal gradient of the tangential velocity
+    /// and of every cell scalar (the pressure included) — the ghost rule of
+    /// [`Boundary::FreeSlip`], named for a plane of symmetry of the flow. Any side, any
+    /// geometry.
+    Symmetry,
     /// The symmetry axis r = 0 of an axisymmetric domain (x_min only).
     Axis,
     /// Periodic: the opposite side must be periodic too.

@@ -1,6 +1,7 @@
 //! [`ScheduleError`]: why a pipeline could not be assembled.
 
 use super::Phase;
+use crate::grid::Geometry;
 
 /// The pipeline could not be assembled.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -50,6 +51,20 @@ pub enum ScheduleError {
         /// The other.
         second: &'static str,
     },
+    /// The scene needs stages that do not run in its geometry ([`super::StagePlugin::supports`]).
+    #[error(
+        "the {geometry:?} scene ({}) needs stages that do not support {geometry:?} geometry: {}",
+        cells_text(*geometry, cells),
+        stages.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ")
+    )]
+    Unsupported {
+        /// The stages, in the plugins' order.
+        stages: Vec<&'static str>,
+        /// The scene's geometry.
+        geometry: Geometry,
+        /// The grid's cells along each axis.
+        cells: [usize; 3],
+    },
     /// A plugin refused the scene.
     #[error("stage `{stage}`: {message}")]
     Build {
@@ -58,4 +73,13 @@ pub enum ScheduleError {
         /// Its message.
         message: String,
     },
+}
+
+/// `nx×ny cells`, or `nx×ny×nz cells` in three dimensions.
+fn cells_text(geometry: Geometry, [nx, ny, nz]: &[usize; 3]) -> String {
+    if geometry == Geometry::Cartesian3D {
+        format!("{nx}×{ny}×{nz} cells")
+    } else {
+        format!("{nx}×{ny} cells")
+    }
 }

@@ -19,7 +19,7 @@
 //! snapshots.
 
 use crate::bc::BoundarySet;
-use crate::grid::Grid;
+use crate::grid::{Geometry, Grid};
 use crate::scene::{Options, Scene};
 use crate::state::State;
 use efsi_linalg::SolveStats;
@@ -200,6 +200,14 @@ pub trait StagePlugin: Sync {
     fn limit_depends_on(&self) -> &'static str {
         "and the velocity it sees"
     }
+    /// Whether the stage runs on grids of `geometry` (default: [`Geometry::Planar`] and
+    /// [`Geometry::Axisymmetric`]). A stage whose kernels run over `Region` lines and axis
+    /// shifts for every axis of the grid (its 3-D kernels tested) answers true for
+    /// [`Geometry::Cartesian3D`]; the scheduler refuses a scene that needs a stage without
+    /// support for its geometry ([`ScheduleError::Unsupported`]), naming the stage.
+    fn supports(&self, geometry: Geometry) -> bool {
+        matches!(geometry, Geometry::Planar | Geometry::Axisymmetric)
+    }
     /// Whether `scene` needs this stage; `options` are its checked sections
     /// ([`crate::scene::options::check_sections`]).
     fn needed(&self, scene: &Scene, options: &Options) -> bool;
@@ -338,6 +346,18 @@ impl Pipeline {
             .copied()
             .filter(|p| p.needed(scene, options))
             .collect();
+        let unsupported: Vec<&'static str> = chosen
+            .iter()
+            .filter(|p| !p.supports(grid.geometry))
+            .map(|p| p.name())
+            .collect();
+        if !unsupported.is_empty() {
+            return Err(ScheduleError::Unsupported {
+                stages: unsupported,
+                geometry: grid.geometry,
+                cells: grid.n(),
+            });
+        }
         // What runs is named uniquely within the pipeline: each stage, or in its place its
         // sub-steps, which may take the name of a stage not scheduled with them (the
         // implicit-momentum stage's `projection`).

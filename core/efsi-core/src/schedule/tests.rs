@@ -225,3 +225,115 @@ mod sub_steps {
         );
     }
 }
+
+mod geometry_support {
+    use super::super::{
+        FieldId, Phase, Pipeline, Resources, ScheduleError, Stage, StageError, StagePlugin,
+        StageStats, StepContext,
+    };
+    use crate::bc::BoundarySet;
+    use crate::grid::{Geometry, Grid};
+    use crate::scene::{Options, Scene};
+    use crate::state::State;
+    use std::path::Path;
+
+    const CUBE: &str = r#"Scene(
+        name: "t",
+        geometry: Cartesian3D,
+        domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (0.0, 0.75)),
+        grid: (nx: 4, ny: 4, nz: 3),
+        time: (end: 1.0),
+        fluid: (density: 1.0, viscosity: 0.01),
+        boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip,
+                     z_min: Periodic, z_max: Periodic),
+    )"#;
+
+    /// A stage that does nothing, with or without three-dimensional support.
+    struct Plain(&'static str, bool);
+    struct Nothing;
+
+    impl StagePlugin for Plain {
+        fn name(&self) -> &'static str {
+            self.0
+        }
+        fn phase(&self) -> Phase {
+            Phase::Elastic
+        }
+        fn reads(&self) -> &'static [FieldId] {
+            &[]
+        }
+        fn writes(&self) -> &'static [FieldId] {
+            &[]
+        }
+        fn supports(&self, geometry: Geometry) -> bool {
+            self.1 || geometry != Geometry::Cartesian3D
+        }
+        fn needed(&self, _: &Scene, _: &Options) -> bool {
+            true
+        }
+        fn build(
+            &self,
+            _: &Scene,
+            _: &Options,
+            _: &Grid,
+            _: &BoundarySet,
+            _: &mut Resources,
+        ) -> Result<Box<dyn Stage>, String> {
+            Ok(Box::new(Nothing))
+        }
+    }
+
+    impl Stage for Nothing {
+        fn run(&mut self, _: &StepContext, _: &mut State) -> Result<StageStats, StageError> {
+            Ok(StageStats::default())
+        }
+    }
+
+    fn build(text: &str, plugins: &[&dyn StagePlugin]) -> Result<Pipeline, ScheduleError> {
+        let mut scene = Scene::from_str_at(text, Path::new("t.ron")).unwrap();
+        let options = scene.check_options(Path::new("t.ron"), plugins).unwrap();
+        let grid = scene.build_grid();
+        let bc = BoundarySet::new(&scene.boundaries, &grid);
+        Pipeline::build(&scene, &options, &grid, &bc, plugins)
+    }
+
+    #[test]
+    fn a_three_dimensional_scene_is_refused_naming_every_stage_without_support() {
+        let e = build(
+            CUBE,
+            &[
+                &Plain("flat", false),
+                &Plain("cube", true),
+                &Plain("other", false),
+            ],
+        )
+        .err()
+        .expect("refused");
+        assert!(matches!(
+            &e,
+            ScheduleError::Unsupported { stages, geometry: Geometry::Cartesian3D, cells: [4, 4, 3] }
+                if stages == &["flat", "other"]
+        ));
+        assert_eq!(
+            e.to_string(),
+            "the Cartesian3D scene (4×4×3 cells) needs stages that do not support Cartesian3D \
+             geometry: `flat`, `other`"
+        );
+        let p = build(CUBE, &[&Plain("cube", true)]).unwrap();
+        assert_eq!(p.stage_names(), ["cube"]);
+    }
+
+    #[test]
+    fn two_dimensional_scenes_run_every_stage_by_default() {
+        let planar = CUBE
+            .replace("geometry: Cartesian3D,", "")
+            .replace(", z: (0.0, 0.75)", "")
+            .replace(", nz: 3", "")
+            .replace(
+                ",\n                     z_min: Periodic, z_max: Periodic",
+                "",
+            );
+        let p = build(&planar, &[&Plain("flat", false), &Plain("cube", true)]).unwrap();
+        assert_eq!(p.stage_names(), ["cube", "flat"]);
+    }
+}

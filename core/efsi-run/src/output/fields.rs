@@ -58,7 +58,6 @@ pub fn notes(geometry: Geometry) -> [(&'static str, &'static str); 2] {
 /// not: the shared fields' ([`VTK_FIELDS`] order), then the arrays among the stages' `outputs`
 /// ([`efsi_core::StagePlugin::outputs`]).
 pub fn describe(geometry: Geometry, point_data: bool, outputs: &[OutputDecl]) -> Vec<ArrayDoc> {
-    let axi = geometry == Geometry::Axisymmetric;
     let location = if point_data { "cell and point" } else { "cell" };
     let stage = outputs.iter().filter_map(|o| {
         let components = match o.kind {
@@ -79,10 +78,10 @@ pub fn describe(geometry: Geometry, point_data: bool, outputs: &[OutputDecl]) ->
         .map(|&name| {
             let (components, meaning, unit) = match name {
                 "velocity" => (
-                    if axi {
-                        vec!["u_r", "0", "u_z"]
-                    } else {
-                        vec!["u_x", "u_y", "0"]
+                    match geometry {
+                        Geometry::Axisymmetric => vec!["u_r", "0", "u_z"],
+                        Geometry::Planar => vec!["u_x", "u_y", "0"],
+                        Geometry::Cartesian3D => vec!["u_x", "u_y", "u_z"],
                     },
                     "fluid and solid velocity, the mean of the two faces' normal components at the cell centre",
                     "m/s",
@@ -183,21 +182,39 @@ pub fn arrays(
     outputs: &[OutputDecl],
 ) -> Vec<(&'static str, usize, Vec<f64>)> {
     let wanted = present(grid, state, options, outputs);
-    let (nx, ny) = (grid.nx, grid.ny);
-    let n = nx * ny;
-    let cells = || (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| (i, j)));
+    let (nx, ny, nz) = (grid.nx, grid.ny, if grid.is_3d() { grid.nz } else { 1 });
+    let n = nx * ny * nz;
+    // Cells in VTK's order, i fastest, then j, then k (k = 0 only in two dimensions).
+    let cells = || {
+        (0..nz as isize).flat_map(move |k| {
+            (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| [i, j, k]))
+        })
+    };
     let scalar = |f: &Field| cells().map(|c| f[c]).collect::<Vec<f64>>();
     let mut out = Vec::new();
     for name in wanted {
         match name {
             "velocity" => {
-                // Axisymmetric output is the r–z slice in the X–Z plane (u_z goes to Z).
-                let vy = if grid.is_axisymmetric() { 2 } else { 1 };
                 let mut vel = vec![0.0; 3 * n];
-                for (k, (i, j)) in cells().enumerate() {
-                    let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
-                    vel[3 * k] = a;
-                    vel[3 * k + vy] = b;
+                match &state.w {
+                    None => {
+                        // Axisymmetric output is the r–z slice in the X–Z plane (u_z goes to Z).
+                        let vy = if grid.is_axisymmetric() { 2 } else { 1 };
+                        for (k, [i, j, _]) in cells().enumerate() {
+                            let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
+                            vel[3 * k] = a;
+                            vel[3 * k + vy] = b;
+                        }
+                    }
+                    Some(w) => {
+                        for (k, c) in cells().enumerate() {
+                            for (a, f) in [&state.u, &state.v, w].into_iter().enumerate() {
+                                let mut up = c;
+                                up[a] += 1;
+                                vel[3 * k + a] = 0.5 * (f[c] + f[up]);
+                            }
+                        }
+                    }
                 }
                 out.push((name, 3, vel));
             }
@@ -207,9 +224,24 @@ pub fn arrays(
             "divergence" => out.push((
                 name,
                 1,
-                cells()
-                    .map(|(i, j)| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
-                    .collect(),
+                match &state.w {
+                    None => cells()
+                        .map(|[i, j, _]| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
+                        .collect(),
+                    Some(w) => cells()
+                        .map(|c| {
+                            let h = grid.h();
+                            let f = [&state.u, &state.v, w];
+                            (0..3)
+                                .map(|a| {
+                                    let mut up = c;
+                                    up[a] += 1;
+                                    (f[a][up] - f[a][c]) / h[a]
+                                })
+                                .sum()
+                        })
+                        .collect(),
+                },
             )),
             "solid_fraction" => {
                 if let Some(phi) = &state.phi {
@@ -232,4 +264,36 @@ pub fn arrays(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What `efsi describe-output` prints for a three-dimensional run: the velocity's three
+    /// components and the axes.
+    #[test]
+    fn three_dimensional_files_are_described_with_their_axes() {
+        let grid = Grid::new_3d([2, 3, 4], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let state = State::new(&grid, 1.0, 0.1, &Default::default());
+        let s = summary(&grid, &state, &VtkOptions::default(), &[]);
+        assert_eq!(
+            s["arrays"][0]["components"],
+            serde_json::json!(["u_x", "u_y", "u_z"])
+        );
+        assert_eq!(
+            s["field_data"]["geometry"],
+            "three-dimensional: X = x, Y = y, Z = z"
+        );
+        let names: Vec<&str> = s["arrays"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            ["velocity", "pressure", "density", "viscosity", "divergence"]
+        );
+    }
 }

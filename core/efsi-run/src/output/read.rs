@@ -37,8 +37,22 @@ impl VtrData {
         self.cells.iter().find(|a| a.name == name)
     }
 
+    /// The number of cells along X, Y and Z (1 along a flat axis); cells are stored with X
+    /// fastest, then Y, then Z.
+    pub fn cells3(&self) -> [usize; 3] {
+        self.coordinates
+            .each_ref()
+            .map(|c| c.len().saturating_sub(1).max(1))
+    }
+
+    /// Whether the file holds a three-dimensional grid (no flat axis).
+    pub fn is_3d(&self) -> bool {
+        self.coordinates.iter().all(|c| c.len() > 1)
+    }
+
     /// The number of cells along the two non-flat axes `(n1, n2)`: X–Y for a planar file, X–Z
-    /// for an axisymmetric one (cells are stored with the first fastest).
+    /// for an axisymmetric one (cells are stored with the first fastest); X–Y for a
+    /// three-dimensional one, whose `cells3()[2]` planes follow one another.
     pub fn shape(&self) -> (usize, usize) {
         let n = |c: &Vec<f64>| c.len().saturating_sub(1);
         let [x, y, z] = &self.coordinates;
@@ -325,6 +339,76 @@ mod tests {
                 }
             }
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A three-dimensional state written and read back: the z coordinates, the velocity as a
+    /// 3-vector with `w`, the divergence with ∂w/∂z, every value equal.
+    #[test]
+    fn a_three_dimensional_state_reads_back_equal() {
+        use crate::output::fields::arrays;
+        use crate::output::spec::VtkOptions;
+        let dir = std::env::temp_dir().join(format!("efsi-read3-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let grid = Grid::new_3d([3, 4, 5], (0.0, 3.0), (0.0, 2.0), (-1.0, 1.5));
+        let mut state = efsi_core::State::new(&grid, 1.0, 0.1, &Default::default());
+        let w = state.w.as_mut().unwrap();
+        for n in 0..w.data().len() {
+            let [i, j, k] = w.index_of(n);
+            w.data_mut()[n] = (i + 3 * j) as f64 + 0.5 * k as f64 * k as f64;
+        }
+        for n in 0..state.u.data().len() {
+            let [i, j, k] = state.u.index_of(n);
+            state.u.data_mut()[n] = (i * i) as f64 - (j + k) as f64;
+            state.p.data_mut()[n] = (i + 10 * j + 100 * k) as f64;
+        }
+        let written = arrays(&grid, &state, &VtkOptions::default(), &[]);
+        let cells: Vec<CellArray> = written
+            .iter()
+            .map(|(name, components, values)| CellArray {
+                name,
+                components: *components,
+                values,
+            })
+            .collect();
+        let path = dir.join("f.vtr");
+        let format = VtrFormat {
+            point_data: true,
+            ..VtrFormat::default()
+        };
+        write_vtr_with(&path, &grid, 1.5, &cells, &format, &[]).unwrap();
+        let r = read_vtr(&path).unwrap();
+        assert!(r.is_3d());
+        assert_eq!(r.cells3(), [3, 4, 5]);
+        assert_eq!(r.coordinates[2], vec![-1.0, -0.5, 0.0, 0.5, 1.0, 1.5]);
+        for (name, components, values) in &written {
+            let a = r.cell(name).unwrap();
+            assert_eq!((a.components, &a.values), (*components, values), "{name}");
+        }
+        // Cell (2, 1, 3) is number (3·4 + 1)·3 + 2 = 41: its velocity is the mean of each
+        // component's two faces, w = ((2 + 3) + 4.5 + (2 + 3) + 8) / 2.
+        let vel = &r.cell("velocity").unwrap().values;
+        assert_eq!(vel[3 * 41 + 2], (5.0 + 4.5 + 5.0 + 8.0) / 2.0);
+        assert_eq!(vel[3 * 41], ((4 - 4) as f64 + (9 - 4) as f64) / 2.0);
+        assert_eq!(vel[3 * 41 + 1], 0.0);
+        assert_eq!(r.cell("pressure").unwrap().values[41], 2.0 + 10.0 + 300.0);
+        // ∂u/∂x + ∂w/∂z = (9 − 4)/1 + (8 − 4.5)/0.5.
+        assert_eq!(r.cell("divergence").unwrap().values[41], 5.0 + 7.0);
+        // Point data: node (0, 0, 0) is cell (0, 0, 0)'s value alone.
+        let pp = &r
+            .points
+            .iter()
+            .find(|a| a.name == "pressure")
+            .unwrap()
+            .values;
+        assert_eq!(pp.len(), 4 * 5 * 6);
+        assert_eq!(pp[0], 0.0);
+        // Node (1, 1, 1): the mean of the eight cells around it.
+        let mean = (0..8)
+            .map(|c| ((c & 1) + 10 * ((c >> 1) & 1) + 100 * (c >> 2)) as f64)
+            .sum::<f64>()
+            / 8.0;
+        assert_eq!(pp[(5 + 1) * 4 + 1], mean);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -8,9 +8,10 @@
 //! settings in force in the scene, so that checkpoints record its defaults too. Code reads and
 //! changes it through [`SceneOutput`].
 
+use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
 use efsi_core::scene::solid::SceneSolid;
-use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, num};
+use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
 use serde::{Deserialize, Serialize};
@@ -99,14 +100,14 @@ pub enum VtkCompression {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum ProbeSpec {
-    /// A field sampled at a point (bilinear interpolation).
+    /// A field sampled at a point (bilinear interpolation; trilinear in three dimensions).
     Point {
         /// Column name.
         name: String,
         /// Field name (see [`FIELD_NAMES`], and the stages' fields).
         field: String,
-        /// Position.
-        at: (f64, f64),
+        /// Position: `(x, y)`, or `(x, y, z)` in a Cartesian3D scene.
+        at: Vector,
     },
     /// Kinetic energy ½∫ρ|u|² dV (per radian in axisymmetric geometry).
     KineticEnergy,
@@ -212,6 +213,23 @@ impl ProbeSpec {
         }
     }
 
+    /// Whether the probe runs in a Cartesian3D scene: a point sample, the energies, the largest
+    /// divergence and speed, and a stage's quantity (the solid and contact probes are
+    /// two-dimensional).
+    pub fn three_dimensional(&self) -> bool {
+        match self {
+            ProbeSpec::Point { .. }
+            | ProbeSpec::KineticEnergy
+            | ProbeSpec::PotentialEnergy
+            | ProbeSpec::MaxDivergence
+            | ProbeSpec::MaxSpeed => true,
+            ProbeSpec::Quantity(name) => {
+                crate::probes::framework_quantity(name).is_none_or(|q| !q.needs_solid)
+            }
+            _ => false,
+        }
+    }
+
     /// Whether the probe needs a solid in the scene.
     pub fn needs_solid(&self) -> bool {
         match self {
@@ -232,10 +250,12 @@ impl ProbeSpec {
 pub const MAX_PROFILE_POINTS: usize = 100_000;
 
 /// The shared fields' names that probes and profiles can sample; the scheduled stages add
-/// theirs ([`efsi_core::OutputKind::Field`]).
+/// theirs ([`efsi_core::OutputKind::Field`]). `w`, the velocity along z, exists in Cartesian3D
+/// scenes only.
 pub const FIELD_NAMES: &[&str] = &[
     "u",
     "v",
+    "w",
     "p",
     "speed",
     "density",
@@ -251,10 +271,10 @@ pub enum ProfileSpec {
     Line {
         /// File stem.
         name: String,
-        /// Start point.
-        from: (f64, f64),
-        /// End point.
-        to: (f64, f64),
+        /// Start point: `(x, y)`, or `(x, y, z)` in a Cartesian3D scene.
+        from: Vector,
+        /// End point, likewise.
+        to: Vector,
         /// Number of points (≥ 2), both ends included.
         points: usize,
         /// Fields to sample (see [`FIELD_NAMES`], and the stages' fields).
@@ -278,6 +298,14 @@ impl ProfileSpec {
         match self {
             ProfileSpec::Line { at, .. } => at,
         }
+    }
+}
+
+/// A point as the scene writes it: `(x, y)` or `(x, y, z)`.
+fn show(p: Vector) -> String {
+    match p.2 {
+        Some(z) => format!("({:?}, {:?}, {z:?})", p.0, p.1),
+        None => format!("({:?}, {:?})", p.0, p.1),
     }
 }
 
@@ -387,11 +415,37 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
             }
         }
     }
-    let inside = |p: (f64, f64)| {
+    let three = scene.geometry == Geometry::Cartesian3D;
+    let inside = |p: Vector| {
         p.0 >= scene.domain.x.0
             && p.0 <= scene.domain.x.1
             && p.1 >= scene.domain.y.0
             && p.1 <= scene.domain.y.1
+            && match (p.2, scene.domain.z) {
+                (Some(z), Some((lo, hi))) => z >= lo && z <= hi,
+                _ => true,
+            }
+    };
+    // A point has as many coordinates as the scene has axes.
+    let dimension = |f: &str, p: Vector| -> Checked {
+        match (three, p.2.is_some()) {
+            (true, false) => err(
+                f,
+                format!(
+                    "{} has two coordinates: a point of a Cartesian3D scene is (x, y, z)",
+                    show(p)
+                ),
+            ),
+            (false, true) => err(
+                f,
+                format!(
+                    "{} has three coordinates: a point of a {:?} scene is (x, y)",
+                    show(p),
+                    scene.geometry
+                ),
+            ),
+            _ => Ok(()),
+        }
     };
     // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
     let mut columns: std::collections::HashMap<String, usize> =
@@ -401,6 +455,16 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
         .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
     for (k, probe) in o.probes.iter().enumerate() {
         let f = format!("output.probes[{k}]");
+        if three && !probe.three_dimensional() {
+            return err(
+                &f,
+                format!(
+                    "{probe:?} is a two-dimensional probe: a Cartesian3D scene's probes are \
+                     Point (at (x, y, z)), KineticEnergy, PotentialEnergy, MaxDivergence, \
+                     MaxSpeed and the stages' quantities"
+                ),
+            );
+        }
         if probe.needs_solid() && scene.solid.is_none() {
             return err(
                 &f,
@@ -458,8 +522,18 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                     "solid_fraction needs a solid, and the scene has none",
                 );
             }
+            if field == "w" && !three {
+                return err(
+                    &format!("{f}.field"),
+                    "`w` is the velocity along z, which only a Cartesian3D scene has",
+                );
+            }
+            dimension(&format!("{f}.at"), *at)?;
             if !inside(*at) {
-                return err(&format!("{f}.at"), format!("{at:?} is outside the domain"));
+                return err(
+                    &format!("{f}.at"),
+                    format!("{} is outside the domain", show(*at)),
+                );
             }
         }
     }
@@ -486,10 +560,21 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                 format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
             );
         }
+        dimension(&format!("{f}.from"), *from)?;
+        dimension(&format!("{f}.to"), *to)?;
         if !inside(*from) || !inside(*to) {
-            return err(&f, format!("segment {from:?} → {to:?} leaves the domain"));
+            return err(
+                &f,
+                format!("segment {} → {} leaves the domain", show(*from), show(*to)),
+            );
         }
         for (j, field) in fields.iter().enumerate() {
+            if field == "w" && !three {
+                return err(
+                    &format!("{f}.fields[{j}]"),
+                    "`w` is the velocity along z, which only a Cartesian3D scene has",
+                );
+            }
             if field == "solid_fraction" && scene.solid.is_none() {
                 return err(
                     &format!("{f}.fields"),

@@ -18,8 +18,12 @@
 //!   nodes, Y = `[0]`, Z the axial nodes, so ParaView's *Rotational Extrusion* (about Z) revolves
 //!   it directly.
 //!
-//! VTK orders cells with i fastest, then the next non-flat axis, which in both cases is efsi's
-//! row-major `(i, j)` order: cell `(i, j)`, component `c` is at `(j·nx + i)·components + c`.
+//! * Three-dimensional grids ([`Geometry::Cartesian3D`]): extent `0 nx 0 ny 0 nz`, X, Y and Z
+//!   the node coordinates; vectors have their three components.
+//!
+//! VTK orders cells with i fastest, then the next non-flat axis, which in every case is efsi's
+//! row-major `(i, j)` order, planes of `k` outermost in three dimensions: cell `(i, j, k)`,
+//! component `c` is at `((k·ny + j)·nx + i)·components + c` (`k = 0` in two dimensions).
 //!
 //! [`write_vtr_with`] writes the same layout with options ([`VtrFormat`]): the arrays as
 //! `Float32` instead of `Float64`; the appended data compressed with zlib — VTK's
@@ -44,8 +48,8 @@ use std::path::{Path, PathBuf};
 
 /// One cell-data array.
 ///
-/// `values.len()` must be `nx · ny · components`; cell `(i, j)`, component `c` is at
-/// `(j·nx + i)·components + c`. Scalars have 1 component, vectors 3 (pad the third with zero in
+/// `values.len()` must be `nx · ny · nz · components` (`nz` = 1 in two dimensions); cell
+/// `(i, j, k)`, component `c` is at `((k·ny + j)·nx + i)·components + c`. Scalars have 1 component, vectors 3 (pad the third with zero in
 /// 2-D), symmetric tensors 6 in VTK's order XX, YY, ZZ, XY, YZ, XZ (in axisymmetric output
 /// X is r, Y is θ and Z is z, so the r–z component goes in XZ). The writer only records
 /// `NumberOfComponents`; arranging the components is the caller's job.
@@ -75,8 +79,12 @@ pub struct VtrFormat {
 }
 
 /// The cell values of `values` (`components` per cell) averaged to the nodes: node `(i, j)`,
-/// `i` fastest, is the mean of the cells `(i − 1 … i, j − 1 … j)` inside the grid.
+/// `i` fastest, is the mean of the cells `(i − 1 … i, j − 1 … j)` inside the grid; in three
+/// dimensions node `(i, j, k)` the mean of the cells `(i − 1 … i, j − 1 … j, k − 1 … k)`.
 pub fn cells_to_points(grid: &Grid, values: &[f64], components: usize) -> Vec<f64> {
+    if grid.is_3d() {
+        return cells_to_points3(grid, values, components);
+    }
     let (nx, ny) = (grid.nx, grid.ny);
     let mut out = vec![0.0; (nx + 1) * (ny + 1) * components];
     for j in 0..=ny {
@@ -94,6 +102,36 @@ pub fn cells_to_points(grid: &Grid, values: &[f64], components: usize) -> Vec<f6
             }
             for k in 0..components {
                 out[o + k] /= n;
+            }
+        }
+    }
+    out
+}
+
+/// [`cells_to_points`] of a three-dimensional grid.
+fn cells_to_points3(grid: &Grid, values: &[f64], components: usize) -> Vec<f64> {
+    let [nx, ny, nz] = grid.n();
+    let mut out = vec![0.0; (nx + 1) * (ny + 1) * (nz + 1) * components];
+    let around = |i: usize, n: usize| i.saturating_sub(1)..(i + 1).min(n);
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let o = ((k * (ny + 1) + j) * (nx + 1) + i) * components;
+                let mut n = 0.0;
+                for ck in around(k, nz) {
+                    for cj in around(j, ny) {
+                        for ci in around(i, nx) {
+                            let c = ((ck * ny + cj) * nx + ci) * components;
+                            for q in 0..components {
+                                out[o + q] += values[c + q];
+                            }
+                            n += 1.0;
+                        }
+                    }
+                }
+                for q in 0..components {
+                    out[o + q] /= n;
+                }
             }
         }
     }
@@ -205,7 +243,7 @@ pub fn node_coordinates(grid: &Grid) -> [Vec<f64>; 3] {
 /// default [`VtrFormat`] and no text field data.
 ///
 /// Fails with `InvalidInput` (and writes nothing) if `time` is not finite, an array name is empty
-/// or repeated, an array has zero components, or its length is not `nx · ny · components`.
+/// or repeated, an array has zero components, or its length is not `nx · ny · nz · components`.
 /// Non-finite cell values are written as they are.
 pub fn write_vtr(path: &Path, grid: &Grid, time: f64, arrays: &[CellArray]) -> io::Result<()> {
     write_vtr_with(path, grid, time, arrays, &VtrFormat::default(), &[])
@@ -224,7 +262,7 @@ pub fn write_vtr_with(
     if !time.is_finite() {
         return Err(invalid(path, format_args!("the time {time} is not finite")));
     }
-    let cells = grid.nx * grid.ny;
+    let cells = grid.cells();
     for (k, a) in arrays.iter().enumerate() {
         if a.name.is_empty() {
             return Err(invalid(

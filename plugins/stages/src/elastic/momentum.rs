@@ -247,7 +247,10 @@ fn deformation_stage(
         walls: Side::ALL.map(|side| {
             matches!(
                 scene.boundaries.get(side),
-                Boundary::NoSlip | Boundary::MovingWall { .. } | Boundary::FreeSlip
+                Boundary::NoSlip
+                    | Boundary::MovingWall { .. }
+                    | Boundary::FreeSlip
+                    | Boundary::Symmetry
             )
         }),
         thetas: [o.stretch_theta(false), o.stretch_theta(true)],

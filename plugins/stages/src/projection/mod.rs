@@ -283,7 +283,7 @@ impl Projector {
             precond,
             scratch: Scratch::reserve(shared, (WORK + pooled) * n),
             increment: increments.then(|| efsi_core::Field::zeros(grid)),
-            gravity: scene.gravity,
+            gravity: scene.gravity.planar(),
             // A copy of the density where it decides alone whether to assemble (assembling
             // and setting up every step is dearer than the comparison); where a second
             // material changes the density nearly every step, the multigrid's own matrix is

@@ -847,12 +847,12 @@ mod tests {
     #[test]
     fn the_field_jacobi_cg_matches_the_generic_one() {
         let grid = Grid::new(Geometry::Axisymmetric, 24, 20, (0.0, 1.0), (0.0, 0.8));
-        let b = Boundaries {
-            x_min: Boundary::Axis,
-            x_max: Boundary::NoSlip,
-            y_min: Boundary::NoSlip,
-            y_max: Boundary::FreeSlip,
-        };
+        let b = Boundaries::planar(
+            Boundary::Axis,
+            Boundary::NoSlip,
+            Boundary::NoSlip,
+            Boundary::FreeSlip,
+        );
         let bc = BoundarySet::new(&b, &grid);
         let faces = UnknownFaces::new(&grid, &bc);
         let n = faces.len();

@@ -8,6 +8,7 @@ use crate::output::spec::ProfileSpec;
 use crate::probes;
 use crate::run::time_label;
 use efsi_core::error::EfsiError;
+use efsi_core::scene::Vector;
 use std::path::{Path, PathBuf};
 
 /// The writer of one line profile.
@@ -46,16 +47,35 @@ impl Writer for Profile {
             .join("profiles")
             .join(format!("{name}_t{}.csv", time_label(sim.state.t)));
         let outputs = sim.pipeline().outputs();
-        let len = (to.0 - from.0).hypot(to.1 - from.1);
-        let mut text = format!("s,x,y,{}\n", fields.join(","));
+        // In three dimensions the segment has a z, and the file a `z` column.
+        let three = sim.grid.is_3d();
+        let [fx, fy, fz] = from.xyz();
+        let [tx, ty, tz] = to.xyz();
+        let len = if three {
+            (tx - fx).hypot(ty - fy).hypot(tz - fz)
+        } else {
+            (tx - fx).hypot(ty - fy)
+        };
+        let mut text = if three {
+            format!("s,x,y,z,{}\n", fields.join(","))
+        } else {
+            format!("s,x,y,{}\n", fields.join(","))
+        };
         for q in 0..*points {
             let f = q as f64 / (*points - 1) as f64;
-            let p = (from.0 + f * (to.0 - from.0), from.1 + f * (to.1 - from.1));
+            let p = (fx + f * (tx - fx), fy + f * (ty - fy));
             text.push_str(&format!("{:.17e},{:.17e},{:.17e}", f * len, p.0, p.1));
+            let at = if three {
+                let z = fz + f * (tz - fz);
+                text.push_str(&format!(",{z:.17e}"));
+                Vector(p.0, p.1, Some(z))
+            } else {
+                Vector(p.0, p.1, None)
+            };
             for fl in fields {
                 text.push_str(&format!(
                     ",{:.17e}",
-                    probes::sample_in(&sim.grid, &sim.state, outputs, fl, p)
+                    probes::sample_at(&sim.grid, &sim.state, outputs, fl, at)
                 ));
             }
             text.push('\n');
