@@ -177,36 +177,51 @@ fn balance(
         let (a0, a1) = (u.at(&xl, minus(c)), u.at(&xl, [0; 3]));
         let ms = [-2, -1, 0, 1].map(|k| xl.on(m, along(0, k)));
         let qs = [-2, -1, 0, 1].map(|k| q.at(&xl, along(0, k)));
+        // The balance of the x-fluxes and of those along axis 1 (every grid has it) in one
+        // pass; the fluxes along further axes added after, the sign flipped by the last.
+        let (m0, m1) = (l.on(fluxes[0].0, [0; 3]), l.on(fluxes[0].0, unit(1)));
+        let (q0, q1) = (l.on(fluxes[0].1, [0; 3]), l.on(fluxes[0].1, unit(1)));
+        let last = fluxes.len() == 1;
         let (mut bm, mut bq) = ([0.0; CHUNK + 1], [0.0; CHUNK + 1]);
         for n0 in (0..len).step_by(CHUNK) {
             let k = CHUNK.min(len - n0);
+            let x = n0..n0 + k + 1;
+            let (a0, a1) = (&a0[x.clone()], &a1[x.clone()]);
+            let ms = ms.map(|s| &s[x.clone()]);
+            let qs = qs.map(|s| &s[x.clone()]);
+            let (bm, bq) = (&mut bm[..=k], &mut bq[..=k]);
             for i in 0..=k {
-                let x = n0 + i;
                 (bm[i], bq[i]) = flux(
-                    0.5 * (a0[x] + a1[x]),
-                    [ms[0][x], ms[1][x], ms[2][x], ms[3][x]],
-                    [qs[0][x], qs[1][x], qs[2][x], qs[3][x]],
+                    0.5 * (a0[i] + a1[i]),
+                    [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
+                    [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
                 );
             }
-            let (rm, rp, r) = (&rm[n0..n0 + k], &rp[n0..n0 + k], &r[n0..n0 + k]);
-            let (qt, mt) = (&mut qt[n0..n0 + k], &mut mt[n0..n0 + k]);
+            let y = n0..n0 + k;
+            let (rm, rp, r) = (&rm[y.clone()], &rp[y.clone()], &r[y.clone()]);
+            let (m0, m1, q0, q1) = (
+                &m0[y.clone()],
+                &m1[y.clone()],
+                &q0[y.clone()],
+                &q1[y.clone()],
+            );
+            let (qt, mt) = (&mut qt[y.clone()], &mut mt[y]);
             for i in 0..k {
                 let d = h[0] * r[i];
-                qt[i] = (rp[i] * bq[i + 1] - rm[i] * bq[i]) / d;
-                mt[i] = (rp[i] * bm[i + 1] - rm[i] * bm[i]) / d;
+                let sq = (rp[i] * bq[i + 1] - rm[i] * bq[i]) / d + (q1[i] - q0[i]) / h[1];
+                let sm = (rp[i] * bm[i + 1] - rm[i] * bm[i]) / d + (m1[i] - m0[i]) / h[1];
+                (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
             }
         }
-        for (a, &(fm, fq)) in (1..).zip(fluxes) {
+        for (a, &(fm, fq)) in (2..).zip(&fluxes[1..]) {
+            let last = a == fluxes.len();
             let (m0, m1) = (&l.on(fm, [0; 3])[..len], &l.on(fm, unit(a))[..len]);
             let (q0, q1) = (&l.on(fq, [0; 3])[..len], &l.on(fq, unit(a))[..len]);
             for i in 0..len {
-                qt[i] += (q1[i] - q0[i]) / h[a];
-                mt[i] += (m1[i] - m0[i]) / h[a];
+                let sq = qt[i] + (q1[i] - q0[i]) / h[a];
+                let sm = mt[i] + (m1[i] - m0[i]) / h[a];
+                (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
             }
-        }
-        for i in 0..len {
-            qt[i] = -qt[i];
-            mt[i] = -mt[i];
         }
     });
 }
@@ -358,18 +373,22 @@ pub fn convective_rate(grid: &Grid, vel: &[&Field]) -> f64 {
     let h = grid.h();
     Region::of(grid, Stagger::Cell).max(0.0, |l| {
         let n = l.len;
-        let faces: [[&[f64]; 2]; 3] = std::array::from_fn(|a| match vel.get(a) {
-            Some(v) => [&v.at(&l, [0; 3])[..n], &v.at(&l, unit(a))[..n]],
-            None => [&[][..], &[][..]],
-        });
+        let on = |a: usize| -> [&[f64]; 2] {
+            let v: &Field = vel[a];
+            [&v.at(&l, [0; 3])[..n], &v.at(&l, unit(a))[..n]]
+        };
+        let rate = |[lo, hi]: [&[f64]; 2], a: usize, i: usize| lo[i].abs().max(hi[i].abs()) / h[a];
+        let (x, y) = (on(0), on(1));
         let mut c = 0.0f64;
-        for i in 0..n {
-            let mut s = 0.0;
-            for (a, [lo, hi]) in faces[..vel.len()].iter().enumerate() {
-                let s_a = lo[i].abs().max(hi[i].abs()) / h[a];
-                s = if a == 0 { s_a } else { s + s_a };
+        if vel.len() == 2 {
+            for i in 0..n {
+                c = c.max(rate(x, 0, i) + rate(y, 1, i));
             }
-            c = c.max(s);
+        } else {
+            let z = on(2);
+            for i in 0..n {
+                c = c.max(rate(x, 0, i) + rate(y, 1, i) + rate(z, 2, i));
+            }
         }
         c
     })
