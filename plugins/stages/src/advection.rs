@@ -57,11 +57,11 @@
 //! each with fluxes along every axis, `w` on the z-faces, and the convective rate and its
 //! limit counting `|w|/dz` (`Δt (|u|/dx + |v|/dy + |w|/dz) ≤ ½` per Euler stage).
 //!
-//! **Parallelism and memory.** The kernels ([`kernels`]) run over the lines of grid regions
+//! **Parallelism and memory.** The kernels run over the lines of grid regions
 //! in parallel, each line writing its own entries, so results are bit-identical on any number
 //! of threads. Each face flux is computed once: along the lines' axis into a buffer of the
 //! line, along every other axis into a full-grid array. The stage uses
-//! [`kernels::work`]`(dims)` full-grid arrays while it runs (10 in two dimensions, 16 in three:
+//! [`work`]`(dims)` full-grid arrays while it runs (10 in two dimensions, 16 in three:
 //! per component the tendencies of momentum and mass, the start-of-step velocity and the
 //! current stage's face masses; the fluxes along each axis but the first) — taken from the
 //! pipeline's pool of work vectors (`scratch`), which the later stages of the step reuse. It

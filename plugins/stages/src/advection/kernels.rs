@@ -18,7 +18,7 @@
 //!   otherwise; all ones in planar and three-dimensional geometry).
 //!
 //! Each face flux is computed once: along x (the lines' axis) into a buffer of the line, along
-//! every other axis into a full-grid flux array ([`WORK`] counts them), which the balance
+//! every other axis into a full-grid flux array ([`work`] counts them), which the balance
 //! differences. Every line writes only its own entries, so the results are the same, bit for
 //! bit, on any number of threads.
 
@@ -82,7 +82,11 @@ fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
 
 /// The face masses of component `c` (the densities of its control volumes) everywhere in the
 /// padded storage: `ρ_f[I] = ½(ρ[I − e_c] + ρ[I])`, the lowest ghost layer along `c`
-/// repeating the next one (its cell below is outside the storage).
+/// repeating the next one (its cell below is outside the storage). The ghost masses are not
+/// advanced by the Euler stages (the boundary set fills velocities, not face masses), so
+/// across a periodic side the mass and momentum fluxes match their images only where the
+/// density is uniform and the mass does not change; inside the box every flux enters the two
+/// control volumes it separates and the sums are conserved to round-off.
 pub(crate) fn face_masses(grid: &Grid, rho: &Field, c: usize, m: &mut [f64]) {
     let whole = Region::whole(grid);
     let lowest = whole.lo()[c];
@@ -370,24 +374,24 @@ impl Euler<'_> {
 /// velocity `vel` (one component per axis): the explicit advective limit is `Δt ≤ CFL/C`. A
 /// maximum, so the same on any number of threads.
 pub fn convective_rate(grid: &Grid, vel: &[&Field]) -> f64 {
-    let h = grid.h();
+    let [dx, dy, dz] = grid.h();
     Region::of(grid, Stagger::Cell).max(0.0, |l| {
-        let n = l.len;
-        let on = |a: usize| -> [&[f64]; 2] {
-            let v: &Field = vel[a];
-            [&v.at(&l, [0; 3])[..n], &v.at(&l, unit(a))[..n]]
-        };
-        let rate = |[lo, hi]: [&[f64]; 2], a: usize, i: usize| lo[i].abs().max(hi[i].abs()) / h[a];
-        let (x, y) = (on(0), on(1));
+        let (u0, u1) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
+        let (v0, v1) = (vel[1].at(&l, [0; 3]), vel[1].at(&l, unit(1)));
         let mut c = 0.0f64;
-        if vel.len() == 2 {
-            for i in 0..n {
-                c = c.max(rate(x, 0, i) + rate(y, 1, i));
+        if let Some(w) = vel.get(2) {
+            let (w0, w1) = (w.at(&l, [0; 3]), w.at(&l, unit(2)));
+            for n in 0..l.len {
+                let uu = u0[n].abs().max(u1[n].abs());
+                let vv = v0[n].abs().max(v1[n].abs());
+                let ww = w0[n].abs().max(w1[n].abs());
+                c = c.max(uu / dx + vv / dy + ww / dz);
             }
         } else {
-            let z = on(2);
-            for i in 0..n {
-                c = c.max(rate(x, 0, i) + rate(y, 1, i) + rate(z, 2, i));
+            for n in 0..l.len {
+                let uu = u0[n].abs().max(u1[n].abs());
+                let vv = v0[n].abs().max(v1[n].abs());
+                c = c.max(uu / dx + vv / dy);
             }
         }
         c
