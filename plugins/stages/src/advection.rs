@@ -233,7 +233,7 @@ pub fn advance(
     vel: &mut [&mut Field],
     rho: &Field,
     pool: &mut [f64],
-    mut history: Option<&mut History>,
+    history: Option<&mut History>,
     fill: &mut dyn FnMut(&mut [&mut Field]),
 ) {
     // SSP-RK2 (Heun) on (m, m u):
@@ -274,7 +274,7 @@ pub fn advance(
             fill(vel);
         }
     }
-    if let Some(h) = history.as_deref_mut() {
+    if let Some(h) = history {
         for (y, v) in h.vel.iter_mut().zip(vel.iter()) {
             copy(y, v.data());
         }
