@@ -159,3 +159,51 @@ impl Stage for BodyForceStage {
         Ok(StageStats::default())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::scene::{Boundaries, Boundary};
+    use efsi_core::schedule::StepContext;
+
+    #[test]
+    fn three_components_on_a_three_dimensional_grid() {
+        let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 0.6), (0.0, 2.0));
+        let side = || Boundary::Periodic;
+        let sides = Boundaries {
+            x_min: side(),
+            x_max: side(),
+            y_min: side(),
+            y_max: side(),
+        };
+        let bc = BoundarySet::new(&sides, &g);
+        let mut state = State::new(&g, 1.0, 1e-3, &Default::default());
+        state.frame_acceleration = (0.5, 0.25);
+        let mut stage = BodyForceStage {
+            g: [1.0, -2.0, 3.0],
+        };
+        // From rest the limit is CFL·√(h/|g − a|), h the smallest cell (0.2).
+        let e = (0.5f64 * 0.5 + 2.25 * 2.25 + 3.0 * 3.0).sqrt();
+        let dt = stage.max_dt(&g, &state, 0.4).unwrap();
+        assert!((dt - 0.4 * (0.2 / e).sqrt()).abs() < 1e-15, "Δt = {dt}");
+        let ctx = StepContext {
+            grid: &g,
+            bc: &bc,
+            t: 0.0,
+            dt: 0.1,
+            step: 0,
+        };
+        stage.run(&ctx, &mut state).unwrap();
+        let w = state.w.as_ref().unwrap();
+        let want = [0.5 * 0.1, -2.25 * 0.1, 3.0 * 0.1];
+        for (c, f) in [&state.u, &state.v, w].into_iter().enumerate() {
+            let faces = Region::of(&g, FACES[c]).range(c, 0, g.n()[c] as isize);
+            for n in 0..f.data().len() {
+                let i = f.index_of(n);
+                let inside = (0..3).all(|a| (faces.lo()[a]..faces.hi()[a]).contains(&i[a]));
+                let v = if inside { want[c] } else { 0.0 };
+                assert_eq!(f.data()[n], v, "component {c} at {i:?}");
+            }
+        }
+    }
+}
