@@ -181,8 +181,7 @@ fn balance(
         let (a0, a1) = (u.at(&xl, minus(c)), u.at(&xl, [0; 3]));
         let ms = [-2, -1, 0, 1].map(|k| xl.on(m, along(0, k)));
         let qs = [-2, -1, 0, 1].map(|k| q.at(&xl, along(0, k)));
-        // The balance of the x-fluxes and of those along axis 1 (every grid has it) in one
-        // pass; the fluxes along further axes added after, the sign flipped by the last.
+        // x- and axis-1 fluxes in one pass, further axes after; the last flips the sign.
         let (m0, m1) = (l.on(fluxes[0].0, [0; 3]), l.on(fluxes[0].0, unit(1)));
         let (q0, q1) = (l.on(fluxes[0].1, [0; 3]), l.on(fluxes[0].1, unit(1)));
         let last = fluxes.len() == 1;
