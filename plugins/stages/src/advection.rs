@@ -53,16 +53,24 @@
 //! accurately and loses volume with `WholeStep`). The cost: two full-grid arrays kept from
 //! step to step and in snapshots.
 //!
-//! **Parallelism and memory.** Tendencies run over bands of rows in parallel, each face flux
-//! computed once and kept only for the row that needs it (no full-grid flux arrays); updates
-//! run over rows in parallel (rayon); each band or row writes its own faces, so results are
-//! bit-identical on any number of threads. The stage uses 8 full-grid arrays while it runs —
-//! the tendencies (4), the start-of-step velocity (2) and the current stage's face masses (2)
-//! — taken from the pipeline's pool of work vectors (`scratch`), which the later stages of the
-//! step reuse. It keeps from one step to the next only the `WholeStep` predictor's two arrays.
+//! **Three dimensions.** The same kernels serve a three-dimensional grid: three components,
+//! each with fluxes along every axis, `w` on the z-faces, and the convective rate and its
+//! limit counting `|w|/dz` (`Δt (|u|/dx + |v|/dy + |w|/dz) ≤ ½` per Euler stage).
+//!
+//! **Parallelism and memory.** The kernels run over the lines of grid regions
+//! in parallel, each line writing its own entries, so results are bit-identical on any number
+//! of threads. Each face flux is computed once: along the lines' axis into a buffer of the
+//! line, along every other axis into a full-grid array. The stage uses
+//! [`work`]`(dims)` full-grid arrays while it runs (10 in two dimensions, 16 in three:
+//! per component the tendencies of momentum and mass, the start-of-step velocity and the
+//! current stage's face masses; the fluxes along each axis but the first) — taken from the
+//! pipeline's pool of work vectors (`scratch`), which the later stages of the step reuse. It
+//! keeps from one step to the next only the `WholeStep` predictor's history, one array per
+//! component.
 
-use crate::faces::UnknownFaces;
-use crate::scratch::{self, Scratch};
+mod kernels;
+
+use crate::scratch::Scratch;
 use efsi_core::scene::options::StageOptions;
 use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
@@ -70,8 +78,12 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
     StageStats, State, StepContext,
 };
-use efsi_linalg::par::{self, copy};
+use efsi_linalg::par::copy;
+use kernels::{Euler, FACES, Work};
 use serde::{Deserialize, Serialize};
+
+pub(crate) use kernels::face_value;
+pub use kernels::{convective_rate, work};
 
 /// The advection's options (`numerics.advection`).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -152,531 +164,213 @@ impl StagePlugin for Advection {
         _bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        // Band edges: at most one band per BAND rows of the tallest family (the v-faces with
-        // an outflow side have ny + 1 rows), plus the top edge.
-        // A band edge holds one padded row of the fields.
-        let [row, rows, planes] = grid.padded();
-        let bands = (grid.ny + 1).div_ceil(BAND);
-        let padded = row * rows * planes;
-        let carry = if whole_step(scene, options)? {
-            Some(Carry {
-                u: vec![0.0; padded],
-                v: vec![0.0; padded],
-                dt: 0.0,
-            })
-        } else {
-            None
-        };
+        let history = whole_step(scene, options)?.then(|| History::new(grid));
         Ok(Box::new(AdvectionStage {
-            carry,
-            scratch: Scratch::reserve(shared, WORK * padded),
-            edge_m: vec![0.0; (bands + 1) * row],
-            edge_q: vec![0.0; (bands + 1) * row],
-            row_x: (0..bands).map(|_| vec![0.0; 2 * row]).collect(),
+            history,
+            scratch: Scratch::reserve(shared, work_len(grid)),
         }))
     }
 }
 
-/// Rows of tendencies per band of the fused flux-and-difference pass (bands run in parallel).
-const BAND: usize = 16;
-
-/// Full-grid work arrays the stage takes from the pipeline's pool, in this order: the
-/// momentum tendencies `−∇·(m a ⊗ u)` on u- and v-faces, the mass tendencies `−∇·(m a)`, the
-/// start-of-step velocity (the start-of-step face masses are recomputed from the density,
-/// which advection does not change), and the current stage's face masses.
-const WORK: usize = 8;
+/// Values of the work arrays [`advance`] needs on `grid` ([`work`] padded full-grid arrays).
+pub fn work_len(grid: &Grid) -> usize {
+    work(grid.dims()) * grid.padded().iter().product::<usize>()
+}
 
 /// What the `WholeStep` predictor keeps from step to step: the velocity the stage left at the
-/// previous step (`Y` in the module docs, padded like the fields) and that step's Δt (0: no
-/// history yet).
-struct Carry {
-    u: Vec<f64>,
-    v: Vec<f64>,
+/// previous step (`Y` in the module docs, one array per component, padded like the fields) and
+/// that step's Δt (0: no history yet).
+#[derive(Clone, Debug)]
+pub struct History {
+    vel: Vec<Vec<f64>>,
     dt: f64,
+}
+
+impl History {
+    /// No history yet, for the velocity components of `grid`.
+    pub fn new(grid: &Grid) -> Self {
+        let len = grid.padded().iter().product();
+        History {
+            vel: (0..grid.dims()).map(|_| vec![0.0; len]).collect(),
+            dt: 0.0,
+        }
+    }
+
+    /// The number of values of the saved history: Δt and the arrays.
+    fn saved_len(&self) -> usize {
+        1 + self.vel.iter().map(Vec::len).sum::<usize>()
+    }
+}
+
+/// The unknown faces of each velocity component of `grid` under `bc`: the control volumes
+/// the advection updates.
+fn control_volumes(grid: &Grid, bc: &BoundarySet) -> [Region; 3] {
+    let n = grid.n();
+    std::array::from_fn(|c| {
+        let faces = Region::of(grid, FACES[c]);
+        if c < grid.dims() {
+            let r = bc.normal_faces(c, n[c]);
+            faces.range(c, r.lo, r.hi)
+        } else {
+            faces
+        }
+    })
+}
+
+/// One step of the momentum advection (SSP-RK2 on `(m, m u)`, module docs) of the velocity
+/// `vel` (one component per axis of `grid`, ghosts filled) with the cell densities `rho`
+/// (ghosts filled), on the control volumes `cv[c]` of each component (its unknown faces).
+/// `fill` fills the velocity's ghosts between the two Runge–Kutta stages; `history` is the
+/// `WholeStep` predictor's (updated), `None` for the `Advection` predictor. `pool` holds at
+/// least [`work_len`] values; on return its first `dims` arrays of the fields' padded length
+/// hold the control volumes' masses at the end of the step (the momentum is their product
+/// with the velocity).
+#[allow(clippy::too_many_arguments)]
+pub fn advance(
+    grid: &Grid,
+    cv: &[Region],
+    dt: f64,
+    vel: &mut [&mut Field],
+    rho: &Field,
+    pool: &mut [f64],
+    history: Option<&mut History>,
+    fill: &mut dyn FnMut(&mut [&mut Field]),
+) {
+    // SSP-RK2 (Heun) on (m, m u):
+    //   m¹ = m⁰ + Δt Lm(m⁰, V⁰),  (m u)¹ = m⁰u⁰ + Δt Lq(m⁰, V⁰),  u¹ = (m u)¹/m¹,
+    //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
+    let dims = grid.dims();
+    assert_eq!(vel.len(), dims, "one velocity component per axis");
+    let mut w = Work::cut(pool, dims, rho.data().len());
+    for c in 0..dims {
+        kernels::face_masses(grid, rho, c, w.m[c]);
+        copy(w.x0[c], vel[c].data());
+    }
+    // The other stages' increments of the last step, rescaled to this Δt (module docs).
+    let (lag, y) = match history.as_deref() {
+        Some(h) if h.dt > 0.0 => (dt / h.dt, Some(&h.vel)),
+        _ => (0.0, None),
+    };
+    for stage in 0..2 {
+        let view: [&Field; 3] = std::array::from_fn(|c| &*vel[c.min(dims - 1)]);
+        kernels::tendencies(grid, cv, &view[..dims], &mut w);
+        let step = Euler {
+            dt,
+            lag,
+            second: stage == 1,
+            rho,
+        };
+        for c in 0..dims {
+            let y: &[f64] = y.map_or(&[], |y| &y[c]);
+            step.update(
+                cv[c],
+                c,
+                vel[c],
+                w.m[c],
+                [&*w.x0[c], y, &*w.qt[c], &*w.mt[c]],
+            );
+        }
+        if stage == 0 {
+            fill(vel);
+        }
+    }
+    if let Some(h) = history {
+        for (y, v) in h.vel.iter_mut().zip(vel.iter()) {
+            copy(y, v.data());
+        }
+        h.dt = dt;
+    }
+}
+
+/// Largest stable Δt of the explicit convective term of the velocity `vel` (one component per
+/// axis) at Courant number `cfl` ([`convective_rate`]).
+pub fn advective_dt(grid: &Grid, vel: &[&Field], cfl: f64) -> Option<f64> {
+    let rate = convective_rate(grid, vel);
+    (rate > 0.0).then(|| cfl / rate)
+}
+
+/// The velocity components of `state`, one per axis of `grid` (`w` on a three-dimensional one).
+pub(crate) fn velocity<'a>(grid: &Grid, state: &'a State) -> ([&'a Field; 3], usize) {
+    let w = state.w.as_ref().unwrap_or(&state.v);
+    ([&state.u, &state.v, w], grid.dims())
+}
+
+/// The momentum and mass tendencies `(−∇·(m a ⊗ u_c), −∇·(m a))` of each component `c` of the
+/// velocity `vel` (ghosts filled) on its control volumes `cv[c]`, with the face masses from the
+/// cell densities `rho` (ghosts filled): the stage's spatial operator, for tests and
+/// diagnostics (it allocates its work arrays).
+pub fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], rho: &Field) -> Vec<[Field; 2]> {
+    let dims = grid.dims();
+    assert_eq!(vel.len(), dims, "one velocity component per axis");
+    let mut pool = vec![0.0; work_len(grid)];
+    let mut w = Work::cut(&mut pool, dims, rho.data().len());
+    for c in 0..dims {
+        kernels::face_masses(grid, rho, c, w.m[c]);
+    }
+    kernels::tendencies(grid, cv, vel, &mut w);
+    (0..dims)
+        .map(|c| {
+            let mut out = [Field::zeros(grid), Field::zeros(grid)];
+            out[0].data_mut().copy_from_slice(w.qt[c]);
+            out[1].data_mut().copy_from_slice(w.mt[c]);
+            out
+        })
+        .collect()
 }
 
 struct AdvectionStage {
     /// The `WholeStep` predictor's history (`None` with `Advection`).
-    carry: Option<Carry>,
-    /// The pipeline's work vectors ([`WORK`] padded full-grid arrays while the stage runs).
+    history: Option<History>,
+    /// The pipeline's work vectors ([`work_len`] values while the stage runs).
     scratch: Scratch,
-    /// Mass and momentum fluxes through the bottom edge of each band of rows, and the top of
-    /// the last (scratch, one padded row per edge).
-    edge_m: Vec<f64>,
-    edge_q: Vec<f64>,
-    /// Each band's mass and momentum fluxes through the x-faces of its current row (scratch).
-    row_x: Vec<Vec<f64>>,
-}
-
-/// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
-/// with `cm` left of `c0` and `c2` right of `c1`.
-#[inline(always)]
-pub(crate) fn face_value(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
-    let (up, c, d) = if a >= 0.0 { (cm, c0, c1) } else { (c2, c1, c0) };
-    let denom = d - c;
-    if denom.abs() < 1e-300 {
-        return c;
-    }
-    let r = (c - up) / denom;
-    let psi = (r + r.abs()) / (1.0 + r.abs());
-    c + 0.5 * psi * denom
-}
-
-/// [`face_value`] in van Leer's harmonic form, one division instead of two and no branch on
-/// the data: with `p = q_C − q_U` and `q = q_D − q_C`, `½ψ(p/q)·q = pq/(p + q)` where
-/// `pq > 0`, else 0 — the same limiter, rounded differently.
-#[inline(always)]
-fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
-    let pos = a >= 0.0;
-    let up = if pos { cm } else { c2 };
-    let c = if pos { c0 } else { c1 };
-    let d = if pos { c1 } else { c0 };
-    let (p, q) = (c - up, d - c);
-    let pq = p * q;
-    c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
-}
-
-/// Largest stable Δt of the explicit convective term at Courant number `cfl`
-/// ([`crate::ops::convective_rate`]).
-pub fn advective_dt(grid: &Grid, u: &Field, v: &Field, cfl: f64) -> Option<f64> {
-    let rate = crate::ops::convective_rate(grid, u, v);
-    (rate > 0.0).then(|| cfl / rate)
-}
-
-/// Flux `(a m̃, a m̃ q̃)` through a control-volume face with advecting velocity `a`, from the
-/// masses `m` and values `q` of the four control volumes along the flux direction.
-#[inline(always)]
-fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
-    let fm = a * limited(a, m[0], m[1], m[2], m[3]);
-    (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
-}
-
-/// A family of control volumes (centred on the u- or the v-faces): its face fluxes and their
-/// balance (methods inlined into [`tendencies`]' loops).
-trait Family: Sync {
-    /// (Mass, momentum) flux through the x-face of the control volume left of face `k`.
-    fn xflux(&self, k: usize) -> (f64, f64);
-    /// (Mass, momentum) flux through the y-face of the control volume below face `k`.
-    fn yflux(&self, k: usize) -> (f64, f64);
-    /// (Momentum, mass) tendency of the control volume of column `i` from its west, east,
-    /// south and north fluxes.
-    fn diff(&self, i: isize, f: [(f64, f64); 4]) -> (f64, f64);
-}
-
-/// What both families read: the velocity, the face masses of the family, the metric.
-struct Flow<'a> {
-    u: &'a [f64],
-    v: &'a [f64],
-    m: &'a [f64],
-    s: usize,
-    metric: &'a efsi_core::grid::Metric,
-    dx: f64,
-    dy: f64,
-}
-
-#[inline(always)]
-fn at(d: &[f64], k: usize, o: usize) -> [f64; 4] {
-    [d[k - 2 * o], d[k - o], d[k], d[k + o]]
-}
-
-/// u control volumes, centred on x-faces: east/west faces at cell centres (the flux through
-/// the centre left of face k), north/south faces at corners (v averaged over the two columns;
-/// the flux below face k).
-struct UFamily<'a>(Flow<'a>);
-
-impl Family for UFamily<'_> {
-    #[inline(always)]
-    fn xflux(&self, k: usize) -> (f64, f64) {
-        let f = &self.0;
-        flux(0.5 * (f.u[k - 1] + f.u[k]), at(f.m, k, 1), at(f.u, k, 1))
-    }
-    #[inline(always)]
-    fn yflux(&self, k: usize) -> (f64, f64) {
-        let f = &self.0;
-        flux(
-            0.5 * (f.v[k - 1] + f.v[k]),
-            at(f.m, k, f.s),
-            at(f.u, k, f.s),
-        )
-    }
-    #[inline(always)]
-    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
-        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
-        let r = m.rx(i);
-        if r == 0.0 {
-            return (0.0, 0.0);
-        }
-        let (re, rw) = (m.rc(i), m.rc(i - 1));
-        (
-            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
-            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
-        )
-    }
-}
-
-/// v control volumes, centred on y-faces: east/west faces at corners (u averaged over the two
-/// rows; the flux left of face k), north/south faces at cell centres (the flux below face k).
-struct VFamily<'a>(Flow<'a>);
-
-impl Family for VFamily<'_> {
-    #[inline(always)]
-    fn xflux(&self, k: usize) -> (f64, f64) {
-        let f = &self.0;
-        flux(0.5 * (f.u[k - f.s] + f.u[k]), at(f.m, k, 1), at(f.v, k, 1))
-    }
-    #[inline(always)]
-    fn yflux(&self, k: usize) -> (f64, f64) {
-        let f = &self.0;
-        flux(
-            0.5 * (f.v[k - f.s] + f.v[k]),
-            at(f.m, k, f.s),
-            at(f.v, k, f.s),
-        )
-    }
-    #[inline(always)]
-    fn diff(&self, i: isize, [w, e, so, no]: [(f64, f64); 4]) -> (f64, f64) {
-        let (m, dx, dy) = (self.0.metric, self.0.dx, self.0.dy);
-        let (re, rw, r) = (m.rx(i + 1), m.rx(i), m.rc(i));
-        (
-            -((re * e.1 - rw * w.1) / (dx * r) + (no.1 - so.1) / dy),
-            -((re * e.0 - rw * w.0) / (dx * r) + (no.0 - so.0) / dy),
-        )
-    }
-}
-
-/// The tendencies of one control-volume family, `rows = qt.len() / s` padded rows from padded
-/// index `r0`, faces `i0..i1` of each row: `(qt, mt)[k] = fam.diff(i, [west, east, south,
-/// north])` with the (mass, momentum) fluxes `fam.xflux(k)` through the face left of `k` and
-/// `fam.yflux(k)` through the face below. Each flux is computed once, without a full-grid flux array: the
-/// rows are split into bands of [`BAND`] rows (in parallel); the fluxes through a band's bottom
-/// edge (and the top of the last) are computed first into `edge_*`, then each band walks its
-/// rows upwards: the x-face fluxes of the row into the band's `row_x`, the fluxes below the
-/// next row into that row's own tendency entries (overwritten once read). The floating-point
-/// operations per entry are those of storing every flux and differencing them, so the results
-/// are the same, bit for bit, on any number of threads.
-#[allow(clippy::too_many_arguments)]
-fn tendencies(
-    qt: &mut [f64],
-    mt: &mut [f64],
-    edge_m: &mut [f64],
-    edge_q: &mut [f64],
-    row_x: &mut [Vec<f64>],
-    s: usize,
-    r0: usize,
-    (i0, i1): (isize, isize),
-    fam: &impl Family,
-) {
-    let rows = qt.len() / s;
-    if rows == 0 || i1 <= i0 {
-        return;
-    }
-    let nb = rows.div_ceil(BAND);
-    let (em, eq) = (&mut edge_m[..(nb + 1) * s], &mut edge_q[..(nb + 1) * s]);
-    let (c0, c1) = ((i0 + efsi_core::G) as usize, (i1 + efsi_core::G) as usize);
-    par::rows((&mut *em, &mut *eq), s).for_each(|b, (fm, fq)| {
-        y_row(fam, r0 + (b * BAND).min(rows) * s, c0..c1, fm, fq);
-    });
-    let (em, eq) = (&*em, &*eq);
-    let len = qt.len();
-    par::rows(
-        (qt, mt, par::per_row(&mut row_x[..nb], BAND * s, len)),
-        BAND * s,
-    )
-    .for_each(|b, (qb, mb, x)| {
-        let x = x.item();
-        let n = qb.len() / s;
-        let (xm, xq) = x.split_at_mut(s);
-        qb[c0..c1].copy_from_slice(&eq[b * s + c0..b * s + c1]);
-        mb[c0..c1].copy_from_slice(&em[b * s + c0..b * s + c1]);
-        for jr in 0..n {
-            let k0 = r0 + (b * BAND + jr) * s;
-            let (qr, qn) = qb[jr * s..].split_at_mut(s);
-            let (mr, mn) = mb[jr * s..].split_at_mut(s);
-            let (nm, nq): (&[f64], &[f64]) = if jr + 1 == n {
-                (&em[(b + 1) * s..], &eq[(b + 1) * s..])
-            } else {
-                y_row(fam, k0 + s, c0..c1, mn, qn);
-                (mn, qn)
-            };
-            x_row(fam, k0, c0..c1 + 1, xm, xq);
-            diff_row(fam, c0..c1, [xm, xq, nm, nq], qr, mr);
-        }
-    });
-}
-
-// The row loops are functions of their own, not inlined: their arrays are arguments, which
-// the compiler knows do not overlap, so the loops vectorise.
-
-/// `(fm, fq)[c] = fam.yflux(k0 + c)` for `c` in `cs`.
-#[inline(never)]
-fn y_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
-    for c in cs {
-        (fm[c], fq[c]) = fam.yflux(k0 + c);
-    }
-}
-
-/// `(fm, fq)[c] = fam.xflux(k0 + c)` for `c` in `cs`.
-#[inline(never)]
-fn x_row(fam: &impl Family, k0: usize, cs: std::ops::Range<usize>, fm: &mut [f64], fq: &mut [f64]) {
-    for c in cs {
-        (fm[c], fq[c]) = fam.xflux(k0 + c);
-    }
-}
-
-/// The tendencies of a row from its x-face fluxes `xm, xq`, the fluxes below it in `(mr, qr)`
-/// (overwritten) and above it `nm, nq`.
-#[inline(never)]
-fn diff_row(
-    fam: &impl Family,
-    cs: std::ops::Range<usize>,
-    [xm, xq, nm, nq]: [&[f64]; 4],
-    qr: &mut [f64],
-    mr: &mut [f64],
-) {
-    for c in cs {
-        let i = c as isize - efsi_core::G;
-        let f = [
-            (xm[c], xq[c]),
-            (xm[c + 1], xq[c + 1]),
-            (mr[c], qr[c]),
-            (nm[c], nq[c]),
-        ];
-        (qr[c], mr[c]) = fam.diff(i, f);
-    }
-}
-
-impl AdvectionStage {
-    /// Tendencies of mass and momentum for velocity `(u, v)` and face masses `(mu, mv)`
-    /// (ghosts filled), on the unknown faces (see [`tendencies`]).
-    #[allow(clippy::too_many_arguments)]
-    fn rhs(
-        &mut self,
-        ctx: &StepContext,
-        u: &Field,
-        v: &Field,
-        [mu, mv]: [&[f64]; 2],
-        [qu, qv, mu_, mv_]: [&mut [f64]; 4],
-    ) {
-        let g = ctx.grid;
-        let s = u.stride();
-        let flow = |m| Flow {
-            u: u.data(),
-            v: v.data(),
-            m,
-            s,
-            metric: &g.metric,
-            dx: g.dx,
-            dy: g.dy,
-        };
-        let ux = ctx.bc.normal_faces(0, g.nx);
-        let vy = ctx.bc.normal_faces(1, g.ny);
-        let row0 = |j: isize| u.idx(-efsi_core::G, j);
-        let r0 = row0(0);
-        let n = g.ny * s;
-        tendencies(
-            &mut qu[r0..r0 + n],
-            &mut mu_[r0..r0 + n],
-            &mut self.edge_m,
-            &mut self.edge_q,
-            &mut self.row_x,
-            s,
-            r0,
-            (ux.lo, ux.hi),
-            &UFamily(flow(mu)),
-        );
-        let rows = (vy.hi - vy.lo).max(0) as usize;
-        let r0 = row0(vy.lo);
-        let n = rows * s;
-        tendencies(
-            &mut qv[r0..r0 + n],
-            &mut mv_[r0..r0 + n],
-            &mut self.edge_m,
-            &mut self.edge_q,
-            &mut self.row_x,
-            s,
-            r0,
-            (0, g.nx as isize),
-            &VFamily(flow(mv)),
-        );
-    }
-}
-
-/// Face masses (densities) from the cell densities, ghosts included (rows in parallel): on
-/// u-faces every padded row but the last, columns 1.. and column 0 a copy of column 1; on
-/// v-faces every padded row from the second, row 0 a copy of row 1, all columns but the last.
-/// The u-faces' last row and the v-faces' last column, outside every stencil, are set to zero
-/// (the arrays come from the shared pool, whatever they held).
-fn face_masses(rho: &Field, mu: &mut [f64], mv: &mut [f64]) {
-    let s = rho.stride();
-    let rows = rho.rows();
-    let r = rho.data();
-    mu[(rows - 1) * s..].fill(0.0);
-    mv.iter_mut().skip(s - 1).step_by(s).for_each(|m| *m = 0.0);
-    par::rows(&mut mu[..(rows - 1) * s], s).for_each(|j, row| {
-        let rr = &r[j * s..(j + 1) * s];
-        for c in 1..s {
-            row[c] = crate::ops::face_density(rr[c - 1], rr[c]);
-        }
-        row[0] = row[1];
-    });
-    par::rows(&mut *mv, s).for_each(|j, row| {
-        let j = j.max(1);
-        let (lo, hi) = (&r[(j - 1) * s..j * s], &r[j * s..(j + 1) * s]);
-        for c in 0..s - 1 {
-            row[c] = 0.5 * (lo[c] + hi[c]);
-        }
-    });
-}
-
-/// One Euler stage of SSP-RK2 on the unknown faces of one family ([`Euler::update`]).
-struct Euler<'a> {
-    dt: f64,
-    /// `Δt/Δtₙ₋₁` of the `WholeStep` predictor, 0 without history.
-    lag: f64,
-    /// Whether this is the second stage (averaged with the start of the step).
-    second: bool,
-    rho: &'a Field,
-}
-
-impl Euler<'_> {
-    /// The velocity `x` and face mass `m1` of the faces of `region` (normal to axis `a`) after
-    /// an Euler stage from the current values with the tendencies `q` (momentum) and `dm`
-    /// (mass); `x0` is the start-of-step velocity and `y` the velocity this stage left at the
-    /// previous step (empty without history). Lines in parallel, each writing its own faces.
-    fn update(
-        &self,
-        region: Region,
-        a: usize,
-        x: &mut Field,
-        m1: &mut [f64],
-        [x0, y, q, dm]: [&[f64]; 4],
-    ) {
-        let (dt, lag, second) = (self.dt, self.lag, self.second);
-        let below = efsi_core::operators::minus(a);
-        let m1 = region.storage(m1);
-        region.for_each((x, m1), |l, (xr, mr)| {
-            let n = l.len;
-            let (x0, q, dm) = (
-                &l.on(x0, [0; 3])[..n],
-                &l.on(q, [0; 3])[..n],
-                &l.on(dm, [0; 3])[..n],
-            );
-            let y = if lag != 0.0 {
-                &l.on(y, [0; 3])[..n]
-            } else {
-                &[]
-            };
-            let (rho_lo, rho_hi) = (&self.rho.at(&l, below)[..n], &self.rho.at(&l, [0; 3])[..n]);
-            let (xr, mr) = (&mut xr[..n], &mut mr[..n]);
-            for c in 0..n {
-                // The other stages' increment added to the first stage's velocity.
-                let other = if lag != 0.0 {
-                    lag * (x0[c] - y[c])
-                } else {
-                    0.0
-                };
-                // (m, m u) after an Euler step from the current stage values (the second
-                // stage from the first's momentum, without that increment).
-                let m_e = mr[c] + dt * dm[c];
-                let q_e = if second && lag != 0.0 {
-                    mr[c] * (xr[c] - other) + dt * q[c]
-                } else {
-                    mr[c] * xr[c] + dt * q[c]
-                };
-                let (m_new, q_new) = if !second {
-                    (m_e, q_e)
-                } else {
-                    // The start-of-step face mass, as `face_masses` gave it.
-                    let a = crate::ops::face_density(rho_lo[c], rho_hi[c]);
-                    (0.5 * (a + m_e), 0.5 * (a * x0[c] + q_e))
-                };
-                mr[c] = m_new;
-                xr[c] = q_new / m_new;
-                if !second && lag != 0.0 {
-                    xr[c] += other;
-                }
-            }
-        });
-    }
 }
 
 impl Stage for AdvectionStage {
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
-        advective_dt(grid, &state.u, &state.v, cfl)
+        let (vel, dims) = velocity(grid, state);
+        advective_dt(grid, &vel[..dims], cfl)
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
-        // SSP-RK2 (Heun) on (m, m u):
-        //   m¹ = m⁰ + Δt Lm(m⁰, V⁰),  (m u)¹ = m⁰u⁰ + Δt Lq(m⁰, V⁰),  u¹ = (m u)¹/m¹,
-        //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
         let g = ctx.grid;
-        let dt = ctx.dt;
+        let dims = g.dims();
+        let cv = control_volumes(g, ctx.bc);
         let scratch = self.scratch.clone();
         let mut pool = scratch.lock();
-        let [qu, qv, mu_, mv_, u0, v0, m1u, m1v] =
-            scratch::take::<WORK>(&mut pool, state.u.data().len());
-        face_masses(&state.rho, m1u, m1v);
-        copy(u0, state.u.data());
-        copy(v0, state.v.data());
-        let faces = UnknownFaces::new(g, ctx.bc);
-        // The other stages' increments of the last step, rescaled to this Δt (module docs).
-        let mut carry = self.carry.take();
-        let (lag, yu, yv): (f64, &[f64], &[f64]) = match &carry {
-            Some(c) if c.dt > 0.0 => (dt / c.dt, &c.u, &c.v),
-            _ => (0.0, &[], &[]),
-        };
-        for stage in 0..2 {
-            self.rhs(
-                ctx,
-                &state.u,
-                &state.v,
-                [m1u, m1v],
-                [&mut *qu, &mut *qv, &mut *mu_, &mut *mv_],
-            );
-            let step = Euler {
-                dt,
-                lag,
-                second: stage == 1,
-                rho: &state.rho,
-            };
-            step.update(
-                faces.u_region(),
-                0,
-                &mut state.u,
-                m1u,
-                [&*u0, yu, &*qu, &*mu_],
-            );
-            step.update(
-                faces.v_region(),
-                1,
-                &mut state.v,
-                m1v,
-                [&*v0, yv, &*qv, &*mv_],
-            );
-            if stage == 0 {
-                ctx.bc
-                    .fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        let State { u, v, w, rho, .. } = state;
+        let mut none = Field::default();
+        let mut vel = [u, v, w.as_mut().unwrap_or(&mut none)];
+        // Between the stages: the boundary conditions at the end of the step. (On a
+        // three-dimensional grid the z ghosts and w are the boundary set's to fill.)
+        let mut fill = |vel: &mut [&mut Field]| {
+            if let [u, v, ..] = vel {
+                ctx.bc.fill_velocity(g, u, v, ctx.t + ctx.dt, false);
             }
-        }
-        if let Some(c) = &mut carry {
-            copy(&mut c.u, state.u.data());
-            copy(&mut c.v, state.v.data());
-            c.dt = dt;
-        }
-        self.carry = carry;
+        };
+        advance(
+            g,
+            &cv[..dims],
+            ctx.dt,
+            &mut vel[..dims],
+            rho,
+            &mut pool,
+            self.history.as_mut(),
+            &mut fill,
+        );
         Ok(StageStats::default())
     }
 
     fn save_into(&self, out: &mut Vec<f64>) {
         out.clear();
-        if let Some(c) = &self.carry {
+        if let Some(h) = &self.history {
             // Room for the history from the first save on: no allocation once it exists.
-            out.reserve(1 + c.u.len() + c.v.len());
+            out.reserve(h.saved_len());
         }
-        if let Some(c) = self.carry.as_ref().filter(|c| c.dt > 0.0) {
-            out.push(c.dt);
-            out.extend_from_slice(&c.u);
-            out.extend_from_slice(&c.v);
+        if let Some(h) = self.history.as_ref().filter(|h| h.dt > 0.0) {
+            out.push(h.dt);
+            for v in &h.vel {
+                out.extend_from_slice(v);
+            }
         }
     }
 
@@ -689,21 +383,26 @@ impl Stage for AdvectionStage {
     /// Nothing (no history: the next step's second stage looks from advection alone), or what
     /// [`save`](Stage::save) wrote.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
-        match &mut self.carry {
-            Some(c) if data.is_empty() => {
-                c.dt = 0.0;
+        match &mut self.history {
+            Some(h) if data.is_empty() => {
+                h.dt = 0.0;
                 Ok(())
             }
-            Some(c) if data.len() == 1 + c.u.len() + c.v.len() && data[0] > 0.0 => {
-                let n = c.u.len();
-                c.dt = data[0];
-                c.u.copy_from_slice(&data[1..1 + n]);
-                c.v.copy_from_slice(&data[1 + n..]);
+            Some(h) if data.len() == h.saved_len() && data[0] > 0.0 => {
+                h.dt = data[0];
+                let n = h.vel[0].len();
+                for (v, d) in h.vel.iter_mut().zip(data[1..].chunks_exact(n)) {
+                    v.copy_from_slice(d);
+                }
                 Ok(())
             }
             None if data.is_empty() => Ok(()),
-            _ => Err(format!(
-                "expected the advection's history ([Δt] and two velocity arrays), got {} values",
+            h => Err(format!(
+                "expected the advection's history ([Δt] and {} velocity arrays), got {} values",
+                match h.as_ref().map_or(2, |h| h.vel.len()) {
+                    3 => "three",
+                    _ => "two",
+                },
                 data.len()
             )),
         }

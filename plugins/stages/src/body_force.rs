@@ -11,8 +11,12 @@
 //! it; in the seed's non-incremental scheme the projection removes it after the viscous step. In axisymmetric geometry only the axial component
 //! is allowed (the scene and [`FrameAcceleration::set_frame_acceleration`] check it).
 //!
+//! On a three-dimensional grid `g` and `a` have three components and the stage adds `Δt (g − a)_c`
+//! to every unknown face of each velocity component `c`, the same loop for every axis.
+//!
 //! **Step limit.** An explicit body force must not move the fluid more than a fraction of a cell
-//! per step: with the convective rate `C = max(|u|/dx + |v|/dy)`, the stage allows
+//! per step: with the convective rate `C = max(|u|/dx + |v|/dy (+ |w|/dz))`
+//! ([`crate::advection::convective_rate`]) and `h` the smallest cell size, the stage allows
 //! `Δt ≤ CFL · 2 / (C + √(C² + 4|g − a|/h))` (Kang, Fedkiw & Liu 2000), which equals the
 //! advective limit when `g − a = 0` and `CFL·√(h/|g − a|)` from rest.
 
@@ -22,6 +26,19 @@ use efsi_core::{
     BoundarySet, EfsiError, FieldId, Grid, Phase, Region, Scene, Simulation, Stage, StageError,
     StagePlugin, StageStats, Stagger, State, StepContext,
 };
+
+/// The scene's gravity as three components (z = 0 in a two-dimensional scene).
+fn gravity(scene: &Scene) -> [f64; 3] {
+    scene.gravity.xyz()
+}
+
+/// The frame acceleration of `state` as three components ([`State::frame_acceleration`]).
+fn frame_acceleration(state: &State) -> [f64; 3] {
+    [state.frame_acceleration.0, state.frame_acceleration.1, 0.0]
+}
+
+/// The location of velocity component `c`.
+const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 
 /// The body-force stage plugin.
 pub struct BodyForce;
@@ -87,7 +104,7 @@ impl StagePlugin for BodyForce {
         &VELOCITY
     }
     fn needed(&self, scene: &Scene, _options: &Options) -> bool {
-        scene.gravity != (0.0, 0.0)
+        gravity(scene) != [0.0; 3]
     }
     fn build(
         &self,
@@ -97,45 +114,96 @@ impl StagePlugin for BodyForce {
         _bc: &BoundarySet,
         _shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        Ok(Box::new(BodyForceStage {
-            g: scene.gravity.planar(),
-        }))
+        Ok(Box::new(BodyForceStage { g: gravity(scene) }))
     }
 }
 
 struct BodyForceStage {
-    g: (f64, f64),
+    g: [f64; 3],
 }
 
 impl BodyForceStage {
     /// `g − a`: gravity in the (possibly accelerating) frame of the grid.
-    fn effective(&self, state: &State) -> (f64, f64) {
-        let a = state.frame_acceleration;
-        (self.g.0 - a.0, self.g.1 - a.1)
+    fn effective(&self, state: &State) -> [f64; 3] {
+        let a = frame_acceleration(state);
+        std::array::from_fn(|c| self.g[c] - a[c])
     }
 }
 
 impl Stage for BodyForceStage {
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
-        let c = crate::ops::convective_rate(grid, &state.u, &state.v);
-        let (gx, gy) = self.effective(state);
-        let g = gx.hypot(gy) / grid.dx.min(grid.dy);
+        let (vel, dims) = crate::advection::velocity(grid, state);
+        let c = crate::advection::convective_rate(grid, &vel[..dims]);
+        let (e, h) = (self.effective(state), grid.h());
+        let (e, h) = (&e[..dims], &h[..dims]);
+        let g = e[1..].iter().fold(e[0], |s, x| s.hypot(*x))
+            / h[1..].iter().fold(h[0], |s, x| s.min(*x));
         Some(cfl * 2.0 / (c + (c * c + 4.0 * g).sqrt()))
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
-        let ux = ctx.bc.normal_faces(0, grid.nx);
-        let vy = ctx.bc.normal_faces(1, grid.ny);
-        let (gx, gy) = self.effective(state);
-        let (gx, gy) = (gx * ctx.dt, gy * ctx.dt);
+        let n = grid.n();
+        let g = self.effective(state);
+        let State { u, v, w, .. } = state;
+        let vel = [Some(u), Some(v), w.as_mut()];
         // The unknown faces of each velocity component.
-        Region::of(grid, Stagger::XFace)
-            .range(0, ux.lo, ux.hi)
-            .for_each(&mut state.u, |_, u| u.iter_mut().for_each(|u| *u += gx));
-        Region::of(grid, Stagger::YFace)
-            .range(1, vy.lo, vy.hi)
-            .for_each(&mut state.v, |_, v| v.iter_mut().for_each(|v| *v += gy));
+        for (c, f) in vel.into_iter().enumerate().take(grid.dims()) {
+            let f = f.expect("w on a three-dimensional grid");
+            let r = ctx.bc.normal_faces(c, n[c]);
+            let gc = g[c] * ctx.dt;
+            Region::of(grid, FACES[c])
+                .range(c, r.lo, r.hi)
+                .for_each(f, |_, f| f.iter_mut().for_each(|f| *f += gc));
+        }
         Ok(StageStats::default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::scene::{Boundaries, Boundary};
+    use efsi_core::schedule::StepContext;
+
+    #[test]
+    fn three_components_on_a_three_dimensional_grid() {
+        let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 0.6), (0.0, 2.0));
+        let side = || Boundary::Periodic;
+        let sides = Boundaries {
+            x_min: side(),
+            x_max: side(),
+            y_min: side(),
+            y_max: side(),
+        };
+        let bc = BoundarySet::new(&sides, &g);
+        let mut state = State::new(&g, 1.0, 1e-3, &Default::default());
+        state.frame_acceleration = (0.5, 0.25);
+        let mut stage = BodyForceStage {
+            g: [1.0, -2.0, 3.0],
+        };
+        // From rest the limit is CFL·√(h/|g − a|), h the smallest cell (0.2).
+        let e = (0.5f64 * 0.5 + 2.25 * 2.25 + 3.0 * 3.0).sqrt();
+        let dt = stage.max_dt(&g, &state, 0.4).unwrap();
+        assert!((dt - 0.4 * (0.2 / e).sqrt()).abs() < 1e-15, "Δt = {dt}");
+        let ctx = StepContext {
+            grid: &g,
+            bc: &bc,
+            t: 0.0,
+            dt: 0.1,
+            step: 0,
+        };
+        stage.run(&ctx, &mut state).unwrap();
+        let w = state.w.as_ref().unwrap();
+        let want = [0.5 * 0.1, -2.25 * 0.1, 3.0 * 0.1];
+        for (c, f) in [&state.u, &state.v, w].into_iter().enumerate() {
+            let faces = Region::of(&g, FACES[c]).range(c, 0, g.n()[c] as isize);
+            for n in 0..f.data().len() {
+                let i = f.index_of(n);
+                let inside = (0..3).all(|a| (faces.lo()[a]..faces.hi()[a]).contains(&i[a]));
+                let v = if inside { want[c] } else { 0.0 };
+                assert_eq!(f.data()[n], v, "component {c} at {i:?}");
+            }
+        }
     }
 }

@@ -68,11 +68,6 @@ impl UnknownFaces {
         self.regions[0]
     }
 
-    /// The unknown v-faces as a grid region (the second part of a compact vector).
-    pub(crate) fn v_region(&self) -> Region {
-        self.regions[1]
-    }
-
     /// Number of unknown u-faces (they come first).
     pub(crate) fn nu(&self) -> usize {
         self.regions[0].size()

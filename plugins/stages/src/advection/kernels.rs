@@ -1,0 +1,398 @@
+//! The momentum advection's kernels, written once for any number of axes over [`Region`] lines
+//! and axis shifts ([`unit`]): the face masses, the face fluxes, their balance, and the SSP-RK2
+//! step that combines them (the scheme is the parent module's).
+//!
+//! Component `c` of the velocity lives on the `c`-faces; its control volume `I` (centred on
+//! the `c`-face `I`) has, along each axis `a`, a lower face shared with control volume
+//! `I − e_a` and an upper one shared with `I + e_a`. Through the lower `a`-face flow
+//!
+//! - the mass flux `F_m = â · m̃` and the momentum flux `F_q = F_m · ũ_c`, with the advecting
+//!   velocity `â = ½(u_a[I − e_c] + u_a[I])` (for `a = c` the cell centre between the faces
+//!   `I − e_c` and `I`; for `a ≠ c` the edge between the two cells beside the face), and `m̃`,
+//!   `ũ_c` the van Leer reconstructions of the face mass and of `u_c` from
+//!   `[I − 2e_a, I − e_a, I, I + e_a]`, upwind by the sign of `â`;
+//! - and the balance of control volume `I` is
+//!   `L = −[(R⁺F[I + e₀] − R⁻F[I])/(h₀ r) + Σ_{a≥1} (F_a[I + e_a] − F_a[I])/h_a]`,
+//!   with the axisymmetric radius factors at the two x-faces of the control volume `R⁻, R⁺`
+//!   and at its centre `r` (`r_c(i−1), r_c(i), r_f(i)` for `c = 0`; `r_f(i), r_f(i+1), r_c(i)`
+//!   otherwise; all ones in planar and three-dimensional geometry).
+//!
+//! Each face flux is computed once: along x (the lines' axis) into a buffer of the line, along
+//! every other axis into a full-grid flux array ([`work`] counts them), which the balance
+//! differences. Every line writes only its own entries, so the results are the same, bit for
+//! bit, on any number of threads.
+
+use efsi_core::operators::minus;
+use efsi_core::{Field, Grid, Index, Region, Stagger, unit};
+
+/// The location of velocity component `c` (the `c`-faces).
+pub(crate) const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
+
+/// Full-grid work arrays of a step on a grid of `dims` axes, per component: the momentum and
+/// mass tendencies, the start-of-step velocity and the current stage's face masses (4), and
+/// the mass and momentum fluxes along each axis but the first, shared by the components (2
+/// per axis): `6·dims − 2` (10 in two dimensions, 16 in three).
+pub const fn work(dims: usize) -> usize {
+    6 * dims - 2
+}
+
+/// A shift by `k` along axis `a`.
+#[inline(always)]
+fn along(a: usize, k: isize) -> Index {
+    let mut s = [0; 3];
+    s[a] = k;
+    s
+}
+
+/// van Leer limited face value for advecting velocity `a` between `c0` (left/below) and `c1`,
+/// with `cm` left of `c0` and `c2` right of `c1`.
+#[inline(always)]
+pub(crate) fn face_value(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
+    let (up, c, d) = if a >= 0.0 { (cm, c0, c1) } else { (c2, c1, c0) };
+    let denom = d - c;
+    if denom.abs() < 1e-300 {
+        return c;
+    }
+    let r = (c - up) / denom;
+    let psi = (r + r.abs()) / (1.0 + r.abs());
+    c + 0.5 * psi * denom
+}
+
+/// [`face_value`] in van Leer's harmonic form, one division instead of two and no branch on
+/// the data: with `p = q_C − q_U` and `q = q_D − q_C`, `½ψ(p/q)·q = pq/(p + q)` where
+/// `pq > 0`, else 0 — the same limiter, rounded differently.
+#[inline(always)]
+fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
+    let pos = a >= 0.0;
+    let up = if pos { cm } else { c2 };
+    let c = if pos { c0 } else { c1 };
+    let d = if pos { c1 } else { c0 };
+    let (p, q) = (c - up, d - c);
+    let pq = p * q;
+    c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
+}
+
+/// Flux `(a m̃, a m̃ q̃)` through a control-volume face with advecting velocity `a`, from the
+/// masses `m` and values `q` of the four control volumes along the flux direction.
+#[inline(always)]
+fn flux(a: f64, m: [f64; 4], q: [f64; 4]) -> (f64, f64) {
+    let fm = a * limited(a, m[0], m[1], m[2], m[3]);
+    (fm, fm * limited(a, q[0], q[1], q[2], q[3]))
+}
+
+/// The face masses of component `c` (the densities of its control volumes) everywhere in the
+/// padded storage: `ρ_f[I] = ½(ρ[I − e_c] + ρ[I])`, the lowest ghost layer along `c`
+/// repeating the next one (its cell below is outside the storage). The ghost masses are not
+/// advanced by the Euler stages (the boundary set fills velocities, not face masses), so
+/// across a periodic side the mass and momentum fluxes match their images only where the
+/// density is uniform and the mass does not change; inside the box every flux enters the two
+/// control volumes it separates and the sums are conserved to round-off.
+pub(crate) fn face_masses(grid: &Grid, rho: &Field, c: usize, m: &mut [f64]) {
+    let whole = Region::whole(grid);
+    let lowest = whole.lo()[c];
+    whole.for_each(whole.storage(m), |l, m| {
+        let m = &mut m[..l.len];
+        if c == 0 {
+            let r = &rho.at(&l, [0; 3])[..l.len];
+            m[0] = crate::ops::face_density(r[0], r[1]);
+            for n in 1..l.len {
+                m[n] = crate::ops::face_density(r[n - 1], r[n]);
+            }
+        } else {
+            let (below, here) = if l.start[c] == lowest {
+                ([0; 3], unit(c))
+            } else {
+                (minus(c), [0; 3])
+            };
+            let (b, h) = (&rho.at(&l, below)[..l.len], &rho.at(&l, here)[..l.len]);
+            for n in 0..l.len {
+                m[n] = crate::ops::face_density(b[n], h[n]);
+            }
+        }
+    });
+}
+
+/// The mass and momentum fluxes `(fm, fq)` of component `c` through the lower `a`-faces
+/// (`a ≥ 1`) of the control volumes `cv` and the upper faces of its last layer along `a`.
+fn face_fluxes(
+    cv: Region,
+    a: usize,
+    c: usize,
+    vel: &[&Field],
+    m: &[f64],
+    fm: &mut [f64],
+    fq: &mut [f64],
+) {
+    let faces = cv.range(a, cv.lo()[a], cv.hi()[a] + 1);
+    let (adv, q) = (vel[a], vel[c]);
+    faces.for_each((faces.storage(fm), faces.storage(fq)), |l, (fm, fq)| {
+        let n = l.len;
+        let (a0, a1) = (&adv.at(&l, minus(c))[..n], &adv.at(&l, [0; 3])[..n]);
+        let ms = [-2, -1, 0, 1].map(|k| &l.on(m, along(a, k))[..n]);
+        let qs = [-2, -1, 0, 1].map(|k| &q.at(&l, along(a, k))[..n]);
+        let (fm, fq) = (&mut fm[..n], &mut fq[..n]);
+        for i in 0..n {
+            (fm[i], fq[i]) = flux(
+                0.5 * (a0[i] + a1[i]),
+                [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
+                [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
+            );
+        }
+    });
+}
+
+/// Control volumes per chunk of a line whose x-face fluxes are kept on the stack.
+const CHUNK: usize = 128;
+
+/// The momentum and mass tendencies `(qt, mt)` of component `c` on its control volumes `cv`
+/// (module docs), from the fluxes along the axes `1..` in `fluxes` (`(fm, fq)` per axis).
+#[allow(clippy::too_many_arguments)]
+fn balance(
+    grid: &Grid,
+    cv: Region,
+    c: usize,
+    vel: &[&Field],
+    m: &[f64],
+    fluxes: &[(&[f64], &[f64])],
+    qt: &mut [f64],
+    mt: &mut [f64],
+) {
+    let xs = cv.range(0, cv.lo()[0], cv.hi()[0] + 1);
+    let (metric, h) = (&grid.metric, grid.h());
+    let (u, q) = (vel[0], vel[c]);
+    cv.for_each((cv.storage(qt), cv.storage(mt)), |l, (qt, mt)| {
+        let len = l.len;
+        let (qt, mt) = (&mut qt[..len], &mut mt[..len]);
+        let (rm, rp, r) = if c == 0 {
+            (
+                metric.rc_on(&l, -1),
+                metric.rc_on(&l, 0),
+                metric.rx_on(&l, 0),
+            )
+        } else {
+            (
+                metric.rx_on(&l, 0),
+                metric.rx_on(&l, 1),
+                metric.rc_on(&l, 0),
+            )
+        };
+        // The x-faces of the line's control volumes: `len + 1` fluxes.
+        let xl = xs.line(l.n);
+        let (a0, a1) = (u.at(&xl, minus(c)), u.at(&xl, [0; 3]));
+        let ms = [-2, -1, 0, 1].map(|k| xl.on(m, along(0, k)));
+        let qs = [-2, -1, 0, 1].map(|k| q.at(&xl, along(0, k)));
+        // x- and axis-1 fluxes in one pass, further axes after; the last flips the sign.
+        let (m0, m1) = (l.on(fluxes[0].0, [0; 3]), l.on(fluxes[0].0, unit(1)));
+        let (q0, q1) = (l.on(fluxes[0].1, [0; 3]), l.on(fluxes[0].1, unit(1)));
+        let last = fluxes.len() == 1;
+        let (mut bm, mut bq) = ([0.0; CHUNK + 1], [0.0; CHUNK + 1]);
+        for n0 in (0..len).step_by(CHUNK) {
+            let k = CHUNK.min(len - n0);
+            let x = n0..n0 + k + 1;
+            let (a0, a1) = (&a0[x.clone()], &a1[x.clone()]);
+            let ms = ms.map(|s| &s[x.clone()]);
+            let qs = qs.map(|s| &s[x.clone()]);
+            let (bm, bq) = (&mut bm[..=k], &mut bq[..=k]);
+            for i in 0..=k {
+                (bm[i], bq[i]) = flux(
+                    0.5 * (a0[i] + a1[i]),
+                    [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
+                    [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
+                );
+            }
+            let y = n0..n0 + k;
+            let (rm, rp, r) = (&rm[y.clone()], &rp[y.clone()], &r[y.clone()]);
+            let (m0, m1, q0, q1) = (
+                &m0[y.clone()],
+                &m1[y.clone()],
+                &q0[y.clone()],
+                &q1[y.clone()],
+            );
+            let (qt, mt) = (&mut qt[y.clone()], &mut mt[y]);
+            for i in 0..k {
+                let d = h[0] * r[i];
+                let sq = (rp[i] * bq[i + 1] - rm[i] * bq[i]) / d + (q1[i] - q0[i]) / h[1];
+                let sm = (rp[i] * bm[i + 1] - rm[i] * bm[i]) / d + (m1[i] - m0[i]) / h[1];
+                (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
+            }
+        }
+        for (a, &(fm, fq)) in (2..).zip(&fluxes[1..]) {
+            let last = a == fluxes.len();
+            let (m0, m1) = (&l.on(fm, [0; 3])[..len], &l.on(fm, unit(a))[..len]);
+            let (q0, q1) = (&l.on(fq, [0; 3])[..len], &l.on(fq, unit(a))[..len]);
+            for i in 0..len {
+                let sq = qt[i] + (q1[i] - q0[i]) / h[a];
+                let sm = mt[i] + (m1[i] - m0[i]) / h[a];
+                (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
+            }
+        }
+    });
+}
+
+/// The velocity components of a step and the arrays it works in.
+pub(crate) struct Work<'a> {
+    /// Momentum and mass tendencies per component.
+    pub(crate) qt: [&'a mut [f64]; 3],
+    pub(crate) mt: [&'a mut [f64]; 3],
+    /// Start-of-step velocity per component.
+    pub(crate) x0: [&'a mut [f64]; 3],
+    /// The current stage's face masses per component.
+    pub(crate) m: [&'a mut [f64]; 3],
+    /// Mass and momentum fluxes along axis `a ≥ 1` (index `a − 1`).
+    pub(crate) fm: [&'a mut [f64]; 2],
+    pub(crate) fq: [&'a mut [f64]; 2],
+}
+
+impl<'a> Work<'a> {
+    /// [`work`]`(dims)` arrays of `len` values each, cut from the front of `pool`; the arrays of
+    /// absent axes are empty.
+    pub(crate) fn cut(pool: &'a mut [f64], dims: usize, len: usize) -> Self {
+        let mut parts = pool[..work(dims) * len].chunks_exact_mut(len);
+        let mut take = |n: usize, k: usize| {
+            if k < n {
+                parts.next().expect("pool sized by work(dims)")
+            } else {
+                Default::default()
+            }
+        };
+        let m = std::array::from_fn(|k| take(dims, k));
+        let x0 = std::array::from_fn(|k| take(dims, k));
+        let qt = std::array::from_fn(|k| take(dims, k));
+        let mt = std::array::from_fn(|k| take(dims, k));
+        let fm = std::array::from_fn(|k| take(dims - 1, k));
+        let fq = std::array::from_fn(|k| take(dims - 1, k));
+        Work {
+            qt,
+            mt,
+            x0,
+            m,
+            fm,
+            fq,
+        }
+    }
+}
+
+/// The momentum and mass tendencies of every component on its control volumes `cv[c]`, for
+/// the velocity `vel` and the face masses `work.m` (ghosts filled).
+pub(crate) fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], work: &mut Work) {
+    let dims = vel.len();
+    let Work {
+        qt, mt, m, fm, fq, ..
+    } = work;
+    for c in 0..dims {
+        for a in 1..dims {
+            face_fluxes(cv[c], a, c, vel, &*m[c], &mut *fm[a - 1], &mut *fq[a - 1]);
+        }
+        let fluxes = [(&*fm[0], &*fq[0]), (&*fm[1], &*fq[1])];
+        balance(
+            grid,
+            cv[c],
+            c,
+            vel,
+            &*m[c],
+            &fluxes[..dims - 1],
+            &mut *qt[c],
+            &mut *mt[c],
+        );
+    }
+}
+
+/// One Euler stage of SSP-RK2 on the control volumes of one component ([`Euler::update`]).
+pub(crate) struct Euler<'a> {
+    pub(crate) dt: f64,
+    /// `Δt/Δtₙ₋₁` of the `WholeStep` predictor, 0 without history.
+    pub(crate) lag: f64,
+    /// Whether this is the second stage (averaged with the start of the step).
+    pub(crate) second: bool,
+    pub(crate) rho: &'a Field,
+}
+
+impl Euler<'_> {
+    /// The velocity `x` and face mass `m1` of the faces of `region` (normal to axis `a`) after
+    /// an Euler stage from the current values with the tendencies `q` (momentum) and `dm`
+    /// (mass); `x0` is the start-of-step velocity and `y` the velocity this stage left at the
+    /// previous step (empty without history). Lines in parallel, each writing its own faces.
+    pub(crate) fn update(
+        &self,
+        region: Region,
+        a: usize,
+        x: &mut Field,
+        m1: &mut [f64],
+        [x0, y, q, dm]: [&[f64]; 4],
+    ) {
+        let (dt, lag, second) = (self.dt, self.lag, self.second);
+        let below = minus(a);
+        let m1 = region.storage(m1);
+        region.for_each((x, m1), |l, (xr, mr)| {
+            let n = l.len;
+            let (x0, q, dm) = (
+                &l.on(x0, [0; 3])[..n],
+                &l.on(q, [0; 3])[..n],
+                &l.on(dm, [0; 3])[..n],
+            );
+            let y = if lag != 0.0 {
+                &l.on(y, [0; 3])[..n]
+            } else {
+                &[]
+            };
+            let (rho_lo, rho_hi) = (&self.rho.at(&l, below)[..n], &self.rho.at(&l, [0; 3])[..n]);
+            let (xr, mr) = (&mut xr[..n], &mut mr[..n]);
+            for c in 0..n {
+                // The other stages' increment added to the first stage's velocity.
+                let other = if lag != 0.0 {
+                    lag * (x0[c] - y[c])
+                } else {
+                    0.0
+                };
+                // (m, m u) after an Euler step from the current stage values (the second
+                // stage from the first's momentum, without that increment).
+                let m_e = mr[c] + dt * dm[c];
+                let q_e = if second && lag != 0.0 {
+                    mr[c] * (xr[c] - other) + dt * q[c]
+                } else {
+                    mr[c] * xr[c] + dt * q[c]
+                };
+                let (m_new, q_new) = if !second {
+                    (m_e, q_e)
+                } else {
+                    // The start-of-step face mass, as `face_masses` gave it.
+                    let a = crate::ops::face_density(rho_lo[c], rho_hi[c]);
+                    (0.5 * (a + m_e), 0.5 * (a * x0[c] + q_e))
+                };
+                mr[c] = m_new;
+                xr[c] = q_new / m_new;
+                if !second && lag != 0.0 {
+                    xr[c] += other;
+                }
+            }
+        });
+    }
+}
+
+/// The convective rate `C = max over cells of Σ_a max(|u_a[I]|, |u_a[I + e_a]|)/h_a` of the
+/// velocity `vel` (one component per axis): the explicit advective limit is `Δt ≤ CFL/C`. A
+/// maximum, so the same on any number of threads.
+pub fn convective_rate(grid: &Grid, vel: &[&Field]) -> f64 {
+    let [dx, dy, dz] = grid.h();
+    Region::of(grid, Stagger::Cell).max(0.0, |l| {
+        let (u0, u1) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
+        let (v0, v1) = (vel[1].at(&l, [0; 3]), vel[1].at(&l, unit(1)));
+        let mut c = 0.0f64;
+        if let Some(w) = vel.get(2) {
+            let (w0, w1) = (w.at(&l, [0; 3]), w.at(&l, unit(2)));
+            for n in 0..l.len {
+                let uu = u0[n].abs().max(u1[n].abs());
+                let vv = v0[n].abs().max(v1[n].abs());
+                let ww = w0[n].abs().max(w1[n].abs());
+                c = c.max(uu / dx + vv / dy + ww / dz);
+            }
+        } else {
+            for n in 0..l.len {
+                let uu = u0[n].abs().max(u1[n].abs());
+                let vv = v0[n].abs().max(v1[n].abs());
+                c = c.max(uu / dx + vv / dy);
+            }
+        }
+        c
+    })
+}
