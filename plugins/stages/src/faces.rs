@@ -8,8 +8,8 @@ use efsi_core::{BoundarySet, Field, Grid, Region, Stagger};
 use efsi_linalg::par;
 
 /// The normal-velocity faces an implicit stage solves for, in one compact order: the u-faces line
-/// by line, then the v-faces line by line. Compact vectors of the linear solvers use this order;
-/// [`UnknownFaces::for_each`] maps it to the fields' storage.
+/// by line, then the v-faces line by line (the lines of [`UnknownFaces::u_region`], then of
+/// [`UnknownFaces::v_region`]). Compact vectors of the linear solvers use this order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct UnknownFaces {
     /// Unknown u-faces along x (all rows).
@@ -51,21 +51,6 @@ impl UnknownFaces {
     /// Number of unknowns.
     pub(crate) fn len(&self) -> usize {
         self.nu() + self.v.size()
-    }
-
-    /// Call `f(compact index, is_u, storage index)` for every unknown face, in order.
-    #[inline]
-    pub(crate) fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
-        let mut c = 0;
-        for (r, is_u) in [(&self.u, true), (&self.v, false)] {
-            for n in 0..r.lines() {
-                let l = r.line(n);
-                for m in 0..l.len {
-                    f(c, is_u, l.linear(m));
-                    c += 1;
-                }
-            }
-        }
     }
 
     /// Write the compact vector `x` into the unknown faces of `u`, `v`.
