@@ -102,10 +102,10 @@ pub fn sum4(n: usize, f: impl Fn(usize) -> f64) -> f64 {
 /// Run `f` — serial work between parallel loops — while another thread of the pool, if one
 /// is free, spins until it is done, so that the parallel loop after it finds that thread
 /// awake. A rayon worker with nothing to do falls asleep after some tens of microseconds,
-/// and waking it costs about as long again: measured on the 2-core VM, a 256² red–black
-/// sweep (100 µs on one thread, 52 µs on two back to back) took 94 µs on two threads after
-/// a 50 µs serial pause. This is the "active wait" that OpenMP runtimes apply between
-/// parallel regions, for the stretches where it pays (the multigrid's serial coarse levels).
+/// and waking it costs about as long again, so a parallel loop that follows a serial stretch
+/// of that length would pay the wake-up on top of its own work. This is the "active wait"
+/// that OpenMP runtimes apply between parallel regions, for the stretches where it pays (the
+/// multigrid's serial coarse levels).
 /// The spinning thread yields every few dozen rounds, so that on an oversubscribed machine it
 /// does not take the core from the thread doing `f`. On one thread it is just `f()`.
 pub fn serial_warm<R: Send>(f: impl FnOnce() -> R + Send) -> R {

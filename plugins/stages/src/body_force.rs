@@ -170,12 +170,9 @@ mod tests {
     fn three_components_on_a_three_dimensional_grid() {
         let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 0.6), (0.0, 2.0));
         let side = || Boundary::Periodic;
-        let sides = Boundaries {
-            x_min: side(),
-            x_max: side(),
-            y_min: side(),
-            y_max: side(),
-        };
+        let mut sides = Boundaries::planar(side(), side(), side(), side());
+        sides.z_min = Some(side());
+        sides.z_max = Some(side());
         let bc = BoundarySet::new(&sides, &g);
         let mut state = State::new(&g, 1.0, 1e-3, &Default::default());
         state.frame_acceleration = (0.5, 0.25);

@@ -93,7 +93,7 @@ impl UnknownFaces {
     }
 
     /// Call `f(compact index, axis, storage index)` for every unknown face, in order.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn for_each_axis(&self, mut f: impl FnMut(usize, usize, usize)) {
         let mut c = 0;
         for (a, r) in self.regions.iter().enumerate() {
@@ -105,13 +105,6 @@ impl UnknownFaces {
                 }
             }
         }
-    }
-
-    /// Call `f(compact index, is_u, storage index)` for every unknown face, in order (the
-    /// two-dimensional form of [`for_each_axis`](Self::for_each_axis)).
-    #[inline]
-    pub(crate) fn for_each(&self, mut f: impl FnMut(usize, bool, usize)) {
-        self.for_each_axis(|c, a, q| f(c, a == 0, q));
     }
 
     /// Write the compact vector `x` into the unknown faces of the velocity `vel`.

@@ -117,7 +117,8 @@ use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
 use crate::ops;
 use crate::projection;
-use efsi_core::{BoundarySet, Field, Grid, StageError, State, StepContext};
+use efsi_core::operators::minus;
+use efsi_core::{BoundarySet, Field, Grid, Region, StageError, Stagger, State, StepContext};
 use efsi_linalg::par;
 use efsi_linalg::{
     Accept, Fgmres, FlexiblePreconditioner, LinearOperator, Multigrid, Preconditioner, SolveStats,
@@ -189,25 +190,25 @@ impl Coupling {
 fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]) {
     let (m, dx, dy) = (&g.metric, g.dx, g.dy);
     let (yu, yv) = y.split_at_mut(faces.nu());
-    let lo = faces.ux.lo;
-    let nur = (faces.ux.hi - lo).max(0) as usize;
-    if nur > 0 {
-        par::rows(&mut *yu, nur).for_each(|j, row| {
-            let j = j as isize;
-            for (t, y) in row.iter_mut().enumerate() {
-                let i = lo + t as isize;
-                *y += c * m.rx(i) * dy * (q[(i, j)] - q[(i - 1, j)]);
+    // The faces normal to axis a, between the cells I − e_a and I, of area `r dy` (x-faces,
+    // r = r_f) or `r dx` (y-faces, r = r_c).
+    for (a, r, y) in [(0, faces.region(0), yu), (1, faces.region(1), yv)] {
+        if r.is_empty() {
+            continue;
+        }
+        par::rows(y, r.len(0)).for_each(|n, row| {
+            let l = r.line(n);
+            let (lo, hi) = (q.at(&l, minus(a)), q.at(&l, [0; 3]));
+            let (area, h) = if a == 0 {
+                (m.rx_on(&l, 0), dy)
+            } else {
+                (m.rc_on(&l, 0), dx)
+            };
+            for (n, y) in row.iter_mut().enumerate() {
+                *y += c * area[n] * h * (hi[n] - lo[n]);
             }
         });
     }
-    let vlo = faces.vy.lo;
-    par::rows(&mut *yv, g.nx).for_each(|r, row| {
-        let j = vlo + r as isize;
-        for (i, y) in row.iter_mut().enumerate() {
-            let i = i as isize;
-            *y += c * m.rc(i) * dx * (q[(i, j)] - q[(i, j - 1)]);
-        }
-    });
 }
 
 /// `out = c (Δt/dV) F(u, v)` per cell (`dt_vol` = Δt/dV, `F` the net outflux), rows in
@@ -223,12 +224,9 @@ fn outflux_per_volume(g: &Grid, u: &Field, v: &Field, dt_vol: &[f64], c: f64, ou
 
 /// Copy a per-cell vector into a cell field and fill its ghosts (homogeneous).
 fn to_field(g: &Grid, bc: &BoundarySet, x: &[f64], f: &mut Field) {
-    let nx = g.nx;
-    for j in 0..g.ny {
-        for i in 0..nx {
-            f[(i as isize, j as isize)] = x[j * nx + i];
-        }
-    }
+    Region::of(g, Stagger::Cell).for_each(&mut *f, |l, row| {
+        row.copy_from_slice(&x[l.n * l.len..][..l.len]);
+    });
     bc.fill_scalar(g, f, true);
 }
 
@@ -303,12 +301,12 @@ impl FlexiblePreconditioner for BlockTriangular<'_> {
             self.pb.iter_mut().for_each(|b| *b -= mean);
         }
         self.poisson.apply(self.pb, self.ps);
-        let (ps, eta) = (&*self.ps, self.eta);
+        let (ps, eta, cells) = (&*self.ps, self.eta, Region::of(g, Stagger::Cell));
         par::rows(&mut *zp, nx).for_each(|j, row| {
-            let jj = j as isize;
+            let eta = eta.at(&cells.line(j), [0; 3]);
             for (i, z) in row.iter_mut().enumerate() {
                 let c = j * nx + i;
-                *z = ps[c] + 2.0 * eta[(i as isize, jj)] * rc[c] / (om * dt * dt);
+                *z = ps[c] + 2.0 * eta[i] * rc[c] / (om * dt * dt);
             }
         });
         // The velocity: Â⁻¹ (r_u − ΔtĜ p).
@@ -391,12 +389,9 @@ impl ElasticStage {
         // From no increment and the pressure the last step ended with (the seed's scheme keeps
         // the whole pressure, which changes little from one step to the next).
         cp.x[..nf].fill(0.0);
-        let p = &state.p;
-        par::rows(&mut cp.x[nf..], g.nx).for_each(|j, row| {
-            for (i, x) in row.iter_mut().enumerate() {
-                *x = p[(i as isize, j as isize)];
-            }
-        });
+        let (p, cells) = (&state.p, Region::of(g, Stagger::Cell));
+        par::rows(&mut cp.x[nf..], g.nx)
+            .for_each(|j, row| row.copy_from_slice(p.at(&cells.line(j), [0; 3])));
         let (st, worst) = self.solve_saddle(cp, ctx, d, &tols);
         if !st.converged {
             return Err(self.unconverged(&st, worst, scale, &tols));
@@ -536,25 +531,20 @@ impl ElasticStage {
     fn apply(&self, cp: &Coupling, g: &Grid, bc: &BoundarySet, state: &mut State) {
         let nf = self.delta.len();
         let (delta, p) = cp.x.split_at(nf);
-        let (u, v) = (&mut state.u, &mut state.v);
-        self.op.k.faces.for_each(|c, is_u, q| {
-            if is_u {
-                u.data_mut()[q] += delta[c];
-            } else {
-                v.data_mut()[q] += delta[c];
-            }
-        });
+        self.op
+            .k
+            .faces
+            .add(delta, &mut [&mut state.u, &mut state.v]);
         let mean = if bc.has_pressure_reference() {
             0.0
         } else {
             p.iter().sum::<f64>() / g.cells() as f64
         };
-        let nx = g.nx;
-        for j in 0..g.ny {
-            for i in 0..nx {
-                state.p[(i as isize, j as isize)] = p[j * nx + i] - mean;
+        Region::of(g, Stagger::Cell).for_each(&mut state.p, |l, row| {
+            for (r, p) in row.iter_mut().zip(&p[l.n * l.len..]) {
+                *r = p - mean;
             }
-        }
+        });
         bc.fill_scalar(g, &mut state.p, true);
     }
 }

@@ -4,7 +4,7 @@
 use super::{
     AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing,
 };
-use efsi_core::{Grid, StageError, StageStats, State, StepContext};
+use efsi_core::{Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
@@ -132,19 +132,23 @@ impl DeformationStage {
             c if c.points() > 0 => c,
             _ => super::Window::new(0, nx - 1, 0, ny - 1),
         };
-        let (i0, i1, j0, j1) = (c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1));
+        let cells =
+            super::Window::new(c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1))
+                .region(grid);
         let [x_min, x_max, y_min, y_max] = self.walls;
         let (u, v) = (&state.u, &state.v);
+        let (dx, dy) = (grid.dx, grid.dy);
         let reach =
             |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
-        (j0..=j1).any(|j| {
-            (i0..=i1).any(|i| {
-                if phi[(i, j)] <= 0.5 {
+        (0..cells.lines()).map(|n| cells.line(n)).any(|l| {
+            let phi = phi.at(&l, [0; 3]);
+            let (uw, ue) = (u.at(&l, [0; 3]), u.at(&l, unit(0)));
+            let (vs, vn) = (v.at(&l, [0; 3]), v.at(&l, unit(1)));
+            l.indices().enumerate().any(|(n, [i, j, _])| {
+                if phi[n] <= 0.5 {
                     return false;
                 }
-                let uc = 0.5 * (u[(i, j)] + u[(i + 1, j)]);
-                let vc = 0.5 * (v[(i, j)] + v[(i, j + 1)]);
-                let (dx, dy) = (grid.dx, grid.dy);
+                let (uc, vc) = (0.5 * (uw[n] + ue[n]), 0.5 * (vs[n] + vn[n]));
                 (x_min && reach(i as f64 * dx, -uc, dx))
                     || (x_max && reach((nx - 1 - i) as f64 * dx, uc, dx))
                     || (y_min && reach(j as f64 * dy, -vc, dy))

@@ -1,7 +1,7 @@
 //! The strain energy of the deformation, `∫ w W(B) dV`.
 
-use super::{Kernels, avg4};
-use efsi_core::Field;
+use super::{CORNERS_OF_CELL, Four, Kernels};
+use efsi_core::{Field, Region, Stagger};
 use efsi_laws_host::ConstitutiveLaw;
 
 impl Kernels {
@@ -29,52 +29,23 @@ impl Kernels {
             0.326_072_577_431_273_1,
             0.173_927_422_568_726_9,
         ];
-        let (nx, ny) = self.nxy();
         let g = &self.grid;
-        let s = b[0].stride();
-        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
-        // Per centre: the in-plane eigen-decomposition (cos, sin, λ₁, λ₂) and λ₃ = B₃₃.
-        let mut energy = 0.0;
         let r = super::stress::rest_stress(law)?;
         let mut cells = std::mem::take(&mut self.energy_cells);
         cells.clear();
-        for j in 0..ny {
-            for i in 0..nx {
-                let k = b[0].idx(i, j);
-                let w = self.w.data()[k];
-                if w == 0.0 {
-                    continue;
+        let interior = Region::of(g, Stagger::Cell);
+        for l in (0..interior.lines()).map(|n| interior.line(n)) {
+            let [w, b11, b22, b33] = [&self.w, &b[0], &b[1], &b[2]].map(|f| f.at(&l, [0; 3]));
+            let b12 = Four::new(&b[3], &l, CORNERS_OF_CELL);
+            for n in (0..l.len).filter(|&n| w[n] != 0.0) {
+                if let Some(p) = principal_log(b11[n], b22[n], b12.avg(n), b33[n]) {
+                    cells.push((w[n], p, g.cell_volume(l.index(n)[0])));
                 }
-                let (a, d, c) = (b11[k], b22[k], avg4(b12, k, k + 1, k + s, k + s + 1));
-                let theta = 0.5 * (2.0 * c).atan2(a - d);
-                let (cs, sn) = (theta.cos(), theta.sin());
-                let l1 = a * cs * cs + 2.0 * c * cs * sn + d * sn * sn;
-                let l2 = a * sn * sn - 2.0 * c * cs * sn + d * cs * cs;
-                let l3 = b33[k];
-                if !(l1 > 0.0 && l2 > 0.0 && l3 > 0.0) {
-                    // No strain energy is defined (a sliver of an interface cell whose B the
-                    // mixed-cell velocity gradient has spoiled): it contributes nothing.
-                    continue;
-                }
-                // The isochoric part: an incompressible law's energy does not see det B, whose
-                // drift from 1 under the discrete transport would otherwise count as strain
-                // (G·Δ(det B)/2 per volume — the leading term for stiff solids).
-                let (m1, m2, m3) = (l1.ln(), l2.ln(), l3.ln());
-                let mean = (m1 + m2 + m3) / 3.0;
-                cells.push((
-                    k,
-                    w,
-                    cs,
-                    sn,
-                    m1 - mean,
-                    m2 - mean,
-                    m3 - mean,
-                    g.cell_volume(i),
-                ));
             }
         }
+        let mut energy = 0.0;
         for (q, wq) in S.iter().zip(WQ) {
-            for (n, &(_, _, cs, sn, m1, m2, m3, _)) in cells.iter().enumerate() {
+            for (n, &(_, [cs, sn, m1, m2, m3], _)) in cells.iter().enumerate() {
                 let (e1, e2, e3) = ((q * m1).exp(), (q * m2).exp(), (q * m3).exp());
                 self.cb[n] = [
                     e1 * cs * cs + e2 * sn * sn,
@@ -86,7 +57,7 @@ impl Kernels {
             let n = cells.len();
             law.evaluate(&self.cb[..n], &mut self.ct[..n], None)
                 .map_err(|e| e.to_string())?;
-            for (n, &(_, w, cs, sn, m1, m2, m3, vol)) in cells.iter().enumerate() {
+            for (n, &(w, [cs, sn, m1, m2, m3], vol)) in cells.iter().enumerate() {
                 let t = self.ct[n];
                 // M in the grid's axes.
                 let (mm11, mm22, mm12) = (
@@ -104,4 +75,25 @@ impl Kernels {
         self.energy_cells = cells;
         Ok(energy)
     }
+}
+
+/// The principal axes of B's in-plane part `[[a, c], [c, d]]` (cos, sin of the first axis'
+/// angle) and the isochoric parts of the logarithms of the principal stretches (`λ₁, λ₂` in the
+/// plane, `λ₃ = B₃₃`), or `None` where a stretch is not positive: no strain energy is defined
+/// there (a sliver of an interface cell whose B the mixed-cell velocity gradient has spoiled),
+/// and the cell contributes nothing.
+fn principal_log(a: f64, d: f64, c: f64, l3: f64) -> Option<[f64; 5]> {
+    let theta = 0.5 * (2.0 * c).atan2(a - d);
+    let (cs, sn) = (theta.cos(), theta.sin());
+    let l1 = a * cs * cs + 2.0 * c * cs * sn + d * sn * sn;
+    let l2 = a * sn * sn - 2.0 * c * cs * sn + d * cs * cs;
+    if !(l1 > 0.0 && l2 > 0.0 && l3 > 0.0) {
+        return None;
+    }
+    // The isochoric part: an incompressible law's energy does not see det B, whose drift from
+    // 1 under the discrete transport would otherwise count as strain (G·Δ(det B)/2 per volume —
+    // the leading term for stiff solids).
+    let (m1, m2, m3) = (l1.ln(), l2.ln(), l3.ln());
+    let mean = (m1 + m2 + m3) / 3.0;
+    Some([cs, sn, m1 - mean, m2 - mean, m3 - mean])
 }

@@ -2,9 +2,8 @@
 //! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
 //! cells.
 
-use super::{Kernels, NEAR, PHI_MIN, Window};
-use efsi_core::Field;
-use efsi_linalg::par;
+use super::{CELLS_OF_CORNER, Kernels, NEAR, PHI_MIN, Window, plus};
+use efsi_core::{Field, Index, Region};
 
 /// The least `aκ` the series corner's rates take (see [`sliver_rates`]).
 const SLIVER: f64 = 0.1;
@@ -35,25 +34,24 @@ impl Kernels {
     /// with ghosts filled.
     pub(super) fn set_weights(&mut self, phi: &Field) {
         let (nx, ny) = self.nxy();
-        // Every entry, ghosts included (one padded shape for all fields), in parallel chunks.
-        let pd = phi.data();
-        par::chunks(self.w.data_mut()).for_each(|o, w| {
-            for (w, f) in w.iter_mut().zip(&pd[o..]) {
+        // Every entry, ghosts included.
+        Region::whole(&self.grid).for_each(&mut self.w, |l, w| {
+            for (w, f) in w.iter_mut().zip(phi.at(&l, [0; 3])) {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         });
         // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`).
         let (mut c, mut m) = (Window::new(nx, -1, ny, -1), Window::new(nx, -1, ny, -1));
-        let wd = self.w.data();
-        for j in -1..=ny {
-            let o = self.w.idx(-1, j);
-            for (f, d, b) in [(wd, 0.0, &mut c), (pd, 0.0, &mut m)] {
-                let row = &f[o..o + (nx + 2) as usize];
-                if let Some(first) = row.iter().position(|&w| w > d) {
-                    let last = row.iter().rposition(|&w| w > d).unwrap_or(first);
+        let batch = Window::new(-1, nx, -1, ny).region(&self.grid);
+        for l in (0..batch.lines()).map(|n| batch.line(n)) {
+            let j = l.start[1];
+            for (f, b) in [(&self.w, &mut c), (phi, &mut m)] {
+                let row = f.at(&l, [0; 3]);
+                if let Some(first) = row.iter().position(|&w| w > 0.0) {
+                    let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
                     *b = Window::new(
-                        b.i0.min(first as isize - 1),
-                        b.i1.max(last as isize - 1),
+                        b.i0.min(l.start[0] + first as isize),
+                        b.i1.max(l.start[0] + last as isize),
                         b.j0.min(j),
                         b.j1.max(j),
                     );
@@ -74,8 +72,6 @@ impl Kernels {
             )
         };
         self.near_k = self.near_c.corners(nx, ny);
-        let (mu_f, mu_s) = (self.mu_f, self.mu_s);
-        let g = efsi_core::G;
         // Corners none of whose cells holds solid: no weight, no series factors, the plain
         // average, and a normal of no consequence (it multiplies a zero extra shear rate).
         for f in [&mut self.wc, &mut self.wk, &mut self.ks, &mut self.rc] {
@@ -91,66 +87,82 @@ impl Kernels {
             return;
         }
         self.set_quarters(phi);
-        // The corners of the solid's centres, ghost corners included.
-        let (i0, i1) = (c.i0.max(1 - g), (c.i1 + 1).min(nx + g));
-        let (j0, j1) = (c.j0.max(1 - g), (c.j1 + 1).min(ny + g));
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                self.wc[(i, j)] = 0.25
-                    * (self.w[(i - 1, j - 1)]
-                        + self.w[(i, j - 1)]
-                        + self.w[(i - 1, j)]
-                        + self.w[(i, j)]);
-                // The corner's solid fraction: the four quarter cells around it.
-                let cells = [(i - 1, j - 1, 3), (i, j - 1, 2), (i - 1, j, 1), (i, j, 0)];
-                let q = cells.map(|(ci, cj, n)| self.quarter[n][(ci, cj)]);
-                let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
-                let lam = std::array::from_fn::<f64, 4, _>(|n| {
-                    let (ci, cj, _) = cells[n];
-                    if self.w[(ci, cj)] > 0.0 { q[n] } else { 0.0 }
-                });
-                let sum: f64 = lam.iter().sum();
-                let solid = cells.map(|(ci, cj, _)| f64::from(u8::from(self.w[(ci, cj)] > 0.0)));
-                let count: f64 = solid.iter().sum();
-                // The interface normal ∝ ∇φ across the corner.
-                let f = |ci: isize, cj: isize| phi[(ci, cj)].clamp(0.0, 1.0);
-                let gx = f(i, j) + f(i, j - 1) - f(i - 1, j) - f(i - 1, j - 1);
-                let gy = f(i, j) + f(i - 1, j) - f(i, j - 1) - f(i - 1, j - 1);
-                let g2 = gx * gx + gy * gy;
-                self.ny2[(i, j)] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
-                for n in 0..4 {
-                    self.kwt[n][(i, j)] = if sum > 0.0 {
-                        lam[n] / sum
-                    } else if count > 0.0 {
-                        solid[n] / count
-                    } else {
-                        0.25
-                    };
-                }
-                // (w_k, s, 1/κ, r): fluid, solid, interface in series.
-                let (wk, sf, ks, rc) = if self.wc[(i, j)] == 0.0 {
-                    (0.0, 1.0, 0.0, 0.0)
-                } else if a >= 1.0 {
-                    (1.0, 1.0, 1.0, 0.0)
-                } else if mu_f == 0.0 {
-                    // An inviscid fluid carries no shear: neither does the interface.
-                    (1.0, 1.0, 0.0, 0.0)
-                } else {
-                    // aκ = a + μ_s (1 − a)/μ_f: finite where the corner's quarters hold no
-                    // solid (a = 0) beside a cell that does.
-                    let ak = a + mu_s * (1.0 - a) / mu_f;
-                    if ak > 0.0 {
-                        let (sf, rc) = sliver_rates(a, ak, mu_f);
-                        (1.0, sf, a / ak, rc)
-                    } else {
-                        // No solid at an inviscid solid's corner: no shear carried.
-                        (1.0, 1.0, 0.0, 0.0)
-                    }
-                };
-                self.wk[(i, j)] = wk;
-                self.sf[(i, j)] = sf;
-                self.ks[(i, j)] = ks;
-                self.rc[(i, j)] = rc;
+        // The corners of the solid's centres, ghost corners included (those whose four cells
+        // lie in the fields' storage).
+        let whole = Region::whole(&self.grid);
+        let (lo, hi) = (whole.lo(), whole.hi());
+        let corners = Window::new(
+            c.i0.max(lo[0] + 1),
+            (c.i1 + 1).min(hi[0] - 1),
+            c.j0.max(lo[1] + 1),
+            (c.j1 + 1).min(hi[1] - 1),
+        )
+        .region(&self.grid);
+        for l in (0..corners.lines()).map(|n| corners.line(n)) {
+            for at in l.indices() {
+                self.set_corner(phi, at);
+            }
+        }
+    }
+
+    /// The weights of corner `at` from its four cells: the average `w_c` of their `φ^{1/2}`,
+    /// the cells' weights in the normal components, the normal's share `n_y²` and the series
+    /// factors (`w_k`, `s`, `1/κ`, `r`) of the interface closure.
+    fn set_corner(&mut self, phi: &Field, at: Index) {
+        let cells = CELLS_OF_CORNER.map(|s| plus(at, s));
+        let w = cells.map(|c| self.w[c]);
+        self.wc[at] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
+        // The corner's solid fraction: the four quarter cells around it (each cell's quarter
+        // at the corner: the corner is its upper-right, upper-left, lower-right, lower-left).
+        let q: [f64; 4] = std::array::from_fn(|n| self.quarter[3 - n][cells[n]]);
+        let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+        let lam: [f64; 4] = std::array::from_fn(|n| if w[n] > 0.0 { q[n] } else { 0.0 });
+        let sum: f64 = lam.iter().sum();
+        let solid = w.map(|w| f64::from(u8::from(w > 0.0)));
+        let count: f64 = solid.iter().sum();
+        // The interface normal ∝ ∇φ across the corner.
+        let f = cells.map(|c| phi[c].clamp(0.0, 1.0));
+        let gx = f[3] + f[1] - f[2] - f[0];
+        let gy = f[3] + f[2] - f[1] - f[0];
+        let g2 = gx * gx + gy * gy;
+        self.ny2[at] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
+        for n in 0..4 {
+            self.kwt[n][at] = if sum > 0.0 {
+                lam[n] / sum
+            } else if count > 0.0 {
+                solid[n] / count
+            } else {
+                0.25
+            };
+        }
+        let (wk, sf, ks, rc) = self.series(self.wc[at], a);
+        self.wk[at] = wk;
+        self.sf[at] = sf;
+        self.ks[at] = ks;
+        self.rc[at] = rc;
+    }
+
+    /// `(w_k, s, 1/κ, r)` of a corner whose cells' weights average `wc` and whose solid
+    /// fraction is `a`: fluid, solid, interface in series.
+    fn series(&self, wc: f64, a: f64) -> (f64, f64, f64, f64) {
+        let (mu_f, mu_s) = (self.mu_f, self.mu_s);
+        if wc == 0.0 {
+            (0.0, 1.0, 0.0, 0.0)
+        } else if a >= 1.0 {
+            (1.0, 1.0, 1.0, 0.0)
+        } else if mu_f == 0.0 {
+            // An inviscid fluid carries no shear: neither does the interface.
+            (1.0, 1.0, 0.0, 0.0)
+        } else {
+            // aκ = a + μ_s (1 − a)/μ_f: finite where the corner's quarters hold no solid
+            // (a = 0) beside a cell that does.
+            let ak = a + mu_s * (1.0 - a) / mu_f;
+            if ak > 0.0 {
+                let (sf, rc) = sliver_rates(a, ak, mu_f);
+                (1.0, sf, a / ak, rc)
+            } else {
+                // No solid at an inviscid solid's corner: no shear carried.
+                (1.0, 1.0, 0.0, 0.0)
             }
         }
     }
@@ -162,33 +174,32 @@ impl Kernels {
     pub(super) fn set_quarters(&mut self, phi: &Field) {
         let (nx, ny) = self.nxy();
         let (dx, dy) = (self.grid.dx, self.grid.dy);
-        let pd = phi.data();
-        // The cells around the solid's corners: its window and one more all round.
+        // The cells around the solid's corners: its window's rows and one more above and
+        // below, whole rows (short of the storage's last).
         let c = self.solid_c;
-        let g = efsi_core::G;
-        let (lo, hi) = (
-            phi.idx(-g, (c.j0 - 1).max(-g)),
-            phi.idx(-g, (c.j1 + 1).min(ny + g - 1)) + phi.stride(),
-        );
+        let whole = Region::whole(&self.grid);
+        let (lo, hi) = (whole.lo()[1], whole.hi()[1]);
+        let rows = whole.range(1, (c.j0 - 1).max(lo), (c.j1 + 2).min(hi - 1));
         for q in &mut self.quarter {
-            for (w, f) in q.data_mut()[lo..hi].iter_mut().zip(&pd[lo..hi]) {
-                *w = f.clamp(0.0, 1.0);
-            }
+            rows.for_each(q, |l, q| {
+                for (w, f) in q.iter_mut().zip(phi.at(&l, [0; 3])) {
+                    *w = f.clamp(0.0, 1.0);
+                }
+            });
         }
-        let c = self.solid_c;
-        let s = phi.stride();
-        for j in c.j0.max(-1)..=c.j1.min(ny) {
-            for i in c.i0.max(-1)..=c.i1.min(nx) {
-                let k = phi.idx(i, j);
-                let f = pd[k];
+        let cut = Window::new(c.i0.max(-1), c.i1.min(nx), c.j0.max(-1), c.j1.min(ny));
+        let cells = cut.region(&self.grid);
+        for l in (0..cells.lines()).map(|n| cells.line(n)) {
+            for at in l.indices() {
+                let f = phi[at];
                 if f <= 0.0 || f >= 1.0 {
                     continue;
                 }
-                let cl = |k: usize| pd[k].clamp(0.0, 1.0);
+                let cl = |di: isize, dj: isize| phi[plus(at, [di, dj, 0])].clamp(0.0, 1.0);
                 let b = [
-                    [cl(k - s - 1), cl(k - s), cl(k - s + 1)],
-                    [cl(k - 1), cl(k), cl(k + 1)],
-                    [cl(k + s - 1), cl(k + s), cl(k + s + 1)],
+                    [cl(-1, -1), cl(0, -1), cl(1, -1)],
+                    [cl(-1, 0), cl(0, 0), cl(1, 0)],
+                    [cl(-1, 1), cl(0, 1), cl(1, 1)],
                 ];
                 let (mx, my) = crate::vof::plic::youngs_normal(&b, dx, dy);
                 let line = crate::vof::plic::Line::planar(mx, my, f, dx, dy);
@@ -200,7 +211,7 @@ impl Kernels {
                     ((hx, hy), (dx, dy)),
                 ];
                 for (n, (lo, hi)) in boxes.into_iter().enumerate() {
-                    self.quarter[n].data_mut()[k] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
+                    self.quarter[n][at] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
                 }
             }
         }
@@ -211,15 +222,24 @@ impl Kernels {
     /// fluxes; this keeps it bounded (stale rates would otherwise compound step after step).
     pub(super) fn reset_fluid(&self, d: &mut super::Deformation) {
         self.reset_fluid_b(&mut d.b);
+        let whole = Region::whole(&self.grid);
         for c in 0..4 {
             let wt = if c == 3 { &self.wc } else { &self.w };
-            for (k, &w) in wt.data().iter().enumerate() {
-                if w == 0.0 {
-                    d.advection[c].data_mut()[k] = 0.0;
-                    d.advection_prev[c].data_mut()[k] = 0.0;
-                    d.stretching[c].data_mut()[k] = 0.0;
+            let rates = (
+                &mut d.advection[c],
+                &mut d.advection_prev[c],
+                &mut d.stretching[c],
+            );
+            whole.for_each(rates, |l, (a, p, s)| {
+                for (n, _) in wt
+                    .at(&l, [0; 3])
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, w)| **w == 0.0)
+                {
+                    (a[n], p[n], s[n]) = (0.0, 0.0, 0.0);
                 }
-            }
+            });
         }
     }
 

@@ -6,10 +6,11 @@ use efsi_core::{Grid, Scene};
 use efsi_laws_host::ConstitutiveLaw;
 
 /// The fewest cells across an elastic solid (its section's hydraulic diameter over the cell
-/// size): in the stability map a solid 3 cells across gained up to 30 % of its impact energy as
-/// motion; with the interface treatment of the law on the solid's own B (series corners, PLIC
-/// corner fractions) one 4 cells across gained up to 12 % (G = 1.8e5, ratio 1e3, CFL 0.5),
-/// 5 cells and more at most 0.15 %.
+/// size) that a scene may have. The interface treatment (the series corners and the PLIC corner
+/// fractions of the module docs) spans a cell on each side of the interface; in a solid fewer
+/// cells across it is most of the solid, the solid's bulk stress is no longer resolved, and an
+/// impact can return more energy as motion than it took in. The check is a floor on the
+/// resolution, not an accuracy target.
 pub const MIN_CELLS_ACROSS: f64 = 5.0;
 
 /// The largest Δt the elastic-wave Courant limits allow, `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`

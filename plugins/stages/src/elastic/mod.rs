@@ -248,7 +248,7 @@
 
 use crate::faces::UnknownFaces;
 use efsi_core::scene::{Boundary, Options, Side};
-use efsi_core::{BoundarySet, Field, FieldId, G, Grid, Scene, StageError};
+use efsi_core::{BoundarySet, Field, FieldId, Grid, Region, Scene, StageError};
 use efsi_laws_host::{Sym, Tangent};
 
 mod choice;
@@ -262,12 +262,12 @@ mod momentum;
 mod options;
 mod outputs;
 mod resource;
-mod rows;
 mod solve;
 mod stress;
 #[cfg(test)]
 mod tests;
 mod transport;
+mod window;
 
 pub(crate) use choice::may_couple;
 use choice::{StepScheme, coupled_step, coupling};
@@ -280,7 +280,7 @@ pub use options::{
     ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
-use rows::{PAR_POINTS, Window, at, rows1, rows2, rows3};
+use window::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Window, plus};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
 pub const B: FieldId = FieldId::Stage("B");
@@ -345,11 +345,12 @@ struct Kernels {
     /// transported everywhere.
     near_c: Window,
     near_k: Window,
-    /// Work space of [`Kernels::strain_energy`]: per solid cell, its index, weight, principal
-    /// axes (cos, sin), the logarithms of the principal stretches and its volume.
+    /// Work space of [`Kernels::strain_energy`]: per solid cell, its weight, principal axes
+    /// (cos, sin), the isochoric logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
     /// Law batches, sized for every centre `[−1, nx] × [−1, ny]` and corner `[0, nx] × [0, ny]`:
-    /// the centres of `solid_c` and the corners of `solid_k` ([`Kernels::ci`], `ki`).
+    /// the centres of `solid_c` and the corners of `solid_k`, row by row ([`Kernels::ci`],
+    /// [`Window::region`]).
     cb: Vec<Sym>,
     ct: Vec<Sym>,
     cj: Vec<Tangent>,
@@ -368,13 +369,23 @@ const PHI_MIN: f64 = 1e-3;
 /// one cell the material may reach in a step, three more its B and rates read.
 const NEAR: isize = 4;
 
-/// See [`Kernels::strain_energy`].
-type EnergyCell = (usize, f64, f64, f64, f64, f64, f64, f64);
-
+/// The weights of the four cells of each corner of `line` ([`CELLS_OF_CORNER`]) in the
+/// corner's normal components ([`Kernels::kwt`]): with [`Four::weighted`], the solid-weighted
+/// average there of a centre field, the interface-consistent value of a normal component (see
+/// "Interface corners").
 #[inline(always)]
-fn avg4(f: &[f64], a: usize, b: usize, c: usize, d: usize) -> f64 {
-    0.25 * (f[a] + f[b] + f[c] + f[d])
+fn corner_weights<'a>(kwt: &'a [Field; 4], line: &efsi_core::Line) -> [&'a [f64]; 4] {
+    std::array::from_fn(|m| kwt[m].at(line, [0; 3]))
 }
+
+/// A field's values at the indices of `line`.
+#[inline(always)]
+fn on<'a>(f: &'a Field, line: &efsi_core::Line) -> &'a [f64] {
+    f.at(line, [0; 3])
+}
+
+/// See [`Kernels::strain_energy`].
+type EnergyCell = (f64, [f64; 5], f64);
 
 impl Kernels {
     fn new(grid: &Grid, bc: &BoundarySet, mu_f: f64, mu_s: f64) -> Self {
@@ -443,27 +454,6 @@ impl Kernels {
         ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
     }
 
-    /// Batch index of corner `(i, j)` of the solid's corners [`Kernels::solid_k`].
-    #[inline(always)]
-    fn ki(&self, i: isize, j: isize) -> usize {
-        let c = self.solid_k;
-        debug_assert!(c.contains(i, j), "corner ({i}, {j}) outside {c:?}");
-        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
-    }
-
-    /// The solid-weighted average at corner `k` (linear index) of a centre field `f`: the
-    /// interface-consistent value of a normal component there (see "Interface corners").
-    #[inline(always)]
-    fn kavg(&self, f: &[f64], k: usize, s: usize) -> f64 {
-        let [w0, w1, w2, w3] = [
-            self.kwt[0].data()[k],
-            self.kwt[1].data()[k],
-            self.kwt[2].data()[k],
-            self.kwt[3].data()[k],
-        ];
-        w0 * f[k - s - 1] + w1 * f[k - s] + w2 * f[k - 1] + w3 * f[k]
-    }
-
     /// A law's error with the cell it names (an entry of the centre batch, or of the corner
     /// batch if `corner`) turned into the grid's cell (or corner) index and position.
     fn locate(&self, e: efsi_laws_host::LawError, corner: bool) -> String {
@@ -505,18 +495,26 @@ impl Kernels {
 /// component is odd in r — zero on the axis — when `odd_at_axis`.
 fn fill_corner(bc: &BoundarySet, grid: &Grid, f: &mut Field, odd_at_axis: bool) {
     let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-    for (axis, n, m, lo_side) in [(0, nx, ny, Side::XMin), (1, ny, nx, Side::YMin)] {
-        let at = |a: isize, b: isize| if axis == 0 { (a, b) } else { (b, a) };
+    // The ghost layers: the storage beyond the interior along each axis.
+    let whole = Region::whole(grid);
+    for (axis, n, lo_side) in [(0, nx, Side::XMin), (1, ny, Side::YMin)] {
+        let other = 1 - axis;
+        let at = |a: isize, b: isize| {
+            let mut i = [0; 3];
+            (i[axis], i[other]) = (a, b);
+            i
+        };
         let periodic = *bc.get(lo_side) == Boundary::Periodic;
         let sign = if odd_at_axis && *bc.get(lo_side) == Boundary::Axis {
             -1.0
         } else {
             1.0
         };
-        for b in -G..(m + 1 + G) {
+        let ghosts = -whole.lo()[axis];
+        for b in whole.lo()[other]..whole.hi()[other] {
             if periodic {
                 f[at(n, b)] = f[at(0, b)];
-                for g in 1..=G {
+                for g in 1..=ghosts {
                     f[at(-g, b)] = f[at(n - g, b)];
                     f[at(n + g, b)] = f[at(g, b)];
                 }
@@ -525,7 +523,7 @@ fn fill_corner(bc: &BoundarySet, grid: &Grid, f: &mut Field, odd_at_axis: bool) 
             if sign < 0.0 {
                 f[at(0, b)] = 0.0;
             }
-            for g in 1..=G {
+            for g in 1..=ghosts {
                 f[at(-g, b)] = sign * f[at(g, b)];
                 f[at(n + g, b)] = f[at(n - g, b)];
             }

@@ -150,27 +150,8 @@ fn elastic_stage(
     let periodic = Side::ALL
         .iter()
         .any(|&s| matches!(scene.boundaries.get(s), Boundary::Periodic));
-    let schemes = [false, true].map(|coupled| StepScheme {
-        theta: o.stretch_theta(coupled),
-        // The coupled step's momentum takes the stress at its stretching's θ (see `coupled`,
-        // "The stress at θ"); the split step's weight depends on the step's elastic-wave
-        // Courant number, set per step (`ElasticStage::set_scheme`).
-        alpha: if coupled { o.stretch_theta(true) } else { 1.0 },
-        preconditioner: match o.preconditioner {
-            // The coupled step keeps the multigrid: with Jacobi for its velocity block its
-            // FGMRES stagnates.
-            ElasticPreconditioner::Auto if !coupled && periodic => ElasticPreconditioner::Jacobi,
-            ElasticPreconditioner::Auto => ElasticPreconditioner::Multigrid,
-            p => p,
-        },
-    });
-    let theta = if crate::viscous::Viscous.needed(scene, options) {
-        options
-            .section_or_default::<crate::viscous::ViscousOptions>(scene.numerics.preset)
-            .theta
-    } else {
-        0.0
-    };
+    let schemes = [false, true].map(|coupled| step_scheme(o, coupled, periodic));
+    let theta = viscous_theta(scene, options);
     let coupled_work = if may_couple(options) {
         let proj: projection::ProjectionOptions = options.section_or_default(scene.numerics.preset);
         Some(super::coupled::Coupling::new(
@@ -225,6 +206,37 @@ fn elastic_stage(
         },
         coupling: coupled_work,
     })
+}
+
+/// The split (`coupled` false) or coupled step's scheme from the options; `periodic` if the
+/// scene has a periodic side.
+fn step_scheme(o: &ElasticOptions, coupled: bool, periodic: bool) -> StepScheme {
+    StepScheme {
+        theta: o.stretch_theta(coupled),
+        // The coupled step's momentum takes the stress at its stretching's θ (see `coupled`,
+        // "The stress at θ"); the split step's weight depends on the step's elastic-wave
+        // Courant number, set per step (`ElasticStage::set_scheme`).
+        alpha: if coupled { o.stretch_theta(true) } else { 1.0 },
+        preconditioner: match o.preconditioner {
+            // The coupled step keeps the multigrid: with Jacobi for its velocity block its
+            // FGMRES stagnates.
+            ElasticPreconditioner::Auto if !coupled && periodic => ElasticPreconditioner::Jacobi,
+            ElasticPreconditioner::Auto => ElasticPreconditioner::Multigrid,
+            p => p,
+        },
+    }
+}
+
+/// The viscous stage's implicit weight θ where the scene has one (the elastic system carries
+/// the same viscous term), else 0.
+fn viscous_theta(scene: &Scene, options: &Options) -> f64 {
+    if crate::viscous::Viscous.needed(scene, options) {
+        options
+            .section_or_default::<crate::viscous::ViscousOptions>(scene.numerics.preset)
+            .theta
+    } else {
+        0.0
+    }
 }
 
 /// The deformation update's sub-step, built for the scene.

@@ -3,7 +3,7 @@
 //! quantity `elastic_energy`, all from the [`Deformation`] resource.
 
 use super::Deformation;
-use efsi_core::{Field, Geometry, Grid, OutputDecl, OutputKind, State};
+use efsi_core::{Field, Geometry, Grid, OutputDecl, OutputKind, Region, Stagger, State};
 
 /// What the elastic plugin contributes.
 pub(super) const OUTPUTS: &[OutputDecl] = &[
@@ -70,16 +70,18 @@ fn tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
     } else {
         (0, 1, 2, 3)
     };
-    for j in 0..ny as isize {
-        for i in 0..nx as isize {
-            let k = 6 * (j as usize * nx + i as usize);
-            let w = phi.map_or(1.0, |p| p[(i, j)].clamp(0.0, 1.0).sqrt());
-            let t12 =
-                0.25 * (t[3][(i, j)] + t[3][(i + 1, j)] + t[3][(i, j + 1)] + t[3][(i + 1, j + 1)]);
-            out[k + c11] = w * t[0][(i, j)];
-            out[k + c22] = w * t[1][(i, j)];
-            out[k + c33] = w * t[2][(i, j)];
-            out[k + c12] = w * t12;
+    let cells = Region::of(grid, Stagger::Cell);
+    for l in (0..cells.lines()).map(|n| cells.line(n)) {
+        let [t11, t22, t33] = [0, 1, 2].map(|c| t[c].at(&l, [0; 3]));
+        let t12 = super::Four::new(&t[3], &l, super::CORNERS_OF_CELL);
+        let phi = phi.map(|p| p.at(&l, [0; 3]));
+        let row = &mut out[6 * l.n * l.len..][..6 * l.len];
+        for (n, out) in row.chunks_exact_mut(6).enumerate() {
+            let w = phi.map_or(1.0, |p| p[n].clamp(0.0, 1.0).sqrt());
+            out[c11] = w * t11[n];
+            out[c22] = w * t22[n];
+            out[c33] = w * t33[n];
+            out[c12] = w * t12.avg(n);
         }
     }
     out

@@ -2,11 +2,12 @@
 //! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
-use super::{Kernels, err, missing};
+use super::{Kernels, err, missing, plus};
 use crate::block_multigrid::ViscousBlocks;
 use crate::ops::face_density;
 use crate::viscous_operator::Coefficients;
-use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext};
+use efsi_core::operators::minus;
+use efsi_core::{Field, Grid, Index, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
 
@@ -306,10 +307,6 @@ impl ElasticStage {
             k.force_sub(&self.tau_n, alpha - 1.0, &mut self.rhs);
         }
         let g = ctx.grid;
-        let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        let rho = &state.rho;
-        let s = rho.stride();
         let c2 = if self.implicit {
             alpha * self.scheme.theta * dt * dt
         } else {
@@ -323,58 +320,7 @@ impl ElasticStage {
                 .viscous
                 .set_viscosity(g, &state.mu, self.op.theta_dt, &mut self.op.mu_corner);
         }
-        let td = self.op.theta_dt;
-        let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
-        let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
-        let cj = &k.cj;
-        // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
-        let stiff = |i: isize, j: isize| {
-            if !k.solid_c.contains(i, j) {
-                return 0.0;
-            }
-            let jm = &cj[k.ci(i, j)];
-            let b = &k.cb[k.ci(i, j)];
-            k.w[(i, j)]
-                * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
-                * b[0].abs().max(b[1].abs()).max(1e-300)
-        };
-        k.faces.for_each(|c, is_u, q| {
-            let (i, j) = (
-                (q % s) as isize - efsi_core::G,
-                (q / s) as isize - efsi_core::G,
-            );
-            let (w, rf, e) = if is_u {
-                (
-                    m.rx(i) * dx * dy,
-                    face_density(rho.data()[q - 1], rho.data()[q]),
-                    stiff(i - 1, j).max(stiff(i, j)),
-                )
-            } else {
-                (
-                    m.rc(i) * dx * dy,
-                    face_density(rho.data()[q - s], rho.data()[q]),
-                    stiff(i, j - 1).max(stiff(i, j)),
-                )
-            };
-            mass[c] = rf * w;
-            let mv = if td > 0.0 {
-                let md = mu.data();
-                let (a, b) = if is_u {
-                    (md[q - 1], md[q])
-                } else {
-                    (md[q - s], md[q])
-                };
-                let mcd = mc.data();
-                2.0 * a
-                    .max(b)
-                    .max(mcd[q])
-                    .max(if is_u { mcd[q + s] } else { mcd[q + 1] })
-            } else {
-                0.0
-            };
-            diag[c] = mass[c] + (c2 * e + td * mv) * w * (4.0 / (dx * dx) + 4.0 / (dy * dy));
-            rhs[c] *= dt;
-        });
+        self.face_terms(g, &state.rho, dt);
         let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
         {
             let op = &mut self.op;
@@ -382,15 +328,76 @@ impl ElasticStage {
                 *dm = m + h;
             }
         }
-        let mut pnorm = 0.0;
-        {
-            let (u, v, mass) = (&state.u, &state.v, &self.op.mass);
-            self.op.k.faces.for_each(|c, is_u, q| {
-                let x = mass[c] * if is_u { u.data()[q] } else { v.data()[q] };
-                pnorm += x * x;
-            });
+        (bnorm, bnorm.max(self.momentum_norm(state)))
+    }
+
+    /// Per unknown face: the mass, the Jacobi diagonal (mass plus the elastic stiffness `c2·e`
+    /// and the viscosity `θΔt·μ` bounds of the face's stencil) and the right-hand side times
+    /// `Δt`.
+    fn face_terms(&mut self, g: &Grid, rho: &Field, dt: f64) {
+        let m = &g.metric;
+        let (dx, dy) = (g.dx, g.dy);
+        let (c2, td) = (self.op.c, self.op.theta_dt);
+        let k = &self.op.k;
+        let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
+        let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
+        // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
+        let stiff = |at: Index| {
+            if !k.solid_c.contains(at[0], at[1]) {
+                return 0.0;
+            }
+            let q = k.ci(at[0], at[1]);
+            let (jm, b) = (&k.cj[q], &k.cb[q]);
+            k.w[at]
+                * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
+                * b[0].abs().max(b[1].abs()).max(1e-300)
+        };
+        let scale = 4.0 / (dx * dx) + 4.0 / (dy * dy);
+        // The faces normal to axis a, between the cells I − e_a and I, with the corners I and
+        // I + e_b beside them.
+        let mut c = 0;
+        for (a, r) in [(0, k.faces.region(0)), (1, k.faces.region(1))] {
+            for l in (0..r.lines()).map(|n| r.line(n)) {
+                let area = if a == 0 {
+                    m.rx_on(&l, 0)
+                } else {
+                    m.rc_on(&l, 0)
+                };
+                let (rlo, rhi) = (rho.at(&l, minus(a)), rho.at(&l, [0; 3]));
+                let (mlo, mhi) = (mu.at(&l, minus(a)), mu.at(&l, [0; 3]));
+                let (klo, khi) = (mc.at(&l, [0; 3]), mc.at(&l, unit(1 - a)));
+                for (n, at) in l.indices().enumerate() {
+                    let w = area[n] * dx * dy;
+                    let e = stiff(plus(at, minus(a))).max(stiff(at));
+                    mass[c] = face_density(rlo[n], rhi[n]) * w;
+                    let mv = if td > 0.0 {
+                        2.0 * mlo[n].max(mhi[n]).max(klo[n]).max(khi[n])
+                    } else {
+                        0.0
+                    };
+                    diag[c] = mass[c] + (c2 * e + td * mv) * w * scale;
+                    rhs[c] *= dt;
+                    c += 1;
+                }
+            }
         }
-        (bnorm, bnorm.max(pnorm.sqrt()))
+    }
+
+    /// The momentum `‖M V‖` on the unknown faces (summed in their compact order).
+    fn momentum_norm(&self, state: &State) -> f64 {
+        let mut pnorm = 0.0;
+        let mut c = 0;
+        let faces = &self.op.k.faces;
+        for (r, f) in [(faces.region(0), &state.u), (faces.region(1), &state.v)] {
+            for l in (0..r.lines()).map(|n| r.line(n)) {
+                for &f in f.at(&l, [0; 3]) {
+                    let x = self.op.mass[c] * f;
+                    pnorm += x * x;
+                    c += 1;
+                }
+            }
+        }
+        pnorm.sqrt()
     }
 
     /// The implicit system for the velocity increment (BiCGSTAB with the scene's
@@ -441,15 +448,10 @@ impl ElasticStage {
                     ),
                 ));
             }
-            let delta = &self.delta;
-            let (u, v) = (&mut state.u, &mut state.v);
-            self.op.k.faces.for_each(|c, is_u, q| {
-                if is_u {
-                    u.data_mut()[q] += delta[c];
-                } else {
-                    v.data_mut()[q] += delta[c];
-                }
-            });
+            self.op
+                .k
+                .faces
+                .add(&self.delta, &mut [&mut state.u, &mut state.v]);
             SolveStats {
                 residual: st.residual / bnorm,
                 ..st

@@ -1,8 +1,9 @@
 //! The law batches (stress and tangent at centres and corners, weighted), the block multigrid's
 //! effective stiffness, and the stress divergence on the faces.
 
-use super::{Kernels, PAR_POINTS, at, avg4, rows1, rows3};
-use efsi_core::Field;
+use super::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Kernels, corner_weights};
+use efsi_core::operators::minus;
+use efsi_core::{Field, Index, Line, Region, unit};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::{LawError, Sym, Tangent};
 
@@ -108,33 +109,7 @@ impl Kernels {
     ) -> Result<(), String> {
         let (cw, kw) = (self.solid_c, self.solid_k);
         let nc = cw.points();
-        let s = b[0].stride();
-        let [b11, b22, b33, b12] = [b[0].data(), b[1].data(), b[2].data(), b[3].data()];
-        for j in cw.j0..=cw.j1 {
-            for i in cw.i0..=cw.i1 {
-                let k = b[0].idx(i, j);
-                let q = self.ci(i, j);
-                self.cb[q] = [
-                    b11[k],
-                    b22[k],
-                    b33[k],
-                    avg4(b12, k, k + 1, k + s, k + s + 1),
-                ];
-            }
-        }
-        for j in kw.j0..=kw.j1 {
-            for i in kw.i0..=kw.i1 {
-                let k = b[0].idx(i, j);
-                let q = self.ki(i, j);
-                let w = self.wk.data()[k];
-                self.kb[q] = [
-                    w * self.kavg(b11, k, s),
-                    w * self.kavg(b22, k, s),
-                    w * self.kavg(b33, k, s),
-                    w * b12[k],
-                ];
-            }
-        }
+        self.gather_batches(b);
         for f in tau.iter_mut() {
             f.fill(0.0);
         }
@@ -157,22 +132,59 @@ impl Kernels {
                 t[c] -= r[c];
             }
         }
-        for j in cw.j0..=cw.j1 {
-            for i in cw.i0..=cw.i1 {
-                let k = b[0].idx(i, j);
-                let (t, w) = (self.ct[self.ci(i, j)], self.w.data()[k]);
-                for c in 0..3 {
-                    tau[c].data_mut()[k] = w * t[c];
+        let [t11, t22, t33, t12] = tau;
+        let (ct, w) = (&self.ct, &self.w);
+        cw.region(&self.grid)
+            .for_each((t11, t22, t33), |l, (t11, t22, t33)| {
+                let w = w.at(&l, [0; 3]);
+                for (n, t) in ct[l.n * l.len..][..l.len].iter().enumerate() {
+                    t11[n] = w[n] * t[0];
+                    t22[n] = w[n] * t[1];
+                    t33[n] = w[n] * t[2];
                 }
+            });
+        let (kt, ks) = (&self.kt, &self.ks);
+        kw.region(&self.grid).for_each(t12, |l, t12| {
+            let ks = ks.at(&l, [0; 3]);
+            for (n, t) in kt[l.n * l.len..][..l.len].iter().enumerate() {
+                t12[n] = ks[n] * t[3];
             }
-        }
-        for j in kw.j0..=kw.j1 {
-            for i in kw.i0..=kw.i1 {
-                let k = b[0].idx(i, j);
-                tau[3].data_mut()[k] = self.ks.data()[k] * self.kt[self.ki(i, j)][3];
-            }
-        }
+        });
         Ok(())
+    }
+
+    /// The batches' B̃ from `b`: at the solid's centres ([`Kernels::solid_c`]) the normal
+    /// components and the average of the cell's corners' shear, at its corners
+    /// ([`Kernels::gather_corners`]).
+    fn gather_batches(&mut self, b: &[Field; 4]) {
+        let cells = self.solid_c.region(&self.grid);
+        for l in (0..cells.lines()).map(|n| cells.line(n)) {
+            let [b11, b22, b33] = [0, 1, 2].map(|c| b[c].at(&l, [0; 3]));
+            let b12 = Four::new(&b[3], &l, CORNERS_OF_CELL);
+            for n in 0..l.len {
+                self.cb[l.n * l.len + n] = [b11[n], b22[n], b33[n], b12.avg(n)];
+            }
+        }
+        self.gather_corners(b);
+    }
+
+    /// The corner batch's B̃ from `b` at the solid's corners ([`Kernels::solid_k`]): the
+    /// solid-weighted normal components and the shear, times the corner's weight `w_k`.
+    pub(super) fn gather_corners(&mut self, b: &[Field; 4]) {
+        let corners = self.solid_k.region(&self.grid);
+        for l in (0..corners.lines()).map(|n| corners.line(n)) {
+            let wt = corner_weights(&self.kwt, &l);
+            let [b11, b22, b33] = [0, 1, 2].map(|c| Four::new(&b[c], &l, CELLS_OF_CORNER));
+            let (b12, w) = (b[3].at(&l, [0; 3]), self.wk.at(&l, [0; 3]));
+            for n in 0..l.len {
+                self.kb[l.n * l.len + n] = [
+                    w[n] * b11.weighted(&wt, n),
+                    w[n] * b22.weighted(&wt, n),
+                    w[n] * b33.weighted(&wt, n),
+                    w[n] * b12[n],
+                ];
+            }
+        }
     }
 
     /// `dtau = J·db` with the tangents of the last [`Kernels::evaluate`] (rows 11, 22, 33 at
@@ -180,48 +192,36 @@ impl Kernels {
     /// Only at the solid's centres and corners ([`Kernels::solid_c`], `solid_k`): `dtau` is zero
     /// elsewhere, and there it is left untouched.
     pub(super) fn apply_tangent(&self, db: &[Field; 4], dtau: &mut [Field; 4]) {
-        let (cw, kw) = (self.solid_c, self.solid_k);
-        let s = db[0].stride();
-        let [d11, d22, d33, d12] = [db[0].data(), db[1].data(), db[2].data(), db[3].data()];
+        let g = &self.grid;
+        let (cw, kw) = (self.solid_c.region(g), self.solid_k.region(g));
         let [t11, t22, t33, t12] = dtau;
-        rows3(
-            [t11, t22, t33],
-            cw.rows(),
-            cw.points() >= PAR_POINTS,
-            |j, rows| {
-                for i in cw.i0..=cw.i1 {
-                    let k = db[0].idx(i, j);
-                    let w = self.w.data()[k];
-                    let x = [
-                        d11[k],
-                        d22[k],
-                        d33[k],
-                        avg4(d12, k, k + 1, k + s, k + s + 1),
-                    ];
-                    let jm = &self.cj[self.ci(i, j)];
-                    for c in 0..3 {
-                        rows[c][at(i)] = w
-                            * (jm[4 * c] * x[0]
-                                + jm[4 * c + 1] * x[1]
-                                + jm[4 * c + 2] * x[2]
-                                + jm[4 * c + 3] * x[3]);
-                    }
+        cw.for_each((t11, t22, t33), |l, (t11, t22, t33)| {
+            let rows = [t11, t22, t33];
+            let [w, d11, d22, d33] = [&self.w, &db[0], &db[1], &db[2]].map(|f| f.at(&l, [0; 3]));
+            let d12 = Four::new(&db[3], &l, CORNERS_OF_CELL);
+            for (n, jm) in self.cj[l.n * l.len..][..l.len].iter().enumerate() {
+                let x = [d11[n], d22[n], d33[n], d12.avg(n)];
+                for c in 0..3 {
+                    rows[c][n] = w[n]
+                        * (jm[4 * c] * x[0]
+                            + jm[4 * c + 1] * x[1]
+                            + jm[4 * c + 2] * x[2]
+                            + jm[4 * c + 3] * x[3]);
                 }
-            },
-        );
-        rows1(t12, kw.rows(), kw.points() >= PAR_POINTS, |j, row| {
-            for i in kw.i0..=kw.i1 {
-                let k = db[0].idx(i, j);
-                let w = self.wk.data()[k];
+            }
+        });
+        kw.for_each(t12, |l, t12| {
+            let wt = corner_weights(&self.kwt, &l);
+            let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, CELLS_OF_CORNER));
+            let [w, d12, ks] = [&self.wk, &db[3], &self.ks].map(|f| f.at(&l, [0; 3]));
+            for (n, jm) in self.kj[l.n * l.len..][..l.len].iter().enumerate() {
                 let x = [
-                    w * self.kavg(d11, k, s),
-                    w * self.kavg(d22, k, s),
-                    w * self.kavg(d33, k, s),
-                    w * d12[k],
+                    w[n] * d11.weighted(&wt, n),
+                    w[n] * d22.weighted(&wt, n),
+                    w[n] * d33.weighted(&wt, n),
+                    w[n] * d12[n],
                 ];
-                let jm = &self.kj[self.ki(i, j)];
-                row[at(i)] = self.ks.data()[k]
-                    * (jm[12] * x[0] + jm[13] * x[1] + jm[14] * x[2] + jm[15] * x[3]);
+                t12[n] = ks[n] * (jm[12] * x[0] + jm[13] * x[1] + jm[14] * x[2] + jm[15] * x[3]);
             }
         });
     }
@@ -233,95 +233,129 @@ impl Kernels {
     /// `1/κ`, shear rate `s`) and this step's relaxation divisor `relax`; negative values count
     /// zero.
     pub(super) fn stiffness(&self, relax: &Field, a: f64, eta: &mut Field, eta_k: &mut Field) {
-        let (nx, ny) = self.nxy();
-        let c = self.solid_c;
-        for j in c.j0..=c.j1 {
-            for i in c.i0..=c.i1 {
-                let (jm, b) = (&self.cj[self.ci(i, j)], &self.cb[self.ci(i, j)]);
-                let g = self.w[(i, j)] * 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
-                eta[(i, j)] += a * g.max(0.0);
+        let g = &self.grid;
+        let (cw, kw) = (self.solid_c.region(g), self.solid_k.region(g));
+        cw.for_each(eta, |l, eta| {
+            let w = self.w.at(&l, [0; 3]);
+            let q0 = l.n * l.len;
+            for (n, eta) in eta.iter_mut().enumerate() {
+                let (jm, b) = (&self.cj[q0 + n], &self.cb[q0 + n]);
+                let g = w[n] * 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
+                *eta += a * g.max(0.0);
             }
-        }
-        let kw = c.corners(nx, ny);
-        for j in kw.j0..=kw.j1 {
-            for i in kw.i0..=kw.i1 {
-                let q = self.ki(i, j);
-                let (jm, b) = (&self.kj[q], &self.kb[q]);
-                let k = eta_k.idx(i, j);
-                let f = self.ks.data()[k] * self.sf.data()[k] * relax.data()[k];
-                let fy = self.ny2.data()[k];
-                let g = f * jm[15] * (fy * b[1] + (1.0 - fy) * b[0]);
-                eta_k.data_mut()[k] += a * g.max(0.0);
+        });
+        kw.for_each(eta_k, |l, eta| {
+            let [ks, sf, relax, fy] =
+                [&self.ks, &self.sf, relax, &self.ny2].map(|f| f.at(&l, [0; 3]));
+            let q0 = l.n * l.len;
+            for (n, eta) in eta.iter_mut().enumerate() {
+                let (jm, b) = (&self.kj[q0 + n], &self.kb[q0 + n]);
+                let f = ks[n] * sf[n] * relax[n];
+                let g = f * jm[15] * (fy[n] * b[1] + (1.0 - fy[n]) * b[0]);
+                *eta += a * g.max(0.0);
             }
+        });
+    }
+
+    /// Volume-weighted `(∇·τ)_x` on the u-faces of `l`: `f(n, value)` for each point `n`.
+    #[inline(always)]
+    fn force_u(&self, tau: &[Field; 4], l: &Line, mut f: impl FnMut(usize, f64)) {
+        let g = &self.grid;
+        let m = &g.metric;
+        let (t11w, t11e) = (tau[0].at(l, minus(0)), tau[0].at(l, [0; 3]));
+        let (t33w, t33e) = (tau[2].at(l, minus(0)), tau[2].at(l, [0; 3]));
+        let (t12s, t12n) = (tau[3].at(l, [0; 3]), tau[3].at(l, unit(1)));
+        let (rx, rcw, rce, hoop) = (
+            m.rx_on(l, 0),
+            m.rc_on(l, -1),
+            m.rc_on(l, 0),
+            m.hoop_x_on(l, 0),
+        );
+        for n in 0..l.len {
+            let r = rx[n];
+            let t33f = 0.5 * (t33w[n] + t33e[n]);
+            f(
+                n,
+                g.dy * (rce[n] * t11e[n] - rcw[n] * t11w[n]) + g.dx * r * (t12n[n] - t12s[n])
+                    - g.dx * g.dy * r * hoop[n] * t33f,
+            );
         }
     }
 
-    /// Volume-weighted `(∇·τ)_x` on the u-face `(i, j)` at linear index `k`.
+    /// Volume-weighted `(∇·τ)_y` on the v-faces of `l`: `f(n, value)` for each point `n`.
     #[inline(always)]
-    pub(super) fn force_u(&self, tau: &[Field; 4], i: isize, k: usize) -> f64 {
+    fn force_v(&self, tau: &[Field; 4], l: &Line, mut f: impl FnMut(usize, f64)) {
         let g = &self.grid;
         let m = &g.metric;
-        let s = tau[0].stride();
-        let [t11, t33, t12] = [tau[0].data(), tau[2].data(), tau[3].data()];
-        let r = m.rx(i);
-        let t33f = 0.5 * (t33[k - 1] + t33[k]);
-        g.dy * (m.rc(i) * t11[k] - m.rc(i - 1) * t11[k - 1]) + g.dx * r * (t12[k + s] - t12[k])
-            - g.dx * g.dy * r * m.hoop_x(i) * t33f
-    }
-
-    /// Volume-weighted `(∇·τ)_y` on the v-face `(i, j)` at linear index `k`.
-    #[inline(always)]
-    pub(super) fn force_v(&self, tau: &[Field; 4], i: isize, k: usize) -> f64 {
-        let g = &self.grid;
-        let m = &g.metric;
-        let s = tau[0].stride();
-        let [t22, t12] = [tau[1].data(), tau[3].data()];
-        g.dy * (m.rx(i + 1) * t12[k + 1] - m.rx(i) * t12[k])
-            + g.dx * m.rc(i) * (t22[k] - t22[k - s])
+        let (t22s, t22n) = (tau[1].at(l, minus(1)), tau[1].at(l, [0; 3]));
+        let (t12w, t12e) = (tau[3].at(l, [0; 3]), tau[3].at(l, unit(0)));
+        let (rw, re, rc) = (m.rx_on(l, 0), m.rx_on(l, 1), m.rc_on(l, 0));
+        for n in 0..l.len {
+            f(
+                n,
+                g.dy * (re[n] * t12e[n] - rw[n] * t12w[n]) + g.dx * rc[n] * (t22n[n] - t22s[n]),
+            );
+        }
     }
 
     /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
     pub(super) fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
-        let (nx, ny) = self.nxy();
-        let mut c = 0;
-        for j in 0..ny {
-            for i in self.faces.ux.lo..self.faces.ux.hi {
-                out[c] = self.force_u(tau, i, tau[0].idx(i, j));
-                c += 1;
-            }
-        }
-        for j in self.faces.vy.lo..self.faces.vy.hi {
-            for i in 0..nx {
-                out[c] = self.force_v(tau, i, tau[0].idx(i, j));
-                c += 1;
+        let (ur, vr) = (self.faces.region(0), self.faces.region(1));
+        let (ou, ov) = out.split_at_mut(ur.size());
+        for (r, o, u) in [(ur, ou, true), (vr, ov, false)] {
+            for l in (0..r.lines()).map(|n| r.line(n)) {
+                let row = &mut o[l.n * l.len..][..l.len];
+                let put = |n, f| row[n] = f;
+                if u {
+                    self.force_u(tau, &l, put);
+                } else {
+                    self.force_v(tau, &l, put);
+                }
             }
         }
     }
 
     /// `y −= a·vol·∇·τ` for a `tau` that vanishes outside the solid's centres and corners
-    /// ([`Kernels::solid_c`], `solid_k`): only the unknown faces next to them see a force.
+    /// ([`Kernels::solid_c`], `solid_k`): only the unknown faces next to them see a force —
+    /// on a u-face (i, j) τ₁₁, τ₃₃ at centres i−1, i and τ₁₂ at corners (i, j), (i, j+1); on
+    /// a v-face τ₂₂ at centres j−1, j and τ₁₂ at corners (i, j), (i+1, j).
     pub(super) fn force_sub(&self, tau: &[Field; 4], a: f64, y: &mut [f64]) {
         let cw = self.solid_c;
         if cw.i0 > cw.i1 {
             return;
         }
-        let (nx, ny) = self.nxy();
-        let (ux, vy) = (self.faces.ux, self.faces.vy);
-        let nur = (ux.hi - ux.lo) as usize;
-        let nu = self.faces.nu();
-        // u-face (i, j): τ₁₁, τ₃₃ at centres i−1, i; τ₁₂ at corners (i, j), (i, j+1).
-        for j in (cw.j0 - 1).max(0)..=(cw.j1 + 1).min(ny - 1) {
-            for i in cw.i0.max(ux.lo)..=(cw.i1 + 1).min(ux.hi - 1) {
-                let c = j as usize * nur + (i - ux.lo) as usize;
-                y[c] -= a * self.force_u(tau, i, tau[0].idx(i, j));
-            }
-        }
-        // v-face (i, j): τ₂₂ at centres j−1, j; τ₁₂ at corners (i, j), (i+1, j).
-        for j in cw.j0.max(vy.lo)..=(cw.j1 + 1).min(vy.hi - 1) {
-            for i in (cw.i0 - 1).max(0)..=(cw.i1 + 1).min(nx - 1) {
-                let c = nu + (j - vy.lo) as usize * nx as usize + i as usize;
-                y[c] -= a * self.force_v(tau, i, tau[0].idx(i, j));
+        let (ur, vr) = (self.faces.region(0), self.faces.region(1));
+        let (yu, yv) = y.split_at_mut(ur.size());
+        // The faces of the solid's centres, and the u-faces (v-faces) of the rows (columns)
+        // beside them.
+        let near = |r: Region, a: usize| {
+            let (lo, hi) = (r.lo(), r.hi());
+            let b = 1 - a;
+            let mut w = [(cw.i0, cw.i1), (cw.j0, cw.j1)];
+            w[a].1 += 1;
+            w[b] = (w[b].0 - 1, w[b].1 + 1);
+            r.range(a, w[a].0.max(lo[a]), (w[a].1 + 1).min(hi[a]))
+                .range(b, w[b].0.max(lo[b]), (w[b].1 + 1).min(hi[b]))
+        };
+        for (r, y, u) in [(ur, yu, true), (vr, yv, false)] {
+            let part = near(r, if u { 0 } else { 1 });
+            for l in (0..part.lines()).map(|n| part.line(n)) {
+                let row = &mut y[compact(&r, l.start)..][..l.len];
+                let sub = |n, f| row[n] -= a * f;
+                if u {
+                    self.force_u(tau, &l, sub);
+                } else {
+                    self.force_v(tau, &l, sub);
+                }
             }
         }
     }
+}
+
+/// The position of index `at` among the indices of region `r`, in its line order (the entry
+/// of `at` in a compact vector over `r`).
+fn compact(r: &Region, at: Index) -> usize {
+    let (lo, n) = (r.lo(), [r.len(0), r.len(1)]);
+    let d = |a: usize| (at[a] - lo[a]) as usize;
+    (d(2) * n[1] + d(1)) * n[0] + d(0)
 }

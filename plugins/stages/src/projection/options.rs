@@ -18,9 +18,8 @@ pub struct ProjectionOptions {
     ///   adds up in the tracked volume (the volume-drift targets of `tests/tests/two_material.rs`
     ///   and the drop benchmark).
     /// - [`ONE_FLUID_TOLERANCE`] (1e-4) in a scene of one fluid, where nothing carries the
-    ///   divergence from step to step (each projection acts on the whole velocity): what it
-    ///   leaves changes a cavity's centrelines far less than their discretisation error, at
-    ///   about half the iterations of 1e-6.
+    ///   divergence from step to step (each projection acts on the whole velocity, so what one
+    ///   step leaves does not accumulate): the looser tolerance takes fewer iterations.
     #[serde(default)]
     pub tolerance: Option<f64>,
     /// Iteration cap of the preconditioned conjugate gradient (default 10000).
