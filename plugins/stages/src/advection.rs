@@ -138,6 +138,10 @@ fn whole_step(scene: &Scene, options: &Options) -> Result<bool, String> {
 pub struct Advection;
 
 impl StagePlugin for Advection {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn name(&self) -> &'static str {
         "advection"
     }
@@ -145,7 +149,12 @@ impl StagePlugin for Advection {
         Phase::Advection
     }
     fn reads(&self) -> &'static [FieldId] {
-        &[FieldId::VelocityX, FieldId::VelocityY, FieldId::Density]
+        &[
+            FieldId::VelocityX,
+            FieldId::VelocityY,
+            FieldId::VelocityZ,
+            FieldId::Density,
+        ]
     }
     fn writes(&self) -> &'static [FieldId] {
         &VELOCITY
@@ -340,12 +349,14 @@ impl Stage for AdvectionStage {
         let State { u, v, w, rho, .. } = state;
         let mut none = Field::default();
         let mut vel = [u, v, w.as_mut().unwrap_or(&mut none)];
-        // Between the stages: the boundary conditions at the end of the step. (On a
-        // three-dimensional grid the z ghosts and w are the boundary set's to fill.)
-        let mut fill = |vel: &mut [&mut Field]| {
-            if let [u, v, ..] = vel {
-                ctx.bc.fill_velocity(g, u, v, ctx.t + ctx.dt, false);
+        // Between the stages: the boundary conditions at the end of the step.
+        let mut fill = |vel: &mut [&mut Field]| match vel {
+            [u, v, w] if dims == 3 => {
+                ctx.bc
+                    .fill_velocity3(g, u, v, Some(&mut **w), ctx.t + ctx.dt, false)
             }
+            [u, v, ..] => ctx.bc.fill_velocity(g, u, v, ctx.t + ctx.dt, false),
+            _ => unreachable!("two or three velocity components"),
         };
         advance(
             g,

@@ -91,6 +91,10 @@ impl FrameAcceleration for Simulation {
 }
 
 impl StagePlugin for BodyForce {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn name(&self) -> &'static str {
         "body_force"
     }

@@ -82,5 +82,5 @@ impl FieldId {
     }
 }
 
-/// Both velocity components, for declarations.
-pub const VELOCITY: [FieldId; 2] = [FieldId::VelocityX, FieldId::VelocityY];
+/// The velocity components, for declarations (`w` exists on three-dimensional grids only).
+pub const VELOCITY: [FieldId; 3] = [FieldId::VelocityX, FieldId::VelocityY, FieldId::VelocityZ];

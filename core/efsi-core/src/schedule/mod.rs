@@ -609,7 +609,14 @@ impl Pipeline {
                     continue;
                 }
                 e.stage.run_sub(k, &ctx, state)?;
-                bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
+                bc.fill_velocity3(
+                    grid,
+                    &mut state.u,
+                    &mut state.v,
+                    state.w.as_mut(),
+                    0.0,
+                    false,
+                );
                 state.p.copy_from(&p0);
                 // An initial velocity too large for floating point (e.g. 1e308) projects to
                 // infinities: refuse it here rather than start a run from them.
@@ -857,12 +864,20 @@ fn after_step(
     writes: &[FieldId],
 ) -> Result<(), StageError> {
     let (nx, ny) = (ctx.grid.nx, ctx.grid.ny);
-    if writes
-        .iter()
-        .any(|f| matches!(f, FieldId::VelocityX | FieldId::VelocityY))
-    {
-        ctx.bc
-            .fill_velocity(ctx.grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+    if writes.iter().any(|f| {
+        matches!(
+            f,
+            FieldId::VelocityX | FieldId::VelocityY | FieldId::VelocityZ
+        )
+    }) {
+        ctx.bc.fill_velocity3(
+            ctx.grid,
+            &mut state.u,
+            &mut state.v,
+            state.w.as_mut(),
+            ctx.t + ctx.dt,
+            false,
+        );
     }
     for &f in writes {
         match f {

@@ -53,7 +53,13 @@ const SUB_STEPS: [SubStep; 3] = [
         name: "elastic",
         // The pressure only in a coupled step, which leaves its pressure for the projection
         // to complete.
-        writes: &[FieldId::VelocityX, FieldId::VelocityY, B, FieldId::Pressure],
+        writes: &[
+            FieldId::VelocityX,
+            FieldId::VelocityY,
+            FieldId::VelocityZ,
+            B,
+            FieldId::Pressure,
+        ],
         projects: false,
     },
     SubStep {
@@ -79,6 +85,7 @@ impl StagePlugin for Momentum {
         &[
             FieldId::VelocityX,
             FieldId::VelocityY,
+            FieldId::VelocityZ,
             FieldId::Pressure,
             FieldId::Density,
             FieldId::Viscosity,
@@ -87,7 +94,13 @@ impl StagePlugin for Momentum {
         ]
     }
     fn writes(&self) -> &'static [FieldId] {
-        &[FieldId::VelocityX, FieldId::VelocityY, B, FieldId::Pressure]
+        &[
+            FieldId::VelocityX,
+            FieldId::VelocityY,
+            FieldId::VelocityZ,
+            B,
+            FieldId::Pressure,
+        ]
     }
     fn sub_steps(&self) -> &'static [SubStep] {
         &SUB_STEPS

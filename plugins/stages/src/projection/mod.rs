@@ -85,14 +85,19 @@ pub struct Projection;
 
 /// What the projection and its predictor read: the velocity, the density of the face weights
 /// and the pressure (the predictor's gradient, the projection's warm start or base).
-const READS: [FieldId; 4] = [
+const READS: [FieldId; 5] = [
     FieldId::VelocityX,
     FieldId::VelocityY,
+    FieldId::VelocityZ,
     FieldId::Density,
     FieldId::Pressure,
 ];
 
 impl StagePlugin for Projection {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn name(&self) -> &'static str {
         "projection"
     }
@@ -138,7 +143,12 @@ impl StagePlugin for Projection {
 }
 
 /// What the projection writes: the velocity and the pressure.
-pub(crate) const WRITES: [FieldId; 3] = [FieldId::VelocityX, FieldId::VelocityY, FieldId::Pressure];
+pub(crate) const WRITES: [FieldId; 4] = [
+    FieldId::VelocityX,
+    FieldId::VelocityY,
+    FieldId::VelocityZ,
+    FieldId::Pressure,
+];
 
 /// The predictor of the incremental pressure correction: `V* ← V* − Δt ∇pⁿ/ρ` with the last
 /// step's pressure, before the viscous and elastic steps (module docs). Scheduled when
@@ -147,6 +157,10 @@ pub(crate) const WRITES: [FieldId; 3] = [FieldId::VelocityX, FieldId::VelocityY,
 pub struct PressurePredictor;
 
 impl StagePlugin for PressurePredictor {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn name(&self) -> &'static str {
         "pressure_predictor"
     }
@@ -458,7 +472,14 @@ impl Projector {
                 }
             }
         }
-        bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, true);
+        bc.fill_velocity3(
+            grid,
+            &mut state.u,
+            &mut state.v,
+            state.w.as_mut(),
+            0.0,
+            true,
+        );
         let ctx = StepContext {
             grid,
             bc,
@@ -699,8 +720,14 @@ fn divergence_rhs(grid: &Grid, u: &efsi_core::Field, v: &efsi_core::Field, dt: f
 /// filled for the step's end first.
 fn check_divergence(ctx: &StepContext, state: &mut State, tol: f64) {
     let grid = ctx.grid;
-    ctx.bc
-        .fill_velocity(grid, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+    ctx.bc.fill_velocity3(
+        grid,
+        &mut state.u,
+        &mut state.v,
+        state.w.as_mut(),
+        ctx.t + ctx.dt,
+        false,
+    );
     let d = match state.w.as_ref().filter(|_| grid.is_3d()) {
         Some(w) => three_d::max_abs_div_3d(grid, [&state.u, &state.v, w]),
         None => ops::max_abs_div(grid, &state.u, &state.v),

@@ -9,8 +9,7 @@
 //! **Right-hand side** `−(∇·V) dV/Δt` ([`operators::div`] with u, v, w). **Correction**
 //! `V_a ← V_a − Δt (p_C − p_{C−e_a})/(h_a ρ_f)` on the unknown faces of each axis.
 //!
-//! The sides along x and y come from the [`BoundarySet`]; those along z from [`z_sides`],
-//! walls until the boundary set carries the z sides.
+//! The sides along every axis come from the [`BoundarySet`] ([`z_sides`] for z).
 
 use crate::ops;
 use efsi_core::loops::unit;
@@ -18,10 +17,10 @@ use efsi_core::{BoundarySet, Field, Grid, Region, Stagger, operators};
 use efsi_linalg::par;
 
 /// The z sides of the projection: whether z is periodic, and the first and one-past-last
-/// unknown z-face (`0..nz` when periodic, `1..nz` between walls). Walls: the boundary set has
-/// no z sides yet.
-pub(crate) fn z_sides(_bc: &BoundarySet, nz: usize) -> (bool, isize, isize) {
-    (false, 1, nz as isize)
+/// unknown z-face (`0..nz` when periodic, `1..nz` between walls).
+pub(crate) fn z_sides(bc: &BoundarySet, nz: usize) -> (bool, isize, isize) {
+    let f = bc.normal_faces(2, nz);
+    (bc.periodic(2), f.lo, f.hi)
 }
 
 /// Whether each axis of a three-dimensional grid wraps.

@@ -95,6 +95,10 @@ pub use options::{ViscousOptions, ViscousPreconditioner};
 pub struct Viscous;
 
 impl StagePlugin for Viscous {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn name(&self) -> &'static str {
         "viscous"
     }
@@ -105,6 +109,7 @@ impl StagePlugin for Viscous {
         &[
             FieldId::VelocityX,
             FieldId::VelocityY,
+            FieldId::VelocityZ,
             FieldId::Density,
             FieldId::Viscosity,
         ]
@@ -128,15 +133,6 @@ impl StagePlugin for Viscous {
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        if grid.is_3d() {
-            // The kernels and the solve are dimension-generic; the boundary conditions fill no
-            // z ghosts yet (`VelocityGhosts for BoundarySet`).
-            return Err(
-                "the viscous stage needs boundary conditions on the z sides, which a \
-                        three-dimensional scene does not have yet"
-                    .into(),
-            );
-        }
         let o: &ViscousOptions = options.section()?;
         if o.preconditioner == ViscousPreconditioner::Multigrid && !block_multigrid_serves(grid) {
             return Err(
@@ -165,13 +161,19 @@ pub(crate) trait VelocityGhosts: Clone + Send + Sync {
 }
 
 impl VelocityGhosts for BoundarySet {
-    /// The x and y sides' rules ([`efsi_core::bc`]); a [`BoundarySet`] has no z sides, so the
-    /// stage refuses a three-dimensional grid ([`Viscous`]'s `build`).
+    /// The sides' rules ([`efsi_core::bc`]), z sides included on a three-dimensional grid.
     fn fill<F: BorrowMut<Field>>(&self, grid: &Grid, vel: &mut [F], when: WallTime) {
-        let [u, v] = vel else {
-            panic!("BoundarySet fills the ghosts of two velocity components")
-        };
-        self.fill_velocity_at(grid, u.borrow_mut(), v.borrow_mut(), when);
+        match vel {
+            [u, v] => self.fill_velocity_at(grid, u.borrow_mut(), v.borrow_mut(), when),
+            [u, v, w] => self.fill_velocity3_at(
+                grid,
+                u.borrow_mut(),
+                v.borrow_mut(),
+                Some(w.borrow_mut()),
+                when,
+            ),
+            _ => panic!("BoundarySet fills the ghosts of two or three velocity components"),
+        }
     }
 }
 

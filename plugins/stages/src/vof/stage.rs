@@ -50,6 +50,7 @@ impl StagePlugin for Vof {
         &[
             FieldId::VelocityX,
             FieldId::VelocityY,
+            FieldId::VelocityZ,
             FieldId::SolidFraction,
         ]
     }
