@@ -389,7 +389,9 @@ impl Case for Couette {
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let what = ("max error over the four times", "Couette");
-        let (checks, recommendation) = self.0.conclude(h, done, (0.005, 1.5), what);
+        // Issue 43's bounds: the 64-cell error no worse than the first-order scheme's 7.1e-4,
+        // the smallest combined order at least 1.5.
+        let (checks, recommendation) = self.0.conclude(h, done, (7.1e-4, 1.5), what);
         let axes = (
             "Couette: error vs wall time",
             "wall time (s)",

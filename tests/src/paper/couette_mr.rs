@@ -113,10 +113,10 @@ impl Case for CouetteMr {
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
-        // The issue's target is 2.0e-3 at 64 cells over the four times; the scheme reaches
-        // 3.54e-4 (3.51e-4 over the quick version's two times), and both are held to 5.0e-4
-        // against regressions.
-        let limits = (5.0e-4, if self.quick { 0.9 } else { 1.0 });
+        // Issue 43's bounds: the 64-cell error no worse than the first-order scheme's 3.5e-4,
+        // the smallest combined order over 64–256 cells at least 1.5 (the quick version's
+        // 32 → 64 cells, at the coarse end, at least 0.9).
+        let limits = (3.5e-4, if self.quick { 0.9 } else { 1.5 });
         let what = (
             "max error over the reference's times",
             "Mooney–Rivlin Couette",
