@@ -386,6 +386,17 @@ pub fn interval(time: &TimeSpec, every: f64) -> Result<(), String> {
 /// The section's ranges and consistency with the scene: intervals, VTK options, probes and
 /// profiles.
 fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
+    validate_intervals_and_vtk(o, scene)?;
+    let space = Space {
+        scene,
+        three: scene.geometry == Geometry::Cartesian3D,
+    };
+    validate_probes(o, scene, &space)?;
+    validate_profiles(o, scene, &space)
+}
+
+/// The output intervals and the VTK field list.
+fn validate_intervals_and_vtk(o: &OutputSpec, scene: &Scene) -> Checked {
     for (f, v) in [
         ("output.vtk_every", o.vtk_every),
         ("output.probe_every", o.probe_every),
@@ -415,20 +426,33 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
             }
         }
     }
-    let three = scene.geometry == Geometry::Cartesian3D;
-    let inside = |p: Vector| {
-        p.0 >= scene.domain.x.0
-            && p.0 <= scene.domain.x.1
-            && p.1 >= scene.domain.y.0
-            && p.1 <= scene.domain.y.1
-            && match (p.2, scene.domain.z) {
+    Ok(())
+}
+
+/// The scene's box, for the points probes and profiles name.
+struct Space<'a> {
+    scene: &'a Scene,
+    /// Whether the scene is three-dimensional (points have three coordinates).
+    three: bool,
+}
+
+impl Space<'_> {
+    /// Whether `p` lies in the domain (z checked when both have one).
+    fn inside(&self, p: Vector) -> bool {
+        let d = &self.scene.domain;
+        p.0 >= d.x.0
+            && p.0 <= d.x.1
+            && p.1 >= d.y.0
+            && p.1 <= d.y.1
+            && match (p.2, d.z) {
                 (Some(z), Some((lo, hi))) => z >= lo && z <= hi,
                 _ => true,
             }
-    };
-    // A point has as many coordinates as the scene has axes.
-    let dimension = |f: &str, p: Vector| -> Checked {
-        match (three, p.2.is_some()) {
+    }
+
+    /// A point has as many coordinates as the scene has axes; `f` names the field.
+    fn dimension(&self, f: &str, p: Vector) -> Checked {
+        match (self.three, p.2.is_some()) {
             (true, false) => err(
                 f,
                 format!(
@@ -441,12 +465,16 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                 format!(
                     "{} has three coordinates: a point of a {:?} scene is (x, y)",
                     show(p),
-                    scene.geometry
+                    self.scene.geometry
                 ),
             ),
             _ => Ok(()),
         }
-    };
+    }
+}
+
+/// The probes: each one the scene can evaluate, its columns named once, its points inside.
+fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked {
     // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
     let mut columns: std::collections::HashMap<String, usize> =
         [("t".to_string(), usize::MAX)].into_iter().collect();
@@ -455,7 +483,7 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
         .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
     for (k, probe) in o.probes.iter().enumerate() {
         let f = format!("output.probes[{k}]");
-        if three && !probe.three_dimensional() {
+        if space.three && !probe.three_dimensional() {
             return err(
                 &f,
                 format!(
@@ -490,31 +518,7 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                 ),
             );
         }
-        for c in probe.columns() {
-            if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
-                return err(
-                    &format!("{f}.name"),
-                    format!(
-                        "must be a non-empty CSV column name without commas, quotes or \
-                         control characters, got {c:?}"
-                    ),
-                );
-            }
-            if let Some(&other) = columns.get(&c) {
-                let first = if other == usize::MAX {
-                    "the time column".to_string()
-                } else {
-                    format!("output.probes[{other}]")
-                };
-                return err(
-                    &f,
-                    format!(
-                        "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
-                    ),
-                );
-            }
-            columns.insert(c, k);
-        }
+        claim_columns(probe, k, &f, &mut columns)?;
         if let ProbeSpec::Point { field, at, .. } = probe {
             if field == "solid_fraction" && scene.solid.is_none() {
                 return err(
@@ -522,14 +526,14 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                     "solid_fraction needs a solid, and the scene has none",
                 );
             }
-            if field == "w" && !three {
+            if field == "w" && !space.three {
                 return err(
                     &format!("{f}.field"),
                     "`w` is the velocity along z, which only a Cartesian3D scene has",
                 );
             }
-            dimension(&format!("{f}.at"), *at)?;
-            if !inside(*at) {
+            space.dimension(&format!("{f}.at"), *at)?;
+            if !space.inside(*at) {
                 return err(
                     &format!("{f}.at"),
                     format!("{} is outside the domain", show(*at)),
@@ -537,6 +541,47 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
             }
         }
     }
+    Ok(())
+}
+
+/// Claim probe `k`'s columns of probes.csv in `columns` (column → the probe that has it,
+/// `usize::MAX` for the time): each a CSV field, none already claimed. `f` names the probe.
+fn claim_columns(
+    probe: &ProbeSpec,
+    k: usize,
+    f: &str,
+    columns: &mut std::collections::HashMap<String, usize>,
+) -> Checked {
+    for c in probe.columns() {
+        if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
+            return err(
+                &format!("{f}.name"),
+                format!(
+                    "must be a non-empty CSV column name without commas, quotes or \
+                     control characters, got {c:?}"
+                ),
+            );
+        }
+        if let Some(&other) = columns.get(&c) {
+            let first = if other == usize::MAX {
+                "the time column".to_string()
+            } else {
+                format!("output.probes[{other}]")
+            };
+            return err(
+                f,
+                format!(
+                    "its column `{c}` is already {first}'s: every column of probes.csv needs its own name"
+                ),
+            );
+        }
+        columns.insert(c, k);
+    }
+    Ok(())
+}
+
+/// The profiles: unique names, point counts, segments inside the domain, fields, times.
+fn validate_profiles(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked {
     let mut pnames = std::collections::HashSet::new();
     for (k, prof) in o.profiles.iter().enumerate() {
         let ProfileSpec::Line {
@@ -560,16 +605,16 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
                 format!("must be in [2, {MAX_PROFILE_POINTS}], got {points}"),
             );
         }
-        dimension(&format!("{f}.from"), *from)?;
-        dimension(&format!("{f}.to"), *to)?;
-        if !inside(*from) || !inside(*to) {
+        space.dimension(&format!("{f}.from"), *from)?;
+        space.dimension(&format!("{f}.to"), *to)?;
+        if !space.inside(*from) || !space.inside(*to) {
             return err(
                 &f,
                 format!("segment {} → {} leaves the domain", show(*from), show(*to)),
             );
         }
         for (j, field) in fields.iter().enumerate() {
-            if field == "w" && !three {
+            if field == "w" && !space.three {
                 return err(
                     &format!("{f}.fields[{j}]"),
                     "`w` is the velocity along z, which only a Cartesian3D scene has",
