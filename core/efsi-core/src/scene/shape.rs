@@ -149,73 +149,40 @@ impl Shape {
     /// (`.radius`, `[1].center`, empty for the shape itself): the setting to name, and to
     /// blame an override for.
     pub fn check(&self) -> Result<(), (String, String)> {
-        use crate::scene::num;
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
         let at = |field: &str, m: String| Err((field.to_string(), m));
         match self {
             Shape::Disk { center, radius } => {
-                if !fin(&[center.0, center.1]) {
-                    return at(
-                        ".center",
-                        format!("Disk: center must be finite, got {center:?}"),
-                    );
-                }
-                if !radius.is_finite() || *radius <= 0.0 {
-                    return at(
-                        ".radius",
-                        format!("Disk: radius must be finite and > 0, got {}", num(*radius)),
-                    );
-                }
+                centre("Disk", &[center.0, center.1], format!("{center:?}"))?;
+                positive("Disk", "radius", *radius)?;
             }
             Shape::Rectangle { min, max } => {
-                if !fin(&[min.0, min.1, max.0, max.1]) || min.0 >= max.0 || min.1 >= max.1 {
-                    let field = if fin(&[min.0, min.1]) { ".max" } else { ".min" };
-                    return at(
-                        field,
-                        format!("Rectangle: need min < max, got {min:?}, {max:?}"),
-                    );
-                }
+                let shown = format!("{min:?}, {max:?}");
+                ordered("Rectangle", &[min.0, min.1], &[max.0, max.1], shown)?;
             }
             Shape::HalfPlane { normal, offset } => {
-                if !fin(&[*offset]) {
-                    return at(
-                        ".offset",
-                        format!("HalfPlane: offset must be finite, got {}", num(*offset)),
-                    );
-                }
-                if !fin(&[normal.0, normal.1]) || (normal.0 == 0.0 && normal.1 == 0.0) {
-                    return at(
-                        ".normal",
-                        format!("HalfPlane: normal must be finite and non-zero, got {normal:?}"),
-                    );
-                }
+                plane(
+                    "HalfPlane",
+                    &[normal.0, normal.1],
+                    *offset,
+                    format!("{normal:?}"),
+                )?;
             }
             Shape::Sphere { center, radius } => {
-                if !fin(&[center.0, center.1, center.2]) {
-                    return at(
-                        ".center",
-                        format!("Sphere: center must be finite, got {center:?}"),
-                    );
-                }
-                if !radius.is_finite() || *radius <= 0.0 {
-                    return at(
-                        ".radius",
-                        format!(
-                            "Sphere: radius must be finite and > 0, got {}",
-                            num(*radius)
-                        ),
-                    );
-                }
+                centre(
+                    "Sphere",
+                    &[center.0, center.1, center.2],
+                    format!("{center:?}"),
+                )?;
+                positive("Sphere", "radius", *radius)?;
             }
             Shape::Ellipsoid { center, semi_axes } => {
-                if !fin(&[center.0, center.1, center.2]) {
-                    return at(
-                        ".center",
-                        format!("Ellipsoid: center must be finite, got {center:?}"),
-                    );
-                }
+                centre(
+                    "Ellipsoid",
+                    &[center.0, center.1, center.2],
+                    format!("{center:?}"),
+                )?;
                 let a = [semi_axes.0, semi_axes.1, semi_axes.2];
-                if !fin(&a) || a.iter().any(|&a| a <= 0.0) {
+                if !a.iter().all(|&a| a.is_finite() && a > 0.0) {
                     return at(
                         ".semi_axes",
                         format!("Ellipsoid: semi_axes must be finite and > 0, got {semi_axes:?}"),
@@ -223,11 +190,8 @@ impl Shape {
                 }
             }
             Shape::Box { min, max } => {
-                let (lo, hi) = ([min.0, min.1, min.2], [max.0, max.1, max.2]);
-                if !fin(&lo) || !fin(&hi) || (0..3).any(|a| lo[a] >= hi[a]) {
-                    let field = if fin(&lo) { ".max" } else { ".min" };
-                    return at(field, format!("Box: need min < max, got {min:?}, {max:?}"));
-                }
+                let shown = format!("{min:?}, {max:?}");
+                ordered("Box", &[min.0, min.1, min.2], &[max.0, max.1, max.2], shown)?;
             }
             Shape::Cylinder {
                 center,
@@ -235,45 +199,17 @@ impl Shape {
                 length,
                 ..
             } => {
-                if !fin(&[center.0, center.1, center.2]) {
-                    return at(
-                        ".center",
-                        format!("Cylinder: center must be finite, got {center:?}"),
-                    );
-                }
-                if !radius.is_finite() || *radius <= 0.0 {
-                    return at(
-                        ".radius",
-                        format!(
-                            "Cylinder: radius must be finite and > 0, got {}",
-                            num(*radius)
-                        ),
-                    );
-                }
-                if !length.is_finite() || *length <= 0.0 {
-                    return at(
-                        ".length",
-                        format!(
-                            "Cylinder: length must be finite and > 0, got {}",
-                            num(*length)
-                        ),
-                    );
-                }
+                centre(
+                    "Cylinder",
+                    &[center.0, center.1, center.2],
+                    format!("{center:?}"),
+                )?;
+                positive("Cylinder", "radius", *radius)?;
+                positive("Cylinder", "length", *length)?;
             }
             Shape::HalfSpace { normal, offset } => {
-                if !fin(&[*offset]) {
-                    return at(
-                        ".offset",
-                        format!("HalfSpace: offset must be finite, got {}", num(*offset)),
-                    );
-                }
                 let n = [normal.0, normal.1, normal.2];
-                if !fin(&n) || n.iter().all(|&c| c == 0.0) {
-                    return at(
-                        ".normal",
-                        format!("HalfSpace: normal must be finite and non-zero, got {normal:?}"),
-                    );
-                }
+                plane("HalfSpace", &n, *offset, format!("{normal:?}"))?;
             }
             Shape::Union(v) | Shape::Intersection(v) => {
                 if v.is_empty() {
@@ -363,4 +299,63 @@ impl Shape {
             Shape::Difference(a, b) => a.contains3(x, y, z) && !b.contains3(x, y, z),
         }
     }
+}
+
+/// A shape's centre `c` (written as `shown`) must be finite; `kind` names the shape.
+fn centre(kind: &str, c: &[f64], shown: String) -> Result<(), (String, String)> {
+    if c.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err((
+            ".center".into(),
+            format!("{kind}: center must be finite, got {shown}"),
+        ))
+    }
+}
+
+/// A box's corners `lo` < `hi` (written as `shown`), all finite; the fault is the max corner's
+/// unless the min corner is not finite.
+fn ordered(kind: &str, lo: &[f64], hi: &[f64], shown: String) -> Result<(), (String, String)> {
+    let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if fin(lo) && fin(hi) && lo.iter().zip(hi).all(|(a, b)| a < b) {
+        return Ok(());
+    }
+    let field = if fin(lo) { ".max" } else { ".min" };
+    Err((field.into(), format!("{kind}: need min < max, got {shown}")))
+}
+
+/// A shape's length `name` must be finite and positive.
+fn positive(kind: &str, name: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((
+            format!(".{name}"),
+            format!(
+                "{kind}: {name} must be finite and > 0, got {}",
+                crate::scene::num(v)
+            ),
+        ))
+    }
+}
+
+/// A half-plane's or half-space's offset must be finite and its normal `n` (written as
+/// `shown`) finite and non-zero.
+fn plane(kind: &str, n: &[f64], offset: f64, shown: String) -> Result<(), (String, String)> {
+    if !offset.is_finite() {
+        return Err((
+            ".offset".into(),
+            format!(
+                "{kind}: offset must be finite, got {}",
+                crate::scene::num(offset)
+            ),
+        ));
+    }
+    if !n.iter().all(|x| x.is_finite()) || n.iter().all(|&c| c == 0.0) {
+        return Err((
+            ".normal".into(),
+            format!("{kind}: normal must be finite and non-zero, got {shown}"),
+        ));
+    }
+    Ok(())
 }
