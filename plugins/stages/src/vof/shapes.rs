@@ -113,6 +113,49 @@ impl Rect {
     }
 }
 
+/// What a cell's cover by a shape can be, whatever else a cut cover carries: what
+/// [`combine`] needs of the two-dimensional and the three-dimensional covers.
+pub(super) trait Coverage: Sized {
+    /// Wholly inside.
+    const IN: Self;
+    /// Wholly outside.
+    const OUT: Self;
+    /// Crossed by several boundaries.
+    const MIXED: Self;
+    /// Whether this is [`Self::IN`] (`inside`) or [`Self::OUT`] (not `inside`).
+    fn is(&self, inside: bool) -> bool;
+}
+
+/// The cover of a union (`union`) or an intersection of parts whose covers are `parts`: a part
+/// wholly in (union) or out (intersection) decides; parts wholly out (union) or in
+/// (intersection) do not count; one part crossed by its boundary is the cover; two or more are
+/// [`Coverage::MIXED`].
+pub(super) fn combine<C: Coverage>(parts: impl Iterator<Item = C>, union: bool) -> C {
+    let mut only = None;
+    for c in parts {
+        if c.is(union) {
+            return c;
+        }
+        if c.is(!union) {
+            continue;
+        }
+        if only.is_some() {
+            return C::MIXED;
+        }
+        only = Some(c);
+    }
+    only.unwrap_or(if union { C::OUT } else { C::IN })
+}
+
+impl Coverage for Cover {
+    const IN: Self = Cover::In;
+    const OUT: Self = Cover::Out;
+    const MIXED: Self = Cover::Mixed;
+    fn is(&self, inside: bool) -> bool {
+        matches!((self, inside), (Cover::In, true) | (Cover::Out, false))
+    }
+}
+
 /// How a shape covers a rectangle.
 #[derive(Clone, Copy, Debug)]
 enum Cover {
@@ -194,38 +237,8 @@ fn cover(this: &Shape, r: Rect, axi: bool) -> Cover {
         | Shape::Box { .. }
         | Shape::Cylinder { .. }
         | Shape::HalfSpace { .. } => Cover::Mixed,
-        Shape::Union(v) => {
-            let mut only = None;
-            for s in v {
-                match cover(s, r, axi) {
-                    Cover::In => return Cover::In,
-                    Cover::Out => {}
-                    c => {
-                        if only.is_some() {
-                            return Cover::Mixed;
-                        }
-                        only = Some(c);
-                    }
-                }
-            }
-            only.unwrap_or(Cover::Out)
-        }
-        Shape::Intersection(v) => {
-            let mut only = None;
-            for s in v {
-                match cover(s, r, axi) {
-                    Cover::Out => return Cover::Out,
-                    Cover::In => {}
-                    c => {
-                        if only.is_some() {
-                            return Cover::Mixed;
-                        }
-                        only = Some(c);
-                    }
-                }
-            }
-            only.unwrap_or(Cover::In)
-        }
+        Shape::Union(v) => combine(v.iter().map(|s| cover(s, r, axi)), true),
+        Shape::Intersection(v) => combine(v.iter().map(|s| cover(s, r, axi)), false),
         Shape::Difference(a, b) => match (cover(a, r, axi), cover(b, r, axi)) {
             (_, Cover::In) | (Cover::Out, _) => Cover::Out,
             (ca, Cover::Out) => ca,

@@ -39,7 +39,7 @@
 //! of Enright et al. (2002), J. Comput. Phys. 183:83.
 
 use super::plic3d::cuboid_fraction;
-use super::shapes::disk_volume;
+use super::shapes::{Coverage, combine, disk_volume};
 use crate::solid::Shape;
 use efsi_core::{Field, Grid, Region, Stagger};
 
@@ -93,6 +93,15 @@ enum Cover<'a> {
     Cut(&'a Shape, bool),
     /// Crossed by several boundaries.
     Mixed,
+}
+
+impl Coverage for Cover<'_> {
+    const IN: Self = Cover::In;
+    const OUT: Self = Cover::Out;
+    const MIXED: Self = Cover::Mixed;
+    fn is(&self, inside: bool) -> bool {
+        matches!((self, inside), (Cover::In, true) | (Cover::Out, false))
+    }
 }
 
 /// The exact volume `|S ∩ b|` of `shape` in the box `b`, up to the limits in the module docs.
@@ -223,38 +232,8 @@ fn cover<'a>(shape: &'a Shape, b: &Cuboid) -> Cover<'a> {
             }
         }
         Shape::Disk { .. } | Shape::Rectangle { .. } | Shape::HalfPlane { .. } => Cover::Mixed,
-        Shape::Union(v) => {
-            let mut only = None;
-            for s in v {
-                match cover(s, b) {
-                    Cover::In => return Cover::In,
-                    Cover::Out => {}
-                    c => {
-                        if only.is_some() {
-                            return Cover::Mixed;
-                        }
-                        only = Some(c);
-                    }
-                }
-            }
-            only.unwrap_or(Cover::Out)
-        }
-        Shape::Intersection(v) => {
-            let mut only = None;
-            for s in v {
-                match cover(s, b) {
-                    Cover::Out => return Cover::Out,
-                    Cover::In => {}
-                    c => {
-                        if only.is_some() {
-                            return Cover::Mixed;
-                        }
-                        only = Some(c);
-                    }
-                }
-            }
-            only.unwrap_or(Cover::In)
-        }
+        Shape::Union(v) => combine(v.iter().map(|s| cover(s, b)), true),
+        Shape::Intersection(v) => combine(v.iter().map(|s| cover(s, b)), false),
         Shape::Difference(p, q) => match (cover(p, b), cover(q, b)) {
             (_, Cover::In) | (Cover::Out, _) => Cover::Out,
             (c, Cover::Out) => c,
