@@ -240,7 +240,9 @@ impl Case for LidDrivenCube {
         );
         let recommendation = format!(
             "{} ({}³): the largest centreline deviation {:.4}; the deviation sits at the extrema near the walls, where the boundary layers are a few cells thick",
-            f.label, nf, mf.dev_u.max(mf.dev_v)
+            f.label,
+            nf,
+            mf.dev_u.max(mf.dev_v)
         );
         Ok(Verdict {
             title: "Lid-driven cube, Re = 1000 (issue 40)".into(),
