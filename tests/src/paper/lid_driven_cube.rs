@@ -18,8 +18,9 @@ const REFERENCE: &str = "lid_driven_cube_re1000";
 /// The largest deviation of either centreline from the tables in quick mode (16³ measured
 /// 0.114 in u, 0.167 in v).
 const QUICK_BOUND: f64 = 0.18;
-/// The same on the finest grid of the full mode (32³ measured 0.0).
-const FULL_BOUND: f64 = 0.0;
+/// The same on the finest grid of the full mode: no worse than 32³ (measured 0.064 in u,
+/// 0.087 in v); the full mode also checks that both fall with every refinement.
+const FULL_BOUND: f64 = 0.09;
 /// max |∇·V|·Δt at the end of a run: the projection's tolerance in a scene of one fluid.
 const DIVERGENCE_BOUND: f64 = 1e-4;
 /// Points of the plotted profiles.
@@ -130,7 +131,7 @@ impl Case for LidDrivenCube {
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
-        let (Some(f), Some((nf, mf))) = (done.runs.last(), done.measured.last()) else {
+        let (Some(f), Some((_, mf))) = (done.runs.last(), done.measured.last()) else {
             return Err("no run completed".into());
         };
         let full = !h.opts.quick;
@@ -239,10 +240,11 @@ impl Case for LidDrivenCube {
             Scale::LogLog,
         );
         let recommendation = format!(
-            "{} ({}³): the largest centreline deviation {:.4}; the deviation sits at the extrema near the walls, where the boundary layers are a few cells thick",
+            "{}, the finest grid: the largest centreline deviation {:.4} (u {:.4}, v {:.4}); it sits at the profiles' extrema next to the walls, which the coarser grids flatten",
             f.label,
-            nf,
-            mf.dev_u.max(mf.dev_v)
+            mf.dev_u.max(mf.dev_v),
+            mf.dev_u,
+            mf.dev_v
         );
         Ok(Verdict {
             title: "Lid-driven cube, Re = 1000 (issue 40)".into(),
