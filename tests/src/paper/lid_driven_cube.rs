@@ -200,10 +200,17 @@ impl Case for LidDrivenCube {
             })
             .collect::<Vec<_>>()
             .join("; ");
+        let orders = if done.measured.len() > 1 {
+            format!(
+                "; observed orders between successive grids u: {}, v: {}",
+                order(|m| m.dev_u),
+                order(|m| m.dev_v)
+            )
+        } else {
+            String::new()
+        };
         h.notes.push(format!(
-            "largest deviations from the tables per grid — {per_grid}; observed orders u: [{}], v: [{}]",
-            order(|m| m.dev_u),
-            order(|m| m.dev_v),
+            "largest deviations from the tables per grid — {per_grid}{orders}"
         ));
         let profile_series = |pick: fn(&Profiles) -> &Vec<(f64, f64)>, t: &Table| {
             let mut s: Vec<_> = done
