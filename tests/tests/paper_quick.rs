@@ -87,6 +87,11 @@ fn oscillating_disk_quick() {
 }
 
 #[test]
+fn lid_driven_cube_quick() {
+    quick("lid_driven_cube");
+}
+
+#[test]
 fn stability_quick() {
     // Twice into one folder: a second `bench-paper` into the same `--out` failed every setting
     // (efsi refused to write over the first run's outputs) until the harness cleared the case.

@@ -8,6 +8,7 @@ pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
+pub mod lid_driven_cube;
 pub mod oscillating_disk;
 pub mod plot;
 pub mod shear_rectangle;
@@ -70,7 +71,7 @@ impl Run {
     /// The record of a finished simulation: its cells, `steps`, wall time and per-stage
     /// timings (no error or metrics yet).
     pub fn of(sim: &Simulation, label: &str, dir: &Path, steps: u64, wall_seconds: f64) -> Run {
-        let cells = sim.grid.nx * sim.grid.ny;
+        let cells = sim.grid.nx * sim.grid.ny * sim.grid.nz;
         let n = steps.max(1) as f64;
         let timings = sim.pipeline().timings();
         let stages = timings.iter().map(|t| {
@@ -215,6 +216,7 @@ pub const CASES: &[Entry] = &[
     entry::<shear_rectangle::ShearRectangle>(),
     entry::<couette::Couette>(),
     entry::<couette_mr::CouetteMr>(),
+    entry::<lid_driven_cube::LidDrivenCube>(),
     entry::<stability::Stability>(),
 ];
 
