@@ -118,17 +118,32 @@ const CUBE: &str = r#"Scene(
 "#;
 
 #[test]
-fn a_lid_driven_cube_is_checked_up_to_the_stages_without_three_dimensional_kernels() {
-    // Scene, grid and boundaries are read in three dimensions; what refuses it is the fluid
-    // stages that have no 3-D kernels yet, named with the grid.
+fn a_lid_driven_cube_checks_and_a_solid_in_three_dimensions_is_refused_by_stage() {
+    // Scene, grid and boundaries are read in three dimensions and the fluid stages run there.
+    let d = tmp("cube_ok");
+    let path = write_scene(&d, CUBE);
+    let out = efsi(&["check", &path]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{said}");
+    assert!(
+        said.contains("three-dimensional 16×16×16 cells")
+            && said.contains("advection → pressure_predictor → viscous → projection"),
+        "{said}"
+    );
+    // A solid needs the momentum (elastic) and VOF stages, which have no 3-D kernels yet:
+    // refused naming them and the grid.
     refused(
-        "cube",
-        CUBE,
+        "cube_with_solid",
+        &CUBE.replace(
+            "    boundaries:",
+            "    solid: (shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.2), density: 2.0,\n\
+             \x20          law: (name: \"neo_hookean\", parameters: {\"G\": 10.0})),\n    boundaries:",
+        ),
         &[
             "Cartesian3D scene (16×16×16 cells)",
             "do not support Cartesian3D",
-            "`advection`",
-            "`projection`",
+            "`momentum`",
+            "`vof`",
         ],
     );
     // Mixing two- and three-dimensional keys is refused by name.

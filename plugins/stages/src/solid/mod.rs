@@ -15,7 +15,7 @@ pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_jso
 use efsi_core::plugin_api::{LawDescription, LawLoader, Laws};
 use efsi_core::scene::Options;
 use efsi_core::validate::{Checked, err};
-use efsi_core::{Field, Grid, Scene};
+use efsi_core::{Field, Region, Scene, Stagger};
 use std::path::Path;
 
 /// The solid of a checked scene, as [`check`] read it into `options`; an error if the scene
@@ -45,17 +45,26 @@ pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
 /// empty intersection) would leave a run without one, its probes NaN: refused, by the cell
 /// fractions the VOF stage starts from ([`crate::vof::fill_fraction`]).
 fn covers_a_cell(scene: &Scene, shape: &Shape) -> Checked {
-    let (domain, n) = (&scene.domain, &scene.grid);
-    let grid = Grid::new(scene.geometry, n.nx, n.ny, domain.x, domain.y);
+    let grid = scene.build_grid();
     let mut phi = Field::zeros(&grid);
     crate::vof::fill_fraction(&grid, shape, &mut phi);
-    if (0..grid.ny as isize).all(|j| (0..grid.nx as isize).all(|i| phi[(i, j)] <= 0.0)) {
+    let most = Region::of(&grid, Stagger::Cell).max(0.0, |line| {
+        phi.at(&line, [0, 0, 0]).iter().fold(0.0, |m, &f| f.max(m))
+    });
+    if most <= 0.0 {
+        let cells = match grid.dims() {
+            3 => format!("{}×{}×{}", grid.nx, grid.ny, grid.nz),
+            _ => format!("{}×{}", grid.nx, grid.ny),
+        };
+        let cell = match grid.dims() {
+            3 => format!("{:e} × {:e} × {:e}", grid.dx, grid.dy, grid.dz),
+            _ => format!("{:e} × {:e}", grid.dx, grid.dy),
+        };
         return err(
             "solid.shape",
             format!(
-                "covers no cell of the {}×{} grid (outside the domain, much smaller than a \
-                 cell of {:e} × {:e}, or empty): the run would have no solid",
-                grid.nx, grid.ny, grid.dx, grid.dy
+                "covers no cell of the {cells} grid (outside the domain, much smaller than a \
+                 cell of {cell}, or empty): the run would have no solid"
             ),
         );
     }
