@@ -32,20 +32,7 @@ pub(super) fn restrict(f: &Level, c: &mut Level) {
                     let len = (fnx - i0).min(RUN);
                     let r = &mut r[..len];
                     f.residual_run(base + i0, r);
-                    if fx == 2 {
-                        let o = &mut out[i0 / 2..];
-                        let pairs = len / 2;
-                        for (m, o) in o[..pairs].iter_mut().enumerate() {
-                            *o = *o + r[2 * m] + r[2 * m + 1];
-                        }
-                        if len % 2 == 1 {
-                            o[pairs] += r[len - 1];
-                        }
-                    } else {
-                        for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
-                            *o += r;
-                        }
-                    }
+                    add_run(out, i0, r, fx);
                     i0 += len;
                 }
             }
@@ -105,20 +92,7 @@ fn restrict_3d(f: &Level, c: &mut Level) {
                         let len = (fnx - i0).min(RUN);
                         let res = &mut res[..len];
                         f.residual_run_3d(base + i0, res);
-                        if fx == 2 {
-                            let o = &mut out[i0 / 2..];
-                            let pairs = len / 2;
-                            for (m, o) in o[..pairs].iter_mut().enumerate() {
-                                *o = *o + res[2 * m] + res[2 * m + 1];
-                            }
-                            if len % 2 == 1 {
-                                o[pairs] += res[len - 1];
-                            }
-                        } else {
-                            for (o, r) in out[i0..i0 + len].iter_mut().zip(res.iter()) {
-                                *o += r;
-                            }
-                        }
+                        add_run(out, i0, res, fx);
                         i0 += len;
                     }
                 }
@@ -152,4 +126,26 @@ fn prolong_3d(f: &mut Level, c: &Level) {
             }
         }
     });
+}
+
+/// Add the fine residuals `r` of a run starting at fine column `i0` into the coarse row `out`:
+/// pairs of fine columns into one coarse column when x is coarsened (`fx == 2`, a lone last
+/// column into its own), column by column otherwise.
+#[inline(always)]
+fn add_run(out: &mut [f64], i0: usize, r: &[f64], fx: usize) {
+    let len = r.len();
+    if fx == 2 {
+        let o = &mut out[i0 / 2..];
+        let pairs = len / 2;
+        for (m, o) in o[..pairs].iter_mut().enumerate() {
+            *o = *o + r[2 * m] + r[2 * m + 1];
+        }
+        if len % 2 == 1 {
+            o[pairs] += r[len - 1];
+        }
+    } else {
+        for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
+            *o += r;
+        }
+    }
 }
