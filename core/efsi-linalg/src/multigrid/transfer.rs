@@ -51,17 +51,7 @@ pub(super) fn prolong(f: &mut Level, c: &Level) {
     par::rows(&mut f.x[fs..(f.ny + 1) * fs], fs).for_each(|j, row| {
         let crow = &c.x[c.p(0, j / fy)..];
         let row = &mut row[1..=fnx];
-        if fx == 2 {
-            for (pair, cx) in row.chunks_mut(2).zip(crow) {
-                for x in pair {
-                    *x += cx;
-                }
-            }
-        } else {
-            for (x, cx) in row.iter_mut().zip(crow) {
-                *x += cx;
-            }
-        }
+        add_coarse(row, crow, fx);
     });
 }
 
@@ -114,17 +104,7 @@ fn prolong_3d(f: &mut Level, c: &Level) {
         }
         let crow = &c.x[c.p3(0, j / fy, k / fz)..];
         let row = &mut row[1..=fnx];
-        if fx == 2 {
-            for (pair, cx) in row.chunks_mut(2).zip(crow) {
-                for x in pair {
-                    *x += cx;
-                }
-            }
-        } else {
-            for (x, cx) in row.iter_mut().zip(crow) {
-                *x += cx;
-            }
-        }
+        add_coarse(row, crow, fx);
     });
 }
 
@@ -146,6 +126,24 @@ fn add_run(out: &mut [f64], i0: usize, r: &[f64], fx: usize) {
     } else {
         for (o, r) in out[i0..i0 + len].iter_mut().zip(r.iter()) {
             *o += r;
+        }
+    }
+}
+
+/// Add the coarse row `crow` into the fine row `row` (piecewise-constant prolongation): each
+/// coarse value into its pair of fine columns when x is coarsened (`fx == 2`), column by
+/// column otherwise.
+#[inline(always)]
+fn add_coarse(row: &mut [f64], crow: &[f64], fx: usize) {
+    if fx == 2 {
+        for (pair, cx) in row.chunks_mut(2).zip(crow) {
+            for x in pair {
+                *x += cx;
+            }
+        }
+    } else {
+        for (x, cx) in row.iter_mut().zip(crow) {
+            *x += cx;
         }
     }
 }
