@@ -326,107 +326,106 @@ fn assemble_into(
     bc: &BoundarySet,
     rho: &efsi_core::Field,
 ) {
-    face_couplings([&mut *east, &mut *north], grid, bc, rho);
-    diagonal(diag, [&*east, &*north], grid, bc, rho);
-}
-
-/// The couplings `A_f/(ρ_f h)` across each cell's east and north faces (zero across a side
-/// that is not periodic), with `ρ_f` the faces' density.
-fn face_couplings(
-    [east, north]: [&mut [f64]; 2],
-    grid: &Grid,
-    bc: &BoundarySet,
-    rho: &efsi_core::Field,
-) {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let m = &grid.metric;
-    let (dx, dy) = (grid.dx, grid.dy);
-    let px = bc.periodic(0);
-    let py = bc.periodic(1);
-    par::rows(east, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, e) in row.iter_mut().enumerate() {
-            let ii = i as isize;
-            *e = if i + 1 < nx || px {
-                let ie = if i + 1 < nx { ii + 1 } else { 0 };
-                m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
-            } else {
-                0.0
-            };
-        }
-    });
-    par::rows(north, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, n) in row.iter_mut().enumerate() {
-            let ii = i as isize;
-            *n = if j + 1 < ny || py {
-                let jn = if j + 1 < ny { jj + 1 } else { 0 };
-                m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
-            } else {
-                0.0
-            };
-        }
-    });
-}
-
-/// The diagonal: the sum of a cell's four couplings (`east`, `north` and its neighbours'),
-/// plus on an outflow side the coupling to `p = 0` on the boundary face, half a cell away.
-fn diagonal(
-    diag: &mut [f64],
-    [east, north]: [&[f64]; 2],
-    grid: &Grid,
-    bc: &BoundarySet,
-    rho: &efsi_core::Field,
-) {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let m = &grid.metric;
-    let (dx, dy) = (grid.dx, grid.dy);
-    let px = bc.periodic(0);
-    let py = bc.periodic(1);
+    let cells = Assembly {
+        grid,
+        rho,
+        periodic: [bc.periodic(0), bc.periodic(1)],
+    };
+    cells.couplings(east, north);
     let outflow = |s: Side| *bc.get(s) == Boundary::Outflow;
-    let (o_xmin, o_xmax, o_ymin, o_ymax) = (
-        outflow(Side::XMin),
-        outflow(Side::XMax),
-        outflow(Side::YMin),
-        outflow(Side::YMax),
-    );
-    par::rows(diag, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, dk) in row.iter_mut().enumerate() {
-            let k = j * nx + i;
-            let ii = i as isize;
-            let w = if i > 0 {
-                east[k - 1]
-            } else if px {
-                east[k + nx - 1]
-            } else {
-                0.0
-            };
-            let s = if j > 0 {
-                north[k - nx]
-            } else if py {
-                north[k + (ny - 1) * nx]
-            } else {
-                0.0
-            };
-            let mut d = east[k] + north[k] + w + s;
-            // Outflow sides: p = 0 on the boundary face, half a cell away.
-            let r = rho[(ii, jj)];
-            if i == 0 && o_xmin {
-                d += 2.0 * m.rx(0) * dy / (r * dx);
+    let outflow = [Side::XMin, Side::XMax, Side::YMin, Side::YMax].map(outflow);
+    cells.diagonal(diag, east, north, outflow);
+}
+
+/// A two-dimensional grid's cells as the projection's matrix couples them: the grid, the
+/// density, and which of the axes x, y are periodic.
+struct Assembly<'a> {
+    grid: &'a Grid,
+    rho: &'a efsi_core::Field,
+    periodic: [bool; 2],
+}
+
+impl Assembly<'_> {
+    /// The couplings `A_f/(ρ_f h)` across each cell's east and north faces (zero across a
+    /// side that is not periodic), with `ρ_f` the faces' density.
+    fn couplings(&self, east: &mut [f64], north: &mut [f64]) {
+        let (grid, rho) = (self.grid, self.rho);
+        let (nx, ny, m) = (grid.nx, grid.ny, &grid.metric);
+        let (dx, dy) = (grid.dx, grid.dy);
+        let [px, py] = self.periodic;
+        par::rows(east, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, e) in row.iter_mut().enumerate() {
+                let ii = i as isize;
+                *e = if i + 1 < nx || px {
+                    let ie = if i + 1 < nx { ii + 1 } else { 0 };
+                    m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
+                } else {
+                    0.0
+                };
             }
-            if i + 1 == nx && o_xmax {
-                d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
+        });
+        par::rows(north, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, n) in row.iter_mut().enumerate() {
+                let ii = i as isize;
+                *n = if j + 1 < ny || py {
+                    let jn = if j + 1 < ny { jj + 1 } else { 0 };
+                    m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
+                } else {
+                    0.0
+                };
             }
-            if j == 0 && o_ymin {
-                d += 2.0 * m.rc(ii) * dx / (r * dy);
+        });
+    }
+
+    /// The diagonal: the sum of a cell's four couplings (`east`, `north` and its neighbours'),
+    /// plus on each `outflow` side (x_min, x_max, y_min, y_max) the coupling to `p = 0` on the
+    /// boundary face, half a cell away.
+    fn diagonal(&self, diag: &mut [f64], east: &[f64], north: &[f64], outflow: [bool; 4]) {
+        let (grid, rho) = (self.grid, self.rho);
+        let (nx, ny, m) = (grid.nx, grid.ny, &grid.metric);
+        let (dx, dy) = (grid.dx, grid.dy);
+        let [px, py] = self.periodic;
+        let [o_xmin, o_xmax, o_ymin, o_ymax] = outflow;
+        par::rows(diag, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, dk) in row.iter_mut().enumerate() {
+                let k = j * nx + i;
+                let ii = i as isize;
+                let w = if i > 0 {
+                    east[k - 1]
+                } else if px {
+                    east[k + nx - 1]
+                } else {
+                    0.0
+                };
+                let s = if j > 0 {
+                    north[k - nx]
+                } else if py {
+                    north[k + (ny - 1) * nx]
+                } else {
+                    0.0
+                };
+                let mut d = east[k] + north[k] + w + s;
+                // Outflow sides: p = 0 on the boundary face, half a cell away.
+                let r = rho[(ii, jj)];
+                if i == 0 && o_xmin {
+                    d += 2.0 * m.rx(0) * dy / (r * dx);
+                }
+                if i + 1 == nx && o_xmax {
+                    d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
+                }
+                if j == 0 && o_ymin {
+                    d += 2.0 * m.rc(ii) * dx / (r * dy);
+                }
+                if j + 1 == ny && o_ymax {
+                    d += 2.0 * m.rc(ii) * dx / (r * dy);
+                }
+                *dk = d;
             }
-            if j + 1 == ny && o_ymax {
-                d += 2.0 * m.rc(ii) * dx / (r * dy);
-            }
-            *dk = d;
-        }
-    });
+        });
+    }
 }
 
 impl Stage for ProjectionStage {
