@@ -91,69 +91,12 @@ impl Simulation {
         scene_path: &Path,
         plugins: &[&dyn StagePlugin],
     ) -> Result<Self, EfsiError> {
-        let config = |field: &str, message: String| EfsiError::Config {
-            path: scene_path.to_path_buf(),
-            field: field.into(),
-            message,
-        };
         let grid = scene.build_grid();
         let bc = BoundarySet::new(&scene.boundaries, &grid);
-        let pipeline = Pipeline::build(&scene, &options, &grid, &bc, plugins)?;
-        let mut state = State::new(
-            &grid,
-            scene.fluid.density,
-            scene.fluid.viscosity,
-            pipeline.fields(),
-        );
-        pipeline.init_state(&grid, &mut state);
-        set_initial_velocity(&scene.initial_velocity, &grid, &mut state);
-        // A solid's initial velocity is blended in by the stage that owns the solid fraction
-        // (the VOF stage's initialize).
-        bc.fill_velocity3(
-            &grid,
-            &mut state.u,
-            &mut state.v,
-            state.w.as_mut(),
-            0.0,
-            false,
-        );
-        bc.fill_scalar(&grid, &mut state.rho, false);
-        bc.fill_scalar(&grid, &mut state.mu, false);
-        let mut pipeline = pipeline;
-        pipeline.initialize(&grid, &bc, &mut state)?;
-        // A velocity scale bounds the first step when the fluid starts at rest: the largest
-        // moving-wall speed is part of it; after that Δt follows the velocities inside the
-        // domain, which is what the advection scheme's stability depends on (a wall's
-        // tangential speed is carried by no face flux).
-        let mut scale = Self::wall_speed(&bc);
-        let lx = grid.x1() - grid.x0;
-        let ly = grid.y1() - grid.y0;
-        let lz = if grid.is_3d() {
-            grid.nz as f64 * grid.dz
-        } else {
-            0.0
-        };
-        scale = scale.max((scene.gravity.norm() * lx.max(ly).max(lz)).sqrt());
-        scale = scale.max(state.u.max_abs(crate::Stagger::XFace, grid.nx, grid.ny));
-        scale = scale.max(state.v.max_abs(crate::Stagger::YFace, grid.nx, grid.ny));
-        if let Some(w) = &state.w {
-            scale = scale.max(w.max_abs(crate::Stagger::ZFace, grid.nx, grid.ny));
-        }
-        if scene.time.fixed_dt.is_none()
-            && scene.time.dt_max.is_none()
-            && (!scene.physics.advection || scale == 0.0)
-        {
-            return Err(config(
-                "time.dt_max",
-                if scene.physics.advection {
-                    "nothing in this scene sets a velocity scale (no moving wall, gravity or initial velocity) \
-                     from which to choose the first step: set time.dt_max or time.fixed_dt"
-                        .into()
-                } else {
-                    "advection is off, so no CFL condition limits the step: set time.dt_max or time.fixed_dt".into()
-                },
-            ));
-        }
+        let mut pipeline = Pipeline::build(&scene, &options, &grid, &bc, plugins)?;
+        let state = Self::initial_state(&scene, &grid, &bc, &mut pipeline)?;
+        let scale = Self::velocity_scale(&scene, &grid, &bc, &state);
+        Self::check_first_step(&scene, scale, scene_path)?;
         let previous = scene.time.steady.map(|_| {
             [
                 Some(state.u.clone()),
@@ -174,6 +117,84 @@ impl Simulation {
             velocity_scale: scale,
             checks: Vec::new(),
         })
+    }
+
+    /// The state the run starts from: the fields `pipeline` uses, its stages' own data, the
+    /// scene's initial velocity, the ghosts filled, and the stages initialised
+    /// ([`Pipeline::initialize`]).
+    fn initial_state(
+        scene: &Scene,
+        grid: &Grid,
+        bc: &BoundarySet,
+        pipeline: &mut Pipeline,
+    ) -> Result<State, EfsiError> {
+        let mut state = State::new(
+            grid,
+            scene.fluid.density,
+            scene.fluid.viscosity,
+            pipeline.fields(),
+        );
+        pipeline.init_state(grid, &mut state);
+        set_initial_velocity(&scene.initial_velocity, grid, &mut state);
+        // A solid's initial velocity is blended in by the stage that owns the solid fraction
+        // (the VOF stage's initialize).
+        bc.fill_velocity3(
+            grid,
+            &mut state.u,
+            &mut state.v,
+            state.w.as_mut(),
+            0.0,
+            false,
+        );
+        bc.fill_scalar(grid, &mut state.rho, false);
+        bc.fill_scalar(grid, &mut state.mu, false);
+        pipeline.initialize(grid, bc, &mut state)?;
+        Ok(state)
+    }
+
+    /// A velocity scale that bounds the first step when the fluid starts at rest: the largest
+    /// moving-wall speed, the free-fall speed √(|g| L) over the domain's longest side, and the
+    /// initial velocity's largest component. After the first step Δt follows the velocities
+    /// inside the domain, which is what the advection scheme's stability depends on (a wall's
+    /// tangential speed is carried by no face flux).
+    fn velocity_scale(scene: &Scene, grid: &Grid, bc: &BoundarySet, state: &State) -> f64 {
+        let mut scale = Self::wall_speed(bc);
+        let lx = grid.x1() - grid.x0;
+        let ly = grid.y1() - grid.y0;
+        let lz = if grid.is_3d() {
+            grid.nz as f64 * grid.dz
+        } else {
+            0.0
+        };
+        scale = scale.max((scene.gravity.norm() * lx.max(ly).max(lz)).sqrt());
+        scale = scale.max(state.u.max_abs(crate::Stagger::XFace, grid.nx, grid.ny));
+        scale = scale.max(state.v.max_abs(crate::Stagger::YFace, grid.nx, grid.ny));
+        if let Some(w) = &state.w {
+            scale = scale.max(w.max_abs(crate::Stagger::ZFace, grid.nx, grid.ny));
+        }
+        scale
+    }
+
+    /// Something must choose the first step: a fixed Δt, `time.dt_max`, or (with advection on)
+    /// a velocity scale above zero.
+    fn check_first_step(scene: &Scene, scale: f64, scene_path: &Path) -> Result<(), EfsiError> {
+        if scene.time.fixed_dt.is_none()
+            && scene.time.dt_max.is_none()
+            && (!scene.physics.advection || scale == 0.0)
+        {
+            return Err(EfsiError::Config {
+                path: scene_path.to_path_buf(),
+                field: "time.dt_max".into(),
+                message: if scene.physics.advection {
+                    "nothing in this scene sets a velocity scale (no moving wall, gravity or initial velocity) \
+                     from which to choose the first step: set time.dt_max or time.fixed_dt"
+                        .into()
+                } else {
+                    "advection is off, so no CFL condition limits the step: set time.dt_max or time.fixed_dt".into()
+                },
+            });
+        }
+        Ok(())
     }
 
     /// Add a check of every step ([`StepCheck`]), after those already added.

@@ -93,6 +93,47 @@ pub fn check_iterations(field: &'static str, n: usize) -> Result<(), (&'static s
     }
 }
 
+/// One axis's cells: `n` (the setting at `f`) is at least one, at least [`MIN_CELLS_ACROSS`]
+/// between sides that are not periodic, and cuts the extent `(lo, hi)` (the setting at `d`)
+/// into cells of a size in [[`MIN_CELL_SIZE`], [`MAX_CELL_SIZE`]] and at least 1e3 ε of the
+/// coordinates.
+fn check_axis_cells(f: &str, n: usize, periodic: bool, (lo, hi): (f64, f64), d: &str) -> Checked {
+    if n == 0 {
+        return err(f, "must be at least 1 cell, got 0");
+    }
+    if n < MIN_CELLS_ACROSS && !periodic {
+        return err(
+            f,
+            format!(
+                "must be at least {MIN_CELLS_ACROSS} cells between sides that are not \
+                 periodic (the stages' differences need a neighbour; one cell has no \
+                 face inside), got {n}"
+            ),
+        );
+    }
+    // Cell sizes whose square (the viscous and pressure systems' 1/h²) over- or
+    // underflows, or too small against the coordinates to tell cells apart.
+    let h = (hi - lo) / n as f64;
+    let scale = lo.abs().max(hi.abs());
+    if !(MIN_CELL_SIZE..=MAX_CELL_SIZE).contains(&h) || h < 1e3 * f64::EPSILON * scale {
+        return err(
+            d,
+            format!(
+                "({}, {}) with {f} = {n} gives cells of size {}: a cell size must be \
+                 in [{:e}, {:e}] (its square and inverse square finite) and at least \
+                 {:e} of the coordinates (else neighbouring cells round to one position)",
+                num(lo),
+                num(hi),
+                num(h),
+                MIN_CELL_SIZE,
+                MAX_CELL_SIZE,
+                1e3 * f64::EPSILON
+            ),
+        );
+    }
+    Ok(())
+}
+
 impl Scene {
     /// Check ranges and consistency, section by section; on failure, the field path and what
     /// was expected.
@@ -131,48 +172,66 @@ impl Scene {
     /// axis, a Cartesian3D one has all of it and none of the axisymmetric spellings (see
     /// [`crate::scene`]'s "Three dimensions").
     fn validate_dimensions(&self) -> Checked {
+        if self.geometry != Geometry::Cartesian3D {
+            return self.validate_two_axes();
+        }
+        self.refuse_axisymmetric_spellings()?;
+        self.require_third_axis()?;
+        if self.gravity.2.is_none() && self.gravity != (0.0, 0.0) {
+            return err(
+                "gravity",
+                "a Cartesian3D scene's gravity has three components (gx, gy, gz), got two: \
+                 which axis is vertical is the scene's to say",
+            );
+        }
+        Ok(())
+    }
+
+    /// A planar or axisymmetric scene writes nothing of a third axis: no `z` extent, cell
+    /// count or sides beside the `y` ones, and gravity of two components.
+    fn validate_two_axes(&self) -> Checked {
         let g = self.geometry;
-        let d = &self.domain;
-        let n = &self.grid;
-        let b = &self.boundaries;
-        if g != Geometry::Cartesian3D {
-            let third = [
-                ("domain.z", d.z.is_some(), "domain.y"),
-                ("grid.nz", n.nz.is_some(), "grid.ny"),
-                ("boundaries.z_min", b.z_min.is_some(), "boundaries.y_min"),
-                ("boundaries.z_max", b.z_max.is_some(), "boundaries.y_max"),
-            ];
-            for (f, given, y) in third {
-                if given {
-                    return err(
-                        f,
-                        format!(
-                            "a {g:?} scene has two axes: `{}` beside `{}` would be a third \
-                             (`{}` is `{}`'s axisymmetric spelling only where `{}` is not \
-                             written); a three-dimensional scene is `geometry: Cartesian3D`",
-                            leaf(f),
-                            leaf(y),
-                            leaf(f),
-                            leaf(y),
-                            leaf(y)
-                        ),
-                    );
-                }
-            }
-            if self.gravity.2.is_some() {
+        let (d, n, b) = (&self.domain, &self.grid, &self.boundaries);
+        let third = [
+            ("domain.z", d.z.is_some(), "domain.y"),
+            ("grid.nz", n.nz.is_some(), "grid.ny"),
+            ("boundaries.z_min", b.z_min.is_some(), "boundaries.y_min"),
+            ("boundaries.z_max", b.z_max.is_some(), "boundaries.y_max"),
+        ];
+        for (f, given, y) in third {
+            if given {
                 return err(
-                    "gravity",
+                    f,
                     format!(
-                        "a {g:?} scene has two axes: gravity is (gx, gy), got three components"
+                        "a {g:?} scene has two axes: `{}` beside `{}` would be a third \
+                         (`{}` is `{}`'s axisymmetric spelling only where `{}` is not \
+                         written); a three-dimensional scene is `geometry: Cartesian3D`",
+                        leaf(f),
+                        leaf(y),
+                        leaf(f),
+                        leaf(y),
+                        leaf(y)
                     ),
                 );
             }
-            return Ok(());
         }
+        if self.gravity.2.is_some() {
+            return err(
+                "gravity",
+                format!("a {g:?} scene has two axes: gravity is (gx, gy), got three components"),
+            );
+        }
+        Ok(())
+    }
+
+    /// A Cartesian3D scene names its axes x, y, z: the first axisymmetric spelling (`r`,
+    /// `nr`, `z_min`, …) written in the domain, grid or boundaries is refused, named by the
+    /// Cartesian key it stands for.
+    fn refuse_axisymmetric_spellings(&self) -> Checked {
         for (section, aliases) in [
-            ("domain", &d.aliases),
-            ("grid", &n.aliases),
-            ("boundaries", &b.aliases),
+            ("domain", &self.domain.aliases),
+            ("grid", &self.grid.aliases),
+            ("boundaries", &self.boundaries.aliases),
         ] {
             if let Some(a) = aliases.first() {
                 let meaning = match *a {
@@ -199,6 +258,13 @@ impl Scene {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// A Cartesian3D scene writes all of its third axis: the extent, the cell count and both
+    /// sides.
+    fn require_third_axis(&self) -> Checked {
+        let (d, n, b) = (&self.domain, &self.grid, &self.boundaries);
         let missing = [
             ("domain.z", d.z.is_none(), "(min, max) along the third axis"),
             (
@@ -222,20 +288,45 @@ impl Scene {
                 return err(f, format!("missing: a Cartesian3D scene needs {what}"));
             }
         }
-        if self.gravity.2.is_none() && self.gravity != (0.0, 0.0) {
-            return err(
-                "gravity",
-                "a Cartesian3D scene's gravity has three components (gx, gy, gz), got two: \
-                 which axis is vertical is the scene's to say",
-            );
+        Ok(())
+    }
+
+    /// The domain and the grid: the dimensions, each axis's extent, the cell count, and each
+    /// axis's cells.
+    fn validate_domain_and_grid(&self) -> Checked {
+        self.validate_dimensions()?;
+        self.validate_extents()?;
+        let [nx, ny, nz] = self.grid.n();
+        self.validate_cell_count([nx, ny, nz])?;
+        let b = &self.boundaries;
+        let mut axes = vec![
+            (
+                "grid.nx",
+                nx,
+                b.x_min == Boundary::Periodic,
+                self.domain.x,
+                "domain.x",
+            ),
+            (
+                "grid.ny",
+                ny,
+                b.y_min == Boundary::Periodic,
+                self.domain.y,
+                "domain.y",
+            ),
+        ];
+        if let (Some(z), Some(zb)) = (self.domain.z, &b.z_min) {
+            axes.push(("grid.nz", nz, *zb == Boundary::Periodic, z, "domain.z"));
+        }
+        for (f, n, periodic, extent, d) in axes {
+            check_axis_cells(f, n, periodic, extent, d)?;
         }
         Ok(())
     }
 
-    /// The domain and the grid.
-    fn validate_domain_and_grid(&self) -> Checked {
-        self.validate_dimensions()?;
-        let three = self.geometry == Geometry::Cartesian3D;
+    /// Each axis's extent is `(min, max)` with `max > min`, both finite and their difference
+    /// too; an axisymmetric domain starts at a radius ≥ 0.
+    fn validate_extents(&self) -> Checked {
         let mut axes = vec![("domain.x", self.domain.x), ("domain.y", self.domain.y)];
         if let Some(z) = self.domain.z {
             axes.push(("domain.z", z));
@@ -272,12 +363,16 @@ impl Scene {
                 ),
             );
         }
-        let [nx, ny, nz] = self.grid.n();
+        Ok(())
+    }
+
+    /// At most [`MAX_CELLS`] cells in all.
+    fn validate_cell_count(&self, [nx, ny, nz]: [usize; 3]) -> Checked {
         let cells = nx.saturating_mul(ny).saturating_mul(nz);
         if cells > MAX_CELLS {
             return err(
                 "grid",
-                if three {
+                if self.geometry == Geometry::Cartesian3D {
                     format!(
                         "more than 1e8 cells ({nx} × {ny} × {nz}) is beyond a 3-D run on this machine"
                     )
@@ -286,62 +381,6 @@ impl Scene {
                 },
             );
         }
-        let b = &self.boundaries;
-        let mut axes = vec![
-            (
-                "grid.nx",
-                nx,
-                b.x_min == Boundary::Periodic,
-                self.domain.x,
-                "domain.x",
-            ),
-            (
-                "grid.ny",
-                ny,
-                b.y_min == Boundary::Periodic,
-                self.domain.y,
-                "domain.y",
-            ),
-        ];
-        if let (Some(z), Some(zb)) = (self.domain.z, &b.z_min) {
-            axes.push(("grid.nz", nz, *zb == Boundary::Periodic, z, "domain.z"));
-        }
-        for (f, n, periodic, (lo, hi), d) in axes {
-            if n == 0 {
-                return err(f, "must be at least 1 cell, got 0");
-            }
-            if n < MIN_CELLS_ACROSS && !periodic {
-                return err(
-                    f,
-                    format!(
-                        "must be at least {MIN_CELLS_ACROSS} cells between sides that are not \
-                         periodic (the stages' differences need a neighbour; one cell has no \
-                         face inside), got {n}"
-                    ),
-                );
-            }
-            // Cell sizes whose square (the viscous and pressure systems' 1/h²) over- or
-            // underflows, or too small against the coordinates to tell cells apart.
-            let h = (hi - lo) / n as f64;
-            let scale = lo.abs().max(hi.abs());
-            if !(MIN_CELL_SIZE..=MAX_CELL_SIZE).contains(&h) || h < 1e3 * f64::EPSILON * scale {
-                return err(
-                    d,
-                    format!(
-                        "({}, {}) with {f} = {n} gives cells of size {}: a cell size must be \
-                         in [{:e}, {:e}] (its square and inverse square finite) and at least \
-                         {:e} of the coordinates (else neighbouring cells round to one position)",
-                        num(lo),
-                        num(hi),
-                        num(h),
-                        MIN_CELL_SIZE,
-                        MAX_CELL_SIZE,
-                        1e3 * f64::EPSILON
-                    ),
-                );
-            }
-        }
-
         Ok(())
     }
 

@@ -316,6 +316,147 @@ pub struct StageTiming {
     pub iterations: u64,
 }
 
+impl Entry {
+    /// Build plugin `p`'s stage ([`StagePlugin::build`]) and its entry: what the scheduler
+    /// runs of it is its sub-steps, or the stage itself as one step.
+    fn build(
+        p: &dyn StagePlugin,
+        scene: &Scene,
+        options: &Options,
+        grid: &Grid,
+        bc: &BoundarySet,
+        shared: &mut Resources,
+    ) -> Result<Entry, ScheduleError> {
+        let stage = p
+            .build(scene, options, grid, bc, shared)
+            .map_err(|message| ScheduleError::Build {
+                stage: p.name().to_string(),
+                message,
+            })?;
+        let subs = p.sub_steps();
+        let steps = if subs.is_empty() {
+            vec![Timed::new(p.name(), p.writes(), stage.projects())]
+        } else {
+            subs.iter()
+                .map(|s| Timed::new(s.name, s.writes, s.projects))
+                .collect()
+        };
+        Ok(Entry {
+            name: p.name(),
+            source: p.source(),
+            phase: p.phase(),
+            reads: p.reads(),
+            writes: p.writes(),
+            options: p.options().map(|d| d.section),
+            limit: p.limit_depends_on(),
+            stage,
+            by_sub_steps: !subs.is_empty(),
+            steps,
+        })
+    }
+}
+
+/// An `after` constraint names a stage of the same phase (`group`); one on a stage the scene
+/// does not schedule (not in `chosen`) is vacuous.
+fn check_after_in_phase(
+    chosen: &[&dyn StagePlugin],
+    group: &[&dyn StagePlugin],
+) -> Result<(), ScheduleError> {
+    for p in group {
+        for a in p.after() {
+            if !chosen.iter().any(|q| q.name() == *a) {
+                continue; // constraint on an absent stage: vacuous
+            }
+            if !group.iter().any(|q| q.name() == *a) {
+                return Err(ScheduleError::BadOrder {
+                    stage: p.name().into(),
+                    other: (*a).into(),
+                    why: "it is in another phase",
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One phase's stages in an order that honours every `after` constraint: Kahn's algorithm,
+/// ties broken by name for determinism; a cycle is refused.
+fn sort_by_after<'a>(
+    group: &[&'a dyn StagePlugin],
+) -> Result<Vec<&'a dyn StagePlugin>, ScheduleError> {
+    let mut done: Vec<&dyn StagePlugin> = Vec::new();
+    let mut left = group.to_vec();
+    left.sort_by_key(|p| p.name());
+    while !left.is_empty() {
+        let pos = left.iter().position(|p| {
+            p.after()
+                .iter()
+                .all(|a| !left.iter().any(|q| q.name() == *a))
+        });
+        match pos {
+            Some(k) => done.push(left.remove(k)),
+            None => {
+                return Err(ScheduleError::BadOrder {
+                    stage: left[0].name().into(),
+                    other: left[0].after().first().copied().unwrap_or("?").into(),
+                    why: "the constraints form a cycle",
+                });
+            }
+        }
+    }
+    Ok(done)
+}
+
+/// Whether `x` is (transitively) required before `y` by the `after` constraints among
+/// `group`.
+fn required_before(group: &[&dyn StagePlugin], x: &dyn StagePlugin, y: &dyn StagePlugin) -> bool {
+    let mut stack = vec![y.name()];
+    let mut seen = BTreeSet::new();
+    while let Some(n) = stack.pop() {
+        if let Some(s) = group.iter().find(|p| p.name() == n) {
+            for a in s.after() {
+                if *a == x.name() {
+                    return true;
+                }
+                if seen.insert(*a) {
+                    stack.push(a);
+                }
+            }
+        }
+    }
+    false
+}
+
+/// Ambiguity: two stages of `phase` (in their order `done`) with conflicting access to a
+/// field (one writes what the other reads or writes) and no (transitive) order between them.
+fn check_unambiguous(
+    group: &[&dyn StagePlugin],
+    done: &[&dyn StagePlugin],
+    phase: Phase,
+) -> Result<(), ScheduleError> {
+    for (k, a) in done.iter().enumerate() {
+        for b in &done[k + 1..] {
+            let conflict = a
+                .writes()
+                .iter()
+                .find(|f| b.writes().contains(f) || b.reads().contains(f))
+                .or_else(|| b.writes().iter().find(|f| a.reads().contains(f)));
+            if let Some(f) = conflict
+                && !required_before(group, *a, *b)
+                && !required_before(group, *b, *a)
+            {
+                return Err(ScheduleError::Ambiguous {
+                    a: a.name().into(),
+                    b: b.name().into(),
+                    phase,
+                    field: f.name(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The ordered stages of a run.
 pub struct Pipeline {
     entries: Vec<Entry>,
@@ -341,6 +482,41 @@ impl Pipeline {
                 return Err(ScheduleError::DuplicateName(p.name().to_string()));
             }
         }
+        let chosen = Self::choose(scene, options, grid, plugins)?;
+        Self::check_step_names(&chosen)?;
+        let order = Self::order(&chosen)?;
+        let fields = Self::fields_of(&chosen)?;
+        let mut entries = Vec::with_capacity(order.len());
+        let mut shared = Resources::default();
+        let mut outputs: Vec<(&'static str, OutputDecl)> = Vec::new();
+        for p in order {
+            for o in p.outputs() {
+                if let Some((first, _)) = outputs.iter().find(|(_, x)| x.name == o.name) {
+                    return Err(ScheduleError::DuplicateOutput {
+                        output: o.name,
+                        first,
+                        second: p.name(),
+                    });
+                }
+                outputs.push((p.name(), *o));
+            }
+            entries.push(Entry::build(p, scene, options, grid, bc, &mut shared)?);
+        }
+        Ok(Pipeline {
+            entries,
+            fields,
+            outputs: outputs.into_iter().map(|(_, o)| o).collect(),
+        })
+    }
+
+    /// The plugins `scene` needs, in the order given; refused if any of them does not run on
+    /// the grid's geometry ([`ScheduleError::Unsupported`], naming them all).
+    fn choose<'a>(
+        scene: &Scene,
+        options: &Options,
+        grid: &Grid,
+        plugins: &[&'a dyn StagePlugin],
+    ) -> Result<Vec<&'a dyn StagePlugin>, ScheduleError> {
         let chosen: Vec<&dyn StagePlugin> = plugins
             .iter()
             .copied()
@@ -358,11 +534,15 @@ impl Pipeline {
                 cells: grid.n(),
             });
         }
-        // What runs is named uniquely within the pipeline: each stage, or in its place its
-        // sub-steps, which may take the name of a stage not scheduled with them (the
-        // implicit-momentum stage's `projection`).
+        Ok(chosen)
+    }
+
+    /// What runs is named uniquely within the pipeline: each stage, or in its place its
+    /// sub-steps, which may take the name of a stage not scheduled with them (the
+    /// implicit-momentum stage's `projection`).
+    fn check_step_names(chosen: &[&dyn StagePlugin]) -> Result<(), ScheduleError> {
         let mut steps = BTreeSet::new();
-        for p in &chosen {
+        for p in chosen {
             let own = [p.name()];
             let subs: Vec<&'static str> = p.sub_steps().iter().map(|s| s.name).collect();
             let run = if subs.is_empty() { &own[..] } else { &subs[..] };
@@ -372,13 +552,17 @@ impl Pipeline {
                 }
             }
         }
-        let order = Self::order(&chosen)?;
-        // Fields: the base set plus everything written.
+        Ok(())
+    }
+
+    /// The fields of the pipeline: the base set plus everything written; every field a stage
+    /// reads must be among them.
+    fn fields_of(chosen: &[&dyn StagePlugin]) -> Result<BTreeSet<FieldId>, ScheduleError> {
         let mut fields: BTreeSet<FieldId> = FieldId::BASE.into_iter().collect();
-        for p in &chosen {
+        for p in chosen {
             fields.extend(p.writes().iter().copied());
         }
-        for p in &chosen {
+        for p in chosen {
             for f in p.reads() {
                 if !fields.contains(f) {
                     return Err(ScheduleError::MissingField {
@@ -388,52 +572,7 @@ impl Pipeline {
                 }
             }
         }
-        let mut entries = Vec::with_capacity(order.len());
-        let mut shared = Resources::default();
-        let mut outputs: Vec<(&'static str, OutputDecl)> = Vec::new();
-        for p in order {
-            for o in p.outputs() {
-                if let Some((first, _)) = outputs.iter().find(|(_, x)| x.name == o.name) {
-                    return Err(ScheduleError::DuplicateOutput {
-                        output: o.name,
-                        first,
-                        second: p.name(),
-                    });
-                }
-                outputs.push((p.name(), *o));
-            }
-            let stage = p
-                .build(scene, options, grid, bc, &mut shared)
-                .map_err(|message| ScheduleError::Build {
-                    stage: p.name().to_string(),
-                    message,
-                })?;
-            let subs = p.sub_steps();
-            let steps = if subs.is_empty() {
-                vec![Timed::new(p.name(), p.writes(), stage.projects())]
-            } else {
-                subs.iter()
-                    .map(|s| Timed::new(s.name, s.writes, s.projects))
-                    .collect()
-            };
-            entries.push(Entry {
-                name: p.name(),
-                source: p.source(),
-                phase: p.phase(),
-                reads: p.reads(),
-                writes: p.writes(),
-                options: p.options().map(|d| d.section),
-                limit: p.limit_depends_on(),
-                stage,
-                by_sub_steps: !subs.is_empty(),
-                steps,
-            });
-        }
-        Ok(Pipeline {
-            entries,
-            fields,
-            outputs: outputs.into_iter().map(|(_, o)| o).collect(),
-        })
+        Ok(fields)
     }
 
     /// Order by phase, then topologically by `after` within a phase; reject ambiguity.
@@ -447,80 +586,9 @@ impl Pipeline {
                 .copied()
                 .filter(|p| p.phase() == phase)
                 .collect();
-            for p in &group {
-                for a in p.after() {
-                    if !chosen.iter().any(|q| q.name() == *a) {
-                        continue; // constraint on an absent stage: vacuous
-                    }
-                    if !group.iter().any(|q| q.name() == *a) {
-                        return Err(ScheduleError::BadOrder {
-                            stage: p.name().into(),
-                            other: (*a).into(),
-                            why: "it is in another phase",
-                        });
-                    }
-                }
-            }
-            // Kahn's algorithm, ties broken by name for determinism.
-            let mut done: Vec<&dyn StagePlugin> = Vec::new();
-            let mut left = group.clone();
-            left.sort_by_key(|p| p.name());
-            while !left.is_empty() {
-                let pos = left.iter().position(|p| {
-                    p.after()
-                        .iter()
-                        .all(|a| !left.iter().any(|q| q.name() == *a))
-                });
-                match pos {
-                    Some(k) => done.push(left.remove(k)),
-                    None => {
-                        return Err(ScheduleError::BadOrder {
-                            stage: left[0].name().into(),
-                            other: left[0].after().first().copied().unwrap_or("?").into(),
-                            why: "the constraints form a cycle",
-                        });
-                    }
-                }
-            }
-            // Ambiguity: conflicting access without a (transitive) order.
-            let before = |x: &dyn StagePlugin, y: &dyn StagePlugin| -> bool {
-                // Is x (transitively) required before y?
-                let mut stack = vec![y.name()];
-                let mut seen = BTreeSet::new();
-                while let Some(n) = stack.pop() {
-                    if let Some(s) = group.iter().find(|p| p.name() == n) {
-                        for a in s.after() {
-                            if *a == x.name() {
-                                return true;
-                            }
-                            if seen.insert(*a) {
-                                stack.push(a);
-                            }
-                        }
-                    }
-                }
-                false
-            };
-            for (k, a) in done.iter().enumerate() {
-                for b in &done[k + 1..] {
-                    let conflict = a
-                        .writes()
-                        .iter()
-                        .find(|f| b.writes().contains(f) || b.reads().contains(f))
-                        .or_else(|| b.writes().iter().find(|f| a.reads().contains(f)));
-                    if let Some(f) = conflict
-                        && !before(*a, *b)
-                        && !before(*b, *a)
-                    {
-                        return Err(ScheduleError::Ambiguous {
-                            a: a.name().into(),
-                            b: b.name().into(),
-                            phase,
-                            field: f.name(),
-                        });
-                    }
-                }
-            }
+            check_after_in_phase(chosen, &group)?;
+            let done = sort_by_after(&group)?;
+            check_unambiguous(&group, &done, phase)?;
             out.extend(done);
         }
         Ok(out)

@@ -73,7 +73,7 @@ use efsi_core::{
 };
 use efsi_linalg::par;
 use efsi_linalg::{
-    IncompleteCholesky, Multigrid, Norm, Stencil5, Stencil5View, pcg::solve_norm_in,
+    IncompleteCholesky, Multigrid, Norm, SolveStats, Stencil5, Stencil5View, pcg::solve_norm_in,
 };
 
 mod options;
@@ -326,80 +326,106 @@ fn assemble_into(
     bc: &BoundarySet,
     rho: &efsi_core::Field,
 ) {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let m = &grid.metric;
-    let (dx, dy) = (grid.dx, grid.dy);
-    let px = bc.periodic(0);
-    let py = bc.periodic(1);
-    par::rows(&mut *east, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, e) in row.iter_mut().enumerate() {
-            let ii = i as isize;
-            *e = if i + 1 < nx || px {
-                let ie = if i + 1 < nx { ii + 1 } else { 0 };
-                m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
-            } else {
-                0.0
-            };
-        }
-    });
-    par::rows(&mut *north, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, n) in row.iter_mut().enumerate() {
-            let ii = i as isize;
-            *n = if j + 1 < ny || py {
-                let jn = if j + 1 < ny { jj + 1 } else { 0 };
-                m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
-            } else {
-                0.0
-            };
-        }
-    });
+    let cells = Assembly {
+        grid,
+        rho,
+        periodic: [bc.periodic(0), bc.periodic(1)],
+    };
+    cells.couplings(east, north);
     let outflow = |s: Side| *bc.get(s) == Boundary::Outflow;
-    let (o_xmin, o_xmax, o_ymin, o_ymax) = (
-        outflow(Side::XMin),
-        outflow(Side::XMax),
-        outflow(Side::YMin),
-        outflow(Side::YMax),
-    );
-    let (east, north) = (&*east, &*north);
-    par::rows(&mut *diag, nx).for_each(|j, row| {
-        let jj = j as isize;
-        for (i, dk) in row.iter_mut().enumerate() {
-            let k = j * nx + i;
-            let ii = i as isize;
-            let w = if i > 0 {
-                east[k - 1]
-            } else if px {
-                east[k + nx - 1]
-            } else {
-                0.0
-            };
-            let s = if j > 0 {
-                north[k - nx]
-            } else if py {
-                north[k + (ny - 1) * nx]
-            } else {
-                0.0
-            };
-            let mut d = east[k] + north[k] + w + s;
-            // Outflow sides: p = 0 on the boundary face, half a cell away.
-            let r = rho[(ii, jj)];
-            if i == 0 && o_xmin {
-                d += 2.0 * m.rx(0) * dy / (r * dx);
+    let outflow = [Side::XMin, Side::XMax, Side::YMin, Side::YMax].map(outflow);
+    cells.diagonal(diag, east, north, outflow);
+}
+
+/// A two-dimensional grid's cells as the projection's matrix couples them: the grid, the
+/// density, and which of the axes x, y are periodic.
+struct Assembly<'a> {
+    grid: &'a Grid,
+    rho: &'a efsi_core::Field,
+    periodic: [bool; 2],
+}
+
+impl Assembly<'_> {
+    /// The couplings `A_f/(ρ_f h)` across each cell's east and north faces (zero across a
+    /// side that is not periodic), with `ρ_f` the faces' density.
+    fn couplings(&self, east: &mut [f64], north: &mut [f64]) {
+        let (grid, rho) = (self.grid, self.rho);
+        let (nx, ny, m) = (grid.nx, grid.ny, &grid.metric);
+        let (dx, dy) = (grid.dx, grid.dy);
+        let [px, py] = self.periodic;
+        par::rows(east, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, e) in row.iter_mut().enumerate() {
+                let ii = i as isize;
+                *e = if i + 1 < nx || px {
+                    let ie = if i + 1 < nx { ii + 1 } else { 0 };
+                    m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
+                } else {
+                    0.0
+                };
             }
-            if i + 1 == nx && o_xmax {
-                d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
+        });
+        par::rows(north, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, n) in row.iter_mut().enumerate() {
+                let ii = i as isize;
+                *n = if j + 1 < ny || py {
+                    let jn = if j + 1 < ny { jj + 1 } else { 0 };
+                    m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
+                } else {
+                    0.0
+                };
             }
-            if j == 0 && o_ymin {
-                d += 2.0 * m.rc(ii) * dx / (r * dy);
+        });
+    }
+
+    /// The diagonal: the sum of a cell's four couplings (`east`, `north` and its neighbours'),
+    /// plus on each `outflow` side (x_min, x_max, y_min, y_max) the coupling to `p = 0` on the
+    /// boundary face, half a cell away.
+    fn diagonal(&self, diag: &mut [f64], east: &[f64], north: &[f64], outflow: [bool; 4]) {
+        let (grid, rho) = (self.grid, self.rho);
+        let (nx, ny, m) = (grid.nx, grid.ny, &grid.metric);
+        let (dx, dy) = (grid.dx, grid.dy);
+        let [px, py] = self.periodic;
+        let [o_xmin, o_xmax, o_ymin, o_ymax] = outflow;
+        par::rows(diag, nx).for_each(|j, row| {
+            let jj = j as isize;
+            for (i, dk) in row.iter_mut().enumerate() {
+                let k = j * nx + i;
+                let ii = i as isize;
+                let w = if i > 0 {
+                    east[k - 1]
+                } else if px {
+                    east[k + nx - 1]
+                } else {
+                    0.0
+                };
+                let s = if j > 0 {
+                    north[k - nx]
+                } else if py {
+                    north[k + (ny - 1) * nx]
+                } else {
+                    0.0
+                };
+                let mut d = east[k] + north[k] + w + s;
+                // Outflow sides: p = 0 on the boundary face, half a cell away.
+                let r = rho[(ii, jj)];
+                if i == 0 && o_xmin {
+                    d += 2.0 * m.rx(0) * dy / (r * dx);
+                }
+                if i + 1 == nx && o_xmax {
+                    d += 2.0 * m.rx(ii + 1) * dy / (r * dx);
+                }
+                if j == 0 && o_ymin {
+                    d += 2.0 * m.rc(ii) * dx / (r * dy);
+                }
+                if j + 1 == ny && o_ymax {
+                    d += 2.0 * m.rc(ii) * dx / (r * dy);
+                }
+                *dk = d;
             }
-            if j + 1 == ny && o_ymax {
-                d += 2.0 * m.rc(ii) * dx / (r * dy);
-            }
-            *dk = d;
-        }
-    });
+        });
+    }
 }
 
 impl Stage for ProjectionStage {
@@ -516,43 +542,19 @@ impl Projector {
         increment: bool,
     ) -> Result<StageStats, StageError> {
         let grid = ctx.grid;
-        let dt = ctx.dt;
         self.set_up(grid, ctx.bc, &state.rho);
         let mut pool = self.scratch.lock();
         let (vectors, _) = pool.split_at_mut(WORK * grid.cells());
         let [b, x, weight, r, pw, q] = scratch::take::<WORK>(vectors, grid.cells());
-        if let Some(w) = state.w.as_ref().filter(|_| grid.is_3d()) {
-            three_d::divergence_rhs_3d(grid, [&state.u, &state.v, w], dt, b);
-            weight.fill(dt * dt / (grid.dx * grid.dy * grid.dz));
-        } else {
-            divergence_rhs(grid, &state.u, &state.v, dt, b);
-            // The residual weights Δt²/dV.
-            par::rows(&mut *weight, grid.nx).for_each(|_, row| {
-                for (i, w) in row.iter_mut().enumerate() {
-                    *w = dt * dt / grid.cell_volume(i as isize);
-                }
-            });
-        }
+        rhs_and_weights(grid, state, ctx.dt, b, weight);
         // An increment on the pressure already applied (the incremental scheme's predictor,
         // or the coupled elastic step's) from zero, else the whole pressure from the last
         // step's.
         let incremental = increment && self.increment.is_some();
         if incremental {
             x.fill(0.0);
-        } else if grid.is_3d() {
-            let nx = grid.nx;
-            let p = &state.p;
-            let cells = Region::of(grid, Stagger::Cell);
-            par::rows(&mut *x, nx).for_each(|r, row| {
-                row.copy_from_slice(p.at(&cells.line(r), [0; 3]));
-            });
         } else {
-            let p = &state.p;
-            par::rows(&mut *x, grid.nx).for_each(|j, row| {
-                for (i, x) in row.iter_mut().enumerate() {
-                    *x = p[(i as isize, j as isize)];
-                }
-            });
+            copy_pressure(grid, &state.p, x);
         }
         let singular = !ctx.bc.has_pressure_reference();
         if singular {
@@ -560,16 +562,9 @@ impl Projector {
             b.iter_mut().for_each(|b| *b -= mean);
         }
         let norm = Norm::MaxWeighted(weight);
-        let work = [r, pw, q];
-        let st = match &mut self.precond {
-            Precond::Multigrid(mg) => {
-                let a = &mut mg.fine_matrix();
-                solve_norm_in(work, a, &*mg, b, x, tol, self.max_iter, norm)
-            }
-            Precond::IncompleteCholesky(ic, a) => {
-                solve_norm_in(work, a, &*ic, b, x, tol, self.max_iter, norm)
-            }
-        };
+        let st = self
+            .precond
+            .solve([r, pw, q], b, x, tol, self.max_iter, norm);
         if !st.converged {
             return Err(StageError {
                 stage: "projection".into(),
@@ -694,6 +689,66 @@ fn correct(
         three_d::subtract_gradient_3d(grid, faces, phi, &state.rho, dt, vel);
     } else {
         subtract_gradient(grid, bc, phi, &state.rho, dt, &mut state.u, &mut state.v);
+    }
+}
+
+/// The projection's right-hand side `b` (the velocity's divergence over Δt, per cell) and the
+/// residual weights Δt²/dV of the norm it is solved to.
+fn rhs_and_weights(grid: &Grid, state: &State, dt: f64, b: &mut [f64], weight: &mut [f64]) {
+    if let Some(w) = state.w.as_ref().filter(|_| grid.is_3d()) {
+        three_d::divergence_rhs_3d(grid, [&state.u, &state.v, w], dt, b);
+        weight.fill(dt * dt / (grid.dx * grid.dy * grid.dz));
+    } else {
+        divergence_rhs(grid, &state.u, &state.v, dt, b);
+        // The residual weights Δt²/dV.
+        par::rows(&mut *weight, grid.nx).for_each(|_, row| {
+            for (i, w) in row.iter_mut().enumerate() {
+                *w = dt * dt / grid.cell_volume(i as isize);
+            }
+        });
+    }
+}
+
+/// The pressure `p` into `x` (per cell, rows of `nx`): the solve's initial guess when it
+/// solves for the whole pressure.
+fn copy_pressure(grid: &Grid, p: &efsi_core::Field, x: &mut [f64]) {
+    if grid.is_3d() {
+        let nx = grid.nx;
+        let cells = Region::of(grid, Stagger::Cell);
+        par::rows(&mut *x, nx).for_each(|r, row| {
+            row.copy_from_slice(p.at(&cells.line(r), [0; 3]));
+        });
+    } else {
+        par::rows(&mut *x, grid.nx).for_each(|j, row| {
+            for (i, x) in row.iter_mut().enumerate() {
+                *x = p[(i as isize, j as isize)];
+            }
+        });
+    }
+}
+
+impl Precond {
+    /// Solve the projection's system for `x` (from its initial guess) by the conjugate
+    /// gradient with this preconditioner, to `tol` in `norm`, in at most `max_iter`
+    /// iterations; `work` holds the solver's vectors.
+    fn solve(
+        &mut self,
+        work: [&mut [f64]; 3],
+        b: &[f64],
+        x: &mut [f64],
+        tol: f64,
+        max_iter: usize,
+        norm: Norm<'_>,
+    ) -> SolveStats {
+        match self {
+            Precond::Multigrid(mg) => {
+                let a = &mut mg.fine_matrix();
+                solve_norm_in(work, a, &*mg, b, x, tol, max_iter, norm)
+            }
+            Precond::IncompleteCholesky(ic, a) => {
+                solve_norm_in(work, a, &*ic, b, x, tol, max_iter, norm)
+            }
+        }
     }
 }
 
