@@ -347,9 +347,15 @@ impl Coefficients {
                 |j, y| {
                     let x = x.map(|x| &x[j * n..(j + 1) * n]);
                     let (l, d) = (r.line(j), &d[j * n..]);
-                    match self.dims {
-                        2 => self.line::<1, F>(a, [1 - a], &l, vel, d, x, y),
-                        _ => self.line::<2, F>(a, others(a), &l, vel, d, x, y),
+                    // The component and the grid's axis count as constants: the shifts
+                    // along the axes are then known to the compiler, which addresses the
+                    // stencil's neighbours from fewer pointers.
+                    match (self.dims, a) {
+                        (2, 0) => self.line::<0, 1, F>(&l, vel, d, x, y),
+                        (2, _) => self.line::<1, 1, F>(&l, vel, d, x, y),
+                        (_, 0) => self.line::<0, 2, F>(&l, vel, d, x, y),
+                        (_, 1) => self.line::<1, 2, F>(&l, vel, d, x, y),
+                        _ => self.line::<2, 2, F>(&l, vel, d, x, y),
                     }
                 },
                 |s, p| s + p,
@@ -358,22 +364,20 @@ impl Coefficients {
         (1..self.dims).fold(xy[0], |s, a| s + xy[a])
     }
 
-    /// [`product`](Self::product) on one line of unknown `a`-faces, whose shear pairs are with
-    /// the axes `across`: `y = d∘x − K(V)` there (`x` the line's unknowns, or `u_a` itself),
-    /// returning `x·y`.
-    #[allow(clippy::too_many_arguments)]
+    /// [`product`](Self::product) on one line of unknown `A`-faces of a grid of `S + 1` axes,
+    /// whose shear pairs are with the `S` other axes: `y = d∘x − K(V)` there (`x` the line's
+    /// unknowns, or `u_A` itself), returning `x·y`.
     #[inline(always)]
-    fn line<const S: usize, F: Borrow<Field>>(
+    fn line<const A: usize, const S: usize, F: Borrow<Field>>(
         &self,
-        a: usize,
-        across: [usize; S],
         l: &Line,
         vel: &[F],
         d: &[f64],
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
-        let n = y.len();
+        let (a, n) = (A, y.len());
+        let across: [usize; S] = std::array::from_fn(|m| if S == 1 { a ^ 1 } else { others(a)[m] });
         let (u, c) = (vel[a].borrow(), &self.normal[a]);
         let (uc, ulo, uhi) = (
             &u.at(l, [0; 3])[..n],
