@@ -57,16 +57,16 @@
 //! each with fluxes along every axis, `w` on the z-faces, and the convective rate and its
 //! limit counting `|w|/dz` (`Δt (|u|/dx + |v|/dy + |w|/dz) ≤ ½` per Euler stage).
 //!
-//! **Parallelism and memory.** The kernels run over the lines of grid regions
-//! in parallel, each line writing its own entries, so results are bit-identical on any number
-//! of threads. Each face flux is computed once: along the lines' axis into a buffer of the
-//! line, along every other axis into a full-grid array. The stage uses
-//! [`work`]`(dims)` full-grid arrays while it runs (10 in two dimensions, 16 in three:
-//! per component the tendencies of momentum and mass, the start-of-step velocity and the
-//! current stage's face masses; the fluxes along each axis but the first) — taken from the
-//! pipeline's pool of work vectors (`scratch`), which the later stages of the step reuse. It
-//! keeps from one step to the next only the `WholeStep` predictor's history, one array per
-//! component.
+//! **Parallelism and memory.** The kernels run over the lines of grid regions, or bands of
+//! them, in parallel, each writing its own entries, so results are bit-identical on any
+//! number of threads. Each face flux is computed once (a band's lower edge twice): along the
+//! lines' axis into a buffer of the line, along axis 1 into a buffer the band's next line
+//! reads, along any further axis into a full-grid array. The stage uses [`work`]`(dims)`
+//! full-grid arrays while it runs (8 in two dimensions, 14 in three: per component the
+//! tendencies of momentum and mass, the start-of-step velocity and the current stage's face
+//! masses; the fluxes along the third axis) — taken from the pipeline's pool of work vectors
+//! (`scratch`), which the later stages of the step reuse. It keeps from one step to the next
+//! only the `WholeStep` predictor's history, one array per component.
 
 mod kernels;
 
@@ -320,8 +320,9 @@ pub fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], rho: &Field) -> Ve
     (0..dims)
         .map(|c| {
             let mut out = [Field::zeros(grid), Field::zeros(grid)];
-            out[0].data_mut().copy_from_slice(w.qt[c]);
-            out[1].data_mut().copy_from_slice(w.mt[c]);
+            for (o, t) in out.iter_mut().zip([&*w.qt[c], &*w.mt[c]]) {
+                cv[c].for_each(o, |l, o| o.copy_from_slice(&t[l.n * l.len..][..l.len]));
+            }
             out
         })
         .collect()

@@ -1,15 +1,16 @@
 //! A block multigrid preconditioner for implicit momentum systems whose stiff part acts like a
 //! viscosity.
 //!
-//! **Matrix.** On the compact unknown faces ([`UnknownFaces`]: u first, then v) it takes
-//! `A = M − K_η`, `K_η = vol·∇·(2η D)` with the coefficients of the one viscous operator
-//! ([`crate::viscous_operator`]) — `η = θΔt μ` for the viscous step, plus `(Δt²/2) G_eff` for the
-//! elastic step, whose implicit tangent acts like an extra viscosity `GΔt/2` (see
-//! [`crate::elastic`]). The preconditioner keeps the u–u and v–v diagonal blocks of `A`
-//! ([`Coefficients::blocks`]), two five-point symmetric M-matrices (the u–v coupling of the shear
-//! stress is dropped, and left to the Krylov solver), with the diagonal the caller gives: the
-//! operator's own, or the mass plus every coupling of the row, wall ones included
-//! ([`Coefficients::diagonal`]), so the blocks are diagonally dominant.
+//! **Matrix.** On the compact unknown faces ([`UnknownFaces`]: u first, then v, then in three
+//! dimensions w) it takes `A = M − K_η`, `K_η = vol·∇·(2η D)` with the coefficients of the one
+//! viscous operator ([`crate::viscous_operator`]) — `η = θΔt μ` for the viscous step, plus
+//! `(Δt²/2) G_eff` for the elastic step, whose implicit tangent acts like an extra viscosity
+//! `GΔt/2` (see [`crate::elastic`]). The preconditioner keeps the diagonal blocks of `A`, one
+//! per velocity component ([`Coefficients::blocks`]): symmetric M-matrices, five-point on a
+//! two-dimensional grid and seven-point on a three-dimensional one (the coupling between
+//! components through the shear stress is dropped, and left to the Krylov solver), with the
+//! diagonal the caller gives: the operator's own, or the mass plus every coupling of the row,
+//! wall ones included ([`Coefficients::diagonal`]), so the blocks are diagonally dominant.
 //!
 //! **Cycle.** One multigrid V(1,1)-cycle per block ([`Multigrid`], the mass carried whole to the
 //! coarse levels): symmetric positive definite, so it serves conjugate gradients as well as
@@ -17,8 +18,8 @@
 //! on any number of threads. [`ViscousBlocks::new`] allocates the hierarchies; later set-ups and
 //! applications allocate nothing.
 //!
-//! **Window.** Where the stiff part acts on a small region (the elastic step's solid), the
-//! multigrid works on a window of each block and the Jacobi diagonal on the rest
+//! **Window.** Where the stiff part acts on a small region (the elastic step's solid, two
+//! dimensions), the multigrid works on a window of each block and the Jacobi diagonal on the rest
 //! ([`ViscousBlocks::setup_in`]). The window is the principal submatrix of the solid's faces
 //! grown by a margin (the unknowns outside held at zero, [`Stencil5::window_into`]). Outside,
 //! the rows are the mass `a` plus the viscous couplings; a disturbance running along a row's
@@ -36,20 +37,17 @@ use crate::viscous_operator::Coefficients;
 use efsi_core::{BoundarySet, Grid};
 use efsi_linalg::{Multigrid, Preconditioner, Stencil5};
 
-/// Multigrid on the u–u and v–v blocks of `M − K_η` (see the module docs), on the whole of each
-/// block or on a window of it ([`ViscousBlocks::setup_in`]).
+/// Multigrid on the diagonal blocks of `M − K_η` (one per axis; see the module docs), on the
+/// whole of each block or, in two dimensions, on a window of it ([`ViscousBlocks::setup_in`]).
 pub(crate) struct ViscousBlocks {
     faces: UnknownFaces,
-    au: Stencil5,
-    av: Stencil5,
+    /// Each axis' block (u–u, v–v, w–w).
+    a: Vec<Stencil5>,
     /// The window of each block the multigrid works on, and its matrix (the storage of a
     /// whole block, reused).
-    wu: BlockWindow,
-    wv: BlockWindow,
-    su: Stencil5,
-    sv: Stencil5,
-    mu: Multigrid,
-    mv: Multigrid,
+    w: Vec<BlockWindow>,
+    s: Vec<Stencil5>,
+    mg: Vec<Multigrid>,
 }
 
 /// A rectangle of a block's unknowns: first `(i0, j0)`, `nx × ny` of them; `whole` when it is
@@ -104,33 +102,32 @@ impl BlockWindow {
 impl ViscousBlocks {
     /// The blocks of `grid` under `bc`, hierarchies allocated (with a unit placeholder matrix).
     pub(crate) fn new(grid: &Grid, bc: &BoundarySet) -> Self {
-        let faces = UnknownFaces::new(grid, bc);
-        let nur = (faces.ux.hi - faces.ux.lo).max(0) as usize;
-        let nvr = (faces.vy.hi - faces.vy.lo).max(0) as usize;
-        let mg = || Multigrid::new(1).with_w_cycle(false).with_excess_scale(1.0);
-        let (px, py) = (bc.periodic(0), bc.periodic(1));
-        let (au, av) = (
-            Stencil5::new(nur, grid.ny, px, py),
-            Stencil5::new(grid.nx, nvr, px, py),
-        );
+        let periodic = [0, 1, 2].map(|a| a < grid.dims() && bc.periodic(a));
+        Self::on(grid, UnknownFaces::new(grid, bc), periodic)
+    }
+
+    /// The blocks of the unknown `faces` of `grid`, each axis `periodic` or not, hierarchies
+    /// allocated (with a unit placeholder matrix).
+    pub(crate) fn on(grid: &Grid, faces: UnknownFaces, periodic: [bool; 3]) -> Self {
+        let shape = |a: usize| {
+            let r = faces.region(a);
+            Stencil5::new_3d(r.len(0), r.len(1), r.len(2), periodic)
+        };
+        let a: Vec<Stencil5> = (0..grid.dims()).map(shape).collect();
         let mut b = ViscousBlocks {
             faces,
-            wu: BlockWindow::whole(&au),
-            wv: BlockWindow::whole(&av),
-            su: Stencil5::new(nur, grid.ny, px, py),
-            sv: Stencil5::new(grid.nx, nvr, px, py),
-            au,
-            av,
-            mu: mg(),
-            mv: mg(),
+            w: a.iter().map(BlockWindow::whole).collect(),
+            s: (0..grid.dims()).map(shape).collect(),
+            mg: (0..grid.dims())
+                .map(|_| Multigrid::new(1).with_w_cycle(false).with_excess_scale(1.0))
+                .collect(),
+            a,
         };
-        b.au.diag.fill(1.0);
-        b.av.diag.fill(1.0);
-        if !b.au.is_empty() {
-            b.mu.setup(&b.au);
-        }
-        if !b.av.is_empty() {
-            b.mv.setup(&b.av);
+        for (a, mg) in b.a.iter_mut().zip(&mut b.mg) {
+            a.diag.fill(1.0);
+            if !a.is_empty() {
+                mg.setup(a);
+            }
         }
         b
     }
@@ -143,18 +140,20 @@ impl ViscousBlocks {
 
     /// [`setup`](Self::setup) with the multigrid on a window of each block and the Jacobi
     /// diagonal elsewhere (`solid`: the cells `[i0, i1] × [j0, j1]` the stiff part acts on,
-    /// grid indices; `None`: multigrid everywhere). The window is the faces of those cells
-    /// grown by the margin over which an increment decays by [`WINDOW_DECAY`] in the rows
-    /// outside ([`margin`]); the whole block where that reaches its edges. Nothing is
-    /// allocated: a window reuses the whole block's storage.
+    /// grid indices; `None`: multigrid everywhere; a three-dimensional grid uses the whole
+    /// blocks). The window is the faces of those cells grown by the margin over which an
+    /// increment decays by [`WINDOW_DECAY`] in the rows outside ([`margin`]); the whole block
+    /// where that reaches its edges. Nothing is allocated: a window reuses the whole block's
+    /// storage.
     pub(crate) fn setup_in(
         &mut self,
         k: &Coefficients,
         diagonal: &[f64],
         solid: Option<((isize, isize), (isize, isize))>,
     ) {
-        k.blocks(diagonal, &mut self.au, &mut self.av);
+        k.blocks(diagonal, &mut self.a);
         let (ulo, vlo) = (self.faces.ux.lo, self.faces.vy.lo);
+        let solid = solid.filter(|_| self.a.len() == 2);
         // The faces of the cells grown by m: cell i's u-faces are i and i + 1, its v-faces j
         // and j + 1 (block indices count from the first unknown face).
         let faces = |m: isize, ((i0, i1), (j0, j1)): ((isize, isize), (isize, isize))| {
@@ -164,13 +163,13 @@ impl ViscousBlocks {
                 ((i0, i1), (j0 - vlo, j1 + 1 - vlo)),
             ]
         };
-        for (b, (a, w, s, mg)) in [
-            (&self.au, &mut self.wu, &mut self.su, &mut self.mu),
-            (&self.av, &mut self.wv, &mut self.sv, &mut self.mv),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        let parts = self
+            .a
+            .iter()
+            .zip(&mut self.w)
+            .zip(&mut self.s)
+            .zip(&mut self.mg);
+        for (b, (((a, w), s), mg)) in parts.enumerate() {
             if a.is_empty() {
                 continue;
             }
@@ -237,38 +236,49 @@ fn margin(r: f64) -> isize {
     (WINDOW_DECAY.ln() / lambda.ln()).ceil().max(1.0) as isize
 }
 
+impl ViscousBlocks {
+    /// The cycle of block `b` (if the grid has that axis) on its part `r` of a residual, into
+    /// `z`: multigrid on its window, Jacobi outside it.
+    fn apply_block(&self, b: usize, r: &[f64], z: &mut [f64]) {
+        let Some(a) = self.a.get(b).filter(|a| !a.is_empty()) else {
+            return;
+        };
+        let (w, m) = (self.w[b], &self.mg[b]);
+        if w.whole {
+            m.apply(r, z);
+        } else {
+            // Jacobi outside the window, multigrid inside (it overwrites the window).
+            efsi_linalg::par::chunks(&mut *z).for_each(|o, z| {
+                let (r, d) = (&r[o..o + z.len()], &a.diag[o..o + z.len()]);
+                for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
+                    *z = r / d;
+                }
+            });
+            m.apply_window(r, z, a.nx, w.j0 * a.nx + w.i0);
+        }
+    }
+}
+
 impl Preconditioner for ViscousBlocks {
-    /// The two blocks' cycles, in parallel when there are threads to spare (each block's own
+    /// The blocks' cycles, side by side when there are threads to spare (each block's own
     /// loops keep their fixed order, so the bits do not depend on the threads).
     fn apply(&self, r: &[f64], z: &mut [f64]) {
-        let nu = self.au.len();
-        let (ru, rv) = r.split_at(nu);
-        let (zu, zv) = z.split_at_mut(nu);
-        let block = |a: &Stencil5, w: BlockWindow, m: &Multigrid, r: &[f64], z: &mut [f64]| {
-            if a.is_empty() {
-                return;
-            }
-            if w.whole {
-                m.apply(r, z);
-            } else {
-                // Jacobi outside the window, multigrid inside (it overwrites the window).
-                efsi_linalg::par::chunks(&mut *z).for_each(|o, z| {
-                    let (r, d) = (&r[o..o + z.len()], &a.diag[o..o + z.len()]);
-                    for ((z, r), d) in z.iter_mut().zip(r).zip(d) {
-                        *z = r / d;
-                    }
-                });
-                m.apply_window(r, z, a.nx, w.j0 * a.nx + w.i0);
-            }
-        };
+        let [r0, r1, r2] = self.faces.split(r);
+        let [z0, z1, z2] = self.faces.split_mut(z);
         if rayon::current_num_threads() > 1 {
             rayon::join(
-                || block(&self.au, self.wu, &self.mu, ru, zu),
-                || block(&self.av, self.wv, &self.mv, rv, zv),
+                || self.apply_block(0, r0, z0),
+                || {
+                    rayon::join(
+                        || self.apply_block(1, r1, z1),
+                        || self.apply_block(2, r2, z2),
+                    )
+                },
             );
         } else {
-            block(&self.au, self.wu, &self.mu, ru, zu);
-            block(&self.av, self.wv, &self.mv, rv, zv);
+            self.apply_block(0, r0, z0);
+            self.apply_block(1, r1, z1);
+            self.apply_block(2, r2, z2);
         }
     }
 }
@@ -331,17 +341,17 @@ mod tests {
         // Rows whose mass is 1e3 times their couplings: a window, Jacobi outside it.
         let (mut b, k, diag) = blocks(1e3);
         b.setup_in(&k, &diag, solid);
-        assert!(!b.wu.whole && !b.wv.whole);
+        assert!(!b.w[0].whole && !b.w[1].whole);
         // Cells 10..=15 × 8..=12 grown by the margin (2 cells here): the u-faces 8..=18,
         // counted from the first unknown one (face 1; the wall's face 0 is known), of rows
         // 6..=14.
-        assert_eq!((b.wu.i0, b.wu.nx, b.wu.j0, b.wu.ny), (7, 11, 6, 9));
+        assert_eq!((b.w[0].i0, b.w[0].nx, b.w[0].j0, b.w[0].ny), (7, 11, 6, 9));
         let n = diag.len();
         let r: Vec<f64> = (0..n).map(|c| ((c * 37) % 11) as f64 - 5.0).collect();
         let mut z = vec![0.0; n];
         b.apply(&r, &mut z);
-        let nu = b.au.len();
-        for (a, w, off) in [(&b.au, b.wu, 0), (&b.av, b.wv, nu)] {
+        let nu = b.a[0].len();
+        for (a, w, off) in [(&b.a[0], b.w[0], 0), (&b.a[1], b.w[1], nu)] {
             // Inside: the cycle of the window's own matrix, bit for bit.
             let mut sub = Stencil5::new(0, 0, false, false);
             a.window_into((w.i0, w.j0), (w.nx, w.ny), &mut sub);
@@ -383,10 +393,10 @@ mod tests {
         // Light rows (viscosity dominant): the margin reaches the edges, the whole block.
         let (mut b, k, diag) = blocks(1e-6);
         b.setup_in(&k, &diag, solid);
-        assert!(b.wu.whole && b.wv.whole);
+        assert!(b.w[0].whole && b.w[1].whole);
         // A solid whose faces miss a block entirely leaves that block whole.
         let (mut b, k, diag) = blocks(1e3);
         b.setup_in(&k, &diag, Some(((10, 15), (-1, -1))));
-        assert!(b.wv.whole, "{:?}", b.wv);
+        assert!(b.w[1].whole, "{:?}", b.w[1]);
     }
 }

@@ -42,8 +42,8 @@
 //! **Products.** [`Coefficients::product`] computes `y = d∘x − K(V)` on the compact unknown
 //! faces in one vectorised pass per component, lines in parallel, and returns `x·y` summed by
 //! lines in order: bit-identical on any number of threads. [`Coefficients::diagonal`] gives the
-//! matrix's diagonal; [`Coefficients::blocks`] the u–u and v–v blocks of a two-dimensional
-//! grid as five-point stencils for the block multigrid ([`crate::block_multigrid`]).
+//! matrix's diagonal; [`Coefficients::blocks`] its diagonal blocks (u–u, v–v, w–w) as five-
+//! or seven-point stencils for the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
 use efsi_core::operators::minus;
@@ -271,37 +271,41 @@ impl Coefficients {
         }
     }
 
-    /// The u–u and v–v blocks of `diag(d) − K` on a two-dimensional grid — `d` the full
-    /// diagonal ([`diagonal`](Self::diagonal)) — as five-point stencils (couplings `≥ 0`, zero
-    /// across a closed boundary).
-    pub(crate) fn blocks(&self, diag: &[f64], au: &mut Stencil5, av: &mut Stencil5) {
-        assert_eq!(self.dims, 2, "five-point blocks of a two-dimensional grid");
-        let (px, py) = (au.periodic_x, au.periodic_y);
-        let [du, dv, _] = self.faces.split(diag);
-        for (a, s, d) in [(0, au, du), (1, av, dv)] {
+    /// The diagonal blocks (u–u, v–v and, in three dimensions, w–w) of `diag(d) − K` — `d` the
+    /// full diagonal ([`diagonal`](Self::diagonal)) — as five- or seven-point stencils, one
+    /// per axis in `out` (shaped like the unknown faces of that axis; couplings `≥ 0`, zero
+    /// across a closed boundary): along the block's own axis `a` the normal stress's `c_a`,
+    /// across it along `b` the shear's `ρ_ab g_ab`.
+    pub(crate) fn blocks(&self, diag: &[f64], out: &mut [Stencil5]) {
+        assert_eq!(out.len(), self.dims, "one block per axis");
+        let ds = self.faces.split(diag);
+        for (a, s) in out.iter_mut().enumerate() {
             let r = self.faces.region(a);
-            let (nr, nl) = (r.len(0), r.len(1));
-            let (c, g, rho) = (&self.normal[a], &self.edge[0], self.ratio[a][1 - a]);
-            for j in 0..r.lines() {
-                let l = r.line(j);
-                // The coupling to the next face along the own axis is the normal stress's,
-                // across it the shear's.
-                let (own, across) = (c.at(&l, [0; 3]), g.at(&l, unit(1 - a)));
-                let (along_x, along_y) = if a == 0 { (own, across) } else { (across, own) };
-                let (wx, wy) = if a == 0 { (1.0, rho) } else { (rho, 1.0) };
-                for i in 0..nr {
-                    let kc = j * nr + i;
-                    s.east[kc] = if i + 1 < nr || px {
-                        wx * along_x[i]
+            let periodic = [s.periodic_x, s.periodic_y, s.periodic_z];
+            let nr = r.len(0);
+            for n in 0..r.lines() {
+                let l = r.line(n);
+                let o = n * nr;
+                s.diag[o..o + nr].copy_from_slice(&ds[a][o..o + nr]);
+                for d in 0..self.dims {
+                    let coupling = if d == a {
+                        (&self.normal[a], 1.0, [0; 3])
                     } else {
-                        0.0
+                        (&self.edge[pair(a, d)], self.ratio[a][d], unit(d))
                     };
-                    s.north[kc] = if j + 1 < nl || py {
-                        wy * along_y[i]
-                    } else {
-                        0.0
+                    let (g, w) = (&coupling.0.at(&l, coupling.2)[..nr], coupling.1);
+                    let out = &mut [&mut s.east, &mut s.north, &mut s.top][d][o..o + nr];
+                    let last = |i: usize| {
+                        let at = if d == 0 {
+                            i
+                        } else {
+                            (l.start[d] - r.lo()[d]) as usize
+                        };
+                        at + 1 == r.len(d) && !periodic[d]
                     };
-                    s.diag[kc] = d[kc];
+                    for (i, (e, g)) in out.iter_mut().zip(g).enumerate() {
+                        *e = if last(i) { 0.0 } else { w * g };
+                    }
                 }
             }
         }
@@ -347,9 +351,15 @@ impl Coefficients {
                 |j, y| {
                     let x = x.map(|x| &x[j * n..(j + 1) * n]);
                     let (l, d) = (r.line(j), &d[j * n..]);
-                    match self.dims {
-                        2 => self.line::<1, F>(a, [1 - a], &l, vel, d, x, y),
-                        _ => self.line::<2, F>(a, others(a), &l, vel, d, x, y),
+                    // The component and the grid's axis count as constants: the shifts
+                    // along the axes are then known to the compiler, which addresses the
+                    // stencil's neighbours from fewer pointers.
+                    match (self.dims, a) {
+                        (2, 0) => self.line::<0, 1, F>(&l, vel, d, x, y),
+                        (2, _) => self.line::<1, 1, F>(&l, vel, d, x, y),
+                        (_, 0) => self.line::<0, 2, F>(&l, vel, d, x, y),
+                        (_, 1) => self.line::<1, 2, F>(&l, vel, d, x, y),
+                        _ => self.line::<2, 2, F>(&l, vel, d, x, y),
                     }
                 },
                 |s, p| s + p,
@@ -358,22 +368,20 @@ impl Coefficients {
         (1..self.dims).fold(xy[0], |s, a| s + xy[a])
     }
 
-    /// [`product`](Self::product) on one line of unknown `a`-faces, whose shear pairs are with
-    /// the axes `across`: `y = d∘x − K(V)` there (`x` the line's unknowns, or `u_a` itself),
-    /// returning `x·y`.
-    #[allow(clippy::too_many_arguments)]
+    /// [`product`](Self::product) on one line of unknown `A`-faces of a grid of `S + 1` axes,
+    /// whose shear pairs are with the `S` other axes: `y = d∘x − K(V)` there (`x` the line's
+    /// unknowns, or `u_A` itself), returning `x·y`.
     #[inline(always)]
-    fn line<const S: usize, F: Borrow<Field>>(
+    fn line<const A: usize, const S: usize, F: Borrow<Field>>(
         &self,
-        a: usize,
-        across: [usize; S],
         l: &Line,
         vel: &[F],
         d: &[f64],
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
-        let n = y.len();
+        let (a, n) = (A, y.len());
+        let across: [usize; S] = std::array::from_fn(|m| if S == 1 { a ^ 1 } else { others(a)[m] });
         let (u, c) = (vel[a].borrow(), &self.normal[a]);
         let (uc, ulo, uhi) = (
             &u.at(l, [0; 3])[..n],
@@ -665,9 +673,12 @@ mod tests {
     ) {
         let nur = (faces.ux.hi - faces.ux.lo) as usize;
         let nvr = (faces.vy.hi - faces.vy.lo) as usize;
-        let mut au = Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1));
-        let mut av = Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1));
-        k.blocks(diag, &mut au, &mut av);
+        let mut s = [
+            Stencil5::new(nur, grid.ny, bc.periodic(0), bc.periodic(1)),
+            Stencil5::new(grid.nx, nvr, bc.periodic(0), bc.periodic(1)),
+        ];
+        k.blocks(diag, &mut s);
+        let [au, av] = s;
         let nu = faces.nu();
         let wrap = |c: usize, n: usize| if c + 1 < n { c + 1 } else { 0 };
         for j in 0..grid.ny {
@@ -847,11 +858,56 @@ mod tests {
                     }
                 }
             }
+            check_blocks_3d(&faces, periodic, &k, &diag, &a, scale);
             // Keeping the edge viscosities gives the same operator, bit for bit.
             let mut kept = Coefficients::new(&grid, faces);
             let mut edges: Vec<Field> = (0..3).map(|_| Field::zeros(&grid)).collect();
             kept.set_viscosity_edges(&grid, &mu, 0.3, &mut edges);
             assert!(dense(&grid, &walls, &kept, &vec![0.0; n]) == a);
+        }
+    }
+
+    /// The seven-point blocks of a three-dimensional grid: their diagonal is `diag`, and each
+    /// coupling to the next face along an axis is the matrix `a`'s entry (negated), zero
+    /// across a wall.
+    fn check_blocks_3d(
+        faces: &UnknownFaces,
+        periodic: [bool; 3],
+        k: &Coefficients,
+        diag: &[f64],
+        a: &[Vec<f64>],
+        scale: f64,
+    ) {
+        let mut s: Vec<Stencil5> = (0..3)
+            .map(|b| {
+                let r = faces.region(b);
+                Stencil5::new_3d(r.len(0), r.len(1), r.len(2), periodic)
+            })
+            .collect();
+        k.blocks(diag, &mut s);
+        let mut off = 0;
+        for (b, s) in s.iter().enumerate() {
+            let n = [s.nx, s.ny, s.nz];
+            for q in 0..s.len() {
+                let at = [q % n[0], (q / n[0]) % n[1], q / (n[0] * n[1])];
+                assert_eq!(s.diag[q], diag[off + q], "block {b}, diagonal {q}");
+                for (d, c) in [&s.east, &s.north, &s.top].into_iter().enumerate() {
+                    if at[d] + 1 == n[d] && !periodic[d] {
+                        assert_eq!(c[q], 0.0, "block {b}, across a wall along {d} at {q}");
+                        continue;
+                    }
+                    let mut next = at;
+                    next[d] = (at[d] + 1) % n[d];
+                    let p = (next[2] * n[1] + next[1]) * n[0] + next[0];
+                    let entry = a[off + q][off + p];
+                    assert!(
+                        c[q] >= 0.0 && (c[q] + entry).abs() <= 1e-13 * scale,
+                        "block {b}, coupling along {d} at {q}: {} vs {entry}",
+                        c[q]
+                    );
+                }
+            }
+            off += s.len();
         }
     }
 

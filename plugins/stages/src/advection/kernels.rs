@@ -18,22 +18,28 @@
 //!   otherwise; all ones in planar and three-dimensional geometry).
 //!
 //! Each face flux is computed once: along x (the lines' axis) into a buffer of the line, along
-//! every other axis into a full-grid flux array ([`work`] counts them), which the balance
-//! differences. Every line writes only its own entries, so the results are the same, bit for
-//! bit, on any number of threads.
+//! axis 1 into a buffer that the next line of the same band of lines reads as its lower flux
+//! (the band's first line computes its lower flux itself, so the flux through a band's lower
+//! edge is computed twice), along every further axis into a full-grid flux array ([`work`]
+//! counts them), which the balance differences. The tendencies are compact: one value per
+//! control volume, line after line. Every band writes only its own lines, and every flux is
+//! the same function of the same values wherever it is computed, so the results are the same,
+//! bit for bit, on any number of threads.
 
 use efsi_core::operators::minus;
-use efsi_core::{Field, Grid, Index, Region, Stagger, unit};
+use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
+use efsi_linalg::par;
+use std::ops::Range;
 
 /// The location of velocity component `c` (the `c`-faces).
 pub(crate) const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 
 /// Full-grid work arrays of a step on a grid of `dims` axes, per component: the momentum and
 /// mass tendencies, the start-of-step velocity and the current stage's face masses (4), and
-/// the mass and momentum fluxes along each axis but the first, shared by the components (2
-/// per axis): `6·dims − 2` (10 in two dimensions, 16 in three).
+/// the mass and momentum fluxes along each axis beyond the second, shared by the components
+/// (2 per axis): `6·dims − 4` (8 in two dimensions, 14 in three).
 pub const fn work(dims: usize) -> usize {
-    6 * dims - 2
+    6 * dims - 4
 }
 
 /// A shift by `k` along axis `a`.
@@ -112,8 +118,54 @@ pub(crate) fn face_masses(grid: &Grid, rho: &Field, c: usize, m: &mut [f64]) {
     });
 }
 
+/// What the fluxes through a run of `a`-faces read: the two values of the advecting velocity
+/// around each face and the masses and values of the advected component at the four control
+/// volumes along `a` ([`flux`]).
+struct Stencil<'a> {
+    adv: [&'a [f64]; 2],
+    m: [&'a [f64]; 4],
+    q: [&'a [f64]; 4],
+}
+
+impl<'a> Stencil<'a> {
+    /// The stencil of component `c` (velocity `vel`, face masses `m`) through the lower
+    /// `a`-faces of the control volumes `I + s·e_a`, `I` the columns `x` of line `l`.
+    #[inline(always)]
+    fn new(
+        l: &Line,
+        [a, c, s]: [usize; 3],
+        vel: &[&'a Field],
+        m: &'a [f64],
+        x: Range<usize>,
+    ) -> Self {
+        let up = along(a, s as isize);
+        let shift = |k: isize| along(a, k + s as isize);
+        let lo = std::array::from_fn(|d| minus(c)[d] + up[d]);
+        Stencil {
+            adv: [&vel[a].at(l, lo)[x.clone()], &vel[a].at(l, up)[x.clone()]],
+            m: [-2, -1, 0, 1].map(|k| &l.on(m, shift(k))[x.clone()]),
+            q: [-2, -1, 0, 1].map(|k| &vel[c].at(l, shift(k))[x.clone()]),
+        }
+    }
+
+    /// The mass and momentum fluxes `(fm, fq)` through the faces, one per entry of `fm`.
+    #[inline(always)]
+    fn fluxes(&self, fm: &mut [f64], fq: &mut [f64]) {
+        let n = fm.len();
+        let (fq, [a0, a1]) = (&mut fq[..n], self.adv.map(|s| &s[..n]));
+        let (ms, qs) = (self.m.map(|s| &s[..n]), self.q.map(|s| &s[..n]));
+        for i in 0..n {
+            (fm[i], fq[i]) = flux(
+                0.5 * (a0[i] + a1[i]),
+                [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
+                [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
+            );
+        }
+    }
+}
+
 /// The mass and momentum fluxes `(fm, fq)` of component `c` through the lower `a`-faces
-/// (`a ≥ 1`) of the control volumes `cv` and the upper faces of its last layer along `a`.
+/// (`a ≥ 2`) of the control volumes `cv` and the upper faces of its last layer along `a`.
 fn face_fluxes(
     cv: Region,
     a: usize,
@@ -124,123 +176,157 @@ fn face_fluxes(
     fq: &mut [f64],
 ) {
     let faces = cv.range(a, cv.lo()[a], cv.hi()[a] + 1);
-    let (adv, q) = (vel[a], vel[c]);
     faces.for_each((faces.storage(fm), faces.storage(fq)), |l, (fm, fq)| {
-        let n = l.len;
-        let (a0, a1) = (&adv.at(&l, minus(c))[..n], &adv.at(&l, [0; 3])[..n]);
-        let ms = [-2, -1, 0, 1].map(|k| &l.on(m, along(a, k))[..n]);
-        let qs = [-2, -1, 0, 1].map(|k| &q.at(&l, along(a, k))[..n]);
-        let (fm, fq) = (&mut fm[..n], &mut fq[..n]);
-        for i in 0..n {
-            (fm[i], fq[i]) = flux(
-                0.5 * (a0[i] + a1[i]),
-                [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
-                [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
-            );
-        }
+        Stencil::new(&l, [a, c, 0], vel, m, 0..l.len).fluxes(fm, fq);
     });
 }
 
-/// Control volumes per chunk of a line whose x-face fluxes are kept on the stack.
+/// Control volumes per chunk of a line whose x- and axis-1 fluxes are kept on the stack.
 const CHUNK: usize = 128;
 
-/// The momentum and mass tendencies `(qt, mt)` of component `c` on its control volumes `cv`
-/// (module docs), from the fluxes along the axes `1..` in `fluxes` (`(fm, fq)` per axis).
-#[allow(clippy::too_many_arguments)]
-fn balance(
-    grid: &Grid,
+/// Bands of lines per component: a band's lines run in order on one thread, so the flux
+/// through the upper axis-1 face of one line is the lower one of the next.
+const BANDS: usize = 8;
+
+/// The balance of component `c` on its control volumes `cv` (module docs): what every band
+/// reads.
+struct Balance<'a> {
     cv: Region,
     c: usize,
-    vel: &[&Field],
-    m: &[f64],
-    fluxes: &[(&[f64], &[f64])],
+    h: [f64; 3],
+    vel: &'a [&'a Field],
+    m: &'a [f64],
+    /// The x-faces of the control volumes: one more column than `cv`.
+    xs: Region,
+    /// The radius factors at the lower and upper x-face and at the centre of each column's
+    /// control volume (the same on every line).
+    radii: [&'a [f64]; 3],
+    /// The mass and momentum fluxes along the axes `2..` (full-grid arrays).
+    further: &'a [(&'a [f64], &'a [f64])],
+}
+
+/// The momentum and mass tendencies `(qt, mt)` of component `c` on its control volumes `cv`
+/// (module docs; compact, line after line), from the fluxes along the axes `2..` in `further`
+/// (`(fm, fq)` per axis).
+#[allow(clippy::too_many_arguments)]
+fn balance<'a>(
+    grid: &'a Grid,
+    cv: Region,
+    c: usize,
+    vel: &'a [&'a Field],
+    m: &'a [f64],
+    further: &'a [(&'a [f64], &'a [f64])],
     qt: &mut [f64],
     mt: &mut [f64],
 ) {
-    let xs = cv.range(0, cv.lo()[0], cv.hi()[0] + 1);
-    let (metric, h) = (&grid.metric, grid.h());
-    let (u, q) = (vel[0], vel[c]);
-    cv.for_each((cv.storage(qt), cv.storage(mt)), |l, (qt, mt)| {
-        let len = l.len;
-        let (qt, mt) = (&mut qt[..len], &mut mt[..len]);
-        let (rm, rp, r) = if c == 0 {
-            (
-                metric.rc_on(&l, -1),
-                metric.rc_on(&l, 0),
-                metric.rx_on(&l, 0),
-            )
-        } else {
-            (
-                metric.rx_on(&l, 0),
-                metric.rx_on(&l, 1),
-                metric.rc_on(&l, 0),
-            )
-        };
-        // The x-faces of the line's control volumes: `len + 1` fluxes.
-        let xl = xs.line(l.n);
-        let (a0, a1) = (u.at(&xl, minus(c)), u.at(&xl, [0; 3]));
-        let ms = [-2, -1, 0, 1].map(|k| xl.on(m, along(0, k)));
-        let qs = [-2, -1, 0, 1].map(|k| q.at(&xl, along(0, k)));
-        // x- and axis-1 fluxes in one pass, further axes after; the last flips the sign.
-        let (m0, m1) = (l.on(fluxes[0].0, [0; 3]), l.on(fluxes[0].0, unit(1)));
-        let (q0, q1) = (l.on(fluxes[0].1, [0; 3]), l.on(fluxes[0].1, unit(1)));
-        let last = fluxes.len() == 1;
-        let (mut bm, mut bq) = ([0.0; CHUNK + 1], [0.0; CHUNK + 1]);
+    if cv.is_empty() {
+        return;
+    }
+    let (metric, l) = (&grid.metric, cv.line(0));
+    let radii = if c == 0 {
+        [
+            metric.rc_on(&l, -1),
+            metric.rc_on(&l, 0),
+            metric.rx_on(&l, 0),
+        ]
+    } else {
+        [
+            metric.rx_on(&l, 0),
+            metric.rx_on(&l, 1),
+            metric.rc_on(&l, 0),
+        ]
+    };
+    let k = Balance {
+        cv,
+        c,
+        h: grid.h(),
+        vel,
+        m,
+        xs: cv.range(0, cv.lo()[0], cv.hi()[0] + 1),
+        radii,
+        further,
+    };
+    let len = cv.len(0);
+    let band = cv.lines().div_ceil(BANDS) * len;
+    let size = cv.size();
+    par::rows((&mut qt[..size], &mut mt[..size]), band).for_each(|b, (qt, mt)| {
+        let lines = b * band / len..(b * band + qt.len()) / len;
         for n0 in (0..len).step_by(CHUNK) {
-            let k = CHUNK.min(len - n0);
-            let x = n0..n0 + k + 1;
-            let (a0, a1) = (&a0[x.clone()], &a1[x.clone()]);
-            let ms = ms.map(|s| &s[x.clone()]);
-            let qs = qs.map(|s| &s[x.clone()]);
-            let (bm, bq) = (&mut bm[..=k], &mut bq[..=k]);
-            for i in 0..=k {
-                (bm[i], bq[i]) = flux(
-                    0.5 * (a0[i] + a1[i]),
-                    [ms[0][i], ms[1][i], ms[2][i], ms[3][i]],
-                    [qs[0][i], qs[1][i], qs[2][i], qs[3][i]],
-                );
+            k.tile(lines.clone(), n0..len.min(n0 + CHUNK), qt, mt);
+        }
+        k.further(lines, qt, mt);
+    });
+}
+
+impl Balance<'_> {
+    /// The x- and axis-1 terms of the balance on the columns `x` of the lines `lines` (one
+    /// band, whose tendencies `qt`, `mt` are), line after line: each line's upper axis-1
+    /// fluxes are the next one's lower fluxes (a band's first line and the first line of a
+    /// plane compute theirs). Without further axes the sum is the tendency (negated).
+    fn tile(&self, lines: Range<usize>, x: Range<usize>, qt: &mut [f64], mt: &mut [f64]) {
+        let (len, w, c) = (self.cv.len(0), x.len(), self.c);
+        let ([mut ylo, mut yhi], [mut qlo, mut qhi]) = ([[0.0; CHUNK]; 2], [[0.0; CHUNK]; 2]);
+        let (mut below, mut above) = ((&mut ylo, &mut qlo), (&mut yhi, &mut qhi));
+        let (mut bm, mut bq) = ([0.0; CHUNK + 1], [0.0; CHUNK + 1]);
+        let last = self.further.is_empty();
+        for n in lines.clone() {
+            let (l, xl) = (self.cv.line(n), self.xs.line(n));
+            if n == lines.start || l.start[1] == self.cv.lo()[1] {
+                Stencil::new(&l, [1, c, 0], self.vel, self.m, x.clone())
+                    .fluxes(&mut below.0[..w], &mut below.1[..w]);
             }
-            let y = n0..n0 + k;
-            let (rm, rp, r) = (&rm[y.clone()], &rp[y.clone()], &r[y.clone()]);
-            let (m0, m1, q0, q1) = (
-                &m0[y.clone()],
-                &m1[y.clone()],
-                &q0[y.clone()],
-                &q1[y.clone()],
-            );
-            let (qt, mt) = (&mut qt[y.clone()], &mut mt[y]);
-            for i in 0..k {
+            Stencil::new(&l, [1, c, 1], self.vel, self.m, x.clone())
+                .fluxes(&mut above.0[..w], &mut above.1[..w]);
+            Stencil::new(&xl, [0, c, 0], self.vel, self.m, x.start..x.end + 1)
+                .fluxes(&mut bm[..=w], &mut bq[..=w]);
+            let o = (n - lines.start) * len + x.start;
+            let (qt, mt) = (&mut qt[o..o + w], &mut mt[o..o + w]);
+            let [rm, rp, r] = self.radii.map(|s| &s[x.clone()]);
+            let (m0, m1, q0, q1) = (&below.0[..w], &above.0[..w], &below.1[..w], &above.1[..w]);
+            let (bm, bq, h) = (&bm[..=w], &bq[..=w], self.h);
+            for i in 0..w {
                 let d = h[0] * r[i];
                 let sq = (rp[i] * bq[i + 1] - rm[i] * bq[i]) / d + (q1[i] - q0[i]) / h[1];
                 let sm = (rp[i] * bm[i + 1] - rm[i] * bm[i]) / d + (m1[i] - m0[i]) / h[1];
                 (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
             }
+            std::mem::swap(&mut below, &mut above);
         }
-        for (a, &(fm, fq)) in (2..).zip(&fluxes[1..]) {
-            let last = a == fluxes.len();
-            let (m0, m1) = (&l.on(fm, [0; 3])[..len], &l.on(fm, unit(a))[..len]);
-            let (q0, q1) = (&l.on(fq, [0; 3])[..len], &l.on(fq, unit(a))[..len]);
-            for i in 0..len {
-                let sq = qt[i] + (q1[i] - q0[i]) / h[a];
-                let sm = mt[i] + (m1[i] - m0[i]) / h[a];
-                (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
+    }
+
+    /// The terms of the axes `2..` added to the tendencies `qt`, `mt` of the lines `lines` (one
+    /// band), the last one negating the sum.
+    fn further(&self, lines: Range<usize>, qt: &mut [f64], mt: &mut [f64]) {
+        let len = self.cv.len(0);
+        let rows = qt.chunks_exact_mut(len).zip(mt.chunks_exact_mut(len));
+        for (n, (qt, mt)) in lines.zip(rows) {
+            let l = self.cv.line(n);
+            for (a, &(fm, fq)) in (2..).zip(self.further) {
+                let last = a == self.further.len() + 1;
+                let (m0, m1) = (&l.on(fm, [0; 3])[..len], &l.on(fm, unit(a))[..len]);
+                let (q0, q1) = (&l.on(fq, [0; 3])[..len], &l.on(fq, unit(a))[..len]);
+                for i in 0..len {
+                    let sq = qt[i] + (q1[i] - q0[i]) / self.h[a];
+                    let sm = mt[i] + (m1[i] - m0[i]) / self.h[a];
+                    (qt[i], mt[i]) = if last { (-sq, -sm) } else { (sq, sm) };
+                }
             }
         }
-    });
+    }
 }
 
 /// The velocity components of a step and the arrays it works in.
 pub(crate) struct Work<'a> {
-    /// Momentum and mass tendencies per component.
+    /// Momentum and mass tendencies per component (compact on its control volumes).
     pub(crate) qt: [&'a mut [f64]; 3],
     pub(crate) mt: [&'a mut [f64]; 3],
     /// Start-of-step velocity per component.
     pub(crate) x0: [&'a mut [f64]; 3],
     /// The current stage's face masses per component.
     pub(crate) m: [&'a mut [f64]; 3],
-    /// Mass and momentum fluxes along axis `a ≥ 1` (index `a − 1`).
-    pub(crate) fm: [&'a mut [f64]; 2],
-    pub(crate) fq: [&'a mut [f64]; 2],
+    /// Mass and momentum fluxes along axis 2 (three dimensions only).
+    pub(crate) fm: [&'a mut [f64]; 1],
+    pub(crate) fq: [&'a mut [f64]; 1],
 }
 
 impl<'a> Work<'a> {
@@ -259,8 +345,8 @@ impl<'a> Work<'a> {
         let x0 = std::array::from_fn(|k| take(dims, k));
         let qt = std::array::from_fn(|k| take(dims, k));
         let mt = std::array::from_fn(|k| take(dims, k));
-        let fm = std::array::from_fn(|k| take(dims - 1, k));
-        let fq = std::array::from_fn(|k| take(dims - 1, k));
+        let fm = std::array::from_fn(|k| take(dims - 2, k));
+        let fq = std::array::from_fn(|k| take(dims - 2, k));
         Work {
             qt,
             mt,
@@ -280,17 +366,17 @@ pub(crate) fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], work: &mut 
         qt, mt, m, fm, fq, ..
     } = work;
     for c in 0..dims {
-        for a in 1..dims {
-            face_fluxes(cv[c], a, c, vel, &*m[c], &mut *fm[a - 1], &mut *fq[a - 1]);
+        for a in 2..dims {
+            face_fluxes(cv[c], a, c, vel, &*m[c], &mut *fm[a - 2], &mut *fq[a - 2]);
         }
-        let fluxes = [(&*fm[0], &*fq[0]), (&*fm[1], &*fq[1])];
+        let further = [(&*fm[0], &*fq[0])];
         balance(
             grid,
             cv[c],
             c,
             vel,
             &*m[c],
-            &fluxes[..dims - 1],
+            &further[..dims - 2],
             &mut *qt[c],
             &mut *mt[c],
         );
@@ -310,8 +396,9 @@ pub(crate) struct Euler<'a> {
 impl Euler<'_> {
     /// The velocity `x` and face mass `m1` of the faces of `region` (normal to axis `a`) after
     /// an Euler stage from the current values with the tendencies `q` (momentum) and `dm`
-    /// (mass); `x0` is the start-of-step velocity and `y` the velocity this stage left at the
-    /// previous step (empty without history). Lines in parallel, each writing its own faces.
+    /// (mass; both compact on `region`); `x0` is the start-of-step velocity and `y` the
+    /// velocity this stage left at the previous step (empty without history). Lines in
+    /// parallel, each writing its own faces.
     pub(crate) fn update(
         &self,
         region: Region,
@@ -327,8 +414,8 @@ impl Euler<'_> {
             let n = l.len;
             let (x0, q, dm) = (
                 &l.on(x0, [0; 3])[..n],
-                &l.on(q, [0; 3])[..n],
-                &l.on(dm, [0; 3])[..n],
+                &q[l.n * n..][..n],
+                &dm[l.n * n..][..n],
             );
             let y = if lag != 0.0 {
                 &l.on(y, [0; 3])[..n]

@@ -14,14 +14,13 @@
 //! the average of the two cells): `(M − θΔt K) δ = Δt K(V*)`, symmetric positive definite, for
 //! all components at once by conjugate gradient ("line solves as in the seed, or better": this
 //! solves the coupled system exactly instead of splitting it), preconditioned by the diagonal
-//! (Jacobi) or, on a two-dimensional grid, by multigrid V-cycles on the u–u and v–v blocks
-//! ([`efsi_linalg::Multigrid`]; scene `numerics.viscous.preconditioner`: `Jacobi`, the
-//! default, `Multigrid`, or `Auto`, multigrid once the diffusion number makes Jacobi's
-//! iteration count, ~10√(max diag/mass), exceed the ~16 iterations the block preconditioner
-//! needs at about four times the cost each). Jacobi keeps a flow uniform along a periodic
-//! direction exactly uniform; the red–black smoother does so only to the solver tolerance.
-//! The block multigrid's blocks are five-point stencils, so a three-dimensional grid uses
-//! Jacobi (`Auto`; `Multigrid` is refused there); one function makes the choice
+//! (Jacobi) or by multigrid V-cycles on the diagonal blocks, one per velocity component
+//! (five-point stencils in two dimensions, seven-point in three; [`efsi_linalg::Multigrid`];
+//! scene `numerics.viscous.preconditioner`: `Jacobi`, the default, `Multigrid`, or `Auto`,
+//! multigrid once the diffusion number makes Jacobi's iteration count, ~10√(max diag/mass),
+//! exceed the ~16 iterations the block preconditioner needs at about four times the cost
+//! each). Jacobi keeps a flow uniform along a periodic direction exactly uniform; the
+//! red–black smoother does so only to the solver tolerance. One function makes the choice
 //! (`use_block_multigrid`).
 //!
 //! **Initial guess.** `δ/Δt` of the last two steps extrapolated linearly to this one, times
@@ -64,9 +63,8 @@
 //! very viscous solid, θ = ½ is second-order in time.
 //!
 //! **Boundaries.** The stage fills velocity ghosts through one trait (`VelocityGhosts`): the
-//! run's [`BoundarySet`], which has the x and y sides only, so `build` refuses a
-//! three-dimensional grid until the boundary conditions have z sides; the tests fill the ghosts
-//! of a periodic or walled box themselves.
+//! run's [`BoundarySet`] (z sides included on a three-dimensional grid), or, in the tests,
+//! the ghosts of a periodic or walled box.
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
@@ -134,20 +132,12 @@ impl StagePlugin for Viscous {
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
         let o: &ViscousOptions = options.section()?;
-        if o.preconditioner == ViscousPreconditioner::Multigrid && !block_multigrid_serves(grid) {
-            return Err(
-                "numerics.viscous.preconditioner: Multigrid works on two-dimensional \
-                        grids only (five-point blocks); use Jacobi or Auto"
-                    .into(),
-            );
-        }
         let faces = UnknownFaces::new(grid, bc);
         let mut stage = ViscousStage::new(scene.time.steady, o, grid, bc.clone(), faces, shared);
         // Only a preconditioner that may use them needs the hierarchies (≈ 27 cell-sized
         // arrays, touched by their set-up).
-        stage.blocks = (o.preconditioner != ViscousPreconditioner::Jacobi
-            && block_multigrid_serves(grid))
-        .then(|| ViscousBlocks::new(grid, bc));
+        stage.blocks = (o.preconditioner != ViscousPreconditioner::Jacobi)
+            .then(|| ViscousBlocks::new(grid, bc));
         Ok(Box::new(stage))
     }
 }
@@ -177,31 +167,18 @@ impl VelocityGhosts for BoundarySet {
     }
 }
 
-/// Whether the block multigrid can precondition the viscous system of `grid`: its blocks are
-/// five-point stencils ([`crate::block_multigrid`]), so a three-dimensional grid uses Jacobi
-/// (under `Auto`) until a seven-point block multigrid exists.
-fn block_multigrid_serves(grid: &Grid) -> bool {
-    grid.dims() == 2
-}
-
 /// Whether this step's conjugate gradient is preconditioned by the block multigrid (else
 /// Jacobi): the scene's `choice`, `Auto` deciding by the largest diagonal-to-mass ratio
-/// (`ratio`, computed only then), on a grid the block multigrid serves
-/// ([`block_multigrid_serves`]).
-fn use_block_multigrid(
-    choice: ViscousPreconditioner,
-    grid: &Grid,
-    ratio: impl FnOnce() -> f64,
-) -> bool {
-    block_multigrid_serves(grid)
-        && match choice {
-            ViscousPreconditioner::Jacobi => false,
-            ViscousPreconditioner::Multigrid => true,
-            // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs ~10√κ
-            // iterations at 1e-9, at a quarter of the block multigrid's cost per iteration:
-            // break-even near κ ≈ 40.
-            ViscousPreconditioner::Auto => ratio() > AUTO_MULTIGRID_RATIO,
-        }
+/// (`ratio`, computed only then).
+fn use_block_multigrid(choice: ViscousPreconditioner, ratio: impl FnOnce() -> f64) -> bool {
+    match choice {
+        ViscousPreconditioner::Jacobi => false,
+        ViscousPreconditioner::Multigrid => true,
+        // Jacobi-preconditioned condition number ≲ max(diag/mass); CG needs ~10√κ
+        // iterations at 1e-9, at a quarter of the block multigrid's cost per iteration:
+        // break-even near κ ≈ 40.
+        ViscousPreconditioner::Auto => ratio() > AUTO_MULTIGRID_RATIO,
+    }
 }
 
 struct ViscousStage<B: VelocityGhosts = BoundarySet> {
@@ -213,7 +190,7 @@ struct ViscousStage<B: VelocityGhosts = BoundarySet> {
     /// The pipeline's work vectors: [`WORK`] of the system's length while the stage runs
     /// (the right-hand side, the diagonal and the solver's three).
     scratch: Scratch,
-    /// Block multigrid on the u–u and v–v blocks, the operator's diagonal kept (`None` with
+    /// Block multigrid on the diagonal blocks, the operator's diagonal kept (`None` with
     /// the Jacobi preconditioner, which never uses it).
     blocks: Option<ViscousBlocks>,
     warm: WarmStart,
@@ -782,9 +759,8 @@ impl<B: VelocityGhosts> ViscousStage<B> {
                 bnorm,
                 [&mut *rhs, &mut *r, &mut *q],
             );
-            let use_mg = use_block_multigrid(self.preconditioner, &op.grid, || {
-                op.max_diag_to_mass(rho, diag)
-            });
+            let use_mg =
+                use_block_multigrid(self.preconditioner, || op.max_diag_to_mass(rho, diag));
             let blocks = self.blocks.as_mut().filter(|_| use_mg);
             let delta = &mut self.warm.prev[1];
             let st = if let Some(blocks) = blocks {
@@ -1002,8 +978,13 @@ mod tests {
                 })
             })
             .collect();
-        let run = |threads: usize| {
+        let run = |threads: usize, multigrid: bool| {
             let mut stage = stage_3d(&grid, walls);
+            if multigrid {
+                stage.preconditioner = ViscousPreconditioner::Multigrid;
+                let faces = stage.op.faces;
+                stage.blocks = Some(ViscousBlocks::on(&grid, faces, walls.periodic));
+            }
             let mut vel = start.clone();
             walls.fill(&grid, &mut vel, WallTime::Homogeneous);
             let pool = rayon::ThreadPoolBuilder::new()
@@ -1015,19 +996,38 @@ mod tests {
                 .unwrap();
             (st, vel, stage)
         };
-        let (st, vel, mut stage) = run(1);
+        let (st, vel, mut stage) = run(1, false);
         assert!(st.converged && st.residual <= 1e-10, "{st:?}");
         assert_eq!(st.iterations, 23, "{st:?}");
-        let (st2, vel2, _) = run(2);
-        assert_eq!(st2.iterations, st.iterations);
-        for (a, b) in vel.iter().zip(&vel2) {
-            assert!(
+        let same = |p: &[Field], q: &[Field]| {
+            p.iter().zip(q).all(|(a, b)| {
                 a.data()
                     .iter()
                     .zip(b.data())
                     .all(|(a, b)| a.to_bits() == b.to_bits())
-            );
-        }
+            })
+        };
+        let (st2, vel2, _) = run(2, false);
+        assert_eq!(st2.iterations, st.iterations);
+        assert!(same(&vel, &vel2));
+        // The seven-point block multigrid: fewer iterations to the same tolerance, the same
+        // increment to it, the same bits on one and two threads.
+        let (mg, vel_mg, _) = run(1, true);
+        assert!(mg.converged && mg.residual <= 1e-10, "{mg:?}");
+        assert_eq!(mg.iterations, 12, "{mg:?}");
+        let (mg2, vel_mg2, _) = run(2, true);
+        assert_eq!(mg2.iterations, mg.iterations);
+        assert!(same(&vel_mg, &vel_mg2));
+        let diff = vel.iter().zip(&vel_mg).fold(0.0f64, |m, (a, b)| {
+            a.data()
+                .iter()
+                .zip(b.data())
+                .fold(m, |m, (a, b)| m.max((a - b).abs()))
+        });
+        assert!(
+            diff <= 1e-8,
+            "Jacobi and multigrid increments differ by {diff}"
+        );
         // The true residual: A δ against Δt K(V*), δ = V − V*.
         let faces = stage.op.faces;
         let n = faces.len();

@@ -54,7 +54,8 @@ pub enum ViscousPreconditioner {
     /// tolerance (the oscillating Couette flow then leaks solid fraction ~1e-7 into the fluid).
     #[default]
     Jacobi,
-    /// Multigrid V-cycles on the u–u and v–v blocks (the u–v shear coupling left to CG):
+    /// Multigrid V-cycles on the diagonal blocks, one per velocity component (the coupling
+    /// between components through the shear stress left to CG):
     /// ≈ 16 iterations whatever the grid and the diffusion number, at about four times
     /// Jacobi's cost per iteration.
     Multigrid,
