@@ -777,7 +777,14 @@ mod tests {
         phi[[2, 1, 0]] = 0.5;
         let values = |p: &ProbeSpec| {
             let mut out = Vec::new();
-            evaluate(p, &grid, &state, Vector(0.0, -1.0, Some(0.0)), &[], &mut out);
+            evaluate(
+                p,
+                &grid,
+                &state,
+                Vector(0.0, -1.0, Some(0.0)),
+                &[],
+                &mut out,
+            );
             out
         };
         let cell = 0.25 * 0.5 * 0.5;

@@ -370,3 +370,31 @@ fn courant_rate(grid: &Grid, vel: &[Field]) -> f64 {
         rate.max(most / h[a])
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_courant_rate_counts_every_axis_of_the_grid() {
+        // 4 × 4 × 8 cells of 0.25 × 0.25 × 0.125: |u| = 1, |v| = 2 and |w| = 0.5 at one face
+        // each give 4, 8 and 4 per unit time; then w = 1.5 at another gives 12.
+        let g = Grid::new_3d([4, 4, 8], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let mut vel: Vec<Field> = (0..3).map(|_| Field::zeros(&g)).collect();
+        vel[0][[2, 1, 3]] = -1.0;
+        vel[1][[1, 2, 5]] = 2.0;
+        vel[2][[3, 3, 4]] = 0.5;
+        assert_eq!(courant_rate(&g, &vel), 8.0);
+        vel[2][[0, 2, 7]] = -1.5;
+        assert_eq!(courant_rate(&g, &vel), 12.0);
+        // A z-face velocity outside the interior (a ghost) does not count.
+        vel[2][[0, 2, 10]] = 100.0;
+        assert_eq!(courant_rate(&g, &vel), 12.0);
+        // Two dimensions: the x and y faces only.
+        let g = Grid::new(efsi_core::Geometry::Planar, 4, 8, (0.0, 1.0), (0.0, 1.0));
+        let mut vel: Vec<Field> = (0..2).map(|_| Field::zeros(&g)).collect();
+        vel[0][(1, 1)] = 1.0;
+        vel[1][(2, 3)] = 0.25;
+        assert_eq!(courant_rate(&g, &vel), 4.0);
+    }
+}
