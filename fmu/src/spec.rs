@@ -520,7 +520,7 @@ pub fn probe_columns(scene: &Scene) -> Result<Vec<String>, String> {
     Ok(output
         .probes
         .iter()
-        .flat_map(efsi_run::probes::columns)
+        .flat_map(|p| efsi_run::probes::columns(p, scene.geometry))
         .collect())
 }
 

@@ -257,7 +257,7 @@ impl Recorder {
         let o = &sim.scene.output_spec().unwrap_or_default();
         let mut columns = vec!["t".to_string()];
         for p in &o.probes {
-            columns.extend(efsi_run::probes::columns(p));
+            columns.extend(efsi_run::probes::columns(p, sim.grid.geometry));
         }
         let vtk = o.vtk_every.map(|e| Schedule::every(Some(e)));
         let profiles = o.profiles.iter().map(|p| Schedule::times(p.times()));

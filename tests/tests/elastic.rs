@@ -520,9 +520,7 @@ fn impact(g: f64, coupling: &str, extra: &[(&str, &str)]) -> (u64, f64, f64, f64
     let budget = ke0 + release;
     let (m1, e1) = energy(&s);
     let phi = s.state.phi.as_ref().expect("a solid");
-    let rebound = efsi_run::probes::solid_moments(&s.grid, &s.state, phi)
-        .velocity
-        .1;
+    let rebound = efsi_run::probes::solid_moments(&s.grid, &s.state, phi).velocity[1];
     (
         s.state.step,
         gain / budget,

@@ -97,3 +97,8 @@ fn stability_quick() {
     // (efsi refused to write over the first run's outputs) until the harness cleared the case.
     quick_runs("stability", 2);
 }
+
+#[test]
+fn falling_drop_3d_quick() {
+    quick("falling_drop_3d");
+}

@@ -57,9 +57,7 @@ fn fall(axisymmetric: bool, n: usize) -> Fall {
         ]
     );
     let v0 = phase_volume(&s.grid, s.state.phi.as_ref().unwrap());
-    let z0 = solid_moments(&s.grid, &s.state, s.state.phi.as_ref().unwrap())
-        .centroid
-        .1;
+    let z0 = solid_moments(&s.grid, &s.state, s.state.phi.as_ref().unwrap()).centroid[1];
     let fall_end = 0.6; // centre three radii above the floor: two radii of gap
     let mut out = Fall {
         worst_rel: 0.0,
@@ -90,13 +88,13 @@ fn fall(axisymmetric: bool, n: usize) -> Fall {
                 out.phi_excess = out.phi_excess.max(-f).max(f - 1.0);
             }
         }
-        let z = solid_moments(&s.grid, &s.state, phi).centroid.1;
+        let z = solid_moments(&s.grid, &s.state, phi).centroid[1];
         if std::env::var("FALL_DEBUG").is_ok() {
             eprintln!(
                 "t {:.4} dt {dt:.4e} z {z:.5} exact {:.5} w {:.4}",
                 s.state.t,
                 z0 - 0.5 * s.state.t * s.state.t,
-                solid_moments(&s.grid, &s.state, phi).velocity.1
+                solid_moments(&s.grid, &s.state, phi).velocity[1]
             );
         }
         let t = s.state.t;

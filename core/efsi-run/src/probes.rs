@@ -2,11 +2,11 @@
 
 use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
-use efsi_core::grid::Grid;
+use efsi_core::grid::{Geometry, Grid};
 use efsi_core::ops::{self, potential_energy};
 use efsi_core::scene::{Side, Vector};
 use efsi_core::state::State;
-use efsi_core::{OutputDecl, OutputKind, Region, Stagger, unit};
+use efsi_core::{Line, OutputDecl, OutputKind, Region, Stagger, unit};
 
 /// Bilinear interpolation of a staggered field at `(x, y)`; `(ox, oy)` is the position of
 /// index (0, 0) in cell units (`(0.5, 0.5)` for cell centres, `(0, 0.5)` for x-faces, …).
@@ -194,9 +194,9 @@ pub fn sample_in(
     }
 }
 
-/// Column names of a probe in `probes.csv`.
-pub fn columns(p: &ProbeSpec) -> Vec<String> {
-    p.columns()
+/// Column names of a probe in `probes.csv` of a scene of `geometry`.
+pub fn columns(p: &ProbeSpec, geometry: Geometry) -> Vec<String> {
+    p.columns(geometry)
 }
 
 /// The quantity `name` of the stages' `outputs` ([`OutputKind::Quantity`]), NaN if none.
@@ -231,8 +231,11 @@ pub struct Probed<'a> {
 pub struct Quantity {
     /// Its name (`Quantity("name")` in a scene).
     pub name: &'static str,
-    /// Its columns, in order.
+    /// Its columns in a planar or axisymmetric scene, in order.
     pub columns: &'static [&'static str],
+    /// Its columns in a Cartesian3D scene, in order (the z components added); none for a
+    /// quantity that is two-dimensional only.
+    pub columns_3d: &'static [&'static str],
     /// Whether it needs a solid in the scene.
     pub needs_solid: bool,
     /// Its values, appended (one per column).
@@ -245,30 +248,35 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "kinetic_energy",
         columns: &["kinetic_energy"],
+        columns_3d: &["kinetic_energy"],
         needs_solid: false,
         eval: |p, out| out.push(kinetic_energy(p.grid, p.state)),
     },
     Quantity {
         name: "potential_energy",
         columns: &["potential_energy"],
+        columns_3d: &["potential_energy"],
         needs_solid: false,
         eval: |p, out| out.push(potential_energy_of(p.grid, &p.state.rho, p.gravity)),
     },
     Quantity {
         name: "max_divergence",
         columns: &["max_divergence"],
+        columns_3d: &["max_divergence"],
         needs_solid: false,
         eval: |p, out| out.push(max_divergence(p.grid, p.state)),
     },
     Quantity {
         name: "max_speed",
         columns: &["max_speed"],
+        columns_3d: &["max_speed"],
         needs_solid: false,
         eval: |p, out| out.push(max_speed(p.grid, p.state)),
     },
     Quantity {
         name: "solid_volume",
         columns: &["solid_volume"],
+        columns_3d: &["solid_volume"],
         needs_solid: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.push(m.volume),
@@ -278,24 +286,27 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "solid_centroid",
         columns: &["solid_x", "solid_y"],
+        columns_3d: &["solid_x", "solid_y", "solid_z"],
         needs_solid: true,
         eval: |p, out| match moments(p) {
-            Some(m) => out.extend([m.centroid.0, m.centroid.1]),
-            None => out.extend([f64::NAN, f64::NAN]),
+            Some(m) => out.extend(&m.centroid[..p.grid.dims()]),
+            None => out.extend(std::iter::repeat_n(f64::NAN, p.grid.dims())),
         },
     },
     Quantity {
         name: "solid_velocity",
         columns: &["solid_u", "solid_v"],
+        columns_3d: &["solid_u", "solid_v", "solid_w"],
         needs_solid: true,
         eval: |p, out| match moments(p) {
-            Some(m) => out.extend([m.velocity.0, m.velocity.1]),
-            None => out.extend([f64::NAN, f64::NAN]),
+            Some(m) => out.extend(&m.velocity[..p.grid.dims()]),
+            None => out.extend(std::iter::repeat_n(f64::NAN, p.grid.dims())),
         },
     },
     Quantity {
         name: "solid_pieces",
         columns: &["solid_pieces", "solid_largest_piece"],
+        columns_3d: &[],
         needs_solid: true,
         eval: |p, out| match &p.state.phi {
             Some(phi) => {
@@ -306,6 +317,17 @@ pub const QUANTITIES: &[Quantity] = &[
         },
     },
 ];
+
+impl Quantity {
+    /// Its columns in a scene of `geometry` (none: it does not run there).
+    pub fn columns_in(&self, geometry: Geometry) -> &'static [&'static str] {
+        if geometry == Geometry::Cartesian3D {
+            self.columns_3d
+        } else {
+            self.columns
+        }
+    }
+}
 
 /// The framework's quantity `name`, if it has one.
 pub fn framework_quantity(name: &str) -> Option<&'static Quantity> {
@@ -381,7 +403,10 @@ pub fn evaluate(
         }
         quantity => match quantity.quantity() {
             Some(name) => evaluate_quantity(name, &probed, out),
-            None => out.extend(std::iter::repeat_n(f64::NAN, columns(p).len())),
+            None => out.extend(std::iter::repeat_n(
+                f64::NAN,
+                columns(p, grid.geometry).len(),
+            )),
         },
     }
 }
@@ -389,39 +414,52 @@ pub fn evaluate(
 /// Volume, centroid and volume-weighted velocity of the solid phase.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolidMoments {
-    /// `∫φ dV` (per radian when axisymmetric).
+    /// `∫φ dV` (per radian when axisymmetric, per unit depth when planar).
     pub volume: f64,
-    /// `∫φ x dV / ∫φ dV`.
-    pub centroid: (f64, f64),
-    /// `∫φ u dV / ∫φ dV` with the cell-centre velocity.
-    pub velocity: (f64, f64),
+    /// `∫φ x dV / ∫φ dV`: x, y and, in three dimensions, z (0 in two).
+    pub centroid: [f64; 3],
+    /// `∫φ u dV / ∫φ dV` with the cell-centre velocity (each component the mean of its two
+    /// faces): u, v and, in three dimensions, w (0 in two).
+    pub velocity: [f64; 3],
 }
 
-/// The moments of `phi` over the grid (rows in parallel, summed in row order: the same bits
-/// on any number of threads).
+/// The moments of `phi` over the grid, in two or three dimensions (lines in parallel, summed
+/// in line order: the same bits on any number of threads).
 pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
-    let cells = efsi_core::Region::of(grid, efsi_core::Stagger::Cell);
-    let [v, mx, my, mu, mv] = cells.sum(|line| {
-        let mut s = [0.0; 5];
-        for [i, j, _] in line.indices() {
-            let w = phi[(i, j)] * grid.cell_volume(i);
-            if w == 0.0 {
+    /// The faces normal to `a` on either side of the line's cells.
+    fn faces<'f>(c: &'f Field, line: &Line, a: usize) -> (&'f [f64], &'f [f64]) {
+        (c.at(line, [0; 3]), c.at(line, unit(a)))
+    }
+    let cells = Region::of(grid, Stagger::Cell);
+    let w_faces = state.w.as_ref().filter(|_| grid.is_3d());
+    let [v, mx, my, mz, mu, mv, mw] = cells.sum(|line| {
+        let mut s = [0.0; 7];
+        let f = phi.at(&line, [0; 3]);
+        let (u, v) = (faces(&state.u, &line, 0), faces(&state.v, &line, 1));
+        let w = w_faces.map(|w| faces(w, &line, 2));
+        for (n, [i, j, k]) in line.indices().enumerate() {
+            let cell = grid.cell_volume(i);
+            let dv = f[n] * if w.is_some() { cell * grid.dz } else { cell };
+            if dv == 0.0 {
                 continue;
             }
-            let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
-            s[0] += w;
-            s[1] += w * grid.xc(i);
-            s[2] += w * grid.yc(j);
-            s[3] += w * a;
-            s[4] += w * b;
+            s[0] += dv;
+            s[1] += dv * grid.xc(i);
+            s[2] += dv * grid.yc(j);
+            s[4] += dv * (0.5 * (u.0[n] + u.1[n]));
+            s[5] += dv * (0.5 * (v.0[n] + v.1[n]));
+            if let Some(w) = w {
+                s[3] += dv * grid.zc(k);
+                s[6] += dv * (0.5 * (w.0[n] + w.1[n]));
+            }
         }
         s
     });
     let inv = if v > 0.0 { 1.0 / v } else { f64::NAN };
     SolidMoments {
         volume: v,
-        centroid: (mx * inv, my * inv),
-        velocity: (mu * inv, mv * inv),
+        centroid: [mx * inv, my * inv, mz * inv],
+        velocity: [mu * inv, mv * inv, mw * inv],
     }
 }
 
@@ -653,7 +691,6 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
 mod tests {
     use super::*;
     use efsi_core::FieldId;
-    use efsi_core::grid::Geometry;
 
     #[test]
     fn a_quantity_is_one_probe_whichever_way_the_scene_names_it() {
@@ -685,10 +722,11 @@ mod tests {
         ] {
             let by_name = ProbeSpec::Quantity(name.into());
             assert_eq!(variant.quantity(), Some(name));
-            assert_eq!(variant.columns(), by_name.columns(), "{name}");
+            let planar = Geometry::Planar;
+            assert_eq!(variant.columns(planar), by_name.columns(planar), "{name}");
             assert_eq!(variant.needs_solid(), by_name.needs_solid(), "{name}");
             let (a, b) = (values(&variant), values(&by_name));
-            assert_eq!(a.len(), variant.columns().len(), "{name}");
+            assert_eq!(a.len(), variant.columns(planar).len(), "{name}");
             assert!(
                 a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
                 "{name}: {a:?} {b:?}"
@@ -711,9 +749,86 @@ mod tests {
         assert!(ke > 0.1 && (got - ke).abs() < 1e-12 * ke, "{got} vs {ke}");
         // A stage's quantity no scheduled stage reports is NaN, one column named after it.
         let elastic = ProbeSpec::Quantity("elastic_energy".into());
-        assert_eq!(elastic.columns(), ["elastic_energy"]);
+        assert_eq!(elastic.columns(Geometry::Planar), ["elastic_energy"]);
         assert!(values(&elastic)[0].is_nan());
         assert_eq!(ProbeSpec::ElasticEnergy.quantity(), Some("elastic_energy"));
+    }
+
+    #[test]
+    fn the_solid_moments_of_a_three_dimensional_state_have_z_components() {
+        // 4 × 2 × 3 cells of 0.25 × 0.5 × 0.5; solid in cell (1, 0, 2) (full) and (2, 1, 0)
+        // (half), each face velocity a linear function of its position.
+        let grid = Grid::new_3d([4, 2, 3], (0.0, 1.0), (0.0, 1.0), (0.0, 1.5));
+        let fields = [FieldId::SolidFraction].into_iter().collect();
+        let mut state = State::new(&grid, 1.0, 0.1, &fields);
+        let w = state.w.as_mut().expect("w on a three-dimensional grid");
+        for k in -1..5isize {
+            for j in -1..4isize {
+                for i in -1..6isize {
+                    let (a, b, c) = (i as f64, j as f64, k as f64);
+                    state.u[[i, j, k]] = 0.5 * a - b;
+                    state.v[[i, j, k]] = c + 0.25 * b;
+                    w[[i, j, k]] = 2.0 * c - a;
+                }
+            }
+        }
+        let phi = state.phi.as_mut().unwrap();
+        phi[[1, 0, 2]] = 1.0;
+        phi[[2, 1, 0]] = 0.5;
+        let values = |p: &ProbeSpec| {
+            let mut out = Vec::new();
+            evaluate(
+                p,
+                &grid,
+                &state,
+                Vector(0.0, -1.0, Some(0.0)),
+                &[],
+                &mut out,
+            );
+            out
+        };
+        let cell = 0.25 * 0.5 * 0.5;
+        assert_eq!(values(&ProbeSpec::SolidVolume), vec![1.5 * cell]);
+        // Centroid: the cells' centres weighted 1 and ½.
+        let mean = |a: f64, b: f64| (a + 0.5 * b) / 1.5;
+        let want = [mean(0.375, 0.625), mean(0.25, 0.75), mean(1.25, 0.25)];
+        let got = values(&ProbeSpec::SolidCentroid);
+        assert_eq!(got.len(), 3);
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-15, "{got:?} vs {want:?}");
+        }
+        // Velocity: each component the mean of its two faces at the cells.
+        let u = |i: f64, j: f64| 0.5 * (i + 0.5) - j;
+        let v = |j: f64, k: f64| k + 0.25 * (j + 0.5);
+        let w = |i: f64, k: f64| 2.0 * (k + 0.5) - i;
+        let want = [
+            mean(u(1.0, 0.0), u(2.0, 1.0)),
+            mean(v(0.0, 2.0), v(1.0, 0.0)),
+            mean(w(1.0, 2.0), w(2.0, 0.0)),
+        ];
+        let got = values(&ProbeSpec::SolidVelocity);
+        assert_eq!(got.len(), 3);
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-14, "{got:?} vs {want:?}");
+        }
+        // The columns name the z components in three dimensions only.
+        let c = |p: ProbeSpec, g| p.columns(g);
+        let three = Geometry::Cartesian3D;
+        assert_eq!(
+            c(ProbeSpec::SolidCentroid, three),
+            ["solid_x", "solid_y", "solid_z"]
+        );
+        assert_eq!(
+            c(ProbeSpec::SolidVelocity, three),
+            ["solid_u", "solid_v", "solid_w"]
+        );
+        assert_eq!(
+            c(ProbeSpec::SolidCentroid, Geometry::Axisymmetric),
+            ["solid_x", "solid_y"]
+        );
+        assert!(ProbeSpec::SolidCentroid.three_dimensional());
+        assert!(!ProbeSpec::SolidPieces.three_dimensional());
+        assert!(c(ProbeSpec::SolidPieces, three).is_empty());
     }
 
     #[test]

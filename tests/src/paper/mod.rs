@@ -8,6 +8,7 @@ pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
+pub mod falling_drop;
 pub mod lid_driven_cube;
 pub mod oscillating_disk;
 pub mod plot;
@@ -217,6 +218,7 @@ pub const CASES: &[Entry] = &[
     entry::<couette::Couette>(),
     entry::<couette_mr::CouetteMr>(),
     entry::<lid_driven_cube::LidDrivenCube>(),
+    entry::<falling_drop::FallingDrop>(),
     entry::<stability::Stability>(),
 ];
 

@@ -195,12 +195,16 @@ impl ProbeSpec {
         })
     }
 
-    /// The probe's column names in `probes.csv`, in order: a quantity's columns (one named
-    /// after a stage's quantity), or the probe's own.
-    pub fn columns(&self) -> Vec<String> {
+    /// The probe's column names in `probes.csv` of a scene of `geometry`, in order: a
+    /// quantity's columns (one named after a stage's quantity), or the probe's own.
+    pub fn columns(&self, geometry: Geometry) -> Vec<String> {
         if let Some(name) = self.quantity() {
             return match crate::probes::framework_quantity(name) {
-                Some(q) => q.columns.iter().map(|c| c.to_string()).collect(),
+                Some(q) => q
+                    .columns_in(geometry)
+                    .iter()
+                    .map(|c| c.to_string())
+                    .collect(),
                 None => vec![name.to_string()],
             };
         }
@@ -214,19 +218,16 @@ impl ProbeSpec {
     }
 
     /// Whether the probe runs in a Cartesian3D scene: a point sample, the energies, the largest
-    /// divergence and speed, and a stage's quantity (the solid and contact probes are
-    /// two-dimensional).
+    /// divergence and speed, the solid's volume, centroid and velocity (three columns each for
+    /// the last two), and a stage's quantity (the contact probes, the solid's extent and its
+    /// pieces are two-dimensional).
     pub fn three_dimensional(&self) -> bool {
         match self {
-            ProbeSpec::Point { .. }
-            | ProbeSpec::KineticEnergy
-            | ProbeSpec::PotentialEnergy
-            | ProbeSpec::MaxDivergence
-            | ProbeSpec::MaxSpeed => true,
-            ProbeSpec::Quantity(name) => {
-                crate::probes::framework_quantity(name).is_none_or(|q| !q.needs_solid)
-            }
-            _ => false,
+            ProbeSpec::Point { .. } => true,
+            ProbeSpec::ElasticEnergy => false,
+            p => p.quantity().is_some_and(|name| {
+                crate::probes::framework_quantity(name).is_none_or(|q| !q.columns_3d.is_empty())
+            }),
         }
     }
 
@@ -489,7 +490,8 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
                 format!(
                     "{probe:?} is a two-dimensional probe: a Cartesian3D scene's probes are \
                      Point (at (x, y, z)), KineticEnergy, PotentialEnergy, MaxDivergence, \
-                     MaxSpeed and the stages' quantities"
+                     MaxSpeed, SolidVolume, SolidCentroid, SolidVelocity and the stages' \
+                     quantities"
                 ),
             );
         }
@@ -518,7 +520,7 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
                 ),
             );
         }
-        claim_columns(probe, k, &f, &mut columns)?;
+        claim_columns(probe, scene.geometry, k, &f, &mut columns)?;
         if let ProbeSpec::Point { field, at, .. } = probe {
             if field == "solid_fraction" && scene.solid.is_none() {
                 return err(
@@ -548,11 +550,12 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
 /// `usize::MAX` for the time): each a CSV field, none already claimed. `f` names the probe.
 fn claim_columns(
     probe: &ProbeSpec,
+    geometry: Geometry,
     k: usize,
     f: &str,
     columns: &mut std::collections::HashMap<String, usize>,
 ) -> Checked {
-    for c in probe.columns() {
+    for c in probe.columns(geometry) {
         if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
             return err(
                 &format!("{f}.name"),

@@ -4,6 +4,7 @@
 use crate::checkpoint::{self, CheckpointFile};
 use crate::output::spec::ProbeSpec;
 use crate::probes;
+use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
 use std::fs::{self, File, OpenOptions};
 use std::path::{Path, PathBuf};
@@ -76,10 +77,10 @@ pub(super) fn replace_earlier_run(
     })
 }
 
-pub(super) fn probe_header(probes: &[ProbeSpec]) -> String {
+pub(super) fn probe_header(probes: &[ProbeSpec], geometry: Geometry) -> String {
     let mut header = vec!["t".to_string()];
     for p in probes {
-        header.extend(probes::columns(p));
+        header.extend(probes::columns(p, geometry));
     }
     header.join(",") + "\n"
 }

@@ -8,6 +8,13 @@
 //! `ρ = (1 − φ_s) ρ_f + φ_s ρ_s` and `μ = (1 − φ_s) μ_f + φ_s μ_s` (Eqs. 5–6), with the seed's
 //! default `μ_s = μ_f ρ_s/ρ_f` unless the scene sets `solid.viscosity`.
 //!
+//! **Geometries.** One code path for planar, axisymmetric and three-dimensional grids: the
+//! step-average velocity has one face field per axis (`u`, `v`, and `w` on a Cartesian3D
+//! grid), the transport sweeps every axis ([`super::advect`]), the sides are closed (walls,
+//! `Symmetry`, the axis) or periodic, z sides included, and an `Outflow` side is refused.
+//! In three dimensions the stage serves a second fluid (a solid without a law, a drop); an
+//! elastic solid needs the implicit-momentum stage, which is two-dimensional.
+//!
 //! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
 //! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
 //!
@@ -15,8 +22,9 @@
 //! next to the axis an outward radial flux can empty up to twice `|u|Δt/Δr` of a cell. The
 //! stage does not limit Δt for it (the scene's CFL number governs the step): when a step's
 //! interface Courant number, `Δt·max(2|u_r|/Δr, |v|/Δz)` there and `Δt·max(|u|/Δx, |v|/Δy)`
-//! elsewhere, exceeds ½ — a CFL above ½, an impact — the transport takes as many equal
-//! sub-steps as keep each sweep at most 0.45, and refuses a sweep above ½. Sub-cycling rather
+//! elsewhere (`Δt·max(|u|/Δx, |v|/Δy, |w|/Δz)` in three dimensions), exceeds ½ — a CFL above
+//! ½, an impact — the transport takes as many equal sub-steps as keep each sweep at most
+//! 0.45, and refuses a sweep above ½. Sub-cycling rather
 //! than capping Δt lets a scene with a solid run at its own CFL; the stability map
 //! (`tests/src/paper/stability.rs`) holds those runs stable.
 //!
@@ -60,6 +68,11 @@ impl StagePlugin for Vof {
     fn needed(&self, scene: &Scene, _options: &Options) -> bool {
         crate::second_material(scene)
     }
+    /// Every geometry: the transport's sweeps, the mixing and the Courant check run over the
+    /// grid's axes.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn check_scene(
         &self,
         scene: &mut Scene,
@@ -83,13 +96,21 @@ impl StagePlugin for Vof {
             )),
             _ => Ok(VofSide::Closed),
         };
+        // The z sides of a two-dimensional grid do not exist (the advector ignores them).
+        let z_side = |s: Side| {
+            if grid.is_3d() {
+                side(s)
+            } else {
+                Ok(VofSide::Closed)
+            }
+        };
         let bounds = VofBoundaries {
             x_lo: side(Side::XMin)?,
             x_hi: side(Side::XMax)?,
             y_lo: side(Side::YMin)?,
             y_hi: side(Side::YMax)?,
-            // The z sides of a three-dimensional grid: a scene names none.
-            ..VofBoundaries::closed()
+            z_lo: z_side(Side::ZMin)?,
+            z_hi: z_side(Side::ZMax)?,
         };
         let advector = VofAdvector::lending(grid, bounds)?;
         Ok(Box::new(VofStage {
@@ -99,8 +120,7 @@ impl StagePlugin for Vof {
             mu: (scene.fluid.viscosity, solid.viscosity(&scene.fluid)),
             shape: solid.shape.clone(),
             initial_velocity: solid.velocity,
-            u_adv: Field::zeros(grid),
-            v_adv: Field::zeros(grid),
+            adv: (0..grid.dims()).map(|_| Field::zeros(grid)).collect(),
         }))
     }
 }
@@ -117,9 +137,9 @@ struct VofStage {
     /// The solid's initial velocity, until it is blended into the starting velocity (the
     /// first [`Stage::initialize`]).
     initial_velocity: Option<(f64, f64)>,
-    /// The velocity at the end of the previous step (Vⁿ), then the step average.
-    u_adv: Field,
-    v_adv: Field,
+    /// The velocity at the end of the previous step (Vⁿ), then the step average: one face
+    /// field per axis of the grid (u, v, and w in three dimensions).
+    adv: Vec<Field>,
 }
 
 impl VofStage {
@@ -161,7 +181,15 @@ impl VofStage {
                 }
             });
         }
-        bc.fill_velocity(grid, &mut state.u, &mut state.v, 0.0, false);
+        let w = state.w.as_mut();
+        bc.fill_velocity3(grid, &mut state.u, &mut state.v, w, 0.0, false);
+    }
+
+    /// Keep the state's velocity (Vⁿ for the next step's average).
+    fn keep_velocity(&mut self, state: &State) {
+        for (a, b) in self.adv.iter_mut().zip(velocity(state)) {
+            a.copy_from(b);
+        }
     }
 
     /// ρ and μ from φ (seed Eqs. 5–6), interior and ghosts alike.
@@ -202,8 +230,7 @@ impl Stage for VofStage {
         let phi = state.phi.take().ok_or_else(missing)?;
         self.mix(&phi, &mut state.rho, &mut state.mu);
         state.phi = Some(phi);
-        self.u_adv.copy_from(&state.u);
-        self.v_adv.copy_from(&state.v);
+        self.keep_velocity(state);
         Ok(())
     }
 
@@ -212,14 +239,13 @@ impl Stage for VofStage {
     // snapshot holds already; `restored` takes it back from there (1.1 MB less in every
     // snapshot at 256²).
 
-    /// Nothing, or the previous velocity (padded u, then v) of a checkpoint written before
-    /// it was taken from the state, which is the same and is taken again in `restored`.
+    /// Nothing, or the previous velocity (padded u, then v, then w) of a checkpoint written
+    /// before it was taken from the state, which is the same and is taken again in `restored`.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
-        let n = self.u_adv.data().len();
-        if !data.is_empty() && data.len() != 2 * n {
+        let n: usize = self.adv.iter().map(|f| f.data().len()).sum();
+        if !data.is_empty() && data.len() != n {
             return Err(format!(
-                "expected nothing or {} values (the previous velocity on this grid), got {}",
-                2 * n,
+                "expected nothing or {n} values (the previous velocity on this grid), got {}",
                 data.len()
             ));
         }
@@ -228,8 +254,7 @@ impl Stage for VofStage {
 
     /// Vⁿ is the restored state's velocity.
     fn restored(&mut self, state: &State) {
-        self.u_adv.copy_from(&state.u);
-        self.v_adv.copy_from(&state.v);
+        self.keep_velocity(state);
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
@@ -238,7 +263,7 @@ impl Stage for VofStage {
         // initial condition, not yet projected (a solid's initial velocity blended into the
         // fluid's is not solenoidal at the interface): there Vⁿ⁺¹ alone.
         let w = if ctx.step == 0 { 0.0 } else { 0.5 };
-        for (a, b) in [(&mut self.u_adv, &state.u), (&mut self.v_adv, &state.v)] {
+        for (a, b) in self.adv.iter_mut().zip(velocity(state)) {
             let b = b.data();
             par::chunks(a.data_mut()).for_each(|o, a| {
                 for (x, y) in a.iter_mut().zip(&b[o..]) {
@@ -249,7 +274,7 @@ impl Stage for VofStage {
         // The step was chosen for the velocity at its start; the velocity it ends with (an
         // impact, a release) can be faster. Sub-cycle the transport with the same velocity so
         // each sweep keeps its Courant number ≤ 0.5 (one sub-step, and the same bits, otherwise).
-        let courant = courant_rate(ctx.grid, &self.u_adv, &self.v_adv) * ctx.dt;
+        let courant = courant_rate(ctx.grid, &self.adv) * ctx.dt;
         let n = if courant > 0.5 {
             (courant / 0.45).ceil() as u64
         } else {
@@ -266,22 +291,25 @@ impl Stage for VofStage {
             });
         }
         let mut st = super::AdvectStats::default();
-        let mut pool = self.scratch.lock();
-        for k in 0..n {
-            let s = self.advector.step_in(
-                &mut pool,
-                ctx.grid,
-                &mut phi,
-                &[&self.u_adv, &self.v_adv],
-                ctx.dt / n as f64,
-                ctx.step * n + k,
-            );
-            st.cfl = st.cfl.max(s.cfl);
-            st.max_clipped = st.max_clipped.max(s.max_clipped);
-            st.clipped_volume += s.clipped_volume;
+        {
+            let mut pool = self.scratch.lock();
+            let dims = self.adv.len();
+            let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
+            for k in 0..n {
+                let s = self.advector.step_in(
+                    &mut pool,
+                    ctx.grid,
+                    &mut phi,
+                    &vel[..dims],
+                    ctx.dt / n as f64,
+                    ctx.step * n + k,
+                );
+                st.cfl = st.cfl.max(s.cfl);
+                st.max_clipped = st.max_clipped.max(s.max_clipped);
+                st.clipped_volume += s.clipped_volume;
+            }
         }
-        self.u_adv.copy_from(&state.u);
-        self.v_adv.copy_from(&state.v);
+        self.keep_velocity(state);
         self.advector.fill_ghosts(&mut phi);
         self.mix(&phi, &mut state.rho, &mut state.mu);
         state.phi = Some(phi);
@@ -308,13 +336,18 @@ impl Stage for VofStage {
 /// Sub-steps the interface transport may take in one time step before the stage gives up.
 const MAX_SUBSTEPS: u64 = 64;
 
+/// The state's face velocities, one per axis of the grid: u, v, and w in three dimensions.
+fn velocity(state: &State) -> impl Iterator<Item = &Field> {
+    [&state.u, &state.v].into_iter().chain(state.w.as_ref())
+}
+
 /// The interface sweep's Courant number per unit Δt, in its flux form: the largest face volume
 /// flux over its upwind cell's volume, `|u| r_face / (r_upwind dx)` on x-faces (up to twice
-/// `|u|/dx` next to the axis) and `|v|/dy` on y-faces.
-fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
+/// `|u|/dx` next to the axis), `|v|/dy` on y-faces and `|w|/dz` on z-faces.
+fn courant_rate(grid: &Grid, vel: &[Field]) -> f64 {
     let m = &grid.metric;
     let rate_u = Region::of(grid, Stagger::XFace).max(0.0, |l| {
-        let u = u.at(&l, [0; 3]);
+        let u = vel[0].at(&l, [0; 3]);
         let mut rate = 0.0f64;
         for (n, [i, _, _]) in l.indices().enumerate() {
             let a = u[n];
@@ -325,8 +358,43 @@ fn courant_rate(grid: &Grid, u: &Field, v: &Field) -> f64 {
         }
         rate
     });
-    let rate_v = Region::of(grid, Stagger::YFace).max(0.0, |l| {
-        v.at(&l, [0; 3]).iter().fold(0.0f64, |r, a| r.max(a.abs()))
-    });
-    (rate_u / grid.dx).max(rate_v / grid.dy)
+    let h = grid.h();
+    let faces = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
+    (1..vel.len()).fold(rate_u / grid.dx, |rate, a| {
+        let most = Region::of(grid, faces[a]).max(0.0, |l| {
+            vel[a]
+                .at(&l, [0; 3])
+                .iter()
+                .fold(0.0f64, |r, v| r.max(v.abs()))
+        });
+        rate.max(most / h[a])
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_courant_rate_counts_every_axis_of_the_grid() {
+        // 4 × 4 × 8 cells of 0.25 × 0.25 × 0.125: |u| = 1, |v| = 2 and |w| = 0.5 at one face
+        // each give 4, 8 and 4 per unit time; then w = 1.5 at another gives 12.
+        let g = Grid::new_3d([4, 4, 8], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let mut vel: Vec<Field> = (0..3).map(|_| Field::zeros(&g)).collect();
+        vel[0][[2, 1, 3]] = -1.0;
+        vel[1][[1, 2, 5]] = 2.0;
+        vel[2][[3, 3, 4]] = 0.5;
+        assert_eq!(courant_rate(&g, &vel), 8.0);
+        vel[2][[0, 2, 7]] = -1.5;
+        assert_eq!(courant_rate(&g, &vel), 12.0);
+        // A z-face velocity outside the interior (a ghost) does not count.
+        vel[2][[0, 2, 10]] = 100.0;
+        assert_eq!(courant_rate(&g, &vel), 12.0);
+        // Two dimensions: the x and y faces only.
+        let g = Grid::new(efsi_core::Geometry::Planar, 4, 8, (0.0, 1.0), (0.0, 1.0));
+        let mut vel: Vec<Field> = (0..2).map(|_| Field::zeros(&g)).collect();
+        vel[0][(1, 1)] = 1.0;
+        vel[1][(2, 3)] = 0.25;
+        assert_eq!(courant_rate(&g, &vel), 4.0);
+    }
 }

@@ -13,6 +13,7 @@ use crate::checkpoint::OutputState;
 use crate::output::spec::ProbeSpec;
 use crate::probes;
 use crate::run::folder::{open_append, probe_header};
+use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
 use std::fs::{self, File};
 use std::io::{Read, Write};
@@ -33,10 +34,15 @@ pub struct ProbesCsv {
 }
 
 impl ProbesCsv {
-    /// A new `probes.csv` in `dir`, its header naming the columns of `probes`.
-    pub fn create(dir: &Path, probes: &[ProbeSpec]) -> Result<ProbesCsv, EfsiError> {
+    /// A new `probes.csv` in `dir`, its header naming the columns of `probes` in a scene of
+    /// `geometry`.
+    pub fn create(
+        dir: &Path,
+        probes: &[ProbeSpec],
+        geometry: Geometry,
+    ) -> Result<ProbesCsv, EfsiError> {
         let path = dir.join("probes.csv");
-        let header = probe_header(probes);
+        let header = probe_header(probes, geometry);
         crate::output::atomic::write_bytes_atomically(&path, header.as_bytes())
             .map_err(|e| EfsiError::io(&path, e))?;
         Ok(ProbesCsv {
@@ -55,10 +61,11 @@ impl ProbesCsv {
     pub fn reopen(
         dir: &Path,
         probes: &[ProbeSpec],
+        geometry: Geometry,
         state: &OutputState,
     ) -> Result<ProbesCsv, EfsiError> {
         let path = dir.join("probes.csv");
-        let header = probe_header(probes);
+        let header = probe_header(probes, geometry);
         let fail = |message: String| EfsiError::Checkpoint {
             what: path.display().to_string(),
             message,
