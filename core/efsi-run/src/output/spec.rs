@@ -10,6 +10,7 @@
 
 use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
+use efsi_core::scene::solid::Axis;
 use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
 use efsi_core::validate::{Checked, err, positive};
@@ -39,6 +40,51 @@ pub struct OutputSpec {
     /// Line profiles, written to `profiles/<name>_t<time>.csv`.
     #[serde(default)]
     pub profiles: Vec<ProfileSpec>,
+    /// Plane slices of a Cartesian3D run, written to `slices/<name>_<step>.vtr` with their
+    /// collection `slices/<name>.pvd`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slices: Vec<SliceSpec>,
+}
+
+/// A plane slice of a Cartesian3D run (`output.slices`): the plane `x_normal = at`, its cells
+/// the grid's in-plane cells, each array of the VTK files interpolated to it
+/// ([`crate::output::slice`]), written as a `.vtr` file of the plane (flat along the normal)
+/// every `every` of simulated time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceSpec {
+    /// File stem (default: the normal's letter and the position, e.g. `z0.5`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The axis the plane is normal to.
+    pub normal: Axis,
+    /// The plane's position along the normal, inside the box.
+    pub at: f64,
+    /// Write it every this much simulated time (and at the start and end); default
+    /// `output.vtk_every`; without either, at the start and the end only.
+    #[serde(default)]
+    pub every: Option<f64>,
+    /// The arrays (names of `output.vtk.fields`); default: every array the VTK files hold.
+    #[serde(default)]
+    pub fields: Option<Vec<String>>,
+}
+
+impl SliceSpec {
+    /// The file stem: `name`, or the normal's letter and the position (`z0.5`).
+    pub fn stem(&self) -> String {
+        self.name.clone().unwrap_or_else(|| {
+            format!(
+                "{}{}",
+                crate::output::slice::axis_name(self.normal.index()),
+                num(self.at)
+            )
+        })
+    }
+
+    /// Its interval: `every`, else `output.vtk_every` (`vtk_every`).
+    pub fn interval(&self, vtk_every: Option<f64>) -> Option<f64> {
+        self.every.or(vtk_every)
+    }
 }
 
 /// The arrays of the shared fields a VTK file can hold, by name (`output.vtk.fields`):
@@ -392,7 +438,8 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
         three: scene.geometry == Geometry::Cartesian3D,
     };
     validate_probes(o, scene, &space)?;
-    validate_profiles(o, scene, &space)
+    validate_profiles(o, scene, &space)?;
+    validate_slices(o, scene)
 }
 
 /// The output intervals and the VTK field list.
@@ -407,24 +454,7 @@ fn validate_intervals_and_vtk(o: &OutputSpec, scene: &Scene) -> Checked {
         }
     }
     if let Some(fields) = &o.vtk.fields {
-        if fields.is_empty() {
-            return err(
-                "output.vtk.fields",
-                "must name at least one field (leave it out for all of them)",
-            );
-        }
-        for (k, f) in fields.iter().enumerate() {
-            let at = format!("output.vtk.fields[{k}]");
-            if fields[..k].contains(f) {
-                return err(&at, format!("`{f}` is listed twice"));
-            }
-            if f == "solid_fraction" && scene.solid.is_none() {
-                return err(
-                    &at,
-                    "`solid_fraction` needs a solid, and the scene has none",
-                );
-            }
-        }
+        check_array_list("output.vtk.fields", fields, scene)?;
     }
     Ok(())
 }
@@ -649,6 +679,84 @@ fn validate_profiles(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checke
     Ok(())
 }
 
+/// The plane slices: a Cartesian3D scene's, each plane inside the box, unique names, their
+/// intervals and field lists.
+fn validate_slices(o: &OutputSpec, scene: &Scene) -> Checked {
+    let mut names = std::collections::HashSet::new();
+    for (k, s) in o.slices.iter().enumerate() {
+        let f = format!("output.slices[{k}]");
+        let Some(z) = scene
+            .domain
+            .z
+            .filter(|_| scene.geometry == Geometry::Cartesian3D)
+        else {
+            return err(
+                &f,
+                format!(
+                    "a plane slice cuts a three-dimensional box, and this scene is {:?}: its \
+                     VTK files (output.vtk_every) are its one plane already",
+                    scene.geometry
+                ),
+            );
+        };
+        let d = &scene.domain;
+        let a = s.normal.index();
+        let (lo, hi) = [d.x, d.y, z][a];
+        if !(s.at.is_finite() && s.at >= lo && s.at <= hi) {
+            return err(
+                &format!("{f}.at"),
+                format!(
+                    "{} = {} is outside the box's [{}, {}]",
+                    crate::output::slice::axis_name(a),
+                    num(s.at),
+                    num(lo),
+                    num(hi)
+                ),
+            );
+        }
+        let name = s.stem();
+        if name.is_empty() || name.contains(['/', '\\']) || !names.insert(name.clone()) {
+            return err(
+                &format!("{f}.name"),
+                format!("must be a unique file stem, got `{name}`"),
+            );
+        }
+        if let Some(every) = s.every {
+            positive(&format!("{f}.every"), every)?;
+            interval(&scene.time, every).or_else(|m| err(&format!("{f}.every"), m))?;
+        }
+        if let Some(fields) = &s.fields {
+            check_array_list(&format!("{f}.fields"), fields, scene)?;
+        }
+    }
+    Ok(())
+}
+
+/// A list of VTK array names (`output.vtk.fields`, a slice's `fields`) named `at`: at least one,
+/// each once, `solid_fraction` only with a solid (the names themselves are checked against the
+/// stages by [`check_names`]).
+fn check_array_list(at: &str, fields: &[String], scene: &Scene) -> Checked {
+    if fields.is_empty() {
+        return err(
+            at,
+            "must name at least one field (leave it out for all of them)",
+        );
+    }
+    for (k, f) in fields.iter().enumerate() {
+        let at = format!("{at}[{k}]");
+        if fields[..k].contains(f) {
+            return err(&at, format!("`{f}` is listed twice"));
+        }
+        if f == "solid_fraction" && scene.solid.is_none() {
+            return err(
+                &at,
+                "`solid_fraction` needs a solid, and the scene has none",
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The outputs the stages provide, checked once the pipeline is built: every array of `output.vtk.fields` is a shared field's
 /// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every field a `Point` probe or a
 /// profile samples a shared one ([`FIELD_NAMES`]) or a stage's
@@ -690,13 +798,23 @@ fn check_names(o: &OutputSpec, pipeline: &Pipeline) -> Checked {
             sampled(format!("output.profiles[{k}].fields"), f)?;
         }
     }
-    for (k, f) in o.vtk.fields.iter().flatten().enumerate() {
-        let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
-        if !arrays.contains(&f.as_str()) {
-            return err(
-                &format!("output.vtk.fields[{k}]"),
-                format!("unknown field `{f}`: this scene's fields and stages provide {arrays:?}"),
-            );
+    let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
+    let lists = std::iter::once(("output.vtk.fields".to_string(), &o.vtk.fields)).chain(
+        o.slices
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (format!("output.slices[{k}].fields"), &s.fields)),
+    );
+    for (at, list) in lists {
+        for (k, f) in list.iter().flatten().enumerate() {
+            if !arrays.contains(&f.as_str()) {
+                return err(
+                    &format!("{at}[{k}]"),
+                    format!(
+                        "unknown field `{f}`: this scene's fields and stages provide {arrays:?}"
+                    ),
+                );
+            }
         }
     }
     for (k, p) in o.probes.iter().enumerate() {
