@@ -849,6 +849,88 @@ mod tests {
             boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
         )"#;
 
+    /// Plane slices: a Cartesian3D scene's, inside the box, with unique names and valid field
+    /// lists; each refusal names the setting.
+    #[test]
+    fn slices_are_checked_by_name() {
+        let cube = MIN
+            .replace(
+                "domain: (x: (0.0, 1.0), y: (0.0, 1.0)),",
+                "geometry: Cartesian3D, domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (-1.0, 2.0)),",
+            )
+            .replace("grid: (nx: 8, ny: 8),", "grid: (nx: 8, ny: 8, nz: 8),")
+            .replace(
+                "y_max: MovingWall(speed: 1.0)",
+                "y_max: MovingWall(speed: 1.0), z_min: NoSlip, z_max: NoSlip",
+            );
+        let with = |base: &str, slices: &str| {
+            let text = base.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (vtk_every: 0.5, slices: {slices}),"),
+            );
+            let scene = Scene::from_str_at(&text, Path::new("scene.ron")).unwrap();
+            let o = scene.output_spec()?;
+            validate(&o, &scene).map(|()| o)
+        };
+        let o = with(&cube, "[(normal: Z, at: 2.0), (name: \"side\", normal: X, at: 0.3, every: 0.25, fields: [\"pressure\"])]").unwrap();
+        assert_eq!(o.slices[0].stem(), "z2");
+        assert_eq!(o.slices[0].interval(o.vtk_every), Some(0.5));
+        assert_eq!(o.slices[1].stem(), "side");
+        assert_eq!(o.slices[1].interval(o.vtk_every), Some(0.25));
+        for (base, slices, needles) in [
+            (
+                MIN,
+                "[(normal: Z, at: 0.5)]",
+                &["output.slices[0]", "three-dimensional box", "Planar"][..],
+            ),
+            (
+                &cube,
+                "[(normal: Z, at: 2.5)]",
+                &[
+                    "output.slices[0].at",
+                    "z = 2.5 is outside the box's [-1, 2]",
+                ],
+            ),
+            (
+                &cube,
+                "[(normal: Y, at: -0.1)]",
+                &["output.slices[0].at", "y = -0.1"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5), (normal: X, at: 0.5)]",
+                &["output.slices[1].name", "unique", "x0.5"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, every: 0.0)]",
+                &["output.slices[0].every"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [])]",
+                &["output.slices[0].fields", "at least one"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [\"pressure\", \"pressure\"])]",
+                &["output.slices[0].fields[1]", "twice"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [\"solid_fraction\"])]",
+                &["output.slices[0].fields[0]", "needs a solid"],
+            ),
+            (&cube, "[(normal: W, at: 0.5)]", &["W"]),
+        ] {
+            let (f, m) = with(base, slices).unwrap_err();
+            let e = format!("{f}: {m}");
+            for n in needles {
+                assert!(e.contains(n), "{slices}: expected `{n}` in: {e}");
+            }
+        }
+    }
+
     #[test]
     fn vtk_options_load_round_trip_and_are_checked_by_name() {
         let load = |text: &str| {
