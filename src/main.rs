@@ -200,8 +200,8 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Check { scene, overrides } => check_scene(&scene, &overrides.list()),
+    match cli.command {
+        Command::Check { scene, overrides } => exit(check_scene(&scene, &overrides.list())),
         Command::Run {
             scene,
             overrides,
@@ -213,7 +213,7 @@ fn main() -> ExitCode {
             overwrite,
         } => {
             let overrides = overrides.list();
-            let run = || {
+            on_workers(threads, || {
                 run_scene(
                     &scene,
                     &overrides,
@@ -223,20 +223,13 @@ fn main() -> ExitCode {
                     checkpoint_every,
                     overwrite,
                 )
-            };
-            match on_workers(threads, run) {
-                Ok(result) => result,
-                Err(code) => return code,
-            }
+            })
         }
         Command::Resume {
             dir,
             checkpoint_every,
             quiet,
-        } => match on_workers(None, || resume_run(&dir, quiet, checkpoint_every)) {
-            Ok(result) => result,
-            Err(code) => return code,
-        },
+        } => on_workers(None, || resume_run(&dir, quiet, checkpoint_every)),
         Command::Plot {
             dir,
             field,
@@ -245,30 +238,29 @@ fn main() -> ExitCode {
             slice,
             out,
         } => {
-            let out = out.unwrap_or_else(|| dir.join("plots"));
             let request = plot::FieldRequest {
                 field,
                 component,
                 time,
                 slice,
             };
-            return print_lines(plot::plot(&dir, &out, &request).map(|files| {
-                files
-                    .iter()
-                    .map(|f| format!("wrote {}", f.display()))
-                    .collect()
-            }));
+            plot_run(&dir, out, &request)
         }
         Command::DescribeOutput { dir } => {
-            return print_lines(describe_output(&dir).map(|text| vec![text]));
+            print_lines(describe_output(&dir).map(|text| vec![text]))
         }
         Command::Laws {
             paths,
             check: false,
-        } => return list_laws(&paths),
-        Command::Laws { paths, check: true } => return check_laws(&paths),
-        Command::Sweep { args } => return sweep(&args),
-    };
+        } => list_laws(&paths),
+        Command::Laws { paths, check: true } => check_laws(&paths),
+        Command::Sweep { args } => sweep(&args),
+    }
+}
+
+/// The exit code of a command's `result`, its error said: 0, 128 + the signal that stopped a
+/// run, or the error's code.
+fn exit(result: Result<Option<usize>, EfsiError>) -> ExitCode {
     match result {
         Ok(None) => ExitCode::SUCCESS,
         Ok(Some(signal)) => ExitCode::from((128 + signal.min(127)) as u8),
@@ -302,28 +294,40 @@ fn check_scene(scene: &Path, overrides: &[Override]) -> Result<Option<usize>, Ef
 }
 
 /// Run `work` (a run or a resume) on a pool of the worker threads asked for (`threads`, else
-/// $RAYON_NUM_THREADS, else all cores): the run loop runs on a worker of the pool, so the
-/// stages' parallel loops start from inside it (cheaper than injecting each from outside, and
-/// allocation-free). The exit code if the pool cannot be had, the error said.
+/// $RAYON_NUM_THREADS, else all cores) and return its exit code ([`exit`]): the run loop runs on
+/// a worker of the pool, so the stages' parallel loops start from inside it (cheaper than
+/// injecting each from outside, and allocation-free). Exit code 1 if the pool cannot be had.
 fn on_workers(
     threads: Option<usize>,
     work: impl FnOnce() -> Result<Option<usize>, EfsiError> + Send,
-) -> Result<Result<Option<usize>, EfsiError>, ExitCode> {
-    let threads = efsi_run::setup::worker_threads(threads, "--threads").map_err(|e| {
-        eprintln!("error: {e}");
-        ExitCode::from(e.exit_code() as u8)
-    })?;
+) -> ExitCode {
+    let threads = match efsi_run::setup::worker_threads(threads, "--threads") {
+        Ok(n) => n,
+        Err(e) => return exit(Err(e)),
+    };
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         pool = pool.num_threads(n);
     }
     match pool.build() {
-        Ok(pool) => Ok(pool.install(work)),
+        Ok(pool) => exit(pool.install(work)),
         Err(e) => {
             eprintln!("error: cannot start the worker threads: {e}");
-            Err(ExitCode::from(1))
+            ExitCode::from(1)
         }
     }
+}
+
+/// `efsi plot`: the plots `request` asks for of the run in `dir`, into `out` (default
+/// `dir/plots`), each file written named.
+fn plot_run(dir: &Path, out: Option<PathBuf>, request: &plot::FieldRequest) -> ExitCode {
+    let out = out.unwrap_or_else(|| dir.join("plots"));
+    print_lines(plot::plot(dir, &out, request).map(|files| {
+        files
+            .iter()
+            .map(|f| format!("wrote {}", f.display()))
+            .collect()
+    }))
 }
 
 /// Print the lines of a command that reads a run's files, or its error (exit code 2).

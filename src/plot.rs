@@ -604,6 +604,17 @@ fn draw_colour_bar(
     Ok(())
 }
 
+/// A field plot's caption: the plotted quantity's `label`, its direction when drawn with
+/// `arrows`, the plane of a `slice`, the `time`.
+fn caption(label: &str, arrows: bool, slice: Option<SliceAt>, time: f64) -> String {
+    let and_arrows = if arrows { " and its direction" } else { "" };
+    let time = efsi_run::run::time_label(time);
+    let on = slice.map_or_else(String::new, |s| {
+        format!(" on {} = {}", axis_name(s.axis), s.at)
+    });
+    format!("{label}{and_arrows}{on} at t = {time}")
+}
+
 /// Draw the cell array `name` (its `component`) of the two-dimensional `data` — a planar or
 /// axisymmetric file, or the plane `slice` of a three-dimensional one — into `png`.
 fn plot_field(
@@ -636,16 +647,7 @@ fn plot_field(
     let interface = interface_segments(data, e1, e2);
     let text = font();
     let label = field_label(name, array.components, component);
-    let and_arrows = if arrows.is_some() {
-        " and its direction"
-    } else {
-        ""
-    };
-    let time = efsi_run::run::time_label(data.time);
-    let on = slice.map_or_else(String::new, |s| {
-        format!(" on {} = {}", axis_name(s.axis), s.at)
-    });
-    let caption = format!("{label}{and_arrows}{on} at t = {time}");
+    let caption = caption(&label, arrows.is_some(), slice, data.time);
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
         let root = BitMapBackend::new(png, FIELD_SIZE).into_drawing_area();
         root.fill(&WHITE)?;

@@ -98,7 +98,10 @@ fn slices_hold_the_box_interpolated_to_the_plane() {
         let (j, k) = (n % 8, n / 8);
         let at = |i: usize| p[(k * 8 + j) * 8 + i];
         let want = 0.1 * at(1) + 0.9 * at(2);
-        assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{n}: {got} {want}");
+        assert!(
+            (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+            "{n}: {got} {want}"
+        );
     }
     // describe-output lists them.
     let o = efsi(&["describe-output", out.to_str().unwrap()]);
@@ -202,7 +205,10 @@ fn bad_slices_are_refused_by_name() {
         (
             &scene,
             &["output.slices[1].at=1.25"],
-            &["output.slices[1].at", "x = 1.25 is outside the box's [0, 1]"],
+            &[
+                "output.slices[1].at",
+                "x = 1.25 is outside the box's [0, 1]",
+            ],
         ),
         (
             &scene,

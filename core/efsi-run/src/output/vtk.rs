@@ -20,6 +20,9 @@
 //!
 //! * Three-dimensional grids ([`Geometry::Cartesian3D`]): extent `0 nx 0 ny 0 nz`, X, Y and Z
 //!   the node coordinates; vectors have their three components.
+//! * A plane slice of a three-dimensional grid ([`write_rectilinear`], any rectilinear mesh):
+//!   flat along its normal, whose one coordinate is the plane's position (extent
+//!   `0 nx 0 ny 0 0` and Z = `[at]` for a plane normal to Z).
 //!
 //! VTK orders cells with i fastest, then the next non-flat axis, which in every case is efsi's
 //! row-major `(i, j)` order, planes of `k` outermost in three dimensions: cell `(i, j, k)`,
@@ -31,7 +34,7 @@
 //! header of `UInt64`s (number of blocks, uncompressed block size, size of the last partial
 //! block or 0, each block's compressed size) followed by the deflated blocks of at most
 //! [`ZLIB_BLOCK`] bytes; each cell array also written as point data, at the nodes, each node
-//! the mean of the (up to four) cells around it; and text field data (one-tuple `String`
+//! the mean of the (up to four, eight in three dimensions) cells around it; and text field data (one-tuple `String`
 //! arrays, ASCII) such as the geometry and the units. Coordinates and the time stay `Float64`.
 //!
 //! The simulation time is stored twice as one-value `Float64` field data: `TIME` (the name VisIt
