@@ -84,7 +84,7 @@ fn slices_hold_the_box_interpolated_to_the_plane() {
     }
     // x = 0.3 lies between the centres 0.1875 and 0.3125 of columns 1 and 2: weight 0.9 on 2.
     let side = read_pvd(&out.join("slices/side.pvd")).unwrap();
-    assert_eq!(times(&side), [0.0, 0.05, 0.1, 0.15, 0.2]);
+    assert_eq!(times(&side), [0.0, 0.05, 0.1, 3.0 * 0.05, 0.2]);
     let (b, s) = (
         read_vtr(&fields[2].1).unwrap(),
         read_vtr(&side[4].1).unwrap(),
