@@ -122,7 +122,8 @@ enum Command {
         overrides: SceneOverrides,
     },
     /// Describe a run's VTK files: format, axes, units and every array (location, components
-    /// in file order, meaning, unit), from the `vtk` section of DIR/run.json.
+    /// in file order, meaning, unit), and its plane slices, from the `vtk` section of
+    /// DIR/run.json.
     DescribeOutput {
         /// The run's output folder.
         dir: PathBuf,
@@ -131,7 +132,8 @@ enum Command {
     ///
     /// Writes OUT/probes.png (every probes.csv column against time) and
     /// OUT/FIELD_tTIME.png (a cell field at an output time, colour-mapped, with the solid's
-    /// φ = ½ contour over it when the run has a solid).
+    /// φ = ½ contour over it when the run has a solid); of a three-dimensional run, the plane
+    /// --slice names (OUT/FIELD_tTIME_z0.5.png).
     Plot {
         /// The run's output folder.
         dir: PathBuf,
@@ -146,6 +148,10 @@ enum Command {
         /// The output time to plot (the nearest written; default the last).
         #[arg(long, value_name = "T")]
         time: Option<f64>,
+        /// The plane of a three-dimensional run to draw, `x=V`, `y=V` or `z=V` (its cell
+        /// values interpolated to the plane as `output.slices` are); required for a 3-D run.
+        #[arg(long, value_name = "AXIS=V", value_parser = plot::SliceAt::parse)]
+        slice: Option<plot::SliceAt>,
         /// Where the PNGs go (default DIR/plots).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -194,26 +200,8 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Check { scene, overrides } => load(&scene, &overrides.list()).map(|sim| {
-            let g = &sim.grid;
-            out!(
-                "{}: ok — {} {} cells, stages: {}",
-                scene.display(),
-                match g.geometry {
-                    efsi_core::Geometry::Planar => "planar",
-                    efsi_core::Geometry::Axisymmetric => "axisymmetric",
-                    efsi_core::Geometry::Cartesian3D => "three-dimensional",
-                },
-                if g.is_3d() {
-                    format!("{}×{}×{}", g.nx, g.ny, g.nz)
-                } else {
-                    format!("{}×{}", g.nx, g.ny)
-                },
-                sim.pipeline().stage_names().join(" → ")
-            );
-            None
-        }),
+    match cli.command {
+        Command::Check { scene, overrides } => exit(check_scene(&scene, &overrides.list())),
         Command::Run {
             scene,
             overrides,
@@ -224,106 +212,136 @@ fn main() -> ExitCode {
             threads,
             overwrite,
         } => {
-            // The run loop runs on a worker of the pool, so the stages' parallel loops start
-            // from inside it (cheaper than injecting each from outside, and allocation-free).
-            let threads = match efsi_run::setup::worker_threads(threads, "--threads") {
-                Ok(n) => n,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(e.exit_code() as u8);
-                }
-            };
-            let mut pool = rayon::ThreadPoolBuilder::new();
-            if let Some(n) = threads {
-                pool = pool.num_threads(n);
-            }
-            match pool.build() {
-                Ok(pool) => pool.install(|| {
-                    run_scene(
-                        &scene,
-                        &overrides.list(),
-                        out,
-                        print_schedule,
-                        quiet,
-                        checkpoint_every,
-                        overwrite,
-                    )
-                }),
-                Err(e) => {
-                    eprintln!("error: cannot start the worker threads: {e}");
-                    return ExitCode::from(1);
-                }
-            }
+            let overrides = overrides.list();
+            on_workers(threads, || {
+                run_scene(
+                    &scene,
+                    &overrides,
+                    out,
+                    print_schedule,
+                    quiet,
+                    checkpoint_every,
+                    overwrite,
+                )
+            })
         }
         Command::Resume {
             dir,
             checkpoint_every,
             quiet,
-        } => match efsi_run::setup::worker_threads(None, "--threads").map(|n| {
-            let pool = rayon::ThreadPoolBuilder::new();
-            match n {
-                Some(n) => pool.num_threads(n).build(),
-                None => pool.build(),
-            }
-        }) {
-            Err(e) => Err(e),
-            Ok(Ok(pool)) => pool.install(|| resume_run(&dir, quiet, checkpoint_every)),
-            Ok(Err(e)) => {
-                eprintln!("error: cannot start the worker threads: {e}");
-                return ExitCode::from(1);
-            }
-        },
+        } => on_workers(None, || resume_run(&dir, quiet, checkpoint_every)),
         Command::Plot {
             dir,
             field,
             component,
             time,
+            slice,
             out,
         } => {
-            let out = out.unwrap_or_else(|| dir.join("plots"));
             let request = plot::FieldRequest {
                 field,
                 component,
                 time,
+                slice,
             };
-            return match plot::plot(&dir, &out, &request) {
-                Ok(files) => {
-                    for f in files {
-                        out!("wrote {}", f.display());
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            };
+            plot_run(&dir, out, &request)
         }
         Command::DescribeOutput { dir } => {
-            return match describe_output(&dir) {
-                Ok(text) => {
-                    out!("{text}");
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            };
+            print_lines(describe_output(&dir).map(|text| vec![text]))
         }
         Command::Laws {
             paths,
             check: false,
-        } => return list_laws(&paths),
-        Command::Laws { paths, check: true } => return check_laws(&paths),
-        Command::Sweep { args } => return sweep(&args),
-    };
+        } => list_laws(&paths),
+        Command::Laws { paths, check: true } => check_laws(&paths),
+        Command::Sweep { args } => sweep(&args),
+    }
+}
+
+/// The exit code of a command's `result`, its error said: 0, 128 + the signal that stopped a
+/// run, or the error's code.
+fn exit(result: Result<Option<usize>, EfsiError>) -> ExitCode {
     match result {
         Ok(None) => ExitCode::SUCCESS,
         Ok(Some(signal)) => ExitCode::from((128 + signal.min(127)) as u8),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// `efsi check`: the scene loaded and its pipeline built, described in one line.
+fn check_scene(scene: &Path, overrides: &[Override]) -> Result<Option<usize>, EfsiError> {
+    let sim = load(scene, overrides)?;
+    let g = &sim.grid;
+    out!(
+        "{}: ok — {} {} cells, stages: {}",
+        scene.display(),
+        match g.geometry {
+            efsi_core::Geometry::Planar => "planar",
+            efsi_core::Geometry::Axisymmetric => "axisymmetric",
+            efsi_core::Geometry::Cartesian3D => "three-dimensional",
+        },
+        if g.is_3d() {
+            format!("{}×{}×{}", g.nx, g.ny, g.nz)
+        } else {
+            format!("{}×{}", g.nx, g.ny)
+        },
+        sim.pipeline().stage_names().join(" → ")
+    );
+    Ok(None)
+}
+
+/// Run `work` (a run or a resume) on a pool of the worker threads asked for (`threads`, else
+/// $RAYON_NUM_THREADS, else all cores) and return its exit code ([`exit`]): the run loop runs on
+/// a worker of the pool, so the stages' parallel loops start from inside it (cheaper than
+/// injecting each from outside, and allocation-free). Exit code 1 if the pool cannot be had.
+fn on_workers(
+    threads: Option<usize>,
+    work: impl FnOnce() -> Result<Option<usize>, EfsiError> + Send,
+) -> ExitCode {
+    let threads = match efsi_run::setup::worker_threads(threads, "--threads") {
+        Ok(n) => n,
+        Err(e) => return exit(Err(e)),
+    };
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        pool = pool.num_threads(n);
+    }
+    match pool.build() {
+        Ok(pool) => exit(pool.install(work)),
+        Err(e) => {
+            eprintln!("error: cannot start the worker threads: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// `efsi plot`: the plots `request` asks for of the run in `dir`, into `out` (default
+/// `dir/plots`), each file written named.
+fn plot_run(dir: &Path, out: Option<PathBuf>, request: &plot::FieldRequest) -> ExitCode {
+    let out = out.unwrap_or_else(|| dir.join("plots"));
+    print_lines(plot::plot(dir, &out, request).map(|files| {
+        files
+            .iter()
+            .map(|f| format!("wrote {}", f.display()))
+            .collect()
+    }))
+}
+
+/// Print the lines of a command that reads a run's files, or its error (exit code 2).
+fn print_lines(result: Result<Vec<String>, String>) -> ExitCode {
+    match result {
+        Ok(lines) => {
+            for l in lines {
+                out!("{l}");
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
         }
     }
 }
@@ -534,7 +552,41 @@ fn describe_output(dir: &Path) -> Result<String, String> {
             s(&a["meaning"])
         ));
     }
+    out.push_str(&describe_slices(vtk));
     Ok(out.trim_end().to_string())
+}
+
+/// The plane slices `run.json`'s `vtk` section lists (none in a run without them), as text.
+fn describe_slices(vtk: &serde_json::Value) -> String {
+    let Some(slices) = vtk["slices"].as_array().filter(|s| !s.is_empty()) else {
+        return String::new();
+    };
+    let s = |v: &serde_json::Value| v.as_str().map_or_else(|| v.to_string(), str::to_string);
+    let mut out =
+        "\nplane slices (VTK files of the plane, flat along its normal; the arrays above \
+                   interpolated linearly between the two cell layers around it):\n"
+            .to_string();
+    for slice in slices {
+        let when = match slice["every"].as_f64() {
+            Some(every) => format!("every {every}"),
+            None => "at the start and the end".into(),
+        };
+        let arrays: Vec<String> = slice["arrays"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(s)
+            .collect();
+        out.push_str(&format!(
+            "  {}: the plane {} = {}, {when}, {}: {}\n",
+            s(&slice["name"]),
+            s(&slice["normal"]),
+            s(&slice["at"]),
+            s(&slice["collection"]),
+            arrays.join(", ")
+        ));
+    }
+    out
 }
 
 /// `efsi laws --check`: the tangent check of each library in `paths` (every law found if

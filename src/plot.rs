@@ -14,6 +14,7 @@
 //! one the plots are drawn without text and a warning says so.
 
 use efsi_run::output::read::{VtrData, read_pvd, read_vtr};
+use efsi_run::output::slice::axis_name;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -57,6 +58,46 @@ pub struct FieldRequest {
     pub component: Option<usize>,
     /// The output time (default: the last); the nearest written one is used.
     pub time: Option<f64>,
+    /// The plane drawn of a three-dimensional run (which has to name one).
+    pub slice: Option<SliceAt>,
+}
+
+/// A plane of a three-dimensional run to draw (`--slice z=0.5`): normal to axis `axis` (0, 1,
+/// 2 for x, y, z) at `at`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceAt {
+    /// The axis the plane is normal to.
+    pub axis: usize,
+    /// Its position along that axis.
+    pub at: f64,
+}
+
+impl SliceAt {
+    /// `x=V`, `y=V` or `z=V` (the command line's `--slice`).
+    pub fn parse(s: &str) -> Result<SliceAt, String> {
+        let how = "expected AXIS=POSITION with AXIS x, y or z, e.g. z=0.5";
+        let (axis, at) = s.split_once('=').ok_or_else(|| format!("`{s}`: {how}"))?;
+        let axis = match axis.trim() {
+            "x" | "X" => 0,
+            "y" | "Y" => 1,
+            "z" | "Z" => 2,
+            a => return Err(format!("`{a}` is not an axis: {how}")),
+        };
+        let at: f64 = at
+            .trim()
+            .parse()
+            .map_err(|e| format!("`{at}` is not a position ({e}): {how}"))?;
+        if !at.is_finite() {
+            return Err(format!("`{at}` is not a finite position: {how}"));
+        }
+        Ok(SliceAt { axis, at })
+    }
+}
+
+impl std::fmt::Display for SliceAt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", axis_name(self.axis), self.at)
+    }
 }
 
 /// Draw the plots of the run in `dir` into `out`; returns the files written.
@@ -74,6 +115,8 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
             "warning: no TrueType font found (install fonts-dejavu-core): plots without text"
         );
     }
+    // The field first: a request it cannot serve writes nothing.
+    let field = field_to_plot(dir, out, request)?;
     let mut written = Vec::new();
     let probes = dir.join("probes.csv");
     if probes.is_file() {
@@ -81,31 +124,9 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
         plot_probes(&probes, &p)?;
         written.push(p);
     }
-    let pvd = dir.join("fields.pvd");
-    if pvd.is_file() {
-        let entries = read_pvd(&pvd).map_err(|e| e.to_string())?;
-        let Some((t, file)) = (match request.time {
-            None => entries.last().cloned(),
-            Some(want) => entries
-                .iter()
-                .min_by(|a, b| (a.0 - want).abs().total_cmp(&(b.0 - want).abs()))
-                .cloned(),
-        }) else {
-            return Err(format!("{}: no output times", pvd.display()));
-        };
-        let data = read_vtr(&file).map_err(|e| e.to_string())?;
-        let name = match &request.field {
-            Some(f) => f.clone(),
-            None => "velocity".into(),
-        };
-        let p = out.join(format!("{name}_t{}.png", efsi_run::run::time_label(t)));
-        plot_field(&data, &name, request.component, &p)?;
+    if let Some((data, name, p)) = field {
+        plot_field(&data, &name, request.component, request.slice, &p)?;
         written.push(p);
-    } else if request.field.is_some() || request.time.is_some() {
-        return Err(format!(
-            "{}: no VTK output to plot a field from (the scene writes none without output.vtk_every)",
-            pvd.display()
-        ));
     }
     if written.is_empty() {
         return Err(format!(
@@ -114,6 +135,63 @@ pub fn plot(dir: &Path, out: &Path, request: &FieldRequest) -> Result<Vec<PathBu
         ));
     }
     Ok(written)
+}
+
+/// The field plot `request` asks for of the run in `dir`: the file's data (the plane of a
+/// three-dimensional one), the array's name and the PNG it goes to in `out`; None without VTK
+/// output (and no field or time asked for).
+fn field_to_plot(
+    dir: &Path,
+    out: &Path,
+    request: &FieldRequest,
+) -> Result<Option<(VtrData, String, PathBuf)>, String> {
+    let pvd = dir.join("fields.pvd");
+    if !pvd.is_file() {
+        if request.field.is_some() || request.time.is_some() || request.slice.is_some() {
+            return Err(format!(
+                "{}: no VTK output to plot a field from (the scene writes none without output.vtk_every)",
+                pvd.display()
+            ));
+        }
+        return Ok(None);
+    }
+    let entries = read_pvd(&pvd).map_err(|e| e.to_string())?;
+    let Some((t, file)) = (match request.time {
+        None => entries.last().cloned(),
+        Some(want) => entries
+            .iter()
+            .min_by(|a, b| (a.0 - want).abs().total_cmp(&(b.0 - want).abs()))
+            .cloned(),
+    }) else {
+        return Err(format!("{}: no output times", pvd.display()));
+    };
+    let data = read_vtr(&file).map_err(|e| e.to_string())?;
+    let data = match request.slice {
+        Some(s) => data
+            .plane(s.axis, s.at)
+            .map_err(|e| format!("--slice {s}: {}: {e}", file.display()))?,
+        None if data.is_3d() => return Err(three_dimensional(&file, &data)),
+        None => data,
+    };
+    let name = request.field.clone().unwrap_or_else(|| "velocity".into());
+    let plane = request
+        .slice
+        .map_or_else(String::new, |s| format!("_{}{}", axis_name(s.axis), s.at));
+    let png = format!("{name}_t{}{plane}.png", efsi_run::run::time_label(t));
+    Ok(Some((data, name, out.join(png))))
+}
+
+/// Why a three-dimensional file is not drawn without a plane, and how to choose one.
+fn three_dimensional(file: &Path, data: &VtrData) -> String {
+    let [nx, ny, nz] = data.cells3();
+    let z = &data.coordinates[2];
+    let (lo, hi) = (z[0], z[z.len() - 1]);
+    format!(
+        "{} is three-dimensional ({nx}×{ny}×{nz} cells): a plot is of a plane; choose one with \
+         --slice x=…, y=… or z=… (e.g. --slice z={}, the middle of z ∈ [{lo}, {hi}])",
+        file.display(),
+        0.5 * (lo + hi)
+    )
 }
 
 /// `probes.csv` as column names and columns (the first is `t`).
@@ -352,7 +430,8 @@ const CONTOUR: RGBColor = RGBColor(230, 30, 30);
 const ARROWS_ACROSS: usize = 24;
 
 /// Arrows of the cell vectors `v` (3 components a cell; `n1 × n2` cells between the edges `e1`,
-/// `e2`; in-plane components 0 and 2 for an axisymmetric r–z slice, else 0 and 1) on a lattice
+/// `e2`; in-plane components `(c1, c2)`: 0 and 2 for an axisymmetric r–z slice, 0 and 1 for a
+/// planar run, the plane's axes for a slice of a three-dimensional one) on a lattice
 /// of about [`ARROWS_ACROSS`] along the longer side, each the polyline shaft and head; the
 /// longest is 0.9 of the lattice spacing. None where the field is zero or not finite.
 pub fn arrows(
@@ -360,7 +439,7 @@ pub fn arrows(
     (n1, n2): (usize, usize),
     e1: &[f64],
     e2: &[f64],
-    axisymmetric: bool,
+    (c1, c2): (usize, usize),
 ) -> Vec<[(f64, f64); 5]> {
     let (w, h) = (e1[n1] - e1[0], e2[n2] - e2[0]);
     let spacing = w.max(h) / ARROWS_ACROSS as f64;
@@ -368,7 +447,6 @@ pub fn arrows(
         ((w / spacing).round() as usize).max(1),
         ((h / spacing).round() as usize).max(1),
     );
-    let second = if axisymmetric { 2 } else { 1 };
     let cell = |e: &[f64], n: usize, x: f64| e.partition_point(|&a| a <= x).clamp(1, n) - 1;
     let mut picked = Vec::new();
     for b in 0..m2 {
@@ -376,7 +454,7 @@ pub fn arrows(
             let x = e1[0] + (a as f64 + 0.5) * w / m1 as f64;
             let y = e2[0] + (b as f64 + 0.5) * h / m2 as f64;
             let k = cell(e2, n2, y) * n1 + cell(e1, n1, x);
-            let (u, vv) = (v[3 * k], v[3 * k + second]);
+            let (u, vv) = (v[3 * k + c1], v[3 * k + c2]);
             if u.is_finite() && vv.is_finite() {
                 picked.push((x, y, u, vv));
             }
@@ -526,18 +604,37 @@ fn draw_colour_bar(
     Ok(())
 }
 
+/// A field plot's caption: the plotted quantity's `label`, its direction when drawn with
+/// `arrows`, the plane of a `slice`, the `time`.
+fn caption(label: &str, arrows: bool, slice: Option<SliceAt>, time: f64) -> String {
+    let and_arrows = if arrows { " and its direction" } else { "" };
+    let time = efsi_run::run::time_label(time);
+    let on = slice.map_or_else(String::new, |s| {
+        format!(" on {} = {}", axis_name(s.axis), s.at)
+    });
+    format!("{label}{and_arrows}{on} at t = {time}")
+}
+
+/// Draw the cell array `name` (its `component`) of the two-dimensional `data` — a planar or
+/// axisymmetric file, or the plane `slice` of a three-dimensional one — into `png`.
 fn plot_field(
     data: &VtrData,
     name: &str,
     component: Option<usize>,
+    slice: Option<SliceAt>,
     png: &Path,
 ) -> Result<(), String> {
     let array = field_array(data, name, component)?;
     let values = scalar(&array.values, array.components, component);
     let (n1, n2) = data.shape();
-    let [x, y, z] = &data.coordinates;
-    let (e1, e2) = if y.len() == 1 { (x, z) } else { (x, y) };
-    let axes = if y.len() == 1 { ("r", "z") } else { ("x", "y") };
+    let (a1, a2) = data.plane_axes();
+    let (e1, e2) = (&data.coordinates[a1], &data.coordinates[a2]);
+    let axisymmetric = slice.is_none() && (a1, a2) == (0, 2);
+    let axes = if axisymmetric {
+        ("r", "z")
+    } else {
+        (axis_name(a1), axis_name(a2))
+    };
     let (lo, hi) = colour_range(&values);
     let span = hi - lo;
     let beyond = (
@@ -546,17 +643,11 @@ fn plot_field(
     );
     // Arrows of a vector field plotted as its magnitude.
     let arrows = (component.is_none() && array.components == 3)
-        .then(|| arrows(&array.values, (n1, n2), e1, e2, y.len() == 1));
+        .then(|| arrows(&array.values, (n1, n2), e1, e2, (a1, a2)));
     let interface = interface_segments(data, e1, e2);
     let text = font();
     let label = field_label(name, array.components, component);
-    let and_arrows = if arrows.is_some() {
-        " and its direction"
-    } else {
-        ""
-    };
-    let time = efsi_run::run::time_label(data.time);
-    let caption = format!("{label}{and_arrows} at t = {time}");
+    let caption = caption(&label, arrows.is_some(), slice, data.time);
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
         let root = BitMapBackend::new(png, FIELD_SIZE).into_drawing_area();
         root.fill(&WHITE)?;
@@ -642,7 +733,7 @@ mod tests {
         let e1: Vec<f64> = (0..=10).map(|k| k as f64).collect();
         let e2: Vec<f64> = (0..=5).map(|k| k as f64).collect();
         let v: Vec<f64> = (0..50).flat_map(|_| [2.0, 0.0, 0.0]).collect();
-        let a = arrows(&v, (10, 5), &e1, &e2, false);
+        let a = arrows(&v, (10, 5), &e1, &e2, (0, 1));
         assert!(!a.is_empty());
         let spacing = 10.0 / ARROWS_ACROSS as f64;
         for [base, tip, left, _, right] in a {
@@ -652,6 +743,6 @@ mod tests {
             assert!((left.1 - tip.1) * (right.1 - tip.1) < 0.0);
         }
         // No flow, no arrows.
-        assert!(arrows(&vec![0.0; 150], (10, 5), &e1, &e2, false).is_empty());
+        assert!(arrows(&vec![0.0; 150], (10, 5), &e1, &e2, (0, 1)).is_empty());
     }
 }

@@ -305,6 +305,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                         probe_every,
                         probes,
                         profiles,
+                        slices: Vec::new(),
                     })
                     .unwrap(),
                     source_dir: None,

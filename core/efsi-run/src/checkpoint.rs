@@ -212,7 +212,8 @@ pub struct OutputState {
     pub probe_count: u64,
     /// Length of `probes.csv` in bytes (a resumed run truncates it to this).
     pub probe_bytes: u64,
-    /// The `.pvd` collection's entries: time and file relative to the output folder.
+    /// The `.pvd` collections' entries: time and file relative to the output folder — the VTK
+    /// series' (`fields/…`), then each plane slice's (`slices/<name>_<step>.vtr`).
     pub pvd: Vec<(f64, String)>,
     /// For each profile of the scene, the output times still to come.
     pub profile_times: Vec<Vec<f64>>,

@@ -9,7 +9,7 @@
 //! the slice into the body. Units are the scene's; the ones named here are those of a scene in
 //! SI units (m, kg, s), as the shipped solid cases are.
 
-use crate::output::spec::{VTK_FIELDS, VtkOptions};
+use crate::output::spec::{SliceSpec, VTK_FIELDS, VtkOptions};
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
 use efsi_core::{OutputDecl, OutputKind};
@@ -148,11 +148,13 @@ pub fn present(
 }
 
 /// The `run.json` section `vtk`: the files' format, text field data and the arrays they hold,
-/// each described ([`describe`]).
+/// each described ([`describe`]); with plane slices (`slices`, their intervals resolved), each
+/// one's plane, interval, collection and arrays under `slices`.
 pub fn summary(
     grid: &Grid,
     state: &State,
     options: &VtkOptions,
+    slices: &[SliceSpec],
     outputs: &[OutputDecl],
 ) -> serde_json::Value {
     let names = present(grid, state, options, outputs);
@@ -164,13 +166,57 @@ pub fn summary(
         .iter()
         .map(|(k, v)| (k.to_string(), serde_json::Value::from(*v)))
         .collect();
-    serde_json::json!({
+    let mut json = serde_json::json!({
         "precision": options.precision,
         "compression": options.compression,
         "point_data": options.point_data,
         "field_data": notes,
         "arrays": docs,
-    })
+    });
+    if !slices.is_empty() {
+        json["slices"] = slices
+            .iter()
+            .map(|s| {
+                let wanted = VtkOptions {
+                    fields: s.fields.clone(),
+                    ..options.clone()
+                };
+                let name = s.stem();
+                serde_json::json!({
+                    "name": name,
+                    "normal": crate::output::slice::axis_name(s.normal.index()),
+                    "at": s.at,
+                    "every": s.every,
+                    "collection": format!("slices/{name}.pvd"),
+                    "arrays": present(grid, state, &wanted, outputs),
+                })
+            })
+            .collect();
+    }
+    json
+}
+
+/// The text field data of a plane slice's files: `geometry` (the plane and its axes), `slice`
+/// (how its values are made) and `units`.
+pub fn slice_notes(normal: usize, at: f64) -> [(&'static str, String); 3] {
+    let axis = crate::output::slice::axis_name(normal);
+    [
+        (
+            "geometry",
+            format!(
+                "the plane {axis} = {at:?} of a three-dimensional run: X = x, Y = y, Z = z (one \
+                 cell layer along {axis})"
+            ),
+        ),
+        (
+            "slice",
+            format!(
+                "cell values interpolated linearly along {axis} between the two cell layers \
+                 whose centres bracket the plane (the layer next to a wall within half a cell of it)"
+            ),
+        ),
+        ("units", notes(Geometry::Cartesian3D)[1].1.to_string()),
+    ]
 }
 
 /// The arrays `options` asks for (all the state has, by default), in [`describe`]'s order:
@@ -181,89 +227,101 @@ pub fn arrays(
     options: &VtkOptions,
     outputs: &[OutputDecl],
 ) -> Vec<(&'static str, usize, Vec<f64>)> {
-    let wanted = present(grid, state, options, outputs);
-    let (nx, ny, nz) = (grid.nx, grid.ny, if grid.is_3d() { grid.nz } else { 1 });
-    let n = nx * ny * nz;
-    // Cells in VTK's order, i fastest, then j, then k (k = 0 only in two dimensions).
-    let cells = || {
-        (0..nz as isize).flat_map(move |k| {
-            (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| [i, j, k]))
-        })
-    };
-    let scalar = |f: &Field| cells().map(|c| f[c]).collect::<Vec<f64>>();
     let mut out = Vec::new();
-    for name in wanted {
-        match name {
-            "velocity" => {
-                let mut vel = vec![0.0; 3 * n];
-                match &state.w {
-                    None => {
-                        // Axisymmetric output is the r–z slice in the X–Z plane (u_z goes to Z).
-                        let vy = if grid.is_axisymmetric() { 2 } else { 1 };
-                        for (k, [i, j, _]) in cells().enumerate() {
-                            let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
-                            vel[3 * k] = a;
-                            vel[3 * k + vy] = b;
-                        }
-                    }
-                    Some(w) => {
-                        for (k, c) in cells().enumerate() {
-                            for (a, f) in [&state.u, &state.v, w].into_iter().enumerate() {
-                                let mut up = c;
-                                up[a] += 1;
-                                vel[3 * k + a] = 0.5 * (f[c] + f[up]);
-                            }
-                        }
-                    }
-                }
-                out.push((name, 3, vel));
-            }
-            "pressure" => out.push((name, 1, scalar(&state.p))),
-            "density" => out.push((name, 1, scalar(&state.rho))),
-            "viscosity" => out.push((name, 1, scalar(&state.mu))),
-            "divergence" => out.push((
-                name,
-                1,
-                match &state.w {
-                    None => cells()
-                        .map(|[i, j, _]| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
-                        .collect(),
-                    Some(w) => cells()
-                        .map(|c| {
-                            let h = grid.h();
-                            let f = [&state.u, &state.v, w];
-                            (0..3)
-                                .map(|a| {
-                                    let mut up = c;
-                                    up[a] += 1;
-                                    (f[a][up] - f[a][c]) / h[a]
-                                })
-                                .sum()
-                        })
-                        .collect(),
-                },
-            )),
-            "solid_fraction" => {
-                if let Some(phi) = &state.phi {
-                    out.push((name, 1, scalar(phi)));
-                }
-            }
-            _ => match outputs.iter().find(|o| o.name == name).map(|o| o.kind) {
-                Some(OutputKind::Array { components, values }) => {
-                    if let Some(v) = values(grid, state) {
-                        out.push((name, components(grid.geometry).len(), v));
-                    }
-                }
-                Some(OutputKind::Field(f)) => {
-                    if let Some(f) = f(state) {
-                        out.push((name, 1, scalar(f)));
-                    }
-                }
-                _ => {}
-            },
+    for name in present(grid, state, options, outputs) {
+        let array = match name {
+            "velocity" => Some((3, velocity(grid, state))),
+            "pressure" => Some((1, scalar(grid, &state.p))),
+            "density" => Some((1, scalar(grid, &state.rho))),
+            "viscosity" => Some((1, scalar(grid, &state.mu))),
+            "divergence" => Some((1, divergence(grid, state))),
+            "solid_fraction" => state.phi.as_ref().map(|phi| (1, scalar(grid, phi))),
+            _ => stage_array(grid, state, outputs, name),
+        };
+        if let Some((components, values)) = array {
+            out.push((name, components, values));
         }
     }
     out
+}
+
+/// The cells of `grid` in VTK's order, i fastest, then j, then k (k = 0 only in two
+/// dimensions).
+fn cells(grid: &Grid) -> impl Iterator<Item = [isize; 3]> {
+    let (nx, ny, nz) = (grid.nx, grid.ny, if grid.is_3d() { grid.nz } else { 1 });
+    (0..nz as isize).flat_map(move |k| {
+        (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| [i, j, k]))
+    })
+}
+
+/// The cell values of `f`, in VTK's order.
+fn scalar(grid: &Grid, f: &Field) -> Vec<f64> {
+    cells(grid).map(|c| f[c]).collect()
+}
+
+/// The velocity at the cell centres as 3-vectors, each component the mean of its two faces;
+/// an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in the X–Z plane).
+fn velocity(grid: &Grid, state: &State) -> Vec<f64> {
+    let mut vel = vec![0.0; 3 * grid.cells()];
+    match &state.w {
+        None => {
+            let vy = if grid.is_axisymmetric() { 2 } else { 1 };
+            for (k, [i, j, _]) in cells(grid).enumerate() {
+                let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
+                vel[3 * k] = a;
+                vel[3 * k + vy] = b;
+            }
+        }
+        Some(w) => {
+            for (k, c) in cells(grid).enumerate() {
+                for (a, f) in [&state.u, &state.v, w].into_iter().enumerate() {
+                    let mut up = c;
+                    up[a] += 1;
+                    vel[3 * k + a] = 0.5 * (f[c] + f[up]);
+                }
+            }
+        }
+    }
+    vel
+}
+
+/// The discrete divergence of the velocity per cell, in VTK's order.
+fn divergence(grid: &Grid, state: &State) -> Vec<f64> {
+    match &state.w {
+        None => cells(grid)
+            .map(|[i, j, _]| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
+            .collect(),
+        Some(w) => cells(grid)
+            .map(|c| {
+                let h = grid.h();
+                let f = [&state.u, &state.v, w];
+                (0..3)
+                    .map(|a| {
+                        let mut up = c;
+                        up[a] += 1;
+                        (f[a][up] - f[a][c]) / h[a]
+                    })
+                    .sum()
+            })
+            .collect(),
+    }
+}
+
+/// A stage's array or field `name` among `outputs`, if the state has it: `(components,
+/// values)`.
+fn stage_array(
+    grid: &Grid,
+    state: &State,
+    outputs: &[OutputDecl],
+    name: &str,
+) -> Option<(usize, Vec<f64>)> {
+    match outputs.iter().find(|o| o.name == name).map(|o| o.kind) {
+        Some(OutputKind::Array { components, values }) => {
+            values(grid, state).map(|v| (components(grid.geometry).len(), v))
+        }
+        Some(OutputKind::Field(f)) => f(state).map(|f| (1, scalar(grid, f))),
+        _ => None,
+    }
 }
 
 #[cfg(test)]
@@ -276,7 +334,7 @@ mod tests {
     fn three_dimensional_files_are_described_with_their_axes() {
         let grid = Grid::new_3d([2, 3, 4], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
         let state = State::new(&grid, 1.0, 0.1, &Default::default());
-        let s = summary(&grid, &state, &VtkOptions::default(), &[]);
+        let s = summary(&grid, &state, &VtkOptions::default(), &[], &[]);
         assert_eq!(
             s["arrays"][0]["components"],
             serde_json::json!(["u_x", "u_y", "u_z"])

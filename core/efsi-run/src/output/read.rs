@@ -54,13 +54,59 @@ impl VtrData {
     /// for an axisymmetric one (cells are stored with the first fastest); X–Y for a
     /// three-dimensional one, whose `cells3()[2]` planes follow one another.
     pub fn shape(&self) -> (usize, usize) {
-        let n = |c: &Vec<f64>| c.len().saturating_sub(1);
-        let [x, y, z] = &self.coordinates;
-        if y.len() == 1 {
-            (n(x), n(z))
-        } else {
-            (n(x), n(y))
+        let (a1, a2) = self.plane_axes();
+        let n = self.cells3();
+        (n[a1], n[a2])
+    }
+
+    /// The two axes a two-dimensional file spans, the lower first (its cells are stored with
+    /// that one fastest): X–Y planar, X–Z axisymmetric, and those of a slice's plane (Y–Z for a
+    /// plane normal to X); X–Y for a three-dimensional file.
+    pub fn plane_axes(&self) -> (usize, usize) {
+        match self.coordinates.iter().position(|c| c.len() == 1) {
+            Some(0) => (1, 2),
+            Some(1) => (0, 2),
+            _ => (0, 1),
         }
+    }
+
+    /// The plane `x_axis = at` (axis 0, 1, 2 for X, Y, Z) of a three-dimensional file: its cell
+    /// arrays interpolated to the plane as a run's `output.slices` are
+    /// ([`crate::output::slice`]), the coordinates flat along the normal; the point arrays are
+    /// left out. Refused (saying why) for a two-dimensional file or a plane outside the box.
+    pub fn plane(&self, axis: usize, at: f64) -> Result<VtrData, String> {
+        use crate::output::slice::{Layers, axis_name, plane_nodes, plane_values};
+        if !self.is_3d() {
+            return Err(
+                "a slice is a plane of a three-dimensional file, and this one is \
+                        two-dimensional already"
+                    .into(),
+            );
+        }
+        let nodes = &self.coordinates[axis];
+        let (lo, hi) = (nodes[0], nodes[nodes.len() - 1]);
+        if !(at.is_finite() && at >= lo && at <= hi) {
+            return Err(format!(
+                "{} = {at} is outside the box's [{lo}, {hi}]",
+                axis_name(axis)
+            ));
+        }
+        let layers = Layers::around(nodes, at);
+        let cells = self.cells3();
+        Ok(VtrData {
+            time: self.time,
+            coordinates: plane_nodes(&self.coordinates, axis, at),
+            cells: self
+                .cells
+                .iter()
+                .map(|a| ReadArray {
+                    name: a.name.clone(),
+                    components: a.components,
+                    values: plane_values(&a.values, a.components, cells, axis, layers),
+                })
+                .collect(),
+            points: Vec::new(),
+        })
     }
 }
 
@@ -130,22 +176,7 @@ fn attr<'a>(tag: &'a str, key: &str) -> Option<&'a str> {
 /// Read the `.vtr` file at `path`.
 pub fn read_vtr(path: &Path) -> io::Result<VtrData> {
     let bytes = read_regular(path, MAX_VTR_BYTES).map_err(|e| bad(path, e))?;
-    let marker = b"<AppendedData encoding=\"raw\">";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .ok_or_else(|| bad(path, "no appended data (not a file efsi wrote)"))?;
-    let underscore = at
-        + bytes[at..]
-            .iter()
-            .position(|&b| b == b'_')
-            .ok_or_else(|| bad(path, "no `_` marker"))?;
-    let head = std::str::from_utf8(&bytes[..at]).map_err(|_| bad(path, "header not UTF-8"))?;
-    let data = &bytes[underscore + 1..];
-    let zlib = head.contains("compressor=\"vtkZLibDataCompressor\"");
-    if !head.contains("header_type=\"UInt64\"") {
-        return Err(bad(path, "only UInt64 block headers are read"));
-    }
+    let (head, data, zlib) = split_appended(path, &bytes)?;
     let (mut time, mut coordinates, mut cells, mut points) = (
         f64::NAN,
         [Vec::new(), Vec::new(), Vec::new()],
@@ -163,47 +194,15 @@ pub fn read_vtr(path: &Path) -> io::Result<VtrData> {
         if !l.starts_with("<DataArray") || attr(l, "format") != Some("appended") {
             continue;
         }
-        let name = attr(l, "Name").ok_or_else(|| bad(path, "an array without a name"))?;
-        let width = match attr(l, "type") {
-            Some("Float64") => 8,
-            Some("Float32") => 4,
-            t => {
-                return Err(bad(
-                    path,
-                    format_args!("array `{name}`: type {t:?} not read"),
-                ));
-            }
-        };
-        let offset: usize = attr(l, "offset")
-            .and_then(|o| o.parse().ok())
-            .ok_or_else(|| bad(path, format_args!("array `{name}`: no offset")))?;
-        let components: usize = attr(l, "NumberOfComponents")
-            .map_or(Some(1), |c| c.parse().ok())
-            .ok_or_else(|| bad(path, format_args!("array `{name}`: bad component count")))?;
-        let raw = block(data, offset, zlib)
-            .map_err(|e| bad(path, format_args!("array `{name}`: {e}")))?;
-        let values: Vec<f64> = if width == 8 {
-            raw.chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-                .collect()
-        } else {
-            raw.chunks_exact(4)
-                .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
-                .collect()
-        };
-        let array = ReadArray {
-            name: name.to_string(),
-            components,
-            values,
-        };
+        let array = appended_array(path, l, data, zlib)?;
         match section {
-            "<FieldData" if name == "TIME" => {
+            "<FieldData" if array.name == "TIME" => {
                 time = array.values.first().copied().unwrap_or(f64::NAN)
             }
             "<PointData" => points.push(array),
             "<CellData" => cells.push(array),
             "<Coordinates" => {
-                let k = match name {
+                let k = match array.name.as_str() {
                     "x" => 0,
                     "y" => 1,
                     _ => 2,
@@ -218,6 +217,66 @@ pub fn read_vtr(path: &Path) -> io::Result<VtrData> {
         coordinates,
         cells,
         points,
+    })
+}
+
+/// A `.vtr` file's bytes split at its appended data: the XML header before it, the appended
+/// section after the `_` marker, and whether the blocks are zlib-compressed.
+fn split_appended<'a>(path: &Path, bytes: &'a [u8]) -> io::Result<(&'a str, &'a [u8], bool)> {
+    let marker = b"<AppendedData encoding=\"raw\">";
+    let at = bytes
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or_else(|| bad(path, "no appended data (not a file efsi wrote)"))?;
+    let underscore = at
+        + bytes[at..]
+            .iter()
+            .position(|&b| b == b'_')
+            .ok_or_else(|| bad(path, "no `_` marker"))?;
+    let head = std::str::from_utf8(&bytes[..at]).map_err(|_| bad(path, "header not UTF-8"))?;
+    let data = &bytes[underscore + 1..];
+    let zlib = head.contains("compressor=\"vtkZLibDataCompressor\"");
+    if !head.contains("header_type=\"UInt64\"") {
+        return Err(bad(path, "only UInt64 block headers are read"));
+    }
+    Ok((head, data, zlib))
+}
+
+/// The appended array the `<DataArray …/>` tag `l` declares, read from the appended section
+/// `data`.
+fn appended_array(path: &Path, l: &str, data: &[u8], zlib: bool) -> io::Result<ReadArray> {
+    let name = attr(l, "Name").ok_or_else(|| bad(path, "an array without a name"))?;
+    let width = match attr(l, "type") {
+        Some("Float64") => 8,
+        Some("Float32") => 4,
+        t => {
+            return Err(bad(
+                path,
+                format_args!("array `{name}`: type {t:?} not read"),
+            ));
+        }
+    };
+    let offset: usize = attr(l, "offset")
+        .and_then(|o| o.parse().ok())
+        .ok_or_else(|| bad(path, format_args!("array `{name}`: no offset")))?;
+    let components: usize = attr(l, "NumberOfComponents")
+        .map_or(Some(1), |c| c.parse().ok())
+        .ok_or_else(|| bad(path, format_args!("array `{name}`: bad component count")))?;
+    let raw =
+        block(data, offset, zlib).map_err(|e| bad(path, format_args!("array `{name}`: {e}")))?;
+    let values: Vec<f64> = if width == 8 {
+        raw.chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    } else {
+        raw.chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
+            .collect()
+    };
+    Ok(ReadArray {
+        name: name.to_string(),
+        components,
+        values,
     })
 }
 

@@ -10,6 +10,7 @@
 
 use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
+use efsi_core::scene::solid::Axis;
 use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
 use efsi_core::validate::{Checked, err, positive};
@@ -39,6 +40,51 @@ pub struct OutputSpec {
     /// Line profiles, written to `profiles/<name>_t<time>.csv`.
     #[serde(default)]
     pub profiles: Vec<ProfileSpec>,
+    /// Plane slices of a Cartesian3D run, written to `slices/<name>_<step>.vtr` with their
+    /// collection `slices/<name>.pvd`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slices: Vec<SliceSpec>,
+}
+
+/// A plane slice of a Cartesian3D run (`output.slices`): the plane `x_normal = at`, its cells
+/// the grid's in-plane cells, each array of the VTK files interpolated to it
+/// ([`crate::output::slice`]), written as a `.vtr` file of the plane (flat along the normal)
+/// every `every` of simulated time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceSpec {
+    /// File stem (default: the normal's letter and the position, e.g. `z0.5`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The axis the plane is normal to.
+    pub normal: Axis,
+    /// The plane's position along the normal, inside the box.
+    pub at: f64,
+    /// Write it every this much simulated time (and at the start and end); default
+    /// `output.vtk_every`; without either, at the start and the end only.
+    #[serde(default)]
+    pub every: Option<f64>,
+    /// The arrays (names of `output.vtk.fields`); default: every array the VTK files hold.
+    #[serde(default)]
+    pub fields: Option<Vec<String>>,
+}
+
+impl SliceSpec {
+    /// The file stem: `name`, or the normal's letter and the position (`z0.5`).
+    pub fn stem(&self) -> String {
+        self.name.clone().unwrap_or_else(|| {
+            format!(
+                "{}{}",
+                crate::output::slice::axis_name(self.normal.index()),
+                num(self.at)
+            )
+        })
+    }
+
+    /// Its interval: `every`, else `output.vtk_every` (`vtk_every`).
+    pub fn interval(&self, vtk_every: Option<f64>) -> Option<f64> {
+        self.every.or(vtk_every)
+    }
 }
 
 /// The arrays of the shared fields a VTK file can hold, by name (`output.vtk.fields`):
@@ -393,7 +439,8 @@ fn validate(o: &OutputSpec, scene: &Scene) -> Checked {
         three: scene.geometry == Geometry::Cartesian3D,
     };
     validate_probes(o, scene, &space)?;
-    validate_profiles(o, scene, &space)
+    validate_profiles(o, scene, &space)?;
+    validate_slices(o, scene)
 }
 
 /// The output intervals and the VTK field list.
@@ -408,24 +455,7 @@ fn validate_intervals_and_vtk(o: &OutputSpec, scene: &Scene) -> Checked {
         }
     }
     if let Some(fields) = &o.vtk.fields {
-        if fields.is_empty() {
-            return err(
-                "output.vtk.fields",
-                "must name at least one field (leave it out for all of them)",
-            );
-        }
-        for (k, f) in fields.iter().enumerate() {
-            let at = format!("output.vtk.fields[{k}]");
-            if fields[..k].contains(f) {
-                return err(&at, format!("`{f}` is listed twice"));
-            }
-            if f == "solid_fraction" && scene.solid.is_none() {
-                return err(
-                    &at,
-                    "`solid_fraction` needs a solid, and the scene has none",
-                );
-            }
-        }
+        check_array_list("output.vtk.fields", fields, scene)?;
     }
     Ok(())
 }
@@ -652,6 +682,84 @@ fn validate_profiles(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checke
     Ok(())
 }
 
+/// The plane slices: a Cartesian3D scene's, each plane inside the box, unique names, their
+/// intervals and field lists.
+fn validate_slices(o: &OutputSpec, scene: &Scene) -> Checked {
+    let mut names = std::collections::HashSet::new();
+    for (k, s) in o.slices.iter().enumerate() {
+        let f = format!("output.slices[{k}]");
+        let Some(z) = scene
+            .domain
+            .z
+            .filter(|_| scene.geometry == Geometry::Cartesian3D)
+        else {
+            return err(
+                &f,
+                format!(
+                    "a plane slice cuts a three-dimensional box, and this scene is {:?}: its \
+                     VTK files (output.vtk_every) are its one plane already",
+                    scene.geometry
+                ),
+            );
+        };
+        let d = &scene.domain;
+        let a = s.normal.index();
+        let (lo, hi) = [d.x, d.y, z][a];
+        if !(s.at.is_finite() && s.at >= lo && s.at <= hi) {
+            return err(
+                &format!("{f}.at"),
+                format!(
+                    "{} = {} is outside the box's [{}, {}]",
+                    crate::output::slice::axis_name(a),
+                    num(s.at),
+                    num(lo),
+                    num(hi)
+                ),
+            );
+        }
+        let name = s.stem();
+        if name.is_empty() || name.contains(['/', '\\']) || !names.insert(name.clone()) {
+            return err(
+                &format!("{f}.name"),
+                format!("must be a unique file stem, got `{name}`"),
+            );
+        }
+        if let Some(every) = s.every {
+            positive(&format!("{f}.every"), every)?;
+            interval(&scene.time, every).or_else(|m| err(&format!("{f}.every"), m))?;
+        }
+        if let Some(fields) = &s.fields {
+            check_array_list(&format!("{f}.fields"), fields, scene)?;
+        }
+    }
+    Ok(())
+}
+
+/// A list of VTK array names (`output.vtk.fields`, a slice's `fields`) named `at`: at least one,
+/// each once, `solid_fraction` only with a solid (the names themselves are checked against the
+/// stages by [`check_names`]).
+fn check_array_list(at: &str, fields: &[String], scene: &Scene) -> Checked {
+    if fields.is_empty() {
+        return err(
+            at,
+            "must name at least one field (leave it out for all of them)",
+        );
+    }
+    for (k, f) in fields.iter().enumerate() {
+        let at = format!("{at}[{k}]");
+        if fields[..k].contains(f) {
+            return err(&at, format!("`{f}` is listed twice"));
+        }
+        if f == "solid_fraction" && scene.solid.is_none() {
+            return err(
+                &at,
+                "`solid_fraction` needs a solid, and the scene has none",
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The outputs the stages provide, checked once the pipeline is built: every array of `output.vtk.fields` is a shared field's
 /// ([`VTK_FIELDS`]) or one a scheduled stage contributes, every field a `Point` probe or a
 /// profile samples a shared one ([`FIELD_NAMES`]) or a stage's
@@ -693,13 +801,23 @@ fn check_names(o: &OutputSpec, pipeline: &Pipeline) -> Checked {
             sampled(format!("output.profiles[{k}].fields"), f)?;
         }
     }
-    for (k, f) in o.vtk.fields.iter().flatten().enumerate() {
-        let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
-        if !arrays.contains(&f.as_str()) {
-            return err(
-                &format!("output.vtk.fields[{k}]"),
-                format!("unknown field `{f}`: this scene's fields and stages provide {arrays:?}"),
-            );
+    let arrays: Vec<&str> = VTK_FIELDS.iter().copied().chain(stage(true)).collect();
+    let lists = std::iter::once(("output.vtk.fields".to_string(), &o.vtk.fields)).chain(
+        o.slices
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (format!("output.slices[{k}].fields"), &s.fields)),
+    );
+    for (at, list) in lists {
+        for (k, f) in list.iter().flatten().enumerate() {
+            if !arrays.contains(&f.as_str()) {
+                return err(
+                    &format!("{at}[{k}]"),
+                    format!(
+                        "unknown field `{f}`: this scene's fields and stages provide {arrays:?}"
+                    ),
+                );
+            }
         }
     }
     for (k, p) in o.probes.iter().enumerate() {
@@ -733,6 +851,88 @@ mod tests {
             fluid: (density: 1.0, viscosity: 0.01),
             boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0)),
         )"#;
+
+    /// Plane slices: a Cartesian3D scene's, inside the box, with unique names and valid field
+    /// lists; each refusal names the setting.
+    #[test]
+    fn slices_are_checked_by_name() {
+        let cube = MIN
+            .replace(
+                "domain: (x: (0.0, 1.0), y: (0.0, 1.0)),",
+                "geometry: Cartesian3D, domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (-1.0, 2.0)),",
+            )
+            .replace("grid: (nx: 8, ny: 8),", "grid: (nx: 8, ny: 8, nz: 8),")
+            .replace(
+                "y_max: MovingWall(speed: 1.0)",
+                "y_max: MovingWall(speed: 1.0), z_min: NoSlip, z_max: NoSlip",
+            );
+        let with = |base: &str, slices: &str| {
+            let text = base.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (vtk_every: 0.5, slices: {slices}),"),
+            );
+            let scene = Scene::from_str_at(&text, Path::new("scene.ron")).unwrap();
+            let o = scene.output_spec()?;
+            validate(&o, &scene).map(|()| o)
+        };
+        let o = with(&cube, "[(normal: Z, at: 2.0), (name: \"side\", normal: X, at: 0.3, every: 0.25, fields: [\"pressure\"])]").unwrap();
+        assert_eq!(o.slices[0].stem(), "z2");
+        assert_eq!(o.slices[0].interval(o.vtk_every), Some(0.5));
+        assert_eq!(o.slices[1].stem(), "side");
+        assert_eq!(o.slices[1].interval(o.vtk_every), Some(0.25));
+        for (base, slices, needles) in [
+            (
+                MIN,
+                "[(normal: Z, at: 0.5)]",
+                &["output.slices[0]", "three-dimensional box", "Planar"][..],
+            ),
+            (
+                &cube,
+                "[(normal: Z, at: 2.5)]",
+                &[
+                    "output.slices[0].at",
+                    "z = 2.5 is outside the box's [-1, 2]",
+                ],
+            ),
+            (
+                &cube,
+                "[(normal: Y, at: -0.1)]",
+                &["output.slices[0].at", "y = -0.1"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5), (normal: X, at: 0.5)]",
+                &["output.slices[1].name", "unique", "x0.5"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, every: 0.0)]",
+                &["output.slices[0].every"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [])]",
+                &["output.slices[0].fields", "at least one"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [\"pressure\", \"pressure\"])]",
+                &["output.slices[0].fields[1]", "twice"],
+            ),
+            (
+                &cube,
+                "[(normal: X, at: 0.5, fields: [\"solid_fraction\"])]",
+                &["output.slices[0].fields[0]", "needs a solid"],
+            ),
+            (&cube, "[(normal: W, at: 0.5)]", &["W"]),
+        ] {
+            let (f, m) = with(base, slices).unwrap_err();
+            let e = format!("{f}: {m}");
+            for n in needles {
+                assert!(e.contains(n), "{slices}: expected `{n}` in: {e}");
+            }
+        }
+    }
 
     #[test]
     fn vtk_options_load_round_trip_and_are_checked_by_name() {

@@ -20,6 +20,9 @@
 //!
 //! * Three-dimensional grids ([`Geometry::Cartesian3D`]): extent `0 nx 0 ny 0 nz`, X, Y and Z
 //!   the node coordinates; vectors have their three components.
+//! * A plane slice of a three-dimensional grid ([`write_rectilinear`], any rectilinear mesh):
+//!   flat along its normal, whose one coordinate is the plane's position (extent
+//!   `0 nx 0 ny 0 0` and Z = `[at]` for a plane normal to Z).
 //!
 //! VTK orders cells with i fastest, then the next non-flat axis, which in every case is efsi's
 //! row-major `(i, j)` order, planes of `k` outermost in three dimensions: cell `(i, j, k)`,
@@ -31,7 +34,7 @@
 //! header of `UInt64`s (number of blocks, uncompressed block size, size of the last partial
 //! block or 0, each block's compressed size) followed by the deflated blocks of at most
 //! [`ZLIB_BLOCK`] bytes; each cell array also written as point data, at the nodes, each node
-//! the mean of the (up to four) cells around it; and text field data (one-tuple `String`
+//! the mean of the (up to four, eight in three dimensions) cells around it; and text field data (one-tuple `String`
 //! arrays, ASCII) such as the geometry and the units. Coordinates and the time stay `Float64`.
 //!
 //! The simulation time is stored twice as one-value `Float64` field data: `TIME` (the name VisIt
@@ -82,46 +85,27 @@ pub struct VtrFormat {
 /// `i` fastest, is the mean of the cells `(i − 1 … i, j − 1 … j)` inside the grid; in three
 /// dimensions node `(i, j, k)` the mean of the cells `(i − 1 … i, j − 1 … j, k − 1 … k)`.
 pub fn cells_to_points(grid: &Grid, values: &[f64], components: usize) -> Vec<f64> {
-    if grid.is_3d() {
-        return cells_to_points3(grid, values, components);
-    }
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut out = vec![0.0; (nx + 1) * (ny + 1) * components];
-    for j in 0..=ny {
-        for i in 0..=nx {
-            let o = (j * (nx + 1) + i) * components;
-            let mut n = 0.0;
-            for cj in j.saturating_sub(1)..(j + 1).min(ny) {
-                for ci in i.saturating_sub(1)..(i + 1).min(nx) {
-                    let c = (cj * nx + ci) * components;
-                    for k in 0..components {
-                        out[o + k] += values[c + k];
-                    }
-                    n += 1.0;
-                }
-            }
-            for k in 0..components {
-                out[o + k] /= n;
-            }
-        }
-    }
-    out
+    let nodes = node_coordinates(grid).each_ref().map(Vec::len);
+    average_to_nodes(nodes, values, components)
 }
 
-/// [`cells_to_points`] of a three-dimensional grid.
-fn cells_to_points3(grid: &Grid, values: &[f64], components: usize) -> Vec<f64> {
-    let [nx, ny, nz] = grid.n();
-    let mut out = vec![0.0; (nx + 1) * (ny + 1) * (nz + 1) * components];
+/// [`cells_to_points`] of a rectilinear mesh of `nodes` nodes along X, Y and Z (1 along a flat
+/// axis, which has one cell layer): each node the mean of the cells around it, summed with the
+/// outermost axis' cell first.
+fn average_to_nodes(nodes: [usize; 3], values: &[f64], components: usize) -> Vec<f64> {
+    let [m0, m1, m2] = nodes;
+    let [n0, n1, n2] = nodes.map(|m| m.saturating_sub(1).max(1));
+    let mut out = vec![0.0; m0 * m1 * m2 * components];
     let around = |i: usize, n: usize| i.saturating_sub(1)..(i + 1).min(n);
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
-                let o = ((k * (ny + 1) + j) * (nx + 1) + i) * components;
+    for k in 0..m2 {
+        for j in 0..m1 {
+            for i in 0..m0 {
+                let o = ((k * m1 + j) * m0 + i) * components;
                 let mut n = 0.0;
-                for ck in around(k, nz) {
-                    for cj in around(j, ny) {
-                        for ci in around(i, nx) {
-                            let c = ((ck * ny + cj) * nx + ci) * components;
+                for ck in around(k, n2) {
+                    for cj in around(j, n1) {
+                        for ci in around(i, n0) {
+                            let c = ((ck * n1 + cj) * n0 + ci) * components;
                             for q in 0..components {
                                 out[o + q] += values[c + q];
                             }
@@ -259,10 +243,71 @@ pub fn write_vtr_with(
     format: &VtrFormat,
     notes: &[(&str, &str)],
 ) -> io::Result<()> {
+    let mesh = node_coordinates(grid);
+    write_rectilinear(path, &mesh, time, arrays, format, notes)
+}
+
+/// [`write_vtr_with`] of any rectilinear mesh: `nodes` are the X, Y and Z node coordinates (one
+/// value along a flat axis, which has one cell layer), the extent `0 n_X 0 n_Y 0 n_Z` with
+/// `n` the node count less one, and `arrays` hold the cells' values in VTK's order (X fastest).
+/// A plane slice of a three-dimensional run is such a mesh, flat along its normal.
+pub fn write_rectilinear(
+    path: &Path,
+    nodes: &[Vec<f64>; 3],
+    time: f64,
+    arrays: &[CellArray],
+    format: &VtrFormat,
+    notes: &[(&str, &str)],
+) -> io::Result<()> {
     if !time.is_finite() {
         return Err(invalid(path, format_args!("the time {time} is not finite")));
     }
-    let cells = grid.cells();
+    let counts = nodes.each_ref().map(Vec::len);
+    let cells = counts.iter().map(|m| m.saturating_sub(1).max(1)).product();
+    check_arrays(path, arrays, cells)?;
+    check_notes(path, notes)?;
+    let time_block = [time];
+    let points: Vec<Vec<f64>> = if format.point_data {
+        arrays
+            .iter()
+            .map(|a| average_to_nodes(counts, a.values, a.components))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let float32 = format.precision == VtkPrecision::Float32;
+    // Blocks in the order they appear in the appended section: (values, as Float32).
+    let mut blocks: Vec<(&[f64], bool)> = Vec::with_capacity(2 * arrays.len() + 5);
+    blocks.push((&time_block, false));
+    blocks.push((&time_block, false));
+    blocks.extend(points.iter().map(|p| (p.as_slice(), float32)));
+    blocks.extend(arrays.iter().map(|a| (a.values, float32)));
+    blocks.extend(nodes.iter().map(|c| (c.as_slice(), false)));
+    let encoded = blocks
+        .iter()
+        .map(|(v, f32)| encode_block(v, *f32, format.compression))
+        .collect::<io::Result<Vec<_>>>()?;
+    let mut offsets = Vec::with_capacity(encoded.len());
+    let mut offset = 0u64;
+    for b in &encoded {
+        offsets.push(offset);
+        offset += b.len() as u64;
+    }
+    let [m0, m1, m2] = counts.map(|m| m.saturating_sub(1));
+    let extent = format!("0 {m0} 0 {m1} 0 {m2}");
+    let h = header(&extent, arrays, format, notes, &offsets);
+    write_atomically(path, |w| {
+        w.write_all(h.as_bytes())?;
+        for b in &encoded {
+            w.write_all(b)?;
+        }
+        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
+    })
+}
+
+/// The cell arrays' names (non-empty, each once), component counts (≥ 1) and lengths (`cells`
+/// tuples), or the `InvalidInput` error naming the file and the array.
+fn check_arrays(path: &Path, arrays: &[CellArray], cells: usize) -> io::Result<()> {
     for (k, a) in arrays.iter().enumerate() {
         if a.name.is_empty() {
             return Err(invalid(
@@ -296,6 +341,11 @@ pub fn write_vtr_with(
             ));
         }
     }
+    Ok(())
+}
+
+/// The text field data's names: non-empty, each once, neither `TIME` nor `TimeValue`.
+fn check_notes(path: &Path, notes: &[(&str, &str)]) -> io::Result<()> {
     for (k, (name, _)) in notes.iter().enumerate() {
         if name.is_empty()
             || notes[..k].iter().any(|n| n.0 == *name)
@@ -308,39 +358,25 @@ pub fn write_vtr_with(
             ));
         }
     }
+    Ok(())
+}
 
-    let coords = node_coordinates(grid);
-    let time_block = [time];
-    let points: Vec<Vec<f64>> = if format.point_data {
-        arrays
-            .iter()
-            .map(|a| cells_to_points(grid, a.values, a.components))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let float32 = format.precision == VtkPrecision::Float32;
-    let array_type = if float32 { "Float32" } else { "Float64" };
-    // Blocks in the order they appear in the appended section: (values, as Float32).
-    let mut blocks: Vec<(&[f64], bool)> = Vec::with_capacity(2 * arrays.len() + 5);
-    blocks.push((&time_block, false));
-    blocks.push((&time_block, false));
-    blocks.extend(points.iter().map(|p| (p.as_slice(), float32)));
-    blocks.extend(arrays.iter().map(|a| (a.values, float32)));
-    blocks.extend(coords.iter().map(|c| (c.as_slice(), false)));
-    let encoded = blocks
-        .iter()
-        .map(|(v, f32)| encode_block(v, *f32, format.compression))
-        .collect::<io::Result<Vec<_>>>()?;
-    let mut offsets = Vec::with_capacity(encoded.len());
-    let mut offset = 0u64;
-    for b in &encoded {
-        offsets.push(offset);
-        offset += b.len() as u64;
-    }
+/// The XML of a `.vtr` file up to the appended data's `_` marker: the mesh of `extent`, the
+/// field data (`TIME`, `TimeValue`, the `notes`), the point data (with `format.point_data`)
+/// and cell data of `arrays`, and the coordinates, each appended array at its offset of
+/// `offsets` (in that order).
+fn header(
+    extent: &str,
+    arrays: &[CellArray],
+    format: &VtrFormat,
+    notes: &[(&str, &str)],
+    offsets: &[u64],
+) -> String {
     let mut off = offsets.iter();
-
-    let extent = extent_string(grid);
+    let array_type = match format.precision {
+        VtkPrecision::Float32 => "Float32",
+        VtkPrecision::Float64 => "Float64",
+    };
     let compressor = match format.compression {
         VtkCompression::None => "",
         VtkCompression::Zlib => r#" compressor="vtkZLibDataCompressor""#,
@@ -407,14 +443,7 @@ pub fn write_vtr_with(
         write!(h, r#"  <AppendedData encoding="raw">"#)?;
         write!(h, "\n   _")
     })();
-
-    write_atomically(path, |w| {
-        w.write_all(h.as_bytes())?;
-        for b in &encoded {
-            w.write_all(b)?;
-        }
-        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
-    })
+    h
 }
 
 /// A ParaView `.pvd` collection: the list of `(time, file)` entries of a time series.

@@ -16,8 +16,17 @@ pub(super) fn earlier_outputs(dir: &Path) -> Result<Vec<PathBuf>, EfsiError> {
         .map(|f| dir.join(f))
         .filter(|p| p.is_file())
         .collect();
-    for (sub, ext) in [("fields", "vtr"), ("profiles", "csv")] {
+    for (sub, ext) in [
+        ("fields", "vtr"),
+        ("profiles", "csv"),
+        ("slices", "vtr"),
+        ("slices", "pvd"),
+    ] {
         let d = dir.join(sub);
+        // `slices/` exists only where a run wrote plane slices.
+        if sub == "slices" && !d.is_dir() {
+            continue;
+        }
         for e in fs::read_dir(&d).map_err(|e| EfsiError::io(&d, e))? {
             let p = e.map_err(|e| EfsiError::io(&d, e))?.path();
             if p.extension().is_some_and(|x| x == ext) && p.is_file() {

@@ -76,7 +76,7 @@ impl Outputs {
             "overrides": sim.scene.overrides.iter().map(|o| o.to_string()).collect::<Vec<_>>(),
             "stop": stop,
             "warnings": self.warnings,
-            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk, sim.pipeline().outputs()),
+            "vtk": crate::output::fields::summary(&sim.grid, &sim.state, &self.vtk, &self.slices, sim.pipeline().outputs()),
             "t_end": sim.state.t,
             "steps": sim.state.step,
             "steps_this_run": steps_this_run,

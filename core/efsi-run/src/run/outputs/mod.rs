@@ -1,7 +1,7 @@
 //! The outputs of one run ([`Outputs`]): `(schedule, writer)` pairs. A [`Schedule`] says when
 //! (and which times Δt lands on), a [`Writer`] what is written; the VTK series
-//! ([`vtk::VtkSeries`]), `probes.csv` ([`probes::ProbesCsv`]), each line profile
-//! ([`profiles::Profile`]) and the periodic checkpoint ([`checkpoints::Checkpoints`]) are the
+//! ([`vtk::VtkSeries`]), `probes.csv` ([`probes::ProbesCsv`]), each plane slice
+//! ([`slices::SliceSeries`]), each line profile ([`profiles::Profile`]) and the periodic checkpoint ([`checkpoints::Checkpoints`]) are the
 //! writers a run has. A new kind of output is one file: a [`Writer`], and its pair in
 //! [`Outputs::new`] / [`Outputs::resume`]. Each writer records in a checkpoint's
 //! [`OutputState`] what a resumed run needs to continue its files, so that a resumed run
@@ -10,6 +10,7 @@
 pub mod checkpoints;
 pub mod probes;
 pub mod profiles;
+pub mod slices;
 pub mod vtk;
 
 pub use crate::output::schedule::{Due, Schedule};
@@ -19,7 +20,7 @@ use super::record::new_run_id;
 use super::time_label;
 use crate::checkpoint::OutputState;
 use crate::lock::FolderLock;
-use crate::output::spec::VtkOptions;
+use crate::output::spec::{OutputSpec, SliceSpec, VtkOptions};
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
 use efsi_core::state::State;
@@ -82,11 +83,24 @@ impl Output {
     }
 }
 
+/// The plane slices of `o`, each one's interval resolved ([`SliceSpec::interval`]).
+fn resolved_slices(o: &OutputSpec) -> Vec<SliceSpec> {
+    o.slices
+        .iter()
+        .map(|s| SliceSpec {
+            every: s.interval(o.vtk_every),
+            ..s.clone()
+        })
+        .collect()
+}
+
 /// The outputs of one run, in the order they are written after a step, in its folder.
 pub struct Outputs {
     pub(super) dir: PathBuf,
     /// The `output.vtk` settings (what `run.json` describes of the VTK arrays).
     pub(super) vtk: VtkOptions,
+    /// The plane slices, their intervals resolved (what `run.json` describes of them).
+    pub(super) slices: Vec<SliceSpec>,
     list: Vec<Output>,
     end: f64,
     /// The checkpoint count a run without periodic checkpoints records (the one it was
@@ -125,6 +139,11 @@ impl Outputs {
             let writer = vtk::VtkSeries::create(dir, &o.vtk, Vec::new())?;
             list.push(Output::new(Schedule::every(Some(every)), writer));
         }
+        let slices = resolved_slices(o);
+        for s in &slices {
+            let writer = slices::SliceSeries::create(dir, s, &o.vtk, &[])?;
+            list.push(Output::new(writer.schedule(), writer));
+        }
         for p in &o.profiles {
             list.push(Output::new(
                 Schedule::times(p.times()),
@@ -137,6 +156,7 @@ impl Outputs {
         let mut outputs = Outputs {
             dir: dir.to_path_buf(),
             vtk: o.vtk.clone(),
+            slices,
             list,
             end: sim.scene.time.end,
             checkpoint_idle: 1,
@@ -183,12 +203,18 @@ impl Outputs {
             });
         }
         if let Some(every) = o.vtk_every {
-            let writer = vtk::VtkSeries::create(dir, &o.vtk, state.pvd.clone())?;
+            let fields = state.pvd.iter().filter(|e| !e.1.starts_with("slices/"));
+            let writer = vtk::VtkSeries::create(dir, &o.vtk, fields.cloned().collect())?;
             let schedule = Schedule::Every {
                 every,
                 count: state.vtk_count,
             };
             list.push(Output::new(schedule, writer));
+        }
+        let slices = resolved_slices(o);
+        for s in &slices {
+            let writer = slices::SliceSeries::create(dir, s, &o.vtk, &state.pvd)?;
+            list.push(Output::new(writer.schedule(), writer));
         }
         for (p, times) in o.profiles.iter().zip(&state.profile_times) {
             let schedule = Schedule::Times(times.clone());
@@ -200,6 +226,7 @@ impl Outputs {
         let mut outputs = Outputs {
             dir: dir.to_path_buf(),
             vtk: o.vtk.clone(),
+            slices,
             list,
             end: sim.scene.time.end,
             checkpoint_idle: state.checkpoint_count,

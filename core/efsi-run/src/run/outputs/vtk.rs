@@ -86,7 +86,7 @@ impl Writer for VtkSeries {
 
     fn save(&self, schedule: &Schedule, into: &mut OutputState) {
         into.vtk_count = schedule.count();
-        into.pvd = self.pvd.entries().to_vec();
+        into.pvd.extend_from_slice(self.pvd.entries());
     }
 
     /// `fields/<name>_<step>_last_good.vtr`, with a `.pvd` entry at its time.
