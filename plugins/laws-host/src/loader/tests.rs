@@ -7,12 +7,105 @@ fn reference_law_passes_the_tangent_check() {
     let c = check_tangent(&NeoHookeanReference { g: 1e6 }).unwrap();
     assert!(c.passed(), "{c}");
     assert!(c.worst_relative_error < 1e-8, "{c}");
+    let c = check_tangent_full(&NeoHookeanReference { g: 1e6 }).unwrap();
+    assert!(c.passed() && c.worst_relative_error < 1e-8, "{c}");
+}
+
+/// A built-in law whose 3-D tangent misses the out-of-plane shears' cross terms (right in-plane,
+/// wrong in 3-D): τ = B·B with the in-plane square's tangent padded with the identity.
+struct InPlaneOnlyTangent;
+
+impl crate::ConstitutiveLaw for InPlaneOnlyTangent {
+    fn name(&self) -> &str {
+        "in_plane_only_tangent"
+    }
+    fn evaluate(
+        &self,
+        b: &[crate::Sym],
+        tau: &mut [crate::Sym],
+        tangent: Option<&mut [crate::Tangent]>,
+    ) -> Result<(), LawError> {
+        for (t, b) in tau.iter_mut().zip(b) {
+            let [b11, b22, b33, b12] = *b;
+            *t = [b11 * b11 + b12 * b12, b22 * b22 + b12 * b12, b33 * b33, b12 * (b11 + b22)];
+        }
+        if let Some(j) = tangent {
+            for (j, b) in j.iter_mut().zip(b) {
+                let [b11, b22, b33, b12] = *b;
+                *j = [
+                    2.0 * b11, 0.0, 0.0, 2.0 * b12, 0.0, 2.0 * b22, 0.0, 2.0 * b12, 0.0, 0.0,
+                    2.0 * b33, 0.0, b12, b12, 0.0, b11 + b22,
+                ];
+            }
+        }
+        Ok(())
+    }
+    fn evaluate_full(
+        &self,
+        b: &[crate::Sym6],
+        tau: &mut [crate::Sym6],
+        tangent: Option<&mut [crate::Tangent6]>,
+    ) -> Result<(), LawError> {
+        for (t, b) in tau.iter_mut().zip(b) {
+            let [b11, b22, b33, b12, b23, b13] = *b;
+            *t = [
+                b11 * b11 + b12 * b12 + b13 * b13,
+                b22 * b22 + b12 * b12 + b23 * b23,
+                b33 * b33 + b13 * b13 + b23 * b23,
+                b11 * b12 + b12 * b22 + b13 * b23,
+                b12 * b13 + b22 * b23 + b23 * b33,
+                b11 * b13 + b12 * b23 + b13 * b33,
+            ];
+        }
+        if let Some(j) = tangent {
+            let mut four = [[0.0; 16]; 1];
+            for (j, b) in j.iter_mut().zip(b) {
+                self.evaluate(&[[b[0], b[1], b[2], b[3]]], &mut [[0.0; 4]], Some(&mut four))?;
+                *j = [0.0; 36];
+                for a in 0..4 {
+                    for c in 0..4 {
+                        j[6 * a + c] = four[0][4 * a + c];
+                    }
+                }
+                j[6 * 4 + 4] = 2.0 * b[1];
+                j[6 * 5 + 5] = 2.0 * b[0];
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The full check sees what the in-plane one cannot: a tangent right on in-plane tensors and
+/// wrong in its out-of-plane rows and columns.
+#[test]
+fn the_full_check_catches_a_tangent_wrong_out_of_plane_only() {
+    let in_plane = check_tangent(&InPlaneOnlyTangent).unwrap();
+    assert!(in_plane.passed(), "{in_plane}");
+    let full = check_tangent_full(&InPlaneOnlyTangent).unwrap();
+    assert!(!full.passed(), "{full}");
+    let (a, b) = full.worst_entry_names();
+    assert!(
+        ["23", "13"].contains(&a) || ["23", "13"].contains(&b),
+        "{full}"
+    );
 }
 
 #[test]
 fn check_states_are_symmetric_positive_definite() {
     for b in tangent_check_states() {
         assert!(b[0] > 0.0 && b[2] > 0.0 && b[0] * b[1] - b[3] * b[3] > 0.0);
+    }
+    for b in tangent_check_states_full() {
+        let [b11, b22, b33, b12, b23, b13] = b;
+        let minor2 = b11 * b22 - b12 * b12;
+        let det = b11 * (b22 * b33 - b23 * b23) - b12 * (b12 * b33 - b23 * b13)
+            + b13 * (b12 * b23 - b22 * b13);
+        assert!(b11 > 0.0 && minor2 > 0.0 && det > 0.0, "{b:?}");
+    }
+    // Every component varies across the full states, the out-of-plane shears included.
+    let states = tangent_check_states_full();
+    for c in 0..6 {
+        assert!(states.iter().any(|b| b[c].abs() > 0.05), "component {c}");
     }
 }
 
