@@ -107,7 +107,9 @@ fn shipped_laws_load_by_name_and_pass_the_tangent_check() {
             "{name}: {check} (expected round-off only)"
         );
         eprintln!("{name}: {check}");
-        let full = law.tangent_check_full().expect("a version-2 law has a 3-D check");
+        let full = law
+            .tangent_check_full()
+            .expect("a version-2 law has a 3-D check");
         assert!(
             full.passed() && full.worst_relative_error < 1e-8,
             "{name}: {full}"
@@ -119,12 +121,9 @@ fn shipped_laws_load_by_name_and_pass_the_tangent_check() {
         assert_eq!(law.info().abi_version, 2);
         assert!(law.evaluates_full());
         // The same law for a 3-D scene.
-        let law = efsi_laws_host::load_law_3d(
-            name,
-            &spec(name, &params).parameters,
-            Path::new("."),
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
+        let law =
+            efsi_laws_host::load_law_3d(name, &spec(name, &params).parameters, Path::new("."))
+                .unwrap_or_else(|e| panic!("{e}"));
         assert!(law.tangent_check_full().unwrap().passed());
     }
 }
@@ -292,7 +291,10 @@ fn check_library_runs_both_checks_of_a_version_2_law() {
     assert!(!wrong.passed() && !wrong.in_plane.passed());
     let full = wrong.full.unwrap();
     assert!(!full.passed(), "{full}");
-    assert!((full.tangent / full.finite_difference - 1.5).abs() < 1e-6, "{full}");
+    assert!(
+        (full.tangent / full.finite_difference - 1.5).abs() < 1e-6,
+        "{full}"
+    );
 }
 
 #[test]

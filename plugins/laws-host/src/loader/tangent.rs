@@ -39,7 +39,10 @@ impl TangentCheck {
 
     /// The worst entry's names, e.g. `("12", "23")`.
     pub fn worst_entry_names(&self) -> (&'static str, &'static str) {
-        (COMPONENTS[self.worst_entry.0], COMPONENTS[self.worst_entry.1])
+        (
+            COMPONENTS[self.worst_entry.0],
+            COMPONENTS[self.worst_entry.1],
+        )
     }
 }
 
@@ -165,9 +168,8 @@ fn check<const N: usize, const NN: usize>(
     // evaluate): the floor of every state's scale, so that a state where the tangent is
     // (nearly) zero — Saint Venant–Kirchhoff with λ = 0 at B̃ = 0.5 I — is judged against the
     // law's own scale, not against round-off.
-    let magnitude = |j: &[f64; NN], fd: &[f64; NN]| {
-        j.iter().chain(fd).fold(0.0_f64, |m, x| m.max(x.abs()))
-    };
+    let magnitude =
+        |j: &[f64; NN], fd: &[f64; NN]| j.iter().chain(fd).fold(0.0_f64, |m, x| m.max(x.abs()));
     let rest = magnitude(&pairs[0].1, &pairs[0].2);
     let mut worst: Option<TangentCheck> = None;
     for (b, j, fd) in &pairs {

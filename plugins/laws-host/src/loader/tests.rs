@@ -27,14 +27,33 @@ impl crate::ConstitutiveLaw for InPlaneOnlyTangent {
     ) -> Result<(), LawError> {
         for (t, b) in tau.iter_mut().zip(b) {
             let [b11, b22, b33, b12] = *b;
-            *t = [b11 * b11 + b12 * b12, b22 * b22 + b12 * b12, b33 * b33, b12 * (b11 + b22)];
+            *t = [
+                b11 * b11 + b12 * b12,
+                b22 * b22 + b12 * b12,
+                b33 * b33,
+                b12 * (b11 + b22),
+            ];
         }
         if let Some(j) = tangent {
             for (j, b) in j.iter_mut().zip(b) {
                 let [b11, b22, b33, b12] = *b;
                 *j = [
-                    2.0 * b11, 0.0, 0.0, 2.0 * b12, 0.0, 2.0 * b22, 0.0, 2.0 * b12, 0.0, 0.0,
-                    2.0 * b33, 0.0, b12, b12, 0.0, b11 + b22,
+                    2.0 * b11,
+                    0.0,
+                    0.0,
+                    2.0 * b12,
+                    0.0,
+                    2.0 * b22,
+                    0.0,
+                    2.0 * b12,
+                    0.0,
+                    0.0,
+                    2.0 * b33,
+                    0.0,
+                    b12,
+                    b12,
+                    0.0,
+                    b11 + b22,
                 ];
             }
         }
@@ -60,7 +79,11 @@ impl crate::ConstitutiveLaw for InPlaneOnlyTangent {
         if let Some(j) = tangent {
             let mut four = [[0.0; 16]; 1];
             for (j, b) in j.iter_mut().zip(b) {
-                self.evaluate(&[[b[0], b[1], b[2], b[3]]], &mut [[0.0; 4]], Some(&mut four))?;
+                self.evaluate(
+                    &[[b[0], b[1], b[2], b[3]]],
+                    &mut [[0.0; 4]],
+                    Some(&mut four),
+                )?;
                 *j = [0.0; 36];
                 for a in 0..4 {
                     for c in 0..4 {

@@ -135,7 +135,14 @@ mod tests {
                     + 2.0 * law.c2 * (tr * m[i][k] - sq[i][k])
                     + 4.0 * law.c3 * (tr - 3.0) * m[i][k]
             };
-            let want = [tau(0, 0), tau(1, 1), tau(2, 2), tau(0, 1), tau(1, 2), tau(0, 2)];
+            let want = [
+                tau(0, 0),
+                tau(1, 1),
+                tau(2, 2),
+                tau(0, 1),
+                tau(1, 2),
+                tau(0, 2),
+            ];
             let got = law.stress(&b);
             for a in 0..6 {
                 assert!((got[a] - want[a]).abs() < 1e-12 * (1.0 + want[a].abs()));
@@ -151,7 +158,9 @@ mod tests {
 
     #[test]
     fn full_tangent_matches_finite_differences() {
-        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)].map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 }) {
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
             let worst = deformed_states_full(200, 0.3, 51)
                 .iter()
                 .map(|b| tangent_error(&law, b))
@@ -163,7 +172,9 @@ mod tests {
     #[test]
     fn rotating_b_rotates_tau() {
         let mut rng = XorShift::new(52);
-        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)].map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 }) {
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
             for b in deformed_states_full(50, 0.3, 53) {
                 let q = rotation(&mut rng);
                 let e = objectivity_error(&law, &b, &q);
@@ -176,7 +187,9 @@ mod tests {
     /// are version 1's, bit for bit.
     #[test]
     fn in_plane_b_gives_the_in_plane_result_exactly() {
-        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)].map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 }) {
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
             for b in deformed_states(100, 0.3, 54) {
                 let (t4, j4) = law.stress_and_tangent(&b);
                 let (t6, j6) = law.stress_and_tangent(&embed(&b));

@@ -90,9 +90,7 @@ mod tests {
     fn mooney_rivlin<T: SymTensor>(c1: f64, c2: f64, c3: f64, b: &T) -> T {
         let t = tensor::trace(b);
         let q = tensor::square(b);
-        T::from_fn(|a| {
-            2.0 * c1 * b[a] + 2.0 * c2 * (t * b[a] - q[a]) + 4.0 * c3 * (t - 3.0) * b[a]
-        })
+        T::from_fn(|a| 2.0 * c1 * b[a] + 2.0 * c2 * (t * b[a] - q[a]) + 4.0 * c3 * (t - 3.0) * b[a])
     }
 
     #[test]
@@ -135,7 +133,9 @@ mod tests {
 
     #[test]
     fn full_tangent_matches_finite_differences() {
-        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)].map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu }) {
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
             let worst = deformed_states_full(200, 0.3, 41)
                 .iter()
                 .map(|b| tangent_error(&law, b))
@@ -147,7 +147,9 @@ mod tests {
     #[test]
     fn rotating_b_rotates_tau() {
         let mut rng = XorShift::new(42);
-        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)].map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu }) {
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
             for b in deformed_states_full(50, 0.3, 43) {
                 let q = rotation(&mut rng);
                 let e = objectivity_error(&law, &b, &q);
@@ -160,7 +162,9 @@ mod tests {
     /// are version 1's, bit for bit.
     #[test]
     fn in_plane_b_gives_the_in_plane_result_exactly() {
-        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)].map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu }) {
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
             for b in deformed_states(100, 0.3, 44) {
                 let (t4, j4) = law.stress_and_tangent(&b);
                 let (t6, j6) = law.stress_and_tangent(&embed(&b));

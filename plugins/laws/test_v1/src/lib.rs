@@ -404,9 +404,7 @@ mod tests {
         };
         let b = [1.2, 0.9, 1.1, 0.3];
         let (t, sq) = (trace(&b), square(&b));
-        let want: Sym = std::array::from_fn(|a| {
-            2.0 * b[a] + (t * b[a] - sq[a]) + (t - 3.0) * b[a]
-        });
+        let want: Sym = std::array::from_fn(|a| 2.0 * b[a] + (t * b[a] - sq[a]) + (t - 3.0) * b[a]);
         let got = law.stress(&b);
         for a in 0..4 {
             assert!((got[a] - want[a]).abs() < 1e-14, "{got:?} vs {want:?}");
