@@ -569,8 +569,11 @@ fn check_laws(paths: &[PathBuf]) -> ExitCode {
                         c.info.abi_version
                     ),
                 };
+                let embedding = c.embedding.as_ref().map_or(String::new(), |e| {
+                    format!("\n  in-plane vs full evaluation of in-plane tensors: {e}")
+                });
                 let text = format!(
-                    "{} ({}, ABI v{}): tangent check {} — in-plane tensors: {}\n  {full}",
+                    "{} ({}, ABI v{}): tangent check {} — in-plane tensors: {}\n  {full}{embedding}",
                     c.info.name,
                     path.display(),
                     c.info.abi_version,

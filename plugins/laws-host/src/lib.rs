@@ -34,8 +34,9 @@ use std::fmt;
 pub mod loader;
 
 pub use loader::{
-    FD_TANGENT_TOLERANCE, LawInfo, LibraryCheck, Listed, LoadedLaw, ParamInfo, TangentCheck,
-    check_library, check_tangent, check_tangent_full, describe, list_laws, load_law, load_law_3d,
+    EmbeddingCheck, FD_TANGENT_TOLERANCE, LawInfo, LibraryCheck, Listed, LoadedLaw, ParamInfo,
+    TangentCheck, check_embedding, check_library, check_tangent, check_tangent_full, describe,
+    list_laws, load_law, load_law_3d,
 };
 
 /// Stored components of an in-plane symmetric tensor: `[t11, t22, t33, t12]`.

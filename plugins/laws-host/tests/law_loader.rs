@@ -266,7 +266,10 @@ fn a_version_1_library_runs_in_plane_and_is_refused_in_3d() {
 
     // `efsi laws --check` runs the in-plane check only; the listing names the version.
     let check = check_library(&path).unwrap();
-    assert!(check.passed() && check.full.is_none(), "{check:?}");
+    assert!(
+        check.passed() && check.full.is_none() && check.embedding.is_none(),
+        "{check:?}"
+    );
     let text = describe(&path).unwrap().to_string();
     assert!(text.contains("ABI v1: in-plane tensors only"), "{text}");
 }
@@ -280,6 +283,9 @@ fn check_library_runs_both_checks_of_a_version_2_law() {
     let full = check.full.unwrap();
     assert_eq!((full.states, full.skipped), (26, 0));
     assert!(full.worst_relative_error < 1e-8, "{full}");
+    // The SDK's two evaluations agree bit for bit on in-plane tensors.
+    let embedding = check.embedding.unwrap();
+    assert_eq!(embedding.worst_relative_difference, 0.0, "{embedding}");
     assert!(
         describe(&path)
             .unwrap()

@@ -32,7 +32,10 @@
 //! 4. **Create** the instance; a failure or panic inside the plugin comes back with its message.
 //! 5. **Check the tangent** against central finite differences of the stress ([`check_tangent`]
 //!    on in-plane tensors, and for a version-2 library [`check_tangent_full`] on full 3-D ones;
-//!    tolerance [`FD_TANGENT_TOLERANCE`]) and refuse a law whose tangent is wrong in either.
+//!    tolerance [`FD_TANGENT_TOLERANCE`]) and refuse a law whose tangent is wrong in either;
+//!    for a version-2 library, also compare its two evaluations on in-plane tensors
+//!    ([`check_embedding`], tolerance [`EMBEDDING_TOLERANCE`]) and refuse a library whose
+//!    in-plane and 3-D laws differ.
 //!
 //! Evaluation is one plugin call per batch of cells; a status other than success, a panic in the
 //! plugin, or a non-finite output becomes a [`LawError`] naming the law (and the first bad cell).
@@ -56,8 +59,8 @@ use params::{describe_values, instantiate};
 use resolve::not_a_library_file;
 pub use resolve::{library_file_name, resolve_law, search_dirs};
 pub use tangent::{
-    TangentCheck, check_tangent, check_tangent_full, tangent_check_states,
-    tangent_check_states_full,
+    EMBEDDING_TOLERANCE, EmbeddingCheck, TangentCheck, check_embedding, check_tangent,
+    check_tangent_full, tangent_check_states, tangent_check_states_full,
 };
 
 /// Relative tolerance of the load-time tangent check: at every test state,
@@ -179,6 +182,19 @@ fn load(
     law.check = Some(checked(&law, check_tangent(&law), "")?);
     if law.evaluates_full() {
         law.check_full = Some(checked(&law, check_tangent_full(&law), "3-D ")?);
+        let embedding = check_embedding(&law).map_err(|e| {
+            law.error(format!(
+                "embedding check at load failed ({}): {}",
+                describe_values(&law.info, &law.values),
+                e.message
+            ))
+        })?;
+        if !embedding.passed() {
+            return Err(law.error(format!(
+                "refused: its in-plane and full evaluations disagree on in-plane tensors ({}): {embedding}; the library's evaluate_in_plane and evaluate_full must be one law",
+                describe_values(&law.info, &law.values)
+            )));
+        }
     }
     Ok(law)
 }
@@ -220,18 +236,23 @@ pub struct LibraryCheck {
     pub in_plane: TangentCheck,
     /// The tangent check on full 3-D tensors; `None` for a version-1 library.
     pub full: Option<TangentCheck>,
+    /// The comparison of the in-plane and full evaluations on in-plane tensors; `None` for a
+    /// version-1 library.
+    pub embedding: Option<EmbeddingCheck>,
 }
 
 impl LibraryCheck {
     /// Whether every check run passed.
     pub fn passed(&self) -> bool {
-        self.in_plane.passed() && self.full.as_ref().is_none_or(TangentCheck::passed)
+        self.in_plane.passed()
+            && self.full.as_ref().is_none_or(TangentCheck::passed)
+            && self.embedding.as_ref().is_none_or(EmbeddingCheck::passed)
     }
 }
 
 /// The tangent checks of the law in the library at `path`, created with its default parameters
-/// (`efsi laws --check`): on in-plane tensors, and for a version-2 library on full 3-D ones,
-/// passed or not ([`LibraryCheck::passed`]). An error if the library cannot be loaded, the law
+/// (`efsi laws --check`): on in-plane tensors, and for a version-2 library on full 3-D ones
+/// with the embedding check, passed or not ([`LibraryCheck::passed`]). An error if the library cannot be loaded, the law
 /// cannot be created or cannot evaluate the checks' states.
 pub fn check_library(path: &Path) -> Result<LibraryCheck, LawError> {
     let label = path.display().to_string();
@@ -251,15 +272,19 @@ pub fn check_library(path: &Path) -> Result<LibraryCheck, LawError> {
         ))
     };
     let in_plane = check_tangent(&law).map_err(|e| failed(e, ""))?;
-    let full = if law.evaluates_full() {
-        Some(check_tangent_full(&law).map_err(|e| failed(e, "3-D "))?)
+    let (full, embedding) = if law.evaluates_full() {
+        (
+            Some(check_tangent_full(&law).map_err(|e| failed(e, "3-D "))?),
+            Some(check_embedding(&law).map_err(|e| failed(e, "embedding or "))?),
+        )
     } else {
-        None
+        (None, None)
     };
     Ok(LibraryCheck {
         info: law.info.clone(),
         in_plane,
         full,
+        embedding,
     })
 }
 

@@ -27,7 +27,8 @@ pub(super) struct Opened {
     pub(super) evaluate_full: Option<EvaluateFn>,
 }
 
-/// The fields of a descriptor of either version that the loader uses.
+/// The fields of a descriptor of either version that the loader uses (pointers into the
+/// library, valid while it stays loaded).
 struct Fields {
     name: *const c_char,
     description: *const c_char,

@@ -237,6 +237,160 @@ fn tangents_and_differences<const N: usize, const NN: usize>(
         .collect())
 }
 
+/// Relative tolerance of the embedding check ([`check_embedding`]): the two evaluations of a
+/// version-2 library may differ on an in-plane tensor by round-off only. A law written with the
+/// SDK differs by nothing (its helpers give the same numbers both ways); a law whose two
+/// functions compute in a different order differs by a few ulps, 1e-15 relative.
+pub const EMBEDDING_TOLERANCE: f64 = 1e-10;
+
+/// The outcome of the embedding check ([`check_embedding`]): the worst difference between a
+/// law's in-plane evaluation and its full evaluation of the same tensors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmbeddingCheck {
+    /// Number of in-plane states compared.
+    pub states: usize,
+    /// The worst `|x_in-plane − x_full| / max|x_in-plane|`, `x` the stress (scaled by its
+    /// largest component over the states) or the tangent (by its largest entry).
+    pub worst_relative_difference: f64,
+    /// The state where it occurred, `[b11, b22, b33, b12]`.
+    pub worst_state: Vec<f64>,
+    /// What differs there, e.g. `τ12` or `∂τ11/∂B̃12`.
+    pub worst_entry: String,
+    /// The in-plane evaluation's value there.
+    pub in_plane: f64,
+    /// The full evaluation's value there.
+    pub full: f64,
+}
+
+impl EmbeddingCheck {
+    /// Whether the check passed ([`EMBEDDING_TOLERANCE`]).
+    pub fn passed(&self) -> bool {
+        self.worst_relative_difference <= EMBEDDING_TOLERANCE
+    }
+}
+
+impl fmt::Display for EmbeddingCheck {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "worst relative difference {:.3e} (tolerance {EMBEDDING_TOLERANCE:e}) over {} states, at {} = {:.6e} in-plane vs {:.6e} full, B̃ = {:?}",
+            self.worst_relative_difference,
+            self.states,
+            self.worst_entry,
+            self.in_plane,
+            self.full,
+            self.worst_state
+        )
+    }
+}
+
+/// Compares a law's in-plane evaluation with its full evaluation of the same tensors embedded
+/// in six components (13 = 23 = 0), at [`tangent_check_states`]: stress components 11, 22, 33,
+/// 12 and the tangent's in-plane 4×4 block, which the ABI requires to be the same law. States
+/// that neither evaluation can evaluate (outside the law's domain) are skipped, as in the
+/// tangent check; a state only one of them evaluates is a disagreement (an infinite
+/// difference). An error if `B̃ = I` cannot be evaluated.
+pub fn check_embedding(law: &dyn ConstitutiveLaw) -> Result<EmbeddingCheck, LawError> {
+    let all = tangent_check_states();
+    let evaluated = match both(law, &all) {
+        Ok(e) => e,
+        Err(first) => {
+            let mut kept = Vec::with_capacity(all.len());
+            for (s, b) in all.iter().enumerate() {
+                match both(law, std::slice::from_ref(b)) {
+                    Ok(e) => kept.extend(e),
+                    Err(e) if s == 0 => return Err(e),
+                    Err(e) => {
+                        let mut t4 = [[0.0; 4]];
+                        let mut t6 = [[0.0; 6]];
+                        let in_plane = law.evaluate(std::slice::from_ref(b), &mut t4, None);
+                        let full = law.evaluate_full(&[embed(b)], &mut t6, None);
+                        if in_plane.is_ok() != full.is_ok() {
+                            return Ok(EmbeddingCheck {
+                                states: s + 1,
+                                worst_relative_difference: f64::INFINITY,
+                                worst_state: b.to_vec(),
+                                worst_entry: format!(
+                                    "the {} evaluation only ({})",
+                                    if in_plane.is_ok() { "in-plane" } else { "full" },
+                                    e.message
+                                ),
+                                in_plane: t4[0][0],
+                                full: t6[0][0],
+                            });
+                        }
+                    }
+                }
+            }
+            if 2 * kept.len() < all.len() {
+                return Err(first);
+            }
+            kept
+        }
+    };
+    let largest = |xs: &mut dyn Iterator<Item = f64>| xs.fold(0.0_f64, |m, x| m.max(x.abs()));
+    let tau_scale = largest(&mut evaluated.iter().flat_map(|e| e.1));
+    let j_scale = largest(&mut evaluated.iter().flat_map(|e| e.2));
+    let first = &evaluated[0];
+    let mut worst = EmbeddingCheck {
+        states: evaluated.len(),
+        worst_relative_difference: 0.0,
+        worst_state: first.0.to_vec(),
+        worst_entry: format!("τ{}", COMPONENTS[0]),
+        in_plane: first.1[0],
+        full: first.3[0],
+    };
+    let mut consider = |b: &Sym, entry: String, x: f64, y: f64, scale: f64| {
+        let d = (x - y).abs() / if scale > 0.0 { scale } else { 1.0 };
+        // `!(d <= w)` also catches a NaN difference.
+        if !(d <= worst.worst_relative_difference) {
+            worst.worst_relative_difference = d;
+            worst.worst_state = b.to_vec();
+            worst.worst_entry = entry;
+            worst.in_plane = x;
+            worst.full = y;
+        }
+    };
+    for (b, t4, j4, t6, j6) in &evaluated {
+        for a in 0..4 {
+            consider(b, format!("τ{}", COMPONENTS[a]), t4[a], t6[a], tau_scale);
+            for c in 0..4 {
+                consider(
+                    b,
+                    format!("∂τ{}/∂B̃{}", COMPONENTS[a], COMPONENTS[c]),
+                    j4[4 * a + c],
+                    j6[6 * a + c],
+                    j_scale,
+                );
+            }
+        }
+    }
+    Ok(worst)
+}
+
+/// `[b11, b22, b33, b12, 0, 0]`.
+fn embed(b: &Sym) -> Sym6 {
+    [b[0], b[1], b[2], b[3], 0.0, 0.0]
+}
+
+/// For each state: `(B̃, τ, J)` in-plane and `(τ, J)` of the embedded state, in one batched call
+/// each way.
+#[allow(clippy::type_complexity)]
+fn both(
+    law: &dyn ConstitutiveLaw,
+    states: &[Sym],
+) -> Result<Vec<(Sym, Sym, [f64; 16], Sym6, [f64; 36])>, LawError> {
+    let n = states.len();
+    let embedded: Vec<Sym6> = states.iter().map(embed).collect();
+    let (mut t4, mut j4) = (vec![[0.0; 4]; n], vec![[0.0; 16]; n]);
+    let (mut t6, mut j6) = (vec![[0.0; 6]; n], vec![[0.0; 36]; n]);
+    law.evaluate(states, &mut t4, Some(&mut j4))?;
+    law.evaluate_full(&embedded, &mut t6, Some(&mut j6))?;
+    Ok((0..n)
+        .map(|k| (states[k], t4[k], j4[k], t6[k], j6[k]))
+        .collect())
+}
+
 /// xorshift64* (seeded, reproducible).
 struct XorShift(u64);
 

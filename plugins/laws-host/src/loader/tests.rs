@@ -185,3 +185,106 @@ fn built_law_libraries_pass_the_file_check() {
     }
     assert!(checked >= 3, "{checked} libraries found");
 }
+
+/// A law whose full evaluation is the reference neo-Hookean's, but whose in-plane shear stress
+/// is 0.1 % off: the two evaluations are not one law.
+struct TwoLaws;
+
+impl crate::ConstitutiveLaw for TwoLaws {
+    fn name(&self) -> &str {
+        "two_laws"
+    }
+    fn evaluate(
+        &self,
+        b: &[crate::Sym],
+        tau: &mut [crate::Sym],
+        tangent: Option<&mut [crate::Tangent]>,
+    ) -> Result<(), LawError> {
+        NeoHookeanReference { g: 2.0 }.evaluate(b, tau, tangent)?;
+        for t in tau.iter_mut() {
+            t[3] *= 1.001;
+        }
+        Ok(())
+    }
+    fn evaluate_full(
+        &self,
+        b: &[crate::Sym6],
+        tau: &mut [crate::Sym6],
+        tangent: Option<&mut [crate::Tangent6]>,
+    ) -> Result<(), LawError> {
+        NeoHookeanReference { g: 2.0 }.evaluate_full(b, tau, tangent)
+    }
+}
+
+/// The embedding check: the reference law's two evaluations agree exactly, a law computing the
+/// full square in another order agrees to round-off, and two different laws are caught at the
+/// component that differs.
+#[test]
+fn the_embedding_check_compares_the_two_evaluations() {
+    let c = check_embedding(&NeoHookeanReference { g: 3.0 }).unwrap();
+    assert_eq!(c.worst_relative_difference, 0.0, "{c}");
+    assert_eq!(c.states, 26);
+    let c = check_embedding(&InPlaneOnlyTangent).unwrap();
+    assert!(c.passed() && c.worst_relative_difference < 1e-15, "{c}");
+    let c = check_embedding(&TwoLaws).unwrap();
+    assert!(!c.passed(), "{c}");
+    assert_eq!(c.worst_entry, "τ12", "{c}");
+    assert!((c.in_plane / c.full - 1.001).abs() < 1e-12, "{c}");
+    assert!(c.worst_relative_difference > 1e-4, "{c}");
+}
+
+/// Past `b11 = 1.2` the law has no value in either evaluation (NaN): those states are skipped;
+/// with `full_only` its in-plane evaluation fails there too but its full one does not, which is a
+/// disagreement.
+struct Domain {
+    full_only: bool,
+}
+
+impl crate::ConstitutiveLaw for Domain {
+    fn name(&self) -> &str {
+        "domain"
+    }
+    fn evaluate(
+        &self,
+        b: &[crate::Sym],
+        tau: &mut [crate::Sym],
+        tangent: Option<&mut [crate::Tangent]>,
+    ) -> Result<(), LawError> {
+        if let Some(k) = b.iter().position(|b| b[0] > 1.2) {
+            return Err(LawError {
+                law: "domain".into(),
+                message: "outside the domain".into(),
+                cell: Some(k),
+            });
+        }
+        NeoHookeanReference { g: 1.0 }.evaluate(b, tau, tangent)
+    }
+    fn evaluate_full(
+        &self,
+        b: &[crate::Sym6],
+        tau: &mut [crate::Sym6],
+        tangent: Option<&mut [crate::Tangent6]>,
+    ) -> Result<(), LawError> {
+        if !self.full_only
+            && let Some(k) = b.iter().position(|b| b[0] > 1.2)
+        {
+            return Err(LawError {
+                law: "domain".into(),
+                message: "outside the domain".into(),
+                cell: Some(k),
+            });
+        }
+        NeoHookeanReference { g: 1.0 }.evaluate_full(b, tau, tangent)
+    }
+}
+
+#[test]
+fn the_embedding_check_skips_states_outside_the_domain() {
+    let c = check_embedding(&Domain { full_only: false }).unwrap();
+    assert!(c.passed() && c.states < 26 && c.states >= 13, "{c}");
+    let skipped = tangent_check_states().iter().filter(|b| b[0] > 1.2).count();
+    assert_eq!(c.states, 26 - skipped);
+    let c = check_embedding(&Domain { full_only: true }).unwrap();
+    assert!(!c.passed(), "{c}");
+    assert!(c.worst_entry.contains("the full evaluation only"), "{c}");
+}
