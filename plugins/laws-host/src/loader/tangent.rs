@@ -342,8 +342,9 @@ pub fn check_embedding(law: &dyn ConstitutiveLaw) -> Result<EmbeddingCheck, LawE
     };
     let mut consider = |b: &Sym, entry: String, x: f64, y: f64, scale: f64| {
         let d = (x - y).abs() / if scale > 0.0 { scale } else { 1.0 };
-        // `!(d <= w)` also catches a NaN difference.
-        if !(d <= worst.worst_relative_difference) {
+        // A NaN difference (one side non-finite) counts as the worst.
+        if d.is_nan() || d > worst.worst_relative_difference {
+            let d = if d.is_nan() { f64::INFINITY } else { d };
             worst.worst_relative_difference = d;
             worst.worst_state = b.to_vec();
             worst.worst_entry = entry;
