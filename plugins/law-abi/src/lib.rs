@@ -35,7 +35,8 @@
 //!
 //! The two must describe one law: `evaluate_in_plane` on `[b11, b22, b33, b12]` gives the
 //! components 11, 22, 33, 12 of `evaluate_full` on `[b11, b22, b33, b12, 0, 0]`, and its tangent
-//! the matching 4×4 block (an isotropic law's 23 and 13 stresses vanish there). The in-plane entry
+//! the matching 4×4 block (an isotropic law's 23 and 13 stresses vanish there; the loader
+//! compares the two at load, to `1e-10` relative). The in-plane entry
 //! exists so that 2-D runs keep the arithmetic of version 1 exactly; the SDK derives both from
 //! one generic law. Batches are **cell-major**: with `m` components (6 or 4), cell `k`'s `B̃` is
 //! `b[m k .. m k + m]`, its stress `tau[m k .. m k + m]`, its tangent `tangent[m² k .. m² k + m²]`.
