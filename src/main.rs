@@ -589,8 +589,9 @@ fn describe_slices(vtk: &serde_json::Value) -> String {
     out
 }
 
-/// `efsi laws --check`: the tangent check of each library in `paths` (every law found if
-/// none); exit code 2 if a law fails it or cannot be checked.
+/// `efsi laws --check`: the tangent checks of each library in `paths` (every law found if
+/// none) — on in-plane tensors, and for an ABI-v2 library on full 3-D tensors too; exit code 2
+/// if a law fails one or cannot be checked.
 fn check_laws(paths: &[PathBuf]) -> ExitCode {
     let mut libraries = paths.to_vec();
     let mut failed = false;
@@ -612,20 +613,31 @@ fn check_laws(paths: &[PathBuf]) -> ExitCode {
     }
     for path in &libraries {
         match efsi_laws_host::check_library(path) {
-            Ok((info, check)) if check.passed() => {
-                out!(
-                    "{} ({}): tangent check passed — {check}",
-                    info.name,
-                    path.display()
+            Ok(c) => {
+                let full = match &c.full {
+                    Some(check) => format!("full 3-D tensors: {check}"),
+                    None => format!(
+                        "full 3-D tensors: not checked — ABI v{} carries in-plane tensors only (refused in 3-D scenes)",
+                        c.info.abi_version
+                    ),
+                };
+                let embedding = c.embedding.as_ref().map_or(String::new(), |e| {
+                    format!("\n  in-plane vs full evaluation of in-plane tensors: {e}")
+                });
+                let text = format!(
+                    "{} ({}, ABI v{}): tangent check {} — in-plane tensors: {}\n  {full}{embedding}",
+                    c.info.name,
+                    path.display(),
+                    c.info.abi_version,
+                    if c.passed() { "passed" } else { "FAILED" },
+                    c.in_plane
                 );
-            }
-            Ok((info, check)) => {
-                eprintln!(
-                    "error: {} ({}): tangent check FAILED — {check}",
-                    info.name,
-                    path.display()
-                );
-                failed = true;
+                if c.passed() {
+                    out!("{text}");
+                } else {
+                    eprintln!("error: {text}");
+                    failed = true;
+                }
             }
             Err(e) => {
                 eprintln!("error: {e}");

@@ -216,7 +216,7 @@ fn law_plugin_failures_are_reported_by_name() {
         (
             law_library("efsi_test_law_bad_abi").display().to_string(),
             "",
-            &["solid.law", "ABI v2, efsi expects v1"],
+            &["solid.law", "ABI v3, efsi expects v2"],
         ),
         (
             law_library("efsi_test_law_panic").display().to_string(),

@@ -11,19 +11,23 @@
 //! W = −(G Jm / 2) ln(1 − (I1 − 3)/Jm),    τ = 2 ∂W/∂I1 B̃ = f B̃,    f = G Jm / (Jm − I1 + 3)
 //! ```
 //!
-//! and, in efsi's 4-component representation `[11, 22, 33, 12]` (shear counted once,
-//! `∂I1/∂B̃ = [1, 1, 1, 0]`), the tangent is
+//! and, in efsi's component representations — the full `[11, 22, 33, 12, 23, 13]` of 3-D
+//! scenes and the in-plane `[11, 22, 33, 12]` of planar and axisymmetric ones, shear counted
+//! once, `∂I1/∂B̃ = [1, 1, 1, 0, 0, 0]` (or `[1, 1, 1, 0]`) — the tangent is
 //!
 //! ```text
-//! J = f I + (f² / (G Jm)) B̃ ⊗ [1, 1, 1, 0]
+//! J = f I + (f² / (G Jm)) B̃ ⊗ ∂I1/∂B̃
 //! ```
+//!
+//! `stress` and `tangent` are written once, generic over the representation `T`; the SDK exports
+//! both.
 //!
 //! As `Jm → ∞` it tends to neo-Hookean `τ = G B̃`. Past the locking limit (`I1 − 3 ≥ Jm`) the
 //! law is undefined and returns NaN, which the SDK reports as a non-finite stress at that cell.
 
-// EDIT: keep `HyperelasticLaw`, `ParamDecl`, `Sym`, `Tangent`, `export_law`; `tensor` has the
-// trace, `B̃·B̃` and their derivatives in the 4-component representation.
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+// EDIT: keep `HyperelasticLaw`, `ParamDecl`, `SymTensor`, `export_law`; `tensor` has the
+// trace, `B̃·B̃`, their derivatives, `s I` and outer products in either representation.
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 // EDIT: the struct holding your law's constants (rename it, and in `export_law!` at the end).
 /// A Gent solid.
@@ -67,21 +71,22 @@ impl HyperelasticLaw for Gent {
         })
     }
 
-    // EDIT: the stress τ(B̃) of one cell.
-    fn stress(&self, b: &Sym) -> Sym {
+    // EDIT: the stress τ(B̃) of one cell, `T` being the full (6 components) or the in-plane (4)
+    // representation: index components with `b[a]`, build with `T::from_fn`, `b.map`.
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         let f = self.factor(b);
         b.map(|x| f * x)
     }
 
-    // EDIT: the tangent ∂τ_a/∂B̃_b of one cell, row-major `J[4a + b]`, shear counted once. efsi
-    // checks it against finite differences of `stress` when it loads the law and refuses the
-    // law if they disagree.
-    fn tangent(&self, b: &Sym) -> Tangent {
+    // EDIT: the tangent ∂τ_a/∂B̃_b of one cell, row-major `J[N a + b]` (`N = T::N`), shear
+    // counted once. efsi checks it against finite differences of `stress` when it loads the law
+    // (in-plane and full) and refuses the law if they disagree.
+    fn tangent<T: SymTensor>(&self, b: &T) -> T::Tangent {
         let f = self.factor(b);
-        let mut j = tensor::scaled_identity(f);
-        let db = tensor::outer(b, &tensor::D_TRACE);
+        let mut j = tensor::scaled_identity::<T>(f);
+        let db = tensor::outer(b, &T::D_TRACE);
         let df = f * f / (self.g * self.jm);
-        for i in 0..16 {
+        for i in 0..T::TANGENT_LEN {
             j[i] += df * db[i];
         }
         j
@@ -90,7 +95,7 @@ impl HyperelasticLaw for Gent {
 
 impl Gent {
     /// `f = G Jm / (Jm − I1 + 3)`, NaN past the locking limit.
-    fn factor(&self, b: &Sym) -> f64 {
+    fn factor<T: SymTensor>(&self, b: &T) -> f64 {
         let room = self.jm - (tensor::trace(b) - 3.0);
         if room > 0.0 {
             self.g * self.jm / room
@@ -106,10 +111,14 @@ export_law!(Gent);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use efsi_law_sdk::testing::{deformed_states, tangent_error};
+    use efsi_law_sdk::testing::{
+        XorShift, deformed_states, deformed_states_full, embed, in_plane_block, objectivity_error,
+        rotation, tangent_error,
+    };
 
     // EDIT: test your law: here the tangent against finite differences of the stress at random
-    // deformed states, and the neo-Hookean limit.
+    // deformed states (in-plane and full), objectivity, the in-plane embedding and the
+    // neo-Hookean limit.
     #[test]
     fn tangent_matches_finite_differences() {
         let law = Gent { g: 2e5, jm: 5.0 };
@@ -118,6 +127,32 @@ mod tests {
             .map(|b| tangent_error(&law, b))
             .fold(0.0, f64::max);
         assert!(worst < 1e-7, "worst relative tangent error {worst:e}");
+        let worst = deformed_states_full(200, 0.3, 12)
+            .iter()
+            .map(|b| tangent_error(&law, b))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-7, "worst relative 3-D tangent error {worst:e}");
+    }
+
+    #[test]
+    fn rotating_b_rotates_tau() {
+        let law = Gent { g: 2e5, jm: 5.0 };
+        let mut rng = XorShift::new(13);
+        for b in deformed_states_full(50, 0.3, 14) {
+            let e = objectivity_error(&law, &b, &rotation(&mut rng));
+            assert!(e < 1e-13, "{e:e}");
+        }
+    }
+
+    #[test]
+    fn in_plane_b_gives_the_in_plane_result_exactly() {
+        let law = Gent { g: 2e5, jm: 5.0 };
+        for b in deformed_states(100, 0.3, 15) {
+            let (t4, j4) = law.stress_and_tangent(&b);
+            let (t6, j6) = law.stress_and_tangent(&embed(&b));
+            assert_eq!(t6[..4], t4);
+            assert_eq!(in_plane_block(&j6), j4);
+        }
     }
 
     #[test]
@@ -134,5 +169,6 @@ mod tests {
     fn locking_limit_gives_nan() {
         let law = Gent { g: 1.0, jm: 1.0 };
         assert!(law.stress(&[3.0, 1.0, 1.0, 0.0])[0].is_nan());
+        assert!(law.stress(&[3.0, 1.0, 1.0, 0.0, 0.0, 0.0])[0].is_nan());
     }
 }

@@ -1,5 +1,6 @@
 //! The law-plugin loader against real plugin libraries: the shipped laws, the test-only
-//! plugins (wrong tangent, panicking, broken descriptor) and the law template built from a copy.
+//! plugins (wrong tangent, panicking, broken descriptor, NaN, a version-1 library) and the law
+//! template built from a copy.
 //!
 //! The libraries are built by `cargo build --workspace`, and by `cargo test -p efsi-laws-host`
 //! too (efsi-laws-host lists them as dev-dependencies, so cargo builds them into
@@ -7,8 +8,8 @@
 
 use efsi_laws_host::loader::{LAW_PATH_ENV, library_file_name, resolve_law, search_dirs};
 use efsi_laws_host::{
-    ConstitutiveLaw, FD_TANGENT_TOLERANCE, LawError, Listed, LoadedLaw, Sym, Tangent, describe,
-    list_laws,
+    ConstitutiveLaw, FD_TANGENT_TOLERANCE, LawError, Listed, LoadedLaw, Sym, Sym6, Tangent,
+    Tangent6, check_library, describe, list_laws,
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -66,6 +67,20 @@ fn eval(law: &dyn ConstitutiveLaw, b: &[Sym]) -> Result<(Vec<Sym>, Vec<Tangent>)
     Ok((tau, j))
 }
 
+fn eval_full(
+    law: &dyn ConstitutiveLaw,
+    b: &[Sym6],
+) -> Result<(Vec<Sym6>, Vec<Tangent6>), LawError> {
+    let mut tau = vec![[0.0; 6]; b.len()];
+    let mut j = vec![[0.0; 36]; b.len()];
+    law.evaluate_full(b, &mut tau, Some(&mut j))?;
+    Ok((tau, j))
+}
+
+fn embed(b: &Sym) -> Sym6 {
+    [b[0], b[1], b[2], b[3], 0.0, 0.0]
+}
+
 fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
     a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
 }
@@ -92,10 +107,200 @@ fn shipped_laws_load_by_name_and_pass_the_tangent_check() {
             "{name}: {check} (expected round-off only)"
         );
         eprintln!("{name}: {check}");
+        let full = law
+            .tangent_check_full()
+            .expect("a version-2 law has a 3-D check");
+        assert!(
+            full.passed() && full.worst_relative_error < 1e-8,
+            "{name}: {full}"
+        );
+        assert_eq!(full.worst_state.len(), 6);
+        eprintln!("{name} (3-D): {full}");
         let expect_file = library_file_name(name);
         assert!(law.info().path.ends_with(&expect_file));
-        assert_eq!(law.info().abi_version, 1);
+        assert_eq!(law.info().abi_version, 2);
+        assert!(law.evaluates_full());
+        // The same law for a 3-D scene.
+        let law =
+            efsi_laws_host::load_law_3d(name, &spec(name, &params).parameters, Path::new("."))
+                .unwrap_or_else(|e| panic!("{e}"));
+        assert!(law.tangent_check_full().unwrap().passed());
     }
+}
+
+/// Through the plugin: rotating a 3-D `B̃` rotates `τ` (`τ(Q B̃ Qᵀ) = Q τ(B̃) Qᵀ`) for each shipped
+/// law, at the full check states and fixed rotations about three different axes.
+#[test]
+fn shipped_laws_are_objective_in_3d() {
+    let rotations = [
+        rotation([1.0, 2.0, 3.0], 0.7),
+        rotation([0.0, 0.0, 1.0], 2.1),
+        rotation([-1.0, 0.5, 0.2], -1.3),
+    ];
+    let states = efsi_laws_host::loader::tangent_check_states_full();
+    for (name, params) in [
+        ("neo_hookean", vec![("G", 1.8e5)]),
+        ("saint_venant_kirchhoff", vec![("lambda", 1e6), ("mu", 2e5)]),
+        ("mooney_rivlin", vec![("C1", 1e5), ("C2", 3e4), ("C3", 5e4)]),
+    ] {
+        let law = load(name, &params).unwrap();
+        let (tau, _) = eval_full(&law, &states).unwrap();
+        // The law's stress scale over the states (τ(I) vanishes for Saint Venant–Kirchhoff).
+        let scale = tau.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for q in &rotations {
+            let rotated: Vec<Sym6> = states.iter().map(|b| rotate(q, b)).collect();
+            let (tau_r, _) = eval_full(&law, &rotated).unwrap();
+            for (k, t) in tau.iter().enumerate() {
+                let want = rotate(q, t);
+                assert!(
+                    close(&tau_r[k], &want, 1e-12 * scale),
+                    "{name} state {k}: {:?} vs {want:?}",
+                    tau_r[k]
+                );
+            }
+            // The rotation changes the states (the assertion above has something to test).
+            assert!(!close(&rotated[5], &states[5], 1e-3));
+        }
+    }
+}
+
+/// The rotation by `angle` about `axis` (Rodrigues).
+fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
+    let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    let [x, y, z] = axis.map(|a| a / n);
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}
+
+/// `Q B Qᵀ` of a stored symmetric tensor `[11, 22, 33, 12, 23, 13]`.
+fn rotate(q: &[[f64; 3]; 3], b: &Sym6) -> Sym6 {
+    let m = [[b[0], b[3], b[5]], [b[3], b[1], b[4]], [b[5], b[4], b[2]]];
+    let r = |i: usize, j: usize| {
+        let mut x = 0.0;
+        for (k, mk) in m.iter().enumerate() {
+            for (l, mkl) in mk.iter().enumerate() {
+                x += q[i][k] * mkl * q[j][l];
+            }
+        }
+        x
+    };
+    [r(0, 0), r(1, 1), r(2, 2), r(0, 1), r(1, 2), r(0, 2)]
+}
+
+/// A version-2 law on an in-plane `B̃` embedded in six components (13 = 23 = 0) gives its
+/// in-plane numbers, bit for bit, through the plugin's two entry points.
+#[test]
+fn full_evaluation_of_an_in_plane_b_is_the_in_plane_evaluation() {
+    let states = efsi_laws_host::loader::tangent_check_states();
+    let embedded: Vec<Sym6> = states.iter().map(embed).collect();
+    for (name, params) in [
+        ("neo_hookean", vec![("G", 1.8e5)]),
+        ("saint_venant_kirchhoff", vec![("lambda", 1e6), ("mu", 2e5)]),
+        ("mooney_rivlin", vec![("C1", 1e5), ("C2", 3e4), ("C3", 5e4)]),
+    ] {
+        let law = load(name, &params).unwrap();
+        let (t4, j4) = eval(&law, &states).unwrap();
+        let (t6, j6) = eval_full(&law, &embedded).unwrap();
+        for k in 0..states.len() {
+            assert_eq!(t6[k][..4], t4[k], "{name} state {k}");
+            assert_eq!(t6[k][4..], [0.0, 0.0], "{name} state {k}");
+            for a in 0..4 {
+                assert_eq!(j6[k][6 * a..6 * a + 4], j4[k][4 * a..4 * a + 4], "{name}");
+            }
+        }
+    }
+}
+
+/// A version-1 library (a frozen copy of the version-1 interface, Mooney–Rivlin with version
+/// 1's arithmetic): loads and runs on in-plane tensors as before, with numbers equal bit for
+/// bit to the version-2 `mooney_rivlin`'s in-plane ones and to its full evaluation of the same
+/// tensors embedded in six components; a 3-D scene refuses it naming the version.
+#[test]
+fn a_version_1_library_runs_in_plane_and_is_refused_in_3d() {
+    let path = test_plugin("efsi_test_law_v1");
+    let name = path.to_str().unwrap();
+    let params = [("C1", 1e5), ("C2", 3e4), ("C3", 5e4)];
+    let v1 = load(name, &params).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(v1.name(), "test_v1_mooney_rivlin");
+    assert_eq!(v1.info().abi_version, 1);
+    assert!(!v1.evaluates_full());
+    assert!(v1.tangent_check().worst_relative_error < 1e-8);
+    assert!(v1.tangent_check_full().is_none());
+
+    let v2 = load("mooney_rivlin", &params).unwrap();
+    let states = efsi_laws_host::loader::tangent_check_states();
+    let (t1, j1) = eval(&v1, &states).unwrap();
+    let (t2, j2) = eval(&v2, &states).unwrap();
+    assert_eq!(t1, t2);
+    assert_eq!(j1, j2);
+    let embedded: Vec<Sym6> = states.iter().map(embed).collect();
+    let (t6, j6) = eval_full(&v2, &embedded).unwrap();
+    for k in 0..states.len() {
+        assert_eq!(t6[k][..4], t1[k]);
+        for a in 0..4 {
+            assert_eq!(j6[k][6 * a..6 * a + 4], j1[k][4 * a..4 * a + 4]);
+        }
+    }
+
+    // In 3-D: refused at load, and a full evaluation is an error naming the version.
+    let e = efsi_laws_host::load_law_3d(name, &spec(name, &params).parameters, Path::new("."))
+        .unwrap_err();
+    eprintln!("{e}");
+    assert_eq!(e.law, "test_v1_mooney_rivlin");
+    for want in [
+        "built for ABI v1",
+        "in-plane tensors only",
+        "rebuild it against efsi-law-sdk",
+        "(ABI v2) to use it in a 3-D scene",
+    ] {
+        assert!(e.message.contains(want), "{want:?} not in: {e}");
+    }
+    let e2 = eval_full(&v1, &embedded).unwrap_err();
+    assert_eq!(e2.message, e.message);
+    assert_eq!(e2.cell, None);
+
+    // `efsi laws --check` runs the in-plane check only; the listing names the version.
+    let check = check_library(&path).unwrap();
+    assert!(
+        check.passed() && check.full.is_none() && check.embedding.is_none(),
+        "{check:?}"
+    );
+    let text = describe(&path).unwrap().to_string();
+    assert!(text.contains("ABI v1: in-plane tensors only"), "{text}");
+}
+
+#[test]
+fn check_library_runs_both_checks_of_a_version_2_law() {
+    let path = resolve_law("saint_venant_kirchhoff", Path::new(".")).unwrap();
+    let check = check_library(&path).unwrap();
+    assert!(check.passed());
+    assert_eq!(check.in_plane.worst_state.len(), 4);
+    let full = check.full.unwrap();
+    assert_eq!((full.states, full.skipped), (26, 0));
+    assert!(full.worst_relative_error < 1e-8, "{full}");
+    // The SDK's two evaluations agree bit for bit on in-plane tensors.
+    let embedding = check.embedding.unwrap();
+    assert_eq!(embedding.worst_relative_difference, 0.0, "{embedding}");
+    assert!(
+        describe(&path)
+            .unwrap()
+            .to_string()
+            .contains("ABI v2: full and in-plane tensors")
+    );
+    // The wrong tangent fails both.
+    let wrong = check_library(&test_plugin("efsi_test_law_wrong_tangent")).unwrap();
+    assert!(!wrong.passed() && !wrong.in_plane.passed());
+    let full = wrong.full.unwrap();
+    assert!(!full.passed(), "{full}");
+    assert!(
+        (full.tangent / full.finite_difference - 1.5).abs() < 1e-6,
+        "{full}"
+    );
 }
 
 #[test]
@@ -279,6 +484,11 @@ fn panicking_plugin_returns_errors_and_the_process_survives() {
     // Still usable after the caught panic.
     let (tau, _) = eval(&law, &[[2.0, 1.0, 1.0, 0.5]]).unwrap();
     assert_eq!(tau[0], [2e5, 1e5, 1e5, 0.5e5]);
+    // The full evaluation catches it alike.
+    let e = eval_full(&law, &[[11.0, 1.0, 1.0, 0.0, 0.2, 0.1]]).unwrap_err();
+    assert_eq!(e.message, "panicked in evaluate: b11 = 11 exceeds 10");
+    let (tau, _) = eval_full(&law, &[[2.0, 1.0, 1.0, 0.5, 0.25, -0.5]]).unwrap();
+    assert_eq!(tau[0], [2e5, 1e5, 1e5, 0.5e5, 0.25e5, -0.5e5]);
 }
 
 #[test]
@@ -297,6 +507,21 @@ fn non_finite_output_names_the_first_bad_cell() {
     let mut tau = vec![[0.0; 4]; 3];
     let e = law.evaluate(&b, &mut tau, None).unwrap_err();
     assert_eq!(e.cell, Some(2), "{e}");
+    // A full batch: the law that turns NaN past a stretch names the first such cell.
+    let nan = load(
+        test_plugin("efsi_test_law_nan").to_str().unwrap(),
+        &[("limit", 1.5)],
+    )
+    .unwrap();
+    let b6 = [
+        [1.0, 1.0, 1.0, 0.0, 0.1, 0.1],
+        [1.6, 1.0, 1.0, 0.0, 0.1, 0.1],
+        [1.7, 1.0, 1.0, 0.0, 0.0, 0.0],
+    ];
+    let e = eval_full(&nan, &b6).unwrap_err();
+    assert_eq!(e.law, "test_nan");
+    assert!(e.message.contains("non-finite stress"), "{e}");
+    assert_eq!(e.cell, Some(1), "{e}");
 }
 
 #[test]
@@ -327,8 +552,9 @@ fn wrong_abi_version_is_refused() {
     }
     let e = load(path.to_str().unwrap(), &[]).unwrap_err();
     assert!(
-        e.message
-            .contains("built for ABI v2, efsi expects v1: rebuild the law against efsi-law-sdk"),
+        e.message.contains(
+            "built for ABI v3, efsi expects v2 (or v1, in-plane tensors only): rebuild the law against efsi-law-sdk"
+        ),
         "{e}"
     );
 }
@@ -341,13 +567,14 @@ fn descriptor_size_and_functions_are_checked() {
         let path = test_plugin("efsi_test_law_bad_abi");
         let e = load(path.to_str().unwrap(), &[]).unwrap_err();
         let want = match mode.as_str() {
-            "size" => "descriptor size 80 bytes, efsi expects 72",
+            "size" => "descriptor size 88 bytes, efsi expects 80 for ABI v2",
+            "v1-size" => "descriptor size 80 bytes, efsi expects 72 for ABI v1",
             "functions" => "lacks a create, destroy or evaluate function",
             other => panic!("unknown mode {other}"),
         };
         assert!(e.message.contains(want), "{e}");
         // The name is read only from a descriptor whose layout is trusted.
-        let law = if mode == "size" {
+        let law = if mode.ends_with("size") {
             path.to_str().unwrap()
         } else {
             "test_bad_abi"
@@ -358,7 +585,7 @@ fn descriptor_size_and_functions_are_checked() {
     if !cfg!(target_pointer_width = "64") {
         return;
     }
-    for mode in ["size", "functions"] {
+    for mode in ["size", "v1-size", "functions"] {
         let out = Command::new(std::env::current_exe().unwrap())
             .args(["--exact", "descriptor_size_and_functions_are_checked"])
             .env("EFSI_TEST_BAD_ABI", mode)
@@ -463,6 +690,23 @@ fn batches_of_many_cells_and_threads() {
     // Mismatched slices are an error, not UB.
     let e = law.evaluate(&b[..2], &mut [[0.0; 4]; 1], None).unwrap_err();
     assert!(e.message.contains("evaluate called with 2"), "{e}");
+    // Full batches, from two threads.
+    let states6 = efsi_laws_host::loader::tangent_check_states_full();
+    let b6: Vec<Sym6> = (0..10_000).map(|k| states6[k % states6.len()]).collect();
+    let (tau6, j6) = eval_full(&*law, &b6).unwrap();
+    let handles: Vec<_> = (0..2)
+        .map(|_| {
+            let (law, b6) = (law.clone(), b6.clone());
+            std::thread::spawn(move || eval_full(&*law, &b6).unwrap())
+        })
+        .collect();
+    for h in handles {
+        assert_eq!(h.join().unwrap(), (tau6.clone(), j6.clone()));
+    }
+    let e = law
+        .evaluate_full(&b6[..3], &mut [[0.0; 6]; 3], Some(&mut [[0.0; 36]; 2]))
+        .unwrap_err();
+    assert!(e.message.contains("evaluate called with 3"), "{e}");
 }
 
 /// Copies `plugins/law-template` to a temporary folder, renames the crate and the law, edits a
@@ -547,6 +791,8 @@ fn the_template_copies_builds_and_loads() {
         "{}",
         law.tangent_check()
     );
+    let full = law.tangent_check_full().unwrap();
+    assert!(full.worst_relative_error < 1e-7, "{full}");
     let b = [1.4, 0.9, 1.2, 0.3];
     let (tau, _) = eval(&law, &[b]).unwrap();
     let f = 2e5 * 20.0 / (20.0 - (b[0] + b[1] + b[2] - 3.0));

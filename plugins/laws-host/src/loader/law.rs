@@ -1,13 +1,14 @@
 //! [`LoadedLaw`], the safe wrapper of a law instance in a plugin library: it owns the library and
-//! the instance, evaluates batches through the plugin and turns a failed status, a panic in the
-//! plugin or a non-finite output into a [`LawError`].
+//! the instance, evaluates batches through the plugin (in-plane, or full for a version-2
+//! library) and turns a failed status, a panic in the plugin or a non-finite output into a
+//! [`LawError`].
 
 use super::LawInfo;
 use super::tangent::TangentCheck;
-use crate::{ConstitutiveLaw, LawError, Sym, Tangent};
+use crate::{ConstitutiveLaw, LawError, Sym, Sym6, Tangent, Tangent6};
 use efsi_law_abi::{
-    DestroyFn, ErrBuf, EvaluateFn, STATUS_ERROR, STATUS_INVALID_ARGUMENT, STATUS_NON_FINITE,
-    STATUS_OK, STATUS_PANIC,
+    CRATE_VERSION, DestroyFn, ErrBuf, EvaluateFn, STATUS_ERROR, STATUS_INVALID_ARGUMENT,
+    STATUS_NON_FINITE, STATUS_OK, STATUS_PANIC,
 };
 use libloading::Library;
 use std::ffi::c_void;
@@ -20,9 +21,12 @@ pub struct LoadedLaw {
     pub(super) info: LawInfo,
     pub(super) values: Vec<f64>,
     pub(super) handle: NonNull<c_void>,
-    pub(super) evaluate_fn: EvaluateFn,
+    pub(super) evaluate_in_plane: EvaluateFn,
+    /// `None` for a version-1 library (in-plane tensors only).
+    pub(super) evaluate_full: Option<EvaluateFn>,
     pub(super) destroy_fn: DestroyFn,
     pub(super) check: Option<TangentCheck>,
+    pub(super) check_full: Option<TangentCheck>,
     // Declared last: dropped after `Drop::drop` destroyed the handle.
     pub(super) _library: Library,
 }
@@ -58,11 +62,33 @@ impl LoadedLaw {
             .collect()
     }
 
-    /// The load-time tangent check's result.
+    /// The load-time tangent check's result on in-plane tensors.
     pub fn tangent_check(&self) -> &TangentCheck {
         self.check
             .as_ref()
             .expect("a loaded law has passed its tangent check")
+    }
+
+    /// The load-time tangent check's result on full 3-D tensors; `None` for a version-1
+    /// library, which has no full evaluation.
+    pub fn tangent_check_full(&self) -> Option<&TangentCheck> {
+        self.check_full.as_ref()
+    }
+
+    /// Whether the law evaluates full 3-D tensors (a version-2 library; a version-1 library
+    /// carries in-plane tensors only).
+    pub fn evaluates_full(&self) -> bool {
+        self.evaluate_full.is_some()
+    }
+
+    /// The refusal of a version-1 library in a 3-D scene, naming the version.
+    pub(super) fn in_plane_only(&self) -> LawError {
+        self.error(format!(
+            "{} was built for ABI v{}, which carries in-plane tensors only (components 11, 22, 33, 12): it runs in planar and axisymmetric scenes but cannot be evaluated on a 3-D tensor; rebuild it against efsi-law-sdk {CRATE_VERSION} (ABI v{}) to use it in a 3-D scene",
+            self.info.path.display(),
+            self.info.abi_version,
+            efsi_law_abi::ABI_VERSION
+        ))
     }
 
     pub(super) fn error(&self, message: String) -> LawError {
@@ -90,7 +116,33 @@ impl ConstitutiveLaw for LoadedLaw {
         &self,
         b: &[Sym],
         tau: &mut [Sym],
-        mut tangent: Option<&mut [Tangent]>,
+        tangent: Option<&mut [Tangent]>,
+    ) -> Result<(), LawError> {
+        self.call(self.evaluate_in_plane, b, tau, tangent)
+    }
+
+    fn evaluate_full(
+        &self,
+        b: &[Sym6],
+        tau: &mut [Sym6],
+        tangent: Option<&mut [Tangent6]>,
+    ) -> Result<(), LawError> {
+        let Some(f) = self.evaluate_full else {
+            return Err(self.in_plane_only());
+        };
+        self.call(f, b, tau, tangent)
+    }
+}
+
+impl LoadedLaw {
+    /// One plugin call on a batch of `N`-component tensors through `f` (`N = 4` in-plane,
+    /// `N = 6` full; `NN = N²`), its status and outputs checked.
+    fn call<const N: usize, const NN: usize>(
+        &self,
+        f: EvaluateFn,
+        b: &[[f64; N]],
+        tau: &mut [[f64; N]],
+        mut tangent: Option<&mut [[f64; NN]]>,
     ) -> Result<(), LawError> {
         let n = b.len();
         if tau.len() != n || tangent.as_ref().is_some_and(|j| j.len() != n) {
@@ -107,11 +159,11 @@ impl ConstitutiveLaw for LoadedLaw {
         let tangent_ptr = tangent
             .as_deref_mut()
             .map_or(std::ptr::null_mut(), |j| j.as_mut_ptr().cast::<f64>());
-        // SAFETY: `b`, `tau` and `tangent` hold `n` cells of 4, 4 and 16 contiguous f64
-        // (cell-major, as the ABI lays them out) and do not overlap (distinct borrows); the
-        // handle is alive.
+        // SAFETY: `b`, `tau` and `tangent` hold `n` cells of N, N and N² contiguous f64
+        // (cell-major, as the ABI lays them out for the function `f`, the matching one of the
+        // descriptor's two) and do not overlap (distinct borrows); the handle is alive.
         let status = unsafe {
-            (self.evaluate_fn)(
+            f(
                 self.handle.as_ptr(),
                 n,
                 b.as_ptr().cast::<f64>(),

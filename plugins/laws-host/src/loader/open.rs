@@ -1,13 +1,16 @@
 //! Opening a law library and checking it before anything else runs: its file's structure
 //! ([`super::elf`], before the dynamic loader sees it), the entry symbol, the ABI version and
-//! descriptor size, the strings and the parameter table of its descriptor.
+//! descriptor size, the strings and the parameter table of its descriptor. A version-2 library
+//! (the current ABI) and a version-1 library (the frozen [`efsi_law_abi::v1`] layout, in-plane
+//! tensors only) are read; any other version is refused.
 
 use super::LawInfo;
 use super::params::ParamInfo;
 use crate::LawError;
 use efsi_law_abi::{
-    ABI_VERSION, CRATE_VERSION, DESCRIPTOR_SIZE, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NAME,
-    EntryFn, EvaluateFn, LawDescriptor, PARAM_MAX_EXCLUSIVE, PARAM_MIN_EXCLUSIVE, ParamDesc,
+    ABI_VERSION, CRATE_VERSION, CreateFn, DESCRIPTOR_SIZE, DestroyFn, ENTRY_SYMBOL,
+    ENTRY_SYMBOL_NAME, EntryFn, EvaluateFn, LawDescriptor, PARAM_MAX_EXCLUSIVE,
+    PARAM_MIN_EXCLUSIVE, ParamDesc, v1,
 };
 use libloading::Library;
 use std::ffi::{CStr, c_char};
@@ -17,9 +20,58 @@ use std::path::Path;
 pub(super) struct Opened {
     pub(super) library: Library,
     pub(super) info: LawInfo,
-    pub(super) create: efsi_law_abi::CreateFn,
+    pub(super) create: CreateFn,
     pub(super) destroy: DestroyFn,
-    pub(super) evaluate: EvaluateFn,
+    pub(super) evaluate_in_plane: EvaluateFn,
+    /// `None` for a version-1 library.
+    pub(super) evaluate_full: Option<EvaluateFn>,
+}
+
+/// The fields of a descriptor of either version that the loader uses (pointers into the
+/// library, valid while it stays loaded).
+struct Fields {
+    name: *const c_char,
+    description: *const c_char,
+    param_count: usize,
+    params: *const ParamDesc,
+    param_desc_size: usize,
+    create: Option<CreateFn>,
+    destroy: Option<DestroyFn>,
+    evaluate_in_plane: Option<EvaluateFn>,
+    /// `Some(_)` for version 2 (present or not), `None` for version 1 (no such field).
+    evaluate_full: Option<Option<EvaluateFn>>,
+}
+
+impl From<&LawDescriptor> for Fields {
+    fn from(d: &LawDescriptor) -> Self {
+        Fields {
+            name: d.name,
+            description: d.description,
+            param_count: d.param_count,
+            params: d.params,
+            param_desc_size: d.param_desc_size,
+            create: d.create,
+            destroy: d.destroy,
+            evaluate_in_plane: d.evaluate_in_plane,
+            evaluate_full: Some(d.evaluate_full),
+        }
+    }
+}
+
+impl From<&v1::LawDescriptor> for Fields {
+    fn from(d: &v1::LawDescriptor) -> Self {
+        Fields {
+            name: d.name,
+            description: d.description,
+            param_count: d.param_count,
+            params: d.params,
+            param_desc_size: d.param_desc_size,
+            create: d.create,
+            destroy: d.destroy,
+            evaluate_in_plane: d.evaluate,
+            evaluate_full: None,
+        }
+    }
 }
 
 /// Opens `path` and checks its descriptor; `label` names the law until the descriptor does.
@@ -30,15 +82,25 @@ pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
     let text = |p: *const c_char, what: &str, law: &str| unsafe { c_text(p, what, law, path) };
     let name = text(d.name, "name", label)?;
     let description = text(d.description, "description", &name)?;
-    let parameters = parameters(d, path, &name)?;
-    let (Some(create), Some(destroy), Some(evaluate)) = (d.create, d.destroy, d.evaluate) else {
-        return Err(fail(
+    let parameters = parameters(&d, path, &name)?;
+    let missing = || {
+        fail(
             &name,
             format!(
                 "{}: the descriptor lacks a create, destroy or evaluate function",
                 path.display()
             ),
-        ));
+        )
+    };
+    let (Some(create), Some(destroy), Some(evaluate_in_plane)) =
+        (d.create, d.destroy, d.evaluate_in_plane)
+    else {
+        return Err(missing());
+    };
+    let evaluate_full = match d.evaluate_full {
+        None => None,
+        Some(None) => return Err(missing()),
+        Some(Some(f)) => Some(f),
     };
     Ok(Opened {
         info: LawInfo {
@@ -50,7 +112,8 @@ pub(super) fn open(path: &Path, label: &str) -> Result<Opened, LawError> {
         },
         create,
         destroy,
-        evaluate,
+        evaluate_in_plane,
+        evaluate_full,
         library,
     })
 }
@@ -87,12 +150,8 @@ fn load(path: &Path, law: &str) -> Result<Library, LawError> {
 }
 
 /// The descriptor `library`'s entry symbol returns, after its frozen header (ABI version and
-/// descriptor size) matched this build's; with the version.
-fn descriptor<'l>(
-    library: &'l Library,
-    path: &Path,
-    law: &str,
-) -> Result<(&'l LawDescriptor, u32), LawError> {
+/// descriptor size) matched this build's version or version 1; with the version.
+fn descriptor(library: &Library, path: &Path, law: &str) -> Result<(Fields, u32), LawError> {
     // SAFETY: the symbol's type is fixed by the ABI (`EntryFn`), for every version.
     let entry: EntryFn = unsafe { library.get::<EntryFn>(ENTRY_SYMBOL) }
         .map(|s| *s)
@@ -119,30 +178,43 @@ fn descriptor<'l>(
     // The first two u32 fields are frozen across ABI versions: read them before anything else.
     // SAFETY: every version's descriptor starts with these two fields.
     let [version, size] = unsafe { ptr.cast::<[u32; 2]>().read() };
-    if version != ABI_VERSION {
+    let expected = match version {
+        ABI_VERSION => DESCRIPTOR_SIZE,
+        v1::ABI_VERSION => v1::DESCRIPTOR_SIZE,
+        _ => {
+            return Err(fail(
+                law,
+                format!(
+                    "{} was built for ABI v{version}, efsi expects v{ABI_VERSION} (or v{}, in-plane tensors only): rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                    path.display(),
+                    v1::ABI_VERSION
+                ),
+            ));
+        }
+    };
+    if size != expected {
         return Err(fail(
             law,
             format!(
-                "{} was built for ABI v{version}, efsi expects v{ABI_VERSION}: rebuild the law against efsi-law-sdk {CRATE_VERSION}",
+                "{}: descriptor size {size} bytes, efsi expects {expected} for ABI v{version}: the library's layout does not match its version; rebuild it against efsi-law-sdk {CRATE_VERSION}",
                 path.display()
             ),
         ));
     }
-    if size != DESCRIPTOR_SIZE {
-        return Err(fail(
-            law,
-            format!(
-                "{}: descriptor size {size} bytes, efsi expects {DESCRIPTOR_SIZE} for ABI v{ABI_VERSION}: the library's layout does not match its version; rebuild it against efsi-law-sdk {CRATE_VERSION}",
-                path.display()
-            ),
-        ));
-    }
-    // SAFETY: version and size match this crate's definition; it lives as long as `library`.
-    Ok((unsafe { &*ptr }, version))
+    let fields = if version == ABI_VERSION {
+        // SAFETY: version and size match this crate's definition; it lives as long as
+        // `library`.
+        Fields::from(unsafe { &*ptr })
+    } else {
+        // SAFETY: version and size match the frozen version-1 definition; it lives as long as
+        // `library`.
+        Fields::from(unsafe { &*ptr.cast::<v1::LawDescriptor>() })
+    };
+    Ok((fields, version))
 }
 
 /// The parameter table of descriptor `d`, each entry's strings, uniqueness and default checked.
-fn parameters(d: &LawDescriptor, path: &Path, law: &str) -> Result<Vec<ParamInfo>, LawError> {
+fn parameters(d: &Fields, path: &Path, law: &str) -> Result<Vec<ParamInfo>, LawError> {
     // SAFETY: descriptor strings are NUL-terminated, live as long as the library (ABI rule).
     let text = |p: *const c_char, what: &str| unsafe { c_text(p, what, law, path) };
     if d.param_desc_size != std::mem::size_of::<ParamDesc>() {

@@ -129,9 +129,11 @@ pub(super) fn instantiate(
         info,
         values,
         handle,
-        evaluate_fn: opened.evaluate,
+        evaluate_in_plane: opened.evaluate_in_plane,
+        evaluate_full: opened.evaluate_full,
         destroy_fn: opened.destroy,
         check: None,
+        check_full: None,
         _library: opened.library,
     })
 }

@@ -9,8 +9,9 @@
 //! `2 (C1 + C2)`, which must be positive. Neo-Hookean is `C1 = G/2, C2 = C3 = 0` (Eq. 9);
 //! Saint Venant–Kirchhoff is `C1 = μ, C2 = −μ/2, C3 = (λ + 2μ)/8` (Eq. 10).
 //!
-//! Tangent in the 4-component representation (shear counted once), with `t = tr(B̃)`,
-//! `∂t/∂B̃ = [1, 1, 1, 0]` and `Q = ∂(B̃·B̃)/∂B̃` (see `efsi_law_sdk::tensor::square_tangent`):
+//! Tangent in either representation (6 or 4 components, shear counted once), with
+//! `t = tr(B̃)`, `∂t/∂B̃ = [1, 1, 1, 0, 0, 0]` (or `[1, 1, 1, 0]`) and `Q = ∂(B̃·B̃)/∂B̃` (see
+//! `efsi_law_sdk::tensor::square_tangent`):
 //!
 //! ```text
 //! J = 2 C1 I + 2 C2 [B̃ ⊗ ∂t/∂B̃ + t I − Q] + 4 C3 [B̃ ⊗ ∂t/∂B̃ + (t − 3) I]
@@ -21,7 +22,7 @@
 //!
 //! Built as `libefsi_law_mooney_rivlin.so`; a scene names it `mooney_rivlin`.
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// Mooney–Rivlin solid (seed Eq. 7).
 #[derive(Clone, Debug, PartialEq)]
@@ -58,21 +59,21 @@ impl HyperelasticLaw for MooneyRivlin {
         Ok(MooneyRivlin { c1, c2, c3 })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         let t = tensor::trace(b);
         let q = tensor::square(b);
         let s = 2.0 * self.c1 + 2.0 * self.c2 * t + 4.0 * self.c3 * (t - 3.0);
-        std::array::from_fn(|a| s * b[a] - 2.0 * self.c2 * q[a])
+        T::from_fn(|a| s * b[a] - 2.0 * self.c2 * q[a])
     }
 
-    fn tangent(&self, b: &Sym) -> Tangent {
+    fn tangent<T: SymTensor>(&self, b: &T) -> T::Tangent {
         let t = tensor::trace(b);
         let q = tensor::square_tangent(b);
-        let bt = tensor::outer(b, &tensor::D_TRACE);
+        let bt = tensor::outer(b, &T::D_TRACE);
         let diag = 2.0 * self.c1 + 2.0 * self.c2 * t + 4.0 * self.c3 * (t - 3.0);
         let k = 2.0 * self.c2 + 4.0 * self.c3;
-        let mut j = tensor::scaled_identity(diag);
-        for i in 0..16 {
+        let mut j = tensor::scaled_identity::<T>(diag);
+        for i in 0..T::TANGENT_LEN {
             j[i] += k * bt[i] - 2.0 * self.c2 * q[i];
         }
         j
@@ -84,7 +85,10 @@ export_law!(MooneyRivlin);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use efsi_law_sdk::testing::{deformed_states, tangent_error};
+    use efsi_law_sdk::testing::{
+        XorShift, deformed_states, deformed_states_full, embed, in_plane_block, objectivity_error,
+        rotation, tangent_error,
+    };
 
     #[test]
     fn tangent_matches_finite_differences() {
@@ -111,14 +115,14 @@ mod tests {
 
     #[test]
     fn stress_matches_full_3x3_formula() {
-        // Eq. 7 with 3×3 matrices, independent of the 4-component shortcuts.
+        // Eq. 7 with 3×3 matrices, independent of the component shortcuts.
         let law = MooneyRivlin {
             c1: 1.0,
             c2: 0.7,
             c3: 0.3,
         };
-        for b in deformed_states(20, 0.4, 3) {
-            let m = [[b[0], b[3], 0.0], [b[3], b[1], 0.0], [0.0, 0.0, b[2]]];
+        for b in deformed_states_full(20, 0.4, 3) {
+            let m = efsi_law_sdk::testing::to_matrix(&b);
             let tr = m[0][0] + m[1][1] + m[2][2];
             let mut sq = [[0.0; 3]; 3];
             for i in 0..3 {
@@ -131,9 +135,16 @@ mod tests {
                     + 2.0 * law.c2 * (tr * m[i][k] - sq[i][k])
                     + 4.0 * law.c3 * (tr - 3.0) * m[i][k]
             };
-            let want = [tau(0, 0), tau(1, 1), tau(2, 2), tau(0, 1)];
+            let want = [
+                tau(0, 0),
+                tau(1, 1),
+                tau(2, 2),
+                tau(0, 1),
+                tau(1, 2),
+                tau(0, 2),
+            ];
             let got = law.stress(&b);
-            for a in 0..4 {
+            for a in 0..6 {
                 assert!((got[a] - want[a]).abs() < 1e-12 * (1.0 + want[a].abs()));
             }
         }
@@ -143,5 +154,49 @@ mod tests {
     fn refuses_non_positive_shear_modulus() {
         let e = efsi_law_sdk::create_law::<MooneyRivlin>(&[1.0, -2.0, 0.0]).unwrap_err();
         assert!(e.contains("2 (C1 + C2)"), "{e}");
+    }
+
+    #[test]
+    fn full_tangent_matches_finite_differences() {
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
+            let worst = deformed_states_full(200, 0.3, 51)
+                .iter()
+                .map(|b| tangent_error(&law, b))
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-8, "{law:?}: worst {worst:e}");
+        }
+    }
+
+    #[test]
+    fn rotating_b_rotates_tau() {
+        let mut rng = XorShift::new(52);
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
+            for b in deformed_states_full(50, 0.3, 53) {
+                let q = rotation(&mut rng);
+                let e = objectivity_error(&law, &b, &q);
+                assert!(e < 1e-13, "{law:?}: {e:e} at {b:?}");
+            }
+        }
+    }
+
+    /// A v2 law on an in-plane B̃ (13 = 23 = 0) gives the in-plane evaluation's numbers, which
+    /// are version 1's, bit for bit.
+    #[test]
+    fn in_plane_b_gives_the_in_plane_result_exactly() {
+        for law in [(5e4, 0.0, 0.0), (3e5, -1e5, 2e5), (1e5, 4e4, 1e3)]
+            .map(|(c1, c2, c3)| MooneyRivlin { c1, c2, c3 })
+        {
+            for b in deformed_states(100, 0.3, 54) {
+                let (t4, j4) = law.stress_and_tangent(&b);
+                let (t6, j6) = law.stress_and_tangent(&embed(&b));
+                assert_eq!(t6[..4], t4);
+                assert_eq!(t6[4..], [0.0, 0.0]);
+                assert_eq!(in_plane_block(&j6), j4);
+            }
+        }
     }
 }

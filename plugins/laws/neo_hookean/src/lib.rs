@@ -1,14 +1,15 @@
 //! # Neo-Hookean law (seed Eq. 9)
 //!
 //! `τ = G B̃`, the Mooney–Rivlin form of seed Eq. 7 with `C1 = G/2`, `C2 = C3 = 0`;
-//! tangent `∂τ/∂B̃ = G I` (identity in the 4-component representation).
+//! tangent `∂τ/∂B̃ = G I` (the identity of the 6- or 4-component representation, shear counted
+//! once).
 //!
 //! Parameter: `G`, shear modulus in Pa, default 1e5 Pa, range `(0, ∞)`.
 //!
 //! Built as `libefsi_law_neo_hookean.so`; a scene names it `neo_hookean`:
 //! `law: (name: "neo_hookean", parameters: {"G": 0.18e6})`.
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// Neo-Hookean solid, `τ = G B̃`.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,12 +32,12 @@ impl HyperelasticLaw for NeoHookean {
         Ok(NeoHookean { g: values[0] })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         b.map(|x| self.g * x)
     }
 
-    fn tangent(&self, _b: &Sym) -> Tangent {
-        tensor::scaled_identity(self.g)
+    fn tangent<T: SymTensor>(&self, _b: &T) -> T::Tangent {
+        tensor::scaled_identity::<T>(self.g)
     }
 }
 
@@ -45,7 +46,10 @@ export_law!(NeoHookean);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use efsi_law_sdk::testing::{deformed_states, tangent_error};
+    use efsi_law_sdk::testing::{
+        XorShift, deformed_states, deformed_states_full, embed, in_plane_block, objectivity_error,
+        rotation, tangent_error,
+    };
 
     #[test]
     fn tangent_matches_finite_differences() {
@@ -63,6 +67,48 @@ mod tests {
             efsi_law_sdk::create_law(&efsi_law_sdk::defaults::<NeoHookean>()).unwrap();
         assert_eq!(law.g, 1.0e5);
         assert_eq!(law.stress(&[1.0, 2.0, 3.0, 0.5]), [1e5, 2e5, 3e5, 0.5e5]);
+        assert_eq!(
+            law.stress(&[1.0, 2.0, 3.0, 0.5, -0.25, 0.125]),
+            [1e5, 2e5, 3e5, 0.5e5, -0.25e5, 0.125e5]
+        );
         assert!(efsi_law_sdk::create_law::<NeoHookean>(&[0.0]).is_err());
+    }
+
+    #[test]
+    fn full_tangent_matches_finite_differences() {
+        for law in [NeoHookean { g: 2.5e5 }, NeoHookean { g: 3.0 }] {
+            let worst = deformed_states_full(200, 0.3, 31)
+                .iter()
+                .map(|b| tangent_error(&law, b))
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-8, "{law:?}: worst {worst:e}");
+        }
+    }
+
+    #[test]
+    fn rotating_b_rotates_tau() {
+        let mut rng = XorShift::new(32);
+        for law in [NeoHookean { g: 2.5e5 }, NeoHookean { g: 3.0 }] {
+            for b in deformed_states_full(50, 0.3, 33) {
+                let q = rotation(&mut rng);
+                let e = objectivity_error(&law, &b, &q);
+                assert!(e < 1e-13, "{law:?}: {e:e} at {b:?}");
+            }
+        }
+    }
+
+    /// A v2 law on an in-plane B̃ (13 = 23 = 0) gives the in-plane evaluation's numbers, which
+    /// are version 1's, bit for bit.
+    #[test]
+    fn in_plane_b_gives_the_in_plane_result_exactly() {
+        for law in [NeoHookean { g: 2.5e5 }, NeoHookean { g: 3.0 }] {
+            for b in deformed_states(100, 0.3, 34) {
+                let (t4, j4) = law.stress_and_tangent(&b);
+                let (t6, j6) = law.stress_and_tangent(&embed(&b));
+                assert_eq!(t6[..4], t4);
+                assert_eq!(t6[4..], [0.0, 0.0]);
+                assert_eq!(in_plane_block(&j6), j4);
+            }
+        }
     }
 }

@@ -10,8 +10,8 @@
 //! `C3 = (λ + 2μ)/8` (expand: `2μB̃ − μ[tr B̃ B̃ − B̃·B̃] + ((λ + 2μ)/2)(tr B̃ − 3)B̃`). The unit
 //! tests check that identity; the loader's tests check it across the two plugin libraries.
 //!
-//! Tangent in the 4-component representation (shear counted once), `t = tr(B̃)`,
-//! `∂t/∂B̃ = [1, 1, 1, 0]`, `Q = ∂(B̃·B̃)/∂B̃`:
+//! Tangent in either representation (6 or 4 components, shear counted once), `t = tr(B̃)`,
+//! `∂t/∂B̃ = [1, 1, 1, 0, 0, 0]` (or `[1, 1, 1, 0]`), `Q = ∂(B̃·B̃)/∂B̃`:
 //!
 //! ```text
 //! J = (λ/2) [B̃ ⊗ ∂t/∂B̃ + (t − 3) I] + μ (Q − I)
@@ -22,7 +22,7 @@
 //!
 //! Built as `libefsi_law_saint_venant_kirchhoff.so`; a scene names it `saint_venant_kirchhoff`.
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// Saint Venant–Kirchhoff solid (seed Eq. 10).
 #[derive(Clone, Debug, PartialEq)]
@@ -58,18 +58,18 @@ impl HyperelasticLaw for SaintVenantKirchhoff {
         })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         let s = 0.5 * self.lambda * (tensor::trace(b) - 3.0) - self.mu;
         let q = tensor::square(b);
-        std::array::from_fn(|a| s * b[a] + self.mu * q[a])
+        T::from_fn(|a| s * b[a] + self.mu * q[a])
     }
 
-    fn tangent(&self, b: &Sym) -> Tangent {
+    fn tangent<T: SymTensor>(&self, b: &T) -> T::Tangent {
         let t = tensor::trace(b);
         let q = tensor::square_tangent(b);
-        let bt = tensor::outer(b, &tensor::D_TRACE);
-        let mut j = tensor::scaled_identity(0.5 * self.lambda * (t - 3.0) - self.mu);
-        for i in 0..16 {
+        let bt = tensor::outer(b, &T::D_TRACE);
+        let mut j = tensor::scaled_identity::<T>(0.5 * self.lambda * (t - 3.0) - self.mu);
+        for i in 0..T::TANGENT_LEN {
             j[i] += 0.5 * self.lambda * bt[i] + self.mu * q[i];
         }
         j
@@ -81,15 +81,16 @@ export_law!(SaintVenantKirchhoff);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use efsi_law_sdk::testing::{deformed_states, tangent_error};
+    use efsi_law_sdk::testing::{
+        XorShift, deformed_states, deformed_states_full, embed, in_plane_block, objectivity_error,
+        rotation, tangent_error,
+    };
 
-    /// Seed Eq. 7 as written, with 4-component helpers.
-    fn mooney_rivlin(c1: f64, c2: f64, c3: f64, b: &Sym) -> Sym {
+    /// Seed Eq. 7 as written, with the SDK's helpers.
+    fn mooney_rivlin<T: SymTensor>(c1: f64, c2: f64, c3: f64, b: &T) -> T {
         let t = tensor::trace(b);
         let q = tensor::square(b);
-        std::array::from_fn(|a| {
-            2.0 * c1 * b[a] + 2.0 * c2 * (t * b[a] - q[a]) + 4.0 * c3 * (t - 3.0) * b[a]
-        })
+        T::from_fn(|a| 2.0 * c1 * b[a] + 2.0 * c2 * (t * b[a] - q[a]) + 4.0 * c3 * (t - 3.0) * b[a])
     }
 
     #[test]
@@ -109,9 +110,9 @@ mod tests {
         let (lambda, mu) = (3.0e5, 1.2e5);
         let law = SaintVenantKirchhoff { lambda, mu };
         let (c1, c2, c3) = (mu, -mu / 2.0, (lambda + 2.0 * mu) / 8.0);
-        for b in deformed_states(100, 0.4, 5) {
+        for b in deformed_states_full(100, 0.4, 5) {
             let (got, want) = (law.stress(&b), mooney_rivlin(c1, c2, c3, &b));
-            for a in 0..4 {
+            for a in 0..6 {
                 assert!(
                     (got[a] - want[a]).abs() <= 1e-10 * (lambda + mu),
                     "{got:?} vs {want:?}"
@@ -126,6 +127,51 @@ mod tests {
             lambda: 4e5,
             mu: 1e5,
         };
-        assert_eq!(law.stress(&tensor::IDENTITY), [0.0; 4]);
+        assert_eq!(law.stress(&efsi_law_sdk::Sym::IDENTITY), [0.0; 4]);
+        assert_eq!(law.stress(&efsi_law_sdk::Sym6::IDENTITY), [0.0; 6]);
+    }
+
+    #[test]
+    fn full_tangent_matches_finite_differences() {
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
+            let worst = deformed_states_full(200, 0.3, 41)
+                .iter()
+                .map(|b| tangent_error(&law, b))
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-8, "{law:?}: worst {worst:e}");
+        }
+    }
+
+    #[test]
+    fn rotating_b_rotates_tau() {
+        let mut rng = XorShift::new(42);
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
+            for b in deformed_states_full(50, 0.3, 43) {
+                let q = rotation(&mut rng);
+                let e = objectivity_error(&law, &b, &q);
+                assert!(e < 1e-13, "{law:?}: {e:e} at {b:?}");
+            }
+        }
+    }
+
+    /// A v2 law on an in-plane B̃ (13 = 23 = 0) gives the in-plane evaluation's numbers, which
+    /// are version 1's, bit for bit.
+    #[test]
+    fn in_plane_b_gives_the_in_plane_result_exactly() {
+        for law in [(4e5, 1e5), (0.0, 1.0), (2e9, 1e6)]
+            .map(|(lambda, mu)| SaintVenantKirchhoff { lambda, mu })
+        {
+            for b in deformed_states(100, 0.3, 44) {
+                let (t4, j4) = law.stress_and_tangent(&b);
+                let (t6, j6) = law.stress_and_tangent(&embed(&b));
+                assert_eq!(t6[..4], t4);
+                assert_eq!(t6[4..], [0.0, 0.0]);
+                assert_eq!(in_plane_block(&j6), j4);
+            }
+        }
     }
 }

@@ -4,13 +4,16 @@
 //! each refusal. What is broken depends on the environment variable `EFSI_TEST_BAD_ABI`, read
 //! when the descriptor is requested:
 //!
-//! * unset or `version` — `abi_version` is one more than the loader's;
+//! * unset or `version` — `abi_version` is one more than the loader's (a version it does not
+//!   know);
 //! * `size` — the right version, but a `descriptor_size` 8 bytes too large;
-//! * `functions` — right version and size, but no `create`/`destroy`/`evaluate` functions.
+//! * `v1-size` — version 1, which the loader also reads, but with version 2's descriptor size
+//!   (a library whose layout does not match the version it claims);
+//! * `functions` — right version and size, but no `create`/`destroy`/`evaluate_*` functions.
 //!
 //! Built as `libefsi_test_law_bad_abi.so`; loaded by path only.
 
-use efsi_law_abi::{ABI_VERSION, DESCRIPTOR_SIZE, LawDescriptor, ParamDesc};
+use efsi_law_abi::{ABI_VERSION, DESCRIPTOR_SIZE, LawDescriptor, ParamDesc, v1};
 use std::ffi::CStr;
 
 const NAME: &CStr = c"test_bad_abi";
@@ -23,6 +26,7 @@ pub extern "C" fn efsi_law_descriptor() -> *const LawDescriptor {
         let mode = std::env::var("EFSI_TEST_BAD_ABI").unwrap_or_default();
         let (abi_version, descriptor_size) = match mode.as_str() {
             "size" => (ABI_VERSION, DESCRIPTOR_SIZE + 8),
+            "v1-size" => (v1::ABI_VERSION, DESCRIPTOR_SIZE),
             "functions" => (ABI_VERSION, DESCRIPTOR_SIZE),
             _ => (ABI_VERSION + 1, DESCRIPTOR_SIZE),
         };
@@ -36,7 +40,8 @@ pub extern "C" fn efsi_law_descriptor() -> *const LawDescriptor {
             param_desc_size: std::mem::size_of::<ParamDesc>(),
             create: None,
             destroy: None,
-            evaluate: None,
+            evaluate_in_plane: None,
+            evaluate_full: None,
         };
         Box::leak(Box::new(d)) as *const LawDescriptor
     })

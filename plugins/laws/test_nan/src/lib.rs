@@ -7,7 +7,7 @@
 //! whose solid stretches past `limit` must stop with exit code 3 and a message naming the law,
 //! and save its last good state. Built as `libefsi_test_law_nan.so`; loaded by path only.
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// `τ = G B̃`, NaN when `b11 > limit` or `b11 < floor`.
 pub struct NanPastLimit {
@@ -37,15 +37,15 @@ impl HyperelasticLaw for NanPastLimit {
         })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         if b[0] > self.limit || b[0] < self.floor {
-            return [f64::NAN; 4];
+            return T::from_fn(|_| f64::NAN);
         }
         b.map(|x| self.g * x)
     }
 
-    fn tangent(&self, _b: &Sym) -> Tangent {
-        tensor::scaled_identity(self.g)
+    fn tangent<T: SymTensor>(&self, _b: &T) -> T::Tangent {
+        tensor::scaled_identity::<T>(self.g)
     }
 }
 

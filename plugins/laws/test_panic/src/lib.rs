@@ -4,7 +4,7 @@
 //! `G > 1e12`: the loader must get an error back (the SDK's `catch_unwind`) and the host process
 //! must survive. Built as `libefsi_test_law_panic.so`; loaded by path only.
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// `τ = G B̃`, panicking on `b11 > 10`.
 pub struct Panicking {
@@ -30,13 +30,13 @@ impl HyperelasticLaw for Panicking {
         Ok(Panicking { g: values[0] })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         assert!(b[0] <= 10.0, "b11 = {} exceeds 10", b[0]);
         b.map(|x| self.g * x)
     }
 
-    fn tangent(&self, _b: &Sym) -> Tangent {
-        tensor::scaled_identity(self.g)
+    fn tangent<T: SymTensor>(&self, _b: &T) -> T::Tangent {
+        tensor::scaled_identity::<T>(self.g)
     }
 }
 

@@ -4,7 +4,7 @@
 //! finite-difference check must refuse it. Built as `libefsi_test_law_wrong_tangent.so`; not a
 //! shipped law (its library name lacks the `efsi_law_` prefix, so it is loaded by path only).
 
-use efsi_law_sdk::{HyperelasticLaw, ParamDecl, Sym, Tangent, export_law, tensor};
+use efsi_law_sdk::{HyperelasticLaw, ParamDecl, SymTensor, export_law, tensor};
 
 /// `τ = G B̃` with the wrong tangent `1.5 G I`.
 pub struct WrongTangent {
@@ -25,12 +25,12 @@ impl HyperelasticLaw for WrongTangent {
         Ok(WrongTangent { g: values[0] })
     }
 
-    fn stress(&self, b: &Sym) -> Sym {
+    fn stress<T: SymTensor>(&self, b: &T) -> T {
         b.map(|x| self.g * x)
     }
 
-    fn tangent(&self, _b: &Sym) -> Tangent {
-        tensor::scaled_identity(1.5 * self.g)
+    fn tangent<T: SymTensor>(&self, _b: &T) -> T::Tangent {
+        tensor::scaled_identity::<T>(1.5 * self.g)
     }
 }
 

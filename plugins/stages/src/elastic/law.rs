@@ -7,7 +7,9 @@ use efsi_laws_host::ConstitutiveLaw;
 
 /// The law named by the scene's solid: a plugin library found and checked by
 /// [`efsi_laws_host::load_law`] (missing file, ABI, parameters, finite-difference check of the
-/// tangent) — every law, test laws included, goes through the loader.
+/// tangent) — every law, test laws included, goes through the loader. A 3-D scene loads it with
+/// [`efsi_laws_host::load_law_3d`], which refuses a version-1 library (in-plane tensors only)
+/// naming the version.
 /// `options` are the scene's checked sections, which hold its solid.
 pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn ConstitutiveLaw>, String> {
     let spec = crate::solid::solid(options)?
@@ -18,8 +20,12 @@ pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn Constitut
         .source_dir
         .clone()
         .unwrap_or_else(|| std::path::PathBuf::from("."));
-    let law = efsi_laws_host::load_law(&spec.name, &spec.parameters, &dir)
-        .map_err(|e| format!("solid.law: {e}"))?;
+    let load = if scene.geometry == efsi_core::Geometry::Cartesian3D {
+        efsi_laws_host::load_law_3d
+    } else {
+        efsi_laws_host::load_law
+    };
+    let law = load(&spec.name, &spec.parameters, &dir).map_err(|e| format!("solid.law: {e}"))?;
     Ok(Box::new(law))
 }
 
