@@ -204,6 +204,18 @@
 //! (centres and corners). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
 //! face values, as the momentum advection.
 //!
+//! **Three dimensions.** B̃ has six components ([`Deformation`]): the normal ones at centres
+//! and each shear pair `B̃_ab` on the edges where the viscous operator puts `τ_ab`
+//! (`viscous_operator::SHEAR`): `B̃₁₂` on the xy-edges (the corners extruded along z), `B̃₂₃`
+//! on the yz-edges, `B̃₁₃` on the xz-edges. `L_aa` lives at centres, `L_ab` and `L_ba` on the
+//! `(a, b)`-edges (the four-point bulk stencil in each edge family's plane), and one kernel
+//! over the grid's shear pairs gives the gradient, the stretching (the third axis's terms
+//! `L_ac B̃_cb + B̃_ac L_bc` from the neighbouring edge families, `transport`), the advection
+//! and the end-of-step update in two and three dimensions; a planar field extruded along a
+//! periodic z gives the planar values. Not yet in three dimensions: the edge fractions from
+//! the PLIC planes (the cells' φ stands in), the interface relaxation of the xz- and yz-edges,
+//! the law on the full tensor and the implicit solve (the stage refuses a 3-D scene).
+//!
 //! # Solve
 //!
 //! BiCGSTAB (van der Vorst 1992), right-preconditioned (`numerics.elastic.preconditioner`):
