@@ -15,12 +15,17 @@ use efsi_core::{Field, Grid, Stagger, StateResource};
 /// Staggered like the stresses it produces, component `c` of every part being the field `[c]`:
 /// `B₁₁, B₂₂, B₃₃` (`[0]`, `[1]`, `[2]`; 33 is zz in plane strain, θθ axisymmetric) at cell
 /// centres, then the shear components on the edges of their pair of axes, in the order of
-/// [`SHEAR`](crate::viscous_operator::SHEAR) — `B₁₂` (`[3]`) on the xy-edges (the cell corners
+/// the viscous operator's shear pairs — `B₁₂` (`[3]`) on the xy-edges (the cell corners
 /// of a two-dimensional grid), `B₂₃` (`[4]`) on the yz-edges (along x), `B₁₃` (`[5]`) on the
 /// xz-edges (along y) — as the viscous stress: four components on a two-dimensional grid, six on
 /// a three-dimensional one ([`Deformation::components`]). The shear force is then a compact
 /// stencil with no undamped checkerboard mode.
 ///
+/// Seed Eqs. 13, 17 and 24 differ only in the velocity of their implicit part: each is
+/// `B = Bⁿ + explicit + (Δt/2) H(V; Bⁿ)` with `H(V; B) = L(V)·B + B·L(V)ᵀ` and
+/// `explicit = −Δt (AB2 of ∇·(V B)) + (Δt/2) H(Vⁿ; Bⁿ)`. The rates at the end of a step are
+/// kept here (`advection`, `advection_prev`, `stretching`) because the next step's elastic
+/// stage runs after the velocity has left Vⁿ.
 #[derive(Clone, Debug)]
 pub struct Deformation {
     /// B (components 11, 22, 33 at centres; the shear on the edges).

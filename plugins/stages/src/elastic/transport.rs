@@ -380,7 +380,7 @@ impl Kernels {
                 let (uw, ue) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
                 let (rw, re, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
                 // The faces across the other axes (no metric there).
-                let other: [Option<(Flux, &[f64], &[f64], f64)>; 2] = std::array::from_fn(|o| {
+                let other = std::array::from_fn::<_, 2, _>(|o| {
                     let x = o + 1;
                     (x < dims).then(|| {
                         let v = vel[x];
