@@ -36,6 +36,9 @@ const BULK_FAR: f64 = -1.0 / 12.0;
 /// upper-right, upper-left, lower-right and lower-left cells.
 const AROUND: [Index; 4] = [[0, 0, 0], [-1, 0, 0], [0, -1, 0], [-1, -1, 0]];
 
+/// The index in [`SHEAR`] of the pair of axes `(a, b)`, `a ≠ b` (the diagonal unused).
+const PAIR: [[usize; 3]; 3] = [[0, 0, 2], [0, 0, 1], [2, 1, 0]];
+
 /// The bulk shear gradient's stencil along axis `a` on a run of corners: the velocity
 /// component `f` at `I − 2e_a … I + e_a` and the solid weights `w` there and at the cells
 /// beside them across the corner (`− e_b`). It covers the points `off..off + len` of the corner
@@ -245,67 +248,18 @@ impl Kernels {
         let g = &self.grid;
         let dims = g.dims();
         let pairs = shear_pairs(dims);
-        let (lc, lk) = (&self.lc, &self.lk);
+        let lk = &self.lk;
         let (normal, shear) = out.split_at_mut(3);
         let [o11, o22, o33] = normal else {
             unreachable!("three normal components")
         };
-        // The terms of `H_aa = 2 Σ_k L_ak B_ka` in the order of k: the centre's own (`None`),
-        // or the cell's edges of the pair (a, k) with `L_ak` first (0) or second (1) there.
-        let terms = |a: usize| -> ([Option<(usize, usize)>; 3], usize) {
-            let axes = if a < dims { 0..dims } else { a..a + 1 };
-            let mut t = [None; 3];
-            for (m, k) in axes.clone().enumerate() {
-                t[m] = (k != a).then(|| (shear_of(a, k), usize::from(a > k)));
-            }
-            (t, axes.len())
-        };
-        let terms = [terms(0), terms(1), terms(2)];
-        // `base + a·h`, or `a·h` alone without a base (as `0 + a·h`: the same bits).
-        cw.region(g)
-            .for_each((o11, o22, o33), |l, (r11, r22, r33)| {
-                let rows = [r11, r22, r33];
-                let at = |f| on(f, &l);
-                let laa = [at(&lc[0]), at(&lc[1]), at(&lc[2])];
-                let baa = [at(&b[0]), at(&b[1]), at(&b[2])];
-                // The solid's gradients and the shear at the cell's edges of each pair.
-                let edges: [Option<[Four; 3]>; 3] = std::array::from_fn(|p| {
-                    pairs.get(p).map(|&(axes, _)| {
-                        let e = edges_of_cell(axes);
-                        [&lk[p][0], &lk[p][1], &b[3 + p]].map(|f| Four::new(f, &l, e))
-                    })
-                });
-                let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
-                for n in 0..l.len {
-                    // ¼ Σ L_ab B_ab and ¼ Σ L_ba B_ab over the cell's edges of each pair.
-                    let mut s = [[0.0; 2]; 3];
-                    for (s, e) in s.iter_mut().zip(&edges) {
-                        let Some([gab, gba, bab]) = e else { continue };
-                        for m in 0..4 {
-                            s[0] += 0.25 * gab.get(m, n) * bab.get(m, n);
-                            s[1] += 0.25 * gba.get(m, n) * bab.get(m, n);
-                        }
-                    }
-                    let h: [f64; 3] = std::array::from_fn(|c| {
-                        let (t, len) = &terms[c];
-                        let term = |m: usize| match t[m] {
-                            None => laa[c][n] * baa[c][n],
-                            Some((p, k)) => s[p][k],
-                        };
-                        let mut sum = term(0);
-                        for m in 1..*len {
-                            sum += term(m);
-                        }
-                        2.0 * sum
-                    });
-                    for c in 0..3 {
-                        rows[c][n] = match base {
-                            Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
-                            None => 0.0 + a * h[c],
-                        };
-                    }
-                }
-            });
+        let normal = (o11, o22, o33);
+        if dims == 3 {
+            self.stretch_centres::<3, 3>(b, a, base, normal, cw);
+        } else {
+            self.stretch_centres::<2, 1>(b, a, base, normal, cw);
+        }
+        let lc = &self.lc;
         for ((p, &(axes, at_)), out) in pairs.iter().enumerate().zip(shear) {
             let [pa, pb] = axes;
             let cells = cells_of_edge(axes);
@@ -356,6 +310,70 @@ impl Kernels {
                 }
             });
         }
+    }
+
+    /// The centres' part of [`Kernels::stretch_in`] on a grid of `D` axes and `P` shear pairs
+    /// (`(2, 1)` or `(3, 3)`): `H_aa = 2 Σ_k L_ak B_ka` in the order of `k`, the centre's own
+    /// term `L_aa B_aa` or the mean over the cell's edges of the pair `(a, k)`; the hoop
+    /// direction of a two-dimensional grid its own term only.
+    fn stretch_centres<const D: usize, const P: usize>(
+        &self,
+        b: &[Field],
+        a: f64,
+        base: Option<(&[Field], &[Field])>,
+        out: (&mut Field, &mut Field, &mut Field),
+        cw: Window,
+    ) {
+        let g = &self.grid;
+        let (lc, lk) = (&self.lc, &self.lk);
+        let pairs: [[usize; 2]; P] = std::array::from_fn(|p| SHEAR[p].0);
+        // `base + a·h`, or `a·h` alone without a base (as `0 + a·h`: the same bits).
+        cw.region(g).for_each(out, |l, (r11, r22, r33)| {
+            let rows = [r11, r22, r33];
+            let at = |f| on(f, &l);
+            let laa = [at(&lc[0]), at(&lc[1]), at(&lc[2])];
+            let baa = [at(&b[0]), at(&b[1]), at(&b[2])];
+            // The solid's gradients and the shear at the cell's edges of each pair.
+            let edges: [[Four; 3]; P] = std::array::from_fn(|p| {
+                let e = edges_of_cell(pairs[p]);
+                [&lk[p][0], &lk[p][1], &b[3 + p]].map(|f| Four::new(f, &l, e))
+            });
+            let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
+            for n in 0..l.len {
+                // ¼ Σ L_ab B_ab and ¼ Σ L_ba B_ab over the cell's edges of each pair.
+                let mut s = [[0.0; 2]; P];
+                for (s, [gab, gba, bab]) in s.iter_mut().zip(&edges) {
+                    for m in 0..4 {
+                        s[0] += 0.25 * gab.get(m, n) * bab.get(m, n);
+                        s[1] += 0.25 * gba.get(m, n) * bab.get(m, n);
+                    }
+                }
+                let h: [f64; 3] = std::array::from_fn(|c| {
+                    let own = laa[c][n] * baa[c][n];
+                    if c >= D {
+                        return 2.0 * own;
+                    }
+                    let term = |k: usize| {
+                        if k == c {
+                            own
+                        } else {
+                            s[PAIR[c][k]][usize::from(c > k)]
+                        }
+                    };
+                    let mut sum = term(0);
+                    for k in 1..D {
+                        sum += term(k);
+                    }
+                    2.0 * sum
+                });
+                for c in 0..3 {
+                    rows[c][n] = match base {
+                        Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
+                        None => 0.0 + a * h[c],
+                    };
+                }
+            }
+        });
     }
 
     /// `out = ∇·(V b)` (conservative, van Leer face values) for the velocity `vel`, at the
