@@ -396,14 +396,8 @@ impl EdgeWeights {
     }
 }
 
-/// The index in [`SHEAR`] of the pair of axes `a ≠ b`.
-fn shear_of(a: usize, b: usize) -> usize {
-    let ab = [a.min(b), a.max(b)];
-    SHEAR
-        .iter()
-        .position(|(p, _)| *p == ab)
-        .expect("a pair of distinct axes")
-}
+/// `PAIR[a][b]`: the index in [`SHEAR`] of the pair of axes `a ≠ b` (the diagonal unused).
+const PAIR: [[usize; 3]; 3] = [[0, 0, 2], [0, 0, 1], [2, 1, 0]];
 
 /// The velocity `[u, v]`, or `[u, v, w]` with a third component (a state's `w`).
 fn velocity<'a>(u: &'a Field, v: &'a Field, w: Option<&'a Field>) -> Vec<&'a Field> {

@@ -320,7 +320,7 @@ fn a_uniform_simple_shear_in_each_plane_of_a_3d_box_gives_the_analytic_b() {
                 step(&mut k, &mut d, &mut first, &vel, dt);
             }
             let gt = rate * dt * steps as f64;
-            let shear = 3 + shear_of(a, b);
+            let shear = 3 + PAIR[a][b];
             for (c, f) in d.b.iter().enumerate() {
                 let want = match c {
                     _ if c == a => 1.0 + gt * gt,

@@ -15,8 +15,8 @@
 //! the xz- and yz-edges' needs the law on the full tensor.
 
 use super::{
-    Four, Kernels, SHEAR, Window, cells_of_edge, corner_weights, edges_of_cell, on, planar, plus,
-    shear_of, shear_pairs,
+    Four, Kernels, PAIR, SHEAR, Window, cells_of_edge, corner_weights, edges_of_cell, on, planar,
+    plus, shear_pairs,
 };
 use crate::advection::face_value;
 use efsi_core::operators::minus;
@@ -35,9 +35,6 @@ const BULK_FAR: f64 = -1.0 / 12.0;
 /// The cells a corner's relaxation stretches, in the order it updates them: the corner's
 /// upper-right, upper-left, lower-right and lower-left cells.
 const AROUND: [Index; 4] = [[0, 0, 0], [-1, 0, 0], [0, -1, 0], [-1, -1, 0]];
-
-/// The index in [`SHEAR`] of the pair of axes `(a, b)`, `a ≠ b` (the diagonal unused).
-const PAIR: [[usize; 3]; 3] = [[0, 0, 2], [0, 0, 1], [2, 1, 0]];
 
 /// The bulk shear gradient's stencil along axis `a` on a run of corners: the velocity
 /// component `f` at `I − 2e_a … I + e_a` and the solid weights `w` there and at the cells
@@ -247,8 +244,7 @@ impl Kernels {
     ) {
         let g = &self.grid;
         let dims = g.dims();
-        let pairs = shear_pairs(dims);
-        let lk = &self.lk;
+        let pairs = shear_pairs(dims).len();
         let (normal, shear) = out.split_at_mut(3);
         let [o11, o22, o33] = normal else {
             unreachable!("three normal components")
@@ -259,57 +255,81 @@ impl Kernels {
         } else {
             self.stretch_centres::<2, 1>(b, a, base, normal, cw);
         }
-        let lc = &self.lc;
-        for ((p, &(axes, at_)), out) in pairs.iter().enumerate().zip(shear) {
-            let [pa, pb] = axes;
-            let cells = cells_of_edge(axes);
-            let kwt = &self.edge[p].kwt;
-            // The third axis's terms `L_ac B_cb + B_ac L_bc` (three dimensions).
-            let third = (dims == 3).then(|| {
-                let pc = 3 - pa - pb;
-                let (qa, qb) = (shear_of(pa, pc), shear_of(pb, pc));
-                let around = |x: usize| {
-                    let (ex, ec) = (minus(x), unit(pc));
-                    [[0; 3], ex, ec, plus(ex, ec)]
-                };
-                // (a, c)-edges around the edge, then (b, c)-edges.
-                let (sa, sb) = (around(pb), around(pa));
-                let lac = &lk[qa][usize::from(pa > pc)];
-                let lbc = &lk[qb][usize::from(pb > pc)];
-                ((lac, &b[3 + qb], sa, sb), (&b[3 + qa], lbc, sa, sb))
-            });
-            cw.edges(g, at_).region(g).for_each(out, |l, row| {
-                let at = |f| on(f, &l);
-                let (bab, gab, gba) = (at(&b[3 + p]), at(&lk[p][0]), at(&lk[p][1]));
-                // The solid's velocity gradient; the solid's own normal components
-                // (solid-weighted).
-                let [laa, lbb, baa, bbb] =
-                    [&lc[pa], &lc[pb], &b[pa], &b[pb]].map(|f| Four::new(f, &l, cells));
-                let wt = corner_weights(kwt, &l);
-                let third = third.map(|((lac, bcb, sa, sb), (bac, lbc, _, _))| {
-                    [
-                        Four::new(lac, &l, sa),
-                        Four::new(bcb, &l, sb),
-                        Four::new(bac, &l, sa),
-                        Four::new(lbc, &l, sb),
-                    ]
-                });
-                let base = base.map(|(x, y)| (at(&x[3 + p]), at(&y[3 + p])));
-                let relax = relax.filter(|_| p == 0).map(at);
-                for n in 0..l.len {
-                    let mut hab = laa.avg(n) * bab[n]
-                        + gab[n] * bbb.weighted(&wt, n)
-                        + baa.weighted(&wt, n) * gba[n]
-                        + bab[n] * lbb.avg(n);
-                    if let Some([lac, bcb, bac, lbc]) = &third {
-                        hab += lac.avg(n) * bcb.avg(n) + bac.avg(n) * lbc.avg(n);
-                    }
-                    let base = base.map_or(0.0, |(x, y)| x[n] + y[n]);
-                    let q = relax.map_or(1.0, |r| r[n]);
-                    row[n] = q * (base + a * hab);
-                }
-            });
+        for (p, out) in shear.iter_mut().enumerate().take(pairs) {
+            match (dims, p) {
+                (3, 0) => self.stretch_edges::<3, 0>(b, a, base, relax, out, cw),
+                (3, 1) => self.stretch_edges::<3, 1>(b, a, base, relax, out, cw),
+                (3, 2) => self.stretch_edges::<3, 2>(b, a, base, relax, out, cw),
+                _ => self.stretch_edges::<2, 0>(b, a, base, relax, out, cw),
+            }
         }
+    }
+
+    /// The edges' part of [`Kernels::stretch_in`] for the shear pair `P` of [`SHEAR`] on a grid
+    /// of `D` axes: `H_ab` from the four cells' normal components and, with `D = 3`, the third
+    /// axis's terms.
+    fn stretch_edges<const D: usize, const P: usize>(
+        &self,
+        b: &[Field],
+        a: f64,
+        base: Option<(&[Field], &[Field])>,
+        relax: Option<&Field>,
+        out: &mut Field,
+        cw: Window,
+    ) {
+        let g = &self.grid;
+        let (lc, lk) = (&self.lc, &self.lk);
+        let (axes, at_) = SHEAR[P];
+        let [pa, pb] = axes;
+        let cells = cells_of_edge(axes);
+        let kwt = &self.edge[P].kwt;
+        // The third axis's terms `L_ac B_cb + B_ac L_bc` (three dimensions).
+        let third = (D == 3).then(|| {
+            let pc = 3 - pa - pb;
+            let (qa, qb) = (PAIR[pa][pc], PAIR[pb][pc]);
+            let around = |x: usize| {
+                let (ex, ec) = (minus(x), unit(pc));
+                [[0; 3], ex, ec, plus(ex, ec)]
+            };
+            // (a, c)-edges around the edge, then (b, c)-edges.
+            let (sa, sb) = (around(pb), around(pa));
+            let lac = &lk[qa][usize::from(pa > pc)];
+            let lbc = &lk[qb][usize::from(pb > pc)];
+            ((lac, &b[3 + qb], sa, sb), (&b[3 + qa], lbc, sa, sb))
+        });
+        cw.edges(g, at_).region(g).for_each(out, |l, row| {
+            let at = |f| on(f, &l);
+            let (bab, gab, gba) = (at(&b[3 + P]), at(&lk[P][0]), at(&lk[P][1]));
+            // The solid's velocity gradient; the solid's own normal components
+            // (solid-weighted).
+            let four = |f| Four::new(f, &l, cells);
+            let (laa, lbb, baa, bbb) = (four(&lc[pa]), four(&lc[pb]), four(&b[pa]), four(&b[pb]));
+            let wt = corner_weights(kwt, &l);
+            let third = third.map(|((lac, bcb, sa, sb), (bac, lbc, _, _))| {
+                [
+                    Four::new(lac, &l, sa),
+                    Four::new(bcb, &l, sb),
+                    Four::new(bac, &l, sa),
+                    Four::new(lbc, &l, sb),
+                ]
+            });
+            let base = base.map(|(x, y)| (at(&x[3 + P]), at(&y[3 + P])));
+            let relax = relax.filter(|_| P == 0).map(at);
+            for n in 0..l.len {
+                let mut hab = laa.avg(n) * bab[n]
+                    + gab[n] * bbb.weighted(&wt, n)
+                    + baa.weighted(&wt, n) * gba[n]
+                    + bab[n] * lbb.avg(n);
+                if D == 3
+                    && let Some([lac, bcb, bac, lbc]) = &third
+                {
+                    hab += lac.avg(n) * bcb.avg(n) + bac.avg(n) * lbc.avg(n);
+                }
+                let base = base.map_or(0.0, |(x, y)| x[n] + y[n]);
+                let q = relax.map_or(1.0, |r| r[n]);
+                row[n] = q * (base + a * hab);
+            }
+        });
     }
 
     /// The centres' part of [`Kernels::stretch_in`] on a grid of `D` axes and `P` shear pairs
@@ -336,7 +356,8 @@ impl Kernels {
             // The solid's gradients and the shear at the cell's edges of each pair.
             let edges: [[Four; 3]; P] = std::array::from_fn(|p| {
                 let e = edges_of_cell(pairs[p]);
-                [&lk[p][0], &lk[p][1], &b[3 + p]].map(|f| Four::new(f, &l, e))
+                let four = |f| Four::new(f, &l, e);
+                [four(&lk[p][0]), four(&lk[p][1]), four(&b[3 + p])]
             });
             let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
             for n in 0..l.len {

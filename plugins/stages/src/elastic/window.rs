@@ -149,7 +149,8 @@ impl<'a> Four<'a> {
     /// `f` on `line` shifted by each of `shifts`.
     #[inline(always)]
     pub(super) fn new(f: &'a Field, line: &Line, shifts: [Index; 4]) -> Self {
-        Four(shifts.map(|s| f.at(line, s)))
+        let at = |m: usize| f.at(line, shifts[m]);
+        Four([at(0), at(1), at(2), at(3)])
     }
 
     /// The four values' mean at point `n` of the line: `¼ (f₀ + f₁ + f₂ + f₃)`.
