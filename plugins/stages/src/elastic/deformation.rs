@@ -2,9 +2,10 @@
 //! then the next step's rates, the end-of-step stress and the strain energy.
 
 use super::{
-    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, ElasticCoupling, Kernels, err, missing,
+    AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, Deformation, ElasticCoupling, Kernels,
+    err, missing, planar, planar_mut,
 };
-use efsi_core::{Grid, StageError, StageStats, State, StepContext, unit};
+use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
@@ -17,7 +18,7 @@ pub(super) struct DeformationStage {
     /// Which sides are walls (x min, x max, y min, y max): `NoSlip`, `MovingWall`, `FreeSlip`.
     pub(super) walls: [bool; 4],
     /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
-    pub(super) first: [efsi_core::Field; 4],
+    pub(super) first: Vec<Field>,
     /// The elastic-wave limits on Δt.
     pub(super) limits: super::limits::WaveLimits,
 }
@@ -81,41 +82,23 @@ impl DeformationStage {
             .as_ref()
             .ok_or_else(|| err("deformation", "the solid fraction is not allocated".into()))?;
         k.set_weights(phi);
-        // B̃^{n+1} = B̃(V^{n+1}) (seed Eq. 24, equivalently Eq. 25), then the next step's rates.
-        k.gradient(&state.u, &state.v);
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
         // The Picard pass, except in a coupled step beyond the split step's wave limit, which
         // ends with B̃^{n+1} = B̃(V^{n+1}), the tensor its implicit stiffness was solved with
         // (see the module docs).
         let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
-        let base = Some((&d.start, &d.explicit));
-        if picard {
-            // The first pass writes near the material only; beyond it (where the second pass's
-            // corner averages reach) it holds the step's B, the identity there.
-            let first = &mut self.first;
-            for (f, b) in first.iter_mut().zip(&d.b) {
-                f.copy_from(b);
-            }
-            k.stretch(&d.start, a, base, Some(&d.relax), first);
-            k.fill_ghosts(first);
-        }
-        // The update stretches the first pass's tensor (Picard) or the step's start.
-        let from = if picard { &self.first } else { &d.start };
-        k.stretch(from, a, base, Some(&d.relax), &mut d.b);
-        // The fluid's B back to the identity before the rates are taken and the interface
-        // moves: stretched by the fluid's velocity gradient, it would flow into the solid
-        // through the next step's advection and stay in the cells the solid enters (see
-        // "Pure fluid" in the module docs).
-        k.reset_fluid_b(&mut d.b);
-        k.fill_ghosts(&mut d.b);
-        std::mem::swap(&mut d.advection, &mut d.advection_prev);
-        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
-        k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        k.update(&vel, d, &mut self.first, a, picard);
         // The end-of-step stress and the elastic energy.
-        k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
-            .map_err(|m| err("deformation", m))?;
+        k.evaluate(
+            self.law.as_ref(),
+            planar(&d.b),
+            planar_mut(&mut d.stress),
+            false,
+        )
+        .map_err(|m| err("deformation", m))?;
         d.elastic_energy = k
-            .strain_energy(self.law.as_ref(), &d.b)
+            .strain_energy(self.law.as_ref(), planar(&d.b))
             .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
     }
@@ -155,5 +138,46 @@ impl DeformationStage {
                     || (y_max && reach((ny - 1 - j) as f64 * dy, vc, dy))
             })
         })
+    }
+}
+
+impl Kernels {
+    /// The end-of-step update of `d` for the velocity `vel` at `V^{n+1}`, the law aside (the
+    /// weights set for the step's solid fraction): `B̃^{n+1} = B̃ⁿ + E + a H(V^{n+1}; ·)` with
+    /// `a = θΔt` (seed Eq. 24, equivalently Eq. 25) — stretching the Picard pass's tensor
+    /// (kept in `first`) if `picard`, else `B̃ⁿ` — the fluid's B back to the identity, then
+    /// the next step's rates `Aⁿ⁺¹ = ∇·(V^{n+1} B̃^{n+1})` (the step's own `A` kept as the
+    /// previous) and `H(V^{n+1}; B̃^{n+1})`.
+    pub(super) fn update(
+        &mut self,
+        vel: &[&Field],
+        d: &mut Deformation,
+        first: &mut [Field],
+        a: f64,
+        picard: bool,
+    ) {
+        self.gradient(vel);
+        let base = Some((&d.start[..], &d.explicit[..]));
+        if picard {
+            // The first pass writes near the material only; beyond it (where the second pass's
+            // edge averages reach) it holds the step's B, the identity there.
+            for (f, b) in first.iter_mut().zip(&d.b) {
+                f.copy_from(b);
+            }
+            self.stretch(&d.start, a, base, Some(&d.relax), first);
+            self.fill_ghosts(first);
+        }
+        // The update stretches the first pass's tensor (Picard) or the step's start.
+        let from = if picard { &*first } else { &d.start[..] };
+        self.stretch(from, a, base, Some(&d.relax), &mut d.b);
+        // The fluid's B back to the identity before the rates are taken and the interface
+        // moves: stretched by the fluid's velocity gradient, it would flow into the solid
+        // through the next step's advection and stay in the cells the solid enters (see
+        // "Pure fluid" in the module docs).
+        self.reset_fluid_b(&mut d.b);
+        self.fill_ghosts(&mut d.b);
+        std::mem::swap(&mut d.advection, &mut d.advection_prev);
+        self.advect(vel, &d.b, &mut d.advection);
+        self.stretch(&d.b, 1.0, None, None, &mut d.stretching);
     }
 }

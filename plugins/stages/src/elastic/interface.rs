@@ -1,9 +1,9 @@
-//! The interface weights: `φ^{1/2}` at centres, the corners' solid fraction from the PLIC
-//! quarter cells and their series factors, the solid bounding box, and the reset of pure-fluid
+//! The interface weights: `φ^{1/2}` at centres, the edges' solid fraction from the PLIC
+//! quarter cells (the cells' φ on a three-dimensional grid) and their series factors, the solid bounding box, and the reset of pure-fluid
 //! cells.
 
-use super::{CELLS_OF_CORNER, Kernels, NEAR, PHI_MIN, Window, plus};
-use efsi_core::{Field, Index, Region};
+use super::{Kernels, NEAR, PHI_MIN, Window, cells_of_edge, plus, shear_pairs};
+use efsi_core::{Field, Index, Region, Stagger};
 
 /// The least `aκ` the series corner's rates take (see [`sliver_rates`]).
 const SLIVER: f64 = 0.1;
@@ -30,104 +30,115 @@ fn sliver_rates(a: f64, ak: f64, mu_f: f64) -> (f64, f64) {
 }
 
 impl Kernels {
-    /// The weights `w = φ^{1/2}` (centres, ghosts included) and their corner averages, from `phi`
-    /// with ghosts filled.
+    /// The weights `w = φ^{1/2}` (centres, ghosts included) and their edge averages, from `phi`
+    /// with ghosts filled; the solid's and the material's windows.
     pub(super) fn set_weights(&mut self, phi: &Field) {
-        let (nx, ny) = self.nxy();
+        let g = &self.grid;
+        let (n, dims) = (g.n().map(|n| n as isize), g.dims());
         // Every entry, ghosts included.
-        Region::whole(&self.grid).for_each(&mut self.w, |l, w| {
+        Region::whole(g).for_each(&mut self.w, |l, w| {
             for (w, f) in w.iter_mut().zip(phi.at(&l, [0; 3])) {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         });
-        // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`).
-        let (mut c, mut m) = (Window::new(nx, -1, ny, -1), Window::new(nx, -1, ny, -1));
-        let batch = Window::new(-1, nx, -1, ny).region(&self.grid);
+        // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`) among the
+        // centres `[−1, n]` along each axis.
+        let (lo, hi): (Index, Index) = (
+            std::array::from_fn(|a| if a < dims { -1 } else { 0 }),
+            std::array::from_fn(|a| if a < dims { n[a] } else { 0 }),
+        );
+        let none = Window::boxed(hi, lo);
+        let (mut c, mut m) = (none, none);
+        let batch = Window::boxed(lo, hi).region(g);
         for l in (0..batch.lines()).map(|n| batch.line(n)) {
-            let j = l.start[1];
             for (f, b) in [(&self.w, &mut c), (phi, &mut m)] {
                 let row = f.at(&l, [0; 3]);
                 if let Some(first) = row.iter().position(|&w| w > 0.0) {
                     let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
-                    *b = Window::new(
-                        b.i0.min(l.start[0] + first as isize),
-                        b.i1.max(l.start[0] + last as isize),
-                        b.j0.min(j),
-                        b.j1.max(j),
+                    let (mut p, mut q) = (l.start, l.start);
+                    (p[0], q[0]) = (p[0] + first as isize, q[0] + last as isize);
+                    let (bl, bh) = (b.lo(), b.hi());
+                    *b = Window::boxed(
+                        std::array::from_fn(|a| bl[a].min(p[a])),
+                        std::array::from_fn(|a| bh[a].max(q[a])),
                     );
                 }
             }
         }
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
-        self.solid_k = self.solid_c.corners(nx, ny);
+        self.solid_k = self.solid_c.edges(g, Stagger::Corner);
         // Where B can matter: the material grown by `NEAR` cells (see `Kernels::near_c`).
         self.near_c = if m.i0 > m.i1 {
             Window::EMPTY
         } else {
-            Window::new(
-                (m.i0 - NEAR).max(-1),
-                (m.i1 + NEAR).min(nx),
-                (m.j0 - NEAR).max(-1),
-                (m.j1 + NEAR).min(ny),
+            let (ml, mh) = (m.lo(), m.hi());
+            Window::boxed(
+                std::array::from_fn(|a| (ml[a] - NEAR).max(lo[a])),
+                std::array::from_fn(|a| (mh[a] + NEAR).min(hi[a])),
             )
         };
-        self.near_k = self.near_c.corners(nx, ny);
-        // Corners none of whose cells holds solid: no weight, no series factors, the plain
+        // Edges none of whose cells holds solid: no weight, no series factors, the plain
         // average, and a normal of no consequence (it multiplies a zero extra shear rate).
-        for f in [&mut self.wc, &mut self.wk, &mut self.ks, &mut self.rc] {
-            f.fill(0.0);
-        }
-        self.sf.fill(1.0);
-        self.ny2.fill(0.5);
-        for f in &mut self.kwt {
-            f.fill(0.25);
+        for e in &mut self.edge {
+            for f in [&mut e.wc, &mut e.wk, &mut e.ks, &mut e.rc] {
+                f.fill(0.0);
+            }
+            e.sf.fill(1.0);
+            e.share.fill(0.5);
+            for f in &mut e.kwt {
+                f.fill(0.25);
+            }
         }
         let c = self.solid_c;
         if c.i0 > c.i1 {
             return;
         }
         self.set_quarters(phi);
-        // The corners of the solid's centres, ghost corners included (those whose four cells
-        // lie in the fields' storage).
+        // The edges of the solid's centres, ghost edges included (those whose four cells lie
+        // in the fields' storage).
         let whole = Region::whole(&self.grid);
         let (lo, hi) = (whole.lo(), whole.hi());
-        let corners = Window::new(
-            c.i0.max(lo[0] + 1),
-            (c.i1 + 1).min(hi[0] - 1),
-            c.j0.max(lo[1] + 1),
-            (c.j1 + 1).min(hi[1] - 1),
-        )
-        .region(&self.grid);
-        for l in (0..corners.lines()).map(|n| corners.line(n)) {
-            for at in l.indices() {
-                self.set_corner(phi, at);
+        for (p, &(axes, at)) in shear_pairs(dims).iter().enumerate() {
+            let nodal = at.nodal();
+            let (cl, ch) = (c.lo(), c.hi());
+            let edges = Window::boxed(
+                std::array::from_fn(|a| cl[a].max(lo[a] + nodal[a] as isize)),
+                std::array::from_fn(|a| (ch[a] + nodal[a] as isize).min(hi[a] - 1)),
+            )
+            .region(&self.grid);
+            for l in (0..edges.lines()).map(|n| edges.line(n)) {
+                for at in l.indices() {
+                    self.set_edge(phi, p, axes, at);
+                }
             }
         }
     }
 
-    /// The weights of corner `at` from its four cells: the average `w_c` of their `φ^{1/2}`,
-    /// the cells' weights in the normal components, the normal's share `n_y²` and the series
-    /// factors (`w_k`, `s`, `1/κ`, `r`) of the interface closure.
-    fn set_corner(&mut self, phi: &Field, at: Index) {
-        let cells = CELLS_OF_CORNER.map(|s| plus(at, s));
+    /// The weights of edge `at` of the shear pair `p` (axes `[a, b]`) from its four cells: the
+    /// average `w_c` of their `φ^{1/2}`, the cells' weights in the normal components, the
+    /// normal's share `n_b²` and the series factors (`w_k`, `s`, `1/κ`, `r`) of the interface
+    /// closure.
+    fn set_edge(&mut self, phi: &Field, p: usize, axes: [usize; 2], at: Index) {
+        let cells = cells_of_edge(axes).map(|s| plus(at, s));
         let w = cells.map(|c| self.w[c]);
-        self.wc[at] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
-        // The corner's solid fraction: the four quarter cells around it (each cell's quarter
-        // at the corner: the corner is its upper-right, upper-left, lower-right, lower-left).
+        let e = &mut self.edge[p];
+        e.wc[at] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
+        // The edge's solid fraction: the four quarter cells around it (each cell's quarter
+        // at the edge: the edge is its upper-right, upper-left, lower-right, lower-left).
         let q: [f64; 4] = std::array::from_fn(|n| self.quarter[3 - n][cells[n]]);
         let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
         let lam: [f64; 4] = std::array::from_fn(|n| if w[n] > 0.0 { q[n] } else { 0.0 });
         let sum: f64 = lam.iter().sum();
         let solid = w.map(|w| f64::from(u8::from(w > 0.0)));
         let count: f64 = solid.iter().sum();
-        // The interface normal ∝ ∇φ across the corner.
+        // The interface normal ∝ ∇φ across the edge.
         let f = cells.map(|c| phi[c].clamp(0.0, 1.0));
         let gx = f[3] + f[1] - f[2] - f[0];
         let gy = f[3] + f[2] - f[1] - f[0];
         let g2 = gx * gx + gy * gy;
-        self.ny2[at] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
+        e.share[at] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
         for n in 0..4 {
-            self.kwt[n][at] = if sum > 0.0 {
+            e.kwt[n][at] = if sum > 0.0 {
                 lam[n] / sum
             } else if count > 0.0 {
                 solid[n] / count
@@ -135,42 +146,44 @@ impl Kernels {
                 0.25
             };
         }
-        let (wk, sf, ks, rc) = self.series(self.wc[at], a);
-        self.wk[at] = wk;
-        self.sf[at] = sf;
-        self.ks[at] = ks;
-        self.rc[at] = rc;
+        let (wk, sf, ks, rc) = series(self.mu_f, self.mu_s, e.wc[at], a);
+        e.wk[at] = wk;
+        e.sf[at] = sf;
+        e.ks[at] = ks;
+        e.rc[at] = rc;
     }
+}
 
-    /// `(w_k, s, 1/κ, r)` of a corner whose cells' weights average `wc` and whose solid
-    /// fraction is `a`: fluid, solid, interface in series.
-    fn series(&self, wc: f64, a: f64) -> (f64, f64, f64, f64) {
-        let (mu_f, mu_s) = (self.mu_f, self.mu_s);
-        if wc == 0.0 {
-            (0.0, 1.0, 0.0, 0.0)
-        } else if a >= 1.0 {
-            (1.0, 1.0, 1.0, 0.0)
-        } else if mu_f == 0.0 {
-            // An inviscid fluid carries no shear: neither does the interface.
-            (1.0, 1.0, 0.0, 0.0)
+/// `(w_k, s, 1/κ, r)` of an edge whose cells' weights average `wc` and whose solid fraction is
+/// `a` (viscosities `mu_f`, `mu_s`): fluid, solid, interface in series.
+fn series(mu_f: f64, mu_s: f64, wc: f64, a: f64) -> (f64, f64, f64, f64) {
+    if wc == 0.0 {
+        (0.0, 1.0, 0.0, 0.0)
+    } else if a >= 1.0 {
+        (1.0, 1.0, 1.0, 0.0)
+    } else if mu_f == 0.0 {
+        // An inviscid fluid carries no shear: neither does the interface.
+        (1.0, 1.0, 0.0, 0.0)
+    } else {
+        // aκ = a + μ_s (1 − a)/μ_f: finite where the edge's quarters hold no solid (a = 0)
+        // beside a cell that does.
+        let ak = a + mu_s * (1.0 - a) / mu_f;
+        if ak > 0.0 {
+            let (sf, rc) = sliver_rates(a, ak, mu_f);
+            (1.0, sf, a / ak, rc)
         } else {
-            // aκ = a + μ_s (1 − a)/μ_f: finite where the corner's quarters hold no solid
-            // (a = 0) beside a cell that does.
-            let ak = a + mu_s * (1.0 - a) / mu_f;
-            if ak > 0.0 {
-                let (sf, rc) = sliver_rates(a, ak, mu_f);
-                (1.0, sf, a / ak, rc)
-            } else {
-                // No solid at an inviscid solid's corner: no shear carried.
-                (1.0, 1.0, 0.0, 0.0)
-            }
+            // No solid at an inviscid solid's edge: no shear carried.
+            (1.0, 1.0, 0.0, 0.0)
         }
     }
+}
 
+impl Kernels {
     /// The solid fraction of each quarter of every centre ([`Kernels::quarter`]): in a cut cell
-    /// of `[−1, nx] × [−1, ny]`, the share of the quarter below the cell's PLIC line (Youngs
-    /// normal, the line cutting the cell's φ off a `dx × dy` cell, as the VOF reconstruction
-    /// does in planar geometry); elsewhere φ (clamped to `[0, 1]`).
+    /// of `[−1, nx] × [−1, ny]` of a two-dimensional grid, the share of the quarter below the
+    /// cell's PLIC line (Youngs normal, the line cutting the cell's φ off a `dx × dy` cell, as
+    /// the VOF reconstruction does in planar geometry); elsewhere, and everywhere on a
+    /// three-dimensional grid, φ (clamped to `[0, 1]`).
     pub(super) fn set_quarters(&mut self, phi: &Field) {
         let (nx, ny) = self.nxy();
         let (dx, dy) = (self.grid.dx, self.grid.dy);
@@ -186,6 +199,9 @@ impl Kernels {
                     *w = f.clamp(0.0, 1.0);
                 }
             });
+        }
+        if self.grid.is_3d() {
+            return;
         }
         let cut = Window::new(c.i0.max(-1), c.i1.min(nx), c.j0.max(-1), c.j1.min(ny));
         let cells = cut.region(&self.grid);
@@ -223,8 +239,8 @@ impl Kernels {
     pub(super) fn reset_fluid(&self, d: &mut super::Deformation) {
         self.reset_fluid_b(&mut d.b);
         let whole = Region::whole(&self.grid);
-        for c in 0..4 {
-            let wt = if c == 3 { &self.wc } else { &self.w };
+        for c in 0..d.b.len() {
+            let wt = if c < 3 { &self.w } else { &self.edge[c - 3].wc };
             let rates = (
                 &mut d.advection[c],
                 &mut d.advection_prev[c],
@@ -246,12 +262,12 @@ impl Kernels {
     /// Reset B (not its rates) to the identity where there is no solid (`w = 0`, the
     /// corners: `w_c = 0`). The end-of-step update calls it before it takes the next step's
     /// rates, which then see the fluid undeformed (see "Pure fluid" in the module docs).
-    pub(super) fn reset_fluid_b(&self, b: &mut [Field; 4]) {
+    pub(super) fn reset_fluid_b(&self, b: &mut [Field]) {
         for (c, b) in b.iter_mut().enumerate() {
-            let (wt, one) = if c == 3 {
-                (&self.wc, 0.0)
-            } else {
+            let (wt, one) = if c < 3 {
                 (&self.w, 1.0)
+            } else {
+                (&self.edge[c - 3].wc, 0.0)
             };
             for (b, &w) in b.data_mut().iter_mut().zip(wt.data()) {
                 if w == 0.0 {

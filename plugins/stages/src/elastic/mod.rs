@@ -204,6 +204,18 @@
 //! (centres and corners). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
 //! face values, as the momentum advection.
 //!
+//! **Three dimensions.** B̃ has six components ([`Deformation`]): the normal ones at centres
+//! and each shear pair `B̃_ab` on the edges where the viscous operator puts `τ_ab`
+//! (`viscous_operator::SHEAR`): `B̃₁₂` on the xy-edges (the corners extruded along z), `B̃₂₃`
+//! on the yz-edges, `B̃₁₃` on the xz-edges. `L_aa` lives at centres, `L_ab` and `L_ba` on the
+//! `(a, b)`-edges (the four-point bulk stencil in each edge family's plane), and one kernel
+//! over the grid's shear pairs gives the gradient, the stretching (the third axis's terms
+//! `L_ac B̃_cb + B̃_ac L_bc` from the neighbouring edge families, `transport`), the advection
+//! and the end-of-step update in two and three dimensions; a planar field extruded along a
+//! periodic z gives the planar values. Not yet in three dimensions: the edge fractions from
+//! the PLIC planes (the cells' φ stands in), the interface relaxation of the xz- and yz-edges,
+//! the law on the full tensor and the implicit solve (the stage refuses a 3-D scene).
+//!
 //! # Solve
 //!
 //! BiCGSTAB (van der Vorst 1992), right-preconditioned (`numerics.elastic.preconditioner`):
@@ -247,8 +259,9 @@
 //! - H. A. van der Vorst, SIAM J. Sci. Stat. Comput. 13 (1992) 631 — BiCGSTAB.
 
 use crate::faces::UnknownFaces;
+use crate::viscous_operator::{SHEAR, shear_pairs};
 use efsi_core::scene::{Boundary, Options, Side};
-use efsi_core::{BoundarySet, Field, FieldId, Grid, Region, Scene, StageError};
+use efsi_core::{BoundarySet, Field, FieldId, Grid, Index, Region, Scene, StageError};
 use efsi_laws_host::{Sym, Tangent};
 
 mod choice;
@@ -280,7 +293,8 @@ pub use options::{
     ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
-use window::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Window, plus};
+use resource::{planar, planar_mut};
+use window::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Window, cells_of_edge, edges_of_cell, plus};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
 pub const B: FieldId = FieldId::Stage("B");
@@ -301,50 +315,36 @@ struct Kernels {
     faces: UnknownFaces,
     /// L₁₁, L₂₂, L₃₃ at centres.
     lc: [Field; 3],
-    /// The solid's L₁₂, L₂₁ at corners (the shear rate's interface share included: see
+    /// Per shear pair `[a, b]` ([`shear_pairs`]), the solid's `L_ab = ∂u_a/∂x_b` and
+    /// `L_ba` on its edges (the shear rate's interface share included: see
     /// [`Kernels::gradient_in`]).
-    lk: [Field; 2],
-    /// `φ^{1/2}` at centres and its four-cell average at corners (zero exactly where the
-    /// corner has no solid).
+    lk: Vec<[Field; 2]>,
+    /// `φ^{1/2}` at centres.
     w: Field,
-    wc: Field,
-    /// Interface shear in series (see "Interface corners" in the module docs): the corner's
-    /// B̃ weight `w_k` (1 with any solid, else 0), its solid shear-rate factor `s = 1/(aκ)`,
-    /// stress factor `1/κ` and relaxation coefficient `r = (1 − a)/(μ_f a κ)` (`aκ` taken no
-    /// less than a sliver's floor in `s` and `r`: see `interface::sliver_rates`).
-    wk: Field,
-    sf: Field,
-    ks: Field,
-    rc: Field,
-    /// Per centre, the solid fraction of each quarter of the cell by its PLIC line (lower-left,
-    /// lower-right, upper-left, upper-right; `φ` itself in uncut cells and beyond the batch).
+    /// Per shear pair, the interface weights of its edges.
+    edge: Vec<EdgeWeights>,
+    /// Per centre, the solid fraction of each quarter of the cell in the x–y plane by its PLIC
+    /// line (lower-left, lower-right, upper-left, upper-right; `φ` itself in uncut cells,
+    /// beyond the batch and on a three-dimensional grid, whose edge fractions do not yet
+    /// come from its PLIC planes).
     quarter: [Field; 4],
-    /// Per corner, the weights of its four cells (lower-left, lower-right, upper-left,
-    /// upper-right of the corner) in its normal components of B: each cell's solid quarter
-    /// next to the corner, over their sum (cells without deformation, `w = 0`, weigh nothing).
-    kwt: [Field; 4],
-    /// Per corner, the share `n_y²` of the interface's unit normal (from the four cells' φ;
-    /// ½ where φ is uniform): the part of the solid's extra shear rate that goes to `L₁₂`, the
-    /// rest going to `L₂₁` (see "Interface corners").
-    ny2: Field,
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
     mu_s: f64,
-    /// The centres holding solid (`w > 0`, within `[−1, nx] × [−1, ny]`) and the corners
-    /// touching them (the only ones with `w_k > 0`), set by [`Kernels::set_weights`]: outside
-    /// them the tangent's stress increment vanishes (it is weighted by `w`, `w_k`), so the
-    /// elastic operator skips them.
+    /// The centres holding solid (`w > 0`, within `[−1, n]` along each axis) and the corners
+    /// (xy-edges) touching them (the only ones with `w_k > 0`), set by
+    /// [`Kernels::set_weights`]: outside them the tangent's stress increment vanishes (it is
+    /// weighted by `w`, `w_k`), so the elastic operator skips them.
     solid_c: Window,
     solid_k: Window,
-    /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included) and
-    /// their corners, set by [`Kernels::set_weights`]: the deformation is transported there
-    /// only. Elsewhere B stays the identity and its rates zero ([`Kernels::reset_fluid`]):
-    /// a cell becomes solid only from a neighbour's material (the VOF step moves less than a
-    /// cell per step), and its B and rates read B at most three cells beyond it (the
-    /// advection's van Leer stencil), so the solid's deformation is the same as if B were
-    /// transported everywhere.
+    /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included), set by
+    /// [`Kernels::set_weights`], and the edges touching them ([`Window::edges`]): the
+    /// deformation is transported there only. Elsewhere B stays the identity and its rates
+    /// zero ([`Kernels::reset_fluid`]): a cell becomes solid only from a neighbour's material
+    /// (the VOF step moves less than a cell per step), and its B and rates read B at most three
+    /// cells beyond it (the advection's van Leer stencil), so the solid's deformation is the
+    /// same as if B were transported everywhere.
     near_c: Window,
-    near_k: Window,
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its weight, principal axes
     /// (cos, sin), the isochoric logarithms of the principal stretches and its volume.
     energy_cells: Vec<EnergyCell>,
@@ -359,6 +359,51 @@ struct Kernels {
     kj: Vec<Tangent>,
 }
 
+/// The interface weights of the edges of one shear pair `[a, b]` (the corners of a
+/// two-dimensional grid; see "Interface corners" in the module docs, whose `n_y²` is `n_b²`).
+struct EdgeWeights {
+    /// The four cells' average of `φ^{1/2}` (zero exactly where the edge has no solid).
+    wc: Field,
+    /// The edge's B̃ weight `w_k` (1 with any solid, else 0), its solid shear-rate factor
+    /// `s = 1/(aκ)`, stress factor `1/κ` and relaxation coefficient `r = (1 − a)/(μ_f a κ)`
+    /// (`aκ` taken no less than a sliver's floor in `s` and `r`: see
+    /// `interface::sliver_rates`).
+    wk: Field,
+    sf: Field,
+    ks: Field,
+    rc: Field,
+    /// The weights of its four cells ([`cells_of_edge`]) in its normal components of B: each
+    /// cell's solid quarter next to the edge, over their sum (cells without deformation,
+    /// `w = 0`, weigh nothing).
+    kwt: [Field; 4],
+    /// The share `n_b²/(n_a² + n_b²)` of the interface's normal (from the four cells' φ; ½
+    /// where φ is uniform): the part of the solid's extra shear rate that goes to `L_ab`, the
+    /// rest going to `L_ba`.
+    share: Field,
+}
+
+impl EdgeWeights {
+    fn new(grid: &Grid) -> Self {
+        EdgeWeights {
+            wc: Field::zeros(grid),
+            wk: Field::zeros(grid),
+            sf: Field::zeros(grid),
+            ks: Field::zeros(grid),
+            rc: Field::zeros(grid),
+            kwt: std::array::from_fn(|_| Field::zeros(grid)),
+            share: Field::zeros(grid),
+        }
+    }
+}
+
+/// `PAIR[a][b]`: the index in [`SHEAR`] of the pair of axes `a ≠ b` (the diagonal unused).
+const PAIR: [[usize; 3]; 3] = [[0, 0, 2], [0, 0, 1], [2, 1, 0]];
+
+/// The velocity `[u, v]`, or `[u, v, w]` with a third component (a state's `w`).
+fn velocity<'a>(u: &'a Field, v: &'a Field, w: Option<&'a Field>) -> Vec<&'a Field> {
+    [u, v].into_iter().chain(w).collect()
+}
+
 /// Cells with less solid than this carry no deformation (B = I, no stress): VOF flotsam and
 /// slivers of an interface whose B the mixed-cell velocity gradient spoils. Their stress,
 /// weighted by `φ^{1/2}`, would act on a face whose mass is the fluid's (`φρ_s ≪ ρ_f` at a
@@ -369,8 +414,8 @@ const PHI_MIN: f64 = 1e-3;
 /// one cell the material may reach in a step, three more its B and rates read.
 const NEAR: isize = 4;
 
-/// The weights of the four cells of each corner of `line` ([`CELLS_OF_CORNER`]) in the
-/// corner's normal components ([`Kernels::kwt`]): with [`Four::weighted`], the solid-weighted
+/// The weights of the four cells of each edge of `line` ([`cells_of_edge`]) in the edge's
+/// normal components ([`EdgeWeights::kwt`]): with [`Four::weighted`], the solid-weighted
 /// average there of a centre field, the interface-consistent value of a normal component (see
 /// "Interface corners").
 #[inline(always)]
@@ -391,27 +436,23 @@ impl Kernels {
     fn new(grid: &Grid, bc: &BoundarySet, mu_f: f64, mu_s: f64) -> Self {
         let nc = (grid.nx + 2) * (grid.ny + 2);
         let nk = (grid.nx + 1) * (grid.ny + 1);
+        let pairs = shear_pairs(grid.dims()).len();
         Kernels {
             grid: grid.clone(),
             bc: bc.clone(),
             faces: UnknownFaces::new(grid, bc),
             lc: std::array::from_fn(|_| Field::zeros(grid)),
-            lk: std::array::from_fn(|_| Field::zeros(grid)),
+            lk: (0..pairs)
+                .map(|_| std::array::from_fn(|_| Field::zeros(grid)))
+                .collect(),
             w: Field::zeros(grid),
-            wc: Field::zeros(grid),
-            wk: Field::zeros(grid),
-            sf: Field::zeros(grid),
-            ks: Field::zeros(grid),
-            rc: Field::zeros(grid),
+            edge: (0..pairs).map(|_| EdgeWeights::new(grid)).collect(),
             quarter: std::array::from_fn(|_| Field::zeros(grid)),
-            kwt: std::array::from_fn(|_| Field::zeros(grid)),
-            ny2: Field::zeros(grid),
             mu_f,
             mu_s,
             solid_c: Window::EMPTY,
             solid_k: Window::EMPTY,
             near_c: Window::EMPTY,
-            near_k: Window::EMPTY,
             energy_cells: Vec::new(),
             cb: vec![[0.0; 4]; nc],
             ct: vec![[0.0; 4]; nc],
@@ -426,23 +467,44 @@ impl Kernels {
         (self.grid.nx as isize, self.grid.ny as isize)
     }
 
-    /// The centres and corners whose gradients [`Kernels::stretch_in`] reads at the centres
-    /// `c` and their corners: one centre more all round (within the batch), and the corners of
-    /// every centre (ghost corners included: the axis's odd B̃₁₂ is not zero there).
-    fn gradient_windows(&self, c: Window) -> (Window, Window) {
-        let (nx, ny) = self.nxy();
-        if c.i0 > c.i1 {
-            return (Window::EMPTY, Window::EMPTY);
+    /// The centres and the edges of each shear pair whose gradients [`Kernels::stretch_in`]
+    /// reads at the centres `c` and their edges: one centre more all round (within
+    /// `[−1, n]` along each axis), and along an edge family's nodal axes the low and high
+    /// edges of every centre of `c` (ghost edges included: the axis's odd B̃₁₂ is not zero
+    /// there), along its centred axis the centres' range (the xz- and yz-edges beside an
+    /// xy-edge enter its stretching on a three-dimensional grid).
+    fn gradient_windows(&self, c: Window) -> (Window, Vec<Window>) {
+        let pairs = shear_pairs(self.grid.dims());
+        if c.points() == 0 {
+            return (Window::EMPTY, vec![Window::EMPTY; pairs.len()]);
         }
-        (
-            Window::new(
-                (c.i0 - 1).max(-1),
-                (c.i1 + 1).min(nx),
-                (c.j0 - 1).max(-1),
-                (c.j1 + 1).min(ny),
-            ),
-            Window::new(c.i0, c.i1 + 1, c.j0, c.j1 + 1),
-        )
+        let (n, dims) = (self.grid.n(), self.grid.dims());
+        let (lo, hi) = (c.lo(), c.hi());
+        let cells = Window::boxed(
+            std::array::from_fn(|a| if a < dims { (lo[a] - 1).max(-1) } else { 0 }),
+            std::array::from_fn(|a| {
+                if a < dims {
+                    (hi[a] + 1).min(n[a] as isize)
+                } else {
+                    0
+                }
+            }),
+        );
+        let edges = pairs
+            .iter()
+            .map(|&(_, at)| {
+                let nodal = at.nodal();
+                let pick = |a: usize, node: isize, cell: isize| match nodal[a] {
+                    1 => node,
+                    _ => cell,
+                };
+                Window::boxed(
+                    std::array::from_fn(|a| pick(a, lo[a], cells.lo()[a])),
+                    std::array::from_fn(|a| pick(a, hi[a] + 1, cells.hi()[a])),
+                )
+            })
+            .collect();
+        (cells, edges)
     }
 
     /// Batch index of centre `(i, j)` of the solid's window [`Kernels::solid_c`] (the law
@@ -481,51 +543,79 @@ impl Kernels {
     }
 
     /// Fill the ghosts of a staggered tensor.
-    fn fill_ghosts(&self, t: &mut [Field; 4]) {
-        for f in t.iter_mut().take(3) {
+    fn fill_ghosts(&self, t: &mut [Field]) {
+        let (normal, shear) = t.split_at_mut(3);
+        for f in normal {
             self.bc.fill_scalar(&self.grid, f, false);
         }
-        fill_corner(&self.bc, &self.grid, &mut t[3], true);
+        for (f, &(axes, _)) in shear.iter_mut().zip(shear_pairs(self.grid.dims())) {
+            fill_edge(&self.bc, &self.grid, f, axes);
+        }
     }
 }
 
-/// Fill the ghosts of a corner-staggered field (B̃₁₂, at the cell corners: a staggering of
-/// this stage's, which the core's boundary conditions do not know): wrap at periodic sides,
-/// even reflection about the boundary line elsewhere, except at the axis where a shear
-/// component is odd in r — zero on the axis — when `odd_at_axis`.
-fn fill_corner(bc: &BoundarySet, grid: &Grid, f: &mut Field, odd_at_axis: bool) {
-    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-    // The ghost layers: the storage beyond the interior along each axis.
+/// Fill the ghosts of a shear component on the edges of the pair `axes` (the corners of a
+/// two-dimensional grid: a staggering of this stage's, which the core's boundary conditions do
+/// not know), one axis after the other. Along the pair's axes (nodal, the boundary on an edge
+/// line): wrap at periodic sides, even reflection about the boundary line elsewhere, except at
+/// the axis and at a symmetry plane, where the component is odd (it changes sign with the
+/// normal coordinate) and zero on the boundary. Along the third axis (centred): wrap at
+/// periodic sides, even reflection about the boundary face elsewhere, as a cell scalar.
+fn fill_edge(bc: &BoundarySet, grid: &Grid, f: &mut Field, axes: [usize; 2]) {
     let whole = Region::whole(grid);
-    for (axis, n, lo_side) in [(0, nx, Side::XMin), (1, ny, Side::YMin)] {
-        let other = 1 - axis;
-        let at = |a: isize, b: isize| {
-            let mut i = [0; 3];
-            (i[axis], i[other]) = (a, b);
+    let (lo, hi, n) = (whole.lo(), whole.hi(), grid.n());
+    for axis in 0..grid.dims() {
+        let n = n[axis] as isize;
+        let ghosts = -lo[axis];
+        let at = |base: Index, a: isize| {
+            let mut i = base;
+            i[axis] = a;
             i
         };
-        let periodic = *bc.get(lo_side) == Boundary::Periodic;
-        let sign = if odd_at_axis && *bc.get(lo_side) == Boundary::Axis {
-            -1.0
-        } else {
-            1.0
-        };
-        let ghosts = -whole.lo()[axis];
-        for b in whole.lo()[other]..whole.hi()[other] {
-            if periodic {
-                f[at(n, b)] = f[at(0, b)];
-                for g in 1..=ghosts {
-                    f[at(-g, b)] = f[at(n - g, b)];
-                    f[at(n + g, b)] = f[at(g, b)];
+        let side = |high| bc.get(Side::normal_to(axis, high));
+        let periodic = *side(false) == Boundary::Periodic;
+        let nodal = axes.contains(&axis);
+        let odd =
+            |high| nodal && matches!(side(high), Boundary::Axis | Boundary::Symmetry) && !periodic;
+        let sign = |high| if odd(high) { -1.0 } else { 1.0 };
+        let (s0, s1) = (sign(false), sign(true));
+        let bases = whole.range(axis, 0, 1);
+        debug_assert!(hi[axis] - lo[axis] >= n + 2 * ghosts);
+        for l in (0..bases.lines()).map(|m| bases.line(m)) {
+            for base in l.indices() {
+                match (nodal, periodic) {
+                    (true, true) => {
+                        f[at(base, n)] = f[at(base, 0)];
+                        for g in 1..=ghosts {
+                            f[at(base, -g)] = f[at(base, n - g)];
+                            f[at(base, n + g)] = f[at(base, g)];
+                        }
+                    }
+                    (true, false) => {
+                        if s0 < 0.0 {
+                            f[at(base, 0)] = 0.0;
+                        }
+                        if s1 < 0.0 {
+                            f[at(base, n)] = 0.0;
+                        }
+                        for g in 1..=ghosts {
+                            f[at(base, -g)] = s0 * f[at(base, g)];
+                            f[at(base, n + g)] = s1 * f[at(base, n - g)];
+                        }
+                    }
+                    (false, true) => {
+                        for g in 1..=ghosts {
+                            f[at(base, -g)] = f[at(base, n - g)];
+                            f[at(base, n - 1 + g)] = f[at(base, g - 1)];
+                        }
+                    }
+                    (false, false) => {
+                        for g in 1..=ghosts {
+                            f[at(base, -g)] = f[at(base, g - 1)];
+                            f[at(base, n - 1 + g)] = f[at(base, n - g)];
+                        }
+                    }
                 }
-                continue;
-            }
-            if sign < 0.0 {
-                f[at(0, b)] = 0.0;
-            }
-            for g in 1..=ghosts {
-                f[at(-g, b)] = sign * f[at(g, b)];
-                f[at(n + g, b)] = f[at(n - g, b)];
             }
         }
     }

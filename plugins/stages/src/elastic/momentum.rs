@@ -279,7 +279,9 @@ fn deformation_stage(
             )
         }),
         thetas: [o.stretch_theta(false), o.stretch_theta(true)],
-        first: std::array::from_fn(|_| Field::zeros(grid)),
+        first: (0..super::Deformation::components(grid))
+            .map(|_| Field::zeros(grid))
+            .collect(),
     })
 }
 

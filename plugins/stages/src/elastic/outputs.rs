@@ -62,7 +62,7 @@ fn elastic_energy(_grid: &Grid, state: &State) -> f64 {
 /// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
 /// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
 /// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
-fn tensor(grid: &Grid, t: &[Field; 4], phi: Option<&Field>) -> Vec<f64> {
+fn tensor(grid: &Grid, t: &[Field], phi: Option<&Field>) -> Vec<f64> {
     let (nx, ny) = (grid.nx, grid.ny);
     let mut out = vec![0.0; 6 * nx * ny];
     let (c11, c22, c33, c12) = if grid.is_axisymmetric() {

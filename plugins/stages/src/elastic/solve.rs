@@ -2,7 +2,7 @@
 //! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
-use super::{Kernels, err, missing, plus};
+use super::{Kernels, err, missing, planar, plus};
 use crate::block_multigrid::ViscousBlocks;
 use crate::ops::face_density;
 use crate::viscous_operator::Coefficients;
@@ -87,7 +87,7 @@ pub(super) struct ElasticOperator {
 /// [`apply`](LinearOperator::apply), `xu`, `xv` hold `x` scattered, ghosts filled.
 pub(super) struct OperatorCtx<'a> {
     pub(super) op: &'a mut ElasticOperator,
-    pub(super) start: &'a [Field; 4],
+    pub(super) start: &'a [Field],
     pub(super) relax: &'a Field,
     pub(super) xu: &'a mut Field,
     pub(super) xv: &'a mut Field,
@@ -119,10 +119,9 @@ impl LinearOperator for OperatorCtx<'_> {
         op.k.faces.scatter(x, xu, xv);
         op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
-        let (cw, kw) = (op.k.solid_c, op.k.solid_k);
-        let (gc, gk) = op.k.gradient_windows(cw);
-        op.k.gradient_in(xu, xv, gc, gk);
-        op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw, kw);
+        let cw = op.k.solid_c;
+        op.k.gradient_in(&[&*xu, &*xv], cw);
+        op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw);
         op.k.apply_tangent(&op.db, self.dtau);
         op.viscous.apply(xu, xv, &op.dm, Some(x), y);
         op.k.force_sub(self.dtau, op.c, y);
@@ -137,10 +136,7 @@ impl ElasticStage {
             .resources
             .get_mut::<super::Deformation>()
             .ok_or_else(missing)?;
-        for c in 0..3 {
-            d.b[c].fill(1.0);
-        }
-        d.b[3].fill(0.0);
+        d.set_identity();
         d.relax.fill(1.0);
         let k = &mut self.op.k;
         // The solid fraction is set: the stages writing material fields initialise first.
@@ -150,10 +146,11 @@ impl ElasticStage {
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         k.set_weights(phi);
         k.fill_ghosts(&mut d.b);
-        k.gradient(&state.u, &state.v);
-        k.advect(&state.u, &state.v, &d.b, &mut d.advection);
-        for c in 0..4 {
-            d.advection_prev[c].copy_from(&d.advection[c]);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        k.gradient(&vel);
+        k.advect(&vel, &d.b, &mut d.advection);
+        for (p, a) in d.advection_prev.iter_mut().zip(&d.advection) {
+            p.copy_from(a);
         }
         k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
         Ok(())
@@ -204,8 +201,8 @@ impl ElasticStage {
                 // to Bⁿ). One split step above its wave cap does not pump energy in the way a
                 // run of them does, and the energy guard watches what follows.
                 Err(_) if self.mode == super::ElasticCoupling::Auto => {
-                    for c in 0..4 {
-                        d.b[c].copy_from(&d.start[c]);
+                    for (b, s) in d.b.iter_mut().zip(&d.start) {
+                        b.copy_from(s);
                     }
                     self.set_scheme(false, ctx.dt);
                     self.predict(ctx, state, d)?;
@@ -248,28 +245,10 @@ impl ElasticStage {
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
         self.op.k.set_weights(phi);
         self.op.k.reset_fluid(d);
-        let th = self.scheme.theta;
-        for c in 0..4 {
-            d.start[c].copy_from(&d.b[c]);
-            let (e, a, ap, h) = (
-                &mut d.explicit[c],
-                &d.advection[c],
-                &d.advection_prev[c],
-                &d.stretching[c],
-            );
-            for (((e, a), ap), h) in e
-                .data_mut()
-                .iter_mut()
-                .zip(a.data())
-                .zip(ap.data())
-                .zip(h.data())
-            {
-                *e = -dt * ((1.0 + 0.5 * r) * a - 0.5 * r * ap) + (1.0 - th) * dt * h;
-            }
-        }
+        d.begin_step(dt, r, self.scheme.theta);
         let k = &mut self.op.k;
         if self.scheme.alpha < 1.0 {
-            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
+            k.evaluate(self.law.as_ref(), planar(&d.start), &mut self.tau_n, false)
                 .map_err(|m| err("elastic", m))?;
         }
         k.relaxation(
@@ -280,16 +259,16 @@ impl ElasticStage {
             &mut d.relax,
         )
         .map_err(|m| err("elastic", m))?;
-        k.gradient(&state.u, &state.v);
+        k.gradient(&super::velocity(&state.u, &state.v, state.w.as_ref()));
         k.stretch(
             &d.start,
             self.scheme.theta * dt,
-            Some((&d.start, &d.explicit)),
+            Some((&d.start[..], &d.explicit[..])),
             Some(&d.relax),
             &mut d.b,
         );
         k.fill_ghosts(&mut d.b);
-        k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
+        k.evaluate(self.law.as_ref(), planar(&d.b), &mut self.tau, true)
             .map_err(|m| err("elastic", m))
     }
 
@@ -532,11 +511,11 @@ impl ElasticStage {
         let dt = ctx.dt;
         let k = &mut self.op.k;
         k.bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
-        k.gradient(&state.u, &state.v);
+        k.gradient(&super::velocity(&state.u, &state.v, state.w.as_ref()));
         k.stretch(
             &d.start,
             self.scheme.theta * dt,
-            Some((&d.start, &d.explicit)),
+            Some((&d.start[..], &d.explicit[..])),
             Some(&d.relax),
             &mut d.b,
         );

@@ -75,7 +75,7 @@ impl Kernels {
         dead: Sym,
     ) -> Result<(), String> {
         let (win, weights) = if corners {
-            (self.solid_k, &self.wk)
+            (self.solid_k, &self.edge[0].wk)
         } else {
             (self.solid_c, &self.w)
         };
@@ -143,7 +143,7 @@ impl Kernels {
                     t33[n] = w[n] * t[2];
                 }
             });
-        let (kt, ks) = (&self.kt, &self.ks);
+        let (kt, ks) = (&self.kt, &self.edge[0].ks);
         kw.region(&self.grid).for_each(t12, |l, t12| {
             let ks = ks.at(&l, [0; 3]);
             for (n, t) in kt[l.n * l.len..][..l.len].iter().enumerate() {
@@ -173,9 +173,9 @@ impl Kernels {
     pub(super) fn gather_corners(&mut self, b: &[Field; 4]) {
         let corners = self.solid_k.region(&self.grid);
         for l in (0..corners.lines()).map(|n| corners.line(n)) {
-            let wt = corner_weights(&self.kwt, &l);
+            let wt = corner_weights(&self.edge[0].kwt, &l);
             let [b11, b22, b33] = [0, 1, 2].map(|c| Four::new(&b[c], &l, CELLS_OF_CORNER));
-            let (b12, w) = (b[3].at(&l, [0; 3]), self.wk.at(&l, [0; 3]));
+            let (b12, w) = (b[3].at(&l, [0; 3]), self.edge[0].wk.at(&l, [0; 3]));
             for n in 0..l.len {
                 self.kb[l.n * l.len + n] = [
                     w[n] * b11.weighted(&wt, n),
@@ -211,9 +211,10 @@ impl Kernels {
             }
         });
         kw.for_each(t12, |l, t12| {
-            let wt = corner_weights(&self.kwt, &l);
+            let wt = corner_weights(&self.edge[0].kwt, &l);
             let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, CELLS_OF_CORNER));
-            let [w, d12, ks] = [&self.wk, &db[3], &self.ks].map(|f| f.at(&l, [0; 3]));
+            let [w, d12, ks] =
+                [&self.edge[0].wk, &db[3], &self.edge[0].ks].map(|f| f.at(&l, [0; 3]));
             for (n, jm) in self.kj[l.n * l.len..][..l.len].iter().enumerate() {
                 let x = [
                     w[n] * d11.weighted(&wt, n),
@@ -245,8 +246,13 @@ impl Kernels {
             }
         });
         kw.for_each(eta_k, |l, eta| {
-            let [ks, sf, relax, fy] =
-                [&self.ks, &self.sf, relax, &self.ny2].map(|f| f.at(&l, [0; 3]));
+            let [ks, sf, relax, fy] = [
+                &self.edge[0].ks,
+                &self.edge[0].sf,
+                relax,
+                &self.edge[0].share,
+            ]
+            .map(|f| f.at(&l, [0; 3]));
             let q0 = l.n * l.len;
             for (n, eta) in eta.iter_mut().enumerate() {
                 let (jm, b) = (&self.kj[q0 + n], &self.kb[q0 + n]);

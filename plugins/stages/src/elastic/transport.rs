@@ -1,13 +1,27 @@
-//! The transport kernels of B: the velocity gradient (centres and corners), the stretching
-//! `H(V; B) = L B + B Lᵀ` with the interface corners' solid gradient, the relaxation of the
-//! corners' shear, and the conservative advection `∇·(V B)`.
+//! The transport kernels of B: the velocity gradient (centres and edges), the stretching
+//! `H(V; B) = L B + B Lᵀ` with the interface edges' solid gradient, the relaxation of the
+//! corners' shear, and the conservative advection `∇·(V B)` — one kernel for two and three
+//! dimensions, over the shear pairs of the grid ([`shear_pairs`]).
+//!
+//! **Stretching on the staggered layout.** With `L_ab = ∂u_a/∂x_b`, `H_ab = Σ_k (L_ak B_kb +
+//! B_ak L_bk)`. At a centre, `H_aa = 2 Σ_k L_ak B_ka`: `L_aa B_aa` there and, for each `k ≠ a`,
+//! the mean over the cell's four edges of the pair `(a, k)` of `L_ak B_ak` (in two dimensions
+//! the hoop direction couples to itself only, `H₃₃ = 2 L₃₃ B₃₃`). On an edge of the pair
+//! `(a, b)`, `H_ab = L_aa B_ab + L_ab B_bb + B_aa L_ba + B_ab L_bb` with the normal components
+//! from the four cells (`L` averaged, B solid-weighted), plus on a three-dimensional grid the
+//! terms of the third axis `c`, `L_ac B_cb + B_ac L_bc`, each factor the mean of the four edges
+//! of its pair around the edge (`(a, c)`-edges at `I − {0, e_b} + {0, e_c}`, `(b, c)`-edges at
+//! `I − {0, e_a} + {0, e_c}`). The interface relaxation (`relax`) acts on the xy-edges only:
+//! the xz- and yz-edges' needs the law on the full tensor.
 
-use super::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Kernels, Window, corner_weights, on, plus};
+use super::{
+    Four, Kernels, PAIR, SHEAR, Window, cells_of_edge, corner_weights, edges_of_cell, on, planar,
+    plus, shear_pairs,
+};
 use crate::advection::face_value;
 use efsi_core::operators::minus;
 use efsi_core::{Field, Index, Line, Region, Stagger, unit};
 use efsi_laws_host::ConstitutiveLaw;
-
 /// The solid fraction from which a cell counts as the solid's bulk for the shear gradient's
 /// four-point stencil (all eight cells it spans at least this).
 const BULK_PHI: f64 = 1.0 - 1e-9;
@@ -101,15 +115,15 @@ impl<'a> Flux<'a> {
 }
 
 impl Kernels {
-    /// Velocity gradients of `(u, v)` (ghosts filled), wherever [`Kernels::stretch`] reads
-    /// them (near the material, [`Kernels::near_c`]).
-    pub(super) fn gradient(&mut self, u: &Field, v: &Field) {
-        let (c, k) = self.gradient_windows(self.near_c);
-        self.gradient_in(u, v, c, k);
+    /// Velocity gradients of `vel` (`[u, v]` or `[u, v, w]`, ghosts filled), wherever
+    /// [`Kernels::stretch`] reads them (near the material, [`Kernels::near_c`]).
+    pub(super) fn gradient(&mut self, vel: &[&Field]) {
+        self.gradient_in(vel, self.near_c);
     }
 
-    /// Velocity gradients of `(u, v)` (ghosts filled): `L₁₁, L₂₂, L₃₃` at the centres `cw`,
-    /// `L₁₂, L₂₁` at the corners `kw`.
+    /// Velocity gradients of `vel` (ghosts filled) wherever [`Kernels::stretch_in`] at the
+    /// centres `c` reads them ([`Kernels::gradient_windows`]): `L₁₁, L₂₂, L₃₃` at centres
+    /// (`L₃₃ = u_r/r` axisymmetric, 0 planar), `L_ab, L_ba` on the edges of each shear pair.
     ///
     /// **Bulk shear gradient.** A shear wave in the solid is the pair `ρ u_t = D τ₁₂`,
     /// `τ₁₂,t = G L u` of the stress divergence `D` (two-point, on the faces) and the corner
@@ -125,203 +139,346 @@ impl Kernels {
     /// positive for every k (`D₄ = (I − (h²/12) δ²) D₂`, an SPD factor on the two-point
     /// gradient: the same dispersion as a mass matrix blended halfway between lumped and
     /// consistent, without touching the mass). Near the interface and where cells hold less
-    /// solid the gradient stays the two-point one (the series closure there).
-    pub(super) fn gradient_in(&mut self, u: &Field, v: &Field, cw: Window, kw: Window) {
+    /// solid the gradient stays the two-point one (the series closure there). Every edge
+    /// family does the same in its own plane.
+    pub(super) fn gradient_in(&mut self, vel: &[&Field], c: Window) {
+        let (cw, ew) = self.gradient_windows(c);
         let g = &self.grid;
-        let (dx, dy) = (g.dx, g.dy);
+        let (h, dims) = (g.h(), g.dims());
+        assert!(vel.len() >= dims, "one velocity component per axis");
         let [l11, l22, l33] = &mut self.lc;
         cw.region(g)
             .for_each((l11, l22, l33), |l, (r11, r22, r33)| {
-                let (uw, ue) = (u.at(&l, [0; 3]), u.at(&l, unit(0)));
-                let (vs, vn) = (v.at(&l, [0; 3]), v.at(&l, unit(1)));
-                let hoop = g.metric.hoop_c_on(&l, 0);
-                for n in 0..l.len {
-                    r11[n] = (ue[n] - uw[n]) / dx;
-                    r22[n] = (vn[n] - vs[n]) / dy;
-                    r33[n] = 0.5 * (uw[n] + ue[n]) * hoop[n];
+                let mut rows = [r11, r22, r33];
+                for (a, row) in rows.iter_mut().enumerate().take(dims) {
+                    let (lo, hi) = (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a)));
+                    for n in 0..l.len {
+                        row[n] = (hi[n] - lo[n]) / h[a];
+                    }
+                }
+                if dims == 2 {
+                    let (uw, ue) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
+                    let hoop = g.metric.hoop_c_on(&l, 0);
+                    for n in 0..l.len {
+                        rows[2][n] = 0.5 * (uw[n] + ue[n]) * hoop[n];
+                    }
                 }
             });
-        self.corner_gradient(u, v, kw);
+        for (p, ew) in ew.into_iter().enumerate() {
+            self.edge_gradient(vel, p, ew);
+        }
     }
 
-    /// The solid's shear gradients `L₁₂, L₂₁` at the corners `kw`: the shear rate times `s` (1
-    /// away from interfaces), the extra going to the derivative across the interface — `L₁₂`
-    /// by the share `n_y²`, `L₂₁` by `n_x²` (see "Interface corners"). In the solid's bulk the
-    /// derivative across the corner takes the four-point stencil `D₄` (see "Bulk shear
-    /// gradient" in the docs of [`Kernels::gradient_in`]) wherever that stencil and the cells
-    /// beside it lie within the fields' storage.
-    fn corner_gradient(&mut self, u: &Field, v: &Field, kw: Window) {
+    /// The solid's shear gradients `L_ab, L_ba` on the edges `ew` of the shear pair `p`: the
+    /// shear rate times `s` (1 away from interfaces), the extra going to the derivative across
+    /// the interface — `L_ab` by the share `n_b²`, `L_ba` by `n_a²` (see "Interface
+    /// corners"). In the solid's bulk the derivative across the edge takes the four-point
+    /// stencil `D₄` (see "Bulk shear gradient" in the docs of [`Kernels::gradient_in`])
+    /// wherever that stencil and the cells beside it lie within the fields' storage.
+    fn edge_gradient(&mut self, vel: &[&Field], p: usize, ew: Window) {
+        let ([a, b], _) = SHEAR[p];
         let g = &self.grid;
-        let (dx, dy) = (g.dx, g.dy);
-        let (sf, ny2, w) = (&self.sf, &self.ny2, &self.w);
-        let corners = kw.region(g);
-        // The storage: `D₄` along axis a at I reads I − 2e_a … I + e_a and the cells across.
+        let h = g.h();
+        let (sf, share, w) = (&self.edge[p].sf, &self.edge[p].share, &self.w);
+        let (ua, ub) = (vel[a], vel[b]);
+        let edges = ew.region(g);
         let whole = Region::whole(g);
         let (lo, hi) = (whole.lo(), whole.hi());
-        let (k0, k1) = (corners.lo()[0], corners.hi()[0]);
-        let along_y = corners.range(0, k0.max(lo[0] + 1), k1);
-        let along_x = corners.range(0, k0.max(lo[0] + 2), k1.min(hi[0] - 2));
-        let [g12, g21] = &mut self.lk;
-        corners.for_each((g12, g21), |l, (r12, r21)| {
-            let j = l.start[1];
-            let by = ((lo[1] + 2..hi[1] - 2).contains(&j))
-                .then(|| Bulk::new(w, u, &along_y.line(l.n), 1, 0, l.start[0]));
-            let bx = (j > lo[1]).then(|| Bulk::new(w, v, &along_x.line(l.n), 0, 1, l.start[0]));
-            let (uc, us) = (u.at(&l, [0; 3]), u.at(&l, minus(1)));
-            let (vc, vw) = (v.at(&l, [0; 3]), v.at(&l, minus(0)));
-            let (sf, ny2) = (sf.at(&l, [0; 3]), ny2.at(&l, [0; 3]));
+        // `D₄` of u_a along b (the cells across along a) and of u_b along a.
+        let (along_b, along_a) = (
+            bulk_columns(&edges, lo, hi, b, a),
+            bulk_columns(&edges, lo, hi, a, b),
+        );
+        let [gab, gba] = &mut self.lk[p];
+        edges.for_each((gab, gba), |l, (rab, rba)| {
+            let bulk = |d: usize, x: usize, f, cols: &Region| {
+                bulk_fits(&l, lo, hi, d, x)
+                    .then(|| Bulk::new(w, f, &cols.line(l.n), d, x, l.start[0]))
+            };
+            let (db, da) = (bulk(b, a, ua, &along_b), bulk(a, b, ub, &along_a));
+            let (uc, us) = (ua.at(&l, [0; 3]), ua.at(&l, minus(b)));
+            let (vc, vw) = (ub.at(&l, [0; 3]), ub.at(&l, minus(a)));
+            let (sf, share) = (sf.at(&l, [0; 3]), share.at(&l, [0; 3]));
             for n in 0..l.len {
-                let l12 = match by.as_ref().and_then(|b| b.d4(n)) {
-                    Some(d) => d / dy,
-                    None => (uc[n] - us[n]) / dy,
+                let lab = match db.as_ref().and_then(|s| s.d4(n)) {
+                    Some(d) => d / h[b],
+                    None => (uc[n] - us[n]) / h[b],
                 };
-                let l21 = match bx.as_ref().and_then(|b| b.d4(n)) {
-                    Some(d) => d / dx,
-                    None => (vc[n] - vw[n]) / dx,
+                let lba = match da.as_ref().and_then(|s| s.d4(n)) {
+                    Some(d) => d / h[a],
+                    None => (vc[n] - vw[n]) / h[a],
                 };
-                let e = (sf[n] - 1.0) * (l12 + l21);
-                r12[n] = l12 + ny2[n] * e;
-                r21[n] = l21 + (1.0 - ny2[n]) * e;
+                let e = (sf[n] - 1.0) * (lab + lba);
+                rab[n] = lab + share[n] * e;
+                rba[n] = lba + (1.0 - share[n]) * e;
             }
         });
     }
 
     /// `out = base + a·H(V; b)` for the gradients of the last [`Kernels::gradient`] call
-    /// (`base` may be `None` for zero), near the material ([`Kernels::near_c`], `near_k`;
-    /// `out` is left untouched elsewhere). At interface corners the shear rate is the solid's
-    /// share (factor `s`), and with `relax` the corner result is divided by this step's
+    /// (`base` may be `None` for zero), near the material ([`Kernels::near_c`] and its edges;
+    /// `out` is left untouched elsewhere). At interface edges the shear rate is the solid's
+    /// share (factor `s`), and with `relax` the xy-edges' result is divided by this step's
     /// relaxation.
     pub(super) fn stretch(
         &self,
-        b: &[Field; 4],
+        b: &[Field],
         a: f64,
-        base: Option<(&[Field; 4], &[Field; 4])>,
+        base: Option<(&[Field], &[Field])>,
         relax: Option<&Field>,
-        out: &mut [Field; 4],
+        out: &mut [Field],
     ) {
-        let (cw, kw) = (self.near_c, self.near_k);
-        self.stretch_in(b, a, base, relax, out, cw, kw);
+        self.stretch_in(b, a, base, relax, out, self.near_c);
     }
 
-    /// [`Kernels::stretch`] at the centres `cw` and the corners `kw` only (the gradients of the
-    /// last [`Kernels::gradient_in`] there).
+    /// [`Kernels::stretch`] at the centres `cw` and the edges touching them
+    /// ([`Window::edges`]) only (the gradients of the last [`Kernels::gradient_in`] there).
     pub(super) fn stretch_in(
         &self,
-        b: &[Field; 4],
+        b: &[Field],
         a: f64,
-        base: Option<(&[Field; 4], &[Field; 4])>,
+        base: Option<(&[Field], &[Field])>,
         relax: Option<&Field>,
-        out: &mut [Field; 4],
+        out: &mut [Field],
         cw: Window,
-        kw: Window,
+    ) {
+        let g = &self.grid;
+        let dims = g.dims();
+        let pairs = shear_pairs(dims).len();
+        let (normal, shear) = out.split_at_mut(3);
+        let [o11, o22, o33] = normal else {
+            unreachable!("three normal components")
+        };
+        let normal = (o11, o22, o33);
+        if dims == 3 {
+            self.stretch_centres::<3, 3>(b, a, base, normal, cw);
+        } else {
+            self.stretch_centres::<2, 1>(b, a, base, normal, cw);
+        }
+        for (p, out) in shear.iter_mut().enumerate().take(pairs) {
+            match (dims, p) {
+                (3, 0) => self.stretch_edges::<3, 0>(b, a, base, relax, out, cw),
+                (3, 1) => self.stretch_edges::<3, 1>(b, a, base, relax, out, cw),
+                (3, 2) => self.stretch_edges::<3, 2>(b, a, base, relax, out, cw),
+                _ => self.stretch_edges::<2, 0>(b, a, base, relax, out, cw),
+            }
+        }
+    }
+
+    /// The edges' part of [`Kernels::stretch_in`] for the shear pair `P` of [`SHEAR`] on a grid
+    /// of `D` axes: `H_ab` from the four cells' normal components and, with `D = 3`, the third
+    /// axis's terms.
+    fn stretch_edges<const D: usize, const P: usize>(
+        &self,
+        b: &[Field],
+        a: f64,
+        base: Option<(&[Field], &[Field])>,
+        relax: Option<&Field>,
+        out: &mut Field,
+        cw: Window,
     ) {
         let g = &self.grid;
         let (lc, lk) = (&self.lc, &self.lk);
-        let [o11, o22, o33, o12] = out;
-        // `base + a·h`, or `a·h` alone without a base (as `0 + a·h`: the same bits).
-        cw.region(g)
-            .for_each((o11, o22, o33), |l, (r11, r22, r33)| {
-                let rows = [r11, r22, r33];
-                let at = |f| on(f, &l);
-                let [l11, l22, l33] = [at(&lc[0]), at(&lc[1]), at(&lc[2])];
-                let [b11, b22, b33] = [at(&b[0]), at(&b[1]), at(&b[2])];
-                // The solid's gradients at the cell's corners (as for `h12` below).
-                let [g12, g21, b12] =
-                    [&lk[0], &lk[1], &b[3]].map(|f| Four::new(f, &l, CORNERS_OF_CELL));
-                let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
-                for n in 0..l.len {
-                    let (mut l12b12, mut l21b12) = (0.0, 0.0);
-                    for m in 0..4 {
-                        l12b12 += 0.25 * g12.get(m, n) * b12.get(m, n);
-                        l21b12 += 0.25 * g21.get(m, n) * b12.get(m, n);
-                    }
-                    let h = [
-                        2.0 * (l11[n] * b11[n] + l12b12),
-                        2.0 * (l21b12 + l22[n] * b22[n]),
-                        2.0 * l33[n] * b33[n],
-                    ];
-                    for c in 0..3 {
-                        rows[c][n] = match base {
-                            Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
-                            None => 0.0 + a * h[c],
-                        };
-                    }
-                }
-            });
-        kw.region(g).for_each(o12, |l, row| {
+        let (axes, at_) = SHEAR[P];
+        let [pa, pb] = axes;
+        let cells = cells_of_edge(axes);
+        let kwt = &self.edge[P].kwt;
+        // The third axis's terms `L_ac B_cb + B_ac L_bc` (three dimensions).
+        let third = (D == 3).then(|| {
+            let pc = 3 - pa - pb;
+            let (qa, qb) = (PAIR[pa][pc], PAIR[pb][pc]);
+            let around = |x: usize| {
+                let (ex, ec) = (minus(x), unit(pc));
+                [[0; 3], ex, ec, plus(ex, ec)]
+            };
+            // (a, c)-edges around the edge, then (b, c)-edges.
+            let (sa, sb) = (around(pb), around(pa));
+            let lac = &lk[qa][usize::from(pa > pc)];
+            let lbc = &lk[qb][usize::from(pb > pc)];
+            ((lac, &b[3 + qb], sa, sb), (&b[3 + qa], lbc, sa, sb))
+        });
+        cw.edges(g, at_).region(g).for_each(out, |l, row| {
             let at = |f| on(f, &l);
-            let (b12, g12, g21) = (at(&b[3]), at(&lk[0]), at(&lk[1]));
+            let (bab, gab, gba) = (at(&b[3 + P]), at(&lk[P][0]), at(&lk[P][1]));
             // The solid's velocity gradient; the solid's own normal components
             // (solid-weighted).
-            let [l11, l22, b11, b22] =
-                [&lc[0], &lc[1], &b[0], &b[1]].map(|f| Four::new(f, &l, CELLS_OF_CORNER));
-            let wt = corner_weights(&self.kwt, &l);
-            let base = base.map(|(x, y)| (at(&x[3]), at(&y[3])));
-            let relax = relax.map(at);
+            let four = |f| Four::new(f, &l, cells);
+            let (laa, lbb, baa, bbb) = (four(&lc[pa]), four(&lc[pb]), four(&b[pa]), four(&b[pb]));
+            let wt = corner_weights(kwt, &l);
+            let third = third.map(|((lac, bcb, sa, sb), (bac, lbc, _, _))| {
+                [
+                    Four::new(lac, &l, sa),
+                    Four::new(bcb, &l, sb),
+                    Four::new(bac, &l, sa),
+                    Four::new(lbc, &l, sb),
+                ]
+            });
+            let base = base.map(|(x, y)| (at(&x[3 + P]), at(&y[3 + P])));
+            let relax = relax.filter(|_| P == 0).map(at);
             for n in 0..l.len {
-                let h12 = l11.avg(n) * b12[n]
-                    + g12[n] * b22.weighted(&wt, n)
-                    + b11.weighted(&wt, n) * g21[n]
-                    + b12[n] * l22.avg(n);
+                let mut hab = laa.avg(n) * bab[n]
+                    + gab[n] * bbb.weighted(&wt, n)
+                    + baa.weighted(&wt, n) * gba[n]
+                    + bab[n] * lbb.avg(n);
+                if D == 3
+                    && let Some([lac, bcb, bac, lbc]) = &third
+                {
+                    hab += lac.avg(n) * bcb.avg(n) + bac.avg(n) * lbc.avg(n);
+                }
                 let base = base.map_or(0.0, |(x, y)| x[n] + y[n]);
                 let q = relax.map_or(1.0, |r| r[n]);
-                row[n] = q * (base + a * h12);
+                row[n] = q * (base + a * hab);
             }
         });
     }
 
-    /// `out = ∇·(V b)` (conservative, van Leer face values), at the interior centres and
-    /// corners near the material ([`Kernels::near_c`], `near_k`; `out` is left untouched
-    /// elsewhere); lines in parallel (each writes only its own entries: the same bits on any
-    /// number of threads).
-    pub(super) fn advect(&self, u: &Field, v: &Field, b: &[Field; 4], out: &mut [Field; 4]) {
+    /// The centres' part of [`Kernels::stretch_in`] on a grid of `D` axes and `P` shear pairs
+    /// (`(2, 1)` or `(3, 3)`): `H_aa = 2 Σ_k L_ak B_ka` in the order of `k`, the centre's own
+    /// term `L_aa B_aa` or the mean over the cell's edges of the pair `(a, k)`; the hoop
+    /// direction of a two-dimensional grid its own term only.
+    fn stretch_centres<const D: usize, const P: usize>(
+        &self,
+        b: &[Field],
+        a: f64,
+        base: Option<(&[Field], &[Field])>,
+        out: (&mut Field, &mut Field, &mut Field),
+        cw: Window,
+    ) {
+        let g = &self.grid;
+        let (lc, lk) = (&self.lc, &self.lk);
+        let pairs: [[usize; 2]; P] = std::array::from_fn(|p| SHEAR[p].0);
+        // `base + a·h`, or `a·h` alone without a base (as `0 + a·h`: the same bits).
+        cw.region(g).for_each(out, |l, (r11, r22, r33)| {
+            let rows = [r11, r22, r33];
+            let at = |f| on(f, &l);
+            let laa = [at(&lc[0]), at(&lc[1]), at(&lc[2])];
+            let baa = [at(&b[0]), at(&b[1]), at(&b[2])];
+            // The solid's gradients and the shear at the cell's edges of each pair.
+            let edges: [[Four; 3]; P] = std::array::from_fn(|p| {
+                let e = edges_of_cell(pairs[p]);
+                let four = |f| Four::new(f, &l, e);
+                [four(&lk[p][0]), four(&lk[p][1]), four(&b[3 + p])]
+            });
+            let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
+            for n in 0..l.len {
+                // ¼ Σ L_ab B_ab and ¼ Σ L_ba B_ab over the cell's edges of each pair.
+                let mut s = [[0.0; 2]; P];
+                for (s, [gab, gba, bab]) in s.iter_mut().zip(&edges) {
+                    for m in 0..4 {
+                        s[0] += 0.25 * gab.get(m, n) * bab.get(m, n);
+                        s[1] += 0.25 * gba.get(m, n) * bab.get(m, n);
+                    }
+                }
+                let h: [f64; 3] = std::array::from_fn(|c| {
+                    let own = laa[c][n] * baa[c][n];
+                    if c >= D {
+                        return 2.0 * own;
+                    }
+                    let term = |k: usize| {
+                        if k == c {
+                            own
+                        } else {
+                            s[PAIR[c][k]][usize::from(c > k)]
+                        }
+                    };
+                    let mut sum = term(0);
+                    for k in 1..D {
+                        sum += term(k);
+                    }
+                    2.0 * sum
+                });
+                for c in 0..3 {
+                    rows[c][n] = match base {
+                        Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
+                        None => 0.0 + a * h[c],
+                    };
+                }
+            }
+        });
+    }
+
+    /// `out = ∇·(V b)` (conservative, van Leer face values) for the velocity `vel`, at the
+    /// interior centres and edges near the material ([`Kernels::near_c`] and its edges; `out`
+    /// is left untouched elsewhere); lines in parallel (each writes only its own entries: the
+    /// same bits on any number of threads).
+    ///
+    /// A centre's control volume is its cell; an edge's is the box between the centres of the
+    /// cells on either side along its nodal axes and between the cell's faces along its centred
+    /// axis. The advecting velocity on a face of an edge's box is the mean of the four values
+    /// of the velocity component around it.
+    pub(super) fn advect(&self, vel: &[&Field], b: &[Field], out: &mut [Field]) {
         let g = &self.grid;
         let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
-        let interior = Region::of(g, Stagger::Cell);
-        let (cw, kw) = (self.near_c.region(g), self.near_k.region(g));
-        let centres = cw
-            .range(0, cw.lo()[0].max(0), cw.hi()[0].min(interior.hi()[0]))
-            .range(1, cw.lo()[1].max(0), cw.hi()[1].min(interior.hi()[1]));
-        for c in 0..3 {
-            centres.for_each(&mut out[c], |l, row| {
-                let (bx, by) = (Flux::new(&b[c], &l, 0), Flux::new(&b[c], &l, 1));
-                let (uw, ue) = (u.at(&l, [0; 3]), u.at(&l, unit(0)));
-                let (vs, vn) = (v.at(&l, [0; 3]), v.at(&l, unit(1)));
+        let (h, dims) = (g.h(), g.dims());
+        let near = self.near_c.region(g);
+        let centres = clip(near, Region::of(g, Stagger::Cell));
+        let (normal, shear) = out.split_at_mut(3);
+        for (c, out) in normal.iter_mut().enumerate() {
+            centres.for_each(out, |l, row| {
+                let bx = Flux::new(&b[c], &l, 0);
+                let (uw, ue) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
                 let (rw, re, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
+                // The faces across the other axes (no metric there).
+                let other = std::array::from_fn::<_, 2, _>(|o| {
+                    let x = o + 1;
+                    (x < dims).then(|| {
+                        let v = vel[x];
+                        (
+                            Flux::new(&b[c], &l, x),
+                            v.at(&l, [0; 3]),
+                            v.at(&l, unit(x)),
+                            h[x],
+                        )
+                    })
+                });
                 for n in 0..l.len {
-                    // x-faces i, i+1 (between cells i−1|i and i|i+1); y-faces j, j+1.
+                    // x-faces i, i+1 (between cells i−1|i and i|i+1); then the others'.
                     let (fw, fe) = (bx.lower(uw[n], n), bx.upper(ue[n], n));
-                    let (fs, fn_) = (by.lower(vs[n], n), by.upper(vn[n], n));
-                    row[n] = (re[n] * fe - rw[n] * fw) / (rc[n] * dx) + (fn_ - fs) / dy;
+                    let mut r = (re[n] * fe - rw[n] * fw) / (rc[n] * h[0]);
+                    for (f, vl, vu, hx) in other.iter().flatten() {
+                        r += (f.upper(vu[n], n) - f.lower(vl[n], n)) / hx;
+                    }
+                    row[n] = r;
                 }
             });
         }
-        // The corners' rows 0..=ny.
-        let corners = kw.range(1, kw.lo()[1].max(0), kw.hi()[1].min(interior.hi()[1] + 1));
-        corners.for_each(&mut out[3], |l, row| {
-            let (bx, by) = (Flux::new(&b[3], &l, 0), Flux::new(&b[3], &l, 1));
-            // The corner's control volume has x-faces at the cell centres i−1, i and y-faces at
-            // the row centres j−1, j; advecting velocities are 4-point averages.
-            let four = |f, s: [[isize; 2]; 4]| Four::new(f, &l, s.map(|[a, b]| [a, b, 0]));
-            let ue = four(u, [[0, 0], [1, 0], [0, -1], [1, -1]]);
-            let uw = four(u, [[-1, 0], [0, 0], [-1, -1], [0, -1]]);
-            let vn = four(v, [[0, 0], [-1, 0], [0, 1], [-1, 1]]);
-            let vs = four(v, [[0, -1], [-1, -1], [0, 0], [-1, 0]]);
-            let (rx, rc, rcw) = (m.rx_on(&l, 0), m.rc_on(&l, 0), m.rc_on(&l, -1));
-            for n in 0..l.len {
-                let r = rx[n];
-                if r == 0.0 {
-                    row[n] = 0.0;
-                    continue;
+        for ((p, &(axes, at)), out) in shear_pairs(dims).iter().enumerate().zip(shear) {
+            let edges = clip(self.near_c.edges(g, at).region(g), Region::of(g, at));
+            // Along x the radius factors of the box's faces and of the edge: at the cell
+            // centres i−1, i and the face i for an edge on x-faces, else as a cell's.
+            let nodal_x = at.nodal()[0] == 1;
+            edges.for_each(out, |l, row| {
+                let fluxes: [Option<(Flux, Four, Four, f64)>; 3] = std::array::from_fn(|x| {
+                    (x < dims).then(|| {
+                        let [up, low] = advecting(axes, x);
+                        let (up, low) = (Four::new(vel[x], &l, up), Four::new(vel[x], &l, low));
+                        (Flux::new(&b[3 + p], &l, x), up, low, h[x])
+                    })
+                });
+                let (ru, rl, rv) = if nodal_x {
+                    (m.rc_on(&l, 0), m.rc_on(&l, -1), m.rx_on(&l, 0))
+                } else {
+                    (m.rx_on(&l, 1), m.rx_on(&l, 0), m.rc_on(&l, 0))
+                };
+                for n in 0..l.len {
+                    let r = rv[n];
+                    if r == 0.0 {
+                        row[n] = 0.0;
+                        continue;
+                    }
+                    let mut sum = 0.0;
+                    for (x, (f, up, low, hx)) in fluxes.iter().flatten().enumerate() {
+                        let (fu, fl) = (f.upper(up.avg(n), n), f.lower(low.avg(n), n));
+                        if x == 0 {
+                            sum = (ru[n] * fu - rl[n] * fl) / (r * hx);
+                        } else {
+                            sum += (fu - fl) / hx;
+                        }
+                    }
+                    row[n] = sum;
                 }
-                let fe = bx.upper(ue.avg(n), n);
-                let fw = bx.lower(uw.avg(n), n);
-                let fn_ = by.upper(vn.avg(n), n);
-                let fs = by.lower(vs.avg(n), n);
-                row[n] = (rc[n] * fe - rcw[n] * fw) / (r * dx) + (fn_ - fs) / dy;
-            }
-        });
+            });
+        }
     }
 
     /// The interface relaxation of the corner shear for this step (see "Interface corners"):
@@ -330,18 +487,18 @@ impl Kernels {
     pub(super) fn relaxation(
         &mut self,
         law: &dyn ConstitutiveLaw,
-        start: &[Field; 4],
+        start: &[Field],
         dt: f64,
-        explicit: &mut [Field; 4],
+        explicit: &mut [Field],
         relax: &mut Field,
     ) -> Result<(), String> {
         relax.fill(1.0);
         // Only the solid's corners relax (`r > 0` needs a solid cell beside the corner).
         let corners = self.solid_k.region(&self.grid);
-        self.gather_corners(start);
+        self.gather_corners(planar(start));
         let any = corners.fold(
             false,
-            |l| on(&self.rc, &l).iter().any(|&r| r > 0.0),
+            |l| on(&self.edge[0].rc, &l).iter().any(|&r| r > 0.0),
             |a, p| a || p,
         );
         if !any {
@@ -351,13 +508,13 @@ impl Kernels {
         self.batch(law, true, true, [0.0; 4])?;
         for l in (0..corners.lines()).map(|n| corners.line(n)) {
             for (n, at) in l.indices().enumerate() {
-                let rc = self.rc[at];
+                let rc = self.edge[0].rc[at];
                 if rc == 0.0 {
                     continue;
                 }
                 let q = l.n * l.len + n;
                 // The shear-rate change times the B it stretches (as in `stretch_in`).
-                let fy = self.ny2[at];
+                let fy = self.edge[0].share[at];
                 let bbar = fy * self.kb[q][1] + (1.0 - fy) * self.kb[q][0];
                 let jt = self.kj[q][15].max(0.0);
                 let lambda = dt * rc * bbar;
@@ -383,4 +540,61 @@ impl Kernels {
         }
         Ok(())
     }
+}
+
+/// `r` restricted to `to` along every axis.
+fn clip(r: Region, to: Region) -> Region {
+    (0..3).fold(r, |r, a| {
+        r.range(a, r.lo()[a].max(to.lo()[a]), r.hi()[a].min(to.hi()[a]))
+    })
+}
+
+/// The shifts of the velocity component `u_x` averaged on the upper and the lower face along
+/// axis `x` of the control volume of an edge of the pair `[p, q]`, each four points with the
+/// offset along `p` varying fastest: along a nodal axis the two faces between the edge's
+/// neighbours along `x` (the cell centres), the other nodal axis at the edge's two cells; along
+/// the centred axis the cell's faces, at the four cells around the edge.
+fn advecting([p, q]: [usize; 2], x: usize) -> [[Index; 4]; 2] {
+    let points = |op: [isize; 2], oq: [isize; 2], extra: isize| {
+        let at = |a: isize, b: isize| {
+            let mut s = [0; 3];
+            (s[p], s[q]) = (a, b);
+            if x != p && x != q {
+                s[x] = extra;
+            }
+            s
+        };
+        [
+            at(op[0], oq[0]),
+            at(op[1], oq[0]),
+            at(op[0], oq[1]),
+            at(op[1], oq[1]),
+        ]
+    };
+    if x == p {
+        [points([0, 1], [0, -1], 0), points([-1, 0], [0, -1], 0)]
+    } else if x == q {
+        [points([0, -1], [0, 1], 0), points([0, -1], [-1, 0], 0)]
+    } else {
+        [points([0, -1], [0, -1], 1), points([0, -1], [0, -1], 0)]
+    }
+}
+
+/// The columns of the edge region `edges` (within the storage `lo..hi`) where the bulk
+/// stencil of the derivative along `d`, the cells across along `x`, fits: `I − 2e_d … I + e_d`
+/// and the cells at `− e_x`.
+fn bulk_columns(edges: &Region, lo: Index, hi: Index, d: usize, x: usize) -> Region {
+    let (mut c0, mut c1) = (edges.lo()[0], edges.hi()[0]);
+    if d == 0 {
+        (c0, c1) = (c0.max(lo[0] + 2), c1.min(hi[0] - 2));
+    }
+    if x == 0 {
+        c0 = c0.max(lo[0] + 1);
+    }
+    edges.range(0, c0, c1)
+}
+
+/// Whether the bulk stencil of [`bulk_columns`] fits along the line's other axes.
+fn bulk_fits(l: &Line, lo: Index, hi: Index, d: usize, x: usize) -> bool {
+    (d == 0 || (lo[d] + 2..hi[d] - 2).contains(&l.start[d])) && (x == 0 || l.start[x] > lo[x])
 }

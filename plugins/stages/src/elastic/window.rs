@@ -1,25 +1,57 @@
 //! The windows of grid points the elastic kernels run over, as regions of the loop abstraction,
-//! and the stencils that join the centres and the corners of the staggered tensor.
+//! and the stencils that join the centres and the edges of the staggered tensor.
+//!
+//! A shear pair `(a, b)` of [`SHEAR`](crate::viscous_operator::SHEAR) lives on the edges along
+//! the third axis `c`; the edge `I` sits at the low faces of cell `I` along `a` and `b` and at
+//! the cell's centre along `c` (a two-dimensional grid has the pair `[0, 1]` only, on the cell
+//! corners). Its four cells are `I − e_a − e_b, I − e_b, I − e_a, I` ([`cells_of_edge`]); a cell's
+//! four edges of the pair are `I, I + e_a, I + e_b, I + e_a + e_b` ([`edges_of_cell`]).
 
-use efsi_core::{Field, Grid, Index, Line, Region, Stagger};
+use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
 
-/// A rectangle of grid points `[i0, i1] × [j0, j1]` (inclusive; empty when `i0 > i1`), of
-/// centres or of corners: the bounding box of the solid or of the material, which the kernels
-/// visit as a [`Region`] ([`Window::region`]).
+/// A box of grid points `[i0, i1] × [j0, j1] × [k0, k1]` (inclusive; empty when `i0 > i1`), of
+/// centres or of one family of edges: the bounding box of the solid or of the material, which
+/// the kernels visit as a [`Region`] ([`Window::region`]). On a two-dimensional grid
+/// `k0 = k1 = 0`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Window {
     pub(super) i0: isize,
     pub(super) i1: isize,
     pub(super) j0: isize,
     pub(super) j1: isize,
+    pub(super) k0: isize,
+    pub(super) k1: isize,
 }
 
 impl Window {
+    /// The window `[i0, i1] × [j0, j1]` of the plane `k = 0` (a two-dimensional grid's).
     pub(super) fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
-        Window { i0, i1, j0, j1 }
+        Window::boxed([i0, j0, 0], [i1, j1, 0])
     }
 
-    /// Whether `(i, j)` is a point of the window.
+    /// The window `lo ≤ I ≤ hi` (component-wise).
+    pub(super) fn boxed(lo: Index, hi: Index) -> Self {
+        Window {
+            i0: lo[0],
+            i1: hi[0],
+            j0: lo[1],
+            j1: hi[1],
+            k0: lo[2],
+            k1: hi[2],
+        }
+    }
+
+    /// The lowest point.
+    pub(super) fn lo(self) -> Index {
+        [self.i0, self.j0, self.k0]
+    }
+
+    /// The highest point.
+    pub(super) fn hi(self) -> Index {
+        [self.i1, self.j1, self.k1]
+    }
+
+    /// Whether `(i, j)` is a point of the window's rows (any plane).
     #[inline(always)]
     pub(super) fn contains(self, i: isize, j: isize) -> bool {
         (self.i0..=self.i1).contains(&i) && (self.j0..=self.j1).contains(&j)
@@ -27,10 +59,10 @@ impl Window {
 
     /// Number of points.
     pub(super) fn points(self) -> usize {
-        if self.i0 > self.i1 || self.j0 > self.j1 {
+        if self.i0 > self.i1 || self.j0 > self.j1 || self.k0 > self.k1 {
             0
         } else {
-            ((self.i1 - self.i0 + 1) * (self.j1 - self.j0 + 1)) as usize
+            ((self.i1 - self.i0 + 1) * (self.j1 - self.j0 + 1) * (self.k1 - self.k0 + 1)) as usize
         }
     }
 
@@ -40,6 +72,8 @@ impl Window {
         i1: -1,
         j0: 0,
         j1: -1,
+        k0: 0,
+        k1: -1,
     };
 
     /// The window's points as a region of `grid` (its lines are the window's rows, in order:
@@ -48,19 +82,27 @@ impl Window {
         Region::of(grid, Stagger::Cell)
             .range(0, self.i0, self.i1 + 1)
             .range(1, self.j0, self.j1 + 1)
+            .range(2, self.k0, self.k1 + 1)
     }
 
-    /// The corners `(i, j)` (lower-left of centre `(i, j)`) touching a centre of `self`,
-    /// within `[0, nx] × [0, ny]`.
-    pub(super) fn corners(self, nx: isize, ny: isize) -> Window {
-        if self.i0 > self.i1 {
+    /// The edges at `at` touching a centre of `self`: along the edges' nodal axes the low and
+    /// high edges of each centre within `[0, n]`, along their centred axis the centres' own
+    /// indices. With [`Stagger::Corner`] on a two-dimensional grid, the corners `(i, j)`
+    /// (lower-left of centre `(i, j)`) within `[0, nx] × [0, ny]`.
+    pub(super) fn edges(self, grid: &Grid, at: Stagger) -> Window {
+        if self.points() == 0 {
             return Window::EMPTY;
         }
-        Window::new(
-            self.i0.max(0),
-            (self.i1 + 1).min(nx),
-            self.j0.max(0),
-            (self.j1 + 1).min(ny),
+        let (lo, hi, n, nodal) = (self.lo(), self.hi(), grid.n(), at.nodal());
+        Window::boxed(
+            std::array::from_fn(|a| if nodal[a] == 1 { lo[a].max(0) } else { lo[a] }),
+            std::array::from_fn(|a| {
+                if nodal[a] == 1 {
+                    (hi[a] + 1).min(n[a] as isize)
+                } else {
+                    hi[a]
+                }
+            }),
         )
     }
 }
@@ -71,12 +113,32 @@ pub(super) fn plus([i, j, k]: Index, [a, b, c]: Index) -> Index {
     [i + a, j + b, k + c]
 }
 
+/// `−s`.
+#[inline(always)]
+fn neg([a, b, c]: Index) -> Index {
+    [-a, -b, -c]
+}
+
+/// The four cells around an edge `I` of the shear pair `[a, b]` (lower-left, lower-right,
+/// upper-left, upper-right in the `a`–`b` plane), as shifts from `I`.
+pub(super) fn cells_of_edge([a, b]: [usize; 2]) -> [Index; 4] {
+    let (ea, eb) = (unit(a), unit(b));
+    [neg(plus(ea, eb)), neg(eb), neg(ea), [0; 3]]
+}
+
+/// The four edges of the shear pair `[a, b]` of a cell `I` (lower-left, lower-right,
+/// upper-left, upper-right in the `a`–`b` plane), as shifts from `I`.
+pub(super) fn edges_of_cell([a, b]: [usize; 2]) -> [Index; 4] {
+    let (ea, eb) = (unit(a), unit(b));
+    [[0; 3], ea, eb, plus(ea, eb)]
+}
+
 /// The four cells around a corner `I` (lower-left, lower-right, upper-left, upper-right), as
-/// shifts from `I`.
+/// shifts from `I`: [`cells_of_edge`] of the pair `[0, 1]`.
 pub(super) const CELLS_OF_CORNER: [Index; 4] = [[-1, -1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, 0]];
 
 /// The four corners of a cell `I` (lower-left, lower-right, upper-left, upper-right), as shifts
-/// from `I`.
+/// from `I`: [`edges_of_cell`] of the pair `[0, 1]`.
 pub(super) const CORNERS_OF_CELL: [Index; 4] = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]];
 
 /// A field's values at four shifts from the indices of a line (e.g. [`CELLS_OF_CORNER`]).
@@ -87,7 +149,8 @@ impl<'a> Four<'a> {
     /// `f` on `line` shifted by each of `shifts`.
     #[inline(always)]
     pub(super) fn new(f: &'a Field, line: &Line, shifts: [Index; 4]) -> Self {
-        Four(shifts.map(|s| f.at(line, s)))
+        let at = |m: usize| f.at(line, shifts[m]);
+        Four([at(0), at(1), at(2), at(3)])
     }
 
     /// The four values' mean at point `n` of the line: `¼ (f₀ + f₁ + f₂ + f₃)`.
