@@ -6,7 +6,9 @@
 //! interface, as the seed asks). Finite-volume form per cell, axisymmetric through the face radii:
 //! `Σ_f (A_f/(ρ_f h)) (p_C − p_F) = −(Σ_f A_f V_f·n)/Δt`, a symmetric positive (semi-)definite
 //! five-point system ([`efsi_linalg::Stencil5`]). Walls contribute no flux (homogeneous
-//! Neumann), periodic sides wrap, outflow sides fix p = 0 on the boundary face. Without an
+//! Neumann), periodic sides wrap, outflow sides fix p = 0 on the boundary face (planar and
+//! axisymmetric only: the seven-point matrix of a 3-D box has no Dirichlet face, and the stage
+//! refuses a 3-D scene with an Outflow side when it is built). Without an
 //! outflow side the system is singular (p up to a constant): the right-hand side is projected on
 //! the range (zero sum) and the mean pressure set to zero.
 //!
@@ -135,11 +137,32 @@ impl StagePlugin for Projection {
                     .into(),
             );
         }
+        if let Some(side) = outflow_side_3d(grid, bc) {
+            return Err(format!(
+                "boundaries.{side}: Outflow is two-dimensional (planar and axisymmetric scenes); \
+                 a three-dimensional box takes NoSlip, MovingWall, FreeSlip, Symmetry or Periodic \
+                 sides"
+            ));
+        }
         Ok(Box::new(ProjectionStage {
             projector: Projector::new(scene, o, grid, bc, shared, incremental),
             incremental,
         }))
     }
+}
+
+/// The first Outflow side of a three-dimensional grid: the seven-point matrix has no
+/// Dirichlet pressure face, so such a scene is refused when the stage is built.
+pub(crate) fn outflow_side_3d(grid: &Grid, bc: &BoundarySet) -> Option<Side> {
+    let sides = Side::of(grid.dims());
+    grid.is_3d()
+        .then(|| {
+            sides
+                .iter()
+                .copied()
+                .find(|&s| *bc.get(s) == Boundary::Outflow)
+        })
+        .flatten()
 }
 
 /// What the projection writes: the velocity and the pressure.
