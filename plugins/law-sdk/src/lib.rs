@@ -651,6 +651,33 @@ pub mod testing {
             .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
         err / tau.iter().fold(1e-300_f64, |m, x| m.max(x.abs()))
     }
+
+    /// Panics unless rotating B̃ rotates τ, `τ(Q B̃ Qᵀ) = Q τ(B̃) Qᵀ` to 1e-13 relative
+    /// ([`objectivity_error`]), on 50 random full states of amplitude 0.3 (`states_seed`), each
+    /// under a random rotation drawn from `rng`.
+    pub fn assert_objective<L: HyperelasticLaw + std::fmt::Debug>(
+        law: &L,
+        rng: &mut XorShift,
+        states_seed: u64,
+    ) {
+        for b in deformed_states_full(50, 0.3, states_seed) {
+            let e = objectivity_error(law, &b, &rotation(rng));
+            assert!(e < 1e-13, "{law:?}: objectivity error {e:e} at {b:?}");
+        }
+    }
+
+    /// Panics unless the full evaluation of an in-plane B̃ (13 = 23 = 0, [`embed`]) gives the
+    /// in-plane evaluation's stress and tangent bit for bit, with zero out-of-plane shear stress,
+    /// on 100 random in-plane states of amplitude 0.3 (`seed`).
+    pub fn assert_in_plane_exact<L: HyperelasticLaw + std::fmt::Debug>(law: &L, seed: u64) {
+        for b in deformed_states(100, 0.3, seed) {
+            let (t4, j4) = law.stress_and_tangent(&b);
+            let (t6, j6) = law.stress_and_tangent(&embed(&b));
+            assert_eq!(t6[..4], t4, "{law:?} at {b:?}");
+            assert_eq!(t6[4..], [0.0, 0.0], "{law:?} at {b:?}");
+            assert_eq!(in_plane_block(&j6), j4, "{law:?} at {b:?}");
+        }
+    }
 }
 
 /// Writes `text` into a caller's error buffer when it is not null.
