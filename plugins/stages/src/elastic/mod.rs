@@ -399,9 +399,32 @@ impl EdgeWeights {
 /// `PAIR[a][b]`: the index in [`SHEAR`] of the pair of axes `a ≠ b` (the diagonal unused).
 const PAIR: [[usize; 3]; 3] = [[0, 0, 2], [0, 0, 1], [2, 1, 0]];
 
-/// The velocity `[u, v]`, or `[u, v, w]` with a third component (a state's `w`).
-fn velocity<'a>(u: &'a Field, v: &'a Field, w: Option<&'a Field>) -> Vec<&'a Field> {
-    [u, v].into_iter().chain(w).collect()
+/// The velocity `[u, v]`, or `[u, v, w]` with a third component (a state's `w`): a slice of
+/// field references on the stack, so a step allocates nothing.
+struct Velocity<'a> {
+    fields: [&'a Field; 3],
+    len: usize,
+}
+
+impl<'a> std::ops::Deref for Velocity<'a> {
+    type Target = [&'a Field];
+    fn deref(&self) -> &[&'a Field] {
+        &self.fields[..self.len]
+    }
+}
+
+/// [`Velocity`] of `u`, `v` and, with a third component, `w`.
+fn velocity<'a>(u: &'a Field, v: &'a Field, w: Option<&'a Field>) -> Velocity<'a> {
+    match w {
+        Some(w) => Velocity {
+            fields: [u, v, w],
+            len: 3,
+        },
+        None => Velocity {
+            fields: [u, v, v],
+            len: 2,
+        },
+    }
 }
 
 /// Cells with less solid than this carry no deformation (B = I, no stress): VOF flotsam and
@@ -473,10 +496,13 @@ impl Kernels {
     /// edges of every centre of `c` (ghost edges included: the axis's odd B̃₁₂ is not zero
     /// there), along its centred axis the centres' range (the xz- and yz-edges beside an
     /// xy-edge enter its stretching on a three-dimensional grid).
-    fn gradient_windows(&self, c: Window) -> (Window, Vec<Window>) {
+    /// The edge windows come as a fixed array, [`Window::EMPTY`] past the grid's shear pairs
+    /// (no allocation in a step).
+    fn gradient_windows(&self, c: Window) -> (Window, [Window; 3]) {
         let pairs = shear_pairs(self.grid.dims());
+        let mut edges = [Window::EMPTY; 3];
         if c.points() == 0 {
-            return (Window::EMPTY, vec![Window::EMPTY; pairs.len()]);
+            return (Window::EMPTY, edges);
         }
         let (n, dims) = (self.grid.n(), self.grid.dims());
         let (lo, hi) = (c.lo(), c.hi());
@@ -490,20 +516,17 @@ impl Kernels {
                 }
             }),
         );
-        let edges = pairs
-            .iter()
-            .map(|&(_, at)| {
-                let nodal = at.nodal();
-                let pick = |a: usize, node: isize, cell: isize| match nodal[a] {
-                    1 => node,
-                    _ => cell,
-                };
-                Window::boxed(
-                    std::array::from_fn(|a| pick(a, lo[a], cells.lo()[a])),
-                    std::array::from_fn(|a| pick(a, hi[a] + 1, cells.hi()[a])),
-                )
-            })
-            .collect();
+        for (edge, &(_, at)) in edges.iter_mut().zip(pairs) {
+            let nodal = at.nodal();
+            let pick = |a: usize, node: isize, cell: isize| match nodal[a] {
+                1 => node,
+                _ => cell,
+            };
+            *edge = Window::boxed(
+                std::array::from_fn(|a| pick(a, lo[a], cells.lo()[a])),
+                std::array::from_fn(|a| pick(a, hi[a] + 1, cells.hi()[a])),
+            );
+        }
         (cells, edges)
     }
 

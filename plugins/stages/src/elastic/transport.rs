@@ -164,7 +164,11 @@ impl Kernels {
                     }
                 }
             });
-        for (p, ew) in ew.into_iter().enumerate() {
+        for (p, ew) in ew
+            .into_iter()
+            .enumerate()
+            .take(super::shear_pairs(dims).len())
+        {
             self.edge_gradient(vel, p, ew);
         }
     }
