@@ -99,6 +99,11 @@ fn stability_quick() {
 }
 
 #[test]
+fn extruded_cavity_quick() {
+    quick("extruded_cavity");
+}
+
+#[test]
 fn falling_drop_3d_quick() {
     quick("falling_drop_3d");
 }

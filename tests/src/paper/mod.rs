@@ -8,6 +8,7 @@ pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
+pub mod extruded_cavity;
 pub mod falling_drop;
 pub mod lid_driven_cube;
 pub mod oscillating_disk;
@@ -218,6 +219,7 @@ pub const CASES: &[Entry] = &[
     entry::<couette::Couette>(),
     entry::<couette_mr::CouetteMr>(),
     entry::<lid_driven_cube::LidDrivenCube>(),
+    entry::<extruded_cavity::ExtrudedCavity>(),
     entry::<falling_drop::FallingDrop>(),
     entry::<stability::Stability>(),
 ];
