@@ -177,12 +177,13 @@ pub enum ProbeSpec {
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
     /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
-    /// column `contact_force`. A contact cell is a cell of the first row along the wall that
-    /// holds a solid fraction φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less
-    /// carries no deformation) and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean
-    /// pressure of the row's other cells, `τ_nn` the elastic normal stress (the viscous one
-    /// vanishes on a no-slip wall). The criterion is absolute: a trace of solid (φ ≈ 1e-18)
-    /// left by the interface advection is no contact, and without a contact cell — before
+    /// column `contact_force`. A contact cell is a cell of the first row (layer, in a
+    /// Cartesian3D scene, on any of its six sides) along the wall that holds a solid fraction
+    /// φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less carries no deformation)
+    /// and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean pressure of the row's
+    /// other cells, `τ_nn` the elastic normal stress (0 for a solid without a law; the viscous
+    /// one vanishes on a no-slip wall). The criterion is absolute: a trace of solid
+    /// (φ ≈ 1e-18) left by the interface advection is no contact, and without a contact cell — before
     /// touch-down, after lift-off — the probe is exactly 0. A body pressed on a no-slip wall
     /// keeps a thin air film, thinner than a cell, under it: the film carries the load, so a
     /// partly filled cell counts.
@@ -193,7 +194,10 @@ pub enum ProbeSpec {
     /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
     /// distance along the wall from its start to the outer edge of the last contact cell (as
     /// defined at [`ProbeSpec::ContactForce`]: φ ≥ 1e-3 and pressing on the wall); exactly 0
-    /// without one. Column `contact_radius`.
+    /// without one. In a Cartesian3D scene, how far the contact cells reach from the wall's
+    /// corner (the lower end of both axes along it: the axis of a body on a quarter of the box
+    /// between two symmetry planes), each cell's farthest point along the direction from the
+    /// corner to its centre. Column `contact_radius`.
     ContactRadius {
         /// The wall.
         wall: Side,
