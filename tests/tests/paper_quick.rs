@@ -102,3 +102,8 @@ fn stability_quick() {
 fn falling_drop_3d_quick() {
     quick("falling_drop_3d");
 }
+
+#[test]
+fn vof_transport_3d_quick() {
+    quick("vof_transport_3d");
+}
