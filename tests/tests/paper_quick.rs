@@ -107,3 +107,8 @@ fn extruded_cavity_quick() {
 fn falling_drop_3d_quick() {
     quick("falling_drop_3d");
 }
+
+#[test]
+fn vof_transport_3d_quick() {
+    quick("vof_transport_3d");
+}

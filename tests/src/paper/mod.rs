@@ -17,6 +17,7 @@ pub mod shear_rectangle;
 pub mod soft_wall;
 pub mod sphere;
 pub mod stability;
+pub mod vof_transport_3d;
 
 use efsi_core::{EfsiError, Scene, Simulation};
 use efsi_run::SceneOverrides;
@@ -221,6 +222,7 @@ pub const CASES: &[Entry] = &[
     entry::<lid_driven_cube::LidDrivenCube>(),
     entry::<extruded_cavity::ExtrudedCavity>(),
     entry::<falling_drop::FallingDrop>(),
+    entry::<vof_transport_3d::VofTransport3d>(),
     entry::<stability::Stability>(),
 ];
 
