@@ -36,16 +36,8 @@ from vtkmodules.vtkFiltersCore import vtkContourFilter
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from efsi_vtk import (  # noqa: E402
-    Refused,
-    arguments,
-    output_times,
-    read_pvd,
-    read_vtr,
-    show_in_paraview,
-    write,
-    write_pvd,
-)
+from efsi_vtk import Refused, arguments, output_times, read_vtr  # noqa: E402
+from efsi_vtk import show_in_paraview, write, write_pvd  # noqa: E402
 
 
 def is_three_dimensional(grid):
