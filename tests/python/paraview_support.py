@@ -2,6 +2,7 @@
 the tools' folder on ``sys.path`` (the tools import ``efsi_vtk`` from it, as ``pvpython`` runs
 them), the surfaces' checks, and ParaView itself, headless, rendering a tool's screenshot."""
 
+import math
 import shutil
 import subprocess
 import sys
@@ -9,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkFiltersCore import vtkFeatureEdges
+from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkMassProperties
 from vtkmodules.vtkIOImage import vtkPNGReader
 from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
@@ -37,6 +38,19 @@ def boundary_edges(surface):
     edges.NonManifoldEdgesOff()
     edges.Update()
     return edges.GetOutput().GetNumberOfCells()
+
+
+def sphere_volume_error(surface, radius):
+    """The relative error of the volume the closed `surface` encloses against the sphere's
+    4/3 pi R^3 (printed with both volumes)."""
+    mass = vtkMassProperties()
+    mass.SetInputData(surface)
+    mass.Update()
+    exact = 4.0 / 3.0 * math.pi * radius**3
+    volume = mass.GetVolume()
+    print(f"enclosed volume {volume:.6e} vs 4/3 pi R^3 = {exact:.6e} "
+          f"({100 * (volume / exact - 1):+.3f} %)")
+    return volume / exact - 1.0
 
 
 def render_screenshot(tool, args, shot):
