@@ -302,6 +302,51 @@ mod tests {
     }
 
     #[test]
+    fn three_dimensional_integrals_are_exact_for_uniform_and_linear_fields() {
+        let g = Grid::new_3d([4, 3, 5], (0.0, 1.0), (0.0, 2.0), (0.0, 1.5));
+        let rho = sample(&g, Stagger::Cell, |_| 2.0);
+        let (u, v, w) = (
+            sample(&g, Stagger::XFace, |_| 1.0),
+            sample(&g, Stagger::YFace, |_| 2.0),
+            sample(&g, Stagger::ZFace, |_| -3.0),
+        );
+        // ½ρ|U|²V = ½·2·14·3 and −∫ρ g·x dV = ρ·9.81·z̄·V = 2·9.81·0.75·3.
+        let ke = kinetic_energy(&g, &[&u, &v, &w], &rho);
+        assert!((ke - 42.0).abs() < 1e-12, "{ke}");
+        let pe = potential_energy(&g, &rho, [0.0, 0.0, -9.81]);
+        assert!((pe - 44.145).abs() < 1e-12, "{pe}");
+        // u = (x, 0, z): ∇·u = 2 everywhere; the outfluxes sum to ∫∇·u dV = 2V.
+        let u = sample(&g, Stagger::XFace, |[x, _, _]| x);
+        let v = sample(&g, Stagger::YFace, |_| 0.0);
+        let w = sample(&g, Stagger::ZFace, |[_, _, z]| z);
+        let vel = [&u, &v, &w];
+        assert!((max_abs_div(&g, &vel) - 2.0).abs() < 1e-13);
+        let [net] = Region::of(&g, Stagger::Cell)
+            .sum(|l| [l.indices().map(|c| net_outflux(&g, &vel, c)).sum()]);
+        assert!((net - 6.0).abs() < 1e-12, "{net}");
+    }
+
+    #[test]
+    fn axisymmetric_integrals_carry_the_radius() {
+        // Per radian over r ∈ [0, 2], z ∈ [0, 1]: ½ρU²∫r dr dz = ½·3·4·2 for a uniform axial
+        // velocity U = 2, and u_r = r (∇·u = 2) has the outflux 2∫r dr dz = 4.
+        let g = Grid::new(Geometry::Axisymmetric, 8, 5, (0.0, 2.0), (0.0, 1.0));
+        let rho = sample(&g, Stagger::Cell, |_| 3.0);
+        let zero = sample(&g, Stagger::XFace, |_| 0.0);
+        let v = sample(&g, Stagger::YFace, |_| 2.0);
+        let ke = kinetic_energy(&g, &[&zero, &v], &rho);
+        assert!((ke - 12.0).abs() < 1e-12, "{ke}");
+        let u = sample(&g, Stagger::XFace, |[r, _, _]| r);
+        let zero = sample(&g, Stagger::YFace, |_| 0.0);
+        let [net] = Region::of(&g, Stagger::Cell)
+            .sum(|l| [l.indices().map(|c| net_outflux(&g, &[&u, &zero], c)).sum()]);
+        assert!((net - 4.0).abs() < 1e-12, "{net}");
+        // −∫ρ g·x dV with g = (0, −1): ρ·z̄·∫r dr dz = 3·0.5·2.
+        let pe = potential_energy(&g, &rho, [0.0, -1.0, 0.0]);
+        assert!((pe - 3.0).abs() < 1e-12, "{pe}");
+    }
+
+    #[test]
     fn two_dimensional_axisymmetric_div_and_lap_are_exact_in_r_and_z() {
         // In (r, z): u_r = r gives ∇·u = (1/r)∂(r·r)/∂r = 2; p = r² + z² gives ∇²p = 4 + 2.
         let g = Grid::new(Geometry::Axisymmetric, 8, 5, (0.0, 2.0), (0.0, 1.0));
