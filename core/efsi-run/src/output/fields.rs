@@ -12,7 +12,7 @@
 use crate::output::spec::{SliceSpec, VTK_FIELDS, VtkOptions};
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
-use efsi_core::{OutputDecl, OutputKind, Region, Stagger, operators, unit};
+use efsi_core::{OutputDecl, OutputKind, Region, Stagger, operators};
 
 use efsi_core::state::State;
 
@@ -259,29 +259,27 @@ fn scalar(grid: &Grid, f: &Field) -> Vec<f64> {
     cells(grid).map(|c| f[c]).collect()
 }
 
-/// The velocity at the cell centres as 3-vectors, each component the mean of its two faces;
-/// an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in the X–Z plane).
+/// The velocity at the cell centres as 3-vectors, each component the mean of its two faces
+/// ([`operators::centre_avg`]); an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in
+/// the X–Z plane). In VTK's order: the cells' lines in order, x fastest.
 fn velocity(grid: &Grid, state: &State) -> Vec<f64> {
+    let (cells, nx) = (Region::of(grid, Stagger::Cell), grid.nx);
+    let slot = |a: usize| usize::from(a == 1 && grid.is_axisymmetric()) + a;
     let mut vel = vec![0.0; 3 * grid.cells()];
-    let slot = |a: usize| {
-        if a == 1 && grid.is_axisymmetric() {
-            2
-        } else {
-            a
-        }
-    };
-    let faces = state.velocity();
-    for (k, c) in cells(grid).enumerate() {
-        for (a, f) in faces.iter().enumerate() {
-            let e = unit(a);
-            vel[3 * k + slot(a)] = 0.5 * (f[c] + f[[c[0] + e[0], c[1] + e[1], c[2] + e[2]]]);
+    let mut centre = vec![0.0; nx];
+    for (n, out) in vel.chunks_mut(3 * nx).enumerate() {
+        let line = cells.line(n);
+        for (a, f) in state.velocity().iter().enumerate() {
+            operators::centre_avg(f, a, &line, &mut centre);
+            for (i, c) in centre.iter().enumerate() {
+                out[3 * i + slot(a)] = *c;
+            }
         }
     }
     vel
 }
 
-/// The discrete divergence of the velocity per cell ([`operators::div`]), in VTK's order (the
-/// cells' lines in order, x fastest).
+/// The discrete divergence of the velocity per cell ([`operators::div`]), in VTK's order.
 fn divergence(grid: &Grid, state: &State) -> Vec<f64> {
     let cells = Region::of(grid, Stagger::Cell);
     let mut out = vec![0.0; grid.cells()];
