@@ -3,7 +3,7 @@
 use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
-use efsi_core::ops::{self, potential_energy};
+use efsi_core::operators;
 use efsi_core::scene::{Side, Vector};
 use efsi_core::state::State;
 use efsi_core::{Line, OutputDecl, OutputKind, Region, Stagger, unit};
@@ -95,65 +95,20 @@ pub fn sample_at(
     }
 }
 
-/// Kinetic energy `½∫ρ|u|² dV` of the state: [`ops::kinetic_energy`] in two dimensions; in
-/// three, the same face-centred quadrature with the z-faces' `w` (half of each of the cell's
-/// six faces belongs to it). Lines summed in order (the same bits on any number of threads).
+/// Kinetic energy `½∫ρ|u|² dV` of the state ([`operators::kinetic_energy`]).
 pub fn kinetic_energy(grid: &Grid, state: &State) -> f64 {
-    let Some(w) = &state.w else {
-        return ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-    };
-    let vol = grid.dx * grid.dy * grid.dz;
-    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
-        let c = [&state.u, &state.v, w];
-        let rho = state.rho.at(&l, [0; 3]);
-        let mut e = 0.0;
-        for (a, f) in c.iter().enumerate() {
-            let (lo, hi) = (f.at(&l, [0; 3]), f.at(&l, unit(a)));
-            for n in 0..l.len {
-                e += rho[n] * 0.25 * (lo[n].powi(2) + hi[n].powi(2)) * vol;
-            }
-        }
-        [e]
-    });
-    e
+    operators::kinetic_energy(grid, &state.velocity(), &state.rho)
 }
 
-/// Gravitational potential energy `−∫ρ g·x dV` of the state ([`ops::potential_energy`] in two
-/// dimensions).
+/// Gravitational potential energy `−∫ρ g·x dV` of the densities `rho`
+/// ([`operators::potential_energy`]).
 pub fn potential_energy_of(grid: &Grid, rho: &Field, gravity: Vector) -> f64 {
-    if !grid.is_3d() {
-        return potential_energy(grid, rho, gravity.planar());
-    }
-    let [gx, gy, gz] = gravity.xyz();
-    let vol = grid.dx * grid.dy * grid.dz;
-    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
-        let rho = rho.at(&l, [0; 3]);
-        let mut e = 0.0;
-        for (n, [i, j, k]) in l.indices().enumerate() {
-            e -= rho[n] * (gx * grid.xc(i) + gy * grid.yc(j) + gz * grid.zc(k)) * vol;
-        }
-        [e]
-    });
-    e
+    operators::potential_energy(grid, rho, gravity.xyz())
 }
 
-/// `max |∇·u|` over the cells ([`ops::max_abs_div`] in two dimensions).
+/// `max |∇·u|` over the cells ([`operators::max_abs_div`]).
 pub fn max_divergence(grid: &Grid, state: &State) -> f64 {
-    let Some(w) = &state.w else {
-        return ops::max_abs_div(grid, &state.u, &state.v);
-    };
-    let h = grid.h();
-    Region::of(grid, Stagger::Cell).max(0.0, |l| {
-        let c = [&state.u, &state.v, w];
-        let mut m = 0.0f64;
-        for n in 0..l.len {
-            let d: f64 = (0..3)
-                .map(|a| (c[a].at(&l, unit(a))[n] - c[a].at(&l, [0; 3])[n]) / h[a])
-                .sum();
-            m = m.max(d.abs());
-        }
-        m
-    })
+    operators::max_abs_div(grid, &state.velocity())
 }
 
 /// A named field sampled at a point (names from [`crate::output::spec::FIELD_NAMES`]).
@@ -371,27 +326,21 @@ pub fn evaluate_quantity(name: &str, probed: &Probed, out: &mut Vec<f64>) {
 
 /// The largest speed at the cell centres (each component the mean of its two faces).
 fn max_speed(grid: &Grid, state: &State) -> f64 {
-    if let Some(w) = &state.w {
-        return Region::of(grid, Stagger::Cell).max(0.0, |l| {
-            let c = [&state.u, &state.v, w];
-            let mut m = 0.0f64;
-            for n in 0..l.len {
-                let s = (0..3)
-                    .map(|a| 0.5 * (c[a].at(&l, [0; 3])[n] + c[a].at(&l, unit(a))[n]))
-                    .fold(0.0f64, f64::hypot);
-                m = m.max(s);
-            }
-            m
-        });
-    }
-    let mut m = 0.0f64;
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
-            let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
-            m = m.max(a.hypot(b));
+    let vel = state.velocity();
+    Region::of(grid, Stagger::Cell).max(0.0, |l| {
+        let faces: [_; 3] =
+            std::array::from_fn(|a| vel.get(a).map(|f| (f.at(&l, [0; 3]), f.at(&l, unit(a)))));
+        let mut m = 0.0f64;
+        for n in 0..l.len {
+            let s = faces
+                .iter()
+                .flatten()
+                .map(|(lo, hi)| 0.5 * (lo[n] + hi[n]))
+                .fold(0.0f64, f64::hypot);
+            m = m.max(s);
         }
-    }
-    m
+        m
+    })
 }
 
 /// The solid's moments, if the state has a solid.

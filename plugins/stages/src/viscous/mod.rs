@@ -70,10 +70,9 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
-use crate::ops::face_density;
 use crate::scratch::{self, Scratch};
 use crate::viscous_operator::Coefficients;
-use efsi_core::operators::minus;
+use efsi_core::operators::{face_density, minus};
 use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
 use efsi_core::{
