@@ -277,8 +277,9 @@ def test_a_three_dimensional_scene_gives_w_z_and_the_same_bits_as_efsi_run(tmp_p
     assert mine.shape == values.shape and mine.shape[0] == 9
     assert np.array_equal(mine, values)
     assert json.loads((out / "run.json").read_text())["steps"] == sim.steps == 32
-    # The drop falls (v < 0) on the symmetry axis x = z = 0.
-    assert rows["solid_v"][-1] < -0.1 and rows["solid_x"][-1] == rows["solid_z"][-1]
+    # The drop falls (v < 0); x and z are alike but for the order of the directional splits.
+    assert rows["solid_v"][-1] < -0.1
+    assert rows["solid_x"][-1] == pytest.approx(rows["solid_z"][-1], rel=1e-6)
     # Fields: cells are 0.25 wide; w lives on z faces, 0 on the symmetry plane z = 0 and on the
     # no-slip wall z = 2; the drop's downflow drags fluid round it, so w is not 0 inside.
     w, x, y, z = sim.field("w")
@@ -292,8 +293,8 @@ def test_a_three_dimensional_scene_gives_w_z_and_the_same_bits_as_efsi_run(tmp_p
     phi = sim.field("solid_fraction")[0]
     assert phi.shape == (8, 16, 8)
     assert phi.sum() * 0.25**3 == pytest.approx(rows["solid_volume"][-1], rel=1e-12)
-    # By symmetry the drop's x and z mirror each other: phi(i, j, k) = phi(k, j, i).
-    np.testing.assert_array_equal(phi, phi.transpose(2, 1, 0))
+    # x and z mirror each other (to the splitting's order): phi(i, j, k) = phi(k, j, i).
+    np.testing.assert_allclose(phi, phi.transpose(2, 1, 0), rtol=0, atol=1e-5)
     w_end, p_end = w, sim.field("p")[0]
     sim.restore(snap)
     assert sim.time == 0.125
