@@ -6,7 +6,7 @@
 //! it: the extruded run must reproduce the planar one on every z plane to the solvers'
 //! tolerance, with w zero to round-off.
 //!
-//! Both runs take the projection at a relative tolerance of [`PROJECTION_TOLERANCE`] (the
+//! Both runs take the projection at a relative tolerance of 1e-10 (the
 //! scene's default is looser), so what is compared is the discretisation, not where two
 //! iterative solves happened to stop. Measured per pair of runs: the largest difference of u on
 //! the vertical centreline x = ½ and of v on the horizontal one y = ½ (129 points each, on three
