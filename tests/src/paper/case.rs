@@ -253,6 +253,22 @@ pub fn drift_check(what: &str, drifts: impl IntoIterator<Item = f64>) -> Check {
     Check::at_most(what, drifts.into_iter().fold(0.0, f64::max), 1e-10, "e")
 }
 
+/// The check that every run stopped at the scene's steady state (`time.steady`), not at its
+/// end time: `steady` holds one flag per run.
+pub fn steady_check(steady: impl IntoIterator<Item = bool>) -> Check {
+    let (mut n, mut stopped) = (0usize, 0usize);
+    for s in steady {
+        n += 1;
+        stopped += usize::from(s);
+    }
+    Check::at_least(
+        format!("runs stopped at the steady state (time.steady), of {n}"),
+        stopped as f64,
+        n as f64,
+        "0",
+    )
+}
+
 /// The speed/accuracy series: (wall time, error) of each run of `runs` that has an error.
 pub fn trade<'a>(label: &str, runs: impl IntoIterator<Item = &'a Run>) -> Series {
     (

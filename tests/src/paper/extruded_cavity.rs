@@ -12,7 +12,7 @@
 //! the vertical centreline x = ½ and of v on the horizontal one y = ½ (129 points each, on three
 //! z planes), the largest |w| over every cell, and the cost per cell-step of each.
 
-use super::case::{Case, Done, Harness, Plan, Verdict};
+use super::case::{Case, Done, Harness, Plan, Verdict, steady_check};
 use super::{Check, Options, Run, load_case};
 use efsi_core::{Geometry as SceneGeometry, Override, Region, Scene, Simulation, Stagger};
 use efsi_run::probes::{sample, sample3};
@@ -183,15 +183,7 @@ impl Case for ExtrudedCavity {
                 "e",
             ),
             Check::at_most("max abs(w) of the extruded runs", w_max, W_BOUND, "e"),
-            Check::at_least(
-                format!(
-                    "runs stopped at the steady state (time.steady), of {}",
-                    done.measured.len()
-                ),
-                done.measured.iter().filter(|(_, m)| m.steady).count() as f64,
-                done.measured.len() as f64,
-                "0",
-            ),
+            steady_check(done.measured.iter().map(|(_, m)| m.steady)),
         ];
         Ok(Verdict {
             title: "Planar invariance: the Re = 100 cavity extruded along z (issue 40, case 3)"
