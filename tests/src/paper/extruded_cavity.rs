@@ -27,7 +27,7 @@ const PROJECTION_TOLERANCE: &str = "1e-10";
 const VELOCITY_BOUND: f64 = 1e-7;
 /// The largest |w| of the extruded run: ten times the projection's relative tolerance. Nothing
 /// drives w but what the pressure solves leave, which accumulates over the steps to the steady
-/// state (measured 2e-12 at 16² × 4 in 445 steps, 6.7e-11 at 32² and 64² in 669 and 1542).
+/// state (measured 2e-12 at 16² × 4 in 445 steps, 6.6e-12 at 32² in 669, 6.7e-11 at 64² in 1542).
 const W_BOUND: f64 = 1e-9;
 /// The depth of the extruded box and its cells.
 const DEPTH: f64 = 0.25;
