@@ -159,6 +159,44 @@ impl Rules {
         self.list[self.len] = (write, read, rule);
         self.len += 1;
     }
+
+    /// The rules of both sides of `axis` (`n` cells along it), each side's ghost layers
+    /// outwards: `pick(boundary, ghost)` gives the position read and the rule, knowing the
+    /// ghost's mirror inside, the side's first cell and the periodic image.
+    fn of_sides(
+        set: &BoundarySet,
+        axis: usize,
+        n: isize,
+        mut pick: impl FnMut(&Boundary, Ghost) -> (isize, Rule),
+    ) -> Self {
+        let mut rules = Rules::new();
+        for (side, first, dir) in [
+            (Side::normal_to(axis, false), 0isize, -1isize),
+            (Side::normal_to(axis, true), n - 1, 1),
+        ] {
+            let bc = set.get(side);
+            for g in 1..=G {
+                let ghost = first + dir * g;
+                let at = Ghost {
+                    mirror: first - dir * (g - 1),
+                    first,
+                    periodic: if dir < 0 { ghost + n } else { ghost - n },
+                };
+                let (read, rule) = pick(bc, at);
+                rules.push(ghost, read, rule);
+            }
+        }
+        rules
+    }
+}
+
+/// Where a ghost's rule may read: its mirror image across the boundary face, the side's first
+/// cell, and its periodic image.
+#[derive(Clone, Copy)]
+struct Ghost {
+    mirror: isize,
+    first: isize,
+    periodic: isize,
 }
 
 impl Lines {
@@ -518,26 +556,13 @@ impl BoundarySet {
                 && when != WallTime::Homogeneous
         };
         if !sides.iter().any(|&(side, ..)| varies(side)) {
-            let mut rules = Rules::new();
-            for (side, first, dir) in sides {
-                let bc = self.get(side);
-                for g in 1..=G {
-                    let ghost = first + dir * g;
-                    let mirror = first - dir * (g - 1);
-                    let (read, rule) = match bc {
-                        Boundary::Periodic => {
-                            (if dir < 0 { ghost + n } else { ghost - n }, Rule::Copy)
-                        }
-                        Boundary::NoSlip => (mirror, Rule::Negate),
-                        Boundary::MovingWall { .. } => (mirror, Rule::Wall(0.0)),
-                        Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => {
-                            (mirror, Rule::Copy)
-                        }
-                        Boundary::Outflow => (first, Rule::Copy),
-                    };
-                    rules.push(ghost, read, rule);
-                }
-            }
+            let rules = Rules::of_sides(self, axis, n, |bc, at| match bc {
+                Boundary::Periodic => (at.periodic, Rule::Copy),
+                Boundary::NoSlip => (at.mirror, Rule::Negate),
+                Boundary::MovingWall { .. } => (at.mirror, Rule::Wall(0.0)),
+                Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => (at.mirror, Rule::Copy),
+                Boundary::Outflow => (at.first, Rule::Copy),
+            });
             lines.apply(f.data_mut(), &rules);
             return;
         }
@@ -583,25 +608,11 @@ impl BoundarySet {
         for axis in 0..grid.dims() {
             let lines = Lines::new(grid, f, axis);
             let n = lines.n;
-            let mut rules = Rules::new();
-            for (side, first, dir) in [
-                (Side::normal_to(axis, false), 0isize, -1isize),
-                (Side::normal_to(axis, true), n - 1, 1),
-            ] {
-                let bc = self.get(side);
-                for g in 1..=G {
-                    let ghost = first + dir * g;
-                    let mirror = first - dir * (g - 1);
-                    let (read, rule) = match bc {
-                        Boundary::Periodic => {
-                            (if dir < 0 { ghost + n } else { ghost - n }, Rule::Copy)
-                        }
-                        Boundary::Outflow if dirichlet_outflow => (mirror, Rule::Negate),
-                        _ => (mirror, Rule::Copy),
-                    };
-                    rules.push(ghost, read, rule);
-                }
-            }
+            let rules = Rules::of_sides(self, axis, n, |bc, at| match bc {
+                Boundary::Periodic => (at.periodic, Rule::Copy),
+                Boundary::Outflow if dirichlet_outflow => (at.mirror, Rule::Negate),
+                _ => (at.mirror, Rule::Copy),
+            });
             lines.apply(f.data_mut(), &rules);
         }
     }
