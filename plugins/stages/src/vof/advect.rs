@@ -477,6 +477,20 @@ impl VofAdvector {
             for b in 0..a {
                 across = across.range(b, -G, self.n[b] as isize + G);
             }
+            if a == 0 {
+                // Lines run along x: each row's ghosts at both ends in one pass.
+                let rows = across.range(0, 0, n);
+                let data = phi.data_mut();
+                for k in 0..rows.lines() {
+                    let first = rows.line(k).linear(0);
+                    for g in 1..=G {
+                        let (lo, hi) = if per { (n - g, g - 1) } else { (g - 1, n - g) };
+                        data[first - g as usize] = data[first + lo as usize];
+                        data[first + (n - 1 + g) as usize] = data[first + hi as usize];
+                    }
+                }
+                continue;
+            }
             let step = phi.offset(unit(a));
             for g in 1..=G {
                 // Ghost `−g` from `lo`, ghost `n − 1 + g` from `hi`.
