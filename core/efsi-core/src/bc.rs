@@ -25,7 +25,8 @@
 //! three velocity components ([`BoundarySet::fill_velocity3`]: `w` on the z-faces is normal on
 //! the z sides and tangential on the others) and for scalars along z. A side has two
 //! tangential components: a moving wall drives one of them — `+x` on the y and z sides, `+y` on
-//! the x sides, as in two dimensions — and holds the other at zero; its profile
+//! the x sides, as in two dimensions — and holds the other at zero, or, with a `direction` in
+//! its plane, drives each by its share of the direction; its profile
 //! ([`crate::scene::WallProfile`]) is the product of the factors along both in-wall axes (a
 //! `Sin2Ramp` lid vanishes at all four edges). Ghosts are filled one axis after the other (x,
 //! then y, then z), each pass over the whole padded extent of the other axes, so edge and
@@ -432,12 +433,27 @@ impl BoundarySet {
             ] {
                 let bc = self.get(side);
                 let speed = match bc {
-                    Boundary::MovingWall { .. } if comp == driven(axis) => self.wall_speed(
+                    Boundary::MovingWall {
+                        direction: None, ..
+                    } if comp == driven(axis) => self.wall_speed(
                         side,
                         (comp, position(t, comp)),
                         other.map(|o| (o, position(t, o))),
                         when,
                     ),
+                    Boundary::MovingWall {
+                        direction: Some((x, y, z)),
+                        ..
+                    } => {
+                        let share = [x, y, z][comp] / (x * x + y * y + z * z).sqrt();
+                        share
+                            * self.wall_speed(
+                                side,
+                                (comp, position(t, comp)),
+                                other.map(|o| (o, position(t, o))),
+                                when,
+                            )
+                    }
                     _ => 0.0,
                 };
                 for g in 1..=G {
@@ -510,6 +526,7 @@ mod tests {
             speed: 2.0,
             profile: WallProfile::Uniform,
             motion: WallMotion::Steady,
+            direction: None,
         };
         let bs = BoundarySet::new(
             &set(Boundary::NoSlip, Boundary::NoSlip, Boundary::NoSlip, lid),
@@ -597,6 +614,7 @@ mod tests {
             speed,
             profile,
             motion: WallMotion::Steady,
+            direction: None,
         }
     }
 

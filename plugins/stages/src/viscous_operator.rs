@@ -139,6 +139,7 @@ impl Coefficients {
         self.set_hoop(g, mu, scale);
     }
 
+    #[cfg(test)]
     /// [`set_viscosity_edges`](Self::set_viscosity_edges) on a two-dimensional grid, whose one
     /// shear pair lives on the corners (`corner`).
     pub(crate) fn set_viscosity(&mut self, g: &Grid, mu: &Field, scale: f64, corner: &mut Field) {
@@ -196,6 +197,7 @@ impl Coefficients {
         });
     }
 
+    #[cfg(test)]
     /// [`set_edges`](Self::set_edges) on a two-dimensional grid, whose one shear pair lives on
     /// the corners (`eta_k`).
     pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
@@ -311,6 +313,7 @@ impl Coefficients {
         }
     }
 
+    #[cfg(test)]
     /// `y = d∘x − K(u, v)` on a two-dimensional grid ([`product`](Self::product) with the
     /// velocity `[u, v]`).
     pub(crate) fn apply(
