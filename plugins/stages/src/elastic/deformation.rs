@@ -123,9 +123,10 @@ impl DeformationStage {
             |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
         (0..cells.lines()).map(|m| cells.line(m)).any(|l| {
             let phi = phi.at(&l, [0; 3]);
-            let faces: Vec<(&[f64], &[f64])> = (0..dims)
-                .map(|a| (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a))))
-                .collect();
+            let faces: [(&[f64], &[f64]); 3] = std::array::from_fn(|a| {
+                let a = a.min(dims - 1);
+                (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a)))
+            });
             l.indices().enumerate().any(|(m, at)| {
                 if phi[m] <= 0.5 {
                     return false;
@@ -149,15 +150,16 @@ fn kinetic_energy(grid: &Grid, vel: &[&Field], rho: &Field) -> f64 {
     let (m, h) = (&grid.metric, grid.h());
     let [e] = efsi_core::Region::of(grid, efsi_core::Stagger::Cell).sum(|l| {
         let (rw, re, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
-        let faces: Vec<(&[f64], &[f64])> = (0..vel.len())
-            .map(|a| (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a))))
-            .collect();
+        let faces: [(&[f64], &[f64]); 3] = std::array::from_fn(|a| {
+            let a = a.min(vel.len() - 1);
+            (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a)))
+        });
         let rho = rho.at(&l, [0; 3]);
         let mut e = 0.0;
         for n in 0..l.len {
             let (uw, ue) = (faces[0].0[n], faces[0].1[n]);
             let mut s = 0.5 * (rw[n] * uw.powi(2) + re[n] * ue.powi(2)) / 2.0;
-            for (lo, hi) in &faces[1..] {
+            for (lo, hi) in &faces[1..vel.len()] {
                 s += 0.5 * rc[n] * (lo[n].powi(2) + hi[n].powi(2)) / 2.0;
             }
             e += h[..vel.len()].iter().fold(rho[n] * s, |p, h| p * h);

@@ -109,12 +109,13 @@ impl Kernels {
         let interior = Region::of(g, Stagger::Cell);
         for l in (0..interior.lines()).map(|n| interior.line(n)) {
             let [w, b11, b22, b33] = [&self.w, &b[0], &b[1], &b[2]].map(|f| f.at(&l, [0; 3]));
-            let sh: Vec<Four> = (0..pairs)
-                .map(|p| Four::new(&b[3 + p], &l, edges_of_cell(SHEAR[p].0)))
-                .collect();
+            let sh: [Four; 3] = std::array::from_fn(|p| {
+                let p = p.min(pairs - 1);
+                Four::new(&b[3 + p], &l, edges_of_cell(SHEAR[p].0))
+            });
             for n in (0..l.len).filter(|&n| w[n] != 0.0) {
                 let mut x = [b11[n], b22[n], b33[n], 0.0, 0.0, 0.0];
-                for (x, s) in x[3..].iter_mut().zip(&sh) {
+                for (x, s) in x[3..3 + pairs].iter_mut().zip(&sh) {
                     *x = s.avg(n);
                 }
                 if let Some(p) = Principal::of(&x[..m]) {

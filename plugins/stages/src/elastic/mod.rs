@@ -200,8 +200,8 @@
 //! location is the average of its four neighbours. The shear rate is a two-point difference
 //! near the interface and a four-point one in the solid's bulk, whose dispersion cancels the
 //! two-point stress divergence's, so a shear wave crossing the solid lags by `O(h⁴)` in phase
-//! (`Kernels::gradient_in`). The law is evaluated in two batches
-//! (centres and corners). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
+//! (`Kernels::gradient_in`). The law is evaluated in batches
+//! (centres, and the edges of each shear pair). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
 //! face values, as the momentum advection.
 //!
 //! **Three dimensions.** B̃ has six components ([`Deformation`]): the normal ones at centres
@@ -212,9 +212,21 @@
 //! over the grid's shear pairs gives the gradient, the stretching (the third axis's terms
 //! `L_ac B̃_cb + B̃_ac L_bc` from the neighbouring edge families, `transport`), the advection
 //! and the end-of-step update in two and three dimensions; a planar field extruded along a
-//! periodic z gives the planar values. Not yet in three dimensions: the edge fractions from
-//! the PLIC planes (the cells' φ stands in), the interface relaxation of the xz- and yz-edges,
-//! the law on the full tensor and the implicit solve (the stage refuses a 3-D scene).
+//! periodic z gives the planar values. The law sees the full tensor `[11, 22, 33, 12, 23, 13]`
+//! (law ABI version 2; a version-1 library is refused in a 3-D scene): at a centre the cell's
+//! normal components and each shear the mean of the cell's four edges of its pair; on an
+//! `(a, b)`-edge the solid-weighted normal components of its four cells, its own shear, and
+//! each other shear the mean of the four edges of its pair around it (`stress`). The stress
+//! divergence on the faces normal to `a` is `Σ_b A_b Δ_b τ_ab` (`A_b` the face area across
+//! `b`), the implicit operator and both preconditioners act on u, v and w, and the coupled step
+//! uses the seven-point Poisson operator of the projection. "Interface corners" holds on every
+//! edge family in its own plane: an `(a, b)`-edge's solid fraction is the solid volume of its
+//! four quarter cells (each the whole cell long along the third axis), cut by the cell's PLIC
+//! plane (the mixed Youngs–centred normal, as the VOF step reconstructs), its interface normal's
+//! share `n_b²/(n_a² + n_b²)`, and its shear relaxes as the corners' does. The strain energy
+//! takes the principal axes of each cell's B by Jacobi rotations. Sugiyama's Couette layer
+//! sheared along `(cos 30°, 0, sin 30°)` (`cases/oscillating_couette_3d.ron`) gives the planar
+//! error along the wall's motion (`tests/tests/couette_3d.rs`).
 //!
 //! # Solve
 //!
@@ -246,8 +258,10 @@
 //! `coupled` module), so a split step is capped at `wave_courant` elastic-wave Courant numbers
 //! ([`MAX_WAVE_COURANT`]), a coupled step at `coupled_wave_courant` for accuracy
 //! ([`ElasticOptions`]). The cap uses the law's stiffness at rest: a law that stiffens under
-//! strain is under-limited where it is deformed. A solid must be at least
-//! [`MIN_CELLS_ACROSS`] cells across.
+//! strain is under-limited where it is deformed; `h` is the smallest cell size over the grid's
+//! axes, and the stiffness at rest the largest diagonal entry of the tangent on the grid's
+//! tensor (in-plane or full). A solid must be at least [`MIN_CELLS_ACROSS`] cells across (its
+//! section's `4A/P` in two dimensions, its `6V/S` in three).
 //!
 //! # References
 //!
@@ -346,6 +360,9 @@ struct Kernels {
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its weight, principal axes
     /// (cos, sin), the isochoric logarithms of the principal stretches and its volume.
     energy_cells: Vec<energy::EnergyCell>,
+    /// The area of a face normal to each axis, `Π_{b≠a} h_b` over the grid's axes (the radius
+    /// aside).
+    area: [f64; 3],
     /// The components of the tensors the law sees: 4 (`[11, 22, 33, 12]`, law ABI version 1's
     /// [`efsi_laws_host::Sym`]) on a two-dimensional grid, 6 (`[11, 22, 33, 12, 23, 13]`, [`efsi_laws_host::Sym6`]) on a
     /// three-dimensional one.
@@ -481,6 +498,12 @@ impl Kernels {
             solid_k: [Window::EMPTY; 3],
             near_c: Window::EMPTY,
             energy_cells: Vec::new(),
+            area: std::array::from_fn(|a| {
+                let h = grid.h();
+                let mut o = (0..grid.dims()).filter(|&b| b != a);
+                let first = o.next().map_or(1.0, |b| h[b]);
+                o.fold(first, |s, b| s * h[b])
+            }),
             m,
             cb: vec![0.0; m * nc],
             ct: vec![0.0; m * nc],

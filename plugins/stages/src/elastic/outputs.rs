@@ -75,11 +75,10 @@ fn tensor(grid: &Grid, t: &[Field], phi: Option<&Field>) -> Vec<f64> {
     let cells = Region::of(grid, Stagger::Cell);
     for l in (0..cells.lines()).map(|n| cells.line(n)) {
         let [t11, t22, t33] = [0, 1, 2].map(|c| t[c].at(&l, [0; 3]));
-        let shear: Vec<super::Four> = pairs
-            .iter()
-            .enumerate()
-            .map(|(p, &(axes, _))| super::Four::new(&t[3 + p], &l, super::edges_of_cell(axes)))
-            .collect();
+        let shear: [super::Four; 3] = std::array::from_fn(|p| {
+            let p = p.min(pairs.len() - 1);
+            super::Four::new(&t[3 + p], &l, super::edges_of_cell(pairs[p].0))
+        });
         let phi = phi.map(|p| p.at(&l, [0; 3]));
         let row = &mut out[6 * l.n * l.len..][..6 * l.len];
         for (n, out) in row.chunks_exact_mut(6).enumerate() {
@@ -87,7 +86,7 @@ fn tensor(grid: &Grid, t: &[Field], phi: Option<&Field>) -> Vec<f64> {
             out[c11] = w * t11[n];
             out[c22] = w * t22[n];
             out[c33] = w * t33[n];
-            for (p, s) in shear.iter().enumerate() {
+            for (p, s) in shear.iter().enumerate().take(pairs.len()) {
                 out[if p == 0 { c12 } else { 3 + p }] = w * s.avg(n);
             }
         }

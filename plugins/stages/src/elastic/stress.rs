@@ -298,7 +298,16 @@ impl Kernels {
     /// the batches gather B̃). Only at the solid's centres and edges ([`Kernels::solid_c`],
     /// `solid_k`): `dtau` is zero elsewhere, and there it is left untouched.
     pub(super) fn apply_tangent(&self, db: &[Field], dtau: &mut [Field]) {
-        let (g, m, pairs) = (&self.grid, self.m, self.edge.len());
+        if self.m == 6 {
+            self.apply_tangent_m::<6>(db, dtau);
+        } else {
+            self.apply_tangent_m::<4>(db, dtau);
+        }
+    }
+
+    /// [`Kernels::apply_tangent`] on tensors of `M` components.
+    fn apply_tangent_m<const M: usize>(&self, db: &[Field], dtau: &mut [Field]) {
+        let (g, pairs) = (&self.grid, M - 3);
         let (normal, shear) = dtau.split_at_mut(3);
         let [t11, t22, t33] = normal else {
             unreachable!("three normal components")
@@ -310,14 +319,16 @@ impl Kernels {
                 let [w, d11, d22, d33] =
                     [&self.w, &db[0], &db[1], &db[2]].map(|f| f.at(&l, [0; 3]));
                 let sh = self.centre_shears(db, &l);
-                let jms = self.cj[l.n * l.len * m * m..][..l.len * m * m].chunks_exact(m * m);
+                let jms = self.cj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
                 for (n, jm) in jms.enumerate() {
-                    let mut x = [d11[n], d22[n], d33[n], 0.0, 0.0, 0.0];
-                    for q in 0..pairs {
-                        x[3 + q] = sh[q].avg(n);
-                    }
+                    let x: [f64; M] = std::array::from_fn(|c| match c {
+                        0 => d11[n],
+                        1 => d22[n],
+                        2 => d33[n],
+                        _ => sh[c - 3].avg(n),
+                    });
                     for c in 0..3 {
-                        rows[c][n] = w[n] * dot(&jm[m * c..], &x[..m]);
+                        rows[c][n] = w[n] * dot(&jm[M * c..], &x);
                     }
                 }
             });
@@ -334,20 +345,16 @@ impl Kernels {
                     let s = if q == p { [[0; 3]; 4] } else { around(p, q) };
                     Four::new(&db[3 + q], &l, s)
                 });
-                let jms = kj[l.n * l.len * m * m..][..l.len * m * m].chunks_exact(m * m);
+                let jms = kj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
                 for (n, jm) in jms.enumerate() {
-                    let mut x = [
-                        w[n] * d11.weighted(&wt, n),
-                        w[n] * d22.weighted(&wt, n),
-                        w[n] * d33.weighted(&wt, n),
-                        0.0,
-                        0.0,
-                        0.0,
-                    ];
-                    for q in 0..pairs {
-                        x[3 + q] = w[n] * if q == p { own[n] } else { others[q].avg(n) };
-                    }
-                    tab[n] = ks[n] * dot(&jm[m * (3 + p)..], &x[..m]);
+                    let x: [f64; M] = std::array::from_fn(|c| match c {
+                        0 => w[n] * d11.weighted(&wt, n),
+                        1 => w[n] * d22.weighted(&wt, n),
+                        2 => w[n] * d33.weighted(&wt, n),
+                        c if c == 3 + p => w[n] * own[n],
+                        c => w[n] * others[c - 3].avg(n),
+                    });
+                    tab[n] = ks[n] * dot(&jm[M * (3 + p)..], &x);
                 }
             });
         }
@@ -395,18 +402,18 @@ impl Kernels {
         }
     }
 
-    /// Volume-weighted `(∇·τ)_a` on the faces normal to `a` of `l`: `f(n, value)` for each
-    /// point `n` (see the module docs).
+    /// Volume-weighted `(∇·τ)_a` on the faces normal to `a` of `l` of a grid of `D` axes:
+    /// `f(n, value)` for each point `n` (see the module docs).
     #[inline(always)]
-    fn force_axis(&self, tau: &[Field], a: usize, l: &Line, mut f: impl FnMut(usize, f64)) {
+    fn force_axis<const D: usize>(
+        &self,
+        tau: &[Field],
+        a: usize,
+        l: &Line,
+        mut f: impl FnMut(usize, f64),
+    ) {
         let g = &self.grid;
-        let (m, dims, h) = (&g.metric, g.dims(), g.h());
-        // The face area across each axis b, Π_{c≠b} h_c, and the face's own radius.
-        let area: [f64; 3] = std::array::from_fn(|b| {
-            let mut o = (0..dims).filter(|&c| c != b);
-            let first = o.next().map_or(1.0, |c| h[c]);
-            o.fold(first, |s, c| s * h[c])
-        });
+        let (m, area) = (&g.metric, &self.area);
         let own = if a == 0 { m.rx_on(l, 0) } else { m.rc_on(l, 0) };
         // Along x the radii of the two stress points; along the others the face's.
         let (rlo, rhi) = if a == 0 {
@@ -415,23 +422,21 @@ impl Kernels {
             (m.rx_on(l, 0), m.rx_on(l, 1))
         };
         // τ_ab below and above the face along b.
-        let t: [(&[f64], &[f64]); 3] = std::array::from_fn(|b| {
-            if b >= dims {
-                (&[][..], &[][..])
-            } else if b == a {
+        let t: [(&[f64], &[f64]); D] = std::array::from_fn(|b| {
+            if b == a {
                 (tau[a].at(l, minus(a)), tau[a].at(l, [0; 3]))
             } else {
                 let c = &tau[3 + PAIR[a][b]];
                 (c.at(l, [0; 3]), c.at(l, unit(b)))
             }
         });
-        let hoop = (a == 0 && dims == 2).then(|| {
+        let hoop = (a == 0 && D == 2).then(|| {
             let t33 = (tau[2].at(l, minus(0)), tau[2].at(l, [0; 3]));
             (m.hoop_x_on(l, 0), t33, g.dx * g.dy)
         });
         for n in 0..l.len {
             let mut s = area[0] * (rhi[n] * t[0].1[n] - rlo[n] * t[0].0[n]);
-            for b in 1..dims {
+            for b in 1..D {
                 s += area[b] * own[n] * (t[b].1[n] - t[b].0[n]);
             }
             if let Some((hoop, (t33w, t33e), vol)) = hoop {
@@ -442,13 +447,23 @@ impl Kernels {
         }
     }
 
+    /// [`Kernels::force_axis`] on the grid's axes.
+    #[inline(always)]
+    fn force_on(&self, tau: &[Field], a: usize, l: &Line, f: impl FnMut(usize, f64)) {
+        if self.grid.is_3d() {
+            self.force_axis::<3>(tau, a, l, f);
+        } else {
+            self.force_axis::<2>(tau, a, l, f);
+        }
+    }
+
     /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
     pub(super) fn force(&self, tau: &[Field], out: &mut [f64]) {
         for (a, o) in self.faces.split_mut(out).into_iter().enumerate() {
             let r = self.faces.region(a);
             for l in (0..r.lines()).map(|n| r.line(n)) {
                 let row = &mut o[l.n * l.len..][..l.len];
-                self.force_axis(tau, a, &l, |n, f| row[n] = f);
+                self.force_on(tau, a, &l, |n, f| row[n] = f);
             }
         }
     }
@@ -479,7 +494,7 @@ impl Kernels {
             }
             for l in (0..part.lines()).map(|n| part.line(n)) {
                 let row = &mut y[compact(&r, l.start)..][..l.len];
-                self.force_axis(tau, x, &l, |n, f| row[n] -= a * f);
+                self.force_on(tau, x, &l, |n, f| row[n] -= a * f);
             }
         }
     }
