@@ -55,7 +55,6 @@ pub(super) fn wave_limit(
     law: &dyn ConstitutiveLaw,
 ) -> Result<WaveLimits, String> {
     let solid = crate::solid::solid(options)?;
-    // The law's tensor on this grid: in-plane (4 components) or full (6).
     let m = super::Deformation::components(grid);
     let (mut b, mut tau, mut tangent) = ([0.0; 6], [0.0; 6], [0.0; 36]);
     b[..3].fill(1.0);
