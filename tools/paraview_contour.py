@@ -26,7 +26,6 @@ used on a ``vtkRectilinearGrid`` directly. A two-dimensional run (planar or axis
 refused: ``tools/paraview_revolve.py`` shows those.
 """
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -37,11 +36,8 @@ from vtkmodules.vtkFiltersCore import vtkContourFilter
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from paraview_revolve import _write, _write_pvd, read_pvd, read_vtr  # noqa: E402
-
-
-class Refused(Exception):
-    """A run or a request this script cannot show (the message says why)."""
+from efsi_vtk import Refused, arguments, output_times, read_vtr  # noqa: E402
+from efsi_vtk import show_in_paraview, write, write_pvd  # noqa: E402
 
 
 def is_three_dimensional(grid):
@@ -105,11 +101,7 @@ def process(run, out=None, time=None, field="solid_fraction", level=0.5):
     the level)."""
     run = Path(run)
     out = Path(out) if out is not None else run / "contour"
-    entries = read_pvd(run / "fields.pvd")
-    if not entries:
-        raise Refused(f"{run / 'fields.pvd'}: no output times")
-    if time is not None:
-        entries = [min(entries, key=lambda e: abs(e[0] - time))]
+    entries = output_times(run, time)
     out.mkdir(parents=True, exist_ok=True)
     surfaces = []
     for k, (t, file) in enumerate(entries):
@@ -118,58 +110,19 @@ def process(run, out=None, time=None, field="solid_fraction", level=0.5):
         except Refused as e:
             raise Refused(f"{file}: {e}") from None
         if surface is not None:
-            _write(vtkXMLPolyDataWriter(), surface, out / f"surface_{k:04}.vtp")
+            write(vtkXMLPolyDataWriter(), surface, out / f"surface_{k:04}.vtp")
             surfaces.append((t, f"surface_{k:04}.vtp"))
     if not surfaces:
         return None
-    _write_pvd(out / "surface.pvd", surfaces)
+    write_pvd(out / "surface.pvd", surfaces)
     return out / "surface.pvd"
 
 
-def _show_in_paraview(surfaces, box, screenshot=None):
-    """Under pvpython: open the surfaces' collection and the box (its outline) in ParaView and
-    show them at their last time, the surface coloured by the pressure; with `screenshot`, save
-    the view to that PNG. Returns False outside pvpython."""
-    try:
-        from paraview import simple  # noqa: PLC0415 (only pvpython has it)
-    except ImportError:
-        return False
-    view = simple.GetActiveViewOrCreate("RenderView")
-    view.ViewSize = [1000, 800]
-    outline = simple.Show(simple.OpenDataFile(str(box)), view)
-    outline.SetRepresentationType("Outline")
-    source = simple.OpenDataFile(str(surfaces))
-    shown = simple.Show(source, view)
-    simple.ColorBy(shown, ("POINTS", "pressure"))
-    shown.RescaleTransferFunctionToDataRange(True, False)
-    times = list(getattr(source, "TimestepValues", None) or [])
-    if times:
-        view.ViewTime = max(times)
-    # An oblique view, Z up.
-    view.CameraPosition = [2.5, -2.0, 1.8]
-    view.CameraFocalPoint = [0.0, 0.0, 0.0]
-    view.CameraViewUp = [0.0, 0.0, 1.0]
-    simple.ResetCamera(view)
-    simple.Render(view)
-    if screenshot is not None:
-        simple.SaveScreenshot(str(screenshot), view, ImageResolution=[1000, 800])
-        # Headless, nothing more to show: release the pipeline before the interpreter exits
-        # (ParaView 5.11's pvpython can crash tearing it down afterwards).
-        simple.Delete(source)
-        simple.Delete(view)
-    return True
-
-
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("run", help="the run's output folder (holding fields.pvd)")
-    p.add_argument("--time", type=float, help="only the output time nearest to this")
+    p = arguments(__doc__, "contour")
     p.add_argument("--field", default="solid_fraction",
                    help="the scalar cell array whose level set is drawn (default solid_fraction)")
     p.add_argument("--level", type=float, default=0.5, help="its level (default 0.5)")
-    p.add_argument("--out", help="output folder (default RUN/contour)")
-    p.add_argument("--screenshot", metavar="PNG",
-                   help="under pvpython: save the view of the last output time to this PNG")
     a = p.parse_args(argv)
     try:
         surfaces = process(a.run, a.out, a.time, a.field, a.level)
@@ -181,13 +134,9 @@ def main(argv=None):
               file=sys.stderr)
         return 2
     print(f"wrote {surfaces}")
-    shown = _show_in_paraview(surfaces, Path(a.run) / "fields.pvd", a.screenshot)
-    if a.screenshot is not None:
-        if not shown:
-            print("--screenshot needs ParaView: run the script with pvpython", file=sys.stderr)
-            return 2
-        print(f"wrote {a.screenshot}")
-    return 0
+    # The box's outline and the surface, in an oblique view, Z up.
+    layers = [(Path(a.run) / "fields.pvd", None), (surfaces, ("POINTS", "pressure"))]
+    return show_in_paraview(layers, camera=(2.5, -2.0, 1.8), png=a.screenshot)
 
 
 if __name__ == "__main__":

@@ -32,14 +32,12 @@ radius (tests/python/test_revolve.py): the 1/2 level of a linear interpolation o
 fractions lies slightly inside a convex body.
 """
 
-import argparse
 import sys
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray, vtk_to_numpy
-from vtkmodules.vtkCommonCore import vtkCommand, vtkPoints
+from vtkmodules.vtkCommonCore import vtkPoints
 from vtkmodules.vtkCommonDataModel import VTK_QUAD, vtkCellArray, vtkRectilinearGrid, vtkUnstructuredGrid
 from vtkmodules.vtkFiltersCore import (
     vtkAppendFilter,
@@ -48,40 +46,11 @@ from vtkmodules.vtkFiltersCore import (
     vtkTriangleFilter,
 )
 from vtkmodules.vtkFiltersModeling import vtkRotationalExtrusionFilter
-from vtkmodules.vtkIOXML import (
-    vtkXMLPolyDataWriter,
-    vtkXMLRectilinearGridReader,
-    vtkXMLUnstructuredGridWriter,
-)
+from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter, vtkXMLUnstructuredGridWriter
 
-
-class _Errors:
-    """Collects VTK error events (VTK otherwise only prints them)."""
-
-    def __init__(self):
-        self.messages = []
-
-    def __call__(self, obj, event):
-        self.messages.append(f"{event} from {obj.GetClassName()}")
-
-
-def read_pvd(path):
-    """The (time, file) entries of a .pvd collection, files resolved against its folder."""
-    root = ET.parse(path).getroot()
-    return [(float(ds.get("timestep")), Path(path).parent / ds.get("file"))
-            for ds in root.iter("DataSet")]
-
-
-def read_vtr(path):
-    """A .vtr file as a vtkRectilinearGrid (any efsi output format: Float32/64, zlib)."""
-    reader = vtkXMLRectilinearGridReader()
-    errors = _Errors()
-    reader.AddObserver(vtkCommand.ErrorEvent, errors)
-    reader.SetFileName(str(path))
-    reader.Update()
-    if errors.messages or reader.GetErrorCode():
-        raise RuntimeError(f"{path}: cannot read: {errors.messages}")
-    return reader.GetOutput()
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from efsi_vtk import Refused, arguments, output_times, read_vtr  # noqa: E402
+from efsi_vtk import show_in_paraview, write, write_pvd  # noqa: E402
 
 
 def is_axisymmetric(grid):
@@ -221,24 +190,6 @@ def revolved_surface(grid, resolution=128, level=0.5):
     return closed.GetOutput()
 
 
-def _write(writer, data, path):
-    writer.SetFileName(str(path))
-    writer.SetInputData(data)
-    writer.SetDataModeToAppended()
-    writer.SetCompressorTypeToZLib()
-    if not writer.Write():
-        raise RuntimeError(f"cannot write {path}")
-
-
-def _write_pvd(path, entries):
-    lines = ['<?xml version="1.0"?>',
-             '<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">',
-             "  <Collection>"]
-    lines += [f'    <DataSet timestep="{t!r}" group="" part="0" file="{f}"/>' for t, f in entries]
-    lines += ["  </Collection>", "</VTKFile>", ""]
-    Path(path).write_text("\n".join(lines))
-
-
 def process(run, out=None, time=None, resolution=128):
     """Write the mirrored slices and revolved surfaces of the run in folder `run` (every output
     time, or the one nearest `time`) into `out`; returns the paths of the two collections (the
@@ -246,85 +197,40 @@ def process(run, out=None, time=None, resolution=128):
     run = Path(run)
     out = Path(out) if out is not None else run / "revolved"
     out.mkdir(parents=True, exist_ok=True)
-    entries = read_pvd(run / "fields.pvd")
-    if not entries:
-        raise RuntimeError(f"{run / 'fields.pvd'}: no output times")
-    if time is not None:
-        entries = [min(entries, key=lambda e: abs(e[0] - time))]
+    entries = output_times(run, time)
     slices, surfaces = [], []
     for k, (t, file) in enumerate(entries):
         grid = read_vtr(file)
-        _write(vtkXMLUnstructuredGridWriter(), mirrored_slice(grid), out / f"slice_{k:04}.vtu")
+        write(vtkXMLUnstructuredGridWriter(), mirrored_slice(grid), out / f"slice_{k:04}.vtu")
         slices.append((t, f"slice_{k:04}.vtu"))
         surface = revolved_surface(grid, resolution)
         if surface is not None:
-            _write(vtkXMLPolyDataWriter(), surface, out / f"surface_{k:04}.vtp")
+            write(vtkXMLPolyDataWriter(), surface, out / f"surface_{k:04}.vtp")
             surfaces.append((t, f"surface_{k:04}.vtp"))
-    _write_pvd(out / "slice.pvd", slices)
+    write_pvd(out / "slice.pvd", slices)
     if surfaces:
-        _write_pvd(out / "surface.pvd", surfaces)
+        write_pvd(out / "surface.pvd", surfaces)
     return out / "slice.pvd", (out / "surface.pvd" if surfaces else None)
 
 
-def _show_in_paraview(collections, screenshot=None):
-    """Under pvpython: open the collections in ParaView and show them at their last time (the
-    slice coloured by the solid fraction, the surface by the pressure); with `screenshot`, save
-    the view to that PNG. Returns False outside pvpython."""
-    try:
-        from paraview import simple  # noqa: PLC0415 (only pvpython has it)
-    except ImportError:
-        return False
-    view = simple.GetActiveViewOrCreate("RenderView")
-    view.ViewSize = [1000, 800]
-    times = []
-    sources = []
-    for path, colour in zip(collections, (("CELLS", "velocity", "Magnitude"), ("POINTS", "pressure"))):
-        if path is not None:
-            source = simple.OpenDataFile(str(path))
-            sources.append(source)
-            times += list(getattr(source, "TimestepValues", None) or [])
-            shown = simple.Show(source, view)
-            simple.ColorBy(shown, colour)
-            shown.RescaleTransferFunctionToDataRange(True, False)
-    if times:
-        view.ViewTime = max(times)
-    # Looking at the section from -Y (its quads face that way), Z up, a little from above.
-    view.CameraPosition = [0.6, -3.0, 1.2]
-    view.CameraFocalPoint = [0.0, 0.0, 0.0]
-    view.CameraViewUp = [0.0, 0.0, 1.0]
-    simple.ResetCamera(view)
-    simple.Render(view)
-    if screenshot is not None:
-        simple.SaveScreenshot(str(screenshot), view, ImageResolution=[1000, 800])
-        # Headless, nothing more to show: release the pipeline before the interpreter exits
-        # (ParaView 5.11's pvpython can crash tearing it down afterwards).
-        for source in sources:
-            simple.Delete(source)
-        simple.Delete(view)
-    return True
-
-
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("run", help="the run's output folder (holding fields.pvd)")
-    p.add_argument("--time", type=float, help="only the output time nearest to this")
+    p = arguments(__doc__, "revolved")
     p.add_argument("--resolution", type=int, default=128,
                    help="steps of the revolution through 360 degrees (default 128)")
-    p.add_argument("--out", help="output folder (default RUN/revolved)")
-    p.add_argument("--screenshot", metavar="PNG",
-                   help="under pvpython: save the view of the last output time to this PNG")
     a = p.parse_args(argv)
     if a.resolution < 3:
         p.error(f"--resolution must be at least 3, got {a.resolution}")
-    slices, surfaces = process(a.run, a.out, a.time, a.resolution)
+    try:
+        slices, surfaces = process(a.run, a.out, a.time, a.resolution)
+    except Refused as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     print(f"wrote {slices}" + (f" and {surfaces}" if surfaces else " (no solid: no surface)"))
-    shown = _show_in_paraview([slices, surfaces], a.screenshot)
-    if a.screenshot is not None:
-        if not shown:
-            print("--screenshot needs ParaView: run the script with pvpython", file=sys.stderr)
-            return 2
-        print(f"wrote {a.screenshot}")
-    return 0
+    layers = [(slices, ("CELLS", "velocity", "Magnitude"))]
+    if surfaces is not None:
+        layers.append((surfaces, ("POINTS", "pressure")))
+    # Looking at the section from -Y (its quads face that way), Z up, a little from above.
+    return show_in_paraview(layers, camera=(0.6, -3.0, 1.2), png=a.screenshot)
 
 
 if __name__ == "__main__":

@@ -41,10 +41,14 @@ class Simulation(_efsi.Simulation):
 
     def field(self, name):
         """The field ``name`` (``u``, ``v``, ``p``, ``density``, ``viscosity``,
-        ``solid_fraction``) as ``(values, x, y)``: ``values[j, i]`` at ``(x[i], y[j])``."""
-        data, rows, cols, x, y = self._field(name)
-        values = _np.frombuffer(data, dtype="<f8").reshape(rows, cols).copy()
-        return values, _np.asarray(x), _np.asarray(y)
+        ``solid_fraction``; ``w`` in a ``Cartesian3D`` scene) as ``(values, x, y)``:
+        ``values[j, i]`` at ``(x[i], y[j])``; in a ``Cartesian3D`` scene as
+        ``(values, x, y, z)``: ``values[k, j, i]`` at ``(x[i], y[j], z[k])``."""
+        data, shape, x, y, z = self._field(name)
+        values = _np.frombuffer(data, dtype="<f8").reshape(shape).copy()
+        if z is None:
+            return values, _np.asarray(x), _np.asarray(y)
+        return values, _np.asarray(x), _np.asarray(y), _np.asarray(z)
 
     def probes(self, frame=None):
         """The probe rows recorded so far — those of ``efsi run``'s ``probes.csv`` — as a

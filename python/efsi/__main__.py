@@ -23,24 +23,24 @@ def _value(text):
     return text
 
 
-def _positive_int(text):
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"`{text}` is not a whole number") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
-    return n
+def _checked(kind, noun, ok, rule):
+    """An argparse type: `text` read as `kind` (else "is not `noun`"), then refused unless
+    `ok(value)` ("must be `rule`, got TEXT")."""
+
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"`{text}` is not {noun}") from None
+        if not ok(value):
+            raise argparse.ArgumentTypeError(f"must be {rule}, got {text}")
+        return value
+
+    return parse
 
 
-def _time(text):
-    try:
-        t = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"`{text}` is not a number") from None
-    if not t >= 0 or t == float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite time ≥ 0, got {text}")
-    return t
+_positive_int = _checked(int, "a whole number", lambda n: n >= 1, "at least 1")
+_time = _checked(float, "a number", lambda t: t >= 0 and t != float("inf"), "a finite time ≥ 0")
 
 
 def _read_runs(path):

@@ -30,8 +30,8 @@
 //! naming the settings that differ, as `resume` refuses another run's checkpoint.
 
 use efsi_core::{
-    Advance, AdvanceError, Advanced, EfsiError, Flow, OverrideValue, Rollback, Scene, Simulation,
-    Snapshot, Stagger, StepInfo, due,
+    Advance, AdvanceError, Advanced, EfsiError, Flow, Grid, OverrideValue, Rollback, Scene,
+    Simulation, Snapshot, Stagger, StepInfo, due,
 };
 use efsi_run::SceneOverrides;
 use efsi_run::run::Schedule;
@@ -438,8 +438,19 @@ impl PySnapshot {
     }
 }
 
-/// A field's values (little-endian f64 bytes), rows, columns, x and y coordinates.
-type FieldData<'py> = (Bound<'py, PyBytes>, usize, usize, Vec<f64>, Vec<f64>);
+/// A grid coordinate along one axis by index: a face's ([`Grid::xf`]) or a cell centre's
+/// ([`Grid::xc`]).
+type Coordinate = fn(&Grid, isize) -> f64;
+
+/// A field's values (little-endian f64 bytes), their shape (`[rows, columns]`, or
+/// `[planes, rows, columns]` in three dimensions), and the x, y and z coordinates.
+type FieldData<'py> = (
+    Bound<'py, PyBytes>,
+    Vec<usize>,
+    Vec<f64>,
+    Vec<f64>,
+    Option<Vec<f64>>,
+);
 
 /// A running simulation of a scene (the stepping half of `efsi run`).
 #[pyclass(module = "efsi._efsi", name = "Simulation", subclass)]
@@ -592,23 +603,32 @@ impl PySimulation {
         })
     }
 
-    /// A field's interior values: `(values, rows, columns, x, y)` with `values` the
-    /// little-endian f64 bytes of a `rows × columns` array (row `j` is y), `x` and `y` the
-    /// coordinates where they live (cell centres; faces for `u` along x and `v` along y).
-    /// Names: `u`, `v`, `p`, `density`, `viscosity`, `solid_fraction`.
+    /// A field's interior values: `(values, shape, x, y, z)` with `values` the little-endian
+    /// f64 bytes of an array of `shape` — `[rows, columns]` (row `j` is y) on a
+    /// two-dimensional grid, `[planes, rows, columns]` (plane `k` is z) on a three-dimensional
+    /// one — and `x`, `y`, `z` the coordinates where they live (cell centres; faces for `u`
+    /// along x, `v` along y and `w` along z; `z` is None on a two-dimensional grid).
+    /// Names: `u`, `v`, `w` (three-dimensional grids), `p`, `density`, `viscosity`,
+    /// `solid_fraction`.
     fn _field<'py>(&self, py: Python<'py>, name: &str) -> PyResult<FieldData<'py>> {
         let d = self.lock()?;
         let (grid, state) = (&d.sim.grid, &d.sim.state);
         let (field, stagger) = match name {
             "u" => (Some(&state.u), Stagger::XFace),
             "v" => (Some(&state.v), Stagger::YFace),
+            "w" if grid.is_3d() => (state.w.as_ref(), Stagger::ZFace),
+            "w" => {
+                return Err(PyValueError::new_err(
+                    "unknown field `w`: the scene is two-dimensional (w exists in Cartesian3D scenes)",
+                ));
+            }
             "p" => (Some(&state.p), Stagger::Cell),
             "density" => (Some(&state.rho), Stagger::Cell),
             "viscosity" => (Some(&state.mu), Stagger::Cell),
             "solid_fraction" => (state.phi.as_ref(), Stagger::Cell),
             _ => {
                 return Err(PyValueError::new_err(format!(
-                    "unknown field `{name}`: expected one of u, v, p, density, viscosity, solid_fraction"
+                    "unknown field `{name}`: expected one of u, v, w, p, density, viscosity, solid_fraction"
                 )));
             }
         };
@@ -617,26 +637,28 @@ impl PySimulation {
                 "field `{name}`: the scene has no solid"
             )));
         };
-        let (ni, nj) = stagger.extent(grid.nx, grid.ny);
-        let mut bytes = Vec::with_capacity(8 * ni * nj);
-        for j in 0..nj as isize {
-            for i in 0..ni as isize {
-                bytes.extend_from_slice(&field[(i, j)].to_le_bytes());
+        let [ni, nj, nk] = stagger.extent3(grid);
+        let [oi, oj, ok] = stagger.nodal();
+        let mut bytes = Vec::with_capacity(8 * ni * nj * nk);
+        for k in 0..nk as isize {
+            for j in 0..nj as isize {
+                for i in 0..ni as isize {
+                    bytes.extend_from_slice(&field.data()[field.idx3([i, j, k])].to_le_bytes());
+                }
             }
         }
-        let x = (0..ni as isize)
-            .map(|i| match stagger {
-                Stagger::XFace | Stagger::Corner => grid.xf(i),
-                _ => grid.xc(i),
-            })
-            .collect();
-        let y = (0..nj as isize)
-            .map(|j| match stagger {
-                Stagger::YFace | Stagger::Corner => grid.yf(j),
-                _ => grid.yc(j),
-            })
-            .collect();
-        Ok((PyBytes::new(py, &bytes), nj, ni, x, y))
+        let axis = |n: usize, nodal: usize, face: Coordinate, centre: Coordinate| {
+            let at = if nodal == 1 { face } else { centre };
+            (0..n as isize).map(|i| at(grid, i)).collect::<Vec<f64>>()
+        };
+        let x = axis(ni, oi, Grid::xf, Grid::xc);
+        let y = axis(nj, oj, Grid::yf, Grid::yc);
+        let (shape, z) = if grid.is_3d() {
+            (vec![nk, nj, ni], Some(axis(nk, ok, Grid::zf, Grid::zc)))
+        } else {
+            (vec![nj, ni], None)
+        };
+        Ok((PyBytes::new(py, &bytes), shape, x, y, z))
     }
 
     /// The probe rows recorded so far (those `efsi run` writes to `probes.csv`): the column

@@ -6,31 +6,22 @@ efsi run the level set of its pressure carries the run's arrays, and bad request
 a screenshot of the surface, which must show it; where ParaView is not installed that test is
 skipped, saying so."""
 
-import importlib.util
-import math
-import os
-import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkRectilinearGrid
-from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkMassProperties
-from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLRectilinearGridWriter
+from vtkmodules.vtkIOXML import vtkXMLRectilinearGridWriter
 
-REPO = Path(__file__).resolve().parents[2]
-EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
-TOOL = REPO / "tools/paraview_contour.py"
+from efsi_test_support import EFSI, REPO
+from paraview_support import TOOLS, boundary_edges, read_surface, render_screenshot, sphere_volume_error
+
+import paraview_contour as tool  # noqa: E402 (from TOOLS, which paraview_support puts on the path)
+from efsi_vtk import read_pvd  # noqa: E402
+
+TOOL = TOOLS / "paraview_contour.py"
 R = 0.25  # the sphere's radius, centred in the unit box
-
-
-def load_tool():
-    spec = importlib.util.spec_from_file_location("paraview_contour", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def sphere_run(folder, n=32, centre=(0.5, 0.5, 0.5)):
@@ -67,41 +58,15 @@ def sphere_run(folder, n=32, centre=(0.5, 0.5, 0.5)):
     return folder
 
 
-def read_surface(path):
-    reader = vtkXMLPolyDataReader()
-    reader.SetFileName(str(path))
-    reader.Update()
-    return reader.GetOutput()
-
-
-def boundary_edges(surface):
-    edges = vtkFeatureEdges()
-    edges.SetInputData(surface)
-    edges.BoundaryEdgesOn()
-    edges.FeatureEdgesOff()
-    edges.ManifoldEdgesOff()
-    edges.NonManifoldEdgesOff()
-    edges.Update()
-    return edges.GetOutput().GetNumberOfCells()
-
-
 def test_the_sphere_surface_encloses_its_volume(tmp_path):
     run = sphere_run(tmp_path / "sphere")
-    tool = load_tool()
     collection = tool.process(run)
-    entries = tool.read_pvd(collection)
+    entries = read_pvd(collection)
     assert [t for t, _ in entries] == [0.0]
     surface = read_surface(entries[0][1])
     assert boundary_edges(surface) == 0, "the surface has holes"
     assert surface.GetPointData().GetArray("pressure") is not None, "arrays carried"
-    mass = vtkMassProperties()
-    mass.SetInputData(surface)
-    mass.Update()
-    exact = 4.0 / 3.0 * math.pi * R**3
-    volume = mass.GetVolume()
-    print(f"phi = 1/2 volume {volume:.6e} vs 4/3 pi R^3 = {exact:.6e} "
-          f"({100 * (volume / exact - 1):+.3f} %) at 8 cells per radius")
-    assert abs(volume / exact - 1.0) < 0.03
+    assert abs(sphere_volume_error(surface, R)) < 0.03  # at 8 cells per radius
     # Its points lie on the sphere, within a cell's diagonal fraction of R.
     points = vtk_to_numpy(surface.GetPoints().GetData()).astype(float)
     radius = np.linalg.norm(points - 0.5, axis=1)
@@ -115,7 +80,7 @@ def test_a_body_on_a_wall_is_cut_by_it(tmp_path):
     """A sphere centred on the face z = 0: the surface reaches the face (not half a cell above
     it), open there."""
     run = sphere_run(tmp_path / "wall", centre=(0.5, 0.5, 0.0))
-    surface = read_surface(load_tool().read_pvd(load_tool().process(run))[0][1])
+    surface = read_surface(read_pvd(tool.process(run))[0][1])
     z0 = surface.GetBounds()[4]
     assert z0 == 0.0, z0
     assert boundary_edges(surface) > 0
@@ -131,12 +96,12 @@ def test_command_line_on_an_efsi_run(tmp_path):
         .replace("nx: 32, ny: 32, nz: 32", "nx: 8, ny: 8, nz: 8"))
     subprocess.run([EFSI, "run", str(scene), "--set", "time.end=0.2", "--set",
                     "output.vtk_every=0.1", "--out", str(out), "-q"], check=True)
-    tool = [sys.executable, str(TOOL), str(out)]
-    r = subprocess.run(tool + ["--field", "pressure", "--level", "0.0", "--time", "0.2"],
+    command = [sys.executable, str(TOOL), str(out)]
+    r = subprocess.run(command + ["--field", "pressure", "--level", "0.0", "--time", "0.2"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "surface.pvd" in r.stdout
-    entries = load_tool().read_pvd(out / "contour/surface.pvd")
+    entries = read_pvd(out / "contour/surface.pvd")
     assert [t for t, _ in entries] == [0.2]
     surface = read_surface(entries[0][1])
     assert surface.GetNumberOfCells() > 0
@@ -151,7 +116,7 @@ def test_command_line_on_an_efsi_run(tmp_path):
         (["--field", "velocity"], "has 3 components"),
         (["--field", "pressure", "--level", "1e9"], "at no output time"),
     ]:
-        r = subprocess.run(tool + args, capture_output=True, text=True)
+        r = subprocess.run(command + args, capture_output=True, text=True)
         assert r.returncode == 2 and needle in r.stderr, r.stderr
     planar = tmp_path / "square"
     subprocess.run([EFSI, "run", str(REPO / "cases/lid_driven_cavity_re100.ron"), "--set",
@@ -166,35 +131,7 @@ def test_paraview_renders_the_surface(tmp_path):
     """ParaView itself, headless: `xvfb-run -a pvpython tools/paraview_contour.py RUN
     --screenshot` writes a screenshot of the sphere's surface (coloured by pressure) in the box's
     outline, which must show it."""
-    missing = [tool for tool in ("pvpython", "xvfb-run") if shutil.which(tool) is None]
-    if missing:
-        import pytest
-
-        pytest.skip(
-            f"ParaView is not installed here ({', '.join(missing)} not found): "
-            "apt-get install --no-install-recommends paraview python3-paraview xvfb xauth "
-            "(.ci/run installs it)"
-        )
     run = sphere_run(tmp_path / "sphere", n=24)
-    shot = tmp_path / "shot.png"
-    r = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "pvpython", str(TOOL),
-                        str(run), "--screenshot", str(shot)],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
-    assert f"wrote {shot}" in r.stdout, r.stdout + r.stderr
-    from vtkmodules.vtkIOImage import vtkPNGReader
-
-    reader = vtkPNGReader()
-    reader.SetFileName(str(shot))
-    reader.Update()
-    image = reader.GetOutput()
-    w, h, _ = image.GetDimensions()
-    assert (w, h) == (1000, 800)
-    rgb = vtk_to_numpy(image.GetPointData().GetScalars())[:, :3].astype(int)
-    packed = (rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]
-    background = np.bincount(packed).argmax()
-    drawn = np.mean(packed != background)
-    colours = len(np.unique(rgb, axis=0))
-    print(f"screenshot {shot}: {100 * drawn:.1f} % of the pixels drawn, {colours} colours")
+    drawn, colours = render_screenshot("paraview_contour.py", [run], tmp_path / "shot.png")
     # The sphere (about 5 % of the view, the outline alone under 1 %), shaded in many colours.
     assert drawn > 0.03 and colours > 50, (drawn, colours)

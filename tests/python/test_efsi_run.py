@@ -6,18 +6,16 @@ then reads `fields.pvd` and the `.vtr` files with `vtkXMLRectilinearGridReader`.
 """
 
 import csv
-import os
 import subprocess
-import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pytest
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLRectilinearGridReader
 
-REPO = Path(__file__).resolve().parents[2]
-EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
+import paraview_support  # noqa: F401 (puts tools/ on the path)
+from efsi_test_support import EFSI, REPO
+from efsi_vtk import output_times, read_vtr  # noqa: E402
+
 
 CAVITY = """Scene(
     name: "py_cavity",
@@ -53,23 +51,9 @@ def run(tmp_path, text, name):
     return out
 
 
-def read_vtr(path):
-    r = vtkXMLRectilinearGridReader()
-    r.SetFileName(str(path))
-    r.Update()
-    return r.GetOutput()
-
-
-def last_dataset(out):
-    root = ET.parse(out / "fields.pvd").getroot()
-    sets = root.findall("./Collection/DataSet")
-    assert sets, "empty collection"
-    return [(float(s.get("timestep")), out / s.get("file")) for s in sets]
-
-
 def test_planar_run_round_trips(tmp_path):
     out = run(tmp_path, CAVITY, "cavity")
-    sets = last_dataset(out)
+    sets = output_times(out)
     assert [t for t, _ in sets] == [0.0, 0.25, 0.5]
     g = read_vtr(sets[-1][1])
     assert g.GetDimensions() == (13, 25, 1)
@@ -102,7 +86,7 @@ def test_planar_run_round_trips(tmp_path):
 
 def test_axisymmetric_slice_in_xz_plane_holds_hagen_poiseuille(tmp_path):
     out = run(tmp_path, PIPE, "pipe")
-    g = read_vtr(last_dataset(out)[-1][1])
+    g = read_vtr(output_times(out)[-1][1])
     assert g.GetDimensions() == (17, 1, 5), "r–z slice lies in the X–Z plane"
     x = vtk_to_numpy(g.GetXCoordinates())
     assert x[0] == 0.0 and abs(x[-1] - 1.0) < 1e-15
@@ -123,7 +107,7 @@ def test_elastic_run_writes_the_deformation_tensor(tmp_path):
     text = text.replace("ny: 64", "ny: 16").replace("end: 4.8", "end: 0.5").replace("vtk_every: 0.4", "vtk_every: 0.5")
     text = text.replace("at: [0.5, 1.0, 2.0, 2.8, 4.0, 4.8]", "at: [0.5]")
     out = run(tmp_path, text.replace('name: "oscillating_couette"', 'name: "py_couette"'), "couette")
-    sets = last_dataset(out)
+    sets = output_times(out)
     b0 = vtk_to_numpy(read_vtr(sets[0][1]).GetCellData().GetArray("B")).reshape(16, 4, 6)
     assert np.all(b0[:8] == np.array([1, 1, 1, 0, 0, 0]))
     assert np.all(b0[8:] == 0.0)

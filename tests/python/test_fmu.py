@@ -1,7 +1,8 @@
 """The efsi FMUs (FMI 2.0 and FMI 3.0 Co-Simulation) in fmpy and in Ecos.
 
 `cargo xtask test` builds them first (`cargo xtask fmu …`) into `$EFSI_FMU_DIR` (the sphere
-impact, the oscillating Couette flow, the disk in a cavity); the `efsi` binary is `$EFSI_BIN`.
+impact, the oscillating Couette flow, the disk in a cavity, the 3-D drop); the `efsi` binary is
+`$EFSI_BIN`.
 The sphere runs here mostly on a coarse grid (14 x 28 cells, 6 cells per radius) with the
 sphere released 6 mm above the substrate, so that it hits within 5 ms; communication steps are
 powers of two (2^-10 s), so that the times fmpy computes and efsi's output times are the same
@@ -779,3 +780,30 @@ def test_scene_fmu_reference_results_are_reproduced(model, suffix):
     for name in ["time"] + outputs:
         want = np.array([float(row[name]) for row in ref])
         assert np.array_equal(r[name], want), f"{name} differs from fmu/compat/{model}/{model}_ref.csv"
+
+
+@pytest.mark.parametrize("fmu", ["falling_drop_3d.fmu", "falling_drop_3d_fmi3.fmu"])
+def test_a_three_dimensional_drop_fmu_equals_efsi_run(fmu, ecos, tmp_path):
+    """`cargo xtask fmu cases/falling_drop_3d.ron --parameter grid.nx --parameter grid.ny
+    --parameter grid.nz`: the 3-D drop (two symmetry planes) at 8 x 16 x 8 cells, every probe
+    column (solid_z and solid_w among them) bit for bit `efsi run --set` of the same scene with
+    its probes at the communication points, in fmpy and in Ecos."""
+    h, n = 2.0**-5, 8  # 0.25 s, four fixed steps per communication step
+    path = FMU_DIR / fmu
+    grid = {"grid.nx": 8, "grid.ny": 16, "grid.nz": 8}
+    outputs = ["solid_volume", "solid_x", "solid_y", "solid_z", "solid_u", "solid_v", "solid_w",
+               "max_divergence"]
+    r = simulate_fmu(path, stop_time=n * h, output_interval=h, start_values=grid,
+                     output=outputs + ["steps"])
+    p = efsi_run_case(tmp_path, "falling_drop_3d",
+                      [("probe_every: 0.03125,", f"probe_every: {h!r},"),
+                       ("end: 1.0,", f"end: {n * h!r},")],
+                      sets=[f"{k}={v}" for k, v in grid.items()])
+    assert list(p) == ["t"] + outputs
+    assert np.array_equal(r["time"], p["t"])
+    for name in outputs:
+        assert np.array_equal(r[name], p[name]), name
+    assert list(r["steps"]) == [4 * k for k in range(n + 1)]
+    assert r["solid_v"][-1] < -0.1  # the drop falls
+    in_ecos = ecos_scene(ecos, path, h, n, grid, lambda k: {}, outputs)
+    assert in_ecos == [tuple(r[o][k] for o in outputs) for k in range(1, n + 1)]

@@ -250,6 +250,58 @@ def test_the_same_bits_as_efsi_run(tmp_path):
     assert rows["contact_force"].max() > 0.0 and rows["solid_v"][-1] > rows["solid_v"].min()
 
 
+def test_a_three_dimensional_scene_gives_w_z_and_the_same_bits_as_efsi_run(tmp_path):
+    """The 3-D drop (cases/falling_drop_3d.ron, two symmetry planes) at 2 cells per radius,
+    by `efsi run --set` and by the package with the same overrides: every probe value
+    identical; the fields come as [k, j, i] with their z coordinates, `w` among them; a
+    snapshot rewinds the 3-D state bit for bit."""
+    drop = REPO / "cases/falling_drop_3d.ron"
+    sets = {"grid.nx": 8, "grid.ny": 16, "grid.nz": 8, "time.end": 0.25}
+    out = tmp_path / "run"
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
+    subprocess.run([EFSI, "run", str(drop), *args, "--out", str(out), "-q"], check=True,
+                   stdout=subprocess.DEVNULL)
+    header, values = read_probes(out / "probes.csv")
+    scene = efsi.Scene.load(drop)
+    for k, v in sets.items():
+        scene.set(k, v)
+    assert scene.get("grid.nz") == 8
+    sim = efsi.Simulation(scene)
+    sim.advance_to(0.125)
+    snap = sim.snapshot()
+    assert sim.advance_to(sim.end)
+    rows = sim.probes(frame=False)
+    assert list(rows) == header
+    assert {"solid_z", "solid_w"} <= set(header)
+    mine = np.column_stack([rows[c] for c in header])
+    assert mine.shape == values.shape and mine.shape[0] == 9
+    assert np.array_equal(mine, values)
+    assert json.loads((out / "run.json").read_text())["steps"] == sim.steps == 32
+    # The drop falls (v < 0); x and z are alike but for the order of the directional splits.
+    assert rows["solid_v"][-1] < -0.1
+    assert rows["solid_x"][-1] == pytest.approx(rows["solid_z"][-1], rel=1e-6)
+    # Fields: cells are 0.25 wide; w lives on z faces, 0 on the symmetry plane z = 0 and on the
+    # no-slip wall z = 2; the drop's downflow drags fluid round it, so w is not 0 inside.
+    w, x, y, z = sim.field("w")
+    assert w.shape == (9, 16, 8) and (x.shape, y.shape, z.shape) == ((8,), (16,), (9,))
+    np.testing.assert_allclose(x, (np.arange(8) + 0.5) / 4, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(z, np.linspace(0.0, 2.0, 9), rtol=0, atol=1e-15)
+    assert np.all(w[0] == 0.0) and np.all(w[-1] == 0.0) and np.abs(w[1:-1]).max() > 1e-3
+    u, _, _, zu = sim.field("u")
+    assert u.shape == (8, 16, 9) and np.all(u[:, :, 0] == 0.0)
+    np.testing.assert_allclose(zu, (np.arange(8) + 0.5) / 4, rtol=0, atol=1e-15)
+    phi = sim.field("solid_fraction")[0]
+    assert phi.shape == (8, 16, 8)
+    assert phi.sum() * 0.25**3 == pytest.approx(rows["solid_volume"][-1], rel=1e-12)
+    # x and z mirror each other (to the splitting's order): phi(i, j, k) = phi(k, j, i).
+    np.testing.assert_allclose(phi, phi.transpose(2, 1, 0), rtol=0, atol=1e-5)
+    w_end, p_end = w, sim.field("p")[0]
+    sim.restore(snap)
+    assert sim.time == 0.125
+    sim.advance_to(sim.end)
+    assert np.array_equal(sim.field("w")[0], w_end) and np.array_equal(sim.field("p")[0], p_end)
+
+
 CHILD = textwrap.dedent(
     """
     import math, signal, sys, time

@@ -5,29 +5,21 @@ Then ParaView itself (`xvfb-run -a pvpython`, headless) runs the script on a sho
 saves a screenshot of the revolved surface, which must show it; where ParaView is not installed
 that test is skipped, saying so."""
 
-import importlib.util
-import math
-import os
-import shutil
 import subprocess
-from pathlib import Path
+import sys
 
 import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkMassProperties
-from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
+from efsi_test_support import EFSI, REPO
+from paraview_support import TOOLS, boundary_edges, read_surface, render_screenshot, sphere_volume_error
 
-REPO = Path(__file__).resolve().parents[2]
-EFSI = os.environ.get("EFSI_BIN", str(REPO / "target/debug/efsi"))
+import paraview_revolve as tool  # noqa: E402 (from TOOLS, which paraview_support puts on the path)
+from efsi_vtk import read_pvd  # noqa: E402
+
+TOOL = TOOLS / "paraview_revolve.py"
 R = 0.0192  # cases/sphere_impact.ron
-
-
-def load_tool():
-    spec = importlib.util.spec_from_file_location("paraview_revolve",
-                                                  REPO / "tools/paraview_revolve.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_revolved_sphere_encloses_its_volume(tmp_path):
@@ -36,40 +28,21 @@ def test_revolved_sphere_encloses_its_volume(tmp_path):
     subprocess.run([EFSI, "run", str(REPO / "cases/sphere_impact.ron"), "--refine",
                     str(15 / 35), "--set", "time.end=0.0005", "--out", str(out), "-q"],
                    check=True)
-    tool = load_tool()
     slices, surfaces = tool.process(out, tmp_path / "revolved", time=0.0, resolution=128)
-    entries = tool.read_pvd(surfaces)
+    entries = read_pvd(surfaces)
     assert [t for t, _ in entries] == [0.0]
 
-    reader = vtkXMLPolyDataReader()
-    reader.SetFileName(str(entries[0][1]))
-    reader.Update()
-    surface = reader.GetOutput()
+    surface = read_surface(entries[0][1])
     assert surface.GetPointData().GetArray("pressure") is not None, "arrays carried"
-    # Closed: no boundary edges.
-    edges = vtkFeatureEdges()
-    edges.SetInputData(surface)
-    edges.BoundaryEdgesOn()
-    edges.FeatureEdgesOff()
-    edges.ManifoldEdgesOff()
-    edges.NonManifoldEdgesOff()
-    edges.Update()
-    assert edges.GetOutput().GetNumberOfCells() == 0, "the revolved surface has holes"
-    mass = vtkMassProperties()
-    mass.SetInputData(surface)
-    mass.Update()
-    exact = 4.0 / 3.0 * math.pi * R**3
-    volume = mass.GetVolume()
-    print(f"revolved phi = 1/2 volume {volume:.6e} m^3 vs 4/3 pi R^3 = {exact:.6e} "
-          f"({100 * (volume / exact - 1):+.3f} %)")
-    assert abs(volume / exact - 1.0) < 0.02
+    assert boundary_edges(surface) == 0, "the revolved surface has holes"
+    assert abs(sphere_volume_error(surface, R)) < 0.02
     # The extent is the sphere's: radius R about the axis.
     x0, x1, y0, y1, z0, z1 = surface.GetBounds()
     assert abs(x1 - R) < 0.05 * R and abs(x0 + R) < 0.05 * R and abs(y1 - R) < 0.05 * R
 
     # The mirrored slice covers r in [-0.045, 0.045] with the cell data.
     reader = vtkXMLUnstructuredGridReader()
-    reader.SetFileName(str(tool.read_pvd(slices)[0][1]))
+    reader.SetFileName(str(read_pvd(slices)[0][1]))
     reader.Update()
     grid = reader.GetOutput()
     bx0, bx1 = grid.GetBounds()[:2]
@@ -77,8 +50,6 @@ def test_revolved_sphere_encloses_its_volume(tmp_path):
     assert grid.GetCellData().GetArray("solid_fraction") is not None
     assert grid.GetNumberOfCells() == 2 * 35 * 70
     # Every quad faces -Y, the mirrored ones too: (p1 - p0) x (p3 - p0) along -Y.
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-
     points = vtk_to_numpy(grid.GetPoints().GetData()).astype(float)
     quads = vtk_to_numpy(grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
     p0, p1, p3 = points[quads[:, 0]], points[quads[:, 1]], points[quads[:, 3]]
@@ -99,12 +70,11 @@ def test_command_line(tmp_path):
     out = tmp_path / "sphere"
     subprocess.run([EFSI, "run", str(REPO / "cases/sphere_impact.ron"), "--refine", "0.2",
                     "--set", "time.end=0.0005", "--out", str(out), "-q"], check=True)
-    import sys
-    r = subprocess.run([sys.executable, str(REPO / "tools/paraview_revolve.py"), str(out),
+    r = subprocess.run([sys.executable, str(TOOL), str(out),
                         "--resolution", "16"], capture_output=True, text=True, check=True)
     assert "surface.pvd" in r.stdout, r.stdout
     assert (out / "revolved/slice.pvd").is_file() and (out / "revolved/surface.pvd").is_file()
-    bad = subprocess.run([sys.executable, str(REPO / "tools/paraview_revolve.py"), str(out),
+    bad = subprocess.run([sys.executable, str(TOOL), str(out),
                           "--resolution", "2"], capture_output=True, text=True)
     assert bad.returncode == 2 and "--resolution must be at least 3" in bad.stderr
 
@@ -113,39 +83,11 @@ def test_paraview_renders_the_revolved_sphere(tmp_path):
     """ParaView itself, headless: `xvfb-run -a pvpython tools/paraview_revolve.py RUN
     --screenshot` on a short sphere run writes a screenshot of the revolved phi = 1/2 surface
     (coloured by pressure) over the mirrored section, which must show the sphere."""
-    missing = [tool for tool in ("pvpython", "xvfb-run") if shutil.which(tool) is None]
-    if missing:
-        import pytest
-
-        pytest.skip(
-            f"ParaView is not installed here ({', '.join(missing)} not found): "
-            "apt-get install --no-install-recommends paraview python3-paraview xvfb xauth "
-            "(.ci/run installs it)"
-        )
     out = tmp_path / "sphere"
     subprocess.run([EFSI, "run", str(REPO / "cases/sphere_impact.ron"), "--refine", "0.3",
                     "--set", "time.end=0.001", "--out", str(out), "-q"], check=True)
-    shot = tmp_path / "shot.png"
-    r = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "pvpython",
-                        str(REPO / "tools/paraview_revolve.py"),
-                        str(out), "--resolution", "48", "--screenshot", str(shot)],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
-    assert f"wrote {shot}" in r.stdout, r.stdout + r.stderr
+    drawn, colours = render_screenshot("paraview_revolve.py", [out, "--resolution", "48"],
+                                       tmp_path / "shot.png")
     assert (out / "revolved/surface.pvd").is_file()
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkIOImage import vtkPNGReader
-
-    reader = vtkPNGReader()
-    reader.SetFileName(str(shot))
-    reader.Update()
-    image = reader.GetOutput()
-    w, h, _ = image.GetDimensions()
-    assert (w, h) == (1000, 800)
-    rgb = vtk_to_numpy(image.GetPointData().GetScalars())[:, :3].astype(int)
-    background = np.bincount((rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]).argmax()
-    drawn = np.mean(((rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]) != background)
-    colours = len(np.unique(rgb, axis=0))
-    print(f"screenshot {shot}: {100 * drawn:.1f} % of the pixels drawn, {colours} colours")
     # The section and the sphere fill a good part of the view, shaded in many colours.
     assert drawn > 0.05 and colours > 50, (drawn, colours)

@@ -21,6 +21,9 @@ from vtkmodules.vtkCommonCore import vtkCommand, vtkDoubleArray, vtkFloatArray
 from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
 from vtkmodules.vtkIOXML import vtkXMLRectilinearGridReader
 
+import paraview_support  # noqa: F401 (puts tools/ on the path)
+from efsi_vtk import VtkEvents  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -40,19 +43,9 @@ def expected(fixture_dir):
     return json.loads((fixture_dir / "expected.json").read_text())
 
 
-class ErrorCatcher:
-    """Collects VTK error and warning events, which VTK otherwise only prints."""
-
-    def __init__(self):
-        self.messages = []
-
-    def __call__(self, obj, event):
-        self.messages.append(f"{event} from {obj.GetClassName()}")
-
-
 def read_vtr(path):
     reader = vtkXMLRectilinearGridReader()
-    catcher = ErrorCatcher()
+    catcher = VtkEvents()
     reader.AddObserver(vtkCommand.ErrorEvent, catcher)
     reader.AddObserver(vtkCommand.WarningEvent, catcher)
     reader.SetFileName(str(path))

@@ -50,6 +50,47 @@ const DISK: &str = r#"Scene(
 )
 "#;
 
+/// A lid-driven cube on a coarse grid: the three velocity components, profiles and VTK in 3-D.
+const CUBE: &str = r#"Scene(
+    name: "cube",
+    geometry: Cartesian3D,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (0.0, 1.0)),
+    grid: (nx: 8, ny: 8, nz: 8),
+    time: (end: 0.3, cfl: 0.5),
+    fluid: (density: 1.0, viscosity: 0.01),
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: MovingWall(speed: 1.0),
+                 z_min: NoSlip, z_max: NoSlip),
+    output: (
+        vtk_every: 0.1,
+        probe_every: 0.02,
+        probes: [Point(name: "w_c", field: "w", at: (0.5, 0.5, 0.25)), KineticEnergy, MaxDivergence],
+        profiles: [Line(name: "u", from: (0.5, 0.0, 0.5), to: (0.5, 1.0, 0.5), points: 9, fields: ["u", "w"])],
+    ),
+)
+"#;
+
+/// A drop (a solid without a law) falling in a quarter box with two symmetry planes: the VOF
+/// stage and the solid probes in 3-D.
+const DROP: &str = r#"Scene(
+    name: "drop",
+    geometry: Cartesian3D,
+    domain: (x: (0.0, 1.0), y: (0.0, 2.0), z: (0.0, 1.0)),
+    grid: (nx: 6, ny: 12, nz: 6),
+    time: (end: 0.25, fixed_dt: 0.0078125),
+    fluid: (density: 1e-3, viscosity: 2e-4),
+    numerics: (projection: (tolerance: 1e-8)),
+    gravity: (0.0, -1.0, 0.0),
+    solid: (shape: Sphere(center: (0.0, 1.5, 0.0), radius: 0.4), density: 1.0, viscosity: 1e-2),
+    boundaries: (x_min: Symmetry, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip,
+                 z_min: Symmetry, z_max: NoSlip),
+    output: (
+        vtk_every: 0.125,
+        probe_every: 0.03125,
+        probes: [SolidVolume, SolidCentroid, SolidVelocity, MaxDivergence],
+    ),
+)
+"#;
+
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("efsi-ckpt-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -179,6 +220,16 @@ fn a_resumed_cavity_run_is_bit_identical_to_an_uninterrupted_one() {
 #[test]
 fn a_resumed_fluid_structure_run_is_bit_identical_to_an_uninterrupted_one() {
     check_resumed_run("disk", DISK, 17, 30);
+}
+
+#[test]
+fn a_resumed_3d_cavity_run_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("cube", CUBE, 9, 15);
+}
+
+#[test]
+fn a_resumed_3d_drop_run_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("drop", DROP, 13, 32);
 }
 
 #[test]

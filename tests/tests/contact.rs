@@ -30,7 +30,7 @@ fn contact_probes_are_exactly_zero_before_touch_down_and_after_lift_off() {
         let row_max = (0..sim.grid.nx as isize).fold(0.0f64, |m, i| m.max(phi[(i, 0)]));
         rows.push((
             sim.state.t,
-            solid_extent(&sim.grid, &sim.state, 0.0).0,
+            solid_extent(&sim.grid, &sim.state, 0.0, 0.0).0,
             row_max,
             contact_force(&sim.grid, &sim.state, sim.pipeline().outputs(), Side::YMin),
             contact_radius(&sim.grid, &sim.state, sim.pipeline().outputs(), Side::YMin),

@@ -2,6 +2,7 @@
 //! solids run at the flow's time step thanks to the implicit elastic term, and scenes without a
 //! solid carry none of it.
 
+use efsi_core::operators;
 use efsi_core::scene::Options;
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{BoundarySet, Grid, Scene, Simulation, StageError, StageStats, State, StepContext};
@@ -323,10 +324,9 @@ fn stiff_solid_runs_at_the_flow_time_step_only_with_the_implicit_term() {
     let bound = 0.5 * 0.0625;
     run_until(&mut s, 2.0, |s, dt| {
         dts.push(dt);
-        energy.push(efsi_stages::ops::kinetic_energy(
+        energy.push(operators::kinetic_energy(
             &s.grid,
-            &s.state.u,
-            &s.state.v,
+            &s.state.velocity(),
             &s.state.rho,
         ));
     });
@@ -349,10 +349,9 @@ fn stiff_solid_runs_at_the_flow_time_step_only_with_the_implicit_term() {
             outcome = Err(e.to_string());
             break;
         }
-        emax = emax.max(efsi_stages::ops::kinetic_energy(
+        emax = emax.max(operators::kinetic_energy(
             &s.grid,
-            &s.state.u,
-            &s.state.v,
+            &s.state.velocity(),
             &s.state.rho,
         ));
         if emax > bound {
@@ -428,11 +427,11 @@ fn saint_venant_kirchhoff_sphere_keeps_its_energy_bounded() {
     scene.time.dt_max = Some(2e-4);
     let mut s = efsi_run::simulation(scene, &path, &efsi_stages::builtin())
         .unwrap_or_else(|e| panic!("{e}"));
-    let g = s.scene.gravity.planar();
+    let g = s.scene.gravity.xyz();
     let energies = |s: &Simulation| {
         (
-            efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho),
-            efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, g),
+            operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho),
+            operators::potential_energy(&s.grid, &s.state.rho, g),
         )
     };
     let (ke0, pe0) = energies(&s);
@@ -497,11 +496,11 @@ fn map_sphere(g: f64, coupling: &str, end: f64, extra: &[(&str, &str)]) -> Simul
 /// the potential energy released), and its vertical velocity at the end.
 fn impact(g: f64, coupling: &str, extra: &[(&str, &str)]) -> (u64, f64, f64, f64) {
     let mut s = map_sphere(g, coupling, 0.016, extra);
-    let gv = s.scene.gravity.planar();
+    let gv = s.scene.gravity.xyz();
     let energy = |s: &Simulation| {
         (
-            efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
-                + efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv),
+            operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho)
+                + operators::potential_energy(&s.grid, &s.state.rho, gv),
             s.state
                 .resources
                 .get::<efsi_stages::elastic::Deformation>()
@@ -509,11 +508,11 @@ fn impact(g: f64, coupling: &str, extra: &[(&str, &str)]) -> (u64, f64, f64, f64
         )
     };
     let (m0, e0) = energy(&s);
-    let ke0 = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
-    let pe0 = efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv);
+    let ke0 = operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho);
+    let pe0 = operators::potential_energy(&s.grid, &s.state.rho, gv);
     let (mut release, mut gain) = (0.0f64, f64::MIN);
     run_until(&mut s, 0.016, |s, _| {
-        let pe = efsi_stages::ops::potential_energy(&s.grid, &s.state.rho, gv);
+        let pe = operators::potential_energy(&s.grid, &s.state.rho, gv);
         release = release.max(pe0 - pe);
         gain = gain.max(energy(s).0 - m0);
     });
@@ -642,7 +641,7 @@ fn coupled_step_with_the_stress_at_its_theta_keeps_more_of_an_impact() {
 
 /// The solid's strain energy over the whole domain's kinetic energy.
 fn strain_share(s: &Simulation) -> f64 {
-    let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+    let ke = operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho);
     let ee = s
         .state
         .resources
@@ -728,7 +727,7 @@ fn spin(scene: efsi_core::Scene) -> (u64, f64, f64, f64) {
         strain = strain.max(strain_share(s));
         drift = drift.max((volume(s) - v0).abs() / v0);
     });
-    let ke = efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho);
+    let ke = operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho);
     (s.state.step, ke, strain, drift)
 }
 

@@ -99,6 +99,16 @@ fn stability_quick() {
 }
 
 #[test]
+fn extruded_cavity_quick() {
+    quick("extruded_cavity");
+}
+
+#[test]
 fn falling_drop_3d_quick() {
     quick("falling_drop_3d");
+}
+
+#[test]
+fn vof_transport_3d_quick() {
+    quick("vof_transport_3d");
 }

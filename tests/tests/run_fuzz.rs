@@ -142,7 +142,7 @@ fn probe() -> BoxedStrategy<ProbeSpec> {
         1 => Just(ProbeSpec::ElasticEnergy),
         1 => side.clone().prop_map(|wall| ProbeSpec::ContactForce { wall }),
         1 => side.prop_map(|wall| ProbeSpec::ContactRadius { wall }),
-        1 => num(-0.1, 1.1).prop_map(|at| ProbeSpec::SolidExtent { at }),
+        1 => num(-0.1, 1.1).prop_map(|at| ProbeSpec::SolidExtent { at, z: None }),
     ]
     .boxed()
 }

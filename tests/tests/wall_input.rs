@@ -87,7 +87,7 @@ fn a_lid_speed_changed_between_steps_acts_from_the_next_step() {
     advance(&mut a, 0.4);
     advance(&mut b, 0.4);
     let ke = |s: &Simulation| {
-        efsi_stages::ops::kinetic_energy(&s.grid, &s.state.u, &s.state.v, &s.state.rho)
+        efsi_core::operators::kinetic_energy(&s.grid, &s.state.velocity(), &s.state.rho)
     };
     assert!(ke(&b) > 3.0 * ke(&a), "{} vs {}", ke(&b), ke(&a));
 }

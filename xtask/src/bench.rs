@@ -11,7 +11,9 @@ use std::process::Command;
 /// Δt = 0.5/N), optionally suffixed `-ic` for the IC(0) pressure preconditioner and/or `-vmg`
 /// for the block-multigrid viscous preconditioner; or `sphere`, the sphere impact of
 /// `cases/sphere_impact.ron` (35 cells per radius, 82 × 164, the whole run; `--quick` until
-/// t = 0.03), suffix `-ej` for the Jacobi-preconditioned elastic step.
+/// t = 0.03), suffix `-ej` for the Jacobi-preconditioned elastic step; or, in three dimensions,
+/// `cube<N>` (the Re = 1000 lid-driven cube on N³, a fixed number of steps from rest) and
+/// `drop3d` (`cases/falling_drop_3d.ron`, the whole run; `--quick` until t = 0.25).
 struct Case {
     name: String,
     scene: String,
@@ -22,17 +24,28 @@ struct Case {
     /// The stages this case runs with the block-multigrid preconditioner (their roofline
     /// model differs).
     block_multigrid: &'static [&'static str],
+    /// Whether the scene is three-dimensional (the stages' roofline models differ).
+    three_d: bool,
 }
 
 fn case(name: &str, quick: bool) -> Result<Case, String> {
     let bad = || {
         format!(
-            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; or sphere, \
-             optionally -ej"
+            "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; sphere, \
+             optionally -ej; cube<N> or drop3d"
         )
     };
     if let Some(rest) = name.strip_prefix("sphere") {
         return sphere_case(name, rest, quick).ok_or_else(bad)?;
+    }
+    if name == "drop3d" {
+        return drop3d_case(quick);
+    }
+    if let Some(n) = name.strip_prefix("cube") {
+        return match n.parse::<usize>() {
+            Ok(n) if n >= 8 => Ok(cube_case(name, n, quick)),
+            _ => Err(bad()),
+        };
     }
     // Suffixes: -ic (IC(0) pressure preconditioner), -vmg (block multigrid for the viscous
     // step instead of the default Jacobi).
@@ -73,6 +86,7 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
         } else {
             &[]
         },
+        three_d: false,
     })
 }
 
@@ -107,7 +121,65 @@ fn sphere_case(name: &str, rest: &str, quick: bool) -> Option<Result<Case, Strin
         } else {
             &[]
         },
+        three_d: false,
     }))
+}
+
+/// The shipped three-dimensional drop (`cases/falling_drop_3d.ron`, 32 × 64 × 32 cells on a
+/// quarter of the box, Δt = 1/128), its whole run t ∈ [0, 1] (quick: [0, 0.25]), its fields
+/// written only at the end. The scene unedited, changed by overrides.
+fn drop3d_case(quick: bool) -> Result<Case, String> {
+    let path = root().join("cases/falling_drop_3d.ron");
+    let scene = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let end = if quick { 0.25 } else { 1.0 };
+    Ok(Case {
+        name: "drop3d".into(),
+        scene,
+        sets: vec![format!("time.end={end}"), format!("output.vtk_every={end}")],
+        drop: true,
+        cells: 32 * 64 * 32,
+        block_multigrid: &[],
+        three_d: true,
+    })
+}
+
+/// Steps of the cube benchmark (quick: a quarter).
+const CUBE_STEPS: usize = 40;
+
+/// The Re = 1000 lid-driven cube on `n`³ from rest (an impulsive start: a developed state of
+/// the cube takes ~10⁴ steps at 64³, longer than the bench), [`CUBE_STEPS`] steps of the fixed
+/// Δt = ½h (Courant number ½ at the lid's speed; quick: a quarter of the steps), the default
+/// solvers (multigrid pressure, Jacobi viscous step).
+fn cube_case(name: &str, n: usize, quick: bool) -> Case {
+    let dt = 0.5 / n as f64;
+    let steps = if quick { CUBE_STEPS / 4 } else { CUBE_STEPS };
+    let scene = format!(
+        r#"// Lid-driven cube, Re = 1000, from rest (cargo xtask bench).
+Scene(
+    name: "{name}",
+    geometry: Cartesian3D,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (0.0, 1.0)),
+    grid: (nx: {n}, ny: {n}, nz: {n}),
+    time: (end: {end:e}, fixed_dt: {dt:e}),
+    fluid: (density: 1.0, viscosity: 0.001),
+    boundaries: (
+        x_min: NoSlip, x_max: NoSlip,
+        y_min: NoSlip, y_max: MovingWall(speed: 1.0),
+        z_min: NoSlip, z_max: NoSlip,
+    ),
+)
+"#,
+        end = dt * steps as f64
+    );
+    Case {
+        name: name.to_string(),
+        scene,
+        sets: Vec::new(),
+        drop: false,
+        cells: n * n * n,
+        block_multigrid: &[],
+        three_d: true,
+    }
 }
 
 /// The axisymmetric drop on `n`², t ∈ [0, 1] (quick: [0, 0.25]), Δt = 0.5/n.
@@ -274,9 +346,9 @@ fn parse(args: &[String]) -> Result<Request, String> {
     )?;
     let names = value("--cases").unwrap_or_else(|| {
         if quick {
-            "cavity128,drop128".into()
+            "cavity128,drop128,cube64,drop3d".into()
         } else {
-            "cavity128,cavity256,drop128,drop256,sphere".into()
+            "cavity128,cavity256,drop128,drop256,sphere,cube64,drop3d".into()
         }
     });
     let cases = names
@@ -363,7 +435,8 @@ fn roofline_json(
     rows: &mut Vec<RoofRow>,
 ) -> serde_json::Value {
     let bytes = |n: &String, it: f64| {
-        roofline::model(n, c.block_multigrid.contains(&n.as_str())).map(|m| roofline::bytes(m, it))
+        roofline::model(n, c.block_multigrid.contains(&n.as_str()), c.three_d)
+            .map(|m| roofline::bytes(m, it))
     };
     let mut row = |stage: &str, ns: f64, b: f64| {
         let bw = b / (ns * 1e-9);
@@ -512,7 +585,7 @@ fn write_json(req: &Request, cases: Vec<serde_json::Value>) -> Result<(), String
         "quick": req.quick,
         "threads": req.pools,
         "roofline_models": roofline::MODELS.iter().map(|m| serde_json::json!({
-            "stage": m.stage, "block_multigrid": m.block_multigrid,
+            "stage": m.stage, "block_multigrid": m.block_multigrid, "three_d": m.three_d,
             "values_per_cell_step": m.fixed,
             "values_per_cell_and_iteration": m.per_iteration, "passes": m.passes,
         })).collect::<Vec<_>>(),
@@ -577,6 +650,8 @@ mod tests {
             "drop256",
             "drop128-ic-vmg",
             "sphere-ej",
+            "cube64",
+            "drop3d",
         ] {
             case(name, false).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
@@ -592,6 +667,13 @@ mod tests {
             case("sphere-ej", false).unwrap().sets,
             ["numerics.elastic.preconditioner=Jacobi"]
         );
-        assert!(case("sphere-x", false).is_err() && case("cube128", false).is_err());
+        assert!(case("sphere-x", false).is_err() && case("cube4", false).is_err());
+        // The 3-D drop is the shipped scene with overrides; the cube takes its steps at ½h.
+        let d = case("drop3d", true).unwrap();
+        assert!(d.three_d && d.drop && d.cells == 32 * 64 * 32);
+        assert_eq!(d.sets, ["time.end=0.25", "output.vtk_every=0.25"]);
+        let c = case("cube64", false).unwrap();
+        assert!(c.three_d && c.cells == 64 * 64 * 64);
+        assert!(c.scene.contains("fixed_dt: 7.8125e-3") && c.scene.contains("end: 3.125e-1"));
     }
 }

@@ -12,12 +12,16 @@
 //!
 //! **The traffic** of a stage is a model of its *compulsory* memory traffic per cell and step:
 //! each array the stage's kernels must stream counted once per pass, 8 bytes per value, a
-//! velocity-like vector counted as two values per cell (one u- and one v-face). A stage's bytes
+//! velocity-like vector counted as one value per component and cell (u-, v- and, in three
+//! dimensions, w-faces), a symmetric tensor's edge components likewise. A stage's bytes
 //! per cell-step are `8 (F + I·k)` with `F` the values streamed once per step, `I` those streamed
 //! per solver iteration and `k` the measured iterations per step ([`MODELS`] states `F` and `I`
 //! for each stage, with the passes they count; the viscous and elastic stages have a second
 //! model for the block-multigrid preconditioner, which the bench picks for the cases that use
-//! it). Anything a kernel reads twice from memory, or
+//! it; a three-dimensional scene's stages have their own models, which count the third
+//! velocity component, the six-coefficient operators, the seven-point pressure stencil with
+//! its coarsening by eight and the full-grid flux arrays of the third axis). Anything a kernel
+//! reads twice from memory, or
 //! stencils whose neighbours miss the cache, is traffic the model does not count: the achieved
 //! bandwidth `bytes / time` is a lower bound, and its fraction of the triad bandwidth says how
 //! far the stage is from being limited by memory traffic alone (near 1: only fewer passes or
@@ -37,6 +41,8 @@ pub struct Model {
     /// Whether this is the stage's model with the block-multigrid preconditioner
     /// (`numerics.*.preconditioner: Multigrid`) rather than Jacobi.
     pub block_multigrid: bool,
+    /// Whether this is the stage's model on a three-dimensional grid.
+    pub three_d: bool,
     /// What the counts are.
     pub passes: &'static str,
 }
@@ -55,6 +61,7 @@ pub const MODELS: &[Model] = &[
         fixed: 10.0,
         per_iteration: 0.0,
         block_multigrid: false,
+        three_d: false,
         passes: "SSP-RK2, two stages, each reading u, v, ρ and writing u, v",
     },
     Model {
@@ -62,6 +69,7 @@ pub const MODELS: &[Model] = &[
         fixed: 4.0,
         per_iteration: 0.0,
         block_multigrid: false,
+        three_d: false,
         passes: "u, v read and written",
     },
     Model {
@@ -69,6 +77,7 @@ pub const MODELS: &[Model] = &[
         fixed: 24.0,
         per_iteration: 25.0,
         block_multigrid: false,
+        three_d: false,
         passes: "step: ρ, μ read; coefficients cxx, cyy, g, corner μ written; mass, dm, diagonal \
                  (2 each) written; right-hand side (u, v, 3 coefficients, hoop 2, rhs 2); warm \
                  start and update (δ history 4, u, v); per CG iteration: the product (x 2, \
@@ -80,6 +89,7 @@ pub const MODELS: &[Model] = &[
         fixed: 30.0,
         per_iteration: 50.0,
         block_multigrid: false,
+        three_d: false,
         passes: "step: u, v, ρ, μ, φ, B̃ (4) read, u, v, B̃ (4) written, right-hand side, mass, \
                  diagonal, viscous coefficients (2 + 2 + 2 + 5); per BiCGSTAB iteration: two \
                  products (x 2, viscous coefficients 3, dm 2, y 2, fields scattered 2: 11 each; \
@@ -91,6 +101,7 @@ pub const MODELS: &[Model] = &[
         fixed: 24.0 + 20.0,
         per_iteration: 9.0 + BLOCK_MG_APPLICATION + 16.0,
         block_multigrid: true,
+        three_d: false,
         passes: "as Jacobi's, plus the set-up of the blocks (coefficients of both blocks and \
                  their coarse levels: ≈ 20); per CG iteration: the product (9), one \
                  block-multigrid application (both blocks, V(1,1): ≈ 68) and the vector \
@@ -101,6 +112,7 @@ pub const MODELS: &[Model] = &[
         fixed: 30.0 + 20.0,
         per_iteration: 50.0 - 12.0 + 2.0 * BLOCK_MG_APPLICATION,
         block_multigrid: true,
+        three_d: false,
         passes: "as Jacobi's, plus the set-up of the blocks (≈ 20); per BiCGSTAB iteration \
                  the two Jacobi applications (12) replaced by two block-multigrid applications \
                  (both blocks, V(1,1): ≈ 68 each)",
@@ -110,6 +122,7 @@ pub const MODELS: &[Model] = &[
         fixed: 18.0,
         per_iteration: 53.0,
         block_multigrid: false,
+        three_d: false,
         passes: "step: u, v, ρ, p read, u, v, p written, divergence, five-point coefficients \
                  (3) and the coarse levels' (≈ 3 more); per CG iteration: the product (3 \
                  coefficients, x, y), the vector updates (8) and one multigrid W-cycle ≈ 2 × \
@@ -120,6 +133,7 @@ pub const MODELS: &[Model] = &[
         fixed: 11.0,
         per_iteration: 0.0,
         block_multigrid: false,
+        three_d: false,
         passes: "u, v, φ, B̃ (4) read, B̃ (4) written",
     },
     Model {
@@ -127,18 +141,90 @@ pub const MODELS: &[Model] = &[
         fixed: 12.0,
         per_iteration: 0.0,
         block_multigrid: false,
+        three_d: false,
         passes: "u, v, φ read; the interface normal (2) and two directional sweeps of φ (read, \
                  written: 4); φ, ρ, μ written",
     },
+    Model {
+        stage: "pressure_predictor",
+        fixed: 6.0,
+        per_iteration: 0.0,
+        block_multigrid: false,
+        three_d: false,
+        passes: "p, ρ, u, v read, u, v written",
+    },
+    Model {
+        stage: "pressure_predictor",
+        fixed: 8.0,
+        per_iteration: 0.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "p, ρ, u, v, w read, u, v, w written",
+    },
+    Model {
+        stage: "advection",
+        fixed: 14.0 + 24.0,
+        per_iteration: 0.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "SSP-RK2, two stages, each reading u, v, w, ρ and writing u, v, w (14); per stage \
+                 and component the mass and momentum fluxes along z, which the kernels keep in \
+                 two full-grid arrays, written and read (4 × 3 × 2 = 24)",
+    },
+    Model {
+        stage: "body_force",
+        fixed: 6.0,
+        per_iteration: 0.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "u, v, w read and written",
+    },
+    Model {
+        stage: "viscous",
+        fixed: 41.0,
+        per_iteration: 39.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "step: ρ, μ read; coefficients c_x, c_y, c_z, the edge weights g_xy, g_yz, g_xz \
+                 and the three edge viscosities written (9); mass, dm, diagonal (3 each) \
+                 written; right-hand side (u, v, w, 6 coefficients, rhs 3 written); warm start \
+                 and update (δ history 6, u, v, w); per CG iteration: the product (x 3, \
+                 coefficients 6, dm 3, y 3) and the fused vector updates (x, p, q, r, diagonal \
+                 read, x, r, p written: 8 × 3 = 24)",
+    },
+    Model {
+        stage: "projection",
+        fixed: 15.0,
+        per_iteration: 46.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "step: u, v, w, ρ, p read, u, v, w, p written, divergence, seven-point \
+                 coefficients (4) and the coarse levels' (≈ 1: each level an eighth); per CG \
+                 iteration: the product (4 coefficients, x, y), the vector updates (8) and one \
+                 multigrid W-cycle ≈ 4/3 × the finest level's smoothing (2 sweeps × 7), \
+                 residual (7), transfers (3): ≈ 32",
+    },
+    Model {
+        stage: "vof",
+        fixed: 16.0,
+        per_iteration: 0.0,
+        block_multigrid: false,
+        three_d: true,
+        passes: "u, v, w, φ read; the interface normal (3) and three directional sweeps of φ \
+                 (read, written: 6); φ, ρ, μ written",
+    },
 ];
 
-/// The model of `stage` (the block-multigrid one where `block_multigrid` and the stage has
-/// one), if there is one.
-pub fn model(stage: &str, block_multigrid: bool) -> Option<&'static Model> {
+/// The model of `stage` on a grid of two or (`three_d`) three dimensions — the block-multigrid
+/// one where `block_multigrid` and the stage has one — if there is one. A two-dimensional model
+/// never stands in for a three-dimensional one.
+pub fn model(stage: &str, block_multigrid: bool, three_d: bool) -> Option<&'static Model> {
+    let of = |m: &&Model| m.stage == stage && m.three_d == three_d;
     MODELS
         .iter()
-        .find(|m| m.stage == stage && m.block_multigrid == block_multigrid)
-        .or_else(|| MODELS.iter().find(|m| m.stage == stage))
+        .filter(of)
+        .find(|m| m.block_multigrid == block_multigrid)
+        .or_else(|| MODELS.iter().find(of))
 }
 
 /// Bytes per cell-step of `m` at `iterations` solver iterations per step.
@@ -216,6 +302,7 @@ mod tests {
         for s in [
             "advection",
             "body_force",
+            "pressure_predictor",
             "viscous",
             "elastic",
             "projection",
@@ -223,23 +310,53 @@ mod tests {
             "vof",
         ] {
             for mg in [false, true] {
-                let m = model(s, mg).unwrap_or_else(|| panic!("no model for {s}"));
+                let m = model(s, mg, false).unwrap_or_else(|| panic!("no model for {s}"));
                 assert_eq!(m.stage, s);
                 assert!(m.fixed > 0.0);
                 assert!(bytes(m, 10.0) >= bytes(m, 0.0));
             }
         }
         assert_eq!(
-            bytes(model("viscous", false).unwrap(), 2.0),
+            bytes(model("viscous", false, false).unwrap(), 2.0),
             8.0 * (24.0 + 50.0)
         );
         // The block multigrid's models are their own, and a stage without one falls back.
         for s in ["viscous", "elastic"] {
-            let (j, mg) = (model(s, false).unwrap(), model(s, true).unwrap());
+            let (j, mg) = (
+                model(s, false, false).unwrap(),
+                model(s, true, false).unwrap(),
+            );
             assert!(mg.block_multigrid && !j.block_multigrid);
             assert!(mg.per_iteration > j.per_iteration);
         }
-        assert!(!model("projection", true).unwrap().block_multigrid);
+        assert!(!model("projection", true, false).unwrap().block_multigrid);
+    }
+
+    #[test]
+    fn the_stages_of_a_three_dimensional_scene_have_their_own_models() {
+        // Every stage that runs in 3-D has a 3-D model; stages that do not have none, and no
+        // 2-D model stands in for one.
+        for s in [
+            "advection",
+            "body_force",
+            "pressure_predictor",
+            "viscous",
+            "projection",
+            "vof",
+        ] {
+            let (two, three) = (
+                model(s, false, false).unwrap(),
+                model(s, false, true).unwrap(),
+            );
+            assert!(three.three_d && !two.three_d, "{s}");
+        }
+        let b = |s: &str, it: f64| bytes(model(s, false, true).unwrap(), it);
+        assert_eq!(b("body_force", 0.0), 8.0 * 6.0);
+        assert_eq!(b("advection", 0.0), 8.0 * 38.0);
+        assert_eq!(b("viscous", 2.0), 8.0 * (41.0 + 78.0));
+        assert!(
+            model("elastic", true, true).is_none() && model("deformation", false, true).is_none()
+        );
     }
 
     #[test]

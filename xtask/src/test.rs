@@ -66,9 +66,9 @@ pub(crate) fn test() -> Result<(), String> {
     let mut c = cargo();
     c.args(["build", "--quiet", "-p", "efsi", "--profile", "test"]);
     run(c, "build efsi for the Python tests")?;
-    // The sphere impact, and two scenes packaged as they are: the oscillating Couette flow
+    // The sphere impact, and three scenes packaged as they are: the oscillating Couette flow
     // with the wall's speed amplitude as a parameter, the disk in a cavity with the lid's speed
-    // as an input.
+    // as an input, the 3-D drop with its grid as parameters.
     let [fmu2, _] = crate::fmu::fmu(&[])?;
     let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     crate::fmu::fmu(&strings(&[
@@ -82,6 +82,15 @@ pub(crate) fn test() -> Result<(), String> {
         "cases/disk_in_cavity.ron",
         "--input",
         "boundaries.y_max.speed=m/s",
+    ]))?;
+    crate::fmu::fmu(&strings(&[
+        "cases/falling_drop_3d.ron",
+        "--parameter",
+        "grid.nx",
+        "--parameter",
+        "grid.ny",
+        "--parameter",
+        "grid.nz",
     ]))?;
     let py = python_env()?;
     install_python_package(&py)?;

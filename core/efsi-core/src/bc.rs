@@ -111,6 +111,102 @@ impl Lines {
     }
 }
 
+/// What one ghost rule writes at a position along the axis of every line ([`Lines::apply`]),
+/// from the value `x` at another position.
+#[derive(Clone, Copy, Debug)]
+enum Rule {
+    /// `x`.
+    Copy,
+    /// `−x`.
+    Negate,
+    /// `2·speed − x`: a wall moving at `speed` (the same on every line).
+    Wall(f64),
+    /// 0 (the value read is not used).
+    Zero,
+}
+
+impl Rule {
+    #[inline(always)]
+    fn of(self, x: f64) -> f64 {
+        match self {
+            Rule::Copy => x,
+            Rule::Negate => -x,
+            Rule::Wall(speed) => 2.0 * speed - x,
+            Rule::Zero => 0.0,
+        }
+    }
+}
+
+/// Up to this many rules per call of [`Lines::apply`]: a side's two ghost layers and its
+/// boundary face, on both sides.
+const RULES: usize = 2 * (G as usize + 1);
+
+/// A sequence of ghost rules `(written, read, rule)` (positions along the lines' axis), kept on
+/// the stack.
+struct Rules {
+    list: [(isize, isize, Rule); RULES],
+    len: usize,
+}
+
+impl Rules {
+    fn new() -> Self {
+        Rules {
+            list: [(0, 0, Rule::Zero); RULES],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, write: isize, read: isize, rule: Rule) {
+        self.list[self.len] = (write, read, rule);
+        self.len += 1;
+    }
+}
+
+impl Lines {
+    /// The rules applied on every line in their order (`d[write] = rule(d[read])`). The lines
+    /// share no entry, so whether a line takes all rules before the next line or each rule
+    /// goes over all lines before the next rule gives the same values; where the lines' first
+    /// other axis is the storage's contiguous one (lines along y or z), each rule goes over
+    /// the lines' contiguous runs, one vectorisable pass per run.
+    fn apply(&self, d: &mut [f64], rules: &Rules) {
+        let rules = &rules.list[..rules.len];
+        let step = self.step;
+        let [(s1, r1), (s2, r2)] = &self.across;
+        if *s1 != 1 {
+            for (base, _) in self.each() {
+                for &(write, read, rule) in rules {
+                    d[(base + write * step) as usize] = rule.of(d[(base + read * step) as usize]);
+                }
+            }
+            return;
+        }
+        let len = r1.len();
+        for &(write, read, rule) in rules {
+            for c in r2.clone() {
+                let base = self.origin + r1.start + c * s2;
+                let (w, r) = (
+                    (base + write * step) as usize,
+                    (base + read * step) as usize,
+                );
+                if let Rule::Zero = rule {
+                    d[w..w + len].fill(0.0);
+                    continue;
+                }
+                let (out, from) = if w < r {
+                    let (lo, hi) = d.split_at_mut(r);
+                    (&mut lo[w..w + len], &hi[..len])
+                } else {
+                    let (lo, hi) = d.split_at_mut(w);
+                    (&mut hi[..len], &lo[r..r + len])
+                };
+                for (o, x) in out.iter_mut().zip(from) {
+                    *o = rule.of(*x);
+                }
+            }
+        }
+    }
+}
+
 /// The two axes other than `axis`, in order.
 fn others(axis: usize) -> [usize; 2] {
     match axis {
@@ -353,47 +449,33 @@ impl BoundarySet {
     /// Normal component `f` along `axis`: boundary face and ghosts.
     fn fill_normal(&self, grid: &Grid, f: &mut Field, axis: usize) {
         let lines = Lines::new(grid, f, axis);
-        let (n, step) = (lines.n, lines.step);
-        let lo = self.get(Side::normal_to(axis, false)).clone();
-        let hi = self.get(Side::normal_to(axis, true)).clone();
-        let d = f.data_mut();
-        let at = |base: isize, a: isize| (base + a * step) as usize;
-        for (base, _) in lines.each() {
-            if lo == Boundary::Periodic {
-                d[at(base, n)] = d[at(base, 0)];
-                for g in 1..=G {
-                    d[at(base, -g)] = d[at(base, n - g)];
-                    d[at(base, n + g)] = d[at(base, g)];
-                }
-                continue;
+        let n = lines.n;
+        let lo = self.get(Side::normal_to(axis, false));
+        let hi = self.get(Side::normal_to(axis, true));
+        let mut rules = Rules::new();
+        if *lo == Boundary::Periodic {
+            rules.push(n, 0, Rule::Copy);
+            for g in 1..=G {
+                rules.push(-g, n - g, Rule::Copy);
+                rules.push(n + g, g, Rule::Copy);
             }
+        } else {
             match lo {
-                Boundary::Outflow => {
-                    for g in 1..=G {
-                        d[at(base, -g)] = d[at(base, 0)];
-                    }
-                }
+                Boundary::Outflow => (1..=G).for_each(|g| rules.push(-g, 0, Rule::Copy)),
                 _ => {
-                    d[at(base, 0)] = 0.0;
-                    for g in 1..=G {
-                        d[at(base, -g)] = -d[at(base, g)];
-                    }
+                    rules.push(0, 0, Rule::Zero);
+                    (1..=G).for_each(|g| rules.push(-g, g, Rule::Negate));
                 }
             }
             match hi {
-                Boundary::Outflow => {
-                    for g in 1..=G {
-                        d[at(base, n + g)] = d[at(base, n)];
-                    }
-                }
+                Boundary::Outflow => (1..=G).for_each(|g| rules.push(n + g, n, Rule::Copy)),
                 _ => {
-                    d[at(base, n)] = 0.0;
-                    for g in 1..=G {
-                        d[at(base, n + g)] = -d[at(base, n - g)];
-                    }
+                    rules.push(n, n, Rule::Zero);
+                    (1..=G).for_each(|g| rules.push(n + g, n - g, Rule::Negate));
                 }
             }
         }
+        lines.apply(f.data_mut(), &rules);
     }
 
     /// Tangential component `f` (the velocity along axis `comp`) at the sides normal to `axis`.
@@ -424,13 +506,46 @@ impl BoundarySet {
         } else {
             None
         };
+        let sides = [
+            (Side::normal_to(axis, false), 0isize, -1isize),
+            (Side::normal_to(axis, true), n - 1, 1),
+        ];
+        // A wall that drives this component at a time other than `Homogeneous` has a speed
+        // that varies along the wall: then line by line below; else every ghost is a rule of
+        // one value.
+        let varies = |side: Side| {
+            matches!(self.get(side), Boundary::MovingWall { .. })
+                && comp == driven(axis)
+                && when != WallTime::Homogeneous
+        };
+        if !sides.iter().any(|&(side, ..)| varies(side)) {
+            let mut rules = Rules::new();
+            for (side, first, dir) in sides {
+                let bc = self.get(side);
+                for g in 1..=G {
+                    let ghost = first + dir * g;
+                    let mirror = first - dir * (g - 1);
+                    let (read, rule) = match bc {
+                        Boundary::Periodic => {
+                            (if dir < 0 { ghost + n } else { ghost - n }, Rule::Copy)
+                        }
+                        Boundary::NoSlip => (mirror, Rule::Negate),
+                        Boundary::MovingWall { .. } => (mirror, Rule::Wall(0.0)),
+                        Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => {
+                            (mirror, Rule::Copy)
+                        }
+                        Boundary::Outflow => (first, Rule::Copy),
+                    };
+                    rules.push(ghost, read, rule);
+                }
+            }
+            lines.apply(f.data_mut(), &rules);
+            return;
+        }
         let d = f.data_mut();
         let at = |base: isize, a: isize| (base + a * step) as usize;
         for (base, t) in lines.each() {
-            for (side, first, dir) in [
-                (Side::normal_to(axis, false), 0isize, -1isize),
-                (Side::normal_to(axis, true), n - 1, 1),
-            ] {
+            for (side, first, dir) in sides {
                 let bc = self.get(side);
                 let speed = match bc {
                     Boundary::MovingWall {
@@ -483,28 +598,27 @@ impl BoundarySet {
     pub fn fill_scalar(&self, grid: &Grid, f: &mut Field, dirichlet_outflow: bool) {
         for axis in 0..grid.dims() {
             let lines = Lines::new(grid, f, axis);
-            let (n, step) = (lines.n, lines.step);
-            let d = f.data_mut();
-            let at = |base: isize, a: isize| (base + a * step) as usize;
-            for (base, _) in lines.each() {
-                for (side, first, dir) in [
-                    (Side::normal_to(axis, false), 0isize, -1isize),
-                    (Side::normal_to(axis, true), n - 1, 1),
-                ] {
-                    let bc = self.get(side);
-                    for g in 1..=G {
-                        let ghost = first + dir * g;
-                        let mirror = first - dir * (g - 1);
-                        d[at(base, ghost)] = match bc {
-                            Boundary::Periodic => {
-                                d[at(base, if dir < 0 { ghost + n } else { ghost - n })]
-                            }
-                            Boundary::Outflow if dirichlet_outflow => -d[at(base, mirror)],
-                            _ => d[at(base, mirror)],
-                        };
-                    }
+            let n = lines.n;
+            let mut rules = Rules::new();
+            for (side, first, dir) in [
+                (Side::normal_to(axis, false), 0isize, -1isize),
+                (Side::normal_to(axis, true), n - 1, 1),
+            ] {
+                let bc = self.get(side);
+                for g in 1..=G {
+                    let ghost = first + dir * g;
+                    let mirror = first - dir * (g - 1);
+                    let (read, rule) = match bc {
+                        Boundary::Periodic => {
+                            (if dir < 0 { ghost + n } else { ghost - n }, Rule::Copy)
+                        }
+                        Boundary::Outflow if dirichlet_outflow => (mirror, Rule::Negate),
+                        _ => (mirror, Rule::Copy),
+                    };
+                    rules.push(ghost, read, rule);
                 }
             }
+            lines.apply(f.data_mut(), &rules);
         }
     }
 }

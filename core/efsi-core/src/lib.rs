@@ -16,7 +16,6 @@ pub mod field;
 pub mod grid;
 pub mod loops;
 pub mod operators;
-pub mod ops;
 pub mod overrides;
 pub mod plugin_api;
 pub mod scene;
@@ -40,4 +39,4 @@ pub use schedule::{
 };
 pub use simulation::{Simulation, StepCheck};
 pub use snapshot::Snapshot;
-pub use state::{State, StateResource, StateResources};
+pub use state::{State, StateResource, StateResources, Velocity};

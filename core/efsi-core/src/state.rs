@@ -145,6 +145,18 @@ impl StateResources {
     }
 }
 
+/// The face velocities of a [`State`], one per axis ([`State::velocity`]): a slice of two or
+/// three fields without an allocation.
+#[derive(Clone, Copy, Debug)]
+pub struct Velocity<'a>([&'a Field; 3], usize);
+
+impl<'a> std::ops::Deref for Velocity<'a> {
+    type Target = [&'a Field];
+    fn deref(&self) -> &[&'a Field] {
+        &self.0[..self.1]
+    }
+}
+
 impl State {
     /// A state at rest, uniform density and viscosity, with the optional `fields` allocated.
     pub fn new(grid: &Grid, density: f64, viscosity: f64, fields: &BTreeSet<FieldId>) -> Self {
@@ -164,6 +176,16 @@ impl State {
             frame_acceleration: (0.0, 0.0),
             resources: StateResources::default(),
         }
+    }
+
+    /// The face velocities, one per axis: `[u, v]`, and `w` on a three-dimensional grid — the
+    /// form [`crate::operators`] take (`&state.velocity()` is a `&[&Field]`).
+    pub fn velocity(&self) -> Velocity<'_> {
+        let w = self.w.as_ref();
+        Velocity(
+            [&self.u, &self.v, w.unwrap_or(&self.v)],
+            2 + w.is_some() as usize,
+        )
     }
 
     /// Every stored array with a stable name, in a fixed order: `u`, `v`, `p`, `rho`, `mu`, then

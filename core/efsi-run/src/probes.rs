@@ -3,7 +3,7 @@
 use crate::output::spec::ProbeSpec;
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
-use efsi_core::ops::{self, potential_energy};
+use efsi_core::operators;
 use efsi_core::scene::{Side, Vector};
 use efsi_core::state::State;
 use efsi_core::{Line, OutputDecl, OutputKind, Region, Stagger, unit};
@@ -95,65 +95,20 @@ pub fn sample_at(
     }
 }
 
-/// Kinetic energy `½∫ρ|u|² dV` of the state: [`ops::kinetic_energy`] in two dimensions; in
-/// three, the same face-centred quadrature with the z-faces' `w` (half of each of the cell's
-/// six faces belongs to it). Lines summed in order (the same bits on any number of threads).
+/// Kinetic energy `½∫ρ|u|² dV` of the state ([`operators::kinetic_energy`]).
 pub fn kinetic_energy(grid: &Grid, state: &State) -> f64 {
-    let Some(w) = &state.w else {
-        return ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
-    };
-    let vol = grid.dx * grid.dy * grid.dz;
-    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
-        let c = [&state.u, &state.v, w];
-        let rho = state.rho.at(&l, [0; 3]);
-        let mut e = 0.0;
-        for (a, f) in c.iter().enumerate() {
-            let (lo, hi) = (f.at(&l, [0; 3]), f.at(&l, unit(a)));
-            for n in 0..l.len {
-                e += rho[n] * 0.25 * (lo[n].powi(2) + hi[n].powi(2)) * vol;
-            }
-        }
-        [e]
-    });
-    e
+    operators::kinetic_energy(grid, &state.velocity(), &state.rho)
 }
 
-/// Gravitational potential energy `−∫ρ g·x dV` of the state ([`ops::potential_energy`] in two
-/// dimensions).
+/// Gravitational potential energy `−∫ρ g·x dV` of the densities `rho`
+/// ([`operators::potential_energy`]).
 pub fn potential_energy_of(grid: &Grid, rho: &Field, gravity: Vector) -> f64 {
-    if !grid.is_3d() {
-        return potential_energy(grid, rho, gravity.planar());
-    }
-    let [gx, gy, gz] = gravity.xyz();
-    let vol = grid.dx * grid.dy * grid.dz;
-    let [e] = Region::of(grid, Stagger::Cell).sum(|l| {
-        let rho = rho.at(&l, [0; 3]);
-        let mut e = 0.0;
-        for (n, [i, j, k]) in l.indices().enumerate() {
-            e -= rho[n] * (gx * grid.xc(i) + gy * grid.yc(j) + gz * grid.zc(k)) * vol;
-        }
-        [e]
-    });
-    e
+    operators::potential_energy(grid, rho, gravity.xyz())
 }
 
-/// `max |∇·u|` over the cells ([`ops::max_abs_div`] in two dimensions).
+/// `max |∇·u|` over the cells ([`operators::max_abs_div`]).
 pub fn max_divergence(grid: &Grid, state: &State) -> f64 {
-    let Some(w) = &state.w else {
-        return ops::max_abs_div(grid, &state.u, &state.v);
-    };
-    let h = grid.h();
-    Region::of(grid, Stagger::Cell).max(0.0, |l| {
-        let c = [&state.u, &state.v, w];
-        let mut m = 0.0f64;
-        for n in 0..l.len {
-            let d: f64 = (0..3)
-                .map(|a| (c[a].at(&l, unit(a))[n] - c[a].at(&l, [0; 3])[n]) / h[a])
-                .sum();
-            m = m.max(d.abs());
-        }
-        m
-    })
+    operators::max_abs_div(grid, &state.velocity())
 }
 
 /// A named field sampled at a point (names from [`crate::output::spec::FIELD_NAMES`]).
@@ -233,9 +188,11 @@ pub struct Quantity {
     pub name: &'static str,
     /// Its columns in a planar or axisymmetric scene, in order.
     pub columns: &'static [&'static str],
-    /// Its columns in a Cartesian3D scene, in order (the z components added); none for a
-    /// quantity that is two-dimensional only.
+    /// Its columns in a Cartesian3D scene, in order (the z components added).
     pub columns_3d: &'static [&'static str],
+    /// Whether it means something in an axisymmetric scene (a spin about the out-of-plane
+    /// axis does not: the r–z plane turns about no axis of the body).
+    pub axisymmetric: bool,
     /// Whether it needs a solid in the scene.
     pub needs_solid: bool,
     /// Its values, appended (one per column).
@@ -249,6 +206,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "kinetic_energy",
         columns: &["kinetic_energy"],
         columns_3d: &["kinetic_energy"],
+        axisymmetric: true,
         needs_solid: false,
         eval: |p, out| out.push(kinetic_energy(p.grid, p.state)),
     },
@@ -256,6 +214,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "potential_energy",
         columns: &["potential_energy"],
         columns_3d: &["potential_energy"],
+        axisymmetric: true,
         needs_solid: false,
         eval: |p, out| out.push(potential_energy_of(p.grid, &p.state.rho, p.gravity)),
     },
@@ -263,6 +222,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "max_divergence",
         columns: &["max_divergence"],
         columns_3d: &["max_divergence"],
+        axisymmetric: true,
         needs_solid: false,
         eval: |p, out| out.push(max_divergence(p.grid, p.state)),
     },
@@ -270,6 +230,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "max_speed",
         columns: &["max_speed"],
         columns_3d: &["max_speed"],
+        axisymmetric: true,
         needs_solid: false,
         eval: |p, out| out.push(max_speed(p.grid, p.state)),
     },
@@ -277,6 +238,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "solid_volume",
         columns: &["solid_volume"],
         columns_3d: &["solid_volume"],
+        axisymmetric: true,
         needs_solid: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.push(m.volume),
@@ -287,6 +249,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "solid_centroid",
         columns: &["solid_x", "solid_y"],
         columns_3d: &["solid_x", "solid_y", "solid_z"],
+        axisymmetric: true,
         needs_solid: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.extend(&m.centroid[..p.grid.dims()]),
@@ -297,6 +260,7 @@ pub const QUANTITIES: &[Quantity] = &[
         name: "solid_velocity",
         columns: &["solid_u", "solid_v"],
         columns_3d: &["solid_u", "solid_v", "solid_w"],
+        axisymmetric: true,
         needs_solid: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.extend(&m.velocity[..p.grid.dims()]),
@@ -306,7 +270,8 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "solid_pieces",
         columns: &["solid_pieces", "solid_largest_piece"],
-        columns_3d: &[],
+        columns_3d: &["solid_pieces", "solid_largest_piece"],
+        axisymmetric: true,
         needs_solid: true,
         eval: |p, out| match &p.state.phi {
             Some(phi) => {
@@ -316,15 +281,31 @@ pub const QUANTITIES: &[Quantity] = &[
             None => out.extend([f64::NAN, f64::NAN]),
         },
     },
+    Quantity {
+        name: "solid_spin",
+        columns: &["solid_spin"],
+        columns_3d: &["solid_spin_x", "solid_spin_y", "solid_spin_z"],
+        axisymmetric: false,
+        needs_solid: true,
+        eval: |p, out| {
+            let spin = p
+                .state
+                .phi
+                .as_ref()
+                .map_or([f64::NAN; 3], |phi| solid_spin(p.grid, p.state, phi));
+            // Three components in three dimensions; ω_z, the only one, in two.
+            out.extend(&spin[if p.grid.is_3d() { 0 } else { 2 }..]);
+        },
+    },
 ];
 
 impl Quantity {
     /// Its columns in a scene of `geometry` (none: it does not run there).
     pub fn columns_in(&self, geometry: Geometry) -> &'static [&'static str] {
-        if geometry == Geometry::Cartesian3D {
-            self.columns_3d
-        } else {
-            self.columns
+        match geometry {
+            Geometry::Cartesian3D => self.columns_3d,
+            Geometry::Axisymmetric if !self.axisymmetric => &[],
+            _ => self.columns,
         }
     }
 }
@@ -345,27 +326,21 @@ pub fn evaluate_quantity(name: &str, probed: &Probed, out: &mut Vec<f64>) {
 
 /// The largest speed at the cell centres (each component the mean of its two faces).
 fn max_speed(grid: &Grid, state: &State) -> f64 {
-    if let Some(w) = &state.w {
-        return Region::of(grid, Stagger::Cell).max(0.0, |l| {
-            let c = [&state.u, &state.v, w];
-            let mut m = 0.0f64;
-            for n in 0..l.len {
-                let s = (0..3)
-                    .map(|a| 0.5 * (c[a].at(&l, [0; 3])[n] + c[a].at(&l, unit(a))[n]))
-                    .fold(0.0f64, f64::hypot);
-                m = m.max(s);
-            }
-            m
-        });
-    }
-    let mut m = 0.0f64;
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
-            let (a, b) = ops::centre_velocity(&state.u, &state.v, i, j);
-            m = m.max(a.hypot(b));
+    let vel = state.velocity();
+    Region::of(grid, Stagger::Cell).max(0.0, |l| {
+        let faces: [_; 3] =
+            std::array::from_fn(|a| vel.get(a).map(|f| (f.at(&l, [0; 3]), f.at(&l, unit(a)))));
+        let mut m = 0.0f64;
+        for n in 0..l.len {
+            let s = faces
+                .iter()
+                .flatten()
+                .map(|(lo, hi)| 0.5 * (lo[n] + hi[n]))
+                .fold(0.0f64, f64::hypot);
+            m = m.max(s);
         }
-    }
-    m
+        m
+    })
 }
 
 /// The solid's moments, if the state has a solid.
@@ -397,8 +372,8 @@ pub fn evaluate(
         ProbeSpec::Point { field, at, .. } => out.push(sample_at(grid, state, outputs, field, *at)),
         ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, outputs, *wall)),
         ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, outputs, *wall)),
-        ProbeSpec::SolidExtent { at } => {
-            let (b, t) = solid_extent(grid, state, *at);
+        ProbeSpec::SolidExtent { at, z } => {
+            let (b, t) = solid_extent(grid, state, *at, z.unwrap_or(0.0));
             out.extend([b, t]);
         }
         quantity => match quantity.quantity() {
@@ -463,37 +438,66 @@ pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
     }
 }
 
-/// The cells of the first row along `wall`: for each, its index `(i, j)`, its wall-face area
-/// (per radian when axisymmetric) and its distance along the wall from the wall's start.
-fn wall_cells(grid: &Grid, wall: Side) -> Vec<((isize, isize), f64, f64)> {
-    let wall = planar_wall(wall);
-    let m = &grid.metric;
-    let (nx, ny) = (grid.nx as isize, grid.ny as isize);
-    match wall {
-        Side::YMin | Side::YMax => {
-            let j = if wall == Side::YMin { 0 } else { ny - 1 };
-            (0..nx)
-                .map(|i| ((i, j), m.rc(i) * grid.dx, (i as f64 + 0.5) * grid.dx))
-                .collect()
-        }
-        // The x sides (`planar_wall` left no z side).
-        _ => {
-            let i = if wall == Side::XMin { 0 } else { nx - 1 };
-            let r = if wall == Side::XMin {
-                m.rx(0)
-            } else {
-                m.rx(nx)
-            };
-            (0..ny)
-                .map(|j| ((i, j), r * grid.dy, (j as f64 + 0.5) * grid.dy))
-                .collect()
-        }
-    }
+/// A cell of the first layer along a wall ([`wall_cells`]).
+#[derive(Clone, Copy, Debug)]
+struct WallCell {
+    /// Its index.
+    at: [isize; 3],
+    /// Its wall-face area (per radian when axisymmetric, per unit depth when planar).
+    area: f64,
+    /// How far the cell reaches from the wall's corner (the lower end of each axis along the
+    /// wall): the largest projection of the cell's points on the direction from the corner to
+    /// its centre, `|s| + ½ Σ_t (s_t/|s|) h_t` with `s` the centre's offset along the wall's
+    /// axes `t` — in two dimensions, `s + ½h`, the far edge of the cell.
+    reach: f64,
 }
 
-/// A wall of a two-dimensional scene: `ZMin` and `ZMax` are the axisymmetric spellings of
-/// `YMin` and `YMax` (the contact probes are two-dimensional: the output checks refuse them in
-/// a Cartesian3D scene).
+/// The cells of the first layer along `wall` (the cells with index 0, or `n − 1`, along the
+/// wall's axis), in storage order; the same code for a row of a two-dimensional grid and a
+/// layer of a three-dimensional one.
+fn wall_cells(grid: &Grid, wall: Side) -> Vec<WallCell> {
+    let wall = planar_wall(wall);
+    let (a, n, h, m) = (wall.axis(), grid.n(), grid.h(), &grid.metric);
+    let tangential: Vec<usize> = (0..grid.dims()).filter(|&t| t != a).collect();
+    let layer = if wall.is_upper() {
+        n[a] as isize - 1
+    } else {
+        0
+    };
+    let mut range = n.map(|n| 0..n as isize);
+    range[a] = layer..layer + 1;
+    let mut cells = Vec::new();
+    for k in range[2].clone() {
+        for j in range[1].clone() {
+            for i in range[0].clone() {
+                let at = [i, j, k];
+                // The radius factor of the wall face: the x-face's for an x wall, the cell's.
+                let r = match (a, wall.is_upper()) {
+                    (0, false) => m.rx(0),
+                    (0, true) => m.rx(n[0] as isize),
+                    _ => m.rc(i),
+                };
+                let area = tangential.iter().fold(r, |s, &t| s * h[t]);
+                let s: Vec<f64> = tangential
+                    .iter()
+                    .map(|&t| (at[t] as f64 + 0.5) * h[t])
+                    .collect();
+                let norm = s.iter().map(|s| s * s).sum::<f64>().sqrt();
+                let edge =
+                    (tangential.iter().zip(&s)).fold(0.0, |e, (&t, s)| e + s / norm * (0.5 * h[t]));
+                cells.push(WallCell {
+                    at,
+                    area,
+                    reach: norm + edge,
+                });
+            }
+        }
+    }
+    cells
+}
+
+/// A wall of the scene's grid: `ZMin` and `ZMax` are the axisymmetric spellings of `YMin` and
+/// `YMax` (the z sides of a three-dimensional box are its own).
 pub fn planar_wall(wall: Side) -> Side {
     match wall {
         Side::ZMin => Side::YMin,
@@ -507,58 +511,77 @@ pub fn planar_wall(wall: Side) -> Side {
 /// Absolute, so a trace of solid left by the interface advection (φ ≈ 1e-18) never counts.
 pub const CONTACT_MIN_SOLID_FRACTION: f64 = 1e-3;
 
-/// The elastic stress the stages output (the VTK array `stress`, six components per cell),
-/// if the state has one.
-fn stress(grid: &Grid, state: &State, outputs: &[OutputDecl]) -> Option<Vec<f64>> {
-    outputs.iter().find_map(|o| match o.kind {
-        OutputKind::Array { values, .. } if o.name == "stress" => values(grid, state),
+/// The elastic stress the stages output (the VTK array `stress`, six components per cell):
+/// `Some(None)` when no scheduled stage declares one (a solid without a law: no elastic
+/// stress), `None` when one is declared but has no values.
+fn stress(grid: &Grid, state: &State, outputs: &[OutputDecl]) -> Option<Option<Vec<f64>>> {
+    let declared = outputs.iter().find_map(|o| match o.kind {
+        OutputKind::Array { values, .. } if o.name == "stress" => Some(values),
         _ => None,
-    })
+    });
+    match declared {
+        Some(values) => values(grid, state).map(Some),
+        None => Some(None),
+    }
 }
 
 /// The contact cells along `wall` — [`ProbeSpec::ContactForce`]'s definition, shared by both
-/// contact probes: each first-row cell holding at least [`CONTACT_MIN_SOLID_FRACTION`] of solid
-/// and pressing on the wall (`p − p_a − τ_nn > 0`, with `p_a` the mean pressure of the row's
-/// other cells, or 0 if there are none), as (traction, wall-face area, position along the wall).
-/// `τ_nn` is the normal component of the stages' `stress` output.
-fn contact_cells(grid: &Grid, state: &State, tau: &[f64], wall: Side) -> Vec<(f64, f64, f64)> {
+/// contact probes: each first-layer cell holding at least [`CONTACT_MIN_SOLID_FRACTION`] of
+/// solid and pressing on the wall (`p − p_a − τ_nn > 0`, with `p_a` the mean pressure of the
+/// layer's other cells, or 0 if there are none), as (traction, wall-face area, reach along the
+/// wall). `τ_nn` is the normal component of the stages' `stress` output (0 without one).
+fn contact_cells(
+    grid: &Grid,
+    state: &State,
+    tau: Option<&[f64]>,
+    wall: Side,
+) -> Vec<(f64, f64, f64)> {
     let Some(phi) = &state.phi else {
         return Vec::new();
     };
-    let wall = planar_wall(wall);
+    let wall = if grid.is_3d() {
+        wall
+    } else {
+        planar_wall(wall)
+    };
     let cells = wall_cells(grid, wall);
     // The normal component's place in the VTK tensor (XX, YY, ZZ, …; r–z in the X–Z plane).
-    let normal = match wall {
-        Side::XMin | Side::XMax => 0,
-        _ if grid.is_axisymmetric() => 2,
-        _ => 1,
+    let normal = match wall.axis() {
+        1 if grid.is_axisymmetric() => 2,
+        a => a,
     };
-    let tau_nn = |(i, j): (isize, isize)| tau[6 * (j as usize * grid.nx + i as usize) + normal];
-    let solid = |c: (isize, isize)| phi[c] >= CONTACT_MIN_SOLID_FRACTION;
+    let [nx, ny, _] = grid.n();
+    let tau_nn = |[i, j, k]: [isize; 3]| {
+        tau.map_or(0.0, |t| {
+            t[6 * ((k as usize * ny + j as usize) * nx + i as usize) + normal]
+        })
+    };
+    let solid = |c: [isize; 3]| phi[c] >= CONTACT_MIN_SOLID_FRACTION;
     let (mut pa, mut na) = (0.0, 0usize);
-    for &(c, _, _) in &cells {
-        if !solid(c) {
-            pa += state.p[c];
+    for c in &cells {
+        if !solid(c.at) {
+            pa += state.p[c.at];
             na += 1;
         }
     }
     let pa = if na > 0 { pa / na as f64 } else { 0.0 };
     cells
         .iter()
-        .filter(|&&(c, _, _)| solid(c))
-        .map(|&(c, area, s)| (state.p[c] - pa - tau_nn(c), area, s))
+        .filter(|c| solid(c.at))
+        .map(|c| (state.p[c.at] - pa - tau_nn(c.at), c.area, c.reach))
         .filter(|&(t, _, _)| t > 0.0)
         .collect()
 }
 
 /// See [`ProbeSpec::ContactForce`]: exactly 0 when no cell is in contact.
-/// `outputs` are the scheduled stages' (NaN without a solid or a `stress` output).
+/// `outputs` are the scheduled stages' (NaN without a solid, or when their `stress` output has
+/// no values).
 pub fn contact_force(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: Side) -> f64 {
     let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
         return f64::NAN;
     };
     // Summed from +0.0 (an empty `Sum` of f64 is −0.0).
-    contact_cells(grid, state, &tau, wall)
+    contact_cells(grid, state, tau.as_deref(), wall)
         .iter()
         .fold(0.0, |f, (t, a, _)| f + t * a)
 }
@@ -569,27 +592,28 @@ pub fn contact_radius(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: 
     let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
         return f64::NAN;
     };
-    let h = if matches!(planar_wall(wall), Side::YMin | Side::YMax) {
-        grid.dx
-    } else {
-        grid.dy
-    };
-    contact_cells(grid, state, &tau, wall)
+    contact_cells(grid, state, tau.as_deref(), wall)
         .iter()
-        .fold(0.0f64, |m, (_, _, s)| m.max(s + 0.5 * h))
+        .fold(0.0f64, |m, (_, _, reach)| m.max(*reach))
 }
 
-/// See [`ProbeSpec::SolidExtent`].
-pub fn solid_extent(grid: &Grid, state: &State, at: f64) -> (f64, f64) {
+/// See [`ProbeSpec::SolidExtent`]: along the y-line through `(x, z)` (`z` ignored in two
+/// dimensions).
+pub fn solid_extent(grid: &Grid, state: &State, x: f64, z: f64) -> (f64, f64) {
     let Some(phi) = &state.phi else {
         return (f64::NAN, f64::NAN);
     };
-    let i = (((at - grid.x0) / grid.dx).floor() as isize).clamp(0, grid.nx as isize - 1);
+    let i = (((x - grid.x0) / grid.dx).floor() as isize).clamp(0, grid.nx as isize - 1);
+    let k = if grid.is_3d() {
+        (((z - grid.z0) / grid.dz).floor() as isize).clamp(0, grid.nz as isize - 1)
+    } else {
+        0
+    };
     let ny = grid.ny as isize;
     // The longest run of cells holding solid.
     let (mut best, mut run) = ((0, -1), None::<isize>);
     for j in 0..=ny {
-        let solid = j < ny && phi[(i, j)] > 1e-6;
+        let solid = j < ny && phi[[i, j, k]] > 1e-6;
         match (solid, run) {
             (true, None) => run = Some(j),
             (false, Some(lo)) => {
@@ -606,8 +630,8 @@ pub fn solid_extent(grid: &Grid, state: &State, at: f64) -> (f64, f64) {
     }
     let (lo, hi) = best;
     let face = |j: isize| grid.y0 + j as f64 * grid.dy;
-    let bottom = face(lo + 1) - phi[(i, lo)].clamp(0.0, 1.0) * grid.dy;
-    let top = face(hi) + phi[(i, hi)].clamp(0.0, 1.0) * grid.dy;
+    let bottom = face(lo + 1) - phi[[i, lo, k]].clamp(0.0, 1.0) * grid.dy;
+    let top = face(hi) + phi[[i, hi, k]].clamp(0.0, 1.0) * grid.dy;
     (bottom, top)
 }
 
@@ -626,48 +650,51 @@ pub struct SolidPieces {
     pub largest: f64,
 }
 
-/// See [`ProbeSpec::SolidPieces`]: the cells with `φ > PIECE_PHI_MIN`, joined through their
-/// faces (not through corners; periodic sides not wrapped), flood-filled into regions whose
-/// volumes `∫φ dV` are compared with the whole solid's.
-pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let at = |i: usize, j: usize| phi[(i as isize, j as isize)];
-    let mut total = 0.0;
-    for j in 0..ny {
-        for i in 0..nx {
-            total += at(i, j).clamp(0.0, 1.0) * grid.cell_volume(i as isize);
-        }
+/// The volume of a cell in column `i` of `grid` (per radian when axisymmetric, per unit depth
+/// when planar).
+fn cell_volume(grid: &Grid, i: isize) -> f64 {
+    if grid.is_3d() {
+        grid.cell_volume(i) * grid.dz
+    } else {
+        grid.cell_volume(i)
     }
-    let mut seen = vec![false; nx * ny];
+}
+
+/// See [`ProbeSpec::SolidPieces`]: the cells with `φ > PIECE_PHI_MIN`, joined through their
+/// faces (4-connected in two dimensions, 6-connected in three; not through edges or corners;
+/// periodic sides not wrapped), flood-filled into regions whose volumes `∫φ dV` are compared
+/// with the whole solid's.
+pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
+    let (n, dims) = (grid.n(), grid.dims());
+    let stride = [1, n[0], n[0] * n[1]];
+    let cells = n[0] * n[1] * n[2];
+    let index =
+        |c: usize| -> [isize; 3] { std::array::from_fn(|a| ((c / stride[a]) % n[a]) as isize) };
+    let at = |c: usize| phi[index(c)];
+    let volume = |c: usize| cell_volume(grid, index(c)[0]);
+    let total = (0..cells).fold(0.0, |t, c| t + at(c).clamp(0.0, 1.0) * volume(c));
+    let mut seen = vec![false; cells];
     let mut stack = Vec::new();
     let mut volumes = Vec::new();
-    for start in 0..nx * ny {
-        if seen[start] || at(start % nx, start / nx) <= PIECE_PHI_MIN {
+    for start in 0..cells {
+        if seen[start] || at(start) <= PIECE_PHI_MIN {
             continue;
         }
         seen[start] = true;
         stack.push(start);
         let mut v = 0.0;
         while let Some(c) = stack.pop() {
-            let (i, j) = (c % nx, c / nx);
-            v += at(i, j).min(1.0) * grid.cell_volume(i as isize);
-            let mut visit = |q: usize, i: usize, j: usize| {
-                if !seen[q] && at(i, j) > PIECE_PHI_MIN {
-                    seen[q] = true;
-                    stack.push(q);
+            v += at(c).min(1.0) * volume(c);
+            let ix = index(c);
+            for a in 0..dims {
+                let lower = (ix[a] > 0).then(|| c - stride[a]);
+                let upper = (ix[a] + 1 < n[a] as isize).then(|| c + stride[a]);
+                for q in [lower, upper].into_iter().flatten() {
+                    if !seen[q] && at(q) > PIECE_PHI_MIN {
+                        seen[q] = true;
+                        stack.push(q);
+                    }
                 }
-            };
-            if i > 0 {
-                visit(c - 1, i - 1, j);
-            }
-            if i + 1 < nx {
-                visit(c + 1, i + 1, j);
-            }
-            if j > 0 {
-                visit(c - nx, i, j - 1);
-            }
-            if j + 1 < ny {
-                visit(c + nx, i, j + 1);
             }
         }
         volumes.push(v);
@@ -685,6 +712,80 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
             .count(),
         largest: volumes.iter().copied().fold(0.0, f64::max) / total,
     }
+}
+
+/// See [`ProbeSpec::SolidSpin`]: the angular velocity `ω` of the rigid rotation about the
+/// solid's centroid `c` that fits its velocity best, `I ω = L` with `L = ∫φ r × u dV` and
+/// `I = ∫φ (|r|² 1 − r rᵀ) dV` (`r = x − c`, `u` the cell-centre velocity, each component the
+/// mean of its two faces; volume-weighted like [`solid_moments`]). In three dimensions the
+/// 3 × 3 system, solved by Cramer's rule; in two, `ω_z = L_z / I_zz` (x and y components 0).
+/// A rigid rotation `u = U + ω × (x − c)` gives `ω` exactly (to round-off): the mean of two
+/// faces is exact for a velocity linear in x. NaN without solid.
+pub fn solid_spin(grid: &Grid, state: &State, phi: &Field) -> [f64; 3] {
+    let c = solid_moments(grid, state, phi).centroid;
+    let cells = Region::of(grid, Stagger::Cell);
+    let w_faces = state.w.as_ref().filter(|_| grid.is_3d());
+    // L (3), then I: xx, yy, zz, xy, yz, xz.
+    let s: [f64; 9] = cells.sum(|line| {
+        let mut s = [0.0; 9];
+        let f = phi.at(&line, [0; 3]);
+        let centre = |q: &Field, a: usize, n: usize| {
+            0.5 * (q.at(&line, [0; 3])[n] + q.at(&line, unit(a))[n])
+        };
+        for (n, [i, j, k]) in line.indices().enumerate() {
+            let dv = f[n] * cell_volume(grid, i);
+            if dv == 0.0 {
+                continue;
+            }
+            let z = if w_faces.is_some() {
+                grid.zc(k) - c[2]
+            } else {
+                0.0
+            };
+            let r = [grid.xc(i) - c[0], grid.yc(j) - c[1], z];
+            let u = [
+                centre(&state.u, 0, n),
+                centre(&state.v, 1, n),
+                w_faces.map_or(0.0, |w| centre(w, 2, n)),
+            ];
+            let cross = [
+                r[1] * u[2] - r[2] * u[1],
+                r[2] * u[0] - r[0] * u[2],
+                r[0] * u[1] - r[1] * u[0],
+            ];
+            let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            let inertia = [
+                r2 - r[0] * r[0],
+                r2 - r[1] * r[1],
+                r2 - r[2] * r[2],
+                -r[0] * r[1],
+                -r[1] * r[2],
+                -r[0] * r[2],
+            ];
+            for (q, x) in s.iter_mut().zip(cross.iter().chain(&inertia)) {
+                *q += dv * x;
+            }
+        }
+        s
+    });
+    let [lx, ly, lz, xx, yy, zz, xy, yz, xz] = s;
+    if !grid.is_3d() {
+        return [0.0, 0.0, lz / zz];
+    }
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let i = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]];
+    let d = det(i);
+    std::array::from_fn(|a| {
+        let mut m = i;
+        for (row, l) in m.iter_mut().zip([lx, ly, lz]) {
+            row[a] = l;
+        }
+        det(m) / d
+    })
 }
 
 #[cfg(test)]
@@ -826,9 +927,9 @@ mod tests {
             c(ProbeSpec::SolidCentroid, Geometry::Axisymmetric),
             ["solid_x", "solid_y"]
         );
-        assert!(ProbeSpec::SolidCentroid.three_dimensional());
-        assert!(!ProbeSpec::SolidPieces.three_dimensional());
-        assert!(c(ProbeSpec::SolidPieces, three).is_empty());
+        assert!(ProbeSpec::SolidCentroid.refused_in(three).is_none());
+        assert!(ProbeSpec::ElasticEnergy.refused_in(three).is_some());
+        assert_eq!(c(ProbeSpec::SolidPieces, three).len(), 2);
     }
 
     #[test]
@@ -868,5 +969,180 @@ mod tests {
         assert_eq!(p.count, 1);
         let total = 7.75 + 2.0 * PIECE_PHI_MIN;
         assert!((p.largest - 7.75 / total).abs() < 1e-15, "{}", p.largest);
+    }
+
+    /// The solid fraction of a sphere of radius `r` about `c` in each cell of `grid`, by
+    /// sampling 6³ points per cell (the 2-D grid's one plane: a disk).
+    fn ball(grid: &Grid, c: [f64; 3], r: f64) -> Field {
+        let mut phi = Field::zeros(grid);
+        let m = 6;
+        let [nx, ny, nz] = grid.n();
+        let depth = if grid.is_3d() { m } else { 1 };
+        for [i, j, k] in
+            (0..nz).flat_map(|k| (0..ny).flat_map(move |j| (0..nx).map(move |i| [i, j, k])))
+        {
+            let mut inside = 0;
+            for (a, b, d) in
+                (0..m).flat_map(|a| (0..m).flat_map(move |b| (0..depth).map(move |d| (a, b, d))))
+            {
+                let x = grid.xf(i as isize) + (a as f64 + 0.5) / m as f64 * grid.dx;
+                let y = grid.yf(j as isize) + (b as f64 + 0.5) / m as f64 * grid.dy;
+                let z = if grid.is_3d() {
+                    grid.zf(k as isize) + (d as f64 + 0.5) / m as f64 * grid.dz
+                } else {
+                    c[2]
+                };
+                inside += usize::from(
+                    (x - c[0]).powi(2) + (y - c[1]).powi(2) + (z - c[2]).powi(2) < r * r,
+                );
+            }
+            phi[[i as isize, j as isize, k as isize]] = inside as f64 / (m * m * depth) as f64;
+        }
+        phi
+    }
+
+    fn state_with(grid: &Grid, phi: Field) -> State {
+        let fields = [FieldId::SolidFraction].into_iter().collect();
+        let mut state = State::new(grid, 1.0, 0.1, &fields);
+        state.phi = Some(phi);
+        state
+    }
+
+    /// Two separated spheres are two pieces (6-connected), one sphere is one; and a sphere's
+    /// extent along the vertical line through its centre is its diameter, to within a cell.
+    #[test]
+    fn pieces_and_extent_of_spheres_in_three_dimensions() {
+        let grid = Grid::new_3d([20, 24, 16], (0.0, 1.0), (0.0, 1.2), (0.0, 0.8));
+        let (r, a, b) = (0.18, [0.28, 0.5, 0.4], [0.75, 0.78, 0.4]);
+        let mut phi = ball(&grid, a, r);
+        let one = solid_pieces(&grid, &phi);
+        assert_eq!(one.count, 1);
+        assert!((one.largest - 1.0).abs() < 1e-14, "{}", one.largest);
+        let (bottom, top) = solid_extent(&grid, &state_with(&grid, phi.clone()), a[0], a[2]);
+        assert!(
+            (bottom - (a[1] - r)).abs() < grid.dy && (top - (a[1] + r)).abs() < grid.dy,
+            "{bottom} {top}"
+        );
+        assert!((top - bottom - 2.0 * r).abs() < grid.dy, "{bottom} {top}");
+        let other = ball(&grid, b, r);
+        for (p, q) in phi.data_mut().iter_mut().zip(other.data()) {
+            *p += q;
+        }
+        let two = solid_pieces(&grid, &phi);
+        assert_eq!(two.count, 2);
+        assert!((two.largest - 0.5).abs() < 0.02, "{}", two.largest);
+        // Cells meeting along an edge only are two pieces; a shared face joins them.
+        let mut phi = Field::zeros(&grid);
+        phi[[3, 3, 3]] = 1.0;
+        phi[[4, 4, 3]] = 1.0;
+        assert_eq!(solid_pieces(&grid, &phi).count, 2);
+        phi[[3, 3, 4]] = 1.0;
+        phi[[3, 4, 4]] = 1.0;
+        phi[[4, 4, 4]] = 1.0;
+        assert_eq!(solid_pieces(&grid, &phi).count, 1);
+    }
+
+    /// A rigid rotation `u = U + ω × (x − p)` of a sphere on the staggered faces gives its
+    /// spin exactly, in three dimensions (all three components) and in two (ω_z).
+    #[test]
+    fn the_spin_of_a_rigid_rotation_is_exact() {
+        let grid = Grid::new_3d([16, 18, 14], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let (om, big_u, p) = ([0.7, -1.3, 2.1], [0.2, -0.4, 0.1], [0.1, 0.9, 0.3]);
+        let vel = |x: [f64; 3]| {
+            let r = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
+            [
+                big_u[0] + om[1] * r[2] - om[2] * r[1],
+                big_u[1] + om[2] * r[0] - om[0] * r[2],
+                big_u[2] + om[0] * r[1] - om[1] * r[0],
+            ]
+        };
+        let mut state = state_with(&grid, ball(&grid, [0.45, 0.55, 0.5], 0.3));
+        let w = state.w.as_mut().unwrap();
+        for k in -1..15isize {
+            for j in -1..19isize {
+                for i in -1..17isize {
+                    let (xc, yc, zc) = (grid.xc(i), grid.yc(j), grid.zc(k));
+                    state.u[[i, j, k]] = vel([grid.xf(i), yc, zc])[0];
+                    state.v[[i, j, k]] = vel([xc, grid.yf(j), zc])[1];
+                    w[[i, j, k]] = vel([xc, yc, grid.zf(k)])[2];
+                }
+            }
+        }
+        let mut out = Vec::new();
+        evaluate(
+            &ProbeSpec::SolidSpin,
+            &grid,
+            &state,
+            Vector(0.0, 0.0, Some(0.0)),
+            &[],
+            &mut out,
+        );
+        assert_eq!(out.len(), 3);
+        for (g, w) in out.iter().zip(om) {
+            assert!((g - w).abs() < 1e-12, "{out:?} vs {om:?}");
+        }
+        // Two dimensions: the same rotation about z.
+        let grid = Grid::new(Geometry::Planar, 20, 16, (0.0, 1.0), (0.0, 0.8));
+        let mut state = state_with(&grid, ball(&grid, [0.5, 0.4, 0.0], 0.25));
+        for j in -1..17isize {
+            for i in -1..21isize {
+                state.u[(i, j)] = big_u[0] - om[2] * (grid.yc(j) - p[1]);
+                state.v[(i, j)] = big_u[1] + om[2] * (grid.xc(i) - p[0]);
+            }
+        }
+        let mut out = Vec::new();
+        evaluate(
+            &ProbeSpec::SolidSpin,
+            &grid,
+            &state,
+            (0.0, -1.0).into(),
+            &[],
+            &mut out,
+        );
+        assert_eq!(out.len(), 1);
+        assert!((out[0] - om[2]).abs() < 1e-12, "{out:?}");
+    }
+
+    /// A heavy fluid at rest on the floor (a box of it, no elastic stress) under its
+    /// hydrostatic pressure presses on the floor with its weight less the buoyancy, down to the
+    /// first layer's centres: `(ρ_s − ρ_f) g (h − h_y/2) A`; the footprint reaches from the
+    /// wall's corner to the box's far corner. The same kernel on a planar and a 3-D grid.
+    #[test]
+    fn a_heavy_fluid_at_rest_presses_on_the_floor_with_its_weight() {
+        let (rho_s, rho_f, g, top) = (3.0, 1.0, 9.81, 1.0);
+        for grid in [
+            Grid::new(Geometry::Planar, 10, 8, (0.0, 1.0), (0.0, top)),
+            Grid::new_3d([10, 8, 10], (0.0, 1.0), (0.0, top), (0.0, 1.0)),
+        ] {
+            // The box: 4 cells along x and z from the corner, 3 layers high.
+            let three = grid.is_3d();
+            let (cols, layers) = (4isize, 3isize);
+            let h = layers as f64 * grid.dy;
+            let mut state = state_with(&grid, Field::zeros(&grid));
+            let kmax = if three { cols } else { 1 };
+            let [nx, ny, nz] = grid.n().map(|n| n as isize);
+            for [i, j, k] in
+                (0..nz).flat_map(|k| (0..ny).flat_map(move |j| (0..nx).map(move |i| [i, j, k])))
+            {
+                let y = grid.yc(j);
+                let inside = i < cols && k < kmax && j < layers;
+                state.phi.as_mut().unwrap()[[i, j, k]] = f64::from(u8::from(inside));
+                state.p[[i, j, k]] = if inside {
+                    rho_f * g * (top - h) + rho_s * g * (h - y)
+                } else {
+                    rho_f * g * (top - y)
+                };
+            }
+            let area = cols as f64 * grid.dx * if three { kmax as f64 * grid.dz } else { 1.0 };
+            let want = (rho_s - rho_f) * g * (h - 0.5 * grid.dy) * area;
+            let force = contact_force(&grid, &state, &[], Side::YMin);
+            assert!((force - want).abs() < 1e-12 * want, "{force} vs {want}");
+            let reach = contact_radius(&grid, &state, &[], Side::YMin);
+            let far = cols as f64 * grid.dx * if three { 2f64.sqrt() } else { 1.0 };
+            assert!((reach - far).abs() < 1e-14, "{reach} vs {far}");
+            // Nothing presses on the lid, nor (no solid there) on the far x wall.
+            assert_eq!(contact_force(&grid, &state, &[], Side::YMax), 0.0);
+            assert_eq!(contact_force(&grid, &state, &[], Side::XMax), 0.0);
+        }
     }
 }

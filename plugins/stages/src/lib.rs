@@ -9,7 +9,7 @@ mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
 mod faces;
-pub mod ops;
+mod ops;
 pub mod projection;
 mod scratch;
 pub mod solid;

@@ -148,7 +148,9 @@ impl Coefficients {
 
     /// [`set_viscosity_edges`](Self::set_viscosity_edges) without keeping the edge viscosities:
     /// each edge's harmonic mean goes straight into its weight (the same values, bit for bit,
-    /// and no edge array). Lines in parallel.
+    /// and no edge array). A line of edges whose four rows of cells hold one viscosity (a
+    /// uniform fluid, or a line away from an interface) takes that viscosity's mean once
+    /// instead of per edge: the same value, without its divisions. Lines in parallel.
     pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
         self.set_cells(g, mu, scale);
         for (e, &(axes, at)) in self.edge.iter_mut().zip(shear_pairs(self.dims)) {
@@ -158,9 +160,21 @@ impl Coefficients {
                 let len = l.len;
                 let [sw, se, nw, ne] = lo.map(|d| &mu.at(&l, d)[..len]);
                 let (r, gr) = (&edge_radius(g, at, &l)[..len], &mut gr[..len]);
-                for n in 0..len {
-                    let mk = harmonic_mean([sw[n], se[n], nw[n], ne[n]]);
-                    gr[n] = s * r[n] * mk;
+                let one = sw.first().copied().filter(|&m| {
+                    [sw, se, nw, ne]
+                        .iter()
+                        .all(|row| row.iter().all(|&x| x == m))
+                });
+                if let Some(m) = one {
+                    let mk = harmonic_mean([m; 4]);
+                    for n in 0..len {
+                        gr[n] = s * r[n] * mk;
+                    }
+                } else {
+                    for n in 0..len {
+                        let mk = harmonic_mean([sw[n], se[n], nw[n], ne[n]]);
+                        gr[n] = s * r[n] * mk;
+                    }
                 }
             });
         }
@@ -1074,5 +1088,44 @@ mod tests {
             "order {order} ({e16:e}, {e32:e})"
         );
         assert!(e32 < 0.01 * size, "{e32:e} of {size:e}");
+    }
+
+    /// The weights of lines of one viscosity (taken once per line) are those of the per-edge
+    /// harmonic means, bit for bit, beside lines that mix two viscosities.
+    #[test]
+    fn uniform_lines_take_the_per_edge_weights() {
+        let grid = box_grid([6, 5, 4]);
+        let walls = BoxGhosts {
+            periodic: [false; 3],
+        };
+        let faces = UnknownFaces::with_ranges(&grid, &walls.ranges(&grid));
+        // 0.7 everywhere but a block of 0.02 (lines through it mix the two).
+        let mut mu = Field::filled(&grid, 0.7);
+        for q in 0..mu.data().len() {
+            let i = mu.index_of(q);
+            if (1..3).contains(&i[0]) && (2..4).contains(&i[1]) && i[2] == 1 {
+                mu.data_mut()[q] = 0.02;
+            }
+        }
+        let mut fast = Coefficients::new(&grid, faces);
+        fast.set_viscosity_weights(&grid, &mu, 0.3);
+        let mut edges: Vec<Field> = (0..3).map(|_| Field::zeros(&grid)).collect();
+        let mut slow = Coefficients::new(&grid, faces);
+        slow.set_viscosity_edges(&grid, &mu, 0.3, &mut edges);
+        for (f, s) in fast.edge.iter().zip(&slow.edge) {
+            assert!(
+                f.data()
+                    .iter()
+                    .zip(s.data())
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+            // Both kinds of line are there: the weights take more than one value.
+            let (lo, hi) = s
+                .data()
+                .iter()
+                .filter(|&&g| g > 0.0)
+                .fold((f64::MAX, 0.0f64), |(l, h), &g| (l.min(g), h.max(g)));
+            assert!(lo < hi, "one weight only: {lo} {hi}");
+        }
     }
 }

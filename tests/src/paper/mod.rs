@@ -8,6 +8,7 @@ pub mod case;
 pub mod couette;
 pub mod couette_mr;
 pub mod disk_cavity;
+pub mod extruded_cavity;
 pub mod falling_drop;
 pub mod lid_driven_cube;
 pub mod oscillating_disk;
@@ -16,6 +17,7 @@ pub mod shear_rectangle;
 pub mod soft_wall;
 pub mod sphere;
 pub mod stability;
+pub mod vof_transport_3d;
 
 use efsi_core::{EfsiError, Scene, Simulation};
 use efsi_run::SceneOverrides;
@@ -218,7 +220,9 @@ pub const CASES: &[Entry] = &[
     entry::<couette::Couette>(),
     entry::<couette_mr::CouetteMr>(),
     entry::<lid_driven_cube::LidDrivenCube>(),
+    entry::<extruded_cavity::ExtrudedCavity>(),
     entry::<falling_drop::FallingDrop>(),
+    entry::<vof_transport_3d::VofTransport3d>(),
     entry::<stability::Stability>(),
 ];
 

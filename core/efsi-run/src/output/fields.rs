@@ -12,7 +12,7 @@
 use crate::output::spec::{SliceSpec, VTK_FIELDS, VtkOptions};
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
-use efsi_core::{OutputDecl, OutputKind};
+use efsi_core::{OutputDecl, OutputKind, Region, Stagger, operators};
 
 use efsi_core::state::State;
 
@@ -259,52 +259,34 @@ fn scalar(grid: &Grid, f: &Field) -> Vec<f64> {
     cells(grid).map(|c| f[c]).collect()
 }
 
-/// The velocity at the cell centres as 3-vectors, each component the mean of its two faces;
-/// an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in the X–Z plane).
+/// The velocity at the cell centres as 3-vectors, each component the mean of its two faces
+/// ([`operators::centre_avg`]); an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in
+/// the X–Z plane). In VTK's order: the cells' lines in order, x fastest.
 fn velocity(grid: &Grid, state: &State) -> Vec<f64> {
+    let (cells, nx) = (Region::of(grid, Stagger::Cell), grid.nx);
+    let slot = |a: usize| usize::from(a == 1 && grid.is_axisymmetric()) + a;
     let mut vel = vec![0.0; 3 * grid.cells()];
-    match &state.w {
-        None => {
-            let vy = if grid.is_axisymmetric() { 2 } else { 1 };
-            for (k, [i, j, _]) in cells(grid).enumerate() {
-                let (a, b) = efsi_core::ops::centre_velocity(&state.u, &state.v, i, j);
-                vel[3 * k] = a;
-                vel[3 * k + vy] = b;
-            }
-        }
-        Some(w) => {
-            for (k, c) in cells(grid).enumerate() {
-                for (a, f) in [&state.u, &state.v, w].into_iter().enumerate() {
-                    let mut up = c;
-                    up[a] += 1;
-                    vel[3 * k + a] = 0.5 * (f[c] + f[up]);
-                }
+    let mut centre = vec![0.0; nx];
+    for (n, out) in vel.chunks_mut(3 * nx).enumerate() {
+        let line = cells.line(n);
+        for (a, f) in state.velocity().iter().enumerate() {
+            operators::centre_avg(f, a, &line, &mut centre);
+            for (i, c) in centre.iter().enumerate() {
+                out[3 * i + slot(a)] = *c;
             }
         }
     }
     vel
 }
 
-/// The discrete divergence of the velocity per cell, in VTK's order.
+/// The discrete divergence of the velocity per cell ([`operators::div`]), in VTK's order.
 fn divergence(grid: &Grid, state: &State) -> Vec<f64> {
-    match &state.w {
-        None => cells(grid)
-            .map(|[i, j, _]| efsi_core::ops::div(grid, &state.u, &state.v, i, j))
-            .collect(),
-        Some(w) => cells(grid)
-            .map(|c| {
-                let h = grid.h();
-                let f = [&state.u, &state.v, w];
-                (0..3)
-                    .map(|a| {
-                        let mut up = c;
-                        up[a] += 1;
-                        (f[a][up] - f[a][c]) / h[a]
-                    })
-                    .sum()
-            })
-            .collect(),
+    let cells = Region::of(grid, Stagger::Cell);
+    let mut out = vec![0.0; grid.cells()];
+    for (n, row) in out.chunks_mut(grid.nx).enumerate() {
+        operators::div(grid, &state.velocity(), &cells.line(n), row);
     }
+    out
 }
 
 /// A stage's array or field `name` among `outputs`, if the state has it: `(components,

@@ -177,12 +177,13 @@ pub enum ProbeSpec {
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
     /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
-    /// column `contact_force`. A contact cell is a cell of the first row along the wall that
-    /// holds a solid fraction φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less
-    /// carries no deformation) and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean
-    /// pressure of the row's other cells, `τ_nn` the elastic normal stress (the viscous one
-    /// vanishes on a no-slip wall). The criterion is absolute: a trace of solid (φ ≈ 1e-18)
-    /// left by the interface advection is no contact, and without a contact cell — before
+    /// column `contact_force`. A contact cell is a cell of the first row (layer, in a
+    /// Cartesian3D scene, on any of its six sides) along the wall that holds a solid fraction
+    /// φ ≥ 1e-3 (the elastic stage's threshold: a cell holding less carries no deformation)
+    /// and presses on the wall, `p − p_a − τ_nn > 0` — `p_a` the mean pressure of the row's
+    /// other cells, `τ_nn` the elastic normal stress (0 for a solid without a law; the viscous
+    /// one vanishes on a no-slip wall). The criterion is absolute: a trace of solid
+    /// (φ ≈ 1e-18) left by the interface advection is no contact, and without a contact cell — before
     /// touch-down, after lift-off — the probe is exactly 0. A body pressed on a no-slip wall
     /// keeps a thin air film, thinner than a cell, under it: the film carries the load, so a
     /// partly filled cell counts.
@@ -193,17 +194,24 @@ pub enum ProbeSpec {
     /// The radius (half-width in planar geometry) of the loaded footprint on a wall: the
     /// distance along the wall from its start to the outer edge of the last contact cell (as
     /// defined at [`ProbeSpec::ContactForce`]: φ ≥ 1e-3 and pressing on the wall); exactly 0
-    /// without one. Column `contact_radius`.
+    /// without one. In a Cartesian3D scene, how far the contact cells reach from the wall's
+    /// corner (the lower end of both axes along it: the axis of a body on a quarter of the box
+    /// between two symmetry planes), each cell's farthest point along the direction from the
+    /// corner to its centre. Column `contact_radius`.
     ContactRadius {
         /// The wall.
         wall: Side,
     },
-    /// The solid's extent along the vertical line `x = at` (the axis in axisymmetric scenes):
-    /// the bottom and top of its longest run of cells holding solid, each placed by the end
-    /// cell's solid fraction (a height function). Columns `solid_bottom`, `solid_top`.
+    /// The solid's extent along the vertical line `x = at` (the axis in axisymmetric scenes;
+    /// the line `x = at`, `z = z` along y in a Cartesian3D scene): the bottom and top of its
+    /// longest run of cells holding solid, each placed by the end cell's solid fraction (a
+    /// height function). Columns `solid_bottom`, `solid_top`.
     SolidExtent {
         /// The line's abscissa.
         at: f64,
+        /// The line's z, in a Cartesian3D scene only (where it is required).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        z: Option<f64>,
     },
     /// Whether the solid stays in one piece: the cells holding more than 1e-3 of solid, joined
     /// through their faces, form connected regions; column `solid_pieces` counts the regions
@@ -211,9 +219,16 @@ pub enum ProbeSpec {
     /// `solid_largest_piece` is the largest region's share of the solid volume (1 for a solid
     /// in one piece). Periodic sides are not wrapped: a solid crossing one counts as two.
     SolidPieces,
+    /// The solid's angular velocity: the rigid rotation about its centroid that fits its
+    /// velocity best in the least-squares sense (`I ω = ∫φ r × u dV`, `I` the solid's inertia
+    /// tensor about the centroid per unit density; exact for a rigid rotation). Column
+    /// `solid_spin` (ω about z) in a planar scene, `solid_spin_x`, `solid_spin_y`,
+    /// `solid_spin_z` in a Cartesian3D one; refused in an axisymmetric scene, whose bodies
+    /// turn about no out-of-plane axis.
+    SolidSpin,
     /// A quantity by name: the framework's ([`crate::probes::QUANTITIES`]: the variants above
-    /// that take no argument, by their column's name, `solid_centroid`, `solid_velocity` and
-    /// `solid_pieces` for the two-column ones) or one a scheduled stage reports
+    /// that take no argument, by their column's name, `solid_centroid`, `solid_velocity`,
+    /// `solid_pieces` and `solid_spin` for the ones of several columns) or one a scheduled stage reports
     /// ([`efsi_core::StagePlugin::outputs`]: `elastic_energy`), whose column is named after it.
     Quantity(String),
 }
@@ -233,6 +248,7 @@ impl ProbeSpec {
             ProbeSpec::SolidVelocity => "solid_velocity",
             ProbeSpec::ElasticEnergy => "elastic_energy",
             ProbeSpec::SolidPieces => "solid_pieces",
+            ProbeSpec::SolidSpin => "solid_spin",
             ProbeSpec::Quantity(name) => name,
             ProbeSpec::Point { .. }
             | ProbeSpec::ContactForce { .. }
@@ -263,17 +279,24 @@ impl ProbeSpec {
         }
     }
 
-    /// Whether the probe runs in a Cartesian3D scene: a point sample, the energies, the largest
-    /// divergence and speed, the solid's volume, centroid and velocity (three columns each for
-    /// the last two), and a stage's quantity (the contact probes, the solid's extent and its
-    /// pieces are two-dimensional).
-    pub fn three_dimensional(&self) -> bool {
+    /// Why the probe cannot run in a scene of `geometry`, if it cannot: `ElasticEnergy` in a
+    /// Cartesian3D scene (the elastic stage's strain energy is two-dimensional) and a quantity
+    /// without columns there (the spin in an axisymmetric scene). Every other probe runs in
+    /// every geometry.
+    pub fn refused_in(&self, geometry: Geometry) -> Option<&'static str> {
         match self {
-            ProbeSpec::Point { .. } => true,
-            ProbeSpec::ElasticEnergy => false,
-            p => p.quantity().is_some_and(|name| {
-                crate::probes::framework_quantity(name).is_none_or(|q| !q.columns_3d.is_empty())
-            }),
+            ProbeSpec::ElasticEnergy if geometry == Geometry::Cartesian3D => Some(
+                "the elastic stage's strain energy is two-dimensional: ElasticEnergy is refused \
+                 in a Cartesian3D scene",
+            ),
+            p => p
+                .quantity()
+                .and_then(crate::probes::framework_quantity)
+                .filter(|q| q.columns_in(geometry).is_empty())
+                .map(|_| {
+                    "SolidSpin is the turn about an axis out of the plane, which an \
+                     axisymmetric scene's bodies have not: it is refused there"
+                }),
         }
     }
 
@@ -514,16 +537,8 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
     for (k, probe) in o.probes.iter().enumerate() {
         let f = format!("output.probes[{k}]");
-        if space.three && !probe.three_dimensional() {
-            return err(
-                &f,
-                format!(
-                    "{probe:?} is a two-dimensional probe: a Cartesian3D scene's probes are \
-                     Point (at (x, y, z)), KineticEnergy, PotentialEnergy, MaxDivergence, \
-                     MaxSpeed, SolidVolume, SolidCentroid, SolidVelocity and the stages' \
-                     quantities"
-                ),
-            );
+        if let Some(why) = probe.refused_in(scene.geometry) {
+            return err(&f, why);
         }
         if probe.needs_solid() && scene.solid.is_none() {
             return err(
@@ -537,18 +552,8 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
                 "ElasticEnergy needs a solid with a law (solid.law), and this solid has none",
             );
         }
-        if let ProbeSpec::SolidExtent { at } = probe
-            && !(at.is_finite() && *at >= scene.domain.x.0 && *at <= scene.domain.x.1)
-        {
-            return err(
-                &format!("{f}.at"),
-                format!(
-                    "x = {} is outside the domain's [{}, {}]",
-                    num(*at),
-                    num(scene.domain.x.0),
-                    num(scene.domain.x.1)
-                ),
-            );
+        if let ProbeSpec::SolidExtent { at, z } = probe {
+            solid_extent_line(&f, scene, *at, *z)?;
         }
         claim_columns(probe, scene.geometry, k, &f, &mut columns)?;
         if let ProbeSpec::Point { field, at, .. } = probe {
@@ -574,6 +579,44 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         }
     }
     Ok(())
+}
+
+/// The line of a `SolidExtent` probe `f`: `x = at` inside the domain, and `z` given, inside,
+/// in a Cartesian3D scene only.
+fn solid_extent_line(f: &str, scene: &Scene, at: f64, z: Option<f64>) -> Checked {
+    let inside = |v: f64, (lo, hi): (f64, f64)| v.is_finite() && v >= lo && v <= hi;
+    let outside = |name: &str, v: f64, (lo, hi): (f64, f64)| {
+        format!(
+            "{name} = {} is outside the domain's [{}, {}]",
+            num(v),
+            num(lo),
+            num(hi)
+        )
+    };
+    if !inside(at, scene.domain.x) {
+        return err(&format!("{f}.at"), outside("x", at, scene.domain.x));
+    }
+    match (
+        z,
+        scene
+            .domain
+            .z
+            .filter(|_| scene.geometry == Geometry::Cartesian3D),
+    ) {
+        (None, Some(_)) => err(
+            &format!("{f}.z"),
+            "a Cartesian3D scene's line needs its z: SolidExtent(at: x, z: z)",
+        ),
+        (Some(_), None) => err(
+            &format!("{f}.z"),
+            format!(
+                "a {:?} scene's line is x = at; z is for a Cartesian3D scene",
+                scene.geometry
+            ),
+        ),
+        (Some(z), Some(d)) if !inside(z, d) => err(&format!("{f}.z"), outside("z", z, d)),
+        _ => Ok(()),
+    }
 }
 
 /// Claim probe `k`'s columns of probes.csv in `columns` (column → the probe that has it,
@@ -930,6 +973,107 @@ mod tests {
             let e = format!("{f}: {m}");
             for n in needles {
                 assert!(e.contains(n), "{slices}: expected `{n}` in: {e}");
+            }
+        }
+    }
+
+    /// The solid probes run in a Cartesian3D scene (the extent's line needs its z there and
+    /// only there); `ElasticEnergy` is refused in 3-D and `SolidSpin` in an axisymmetric
+    /// scene, each by name.
+    #[test]
+    fn the_solid_probes_are_checked_per_geometry_by_name() {
+        let solid = "solid: (shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.2), density: 2.0, viscosity: 0.1),";
+        let cube = MIN
+            .replace(
+                "domain: (x: (0.0, 1.0), y: (0.0, 1.0)),",
+                "geometry: Cartesian3D, domain: (x: (0.0, 1.0), y: (0.0, 1.0), z: (0.0, 1.0)),",
+            )
+            .replace(
+                "grid: (nx: 8, ny: 8),",
+                &format!("grid: (nx: 8, ny: 8, nz: 8), {solid}"),
+            )
+            .replace(
+                "y_max: MovingWall(speed: 1.0)",
+                "y_max: MovingWall(speed: 1.0), z_min: NoSlip, z_max: NoSlip",
+            );
+        let axi = MIN
+            .replace("domain: (x: (0.0, 1.0), y: (0.0, 1.0)),", "geometry: Axisymmetric, domain: (r: (0.0, 1.0), z: (0.0, 1.0)),")
+            .replace("grid: (nx: 8, ny: 8),", "grid: (nr: 8, nz: 8), solid: (shape: Disk(center: (0.0, 0.5), radius: 0.2), density: 2.0, viscosity: 0.1),")
+            .replace("boundaries: (x_min: NoSlip,", "boundaries: (x_min: Axis,");
+        let with = |base: &str, probes: &str| {
+            let text = base.replace(
+                "time: (end: 1.0),",
+                &format!("time: (end: 1.0), output: (probes: [{probes}]),"),
+            );
+            let scene = Scene::from_str_at(&text, Path::new("scene.ron")).unwrap();
+            let o = scene.output_spec()?;
+            validate(&o, &scene).map(|()| o)
+        };
+        let o = with(
+            &cube,
+            "SolidPieces, SolidSpin, SolidExtent(at: 0.5, z: 0.25), ContactForce(wall: ZMin), ContactRadius(wall: YMin)",
+        )
+        .unwrap();
+        let columns: Vec<String> = o
+            .probes
+            .iter()
+            .flat_map(|p| p.columns(Geometry::Cartesian3D))
+            .collect();
+        assert_eq!(
+            columns,
+            [
+                "solid_pieces",
+                "solid_largest_piece",
+                "solid_spin_x",
+                "solid_spin_y",
+                "solid_spin_z",
+                "solid_bottom",
+                "solid_top",
+                "contact_force",
+                "contact_radius"
+            ]
+        );
+        assert_eq!(
+            ProbeSpec::SolidSpin.columns(Geometry::Planar),
+            ["solid_spin"]
+        );
+        assert!(with(&axi, "SolidExtent(at: 0.0), SolidPieces").is_ok());
+        for (base, probes, needles) in [
+            (
+                &cube,
+                "SolidExtent(at: 0.5)",
+                &["output.probes[0].z", "needs its z"][..],
+            ),
+            (
+                &cube,
+                "SolidExtent(at: 0.5, z: 1.5)",
+                &["output.probes[0].z", "z = 1.5"],
+            ),
+            (
+                &axi,
+                "SolidExtent(at: 0.0, z: 0.5)",
+                &["output.probes[0].z", "Axisymmetric"],
+            ),
+            (
+                &cube,
+                "MaxSpeed, ElasticEnergy",
+                &["output.probes[1]", "ElasticEnergy is refused"],
+            ),
+            (
+                &axi,
+                "SolidSpin",
+                &["output.probes[0]", "SolidSpin", "axisymmetric"],
+            ),
+            (
+                &axi,
+                "Quantity(\"solid_spin\")",
+                &["output.probes[0]", "SolidSpin"],
+            ),
+        ] {
+            let (f, m) = with(base, probes).unwrap_err();
+            let e = format!("{f}: {m}");
+            for n in needles {
+                assert!(e.contains(n), "{probes}: expected `{n}` in: {e}");
             }
         }
     }

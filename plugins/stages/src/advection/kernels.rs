@@ -26,7 +26,7 @@
 //! the same function of the same values wherever it is computed, so the results are the same,
 //! bit for bit, on any number of threads.
 
-use efsi_core::operators::minus;
+use efsi_core::operators::{face_density, minus};
 use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
 use efsi_linalg::par;
 use std::ops::Range;
@@ -100,9 +100,9 @@ pub(crate) fn face_masses(grid: &Grid, rho: &Field, c: usize, m: &mut [f64]) {
         let m = &mut m[..l.len];
         if c == 0 {
             let r = &rho.at(&l, [0; 3])[..l.len];
-            m[0] = crate::ops::face_density(r[0], r[1]);
+            m[0] = face_density(r[0], r[1]);
             for n in 1..l.len {
-                m[n] = crate::ops::face_density(r[n - 1], r[n]);
+                m[n] = face_density(r[n - 1], r[n]);
             }
         } else {
             let (below, here) = if l.start[c] == lowest {
@@ -112,7 +112,7 @@ pub(crate) fn face_masses(grid: &Grid, rho: &Field, c: usize, m: &mut [f64]) {
             };
             let (b, h) = (&rho.at(&l, below)[..l.len], &rho.at(&l, here)[..l.len]);
             for n in 0..l.len {
-                m[n] = crate::ops::face_density(b[n], h[n]);
+                m[n] = face_density(b[n], h[n]);
             }
         }
     });
@@ -443,7 +443,7 @@ impl Euler<'_> {
                     (m_e, q_e)
                 } else {
                     // The start-of-step face mass, as `face_masses` gave it.
-                    let a = crate::ops::face_density(rho_lo[c], rho_hi[c]);
+                    let a = face_density(rho_lo[c], rho_hi[c]);
                     (0.5 * (a + m_e), 0.5 * (a * x0[c] + q_e))
                 };
                 mr[c] = m_new;

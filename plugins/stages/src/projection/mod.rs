@@ -66,8 +66,8 @@
 //! fixed order, so the result is bit-identical on any number of threads. Nothing is allocated
 //! after the first step.
 
-use crate::ops;
 use crate::scratch::{self, Scratch};
+use efsi_core::operators;
 use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
     BoundarySet, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin, StageStats,
@@ -382,7 +382,7 @@ impl Assembly<'_> {
                 let ii = i as isize;
                 *e = if i + 1 < nx || px {
                     let ie = if i + 1 < nx { ii + 1 } else { 0 };
-                    m.rx(ii + 1) * dy / (ops::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
+                    m.rx(ii + 1) * dy / (operators::face_density(rho[(ii, jj)], rho[(ie, jj)]) * dx)
                 } else {
                     0.0
                 };
@@ -394,7 +394,7 @@ impl Assembly<'_> {
                 let ii = i as isize;
                 *n = if j + 1 < ny || py {
                     let jn = if j + 1 < ny { jj + 1 } else { 0 };
-                    m.rc(ii) * dx / (ops::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
+                    m.rc(ii) * dx / (operators::face_density(rho[(ii, jj)], rho[(ii, jn)]) * dy)
                 } else {
                     0.0
                 };
@@ -775,7 +775,7 @@ impl Precond {
     }
 }
 
-/// `b = −(net volume outflux)/Δt` per cell, as `ops::net_outflux` computes it, over slices
+/// `b = −(net volume outflux)/Δt` per cell, as `operators::net_outflux` computes it, over slices
 /// (it vectorises).
 fn divergence_rhs(grid: &Grid, u: &efsi_core::Field, v: &efsi_core::Field, dt: f64, b: &mut [f64]) {
     let nx = grid.nx;
@@ -806,10 +806,7 @@ fn check_divergence(ctx: &StepContext, state: &mut State, tol: f64) {
         ctx.t + ctx.dt,
         false,
     );
-    let d = match state.w.as_ref().filter(|_| grid.is_3d()) {
-        Some(w) => three_d::max_abs_div_3d(grid, [&state.u, &state.v, w]),
-        None => ops::max_abs_div(grid, &state.u, &state.v),
-    } * ctx.dt;
+    let d = operators::max_abs_div(grid, &state.velocity()) * ctx.dt;
     // A non-finite divergence is not this check's to report: the scheduler names the first
     // non-finite velocity (and the stage) right after the stage.
     debug_assert!(
@@ -819,7 +816,7 @@ fn check_divergence(ctx: &StepContext, state: &mut State, tol: f64) {
 }
 
 /// `V ← V − Δt ∇p/ρ` on the unknown faces (`bc.normal_faces`), with the face density of
-/// [`ops::face_density`]: the projection's velocity update, and the incremental scheme's
+/// [`operators::face_density`]: the projection's velocity update, and the incremental scheme's
 /// predictor with the last step's pressure. `p`'s ghosts must be filled.
 pub(crate) fn subtract_gradient(
     grid: &Grid,
@@ -840,7 +837,7 @@ pub(crate) fn subtract_gradient(
         let (pe, pw) = (p.at(&line, [0, 0, 0]), p.at(&line, [-1, 0, 0]));
         let (re, rw) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [-1, 0, 0]));
         for (t, u) in u.iter_mut().enumerate() {
-            *u -= cx * (pe[t] - pw[t]) / ops::face_density(re[t], rw[t]);
+            *u -= cx * (pe[t] - pw[t]) / operators::face_density(re[t], rw[t]);
         }
     });
     let faces = Region::of(grid, Stagger::YFace).range(1, vy.lo, vy.hi);
@@ -848,7 +845,7 @@ pub(crate) fn subtract_gradient(
         let (pn, ps) = (p.at(&line, [0, 0, 0]), p.at(&line, [0, -1, 0]));
         let (rn, rs) = (rho.at(&line, [0, 0, 0]), rho.at(&line, [0, -1, 0]));
         for (i, v) in v.iter_mut().enumerate() {
-            *v -= cy * (pn[i] - ps[i]) / ops::face_density(rn[i], rs[i]);
+            *v -= cy * (pn[i] - ps[i]) / operators::face_density(rn[i], rs[i]);
         }
     });
 }
@@ -856,16 +853,11 @@ pub(crate) fn subtract_gradient(
 /// A closed domain whose boundary velocities carry a net flux cannot be made divergence-free
 /// everywhere; the postcondition does not apply (only reachable with inconsistent scenes).
 fn singular_inconsistent(ctx: &StepContext, state: &State) -> bool {
-    let g = ctx.grid;
-    if let Some(w) = state.w.as_ref().filter(|_| g.is_3d()) {
-        let net = three_d::net_outflux_3d(g, [&state.u, &state.v, w]);
-        return !ctx.bc.has_pressure_reference() && net.abs() > 1e-12;
-    }
-    let mut net = 0.0;
-    for j in 0..g.ny as isize {
-        for i in 0..g.nx as isize {
-            net += ops::net_outflux(g, &state.u, &state.v, i, j);
-        }
-    }
+    let (g, vel) = (ctx.grid, state.velocity());
+    let [net] = Region::of(g, Stagger::Cell).sum(|l| {
+        [l.indices()
+            .map(|c| operators::net_outflux(g, &vel, c))
+            .sum()]
+    });
     !ctx.bc.has_pressure_reference() && net.abs() > 1e-12
 }

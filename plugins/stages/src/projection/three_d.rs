@@ -4,14 +4,13 @@
 //!
 //! **Matrix.** `Σ_f (A_f/(ρ_f h_a)) (p_C − p_F)` over the six faces, `A_f` the face's area
 //! (`h_y h_z`, `h_x h_z`, `h_x h_y`), `ρ_f` the average of the two cells' densities
-//! ([`ops::face_density`]); a closed side (wall) has no coupling (homogeneous Neumann), a
+//! ([`operators::face_density`]); a closed side (wall) has no coupling (homogeneous Neumann), a
 //! periodic axis wraps, read from the density's ghost across the wrap, which must be filled.
 //! **Right-hand side** `−(∇·V) dV/Δt` ([`operators::div`] with u, v, w). **Correction**
 //! `V_a ← V_a − Δt (p_C − p_{C−e_a})/(h_a ρ_f)` on the unknown faces of each axis.
 //!
 //! The sides along every axis come from the [`BoundarySet`] ([`z_sides`] for z).
 
-use crate::ops;
 use efsi_core::loops::unit;
 use efsi_core::{BoundarySet, Field, Grid, Region, Stagger, operators};
 use efsi_linalg::par;
@@ -63,7 +62,7 @@ pub(crate) fn assemble_3d_into(
                     at[ax - 1] + 1 == n[ax]
                 };
                 *o = if !last || periodic[ax] {
-                    c / ops::face_density(rc[i], rn[i])
+                    c / operators::face_density(rc[i], rn[i])
                 } else {
                     0.0
                 };
@@ -135,32 +134,10 @@ pub(crate) fn subtract_gradient_3d(
             let (pc, pb) = (p.at(&line, [0; 3]), p.at(&line, below));
             let (rc, rb) = (rho.at(&line, [0; 3]), rho.at(&line, below));
             for (t, u) in u.iter_mut().enumerate() {
-                *u -= c * (pc[t] - pb[t]) / ops::face_density(rc[t], rb[t]);
+                *u -= c * (pc[t] - pb[t]) / operators::face_density(rc[t], rb[t]);
             }
         });
     }
-}
-
-/// `max |∇·V|` over the cells of a three-dimensional grid (ghosts filled).
-pub(crate) fn max_abs_div_3d(grid: &Grid, vel: [&Field; 3]) -> f64 {
-    let cells = Region::of(grid, Stagger::Cell);
-    cells.max(0.0, |line| {
-        let mut out = vec![0.0; line.len];
-        operators::div(grid, &vel, &line, &mut out);
-        out.iter().fold(0.0f64, |m, d| m.max(d.abs()))
-    })
-}
-
-/// The net volume outflux `Σ (∇·V) dV` of a three-dimensional grid.
-pub(crate) fn net_outflux_3d(grid: &Grid, vel: [&Field; 3]) -> f64 {
-    let cells = Region::of(grid, Stagger::Cell);
-    let dv = grid.dx * grid.dy * grid.dz;
-    let [s] = cells.sum(|line| {
-        let mut out = vec![0.0; line.len];
-        operators::div(grid, &vel, &line, &mut out);
-        [out.iter().sum::<f64>() * dv]
-    });
-    s
 }
 
 #[cfg(test)]
@@ -277,14 +254,8 @@ mod tests {
             }
             let dt = 0.01;
             let cells = n[0] * n[1] * n[2];
-            let max_div = |u: &Field, v: &Field, w: &Field| {
-                let region = Region::of(&grid, Stagger::Cell);
-                let mut out = vec![0.0; n[0]];
-                (0..region.lines()).fold(0.0f64, |m, l| {
-                    operators::div(&grid, &[u, v, w], &region.line(l), &mut out);
-                    out.iter().fold(m, |m, d| m.max(d.abs()))
-                })
-            };
+            let max_div =
+                |u: &Field, v: &Field, w: &Field| operators::max_abs_div(&grid, &[u, v, w]);
             let before = max_div(&u, &v, &w) * dt;
             let mut a = Stencil5::new(0, 0, false, false);
             assemble_3d(&mut a, &grid, periodic, &rho);

@@ -9,6 +9,8 @@
 //! - [`plic3d`]: the same geometry in three dimensions: the plane–cuboid volume and its
 //!   inverse, the fluxed volume of a split sweep, Youngs / centred / mixed normals;
 //!   [`shapes3d`]: the cell fractions of the three-dimensional shapes.
+//! - [`benchmarks`]: the three-dimensional transport benchmarks (deformation, slotted sphere)
+//!   the tests and `cargo xtask bench-paper` run.
 //!
 //! # Three dimensions
 //!
@@ -33,10 +35,12 @@
 //! not on the sum of the components as for unsplit schemes. Normals are those of one 3×3×3
 //! block; LVIRA/ELVIRA or height functions would be more accurate at several times the cost.
 //!
-//! **Tests** (`tests/vof_advection3d.rs`, face-averaged prescribed velocities): LeVeque's /
-//! Enright's deformation of a sphere (r = 0.15, period 3) at 32³, the slotted sphere's
-//! revolution (Enright et al. 2002) at 32³, and exact translation along every axis through
-//! periodic sides; each asserts its shape error, conservation to 1e-12 and the bounds.
+//! **Tests** (`tests/vof_advection3d.rs`, on the face-averaged prescribed velocities of
+//! [`benchmarks`]): LeVeque's / Enright's deformation of a sphere (r = 0.15, period 3) at 32³,
+//! the slotted sphere's revolution (Enright et al. 2002) at 32³, and exact translation along
+//! every axis through periodic sides; each asserts its shape error, conservation to 1e-12 and
+//! the bounds. `cargo xtask bench-paper --case vof_transport_3d` runs the first two at up to
+//! 128³ with their observed order and a published comparison.
 //!
 //! **References**: G. D. Weymouth & D. K.-P. Yue (2010), J. Comput. Phys. 229:2853–2865;
 //! E. Aulisa, S. Manservisi, R. Scardovelli & S. Zaleski (2007), J. Comput. Phys.
@@ -46,6 +50,7 @@
 //! incompressible flow*, SIAM J. Numer. Anal. 33:627–665.
 
 pub mod advect;
+pub mod benchmarks;
 pub mod plic;
 pub mod plic3d;
 pub mod shapes;
