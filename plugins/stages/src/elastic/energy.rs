@@ -172,7 +172,8 @@ fn principal_log_3d(b: &[f64]) -> Option<([[f64; 3]; 3], [f64; 3])> {
     let scale = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
     for _ in 0..50 {
         let off = a[0][1].abs() + a[1][2].abs() + a[0][2].abs();
-        if !(off > 1e-15 * scale) {
+        // Stops on round-off, and on NaN.
+        if off.partial_cmp(&(1e-15 * scale)) != Some(std::cmp::Ordering::Greater) {
             break;
         }
         for (p, r) in [(0, 1), (1, 2), (0, 2)] {

@@ -4,8 +4,8 @@
 use super::ElasticPreconditioner;
 use super::{Kernels, err, missing, plus};
 use crate::block_multigrid::ViscousBlocks;
-use efsi_core::operators::face_density;
 use crate::viscous_operator::Coefficients;
+use efsi_core::operators::face_density;
 use efsi_core::operators::minus;
 use efsi_core::{Field, Grid, Index, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
