@@ -513,10 +513,16 @@ impl BoundarySet {
         // A wall that drives this component at a time other than `Homogeneous` has a speed
         // that varies along the wall: then line by line below; else every ghost is a rule of
         // one value.
+        // A wall with a direction drives both tangential components.
         let varies = |side: Side| {
-            matches!(self.get(side), Boundary::MovingWall { .. })
-                && comp == driven(axis)
-                && when != WallTime::Homogeneous
+            when != WallTime::Homogeneous
+                && match self.get(side) {
+                    Boundary::MovingWall {
+                        direction: Some(_), ..
+                    } => true,
+                    Boundary::MovingWall { .. } => comp == driven(axis),
+                    _ => false,
+                }
         };
         if !sides.iter().any(|&(side, ..)| varies(side)) {
             let mut rules = Rules::new();
