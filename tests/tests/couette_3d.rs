@@ -2,8 +2,9 @@
 //! issue 41 case 1): the wall moving along `d = (cos 30°, 0, sin 30°)`, periodic in x and z.
 //! The flow is the planar case's along `d`: the 3-D velocity along `d` must give the planar
 //! error against the start-up reference, the cross-plane component `−sin 30° u + cos 30° w`
-//! and `v` stay at round-off, and a non-linear law (Mooney–Rivlin, whose stress sees `tr B`
-//! and `tr B²` and so every off-diagonal component of B̃) gives the planar profile.
+//! and `v` stay at round-off (within the projection's tolerance where the stress loads the
+//! pressure), and a non-linear law (Mooney–Rivlin, whose stress grows with `tr B̃`) gives the
+//! planar profile.
 
 use efsi_core::Simulation;
 use efsi_tests::{read_csv, reference, run_until};
@@ -178,8 +179,14 @@ fn the_oblique_couette_flow_is_the_planar_one_along_the_wall() {
 }
 
 /// Mooney–Rivlin at 16 cells to t = 2: the 3-D profile along the wall's motion is the planar
-/// one to 1e-6 of the wall's speed (its stress sees B₁₃ = B₁₂B₂₃-like products through `tr B²`,
-/// which the discrete B carries to O(h²) only), and the velocity across it stays at round-off.
+/// one to 1e-6 of the wall's speed, and the velocity across it stays within what the
+/// projection's tolerance leaves. Its stress grows with `tr B̃`, so its normal stress `τ₂₂`
+/// varies across the layer and loads the pressure: the 3-D projection stops at the `Strict`
+/// tolerance (`max |∇·V| Δt ≤ 1e-10`), which leaves v (and u, w off the wall's plane through
+/// the pressure's error) up to `1e-10 L/Δt` over the layer's depth `L`; the planar one happens
+/// to converge to round-off. What that residual does to φ must not switch the bulk shear
+/// gradient's stencil cell by cell (`elastic::transport`'s bulk test), or the profiles part
+/// at O(h²).
 #[test]
 fn a_mooney_rivlin_layer_sheared_obliquely_gives_the_planar_profile() {
     let (n, dt) = (16, 4e-3);
@@ -200,9 +207,10 @@ fn a_mooney_rivlin_layer_sheared_obliquely_gives_the_planar_profile() {
     );
     assert!(peak > 0.05, "peak {peak:e}");
     assert!(diff <= 1e-6 * 0.4, "max |U3 − U2| = {diff:e}");
+    let residual = 1e-10 * 0.4 / dt;
     assert!(
-        across <= 1e-12,
-        "velocity across the wall's motion {across:e}"
+        across <= residual,
+        "velocity across the wall's motion {across:e} (the projection leaves ≤ {residual:e})"
     );
 }
 

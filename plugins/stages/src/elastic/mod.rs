@@ -223,7 +223,9 @@
 //! edge family in its own plane: an `(a, b)`-edge's solid fraction is the solid volume of its
 //! four quarter cells (each the whole cell long along the third axis), cut by the cell's PLIC
 //! plane (the mixed Youngs–centred normal, as the VOF step reconstructs), its interface normal's
-//! share `n_b²/(n_a² + n_b²)`, and its shear relaxes as the corners' does. The strain energy
+//! share `n_b²/(n_a² + n_b²)`, and its shear relaxes as the corners' does; the relaxation's
+//! change of the solid's `L_ab` (`L_ba`) stretches, besides the normal components, the shear of
+//! the pair `(a, c)` (`(b, c)`) on the four edges around, `Ḃ_ac = L_ab B_bc`. The strain energy
 //! takes the principal axes of each cell's B by Jacobi rotations. Sugiyama's Couette layer
 //! sheared along `(cos 30°, 0, sin 30°)` (`cases/oscillating_couette_3d.ron`) gives the planar
 //! error along the wall's motion (`tests/tests/couette_3d.rs`).

@@ -24,8 +24,11 @@ use efsi_core::operators::minus;
 use efsi_core::{Field, Index, Line, Region, Stagger, unit};
 use efsi_laws_host::ConstitutiveLaw;
 /// The solid fraction from which a cell counts as the solid's bulk for the shear gradient's
-/// four-point stencil (all eight cells it spans at least this).
-const BULK_PHI: f64 = 1.0 - 1e-9;
+/// four-point stencil (all eight cells it spans at least this): a cell missing less than 1e-6
+/// of its volume. The VOF step leaves a full cell the projection's divergence residual (up to
+/// 1e-8 of its volume per step, `vof::advect`), which adds up over a run and must not switch
+/// the stencil cell by cell; an interface that cuts a cell measurably keeps it out.
+const BULK_PHI: f64 = 1.0 - 1e-6;
 
 /// The weights of the bulk shear gradient `D₄ f = [a (f₀ − f₋₁) + b (f₁ − f₋₂)] / h` at a
 /// corner between `f₋₁` and `f₀`: `a = 5/4`, `b = −1/12` (see [`Kernels::gradient_in`]).
@@ -527,6 +530,17 @@ impl Kernels {
         let (m, c) = (self.m, 3 + p);
         let [pa, pb] = SHEAR[p].0;
         let around = cells_of_edge(SHEAR[p].0);
+        // Three dimensions: the pairs (a, c) and (b, c) with the third axis c, and the shifts to
+        // their edges whose averages take this pair's edge (`I + {0, +e_c} × {0, −e_b}` and
+        // `I + {0, +e_c} × {0, −e_a}`).
+        let third = (self.grid.dims() == 3).then(|| {
+            let pc = 3 - pa - pb;
+            let shifts = |x: usize| {
+                let (ex, ec) = (minus(x), unit(pc));
+                [[0; 3], ex, ec, plus(ex, ec)]
+            };
+            [(PAIR[pa][pc], shifts(pb)), (PAIR[pb][pc], shifts(pa))]
+        });
         for l in (0..edges.lines()).map(|n| edges.line(n)) {
             for (n, at) in l.indices().enumerate() {
                 let rc = self.edge[p].rc[at];
@@ -557,6 +571,18 @@ impl Kernels {
                 for s in around {
                     explicit[pa][plus(at, s)] -= fy * d;
                     explicit[pb][plus(at, s)] -= (1.0 - fy) * d;
+                }
+                // In three dimensions the same change of `L_ab` (`L_ba`) stretches the shear of
+                // the pair (a, c) (of (b, c)) on the edges around: `Ḃ_ac = L_ab B_bc`,
+                // `Ḃ_bc = L_ba B_ac`, a quarter on each of the four edges whose average takes
+                // this one (B at this edge as the batch gathers it).
+                if let Some([(qa, sa), (qb, sb)]) = third {
+                    let e = 0.5 * dt * rc * kt[c] * relax[at];
+                    let (bbc, bac) = (kb[3 + qb], kb[3 + qa]);
+                    for (ta, tb) in sa.into_iter().zip(sb) {
+                        explicit[3 + qa][plus(at, ta)] -= 0.5 * fy * e * bbc;
+                        explicit[3 + qb][plus(at, tb)] -= 0.5 * (1.0 - fy) * e * bac;
+                    }
                 }
             }
         }
