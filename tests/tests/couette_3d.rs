@@ -41,6 +41,7 @@ fn scene_with(
     three_d: bool,
     coupling: efsi_stages::elastic::ElasticCoupling,
 ) -> Simulation {
+    let kind = law;
     let (l, mu_f, mu_s, v, law) = match law {
         Law::NeoHookean => (
             1.0,
@@ -99,6 +100,16 @@ fn scene_with(
         coupling,
         ..Default::default()
     });
+    // The Mooney–Rivlin layer loads the pressure: its projection is converged to round-off
+    // (see `a_mooney_rivlin_layer_sheared_obliquely_gives_the_planar_profile`).
+    if let Law::MooneyRivlin = kind {
+        scene
+            .numerics
+            .set(&efsi_stages::projection::ProjectionOptions {
+                tolerance: Some(1e-14),
+                ..Default::default()
+            });
+    }
     let path = efsi_tests::workspace_root().join("cases/oscillating_couette_3d.ron");
     efsi_run::simulation(scene, &path, &efsi_stages::builtin()).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -179,14 +190,14 @@ fn the_oblique_couette_flow_is_the_planar_one_along_the_wall() {
 }
 
 /// Mooney–Rivlin at 16 cells to t = 2: the 3-D profile along the wall's motion is the planar
-/// one to 1e-6 of the wall's speed, and the velocity across it stays within what the
-/// projection's tolerance leaves. Its stress grows with `tr B̃`, so its normal stress `τ₂₂`
-/// varies across the layer and loads the pressure: the 3-D projection stops at the `Strict`
-/// tolerance (`max |∇·V| Δt ≤ 1e-10`), which leaves v (and u, w off the wall's plane through
-/// the pressure's error) up to `1e-10 L/Δt` over the layer's depth `L`; the planar one happens
-/// to converge to round-off. What that residual does to φ must not switch the bulk shear
-/// gradient's stencil cell by cell (`elastic::transport`'s bulk test), or the profiles part
-/// at O(h²).
+/// one to 1e-6 of the wall's speed, and the velocity across it stays at round-off. Its stress
+/// grows with `tr B̃`, so its normal stress `τ₂₂` varies across the layer and loads the
+/// pressure; the projection is converged to round-off here (tolerance 1e-14). At the `Strict`
+/// tolerance (`max |∇·V| Δt ≤ 1e-10`) the 3-D projection leaves v ~1e-11, not uniform in x and
+/// z (the planar one happens to converge to 1e-20), the VOF step hands that residual to φ, and
+/// once a full cell has drifted below the bulk shear gradient's threshold (`1 − 1e-9`, after
+/// ~100 steps) the stencil switches cell by cell and the profiles part at O(h²) (1e-3): what
+/// this test would then measure is the projection's tolerance, not the elastic kernels.
 #[test]
 fn a_mooney_rivlin_layer_sheared_obliquely_gives_the_planar_profile() {
     let (n, dt) = (16, 4e-3);
@@ -207,10 +218,9 @@ fn a_mooney_rivlin_layer_sheared_obliquely_gives_the_planar_profile() {
     );
     assert!(peak > 0.05, "peak {peak:e}");
     assert!(diff <= 1e-6 * 0.4, "max |U3 − U2| = {diff:e}");
-    let residual = 1e-10 * 0.4 / dt;
     assert!(
-        across <= residual,
-        "velocity across the wall's motion {across:e} (the projection leaves ≤ {residual:e})"
+        across <= 1e-12,
+        "velocity across the wall's motion {across:e}"
     );
 }
 

@@ -24,11 +24,8 @@ use efsi_core::operators::minus;
 use efsi_core::{Field, Index, Line, Region, Stagger, unit};
 use efsi_laws_host::ConstitutiveLaw;
 /// The solid fraction from which a cell counts as the solid's bulk for the shear gradient's
-/// four-point stencil (all eight cells it spans at least this): a cell missing less than 1e-6
-/// of its volume. The VOF step leaves a full cell the projection's divergence residual (up to
-/// 1e-8 of its volume per step, `vof::advect`), which adds up over a run and must not switch
-/// the stencil cell by cell; an interface that cuts a cell measurably keeps it out.
-const BULK_PHI: f64 = 1.0 - 1e-6;
+/// four-point stencil (all eight cells it spans at least this).
+const BULK_PHI: f64 = 1.0 - 1e-9;
 
 /// The weights of the bulk shear gradient `D₄ f = [a (f₀ − f₋₁) + b (f₁ − f₋₂)] / h` at a
 /// corner between `f₋₁` and `f₀`: `a = 5/4`, `b = −1/12` (see [`Kernels::gradient_in`]).
