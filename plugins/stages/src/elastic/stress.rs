@@ -235,11 +235,13 @@ impl Kernels {
     /// The shears of `b` at the centres of `l`: each the mean of the cell's four edges of its
     /// pair (the last pair repeated past the grid's pairs).
     fn centre_shears<'a>(&self, b: &'a [Field], l: &Line) -> [Four<'a>; 3] {
-        let last = self.edge.len() - 1;
-        std::array::from_fn(|p| {
-            let p = p.min(last);
-            Four::new(&b[3 + p], l, edges_of_cell(SHEAR[p].0))
-        })
+        let four = |p: usize| Four::new(&b[3 + p], l, edges_of_cell(SHEAR[p].0));
+        let first = four(0);
+        if self.edge.len() == 3 {
+            [first, four(1), four(2)]
+        } else {
+            [first; 3]
+        }
     }
 
     /// The batches' B̃ from `b`: at the solid's centres ([`Kernels::solid_c`]) the normal
@@ -321,12 +323,11 @@ impl Kernels {
                 let sh = self.centre_shears(db, &l);
                 let jms = self.cj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
                 for (n, jm) in jms.enumerate() {
-                    let x: [f64; M] = std::array::from_fn(|c| match c {
-                        0 => d11[n],
-                        1 => d22[n],
-                        2 => d33[n],
-                        _ => sh[c - 3].avg(n),
-                    });
+                    let mut x = [0.0; M];
+                    (x[0], x[1], x[2]) = (d11[n], d22[n], d33[n]);
+                    for c in 3..M {
+                        x[c] = sh[c - 3].avg(n);
+                    }
                     for c in 0..3 {
                         rows[c][n] = w[n] * dot(&jm[M * c..], &x);
                     }
@@ -340,20 +341,26 @@ impl Kernels {
                 let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, cells));
                 let [w, own, ks] =
                     [&self.edge[p].wk, &db[3 + p], &self.edge[p].ks].map(|f| f.at(&l, [0; 3]));
-                let others: [Four; 3] = std::array::from_fn(|q| {
-                    let q = if q < pairs && q != p { q } else { p };
-                    let s = if q == p { [[0; 3]; 4] } else { around(p, q) };
-                    Four::new(&db[3 + q], &l, s)
+                // The other pairs' shears around the edge (three dimensions only).
+                let others = (M == 6).then(|| {
+                    let four = |q: usize| match q == p {
+                        true => Four::new(&db[3 + q], &l, [[0; 3]; 4]),
+                        false => Four::new(&db[3 + q], &l, around(p, q)),
+                    };
+                    [four(0), four(1), four(2)]
                 });
                 let jms = kj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
                 for (n, jm) in jms.enumerate() {
-                    let x: [f64; M] = std::array::from_fn(|c| match c {
-                        0 => w[n] * d11.weighted(&wt, n),
-                        1 => w[n] * d22.weighted(&wt, n),
-                        2 => w[n] * d33.weighted(&wt, n),
-                        c if c == 3 + p => w[n] * own[n],
-                        c => w[n] * others[c - 3].avg(n),
-                    });
+                    let mut x = [0.0; M];
+                    x[0] = w[n] * d11.weighted(&wt, n);
+                    x[1] = w[n] * d22.weighted(&wt, n);
+                    x[2] = w[n] * d33.weighted(&wt, n);
+                    x[3 + p] = w[n] * own[n];
+                    if let Some(others) = &others {
+                        for q in (0..pairs).filter(|&q| q != p) {
+                            x[3 + q] = w[n] * others[q].avg(n);
+                        }
+                    }
                     tab[n] = ks[n] * dot(&jm[M * (3 + p)..], &x);
                 }
             });
@@ -422,14 +429,15 @@ impl Kernels {
             (m.rx_on(l, 0), m.rx_on(l, 1))
         };
         // τ_ab below and above the face along b.
-        let t: [(&[f64], &[f64]); D] = std::array::from_fn(|b| {
-            if b == a {
+        let mut t: [(&[f64], &[f64]); D] = [(&[], &[]); D];
+        for (b, t) in t.iter_mut().enumerate() {
+            *t = if b == a {
                 (tau[a].at(l, minus(a)), tau[a].at(l, [0; 3]))
             } else {
                 let c = &tau[3 + PAIR[a][b]];
                 (c.at(l, [0; 3]), c.at(l, unit(b)))
-            }
-        });
+            };
+        }
         let hoop = (a == 0 && D == 2).then(|| {
             let t33 = (tau[2].at(l, minus(0)), tau[2].at(l, [0; 3]));
             (m.hoop_x_on(l, 0), t33, g.dx * g.dy)

@@ -370,10 +370,12 @@ impl Kernels {
                         s[1] += 0.25 * gba.get(m, n) * bab.get(m, n);
                     }
                 }
-                let h: [f64; 3] = std::array::from_fn(|c| {
+                let mut h = [0.0; 3];
+                for (c, h) in h.iter_mut().enumerate() {
                     let own = laa[c][n] * baa[c][n];
                     if c >= D {
-                        return 2.0 * own;
+                        *h = 2.0 * own;
+                        continue;
                     }
                     let term = |k: usize| {
                         if k == c {
@@ -386,8 +388,8 @@ impl Kernels {
                     for k in 1..D {
                         sum += term(k);
                     }
-                    2.0 * sum
-                });
+                    *h = 2.0 * sum;
+                }
                 for c in 0..3 {
                     rows[c][n] = match base {
                         Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
