@@ -118,7 +118,7 @@ const CUBE: &str = r#"Scene(
 "#;
 
 #[test]
-fn a_lid_driven_cube_checks_and_a_solid_in_three_dimensions_is_refused_by_stage() {
+fn a_lid_driven_cube_and_an_elastic_ball_check_and_what_stays_planar_is_refused() {
     // Scene, grid and boundaries are read in three dimensions and the fluid stages run there.
     let d = tmp("cube_ok");
     let path = write_scene(&d, CUBE);
@@ -130,20 +130,31 @@ fn a_lid_driven_cube_checks_and_a_solid_in_three_dimensions_is_refused_by_stage(
             && said.contains("advection → pressure_predictor → viscous → projection"),
         "{said}"
     );
-    // An elastic solid needs the implicit-momentum stage, which has no 3-D kernels yet: refused
-    // naming it and the grid (the VOF stage runs in 3-D: a solid without a law is a drop).
+    // An elastic solid runs in three dimensions: the VOF stage and the implicit-momentum
+    // stage's sub-steps (elastic, deformation) in the schedule. Its strain-energy probe is
+    // still refused there, by name.
+    let ball = CUBE.replace(
+        "    boundaries:",
+        "    solid: (shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.2), density: 2.0,\n\
+         \x20          law: (name: \"neo_hookean\", parameters: {\"G\": 10.0})),\n    boundaries:",
+    );
+    let d = tmp("cube_with_solid");
+    let out = efsi(&["check", &write_scene(&d, &ball)]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{said}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        said.contains("three-dimensional 16×16×16 cells")
+            && said.contains("advection → viscous → elastic → projection → deformation → vof"),
+        "{said}"
+    );
     refused(
-        "cube_with_solid",
-        &CUBE.replace(
-            "    boundaries:",
-            "    solid: (shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.2), density: 2.0,\n\
-             \x20          law: (name: \"neo_hookean\", parameters: {\"G\": 10.0})),\n    boundaries:",
-        ),
-        &[
-            "Cartesian3D scene (16×16×16 cells)",
-            "do not support Cartesian3D",
-            "`momentum`",
-        ],
+        "cube_with_solid_energy",
+        &ball.replace("KineticEnergy,", "KineticEnergy, ElasticEnergy,"),
+        &["ElasticEnergy", "Cartesian3D"],
     );
     // The seven-point pressure matrix has no Dirichlet face: an Outflow side is refused by name.
     refused(

@@ -107,6 +107,7 @@ fn boundary() -> BoxedStrategy<Boundary> {
                 speed,
                 profile: width.map_or(WallProfile::Uniform, |width| WallProfile::Sin2Ramp { width }),
                 motion: omega.map_or(WallMotion::Steady, |omega| WallMotion::Sin { omega }),
+                direction: None,
             }),
     ]
     .boxed()

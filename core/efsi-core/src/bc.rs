@@ -25,7 +25,8 @@
 //! three velocity components ([`BoundarySet::fill_velocity3`]: `w` on the z-faces is normal on
 //! the z sides and tangential on the others) and for scalars along z. A side has two
 //! tangential components: a moving wall drives one of them — `+x` on the y and z sides, `+y` on
-//! the x sides, as in two dimensions — and holds the other at zero; its profile
+//! the x sides, as in two dimensions — and holds the other at zero, or, with a `direction` in
+//! its plane, drives each by its share of the direction; its profile
 //! ([`crate::scene::WallProfile`]) is the product of the factors along both in-wall axes (a
 //! `Sin2Ramp` lid vanishes at all four edges). Ghosts are filled one axis after the other (x,
 //! then y, then z), each pass over the whole padded extent of the other axes, so edge and
@@ -550,10 +551,16 @@ impl BoundarySet {
         // A wall that drives this component at a time other than `Homogeneous` has a speed
         // that varies along the wall: then line by line below; else every ghost is a rule of
         // one value.
+        // A wall with a direction drives both tangential components.
         let varies = |side: Side| {
-            matches!(self.get(side), Boundary::MovingWall { .. })
-                && comp == driven(axis)
-                && when != WallTime::Homogeneous
+            when != WallTime::Homogeneous
+                && match self.get(side) {
+                    Boundary::MovingWall {
+                        direction: Some(_), ..
+                    } => true,
+                    Boundary::MovingWall { .. } => comp == driven(axis),
+                    _ => false,
+                }
         };
         if !sides.iter().any(|&(side, ..)| varies(side)) {
             let rules = Rules::of_sides(self, axis, n, |bc, at| match bc {
@@ -572,12 +579,27 @@ impl BoundarySet {
             for (side, first, dir) in sides {
                 let bc = self.get(side);
                 let speed = match bc {
-                    Boundary::MovingWall { .. } if comp == driven(axis) => self.wall_speed(
+                    Boundary::MovingWall {
+                        direction: None, ..
+                    } if comp == driven(axis) => self.wall_speed(
                         side,
                         (comp, position(t, comp)),
                         other.map(|o| (o, position(t, o))),
                         when,
                     ),
+                    Boundary::MovingWall {
+                        direction: Some((x, y, z)),
+                        ..
+                    } => {
+                        let share = [x, y, z][comp] / (x * x + y * y + z * z).sqrt();
+                        share
+                            * self.wall_speed(
+                                side,
+                                (comp, position(t, comp)),
+                                other.map(|o| (o, position(t, o))),
+                                when,
+                            )
+                    }
                     _ => 0.0,
                 };
                 for g in 1..=G {
@@ -635,6 +657,7 @@ mod tests {
             speed: 2.0,
             profile: WallProfile::Uniform,
             motion: WallMotion::Steady,
+            direction: None,
         };
         let bs = BoundarySet::new(
             &set(Boundary::NoSlip, Boundary::NoSlip, Boundary::NoSlip, lid),
@@ -722,6 +745,7 @@ mod tests {
             speed,
             profile,
             motion: WallMotion::Steady,
+            direction: None,
         }
     }
 

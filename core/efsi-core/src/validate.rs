@@ -561,10 +561,32 @@ impl Scene {
                 speed,
                 profile,
                 motion,
+                direction,
             } = b
             {
                 if !speed.is_finite() {
                     return err(&format!("{f}.speed"), "must be finite");
+                }
+                if let Some((x, y, z)) = *direction {
+                    let d = [x, y, z];
+                    let normal = d[side.axis()];
+                    let norm = (x * x + y * y + z * z).sqrt();
+                    if !(norm.is_finite() && norm > 0.0) || normal != 0.0 || (dims == 2 && z != 0.0)
+                    {
+                        return err(
+                            &format!("{f}.direction"),
+                            format!(
+                                "({x}, {y}, {z}) must be a non-zero direction in the wall's plane: \
+                                 its component along the wall's normal (axis {}) zero{}",
+                                ["x", "y", "z"][side.axis()],
+                                if dims == 2 {
+                                    ", and z zero in two dimensions"
+                                } else {
+                                    ""
+                                }
+                            ),
+                        );
+                    }
                 }
                 if let WallProfile::Sin2Ramp { width } = profile {
                     positive(&format!("{f}.profile.width"), *width)?;

@@ -69,6 +69,7 @@ impl UnknownFaces {
     }
 
     /// Number of unknown u-faces (they come first).
+    #[cfg(test)]
     pub(crate) fn nu(&self) -> usize {
         self.regions[0].size()
     }

@@ -9,7 +9,6 @@ mod block_multigrid;
 pub mod body_force;
 pub mod elastic;
 mod faces;
-mod ops;
 pub mod projection;
 mod scratch;
 pub mod solid;

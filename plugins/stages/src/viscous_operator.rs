@@ -141,6 +141,7 @@ impl Coefficients {
 
     /// [`set_viscosity_edges`](Self::set_viscosity_edges) on a two-dimensional grid, whose one
     /// shear pair lives on the corners (`corner`).
+    #[cfg(test)]
     pub(crate) fn set_viscosity(&mut self, g: &Grid, mu: &Field, scale: f64, corner: &mut Field) {
         self.set_viscosity_edges(g, mu, scale, std::slice::from_mut(corner));
     }
@@ -208,12 +209,6 @@ impl Coefficients {
                 gr[n] = s * r[n] * ek[n];
             }
         });
-    }
-
-    /// [`set_edges`](Self::set_edges) on a two-dimensional grid, whose one shear pair lives on
-    /// the corners (`eta_k`).
-    pub(crate) fn set(&mut self, g: &Grid, eta: &Field, eta_k: &Field, scale: f64) {
-        self.set_edges(g, eta, &[eta_k], scale);
     }
 
     /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients.
@@ -327,6 +322,7 @@ impl Coefficients {
 
     /// `y = d∘x − K(u, v)` on a two-dimensional grid ([`product`](Self::product) with the
     /// velocity `[u, v]`).
+    #[cfg(test)]
     pub(crate) fn apply(
         &self,
         u: &Field,

@@ -1,7 +1,7 @@
 //! The VOF stage in a Cartesian3D scene: a second fluid runs (the transport, the mixing, the
-//! sides), a planar drop extruded along a periodic z falls as the planar one, and what stays
-//! two-dimensional is refused by name (a solid with a law: the `momentum` stage; a 2-D shape;
-//! an initial solid velocity).
+//! sides), a planar drop extruded along a periodic z falls as the planar one, an elastic solid
+//! runs with it, and what stays two-dimensional or is not allowed in three is refused by name
+//! (a 2-D shape; an initial solid velocity; an elastic solid fewer than five cells across).
 
 use efsi_core::{Scene, Simulation};
 use efsi_run::probes::solid_moments;
@@ -147,20 +147,42 @@ fn solid_3d(solid: &str) -> String {
 }
 
 #[test]
-fn what_stays_two_dimensional_is_refused_by_name() {
+fn an_elastic_solid_runs_and_what_stays_two_dimensional_is_refused_by_name() {
     let sphere = "Sphere(center: (0.5, 0.5, 0.5), radius: 0.25)";
     // A drop runs.
     let drop = format!("(shape: {sphere}, density: 2.0)");
     if let Err(e) = build(&solid_3d(&drop)) {
         panic!("a 3-D drop is refused: {e}");
     }
-    // An elastic solid needs the implicit-momentum stage, which is two-dimensional.
-    let elastic = format!(
-        "(shape: {sphere}, density: 2.0, law: (name: \"{}\", parameters: {{\"G\": 5.0}}))",
-        a_law().display()
+    // An elastic solid runs in three dimensions (the VOF and the implicit-momentum stages):
+    // a ball six cells across (radius 0.375 on 8³) takes steps and stays at rest in a fluid at
+    // rest. One four cells across (radius 0.25) is refused by the elastic stage's floor.
+    let elastic = |radius: f64| {
+        format!(
+            "(shape: Sphere(center: (0.5, 0.5, 0.5), radius: {radius}), density: 1.0, \
+             law: (name: \"{}\", parameters: {{\"G\": 5.0}}))",
+            a_law().display()
+        )
+    };
+    let mut sim = build(&solid_3d(&elastic(0.375)))
+        .unwrap_or_else(|e| panic!("a 3-D elastic solid is refused: {e}"));
+    run(&mut sim, 0.05);
+    let s = &sim.state;
+    let w = s.w.as_ref().expect("a 3-D state has w");
+    let speed = [&s.u, &s.v, w]
+        .iter()
+        .flat_map(|f| f.data())
+        .fold(0.0_f64, |m, x| m.max(x.abs()));
+    assert!(
+        s.t >= 0.05 - 1e-12 && speed < 1e-12,
+        "t {} |V| {speed:e}",
+        s.t
     );
-    let e = refused(&solid_3d(&elastic));
-    assert!(e.contains("momentum") && !e.contains("vof"), "{e}");
+    let e = refused(&solid_3d(&elastic(0.25)));
+    assert!(
+        e.contains("solid.shape") && e.contains("cells across"),
+        "{e}"
+    );
     // A two-dimensional shape in a three-dimensional scene, and the mix of both.
     let disk = "(shape: Disk(center: (0.5, 0.5), radius: 0.25), density: 2.0)";
     let e = refused(&solid_3d(disk));

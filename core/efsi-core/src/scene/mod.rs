@@ -643,7 +643,7 @@ pub enum Boundary {
     /// `speed · profile(position) · motion(t)`.
     MovingWall {
         /// Peak tangential speed (m/s), along +x on y- and z-sides and +y on x-sides (the
-        /// other tangential component is zero, as at a fixed wall).
+        /// other tangential component is zero, as at a fixed wall), or along `direction`.
         speed: f64,
         /// Shape along the wall (default uniform).
         #[serde(default)]
@@ -651,6 +651,11 @@ pub enum Boundary {
         /// Dependence on time (default steady).
         #[serde(default)]
         motion: WallMotion,
+        /// The direction of the motion in the wall's plane, `(x, y, z)` (normalised; its
+        /// component normal to the wall zero, and `z` zero in two dimensions). Default: the
+        /// axis `speed` is along. Each tangential component is `speed` times its share.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        direction: Option<(f64, f64, f64)>,
     },
     /// Impermeable wall without friction: zero normal velocity and zero tangential stress.
     FreeSlip,

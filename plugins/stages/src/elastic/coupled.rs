@@ -115,10 +115,9 @@ use super::err;
 use super::solve::{ElasticStage, OperatorCtx};
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
-use crate::ops;
 use crate::projection;
 use efsi_core::operators::minus;
-use efsi_core::{BoundarySet, Field, Grid, Region, StageError, Stagger, State, StepContext};
+use efsi_core::{BoundarySet, Field, Grid, Region, StageError, Stagger, State, StepContext, unit};
 use efsi_linalg::par;
 use efsi_linalg::{
     Accept, Fgmres, FlexiblePreconditioner, LinearOperator, Multigrid, Preconditioner, SolveStats,
@@ -169,7 +168,12 @@ impl Coupling {
             rel_tol: el.coupling_tolerance,
             proj_tol,
             max_iter: el.coupling_iterations,
-            poisson: Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1)),
+            poisson: if grid.is_3d() {
+                let periodic = projection::three_d::periodic_axes(bc, grid);
+                Stencil5::new_3d(grid.nx, grid.ny, grid.nz, periodic)
+            } else {
+                Stencil5::new(grid.nx, grid.ny, bc.periodic(0), bc.periodic(1))
+            },
             mg: Multigrid::new(2),
             fgmres: Fgmres::new(faces + n, RESTART),
             rhs: vec![0.0; faces + n],
@@ -188,21 +192,22 @@ impl Coupling {
 /// `y += c Ĝ q` on the unknown faces (`Ĝ q` = face area × the jump of `q` across the face, so
 /// that `F = −Ĝᵀ` for the net outflux `F`), `q` a cell field whose ghosts are filled.
 fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]) {
-    let (m, dx, dy) = (&g.metric, g.dx, g.dy);
-    let (yu, yv) = y.split_at_mut(faces.nu());
-    // The faces normal to axis a, between the cells I − e_a and I, of area `r dy` (x-faces,
-    // r = r_f) or `r dx` (y-faces, r = r_c).
-    for (a, r, y) in [(0, faces.region(0), yu), (1, faces.region(1), yv)] {
+    let (m, area) = (&g.metric, face_areas(g));
+    // The faces normal to axis a, between the cells I − e_a and I, of area `r A_a` (x-faces,
+    // r = r_f; the others r = r_c; `A_a` the product of the other axes' cell sizes).
+    for (a, y) in faces.split_mut(y).into_iter().enumerate().take(g.dims()) {
+        let r = faces.region(a);
         if r.is_empty() {
             continue;
         }
+        let h = area[a];
         par::rows(y, r.len(0)).for_each(|n, row| {
             let l = r.line(n);
             let (lo, hi) = (q.at(&l, minus(a)), q.at(&l, [0; 3]));
-            let (area, h) = if a == 0 {
-                (m.rx_on(&l, 0), dy)
+            let area = if a == 0 {
+                m.rx_on(&l, 0)
             } else {
-                (m.rc_on(&l, 0), dx)
+                m.rc_on(&l, 0)
             };
             for (n, y) in row.iter_mut().enumerate() {
                 *y += c * area[n] * h * (hi[n] - lo[n]);
@@ -211,13 +216,33 @@ fn add_gradient(faces: &UnknownFaces, g: &Grid, q: &Field, c: f64, y: &mut [f64]
     }
 }
 
-/// `out = c (Δt/dV) F(u, v)` per cell (`dt_vol` = Δt/dV, `F` the net outflux), rows in
-/// parallel.
-fn outflux_per_volume(g: &Grid, u: &Field, v: &Field, dt_vol: &[f64], c: f64, out: &mut [f64]) {
-    let nx = g.nx;
-    par::rows(&mut *out, nx).for_each(|j, row| {
-        for (i, y) in row.iter_mut().enumerate() {
-            *y = c * dt_vol[j * nx + i] * ops::net_outflux(g, u, v, i as isize, j as isize);
+/// The area of a face normal to each axis, `Π_{b≠a} h_b` over the grid's axes (the radius
+/// aside).
+fn face_areas(g: &Grid) -> [f64; 3] {
+    let (h, dims) = (g.h(), g.dims());
+    std::array::from_fn(|a| {
+        let mut o = (0..dims).filter(|&b| b != a);
+        let first = o.next().map_or(1.0, |b| h[b]);
+        o.fold(first, |s, b| s * h[b])
+    })
+}
+
+/// `out = c (Δt/dV) F(V)` per cell (`dt_vol` = Δt/dV, `F` the net outflux of the velocity
+/// `vel`, one field per axis: `Σ_a A_a (r u_a(I + e_a) − r u_a(I))`), lines in parallel.
+fn outflux_per_volume(g: &Grid, vel: &[&Field], dt_vol: &[f64], c: f64, out: &mut [f64]) {
+    let (m, area, cells) = (&g.metric, face_areas(g), Region::of(g, Stagger::Cell));
+    par::rows(&mut *out, g.nx).for_each(|r, row| {
+        let l = cells.line(r);
+        let (rlo, rhi, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
+        let (u0, u1) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
+        let dt_vol = &dt_vol[r * l.len..];
+        for (n, y) in row.iter_mut().enumerate() {
+            let mut f = (rhi[n] * u1[n] - rlo[n] * u0[n]) * area[0];
+            for (b, v) in vel.iter().enumerate().skip(1) {
+                let (v0, v1) = (v.at(&l, [0; 3]), v.at(&l, unit(b)));
+                f += rc[n] * (v1[n] - v0[n]) * area[b];
+            }
+            *y = c * dt_vol[n] * f;
         }
     });
 }
@@ -249,8 +274,8 @@ impl LinearOperator for Saddle<'_> {
         // A δ; the operator leaves δ scattered, ghosts filled, in its scratch fields.
         self.a.apply(xd, yu);
         let (g, om) = (self.grid, self.omega);
-        let (xu, xv, w) = (&*self.a.xu, &*self.a.xv, self.dt_vol);
-        outflux_per_volume(g, xu, xv, w, om, yc);
+        let vel = super::velocity(&*self.a.xu, &*self.a.xv, self.a.xw.as_deref());
+        outflux_per_volume(g, &vel, self.dt_vol, om, yc);
         to_field(g, self.bc, xp, self.q);
         add_gradient(&self.a.op.k.faces, g, self.q, self.dt, yu);
     }
@@ -358,9 +383,11 @@ impl ElasticStage {
         cp.set_dt(g, dt);
         // The divergence of V^{n+1/3} (its boundary values at the step's end), and of the
         // explicit elastic increment M⁻¹ b: the scale the divergence target is relative to.
-        bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        let t = ctx.t + dt;
+        bc.fill_velocity3(g, &mut state.u, &mut state.v, state.w.as_mut(), t, false);
         let (rc, w) = (&mut cp.rhs[nf..], &cp.dt_vol);
-        outflux_per_volume(g, &state.u, &state.v, w, -1.0, rc);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        outflux_per_volume(g, &vel, w, -1.0, rc);
         let div0 = max_abs(&cp.rhs[nf..]);
         let div_b = self.increment_divergence(cp, g, bc);
         if bnorm == 0.0 && div0 == 0.0 {
@@ -384,7 +411,14 @@ impl ElasticStage {
             // η for the Schur complement's local term (the multigrid's setup made it).
             self.effective_viscosity(d);
         }
-        projection::assemble(&mut cp.poisson, g, bc, &state.rho);
+        if g.is_3d() {
+            let a = &mut cp.poisson;
+            let periodic = projection::three_d::periodic_axes(bc, g);
+            let parts = [&mut a.diag, &mut a.east, &mut a.north, &mut a.top].map(|v| &mut v[..]);
+            projection::three_d::assemble_3d_into(parts, g, periodic, &state.rho);
+        } else {
+            projection::assemble(&mut cp.poisson, g, bc, &state.rho);
+        }
         cp.mg.setup(&cp.poisson);
         // From no increment and the pressure the last step ended with (the seed's scheme keeps
         // the whole pressure, which changes little from one step to the next).
@@ -411,9 +445,16 @@ impl ElasticStage {
         for (r, (b, m)) in cp.ru.iter_mut().zip(rhs.iter().zip(mass)) {
             *r = b / m;
         }
-        self.op.k.faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv);
-        bc.fill_velocity(g, &mut sc.xu, &mut sc.xv, 0.0, true);
-        outflux_per_volume(g, &sc.xu, &sc.xv, &cp.dt_vol, 1.0, &mut cp.pb);
+        match sc.xw.as_mut() {
+            Some(xw) => {
+                let vel = &mut [&mut sc.xu, &mut sc.xv, xw];
+                self.op.k.faces.scatter_to(&cp.ru, vel);
+            }
+            None => self.op.k.faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv),
+        }
+        bc.fill_velocity3(g, &mut sc.xu, &mut sc.xv, sc.xw.as_mut(), 0.0, true);
+        let vel = super::velocity(&sc.xu, &sc.xv, sc.xw.as_ref());
+        outflux_per_volume(g, &vel, &cp.dt_vol, 1.0, &mut cp.pb);
         max_abs(&cp.pb)
     }
 
@@ -531,10 +572,11 @@ impl ElasticStage {
     fn apply(&self, cp: &Coupling, g: &Grid, bc: &BoundarySet, state: &mut State) {
         let nf = self.delta.len();
         let (delta, p) = cp.x.split_at(nf);
-        self.op
-            .k
-            .faces
-            .add(delta, &mut [&mut state.u, &mut state.v]);
+        let faces = &self.op.k.faces;
+        match state.w.as_mut() {
+            Some(w) => faces.add(delta, &mut [&mut state.u, &mut state.v, w]),
+            None => faces.add(delta, &mut [&mut state.u, &mut state.v]),
+        }
         let mean = if bc.has_pressure_reference() {
             0.0
         } else {

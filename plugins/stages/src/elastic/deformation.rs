@@ -3,7 +3,7 @@
 
 use super::{
     AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, Deformation, ElasticCoupling, Kernels,
-    err, missing, planar, planar_mut,
+    err, missing,
 };
 use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
@@ -15,8 +15,9 @@ pub(super) struct DeformationStage {
     pub(super) thetas: [f64; 2],
     /// `numerics.elastic.coupling` (`Split` where the scene cannot couple).
     pub(super) mode: super::ElasticCoupling,
-    /// Which sides are walls (x min, x max, y min, y max): `NoSlip`, `MovingWall`, `FreeSlip`.
-    pub(super) walls: [bool; 4],
+    /// Which sides are walls (x min, x max, y min, y max, then z min, z max on a
+    /// three-dimensional grid): `NoSlip`, `MovingWall`, `FreeSlip`, `Symmetry`.
+    pub(super) walls: Vec<bool>,
     /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
     pub(super) first: Vec<Field>,
     /// The elastic-wave limits on Δt.
@@ -60,7 +61,8 @@ impl DeformationStage {
             .resources
             .get::<super::Deformation>()
             .map_or(0.0, |d| d.elastic_energy);
-        let kinetic = crate::ops::kinetic_energy(grid, &state.u, &state.v, &state.rho);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        let kinetic = kinetic_energy(grid, &vel, &state.rho);
         (strain <= AUTO_STRAIN_SHARE * kinetic && !self.near_wall(grid, state, self.limits.coupled))
             .then_some(self.limits.coupled)
     }
@@ -90,15 +92,10 @@ impl DeformationStage {
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         k.update(&vel, d, &mut self.first, a, picard);
         // The end-of-step stress and the elastic energy.
-        k.evaluate(
-            self.law.as_ref(),
-            planar(&d.b),
-            planar_mut(&mut d.stress),
-            false,
-        )
-        .map_err(|m| err("deformation", m))?;
+        k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
+            .map_err(|m| err("deformation", m))?;
         d.elastic_energy = k
-            .strain_energy(self.law.as_ref(), planar(&d.b))
+            .strain_energy(self.law.as_ref(), &d.b)
             .map_err(|m| err("deformation", m))?;
         Ok(StageStats::default())
     }
@@ -109,36 +106,67 @@ impl DeformationStage {
         let Some(phi) = state.phi.as_ref() else {
             return false;
         };
-        let (nx, ny) = (grid.nx as isize, grid.ny as isize);
+        let (n, h, dims) = (grid.n().map(|n| n as isize), grid.h(), grid.dims());
+        let last = |a: usize| if a < dims { n[a] - 1 } else { 0 };
         // The solid's cells as of the last update; before the first one, every cell.
         let c = match self.k.solid_c {
             c if c.points() > 0 => c,
-            _ => super::Window::new(0, nx - 1, 0, ny - 1),
+            _ => super::Window::boxed([0; 3], std::array::from_fn(last)),
         };
-        let cells =
-            super::Window::new(c.i0.max(0), c.i1.min(nx - 1), c.j0.max(0), c.j1.min(ny - 1))
-                .region(grid);
-        let [x_min, x_max, y_min, y_max] = self.walls;
-        let (u, v) = (&state.u, &state.v);
-        let (dx, dy) = (grid.dx, grid.dy);
+        let cells = super::Window::boxed(
+            std::array::from_fn(|a| c.lo()[a].max(0)),
+            std::array::from_fn(|a| c.hi()[a].min(last(a))),
+        )
+        .region(grid);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let reach =
             |gap: f64, toward: f64, h: f64| gap - toward.max(0.0) * dt < AUTO_WALL_CELLS * h;
-        (0..cells.lines()).map(|n| cells.line(n)).any(|l| {
+        (0..cells.lines()).map(|m| cells.line(m)).any(|l| {
             let phi = phi.at(&l, [0; 3]);
-            let (uw, ue) = (u.at(&l, [0; 3]), u.at(&l, unit(0)));
-            let (vs, vn) = (v.at(&l, [0; 3]), v.at(&l, unit(1)));
-            l.indices().enumerate().any(|(n, [i, j, _])| {
-                if phi[n] <= 0.5 {
+            let faces: [(&[f64], &[f64]); 3] = std::array::from_fn(|a| {
+                let a = a.min(dims - 1);
+                (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a)))
+            });
+            l.indices().enumerate().any(|(m, at)| {
+                if phi[m] <= 0.5 {
                     return false;
                 }
-                let (uc, vc) = (0.5 * (uw[n] + ue[n]), 0.5 * (vs[n] + vn[n]));
-                (x_min && reach(i as f64 * dx, -uc, dx))
-                    || (x_max && reach((nx - 1 - i) as f64 * dx, uc, dx))
-                    || (y_min && reach(j as f64 * dy, -vc, dy))
-                    || (y_max && reach((ny - 1 - j) as f64 * dy, vc, dy))
+                (0..dims).any(|a| {
+                    let vc = 0.5 * (faces[a].0[m] + faces[a].1[m]);
+                    let (lo, hi) = (self.walls[2 * a], self.walls[2 * a + 1]);
+                    (lo && reach(at[a] as f64 * h[a], -vc, h[a]))
+                        || (hi && reach((n[a] - 1 - at[a]) as f64 * h[a], vc, h[a]))
+                })
             })
         })
     }
+}
+
+/// Kinetic energy `½∫ρ|V|² dV` (per radian when axisymmetric) of the velocity `vel` (one field
+/// per axis), with face-centred quadrature: half of each of a cell's two faces along each axis
+/// belongs to it. Lines in parallel, summed in line order (the same bits on any number of
+/// threads).
+fn kinetic_energy(grid: &Grid, vel: &[&Field], rho: &Field) -> f64 {
+    let (m, h) = (&grid.metric, grid.h());
+    let [e] = efsi_core::Region::of(grid, efsi_core::Stagger::Cell).sum(|l| {
+        let (rw, re, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
+        let faces: [(&[f64], &[f64]); 3] = std::array::from_fn(|a| {
+            let a = a.min(vel.len() - 1);
+            (vel[a].at(&l, [0; 3]), vel[a].at(&l, unit(a)))
+        });
+        let rho = rho.at(&l, [0; 3]);
+        let mut e = 0.0;
+        for n in 0..l.len {
+            let (uw, ue) = (faces[0].0[n], faces[0].1[n]);
+            let mut s = 0.5 * (rw[n] * uw.powi(2) + re[n] * ue.powi(2)) / 2.0;
+            for (lo, hi) in &faces[1..vel.len()] {
+                s += 0.5 * rc[n] * (lo[n].powi(2) + hi[n].powi(2)) / 2.0;
+            }
+            e += h[..vel.len()].iter().fold(rho[n] * s, |p, h| p * h);
+        }
+        [e]
+    });
+    e
 }
 
 impl Kernels {

@@ -1,9 +1,9 @@
 //! The interface weights: `φ^{1/2}` at centres, the edges' solid fraction from the PLIC
-//! quarter cells (the cells' φ on a three-dimensional grid) and their series factors, the solid bounding box, and the reset of pure-fluid
-//! cells.
+//! quarter cells (lines in two dimensions, planes in three) and their series factors, the
+//! solid bounding box, and the reset of pure-fluid cells.
 
-use super::{Kernels, NEAR, PHI_MIN, Window, cells_of_edge, plus, shear_pairs};
-use efsi_core::{Field, Index, Region, Stagger};
+use super::{Kernels, NEAR, PHI_MIN, SHEAR, Window, cells_of_edge, plus, shear_pairs};
+use efsi_core::{Field, Index, Region};
 
 /// The least `aκ` the series corner's rates take (see [`sliver_rates`]).
 const SLIVER: f64 = 0.1;
@@ -41,32 +41,16 @@ impl Kernels {
                 *w = if *f < PHI_MIN { 0.0 } else { f.min(1.0).sqrt() };
             }
         });
-        // The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`) among the
-        // centres `[−1, n]` along each axis.
         let (lo, hi): (Index, Index) = (
             std::array::from_fn(|a| if a < dims { -1 } else { 0 }),
             std::array::from_fn(|a| if a < dims { n[a] } else { 0 }),
         );
-        let none = Window::boxed(hi, lo);
-        let (mut c, mut m) = (none, none);
-        let batch = Window::boxed(lo, hi).region(g);
-        for l in (0..batch.lines()).map(|n| batch.line(n)) {
-            for (f, b) in [(&self.w, &mut c), (phi, &mut m)] {
-                let row = f.at(&l, [0; 3]);
-                if let Some(first) = row.iter().position(|&w| w > 0.0) {
-                    let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
-                    let (mut p, mut q) = (l.start, l.start);
-                    (p[0], q[0]) = (p[0] + first as isize, q[0] + last as isize);
-                    let (bl, bh) = (b.lo(), b.hi());
-                    *b = Window::boxed(
-                        std::array::from_fn(|a| bl[a].min(p[a])),
-                        std::array::from_fn(|a| bh[a].max(q[a])),
-                    );
-                }
-            }
-        }
+        let (c, m) = self.bounding_boxes(phi, (lo, hi));
         self.solid_c = if c.i0 > c.i1 { Window::EMPTY } else { c };
-        self.solid_k = self.solid_c.edges(g, Stagger::Corner);
+        let solid_c = self.solid_c;
+        for (k, &(_, at)) in self.solid_k.iter_mut().zip(shear_pairs(dims)) {
+            *k = solid_c.edges(g, at);
+        }
         // Where B can matter: the material grown by `NEAR` cells (see `Kernels::near_c`).
         self.near_c = if m.i0 > m.i1 {
             Window::EMPTY
@@ -114,6 +98,30 @@ impl Kernels {
         }
     }
 
+    /// The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`) among the
+    /// centres `lo..=hi` (each empty, `i0 > i1`, where there is none).
+    fn bounding_boxes(&self, phi: &Field, (lo, hi): (Index, Index)) -> (Window, Window) {
+        let none = Window::boxed(hi, lo);
+        let (mut c, mut m) = (none, none);
+        let batch = Window::boxed(lo, hi).region(&self.grid);
+        for l in (0..batch.lines()).map(|n| batch.line(n)) {
+            for (f, b) in [(&self.w, &mut c), (phi, &mut m)] {
+                let row = f.at(&l, [0; 3]);
+                if let Some(first) = row.iter().position(|&w| w > 0.0) {
+                    let last = row.iter().rposition(|&w| w > 0.0).unwrap_or(first);
+                    let (mut p, mut q) = (l.start, l.start);
+                    (p[0], q[0]) = (p[0] + first as isize, q[0] + last as isize);
+                    let (bl, bh) = (b.lo(), b.hi());
+                    *b = Window::boxed(
+                        std::array::from_fn(|a| bl[a].min(p[a])),
+                        std::array::from_fn(|a| bh[a].max(q[a])),
+                    );
+                }
+            }
+        }
+        (c, m)
+    }
+
     /// The weights of edge `at` of the shear pair `p` (axes `[a, b]`) from its four cells: the
     /// average `w_c` of their `φ^{1/2}`, the cells' weights in the normal components, the
     /// normal's share `n_b²` and the series factors (`w_k`, `s`, `1/κ`, `r`) of the interface
@@ -125,7 +133,7 @@ impl Kernels {
         e.wc[at] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
         // The edge's solid fraction: the four quarter cells around it (each cell's quarter
         // at the edge: the edge is its upper-right, upper-left, lower-right, lower-left).
-        let q: [f64; 4] = std::array::from_fn(|n| self.quarter[3 - n][cells[n]]);
+        let q: [f64; 4] = std::array::from_fn(|n| self.quarter[p][3 - n][cells[n]]);
         let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
         let lam: [f64; 4] = std::array::from_fn(|n| if w[n] > 0.0 { q[n] } else { 0.0 });
         let sum: f64 = lam.iter().sum();
@@ -179,31 +187,33 @@ fn series(mu_f: f64, mu_s: f64, wc: f64, a: f64) -> (f64, f64, f64, f64) {
 }
 
 impl Kernels {
-    /// The solid fraction of each quarter of every centre ([`Kernels::quarter`]): in a cut cell
-    /// of `[−1, nx] × [−1, ny]` of a two-dimensional grid, the share of the quarter below the
-    /// cell's PLIC line (Youngs normal, the line cutting the cell's φ off a `dx × dy` cell, as
-    /// the VOF reconstruction does in planar geometry); elsewhere, and everywhere on a
-    /// three-dimensional grid, φ (clamped to `[0, 1]`).
+    /// The solid fraction of each quarter of every centre in the plane of each shear pair
+    /// ([`Kernels::quarter`]): in a cut cell of the solid's window (within `[−1, n]` along each
+    /// axis), the share of the quarter below the cell's interface as the VOF step reconstructs
+    /// it — on a two-dimensional grid the PLIC line (Youngs normal, the line cutting the cell's
+    /// φ off a `dx × dy` cell), on a three-dimensional one the PLIC plane (mixed Youngs–centred
+    /// normal, the plane cutting φ off the `dx × dy × dz` cell) and for the pair `(a, b)` the
+    /// quarter the whole cell long along the third axis; elsewhere φ (clamped to `[0, 1]`).
     pub(super) fn set_quarters(&mut self, phi: &Field) {
-        let (nx, ny) = self.nxy();
-        let (dx, dy) = (self.grid.dx, self.grid.dy);
-        // The cells around the solid's corners: its window's rows and one more above and
-        // below, whole rows (short of the storage's last).
         let c = self.solid_c;
         let whole = Region::whole(&self.grid);
+        // The cells around the solid's edges: its window's rows and one more on each side
+        // along y, whole rows (short of the storage's last).
         let (lo, hi) = (whole.lo()[1], whole.hi()[1]);
         let rows = whole.range(1, (c.j0 - 1).max(lo), (c.j1 + 2).min(hi - 1));
-        for q in &mut self.quarter {
+        for q in self.quarter.iter_mut().flatten() {
             rows.for_each(q, |l, q| {
                 for (w, f) in q.iter_mut().zip(phi.at(&l, [0; 3])) {
                     *w = f.clamp(0.0, 1.0);
                 }
             });
         }
-        if self.grid.is_3d() {
-            return;
-        }
-        let cut = Window::new(c.i0.max(-1), c.i1.min(nx), c.j0.max(-1), c.j1.min(ny));
+        let n = self.grid.n().map(|n| n as isize);
+        let dims = self.grid.dims();
+        let cut = Window::boxed(
+            std::array::from_fn(|a| if a < dims { c.lo()[a].max(-1) } else { 0 }),
+            std::array::from_fn(|a| if a < dims { c.hi()[a].min(n[a]) } else { 0 }),
+        );
         let cells = cut.region(&self.grid);
         for l in (0..cells.lines()).map(|n| cells.line(n)) {
             for at in l.indices() {
@@ -211,24 +221,60 @@ impl Kernels {
                 if f <= 0.0 || f >= 1.0 {
                     continue;
                 }
-                let cl = |di: isize, dj: isize| phi[plus(at, [di, dj, 0])].clamp(0.0, 1.0);
-                let b = [
-                    [cl(-1, -1), cl(0, -1), cl(1, -1)],
-                    [cl(-1, 0), cl(0, 0), cl(1, 0)],
-                    [cl(-1, 1), cl(0, 1), cl(1, 1)],
-                ];
-                let (mx, my) = crate::vof::plic::youngs_normal(&b, dx, dy);
-                let line = crate::vof::plic::Line::planar(mx, my, f, dx, dy);
-                let (hx, hy) = (0.5 * dx, 0.5 * dy);
-                let boxes = [
-                    ((0.0, 0.0), (hx, hy)),
-                    ((hx, 0.0), (dx, hy)),
-                    ((0.0, hy), (hx, dy)),
-                    ((hx, hy), (dx, dy)),
-                ];
-                for (n, (lo, hi)) in boxes.into_iter().enumerate() {
-                    self.quarter[n][at] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
+                if dims == 3 {
+                    self.cut_quarters_3d(phi, at);
+                } else {
+                    self.cut_quarters(phi, at);
                 }
+            }
+        }
+    }
+
+    /// The quarters of the cut cell `at` of a two-dimensional grid (see
+    /// [`Kernels::set_quarters`]).
+    fn cut_quarters(&mut self, phi: &Field, at: Index) {
+        let (dx, dy) = (self.grid.dx, self.grid.dy);
+        let cl = |di: isize, dj: isize| phi[plus(at, [di, dj, 0])].clamp(0.0, 1.0);
+        let b = [
+            [cl(-1, -1), cl(0, -1), cl(1, -1)],
+            [cl(-1, 0), cl(0, 0), cl(1, 0)],
+            [cl(-1, 1), cl(0, 1), cl(1, 1)],
+        ];
+        let (mx, my) = crate::vof::plic::youngs_normal(&b, dx, dy);
+        let line = crate::vof::plic::Line::planar(mx, my, phi[at], dx, dy);
+        let (hx, hy) = (0.5 * dx, 0.5 * dy);
+        let boxes = [
+            ((0.0, 0.0), (hx, hy)),
+            ((hx, 0.0), (dx, hy)),
+            ((0.0, hy), (hx, dy)),
+            ((hx, hy), (dx, dy)),
+        ];
+        for (n, (lo, hi)) in boxes.into_iter().enumerate() {
+            self.quarter[0][n][at] = line.area_fraction(lo, hi).clamp(0.0, 1.0);
+        }
+    }
+
+    /// The quarters of the cut cell `at` of a three-dimensional grid in the plane of each
+    /// shear pair (see [`Kernels::set_quarters`]).
+    fn cut_quarters_3d(&mut self, phi: &Field, at: Index) {
+        use crate::vof::plic3d::{Block, Plane, myc_normal};
+        let d = self.grid.h();
+        let block: Block = std::array::from_fn(|k| {
+            std::array::from_fn(|j| {
+                std::array::from_fn(|i| {
+                    let s = [i as isize - 1, j as isize - 1, k as isize - 1];
+                    phi[plus(at, s)].clamp(0.0, 1.0)
+                })
+            })
+        });
+        let plane = Plane::new(myc_normal(&block, d), phi[at], d);
+        for (p, &([a, b], _)) in SHEAR.iter().enumerate() {
+            for n in 0..4 {
+                let (mut lo, mut hi) = ([0.0; 3], d);
+                let (ha, hb) = (0.5 * d[a], 0.5 * d[b]);
+                (lo[a], hi[a]) = if n % 2 == 0 { (0.0, ha) } else { (ha, d[a]) };
+                (lo[b], hi[b]) = if n < 2 { (0.0, hb) } else { (hb, d[b]) };
+                self.quarter[p][n][at] = plane.box_fraction(lo, hi).clamp(0.0, 1.0);
             }
         }
     }

@@ -5,16 +5,18 @@ use efsi_core::scene::Options;
 use efsi_core::{Grid, Scene};
 use efsi_laws_host::ConstitutiveLaw;
 
-/// The fewest cells across an elastic solid (its section's hydraulic diameter over the cell
-/// size) that a scene may have. The interface treatment (the series corners and the PLIC corner
+/// The fewest cells across an elastic solid (its section's hydraulic diameter `4A/P` over the
+/// cell size in two dimensions, its `6V/S` in three: a disk's or a ball's diameter) that a
+/// scene may have. The interface treatment (the series corners and the PLIC corner
 /// fractions of the module docs) spans a cell on each side of the interface; in a solid fewer
 /// cells across it is most of the solid, the solid's bulk stress is no longer resolved, and an
 /// impact can return more energy as motion than it took in. The check is a floor on the
 /// resolution, not an accuracy target.
 pub const MIN_CELLS_ACROSS: f64 = 5.0;
 
-/// The largest Δt the elastic-wave Courant limits allow, `s·h/c` with `c = √(G₀/ρ_s)` and `G₀`
-/// the largest diagonal entry of the law's tangent at `B̃ = I` (the shear modulus for the
+/// The largest Δt the elastic-wave Courant limits allow, `s·h/c` with `h` the smallest cell
+/// size over the grid's axes, `c = √(G₀/ρ_s)` and `G₀` the largest diagonal entry of the law's
+/// tangent at `B̃ = I` (in-plane or full, as the grid's tensor; the shear modulus for the
 /// shipped laws): `split` at `s` = [`super::ElasticOptions::wave_courant`], `coupled` at
 /// [`super::ElasticOptions::coupled_wave_courant`] where the scene may take the coupled step
 /// (else equal to `split`). The stiffness is the rest state's: a law that stiffens under strain
@@ -53,11 +55,12 @@ pub(super) fn wave_limit(
     law: &dyn ConstitutiveLaw,
 ) -> Result<WaveLimits, String> {
     let solid = crate::solid::solid(options)?;
-    let mut tau = [[0.0; 4]];
-    let mut tangent = [[0.0; 16]];
-    law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut tau, Some(&mut tangent))
+    let m = super::Deformation::components(grid);
+    let (mut b, mut tau, mut tangent) = ([0.0; 6], [0.0; 6], [0.0; 36]);
+    b[..3].fill(1.0);
+    super::stress::eval(law, m, &b[..m], &mut tau[..m], Some(&mut tangent[..m * m]))
         .map_err(|e| format!("solid.law: at rest (B = I): {e}"))?;
-    let shear = tangent[0][15];
+    let shear = tangent[3 * (m + 1)];
     if shear.is_nan() || shear <= 0.0 {
         return Err(format!(
             "solid.law: its shear stiffness at rest (∂τ₁₂/∂B̃₁₂ at B̃ = I) is {shear:e} Pa, not \
@@ -65,15 +68,18 @@ pub(super) fn wave_limit(
              be > 0)"
         ));
     }
-    let g0 = (0..4).map(|a| tangent[0][5 * a].abs()).fold(0.0, f64::max);
+    let g0 = (0..m)
+        .map(|a| tangent[a * (m + 1)].abs())
+        .fold(0.0, f64::max);
     if !(g0.is_finite() && g0 > 0.0) {
         return Err(format!(
             "solid.law: its stiffness at rest (the tangent's diagonal at B = I) is {g0}, not a \
              positive number"
         ));
     }
-    if let Some(width) = crate::vof::section_width(grid, &solid.shape) {
-        let h = grid.dx.max(grid.dy);
+    let (hs, dims) = (grid.h(), grid.dims());
+    if let Some(width) = solid_width(grid, &solid.shape) {
+        let h = hs[1..dims].iter().fold(hs[0], |s, &h| s.max(h));
         // The staircase estimate of the width is within 8 % for a disk 3 cells across or more.
         if width / h < 0.9 * MIN_CELLS_ACROSS {
             return Err(format!(
@@ -81,8 +87,9 @@ pub(super) fn wave_limit(
                  4A/P = {width:.4e} m over cells of {h:.4e} m); an elastic solid needs at least \
                  {MIN_CELLS_ACROSS} (narrower ones were measured to gain up to 12 % of their \
                  impact energy, `cargo xtask bench-paper --case stability`): refine the grid \
-                 (grid: nx, ny — nr, nz when axisymmetric) to cells of at most {:.4e} m, or widen the solid",
+                 (grid: nx, ny{} — nr, nz when axisymmetric) to cells of at most {:.4e} m, or widen the solid",
                 width / h,
+                if dims == 3 { ", nz" } else { "" },
                 width / MIN_CELLS_ACROSS
             ));
         }
@@ -99,7 +106,7 @@ pub(super) fn wave_limit(
              the split step's numerics.elastic.wave_courant"
         }
     };
-    let h = grid.dx.min(grid.dy);
+    let h = hs[1..dims].iter().fold(hs[0], |s, &h| s.min(h));
     let c = (g0 / solid.density).sqrt();
     let dt = s * h / c;
     if let Some(fixed) = scene.time.fixed_dt
@@ -120,4 +127,33 @@ pub(super) fn wave_limit(
         coupled: dt,
         wave_step: h / c,
     })
+}
+
+/// The solid's width for [`MIN_CELLS_ACROSS`]: in two dimensions its section's hydraulic
+/// diameter ([`crate::vof::section_width`]); in three `6V/S` from its exact cell fractions φ,
+/// `V = Σ φ dV` and `S = Σ |∇φ| dV` (central differences, φ held at the boundary). `None`
+/// without a surface.
+fn solid_width(grid: &Grid, shape: &crate::solid::Shape) -> Option<f64> {
+    if !grid.is_3d() {
+        return crate::vof::section_width(grid, shape);
+    }
+    let mut phi = efsi_core::Field::zeros(grid);
+    crate::vof::fill_fraction(grid, shape, &mut phi);
+    let (n, h) = (grid.n().map(|n| n as isize), grid.h());
+    let dv = h[0] * h[1] * h[2];
+    let at = |i: [isize; 3]| phi[std::array::from_fn::<_, 3, _>(|a| i[a].clamp(0, n[a] - 1))];
+    let (mut volume, mut surface) = (0.0, 0.0);
+    let cells = efsi_core::Region::of(grid, efsi_core::Stagger::Cell);
+    for l in (0..cells.lines()).map(|m| cells.line(m)) {
+        for i in l.indices() {
+            volume += phi[i] * dv;
+            let d = |a: usize| {
+                let (mut lo, mut hi) = (i, i);
+                (lo[a], hi[a]) = (i[a] - 1, i[a] + 1);
+                (at(hi) - at(lo)) / (2.0 * h[a])
+            };
+            surface += (d(0).powi(2) + d(1).powi(2) + d(2).powi(2)).sqrt() * dv;
+        }
+    }
+    (surface > 0.0).then(|| 6.0 * volume / surface)
 }

@@ -200,8 +200,8 @@
 //! location is the average of its four neighbours. The shear rate is a two-point difference
 //! near the interface and a four-point one in the solid's bulk, whose dispersion cancels the
 //! two-point stress divergence's, so a shear wave crossing the solid lags by `O(h⁴)` in phase
-//! (`Kernels::gradient_in`). The law is evaluated in two batches
-//! (centres and corners). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
+//! (`Kernels::gradient_in`). The law is evaluated in batches
+//! (centres, and the edges of each shear pair). Advection `∇·(V B̃)` is conservative with van Leer limited upwind
 //! face values, as the momentum advection.
 //!
 //! **Three dimensions.** B̃ has six components ([`Deformation`]): the normal ones at centres
@@ -212,9 +212,23 @@
 //! over the grid's shear pairs gives the gradient, the stretching (the third axis's terms
 //! `L_ac B̃_cb + B̃_ac L_bc` from the neighbouring edge families, `transport`), the advection
 //! and the end-of-step update in two and three dimensions; a planar field extruded along a
-//! periodic z gives the planar values. Not yet in three dimensions: the edge fractions from
-//! the PLIC planes (the cells' φ stands in), the interface relaxation of the xz- and yz-edges,
-//! the law on the full tensor and the implicit solve (the stage refuses a 3-D scene).
+//! periodic z gives the planar values. The law sees the full tensor `[11, 22, 33, 12, 23, 13]`
+//! (law ABI version 2; a version-1 library is refused in a 3-D scene): at a centre the cell's
+//! normal components and each shear the mean of the cell's four edges of its pair; on an
+//! `(a, b)`-edge the solid-weighted normal components of its four cells, its own shear, and
+//! each other shear the mean of the four edges of its pair around it (`stress`). The stress
+//! divergence on the faces normal to `a` is `Σ_b A_b Δ_b τ_ab` (`A_b` the face area across
+//! `b`), the implicit operator and both preconditioners act on u, v and w, and the coupled step
+//! uses the seven-point Poisson operator of the projection. "Interface corners" holds on every
+//! edge family in its own plane: an `(a, b)`-edge's solid fraction is the solid volume of its
+//! four quarter cells (each the whole cell long along the third axis), cut by the cell's PLIC
+//! plane (the mixed Youngs–centred normal, as the VOF step reconstructs), its interface normal's
+//! share `n_b²/(n_a² + n_b²)`, and its shear relaxes as the corners' does; the relaxation's
+//! change of the solid's `L_ab` (`L_ba`) stretches, besides the normal components, the shear of
+//! the pair `(a, c)` (`(b, c)`) on the four edges around, `Ḃ_ac = L_ab B_bc`. The strain energy
+//! takes the principal axes of each cell's B by Jacobi rotations. Sugiyama's Couette layer
+//! sheared along `(cos 30°, 0, sin 30°)` (`cases/oscillating_couette_3d.ron`) gives the planar
+//! error along the wall's motion (`tests/tests/couette_3d.rs`).
 //!
 //! # Solve
 //!
@@ -246,8 +260,10 @@
 //! `coupled` module), so a split step is capped at `wave_courant` elastic-wave Courant numbers
 //! ([`MAX_WAVE_COURANT`]), a coupled step at `coupled_wave_courant` for accuracy
 //! ([`ElasticOptions`]). The cap uses the law's stiffness at rest: a law that stiffens under
-//! strain is under-limited where it is deformed. A solid must be at least
-//! [`MIN_CELLS_ACROSS`] cells across.
+//! strain is under-limited where it is deformed; `h` is the smallest cell size over the grid's
+//! axes, and the stiffness at rest the largest diagonal entry of the tangent on the grid's
+//! tensor (in-plane or full). A solid must be at least [`MIN_CELLS_ACROSS`] cells across (its
+//! section's `4A/P` in two dimensions, its `6V/S` in three).
 //!
 //! # References
 //!
@@ -262,7 +278,6 @@ use crate::faces::UnknownFaces;
 use crate::viscous_operator::{SHEAR, shear_pairs};
 use efsi_core::scene::{Boundary, Options, Side};
 use efsi_core::{BoundarySet, Field, FieldId, Grid, Index, Region, Scene, StageError};
-use efsi_laws_host::{Sym, Tangent};
 
 mod choice;
 mod coupled;
@@ -293,8 +308,7 @@ pub use options::{
     ElasticOptions, ElasticPreconditioner, MAX_COUPLED_WAVE_COURANT, MAX_WAVE_COURANT,
 };
 pub use resource::Deformation;
-use resource::{planar, planar_mut};
-use window::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Window, cells_of_edge, edges_of_cell, plus};
+use window::{Four, Window, cells_of_edge, edges_of_cell, plus};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
 pub const B: FieldId = FieldId::Stage("B");
@@ -323,20 +337,20 @@ struct Kernels {
     w: Field,
     /// Per shear pair, the interface weights of its edges.
     edge: Vec<EdgeWeights>,
-    /// Per centre, the solid fraction of each quarter of the cell in the x–y plane by its PLIC
-    /// line (lower-left, lower-right, upper-left, upper-right; `φ` itself in uncut cells,
-    /// beyond the batch and on a three-dimensional grid, whose edge fractions do not yet
-    /// come from its PLIC planes).
-    quarter: [Field; 4],
+    /// Per shear pair `[a, b]`, per centre, the solid fraction of each quarter of the cell in
+    /// the a–b plane (the whole cell along the third axis) cut by its PLIC line or plane
+    /// (lower-left, lower-right, upper-left, upper-right; `φ` itself in uncut cells and beyond
+    /// the batch).
+    quarter: Vec<[Field; 4]>,
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
     mu_s: f64,
-    /// The centres holding solid (`w > 0`, within `[−1, n]` along each axis) and the corners
-    /// (xy-edges) touching them (the only ones with `w_k > 0`), set by
-    /// [`Kernels::set_weights`]: outside them the tangent's stress increment vanishes (it is
-    /// weighted by `w`, `w_k`), so the elastic operator skips them.
+    /// The centres holding solid (`w > 0`, within `[−1, n]` along each axis) and, per shear
+    /// pair, the edges touching them (the only ones with `w_k > 0`; [`Window::EMPTY`] past the
+    /// grid's pairs), set by [`Kernels::set_weights`]: outside them the tangent's stress
+    /// increment vanishes (it is weighted by `w`, `w_k`), so the elastic operator skips them.
     solid_c: Window,
-    solid_k: Window,
+    solid_k: [Window; 3],
     /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included), set by
     /// [`Kernels::set_weights`], and the edges touching them ([`Window::edges`]): the
     /// deformation is transported there only. Elsewhere B stays the identity and its rates
@@ -347,16 +361,24 @@ struct Kernels {
     near_c: Window,
     /// Work space of [`Kernels::strain_energy`]: per solid cell, its weight, principal axes
     /// (cos, sin), the isochoric logarithms of the principal stretches and its volume.
-    energy_cells: Vec<EnergyCell>,
-    /// Law batches, sized for every centre `[−1, nx] × [−1, ny]` and corner `[0, nx] × [0, ny]`:
-    /// the centres of `solid_c` and the corners of `solid_k`, row by row ([`Kernels::ci`],
+    energy_cells: Vec<energy::EnergyCell>,
+    /// The area of a face normal to each axis, `Π_{b≠a} h_b` over the grid's axes (the radius
+    /// aside).
+    area: [f64; 3],
+    /// The components of the tensors the law sees: 4 (`[11, 22, 33, 12]`, law ABI version 1's
+    /// [`efsi_laws_host::Sym`]) on a two-dimensional grid, 6 (`[11, 22, 33, 12, 23, 13]`, [`efsi_laws_host::Sym6`]) on a
+    /// three-dimensional one.
+    m: usize,
+    /// Law batches, flat (`m` components, `m²` tangent entries per point, cell-major), sized for
+    /// every centre within `[−1, n]` along each axis and, per shear pair, every edge touching
+    /// one: the centres of `solid_c` and the edges of `solid_k`, line by line ([`Kernels::ci`],
     /// [`Window::region`]).
-    cb: Vec<Sym>,
-    ct: Vec<Sym>,
-    cj: Vec<Tangent>,
-    kb: Vec<Sym>,
-    kt: Vec<Sym>,
-    kj: Vec<Tangent>,
+    cb: Vec<f64>,
+    ct: Vec<f64>,
+    cj: Vec<f64>,
+    kb: Vec<Vec<f64>>,
+    kt: Vec<Vec<f64>>,
+    kj: Vec<Vec<f64>>,
 }
 
 /// The interface weights of the edges of one shear pair `[a, b]` (the corners of a
@@ -452,14 +474,13 @@ fn on<'a>(f: &'a Field, line: &efsi_core::Line) -> &'a [f64] {
     f.at(line, [0; 3])
 }
 
-/// See [`Kernels::strain_energy`].
-type EnergyCell = (f64, [f64; 5], f64);
-
 impl Kernels {
     fn new(grid: &Grid, bc: &BoundarySet, mu_f: f64, mu_s: f64) -> Self {
-        let nc = (grid.nx + 2) * (grid.ny + 2);
-        let nk = (grid.nx + 1) * (grid.ny + 1);
+        let n = grid.n();
+        let nc: usize = (0..grid.dims()).map(|a| n[a] + 2).product();
         let pairs = shear_pairs(grid.dims()).len();
+        let m = 3 + pairs;
+        let batch = |len: usize| (0..pairs).map(|_| vec![0.0; len]).collect::<Vec<_>>();
         Kernels {
             grid: grid.clone(),
             bc: bc.clone(),
@@ -470,24 +491,29 @@ impl Kernels {
                 .collect(),
             w: Field::zeros(grid),
             edge: (0..pairs).map(|_| EdgeWeights::new(grid)).collect(),
-            quarter: std::array::from_fn(|_| Field::zeros(grid)),
+            quarter: (0..pairs)
+                .map(|_| std::array::from_fn(|_| Field::zeros(grid)))
+                .collect(),
             mu_f,
             mu_s,
             solid_c: Window::EMPTY,
-            solid_k: Window::EMPTY,
+            solid_k: [Window::EMPTY; 3],
             near_c: Window::EMPTY,
             energy_cells: Vec::new(),
-            cb: vec![[0.0; 4]; nc],
-            ct: vec![[0.0; 4]; nc],
-            cj: vec![[0.0; 16]; nc],
-            kb: vec![[0.0; 4]; nk],
-            kt: vec![[0.0; 4]; nk],
-            kj: vec![[0.0; 16]; nk],
+            area: std::array::from_fn(|a| {
+                let h = grid.h();
+                let mut o = (0..grid.dims()).filter(|&b| b != a);
+                let first = o.next().map_or(1.0, |b| h[b]);
+                o.fold(first, |s, b| s * h[b])
+            }),
+            m,
+            cb: vec![0.0; m * nc],
+            ct: vec![0.0; m * nc],
+            cj: vec![0.0; m * m * nc],
+            kb: batch(m * nc),
+            kt: batch(m * nc),
+            kj: batch(m * m * nc),
         }
-    }
-
-    fn nxy(&self) -> (isize, isize) {
-        (self.grid.nx as isize, self.grid.ny as isize)
     }
 
     /// The centres and the edges of each shear pair whose gradients [`Kernels::stretch_in`]
@@ -530,38 +556,48 @@ impl Kernels {
         (cells, edges)
     }
 
-    /// Batch index of centre `(i, j)` of the solid's window [`Kernels::solid_c`] (the law
-    /// batches hold the window's points, row by row).
+    /// Batch index of centre `at` of the solid's window [`Kernels::solid_c`] (the law batches
+    /// hold the window's points, line by line).
     #[inline(always)]
-    fn ci(&self, i: isize, j: isize) -> usize {
+    fn ci(&self, at: Index) -> usize {
         let c = self.solid_c;
-        debug_assert!(c.contains(i, j), "centre ({i}, {j}) outside {c:?}");
-        ((j - c.j0) * (c.i1 - c.i0 + 1) + i - c.i0) as usize
+        debug_assert!(c.contains3(at), "centre {at:?} outside {c:?}");
+        c.offset(at)
     }
 
-    /// A law's error with the cell it names (an entry of the centre batch, or of the corner
-    /// batch if `corner`) turned into the grid's cell (or corner) index and position.
-    fn locate(&self, e: efsi_laws_host::LawError, corner: bool) -> String {
+    /// A law's error with the point it names (an entry of the centre batch, or of the edge
+    /// batch of the shear pair `edge`) turned into the grid's index and position.
+    fn locate(&self, e: efsi_laws_host::LawError, edge: Option<usize>) -> String {
         let Some(q) = e.cell else {
             return e.to_string();
         };
         let g = &self.grid;
         let text = efsi_laws_host::LawError { cell: None, ..e }.to_string();
-        let c = if corner { self.solid_k } else { self.solid_c };
-        let w = (c.i1 - c.i0 + 1).max(1) as usize;
-        let (i, j) = (c.i0 + (q % w) as isize, c.j0 + (q / w) as isize);
-        if corner {
-            format!(
-                "{text} at corner (i, j) = ({i}, {j}), (x, y) = ({:.6e}, {:.6e})",
-                g.xf(i),
-                g.yf(j)
-            )
+        let c = edge.map_or(self.solid_c, |p| self.solid_k[p]);
+        let at = c.point(q);
+        let (ijk, xyz) = if g.is_3d() {
+            ("(i, j, k)", "(x, y, z)")
         } else {
-            format!(
-                "{text} in cell (i, j) = ({i}, {j}), centre (x, y) = ({:.6e}, {:.6e})",
-                g.xc(i),
-                g.yc(j)
-            )
+            ("(i, j)", "(x, y)")
+        };
+        let list = |v: &mut dyn Iterator<Item = String>| v.collect::<Vec<_>>().join(", ");
+        let shown = list(&mut at[..g.dims()].iter().map(|i| i.to_string()));
+        let pos = |a: usize| {
+            let nodal = edge.is_some_and(|p| SHEAR[p].1.nodal()[a] == 1);
+            match (a, nodal) {
+                (0, true) => g.xf(at[0]),
+                (0, false) => g.xc(at[0]),
+                (1, true) => g.yf(at[1]),
+                (1, false) => g.yc(at[1]),
+                (_, true) => g.zf(at[2]),
+                (_, false) => g.zc(at[2]),
+            }
+        };
+        let p = list(&mut (0..g.dims()).map(|a| format!("{:.6e}", pos(a))));
+        match edge {
+            Some(0) if !g.is_3d() => format!("{text} at corner {ijk} = ({shown}), {xyz} = ({p})"),
+            Some(_) => format!("{text} at edge {ijk} = ({shown}), {xyz} = ({p})"),
+            None => format!("{text} in cell {ijk} = ({shown}), centre {xyz} = ({p})"),
         }
     }
 

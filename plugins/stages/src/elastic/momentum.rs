@@ -102,6 +102,11 @@ impl StagePlugin for Momentum {
             FieldId::Pressure,
         ]
     }
+    /// Planar, axisymmetric and three-dimensional grids: the elastic kernels, the split and
+    /// the coupled step run over the grid's axes and shear pairs.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
     fn sub_steps(&self) -> &'static [SubStep] {
         &SUB_STEPS
     }
@@ -160,7 +165,7 @@ fn elastic_stage(
     let n = k.faces.len();
     let o: &ElasticOptions = options.section()?;
     let limits = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?;
-    let periodic = Side::ALL
+    let periodic = Side::of(grid.dims())
         .iter()
         .any(|&s| matches!(scene.boundaries.get(s), Boundary::Periodic));
     let schemes = [false, true].map(|coupled| step_scheme(o, coupled, periodic));
@@ -177,22 +182,25 @@ fn elastic_stage(
     } else {
         None
     };
+    let fields = |n: usize| (0..n).map(|_| Field::zeros(grid)).collect::<Vec<_>>();
+    let tensor = || fields(super::Deformation::components(grid));
+    let edges = || fields(super::Deformation::components(grid) - 3);
     Ok(ElasticStage {
         mode: coupling(options),
         split_dt: limits.split,
         wave_step: limits.wave_step,
         options: o.clone(),
         law,
-        tau: std::array::from_fn(|_| Field::zeros(grid)),
-        tau_n: std::array::from_fn(|_| Field::zeros(grid)),
+        tau: tensor(),
+        tau_n: tensor(),
         op: ElasticOperator {
             k,
-            db: std::array::from_fn(|_| Field::zeros(grid)),
+            db: tensor(),
             mass: vec![0.0; n],
             c: 0.0,
             theta_dt: 0.0,
             mu: Field::zeros(grid),
-            mu_corner: Field::zeros(grid),
+            mu_edges: edges(),
             viscous: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
             dm: vec![0.0; n],
         },
@@ -208,14 +216,15 @@ fn elastic_stage(
         schemes,
         blocks: ViscousBlocks::new(grid, bc),
         eta: Field::zeros(grid),
-        eta_k: Field::zeros(grid),
+        eta_k: edges(),
         eta_coefficients: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
         eta_dm: vec![0.0; n],
         eta_diag: vec![0.0; n],
         scratch: Scratch {
             xu: Field::zeros(grid),
             xv: Field::zeros(grid),
-            dtau: std::array::from_fn(|_| Field::zeros(grid)),
+            xw: grid.is_3d().then(|| Field::zeros(grid)),
+            dtau: tensor(),
         },
         coupling: coupled_work,
     })
@@ -269,15 +278,18 @@ fn deformation_stage(
         k: Kernels::new(grid, bc, mu_f, mu_s),
         mode: coupling(options),
         limits,
-        walls: Side::ALL.map(|side| {
-            matches!(
-                scene.boundaries.get(side),
-                Boundary::NoSlip
-                    | Boundary::MovingWall { .. }
-                    | Boundary::FreeSlip
-                    | Boundary::Symmetry
-            )
-        }),
+        walls: Side::of(grid.dims())
+            .iter()
+            .map(|&side| {
+                matches!(
+                    scene.boundaries.get(side),
+                    Boundary::NoSlip
+                        | Boundary::MovingWall { .. }
+                        | Boundary::FreeSlip
+                        | Boundary::Symmetry
+                )
+            })
+            .collect(),
         thetas: [o.stretch_theta(false), o.stretch_theta(true)],
         first: (0..super::Deformation::components(grid))
             .map(|_| Field::zeros(grid))
@@ -311,7 +323,8 @@ impl Stage for MomentumStage {
             let s = self.run_sub(k, ctx, state)?;
             stats.solve = s.solve.or(stats.solve);
             let (g, bc) = (ctx.grid, ctx.bc);
-            bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + ctx.dt, false);
+            let t = ctx.t + ctx.dt;
+            bc.fill_velocity3(g, &mut state.u, &mut state.v, state.w.as_mut(), t, false);
             bc.fill_scalar(g, &mut state.p, true);
         }
         Ok(stats)

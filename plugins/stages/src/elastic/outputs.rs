@@ -59,21 +59,26 @@ fn elastic_energy(_grid: &Grid, state: &State) -> f64 {
         .map_or(f64::NAN, |d| d.elastic_energy)
 }
 
-/// A staggered tensor (11, 22, 33 at centres, 12 at corners) at the cell centres as a VTK
-/// symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), weighted by `φ^{1/2}` if `phi` is given. Planar:
-/// 1 = X, 2 = Y, 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y.
+/// A staggered tensor (11, 22, 33 at centres, each shear on the edges of its pair) at the cell
+/// centres as a VTK symmetric tensor (XX, YY, ZZ, XY, YZ, XZ), each shear the mean of the cell's
+/// four edges of its pair, weighted by `φ^{1/2}` if `phi` is given. Planar: 1 = X, 2 = Y,
+/// 3 = Z. Axisymmetric (the r–z slice in the X–Z plane): r = X, z = Z, θ = Y. Three
+/// dimensions: 1, 2, 3 = X, Y, Z (12, 23, 13 = XY, YZ, XZ).
 fn tensor(grid: &Grid, t: &[Field], phi: Option<&Field>) -> Vec<f64> {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut out = vec![0.0; 6 * nx * ny];
+    let mut out = vec![0.0; 6 * grid.cells()];
     let (c11, c22, c33, c12) = if grid.is_axisymmetric() {
         (0, 2, 1, 5)
     } else {
         (0, 1, 2, 3)
     };
+    let pairs = &crate::viscous_operator::SHEAR[..t.len() - 3];
     let cells = Region::of(grid, Stagger::Cell);
     for l in (0..cells.lines()).map(|n| cells.line(n)) {
         let [t11, t22, t33] = [0, 1, 2].map(|c| t[c].at(&l, [0; 3]));
-        let t12 = super::Four::new(&t[3], &l, super::CORNERS_OF_CELL);
+        let shear: [super::Four; 3] = std::array::from_fn(|p| {
+            let p = p.min(pairs.len() - 1);
+            super::Four::new(&t[3 + p], &l, super::edges_of_cell(pairs[p].0))
+        });
         let phi = phi.map(|p| p.at(&l, [0; 3]));
         let row = &mut out[6 * l.n * l.len..][..6 * l.len];
         for (n, out) in row.chunks_exact_mut(6).enumerate() {
@@ -81,7 +86,9 @@ fn tensor(grid: &Grid, t: &[Field], phi: Option<&Field>) -> Vec<f64> {
             out[c11] = w * t11[n];
             out[c22] = w * t22[n];
             out[c33] = w * t33[n];
-            out[c12] = w * t12.avg(n);
+            for (p, s) in shear.iter().enumerate().take(pairs.len()) {
+                out[if p == 0 { c12 } else { 3 + p }] = w * s.avg(n);
+            }
         }
     }
     out

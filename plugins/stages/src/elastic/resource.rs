@@ -40,12 +40,11 @@ pub struct Deformation {
     pub stretching: Vec<Field>,
     /// This step's explicit part.
     pub explicit: Vec<Field>,
-    /// This step's implicit-relaxation divisor of the corner shear `B₁₂` at interface corners
-    /// (1 elsewhere): set by the elastic sub-step, used again by the end-of-step update. Scratch
-    /// of one step: it is recomputed before use, so it carries no history. The xz- and
-    /// yz-edges of a three-dimensional grid have none yet: their interface closure needs the
-    /// law on the full tensor.
-    pub relax: Field,
+    /// This step's implicit-relaxation factor of each shear pair's component at its interface
+    /// edges (1 elsewhere; one field per pair): set by the elastic sub-step, used again by
+    /// the end-of-step update. Scratch of one step: it is recomputed before use, so it carries
+    /// no history.
+    pub relax: Vec<Field>,
     /// The elastic stress `τ(B̃) − τ(φ^{1/2} I)` at the end of the step (the law's stress less
     /// its stress-free isotropic part, which is pressure), staggered like `b`.
     pub stress: Vec<Field>,
@@ -70,7 +69,9 @@ impl Deformation {
             advection_prev: z(),
             stretching: z(),
             explicit: z(),
-            relax: Field::zeros(grid),
+            relax: (3..Deformation::components(grid))
+                .map(|_| Field::zeros(grid))
+                .collect(),
             stress: z(),
             elastic_energy: 0.0,
         }
@@ -231,19 +232,4 @@ impl Deformation {
             }
         }
     }
-}
-
-/// The components the law ABI version 1 carries (11, 22, 33, 12): the whole tensor of a
-/// two-dimensional grid.
-pub(super) fn planar(t: &[Field]) -> &[Field; 4] {
-    t[..4]
-        .try_into()
-        .expect("a tensor has at least four components")
-}
-
-/// [`planar`], mutable.
-pub(super) fn planar_mut(t: &mut [Field]) -> &mut [Field; 4] {
-    (&mut t[..4])
-        .try_into()
-        .expect("a tensor has at least four components")
 }

@@ -2,10 +2,10 @@
 //! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
-use super::{Kernels, err, missing, planar, plus};
+use super::{Kernels, err, missing, plus};
 use crate::block_multigrid::ViscousBlocks;
-use crate::ops::face_density;
 use crate::viscous_operator::Coefficients;
+use efsi_core::operators::face_density;
 use efsi_core::operators::minus;
 use efsi_core::{Field, Grid, Index, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
@@ -30,10 +30,10 @@ pub(super) struct ElasticStage {
     /// ([`super::ElasticOptions::split_stress_weight`]).
     pub(super) wave_step: f64,
     pub(super) options: super::ElasticOptions,
-    pub(super) tau: [Field; 4],
+    pub(super) tau: Vec<Field>,
     /// τ(Bⁿ) with this step's weights: the old-time stress of a step whose stress weight α is
     /// below 1 (evaluated only then).
-    pub(super) tau_n: [Field; 4],
+    pub(super) tau_n: Vec<Field>,
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
     pub(super) delta: Vec<f64>,
@@ -43,11 +43,11 @@ pub(super) struct ElasticStage {
     pub(super) max_iter: usize,
     /// Whether the elastic stress is implicit (scene `numerics.elastic.implicit`).
     pub(super) implicit: bool,
-    /// The block multigrid's effective viscosities × Δt at centres and corners (see
-    /// [`Kernels::stiffness`]).
+    /// The block multigrid's effective viscosities × Δt at centres and on the edges of each
+    /// shear pair (see [`Kernels::stiffness`]).
     pub(super) blocks: ViscousBlocks,
     pub(super) eta: Field,
-    pub(super) eta_k: Field,
+    pub(super) eta_k: Vec<Field>,
     /// `K_η` of those, and the mass plus its hoop term and the diagonal of `M − K_η`.
     pub(super) eta_coefficients: Coefficients,
     pub(super) eta_dm: Vec<f64>,
@@ -59,24 +59,27 @@ pub(super) struct ElasticStage {
     pub(super) coupling: Option<super::coupled::Coupling>,
 }
 
-/// The elastic operator's work space: the increment as fields, and Δτ (zero outside the solid).
+/// The elastic operator's work space: the increment as fields (`xw` on a three-dimensional
+/// grid only), and Δτ (zero outside the solid).
 pub(super) struct Scratch {
     pub(super) xu: Field,
     pub(super) xv: Field,
-    pub(super) dtau: [Field; 4],
+    pub(super) xw: Option<Field>,
+    pub(super) dtau: Vec<Field>,
 }
 
 /// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
 pub(super) struct ElasticOperator {
     pub(super) k: Kernels,
-    pub(super) db: [Field; 4],
+    pub(super) db: Vec<Field>,
     pub(super) mass: Vec<f64>,
     /// `Δt²/2`.
     pub(super) c: f64,
     /// `θΔt` of the viscous step (0 without viscosity), and the viscosities it uses.
     pub(super) theta_dt: f64,
     pub(super) mu: Field,
-    pub(super) mu_corner: Field,
+    /// The edge viscosities of each shear pair.
+    pub(super) mu_edges: Vec<Field>,
     /// `θΔt K_v`, its coefficients set each step (zero without viscosity).
     pub(super) viscous: Coefficients,
     /// `mass` plus the hoop term of `θΔt K_v`.
@@ -84,14 +87,15 @@ pub(super) struct ElasticOperator {
 }
 
 /// The elastic operator bound to this step's deformation and work space. After
-/// [`apply`](LinearOperator::apply), `xu`, `xv` hold `x` scattered, ghosts filled.
+/// [`apply`](LinearOperator::apply), `xu`, `xv` (and `xw`) hold `x` scattered, ghosts filled.
 pub(super) struct OperatorCtx<'a> {
     pub(super) op: &'a mut ElasticOperator,
     pub(super) start: &'a [Field],
-    pub(super) relax: &'a Field,
+    pub(super) relax: &'a [Field],
     pub(super) xu: &'a mut Field,
     pub(super) xv: &'a mut Field,
-    pub(super) dtau: &'a mut [Field; 4],
+    pub(super) xw: Option<&'a mut Field>,
+    pub(super) dtau: &'a mut [Field],
 }
 
 impl<'a> OperatorCtx<'a> {
@@ -107,6 +111,7 @@ impl<'a> OperatorCtx<'a> {
             relax: &d.relax,
             xu: &mut scratch.xu,
             xv: &mut scratch.xv,
+            xw: scratch.xw.as_mut(),
             dtau: &mut scratch.dtau,
         }
     }
@@ -116,14 +121,21 @@ impl LinearOperator for OperatorCtx<'_> {
     fn apply(&mut self, x: &[f64], y: &mut [f64]) {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
-        op.k.faces.scatter(x, xu, xv);
-        op.k.bc.fill_velocity(&op.k.grid, xu, xv, 0.0, true);
+        let mut xw = self.xw.as_deref_mut();
+        match xw.as_deref_mut() {
+            Some(xw) => op.k.faces.scatter_to(x, &mut [&mut *xu, &mut *xv, xw]),
+            None => op.k.faces.scatter(x, xu, xv),
+        }
+        let g = &op.k.grid;
+        op.k.bc
+            .fill_velocity3(g, xu, xv, xw.as_deref_mut(), 0.0, true);
         // The increment's stress lives in the solid: gradients, stretching and tangent there.
         let cw = op.k.solid_c;
-        op.k.gradient_in(&[&*xu, &*xv], cw);
+        let vel = super::velocity(xu, xv, xw.as_deref());
+        op.k.gradient_in(&vel, cw);
         op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw);
         op.k.apply_tangent(&op.db, self.dtau);
-        op.viscous.apply(xu, xv, &op.dm, Some(x), y);
+        op.viscous.product(&vel, &op.dm, Some(x), y);
         op.k.force_sub(self.dtau, op.c, y);
     }
 }
@@ -137,7 +149,9 @@ impl ElasticStage {
             .get_mut::<super::Deformation>()
             .ok_or_else(missing)?;
         d.set_identity();
-        d.relax.fill(1.0);
+        for r in &mut d.relax {
+            r.fill(1.0);
+        }
         let k = &mut self.op.k;
         // The solid fraction is set: the stages writing material fields initialise first.
         let phi = state
@@ -248,7 +262,7 @@ impl ElasticStage {
         d.begin_step(dt, r, self.scheme.theta);
         let k = &mut self.op.k;
         if self.scheme.alpha < 1.0 {
-            k.evaluate(self.law.as_ref(), planar(&d.start), &mut self.tau_n, false)
+            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
                 .map_err(|m| err("elastic", m))?;
         }
         k.relaxation(
@@ -268,7 +282,7 @@ impl ElasticStage {
             &mut d.b,
         );
         k.fill_ghosts(&mut d.b);
-        k.evaluate(self.law.as_ref(), planar(&d.b), &mut self.tau, true)
+        k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
             .map_err(|m| err("elastic", m))
     }
 
@@ -295,9 +309,12 @@ impl ElasticStage {
         self.op.theta_dt = self.theta * dt;
         if self.theta > 0.0 {
             self.op.mu.copy_from(&state.mu);
-            self.op
-                .viscous
-                .set_viscosity(g, &state.mu, self.op.theta_dt, &mut self.op.mu_corner);
+            self.op.viscous.set_viscosity_edges(
+                g,
+                &state.mu,
+                self.op.theta_dt,
+                &mut self.op.mu_edges,
+            );
         }
         self.face_terms(g, &state.rho, dt);
         let bnorm = self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -315,27 +332,40 @@ impl ElasticStage {
     /// `Δt`.
     fn face_terms(&mut self, g: &Grid, rho: &Field, dt: f64) {
         let m = &g.metric;
-        let (dx, dy) = (g.dx, g.dy);
+        let (h, dims) = (g.h(), g.dims());
         let (c2, td) = (self.op.c, self.op.theta_dt);
         let k = &self.op.k;
-        let (mu, mc) = (&self.op.mu, &self.op.mu_corner);
+        let (mu, me) = (&self.op.mu, &self.op.mu_edges);
         let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
+        let mm = k.m;
+        // The largest diagonal entry of the tangent (normal and shear rows) at a centre.
+        let rows: &[usize] = if dims == 2 {
+            &[0, 1, 3]
+        } else {
+            &[0, 1, 2, 3, 4, 5]
+        };
         // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
         let stiff = |at: Index| {
-            if !k.solid_c.contains(at[0], at[1]) {
+            if !k.solid_c.contains3(at) {
                 return 0.0;
             }
-            let q = k.ci(at[0], at[1]);
-            let (jm, b) = (&k.cj[q], &k.cb[q]);
-            k.w[at]
-                * jm[0].abs().max(jm[5].abs()).max(jm[15].abs())
-                * b[0].abs().max(b[1].abs()).max(1e-300)
+            let q = k.ci(at);
+            let (jm, b) = (&k.cj[q * mm * mm..], &k.cb[q * mm..]);
+            let j = rows
+                .iter()
+                .fold(0.0_f64, |s, &c| s.max(jm[c * (mm + 1)].abs()));
+            let b = (0..dims).fold(0.0_f64, |s, c| s.max(b[c].abs()));
+            k.w[at] * j * b.max(1e-300)
         };
-        let scale = 4.0 / (dx * dx) + 4.0 / (dy * dy);
-        // The faces normal to axis a, between the cells I − e_a and I, with the corners I and
-        // I + e_b beside them.
+        let mut scale = 4.0 / (h[0] * h[0]);
+        for a in 1..dims {
+            scale += 4.0 / (h[a] * h[a]);
+        }
+        // The faces normal to axis a, between the cells I − e_a and I, with the edges I and
+        // I + e_b of each pair (a, b) beside them.
         let mut c = 0;
-        for (a, r) in [(0, k.faces.region(0)), (1, k.faces.region(1))] {
+        for a in 0..dims {
+            let r = k.faces.region(a);
             for l in (0..r.lines()).map(|n| r.line(n)) {
                 let area = if a == 0 {
                     m.rx_on(&l, 0)
@@ -344,13 +374,26 @@ impl ElasticStage {
                 };
                 let (rlo, rhi) = (rho.at(&l, minus(a)), rho.at(&l, [0; 3]));
                 let (mlo, mhi) = (mu.at(&l, minus(a)), mu.at(&l, [0; 3]));
-                let (klo, khi) = (mc.at(&l, [0; 3]), mc.at(&l, unit(1 - a)));
+                let beside: [(&[f64], &[f64]); 2] = std::array::from_fn(|o| {
+                    let b = (a + 1 + o) % dims.max(2);
+                    match (0..dims).contains(&b) && b != a {
+                        true => {
+                            let e = &me[super::PAIR[a][b]];
+                            (e.at(&l, [0; 3]), e.at(&l, unit(b)))
+                        }
+                        false => (&[][..], &[][..]),
+                    }
+                });
                 for (n, at) in l.indices().enumerate() {
-                    let w = area[n] * dx * dy;
+                    let w = h[..dims].iter().fold(area[n], |s, h| s * h);
                     let e = stiff(plus(at, minus(a))).max(stiff(at));
                     mass[c] = face_density(rlo[n], rhi[n]) * w;
                     let mv = if td > 0.0 {
-                        2.0 * mlo[n].max(mhi[n]).max(klo[n]).max(khi[n])
+                        let mut x = mlo[n].max(mhi[n]);
+                        for (lo, hi) in beside.iter().filter(|(lo, _)| !lo.is_empty()) {
+                            x = x.max(lo[n]).max(hi[n]);
+                        }
+                        2.0 * x
                     } else {
                         0.0
                     };
@@ -367,7 +410,9 @@ impl ElasticStage {
         let mut pnorm = 0.0;
         let mut c = 0;
         let faces = &self.op.k.faces;
-        for (r, f) in [(faces.region(0), &state.u), (faces.region(1), &state.v)] {
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        for (a, f) in vel.iter().enumerate() {
+            let r = faces.region(a);
             for l in (0..r.lines()).map(|n| r.line(n)) {
                 for &f in f.at(&l, [0; 3]) {
                     let x = self.op.mass[c] * f;
@@ -427,10 +472,11 @@ impl ElasticStage {
                     ),
                 ));
             }
-            self.op
-                .k
-                .faces
-                .add(&self.delta, &mut [&mut state.u, &mut state.v]);
+            let faces = &self.op.k.faces;
+            match state.w.as_mut() {
+                Some(w) => faces.add(&self.delta, &mut [&mut state.u, &mut state.v, w]),
+                None => faces.add(&self.delta, &mut [&mut state.u, &mut state.v]),
+            }
             SolveStats {
                 residual: st.residual / bnorm,
                 ..st
@@ -451,7 +497,7 @@ impl ElasticStage {
             self.effective_viscosity(d);
             let op = &self.op;
             let pre = &mut self.eta_coefficients;
-            pre.set(g, &self.eta, &self.eta_k, 1.0);
+            pre.set_edges(g, &self.eta, &self.eta_k, 1.0);
             for ((dm, m), h) in self.eta_dm.iter_mut().zip(&op.mass).zip(pre.hoop()) {
                 *dm = m + h;
             }
@@ -472,12 +518,16 @@ impl ElasticStage {
             for (e, m) in e.data_mut().iter_mut().zip(op.mu.data()) {
                 *e = td * m;
             }
-            for (e, m) in ek.data_mut().iter_mut().zip(op.mu_corner.data()) {
-                *e = td * m;
+            for (ek, me) in ek.iter_mut().zip(&op.mu_edges) {
+                for (e, m) in ek.data_mut().iter_mut().zip(me.data()) {
+                    *e = td * m;
+                }
             }
         } else {
             e.fill(0.0);
-            ek.fill(0.0);
+            for ek in ek.iter_mut() {
+                ek.fill(0.0);
+            }
         }
         op.k.stiffness(&d.relax, op.c, e, ek);
     }
@@ -510,7 +560,14 @@ impl ElasticStage {
         let g = ctx.grid;
         let dt = ctx.dt;
         let k = &mut self.op.k;
-        k.bc.fill_velocity(g, &mut state.u, &mut state.v, ctx.t + dt, false);
+        k.bc.fill_velocity3(
+            g,
+            &mut state.u,
+            &mut state.v,
+            state.w.as_mut(),
+            ctx.t + dt,
+            false,
+        );
         k.gradient(&super::velocity(&state.u, &state.v, state.w.as_ref()));
         k.stretch(
             &d.start,

@@ -1,57 +1,115 @@
-//! The law batches (stress and tangent at centres and corners, weighted), the block multigrid's
-//! effective stiffness, and the stress divergence on the faces.
+//! The law batches (stress and tangent at centres and on the edges of each shear pair,
+//! weighted), the block multigrid's effective stiffness, and the stress divergence on the faces.
+//!
+//! **The law on the full tensor.** On a two-dimensional grid the law sees `[11, 22, 33, 12]`
+//! (law ABI version 1's in-plane tensor), on a three-dimensional one `[11, 22, 33, 12, 23, 13]`
+//! (version 2's). At a centre the normal components are the cell's own and each shear the mean
+//! of the cell's four edges of its pair; on an edge of the pair `(a, b)` the normal components
+//! are the solid-weighted average of its four cells, its own shear is its own, and (three
+//! dimensions) each other shear is the mean of the four edges of its pair around the edge
+//! (the pair `(a, c)` at `I − {0, e_b} + {0, e_c}`, `(b, c)` at `I − {0, e_a} + {0, e_c}`).
+//! The stress a location applies is its own rows: 11, 22, 33 at centres, `τ_ab` on the
+//! `(a, b)`-edges.
+//!
+//! **The divergence.** On the faces normal to `a`, volume-weighted,
+//! `V (∇·τ)_a = Σ_b A_b (τ_ab(I + ½e_b) − τ_ab(I − ½e_b))`, `A_b = Π_{c≠b} h_c` the face
+//! area across `b` (radius-weighted along r, less the hoop term `V τ_θθ / r` on the radial
+//! faces of an axisymmetric grid): the normal stress from the two cells, each shear from the
+//! two edges of its pair beside the face.
 
-use super::{CELLS_OF_CORNER, CORNERS_OF_CELL, Four, Kernels, corner_weights};
+use super::{Four, Kernels, PAIR, SHEAR, cells_of_edge, corner_weights, edges_of_cell, plus};
 use efsi_core::operators::minus;
 use efsi_core::{Field, Index, Line, Region, unit};
 use efsi_laws_host::ConstitutiveLaw;
-use efsi_laws_host::{LawError, Sym, Tangent};
+use efsi_laws_host::LawError;
 
-/// The law's stress in the undeformed state `B = I` (the same at every point).
-pub(super) fn rest_stress(law: &dyn ConstitutiveLaw) -> Result<efsi_laws_host::Sym, String> {
-    let mut r = [[0.0; 4]];
-    law.evaluate(&[[1.0, 1.0, 1.0, 0.0]], &mut r, None)
-        .map_err(|e| e.to_string())?;
-    Ok(r[0])
+/// The law on a flat batch of `m`-component tensors: `b` into `tau` (and the `m²`-entry tangent
+/// into `tangent`): [`ConstitutiveLaw::evaluate`] for `m = 4`, `evaluate_full` for `m = 6`.
+pub(super) fn eval(
+    law: &dyn ConstitutiveLaw,
+    m: usize,
+    b: &[f64],
+    tau: &mut [f64],
+    tangent: Option<&mut [f64]>,
+) -> Result<(), LawError> {
+    if m == 4 {
+        let j = tangent.map(|j| j.as_chunks_mut::<16>().0);
+        law.evaluate(b.as_chunks::<4>().0, tau.as_chunks_mut::<4>().0, j)
+    } else {
+        let j = tangent.map(|j| j.as_chunks_mut::<36>().0);
+        law.evaluate_full(b.as_chunks::<6>().0, tau.as_chunks_mut::<6>().0, j)
+    }
 }
 
-/// `eval(b, tau, tangent)` on the points `q` of a batch with `live(q)` only, in one call: the
-/// live points are moved to the front (a sequence of swaps), evaluated, and the swaps undone,
-/// so that every array is back in the batch's order with the live points' results, the stress
-/// `dead` and a zero tangent at the others, and `b` unchanged. An error's cell is the batch
-/// index `q` of the live point it names.
+/// The law's stress in the undeformed state `B = I` (the same at every point), its first `m`
+/// components.
+pub(super) fn rest_stress(law: &dyn ConstitutiveLaw, m: usize) -> Result<[f64; 6], String> {
+    let mut b = [0.0; 6];
+    b[..3].fill(1.0);
+    let mut r = [0.0; 6];
+    eval(law, m, &b[..m], &mut r[..m], None).map_err(|e| e.to_string())?;
+    Ok(r)
+}
+
+/// `a · x` over the `x.len()` entries, summed in order from the first product.
+#[inline(always)]
+fn dot(a: &[f64], x: &[f64]) -> f64 {
+    let mut s = a[0] * x[0];
+    for k in 1..x.len() {
+        s += a[k] * x[k];
+    }
+    s
+}
+
+/// Swap the points `p` and `q` (`m` entries each) of a flat batch.
+#[inline(always)]
+fn swap(v: &mut [f64], m: usize, p: usize, q: usize) {
+    if p != q {
+        for c in 0..m {
+            v.swap(p * m + c, q * m + c);
+        }
+    }
+}
+
+/// `eval(b, tau, tangent)` on the points `q` of a flat batch of `m`-component tensors with
+/// `live(q)` only, in one call: the live points are moved to the front (a sequence of swaps),
+/// evaluated, and the swaps undone, so that every array is back in the batch's order with the
+/// live points' results, the stress `dead` and a zero tangent at the others, and `b` unchanged.
+/// An error's cell is the batch index `q` of the live point it names.
 fn live_only(
     live: impl Fn(usize) -> bool,
-    dead: Sym,
-    b: &mut [Sym],
-    tau: &mut [Sym],
-    mut tangent: Option<&mut [Tangent]>,
-    eval: impl FnOnce(&[Sym], &mut [Sym], Option<&mut [Tangent]>) -> Result<(), LawError>,
+    (m, n): (usize, usize),
+    dead: &[f64],
+    b: &mut [f64],
+    tau: &mut [f64],
+    mut tangent: Option<&mut [f64]>,
+    eval: impl FnOnce(&[f64], &mut [f64], Option<&mut [f64]>) -> Result<(), LawError>,
 ) -> Result<(), LawError> {
-    let n = b.len();
-    let mut m = 0;
+    let mut k = 0;
     for q in 0..n {
         if live(q) {
-            b.swap(m, q);
-            m += 1;
+            swap(b, m, k, q);
+            k += 1;
         }
     }
     let result = eval(
-        &b[..m],
-        &mut tau[..m],
-        tangent.as_deref_mut().map(|j| &mut j[..m]),
+        &b[..k * m],
+        &mut tau[..k * m],
+        tangent.as_deref_mut().map(|j| &mut j[..k * m * m]),
     );
-    tau[m..].fill(dead);
+    for t in tau[k * m..n * m].chunks_exact_mut(m) {
+        t.copy_from_slice(dead);
+    }
     if let Some(j) = tangent.as_deref_mut() {
-        j[m..].fill([0.0; 16]);
+        j[k * m * m..n * m * m].fill(0.0);
     }
     for q in (0..n).rev() {
         if live(q) {
-            m -= 1;
-            b.swap(m, q);
-            tau.swap(m, q);
+            k -= 1;
+            swap(b, m, k, q);
+            swap(tau, m, k, q);
             if let Some(j) = tangent.as_deref_mut() {
-                j.swap(m, q);
+                swap(j, m * m, k, q);
             }
         }
     }
@@ -61,53 +119,65 @@ fn live_only(
     })
 }
 
+/// The shifts of the four edges of the shear pair `q` around an edge of the pair `p` (`p ≠ q`,
+/// three dimensions): with `y` the axis of `p` not in `q` and `c` the axis of `q` not in `p`,
+/// `{0, −e_y} × {0, +e_c}`.
+fn around(p: usize, q: usize) -> [Index; 4] {
+    let (pp, qq) = (SHEAR[p].0, SHEAR[q].0);
+    let y = if qq.contains(&pp[0]) { pp[1] } else { pp[0] };
+    let c = if pp.contains(&qq[0]) { qq[1] } else { qq[0] };
+    let (ey, ec) = (minus(y), unit(c));
+    [[0; 3], ey, ec, plus(ey, ec)]
+}
+
 impl Kernels {
-    /// The law on the centre batch (`cb` into `ct`, and `cj` if `tangent`), or on the corner
-    /// batch (`kb`, `kt`, `kj`) if `corners`, at the points with a weight only (`w > 0` at a
-    /// centre, `w_k > 0` at a corner: those holding or touching solid), in one call; the
-    /// others get the stress `dead` and a zero tangent ([`live_only`]). A law's error names
-    /// the grid point.
+    /// The law on the centre batch (`cb` into `ct`, and `cj` if `tangent`), or on the batch of
+    /// the edges of the shear pair `edge` (`kb`, `kt`, `kj`), at the points with a weight only
+    /// (`w > 0` at a centre, `w_k > 0` on an edge: those holding or touching solid), in one
+    /// call; the others get the stress `dead` and a zero tangent ([`live_only`]). A law's error
+    /// names the grid point.
     pub(super) fn batch(
         &mut self,
         law: &dyn ConstitutiveLaw,
-        corners: bool,
+        edge: Option<usize>,
         tangent: bool,
-        dead: Sym,
+        dead: &[f64],
     ) -> Result<(), String> {
-        let (win, weights) = if corners {
-            (self.solid_k, &self.edge[0].wk)
-        } else {
-            (self.solid_c, &self.w)
+        let (win, weights) = match edge {
+            Some(p) => (self.solid_k[p], &self.edge[p].wk),
+            None => (self.solid_c, &self.w),
         };
-        let n = win.points();
-        let width = (win.i1 - win.i0 + 1).max(1) as usize;
-        let live = |q: usize| {
-            weights[(win.i0 + (q % width) as isize, win.j0 + (q / width) as isize)] != 0.0
+        let (m, n) = (self.m, win.points());
+        let live = |q: usize| weights[win.point(q)] != 0.0;
+        let (b, t, j) = match edge {
+            Some(p) => (&mut self.kb[p], &mut self.kt[p], &mut self.kj[p]),
+            None => (&mut self.cb, &mut self.ct, &mut self.cj),
         };
-        let (b, t, j) = if corners {
-            (&mut self.kb[..n], &mut self.kt[..n], &mut self.kj[..n])
-        } else {
-            (&mut self.cb[..n], &mut self.ct[..n], &mut self.cj[..n])
-        };
-        let result = live_only(live, dead, b, t, tangent.then_some(j), |b, t, j| {
-            law.evaluate(b, t, j)
-        });
-        result.map_err(|e| self.locate(e, corners))
+        let result = live_only(
+            live,
+            (m, n),
+            &dead[..m],
+            &mut b[..n * m],
+            &mut t[..n * m],
+            tangent.then_some(&mut j[..n * m * m]),
+            |b, t, j| eval(law, m, b, t, j),
+        );
+        result.map_err(|e| self.locate(e, edge))
     }
 
     /// τ (and J if `tangent`) of `b` into the batches and `tau`. The law sees the solid's
-    /// centres and corners only ([`Kernels::solid_c`], `solid_k`, packed in that order: see
+    /// centres and edges only ([`Kernels::solid_c`], `solid_k`, packed in that order: see
     /// [`Kernels::ci`]), and of those only the ones with a weight (`w > 0`, `w_k > 0`): it is
     /// never called on a point without solid. Elsewhere the weights `w`, `1/κ` vanish and so
     /// does `tau`.
     pub(super) fn evaluate(
         &mut self,
         law: &dyn ConstitutiveLaw,
-        b: &[Field; 4],
-        tau: &mut [Field; 4],
+        b: &[Field],
+        tau: &mut [Field],
         tangent: bool,
     ) -> Result<(), String> {
-        let (cw, kw) = (self.solid_c, self.solid_k);
+        let (cw, m) = (self.solid_c, self.m);
         let nc = cw.points();
         self.gather_batches(b);
         for f in tau.iter_mut() {
@@ -116,243 +186,323 @@ impl Kernels {
         if nc == 0 {
             return Ok(());
         }
-        // The law is called only where the weight is not zero (centres with solid, corners
+        // The law is called only where the weight is not zero (centres with solid, edges
         // touching it): the window's other points hold no solid — the fluid's B = I at a
-        // centre, nothing (B̃ = 0, outside many laws' domains) at a corner. Their stress is the
-        // rest stress at a centre (nothing once it is subtracted) and zero at a corner, their
+        // centre, nothing (B̃ = 0, outside many laws' domains) on an edge. Their stress is the
+        // rest stress at a centre (nothing once it is subtracted) and zero on an edge, their
         // tangent zero; all of it is weighted by zero.
-        let r = rest_stress(law)?;
-        self.batch(law, false, tangent, r)?;
-        self.batch(law, true, tangent, [0.0; 4])?;
+        let r = rest_stress(law, m)?;
+        self.batch(law, None, tangent, &r)?;
+        for p in 0..self.edge.len() {
+            self.batch(law, Some(p), tangent, &[0.0; 6])?;
+        }
         // Subtract the stress of the stress-free state B = I (B̃ = w I): isotropic, so only a
         // change of pressure — but it jumps across the interface, and fed through the implicit
         // solve it would not stay a pure gradient (see "Stress-free reference" in the docs).
-        for t in &mut self.ct[..nc] {
+        for t in self.ct[..nc * m].chunks_exact_mut(m) {
             for c in 0..3 {
                 t[c] -= r[c];
             }
         }
-        let [t11, t22, t33, t12] = tau;
+        let (normal, shear) = tau.split_at_mut(3);
+        let [t11, t22, t33] = normal else {
+            unreachable!("three normal components")
+        };
         let (ct, w) = (&self.ct, &self.w);
         cw.region(&self.grid)
             .for_each((t11, t22, t33), |l, (t11, t22, t33)| {
                 let w = w.at(&l, [0; 3]);
-                for (n, t) in ct[l.n * l.len..][..l.len].iter().enumerate() {
+                let rows = ct[l.n * l.len * m..][..l.len * m].chunks_exact(m);
+                for (n, t) in rows.enumerate() {
                     t11[n] = w[n] * t[0];
                     t22[n] = w[n] * t[1];
                     t33[n] = w[n] * t[2];
                 }
             });
-        let (kt, ks) = (&self.kt, &self.edge[0].ks);
-        kw.region(&self.grid).for_each(t12, |l, t12| {
-            let ks = ks.at(&l, [0; 3]);
-            for (n, t) in kt[l.n * l.len..][..l.len].iter().enumerate() {
-                t12[n] = ks[n] * t[3];
-            }
-        });
+        for (p, tab) in shear.iter_mut().enumerate().take(self.edge.len()) {
+            let (kt, ks) = (&self.kt[p], &self.edge[p].ks);
+            self.solid_k[p].region(&self.grid).for_each(tab, |l, tab| {
+                let ks = ks.at(&l, [0; 3]);
+                let rows = kt[l.n * l.len * m..][..l.len * m].chunks_exact(m);
+                for (n, t) in rows.enumerate() {
+                    tab[n] = ks[n] * t[3 + p];
+                }
+            });
+        }
         Ok(())
     }
 
+    /// The shears of `b` at the centres of `l`: each the mean of the cell's four edges of its
+    /// pair (the last pair repeated past the grid's pairs).
+    fn centre_shears<'a>(&self, b: &'a [Field], l: &Line) -> [Four<'a>; 3] {
+        let four = |p: usize| Four::new(&b[3 + p], l, edges_of_cell(SHEAR[p].0));
+        let first = four(0);
+        if self.edge.len() == 3 {
+            [first, four(1), four(2)]
+        } else {
+            [first; 3]
+        }
+    }
+
     /// The batches' B̃ from `b`: at the solid's centres ([`Kernels::solid_c`]) the normal
-    /// components and the average of the cell's corners' shear, at its corners
-    /// ([`Kernels::gather_corners`]).
-    fn gather_batches(&mut self, b: &[Field; 4]) {
+    /// components and each shear the mean of the cell's edges of its pair, on the solid's
+    /// edges ([`Kernels::gather_edges`]).
+    fn gather_batches(&mut self, b: &[Field]) {
+        let m = self.m;
         let cells = self.solid_c.region(&self.grid);
         for l in (0..cells.lines()).map(|n| cells.line(n)) {
             let [b11, b22, b33] = [0, 1, 2].map(|c| b[c].at(&l, [0; 3]));
-            let b12 = Four::new(&b[3], &l, CORNERS_OF_CELL);
-            for n in 0..l.len {
-                self.cb[l.n * l.len + n] = [b11[n], b22[n], b33[n], b12.avg(n)];
+            let sh = self.centre_shears(b, &l);
+            let rows = self.cb[l.n * l.len * m..][..l.len * m].chunks_exact_mut(m);
+            for (n, x) in rows.enumerate() {
+                x[..3].copy_from_slice(&[b11[n], b22[n], b33[n]]);
+                for (x, s) in x[3..].iter_mut().zip(&sh) {
+                    *x = s.avg(n);
+                }
             }
         }
-        self.gather_corners(b);
+        for p in 0..self.edge.len() {
+            self.gather_edges(b, p);
+        }
     }
 
-    /// The corner batch's B̃ from `b` at the solid's corners ([`Kernels::solid_k`]): the
-    /// solid-weighted normal components and the shear, times the corner's weight `w_k`.
-    pub(super) fn gather_corners(&mut self, b: &[Field; 4]) {
-        let corners = self.solid_k.region(&self.grid);
-        for l in (0..corners.lines()).map(|n| corners.line(n)) {
-            let wt = corner_weights(&self.edge[0].kwt, &l);
-            let [b11, b22, b33] = [0, 1, 2].map(|c| Four::new(&b[c], &l, CELLS_OF_CORNER));
-            let (b12, w) = (b[3].at(&l, [0; 3]), self.edge[0].wk.at(&l, [0; 3]));
-            for n in 0..l.len {
-                self.kb[l.n * l.len + n] = [
-                    w[n] * b11.weighted(&wt, n),
-                    w[n] * b22.weighted(&wt, n),
-                    w[n] * b33.weighted(&wt, n),
-                    w[n] * b12[n],
-                ];
+    /// The batch of the shear pair `p`'s B̃ from `b` on the solid's edges
+    /// ([`Kernels::solid_k`]): the solid-weighted normal components, the edge's own shear and
+    /// (three dimensions) the others averaged around it, times the edge's weight `w_k`.
+    pub(super) fn gather_edges(&mut self, b: &[Field], p: usize) {
+        let (m, pairs) = (self.m, self.edge.len());
+        let edges = self.solid_k[p].region(&self.grid);
+        let cells = cells_of_edge(SHEAR[p].0);
+        let kb = &mut self.kb[p];
+        for l in (0..edges.lines()).map(|n| edges.line(n)) {
+            let wt = corner_weights(&self.edge[p].kwt, &l);
+            let [b11, b22, b33] = [0, 1, 2].map(|c| Four::new(&b[c], &l, cells));
+            let (own, w) = (b[3 + p].at(&l, [0; 3]), self.edge[p].wk.at(&l, [0; 3]));
+            let others: [Four; 3] = std::array::from_fn(|q| {
+                let q = if q < pairs && q != p { q } else { p };
+                let s = if q == p { [[0; 3]; 4] } else { around(p, q) };
+                Four::new(&b[3 + q], &l, s)
+            });
+            let rows = kb[l.n * l.len * m..][..l.len * m].chunks_exact_mut(m);
+            for (n, x) in rows.enumerate() {
+                x[0] = w[n] * b11.weighted(&wt, n);
+                x[1] = w[n] * b22.weighted(&wt, n);
+                x[2] = w[n] * b33.weighted(&wt, n);
+                for q in 0..pairs {
+                    x[3 + q] = w[n] * if q == p { own[n] } else { others[q].avg(n) };
+                }
             }
         }
     }
 
     /// `dtau = J·db` with the tangents of the last [`Kernels::evaluate`] (rows 11, 22, 33 at
-    /// centres, 12 at corners; the other components averaged to the location).
-    /// Only at the solid's centres and corners ([`Kernels::solid_c`], `solid_k`): `dtau` is zero
-    /// elsewhere, and there it is left untouched.
-    pub(super) fn apply_tangent(&self, db: &[Field; 4], dtau: &mut [Field; 4]) {
-        let g = &self.grid;
-        let (cw, kw) = (self.solid_c.region(g), self.solid_k.region(g));
-        let [t11, t22, t33, t12] = dtau;
-        cw.for_each((t11, t22, t33), |l, (t11, t22, t33)| {
-            let rows = [t11, t22, t33];
-            let [w, d11, d22, d33] = [&self.w, &db[0], &db[1], &db[2]].map(|f| f.at(&l, [0; 3]));
-            let d12 = Four::new(&db[3], &l, CORNERS_OF_CELL);
-            for (n, jm) in self.cj[l.n * l.len..][..l.len].iter().enumerate() {
-                let x = [d11[n], d22[n], d33[n], d12.avg(n)];
-                for c in 0..3 {
-                    rows[c][n] = w[n]
-                        * (jm[4 * c] * x[0]
-                            + jm[4 * c + 1] * x[1]
-                            + jm[4 * c + 2] * x[2]
-                            + jm[4 * c + 3] * x[3]);
+    /// centres, `ab` on the `(a, b)`-edges; the other components gathered to the location as
+    /// the batches gather B̃). Only at the solid's centres and edges ([`Kernels::solid_c`],
+    /// `solid_k`): `dtau` is zero elsewhere, and there it is left untouched.
+    pub(super) fn apply_tangent(&self, db: &[Field], dtau: &mut [Field]) {
+        if self.m == 6 {
+            self.apply_tangent_m::<6>(db, dtau);
+        } else {
+            self.apply_tangent_m::<4>(db, dtau);
+        }
+    }
+
+    /// [`Kernels::apply_tangent`] on tensors of `M` components.
+    fn apply_tangent_m<const M: usize>(&self, db: &[Field], dtau: &mut [Field]) {
+        let (g, pairs) = (&self.grid, M - 3);
+        let (normal, shear) = dtau.split_at_mut(3);
+        let [t11, t22, t33] = normal else {
+            unreachable!("three normal components")
+        };
+        self.solid_c
+            .region(g)
+            .for_each((t11, t22, t33), |l, (t11, t22, t33)| {
+                let rows = [t11, t22, t33];
+                let [w, d11, d22, d33] =
+                    [&self.w, &db[0], &db[1], &db[2]].map(|f| f.at(&l, [0; 3]));
+                let sh = self.centre_shears(db, &l);
+                let jms = self.cj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
+                for (n, jm) in jms.enumerate() {
+                    let mut x = [0.0; M];
+                    (x[0], x[1], x[2]) = (d11[n], d22[n], d33[n]);
+                    for c in 3..M {
+                        x[c] = sh[c - 3].avg(n);
+                    }
+                    for c in 0..3 {
+                        rows[c][n] = w[n] * dot(&jm[M * c..], &x);
+                    }
                 }
-            }
-        });
-        kw.for_each(t12, |l, t12| {
-            let wt = corner_weights(&self.edge[0].kwt, &l);
-            let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, CELLS_OF_CORNER));
-            let [w, d12, ks] =
-                [&self.edge[0].wk, &db[3], &self.edge[0].ks].map(|f| f.at(&l, [0; 3]));
-            for (n, jm) in self.kj[l.n * l.len..][..l.len].iter().enumerate() {
-                let x = [
-                    w[n] * d11.weighted(&wt, n),
-                    w[n] * d22.weighted(&wt, n),
-                    w[n] * d33.weighted(&wt, n),
-                    w[n] * d12[n],
-                ];
-                t12[n] = ks[n] * (jm[12] * x[0] + jm[13] * x[1] + jm[14] * x[2] + jm[15] * x[3]);
-            }
-        });
+            });
+        for (p, tab) in shear.iter_mut().enumerate().take(pairs) {
+            let cells = cells_of_edge(SHEAR[p].0);
+            let kj = &self.kj[p];
+            self.solid_k[p].region(g).for_each(tab, |l, tab| {
+                let wt = corner_weights(&self.edge[p].kwt, &l);
+                let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, cells));
+                let [w, own, ks] =
+                    [&self.edge[p].wk, &db[3 + p], &self.edge[p].ks].map(|f| f.at(&l, [0; 3]));
+                // The other pairs' shears around the edge (three dimensions only).
+                let others = (M == 6).then(|| {
+                    let four = |q: usize| match q == p {
+                        true => Four::new(&db[3 + q], &l, [[0; 3]; 4]),
+                        false => Four::new(&db[3 + q], &l, around(p, q)),
+                    };
+                    [four(0), four(1), four(2)]
+                });
+                let jms = kj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
+                for (n, jm) in jms.enumerate() {
+                    let mut x = [0.0; M];
+                    x[0] = w[n] * d11.weighted(&wt, n);
+                    x[1] = w[n] * d22.weighted(&wt, n);
+                    x[2] = w[n] * d33.weighted(&wt, n);
+                    x[3 + p] = w[n] * own[n];
+                    if let Some(others) = &others {
+                        for q in (0..pairs).filter(|&q| q != p) {
+                            x[3 + q] = w[n] * others[q].avg(n);
+                        }
+                    }
+                    tab[n] = ks[n] * dot(&jm[M * (3 + p)..], &x);
+                }
+            });
+        }
     }
 
     /// `eta += a·G_eff`: the stiffness of the tangent of the last [`Kernels::evaluate`] as the
     /// viscosity it acts like in the implicit system (module docs: `J : H(δ) ≈ 2 G_eff D(δ)`).
-    /// At a centre `G_eff = ½ (J₁₁₁₁ B̃₁₁ + J₂₂₂₂ B̃₂₂)` (the normal stresses), at a corner
-    /// `G_eff = J₁₂₁₂ ½ (B̃₁₁ + B̃₂₂)` times the interface factors of the shear in series (stress
-    /// `1/κ`, shear rate `s`) and this step's relaxation divisor `relax`; negative values count
-    /// zero.
-    pub(super) fn stiffness(&self, relax: &Field, a: f64, eta: &mut Field, eta_k: &mut Field) {
-        let g = &self.grid;
-        let (cw, kw) = (self.solid_c.region(g), self.solid_k.region(g));
-        cw.for_each(eta, |l, eta| {
+    /// At a centre `G_eff` is the mean of `J_aaaa B̃_aa` over the grid's axes (the normal
+    /// stresses), on an edge of the pair `(a, b)` `G_eff = J_abab (n_b² B̃_bb + n_a² B̃_aa)`
+    /// times the interface factors of the shear in series (stress `1/κ`, shear rate `s`) and
+    /// this step's relaxation divisor `relax` of the pair; negative values count zero.
+    /// `eta_e` holds one field per shear pair.
+    pub(super) fn stiffness(&self, relax: &[Field], a: f64, eta: &mut Field, eta_e: &mut [Field]) {
+        let (g, m, dims) = (&self.grid, self.m, self.grid.dims());
+        self.solid_c.region(g).for_each(eta, |l, eta| {
             let w = self.w.at(&l, [0; 3]);
             let q0 = l.n * l.len;
             for (n, eta) in eta.iter_mut().enumerate() {
-                let (jm, b) = (&self.cj[q0 + n], &self.cb[q0 + n]);
-                let g = w[n] * 0.5 * (jm[0] * b[0] + jm[5] * b[1]);
+                let q = q0 + n;
+                let (jm, b) = (&self.cj[q * m * m..], &self.cb[q * m..]);
+                let g = if dims == 2 {
+                    w[n] * 0.5 * (jm[0] * b[0] + jm[m + 1] * b[1])
+                } else {
+                    w[n] * (jm[0] * b[0] + jm[m + 1] * b[1] + jm[2 * m + 2] * b[2]) / 3.0
+                };
                 *eta += a * g.max(0.0);
             }
         });
-        kw.for_each(eta_k, |l, eta| {
-            let [ks, sf, relax, fy] = [
-                &self.edge[0].ks,
-                &self.edge[0].sf,
-                relax,
-                &self.edge[0].share,
-            ]
-            .map(|f| f.at(&l, [0; 3]));
-            let q0 = l.n * l.len;
-            for (n, eta) in eta.iter_mut().enumerate() {
-                let (jm, b) = (&self.kj[q0 + n], &self.kb[q0 + n]);
-                let f = ks[n] * sf[n] * relax[n];
-                let g = f * jm[15] * (fy[n] * b[1] + (1.0 - fy[n]) * b[0]);
-                *eta += a * g.max(0.0);
-            }
-        });
-    }
-
-    /// Volume-weighted `(∇·τ)_x` on the u-faces of `l`: `f(n, value)` for each point `n`.
-    #[inline(always)]
-    fn force_u(&self, tau: &[Field; 4], l: &Line, mut f: impl FnMut(usize, f64)) {
-        let g = &self.grid;
-        let m = &g.metric;
-        let (t11w, t11e) = (tau[0].at(l, minus(0)), tau[0].at(l, [0; 3]));
-        let (t33w, t33e) = (tau[2].at(l, minus(0)), tau[2].at(l, [0; 3]));
-        let (t12s, t12n) = (tau[3].at(l, [0; 3]), tau[3].at(l, unit(1)));
-        let (rx, rcw, rce, hoop) = (
-            m.rx_on(l, 0),
-            m.rc_on(l, -1),
-            m.rc_on(l, 0),
-            m.hoop_x_on(l, 0),
-        );
-        for n in 0..l.len {
-            let r = rx[n];
-            let t33f = 0.5 * (t33w[n] + t33e[n]);
-            f(
-                n,
-                g.dy * (rce[n] * t11e[n] - rcw[n] * t11w[n]) + g.dx * r * (t12n[n] - t12s[n])
-                    - g.dx * g.dy * r * hoop[n] * t33f,
-            );
+        for (p, eta) in eta_e.iter_mut().enumerate().take(self.edge.len()) {
+            let [pa, pb] = SHEAR[p].0;
+            let e = &self.edge[p];
+            let (kj, kb, d) = (&self.kj[p], &self.kb[p], (3 + p) * (m + 1));
+            self.solid_k[p].region(g).for_each(eta, |l, eta| {
+                let [ks, sf, relax, fy] =
+                    [&e.ks, &e.sf, &relax[p], &e.share].map(|f| f.at(&l, [0; 3]));
+                let q0 = l.n * l.len;
+                for (n, eta) in eta.iter_mut().enumerate() {
+                    let q = q0 + n;
+                    let (jm, b) = (&kj[q * m * m..], &kb[q * m..]);
+                    let f = ks[n] * sf[n] * relax[n];
+                    let g = f * jm[d] * (fy[n] * b[pb] + (1.0 - fy[n]) * b[pa]);
+                    *eta += a * g.max(0.0);
+                }
+            });
         }
     }
 
-    /// Volume-weighted `(∇·τ)_y` on the v-faces of `l`: `f(n, value)` for each point `n`.
+    /// Volume-weighted `(∇·τ)_a` on the faces normal to `a` of `l` of a grid of `D` axes:
+    /// `f(n, value)` for each point `n` (see the module docs).
     #[inline(always)]
-    fn force_v(&self, tau: &[Field; 4], l: &Line, mut f: impl FnMut(usize, f64)) {
+    fn force_axis<const D: usize>(
+        &self,
+        tau: &[Field],
+        a: usize,
+        l: &Line,
+        mut f: impl FnMut(usize, f64),
+    ) {
         let g = &self.grid;
-        let m = &g.metric;
-        let (t22s, t22n) = (tau[1].at(l, minus(1)), tau[1].at(l, [0; 3]));
-        let (t12w, t12e) = (tau[3].at(l, [0; 3]), tau[3].at(l, unit(0)));
-        let (rw, re, rc) = (m.rx_on(l, 0), m.rx_on(l, 1), m.rc_on(l, 0));
+        let (m, area) = (&g.metric, &self.area);
+        let own = if a == 0 { m.rx_on(l, 0) } else { m.rc_on(l, 0) };
+        // Along x the radii of the two stress points; along the others the face's.
+        let (rlo, rhi) = if a == 0 {
+            (m.rc_on(l, -1), m.rc_on(l, 0))
+        } else {
+            (m.rx_on(l, 0), m.rx_on(l, 1))
+        };
+        // τ_ab below and above the face along b.
+        let mut t: [(&[f64], &[f64]); D] = [(&[], &[]); D];
+        for (b, t) in t.iter_mut().enumerate() {
+            *t = if b == a {
+                (tau[a].at(l, minus(a)), tau[a].at(l, [0; 3]))
+            } else {
+                let c = &tau[3 + PAIR[a][b]];
+                (c.at(l, [0; 3]), c.at(l, unit(b)))
+            };
+        }
+        let hoop = (a == 0 && D == 2).then(|| {
+            let t33 = (tau[2].at(l, minus(0)), tau[2].at(l, [0; 3]));
+            (m.hoop_x_on(l, 0), t33, g.dx * g.dy)
+        });
         for n in 0..l.len {
-            f(
-                n,
-                g.dy * (re[n] * t12e[n] - rw[n] * t12w[n]) + g.dx * rc[n] * (t22n[n] - t22s[n]),
-            );
+            let mut s = area[0] * (rhi[n] * t[0].1[n] - rlo[n] * t[0].0[n]);
+            for b in 1..D {
+                s += area[b] * own[n] * (t[b].1[n] - t[b].0[n]);
+            }
+            if let Some((hoop, (t33w, t33e), vol)) = hoop {
+                let t33f = 0.5 * (t33w[n] + t33e[n]);
+                s -= vol * own[n] * hoop[n] * t33f;
+            }
+            f(n, s);
+        }
+    }
+
+    /// [`Kernels::force_axis`] on the grid's axes.
+    #[inline(always)]
+    fn force_on(&self, tau: &[Field], a: usize, l: &Line, f: impl FnMut(usize, f64)) {
+        if self.grid.is_3d() {
+            self.force_axis::<3>(tau, a, l, f);
+        } else {
+            self.force_axis::<2>(tau, a, l, f);
         }
     }
 
     /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
-    pub(super) fn force(&self, tau: &[Field; 4], out: &mut [f64]) {
-        let (ur, vr) = (self.faces.region(0), self.faces.region(1));
-        let (ou, ov) = out.split_at_mut(ur.size());
-        for (r, o, u) in [(ur, ou, true), (vr, ov, false)] {
+    pub(super) fn force(&self, tau: &[Field], out: &mut [f64]) {
+        for (a, o) in self.faces.split_mut(out).into_iter().enumerate() {
+            let r = self.faces.region(a);
             for l in (0..r.lines()).map(|n| r.line(n)) {
                 let row = &mut o[l.n * l.len..][..l.len];
-                let put = |n, f| row[n] = f;
-                if u {
-                    self.force_u(tau, &l, put);
-                } else {
-                    self.force_v(tau, &l, put);
-                }
+                self.force_on(tau, a, &l, |n, f| row[n] = f);
             }
         }
     }
 
-    /// `y −= a·vol·∇·τ` for a `tau` that vanishes outside the solid's centres and corners
+    /// `y −= a·vol·∇·τ` for a `tau` that vanishes outside the solid's centres and edges
     /// ([`Kernels::solid_c`], `solid_k`): only the unknown faces next to them see a force —
-    /// on a u-face (i, j) τ₁₁, τ₃₃ at centres i−1, i and τ₁₂ at corners (i, j), (i, j+1); on
-    /// a v-face τ₂₂ at centres j−1, j and τ₁₂ at corners (i, j), (i+1, j).
-    pub(super) fn force_sub(&self, tau: &[Field; 4], a: f64, y: &mut [f64]) {
+    /// on a face normal to `a` the normal stress at the two centres across it and each shear
+    /// at the two edges of its pair beside it: the faces of the solid's centres, and one row
+    /// more on each side across the other axes.
+    pub(super) fn force_sub(&self, tau: &[Field], a: f64, y: &mut [f64]) {
         let cw = self.solid_c;
-        if cw.i0 > cw.i1 {
+        if cw.points() == 0 {
             return;
         }
-        let (ur, vr) = (self.faces.region(0), self.faces.region(1));
-        let (yu, yv) = y.split_at_mut(ur.size());
-        // The faces of the solid's centres, and the u-faces (v-faces) of the rows (columns)
-        // beside them.
-        let near = |r: Region, a: usize| {
-            let (lo, hi) = (r.lo(), r.hi());
-            let b = 1 - a;
-            let mut w = [(cw.i0, cw.i1), (cw.j0, cw.j1)];
-            w[a].1 += 1;
-            w[b] = (w[b].0 - 1, w[b].1 + 1);
-            r.range(a, w[a].0.max(lo[a]), (w[a].1 + 1).min(hi[a]))
-                .range(b, w[b].0.max(lo[b]), (w[b].1 + 1).min(hi[b]))
-        };
-        for (r, y, u) in [(ur, yu, true), (vr, yv, false)] {
-            let part = near(r, if u { 0 } else { 1 });
+        let dims = self.grid.dims();
+        let (lo, hi) = (cw.lo(), cw.hi());
+        for (x, y) in self.faces.split_mut(y).into_iter().enumerate().take(dims) {
+            let r = self.faces.region(x);
+            let mut part = r;
+            for b in 0..dims {
+                let (rl, rh) = (r.lo()[b], r.hi()[b]);
+                let (l0, h0) = if b == x {
+                    (lo[b], hi[b] + 1)
+                } else {
+                    (lo[b] - 1, hi[b] + 1)
+                };
+                part = part.range(b, l0.max(rl), (h0 + 1).min(rh));
+            }
             for l in (0..part.lines()).map(|n| part.line(n)) {
                 let row = &mut y[compact(&r, l.start)..][..l.len];
-                let sub = |n, f| row[n] -= a * f;
-                if u {
-                    self.force_u(tau, &l, sub);
-                } else {
-                    self.force_v(tau, &l, sub);
-                }
+                self.force_on(tau, x, &l, |n, f| row[n] -= a * f);
             }
         }
     }

@@ -3,6 +3,7 @@ use super::*;
 use crate::solid::{SceneSolid, Shape};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
+use efsi_laws_host::Sym;
 
 /// A layer of full cells (rows 0–2) under a row of cells a third full (row 3) on an 8×8
 /// grid, μ_f = 1, μ_s = 0.5; B is `bs` in every cell holding solid, I elsewhere. For each
@@ -261,7 +262,7 @@ fn solid_everywhere(g: &Grid, bc: &BoundarySet, vel: &[&Field]) -> (Kernels, Def
     k.set_weights(&Field::filled(g, 1.0));
     let mut d = Deformation::zeros(g);
     d.set_identity();
-    d.relax.fill(1.0);
+    d.relax.iter_mut().for_each(|r| r.fill(1.0));
     k.fill_ghosts(&mut d.b);
     k.gradient(vel);
     k.advect(vel, &d.b, &mut d.advection);
@@ -426,7 +427,7 @@ fn a_planar_field_extruded_along_a_periodic_z_gives_the_planar_kernels() {
             let at = if c < 3 { Cell } else { Corner };
             d.b[c] = sample(g, at, |x| b0(c, x));
         }
-        d.relax.fill(1.0);
+        d.relax.iter_mut().for_each(|r| r.fill(1.0));
         k.fill_ghosts(&mut d.b);
         k.gradient(&v);
         k.advect(&v, &d.b, &mut d.advection);
@@ -582,4 +583,164 @@ fn shears_across_each_others_third_axis_give_the_analytic_b_at_second_order() {
             errors[1][c]
         );
     }
+}
+
+/// A planar deformation (a rough B̃ in a solid block whose interface lies on the faces, so
+/// the planar PLIC quarters and the three-dimensional ones agree) extruded along a periodic z,
+/// for the non-linear Mooney–Rivlin law (its stress sees `tr B̃` and `tr B̃²`): the
+/// three-dimensional law batches, stress, tangent increment and stress divergence give the
+/// planar ones in every plane, `τ₂₃ = τ₁₃ = 0` and no force on the w-faces.
+#[test]
+fn a_planar_deformation_extruded_along_z_gives_the_planar_stress_and_force() {
+    use efsi_core::Stagger::{Cell, Corner};
+    let params = [("C1", 0.7), ("C2", 0.2), ("C3", 0.4)]
+        .iter()
+        .map(|&(k, v)| (k.to_string(), v))
+        .collect();
+    let law = efsi_laws_host::load_law_3d("mooney_rivlin", &params, std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (n, sides) = ([10, 9], [Boundary::NoSlip, Boundary::FreeSlip]);
+    let g2 = Grid::new(
+        efsi_core::Geometry::Planar,
+        n[0],
+        n[1],
+        (0.0, 1.0),
+        (0.0, 0.8),
+    );
+    let b2 = efsi_core::scene::Boundaries::planar(
+        sides[0].clone(),
+        sides[0].clone(),
+        sides[1].clone(),
+        sides[1].clone(),
+    );
+    let bc2 = BoundarySet::new(&b2, &g2);
+    let (g3, bc3) = box3(
+        [n[0], n[1], 3],
+        [sides[0].clone(), sides[1].clone(), Boundary::Periodic],
+    );
+    let phi = |x: [f64; 3]| f64::from(u8::from((0.2..0.7).contains(&x[0]) && x[1] < 0.5));
+    let b0 = |c: usize, x: [f64; 3]| match c {
+        0 => 1.1 + 0.2 * (4.0 * x[0]).sin() * x[1],
+        1 => 0.9 + 0.1 * (3.0 * x[1]).cos() + 0.05 * x[0],
+        2 => 1.0 + 0.05 * x[0] * x[1],
+        _ => 0.1 * (5.0 * x[0] * x[1]).sin(),
+    };
+    let mut out = Vec::new();
+    for (g, bc) in [(&g2, &bc2), (&g3, &bc3)] {
+        let mut k = Kernels::new(g, bc, 1.0e-2, 0.5);
+        k.set_weights(&sample(g, Cell, phi));
+        let mut b = Deformation::zeros(g).b;
+        for (c, f) in b.iter_mut().enumerate().take(4) {
+            *f = sample(g, if c < 3 { Cell } else { Corner }, |x| b0(c, x));
+        }
+        k.fill_ghosts(&mut b);
+        let mut tau = Deformation::zeros(g).b;
+        k.evaluate(&law, &b, &mut tau, true).unwrap();
+        let mut dtau = Deformation::zeros(g).b;
+        k.apply_tangent(&b, &mut dtau);
+        let mut f = vec![0.0; k.faces.len()];
+        k.force(&tau, &mut f);
+        let mut fv = velocity_field(g, |_| [0.0; 3]);
+        k.faces.scatter_to(&f, &mut fv);
+        out.push((tau, dtau, fv));
+    }
+    let (p2, p3) = (&out[0], &out[1]);
+    let mut seen = 0.0f64;
+    let same = |name: &str, f2: &Field, f3: &Field, at: efsi_core::Stagger, scale: f64| {
+        let r2 = Region::of(&g2, at);
+        let mut big = 0.0f64;
+        for l in (0..r2.lines()).map(|m| r2.line(m)) {
+            for i in l.indices() {
+                for kz in 0..3 {
+                    let (x, y) = (f2[i], f3[[i[0], i[1], kz]]);
+                    assert!(
+                        (x - y).abs() <= 1e-13 * (scale + x.abs()),
+                        "{name} at {i:?}, k = {kz}: {x} ≠ {y}"
+                    );
+                    big = big.max(x.abs());
+                }
+            }
+        }
+        big
+    };
+    for c in 0..4 {
+        let at = if c < 3 { Cell } else { Corner };
+        seen = seen.max(same("τ", &p2.0[c], &p3.0[c], at, 1.0));
+        same("J·δB", &p2.1[c], &p3.1[c], at, 1.0);
+    }
+    for c in 4..6 {
+        for (name, f) in [("τ", &p3.0[c]), ("J·δB", &p3.1[c])] {
+            let e = max_error(&g3, f, c, 0.0);
+            assert!(e <= 1e-14, "{name} {c} of the extruded field: {e:e}");
+        }
+    }
+    let h2 = g2.dx * g2.dy;
+    for (a, at) in [efsi_core::Stagger::XFace, efsi_core::Stagger::YFace]
+        .into_iter()
+        .enumerate()
+    {
+        // The 3-D force is the planar one times the cells' depth dz.
+        let mut f3 = p3.2[a].clone();
+        f3.data_mut().iter_mut().for_each(|x| *x /= g3.dz);
+        seen = seen.max(same("force", &p2.2[a], &f3, at, h2));
+    }
+    let fw = p3.2[2].data().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(fw <= 1e-14 * h2, "force on the w-faces {fw:e}");
+    assert!(seen > 0.1, "nothing compared ({seen:e})");
+}
+
+/// The edge fractions of a three-dimensional grid come from the cells' PLIC planes: for a plane
+/// interface (normal mostly along y, where the VOF step's mixed Youngs–centred normal is
+/// exact), every cut cell's quarter in the plane of each shear pair holds the exact share of
+/// solid below the plane, and each edge's solid fraction is the mean of its four quarters.
+#[test]
+fn the_edge_fractions_in_3d_are_the_exact_quarters_of_a_plane_interface() {
+    use crate::vof::plic3d::{Plane, cuboid_fraction};
+    let (g, bc) = box3(
+        [6, 8, 5],
+        [Boundary::Periodic, Boundary::NoSlip, Boundary::Periodic],
+    );
+    let h = g.h();
+    // The solid below the plane n·x = c (n = (0.25, 1, −0.15), x from the domain's origin).
+    let n = [0.25, 1.0, -0.15];
+    let c = 0.41;
+    let phi_at = |lo: [f64; 3], d: [f64; 3]| {
+        let p = Plane::new(n, 0.5, d);
+        let s = p.n[0] / n[0];
+        let alpha = s * (c - (n[0] * lo[0] + n[1] * lo[1] + n[2] * lo[2]));
+        cuboid_fraction(p.n, alpha, d)
+    };
+    let mut phi = Field::zeros(&g);
+    Region::whole(&g).for_each(&mut phi, |l, row| {
+        for (m, [i, j, k]) in l.indices().enumerate() {
+            let lo = [i as f64 * h[0], j as f64 * h[1], k as f64 * h[2]];
+            row[m] = phi_at(lo, h);
+        }
+    });
+    let mut k = Kernels::new(&g, &bc, 1.0, 0.5);
+    k.set_weights(&phi);
+    let (mut cut, mut worst) = (0, 0.0f64);
+    let cells = Region::of(&g, efsi_core::Stagger::Cell);
+    for l in (0..cells.lines()).map(|m| cells.line(m)) {
+        for [i, j, kk] in l.indices() {
+            let f = phi[[i, j, kk]];
+            if f <= 1e-9 || f >= 1.0 - 1e-9 {
+                continue;
+            }
+            cut += 1;
+            for (p, &([a, b], _)) in SHEAR.iter().enumerate() {
+                for q in 0..4 {
+                    let mut lo = [i as f64 * h[0], j as f64 * h[1], kk as f64 * h[2]];
+                    let mut d = h;
+                    (d[a], d[b]) = (0.5 * h[a], 0.5 * h[b]);
+                    lo[a] += if q % 2 == 1 { d[a] } else { 0.0 };
+                    lo[b] += if q >= 2 { d[b] } else { 0.0 };
+                    let e = (k.quarter[p][q][[i, j, kk]] - phi_at(lo, d)).abs();
+                    worst = worst.max(e);
+                }
+            }
+        }
+    }
+    assert!(cut >= 30, "{cut} cut cells");
+    assert!(worst <= 1e-9, "quarter fractions off by {worst:e}");
 }

@@ -11,12 +11,13 @@
 //! from the four cells (`L` averaged, B solid-weighted), plus on a three-dimensional grid the
 //! terms of the third axis `c`, `L_ac B_cb + B_ac L_bc`, each factor the mean of the four edges
 //! of its pair around the edge (`(a, c)`-edges at `I − {0, e_b} + {0, e_c}`, `(b, c)`-edges at
-//! `I − {0, e_a} + {0, e_c}`). The interface relaxation (`relax`) acts on the xy-edges only:
-//! the xz- and yz-edges' needs the law on the full tensor.
+//! `I − {0, e_a} + {0, e_c}`). The interface relaxation (`relax`, "Interface corners" in the
+//! parent module) acts on every edge family alike, each in its own plane, with the law on the
+//! full tensor in three dimensions.
 
 use super::{
-    Four, Kernels, PAIR, SHEAR, Window, cells_of_edge, corner_weights, edges_of_cell, on, planar,
-    plus, shear_pairs,
+    Four, Kernels, PAIR, SHEAR, Window, cells_of_edge, corner_weights, edges_of_cell, on, plus,
+    shear_pairs,
 };
 use crate::advection::face_value;
 use efsi_core::operators::minus;
@@ -31,10 +32,6 @@ const BULK_PHI: f64 = 1.0 - 1e-9;
 const BULK_NEAR: f64 = 1.25;
 /// See [`BULK_NEAR`].
 const BULK_FAR: f64 = -1.0 / 12.0;
-
-/// The cells a corner's relaxation stretches, in the order it updates them: the corner's
-/// upper-right, upper-left, lower-right and lower-left cells.
-const AROUND: [Index; 4] = [[0, 0, 0], [-1, 0, 0], [0, -1, 0], [-1, -1, 0]];
 
 /// The bulk shear gradient's stencil along axis `a` on a run of corners: the velocity
 /// component `f` at `I − 2e_a … I + e_a` and the solid weights `w` there and at the cells
@@ -229,7 +226,7 @@ impl Kernels {
         b: &[Field],
         a: f64,
         base: Option<(&[Field], &[Field])>,
-        relax: Option<&Field>,
+        relax: Option<&[Field]>,
         out: &mut [Field],
     ) {
         self.stretch_in(b, a, base, relax, out, self.near_c);
@@ -242,7 +239,7 @@ impl Kernels {
         b: &[Field],
         a: f64,
         base: Option<(&[Field], &[Field])>,
-        relax: Option<&Field>,
+        relax: Option<&[Field]>,
         out: &mut [Field],
         cw: Window,
     ) {
@@ -277,7 +274,7 @@ impl Kernels {
         b: &[Field],
         a: f64,
         base: Option<(&[Field], &[Field])>,
-        relax: Option<&Field>,
+        relax: Option<&[Field]>,
         out: &mut Field,
         cw: Window,
     ) {
@@ -318,7 +315,7 @@ impl Kernels {
                 ]
             });
             let base = base.map(|(x, y)| (at(&x[3 + P]), at(&y[3 + P])));
-            let relax = relax.filter(|_| P == 0).map(at);
+            let relax = relax.map(|r| at(&r[P]));
             for n in 0..l.len {
                 let mut hab = laa.avg(n) * bab[n]
                     + gab[n] * bbb.weighted(&wt, n)
@@ -373,10 +370,12 @@ impl Kernels {
                         s[1] += 0.25 * gba.get(m, n) * bab.get(m, n);
                     }
                 }
-                let h: [f64; 3] = std::array::from_fn(|c| {
+                let mut h = [0.0; 3];
+                for (c, h) in h.iter_mut().enumerate() {
                     let own = laa[c][n] * baa[c][n];
                     if c >= D {
-                        return 2.0 * own;
+                        *h = 2.0 * own;
+                        continue;
                     }
                     let term = |k: usize| {
                         if k == c {
@@ -389,8 +388,8 @@ impl Kernels {
                     for k in 1..D {
                         sum += term(k);
                     }
-                    2.0 * sum
-                });
+                    *h = 2.0 * sum;
+                }
                 for c in 0..3 {
                     rows[c][n] = match base {
                         Some(xy) => xy[c].0[n] + xy[c].1[n] + a * h[c],
@@ -485,60 +484,104 @@ impl Kernels {
         }
     }
 
-    /// The interface relaxation of the corner shear for this step (see "Interface corners"):
-    /// evaluates the law at the corners of `start` (Bⁿ), folds the linearised relaxation's
-    /// explicit part into `explicit[3]` and sets the divisor `relax` (1 away from interfaces).
+    /// The interface relaxation of the edges' shear for this step (see "Interface corners"):
+    /// per shear pair, evaluates the law on the solid's edges of `start` (Bⁿ), folds the
+    /// linearised relaxation's explicit part into the pair's `explicit` component and sets its
+    /// divisor `relax[p]` (1 away from interfaces).
     pub(super) fn relaxation(
         &mut self,
         law: &dyn ConstitutiveLaw,
         start: &[Field],
         dt: f64,
         explicit: &mut [Field],
+        relax: &mut [Field],
+    ) -> Result<(), String> {
+        for (p, relax) in relax.iter_mut().enumerate().take(self.edge.len()) {
+            self.relax_pair(law, start, dt, explicit, relax, p)?;
+        }
+        Ok(())
+    }
+
+    /// [`Kernels::relaxation`] of the shear pair `p` (axes `[a, b]`).
+    fn relax_pair(
+        &mut self,
+        law: &dyn ConstitutiveLaw,
+        start: &[Field],
+        dt: f64,
+        explicit: &mut [Field],
         relax: &mut Field,
+        p: usize,
     ) -> Result<(), String> {
         relax.fill(1.0);
-        // Only the solid's corners relax (`r > 0` needs a solid cell beside the corner).
-        let corners = self.solid_k.region(&self.grid);
-        self.gather_corners(planar(start));
-        let any = corners.fold(
+        // Only the solid's edges relax (`r > 0` needs a solid cell beside the edge).
+        let edges = self.solid_k[p].region(&self.grid);
+        self.gather_edges(start, p);
+        let any = edges.fold(
             false,
-            |l| on(&self.edge[0].rc, &l).iter().any(|&r| r > 0.0),
+            |l| on(&self.edge[p].rc, &l).iter().any(|&r| r > 0.0),
             |a, p| a || p,
         );
         if !any {
             return Ok(());
         }
-        // At the corners touching solid only (the law may be undefined at B = 0).
-        self.batch(law, true, true, [0.0; 4])?;
-        for l in (0..corners.lines()).map(|n| corners.line(n)) {
+        // On the edges touching solid only (the law may be undefined at B = 0).
+        self.batch(law, Some(p), true, &[0.0; 6])?;
+        let (m, c) = (self.m, 3 + p);
+        let [pa, pb] = SHEAR[p].0;
+        let around = cells_of_edge(SHEAR[p].0);
+        // Three dimensions: the pairs (a, c) and (b, c) with the third axis c, and the shifts to
+        // their edges whose averages take this pair's edge (`I + {0, +e_c} × {0, −e_b}` and
+        // `I + {0, +e_c} × {0, −e_a}`).
+        let third = (self.grid.dims() == 3).then(|| {
+            let pc = 3 - pa - pb;
+            let shifts = |x: usize| {
+                let (ex, ec) = (minus(x), unit(pc));
+                [[0; 3], ex, ec, plus(ex, ec)]
+            };
+            [(PAIR[pa][pc], shifts(pb)), (PAIR[pb][pc], shifts(pa))]
+        });
+        for l in (0..edges.lines()).map(|n| edges.line(n)) {
             for (n, at) in l.indices().enumerate() {
-                let rc = self.edge[0].rc[at];
+                let rc = self.edge[p].rc[at];
                 if rc == 0.0 {
                     continue;
                 }
                 let q = l.n * l.len + n;
+                let (kb, kt) = (&self.kb[p][q * m..], &self.kt[p][q * m..]);
                 // The shear-rate change times the B it stretches (as in `stretch_in`).
-                let fy = self.edge[0].share[at];
-                let bbar = fy * self.kb[q][1] + (1.0 - fy) * self.kb[q][0];
-                let jt = self.kj[q][15].max(0.0);
+                let fy = self.edge[p].share[at];
+                let bbar = fy * kb[pb] + (1.0 - fy) * kb[pa];
+                let jt = self.kj[p][q * m * m + c * (m + 1)].max(0.0);
                 let lambda = dt * rc * bbar;
                 // The relaxation at θ_r = ½ + ½ z/(1 + z), `z = λ J` its stiffness over the
                 // step: trapezoidal where it is slow (θ_r − ½ = O(Δt), second order), backward
                 // Euler where it is stiff (a solid in air; monotone for every z).
                 let z = lambda * jt;
                 let th = 0.5 + 0.5 * z / (1.0 + z);
-                let b12 = start[3][at];
+                let bab = start[c][at];
                 relax[at] = 1.0 / (1.0 + th * z);
-                explicit[3][at] -= lambda * (self.kt[q][3] - th * jt * b12);
+                explicit[c][at] -= lambda * (kt[c] - th * jt * bab);
                 // The same relaxation of the solid's shear rate stretches the normal components
-                // of the four cells around (explicit, at Bⁿ): `Ḃ₁₁ = 2 L₁₂ B₁₂`, `Ḃ₂₂ = 2 L₂₁ B₁₂`
-                // averaged over a centre's corners, with the share n_y² to L₁₂. The relaxation
-                // as the corner's implicit step applies it (× q): bounded where it is stiff (a
-                // solid in air), where the explicit rate would blow up.
-                let d = 0.5 * dt * rc * self.kt[q][3] * b12 * relax[at];
-                for c in AROUND {
-                    explicit[0][plus(at, c)] -= fy * d;
-                    explicit[1][plus(at, c)] -= (1.0 - fy) * d;
+                // of the four cells around (explicit, at Bⁿ): `Ḃ_aa = 2 L_ab B_ab`,
+                // `Ḃ_bb = 2 L_ba B_ab` averaged over a centre's edges, with the share n_b² to
+                // L_ab. The relaxation as the edge's implicit step applies it (× q): bounded
+                // where it is stiff (a solid in air), where the explicit rate would blow up.
+                let d = 0.5 * dt * rc * kt[c] * bab * relax[at];
+                for s in around {
+                    explicit[pa][plus(at, s)] -= fy * d;
+                    explicit[pb][plus(at, s)] -= (1.0 - fy) * d;
+                }
+                // In three dimensions the same change of `L_ab` (`L_ba`) stretches the shear of
+                // the pair (a, c) (of (b, c)) on the edges around: `Ḃ_ac = L_ab B_bc`,
+                // `Ḃ_bc = L_ba B_ac`, a quarter on each of the four edges whose average takes
+                // this one (B at this edge as the batch gathers it).
+                if let Some([(qa, sa), (qb, sb)]) = third {
+                    let e = 0.5 * dt * rc * kt[c] * relax[at];
+                    let (bbc, bac) = (kb[3 + qb], kb[3 + qa]);
+                    for (ta, tb) in sa.into_iter().zip(sb) {
+                        explicit[3 + qa][plus(at, ta)] -= 0.5 * fy * e * bbc;
+                        explicit[3 + qb][plus(at, tb)] -= 0.5 * (1.0 - fy) * e * bac;
+                    }
                 }
             }
         }

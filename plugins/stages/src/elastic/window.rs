@@ -24,11 +24,6 @@ pub(super) struct Window {
 }
 
 impl Window {
-    /// The window `[i0, i1] × [j0, j1]` of the plane `k = 0` (a two-dimensional grid's).
-    pub(super) fn new(i0: isize, i1: isize, j0: isize, j1: isize) -> Self {
-        Window::boxed([i0, j0, 0], [i1, j1, 0])
-    }
-
     /// The window `lo ≤ I ≤ hi` (component-wise).
     pub(super) fn boxed(lo: Index, hi: Index) -> Self {
         Window {
@@ -55,6 +50,34 @@ impl Window {
     #[inline(always)]
     pub(super) fn contains(self, i: isize, j: isize) -> bool {
         (self.i0..=self.i1).contains(&i) && (self.j0..=self.j1).contains(&j)
+    }
+
+    /// Whether `at` is a point of the window.
+    #[inline(always)]
+    pub(super) fn contains3(self, at: Index) -> bool {
+        self.contains(at[0], at[1]) && (self.k0..=self.k1).contains(&at[2])
+    }
+
+    /// The position of `at` (a point of the window) among its points, line by line (`i`
+    /// fastest, then `j`, then `k`): its entry in a batch packed in the window's order.
+    #[inline(always)]
+    pub(super) fn offset(self, at: Index) -> usize {
+        let (w, h) = (self.i1 - self.i0 + 1, self.j1 - self.j0 + 1);
+        (((at[2] - self.k0) * h + at[1] - self.j0) * w + at[0] - self.i0) as usize
+    }
+
+    /// The point at position `q` ([`Window::offset`]).
+    pub(super) fn point(self, q: usize) -> Index {
+        let (w, h) = (
+            (self.i1 - self.i0 + 1).max(1) as usize,
+            (self.j1 - self.j0 + 1).max(1) as usize,
+        );
+        let (i, j, k) = (q % w, (q / w) % h, q / (w * h));
+        [
+            self.i0 + i as isize,
+            self.j0 + j as isize,
+            self.k0 + k as isize,
+        ]
     }
 
     /// Number of points.
@@ -133,15 +156,7 @@ pub(super) fn edges_of_cell([a, b]: [usize; 2]) -> [Index; 4] {
     [[0; 3], ea, eb, plus(ea, eb)]
 }
 
-/// The four cells around a corner `I` (lower-left, lower-right, upper-left, upper-right), as
-/// shifts from `I`: [`cells_of_edge`] of the pair `[0, 1]`.
-pub(super) const CELLS_OF_CORNER: [Index; 4] = [[-1, -1, 0], [0, -1, 0], [-1, 0, 0], [0, 0, 0]];
-
-/// The four corners of a cell `I` (lower-left, lower-right, upper-left, upper-right), as shifts
-/// from `I`: [`edges_of_cell`] of the pair `[0, 1]`.
-pub(super) const CORNERS_OF_CELL: [Index; 4] = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]];
-
-/// A field's values at four shifts from the indices of a line (e.g. [`CELLS_OF_CORNER`]).
+/// A field's values at four shifts from the indices of a line (e.g. [`cells_of_edge`]).
 #[derive(Clone, Copy)]
 pub(super) struct Four<'a>([&'a [f64]; 4]);
 

@@ -79,7 +79,7 @@ use efsi_linalg::{
 };
 
 mod options;
-mod three_d;
+pub(crate) mod three_d;
 pub use options::{INTERFACE_TOLERANCE, ONE_FLUID_TOLERANCE, PressureSolver, ProjectionOptions};
 
 /// The projection stage plugin.
