@@ -46,6 +46,7 @@
 //! or seven-point stencils for the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
+use efsi_core::grid::Metric;
 use efsi_core::operators::minus;
 use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
@@ -64,6 +65,9 @@ pub(crate) const SHEAR: [([usize; 2], Stagger); 3] = [
 pub(crate) fn shear_pairs(dims: usize) -> &'static [([usize; 2], Stagger)] {
     &SHEAR[..if dims == 3 { 3 } else { 1 }]
 }
+
+/// Entries of a line whose coefficients a pass forms on the stack at a time.
+const LANE: usize = 64;
 
 /// The index in [`SHEAR`] of the pair of axes `a ≠ b`.
 fn pair(a: usize, b: usize) -> usize {
@@ -87,8 +91,14 @@ pub(crate) struct Coefficients {
     dims: usize,
     /// `h_a/h_b`: the weight of a row's own component in a shear flux.
     ratio: [[f64; 3]; 3],
-    /// The normal-stress coefficient `c_a` of each axis at cells.
-    normal: Vec<Field>,
+    /// The cell coefficient `η` (a copy, ghosts included): the normal-stress coefficient of
+    /// axis `a` at a cell is `c_a = (s_a r) η`, formed where it is read ([`normal`](Self::normal))
+    /// — one cell array instead of one per axis.
+    cells: Field,
+    /// `s_a = 2 scale V/h_a²` (per unit radius factor) of each axis.
+    normal_factor: [f64; 3],
+    /// The grid's radius factors (`r` at cell centres for `c_a`).
+    metric: Metric,
     /// The weight `g` of each shear pair ([`shear_pairs`]) on its edges.
     edge: Vec<Field>,
     /// The hoop term of each unknown face (zero off the u-faces and in planar geometry).
@@ -105,7 +115,9 @@ impl Coefficients {
             faces,
             dims,
             ratio: std::array::from_fn(|a| std::array::from_fn(|b| h[a] / h[b])),
-            normal: (0..dims).map(|_| Field::zeros(grid)).collect(),
+            cells: Field::zeros(grid),
+            normal_factor: [0.0; 3],
+            metric: grid.metric.clone(),
             edge: shear_pairs(dims)
                 .iter()
                 .map(|_| Field::zeros(grid))
@@ -216,21 +228,32 @@ impl Coefficients {
         self.set_edges(g, eta, &[eta_k], scale);
     }
 
-    /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients.
+    /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients: their
+    /// factors `s_a` and a copy of `eta`.
     fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
-        let (m, h) = (&g.metric, g.h());
-        for (a, c) in self.normal.iter_mut().enumerate() {
+        let h = g.h();
+        for (a, ca) in self.normal_factor.iter_mut().enumerate().take(self.dims) {
             // 2 scale V/h_a², as 2 scale (Π_{b≠a} h_b)/h_a.
             let area = (0..self.dims)
                 .filter(|&b| b != a)
                 .fold(scale * 2.0, |s, b| s * h[b]);
-            let ca = area / h[a];
-            Region::whole(g).for_each(c, |l, c| {
-                let (e, rc) = (eta.at(&l, [0; 3]), m.rc_on(&l, 0));
-                for ((c, e), r) in c.iter_mut().zip(e).zip(rc) {
-                    *c = ca * r * e;
-                }
-            });
+            *ca = area / h[a];
+        }
+        self.cells.copy_from(eta);
+    }
+
+    /// The normal-stress coefficient `c_a = (s_a r) η` of axis `a` at the cells of line `l`
+    /// shifted by `shift` along `a` (0 or −1), from its entry `from` on, one per entry of `out`.
+    #[inline(always)]
+    fn normal(&self, a: usize, l: &Line, shift: isize, from: usize, out: &mut [f64]) {
+        let n = out.len();
+        let mut at = [0; 3];
+        at[a] = shift;
+        let e = &self.cells.at(l, at)[from..from + n];
+        let r = &self.metric.rc_on(l, at[0])[from..from + n];
+        let ca = self.normal_factor[a];
+        for k in 0..n {
+            out[k] = ca * r[k] * e[k];
         }
     }
 
@@ -265,14 +288,18 @@ impl Coefficients {
             if r.is_empty() {
                 continue;
             }
-            let c = &self.normal[a];
             let dm = dms[a];
             par::rows(dg, r.len(0)).for_each(|n, dgs| {
                 let l = r.line(n);
                 let dm = &dm[n * l.len..];
-                let (clo, chi) = (c.at(&l, minus(a)), c.at(&l, [0; 3]));
-                for k in 0..l.len {
-                    dgs[k] = dm[k] + (chi[k] + clo[k]);
+                for k in (0..l.len).step_by(LANE) {
+                    let w = LANE.min(l.len - k);
+                    let (mut clo, mut chi) = ([0.0; LANE], [0.0; LANE]);
+                    self.normal(a, &l, -1, k, &mut clo[..w]);
+                    self.normal(a, &l, 0, k, &mut chi[..w]);
+                    for i in 0..w {
+                        dgs[k + i] = dm[k + i] + (chi[i] + clo[i]);
+                    }
                 }
                 for b in (0..self.dims).filter(|&b| b != a) {
                     let (g, rho) = (&self.edge[pair(a, b)], self.ratio[a][b]);
@@ -297,17 +324,20 @@ impl Coefficients {
             let r = self.faces.region(a);
             let periodic = [s.periodic_x, s.periodic_y, s.periodic_z];
             let nr = r.len(0);
+            // The line's own normal-stress coefficients.
+            let mut own = vec![0.0; nr];
             for n in 0..r.lines() {
                 let l = r.line(n);
                 let o = n * nr;
                 s.diag[o..o + nr].copy_from_slice(&ds[a][o..o + nr]);
                 for d in 0..self.dims {
-                    let coupling = if d == a {
-                        (&self.normal[a], 1.0, [0; 3])
+                    let (g, w) = if d == a {
+                        self.normal(a, &l, 0, 0, &mut own[..nr]);
+                        (&own[..nr], 1.0)
                     } else {
-                        (&self.edge[pair(a, d)], self.ratio[a][d], unit(d))
+                        let g = &self.edge[pair(a, d)];
+                        (&g.at(&l, unit(d))[..nr], self.ratio[a][d])
                     };
-                    let (g, w) = (&coupling.0.at(&l, coupling.2)[..nr], coupling.1);
                     let out = &mut [&mut s.east, &mut s.north, &mut s.top][d][o..o + nr];
                     let last = |i: usize| {
                         let at = if d == 0 {
@@ -396,13 +426,22 @@ impl Coefficients {
     ) -> f64 {
         let (a, n) = (A, y.len());
         let across: [usize; S] = std::array::from_fn(|m| if S == 1 { a ^ 1 } else { others(a)[m] });
-        let (u, c) = (vel[a].borrow(), &self.normal[a]);
+        let u = vel[a].borrow();
         let (uc, ulo, uhi) = (
             &u.at(l, [0; 3])[..n],
             &u.at(l, minus(a))[..n],
             &u.at(l, unit(a))[..n],
         );
-        let (chi, clo) = (&c.at(l, [0; 3])[..n], &c.at(l, minus(a))[..n]);
+        // c_a at the cells above and below each face, `(s_a r) η` as the coefficients define it.
+        let ca = self.normal_factor[a];
+        let (ehi, elo) = (
+            &self.cells.at(l, [0; 3])[..n],
+            &self.cells.at(l, minus(a))[..n],
+        );
+        let (rhi, rlo) = (
+            &self.metric.rc_on(l, 0)[..n],
+            &self.metric.rc_on(l, minus(a)[0])[..n],
+        );
         let dr = &d[..n];
         let xr = &x.unwrap_or(uc)[..n];
         // The normal stresses and the first shear pair; each further pair adds its fluxes in a
@@ -424,7 +463,8 @@ impl Coefficients {
                 let f_lo = glo[k] * (rho * (uc[k] - own_lo[k]) + (lo[k] - lo_m[k]));
                 let f_hi = ghi[k] * (rho * (own_hi[k] - uc[k]) + (hi[k] - hi_m[k]));
                 let s = if m == 0 {
-                    chi[k] * (uhi[k] - uc[k]) - clo[k] * (uc[k] - ulo[k])
+                    let (chi, clo) = (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k]);
+                    chi * (uhi[k] - uc[k]) - clo * (uc[k] - ulo[k])
                 } else {
                     y[k]
                 } + (f_hi - f_lo);
