@@ -382,7 +382,7 @@ pub(crate) fn tendency(grid: &Grid, cv: Region, c: usize, vel: &[&Field], work: 
         &*m[c],
         &further[..dims - 2],
         &mut *qt[c],
-        &mut **mt,
+        mt,
     );
 }
 
