@@ -20,10 +20,12 @@
 //! ([`edge_viscosity`]).
 //!
 //! **Coefficients**, assembled once per step ([`Coefficients`]): for each axis `a` the
-//! normal-stress coefficient `c_a = 2η r V/h_a²` at cells, for each pair one edge weight
-//! `g = r η_e V/(h_a h_b)`, and the hoop term `h = η_f r V χ²` (the two cells' sum `η_f`, hoop
-//! factor `χ = 1/r`) per unknown u-face (`r` the radius factor of the location; in two
-//! dimensions `V = h_x h_y`, per unit depth). Per unknown `a`-face `I`:
+//! normal-stress coefficient `c_a = 2η r V/h_a²` at cells (formed where it is read, as
+//! `(s_a r) η` from one copy of the cell field and the factor `s_a`, `2V/h_a²` times the
+//! field's scale, so one cell array serves every axis), for each pair one edge weight `g = r η_e V/(h_a h_b)` (an array per pair), and
+//! the hoop term `h = η_f r V χ²` (the two cells' sum `η_f`, hoop factor `χ = 1/r`) per unknown
+//! u-face (`r` the radius factor of the location; in two dimensions `V = h_x h_y`, per unit
+//! depth). Per unknown `a`-face `I`:
 //!
 //! ```text
 //!   (K u)_a[I] = c_a[I] (u_a[I+e_a] − u_a[I]) − c_a[I−e_a] (u_a[I] − u_a[I−e_a])
@@ -66,9 +68,6 @@ pub(crate) fn shear_pairs(dims: usize) -> &'static [([usize; 2], Stagger)] {
     &SHEAR[..if dims == 3 { 3 } else { 1 }]
 }
 
-/// Entries of a line whose coefficients a pass forms on the stack at a time.
-const LANE: usize = 64;
-
 /// The index in [`SHEAR`] of the pair of axes `a ≠ b`.
 fn pair(a: usize, b: usize) -> usize {
     match (a.min(b), a.max(b)) {
@@ -99,6 +98,8 @@ pub(crate) struct Coefficients {
     normal_factor: [f64; 3],
     /// The grid's radius factors (`r` at cell centres for `c_a`).
     metric: Metric,
+    /// Whether they are all ones (planar and three-dimensional grids).
+    unit_metric: bool,
     /// The weight `g` of each shear pair ([`shear_pairs`]) on its edges.
     edge: Vec<Field>,
     /// The hoop term of each unknown face (zero off the u-faces and in planar geometry).
@@ -118,6 +119,7 @@ impl Coefficients {
             cells: Field::zeros(grid),
             normal_factor: [0.0; 3],
             metric: grid.metric.clone(),
+            unit_metric: !grid.is_axisymmetric(),
             edge: shear_pairs(dims)
                 .iter()
                 .map(|_| Field::zeros(grid))
@@ -242,19 +244,15 @@ impl Coefficients {
         self.cells.copy_from(eta);
     }
 
-    /// The normal-stress coefficient `c_a = (s_a r) η` of axis `a` at the cells of line `l`
-    /// shifted by `shift` along `a` (0 or −1), from its entry `from` on, one per entry of `out`.
+    /// What the normal-stress coefficient `c_a = (s_a r) η` of axis `a` at the cells of line
+    /// `l` shifted by `shift` along `a` (0 or −1) is made of: `s_a`, then `η` and `r` there
+    /// (`r` `None` where the metric is all ones: `s_a · 1` is `s_a`, so `c_a = s_a η` exactly).
     #[inline(always)]
-    fn normal(&self, a: usize, l: &Line, shift: isize, from: usize, out: &mut [f64]) {
-        let n = out.len();
+    fn normal(&self, a: usize, l: &Line, shift: isize) -> (f64, &[f64], Option<&[f64]>) {
         let mut at = [0; 3];
         at[a] = shift;
-        let e = &self.cells.at(l, at)[from..from + n];
-        let r = &self.metric.rc_on(l, at[0])[from..from + n];
-        let ca = self.normal_factor[a];
-        for k in 0..n {
-            out[k] = ca * r[k] * e[k];
-        }
+        let r = (!self.unit_metric).then(|| &self.metric.rc_on(l, at[0])[..l.len]);
+        (self.normal_factor[a], &self.cells.at(l, at)[..l.len], r)
     }
 
     /// The hoop term of `scale·K_η` on each unknown u-face, from the cell coefficients.
@@ -292,13 +290,19 @@ impl Coefficients {
             par::rows(dg, r.len(0)).for_each(|n, dgs| {
                 let l = r.line(n);
                 let dm = &dm[n * l.len..];
-                for k in (0..l.len).step_by(LANE) {
-                    let w = LANE.min(l.len - k);
-                    let (mut clo, mut chi) = ([0.0; LANE], [0.0; LANE]);
-                    self.normal(a, &l, -1, k, &mut clo[..w]);
-                    self.normal(a, &l, 0, k, &mut chi[..w]);
-                    for i in 0..w {
-                        dgs[k + i] = dm[k + i] + (chi[i] + clo[i]);
+                let ((ca, ehi, rhi), (_, elo, rlo)) =
+                    (self.normal(a, &l, 0), self.normal(a, &l, -1));
+                match (rhi, rlo) {
+                    (Some(rhi), Some(rlo)) => {
+                        for k in 0..l.len {
+                            let (chi, clo) = (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k]);
+                            dgs[k] = dm[k] + (chi + clo);
+                        }
+                    }
+                    _ => {
+                        for k in 0..l.len {
+                            dgs[k] = dm[k] + (ca * ehi[k] + ca * elo[k]);
+                        }
                     }
                 }
                 for b in (0..self.dims).filter(|&b| b != a) {
@@ -332,7 +336,10 @@ impl Coefficients {
                 s.diag[o..o + nr].copy_from_slice(&ds[a][o..o + nr]);
                 for d in 0..self.dims {
                     let (g, w) = if d == a {
-                        self.normal(a, &l, 0, 0, &mut own[..nr]);
+                        let (ca, e, r) = self.normal(a, &l, 0);
+                        for (k, c) in own[..nr].iter_mut().enumerate() {
+                            *c = r.map_or(ca, |r| ca * r[k]) * e[k];
+                        }
                         (&own[..nr], 1.0)
                     } else {
                         let g = &self.edge[pair(a, d)];
@@ -395,15 +402,20 @@ impl Coefficients {
                 |j, y| {
                     let x = x.map(|x| &x[j * n..(j + 1) * n]);
                     let (l, d) = (r.line(j), &d[j * n..]);
-                    // The component and the grid's axis count as constants: the shifts
-                    // along the axes are then known to the compiler, which addresses the
-                    // stencil's neighbours from fewer pointers.
-                    match (self.dims, a) {
-                        (2, 0) => self.line::<0, 1, F>(&l, vel, d, x, y),
-                        (2, _) => self.line::<1, 1, F>(&l, vel, d, x, y),
-                        (_, 0) => self.line::<0, 2, F>(&l, vel, d, x, y),
-                        (_, 1) => self.line::<1, 2, F>(&l, vel, d, x, y),
-                        _ => self.line::<2, 2, F>(&l, vel, d, x, y),
+                    // The component, the grid's axis count and whether the metric is all ones
+                    // count as constants: the shifts along the axes are then known to the
+                    // compiler, which addresses the stencil's neighbours from fewer pointers.
+                    match (self.unit_metric, self.dims, a) {
+                        (true, 2, 0) => self.line::<0, 1, true, F>(&l, vel, d, x, y),
+                        (true, 2, _) => self.line::<1, 1, true, F>(&l, vel, d, x, y),
+                        (true, _, 0) => self.line::<0, 2, true, F>(&l, vel, d, x, y),
+                        (true, _, 1) => self.line::<1, 2, true, F>(&l, vel, d, x, y),
+                        (true, ..) => self.line::<2, 2, true, F>(&l, vel, d, x, y),
+                        (false, 2, 0) => self.line::<0, 1, false, F>(&l, vel, d, x, y),
+                        (false, 2, _) => self.line::<1, 1, false, F>(&l, vel, d, x, y),
+                        (false, _, 0) => self.line::<0, 2, false, F>(&l, vel, d, x, y),
+                        (false, _, 1) => self.line::<1, 2, false, F>(&l, vel, d, x, y),
+                        (false, ..) => self.line::<2, 2, false, F>(&l, vel, d, x, y),
                     }
                 },
                 |s, p| s + p,
@@ -414,9 +426,9 @@ impl Coefficients {
 
     /// [`product`](Self::product) on one line of unknown `A`-faces of a grid of `S + 1` axes,
     /// whose shear pairs are with the `S` other axes: `y = d∘x − K(V)` there (`x` the line's
-    /// unknowns, or `u_A` itself), returning `x·y`.
+    /// unknowns, or `u_A` itself), returning `x·y`; `U`: the metric is all ones.
     #[inline(always)]
-    fn line<const A: usize, const S: usize, F: Borrow<Field>>(
+    fn line<const A: usize, const S: usize, const U: bool, F: Borrow<Field>>(
         &self,
         l: &Line,
         vel: &[F],
@@ -432,16 +444,21 @@ impl Coefficients {
             &u.at(l, minus(a))[..n],
             &u.at(l, unit(a))[..n],
         );
-        // c_a at the cells above and below each face, `(s_a r) η` as the coefficients define it.
+        // c_a at the cells above and below each face, `(s_a r) η` as the coefficients define it
+        // (`s_a η` where r is one, the same value).
         let ca = self.normal_factor[a];
         let (ehi, elo) = (
             &self.cells.at(l, [0; 3])[..n],
             &self.cells.at(l, minus(a))[..n],
         );
-        let (rhi, rlo) = (
-            &self.metric.rc_on(l, 0)[..n],
-            &self.metric.rc_on(l, minus(a)[0])[..n],
-        );
+        let (rhi, rlo): (&[f64], &[f64]) = if U {
+            (&[], &[])
+        } else {
+            (
+                &self.metric.rc_on(l, 0)[..n],
+                &self.metric.rc_on(l, minus(a)[0])[..n],
+            )
+        };
         let dr = &d[..n];
         let xr = &x.unwrap_or(uc)[..n];
         // The normal stresses and the first shear pair; each further pair adds its fluxes in a
@@ -463,7 +480,11 @@ impl Coefficients {
                 let f_lo = glo[k] * (rho * (uc[k] - own_lo[k]) + (lo[k] - lo_m[k]));
                 let f_hi = ghi[k] * (rho * (own_hi[k] - uc[k]) + (hi[k] - hi_m[k]));
                 let s = if m == 0 {
-                    let (chi, clo) = (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k]);
+                    let (chi, clo) = if U {
+                        (ca * ehi[k], ca * elo[k])
+                    } else {
+                        (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k])
+                    };
                     chi * (uhi[k] - uc[k]) - clo * (uc[k] - ulo[k])
                 } else {
                     y[k]
