@@ -183,7 +183,12 @@ impl Simulation {
             if let Rollback::Step(slot) = &mut rollback {
                 self.keep(slot);
             }
-            if let Err(error) = self.step(dt) {
+            // The snapshot just kept is the state the step starts from.
+            let start = match &rollback {
+                Rollback::Step(Some(s)) => Some(&s.state),
+                _ => None,
+            };
+            if let Err(error) = self.step_from(dt, start) {
                 let good = match &rollback {
                     Rollback::Step(Some(s)) | Rollback::Call(Some(s)) => {
                         self.put_back(s);

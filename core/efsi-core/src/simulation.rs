@@ -52,7 +52,8 @@ pub struct Simulation {
     options: Options,
     pipeline: Pipeline,
     /// The velocity components `u`, `v`, `w` (`None` in two dimensions) before the step, when
-    /// the scene stops at steady state.
+    /// the scene stops at steady state and the step is not told the state it starts from
+    /// ([`step_from`](Self::step_from)): made at the first such step.
     previous: Option<[Option<Field>; 3]>,
     last_change: f64,
     velocity_scale: f64,
@@ -97,13 +98,6 @@ impl Simulation {
         let state = Self::initial_state(&scene, &grid, &bc, &mut pipeline)?;
         let scale = Self::velocity_scale(&scene, &grid, &bc, &state);
         Self::check_first_step(&scene, scale, scene_path)?;
-        let previous = scene.time.steady.map(|_| {
-            [
-                Some(state.u.clone()),
-                Some(state.v.clone()),
-                state.w.clone(),
-            ]
-        });
         Ok(Simulation {
             scene,
             scene_path: scene_path.to_path_buf(),
@@ -112,7 +106,7 @@ impl Simulation {
             state,
             options,
             pipeline,
-            previous,
+            previous: None,
             last_change: f64::INFINITY,
             velocity_scale: scale,
             checks: Vec::new(),
@@ -337,11 +331,25 @@ impl Simulation {
 
     /// Advance by one step of size `dt`.
     pub fn step(&mut self, dt: f64) -> Result<(), EfsiError> {
-        if let Some(before) = &mut self.previous {
-            for (b, now) in before.iter_mut().zip(velocity(&self.state)) {
-                if let (Some(b), Some(now)) = (b, now) {
-                    b.copy_from(now);
+        self.step_from(dt, None)
+    }
+
+    /// [`step`](Self::step), told a copy of the state it starts from, `start` (the run loop's
+    /// rollback snapshot, [`crate::Rollback::Step`]): a scene that stops at steady state then
+    /// measures the step's change against its velocity instead of a copy of its own.
+    pub(crate) fn step_from(&mut self, dt: f64, start: Option<&State>) -> Result<(), EfsiError> {
+        let steady = self.scene.time.steady.is_some();
+        if steady && start.is_none() {
+            let now = velocity(&self.state);
+            match &mut self.previous {
+                Some(before) => {
+                    for (b, now) in before.iter_mut().zip(now) {
+                        if let (Some(b), Some(now)) = (b, now) {
+                            b.copy_from(now);
+                        }
+                    }
                 }
+                None => self.previous = Some(now.map(|f| f.cloned())),
             }
         }
         let ctx = StepContext {
@@ -361,7 +369,12 @@ impl Simulation {
         for c in &mut self.checks {
             c.after(&self.scene, &ctx, &self.state)?;
         }
-        if let Some(before) = &self.previous {
+        let before = match (start, &self.previous) {
+            (Some(start), _) => Some(velocity(start)),
+            (None, Some([u, v, w])) => Some([u.as_ref(), v.as_ref(), w.as_ref()]),
+            (None, None) => None,
+        };
+        if let Some(before) = before.filter(|_| steady) {
             // The largest change over the unknown faces of each component (max is exact, so
             // the order of the visit does not matter).
             let mut m = 0.0f64;

@@ -56,6 +56,13 @@ pub fn encode<T: Serialize + ?Sized>(format: &Format, value: &T) -> Vec<u8> {
     out
 }
 
+/// The length of [`encode`]'s bytes of `value`, counted without making them.
+pub fn encoded_len<T: Serialize + ?Sized>(value: &T) -> usize {
+    let size = postcard::ser_flavors::Size::default();
+    PREFIX
+        + postcard::serialize_with_flavor(value, size).expect("postcard encodes efsi's file types")
+}
+
 /// The format version recorded in `bytes` when they start with `format`'s magic.
 pub fn version_of(bytes: &[u8], format: &Format) -> Option<u32> {
     let version = bytes.get(8..12)?;
@@ -141,6 +148,7 @@ mod tests {
     #[test]
     fn values_come_back_bit_for_bit() {
         let bytes = encode(&TEST, &value());
+        assert_eq!(encoded_len(&value()), bytes.len());
         assert_eq!(&bytes[..8], b"EFSITEST");
         assert_eq!(version_of(&bytes, &TEST), Some(3));
         // Prefix, then: name (varint 2, 2 bytes), xs (varint 5, 40 bytes), None (1 byte).

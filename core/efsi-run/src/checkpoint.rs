@@ -432,6 +432,17 @@ struct SnapshotBody<'a> {
 
 /// The bytes of a checkpoint file (see the module docs for the layout).
 pub fn encode(c: &Checkpoint) -> Vec<u8> {
+    with_body(c, |body| binary::encode(&FORMAT, body))
+}
+
+/// The length of [`encode`]'s bytes, counted without making them (what the run keeps room on
+/// disk for).
+pub fn encoded_len(c: &Checkpoint) -> usize {
+    with_body(c, |body| binary::encoded_len(body))
+}
+
+/// `f` of the body of `c`'s file, which borrows its arrays.
+fn with_body<R>(c: &Checkpoint, f: impl FnOnce(&Body) -> R) -> R {
     let s = &c.snapshot;
     let scene_path = c.scene_path.display().to_string();
     let guard = s.checks.iter().find(|(n, _)| *n == crate::guard::NAME);
@@ -466,7 +477,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
             guard: Cow::Borrowed(guard.map_or(&[], |(_, r)| r.as_slice())),
         },
     };
-    binary::encode(&FORMAT, &body)
+    f(&body)
 }
 
 /// Decode checkpoint bytes; `what` (the file) names it in errors.

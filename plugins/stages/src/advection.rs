@@ -62,9 +62,10 @@
 //! number of threads. Each face flux is computed once (a band's lower edge twice): along the
 //! lines' axis into a buffer of the line, along axis 1 into a buffer the band's next line
 //! reads, along any further axis into a full-grid array. The stage uses [`work`]`(dims)`
-//! full-grid arrays while it runs (8 in two dimensions, 14 in three: per component the
-//! tendencies of momentum and mass, the start-of-step velocity and the current stage's face
-//! masses; the fluxes along the third axis) — taken from the pipeline's pool of work vectors
+//! full-grid arrays while it runs (7 in two dimensions, 12 in three: per component the
+//! momentum tendency, the start-of-step velocity and the current stage's face masses; one mass
+//! tendency, each component's in turn, whose masses and momenta advance as soon as its own
+//! tendencies are known; the fluxes along the third axis) — taken from the pipeline's pool of work vectors
 //! (`scratch`), which the later stages of the step reuse. It keeps from one step to the next
 //! only the `WholeStep` predictor's history, one array per component.
 
@@ -261,23 +262,24 @@ pub fn advance(
         _ => (0.0, None),
     };
     for stage in 0..2 {
-        let view: [&Field; 3] = std::array::from_fn(|c| &*vel[c.min(dims - 1)]);
-        kernels::tendencies(grid, cv, &view[..dims], &mut w);
         let step = Euler {
             dt,
             lag,
             second: stage == 1,
             rho,
         };
+        // Each component's masses and momenta advance once its tendencies are known (only
+        // its own tendencies read its masses); the velocities once every component's are.
+        let view: [&Field; 3] = std::array::from_fn(|c| &*vel[c.min(dims - 1)]);
+        for c in 0..dims {
+            kernels::tendency(grid, cv[c], c, &view[..dims], &mut w);
+            let y: &[f64] = y.map_or(&[], |y| &y[c]);
+            let Work { qt, mt, x0, m, .. } = &mut w;
+            step.advance_mass(cv[c], c, view[c], m[c], [&*x0[c], y], qt[c], mt);
+        }
         for c in 0..dims {
             let y: &[f64] = y.map_or(&[], |y| &y[c]);
-            step.update(
-                cv[c],
-                c,
-                vel[c],
-                w.m[c],
-                [&*w.x0[c], y, &*w.qt[c], &*w.mt[c]],
-            );
+            step.velocity(cv[c], vel[c], &*w.m[c], [&*w.x0[c], y], &*w.qt[c]);
         }
         if stage == 0 {
             fill(vel);
@@ -316,11 +318,11 @@ pub fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], rho: &Field) -> Ve
     for c in 0..dims {
         kernels::face_masses(grid, rho, c, w.m[c]);
     }
-    kernels::tendencies(grid, cv, vel, &mut w);
     (0..dims)
         .map(|c| {
+            kernels::tendency(grid, cv[c], c, vel, &mut w);
             let mut out = [Field::zeros(grid), Field::zeros(grid)];
-            for (o, t) in out.iter_mut().zip([&*w.qt[c], &*w.mt[c]]) {
+            for (o, t) in out.iter_mut().zip([&*w.qt[c], &*w.mt]) {
                 cv[c].for_each(o, |l, o| o.copy_from_slice(&t[l.n * l.len..][..l.len]));
             }
             out

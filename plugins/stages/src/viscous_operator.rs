@@ -20,10 +20,12 @@
 //! ([`edge_viscosity`]).
 //!
 //! **Coefficients**, assembled once per step ([`Coefficients`]): for each axis `a` the
-//! normal-stress coefficient `c_a = 2η r V/h_a²` at cells, for each pair one edge weight
-//! `g = r η_e V/(h_a h_b)`, and the hoop term `h = η_f r V χ²` (the two cells' sum `η_f`, hoop
-//! factor `χ = 1/r`) per unknown u-face (`r` the radius factor of the location; in two
-//! dimensions `V = h_x h_y`, per unit depth). Per unknown `a`-face `I`:
+//! normal-stress coefficient `c_a = 2η r V/h_a²` at cells (formed where it is read, as
+//! `(s_a r) η` from one copy of the cell field and the factor `s_a`, `2V/h_a²` times the
+//! field's scale, so one cell array serves every axis), for each pair one edge weight `g = r η_e V/(h_a h_b)` (an array per pair), and
+//! the hoop term `h = η_f r V χ²` (the two cells' sum `η_f`, hoop factor `χ = 1/r`) per unknown
+//! u-face (`r` the radius factor of the location; in two dimensions `V = h_x h_y`, per unit
+//! depth). Per unknown `a`-face `I`:
 //!
 //! ```text
 //!   (K u)_a[I] = c_a[I] (u_a[I+e_a] − u_a[I]) − c_a[I−e_a] (u_a[I] − u_a[I−e_a])
@@ -46,6 +48,7 @@
 //! or seven-point stencils for the block multigrid ([`crate::block_multigrid`]).
 
 use crate::faces::UnknownFaces;
+use efsi_core::grid::Metric;
 use efsi_core::operators::minus;
 use efsi_core::{Field, Grid, Index, Line, Region, Stagger, unit};
 use efsi_linalg::Stencil5;
@@ -87,8 +90,16 @@ pub(crate) struct Coefficients {
     dims: usize,
     /// `h_a/h_b`: the weight of a row's own component in a shear flux.
     ratio: [[f64; 3]; 3],
-    /// The normal-stress coefficient `c_a` of each axis at cells.
-    normal: Vec<Field>,
+    /// The cell coefficient `η` (a copy, ghosts included): the normal-stress coefficient of
+    /// axis `a` at a cell is `c_a = (s_a r) η`, formed where it is read ([`normal`](Self::normal))
+    /// — one cell array instead of one per axis.
+    cells: Field,
+    /// `s_a = 2 scale V/h_a²` (per unit radius factor) of each axis.
+    normal_factor: [f64; 3],
+    /// The grid's radius factors (`r` at cell centres for `c_a`).
+    metric: Metric,
+    /// Whether they are all ones (planar and three-dimensional grids).
+    unit_metric: bool,
     /// The weight `g` of each shear pair ([`shear_pairs`]) on its edges.
     edge: Vec<Field>,
     /// The hoop term of each unknown face (zero off the u-faces and in planar geometry).
@@ -105,7 +116,10 @@ impl Coefficients {
             faces,
             dims,
             ratio: std::array::from_fn(|a| std::array::from_fn(|b| h[a] / h[b])),
-            normal: (0..dims).map(|_| Field::zeros(grid)).collect(),
+            cells: Field::zeros(grid),
+            normal_factor: [0.0; 3],
+            metric: grid.metric.clone(),
+            unit_metric: !grid.is_axisymmetric(),
             edge: shear_pairs(dims)
                 .iter()
                 .map(|_| Field::zeros(grid))
@@ -211,22 +225,29 @@ impl Coefficients {
         });
     }
 
-    /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients.
+    /// The normal-stress coefficients `c_a` of `scale·K_η` from the cell coefficients: their
+    /// factors `s_a` and a copy of `eta`.
     fn set_cells(&mut self, g: &Grid, eta: &Field, scale: f64) {
-        let (m, h) = (&g.metric, g.h());
-        for (a, c) in self.normal.iter_mut().enumerate() {
+        let h = g.h();
+        for (a, ca) in self.normal_factor.iter_mut().enumerate().take(self.dims) {
             // 2 scale V/h_a², as 2 scale (Π_{b≠a} h_b)/h_a.
             let area = (0..self.dims)
                 .filter(|&b| b != a)
                 .fold(scale * 2.0, |s, b| s * h[b]);
-            let ca = area / h[a];
-            Region::whole(g).for_each(c, |l, c| {
-                let (e, rc) = (eta.at(&l, [0; 3]), m.rc_on(&l, 0));
-                for ((c, e), r) in c.iter_mut().zip(e).zip(rc) {
-                    *c = ca * r * e;
-                }
-            });
+            *ca = area / h[a];
         }
+        self.cells.copy_from(eta);
+    }
+
+    /// What the normal-stress coefficient `c_a = (s_a r) η` of axis `a` at the cells of line
+    /// `l` shifted by `shift` along `a` (0 or −1) is made of: `s_a`, then `η` and `r` there
+    /// (`r` `None` where the metric is all ones: `s_a · 1` is `s_a`, so `c_a = s_a η` exactly).
+    #[inline(always)]
+    fn normal(&self, a: usize, l: &Line, shift: isize) -> (f64, &[f64], Option<&[f64]>) {
+        let mut at = [0; 3];
+        at[a] = shift;
+        let r = (!self.unit_metric).then(|| &self.metric.rc_on(l, at[0])[..l.len]);
+        (self.normal_factor[a], &self.cells.at(l, at)[..l.len], r)
     }
 
     /// The hoop term of `scale·K_η` on each unknown u-face, from the cell coefficients.
@@ -260,14 +281,24 @@ impl Coefficients {
             if r.is_empty() {
                 continue;
             }
-            let c = &self.normal[a];
             let dm = dms[a];
             par::rows(dg, r.len(0)).for_each(|n, dgs| {
                 let l = r.line(n);
                 let dm = &dm[n * l.len..];
-                let (clo, chi) = (c.at(&l, minus(a)), c.at(&l, [0; 3]));
-                for k in 0..l.len {
-                    dgs[k] = dm[k] + (chi[k] + clo[k]);
+                let ((ca, ehi, rhi), (_, elo, rlo)) =
+                    (self.normal(a, &l, 0), self.normal(a, &l, -1));
+                match (rhi, rlo) {
+                    (Some(rhi), Some(rlo)) => {
+                        for k in 0..l.len {
+                            let (chi, clo) = (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k]);
+                            dgs[k] = dm[k] + (chi + clo);
+                        }
+                    }
+                    _ => {
+                        for k in 0..l.len {
+                            dgs[k] = dm[k] + (ca * ehi[k] + ca * elo[k]);
+                        }
+                    }
                 }
                 for b in (0..self.dims).filter(|&b| b != a) {
                     let (g, rho) = (&self.edge[pair(a, b)], self.ratio[a][b]);
@@ -292,17 +323,23 @@ impl Coefficients {
             let r = self.faces.region(a);
             let periodic = [s.periodic_x, s.periodic_y, s.periodic_z];
             let nr = r.len(0);
+            // The line's own normal-stress coefficients.
+            let mut own = vec![0.0; nr];
             for n in 0..r.lines() {
                 let l = r.line(n);
                 let o = n * nr;
                 s.diag[o..o + nr].copy_from_slice(&ds[a][o..o + nr]);
                 for d in 0..self.dims {
-                    let coupling = if d == a {
-                        (&self.normal[a], 1.0, [0; 3])
+                    let (g, w) = if d == a {
+                        let (ca, e, r) = self.normal(a, &l, 0);
+                        for (k, c) in own[..nr].iter_mut().enumerate() {
+                            *c = r.map_or(ca, |r| ca * r[k]) * e[k];
+                        }
+                        (&own[..nr], 1.0)
                     } else {
-                        (&self.edge[pair(a, d)], self.ratio[a][d], unit(d))
+                        let g = &self.edge[pair(a, d)];
+                        (&g.at(&l, unit(d))[..nr], self.ratio[a][d])
                     };
-                    let (g, w) = (&coupling.0.at(&l, coupling.2)[..nr], coupling.1);
                     let out = &mut [&mut s.east, &mut s.north, &mut s.top][d][o..o + nr];
                     let last = |i: usize| {
                         let at = if d == 0 {
@@ -361,15 +398,20 @@ impl Coefficients {
                 |j, y| {
                     let x = x.map(|x| &x[j * n..(j + 1) * n]);
                     let (l, d) = (r.line(j), &d[j * n..]);
-                    // The component and the grid's axis count as constants: the shifts
-                    // along the axes are then known to the compiler, which addresses the
-                    // stencil's neighbours from fewer pointers.
-                    match (self.dims, a) {
-                        (2, 0) => self.line::<0, 1, F>(&l, vel, d, x, y),
-                        (2, _) => self.line::<1, 1, F>(&l, vel, d, x, y),
-                        (_, 0) => self.line::<0, 2, F>(&l, vel, d, x, y),
-                        (_, 1) => self.line::<1, 2, F>(&l, vel, d, x, y),
-                        _ => self.line::<2, 2, F>(&l, vel, d, x, y),
+                    // The component, the grid's axis count and whether the metric is all ones
+                    // count as constants: the shifts along the axes are then known to the
+                    // compiler, which addresses the stencil's neighbours from fewer pointers.
+                    match (self.unit_metric, self.dims, a) {
+                        (true, 2, 0) => self.line::<0, 1, true, F>(&l, vel, d, x, y),
+                        (true, 2, _) => self.line::<1, 1, true, F>(&l, vel, d, x, y),
+                        (true, _, 0) => self.line::<0, 2, true, F>(&l, vel, d, x, y),
+                        (true, _, 1) => self.line::<1, 2, true, F>(&l, vel, d, x, y),
+                        (true, ..) => self.line::<2, 2, true, F>(&l, vel, d, x, y),
+                        (false, 2, 0) => self.line::<0, 1, false, F>(&l, vel, d, x, y),
+                        (false, 2, _) => self.line::<1, 1, false, F>(&l, vel, d, x, y),
+                        (false, _, 0) => self.line::<0, 2, false, F>(&l, vel, d, x, y),
+                        (false, _, 1) => self.line::<1, 2, false, F>(&l, vel, d, x, y),
+                        (false, ..) => self.line::<2, 2, false, F>(&l, vel, d, x, y),
                     }
                 },
                 |s, p| s + p,
@@ -380,9 +422,9 @@ impl Coefficients {
 
     /// [`product`](Self::product) on one line of unknown `A`-faces of a grid of `S + 1` axes,
     /// whose shear pairs are with the `S` other axes: `y = d∘x − K(V)` there (`x` the line's
-    /// unknowns, or `u_A` itself), returning `x·y`.
+    /// unknowns, or `u_A` itself), returning `x·y`; `U`: the metric is all ones.
     #[inline(always)]
-    fn line<const A: usize, const S: usize, F: Borrow<Field>>(
+    fn line<const A: usize, const S: usize, const U: bool, F: Borrow<Field>>(
         &self,
         l: &Line,
         vel: &[F],
@@ -392,13 +434,27 @@ impl Coefficients {
     ) -> f64 {
         let (a, n) = (A, y.len());
         let across: [usize; S] = std::array::from_fn(|m| if S == 1 { a ^ 1 } else { others(a)[m] });
-        let (u, c) = (vel[a].borrow(), &self.normal[a]);
+        let u = vel[a].borrow();
         let (uc, ulo, uhi) = (
             &u.at(l, [0; 3])[..n],
             &u.at(l, minus(a))[..n],
             &u.at(l, unit(a))[..n],
         );
-        let (chi, clo) = (&c.at(l, [0; 3])[..n], &c.at(l, minus(a))[..n]);
+        // c_a at the cells above and below each face, `(s_a r) η` as the coefficients define it
+        // (`s_a η` where r is one, the same value).
+        let ca = self.normal_factor[a];
+        let (ehi, elo) = (
+            &self.cells.at(l, [0; 3])[..n],
+            &self.cells.at(l, minus(a))[..n],
+        );
+        let (rhi, rlo): (&[f64], &[f64]) = if U {
+            (&[], &[])
+        } else {
+            (
+                &self.metric.rc_on(l, 0)[..n],
+                &self.metric.rc_on(l, minus(a)[0])[..n],
+            )
+        };
         let dr = &d[..n];
         let xr = &x.unwrap_or(uc)[..n];
         // The normal stresses and the first shear pair; each further pair adds its fluxes in a
@@ -420,7 +476,12 @@ impl Coefficients {
                 let f_lo = glo[k] * (rho * (uc[k] - own_lo[k]) + (lo[k] - lo_m[k]));
                 let f_hi = ghi[k] * (rho * (own_hi[k] - uc[k]) + (hi[k] - hi_m[k]));
                 let s = if m == 0 {
-                    chi[k] * (uhi[k] - uc[k]) - clo[k] * (uc[k] - ulo[k])
+                    let (chi, clo) = if U {
+                        (ca * ehi[k], ca * elo[k])
+                    } else {
+                        (ca * rhi[k] * ehi[k], ca * rlo[k] * elo[k])
+                    };
+                    chi * (uhi[k] - uc[k]) - clo * (uc[k] - ulo[k])
                 } else {
                     y[k]
                 } + (f_hi - f_lo);

@@ -9,8 +9,9 @@ use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Capacity of the buffered writer handed to the caller (1 MiB).
-const BUFFER_BYTES: usize = 1 << 20;
+/// Capacity of the buffered writer handed to the caller (64 KiB: writes reach the file in large
+/// pieces, and a field file streamed through it adds little to a run's memory).
+const BUFFER_BYTES: usize = 1 << 16;
 
 /// The temporary name used while `path` is being written: `.name.tmp` in the same folder.
 pub fn temporary_path(path: &Path) -> io::Result<PathBuf> {
@@ -41,8 +42,8 @@ pub fn write_atomically(
 }
 
 /// [`write_atomically`] for data already in memory: `bytes` go to the temporary file in one
-/// write, without the 1 MiB buffer (which `run.json`, a few kB, made the largest allocation of
-/// the run's end).
+/// write, without a buffer (for `run.json`, a few kB, it would be the largest allocation of the
+/// run's end).
 pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_through(path, 0, |w| w.write_all(bytes))
 }

@@ -14,7 +14,9 @@ use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
 use efsi_core::{OutputDecl, OutputKind, Region, Stagger, operators};
 
+use crate::output::vtk::Produce;
 use efsi_core::state::State;
+use std::io;
 
 /// What one array of the VTK files holds.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -220,54 +222,85 @@ pub fn slice_notes(normal: usize, at: f64) -> [(&'static str, String); 3] {
 }
 
 /// The arrays `options` asks for (all the state has, by default), in [`describe`]'s order:
-/// `(name, components, values)`, cell-major.
+/// `(name, components, values)`, cell-major ([`producers`] gathered).
 pub fn arrays(
     grid: &Grid,
     state: &State,
     options: &VtkOptions,
     outputs: &[OutputDecl],
 ) -> Vec<(&'static str, usize, Vec<f64>)> {
-    let mut out = Vec::new();
+    producers(grid, state, options, outputs)
+        .into_iter()
+        .map(|(name, components, produce)| {
+            let mut values = Vec::with_capacity(components * grid.cells());
+            produce(&mut |v| {
+                values.extend_from_slice(v);
+                Ok(())
+            })
+            .expect("gathering into memory cannot fail");
+            (name, components, values)
+        })
+        .collect()
+}
+
+/// A producer of one array's values ([`Produce`]), boxed.
+pub type Producer<'a> = Box<Produce<'a>>;
+
+/// The arrays of [`arrays`], each as a producer that hands its values over a line of cells
+/// at a time (a stage's array whole), in VTK's order: `(name, components, producer)` — what a
+/// field file is written from without holding its arrays.
+pub fn producers<'a>(
+    grid: &'a Grid,
+    state: &'a State,
+    options: &VtkOptions,
+    outputs: &'a [OutputDecl],
+) -> Vec<(&'static str, usize, Producer<'a>)> {
+    let mut out: Vec<(&'static str, usize, Producer<'a>)> = Vec::new();
     for name in present(grid, state, options, outputs) {
-        let array = match name {
-            "velocity" => Some((3, velocity(grid, state))),
-            "pressure" => Some((1, scalar(grid, &state.p))),
-            "density" => Some((1, scalar(grid, &state.rho))),
-            "viscosity" => Some((1, scalar(grid, &state.mu))),
-            "divergence" => Some((1, divergence(grid, state))),
-            "solid_fraction" => state.phi.as_ref().map(|phi| (1, scalar(grid, phi))),
+        let field = |f: &'a Field| -> Producer<'a> { Box::new(move |sink| scalar(grid, f, sink)) };
+        let array: Option<(usize, Producer<'a>)> = match name {
+            "velocity" => Some((3, Box::new(move |sink| velocity(grid, state, sink)))),
+            "pressure" => Some((1, field(&state.p))),
+            "density" => Some((1, field(&state.rho))),
+            "viscosity" => Some((1, field(&state.mu))),
+            "divergence" => Some((1, Box::new(move |sink| divergence(grid, state, sink)))),
+            "solid_fraction" => state.phi.as_ref().map(|phi| (1, field(phi))),
             _ => stage_array(grid, state, outputs, name),
         };
-        if let Some((components, values)) = array {
-            out.push((name, components, values));
+        if let Some((components, produce)) = array {
+            out.push((name, components, produce));
         }
     }
     out
 }
 
-/// The cells of `grid` in VTK's order, i fastest, then j, then k (k = 0 only in two
-/// dimensions).
-fn cells(grid: &Grid) -> impl Iterator<Item = [isize; 3]> {
-    let (nx, ny, nz) = (grid.nx, grid.ny, if grid.is_3d() { grid.nz } else { 1 });
-    (0..nz as isize).flat_map(move |k| {
-        (0..ny as isize).flat_map(move |j| (0..nx as isize).map(move |i| [i, j, k]))
-    })
-}
-
-/// The cell values of `f`, in VTK's order.
-fn scalar(grid: &Grid, f: &Field) -> Vec<f64> {
-    cells(grid).map(|c| f[c]).collect()
+/// The cell values of `f` to `sink`, a line of cells at a time in VTK's order (i fastest, then
+/// j, then k; k = 0 only in two dimensions).
+fn scalar(
+    grid: &Grid,
+    f: &Field,
+    sink: &mut dyn FnMut(&[f64]) -> io::Result<()>,
+) -> io::Result<()> {
+    let cells = Region::of(grid, Stagger::Cell);
+    for n in 0..cells.lines() {
+        sink(&f.at(&cells.line(n), [0; 3])[..grid.nx])?;
+    }
+    Ok(())
 }
 
 /// The velocity at the cell centres as 3-vectors, each component the mean of its two faces
 /// ([`operators::centre_avg`]); an axisymmetric run's `(u_r, 0, u_z)` (the r–z slice lies in
-/// the X–Z plane). In VTK's order: the cells' lines in order, x fastest.
-fn velocity(grid: &Grid, state: &State) -> Vec<f64> {
+/// the X–Z plane). To `sink` a line of cells at a time, in VTK's order.
+fn velocity(
+    grid: &Grid,
+    state: &State,
+    sink: &mut dyn FnMut(&[f64]) -> io::Result<()>,
+) -> io::Result<()> {
     let (cells, nx) = (Region::of(grid, Stagger::Cell), grid.nx);
     let slot = |a: usize| usize::from(a == 1 && grid.is_axisymmetric()) + a;
-    let mut vel = vec![0.0; 3 * grid.cells()];
+    let mut out = vec![0.0; 3 * nx];
     let mut centre = vec![0.0; nx];
-    for (n, out) in vel.chunks_mut(3 * nx).enumerate() {
+    for n in 0..cells.lines() {
         let line = cells.line(n);
         for (a, f) in state.velocity().iter().enumerate() {
             operators::centre_avg(f, a, &line, &mut centre);
@@ -275,33 +308,48 @@ fn velocity(grid: &Grid, state: &State) -> Vec<f64> {
                 out[3 * i + slot(a)] = *c;
             }
         }
+        sink(&out)?;
     }
-    vel
+    Ok(())
 }
 
-/// The discrete divergence of the velocity per cell ([`operators::div`]), in VTK's order.
-fn divergence(grid: &Grid, state: &State) -> Vec<f64> {
+/// The discrete divergence of the velocity per cell ([`operators::div`]), to `sink` a line of
+/// cells at a time, in VTK's order.
+fn divergence(
+    grid: &Grid,
+    state: &State,
+    sink: &mut dyn FnMut(&[f64]) -> io::Result<()>,
+) -> io::Result<()> {
     let cells = Region::of(grid, Stagger::Cell);
-    let mut out = vec![0.0; grid.cells()];
-    for (n, row) in out.chunks_mut(grid.nx).enumerate() {
-        operators::div(grid, &state.velocity(), &cells.line(n), row);
+    let mut row = vec![0.0; grid.nx];
+    for n in 0..cells.lines() {
+        operators::div(grid, &state.velocity(), &cells.line(n), &mut row);
+        sink(&row)?;
     }
-    out
+    Ok(())
 }
 
 /// A stage's array or field `name` among `outputs`, if the state has it: `(components,
-/// values)`.
-fn stage_array(
-    grid: &Grid,
-    state: &State,
-    outputs: &[OutputDecl],
+/// producer)` (an array is made whole when it is produced).
+fn stage_array<'a>(
+    grid: &'a Grid,
+    state: &'a State,
+    outputs: &'a [OutputDecl],
     name: &str,
-) -> Option<(usize, Vec<f64>)> {
+) -> Option<(usize, Producer<'a>)> {
     match outputs.iter().find(|o| o.name == name).map(|o| o.kind) {
         Some(OutputKind::Array { components, values }) => {
-            values(grid, state).map(|v| (components(grid.geometry).len(), v))
+            values(grid, state)?;
+            let produce: Producer<'a> = Box::new(move |sink| match values(grid, state) {
+                Some(v) => sink(&v),
+                None => Ok(()),
+            });
+            Some((components(grid.geometry).len(), produce))
         }
-        Some(OutputKind::Field(f)) => f(state).map(|f| (1, scalar(grid, f))),
+        Some(OutputKind::Field(f)) => {
+            let f = f(state)?;
+            Some((1, Box::new(move |sink| scalar(grid, f, sink))))
+        }
         _ => None,
     }
 }

@@ -122,49 +122,93 @@ fn average_to_nodes(nodes: [usize; 3], values: &[f64], components: usize) -> Vec
     out
 }
 
-/// One appended block as it goes into the file: raw (`UInt64` byte count, then the
-/// little-endian values) or zlib-compressed (see the module docs), the values as `Float64` or,
-/// if `float32`, rounded to `Float32`.
-fn encode_block(values: &[f64], float32: bool, compression: VtkCompression) -> io::Result<Vec<u8>> {
-    let width = if float32 { 4 } else { 8 };
-    let mut payload = Vec::with_capacity(width * values.len());
-    for v in values {
-        if float32 {
-            payload.extend_from_slice(&(*v as f32).to_le_bytes());
+/// A producer of an array's values: it hands them to its sink in consecutive pieces, in the
+/// file's order (all of them, each once), stopping at the sink's first error.
+pub type Produce<'a> =
+    dyn Fn(&mut dyn FnMut(&[f64]) -> io::Result<()>) -> io::Result<()> + Sync + 'a;
+
+/// One cell-data array made piece by piece as it is written ([`write_rectilinear_from`]): the
+/// file is then written without holding its arrays (a raw file holds none of them; with
+/// point data an array is gathered whole while its nodes are averaged, with zlib each block
+/// is held compressed until the header, which needs the sizes, is written).
+#[derive(Clone, Copy)]
+pub struct CellSource<'a> {
+    /// Array name as ParaView shows it.
+    pub name: &'a str,
+    /// Number of components per cell (≥ 1).
+    pub components: usize,
+    /// Its values, cell-major, in pieces ([`Produce`]).
+    pub values: &'a Produce<'a>,
+}
+
+/// Values encoded per piece: at most this many at a time go through a stack buffer.
+const PIECE: usize = 512;
+
+/// The little-endian bytes of `values`, as `Float64` or, if `float32`, rounded to `Float32`,
+/// handed to `out` a stack buffer at a time.
+fn encode_values(
+    values: &[f64],
+    float32: bool,
+    out: &mut dyn FnMut(&[u8]) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut bytes = [0u8; 8 * PIECE];
+    for piece in values.chunks(PIECE) {
+        let n = if float32 {
+            for (b, v) in bytes.chunks_exact_mut(4).zip(piece) {
+                b.copy_from_slice(&(*v as f32).to_le_bytes());
+            }
+            4 * piece.len()
         } else {
-            payload.extend_from_slice(&v.to_le_bytes());
-        }
+            for (b, v) in bytes.chunks_exact_mut(8).zip(piece) {
+                b.copy_from_slice(&v.to_le_bytes());
+            }
+            8 * piece.len()
+        };
+        out(&bytes[..n])?;
     }
-    match compression {
-        VtkCompression::None => {
-            let mut out = Vec::with_capacity(8 + payload.len());
-            out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-            out.extend_from_slice(&payload);
-            Ok(out)
-        }
-        VtkCompression::Zlib => {
-            let blocks: Vec<&[u8]> = payload.chunks(ZLIB_BLOCK).collect();
-            let last = payload.len() % ZLIB_BLOCK;
-            let mut compressed = Vec::with_capacity(blocks.len());
-            for b in &blocks {
-                let mut z =
-                    flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
-                z.write_all(b)?;
-                compressed.push(z.finish()?);
+    Ok(())
+}
+
+/// A zlib-compressed appended block (see the module docs) of the payload `produce` hands over,
+/// its values as `Float64` or, if `float32`, `Float32`: the payload cut into [`ZLIB_BLOCK`]
+/// bytes as it comes, each deflated on its own.
+fn compress_block(produce: &Produce, float32: bool) -> io::Result<Vec<u8>> {
+    let mut raw: Vec<u8> = Vec::with_capacity(ZLIB_BLOCK);
+    let mut compressed: Vec<Vec<u8>> = Vec::new();
+    let deflate = |b: &[u8]| -> io::Result<Vec<u8>> {
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        z.write_all(b)?;
+        z.finish()
+    };
+    produce(&mut |values| {
+        encode_values(values, float32, &mut |mut bytes| {
+            while !bytes.is_empty() {
+                let take = bytes.len().min(ZLIB_BLOCK - raw.len());
+                raw.extend_from_slice(&bytes[..take]);
+                bytes = &bytes[take..];
+                if raw.len() == ZLIB_BLOCK {
+                    compressed.push(deflate(&raw)?);
+                    raw.clear();
+                }
             }
-            let mut out = Vec::new();
-            for h in [blocks.len(), ZLIB_BLOCK, last] {
-                out.extend_from_slice(&(h as u64).to_le_bytes());
-            }
-            for c in &compressed {
-                out.extend_from_slice(&(c.len() as u64).to_le_bytes());
-            }
-            for c in &compressed {
-                out.extend_from_slice(c);
-            }
-            Ok(out)
-        }
+            Ok(())
+        })
+    })?;
+    let last = raw.len();
+    if last > 0 {
+        compressed.push(deflate(&raw)?);
     }
+    let mut out = Vec::new();
+    for h in [compressed.len(), ZLIB_BLOCK, last] {
+        out.extend_from_slice(&(h as u64).to_le_bytes());
+    }
+    for c in &compressed {
+        out.extend_from_slice(&(c.len() as u64).to_le_bytes());
+    }
+    for c in &compressed {
+        out.extend_from_slice(c);
+    }
+    Ok(out)
 }
 
 /// A VTK XML ASCII `String` value: each byte as a number, then the terminating 0.
@@ -262,60 +306,188 @@ pub fn write_rectilinear(
     if !time.is_finite() {
         return Err(invalid(path, format_args!("the time {time} is not finite")));
     }
-    let counts = nodes.each_ref().map(Vec::len);
-    let cells = counts.iter().map(|m| m.saturating_sub(1).max(1)).product();
-    check_arrays(path, arrays, cells)?;
-    check_notes(path, notes)?;
-    let time_block = [time];
-    let points: Vec<Vec<f64>> = if format.point_data {
-        arrays
-            .iter()
-            .map(|a| average_to_nodes(counts, a.values, a.components))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let float32 = format.precision == VtkPrecision::Float32;
-    // Blocks in the order they appear in the appended section: (values, as Float32).
-    let mut blocks: Vec<(&[f64], bool)> = Vec::with_capacity(2 * arrays.len() + 5);
-    blocks.push((&time_block, false));
-    blocks.push((&time_block, false));
-    blocks.extend(points.iter().map(|p| (p.as_slice(), float32)));
-    blocks.extend(arrays.iter().map(|a| (a.values, float32)));
-    blocks.extend(nodes.iter().map(|c| (c.as_slice(), false)));
-    let encoded = blocks
+    check_arrays(path, arrays, cell_count(nodes))?;
+    let whole: Vec<Box<Produce>> = arrays
         .iter()
-        .map(|(v, f32)| encode_block(v, *f32, format.compression))
-        .collect::<io::Result<Vec<_>>>()?;
-    let mut offsets = Vec::with_capacity(encoded.len());
-    let mut offset = 0u64;
-    for b in &encoded {
-        offsets.push(offset);
-        offset += b.len() as u64;
-    }
-    let [m0, m1, m2] = counts.map(|m| m.saturating_sub(1));
-    let extent = format!("0 {m0} 0 {m1} 0 {m2}");
-    let h = header(&extent, arrays, format, notes, &offsets);
-    write_atomically(path, |w| {
-        w.write_all(h.as_bytes())?;
-        for b in &encoded {
-            w.write_all(b)?;
-        }
-        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
-    })
+        .map(|a| {
+            let values = a.values;
+            Box::new(move |sink: &mut dyn FnMut(&[f64]) -> io::Result<()>| sink(values))
+                as Box<Produce>
+        })
+        .collect();
+    let sources: Vec<CellSource> = arrays
+        .iter()
+        .zip(&whole)
+        .map(|(a, values)| CellSource {
+            name: a.name,
+            components: a.components,
+            values: &**values,
+        })
+        .collect();
+    write_rectilinear_from(path, nodes, time, &sources, format, notes)
 }
 
-/// The cell arrays' names (non-empty, each once), component counts (≥ 1) and lengths (`cells`
-/// tuples), or the `InvalidInput` error naming the file and the array.
-fn check_arrays(path: &Path, arrays: &[CellArray], cells: usize) -> io::Result<()> {
-    for (k, a) in arrays.iter().enumerate() {
+/// The cells of a rectilinear mesh of `nodes` (one layer along a flat axis).
+fn cell_count(nodes: &[Vec<f64>; 3]) -> usize {
+    nodes
+        .iter()
+        .map(|m| m.len().saturating_sub(1).max(1))
+        .product()
+}
+
+/// One appended block of a `.vtr` file, in the order of the appended section.
+#[derive(Clone, Copy)]
+enum Block {
+    /// The time (`TIME`, then `TimeValue`).
+    Time,
+    /// A cell array averaged to the nodes (point data).
+    Points(usize),
+    /// A cell array.
+    Cells(usize),
+    /// The node coordinates along an axis.
+    Axis(usize),
+}
+
+/// [`write_rectilinear`] of arrays made as they are written ([`CellSource`]): the same file,
+/// byte for byte, without the arrays or their encoded blocks in memory (raw data streams
+/// through the file's buffer). A source that hands over a number of values other than
+/// `cells × components` fails the write with `InvalidInput` and leaves no file.
+pub fn write_rectilinear_from(
+    path: &Path,
+    nodes: &[Vec<f64>; 3],
+    time: f64,
+    sources: &[CellSource],
+    format: &VtrFormat,
+    notes: &[(&str, &str)],
+) -> io::Result<()> {
+    if !time.is_finite() {
+        return Err(invalid(path, format_args!("the time {time} is not finite")));
+    }
+    check_sources(path, sources)?;
+    check_notes(path, notes)?;
+    let counts = nodes.each_ref().map(Vec::len);
+    let cells = cell_count(nodes);
+    let float32 = format.precision == VtkPrecision::Float32;
+    let arrays = 0..sources.len();
+    let point_blocks = arrays.clone().filter(|_| format.point_data);
+    let blocks: Vec<Block> = [Block::Time, Block::Time]
+        .into_iter()
+        .chain(point_blocks.map(Block::Points))
+        .chain(arrays.map(Block::Cells))
+        .chain((0..3).map(Block::Axis))
+        .collect();
+    // Each block's values handed to `sink` in pieces, and whether they go as Float32.
+    let produce = |b: Block, sink: &mut dyn FnMut(&[f64]) -> io::Result<()>| match b {
+        Block::Time => sink(&[time]),
+        Block::Axis(a) => sink(&nodes[a]),
+        Block::Cells(k) => counted(path, &sources[k], cells, sink),
+        Block::Points(k) => {
+            let s = &sources[k];
+            let mut whole = Vec::with_capacity(cells * s.components);
+            counted(path, s, cells, &mut |v| {
+                whole.extend_from_slice(v);
+                Ok(())
+            })?;
+            sink(&average_to_nodes(counts, &whole, s.components))
+        }
+    };
+    let single = |b: Block| float32 && matches!(b, Block::Points(_) | Block::Cells(_));
+    let [m0, m1, m2] = counts.map(|m| m.saturating_sub(1));
+    let extent = format!("0 {m0} 0 {m1} 0 {m2}");
+    let tail = b"\n  </AppendedData>\n</VTKFile>\n";
+    match format.compression {
+        VtkCompression::None => {
+            let payload = |b: Block| {
+                let values = match b {
+                    Block::Time => 1,
+                    Block::Axis(a) => counts[a],
+                    Block::Cells(k) => cells * sources[k].components,
+                    Block::Points(k) => counts.iter().product::<usize>() * sources[k].components,
+                };
+                (if single(b) { 4 } else { 8 }) * values
+            };
+            let offsets: Vec<u64> = blocks
+                .iter()
+                .scan(0u64, |at, &b| {
+                    let here = *at;
+                    *at += 8 + payload(b) as u64;
+                    Some(here)
+                })
+                .collect();
+            let h = header(&extent, sources, format, notes, &offsets);
+            write_atomically(path, |w| {
+                w.write_all(h.as_bytes())?;
+                for &b in &blocks {
+                    w.write_all(&(payload(b) as u64).to_le_bytes())?;
+                    produce(b, &mut |v| {
+                        encode_values(v, single(b), &mut |x| w.write_all(x))
+                    })?;
+                }
+                w.write_all(tail)
+            })
+        }
+        VtkCompression::Zlib => {
+            let encoded = blocks
+                .iter()
+                .map(|&b| compress_block(&|sink| produce(b, sink), single(b)))
+                .collect::<io::Result<Vec<_>>>()?;
+            let offsets: Vec<u64> = encoded
+                .iter()
+                .scan(0u64, |at, e| {
+                    let here = *at;
+                    *at += e.len() as u64;
+                    Some(here)
+                })
+                .collect();
+            let h = header(&extent, sources, format, notes, &offsets);
+            write_atomically(path, |w| {
+                w.write_all(h.as_bytes())?;
+                for e in &encoded {
+                    w.write_all(e)?;
+                }
+                w.write_all(tail)
+            })
+        }
+    }
+}
+
+/// The values of `source` handed to `sink`, failing with `InvalidInput` if they are not
+/// `cells × components`.
+fn counted(
+    path: &Path,
+    source: &CellSource,
+    cells: usize,
+    sink: &mut dyn FnMut(&[f64]) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut n = 0;
+    (source.values)(&mut |v| {
+        n += v.len();
+        sink(v)
+    })?;
+    let expected = cells * source.components;
+    if n != expected {
+        return Err(invalid(
+            path,
+            format_args!(
+                "cell array `{}` has {n} values, expected {cells} cells × {} components = {expected}",
+                source.name, source.components
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The sources' names (non-empty, each once) and component counts (≥ 1), or the
+/// `InvalidInput` error naming the file and the array.
+fn check_sources(path: &Path, sources: &[CellSource]) -> io::Result<()> {
+    for (k, a) in sources.iter().enumerate() {
         if a.name.is_empty() {
             return Err(invalid(
                 path,
                 format_args!("cell array #{k} has an empty name"),
             ));
         }
-        if arrays[..k].iter().any(|b| b.name == a.name) {
+        if sources[..k].iter().any(|b| b.name == a.name) {
             return Err(invalid(
                 path,
                 format_args!("cell array name `{}` is used twice", a.name),
@@ -327,6 +499,14 @@ fn check_arrays(path: &Path, arrays: &[CellArray], cells: usize) -> io::Result<(
                 format_args!("cell array `{}` has 0 components", a.name),
             ));
         }
+    }
+    Ok(())
+}
+
+/// The cell arrays' lengths (`cells` tuples), or the `InvalidInput` error naming the file and
+/// the array (their names and component counts: [`check_sources`]).
+fn check_arrays(path: &Path, arrays: &[CellArray], cells: usize) -> io::Result<()> {
+    for a in arrays {
         if a.values.len() != cells * a.components {
             return Err(invalid(
                 path,
@@ -367,7 +547,7 @@ fn check_notes(path: &Path, notes: &[(&str, &str)]) -> io::Result<()> {
 /// `offsets` (in that order).
 fn header(
     extent: &str,
-    arrays: &[CellArray],
+    arrays: &[CellSource],
     format: &VtrFormat,
     notes: &[(&str, &str)],
     offsets: &[u64],
@@ -532,6 +712,7 @@ impl PvdCollection {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::atomic::temporary_path;
     use std::fs;
 
     fn scratch(name: &str) -> PathBuf {
@@ -725,6 +906,100 @@ mod tests {
             assert!(e.to_string().contains("bad.vtr"), "{e}");
         }
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Arrays handed over in uneven pieces give the file the whole arrays give, byte for byte,
+    /// in every format; a source short of values fails and leaves no file.
+    #[test]
+    fn arrays_in_pieces_write_the_same_file() {
+        let dir = scratch("pieces");
+        let grid = Grid::new_3d([5, 4, 3], (0.0, 1.0), (0.0, 0.8), (-0.3, 0.3));
+        let n = grid.cells();
+        let (p, u, _) = sample(&grid);
+        // Longer than a zlib block, so that the compressed form has several.
+        let big = Grid::new_3d([40, 30, 20], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let (q, _, _) = sample(&big);
+        for (grid, arrays) in [
+            (
+                &grid,
+                vec![
+                    CellArray {
+                        name: "p",
+                        components: 1,
+                        values: &p[..n],
+                    },
+                    CellArray {
+                        name: "velocity",
+                        components: 3,
+                        values: &u[..3 * n],
+                    },
+                ],
+            ),
+            (
+                &big,
+                vec![CellArray {
+                    name: "q",
+                    components: 1,
+                    values: &q,
+                }],
+            ),
+        ] {
+            let pieces: Vec<Box<Produce>> = arrays
+                .iter()
+                .map(|a| {
+                    let v = a.values;
+                    Box::new(move |sink: &mut dyn FnMut(&[f64]) -> io::Result<()>| {
+                        let (mut at, mut len) = (0, 1);
+                        while at < v.len() {
+                            let end = (at + len).min(v.len());
+                            sink(&v[at..end])?;
+                            (at, len) = (end, 2 * len + 1);
+                        }
+                        Ok(())
+                    }) as Box<Produce>
+                })
+                .collect();
+            let sources: Vec<CellSource> = arrays
+                .iter()
+                .zip(&pieces)
+                .map(|(a, v)| CellSource {
+                    name: a.name,
+                    components: a.components,
+                    values: &**v,
+                })
+                .collect();
+            for precision in [VtkPrecision::Float64, VtkPrecision::Float32] {
+                for compression in [VtkCompression::None, VtkCompression::Zlib] {
+                    for point_data in [false, true] {
+                        let format = VtrFormat {
+                            precision,
+                            compression,
+                            point_data,
+                        };
+                        let (a, b) = (dir.join("a.vtr"), dir.join("b.vtr"));
+                        let notes = [("units", "SI")];
+                        write_vtr_with(&a, grid, 0.5, &arrays, &format, &notes).unwrap();
+                        let nodes = node_coordinates(grid);
+                        write_rectilinear_from(&b, &nodes, 0.5, &sources, &format, &notes).unwrap();
+                        assert!(fs::read(&a).unwrap() == fs::read(&b).unwrap(), "{format:?}");
+                    }
+                }
+            }
+        }
+        let short = |sink: &mut dyn FnMut(&[f64]) -> io::Result<()>| sink(&p[..n - 1]);
+        let source = CellSource {
+            name: "p",
+            components: 1,
+            values: &short,
+        };
+        let path = dir.join("short.vtr");
+        let nodes = node_coordinates(&grid);
+        let e = write_rectilinear_from(&path, &nodes, 0.0, &[source], &VtrFormat::default(), &[])
+            .unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("has 59 values, expected 60"), "{e}");
+        assert!(!path.exists() && !temporary_path(&path).unwrap().exists());
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -18,7 +18,7 @@ pub(super) fn make_room(
     law: &Option<LawIdentity>,
     out: &mut Outputs,
 ) -> Result<(), EfsiError> {
-    let bytes = checkpoint::encode(&checkpoint_of(sim, law, out.state(), sim.snapshot())).len();
+    let bytes = checkpoint::encoded_len(&checkpoint_of(sim, law, out.state(), sim.snapshot()));
     let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
     let needed = Room::needed(bytes as u64, record);
     let room = Room::keep(&out.dir, needed).map_err(|e| {

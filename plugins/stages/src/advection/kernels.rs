@@ -34,12 +34,14 @@ use std::ops::Range;
 /// The location of velocity component `c` (the `c`-faces).
 pub(crate) const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 
-/// Full-grid work arrays of a step on a grid of `dims` axes, per component: the momentum and
-/// mass tendencies, the start-of-step velocity and the current stage's face masses (4), and
-/// the mass and momentum fluxes along each axis beyond the second, shared by the components
-/// (2 per axis): `6·dims − 4` (8 in two dimensions, 14 in three).
+/// Full-grid work arrays of a step on a grid of `dims` axes: per component the momentum
+/// tendency, the start-of-step velocity and the current stage's face masses (3); one mass
+/// tendency, which each component uses in turn (its masses and momenta advance as soon as its
+/// own tendencies are known: no other component reads its masses); and the mass and momentum
+/// fluxes along each axis beyond the second, shared by the components (2 per axis):
+/// `5·dims − 3` (7 in two dimensions, 12 in three).
 pub const fn work(dims: usize) -> usize {
-    6 * dims - 4
+    5 * dims - 3
 }
 
 /// A shift by `k` along axis `a`.
@@ -317,9 +319,11 @@ impl Balance<'_> {
 
 /// The velocity components of a step and the arrays it works in.
 pub(crate) struct Work<'a> {
-    /// Momentum and mass tendencies per component (compact on its control volumes).
+    /// Momentum tendencies per component (compact on its control volumes), then the momenta
+    /// of the Euler stage ([`Euler::advance_mass`]).
     pub(crate) qt: [&'a mut [f64]; 3],
-    pub(crate) mt: [&'a mut [f64]; 3],
+    /// The mass tendency of the component at hand (compact on its control volumes).
+    pub(crate) mt: &'a mut [f64],
     /// Start-of-step velocity per component.
     pub(crate) x0: [&'a mut [f64]; 3],
     /// The current stage's face masses per component.
@@ -344,7 +348,7 @@ impl<'a> Work<'a> {
         let m = std::array::from_fn(|k| take(dims, k));
         let x0 = std::array::from_fn(|k| take(dims, k));
         let qt = std::array::from_fn(|k| take(dims, k));
-        let mt = std::array::from_fn(|k| take(dims, k));
+        let mt = take(1, 0);
         let fm = std::array::from_fn(|k| take(dims - 2, k));
         let fq = std::array::from_fn(|k| take(dims - 2, k));
         Work {
@@ -358,29 +362,28 @@ impl<'a> Work<'a> {
     }
 }
 
-/// The momentum and mass tendencies of every component on its control volumes `cv[c]`, for
-/// the velocity `vel` and the face masses `work.m` (ghosts filled).
-pub(crate) fn tendencies(grid: &Grid, cv: &[Region], vel: &[&Field], work: &mut Work) {
+/// The momentum and mass tendencies of component `c` on its control volumes `cv` into
+/// `work.qt[c]` and `work.mt`, for the velocity `vel` and the face masses `work.m[c]` (ghosts
+/// filled).
+pub(crate) fn tendency(grid: &Grid, cv: Region, c: usize, vel: &[&Field], work: &mut Work) {
     let dims = vel.len();
     let Work {
         qt, mt, m, fm, fq, ..
     } = work;
-    for c in 0..dims {
-        for a in 2..dims {
-            face_fluxes(cv[c], a, c, vel, &*m[c], &mut *fm[a - 2], &mut *fq[a - 2]);
-        }
-        let further = [(&*fm[0], &*fq[0])];
-        balance(
-            grid,
-            cv[c],
-            c,
-            vel,
-            &*m[c],
-            &further[..dims - 2],
-            &mut *qt[c],
-            &mut *mt[c],
-        );
+    for a in 2..dims {
+        face_fluxes(cv, a, c, vel, &*m[c], &mut *fm[a - 2], &mut *fq[a - 2]);
     }
+    let further = [(&*fm[0], &*fq[0])];
+    balance(
+        grid,
+        cv,
+        c,
+        vel,
+        &*m[c],
+        &further[..dims - 2],
+        &mut *qt[c],
+        mt,
+    );
 }
 
 /// One Euler stage of SSP-RK2 on the control volumes of one component ([`Euler::update`]).
@@ -394,28 +397,37 @@ pub(crate) struct Euler<'a> {
 }
 
 impl Euler<'_> {
-    /// The velocity `x` and face mass `m1` of the faces of `region` (normal to axis `a`) after
-    /// an Euler stage from the current values with the tendencies `q` (momentum) and `dm`
-    /// (mass; both compact on `region`); `x0` is the start-of-step velocity and `y` the
-    /// velocity this stage left at the previous step (empty without history). Lines in
-    /// parallel, each writing its own faces.
-    pub(crate) fn update(
+    /// The face mass `m1` (in the fields' storage) and momentum of the faces of `region`
+    /// (normal to axis `a`) after an Euler stage from the current values with the tendencies
+    /// `q` (momentum) and `dm` (mass; both compact on `region`): the momentum goes where its
+    /// tendency was, in `q`, and `dm` is spent. `x` is the current velocity, `x0` the
+    /// start-of-step one and `y` the velocity this stage left at the previous step (empty
+    /// without history). The velocity itself follows in [`velocity`](Self::velocity), once no
+    /// component's tendencies read it any more. Lines in parallel, each writing its own faces.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn advance_mass(
         &self,
         region: Region,
         a: usize,
-        x: &mut Field,
+        x: &Field,
         m1: &mut [f64],
-        [x0, y, q, dm]: [&[f64]; 4],
+        [x0, y]: [&[f64]; 2],
+        q: &mut [f64],
+        dm: &mut [f64],
     ) {
+        if region.is_empty() {
+            return;
+        }
         let (dt, lag, second) = (self.dt, self.lag, self.second);
         let below = minus(a);
-        let m1 = region.storage(m1);
-        region.for_each((x, m1), |l, (xr, mr)| {
-            let n = l.len;
-            let (x0, q, dm) = (
+        let (n, size) = (region.len(0), region.size());
+        let mr = &*m1;
+        par::rows((&mut q[..size], &mut dm[..size]), n).for_each(|j, (q, dm)| {
+            let l = region.line(j);
+            let (x0, xr, mr) = (
                 &l.on(x0, [0; 3])[..n],
-                &q[l.n * n..][..n],
-                &dm[l.n * n..][..n],
+                &x.at(&l, [0; 3])[..n],
+                &l.on(mr, [0; 3])[..n],
             );
             let y = if lag != 0.0 {
                 &l.on(y, [0; 3])[..n]
@@ -423,7 +435,7 @@ impl Euler<'_> {
                 &[]
             };
             let (rho_lo, rho_hi) = (&self.rho.at(&l, below)[..n], &self.rho.at(&l, [0; 3])[..n]);
-            let (xr, mr) = (&mut xr[..n], &mut mr[..n]);
+            let (q, dm) = (&mut q[..n], &mut dm[..n]);
             for c in 0..n {
                 // The other stages' increment added to the first stage's velocity.
                 let other = if lag != 0.0 {
@@ -439,17 +451,51 @@ impl Euler<'_> {
                 } else {
                     mr[c] * xr[c] + dt * q[c]
                 };
-                let (m_new, q_new) = if !second {
+                (dm[c], q[c]) = if !second {
                     (m_e, q_e)
                 } else {
                     // The start-of-step face mass, as `face_masses` gave it.
                     let a = face_density(rho_lo[c], rho_hi[c]);
                     (0.5 * (a + m_e), 0.5 * (a * x0[c] + q_e))
                 };
-                mr[c] = m_new;
-                xr[c] = q_new / m_new;
+            }
+        });
+        // The new masses into their faces.
+        let dm = &*dm;
+        region.for_each(region.storage(m1), |l, mr| {
+            mr[..l.len].copy_from_slice(&dm[l.n * l.len..][..l.len]);
+        });
+    }
+
+    /// The velocity `x` of the faces of `region` (normal to axis `a`) from their momentum `q`
+    /// (compact) and mass `m1` after [`advance_mass`](Self::advance_mass): `q/m`, plus in the
+    /// first stage the other stages' increment (`x0` and `y` as there). Lines in parallel.
+    pub(crate) fn velocity(
+        &self,
+        region: Region,
+        x: &mut Field,
+        m1: &[f64],
+        [x0, y]: [&[f64]; 2],
+        q: &[f64],
+    ) {
+        let (lag, second) = (self.lag, self.second);
+        region.for_each(x, |l, xr| {
+            let n = l.len;
+            let (q, mr, x0) = (
+                &q[l.n * n..][..n],
+                &l.on(m1, [0; 3])[..n],
+                &l.on(x0, [0; 3])[..n],
+            );
+            let y = if lag != 0.0 {
+                &l.on(y, [0; 3])[..n]
+            } else {
+                &[]
+            };
+            let xr = &mut xr[..n];
+            for c in 0..n {
+                xr[c] = q[c] / mr[c];
                 if !second && lag != 0.0 {
-                    xr[c] += other;
+                    xr[c] += lag * (x0[c] - y[c]);
                 }
             }
         });

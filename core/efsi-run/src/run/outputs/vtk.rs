@@ -6,7 +6,9 @@
 use super::{RunAt, Schedule, Writer};
 use crate::checkpoint::OutputState;
 use crate::output::spec::VtkOptions;
-use crate::output::vtk::{CellArray, PvdCollection, VtrFormat, write_vtr_with};
+use crate::output::vtk::{
+    CellSource, PvdCollection, VtrFormat, node_coordinates, write_rectilinear_from,
+};
 use efsi_core::error::EfsiError;
 use efsi_core::state::State;
 use std::path::{Path, PathBuf};
@@ -48,13 +50,14 @@ impl VtkSeries {
         let (grid, name) = (&run.sim.grid, &run.sim.scene.name);
         let options = &self.options;
         let outputs = run.sim.pipeline().outputs();
-        let data = crate::output::fields::arrays(grid, state, options, outputs);
-        let arrays: Vec<CellArray> = data
+        // The arrays made line by line as the file is written: none is held whole.
+        let data = crate::output::fields::producers(grid, state, options, outputs);
+        let sources: Vec<CellSource> = data
             .iter()
-            .map(|(name, components, values)| CellArray {
+            .map(|(name, components, values)| CellSource {
                 name,
                 components: *components,
-                values,
+                values: &**values,
             })
             .collect();
         let format = VtrFormat {
@@ -65,8 +68,15 @@ impl VtkSeries {
         let notes = crate::output::fields::notes(grid.geometry);
         let file = format!("{name}_{:06}{suffix}.vtr", state.step);
         let path = self.dir.join("fields").join(&file);
-        write_vtr_with(&path, grid, state.t, &arrays, &format, &notes)
-            .map_err(|e| EfsiError::io(&path, e))?;
+        write_rectilinear_from(
+            &path,
+            &node_coordinates(grid),
+            state.t,
+            &sources,
+            &format,
+            &notes,
+        )
+        .map_err(|e| EfsiError::io(&path, e))?;
         let rel = format!("fields/{file}");
         self.pvd
             .add(state.t, &rel)
