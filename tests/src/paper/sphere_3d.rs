@@ -51,7 +51,9 @@ pub enum Geometry {
 
 /// The three metrics compared: name, unit scale and format of the table, and their value.
 const METRICS: [(&str, f64, &str, fn(&Impact) -> f64); 3] = [
-    ("restitution", 1.0, "4", |i| i.rebound_speed / i.impact_speed),
+    ("restitution", 1.0, "4", |i| {
+        i.rebound_speed / i.impact_speed
+    }),
     ("contact time (ms)", 1e3, "3", |i| i.contact_time),
     ("max compression (mm)", 1e3, "3", |i| i.compression),
 ];
