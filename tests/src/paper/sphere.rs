@@ -1,6 +1,6 @@
 //! Seed §5.1: the silicone sphere dropped on a rigid substrate (`cases/sphere_impact*.ron`),
 //! against free fall before contact and Hertz's contact estimates
-//! (`tests/references/hertz_sphere_impact/`). The measurement of a run ([`analyse`]) serves the
+//! (`tests/references/hertz_sphere_impact/`). The measurement of a run (`analyse`) serves the
 //! axisymmetric sphere and the three-dimensional one of [`super::sphere_3d`] alike.
 
 use super::case::{

@@ -3,15 +3,15 @@
 //! vertical) against the axisymmetric sphere (`cases/sphere_impact.ron`) at the same cells per
 //! radius, every axis.
 //!
-//! Both runs are measured by the axisymmetric case's [`analyse`]: restitution (the rebound
-//! speed over the impact speed), contact time (the force on the substrate above 2 % of its
-//! peak) and maximum compression (2R minus the least height along the axis — in three
-//! dimensions the column of cells at the corner x = z = 0, the axis). The force of the quarter
-//! domain is ×4 the whole sphere's, the axisymmetric one's ×2π (per radian); neither factor
-//! enters the three metrics. What differs between the two runs is the discretisation of the
-//! same body (a sphere on a Cartesian grid against a disk revolved about the axis: 3-D edge
-//! fractions and the six-component B̃ against the hoop component) and the side walls (a square
-//! 45 mm from the axis against a cylinder of that radius).
+//! Both runs are measured by the axisymmetric case's `analyse` (`super::sphere`): restitution
+//! (the rebound speed over the impact speed), contact time (the force on the substrate above
+//! 2 % of its peak) and maximum compression (2R minus the least height along the axis — in
+//! three dimensions the column of cells at the corner x = z = 0, the axis). The whole sphere's
+//! force is 4 times the quarter domain's, 2π times the axisymmetric one's (per radian); neither
+//! factor enters the three metrics. What differs between the two runs is the discretisation
+//! of the same body (a sphere on a Cartesian grid against a disk revolved about the axis: 3-D
+//! edge fractions and the six-component B̃ against the hoop component) and the side walls (a
+//! square 45 mm from the axis against a cylinder of that radius).
 //!
 //! The full version runs the scenes as they are (release 38.1 mm above the substrate, 60 ms)
 //! at 10, 15 and 20 cells per radius; the quick one at 8 cells per radius releases the sphere
