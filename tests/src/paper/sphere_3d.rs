@@ -49,8 +49,14 @@ pub enum Geometry {
     ThreeD,
 }
 
-/// The three metrics compared: name, unit scale and format of the table, and their value.
-const METRICS: [(&str, f64, &str, fn(&Impact) -> f64); 3] = [
+/// A metric compared: its name, the scale and format of its value in the table, and its value.
+type Metric = (&'static str, f64, &'static str, fn(&Impact) -> f64);
+
+/// Each metric's axisymmetric value, 3-D value and relative difference at one resolution.
+type Row = [(f64, f64, f64); 3];
+
+/// The three metrics compared.
+const METRICS: [Metric; 3] = [
     ("restitution", 1.0, "4", |i| {
         i.rebound_speed / i.impact_speed
     }),
@@ -132,7 +138,7 @@ impl Case for SphereImpact3d {
                 .map(|(_, i)| i)
         };
         // Per resolution with both runs: each metric's (axisymmetric, 3-D, relative difference).
-        let mut table: Vec<(usize, [(f64, f64, f64); 3])> = Vec::new();
+        let mut table: Vec<(usize, Row)> = Vec::new();
         for ((g, c), three) in &done.measured {
             if *g != Geometry::ThreeD {
                 continue;
