@@ -1,8 +1,8 @@
 """The efsi FMUs (FMI 2.0 and FMI 3.0 Co-Simulation) in fmpy and in Ecos.
 
 `cargo xtask test` builds them first (`cargo xtask fmu …`) into `$EFSI_FMU_DIR` (the sphere
-impact, the oscillating Couette flow, the disk in a cavity, the 3-D drop); the `efsi` binary is
-`$EFSI_BIN`.
+impact, the oscillating Couette flow, the disk in a cavity, the 3-D drop, the 3-D elastic
+sphere); the `efsi` binary is `$EFSI_BIN`.
 The sphere runs here mostly on a coarse grid (14 x 28 cells, 6 cells per radius) with the
 sphere released 6 mm above the substrate, so that it hits within 5 ms; communication steps are
 powers of two (2^-10 s), so that the times fmpy computes and efsi's output times are the same
@@ -806,4 +806,34 @@ def test_a_three_dimensional_drop_fmu_equals_efsi_run(fmu, ecos, tmp_path):
     assert list(r["steps"]) == [4 * k for k in range(n + 1)]
     assert r["solid_v"][-1] < -0.1  # the drop falls
     in_ecos = ecos_scene(ecos, path, h, n, grid, lambda k: {}, outputs)
+    assert in_ecos == [tuple(r[o][k] for o in outputs) for k in range(1, n + 1)]
+
+
+@pytest.mark.parametrize("fmu", ["sphere_impact_3d.fmu", "sphere_impact_3d_fmi3.fmu"])
+def test_a_three_dimensional_elastic_sphere_fmu_equals_efsi_run(fmu, ecos, tmp_path):
+    """`cargo xtask fmu cases/sphere_impact_3d.ron --parameter grid.nx --parameter grid.ny
+    --parameter grid.nz --parameter solid.shape.center[1]`: the 3-D neo-Hookean sphere (a
+    quarter domain, two symmetry planes) at 6 cells per radius, released 5.8 mm above the
+    substrate, through the impact: every probe column bit for bit `efsi run --set` of the same
+    scene with its probes at the communication points, in fmpy and in Ecos."""
+    h, n = 2.0**-10, 10  # through the impact (contact from ≈ 5 ms)
+    path = FMU_DIR / fmu
+    params = {"grid.nx": 14, "grid.ny": 28, "grid.nz": 14, "solid.shape.center[1]": 0.025}
+    outputs = ["solid_x", "solid_y", "solid_z", "solid_u", "solid_v", "solid_w",
+               "solid_volume", "kinetic_energy", "contact_force", "contact_radius",
+               "solid_bottom", "solid_top", "solid_pieces", "solid_largest_piece", "max_speed"]
+    r = simulate_fmu(path, stop_time=n * h, output_interval=h, start_values=params,
+                     output=outputs + ["steps"])
+    p = efsi_run_case(tmp_path, "sphere_impact_3d",
+                      [("probe_every: 0.0002,", f"probe_every: {h!r},"),
+                       ("end: 0.06,", f"end: {n * h!r},"),
+                       ("vtk_every: 0.005,", "")],
+                      sets=[f"{k}={v}" for k, v in params.items()])
+    assert list(p) == ["t"] + outputs
+    assert np.array_equal(r["time"], p["t"])
+    for name in outputs:
+        assert np.array_equal(r[name], p[name]), name
+    assert np.all(np.diff(r["steps"]) > 0)
+    assert r["contact_force"].max() > 0.0  # the run reaches the impact
+    in_ecos = ecos_scene(ecos, path, h, n, params, lambda k: {}, outputs)
     assert in_ecos == [tuple(r[o][k] for o in outputs) for k in range(1, n + 1)]

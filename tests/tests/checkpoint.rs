@@ -91,6 +91,31 @@ const DROP: &str = r#"Scene(
 )
 "#;
 
+/// A neo-Hookean sphere thrown at the floor of a quarter box with two symmetry planes: the
+/// elastic stages in 3-D (B̃ of six components, the implicit elastic step), the solid's initial
+/// velocity and the contact probes.
+const SPHERE: &str = r#"Scene(
+    name: "sphere",
+    geometry: Cartesian3D,
+    domain: (x: (0.0, 1.0), y: (0.0, 1.5), z: (0.0, 1.0)),
+    grid: (nx: 6, ny: 9, nz: 6),
+    time: (end: 0.15, cfl: 0.4, dt_max: 0.005),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -9.81, 0.0),
+    solid: (shape: Sphere(center: (0.0, 0.55, 0.0), radius: 0.4), density: 2.0,
+            velocity: (0.0, -2.0, 0.0),
+            law: (name: "neo_hookean", parameters: {"G": 50.0})),
+    boundaries: (x_min: Symmetry, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip,
+                 z_min: Symmetry, z_max: NoSlip),
+    output: (
+        vtk_every: 0.05,
+        probe_every: 0.01,
+        probes: [SolidVolume, SolidCentroid, SolidVelocity, KineticEnergy,
+                 ContactForce(wall: YMin), SolidPieces],
+    ),
+)
+"#;
+
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("efsi-ckpt-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -230,6 +255,11 @@ fn a_resumed_3d_cavity_run_is_bit_identical_to_an_uninterrupted_one() {
 #[test]
 fn a_resumed_3d_drop_run_is_bit_identical_to_an_uninterrupted_one() {
     check_resumed_run("drop", DROP, 13, 32);
+}
+
+#[test]
+fn a_resumed_3d_elastic_run_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("sphere", SPHERE, 17, 30);
 }
 
 #[test]

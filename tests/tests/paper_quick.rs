@@ -57,6 +57,11 @@ fn sphere_impact_quick() {
 }
 
 #[test]
+fn sphere_impact_3d_quick() {
+    quick("sphere_impact_3d");
+}
+
+#[test]
 fn soft_wall_cavity_quick() {
     quick("soft_wall_cavity");
 }

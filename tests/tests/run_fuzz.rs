@@ -178,7 +178,7 @@ fn solid() -> BoxedStrategy<Solid> {
             shape,
             density,
             viscosity: None,
-            velocity,
+            velocity: velocity.map(Into::into),
             law: g.map(|g| LawSpec {
                 name: "neo_hookean".into(),
                 parameters: [("G".to_string(), g)].into_iter().collect(),
@@ -256,7 +256,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 };
                 let mut solid = solid;
                 if axi && let Some(s) = &mut solid {
-                    s.velocity = s.velocity.map(|v| (0.0, v.1));
+                    s.velocity = s.velocity.map(|v| (0.0, v.1).into());
                 }
                 Scene {
                     name,

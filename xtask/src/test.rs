@@ -66,9 +66,10 @@ pub(crate) fn test() -> Result<(), String> {
     let mut c = cargo();
     c.args(["build", "--quiet", "-p", "efsi", "--profile", "test"]);
     run(c, "build efsi for the Python tests")?;
-    // The sphere impact, and three scenes packaged as they are: the oscillating Couette flow
+    // The sphere impact, and four scenes packaged as they are: the oscillating Couette flow
     // with the wall's speed amplitude as a parameter, the disk in a cavity with the lid's speed
-    // as an input, the 3-D drop with its grid as parameters.
+    // as an input, the 3-D drop with its grid as parameters, the 3-D elastic sphere with its
+    // grid and height as parameters.
     let [fmu2, _] = crate::fmu::fmu(&[])?;
     let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     crate::fmu::fmu(&strings(&[
@@ -91,6 +92,17 @@ pub(crate) fn test() -> Result<(), String> {
         "grid.ny",
         "--parameter",
         "grid.nz",
+    ]))?;
+    crate::fmu::fmu(&strings(&[
+        "cases/sphere_impact_3d.ron",
+        "--parameter",
+        "grid.nx",
+        "--parameter",
+        "grid.ny",
+        "--parameter",
+        "grid.nz",
+        "--parameter",
+        "solid.shape.center[1]",
     ]))?;
     let py = python_env()?;
     install_python_package(&py)?;

@@ -1,7 +1,8 @@
 //! The VOF stage in a Cartesian3D scene: a second fluid runs (the transport, the mixing, the
 //! sides), a planar drop extruded along a periodic z falls as the planar one, an elastic solid
-//! runs with it, and what stays two-dimensional or is not allowed in three is refused by name
-//! (a 2-D shape; an initial solid velocity; an elastic solid fewer than five cells across).
+//! runs with it, a solid starts with its three-component velocity, and what stays
+//! two-dimensional or is not allowed in three is refused by name (a 2-D shape; an initial solid
+//! velocity of two components; an elastic solid fewer than five cells across).
 
 use efsi_core::{Scene, Simulation};
 use efsi_run::probes::solid_moments;
@@ -191,7 +192,7 @@ fn an_elastic_solid_runs_and_what_stays_two_dimensional_is_refused_by_name() {
         format!("(shape: Union([{sphere}, Disk(center: (0.5, 0.5), radius: 0.25)]), density: 2.0)");
     let e = refused(&solid_3d(&mixed));
     assert!(e.contains("solid.shape"), "{e}");
-    // The section's velocity has two components: a 3-D solid starts at rest.
+    // The section's velocity has one component per axis: two are refused in 3-D.
     let moving = format!("(shape: {sphere}, density: 2.0, velocity: (0.0, -1.0))");
     let e = refused(&solid_3d(&moving));
     assert!(e.contains("solid.velocity"), "{e}");
@@ -199,4 +200,42 @@ fn an_elastic_solid_runs_and_what_stays_two_dimensional_is_refused_by_name() {
     let text = solid_3d(&drop).replace("z_max: NoSlip", "z_max: Outflow");
     let e = refused(&text);
     assert!(e.contains("z_max") && e.contains("Outflow"), "{e}");
+}
+
+/// A dense sphere (1000 in 1) given an initial velocity of three components starts with it:
+/// the faces it covers take the solid's velocity, the interface faces the mixture's, so the
+/// solid's mean velocity is the given one less the fluid's share (within 5e-3, every
+/// component in the same ratio); a 2-D velocity in a 3-D scene is refused naming the
+/// components.
+#[test]
+fn a_solid_starts_with_its_three_component_velocity() {
+    let given = [0.2, -0.4, 0.3];
+    let solid = format!(
+        "(shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.25), density: 1000.0, \
+         velocity: ({}, {}, {}))",
+        given[0], given[1], given[2]
+    );
+    let sim = build(&solid_3d(&solid)).unwrap_or_else(|e| panic!("{e}"));
+    let phi = sim.state.phi.as_ref().expect("a solid");
+    let v = solid_moments(&sim.grid, &sim.state, phi).velocity;
+    eprintln!("solid velocity after the initial projection: {v:?}");
+    // Each component 0.3 % short of the given one (the fluid's share of the interface faces'
+    // momentum), all in the same ratio: the direction is the given one.
+    let ratio = [0, 1, 2].map(|a| v[a] / given[a]);
+    for (a, r) in ratio.iter().enumerate() {
+        assert!(
+            (r - 1.0).abs() < 5e-3,
+            "component {a}: {} against {}",
+            v[a],
+            given[a]
+        );
+        assert!((r - ratio[0]).abs() < 1e-9, "{ratio:?}");
+    }
+    let two = "(shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.25), density: 2.0, \
+               velocity: (0.2, -0.4))";
+    let e = refused(&solid_3d(two));
+    assert!(
+        e.contains("solid.velocity") && e.contains("three components"),
+        "{e}"
+    );
 }

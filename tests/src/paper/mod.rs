@@ -16,6 +16,7 @@ pub mod plot;
 pub mod shear_rectangle;
 pub mod soft_wall;
 pub mod sphere;
+pub mod sphere_3d;
 pub mod stability;
 pub mod vof_transport_3d;
 
@@ -213,6 +214,7 @@ const fn entry<C: case::Case>() -> Entry {
 /// Every case, in report order.
 pub const CASES: &[Entry] = &[
     entry::<sphere::SphereImpact>(),
+    entry::<sphere_3d::SphereImpact3d>(),
     entry::<soft_wall::SoftWall>(),
     entry::<disk_cavity::DiskCavity>(),
     entry::<oscillating_disk::OscillatingDisk>(),

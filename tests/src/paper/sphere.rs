@@ -1,26 +1,33 @@
 //! Seed §5.1: the silicone sphere dropped on a rigid substrate (`cases/sphere_impact*.ron`),
 //! against free fall before contact and Hertz's contact estimates
-//! (`tests/references/hertz_sphere_impact/`).
+//! (`tests/references/hertz_sphere_impact/`). The measurement of a run (`analyse`) serves the
+//! axisymmetric sphere and the three-dimensional one of [`super::sphere_3d`] alike.
 
 use super::case::{
     Case, Done, Harness, Plan, Verdict, deviation, drift, drift_check, stage_names, trade,
 };
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
-use efsi_core::{Scene, Simulation};
+use efsi_core::scene::{Boundary, Side};
+use efsi_core::{Geometry, Scene, Simulation};
 use efsi_run::{ProbeSpec, SceneOutput};
 use efsi_stages::solid::{SceneSolid, Shape, Solid};
 use std::f64::consts::PI;
 
 /// The sphere's material and initial condition, read from its scene.
 #[derive(Clone, Copy, Debug)]
-struct Sphere {
-    radius: f64,
+pub(crate) struct Sphere {
+    pub(crate) radius: f64,
     density: f64,
     shear_modulus: f64,
-    z0: f64,
+    /// The centre's initial height (y; z when axisymmetric).
+    pub(crate) z0: f64,
     v0: f64,
     g: f64,
+    /// The whole sphere over the part the domain holds, by which a probe's force is
+    /// multiplied: 2π for an axisymmetric scene (its forces are per radian), 2 for each
+    /// Symmetry plane through the centre of a Cartesian3D one (4 on a quarter domain).
+    whole: f64,
 }
 
 /// The solid of `scene`, or why there is none.
@@ -31,10 +38,35 @@ pub(crate) fn solid_of(scene: &Scene) -> Result<Solid, String> {
         .ok_or_else(|| "the scene has no solid".into())
 }
 
-fn sphere_of(scene: &Scene) -> Result<Sphere, String> {
+/// The sphere of `scene`: a `Disk` centred on the axis of an axisymmetric scene, or a
+/// `Sphere` of a Cartesian3D one (y vertical, cut by the Symmetry planes through its centre).
+pub(crate) fn sphere_of(scene: &Scene) -> Result<Sphere, String> {
     let solid = solid_of(scene)?;
-    let Shape::Disk { center, radius } = solid.shape else {
-        return Err("the solid is not a disk".into());
+    let (radius, height, whole) = match solid.shape {
+        Shape::Disk { center, radius } if scene.geometry == Geometry::Axisymmetric => {
+            (radius, center.1, 2.0 * PI)
+        }
+        Shape::Sphere { center, radius } => {
+            let z = scene
+                .domain
+                .z
+                .ok_or("a Sphere in a scene without a z extent")?;
+            let planes = [
+                (Side::XMin, center.0, scene.domain.x.0),
+                (Side::ZMin, center.2, z.0),
+            ]
+            .iter()
+            .filter(|(side, c, wall)| {
+                scene.boundaries.side(*side) == Some(&Boundary::Symmetry) && c == wall
+            })
+            .count();
+            (radius, center.1, 2f64.powi(planes as i32))
+        }
+        _ => {
+            return Err(
+                "the solid is not a sphere (a Disk in an axisymmetric scene, or a Sphere)".into(),
+            );
+        }
     };
     let g = solid
         .law
@@ -45,9 +77,10 @@ fn sphere_of(scene: &Scene) -> Result<Sphere, String> {
         radius,
         density: solid.density,
         shear_modulus: g,
-        z0: center.1,
+        z0: height,
         v0: solid.velocity.map_or(0.0, |v| v.1),
         g: -scene.gravity.1,
+        whole,
     })
 }
 
@@ -70,41 +103,47 @@ fn hertz(s: &Sphere, v: f64) -> (f64, f64, f64, f64) {
 /// What one run of the sphere shows.
 #[derive(Clone, Debug, Default)]
 pub struct Impact {
-    t: Vec<f64>,
-    z: Vec<f64>,
+    pub(crate) t: Vec<f64>,
+    pub(crate) z: Vec<f64>,
     v: Vec<f64>,
     force: Vec<f64>,
     /// Max |z − z_free|/z_free before contact.
     free_fall: f64,
     t_contact: f64,
-    contact_time: f64,
-    impact_speed: f64,
+    /// How long the force stays above [`CONTACT`] of its peak.
+    pub(crate) contact_time: f64,
+    pub(crate) impact_speed: f64,
     /// 2R minus the least axial height of the solid.
-    compression: f64,
+    pub(crate) compression: f64,
     /// R minus the lowest centroid height.
     centroid_drop: f64,
     peak_force: f64,
     contact_radius: f64,
-    rebound_speed: f64,
-    volume_drift: f64,
+    pub(crate) rebound_speed: f64,
+    pub(crate) volume_drift: f64,
     /// The smallest share of the solid volume in its largest connected piece, over the outputs.
-    largest_piece: f64,
+    pub(crate) largest_piece: f64,
     /// The most pieces at any output.
-    pieces: f64,
+    pub(crate) pieces: f64,
     /// The run's pipeline.
     stages: Vec<String>,
 }
 
-fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
+/// What the probes of `run` show of the sphere `s`: the force on the whole sphere, the first
+/// contiguous contact (force above [`CONTACT`] of its peak; its duration between the
+/// threshold's crossings, interpolated between probe samples), the impact and rebound speeds
+/// (the largest upward speed within 5 ms after the contact), the compression (2R minus the
+/// least height along the axis), the volume drift and the pieces.
+pub(crate) fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
     let p = probes(&run.dir)?;
     let t = p.col("t")?.to_vec();
     let z = p.col("solid_y")?.to_vec();
     let v = p.col("solid_v")?.to_vec();
-    // Force and energies are per radian: ×2π for the whole sphere.
+    // The force on the domain's part of the sphere, times the whole over that part.
     let force: Vec<f64> = p
         .col("contact_force")?
         .iter()
-        .map(|f| 2.0 * PI * f)
+        .map(|f| s.whole * f)
         .collect();
     let radius = p.col("contact_radius")?;
     let (bottom, top) = (p.col("solid_bottom")?, p.col("solid_top")?);
@@ -151,10 +190,23 @@ fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
             .min(last + 1 + (0.005 / (t[1] - t[0])).ceil() as usize);
     let rebound_speed = after.map(|k| v[k]).fold(f64::MIN, f64::max);
     let volume_drift = drift(vol);
+    // The times the force crosses the threshold, each interpolated linearly between the
+    // samples either side of it (the sample itself at the ends of the record), so that the
+    // contact time resolves less than a probe interval.
+    let threshold = CONTACT * peak;
+    let crossing = |a: usize, b: usize| {
+        if a == b || force[a] == force[b] {
+            t[b]
+        } else {
+            t[a] + (threshold - force[a]) / (force[b] - force[a]) * (t[b] - t[a])
+        }
+    };
+    let start = crossing(first.saturating_sub(1), first);
+    let end = crossing(last, (last + 1).min(t.len() - 1));
     Ok(Impact {
         free_fall,
         t_contact: t[first],
-        contact_time: t[last] - t[first],
+        contact_time: end - start,
         impact_speed,
         compression: 2.0 * s.radius - height,
         centroid_drop: s.radius - zmin,
@@ -172,7 +224,10 @@ fn analyse(run: &Run, s: &Sphere) -> Result<Impact, String> {
     })
 }
 
-fn scene_at(
+/// The sphere of `file` at `cpr` cells per radius (every axis, the third of a Cartesian3D
+/// scene too) and Courant number `cfl`, with the `SolidPieces` probe, its VTK output only if
+/// `vtk`.
+pub(crate) fn scene_at(
     file: &str,
     cpr: f64,
     cfl: f64,
@@ -181,12 +236,10 @@ fn scene_at(
     let (mut scene, path) = load_case(file)?;
     let s = sphere_of(&scene)?;
     let h = s.radius / cpr;
-    let (lx, ly) = (
-        scene.domain.x.1 - scene.domain.x.0,
-        scene.domain.y.1 - scene.domain.y.0,
-    );
-    scene.grid.nx = (lx / h).round() as usize;
-    scene.grid.ny = (ly / h).round() as usize;
+    let cells = |(a, b): (f64, f64)| ((b - a) / h).round() as usize;
+    scene.grid.nx = cells(scene.domain.x);
+    scene.grid.ny = cells(scene.domain.y);
+    scene.grid.nz = scene.domain.z.map(cells);
     scene.time.cfl = cfl;
     scene.update_output(|o| {
         if !o.probes.contains(&ProbeSpec::SolidPieces) {

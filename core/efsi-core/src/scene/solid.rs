@@ -17,7 +17,7 @@
 //! reads the section once when a simulation is built and keeps the [`Solid`] in the checked
 //! scene's [`Options`](super::Options), from which every stage that needs it reads it.
 
-use super::{Fluid, Scene, Section};
+use super::{Fluid, Scene, Section, Vector};
 use crate::grid::Geometry;
 use crate::validate::{Checked, err, finite, positive};
 use serde::{Deserialize, Serialize};
@@ -36,9 +36,10 @@ pub struct Solid {
     /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
     #[serde(default)]
     pub viscosity: Option<f64>,
-    /// Initial velocity of the solid (default: at rest).
+    /// Initial velocity of the solid (default: at rest): `(vx, vy)` in a two-dimensional
+    /// scene (`(0, v_z)` when axisymmetric), `(vx, vy, vz)` in a Cartesian3D one.
     #[serde(default)]
-    pub velocity: Option<(f64, f64)>,
+    pub velocity: Option<Vector>,
     /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
     #[serde(default)]
     pub law: Option<LawSpec>,
@@ -119,7 +120,29 @@ impl Solid {
             scene.check_diffusion("solid.viscosity", mu, self.density)?;
         }
         if let Some(v) = self.velocity {
-            finite("solid.velocity", v)?;
+            let [x, y, z] = v.xyz();
+            finite("solid.velocity", (x, y))?;
+            finite("solid.velocity", (z, 0.0))?;
+            match (dims, v.2.is_some()) {
+                (3, false) => {
+                    return err(
+                        "solid.velocity",
+                        "a Cartesian3D scene's solid velocity has three components (vx, vy, vz), \
+                         got two",
+                    );
+                }
+                (2, true) => {
+                    return err(
+                        "solid.velocity",
+                        format!(
+                            "a {:?} scene has two axes: the solid velocity is (vx, vy), got \
+                             three components",
+                            scene.geometry
+                        ),
+                    );
+                }
+                _ => {}
+            }
         }
         if scene.geometry == Geometry::Axisymmetric && self.velocity.is_some_and(|v| v.0 != 0.0) {
             return err(

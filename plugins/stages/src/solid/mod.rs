@@ -7,9 +7,8 @@
 //! simulation is built — its ranges; its shape's dimension, that of the scene (a
 //! two-dimensional shape in a Cartesian3D scene, a three-dimensional one in a planar or
 //! axisymmetric scene, or a combination of both is refused, naming the shapes the scene takes);
-//! that a Cartesian3D scene's solid starts at rest (`solid.velocity` has two components); and
-//! that it covers a cell of the grid — each failure naming the setting's path
-//! (`solid.density`), puts back its settings in force, so that records hold the defaults too,
+//! its velocity's components, one per axis of the scene; and that it covers a cell of the
+//! grid — each failure naming the setting's path (`solid.density`), puts back its settings in force, so that records hold the defaults too,
 //! and keeps the [`Solid`] in the checked scene's [`Options`], from which every stage that
 //! needs it reads it, with the law loader ([`Laws`]) through which the run loop identifies the
 //! law library a checkpoint records.
@@ -23,7 +22,7 @@ pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_jso
 use efsi_core::plugin_api::{LawDescription, LawLoader, Laws};
 use efsi_core::scene::Options;
 use efsi_core::validate::{Checked, err};
-use efsi_core::{Field, Geometry, Region, Scene, Stagger};
+use efsi_core::{Field, Region, Scene, Stagger};
 use std::path::Path;
 
 /// The solid of a checked scene, as [`check`] read it into `options`; an error if the scene
@@ -42,13 +41,6 @@ pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
         return Ok(());
     };
     solid.validate(scene)?;
-    if scene.geometry == Geometry::Cartesian3D && solid.velocity.is_some() {
-        return err(
-            "solid.velocity",
-            "takes two components (x, y): a Cartesian3D scene's solid starts at rest (leave \
-             it out)",
-        );
-    }
     covers_a_cell(scene, &solid.shape)?;
     scene.set_solid(&solid);
     options.insert(solid);

@@ -37,7 +37,7 @@ use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
 use efsi_core::operators::minus;
-use efsi_core::scene::{Boundary, Options, Side};
+use efsi_core::scene::{Boundary, Options, Side, Vector};
 use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
     StageStats, Stagger, State, StepContext,
@@ -136,7 +136,7 @@ struct VofStage {
     shape: Shape,
     /// The solid's initial velocity, until it is blended into the starting velocity (the
     /// first [`Stage::initialize`]).
-    initial_velocity: Option<(f64, f64)>,
+    initial_velocity: Option<Vector>,
     /// The velocity at the end of the previous step (Vⁿ), then the step average: one face
     /// field per axis of the grid (u, v, and w in three dimensions).
     adv: Vec<Field>,
@@ -153,7 +153,7 @@ impl VofStage {
         grid: &Grid,
         bc: &BoundarySet,
         state: &mut State,
-        (us, vs): (f64, f64),
+        solid_velocity: Vector,
     ) {
         let mut phi = Field::zeros(grid);
         fill_fraction(grid, &self.shape, &mut phi);
@@ -167,11 +167,13 @@ impl VofStage {
                 vf
             }
         };
-        let faces = [Stagger::XFace, Stagger::YFace];
-        for (a, (vel, solid)) in [&mut state.u, &mut state.v]
+        let faces = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
+        let components = [Some(&mut state.u), Some(&mut state.v), state.w.as_mut()];
+        for (a, (vel, solid)) in components
             .into_iter()
-            .zip([us, vs])
+            .zip(solid_velocity.xyz())
             .enumerate()
+            .filter_map(|(a, (vel, s))| vel.map(|vel| (a, (vel, s))))
         {
             Region::of(grid, faces[a]).for_each(vel, |l, vel| {
                 // φ_f: the face average of the fractions of the face's two cells.
