@@ -14,8 +14,8 @@
 //! law library a checkpoint records.
 //!
 //! A solid without a law (a second fluid: a drop, a bubble) runs in every geometry; one with a
-//! law needs the implicit-momentum stage (`momentum`), which is two-dimensional, so a
-//! Cartesian3D scene with one is refused by the scheduler, naming that stage.
+//! law adds the implicit-momentum stage (`momentum`) and the deformation stage, which run in
+//! every geometry too.
 
 pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_json, json};
 

@@ -12,8 +12,7 @@
 //! step-average velocity has one face field per axis (`u`, `v`, and `w` on a Cartesian3D
 //! grid), the transport sweeps every axis ([`super::advect`]), the sides are closed (walls,
 //! `Symmetry`, the axis) or periodic, z sides included, and an `Outflow` side is refused.
-//! In three dimensions the stage serves a second fluid (a solid without a law, a drop); an
-//! elastic solid needs the implicit-momentum stage, which is two-dimensional.
+//! In three dimensions the stage serves a second fluid (a drop) and an elastic solid alike.
 //!
 //! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
 //! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
