@@ -51,6 +51,7 @@
 
 pub mod advect;
 pub mod benchmarks;
+pub mod bodies;
 pub mod plic;
 pub mod plic3d;
 pub mod shapes;
