@@ -46,9 +46,23 @@
 //!
 //! # Limits
 //!
-//! The window of a body that spans the domain is the domain. The per-body windows are not yet
-//! written to checkpoints (a scene of several bodies restarts from t = 0). The elastic stage
-//! keeps one deformation field: bodies with a law run only alone.
+//! The window of a body that spans the domain is the domain. The transport keeps each body's
+//! `0 ≤ φ_k ≤ 1` and volume; it does not keep `Σ_k φ_k ≤ 1` in a cell that two bodies enter
+//! together (each reconstructs its own interface as if the rest of the cell were fluid): bodies
+//! must be kept a film apart, by the resolved fluid and, below a cell, by a contact force,
+//! which is not part of this module. The elastic stage keeps one deformation field, so a body
+//! with a law runs only alone (the scene check refuses a law among several bodies).
+//!
+//! # Plan for elastic bodies
+//!
+//! Each elastic body keeps its deformation `B̃_k` on its own window, beside `φ_k` (the window
+//! moves carry it along), predicted and projected by the elastic stage's kernels over the
+//! window's region with the parent's metric, as the transport is here; its law is loaded once
+//! per distinct law and evaluated in batches over its window. The cell's stress is the mixture
+//! `τ = Σ_k τ_k(B̃_k)` (each `τ_k` carries its `φ_k` through `B̃_k = φ_k^{1/2} B_k`), and the
+//! implicit system's tangent `J = Σ_k J_k` — the per-body histories never mix, even where two
+//! bodies share a cell. Contact below a cell's gap is then a short-range repulsion between
+//! the bodies' interfaces (gap × stiffness, energy-bounded), a stage of its own.
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
 use efsi_core::{Field, G, Grid, Region, Stagger};
@@ -138,6 +152,23 @@ impl BodyWindow {
             let a0 = a0.min(pn[a].saturating_sub(2));
             wlo[a] = a0;
             wn[a] = (a1 - a0).max(2);
+        }
+        Self::at(parent, bounds, wlo, wn)
+    }
+
+    /// An empty window of `wn` cells whose cell `[0, 0, 0]` is the parent cell `wlo`.
+    fn at(
+        parent: &Grid,
+        bounds: VofBoundaries,
+        wlo: [usize; 3],
+        wn: [usize; 3],
+    ) -> Result<Self, String> {
+        let dims = parent.dims();
+        let pn = parent.n();
+        if (0..dims).any(|a| wn[a] < 2 || wlo[a] + wn[a] > pn[a]) {
+            return Err(format!(
+                "a window of {wn:?} cells at {wlo:?} does not fit the grid of {pn:?} cells"
+            ));
         }
         let h = parent.h();
         let span =
@@ -292,10 +323,82 @@ impl BodyWindow {
         f
     }
 
+    /// Append the window to `out`: its first parent cell and its cells along each axis (six
+    /// numbers), then `φ_k` on its interior cells in storage order (x fastest).
+    pub fn save_into(&self, out: &mut Vec<f64>) {
+        let n = self.grid.n();
+        out.extend(self.lo.iter().chain(&n).map(|&v| v as f64));
+        for k in 0..n[2] as isize {
+            for j in 0..n[1] as isize {
+                for i in 0..n[0] as isize {
+                    out.push(self.phi[[i, j, k]]);
+                }
+            }
+        }
+    }
+
+    /// The window [`Self::save_into`] wrote at the start of `data`, and the number of values
+    /// it took; an error if they do not describe a window of `parent`.
+    pub fn restore(
+        parent: &Grid,
+        bounds: VofBoundaries,
+        data: &[f64],
+    ) -> Result<(Self, usize), String> {
+        let head = data
+            .get(..6)
+            .ok_or("a body's window record is shorter than its six numbers of extent")?;
+        let int = |v: f64| {
+            (v >= 0.0 && v.fract() == 0.0 && v < 1e12)
+                .then_some(v as usize)
+                .ok_or_else(|| format!("{v} is not a cell count of a window"))
+        };
+        let lo = [int(head[0])?, int(head[1])?, int(head[2])?];
+        let n = [int(head[3])?, int(head[4])?, int(head[5])?];
+        let mut w = Self::at(parent, bounds, lo, n)?;
+        let cells = w.cells();
+        let values = data
+            .get(6..6 + cells)
+            .ok_or_else(|| format!("a window of {cells} cells is cut short"))?;
+        let mut it = values.iter();
+        for k in 0..n[2] as isize {
+            for j in 0..n[1] as isize {
+                for i in 0..n[0] as isize {
+                    w.phi[[i, j, k]] = *it.next().expect("counted");
+                }
+            }
+        }
+        Ok((w, 6 + cells))
+    }
+
     /// Cells of the window (its interior): the storage it scales with.
     pub fn cells(&self) -> usize {
         self.grid.n().iter().product()
     }
+}
+
+/// The windows of `count` bodies that [`BodyWindow::save_into`] wrote one after the other in
+/// `data` (the VOF stage's record of a scene of several bodies, in its snapshots and
+/// checkpoints); an error if the record does not hold exactly that.
+pub fn windows_of(
+    parent: &Grid,
+    bounds: VofBoundaries,
+    count: usize,
+    data: &[f64],
+) -> Result<Vec<BodyWindow>, String> {
+    let mut windows = Vec::with_capacity(count);
+    let mut rest = data;
+    for _ in 0..count {
+        let (w, used) = BodyWindow::restore(parent, bounds, rest)?;
+        windows.push(w);
+        rest = &rest[used..];
+    }
+    if !rest.is_empty() {
+        return Err(format!(
+            "{} values beyond the windows of the {count} bodies",
+            rest.len()
+        ));
+    }
+    Ok(windows)
 }
 
 /// Copy the padded window of `from` (a parent field) whose cell `[0, 0, 0]` is the parent cell

@@ -15,6 +15,14 @@
 //! In three dimensions the stage serves a second fluid (a solid without a law, a drop); an
 //! elastic solid needs the implicit-momentum stage, which is two-dimensional.
 //!
+//! **Several bodies** (`solids: [ … ]` with more than one entry): each body's fraction φ_k is
+//! transported on its own window of the grid ([`super::bodies`]) by the same kernel and the
+//! same sub-steps, bodies in the scene's order; the state's solid fraction is `Σ_k φ_k`, and
+//! `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k`, `μ` likewise. Each body's initial velocity is blended into
+//! the face velocities as for one body, the mixture's momentum over all materials of the face.
+//! The stage's record ([`Stage::save`]: the windows) carries the bodies through snapshots and
+//! checkpoints. A scene of one body (`solid:`, or a list of one) runs the one-field path above.
+//!
 //! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
 //! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
 //!
@@ -128,6 +136,7 @@ impl StagePlugin for Vof {
                 .collect(),
             windows: Vec::new(),
             bounds,
+            grid: grid.clone(),
         });
         Ok(Box::new(VofStage {
             many,
@@ -267,6 +276,8 @@ struct Many {
     windows: Vec<BodyWindow>,
     /// The sides of the grid.
     bounds: VofBoundaries,
+    /// The grid (the windows' parent).
+    grid: Grid,
 }
 
 /// One body's material, shape and initial velocity.
@@ -417,9 +428,32 @@ impl Stage for VofStage {
     // snapshot holds already; `restored` takes it back from there (1.1 MB less in every
     // snapshot at 256²).
 
-    /// Nothing, or the previous velocity (padded u, then v, then w) of a checkpoint written
-    /// before it was taken from the state, which is the same and is taken again in `restored`.
+    /// One body: nothing. Several: the bodies' windows, each its extent and values
+    /// ([`BodyWindow::save_into`]), in the scene's order.
+    fn save(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.save_into(&mut out);
+        out
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        if let Some(many) = &self.many {
+            for w in &many.windows {
+                w.save_into(out);
+            }
+        }
+    }
+
+    /// Several bodies: their windows ([`Self::save`]). One body: nothing, or the previous
+    /// velocity (padded u, then v, then w) of a checkpoint written before it was taken from the
+    /// state, which is the same and is taken again in `restored`.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        if let Some(many) = &mut self.many {
+            many.windows =
+                super::bodies::windows_of(&many.grid, many.bounds, many.bodies.len(), data)?;
+            return Ok(());
+        }
         let n: usize = self.adv.iter().map(|f| f.data().len()).sum();
         if !data.is_empty() && data.len() != n {
             return Err(format!(
