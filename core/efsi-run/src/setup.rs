@@ -118,11 +118,7 @@ fn check_memory(scene: &Scene) -> Result<(), String> {
     } else {
         BYTES_PER_CELL
     };
-    let per_cell = if scene.has_bodies() {
-        bytes.1
-    } else {
-        bytes.0
-    };
+    let per_cell = if scene.has_bodies() { bytes.1 } else { bytes.0 };
     let need = padded * per_cell;
     let Some(available) = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
         m.lines()

@@ -21,7 +21,9 @@ fn refused(text: &str) -> String {
 }
 
 fn case(name: &str) -> String {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases").join(name);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases")
+        .join(name);
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
@@ -63,7 +65,11 @@ fn two_drops_fall_side_by_side_each_its_own_volume_and_never_overlapping() {
         .collect();
     // Each window is a box around its drop, far smaller than the grid.
     for w in &start {
-        assert!(w.cells() * 4 < g.nx * g.ny, "a window of {} cells", w.cells());
+        assert!(
+            w.cells() * 4 < g.nx * g.ny,
+            "a window of {} cells",
+            w.cells()
+        );
     }
     let (end, every) = (0.5, 0.125);
     let mut next = every;
@@ -79,7 +85,11 @@ fn two_drops_fall_side_by_side_each_its_own_volume_and_never_overlapping() {
         let now = windows(&sim, 2);
         for (k, (w, v0)) in now.iter().zip(&v0).enumerate() {
             let drift = (w.volume(&g) - v0).abs() / v0;
-            assert!(drift <= 1e-10, "t = {}: body {k} volume drift {drift:e}", sim.state.t);
+            assert!(
+                drift <= 1e-10,
+                "t = {}: body {k} volume drift {drift:e}",
+                sim.state.t
+            );
         }
         // The state's fraction is Σ φ_k: at most 1 + 1e-12 in every cell.
         let phi = sim.state.phi.as_ref().unwrap();
@@ -100,7 +110,10 @@ fn two_drops_fall_side_by_side_each_its_own_volume_and_never_overlapping() {
         .zip(&y0)
         .map(|(w, y0)| y0 - centroid_y(&g, &w.on_parent(&g)))
         .collect();
-    println!("falls at t = 0.5: light {:.5}, heavy {:.5}", fall[0], fall[1]);
+    println!(
+        "falls at t = 0.5: light {:.5}, heavy {:.5}",
+        fall[0], fall[1]
+    );
     let ideal = |rho: f64| 0.5 * (rho - 1.0) / (rho + 1.0) * end * end;
     for (f, rho) in fall.iter().zip([2.0, 5.0]) {
         assert!(*f > 0.5 * ideal(rho) && *f < ideal(rho), "{fall:?}");
@@ -128,13 +141,22 @@ const B: &str = r#"(name: "b", shape: Disk(center: (0.7, 0.5), radius: 0.1), den
 fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
     let list = |v: &[&str]| format!("solids: [{}],", v.join(", "));
     assert!(build(&with(&list(&[A, B]))).is_ok());
-    let both = format!("solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}", list(&[A]));
+    let both = format!(
+        "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}",
+        list(&[A])
+    );
     let e = refused(&with(&both));
-    assert!(e.contains("solids") && e.contains("both `solid` and `solids`"), "{e}");
+    assert!(
+        e.contains("solids") && e.contains("both `solid` and `solids`"),
+        "{e}"
+    );
     let e = refused(&with("solids: [],"));
     assert!(e.contains("solids: an empty list"), "{e}");
     let e = refused(&with(&list(&[A, &A.replace("0.3", "0.7")])));
-    assert!(e.contains("solids[1].name") && e.contains("also the name of solids[0]"), "{e}");
+    assert!(
+        e.contains("solids[1].name") && e.contains("also the name of solids[0]"),
+        "{e}"
+    );
     let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"\"")])));
     assert!(e.contains("solids[1].name: empty"), "{e}");
     let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"b c\"")])));
@@ -148,10 +170,19 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
     // Touching (centres 0.2 apart) is not an overlap.
     assert!(build(&with(&list(&[A, &B.replace("0.7", "0.5")]))).is_ok());
     let e = refused(&with(&list(&[A, &B.replace("(0.7, 0.5)", "(3.0, 0.5)")])));
-    assert!(e.contains("solids[1].shape") && e.contains("covers no cell"), "{e}");
+    assert!(
+        e.contains("solids[1].shape") && e.contains("covers no cell"),
+        "{e}"
+    );
     let e = refused(&with(&list(&[A, &B.replace("3.0)", "-3.0)")])));
-    assert!(e.contains("solids[1].density") && e.contains("body \"b\""), "{e}");
-    let law = B.replace("3.0)", "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))");
+    assert!(
+        e.contains("solids[1].density") && e.contains("body \"b\""),
+        "{e}"
+    );
+    let law = B.replace(
+        "3.0)",
+        "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
+    );
     let e = refused(&with(&list(&[A, &law])));
     assert!(
         e.contains("solids[1].law") && e.contains("issue 42") && e.contains("per-body deformation"),

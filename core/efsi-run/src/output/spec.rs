@@ -10,9 +10,9 @@
 
 use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
+use efsi_core::scene::bodies::SceneBodies;
 use efsi_core::scene::solid::Axis;
 use efsi_core::scene::solid::SceneSolid;
-use efsi_core::scene::bodies::SceneBodies;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
