@@ -39,7 +39,7 @@
 //! outside neighbour, is empty: the full grid's flux through a window side is `F = 0` (empty
 //! upwind cell), as the window's closed side gives, and its volume flux `U` enters the update
 //! only through the indicator `c_c = 0` of empty cells. The advector takes its cell sizes and
-//! radii from the parent grid at the same cells ([`VofAdvector::lending_in`]), and the step's
+//! radii from the parent grid at the same cells (`VofAdvector::lending_in`), and the step's
 //! sums (clipped volume, the room of the give-back) add the same non-zero terms in the same
 //! order, lines in storage order. A test asserts the equality (planar, axisymmetric, 3-D,
 //! with window moves).
@@ -298,7 +298,9 @@ impl BodyWindow {
             .step_in(work, &self.grid, &mut self.phi, &vel, dt, step_index))
     }
 
-    /// [`Self::step_in`] with work arrays of its own (tests, benchmarks).
+    /// Advance `φ_k` by `dt` on the parent's face velocities `vel` (one per axis), moving the
+    /// window first if the body nears its side; `step_index` selects the sweep order. With
+    /// work arrays of its own (tests, benchmarks; the stage lends its pool).
     pub fn step(
         &mut self,
         parent: &Grid,
