@@ -203,3 +203,15 @@ fn a_list_of_one_body_runs_as_the_single_solid() {
     assert_eq!(single.state.phi, listed.state.phi);
     assert_eq!(single.state.v, listed.state.v);
 }
+
+#[test]
+fn viscous_bodies_in_an_inviscid_fluid_schedule_the_viscous_stage() {
+    // μ_f = 0, the bodies' μ_k > 0: the viscous stage runs (for one body as for several).
+    let inviscid = |b: &str| with(b).replace("viscosity: 0.01", "viscosity: 0.0");
+    let a = A.replace("2.0)", "2.0, viscosity: 0.1)");
+    for bodies in [format!("solids: [{a}, {B}],"), format!("solids: [{a}],")] {
+        let sim = build(&inviscid(&bodies)).unwrap();
+        let names = sim.pipeline().stage_names();
+        assert!(names.contains(&"viscous"), "{bodies}: {names:?}");
+    }
+}
