@@ -279,6 +279,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     },
                     initial_velocity: Default::default(),
                     solid: solid.map(|s| Section::of(&s).expect("a solid serialises to RON")),
+                    solids: None,
                     boundaries: {
                         // A periodic side mostly gets a periodic partner.
                         let mut b = b;

@@ -5,6 +5,7 @@
 use crate::output::spec::SceneOutput;
 use efsi_core::error::EfsiError;
 use efsi_core::grid::GHOST;
+use efsi_core::scene::bodies::SceneBodies;
 use efsi_core::scene::{Options, Scene};
 use efsi_core::{Simulation, StagePlugin};
 use std::path::Path;
@@ -117,11 +118,7 @@ fn check_memory(scene: &Scene) -> Result<(), String> {
     } else {
         BYTES_PER_CELL
     };
-    let per_cell = if scene.solid.is_some() {
-        bytes.1
-    } else {
-        bytes.0
-    };
+    let per_cell = if scene.has_bodies() { bytes.1 } else { bytes.0 };
     let need = padded * per_cell;
     let Some(available) = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
         m.lines()
@@ -138,7 +135,7 @@ fn check_memory(scene: &Scene) -> Result<(), String> {
         "the run needs about {:.1} GB ({padded:.3e} cells with ghost layers × ≈ {per_cell} B{}), \
          more than the {:.1} GB of memory available: use a coarser grid (e.g. --refine {:.2})",
         need / 1e9,
-        if scene.solid.is_some() {
+        if scene.has_bodies() {
             " with a solid"
         } else {
             ""

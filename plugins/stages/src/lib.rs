@@ -19,11 +19,12 @@ pub mod vof;
 
 use efsi_core::StagePlugin;
 
-/// Whether `scene` has a second material (a `solid` section: a solid or a second fluid), whose
-/// interface the VOF stage tracks. The defaults that depend on the scene follow it: the
-/// advection's predictor and the projection's tolerance.
+/// Whether `scene` has a second material (a `solid` or `solids` section: solids or other
+/// fluids), whose interfaces the VOF stage tracks. The defaults that depend on the scene follow
+/// it: the advection's predictor and the projection's tolerance.
 pub(crate) fn second_material(scene: &efsi_core::Scene) -> bool {
-    scene.solid.is_some()
+    use efsi_core::scene::bodies::SceneBodies;
+    scene.has_bodies()
 }
 
 /// Whether a checked scene (`options`) has an elastic solid (a solid with a constitutive law):

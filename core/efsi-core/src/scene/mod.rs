@@ -36,6 +36,7 @@ pub use numerics::{Numerics, OptionsDecl, Preset, StageOptions};
 pub use section::Section;
 pub use typed::Options;
 
+pub mod bodies;
 mod numerics;
 mod section;
 mod shape;
@@ -126,6 +127,9 @@ pub struct Scene {
     /// ([`solid::SceneSolid`]).
     #[serde(default)]
     pub solid: Option<Section>,
+    /// Several named bodies ([`bodies`]); a scene writes `solid` or `solids`, not both.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solids: Option<Section>,
     /// Boundary conditions per side.
     pub boundaries: Boundaries,
     /// Physics switches that cannot be inferred.
@@ -810,7 +814,7 @@ impl Scene {
     pub fn locate_sections_in(&mut self, text: &str) {
         self.numerics.locate_in(text);
         self.output.locate_in(text);
-        if let Some(solid) = &mut self.solid {
+        for solid in [&mut self.solid, &mut self.solids].into_iter().flatten() {
             solid.locate_in(text);
         }
     }

@@ -10,6 +10,7 @@
 
 use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
+use efsi_core::scene::bodies::SceneBodies;
 use efsi_core::scene::solid::Axis;
 use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
@@ -540,7 +541,7 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         if let Some(why) = probe.refused_in(scene.geometry) {
             return err(&f, why);
         }
-        if probe.needs_solid() && scene.solid.is_none() {
+        if probe.needs_solid() && !scene.has_bodies() {
             return err(
                 &f,
                 format!("{probe:?} needs a solid, and the scene has none"),
@@ -557,7 +558,7 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         }
         claim_columns(probe, scene.geometry, k, &f, &mut columns)?;
         if let ProbeSpec::Point { field, at, .. } = probe {
-            if field == "solid_fraction" && scene.solid.is_none() {
+            if field == "solid_fraction" && !scene.has_bodies() {
                 return err(
                     &format!("{f}.field"),
                     "solid_fraction needs a solid, and the scene has none",
@@ -696,7 +697,7 @@ fn validate_profiles(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checke
                     "`w` is the velocity along z, which only a Cartesian3D scene has",
                 );
             }
-            if field == "solid_fraction" && scene.solid.is_none() {
+            if field == "solid_fraction" && !scene.has_bodies() {
                 return err(
                     &format!("{f}.fields"),
                     "solid_fraction needs a solid, and the scene has none",
@@ -793,7 +794,7 @@ fn check_array_list(at: &str, fields: &[String], scene: &Scene) -> Checked {
         if fields[..k].contains(f) {
             return err(&at, format!("`{f}` is listed twice"));
         }
-        if f == "solid_fraction" && scene.solid.is_none() {
+        if f == "solid_fraction" && !scene.has_bodies() {
             return err(
                 &at,
                 "`solid_fraction` needs a solid, and the scene has none",

@@ -17,6 +17,7 @@
 //! law adds the implicit-momentum stage (`momentum`) and the deformation stage, which run in
 //! every geometry too.
 
+pub use efsi_core::scene::bodies::{Bodies, Body, SceneBodies};
 pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_json, json};
 
 use efsi_core::plugin_api::{LawDescription, LawLoader, Laws};
@@ -33,18 +34,112 @@ pub(crate) fn solid(options: &Options) -> Result<&Solid, String> {
         .ok_or_else(|| "the scene has no solid".to_string())
 }
 
-/// Check the `solid` section of `scene`, if it has one ([`Solid::validate`]), put back its
-/// settings in force (defaults filled in) and keep the [`Solid`] in `options`, read once for
-/// every stage that needs it, with the law loader ([`Laws`]).
+/// Check the `solid` or `solids` section of `scene`, if it has one, put back its settings in
+/// force (defaults filled in) and keep the [`Bodies`] in `options`, read once for every stage
+/// that needs them, with the law loader ([`Laws`]); a scene of one body (`solid:`, or a
+/// `solids` list of one) also keeps it as the [`Solid`], which the elastic stages read.
+///
+/// A scene of several bodies is further refused when a body covers no cell, when two bodies
+/// overlap at t = 0 ([`overlap`]), and when a body has a law: the elastic stage holds one
+/// deformation field, and per-body deformation (issue 42's second part) does not exist yet.
 pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
-    let Some(solid) = scene.solid_spec()? else {
+    let Some(bodies) = scene.bodies_spec()? else {
         return Ok(());
     };
-    solid.validate(scene)?;
-    covers_a_cell(scene, &solid.shape)?;
-    scene.set_solid(&solid);
-    options.insert(solid);
+    if !bodies.listed {
+        let solid = &bodies.list[0].solid;
+        check_solid(scene, solid, "solid")?;
+        scene.set_solid(solid);
+        options.insert(solid.clone());
+    } else {
+        let many = bodies.list.len() > 1;
+        for (k, body) in bodies.list.iter().enumerate() {
+            let at = Body::path(true, k);
+            check_solid(scene, &body.solid, &at)
+                .map_err(|(f, m)| (f, format!("body \"{}\": {m}", body.name)))?;
+            if many && body.solid.law.is_some() {
+                return err(
+                    &format!("{at}.law"),
+                    format!(
+                        "body \"{}\" has a law, in a scene of {} bodies: an elastic body among \
+                         several needs its own deformation field, which the elastic stage does \
+                         not keep yet (issue 42, per-body deformation); bodies without a law \
+                         (drops, bubbles) run",
+                        body.name,
+                        bodies.list.len()
+                    ),
+                );
+            }
+        }
+        overlap(scene, &bodies.list)?;
+        scene.set_bodies(&bodies.list);
+        if !many {
+            options.insert(bodies.list[0].solid.clone());
+        }
+    }
+    options.insert(bodies);
     options.insert(Laws(&LOADER));
+    Ok(())
+}
+
+/// The bodies of a checked scene, as [`check`] read them into `options`; an error if the scene
+/// has none.
+pub(crate) fn bodies(options: &Options) -> Result<&Bodies, String> {
+    options
+        .get::<Bodies>()
+        .ok_or_else(|| "the scene has no solid".to_string())
+}
+
+/// The checks of one body's settings that need the scene's geometry and grid: its velocity
+/// in a Cartesian3D scene, and that it covers a cell; `at` is its path (`solid`,
+/// `solids[1]`).
+fn check_solid(scene: &Scene, solid: &Solid, at: &str) -> Checked {
+    solid.validate(scene).map_err(|(f, m)| {
+        let rest = f.strip_prefix("solid").unwrap_or(&f);
+        (format!("{at}{rest}"), m)
+    })?;
+    covers_a_cell(scene, &solid.shape).map_err(|(f, m)| {
+        let rest = f.strip_prefix("solid").unwrap_or(&f);
+        (format!("{at}{rest}"), m)
+    })
+}
+
+/// The largest cell fraction of the intersection of two bodies at t = 0 that is not an
+/// overlap: the exact fractions of [`crate::vof::fill_fraction`] are exact to round-off where
+/// one boundary crosses a cell, and to ≲ 1e-10 of the cell where two do (the recursive split
+/// of [`crate::vof::shapes`]), so two bodies that touch, or pass within a cell of each other,
+/// stay below it.
+pub const OVERLAP_TOLERANCE: f64 = 1e-9;
+
+/// Refuse bodies that overlap at t = 0: for every pair, the exact cell fractions of the
+/// intersection of their shapes ([`Shape::Intersection`]) exceed [`OVERLAP_TOLERANCE`] in
+/// some cell. This is a geometric test (resolved to the fractions' accuracy, not to the
+/// grid): bodies that share a cell without overlapping pass, and their fractions then sum to
+/// at most 1 in every cell (to round-off), the bound the transport keeps.
+pub fn overlap(scene: &Scene, bodies: &[Body]) -> Checked {
+    let grid = scene.build_grid();
+    let cells = Region::of(&grid, Stagger::Cell);
+    let mut phi = Field::zeros(&grid);
+    for (k, b) in bodies.iter().enumerate() {
+        for (j, a) in bodies[..k].iter().enumerate() {
+            let both = Shape::Intersection(vec![a.solid.shape.clone(), b.solid.shape.clone()]);
+            phi.fill(0.0);
+            crate::vof::fill_fraction(&grid, &both, &mut phi);
+            let most = cells.max(0.0, |line| {
+                phi.at(&line, [0, 0, 0]).iter().fold(0.0, |m, &f| f.max(m))
+            });
+            if most > OVERLAP_TOLERANCE {
+                return err(
+                    &format!("solids[{k}].shape"),
+                    format!(
+                        "body \"{}\" overlaps body \"{}\" (solids[{j}]) at t = 0 (up to {:.3} \
+                         of a cell): bodies must start apart",
+                        b.name, a.name, most
+                    ),
+                );
+            }
+        }
+    }
     Ok(())
 }
 

@@ -118,7 +118,8 @@ impl StagePlugin for Viscous {
     }
     fn needed(&self, scene: &Scene, options: &Options) -> bool {
         scene.fluid.viscosity > 0.0
-            || crate::solid::solid(options).is_ok_and(|s| s.viscosity(&scene.fluid) > 0.0)
+            || crate::solid::bodies(options)
+                .is_ok_and(|b| b.list.iter().any(|b| b.solid.viscosity(&scene.fluid) > 0.0))
     }
     fn options(&self) -> Option<OptionsDecl> {
         Some(OptionsDecl::of::<ViscousOptions>())

@@ -358,6 +358,21 @@ impl VofAdvector {
     /// An advector without work arrays of its own: its steps borrow them
     /// ([`Self::step_in`]).
     pub(crate) fn lending(grid: &Grid, bounds: VofBoundaries) -> Result<Self, String> {
+        Self::lending_in(grid, bounds, grid, [0; 3])
+    }
+
+    /// An advector for the box of cells `window` of the grid `parent`, whose cell `[0, 0, 0]`
+    /// is the parent's cell `lo` ([`super::bodies`]): the shape of its fields is `window`'s,
+    /// its cell sizes and metric (the radii of an axisymmetric grid) are the parent's at the
+    /// same cells, so a step on the window computes, cell by cell, what a step on the parent
+    /// does there. Without work arrays of its own ([`Self::step_in`]).
+    pub(crate) fn lending_in(
+        window: &Grid,
+        bounds: VofBoundaries,
+        parent: &Grid,
+        lo: [usize; 3],
+    ) -> Result<Self, String> {
+        let grid = window;
         bounds.validate(grid)?;
         let axi = grid.is_axisymmetric();
         let kind = if grid.is_3d() {
@@ -368,27 +383,27 @@ impl VofAdvector {
             PLANAR
         };
         let cells = grid.padded().iter().product();
-        // The padded columns, in storage order.
+        // The padded columns, in storage order, as the parent's columns.
         let padded_row = Region::whole(grid).line(0);
-        let columns = || padded_row.indices().map(|[i, _, _]| i);
-        let [dx, dy, dz] = grid.h();
+        let columns = || padded_row.indices().map(|[i, _, _]| i + lo[0] as isize);
+        let [dx, dy, dz] = parent.h();
         Ok(VofAdvector {
             bounds,
             kind,
             n: grid.n(),
-            h: grid.h(),
+            h: parent.h(),
             area: [dy * dz, dx * dz, dx * dy],
             cells,
             interior: Region::of(grid, Stagger::Cell),
             own: Vec::new(),
             inv_vol: columns()
-                .map(|i| 1.0 / (grid.cell_volume(i) * dz))
+                .map(|i| 1.0 / (parent.cell_volume(i) * dz))
                 .collect(),
             r_left: columns()
-                .map(|i| if axi { grid.xf(i) } else { 0.0 })
+                .map(|i| if axi { parent.xf(i) } else { 0.0 })
                 .collect(),
-            r_face: columns().map(|i| grid.metric.rx(i)).collect(),
-            r_centre: columns().map(|i| grid.metric.rc(i)).collect(),
+            r_face: columns().map(|i| parent.metric.rx(i)).collect(),
+            r_centre: columns().map(|i| parent.metric.rc(i)).collect(),
         })
     }
 

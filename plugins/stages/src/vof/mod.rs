@@ -9,6 +9,8 @@
 //! - [`plic3d`]: the same geometry in three dimensions: the plane–cuboid volume and its
 //!   inverse, the fluxed volume of a split sweep, Youngs / centred / mixed normals;
 //!   [`shapes3d`]: the cell fractions of the three-dimensional shapes.
+//! - [`bodies`]: several bodies, each body's fraction on its own window of the grid, advanced
+//!   by the same kernel (bit for bit the full-grid step), for scenes with `solids: [ … ]`.
 //! - [`benchmarks`]: the three-dimensional transport benchmarks (deformation, slotted sphere)
 //!   the tests and `cargo xtask bench-paper` run.
 //!
@@ -51,6 +53,7 @@
 
 pub mod advect;
 pub mod benchmarks;
+pub mod bodies;
 pub mod plic;
 pub mod plic3d;
 pub mod shapes;

@@ -14,6 +14,14 @@
 //! `Symmetry`, the axis) or periodic, z sides included, and an `Outflow` side is refused.
 //! In three dimensions the stage serves a second fluid (a drop) and an elastic solid alike.
 //!
+//! **Several bodies** (`solids: [ … ]` with more than one entry): each body's fraction φ_k is
+//! transported on its own window of the grid ([`super::bodies`]) by the same kernel and the
+//! same sub-steps, bodies in the scene's order; the state's solid fraction is `Σ_k φ_k`, and
+//! `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k`, `μ` likewise. Each body's initial velocity is blended into
+//! the face velocities as for one body, the mixture's momentum over all materials of the face.
+//! The stage's record ([`Stage::save`]: the windows) carries the bodies through snapshots and
+//! checkpoints. A scene of one body (`solid:`, or a list of one) runs the one-field path above.
+//!
 //! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
 //! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
 //!
@@ -32,6 +40,7 @@
 //! `Σ φ_s V` is conserved to round-off.
 
 use super::advect::{self, VofAdvector, VofBoundaries, VofSide};
+use super::bodies::BodyWindow;
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
@@ -87,7 +96,8 @@ impl StagePlugin for Vof {
         bc: &BoundarySet,
         shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        let solid = crate::solid::solid(options)?;
+        let bodies = crate::solid::bodies(options)?;
+        let solid = &bodies.list[0].solid;
         let side = |s: Side| match bc.get(s) {
             Boundary::Periodic => Ok(VofSide::Periodic),
             Boundary::Outflow => Err(format!(
@@ -112,7 +122,23 @@ impl StagePlugin for Vof {
             z_hi: z_side(Side::ZMax)?,
         };
         let advector = VofAdvector::lending(grid, bounds)?;
+        let many = (bodies.list.len() > 1).then(|| Many {
+            bodies: bodies
+                .list
+                .iter()
+                .map(|b| ManyBody {
+                    rho: b.solid.density,
+                    mu: b.solid.viscosity(&scene.fluid),
+                    shape: b.solid.shape.clone(),
+                    velocity: b.solid.velocity,
+                })
+                .collect(),
+            windows: Vec::new(),
+            bounds,
+            grid: grid.clone(),
+        });
         Ok(Box::new(VofStage {
+            many,
             advector,
             scratch: Scratch::reserve(shared, advect::work_len(grid)),
             rho: (scene.fluid.density, solid.density),
@@ -125,6 +151,9 @@ impl StagePlugin for Vof {
 }
 
 struct VofStage {
+    /// The bodies of a scene of several ([`super::bodies`]); `None` for one body, whose
+    /// fraction is the state's and whose material is `rho`, `mu`, `shape`.
+    many: Option<Many>,
     /// The advector, whose work arrays come from `scratch`.
     advector: VofAdvector,
     /// The pipeline's work vectors (the advector's [`advect::work_len`] values while the
@@ -186,6 +215,39 @@ impl VofStage {
         bc.fill_velocity3(grid, &mut state.u, &mut state.v, w, 0.0, false);
     }
 
+    /// [`Stage::initialize`] for several bodies: their windows, the blended initial velocity,
+    /// `Σ φ_k`, ρ and μ.
+    fn initialize_many(
+        &mut self,
+        many: &mut Many,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        let full = many.place(grid)?;
+        if self.initial_velocity.take().is_some()
+            || many.bodies.iter().any(|b| b.velocity.is_some())
+        {
+            many.blend_initial_velocity(grid, bc, state, self.rho.0, full);
+            for b in &mut many.bodies {
+                b.velocity = None;
+            }
+        }
+        let mut phi = state.phi.take().ok_or_else(missing)?;
+        many.total(&mut phi);
+        self.advector.fill_ghosts(&mut phi);
+        many.mix(
+            &self.advector,
+            (self.rho.0, self.mu.0),
+            &phi,
+            &mut state.rho,
+            &mut state.mu,
+        );
+        state.phi = Some(phi);
+        self.keep_velocity(state);
+        Ok(())
+    }
+
     /// Keep the state's velocity (Vⁿ for the next step's average).
     fn keep_velocity(&mut self, state: &State) {
         for (a, b) in self.adv.iter_mut().zip(velocity(state)) {
@@ -208,6 +270,133 @@ impl VofStage {
     }
 }
 
+/// The bodies of a scene of several, each with its fraction on its window.
+struct Many {
+    bodies: Vec<ManyBody>,
+    /// One per body, in the scene's order (made by [`Stage::initialize`]).
+    windows: Vec<BodyWindow>,
+    /// The sides of the grid.
+    bounds: VofBoundaries,
+    /// The grid (the windows' parent).
+    grid: Grid,
+}
+
+/// One body's material, shape and initial velocity.
+struct ManyBody {
+    rho: f64,
+    mu: f64,
+    shape: Shape,
+    velocity: Option<Vector>,
+}
+
+impl Many {
+    /// The bodies' windows from their shapes' exact fractions, and their fractions on the whole
+    /// grid (for the initial velocity).
+    fn place(&mut self, grid: &Grid) -> Result<Vec<Field>, StageError> {
+        let mut full = Vec::new();
+        self.windows.clear();
+        for b in &self.bodies {
+            let mut phi = Field::zeros(grid);
+            fill_fraction(grid, &b.shape, &mut phi);
+            self.windows
+                .push(BodyWindow::around(grid, self.bounds, &phi).map_err(stage_error)?);
+            full.push(phi);
+        }
+        Ok(full)
+    }
+
+    /// The bodies' initial velocities: every face gets the momentum-weighted mixture
+    /// `(Σ φ_k ρ_k V_k + (1 − Σ φ_k) ρ_f V_fluid) / (Σ φ_k ρ_k + (1 − Σ φ_k) ρ_f)`, φ_k the
+    /// average fraction of body k in the face's two cells (a body without a velocity moves
+    /// with the fluid); the initial projection removes the divergence this leaves.
+    fn blend_initial_velocity(
+        &self,
+        grid: &Grid,
+        bc: &BoundarySet,
+        state: &mut State,
+        rho_f: f64,
+        mut phis: Vec<Field>,
+    ) {
+        if self.bodies.iter().all(|b| b.velocity.is_none()) {
+            return;
+        }
+        for phi in &mut phis {
+            bc.fill_scalar(grid, phi, false);
+        }
+        let faces = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
+        let components = [Some(&mut state.u), Some(&mut state.v), state.w.as_mut()];
+        for (a, vel) in components
+            .into_iter()
+            .enumerate()
+            .filter_map(|(a, vel)| vel.map(|vel| (a, vel)))
+        {
+            Region::of(grid, faces[a]).for_each(vel, |l, vel| {
+                let f: Vec<(&[f64], &[f64])> = phis
+                    .iter()
+                    .map(|p| (p.at(&l, minus(a)), p.at(&l, [0; 3])))
+                    .collect();
+                for (n, v) in vel.iter_mut().enumerate() {
+                    let (mut m, mut p, mut s) = (0.0, 0.0, 0.0);
+                    for (b, (lo, hi)) in self.bodies.iter().zip(&f) {
+                        let phi = 0.5 * (lo[n] + hi[n]);
+                        let vb = b.velocity.map_or(*v, |vb| vb.xyz()[a]);
+                        s += phi;
+                        m += phi * b.rho;
+                        p += phi * b.rho * vb;
+                    }
+                    let mf = (1.0 - s).max(0.0) * rho_f;
+                    if m + mf > 0.0 {
+                        *v = (p + mf * *v) / (m + mf);
+                    }
+                }
+            });
+        }
+        let w = state.w.as_mut();
+        bc.fill_velocity3(grid, &mut state.u, &mut state.v, w, 0.0, false);
+    }
+
+    /// `Σ_k φ_k` into `phi` (interior; the caller fills the ghosts).
+    fn total(&self, phi: &mut Field) {
+        phi.fill(0.0);
+        for w in &self.windows {
+            w.add_into(phi, 1.0);
+        }
+    }
+
+    /// `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k` and `μ` likewise from the total `phi` (ghosts
+    /// filled) and the windows, bodies in order; the ghosts of ρ and μ by `advector`'s sides.
+    fn mix(
+        &self,
+        advector: &VofAdvector,
+        (rf, mf): (f64, f64),
+        phi: &Field,
+        rho: &mut Field,
+        mu: &mut Field,
+    ) {
+        let phi = phi.data();
+        par::rows((rho.data_mut(), mu.data_mut()), REDUCE_CHUNK).for_each(|c, (r, m)| {
+            let o = c * REDUCE_CHUNK;
+            for ((r, m), f) in r.iter_mut().zip(m).zip(&phi[o..]) {
+                *r = (1.0 - f) * rf;
+                *m = (1.0 - f) * mf;
+            }
+        });
+        for (w, b) in self.windows.iter().zip(&self.bodies) {
+            w.add_into(rho, b.rho);
+            w.add_into(mu, b.mu);
+        }
+        advector.fill_ghosts(rho);
+        advector.fill_ghosts(mu);
+    }
+}
+
+fn stage_error(message: String) -> StageError {
+    StageError {
+        stage: "vof".into(),
+        message,
+    }
+}
+
 fn missing() -> StageError {
     StageError {
         stage: "vof".into(),
@@ -222,6 +411,11 @@ impl Stage for VofStage {
         bc: &BoundarySet,
         state: &mut State,
     ) -> Result<(), StageError> {
+        if let Some(mut many) = self.many.take() {
+            let res = self.initialize_many(&mut many, grid, bc, state);
+            self.many = Some(many);
+            return res;
+        }
         if let Some(velocity) = self.initial_velocity.take() {
             self.blend_initial_velocity(grid, bc, state, velocity);
         }
@@ -240,9 +434,32 @@ impl Stage for VofStage {
     // snapshot holds already; `restored` takes it back from there (1.1 MB less in every
     // snapshot at 256²).
 
-    /// Nothing, or the previous velocity (padded u, then v, then w) of a checkpoint written
-    /// before it was taken from the state, which is the same and is taken again in `restored`.
+    /// One body: nothing. Several: the bodies' windows, each its extent and values
+    /// ([`BodyWindow::save_into`]), in the scene's order.
+    fn save(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.save_into(&mut out);
+        out
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        if let Some(many) = &self.many {
+            for w in &many.windows {
+                w.save_into(out);
+            }
+        }
+    }
+
+    /// Several bodies: their windows ([`Self::save`]). One body: nothing, or the previous
+    /// velocity (padded u, then v, then w) of a checkpoint written before it was taken from the
+    /// state, which is the same and is taken again in `restored`.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        if let Some(many) = &mut self.many {
+            many.windows =
+                super::bodies::windows_of(&many.grid, many.bounds, many.bodies.len(), data)?;
+            return Ok(());
+        }
         let n: usize = self.adv.iter().map(|f| f.data().len()).sum();
         if !data.is_empty() && data.len() != n {
             return Err(format!(
@@ -292,7 +509,29 @@ impl Stage for VofStage {
             });
         }
         let mut st = super::AdvectStats::default();
-        {
+        if let Some(many) = &mut self.many {
+            let mut pool = self.scratch.lock();
+            let dims = self.adv.len();
+            let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
+            for w in &mut many.windows {
+                for k in 0..n {
+                    let step = ctx.step * n + k;
+                    let s =
+                        match w.step_in(&mut pool, ctx.grid, &vel[..dims], ctx.dt / n as f64, step)
+                        {
+                            Ok(s) => s,
+                            Err(e) => {
+                                drop(pool);
+                                state.phi = Some(phi);
+                                return Err(stage_error(e));
+                            }
+                        };
+                    st.cfl = st.cfl.max(s.cfl);
+                    st.max_clipped = st.max_clipped.max(s.max_clipped);
+                    st.clipped_volume += s.clipped_volume;
+                }
+            }
+        } else {
             let mut pool = self.scratch.lock();
             let dims = self.adv.len();
             let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
@@ -311,8 +550,20 @@ impl Stage for VofStage {
             }
         }
         self.keep_velocity(state);
-        self.advector.fill_ghosts(&mut phi);
-        self.mix(&phi, &mut state.rho, &mut state.mu);
+        if let Some(many) = &self.many {
+            many.total(&mut phi);
+            self.advector.fill_ghosts(&mut phi);
+            many.mix(
+                &self.advector,
+                (self.rho.0, self.mu.0),
+                &phi,
+                &mut state.rho,
+                &mut state.mu,
+            );
+        } else {
+            self.advector.fill_ghosts(&mut phi);
+            self.mix(&phi, &mut state.rho, &mut state.mu);
+        }
         state.phi = Some(phi);
         if st.cfl > 0.5 + 1e-9 {
             return Err(StageError {

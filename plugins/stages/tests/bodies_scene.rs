@@ -1,0 +1,217 @@
+//! Scenes of several bodies (`solids: [ … ]`) through the whole time step: the case
+//! `cases/two_drops.ron` (two drops of different density falling side by side), and the
+//! scene checks that refuse what a scene of bodies may not be.
+
+use efsi_core::{Field, Grid, Scene, Simulation};
+use efsi_stages::vof::bodies::{BodyWindow, windows_of};
+use efsi_stages::vof::{VofBoundaries, phase_volume};
+use std::path::{Path, PathBuf};
+
+fn build(text: &str) -> Result<Simulation, String> {
+    let path = Path::new("bodies.ron");
+    let scene = Scene::from_str_at(text, path).map_err(|e| e.to_string())?;
+    efsi_run::simulation(scene, path, &efsi_stages::builtin()).map_err(|e| e.to_string())
+}
+
+fn refused(text: &str) -> String {
+    match build(text) {
+        Ok(_) => panic!("not refused:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+fn case(name: &str) -> String {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The bodies' windows, from the VOF stage's record.
+fn windows(sim: &Simulation, count: usize) -> Vec<BodyWindow> {
+    let record = sim
+        .pipeline()
+        .save_stages()
+        .into_iter()
+        .find(|(name, _)| name == "vof")
+        .expect("a VOF stage")
+        .1;
+    windows_of(&sim.grid, VofBoundaries::closed(), count, &record).unwrap()
+}
+
+/// `∫ φ y dV / ∫ φ dV` of a field of `grid`.
+fn centroid_y(grid: &Grid, phi: &Field) -> f64 {
+    let (mut m, mut v) = (0.0, 0.0);
+    for j in 0..grid.ny as isize {
+        for i in 0..grid.nx as isize {
+            let y = grid.y0 + (j as f64 + 0.5) * grid.dy;
+            m += phi[(i, j)] * y;
+            v += phi[(i, j)];
+        }
+    }
+    m / v
+}
+
+#[test]
+fn two_drops_fall_side_by_side_each_its_own_volume_and_never_overlapping() {
+    let text = case("two_drops.ron").replace("end: 1.0", "end: 0.5");
+    let mut sim = build(&text).unwrap();
+    let g = sim.grid.clone();
+    let start = windows(&sim, 2);
+    let v0: Vec<f64> = start.iter().map(|w| w.volume(&g)).collect();
+    let y0: Vec<f64> = start
+        .iter()
+        .map(|w| centroid_y(&g, &w.on_parent(&g)))
+        .collect();
+    // Each window is a box around its drop, far smaller than the grid.
+    for w in &start {
+        assert!(
+            w.cells() * 4 < g.nx * g.ny,
+            "a window of {} cells",
+            w.cells()
+        );
+    }
+    let (end, every) = (0.5, 0.125);
+    let mut next = every;
+    let mut outputs = 0;
+    while sim.state.t < end - 1e-12 {
+        let dt = sim.next_dt(next).unwrap();
+        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
+        if sim.state.t < next - 1e-12 {
+            continue;
+        }
+        next += every;
+        outputs += 1;
+        let now = windows(&sim, 2);
+        for (k, (w, v0)) in now.iter().zip(&v0).enumerate() {
+            let drift = (w.volume(&g) - v0).abs() / v0;
+            assert!(
+                drift <= 1e-10,
+                "t = {}: body {k} volume drift {drift:e}",
+                sim.state.t
+            );
+        }
+        // The state's fraction is Σ φ_k: at most 1 + 1e-12 in every cell.
+        let phi = sim.state.phi.as_ref().unwrap();
+        let most = phi.data().iter().fold(0.0f64, |m, x| m.max(*x));
+        assert!(most <= 1.0 + 1e-12, "t = {}: Σφ_k = {most}", sim.state.t);
+        let total: f64 = now.iter().map(|w| w.volume(&g)).sum();
+        assert!((phase_volume(&g, phi) - total).abs() <= 1e-12 * total);
+    }
+    assert_eq!(outputs, 4);
+    // A drop of density ρ_k accelerating from rest in a fluid of density ρ_f = 1 under g = 1,
+    // with the added mass of a cylinder in potential flow (coefficient 1), falls
+    // ½ g (ρ_k − ρ_f)/(ρ_k + ρ_f) t²: ⅓ g for the light drop, ⅔ g for the heavy one. Drag and
+    // the start from rest slow them; each falls between half and all of it, and the heavy one
+    // more than twice as far.
+    let now = windows(&sim, 2);
+    let fall: Vec<f64> = now
+        .iter()
+        .zip(&y0)
+        .map(|(w, y0)| y0 - centroid_y(&g, &w.on_parent(&g)))
+        .collect();
+    println!(
+        "falls at t = 0.5: light {:.5}, heavy {:.5}",
+        fall[0], fall[1]
+    );
+    let ideal = |rho: f64| 0.5 * (rho - 1.0) / (rho + 1.0) * end * end;
+    for (f, rho) in fall.iter().zip([2.0, 5.0]) {
+        assert!(*f > 0.5 * ideal(rho) && *f < ideal(rho), "{fall:?}");
+    }
+    assert!(fall[1] > 2.0 * fall[0], "{fall:?}");
+}
+
+const SCENE: &str = r#"Scene(name: "b",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 16, ny: 16),
+    time: (end: 0.1, fixed_dt: 0.01),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -1.0),
+    BODIES
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip))"#;
+
+fn with(bodies: &str) -> String {
+    SCENE.replace("BODIES", bodies)
+}
+
+const A: &str = r#"(name: "a", shape: Disk(center: (0.3, 0.5), radius: 0.1), density: 2.0)"#;
+const B: &str = r#"(name: "b", shape: Disk(center: (0.7, 0.5), radius: 0.1), density: 3.0)"#;
+
+#[test]
+fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
+    let list = |v: &[&str]| format!("solids: [{}],", v.join(", "));
+    assert!(build(&with(&list(&[A, B]))).is_ok());
+    let both = format!(
+        "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}",
+        list(&[A])
+    );
+    let e = refused(&with(&both));
+    assert!(
+        e.contains("solids") && e.contains("both `solid` and `solids`"),
+        "{e}"
+    );
+    let e = refused(&with("solids: [],"));
+    assert!(e.contains("solids: an empty list"), "{e}");
+    let e = refused(&with(&list(&[A, &A.replace("0.3", "0.7")])));
+    assert!(
+        e.contains("solids[1].name") && e.contains("also the name of solids[0]"),
+        "{e}"
+    );
+    let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"\"")])));
+    assert!(e.contains("solids[1].name: empty"), "{e}");
+    let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"b c\"")])));
+    assert!(e.contains("solids[1].name") && e.contains("' '"), "{e}");
+    // Overlap at t = 0: the disks at 0.3 and 0.45 (radius 0.1) share a lens.
+    let e = refused(&with(&list(&[A, &B.replace("0.7", "0.45")])));
+    assert!(
+        e.contains("solids[1].shape") && e.contains("\"b\" overlaps body \"a\""),
+        "{e}"
+    );
+    // Touching (centres 0.2 apart) is not an overlap.
+    assert!(build(&with(&list(&[A, &B.replace("0.7", "0.5")]))).is_ok());
+    let e = refused(&with(&list(&[A, &B.replace("(0.7, 0.5)", "(3.0, 0.5)")])));
+    assert!(
+        e.contains("solids[1].shape") && e.contains("covers no cell"),
+        "{e}"
+    );
+    let e = refused(&with(&list(&[A, &B.replace("3.0)", "-3.0)")])));
+    assert!(
+        e.contains("solids[1].density") && e.contains("body \"b\""),
+        "{e}"
+    );
+    let law = B.replace(
+        "3.0)",
+        "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
+    );
+    let e = refused(&with(&list(&[A, &law])));
+    assert!(
+        e.contains("solids[1].law") && e.contains("issue 42") && e.contains("per-body deformation"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_list_of_one_body_runs_as_the_single_solid() {
+    // `solids: [ one ]` and `solid: one` give the same fields, bit for bit.
+    let one = A.replace("(name: \"a\", ", "(");
+    let mut single = build(&with(&format!("solid: {one},"))).unwrap();
+    let mut listed = build(&with(&format!("solids: [{A}],"))).unwrap();
+    for _ in 0..5 {
+        single.step(0.01).unwrap();
+        listed.step(0.01).unwrap();
+    }
+    assert_eq!(single.state.phi, listed.state.phi);
+    assert_eq!(single.state.v, listed.state.v);
+}
+
+#[test]
+fn viscous_bodies_in_an_inviscid_fluid_schedule_the_viscous_stage() {
+    // μ_f = 0, the bodies' μ_k > 0: the viscous stage runs (for one body as for several).
+    let inviscid = |b: &str| with(b).replace("viscosity: 0.01", "viscosity: 0.0");
+    let a = A.replace("2.0)", "2.0, viscosity: 0.1)");
+    for bodies in [format!("solids: [{a}, {B}],"), format!("solids: [{a}],")] {
+        let sim = build(&inviscid(&bodies)).unwrap();
+        let names = sim.pipeline().stage_names();
+        assert!(names.contains(&"viscous"), "{bodies}: {names:?}");
+    }
+}
