@@ -1,7 +1,7 @@
 //! The strain energy of the deformation, `∫ w W(B) dV`.
 
-use super::{Four, stress::rest_stress};
-use super::{Kernels, SHEAR, edges_of_cell};
+use super::Kernels;
+use super::stress::rest_stress;
 use efsi_core::{Field, Region, Stagger};
 use efsi_laws_host::ConstitutiveLaw;
 
@@ -108,11 +108,9 @@ impl Kernels {
         cells.clear();
         let interior = Region::of(g, Stagger::Cell);
         for l in (0..interior.lines()).map(|n| interior.line(n)) {
-            let [w, b11, b22, b33] = [&self.w, &b[0], &b[1], &b[2]].map(|f| f.at(&l, [0; 3]));
-            let sh: [Four; 3] = std::array::from_fn(|p| {
-                let p = p.min(pairs - 1);
-                Four::new(&b[3 + p], &l, edges_of_cell(SHEAR[p].0))
-            });
+            let (w, b11) = (self.w.at(&l, [0; 3]), b[0].at(&l, [0; 3]));
+            let (b22, b33) = (b[1].at(&l, [0; 3]), b[2].at(&l, [0; 3]));
+            let sh = self.centre_shears(b, &l);
             for n in (0..l.len).filter(|&n| w[n] != 0.0) {
                 let mut x = [b11[n], b22[n], b33[n], 0.0, 0.0, 0.0];
                 for (x, s) in x[3..3 + pairs].iter_mut().zip(&sh) {

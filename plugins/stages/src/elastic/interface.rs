@@ -2,8 +2,8 @@
 //! quarter cells (lines in two dimensions, planes in three) and their series factors, the
 //! solid bounding box, and the reset of pure-fluid cells.
 
-use super::{Kernels, NEAR, PHI_MIN, SHEAR, Window, cells_of_edge, plus, shear_pairs};
-use efsi_core::{Field, Index, Region};
+use super::{Four, Kernels, NEAR, PHI_MIN, SHEAR, Window, cells_of_edge, plus, shear_pairs};
+use efsi_core::{Field, Index, Line, Region};
 
 /// The least `aκ` the series corner's rates take (see [`sliver_rates`]).
 const SLIVER: f64 = 0.1;
@@ -91,9 +91,7 @@ impl Kernels {
             )
             .region(&self.grid);
             for l in (0..edges.lines()).map(|n| edges.line(n)) {
-                for at in l.indices() {
-                    self.set_edge(phi, p, axes, at);
-                }
+                self.set_edges(phi, p, axes, &l);
             }
         }
     }
@@ -122,43 +120,59 @@ impl Kernels {
         (c, m)
     }
 
-    /// The weights of edge `at` of the shear pair `p` (axes `[a, b]`) from its four cells: the
-    /// average `w_c` of their `φ^{1/2}`, the cells' weights in the normal components, the
-    /// normal's share `n_b²` and the series factors (`w_k`, `s`, `1/κ`, `r`) of the interface
-    /// closure.
-    fn set_edge(&mut self, phi: &Field, p: usize, axes: [usize; 2], at: Index) {
-        let cells = cells_of_edge(axes).map(|s| plus(at, s));
-        let w = cells.map(|c| self.w[c]);
-        let e = &mut self.edge[p];
-        e.wc[at] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
+    /// The weights of the edges `l` of the shear pair `p` (axes `[a, b]`) from their four
+    /// cells: the average `w_c` of their `φ^{1/2}`, the cells' weights in the normal
+    /// components, the normal's share `n_b²` and the series factors (`w_k`, `s`, `1/κ`, `r`) of
+    /// the interface closure.
+    fn set_edges(&mut self, phi: &Field, p: usize, axes: [usize; 2], l: &Line) {
+        let cells = cells_of_edge(axes);
+        let w = Four::new(&self.w, l, cells);
         // The edge's solid fraction: the four quarter cells around it (each cell's quarter
         // at the edge: the edge is its upper-right, upper-left, lower-right, lower-left).
-        let q: [f64; 4] = std::array::from_fn(|n| self.quarter[p][3 - n][cells[n]]);
-        let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
-        let lam: [f64; 4] = std::array::from_fn(|n| if w[n] > 0.0 { q[n] } else { 0.0 });
-        let sum: f64 = lam.iter().sum();
-        let solid = w.map(|w| f64::from(u8::from(w > 0.0)));
-        let count: f64 = solid.iter().sum();
-        // The interface normal ∝ ∇φ across the edge.
-        let f = cells.map(|c| phi[c].clamp(0.0, 1.0));
-        let gx = f[3] + f[1] - f[2] - f[0];
-        let gy = f[3] + f[2] - f[1] - f[0];
-        let g2 = gx * gx + gy * gy;
-        e.share[at] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
-        for n in 0..4 {
-            e.kwt[n][at] = if sum > 0.0 {
-                lam[n] / sum
-            } else if count > 0.0 {
-                solid[n] / count
-            } else {
-                0.25
-            };
+        let qs = &self.quarter[p];
+        let quarter = |n: usize| qs[3 - n].at(l, cells[n]);
+        let quarters = [quarter(0), quarter(1), quarter(2), quarter(3)];
+        let f = Four::new(phi, l, cells);
+        let e = &mut self.edge[p];
+        let [k0, k1, k2, k3] = &mut e.kwt;
+        let kwt = [k0, k1, k2, k3].map(|k| k.at_mut(l, [0; 3]));
+        let (wc, share) = (e.wc.at_mut(l, [0; 3]), e.share.at_mut(l, [0; 3]));
+        let (wk, sf) = (e.wk.at_mut(l, [0; 3]), e.sf.at_mut(l, [0; 3]));
+        let (ks, rc) = (e.ks.at_mut(l, [0; 3]), e.rc.at_mut(l, [0; 3]));
+        for i in 0..l.len {
+            let w = [w.get(0, i), w.get(1, i), w.get(2, i), w.get(3, i)];
+            wc[i] = 0.25 * (w[0] + w[1] + w[2] + w[3]);
+            let q = [
+                quarters[0][i],
+                quarters[1][i],
+                quarters[2][i],
+                quarters[3][i],
+            ];
+            let a = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+            let lam = |n: usize| if w[n] > 0.0 { q[n] } else { 0.0 };
+            let lam = [lam(0), lam(1), lam(2), lam(3)];
+            let sum: f64 = lam.iter().sum();
+            let solid = |n: usize| f64::from(u8::from(w[n] > 0.0));
+            let solid = [solid(0), solid(1), solid(2), solid(3)];
+            let count: f64 = solid.iter().sum();
+            // The interface normal ∝ ∇φ across the edge.
+            let f = |n: usize| f.get(n, i).clamp(0.0, 1.0);
+            let f = [f(0), f(1), f(2), f(3)];
+            let gx = f[3] + f[1] - f[2] - f[0];
+            let gy = f[3] + f[2] - f[1] - f[0];
+            let g2 = gx * gx + gy * gy;
+            share[i] = if g2 > 0.0 { gy * gy / g2 } else { 0.5 };
+            for n in 0..4 {
+                kwt[n][i] = if sum > 0.0 {
+                    lam[n] / sum
+                } else if count > 0.0 {
+                    solid[n] / count
+                } else {
+                    0.25
+                };
+            }
+            (wk[i], sf[i], ks[i], rc[i]) = series(self.mu_f, self.mu_s, wc[i], a);
         }
-        let (wk, sf, ks, rc) = series(self.mu_f, self.mu_s, e.wc[at], a);
-        e.wk[at] = wk;
-        e.sf[at] = sf;
-        e.ks[at] = ks;
-        e.rc[at] = rc;
     }
 }
 

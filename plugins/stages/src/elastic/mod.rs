@@ -465,7 +465,8 @@ const NEAR: isize = 4;
 /// "Interface corners").
 #[inline(always)]
 fn corner_weights<'a>(kwt: &'a [Field; 4], line: &efsi_core::Line) -> [&'a [f64]; 4] {
-    std::array::from_fn(|m| kwt[m].at(line, [0; 3]))
+    let on = |m: usize| kwt[m].at(line, [0; 3]);
+    [on(0), on(1), on(2), on(3)]
 }
 
 /// A field's values at the indices of `line`.

@@ -148,7 +148,16 @@ impl Kernels {
             None => (self.solid_c, &self.w),
         };
         let (m, n) = (self.m, win.points());
-        let live = |q: usize| weights[win.point(q)] != 0.0;
+        // Whether each point of the window (in its line order) is live.
+        let mut mask = Vec::with_capacity(n);
+        if n > 0 {
+            let r = win.region(&self.grid);
+            for l in (0..r.lines()).map(|k| r.line(k)) {
+                mask.extend(weights.at(&l, [0; 3]).iter().map(|&w| w != 0.0));
+            }
+        }
+        debug_assert_eq!(mask.len(), n, "one flag per point of the window");
+        let live = |q: usize| mask[q];
         let (b, t, j) = match edge {
             Some(p) => (&mut self.kb[p], &mut self.kt[p], &mut self.kj[p]),
             None => (&mut self.cb, &mut self.ct, &mut self.cj),
@@ -234,7 +243,7 @@ impl Kernels {
 
     /// The shears of `b` at the centres of `l`: each the mean of the cell's four edges of its
     /// pair (the last pair repeated past the grid's pairs).
-    fn centre_shears<'a>(&self, b: &'a [Field], l: &Line) -> [Four<'a>; 3] {
+    pub(super) fn centre_shears<'a>(&self, b: &'a [Field], l: &Line) -> [Four<'a>; 3] {
         let four = |p: usize| Four::new(&b[3 + p], l, edges_of_cell(SHEAR[p].0));
         let first = four(0);
         if self.edge.len() == 3 {
@@ -270,26 +279,43 @@ impl Kernels {
     /// ([`Kernels::solid_k`]): the solid-weighted normal components, the edge's own shear and
     /// (three dimensions) the others averaged around it, times the edge's weight `w_k`.
     pub(super) fn gather_edges(&mut self, b: &[Field], p: usize) {
-        let (m, pairs) = (self.m, self.edge.len());
+        if self.m == 6 {
+            self.gather_edges_m::<6>(b, p);
+        } else {
+            self.gather_edges_m::<4>(b, p);
+        }
+    }
+
+    /// [`Kernels::gather_edges`] on tensors of `M` components.
+    fn gather_edges_m<const M: usize>(&mut self, b: &[Field], p: usize) {
+        let pairs = M - 3;
         let edges = self.solid_k[p].region(&self.grid);
         let cells = cells_of_edge(SHEAR[p].0);
         let kb = &mut self.kb[p];
         for l in (0..edges.lines()).map(|n| edges.line(n)) {
             let wt = corner_weights(&self.edge[p].kwt, &l);
-            let [b11, b22, b33] = [0, 1, 2].map(|c| Four::new(&b[c], &l, cells));
+            let b11 = Four::new(&b[0], &l, cells);
+            let b22 = Four::new(&b[1], &l, cells);
+            let b33 = Four::new(&b[2], &l, cells);
             let (own, w) = (b[3 + p].at(&l, [0; 3]), self.edge[p].wk.at(&l, [0; 3]));
-            let others: [Four; 3] = std::array::from_fn(|q| {
-                let q = if q < pairs && q != p { q } else { p };
-                let s = if q == p { [[0; 3]; 4] } else { around(p, q) };
-                Four::new(&b[3 + q], &l, s)
+            // The other pairs' shears around the edge (three dimensions only).
+            let others = (M == 6).then(|| {
+                let four = |q: usize| match q == p {
+                    true => Four::new(&b[3 + q], &l, [[0; 3]; 4]),
+                    false => Four::new(&b[3 + q], &l, around(p, q)),
+                };
+                [four(0), four(1), four(2)]
             });
-            let rows = kb[l.n * l.len * m..][..l.len * m].chunks_exact_mut(m);
+            let rows = kb[l.n * l.len * M..][..l.len * M].chunks_exact_mut(M);
             for (n, x) in rows.enumerate() {
                 x[0] = w[n] * b11.weighted(&wt, n);
                 x[1] = w[n] * b22.weighted(&wt, n);
                 x[2] = w[n] * b33.weighted(&wt, n);
-                for q in 0..pairs {
-                    x[3 + q] = w[n] * if q == p { own[n] } else { others[q].avg(n) };
+                x[3 + p] = w[n] * own[n];
+                if let Some(others) = &others {
+                    for q in (0..pairs).filter(|&q| q != p) {
+                        x[3 + q] = w[n] * others[q].avg(n);
+                    }
                 }
             }
         }
@@ -318,8 +344,8 @@ impl Kernels {
             .region(g)
             .for_each((t11, t22, t33), |l, (t11, t22, t33)| {
                 let rows = [t11, t22, t33];
-                let [w, d11, d22, d33] =
-                    [&self.w, &db[0], &db[1], &db[2]].map(|f| f.at(&l, [0; 3]));
+                let (w, d11) = (self.w.at(&l, [0; 3]), db[0].at(&l, [0; 3]));
+                let (d22, d33) = (db[1].at(&l, [0; 3]), db[2].at(&l, [0; 3]));
                 let sh = self.centre_shears(db, &l);
                 let jms = self.cj[l.n * l.len * M * M..][..l.len * M * M].chunks_exact(M * M);
                 for (n, jm) in jms.enumerate() {
@@ -338,9 +364,11 @@ impl Kernels {
             let kj = &self.kj[p];
             self.solid_k[p].region(g).for_each(tab, |l, tab| {
                 let wt = corner_weights(&self.edge[p].kwt, &l);
-                let [d11, d22, d33] = [0, 1, 2].map(|c| Four::new(&db[c], &l, cells));
-                let [w, own, ks] =
-                    [&self.edge[p].wk, &db[3 + p], &self.edge[p].ks].map(|f| f.at(&l, [0; 3]));
+                let d11 = Four::new(&db[0], &l, cells);
+                let d22 = Four::new(&db[1], &l, cells);
+                let d33 = Four::new(&db[2], &l, cells);
+                let (w, own) = (self.edge[p].wk.at(&l, [0; 3]), db[3 + p].at(&l, [0; 3]));
+                let ks = self.edge[p].ks.at(&l, [0; 3]);
                 // The other pairs' shears around the edge (three dimensions only).
                 let others = (M == 6).then(|| {
                     let four = |q: usize| match q == p {
@@ -375,32 +403,47 @@ impl Kernels {
     /// this step's relaxation divisor `relax` of the pair; negative values count zero.
     /// `eta_e` holds one field per shear pair.
     pub(super) fn stiffness(&self, relax: &[Field], a: f64, eta: &mut Field, eta_e: &mut [Field]) {
-        let (g, m, dims) = (&self.grid, self.m, self.grid.dims());
+        if self.m == 6 {
+            self.stiffness_m::<6>(relax, a, eta, eta_e);
+        } else {
+            self.stiffness_m::<4>(relax, a, eta, eta_e);
+        }
+    }
+
+    /// [`Kernels::stiffness`] on tensors of `M` components (`M = 4`: two axes, `6`: three).
+    fn stiffness_m<const M: usize>(
+        &self,
+        relax: &[Field],
+        a: f64,
+        eta: &mut Field,
+        eta_e: &mut [Field],
+    ) {
+        let g = &self.grid;
         self.solid_c.region(g).for_each(eta, |l, eta| {
             let w = self.w.at(&l, [0; 3]);
             let q0 = l.n * l.len;
-            for (n, eta) in eta.iter_mut().enumerate() {
-                let q = q0 + n;
-                let (jm, b) = (&self.cj[q * m * m..], &self.cb[q * m..]);
-                let g = if dims == 2 {
-                    w[n] * 0.5 * (jm[0] * b[0] + jm[m + 1] * b[1])
+            let jms = self.cj[q0 * M * M..][..l.len * M * M].chunks_exact(M * M);
+            let bs = self.cb[q0 * M..][..l.len * M].chunks_exact(M);
+            for (n, ((eta, jm), b)) in eta.iter_mut().zip(jms).zip(bs).enumerate() {
+                let g = if M == 4 {
+                    w[n] * 0.5 * (jm[0] * b[0] + jm[M + 1] * b[1])
                 } else {
-                    w[n] * (jm[0] * b[0] + jm[m + 1] * b[1] + jm[2 * m + 2] * b[2]) / 3.0
+                    w[n] * (jm[0] * b[0] + jm[M + 1] * b[1] + jm[2 * M + 2] * b[2]) / 3.0
                 };
                 *eta += a * g.max(0.0);
             }
         });
-        for (p, eta) in eta_e.iter_mut().enumerate().take(self.edge.len()) {
+        for (p, eta) in eta_e.iter_mut().enumerate().take(M - 3) {
             let [pa, pb] = SHEAR[p].0;
             let e = &self.edge[p];
-            let (kj, kb, d) = (&self.kj[p], &self.kb[p], (3 + p) * (m + 1));
+            let (kj, kb, d) = (&self.kj[p], &self.kb[p], (3 + p) * (M + 1));
             self.solid_k[p].region(g).for_each(eta, |l, eta| {
-                let [ks, sf, relax, fy] =
-                    [&e.ks, &e.sf, &relax[p], &e.share].map(|f| f.at(&l, [0; 3]));
+                let (ks, sf) = (e.ks.at(&l, [0; 3]), e.sf.at(&l, [0; 3]));
+                let (relax, fy) = (relax[p].at(&l, [0; 3]), e.share.at(&l, [0; 3]));
                 let q0 = l.n * l.len;
-                for (n, eta) in eta.iter_mut().enumerate() {
-                    let q = q0 + n;
-                    let (jm, b) = (&kj[q * m * m..], &kb[q * m..]);
+                let jms = kj[q0 * M * M..][..l.len * M * M].chunks_exact(M * M);
+                let bs = kb[q0 * M..][..l.len * M].chunks_exact(M);
+                for (n, ((eta, jm), b)) in eta.iter_mut().zip(jms).zip(bs).enumerate() {
                     let f = ks[n] * sf[n] * relax[n];
                     let g = f * jm[d] * (fy[n] * b[pb] + (1.0 - fy[n]) * b[pa]);
                     *eta += a * g.max(0.0);

@@ -35,51 +35,34 @@ const BULK_FAR: f64 = -1.0 / 12.0;
 
 /// The bulk shear gradient's stencil along axis `a` on a run of corners: the velocity
 /// component `f` at `I − 2e_a … I + e_a` and the solid weights `w` there and at the cells
-/// beside them across the corner (`− e_b`). It covers the points `off..off + len` of the corner
-/// line it serves.
+/// beside them across the corner (`− e_b`), addressed in the fields' storage from the linear
+/// index `base` of the run's first point by the offsets `sa`, `sb` of `e_a`, `e_b`. It covers
+/// the points `off..off + len` of the corner line it serves.
 struct Bulk<'a> {
-    w: [&'a [f64]; 8],
-    f: [&'a [f64]; 4],
+    w: &'a [f64],
+    f: &'a [f64],
+    base: usize,
+    sa: isize,
+    sb: isize,
     off: usize,
     len: usize,
 }
 
-impl<'a> Bulk<'a> {
-    /// The stencil on `line`, a run of the corner line starting at column `start`.
-    fn new(w: &'a Field, f: &'a Field, line: &Line, a: usize, b: usize, start: isize) -> Self {
-        let s = |d: isize, e: isize| {
-            let mut x = [0; 3];
-            x[a] += d;
-            x[b] -= e;
-            x
-        };
-        Bulk {
-            w: [
-                (-2, 0),
-                (-1, 0),
-                (0, 0),
-                (1, 0),
-                (-2, 1),
-                (-1, 1),
-                (0, 1),
-                (1, 1),
-            ]
-            .map(|(d, e)| w.at(line, s(d, e))),
-            f: [-2, -1, 0, 1].map(|d| f.at(line, s(d, 0))),
-            off: (line.start[0] - start) as usize,
-            len: line.len,
-        }
-    }
-
+impl Bulk<'_> {
     /// `h D₄ f` at point `n` of the corner line, if the stencil covers it and its eight cells
     /// are all the solid's bulk ([`BULK_PHI`]).
     #[inline(always)]
     fn d4(&self, n: usize) -> Option<f64> {
         let m = n.checked_sub(self.off).filter(|&m| m < self.len)?;
-        let (w, f) = (&self.w, &self.f);
-        let solid = |c: usize| w[c][m] * w[c][m] >= BULK_PHI;
-        let bulk = (0..4).all(|c| solid(c) && solid(c + 4));
-        bulk.then(|| BULK_NEAR * (f[2][m] - f[1][m]) + BULK_FAR * (f[3][m] - f[0][m]))
+        let i = (self.base + m) as isize;
+        let at = |d: isize, e: isize| (i + d * self.sa - e * self.sb) as usize;
+        let (w, f) = (self.w, self.f);
+        let solid = |d: isize, e: isize| w[at(d, e)] * w[at(d, e)] >= BULK_PHI;
+        let bulk = (-2..2).all(|d| solid(d, 0) && solid(d, 1));
+        bulk.then(|| {
+            let f = |d: isize| f[at(d, 0)];
+            BULK_NEAR * (f(0) - f(-1)) + BULK_FAR * (f(1) - f(-2))
+        })
     }
 }
 
@@ -88,12 +71,14 @@ impl<'a> Bulk<'a> {
 struct Flux<'a>([&'a [f64]; 5]);
 
 impl<'a> Flux<'a> {
+    #[inline(always)]
     fn new(f: &'a Field, line: &Line, a: usize) -> Self {
-        Flux([-2, -1, 0, 1, 2].map(|d| {
+        let at = |d: isize| {
             let mut s = [0; 3];
             s[a] = d;
             f.at(line, s)
-        }))
+        };
+        Flux([at(-2), at(-1), at(0), at(1), at(2)])
     }
 
     /// The flux `a·f` through the face between `I − e_a` and `I` at speed `a`.
@@ -190,13 +175,33 @@ impl Kernels {
             bulk_columns(&edges, lo, hi, b, a),
             bulk_columns(&edges, lo, hi, a, b),
         );
+        // Each line's part in the columns: its first point and length.
+        let part = |cols: Region| match cols.len(0) {
+            0 => (0, 0),
+            len => ((cols.lo()[0] - edges.lo()[0]) as usize, len),
+        };
+        let (along_b_part, along_a_part) = (part(along_b), part(along_a));
+        let (sa, sb) = (w.offset(unit(a)), w.offset(unit(b)));
         let [gab, gba] = &mut self.lk[p];
         edges.for_each((gab, gba), |l, (rab, rba)| {
-            let bulk = |d: usize, x: usize, f, cols: &Region| {
-                bulk_fits(&l, lo, hi, d, x)
-                    .then(|| Bulk::new(w, f, &cols.line(l.n), d, x, l.start[0]))
+            // `D₄` of u_a along b (`true`) or of u_b along a.
+            let bulk = |along_b: bool| {
+                let ([d, x], f, (off, len), [sd, sx]) = if along_b {
+                    ([b, a], ua, along_b_part, [sb, sa])
+                } else {
+                    ([a, b], ub, along_a_part, [sa, sb])
+                };
+                bulk_fits(&l, lo, hi, d, x).then_some(Bulk {
+                    w: w.data(),
+                    f: f.data(),
+                    base: l.linear(off),
+                    sa: sd,
+                    sb: sx,
+                    off,
+                    len,
+                })
             };
-            let (db, da) = (bulk(b, a, ua, &along_b), bulk(a, b, ub, &along_a));
+            let (db, da) = (bulk(true), bulk(false));
             let (uc, us) = (ua.at(&l, [0; 3]), ua.at(&l, minus(b)));
             let (vc, vw) = (ub.at(&l, [0; 3]), ub.at(&l, minus(a)));
             let (sf, share) = (sf.at(&l, [0; 3]), share.at(&l, [0; 3]));
@@ -360,7 +365,10 @@ impl Kernels {
                 let four = |f| Four::new(f, &l, e);
                 [four(&lk[p][0]), four(&lk[p][1]), four(&b[3 + p])]
             });
-            let base = base.map(|(x, y)| [0, 1, 2].map(|c| (at(&x[c]), at(&y[c]))));
+            let base = base.map(|(x, y)| {
+                let xy = |c: usize| (at(&x[c]), at(&y[c]));
+                [xy(0), xy(1), xy(2)]
+            });
             for n in 0..l.len {
                 // ¼ Σ L_ab B_ab and ¼ Σ L_ba B_ab over the cell's edges of each pair.
                 let mut s = [[0.0; 2]; P];
@@ -422,8 +430,7 @@ impl Kernels {
                 let (uw, ue) = (vel[0].at(&l, [0; 3]), vel[0].at(&l, unit(0)));
                 let (rw, re, rc) = (m.rx_on(&l, 0), m.rx_on(&l, 1), m.rc_on(&l, 0));
                 // The faces across the other axes (no metric there).
-                let other = std::array::from_fn::<_, 2, _>(|o| {
-                    let x = o + 1;
+                let face = |x: usize| {
                     (x < dims).then(|| {
                         let v = vel[x];
                         (
@@ -433,7 +440,8 @@ impl Kernels {
                             h[x],
                         )
                     })
-                });
+                };
+                let other = [face(1), face(2)];
                 for n in 0..l.len {
                     // x-faces i, i+1 (between cells i−1|i and i|i+1); then the others'.
                     let (fw, fe) = (bx.lower(uw[n], n), bx.upper(ue[n], n));
@@ -450,14 +458,16 @@ impl Kernels {
             // Along x the radius factors of the box's faces and of the edge: at the cell
             // centres i−1, i and the face i for an edge on x-faces, else as a cell's.
             let nodal_x = at.nodal()[0] == 1;
+            let faces = [0, 1, 2].map(|x| advecting(axes, x));
             edges.for_each(out, |l, row| {
-                let fluxes: [Option<(Flux, Four, Four, f64)>; 3] = std::array::from_fn(|x| {
+                let flux = |x: usize| {
                     (x < dims).then(|| {
-                        let [up, low] = advecting(axes, x);
+                        let [up, low] = faces[x];
                         let (up, low) = (Four::new(vel[x], &l, up), Four::new(vel[x], &l, low));
                         (Flux::new(&b[3 + p], &l, x), up, low, h[x])
                     })
-                });
+                };
+                let fluxes = [flux(0), flux(1), flux(2)];
                 let (ru, rl, rv) = if nodal_x {
                     (m.rc_on(&l, 0), m.rc_on(&l, -1), m.rx_on(&l, 0))
                 } else {
