@@ -205,6 +205,7 @@ impl Region {
 
     /// Line `n` (`0..`[`Region::lines`]) of the region, for a kernel that walks lines itself
     /// (e.g. filling the rows of a compact vector, [`efsi_linalg::par::rows`]).
+    #[inline]
     pub fn line(&self, n: usize) -> Line {
         let stride = self.stride;
         let (j, k) = (n % self.len(1), n / self.len(1));

@@ -171,6 +171,60 @@ struct VofStage {
 }
 
 impl VofStage {
+    /// ½(Vⁿ + Vⁿ⁺¹) in place of the stored Vⁿ — except in the `first` step, whose Vⁿ is the
+    /// initial condition, not yet projected (a solid's initial velocity blended into the
+    /// fluid's is not solenoidal at the interface): there Vⁿ⁺¹ alone.
+    fn step_average(&mut self, state: &State, first: bool) {
+        let w = if first { 0.0 } else { 0.5 };
+        for (a, b) in self.adv.iter_mut().zip(velocity(state)) {
+            let b = b.data();
+            par::chunks(a.data_mut()).for_each(|o, a| {
+                for (x, y) in a.iter_mut().zip(&b[o..]) {
+                    *x = w * *x + (1.0 - w) * y;
+                }
+            });
+        }
+    }
+
+    /// Transport the interface over the step in `n` equal sub-steps with the step-average
+    /// velocity: `phi` itself for one body, every body's window for several.
+    fn transport(
+        &mut self,
+        ctx: &StepContext,
+        phi: &mut Field,
+        n: u64,
+    ) -> Result<super::AdvectStats, String> {
+        let mut st = super::AdvectStats::default();
+        let mut add = |s: super::AdvectStats| {
+            st.cfl = st.cfl.max(s.cfl);
+            st.max_clipped = st.max_clipped.max(s.max_clipped);
+            st.clipped_volume += s.clipped_volume;
+        };
+        let mut pool = self.scratch.lock();
+        let dims = self.adv.len();
+        let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
+        let dt = ctx.dt / n as f64;
+        if let Some(many) = &mut self.many {
+            for w in &mut many.windows {
+                for k in 0..n {
+                    add(w.step_in(&mut pool, ctx.grid, &vel[..dims], dt, ctx.step * n + k)?);
+                }
+            }
+        } else {
+            for k in 0..n {
+                let s = self.advector.step_in(
+                    &mut pool,
+                    ctx.grid,
+                    phi,
+                    &vel[..dims],
+                    dt,
+                    ctx.step * n + k,
+                );
+                add(s);
+            }
+        }
+        Ok(st)
+    }
     /// The solid's initial velocity V_s: every face gets the momentum-weighted mixture
     /// (φ_f ρ_s V_s + (1 − φ_f) ρ_f V_fluid) / (φ_f ρ_s + (1 − φ_f) ρ_f), φ_f the average
     /// fraction of its two cells — the velocity of the face's mixture — so a heavy body's
@@ -477,18 +531,7 @@ impl Stage for VofStage {
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
         let mut phi = state.phi.take().ok_or_else(missing)?;
-        // ½(Vⁿ + Vⁿ⁺¹) in place of the stored Vⁿ — except in the first step, whose Vⁿ is the
-        // initial condition, not yet projected (a solid's initial velocity blended into the
-        // fluid's is not solenoidal at the interface): there Vⁿ⁺¹ alone.
-        let w = if ctx.step == 0 { 0.0 } else { 0.5 };
-        for (a, b) in self.adv.iter_mut().zip(velocity(state)) {
-            let b = b.data();
-            par::chunks(a.data_mut()).for_each(|o, a| {
-                for (x, y) in a.iter_mut().zip(&b[o..]) {
-                    *x = w * *x + (1.0 - w) * y;
-                }
-            });
-        }
+        self.step_average(state, ctx.step == 0);
         // The step was chosen for the velocity at its start; the velocity it ends with (an
         // impact, a release) can be faster. Sub-cycle the transport with the same velocity so
         // each sweep keeps its Courant number ≤ 0.5 (one sub-step, and the same bits, otherwise).
@@ -508,47 +551,13 @@ impl Stage for VofStage {
                 ),
             });
         }
-        let mut st = super::AdvectStats::default();
-        if let Some(many) = &mut self.many {
-            let mut pool = self.scratch.lock();
-            let dims = self.adv.len();
-            let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
-            for w in &mut many.windows {
-                for k in 0..n {
-                    let step = ctx.step * n + k;
-                    let s =
-                        match w.step_in(&mut pool, ctx.grid, &vel[..dims], ctx.dt / n as f64, step)
-                        {
-                            Ok(s) => s,
-                            Err(e) => {
-                                drop(pool);
-                                state.phi = Some(phi);
-                                return Err(stage_error(e));
-                            }
-                        };
-                    st.cfl = st.cfl.max(s.cfl);
-                    st.max_clipped = st.max_clipped.max(s.max_clipped);
-                    st.clipped_volume += s.clipped_volume;
-                }
+        let st = match self.transport(ctx, &mut phi, n) {
+            Ok(st) => st,
+            Err(e) => {
+                state.phi = Some(phi);
+                return Err(stage_error(e));
             }
-        } else {
-            let mut pool = self.scratch.lock();
-            let dims = self.adv.len();
-            let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
-            for k in 0..n {
-                let s = self.advector.step_in(
-                    &mut pool,
-                    ctx.grid,
-                    &mut phi,
-                    &vel[..dims],
-                    ctx.dt / n as f64,
-                    ctx.step * n + k,
-                );
-                st.cfl = st.cfl.max(s.cfl);
-                st.max_clipped = st.max_clipped.max(s.max_clipped);
-                st.clipped_volume += s.clipped_volume;
-            }
-        }
+        };
         self.keep_velocity(state);
         if let Some(many) = &self.many {
             many.total(&mut phi);
