@@ -288,12 +288,10 @@ impl VofStage {
             }
         }
         let mut phi = state.phi.take().ok_or_else(missing)?;
-        many.total(&mut phi);
-        self.advector.fill_ghosts(&mut phi);
         many.mix(
             &self.advector,
             (self.rho.0, self.mu.0),
-            &phi,
+            &mut phi,
             &mut state.rho,
             &mut state.mu,
         );
@@ -417,16 +415,19 @@ impl Many {
         }
     }
 
-    /// `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k` and `μ` likewise from the total `phi` (ghosts
-    /// filled) and the windows, bodies in order; the ghosts of ρ and μ by `advector`'s sides.
+    /// `phi` set to the total `Σ φ_k` (ghosts filled by `advector`'s sides), then
+    /// `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k` and `μ` likewise from it and the windows, bodies in
+    /// order; the ghosts of ρ and μ by `advector`'s sides.
     fn mix(
         &self,
         advector: &VofAdvector,
         (rf, mf): (f64, f64),
-        phi: &Field,
+        phi: &mut Field,
         rho: &mut Field,
         mu: &mut Field,
     ) {
+        self.total(phi);
+        advector.fill_ghosts(phi);
         let phi = phi.data();
         par::rows((rho.data_mut(), mu.data_mut()), REDUCE_CHUNK).for_each(|c, (r, m)| {
             let o = c * REDUCE_CHUNK;
@@ -560,12 +561,10 @@ impl Stage for VofStage {
         };
         self.keep_velocity(state);
         if let Some(many) = &self.many {
-            many.total(&mut phi);
-            self.advector.fill_ghosts(&mut phi);
             many.mix(
                 &self.advector,
                 (self.rho.0, self.mu.0),
-                &phi,
+                &mut phi,
                 &mut state.rho,
                 &mut state.mu,
             );
