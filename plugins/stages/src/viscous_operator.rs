@@ -323,23 +323,11 @@ impl Coefficients {
             let r = self.faces.region(a);
             let periodic = [s.periodic_x, s.periodic_y, s.periodic_z];
             let nr = r.len(0);
-            // The line's own normal-stress coefficients.
-            let mut own = vec![0.0; nr];
             for n in 0..r.lines() {
                 let l = r.line(n);
                 let o = n * nr;
                 s.diag[o..o + nr].copy_from_slice(&ds[a][o..o + nr]);
                 for d in 0..self.dims {
-                    let (g, w) = if d == a {
-                        let (ca, e, r) = self.normal(a, &l, 0);
-                        for (k, c) in own[..nr].iter_mut().enumerate() {
-                            *c = r.map_or(ca, |r| ca * r[k]) * e[k];
-                        }
-                        (&own[..nr], 1.0)
-                    } else {
-                        let g = &self.edge[pair(a, d)];
-                        (&g.at(&l, unit(d))[..nr], self.ratio[a][d])
-                    };
                     let out = &mut [&mut s.east, &mut s.north, &mut s.top][d][o..o + nr];
                     let last = |i: usize| {
                         let at = if d == 0 {
@@ -349,8 +337,19 @@ impl Coefficients {
                         };
                         at + 1 == r.len(d) && !periodic[d]
                     };
-                    for (i, (e, g)) in out.iter_mut().zip(g).enumerate() {
-                        *e = if last(i) { 0.0 } else { w * g };
+                    if d == a {
+                        // The line's own normal-stress coefficients.
+                        let (ca, eta, radius) = self.normal(a, &l, 0);
+                        for (i, x) in out.iter_mut().enumerate() {
+                            let own = radius.map_or(ca, |r| ca * r[i]) * eta[i];
+                            *x = if last(i) { 0.0 } else { own };
+                        }
+                    } else {
+                        let w = self.ratio[a][d];
+                        let g = &self.edge[pair(a, d)].at(&l, unit(d))[..nr];
+                        for (i, (x, g)) in out.iter_mut().zip(g).enumerate() {
+                            *x = if last(i) { 0.0 } else { w * g };
+                        }
                     }
                 }
             }

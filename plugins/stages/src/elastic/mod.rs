@@ -376,6 +376,9 @@ struct Kernels {
     cb: Vec<f64>,
     ct: Vec<f64>,
     cj: Vec<f64>,
+    /// Which points of a batch's window are live ([`Kernels::batch`]); its capacity kept
+    /// between steps.
+    mask: Vec<bool>,
     kb: Vec<Vec<f64>>,
     kt: Vec<Vec<f64>>,
     kj: Vec<Vec<f64>>,
@@ -511,6 +514,7 @@ impl Kernels {
             cb: vec![0.0; m * nc],
             ct: vec![0.0; m * nc],
             cj: vec![0.0; m * m * nc],
+            mask: Vec::new(),
             kb: batch(m * nc),
             kt: batch(m * nc),
             kj: batch(m * m * nc),

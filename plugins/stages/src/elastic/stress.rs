@@ -149,7 +149,8 @@ impl Kernels {
         };
         let (m, n) = (self.m, win.points());
         // Whether each point of the window (in its line order) is live.
-        let mut mask = Vec::with_capacity(n);
+        let mut mask = std::mem::take(&mut self.mask);
+        mask.clear();
         if n > 0 {
             let r = win.region(&self.grid);
             for l in (0..r.lines()).map(|k| r.line(k)) {
@@ -171,6 +172,7 @@ impl Kernels {
             tangent.then_some(&mut j[..n * m * m]),
             |b, t, j| eval(law, m, b, t, j),
         );
+        self.mask = mask;
         result.map_err(|e| self.locate(e, edge))
     }
 
