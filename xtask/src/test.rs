@@ -71,39 +71,41 @@ pub(crate) fn test() -> Result<(), String> {
     // as an input, the 3-D drop with its grid as parameters, the 3-D elastic sphere with its
     // grid and height as parameters.
     let [fmu2, _] = crate::fmu::fmu(&[])?;
-    let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    crate::fmu::fmu(&strings(&[
-        "cases/oscillating_couette.ron",
-        "--parameter",
-        "boundaries.y_max.speed=m/s",
-        "--output",
-        "u_interface=m/s",
-    ]))?;
-    crate::fmu::fmu(&strings(&[
-        "cases/disk_in_cavity.ron",
-        "--input",
-        "boundaries.y_max.speed=m/s",
-    ]))?;
-    crate::fmu::fmu(&strings(&[
-        "cases/falling_drop_3d.ron",
+    let grid = [
         "--parameter",
         "grid.nx",
         "--parameter",
         "grid.ny",
         "--parameter",
         "grid.nz",
-    ]))?;
-    crate::fmu::fmu(&strings(&[
-        "cases/sphere_impact_3d.ron",
-        "--parameter",
-        "grid.nx",
-        "--parameter",
-        "grid.ny",
-        "--parameter",
-        "grid.nz",
-        "--parameter",
-        "solid.shape.center[1]",
-    ]))?;
+    ];
+    let scenes: [(&str, &[&str]); 4] = [
+        (
+            "cases/oscillating_couette.ron",
+            &[
+                "--parameter",
+                "boundaries.y_max.speed=m/s",
+                "--output",
+                "u_interface=m/s",
+            ],
+        ),
+        (
+            "cases/disk_in_cavity.ron",
+            &["--input", "boundaries.y_max.speed=m/s"],
+        ),
+        ("cases/falling_drop_3d.ron", &grid),
+        (
+            "cases/sphere_impact_3d.ron",
+            &[&grid[..], &["--parameter", "solid.shape.center[1]"]].concat(),
+        ),
+    ];
+    for (scene, options) in scenes {
+        let args: Vec<String> = std::iter::once(scene)
+            .chain(options.iter().copied())
+            .map(str::to_string)
+            .collect();
+        crate::fmu::fmu(&args)?;
+    }
     let py = python_env()?;
     install_python_package(&py)?;
     let mut c = Command::new(py);
