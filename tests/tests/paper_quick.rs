@@ -87,6 +87,11 @@ fn disk_in_cavity_quick() {
 }
 
 #[test]
+fn soft_sphere_in_cube_quick() {
+    quick("soft_sphere_in_cube");
+}
+
+#[test]
 fn oscillating_disk_quick() {
     quick("oscillating_disk");
 }

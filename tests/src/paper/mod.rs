@@ -14,6 +14,7 @@ pub mod lid_driven_cube;
 pub mod oscillating_disk;
 pub mod plot;
 pub mod shear_rectangle;
+pub mod soft_sphere_cube;
 pub mod soft_wall;
 pub mod sphere;
 pub mod sphere_3d;
@@ -217,6 +218,7 @@ pub const CASES: &[Entry] = &[
     entry::<sphere_3d::SphereImpact3d>(),
     entry::<soft_wall::SoftWall>(),
     entry::<disk_cavity::DiskCavity>(),
+    entry::<soft_sphere_cube::SoftSphereCube>(),
     entry::<oscillating_disk::OscillatingDisk>(),
     entry::<shear_rectangle::ShearRectangle>(),
     entry::<couette::Couette>(),
