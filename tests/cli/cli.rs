@@ -273,6 +273,14 @@ fn run_writes_fields_probes_profiles_and_summary() {
     ] {
         assert!(json.contains(key), "{key} missing from run.json");
     }
+    // The peak resident memory: at least the grid's fields, at most what a small run can take.
+    if cfg!(target_os = "linux") {
+        let j: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let rss = j["peak_rss_bytes"]
+            .as_f64()
+            .expect("peak_rss_bytes on Linux");
+        assert!((1e6..1e9).contains(&rss), "peak_rss_bytes {rss}");
+    }
 }
 
 /// A profile's `at` times are written when reached; when the run stops at a steady state before

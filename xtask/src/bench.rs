@@ -32,14 +32,20 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
     let bad = || {
         format!(
             "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; sphere, \
-             optionally -ej; cube<N> or drop3d"
+             optionally -ej; cube<N>, drop3d, sphere3d or softcube"
         )
     };
+    if name == "sphere3d" {
+        return sphere3d_case(quick);
+    }
     if let Some(rest) = name.strip_prefix("sphere") {
         return sphere_case(name, rest, quick).ok_or_else(bad)?;
     }
     if name == "drop3d" {
         return drop3d_case(quick);
+    }
+    if name == "softcube" {
+        return softcube_case(quick);
     }
     if let Some(n) = name.strip_prefix("cube") {
         return match n.parse::<usize>() {
@@ -129,8 +135,7 @@ fn sphere_case(name: &str, rest: &str, quick: bool) -> Option<Result<Case, Strin
 /// quarter of the box, Δt = 1/128), its whole run t ∈ [0, 1] (quick: [0, 0.25]), its fields
 /// written only at the end. The scene unedited, changed by overrides.
 fn drop3d_case(quick: bool) -> Result<Case, String> {
-    let path = root().join("cases/falling_drop_3d.ron");
-    let scene = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let scene = shipped("falling_drop_3d.ron")?;
     let end = if quick { 0.25 } else { 1.0 };
     Ok(Case {
         name: "drop3d".into(),
@@ -139,6 +144,57 @@ fn drop3d_case(quick: bool) -> Result<Case, String> {
         drop: true,
         cells: 32 * 64 * 32,
         block_multigrid: &[],
+        three_d: true,
+    })
+}
+
+/// A shipped scene's text, to be changed by overrides.
+fn shipped(file: &str) -> Result<String, String> {
+    let path = root().join("cases").join(file);
+    std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The three-dimensional elastic sphere (`cases/sphere_impact_3d.ron`) at 10 cells per radius
+/// (23 × 47 × 23 cells on the quarter box), released 4 mm above the substrate at its 1.22 m/s:
+/// the fall, the first contact near 3.3 ms and the compression to t = 6 ms (quick: 3 ms, the
+/// fall only). The scene unedited, changed by overrides.
+fn sphere3d_case(quick: bool) -> Result<Case, String> {
+    let end = if quick { 0.003 } else { 0.006 };
+    Ok(Case {
+        name: "sphere3d".into(),
+        scene: shipped("sphere_impact_3d.ron")?,
+        sets: vec![
+            "grid.nx=23".into(),
+            "grid.ny=47".into(),
+            "grid.nz=23".into(),
+            "solid.shape=Sphere(center: (0.0, 0.0232, 0.0), radius: 0.0192)".into(),
+            format!("time.end={end}"),
+            format!("output.vtk_every={end}"),
+        ],
+        drop: false,
+        cells: 23 * 47 * 23,
+        block_multigrid: &["elastic"],
+        three_d: true,
+    })
+}
+
+/// The neo-Hookean sphere in the lid-driven cube (`cases/soft_sphere_in_cube.ron`) at 24³,
+/// t ∈ [0, 1] (quick: [0, 0.25]). The scene unedited, changed by overrides.
+fn softcube_case(quick: bool) -> Result<Case, String> {
+    let end = if quick { 0.25 } else { 1.0 };
+    Ok(Case {
+        name: "softcube".into(),
+        scene: shipped("soft_sphere_in_cube.ron")?,
+        sets: vec![
+            "grid.nx=24".into(),
+            "grid.ny=24".into(),
+            "grid.nz=24".into(),
+            format!("time.end={end}"),
+            format!("output.vtk_every={end}"),
+        ],
+        drop: false,
+        cells: 24 * 24 * 24,
+        block_multigrid: &["elastic"],
         three_d: true,
     })
 }
@@ -232,6 +288,9 @@ struct Figures {
     steps: f64,
     fall: Option<f64>,
     wall: f64,
+    /// The run's peak resident memory (bytes; `run.json`'s `peak_rss_bytes`, NaN where the
+    /// system does not report it).
+    peak_rss: f64,
 }
 
 fn run_case(c: &Case, threads: usize, out: &Path, binary: &Path) -> Result<Figures, String> {
@@ -288,6 +347,7 @@ fn run_case(c: &Case, threads: usize, out: &Path, binary: &Path) -> Result<Figur
         steps: num(&j["steps"]),
         fall,
         wall: num(&j["wall_seconds"]),
+        peak_rss: num(&j["peak_rss_bytes"]),
     })
 }
 
@@ -308,6 +368,7 @@ fn median_figures(runs: &[Figures]) -> Figures {
     let mut f = runs[0].clone();
     f.total = median(runs.iter().map(|r| r.total).collect());
     f.wall = median(runs.iter().map(|r| r.wall).collect());
+    f.peak_rss = median(runs.iter().map(|r| r.peak_rss).collect());
     for (k, s) in f.stages.iter_mut().enumerate() {
         s.1 = median(runs.iter().map(|r| r.stages[k].1).collect());
         s.2 = median(runs.iter().map(|r| r.stages[k].2).collect());
@@ -348,7 +409,7 @@ fn parse(args: &[String]) -> Result<Request, String> {
         if quick {
             "cavity128,drop128,cube64,drop3d".into()
         } else {
-            "cavity128,cavity256,drop128,drop256,sphere,cube64,drop3d".into()
+            "cavity128,cavity256,drop128,drop256,sphere,cube64,drop3d,sphere3d,softcube".into()
         }
     });
     let cases = names
@@ -525,8 +586,17 @@ fn report_case(
         .zip(free_fall)
         .map(|(z, ff)| format!("; fall {z:.4} (½gt² = {ff:.4})"))
         .unwrap_or_default();
+    let memory = if f.peak_rss.is_finite() {
+        format!(
+            "; peak {:.1} MB ({:.0} B/cell)",
+            f.peak_rss / 1e6,
+            f.peak_rss / c.cells as f64
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{pair_note}",
+        "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{memory}{pair_note}",
         c.name,
         t,
         f.steps,
@@ -548,6 +618,8 @@ fn report_case(
         "speedup_vs_1_thread": base / f.total,
         "speedup_pairs": pairs,
         "wall_seconds": f.wall,
+        "peak_rss_bytes": f.peak_rss.is_finite().then_some(f.peak_rss),
+        "peak_rss_bytes_per_cell": f.peak_rss.is_finite().then(|| f.peak_rss / c.cells as f64),
         "fall": f.fall,
         "free_fall": free_fall,
         "stages": f.stages.iter().map(|(n, ns, it)| serde_json::json!({
@@ -652,6 +724,8 @@ mod tests {
             "sphere-ej",
             "cube64",
             "drop3d",
+            "sphere3d",
+            "softcube",
         ] {
             case(name, false).unwrap_or_else(|e| panic!("{name}: {e}"));
         }

@@ -1,5 +1,6 @@
 //! `run.json`, the run's record: its identity (`run_id`, also in its checkpoints), the effective
-//! scene and overrides, how it stands or stopped, its steps, wall time and wall time per stage.
+//! scene and overrides, how it stands or stopped, its steps, wall time and wall time per stage,
+//! and the process's peak resident memory.
 
 use super::{Outputs, RunOutcome};
 use crate::checkpoint;
@@ -32,6 +33,21 @@ pub(super) fn recorded_run_id(dir: &Path) -> Result<String, String> {
         .and_then(|v| v.as_str())
         .map(str::to_string)
         .ok_or_else(|| format!("{} names no run", path.display()))
+}
+
+/// The process's peak resident memory so far, in bytes (`VmHWM` of `/proc/self/status`; `None`
+/// where the system has no such file, e.g. outside Linux).
+pub(crate) fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .strip_suffix("kB")?
+        .trim()
+        .parse::<u64>()
+        .ok()?;
+    Some(kb * 1024)
 }
 
 impl Outputs {
@@ -84,6 +100,7 @@ impl Outputs {
             "cells": sim.grid.cells(),
             "wall_seconds": wall_seconds,
             "ns_per_cell_step": wall_seconds * 1e9 / (cells * steps),
+            "peak_rss_bytes": peak_rss_bytes(),
             "projection_tolerance": projection_tolerance,
             "final_rate_of_change": if sim.rate_of_change().is_finite() { serde_json::json!(sim.rate_of_change()) } else { serde_json::Value::Null },
             "stages": timings.iter().map(|s| serde_json::json!({
