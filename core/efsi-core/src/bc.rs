@@ -268,6 +268,8 @@ struct WallPlace {
     /// The first in-wall axis (the line's first index is along it).
     first: usize,
     comp: usize,
+    /// Whether `comp` is the component a moving wall without a direction drives.
+    driven: bool,
     /// The in-wall axis other than `comp` on a three-dimensional grid.
     other: Option<usize>,
 }
@@ -279,6 +281,7 @@ impl WallPlace {
             h: grid.h(),
             first: o1,
             comp,
+            driven: comp == driven(axis),
             other: grid.is_3d().then_some(if o1 == comp { o2 } else { o1 }),
         }
     }
@@ -654,7 +657,7 @@ impl BoundarySet {
         for (base, t) in lines.each() {
             for (side, first, dir) in sides {
                 let bc = self.get(side);
-                let speed = self.tangential_speed(side, axis, comp, &place, t, when);
+                let speed = self.tangential_speed(side, bc, &place, t, when);
                 let line = GhostLine {
                     base,
                     step,
@@ -667,38 +670,39 @@ impl BoundarySet {
         }
     }
 
-    /// The speed along `comp` of the wall at `side` (normal to `axis`) at the place of the line
-    /// with in-wall indices `t`: its own speed where it drives `comp` without a direction, its
-    /// speed times the direction's share along `comp` where a direction is given, else 0.
+    /// The speed along the place's component of the wall `bc` at `side` at the place of the
+    /// line with in-wall indices `t`: its own speed where it drives the component without a
+    /// direction, its speed times the direction's share along the component where a direction
+    /// is given, else 0.
+    #[inline]
     fn tangential_speed(
         &self,
         side: Side,
-        axis: usize,
-        comp: usize,
+        bc: &Boundary,
         place: &WallPlace,
         t: [isize; 2],
         when: WallTime,
     ) -> f64 {
-        let speed = || {
-            self.wall_speed(
-                side,
-                (comp, place.position(t, comp)),
-                place.other.map(|o| (o, place.position(t, o))),
-                when,
-            )
-        };
-        match self.get(side) {
+        let comp = place.comp;
+        let share = match bc {
             Boundary::MovingWall {
                 direction: None, ..
-            } if comp == driven(axis) => speed(),
+            } if place.driven => None,
             Boundary::MovingWall {
                 direction: Some((x, y, z)),
                 ..
-            } => {
-                let share = [x, y, z][comp] / (x * x + y * y + z * z).sqrt();
-                share * speed()
-            }
-            _ => 0.0,
+            } => Some([x, y, z][comp] / (x * x + y * y + z * z).sqrt()),
+            _ => return 0.0,
+        };
+        let speed = self.wall_speed(
+            side,
+            (comp, place.position(t, comp)),
+            place.other.map(|o| (o, place.position(t, o))),
+            when,
+        );
+        match share {
+            Some(share) => share * speed,
+            None => speed,
         }
     }
 
