@@ -148,7 +148,7 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
         "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
     );
     // Each scene's bodies and the fragments its refusal holds.
-    let refusals: [(String, &[&str]); 10] = [
+    let refusals: [(String, &[&str]); 11] = [
         (
             format!(
                 "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}",
@@ -186,12 +186,22 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
             list(&[A, &law]),
             &["solids[1].law", "issue 42", "per-body deformation"],
         ),
+        // A misspelt setting: the message lists a body's settings (`solid:` without a name).
         (
             list(&[A, &B.replace("density", "densty")]),
             &[
-                "solids",
-                "unknown field `densty`",
-                "`name`, `shape`, `density`",
+                "solids.[1].densty: Unexpected field named `densty` in `BodySpec`, expected one \
+                 of `name`, `shape`, `density`, `viscosity`, `velocity`, or `law` instead",
+            ],
+        ),
+        (
+            format!(
+                "solid: {},",
+                A.replace("name: \"a\", ", "").replace("density", "densty")
+            ),
+            &[
+                "solid.densty: Unexpected field named `densty` in `Solid`, expected one of \
+                 `shape`, `density`, `viscosity`, `velocity`, or `law` instead",
             ],
         ),
     ];
