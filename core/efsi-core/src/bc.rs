@@ -260,6 +260,81 @@ fn driven(axis: usize) -> usize {
     if axis == 0 { 1 } else { 0 }
 }
 
+/// Where on a wall normal to `axis` a line of the tangential component `comp` lies: the
+/// component lives on the faces of its own axis (position index·h from the wall's start) and at
+/// cell centres of the other in-wall axis ((index + ½)·h).
+struct WallPlace {
+    h: [f64; 3],
+    /// The first in-wall axis (the line's first index is along it).
+    first: usize,
+    comp: usize,
+    /// Whether `comp` is the component a moving wall without a direction drives.
+    driven: bool,
+    /// The in-wall axis other than `comp` on a three-dimensional grid.
+    other: Option<usize>,
+}
+
+impl WallPlace {
+    fn new(grid: &Grid, axis: usize, comp: usize) -> Self {
+        let [o1, o2] = others(axis);
+        WallPlace {
+            h: grid.h(),
+            first: o1,
+            comp,
+            driven: comp == driven(axis),
+            other: grid.is_3d().then_some(if o1 == comp { o2 } else { o1 }),
+        }
+    }
+
+    /// The position along in-wall axis `a` of the line with in-wall indices `t`.
+    #[inline]
+    fn position(&self, t: [isize; 2], a: usize) -> f64 {
+        let b = if a == self.first { t[0] } else { t[1] };
+        if a == self.comp {
+            b as f64 * self.h[a]
+        } else {
+            (b as f64 + 0.5) * self.h[a]
+        }
+    }
+}
+
+/// One side of one line: the storage index of the line's index 0 and the stride along it, the
+/// cells along it, the side's first cell and its outward direction (−1 or 1).
+struct GhostLine {
+    base: isize,
+    step: isize,
+    n: isize,
+    first: isize,
+    dir: isize,
+}
+
+/// The ghost layers of a tangential component on one side of one line, outwards: wrapped at a
+/// periodic side, odd at a no-slip wall, `2·speed − x` at a moving wall, even at free-slip,
+/// symmetry and axis sides, the first cell's value at an outflow.
+#[inline]
+fn fill_line_ghosts(d: &mut [f64], line: &GhostLine, bc: &Boundary, speed: f64) {
+    let &GhostLine {
+        base,
+        step,
+        n,
+        first,
+        dir,
+    } = line;
+    let at = |a: isize| (base + a * step) as usize;
+    for g in 1..=G {
+        let ghost = first + dir * g;
+        let mirror = first - dir * (g - 1);
+        let val = match bc {
+            Boundary::Periodic => d[at(if dir < 0 { ghost + n } else { ghost - n })],
+            Boundary::NoSlip => -d[at(mirror)],
+            Boundary::MovingWall { .. } => 2.0 * speed - d[at(mirror)],
+            Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => d[at(mirror)],
+            Boundary::Outflow => d[at(first)],
+        };
+        d[at(ghost)] = val;
+    }
+}
+
 /// The boundary conditions of a run, ready to fill ghosts.
 ///
 /// A moving wall's speed is an input that may change between steps
@@ -517,6 +592,8 @@ impl BoundarySet {
     }
 
     /// Tangential component `f` (the velocity along axis `comp`) at the sides normal to `axis`.
+    /// Where no wall drives it with a speed that varies along the wall, every ghost is a rule of
+    /// one value; else line by line ([`fill_tangential_lines`](Self::fill_tangential_lines)).
     fn fill_tangential(
         &self,
         grid: &Grid,
@@ -526,99 +603,106 @@ impl BoundarySet {
         when: WallTime,
     ) {
         let lines = Lines::new(grid, f, axis);
-        let (n, step) = (lines.n, lines.step);
-        let [o1, o2] = others(axis);
-        let h = grid.h();
-        // The component lives on the faces of its own axis (position index·h from the wall's
-        // start) and at cell centres of the other in-wall axis ((index + ½)·h).
-        let position = |t: [isize; 2], a: usize| {
-            let b = if a == o1 { t[0] } else { t[1] };
-            if a == comp {
-                b as f64 * h[a]
-            } else {
-                (b as f64 + 0.5) * h[a]
+        if [false, true]
+            .into_iter()
+            .any(|hi| self.drives_varying(Side::normal_to(axis, hi), axis, comp, when))
+        {
+            self.fill_tangential_lines(grid, f, &lines, axis, comp, when);
+            return;
+        }
+        let rules = Rules::of_sides(self, axis, lines.n, |bc, at| match bc {
+            Boundary::Periodic => (at.periodic, Rule::Copy),
+            Boundary::NoSlip => (at.mirror, Rule::Negate),
+            Boundary::MovingWall { .. } => (at.mirror, Rule::Wall(0.0)),
+            Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => (at.mirror, Rule::Copy),
+            Boundary::Outflow => (at.first, Rule::Copy),
+        });
+        lines.apply(f.data_mut(), &rules);
+    }
+
+    /// Whether the wall at `side` (normal to `axis`) drives component `comp` with a speed that
+    /// varies along the wall at `when`: a moving wall, at a time other than `Homogeneous`,
+    /// whose direction is given (it drives both tangential components) or whose driven
+    /// component is `comp`.
+    fn drives_varying(&self, side: Side, axis: usize, comp: usize, when: WallTime) -> bool {
+        when != WallTime::Homogeneous
+            && match self.get(side) {
+                Boundary::MovingWall {
+                    direction: Some(_), ..
+                } => true,
+                Boundary::MovingWall { .. } => comp == driven(axis),
+                _ => false,
             }
-        };
-        let other = if grid.is_3d() {
-            Some(if o1 == comp { o2 } else { o1 })
-        } else {
-            None
-        };
+    }
+
+    /// The tangential ghosts of `f` line by line: on each line and side, the wall's speed at
+    /// the line's place on the wall ([`tangential_speed`](Self::tangential_speed)), then the
+    /// side's ghost layers ([`fill_line_ghosts`]).
+    fn fill_tangential_lines(
+        &self,
+        grid: &Grid,
+        f: &mut Field,
+        lines: &Lines,
+        axis: usize,
+        comp: usize,
+        when: WallTime,
+    ) {
+        let (n, step) = (lines.n, lines.step);
+        let place = WallPlace::new(grid, axis, comp);
         let sides = [
             (Side::normal_to(axis, false), 0isize, -1isize),
             (Side::normal_to(axis, true), n - 1, 1),
         ];
-        // A wall that drives this component at a time other than `Homogeneous` has a speed
-        // that varies along the wall: then line by line below; else every ghost is a rule of
-        // one value.
-        // A wall with a direction drives both tangential components.
-        let varies = |side: Side| {
-            when != WallTime::Homogeneous
-                && match self.get(side) {
-                    Boundary::MovingWall {
-                        direction: Some(_), ..
-                    } => true,
-                    Boundary::MovingWall { .. } => comp == driven(axis),
-                    _ => false,
-                }
-        };
-        if !sides.iter().any(|&(side, ..)| varies(side)) {
-            let rules = Rules::of_sides(self, axis, n, |bc, at| match bc {
-                Boundary::Periodic => (at.periodic, Rule::Copy),
-                Boundary::NoSlip => (at.mirror, Rule::Negate),
-                Boundary::MovingWall { .. } => (at.mirror, Rule::Wall(0.0)),
-                Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => (at.mirror, Rule::Copy),
-                Boundary::Outflow => (at.first, Rule::Copy),
-            });
-            lines.apply(f.data_mut(), &rules);
-            return;
-        }
         let d = f.data_mut();
-        let at = |base: isize, a: isize| (base + a * step) as usize;
         for (base, t) in lines.each() {
             for (side, first, dir) in sides {
                 let bc = self.get(side);
-                let speed = match bc {
-                    Boundary::MovingWall {
-                        direction: None, ..
-                    } if comp == driven(axis) => self.wall_speed(
-                        side,
-                        (comp, position(t, comp)),
-                        other.map(|o| (o, position(t, o))),
-                        when,
-                    ),
-                    Boundary::MovingWall {
-                        direction: Some((x, y, z)),
-                        ..
-                    } => {
-                        let share = [x, y, z][comp] / (x * x + y * y + z * z).sqrt();
-                        share
-                            * self.wall_speed(
-                                side,
-                                (comp, position(t, comp)),
-                                other.map(|o| (o, position(t, o))),
-                                when,
-                            )
-                    }
-                    _ => 0.0,
+                let speed = self.tangential_speed(side, bc, &place, t, when);
+                let line = GhostLine {
+                    base,
+                    step,
+                    n,
+                    first,
+                    dir,
                 };
-                for g in 1..=G {
-                    let ghost = first + dir * g;
-                    let mirror = first - dir * (g - 1);
-                    let val = match bc {
-                        Boundary::Periodic => {
-                            d[at(base, if dir < 0 { ghost + n } else { ghost - n })]
-                        }
-                        Boundary::NoSlip => -d[at(base, mirror)],
-                        Boundary::MovingWall { .. } => 2.0 * speed - d[at(base, mirror)],
-                        Boundary::FreeSlip | Boundary::Symmetry | Boundary::Axis => {
-                            d[at(base, mirror)]
-                        }
-                        Boundary::Outflow => d[at(base, first)],
-                    };
-                    d[at(base, ghost)] = val;
-                }
+                fill_line_ghosts(d, &line, bc, speed);
             }
+        }
+    }
+
+    /// The speed along the place's component of the wall `bc` at `side` at the place of the
+    /// line with in-wall indices `t`: its own speed where it drives the component without a
+    /// direction, its speed times the direction's share along the component where a direction
+    /// is given, else 0.
+    #[inline]
+    fn tangential_speed(
+        &self,
+        side: Side,
+        bc: &Boundary,
+        place: &WallPlace,
+        t: [isize; 2],
+        when: WallTime,
+    ) -> f64 {
+        let comp = place.comp;
+        let share = match bc {
+            Boundary::MovingWall {
+                direction: None, ..
+            } if place.driven => None,
+            Boundary::MovingWall {
+                direction: Some((x, y, z)),
+                ..
+            } => Some([x, y, z][comp] / (x * x + y * y + z * z).sqrt()),
+            _ => return 0.0,
+        };
+        let speed = self.wall_speed(
+            side,
+            (comp, place.position(t, comp)),
+            place.other.map(|o| (o, place.position(t, o))),
+            when,
+        );
+        match share {
+            Some(share) => share * speed,
+            None => speed,
         }
     }
 

@@ -521,86 +521,16 @@ impl Scene {
         Ok(())
     }
 
-    /// The boundary conditions.
+    /// The boundary conditions: each side's ([`validate_side`](Self::validate_side)), then the
+    /// axis of an axisymmetric scene whose r_min is 0.
     fn validate_boundaries(&self) -> Checked {
-        // Boundaries.
         let dims = if self.geometry == Geometry::Cartesian3D {
             3
         } else {
             2
         };
         for &side in Side::of(dims) {
-            let b = self.boundaries.get(side);
-            let f = format!("boundaries.{}", side.field_name());
-            let partner = self.boundaries.get(side.opposite());
-            if *b == Boundary::Periodic && *partner != Boundary::Periodic {
-                return err(
-                    &f,
-                    format!(
-                        "is Periodic but its partner boundaries.{} is {:?}: a periodic side needs a periodic partner",
-                        side.opposite().field_name(),
-                        partner
-                    ),
-                );
-            }
-            if *b == Boundary::Axis {
-                if side != Side::XMin || self.geometry != Geometry::Axisymmetric {
-                    return err(
-                        &f,
-                        "Axis is only allowed on x_min (r_min) of an axisymmetric scene",
-                    );
-                }
-                if self.domain.x.0 != 0.0 {
-                    return err(
-                        &f,
-                        format!("Axis needs r_min = 0, got domain.x.0 = {}", self.domain.x.0),
-                    );
-                }
-            }
-            if let Boundary::MovingWall {
-                speed,
-                profile,
-                motion,
-                direction,
-            } = b
-            {
-                if !speed.is_finite() {
-                    return err(&format!("{f}.speed"), "must be finite");
-                }
-                if let Some((x, y, z)) = *direction {
-                    let d = [x, y, z];
-                    let normal = d[side.axis()];
-                    let norm = (x * x + y * y + z * z).sqrt();
-                    if !(norm.is_finite() && norm > 0.0) || normal != 0.0 || (dims == 2 && z != 0.0)
-                    {
-                        return err(
-                            &format!("{f}.direction"),
-                            format!(
-                                "({x}, {y}, {z}) must be a non-zero direction in the wall's plane: \
-                                 its component along the wall's normal (axis {}) zero{}",
-                                ["x", "y", "z"][side.axis()],
-                                if dims == 2 {
-                                    ", and z zero in two dimensions"
-                                } else {
-                                    ""
-                                }
-                            ),
-                        );
-                    }
-                }
-                if let WallProfile::Sin2Ramp { width } = profile {
-                    positive(&format!("{f}.profile.width"), *width)?;
-                }
-                match motion {
-                    WallMotion::Sin { omega } if !omega.is_finite() => {
-                        return err(&format!("{f}.motion.omega"), "must be finite");
-                    }
-                    WallMotion::Until { t_off } if !t_off.is_finite() => {
-                        return err(&format!("{f}.motion.t_off"), "must be finite");
-                    }
-                    _ => {}
-                }
-            }
+            self.validate_side(side, dims)?;
         }
         if self.geometry == Geometry::Axisymmetric
             && self.domain.x.0 == 0.0
@@ -616,4 +546,94 @@ impl Scene {
         }
         Ok(())
     }
+
+    /// The condition on `side` of a `dims`-dimensional scene: a periodic side has a periodic
+    /// partner, an axis is r_min = 0 of an axisymmetric scene, a moving wall's parameters are
+    /// valid ([`moving_wall`]).
+    fn validate_side(&self, side: Side, dims: usize) -> Checked {
+        let b = self.boundaries.get(side);
+        let f = format!("boundaries.{}", side.field_name());
+        let partner = self.boundaries.get(side.opposite());
+        if *b == Boundary::Periodic && *partner != Boundary::Periodic {
+            return err(
+                &f,
+                format!(
+                    "is Periodic but its partner boundaries.{} is {:?}: a periodic side needs a periodic partner",
+                    side.opposite().field_name(),
+                    partner
+                ),
+            );
+        }
+        if *b == Boundary::Axis {
+            if side != Side::XMin || self.geometry != Geometry::Axisymmetric {
+                return err(
+                    &f,
+                    "Axis is only allowed on x_min (r_min) of an axisymmetric scene",
+                );
+            }
+            if self.domain.x.0 != 0.0 {
+                return err(
+                    &f,
+                    format!("Axis needs r_min = 0, got domain.x.0 = {}", self.domain.x.0),
+                );
+            }
+        }
+        moving_wall(&f, side, dims, b)
+    }
+}
+
+/// A moving wall's parameters (the field `f` is its side's), if `b` is one: a finite speed, a
+/// direction (if given) non-zero in the wall's plane ([`wall_direction`]), a positive ramp
+/// width, a finite angular frequency or switch-off time.
+fn moving_wall(f: &str, side: Side, dims: usize, b: &Boundary) -> Checked {
+    let Boundary::MovingWall {
+        speed,
+        profile,
+        motion,
+        direction,
+    } = b
+    else {
+        return Ok(());
+    };
+    if !speed.is_finite() {
+        return err(&format!("{f}.speed"), "must be finite");
+    }
+    if let Some(d) = *direction {
+        wall_direction(f, side, dims, d)?;
+    }
+    if let WallProfile::Sin2Ramp { width } = profile {
+        positive(&format!("{f}.profile.width"), *width)?;
+    }
+    match motion {
+        WallMotion::Sin { omega } if !omega.is_finite() => {
+            err(&format!("{f}.motion.omega"), "must be finite")
+        }
+        WallMotion::Until { t_off } if !t_off.is_finite() => {
+            err(&format!("{f}.motion.t_off"), "must be finite")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A moving wall's direction `(x, y, z)` on `side`: finite, non-zero, with no component along
+/// the wall's normal, and z zero in two dimensions.
+fn wall_direction(f: &str, side: Side, dims: usize, (x, y, z): (f64, f64, f64)) -> Checked {
+    let normal = [x, y, z][side.axis()];
+    let norm = (x * x + y * y + z * z).sqrt();
+    if !(norm.is_finite() && norm > 0.0) || normal != 0.0 || (dims == 2 && z != 0.0) {
+        return err(
+            &format!("{f}.direction"),
+            format!(
+                "({x}, {y}, {z}) must be a non-zero direction in the wall's plane: \
+                 its component along the wall's normal (axis {}) zero{}",
+                ["x", "y", "z"][side.axis()],
+                if dims == 2 {
+                    ", and z zero in two dimensions"
+                } else {
+                    ""
+                }
+            ),
+        );
+    }
+    Ok(())
 }

@@ -141,53 +141,74 @@ const B: &str = r#"(name: "b", shape: Disk(center: (0.7, 0.5), radius: 0.1), den
 fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
     let list = |v: &[&str]| format!("solids: [{}],", v.join(", "));
     assert!(build(&with(&list(&[A, B]))).is_ok());
-    let both = format!(
-        "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}",
-        list(&[A])
-    );
-    let e = refused(&with(&both));
-    assert!(
-        e.contains("solids") && e.contains("both `solid` and `solids`"),
-        "{e}"
-    );
-    let e = refused(&with("solids: [],"));
-    assert!(e.contains("solids: an empty list"), "{e}");
-    let e = refused(&with(&list(&[A, &A.replace("0.3", "0.7")])));
-    assert!(
-        e.contains("solids[1].name") && e.contains("also the name of solids[0]"),
-        "{e}"
-    );
-    let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"\"")])));
-    assert!(e.contains("solids[1].name: empty"), "{e}");
-    let e = refused(&with(&list(&[A, &B.replace("\"b\"", "\"b c\"")])));
-    assert!(e.contains("solids[1].name") && e.contains("' '"), "{e}");
-    // Overlap at t = 0: the disks at 0.3 and 0.45 (radius 0.1) share a lens.
-    let e = refused(&with(&list(&[A, &B.replace("0.7", "0.45")])));
-    assert!(
-        e.contains("solids[1].shape") && e.contains("\"b\" overlaps body \"a\""),
-        "{e}"
-    );
     // Touching (centres 0.2 apart) is not an overlap.
     assert!(build(&with(&list(&[A, &B.replace("0.7", "0.5")]))).is_ok());
-    let e = refused(&with(&list(&[A, &B.replace("(0.7, 0.5)", "(3.0, 0.5)")])));
-    assert!(
-        e.contains("solids[1].shape") && e.contains("covers no cell"),
-        "{e}"
-    );
-    let e = refused(&with(&list(&[A, &B.replace("3.0)", "-3.0)")])));
-    assert!(
-        e.contains("solids[1].density") && e.contains("body \"b\""),
-        "{e}"
-    );
     let law = B.replace(
         "3.0)",
         "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
     );
-    let e = refused(&with(&list(&[A, &law])));
-    assert!(
-        e.contains("solids[1].law") && e.contains("issue 42") && e.contains("per-body deformation"),
-        "{e}"
-    );
+    // Each scene's bodies and the fragments its refusal holds.
+    let refusals: [(String, &[&str]); 11] = [
+        (
+            format!(
+                "solid: (shape: Disk(center: (0.5, 0.5), radius: 0.1), density: 2.0), {}",
+                list(&[A])
+            ),
+            &["solids", "both `solid` and `solids`"],
+        ),
+        ("solids: [],".into(), &["solids: an empty list"]),
+        (
+            list(&[A, &A.replace("0.3", "0.7")]),
+            &["solids[1].name", "also the name of solids[0]"],
+        ),
+        (
+            list(&[A, &B.replace("\"b\"", "\"\"")]),
+            &["solids[1].name: empty"],
+        ),
+        (
+            list(&[A, &B.replace("\"b\"", "\"b c\"")]),
+            &["solids[1].name", "' '"],
+        ),
+        // Overlap at t = 0: the disks at 0.3 and 0.45 (radius 0.1) share a lens.
+        (
+            list(&[A, &B.replace("0.7", "0.45")]),
+            &["solids[1].shape", "\"b\" overlaps body \"a\""],
+        ),
+        (
+            list(&[A, &B.replace("(0.7, 0.5)", "(3.0, 0.5)")]),
+            &["solids[1].shape", "covers no cell"],
+        ),
+        (
+            list(&[A, &B.replace("3.0)", "-3.0)")]),
+            &["solids[1].density", "body \"b\""],
+        ),
+        (
+            list(&[A, &law]),
+            &["solids[1].law", "issue 42", "per-body deformation"],
+        ),
+        // A misspelt setting: the message lists a body's settings (`solid:` without a name).
+        (
+            list(&[A, &B.replace("density", "densty")]),
+            &[
+                "solids.[1].densty: Unexpected field named `densty` in `BodySpec`, expected one \
+                 of `name`, `shape`, `density`, `viscosity`, `velocity`, or `law` instead",
+            ],
+        ),
+        (
+            format!(
+                "solid: {},",
+                A.replace("name: \"a\", ", "").replace("density", "densty")
+            ),
+            &[
+                "solid.densty: Unexpected field named `densty` in `Solid`, expected one of \
+                 `shape`, `density`, `viscosity`, `velocity`, or `law` instead",
+            ],
+        ),
+    ];
+    for (bodies, fragments) in refusals {
+        let e = refused(&with(&bodies));
+        assert!(fragments.iter().all(|f| e.contains(f)), "{bodies}: {e}");
+    }
 }
 
 #[test]

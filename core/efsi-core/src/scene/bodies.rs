@@ -18,33 +18,19 @@
 //! ([`Solid::validate`]), the path naming the body (`solids[1].density`). The checks that need the grid — a body covers a cell, no two bodies
 //! overlap at t = 0 — belong to the VOF stage's plugin, which turns shapes into cell fractions.
 
-use super::solid::{LawSpec, SceneSolid, Shape, Solid};
-use super::{Scene, Vector};
+use super::Scene;
+use super::solid::{SceneSolid, Solid, solid_settings};
 use crate::validate::{Checked, err};
-use serde::{Deserialize, Serialize};
 
 /// The name of the body of a scene that writes the single `solid:`.
 pub const SINGLE: &str = "solid";
 
-/// One entry of `solids: [ … ]`: a named [`Solid`].
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BodySpec {
-    /// The body's name, for its probes and outputs.
-    pub name: String,
-    /// The region it occupies at t = 0 ([`Solid::shape`]).
-    pub shape: Shape,
-    /// Density ρ_k (kg/m³, > 0).
-    pub density: f64,
-    /// Viscosity μ_k (Pa·s, ≥ 0); default the seed's rule μ_k = μ_f ρ_k/ρ_f.
-    #[serde(default)]
-    pub viscosity: Option<f64>,
-    /// Initial velocity (default: at rest): one component per axis, as [`Solid::velocity`].
-    #[serde(default)]
-    pub velocity: Option<Vector>,
-    /// The hyperelastic law; without one the body is a dense viscous body (a drop).
-    #[serde(default)]
-    pub law: Option<LawSpec>,
+solid_settings! {
+    /// One entry of `solids: [ … ]`: a named [`Solid`] (its settings, as [`Solid`]'s).
+    pub struct BodySpec {
+        /// The body's name, for its probes and outputs.
+        pub name: String,
+    }
 }
 
 /// A body of the scene: its name and its material and shape.

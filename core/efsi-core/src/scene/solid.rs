@@ -24,25 +24,44 @@ use serde::{Deserialize, Serialize};
 
 pub use super::shape::{Axis, Shape};
 
-/// A solid body (or several, as a union of shapes) of one material.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Solid {
-    /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry; a
-    /// three-dimensional shape in a three-dimensional scene).
-    pub shape: Shape,
-    /// Density ρ_s (kg/m³, > 0).
-    pub density: f64,
-    /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
-    #[serde(default)]
-    pub viscosity: Option<f64>,
-    /// Initial velocity of the solid (default: at rest): `(vx, vy)` in a two-dimensional
-    /// scene (`(0, v_z)` when axisymmetric), `(vx, vy, vz)` in a Cartesian3D one.
-    #[serde(default)]
-    pub velocity: Option<Vector>,
-    /// The hyperelastic law; without one the solid is a dense viscous body (no elastic stage).
-    #[serde(default)]
-    pub law: Option<LawSpec>,
+/// A struct of a body's settings: the fields given (a `solids` entry's `name`), then those of a
+/// [`Solid`] — `shape`, `density`, `viscosity`, `velocity`, `law` — with unknown fields refused.
+/// The one list of a body's settings, for [`Solid`] and for an entry of `solids: [ … ]`
+/// (`bodies::BodySpec`): serde's `flatten` cannot be combined with `deny_unknown_fields`.
+macro_rules! solid_settings {
+    (
+        $(#[$attr:meta])*
+        pub struct $name:ident { $($(#[$fattr:meta])* pub $field:ident: $ty:ty,)* }
+    ) => {
+        $(#[$attr])*
+        #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            $($(#[$fattr])* pub $field: $ty,)*
+            /// The region it occupies at t = 0 (x–y, or r–z in axisymmetric geometry; a
+            /// three-dimensional shape in a three-dimensional scene).
+            pub shape: $crate::scene::solid::Shape,
+            /// Density ρ_s (kg/m³, > 0).
+            pub density: f64,
+            /// Viscosity μ_s (Pa·s, ≥ 0); default the seed's rule μ_s = μ_f ρ_s/ρ_f.
+            #[serde(default)]
+            pub viscosity: Option<f64>,
+            /// Initial velocity (default: at rest): `(vx, vy)` in a two-dimensional scene
+            /// (`(0, v_z)` when axisymmetric), `(vx, vy, vz)` in a Cartesian3D one.
+            #[serde(default)]
+            pub velocity: Option<$crate::scene::Vector>,
+            /// The hyperelastic law; without one the body is a dense viscous body (no elastic
+            /// stage).
+            #[serde(default)]
+            pub law: Option<$crate::scene::solid::LawSpec>,
+        }
+    };
+}
+pub(super) use solid_settings;
+
+solid_settings! {
+    /// A solid body (or several, as a union of shapes) of one material.
+    pub struct Solid {}
 }
 
 /// A constitutive law named in a scene.
@@ -72,33 +91,57 @@ impl Solid {
     /// Check the solid against `scene`: its shape, density (and the density ratio), viscosity
     /// and velocity; on failure the setting's path and what was expected.
     pub fn validate(&self, scene: &Scene) -> Checked {
-        self.shape
-            .check()
-            .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
         let dims = if scene.geometry == Geometry::Cartesian3D {
             3
         } else {
             2
         };
-        if self.shape.dims() != dims {
-            return err(
-                "solid.shape",
-                format!(
-                    "a {}-D shape in a {dims}-D scene (geometry {:?}): the shapes of a \
-                     {dims}-D scene are {}",
-                    self.shape.dims(),
-                    scene.geometry,
-                    if dims == 3 {
-                        "Sphere, Ellipsoid, Box, Cylinder, HalfSpace and their combinations"
-                    } else {
-                        "Disk, Rectangle, HalfPlane and their combinations"
-                    }
-                ),
-            );
+        self.check_shape(scene, dims)?;
+        self.check_density(scene)?;
+        if let Some(mu) = self.viscosity {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return err(
+                    "solid.viscosity",
+                    format!("must be a finite number ≥ 0, got {}", crate::scene::num(mu)),
+                );
+            }
+            scene.check_diffusion("solid.viscosity", mu, self.density)?;
         }
+        if let Some(v) = self.velocity {
+            check_velocity(v, scene.geometry, dims)?;
+        }
+        Ok(())
+    }
+
+    /// The shape is valid and has the scene's `dims` axes.
+    fn check_shape(&self, scene: &Scene, dims: usize) -> Checked {
+        self.shape
+            .check()
+            .map_err(|(at, m)| (format!("solid.shape{at}"), m))?;
+        if self.shape.dims() == dims {
+            return Ok(());
+        }
+        err(
+            "solid.shape",
+            format!(
+                "a {}-D shape in a {dims}-D scene (geometry {:?}): the shapes of a \
+                 {dims}-D scene are {}",
+                self.shape.dims(),
+                scene.geometry,
+                if dims == 3 {
+                    "Sphere, Ellipsoid, Box, Cylinder, HalfSpace and their combinations"
+                } else {
+                    "Disk, Rectangle, HalfPlane and their combinations"
+                }
+            ),
+        )
+    }
+
+    /// The density is positive and within [1e-6, 1e6] of the fluid's: far beyond the ratios
+    /// the scheme is meant for (DESIGN: up to 1e4), the pressure equation's coefficients 1/ρ
+    /// span more than floating point resolves.
+    fn check_density(&self, scene: &Scene) -> Checked {
         positive("solid.density", self.density)?;
-        // Far beyond the ratios the scheme is meant for (DESIGN: up to 1e4), the pressure
-        // equation's coefficients 1/ρ span more than floating point resolves.
         let ratio = self.density / scene.fluid.density;
         if !(1e-6..=1e6).contains(&ratio) {
             return err(
@@ -110,48 +153,42 @@ impl Solid {
                 ),
             );
         }
-        if let Some(mu) = self.viscosity {
-            if !(mu.is_finite() && mu >= 0.0) {
-                return err(
-                    "solid.viscosity",
-                    format!("must be a finite number ≥ 0, got {}", crate::scene::num(mu)),
-                );
-            }
-            scene.check_diffusion("solid.viscosity", mu, self.density)?;
-        }
-        if let Some(v) = self.velocity {
-            let [x, y, z] = v.xyz();
-            finite("solid.velocity", (x, y))?;
-            finite("solid.velocity", (z, 0.0))?;
-            match (dims, v.2.is_some()) {
-                (3, false) => {
-                    return err(
-                        "solid.velocity",
-                        "a Cartesian3D scene's solid velocity has three components (vx, vy, vz), \
-                         got two",
-                    );
-                }
-                (2, true) => {
-                    return err(
-                        "solid.velocity",
-                        format!(
-                            "a {:?} scene has two axes: the solid velocity is (vx, vy), got \
-                             three components",
-                            scene.geometry
-                        ),
-                    );
-                }
-                _ => {}
-            }
-        }
-        if scene.geometry == Geometry::Axisymmetric && self.velocity.is_some_and(|v| v.0 != 0.0) {
-            return err(
-                "solid.velocity",
-                "an axisymmetric body can only move along the axis: (0, v_z)",
-            );
-        }
         Ok(())
     }
+}
+
+/// The initial velocity `v` of a solid in a scene of `geometry` with `dims` axes: finite, one
+/// component per axis, along the axis only when axisymmetric.
+fn check_velocity(v: Vector, geometry: Geometry, dims: usize) -> Checked {
+    let [x, y, z] = v.xyz();
+    finite("solid.velocity", (x, y))?;
+    finite("solid.velocity", (z, 0.0))?;
+    match (dims, v.2.is_some()) {
+        (3, false) => {
+            return err(
+                "solid.velocity",
+                "a Cartesian3D scene's solid velocity has three components (vx, vy, vz), \
+                 got two",
+            );
+        }
+        (2, true) => {
+            return err(
+                "solid.velocity",
+                format!(
+                    "a {geometry:?} scene has two axes: the solid velocity is (vx, vy), got \
+                     three components",
+                ),
+            );
+        }
+        _ => {}
+    }
+    if geometry == Geometry::Axisymmetric && v.0 != 0.0 {
+        return err(
+            "solid.velocity",
+            "an axisymmetric body can only move along the axis: (0, v_z)",
+        );
+    }
+    Ok(())
 }
 
 /// The `solid` section of a scene as a [`Solid`].

@@ -303,10 +303,6 @@ pub fn write_rectilinear(
     format: &VtrFormat,
     notes: &[(&str, &str)],
 ) -> io::Result<()> {
-    if !time.is_finite() {
-        return Err(invalid(path, format_args!("the time {time} is not finite")));
-    }
-    check_arrays(path, arrays, cell_count(nodes))?;
     let whole: Vec<Box<Produce>> = arrays
         .iter()
         .map(|a| {
@@ -315,16 +311,20 @@ pub fn write_rectilinear(
                 as Box<Produce>
         })
         .collect();
-    let sources: Vec<CellSource> = arrays
+    write_rectilinear_from(path, nodes, time, &sources(arrays, &whole), format, notes)
+}
+
+/// The sources of `arrays`, the values of each made by its entry of `produce`.
+fn sources<'a>(arrays: &[CellArray<'a>], produce: &'a [Box<Produce<'a>>]) -> Vec<CellSource<'a>> {
+    arrays
         .iter()
-        .zip(&whole)
+        .zip(produce)
         .map(|(a, values)| CellSource {
             name: a.name,
             components: a.components,
             values: &**values,
         })
-        .collect();
-    write_rectilinear_from(path, nodes, time, &sources, format, notes)
+        .collect()
 }
 
 /// The cells of a rectilinear mesh of `nodes` (one layer along a flat axis).
@@ -365,90 +365,150 @@ pub fn write_rectilinear_from(
     }
     check_sources(path, sources)?;
     check_notes(path, notes)?;
-    let counts = nodes.each_ref().map(Vec::len);
-    let cells = cell_count(nodes);
-    let float32 = format.precision == VtkPrecision::Float32;
-    let arrays = 0..sources.len();
-    let point_blocks = arrays.clone().filter(|_| format.point_data);
-    let blocks: Vec<Block> = [Block::Time, Block::Time]
-        .into_iter()
-        .chain(point_blocks.map(Block::Points))
-        .chain(arrays.map(Block::Cells))
-        .chain((0..3).map(Block::Axis))
-        .collect();
-    // Each block's values handed to `sink` in pieces, and whether they go as Float32.
-    let produce = |b: Block, sink: &mut dyn FnMut(&[f64]) -> io::Result<()>| match b {
-        Block::Time => sink(&[time]),
-        Block::Axis(a) => sink(&nodes[a]),
-        Block::Cells(k) => counted(path, &sources[k], cells, sink),
-        Block::Points(k) => {
-            let s = &sources[k];
-            let mut whole = Vec::with_capacity(cells * s.components);
-            counted(path, s, cells, &mut |v| {
-                whole.extend_from_slice(v);
-                Ok(())
-            })?;
-            sink(&average_to_nodes(counts, &whole, s.components))
-        }
-    };
-    let single = |b: Block| float32 && matches!(b, Block::Points(_) | Block::Cells(_));
-    let [m0, m1, m2] = counts.map(|m| m.saturating_sub(1));
+    let appended = Appended::new(path, nodes, time, sources, format);
+    let [m0, m1, m2] = appended.counts.map(|m| m.saturating_sub(1));
     let extent = format!("0 {m0} 0 {m1} 0 {m2}");
-    let tail = b"\n  </AppendedData>\n</VTKFile>\n";
+    let header = |offsets: &[u64]| header(&extent, sources, format, notes, offsets);
     match format.compression {
-        VtkCompression::None => {
-            let payload = |b: Block| {
-                let values = match b {
-                    Block::Time => 1,
-                    Block::Axis(a) => counts[a],
-                    Block::Cells(k) => cells * sources[k].components,
-                    Block::Points(k) => counts.iter().product::<usize>() * sources[k].components,
-                };
-                (if single(b) { 4 } else { 8 }) * values
-            };
-            let offsets: Vec<u64> = blocks
-                .iter()
-                .scan(0u64, |at, &b| {
-                    let here = *at;
-                    *at += 8 + payload(b) as u64;
-                    Some(here)
-                })
-                .collect();
-            let h = header(&extent, sources, format, notes, &offsets);
-            write_atomically(path, |w| {
-                w.write_all(h.as_bytes())?;
-                for &b in &blocks {
-                    w.write_all(&(payload(b) as u64).to_le_bytes())?;
-                    produce(b, &mut |v| {
-                        encode_values(v, single(b), &mut |x| w.write_all(x))
-                    })?;
-                }
-                w.write_all(tail)
-            })
-        }
-        VtkCompression::Zlib => {
-            let encoded = blocks
-                .iter()
-                .map(|&b| compress_block(&|sink| produce(b, sink), single(b)))
-                .collect::<io::Result<Vec<_>>>()?;
-            let offsets: Vec<u64> = encoded
-                .iter()
-                .scan(0u64, |at, e| {
-                    let here = *at;
-                    *at += e.len() as u64;
-                    Some(here)
-                })
-                .collect();
-            let h = header(&extent, sources, format, notes, &offsets);
-            write_atomically(path, |w| {
-                w.write_all(h.as_bytes())?;
-                for e in &encoded {
-                    w.write_all(e)?;
-                }
-                w.write_all(tail)
-            })
+        VtkCompression::None => appended.write_raw(&header),
+        VtkCompression::Zlib => appended.write_zlib(&header),
+    }
+}
+
+/// The end of a `.vtr` file, after the appended blocks.
+const TAIL: &[u8] = b"\n  </AppendedData>\n</VTKFile>\n";
+
+/// The appended blocks of one `.vtr` file and what they are made of: the time, the arrays of
+/// `sources` (as point data too with `VtrFormat::point_data`), the node coordinates.
+struct Appended<'a> {
+    path: &'a Path,
+    nodes: &'a [Vec<f64>; 3],
+    time: f64,
+    sources: &'a [CellSource<'a>],
+    /// Nodes along each axis.
+    counts: [usize; 3],
+    cells: usize,
+    /// Whether the arrays go as `Float32`.
+    float32: bool,
+    /// The blocks in the order of the appended section.
+    blocks: Vec<Block>,
+}
+
+impl<'a> Appended<'a> {
+    fn new(
+        path: &'a Path,
+        nodes: &'a [Vec<f64>; 3],
+        time: f64,
+        sources: &'a [CellSource<'a>],
+        format: &VtrFormat,
+    ) -> Self {
+        let arrays = 0..sources.len();
+        let point_blocks = arrays.clone().filter(|_| format.point_data);
+        let blocks: Vec<Block> = [Block::Time, Block::Time]
+            .into_iter()
+            .chain(point_blocks.map(Block::Points))
+            .chain(arrays.map(Block::Cells))
+            .chain((0..3).map(Block::Axis))
+            .collect();
+        Appended {
+            path,
+            nodes,
+            time,
+            sources,
+            counts: nodes.each_ref().map(Vec::len),
+            cells: cell_count(nodes),
+            float32: format.precision == VtkPrecision::Float32,
+            blocks,
         }
     }
+
+    /// The values of block `b` handed to `sink` in pieces.
+    fn produce(&self, b: Block, sink: &mut dyn FnMut(&[f64]) -> io::Result<()>) -> io::Result<()> {
+        match b {
+            Block::Time => sink(&[self.time]),
+            Block::Axis(a) => sink(&self.nodes[a]),
+            Block::Cells(k) => counted(self.path, &self.sources[k], self.cells, sink),
+            Block::Points(k) => {
+                let s = &self.sources[k];
+                let mut whole = Vec::with_capacity(self.cells * s.components);
+                counted(self.path, s, self.cells, &mut |v| {
+                    whole.extend_from_slice(v);
+                    Ok(())
+                })?;
+                sink(&average_to_nodes(self.counts, &whole, s.components))
+            }
+        }
+    }
+
+    /// Whether block `b` goes as `Float32`.
+    fn single(&self, b: Block) -> bool {
+        self.float32 && matches!(b, Block::Points(_) | Block::Cells(_))
+    }
+
+    /// The bytes of block `b` uncompressed.
+    fn payload(&self, b: Block) -> usize {
+        let values = match b {
+            Block::Time => 1,
+            Block::Axis(a) => self.counts[a],
+            Block::Cells(k) => self.cells * self.sources[k].components,
+            Block::Points(k) => self.counts.iter().product::<usize>() * self.sources[k].components,
+        };
+        (if self.single(b) { 4 } else { 8 }) * values
+    }
+
+    /// The file with raw blocks (each its byte count, then its values), streamed through the
+    /// file's buffer.
+    fn write_raw(&self, header: &dyn Fn(&[u64]) -> String) -> io::Result<()> {
+        let sizes = self.blocks.iter().map(|&b| 8 + self.payload(b) as u64);
+        self.write_file(&header(&offsets(sizes)), |w| {
+            for &b in &self.blocks {
+                w.write_all(&(self.payload(b) as u64).to_le_bytes())?;
+                self.produce(b, &mut |v| {
+                    encode_values(v, self.single(b), &mut |x| w.write_all(x))
+                })?;
+            }
+            Ok(())
+        })
+    }
+
+    /// The file with zlib-compressed blocks ([`compress_block`]), each held compressed until
+    /// the header, which needs their sizes, is written.
+    fn write_zlib(&self, header: &dyn Fn(&[u64]) -> String) -> io::Result<()> {
+        let encoded = self
+            .blocks
+            .iter()
+            .map(|&b| compress_block(&|sink| self.produce(b, sink), self.single(b)))
+            .collect::<io::Result<Vec<_>>>()?;
+        let sizes = encoded.iter().map(|e| e.len() as u64);
+        self.write_file(&header(&offsets(sizes)), |w| {
+            encoded.iter().try_for_each(|e| w.write_all(e))
+        })
+    }
+
+    /// The file (atomically: [`write_atomically`]): `header`, the appended blocks `blocks`
+    /// writes, the tail.
+    fn write_file(
+        &self,
+        header: &str,
+        blocks: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> io::Result<()>,
+    ) -> io::Result<()> {
+        write_atomically(self.path, |w| {
+            w.write_all(header.as_bytes())?;
+            blocks(w)?;
+            w.write_all(TAIL)
+        })
+    }
+}
+
+/// The offset of each block of the appended section from the blocks' `sizes` in bytes.
+fn offsets(sizes: impl Iterator<Item = u64>) -> Vec<u64> {
+    sizes
+        .scan(0u64, |at, size| {
+            let here = *at;
+            *at += size;
+            Some(here)
+        })
+        .collect()
 }
 
 /// The values of `source` handed to `sink`, failing with `InvalidInput` if they are not
@@ -497,27 +557,6 @@ fn check_sources(path: &Path, sources: &[CellSource]) -> io::Result<()> {
             return Err(invalid(
                 path,
                 format_args!("cell array `{}` has 0 components", a.name),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// The cell arrays' lengths (`cells` tuples), or the `InvalidInput` error naming the file and
-/// the array (their names and component counts: [`check_sources`]).
-fn check_arrays(path: &Path, arrays: &[CellArray], cells: usize) -> io::Result<()> {
-    for a in arrays {
-        if a.values.len() != cells * a.components {
-            return Err(invalid(
-                path,
-                format_args!(
-                    "cell array `{}` has {} values, expected {} cells × {} components = {}",
-                    a.name,
-                    a.values.len(),
-                    cells,
-                    a.components,
-                    cells * a.components
-                ),
             ));
         }
     }
@@ -960,15 +999,7 @@ mod tests {
                     }) as Box<Produce>
                 })
                 .collect();
-            let sources: Vec<CellSource> = arrays
-                .iter()
-                .zip(&pieces)
-                .map(|(a, v)| CellSource {
-                    name: a.name,
-                    components: a.components,
-                    values: &**v,
-                })
-                .collect();
+            let sources = sources(&arrays, &pieces);
             for precision in [VtkPrecision::Float64, VtkPrecision::Float32] {
                 for compression in [VtkCompression::None, VtkCompression::Zlib] {
                     for point_data in [false, true] {
