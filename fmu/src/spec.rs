@@ -517,10 +517,11 @@ impl Spec {
 /// The probe columns of a scene, in `probes.csv` order (time excluded).
 pub fn probe_columns(scene: &Scene) -> Result<Vec<String>, String> {
     let output = scene.output_spec().map_err(|(f, m)| format!("{f}: {m}"))?;
+    let bodies = efsi_run::probes::body_names(scene);
     Ok(output
         .probes
         .iter()
-        .flat_map(|p| efsi_run::probes::columns(p, scene.geometry))
+        .flat_map(|p| efsi_run::probes::columns(p, scene.geometry, &bodies))
         .collect())
 }
 

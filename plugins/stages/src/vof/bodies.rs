@@ -65,6 +65,7 @@
 //! the bodies' interfaces (gap × stiffness, energy-bounded), a stage of its own.
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
+use efsi_core::body_fractions::BodyFraction;
 use efsi_core::{Field, G, Grid, Region, Stagger};
 
 /// Cells of margin a window keeps around its body's support when it is (re)placed.
@@ -370,6 +371,17 @@ impl BodyWindow {
             }
         }
         Ok((w, 6 + cells))
+    }
+
+    /// Copy the window and `φ_k` on it into `into` (the state's copy of the bodies' fractions,
+    /// [`efsi_core::body_fractions`]), reusing its storage.
+    pub fn publish(&self, into: &mut BodyFraction) {
+        let n = self.grid.n();
+        let phi = &self.phi;
+        let cells = (0..n[2] as isize).flat_map(move |k| {
+            (0..n[1] as isize).flat_map(move |j| (0..n[0] as isize).map(move |i| phi[[i, j, k]]))
+        });
+        into.set(self.lo, n, cells);
     }
 
     /// Cells of the window (its interior): the storage it scales with.

@@ -44,6 +44,7 @@ use super::bodies::BodyWindow;
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
+use efsi_core::body_fractions::{BodyFraction, BodyFractions};
 use efsi_core::operators::minus;
 use efsi_core::scene::{Boundary, Options, Side, Vector};
 use efsi_core::{
@@ -127,6 +128,7 @@ impl StagePlugin for Vof {
                 .list
                 .iter()
                 .map(|b| ManyBody {
+                    name: b.name.clone(),
                     rho: b.solid.density,
                     mu: b.solid.viscosity(&scene.fluid),
                     shape: b.solid.shape.clone(),
@@ -296,6 +298,7 @@ impl VofStage {
             &mut state.mu,
         );
         state.phi = Some(phi);
+        many.publish(state);
         self.keep_velocity(state);
         Ok(())
     }
@@ -333,8 +336,9 @@ struct Many {
     grid: Grid,
 }
 
-/// One body's material, shape and initial velocity.
+/// One body's name, material, shape and initial velocity.
 struct ManyBody {
+    name: String,
     rho: f64,
     mu: f64,
     shape: Shape,
@@ -407,6 +411,16 @@ impl Many {
         bc.fill_velocity3(grid, &mut state.u, &mut state.v, w, 0.0, false);
     }
 
+    /// Each body's window and `φ_k` into the state's [`BodyFractions`] (for the probes and
+    /// outputs per body).
+    fn publish(&self, state: &mut State) {
+        if let Some(all) = state.resources.get_mut::<BodyFractions>() {
+            for (w, b) in self.windows.iter().zip(&mut all.bodies) {
+                w.publish(b);
+            }
+        }
+    }
+
     /// `Σ_k φ_k` into `phi` (interior; the caller fills the ghosts).
     fn total(&self, phi: &mut Field) {
         phi.fill(0.0);
@@ -460,6 +474,20 @@ fn missing() -> StageError {
 }
 
 impl Stage for VofStage {
+    /// Several bodies: their fractions' copy in the state ([`BodyFractions`]), named, set by
+    /// [`Stage::initialize`] and every step.
+    fn init_state(&self, _grid: &Grid, state: &mut State) {
+        if let Some(many) = &self.many {
+            state.resources.insert(BodyFractions {
+                bodies: many
+                    .bodies
+                    .iter()
+                    .map(|b| BodyFraction::named(b.name.clone()))
+                    .collect(),
+            });
+        }
+    }
+
     fn initialize(
         &mut self,
         grid: &Grid,
@@ -568,6 +596,7 @@ impl Stage for VofStage {
                 &mut state.rho,
                 &mut state.mu,
             );
+            many.publish(state);
         } else {
             self.advector.fill_ghosts(&mut phi);
             self.mix(&phi, &mut state.rho, &mut state.mu);
