@@ -1234,6 +1234,85 @@ mod tests {
         assert!((e[0] - (0.375 - 0.75 * 0.125)).abs() < 1e-15, "{e:?}");
     }
 
+    /// Two spheres of a three-dimensional grid, each on its window: the per-body probes are
+    /// each sphere's own (the same kernel as in two dimensions), three centroid columns per
+    /// body; the spheres apart, no cell is shared.
+    #[test]
+    fn probes_of_two_spheres_are_evaluated_per_body_in_three_dimensions() {
+        use efsi_core::body_fractions::{BodyFraction, BodyFractions};
+        let grid = Grid::new_3d([20, 24, 16], (0.0, 1.0), (0.0, 1.2), (0.0, 0.8));
+        let (r, a, b) = (0.18, [0.28, 0.5, 0.4], [0.75, 0.78, 0.4]);
+        let mut state = state_with(&grid, Field::zeros(&grid));
+        let mut all = BodyFractions::default();
+        for (name, c) in [("a", a), ("b", b)] {
+            let own = ball(&grid, c, r);
+            // The window: the sphere's bounding cells.
+            let origin = [grid.x0, grid.y0, grid.z0];
+            let cell = |x: f64, a: usize| ((x - origin[a]) / grid.h()[a]).floor() as usize;
+            let lo: [usize; 3] = std::array::from_fn(|k| cell(c[k] - r, k));
+            let hi: [usize; 3] = std::array::from_fn(|k| cell(c[k] + r, k));
+            let n: [usize; 3] = std::array::from_fn(|k| hi[k] - lo[k] + 1);
+            let mut body = BodyFraction::named(name);
+            let values = (0..n[2]).flat_map(|k| {
+                let own = &own;
+                (0..n[1]).flat_map(move |j| {
+                    (0..n[0]).map(move |i| {
+                        own[[
+                            (lo[0] + i) as isize,
+                            (lo[1] + j) as isize,
+                            (lo[2] + k) as isize,
+                        ]]
+                    })
+                })
+            });
+            body.set(lo, n, values);
+            let phi = state.phi.as_mut().unwrap();
+            for (p, q) in phi.data_mut().iter_mut().zip(own.data()) {
+                *p += q;
+            }
+            // The sphere's probes alone, on a state holding it only.
+            let alone = state_with(&grid, own);
+            let mut want = Vec::new();
+            for p in [ProbeSpec::SolidVolume, ProbeSpec::SolidCentroid] {
+                evaluate(&p, &grid, &alone, (0.0, 0.0).into(), &[], &mut want);
+            }
+            all.bodies.push(body);
+            assert!((want[2] - c[1]).abs() < 0.01, "{want:?}");
+            state.resources.insert(all.clone());
+            let mut got = Vec::new();
+            for p in [ProbeSpec::SolidVolume, ProbeSpec::SolidCentroid] {
+                evaluate(&p, &grid, &state, (0.0, 0.0).into(), &[], &mut got);
+            }
+            // The last body's group: volume, then x, y, z.
+            let k = all.bodies.len() - 1;
+            let mine = [
+                got[k],
+                got[all.bodies.len() + 3 * k],
+                got[all.bodies.len() + 3 * k + 1],
+            ];
+            assert_eq!(mine, [want[0], want[1], want[2]], "{name}");
+        }
+        let names = ["a".to_string(), "b".to_string()];
+        assert_eq!(
+            columns(&ProbeSpec::SolidCentroid, Geometry::Cartesian3D, &names),
+            [
+                "a.solid_x",
+                "a.solid_y",
+                "a.solid_z",
+                "b.solid_x",
+                "b.solid_y",
+                "b.solid_z"
+            ]
+        );
+        let mut out = Vec::new();
+        for p in [ProbeSpec::SolidPieces, ProbeSpec::BodyContact] {
+            evaluate(&p, &grid, &state, (0.0, 0.0).into(), &[], &mut out);
+        }
+        assert_eq!(out[0], 1.0);
+        assert_eq!(out[2], 1.0);
+        assert_eq!(out[4..], [0.0, 0.0]);
+    }
+
     /// The solid fraction of a sphere of radius `r` about `c` in each cell of `grid`, by
     /// sampling 6³ points per cell (the 2-D grid's one plane: a disk).
     fn ball(grid: &Grid, c: [f64; 3], r: f64) -> Field {

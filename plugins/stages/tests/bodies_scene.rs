@@ -179,6 +179,20 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
         e.contains("solids[1].density") && e.contains("body \"b\""),
         "{e}"
     );
+    // The pair measure needs a pair; the per-body probes run for one body as for several.
+    let probes = |b: &str, p: &str| {
+        with(b).replace(
+            "boundaries:",
+            &format!("output: (probes: [{p}]), boundaries:"),
+        )
+    };
+    let e = refused(&probes(&list(&[A]), "BodyContact"));
+    assert!(
+        e.contains("output.probes[0]") && e.contains("BodyContact measures pairs of bodies"),
+        "{e}"
+    );
+    assert!(build(&probes(&list(&[A, B]), "BodyContact, SolidOverlap")).is_ok());
+    assert!(build(&probes(&list(&[A]), "SolidCentroid, SolidOverlap")).is_ok());
     let law = B.replace(
         "3.0)",
         "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
