@@ -858,7 +858,7 @@ mod tests {
         model.setup_experiment(0.0, Some(1.0)).unwrap();
         model.enter_initialization();
         model.exit_initialization().unwrap();
-        let mut read = |model: &mut crate::model::Model| -> Vec<f64> {
+        let read = |model: &mut crate::model::Model| -> Vec<f64> {
             (0..ports.len() as u32)
                 .map(|k| model.get_real(VR_OUTPUTS + k).unwrap())
                 .collect()
