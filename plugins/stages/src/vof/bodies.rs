@@ -50,7 +50,8 @@
 //! `0 ≤ φ_k ≤ 1` and volume; it does not keep `Σ_k φ_k ≤ 1` in a cell that two bodies enter
 //! together (each reconstructs its own interface as if the rest of the cell were fluid): bodies
 //! must be kept a film apart, by the resolved fluid and, below a cell, by a contact force,
-//! which is not part of this module. The elastic stage keeps one deformation field, so a body
+//! which is not part of this module; the probe `SolidOverlap` (`max_solid_fraction_sum`) shows
+//! `max Σ_k φ_k` at every output, and `BodyContact` the cells two bodies share. The elastic stage keeps one deformation field, so a body
 //! with a law runs only alone (the scene check refuses a law among several bodies).
 //!
 //! # Plan for elastic bodies
