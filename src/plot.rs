@@ -1,6 +1,8 @@
 //! `efsi plot DIR`: a run looked at without ParaView — PNGs of the probe time series
 //! (`probes.png`, one panel per column) and of a field at an output time
-//! (`<field>_t<time>.png`, a colour map with the solid's φ = ½ contour drawn over it in red).
+//! (`<field>_t<time>.png`, a colour map with the solid's φ = ½ contour drawn over it in red;
+//! in a run of several bodies, which writes the array `body_id`, each body's contour in a
+//! colour of its own: [`BODY_COLOURS`], body 1 red).
 //!
 //! **What is drawn by default:** the velocity magnitude with arrows of the velocity (white, on
 //! a coarse lattice, the longest as long as the lattice's spacing), the solid's φ = ½ contour
@@ -519,9 +521,26 @@ fn field_label(name: &str, components: usize, component: Option<usize>) -> Strin
     }
 }
 
+/// The colours of the bodies' interfaces in a run of several bodies, body 1 first (then
+/// again from the first for more bodies than colours).
+pub const BODY_COLOURS: [RGBColor; 6] = [
+    CONTOUR,
+    RGBColor(255, 150, 0),
+    RGBColor(210, 0, 210),
+    RGBColor(0, 0, 0),
+    RGBColor(0, 200, 220),
+    RGBColor(130, 230, 0),
+];
+
 /// The segments of the solid's interface (the `solid_fraction` = ½ contour) over the cells
-/// with edges `e1`, `e2`, when the output has a solid fraction.
-fn interface_segments(data: &VtrData, e1: &[f64], e2: &[f64]) -> Option<Vec<Segment>> {
+/// with edges `e1`, `e2`, when the output has a solid fraction, each group with its colour:
+/// one group in [`CONTOUR`]; in a run of several bodies (the array `body_id`), one group per
+/// body ([`body_contours`]) in its colour of [`BODY_COLOURS`].
+fn interface_segments(
+    data: &VtrData,
+    e1: &[f64],
+    e2: &[f64],
+) -> Option<Vec<(RGBColor, Vec<Segment>)>> {
     let phi = data.cell("solid_fraction")?;
     let centre = |e: &[f64]| {
         e.windows(2)
@@ -529,7 +548,37 @@ fn interface_segments(data: &VtrData, e1: &[f64], e2: &[f64]) -> Option<Vec<Segm
             .collect::<Vec<_>>()
     };
     let shape = (e1.len() - 1, e2.len() - 1);
-    Some(contour(&phi.values, shape, &centre(e1), &centre(e2), 0.5))
+    let (c1, c2) = (centre(e1), centre(e2));
+    Some(match data.cell("body_id") {
+        Some(ids) => body_contours(&phi.values, &ids.values, shape, &c1, &c2)
+            .into_iter()
+            .map(|(k, s)| (BODY_COLOURS[(k - 1) % BODY_COLOURS.len()], s))
+            .collect(),
+        None => vec![(CONTOUR, contour(&phi.values, shape, &c1, &c2, 0.5))],
+    })
+}
+
+/// Each body's interface in a run of several bodies: for body `k` (1, 2, …, the values of
+/// `ids`, the `body_id` array), the ½ contour of the solid fraction `phi` kept in the cells
+/// `ids` gives to `k` (0 elsewhere), as `(k, segments)` in the order of `k`.
+pub fn body_contours(
+    phi: &[f64],
+    ids: &[f64],
+    shape: (usize, usize),
+    c1: &[f64],
+    c2: &[f64],
+) -> Vec<(usize, Vec<Segment>)> {
+    let most = ids.iter().fold(0.0f64, |m, v| m.max(*v)) as usize;
+    (1..=most)
+        .map(|k| {
+            let own: Vec<f64> = phi
+                .iter()
+                .zip(ids)
+                .map(|(f, id)| if *id == k as f64 { *f } else { 0.0 })
+                .collect();
+            (k, contour(&own, shape, c1, c2, 0.5))
+        })
+        .collect()
 }
 
 /// The plot window `(x0, x1, y0, y1)` around edges `e1`, `e2` with the domain's aspect ratio.
@@ -669,11 +718,11 @@ fn plot_field(
                 Rectangle::new([(e1[i], e2[j]), (e1[i + 1], e2[j + 1])], c.filled())
             })
         }))?;
-        if let Some(segments) = &interface {
+        for (colour, segments) in interface.iter().flatten() {
             chart.draw_series(
                 segments
                     .iter()
-                    .map(|&(a, b)| PathElement::new(vec![a, b], CONTOUR.stroke_width(3))),
+                    .map(|&(a, b)| PathElement::new(vec![a, b], colour.stroke_width(3))),
             )?;
         }
         if let Some(arrows) = &arrows {
@@ -693,6 +742,39 @@ fn plot_field(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two bodies side by side: each body's contour lies around its own cells only.
+    #[test]
+    fn each_body_has_its_own_contour() {
+        // 6 × 3 cells: body 1 in column 1, body 2 in column 4 (φ = 1), fluid elsewhere.
+        let (n1, n2) = (6, 3);
+        let mut phi = vec![0.0; n1 * n2];
+        let mut ids = vec![0.0; n1 * n2];
+        for j in 0..n2 {
+            for (i, k) in [(1, 1.0), (4, 2.0)] {
+                phi[j * n1 + i] = 1.0;
+                ids[j * n1 + i] = k;
+            }
+        }
+        let c1: Vec<f64> = (0..n1).map(|i| i as f64 + 0.5).collect();
+        let c2: Vec<f64> = (0..n2).map(|j| j as f64 + 0.5).collect();
+        let got = body_contours(&phi, &ids, (n1, n2), &c1, &c2);
+        assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [1, 2]);
+        for (k, segments) in &got {
+            let x = if *k == 1 { 1.5 } else { 4.5 };
+            assert!(!segments.is_empty());
+            for ((xa, _), (xb, _)) in segments {
+                // Halfway between the body's centres and its neighbours'.
+                assert!(
+                    (xa - x).abs() <= 0.5 && (xb - x).abs() <= 0.5,
+                    "{k}: {segments:?}"
+                );
+            }
+        }
+        // The whole φ's contour is both bodies' together.
+        let all = contour(&phi, (n1, n2), &c1, &c2, 0.5).len();
+        assert_eq!(got[0].1.len() + got[1].1.len(), all);
+    }
 
     #[test]
     fn ticks_are_plain_numbers_where_they_fit() {

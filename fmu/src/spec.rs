@@ -517,10 +517,11 @@ impl Spec {
 /// The probe columns of a scene, in `probes.csv` order (time excluded).
 pub fn probe_columns(scene: &Scene) -> Result<Vec<String>, String> {
     let output = scene.output_spec().map_err(|(f, m)| format!("{f}: {m}"))?;
+    let bodies = efsi_run::probes::body_names(scene);
     Ok(output
         .probes
         .iter()
-        .flat_map(|p| efsi_run::probes::columns(p, scene.geometry))
+        .flat_map(|p| efsi_run::probes::columns(p, scene.geometry, &bodies))
         .collect())
 }
 
@@ -813,6 +814,71 @@ mod tests {
         other.outputs.pop();
         assert_ne!(other.token(), spec.token());
         assert_eq!(Spec::from_ron(&spec.to_ron()).unwrap(), spec);
+    }
+
+    /// A scene of several bodies (`cases/two_drops.ron`): its outputs are the probe columns
+    /// named per body, and a model steps them — each drop's volume kept, the heavy drop
+    /// falling farther, no overlap.
+    #[test]
+    fn a_scene_of_several_bodies_has_its_outputs_named_per_body() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases/two_drops.ron");
+        let all = Spec::from_args(&path, &[]).unwrap();
+        let names: Vec<&str> = all.outputs.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(
+            names[..7],
+            [
+                "light.solid_volume",
+                "heavy.solid_volume",
+                "light.solid_x",
+                "light.solid_y",
+                "heavy.solid_x",
+                "heavy.solid_y",
+                "light.solid_u"
+            ]
+        );
+        assert!(names.ends_with(&[
+            "max_solid_fraction_sum",
+            "solid_overlap_volume",
+            "light.heavy.shared_volume",
+            "light.heavy.shared_cells"
+        ]));
+        // The single solid's column is not one of this scene's.
+        let e = Spec::from_args(&path, &args(&["--output", "solid_y=m"])).unwrap_err();
+        assert!(e.contains("light.solid_y"), "{e}");
+        let ports = [
+            "light.solid_volume=m2",
+            "heavy.solid_volume=m2",
+            "light.solid_y=m",
+            "heavy.solid_y=m",
+            "max_solid_fraction_sum=1",
+        ];
+        let flags: Vec<&str> = ports.iter().flat_map(|p| ["--output", *p]).collect();
+        let spec = Spec::from_args(&path, &args(&flags)).unwrap();
+        let mut model = crate::model::Model::new(std::sync::Arc::new(spec)).unwrap();
+        model.setup_experiment(0.0, Some(1.0)).unwrap();
+        model.enter_initialization();
+        model.exit_initialization().unwrap();
+        let read = |model: &mut crate::model::Model| -> Vec<f64> {
+            (0..ports.len() as u32)
+                .map(|k| model.get_real(VR_OUTPUTS + k).unwrap())
+                .collect()
+        };
+        let start = read(&mut model);
+        // Two drops of radius 0.4 (per unit depth); both at height 3.
+        assert_eq!(start[0], start[1]);
+        assert!(
+            (start[0] - std::f64::consts::PI * 0.16).abs() < 1e-3,
+            "{start:?}"
+        );
+        assert!((start[2] - 3.0).abs() < 1e-12 && (start[3] - 3.0).abs() < 1e-12);
+        model.do_step(0.0, 0.25).unwrap();
+        let now = read(&mut model);
+        for k in 0..2 {
+            assert!((now[k] - start[k]).abs() <= 1e-10 * start[k], "{now:?}");
+        }
+        let fall = [start[2] - now[2], start[3] - now[3]];
+        assert!(fall[0] > 0.0 && fall[1] > 2.0 * fall[0], "{fall:?}");
+        assert!(now[4] <= 1.0 + 1e-12, "{now:?}");
     }
 
     #[test]

@@ -256,8 +256,9 @@ impl Recorder {
         // The section was checked when the simulation was built (`efsi_run::simulation`).
         let o = &sim.scene.output_spec().unwrap_or_default();
         let mut columns = vec!["t".to_string()];
+        let bodies = efsi_run::probes::body_names(&sim.scene);
         for p in &o.probes {
-            columns.extend(efsi_run::probes::columns(p, sim.grid.geometry));
+            columns.extend(efsi_run::probes::columns(p, sim.grid.geometry, &bodies));
         }
         let vtk = o.vtk_every.map(|e| Schedule::every(Some(e)));
         let profiles = o.profiles.iter().map(|p| Schedule::times(p.times()));

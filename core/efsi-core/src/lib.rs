@@ -11,6 +11,7 @@
 
 pub mod advance;
 pub mod bc;
+pub mod body_fractions;
 pub mod error;
 pub mod field;
 pub mod grid;

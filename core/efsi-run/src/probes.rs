@@ -1,6 +1,7 @@
 //! Sampling fields at points and along lines, and the time-series probes of `probes.csv`.
 
 use crate::output::spec::ProbeSpec;
+use efsi_core::body_fractions::BodyFractions;
 use efsi_core::field::Field;
 use efsi_core::grid::{Geometry, Grid};
 use efsi_core::operators;
@@ -149,9 +150,22 @@ pub fn sample_in(
     }
 }
 
-/// Column names of a probe in `probes.csv` of a scene of `geometry`.
-pub fn columns(p: &ProbeSpec, geometry: Geometry) -> Vec<String> {
-    p.columns(geometry)
+/// Column names of a probe in `probes.csv` of a scene of `geometry` whose bodies are named
+/// `bodies` ([`body_names`]: none for a scene of the single `solid:`);
+/// [`ProbeSpec::columns_for`].
+pub fn columns(p: &ProbeSpec, geometry: Geometry, bodies: &[String]) -> Vec<String> {
+    p.columns_for(geometry, bodies)
+}
+
+/// The names of a scene's bodies as its probes' columns carry them: the `solids: [ … ]` list's,
+/// in order; none for a scene of the single `solid:` (its columns are unprefixed) or without a
+/// solid, and none for a scene whose bodies do not read (its check reports that).
+pub fn body_names(scene: &efsi_core::Scene) -> Vec<String> {
+    use efsi_core::scene::bodies::SceneBodies;
+    match scene.bodies_spec() {
+        Ok(Some(b)) if b.listed => b.list.into_iter().map(|b| b.name).collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// The quantity `name` of the stages' `outputs` ([`OutputKind::Quantity`]), NaN if none.
@@ -177,6 +191,9 @@ pub struct Probed<'a> {
     pub gravity: Vector,
     /// The scheduled stages' outputs.
     pub outputs: &'a [OutputDecl],
+    /// The solid fraction the solid quantities read: the state's (`Σ_k φ_k`), or one body's
+    /// `φ_k` when a probe is evaluated per body ([`evaluate`]).
+    pub phi: Option<&'a Field>,
 }
 
 /// A quantity of the framework: one or more columns of `probes.csv`, declared as the stages
@@ -195,6 +212,9 @@ pub struct Quantity {
     pub axisymmetric: bool,
     /// Whether it needs a solid in the scene.
     pub needs_solid: bool,
+    /// Whether it is a property of one body, evaluated per body in a scene that lists its
+    /// bodies ([`evaluate`]); false for the whole scene's.
+    pub per_body: bool,
     /// Its values, appended (one per column).
     pub eval: fn(&Probed, &mut Vec<f64>),
 }
@@ -208,6 +228,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["kinetic_energy"],
         axisymmetric: true,
         needs_solid: false,
+        per_body: false,
         eval: |p, out| out.push(kinetic_energy(p.grid, p.state)),
     },
     Quantity {
@@ -216,6 +237,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["potential_energy"],
         axisymmetric: true,
         needs_solid: false,
+        per_body: false,
         eval: |p, out| out.push(potential_energy_of(p.grid, &p.state.rho, p.gravity)),
     },
     Quantity {
@@ -224,6 +246,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["max_divergence"],
         axisymmetric: true,
         needs_solid: false,
+        per_body: false,
         eval: |p, out| out.push(max_divergence(p.grid, p.state)),
     },
     Quantity {
@@ -232,6 +255,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["max_speed"],
         axisymmetric: true,
         needs_solid: false,
+        per_body: false,
         eval: |p, out| out.push(max_speed(p.grid, p.state)),
     },
     Quantity {
@@ -240,6 +264,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["solid_volume"],
         axisymmetric: true,
         needs_solid: true,
+        per_body: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.push(m.volume),
             None => out.push(f64::NAN),
@@ -251,6 +276,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["solid_x", "solid_y", "solid_z"],
         axisymmetric: true,
         needs_solid: true,
+        per_body: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.extend(&m.centroid[..p.grid.dims()]),
             None => out.extend(std::iter::repeat_n(f64::NAN, p.grid.dims())),
@@ -262,6 +288,7 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["solid_u", "solid_v", "solid_w"],
         axisymmetric: true,
         needs_solid: true,
+        per_body: true,
         eval: |p, out| match moments(p) {
             Some(m) => out.extend(&m.velocity[..p.grid.dims()]),
             None => out.extend(std::iter::repeat_n(f64::NAN, p.grid.dims())),
@@ -273,7 +300,8 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["solid_pieces", "solid_largest_piece"],
         axisymmetric: true,
         needs_solid: true,
-        eval: |p, out| match &p.state.phi {
+        per_body: true,
+        eval: |p, out| match p.phi {
             Some(phi) => {
                 let s = solid_pieces(p.grid, phi);
                 out.extend([s.count as f64, s.largest]);
@@ -287,14 +315,28 @@ pub const QUANTITIES: &[Quantity] = &[
         columns_3d: &["solid_spin_x", "solid_spin_y", "solid_spin_z"],
         axisymmetric: false,
         needs_solid: true,
+        per_body: true,
         eval: |p, out| {
             let spin = p
-                .state
                 .phi
-                .as_ref()
                 .map_or([f64::NAN; 3], |phi| solid_spin(p.grid, p.state, phi));
             // Three components in three dimensions; ω_z, the only one, in two.
             out.extend(&spin[if p.grid.is_3d() { 0 } else { 2 }..]);
+        },
+    },
+    Quantity {
+        name: "solid_overlap",
+        columns: &["max_solid_fraction_sum", "solid_overlap_volume"],
+        columns_3d: &["max_solid_fraction_sum", "solid_overlap_volume"],
+        axisymmetric: true,
+        needs_solid: true,
+        per_body: false,
+        eval: |p, out| match &p.state.phi {
+            Some(phi) => {
+                let (most, excess) = solid_overlap(p.grid, phi);
+                out.extend([most, excess]);
+            }
+            None => out.extend([f64::NAN, f64::NAN]),
         },
     },
 ];
@@ -345,15 +387,20 @@ fn max_speed(grid: &Grid, state: &State) -> f64 {
 
 /// The solid's moments, if the state has a solid.
 fn moments(p: &Probed) -> Option<SolidMoments> {
-    p.state
-        .phi
-        .as_ref()
-        .map(|phi| solid_moments(p.grid, p.state, phi))
+    p.phi.map(|phi| solid_moments(p.grid, p.state, phi))
 }
 
 /// Append the probe's values to `out`; `gravity` is the scene's, `outputs` the scheduled
 /// stages' ([`efsi_core::Pipeline::outputs`]). A probe of a quantity is evaluated by name
 /// ([`evaluate_quantity`]), whichever way the scene names it.
+///
+/// **Per body.** In a scene of several bodies (the state holds their fractions,
+/// [`BodyFractions`]) a probe of one body ([`ProbeSpec::per_body`]) is evaluated once per
+/// body, in the scene's order, by the same kernel on that body's `φ_k` (written into a field of
+/// the grid) in place of the state's `Σ_k φ_k` — one column group per body, named as
+/// [`columns`] names them (NaN before the VOF stage has set the fractions). Otherwise, and for
+/// a scene of one body, once on the state's solid fraction. [`ProbeSpec::BodyContact`] reads
+/// the bodies' fractions pair by pair ([`body_contact`]).
 pub fn evaluate(
     p: &ProbeSpec,
     grid: &Grid,
@@ -367,23 +414,107 @@ pub fn evaluate(
         state,
         gravity,
         outputs,
+        phi: state.phi.as_ref(),
     };
-    match p {
-        ProbeSpec::Point { field, at, .. } => out.push(sample_at(grid, state, outputs, field, *at)),
-        ProbeSpec::ContactForce { wall } => out.push(contact_force(grid, state, outputs, *wall)),
-        ProbeSpec::ContactRadius { wall } => out.push(contact_radius(grid, state, outputs, *wall)),
-        ProbeSpec::SolidExtent { at, z } => {
-            let (b, t) = solid_extent(grid, state, *at, z.unwrap_or(0.0));
+    let bodies = state.resources.get::<BodyFractions>();
+    if *p == ProbeSpec::BodyContact {
+        if let Some(all) = bodies {
+            body_contact(grid, all, out);
+        }
+        return;
+    }
+    match bodies.filter(|_| p.per_body()) {
+        None => evaluate_on(p, &probed, out),
+        Some(all) => {
+            let mut phi = Field::zeros(grid);
+            for b in &all.bodies {
+                if b.is_set() {
+                    b.fill(&mut phi);
+                    let on = Probed {
+                        phi: Some(&phi),
+                        ..probed
+                    };
+                    evaluate_on(p, &on, out);
+                } else {
+                    let n = p.columns(grid.geometry).len();
+                    out.extend(std::iter::repeat_n(f64::NAN, n));
+                }
+            }
+        }
+    }
+}
+
+/// [`evaluate`] on the solid fraction `p.phi`.
+fn evaluate_on(probe: &ProbeSpec, p: &Probed, out: &mut Vec<f64>) {
+    let (grid, state, outputs) = (p.grid, p.state, p.outputs);
+    match (probe, p.phi) {
+        (ProbeSpec::Point { field, at, .. }, _) => {
+            out.push(sample_at(grid, state, outputs, field, *at))
+        }
+        (ProbeSpec::ContactForce { wall }, Some(phi)) => {
+            out.push(contact_force_of(grid, state, phi, outputs, *wall))
+        }
+        (ProbeSpec::ContactRadius { wall }, Some(phi)) => {
+            out.push(contact_radius_of(grid, state, phi, outputs, *wall))
+        }
+        (ProbeSpec::SolidExtent { at, z }, Some(phi)) => {
+            let (b, t) = solid_extent_of(grid, phi, *at, z.unwrap_or(0.0));
             out.extend([b, t]);
         }
-        quantity => match quantity.quantity() {
-            Some(name) => evaluate_quantity(name, &probed, out),
+        (quantity, _) => match quantity.quantity() {
+            Some(name) => evaluate_quantity(name, p, out),
             None => out.extend(std::iter::repeat_n(
                 f64::NAN,
-                columns(p, grid.geometry).len(),
+                quantity.columns(grid.geometry).len(),
             )),
         },
     }
+}
+
+/// See [`ProbeSpec::BodyContact`]: for each pair `(a, b)` of bodies, in the order of
+/// [`columns`], `∫ min(φ_a, φ_b) dV` over the cells both windows cover and the number of
+/// cells where both fractions exceed [`PIECE_PHI_MIN`]. A body whose fraction is not set yet
+/// gives NaN.
+pub fn body_contact(grid: &Grid, all: &BodyFractions, out: &mut Vec<f64>) {
+    let bodies = &all.bodies;
+    for (k, a) in bodies.iter().enumerate() {
+        for b in &bodies[k + 1..] {
+            if !(a.is_set() && b.is_set()) {
+                out.extend([f64::NAN, f64::NAN]);
+                continue;
+            }
+            let (mut shared, mut cells) = (0.0, 0usize);
+            for (at, fa) in a.cells() {
+                let fb = b.at(at);
+                let m = fa.min(fb);
+                if m > 0.0 {
+                    shared += m * cell_volume(grid, at[0]);
+                }
+                cells += usize::from(m > PIECE_PHI_MIN);
+            }
+            out.extend([shared, cells as f64]);
+        }
+    }
+}
+
+/// See [`ProbeSpec::SolidOverlap`]: the largest solid fraction of a cell, `max Σ_k φ_k` (at
+/// most 1 where no bodies overlap), and the volume in excess of full cells,
+/// `∫ max(0, Σ_k φ_k − 1) dV`, over the interior cells of `phi` (the state's `Σ_k φ_k`).
+pub fn solid_overlap(grid: &Grid, phi: &Field) -> (f64, f64) {
+    let cells = Region::of(grid, Stagger::Cell);
+    let most = cells.max(0.0, |line| {
+        phi.at(&line, [0; 3]).iter().fold(0.0f64, |m, f| m.max(*f))
+    });
+    let [excess] = cells.sum(|line| {
+        let mut e = 0.0;
+        for (f, [i, _, _]) in phi.at(&line, [0; 3]).iter().zip(line.indices()) {
+            if *f > 1.0 {
+                e += (f - 1.0) * cell_volume(grid, i);
+            }
+        }
+        [e]
+    });
+    (most, excess)
 }
 
 /// Volume, centroid and volume-weighted velocity of the solid phase.
@@ -533,12 +664,12 @@ fn stress(grid: &Grid, state: &State, outputs: &[OutputDecl]) -> Option<Option<V
 fn contact_cells(
     grid: &Grid,
     state: &State,
+    body: &Field,
     tau: Option<&[f64]>,
     wall: Side,
 ) -> Vec<(f64, f64, f64)> {
-    let Some(phi) = &state.phi else {
-        return Vec::new();
-    };
+    // The ambient pressure: of the layer's cells holding no solid of any body.
+    let all = state.phi.as_ref().unwrap_or(body);
     let wall = if grid.is_3d() {
         wall
     } else {
@@ -556,10 +687,11 @@ fn contact_cells(
             t[6 * ((k as usize * ny + j as usize) * nx + i as usize) + normal]
         })
     };
-    let solid = |c: [isize; 3]| phi[c] >= CONTACT_MIN_SOLID_FRACTION;
+    let holds = |f: &Field, c: [isize; 3]| f[c] >= CONTACT_MIN_SOLID_FRACTION;
+    let solid = |c: [isize; 3]| holds(body, c);
     let (mut pa, mut na) = (0.0, 0usize);
     for c in &cells {
-        if !solid(c.at) {
+        if !holds(all, c.at) {
             pa += state.p[c.at];
             na += 1;
         }
@@ -577,11 +709,25 @@ fn contact_cells(
 /// `outputs` are the scheduled stages' (NaN without a solid, or when their `stress` output has
 /// no values).
 pub fn contact_force(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: Side) -> f64 {
-    let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
+    state.phi.as_ref().map_or(f64::NAN, |phi| {
+        contact_force_of(grid, state, phi, outputs, wall)
+    })
+}
+
+/// [`contact_force`] of the body whose fraction is `body` (the state's for one body, `φ_k`
+/// for body `k` of several; the ambient pressure from the cells that hold no body).
+pub fn contact_force_of(
+    grid: &Grid,
+    state: &State,
+    body: &Field,
+    outputs: &[OutputDecl],
+    wall: Side,
+) -> f64 {
+    let Some(tau) = stress(grid, state, outputs) else {
         return f64::NAN;
     };
     // Summed from +0.0 (an empty `Sum` of f64 is −0.0).
-    contact_cells(grid, state, tau.as_deref(), wall)
+    contact_cells(grid, state, body, tau.as_deref(), wall)
         .iter()
         .fold(0.0, |f, (t, a, _)| f + t * a)
 }
@@ -589,10 +735,23 @@ pub fn contact_force(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: S
 /// See [`ProbeSpec::ContactRadius`]: exactly 0 when no cell is in contact.
 /// `outputs` as for [`contact_force`].
 pub fn contact_radius(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: Side) -> f64 {
-    let Some(tau) = state.phi.as_ref().and(stress(grid, state, outputs)) else {
+    state.phi.as_ref().map_or(f64::NAN, |phi| {
+        contact_radius_of(grid, state, phi, outputs, wall)
+    })
+}
+
+/// [`contact_radius`] of the body whose fraction is `body` (as [`contact_force_of`]).
+pub fn contact_radius_of(
+    grid: &Grid,
+    state: &State,
+    body: &Field,
+    outputs: &[OutputDecl],
+    wall: Side,
+) -> f64 {
+    let Some(tau) = stress(grid, state, outputs) else {
         return f64::NAN;
     };
-    contact_cells(grid, state, tau.as_deref(), wall)
+    contact_cells(grid, state, body, tau.as_deref(), wall)
         .iter()
         .fold(0.0f64, |m, (_, _, reach)| m.max(*reach))
 }
@@ -600,9 +759,14 @@ pub fn contact_radius(grid: &Grid, state: &State, outputs: &[OutputDecl], wall: 
 /// See [`ProbeSpec::SolidExtent`]: along the y-line through `(x, z)` (`z` ignored in two
 /// dimensions).
 pub fn solid_extent(grid: &Grid, state: &State, x: f64, z: f64) -> (f64, f64) {
-    let Some(phi) = &state.phi else {
-        return (f64::NAN, f64::NAN);
-    };
+    state
+        .phi
+        .as_ref()
+        .map_or((f64::NAN, f64::NAN), |phi| solid_extent_of(grid, phi, x, z))
+}
+
+/// [`solid_extent`] of the solid fraction `phi` (one body's, or the state's).
+pub fn solid_extent_of(grid: &Grid, phi: &Field, x: f64, z: f64) -> (f64, f64) {
     let i = (((x - grid.x0) / grid.dx).floor() as isize).clamp(0, grid.nx as isize - 1);
     let k = if grid.is_3d() {
         (((z - grid.z0) / grid.dz).floor() as isize).clamp(0, grid.nz as isize - 1)
@@ -969,6 +1133,184 @@ mod tests {
         assert_eq!(p.count, 1);
         let total = 7.75 + 2.0 * PIECE_PHI_MIN;
         assert!((p.largest - 7.75 / total).abs() < 1e-15, "{}", p.largest);
+    }
+
+    /// Two bodies on their windows: each per-body probe once per body, from that body's
+    /// fraction alone, its columns prefixed by the body's name; the overlap and contact
+    /// measures from the pair.
+    #[test]
+    fn probes_of_several_bodies_are_evaluated_per_body_and_named_after_them() {
+        use efsi_core::body_fractions::{BodyFraction, BodyFractions};
+        let grid = Grid::new(Geometry::Planar, 8, 6, (0.0, 1.0), (0.0, 0.75));
+        let mut state = state_with(&grid, Field::zeros(&grid));
+        // Body a: cells (1..3, 1..3) full; body b: a window at (3, 1) of 2 × 2 cells, 0.25 in
+        // its first cell (shared with nothing) and 0.5 in (3, 2), where a holds 0.75 — a
+        // shared cell, Σφ = 1.25 there.
+        let mut a = BodyFraction::named("a");
+        a.set(
+            [1, 1, 0],
+            [3, 2, 1],
+            [1.0, 1.0, 0.0, 1.0, 1.0, 0.75].into_iter(),
+        );
+        let mut b = BodyFraction::named("b");
+        b.set([3, 1, 0], [2, 2, 1], [0.25, 0.0, 0.5, 0.0].into_iter());
+        let all = BodyFractions { bodies: vec![a, b] };
+        let phi = state.phi.as_mut().unwrap();
+        for body in &all.bodies {
+            for (at, f) in body.cells() {
+                phi[at] += f;
+            }
+        }
+        state.resources.insert(all);
+        let values = |p: &ProbeSpec| {
+            let mut out = Vec::new();
+            evaluate(p, &grid, &state, (0.0, -1.0).into(), &[], &mut out);
+            out
+        };
+        let cell = 0.125 * 0.125;
+        let vol = values(&ProbeSpec::SolidVolume);
+        assert_eq!(vol, vec![4.75 * cell, 0.75 * cell]);
+        let c = values(&ProbeSpec::SolidCentroid);
+        assert_eq!(c.len(), 4);
+        // b: 0.25 at the centre (0.4375, 0.1875), 0.5 at (0.4375, 0.3125).
+        let yb = (0.25 * 0.1875 + 0.5 * 0.3125) / 0.75;
+        assert!(
+            (c[2] - 0.4375).abs() < 1e-15 && (c[3] - yb).abs() < 1e-15,
+            "{c:?}"
+        );
+        let xa = (0.1875 + 0.3125 + 0.1875 + 0.3125 + 0.75 * 0.4375) / 4.75;
+        assert!((c[0] - xa).abs() < 1e-15, "{c:?}");
+        // Each body one piece (b's two cells share a face).
+        assert_eq!(values(&ProbeSpec::SolidPieces), vec![1.0, 1.0, 1.0, 1.0]);
+        // The overlap: Σφ = 1.25 in the shared cell, its excess 0.25 of a cell.
+        let o = values(&ProbeSpec::SolidOverlap);
+        assert_eq!(o, vec![1.25, 0.25 * cell]);
+        // The pair: min(0.75, 0.5) of the shared cell; one cell holds both.
+        assert_eq!(values(&ProbeSpec::BodyContact), vec![0.5 * cell, 1.0]);
+        // The names: per body, prefixed; the scene's quantities and the points unprefixed.
+        let names = ["a".to_string(), "b".to_string()];
+        let planar = Geometry::Planar;
+        let cols = |p: ProbeSpec| columns(&p, planar, &names);
+        assert_eq!(
+            cols(ProbeSpec::SolidCentroid),
+            ["a.solid_x", "a.solid_y", "b.solid_x", "b.solid_y"]
+        );
+        assert_eq!(
+            cols(ProbeSpec::ContactForce { wall: Side::YMin }),
+            ["a.contact_force", "b.contact_force"]
+        );
+        assert_eq!(
+            cols(ProbeSpec::SolidOverlap),
+            ["max_solid_fraction_sum", "solid_overlap_volume"]
+        );
+        assert_eq!(
+            cols(ProbeSpec::BodyContact),
+            ["a.b.shared_volume", "a.b.shared_cells"]
+        );
+        assert_eq!(cols(ProbeSpec::KineticEnergy), ["kinetic_energy"]);
+        // Without names (the single `solid:`), the columns are the unprefixed ones.
+        assert_eq!(
+            columns(&ProbeSpec::SolidCentroid, planar, &[]),
+            ["solid_x", "solid_y"]
+        );
+        // A per-body probe has one value per column, whichever the probe.
+        for p in [
+            ProbeSpec::SolidVelocity,
+            ProbeSpec::SolidSpin,
+            ProbeSpec::SolidExtent { at: 0.45, z: None },
+            ProbeSpec::ContactRadius { wall: Side::YMin },
+        ] {
+            assert_eq!(values(&p).len(), cols(p.clone()).len(), "{p:?}");
+        }
+        // Extent along x = 0.45 (column 3), each body's own run of cells: b's cells (3, 1)
+        // and (3, 2), from 0.25 − 0.25·0.125 to 0.25 + 0.5·0.125; a's cell (3, 2) alone, its
+        // bottom at 0.375 − 0.75·0.125.
+        let e = values(&ProbeSpec::SolidExtent { at: 0.45, z: None });
+        let (bottom_b, top_b) = (0.25 - 0.25 * 0.125, 0.25 + 0.5 * 0.125);
+        assert!(
+            (e[2] - bottom_b).abs() < 1e-15 && (e[3] - top_b).abs() < 1e-15,
+            "{e:?}"
+        );
+        assert!((e[0] - (0.375 - 0.75 * 0.125)).abs() < 1e-15, "{e:?}");
+    }
+
+    /// Two spheres of a three-dimensional grid, each on its window: the per-body probes are
+    /// each sphere's own (the same kernel as in two dimensions), three centroid columns per
+    /// body; the spheres apart, no cell is shared.
+    #[test]
+    fn probes_of_two_spheres_are_evaluated_per_body_in_three_dimensions() {
+        use efsi_core::body_fractions::{BodyFraction, BodyFractions};
+        let grid = Grid::new_3d([20, 24, 16], (0.0, 1.0), (0.0, 1.2), (0.0, 0.8));
+        let (r, a, b) = (0.18, [0.28, 0.5, 0.4], [0.75, 0.78, 0.4]);
+        let mut state = state_with(&grid, Field::zeros(&grid));
+        let mut all = BodyFractions::default();
+        for (name, c) in [("a", a), ("b", b)] {
+            let own = ball(&grid, c, r);
+            // The window: the sphere's bounding cells.
+            let origin = [grid.x0, grid.y0, grid.z0];
+            let cell = |x: f64, a: usize| ((x - origin[a]) / grid.h()[a]).floor() as usize;
+            let lo: [usize; 3] = std::array::from_fn(|k| cell(c[k] - r, k));
+            let hi: [usize; 3] = std::array::from_fn(|k| cell(c[k] + r, k));
+            let n: [usize; 3] = std::array::from_fn(|k| hi[k] - lo[k] + 1);
+            let mut body = BodyFraction::named(name);
+            let values = (0..n[2]).flat_map(|k| {
+                let own = &own;
+                (0..n[1]).flat_map(move |j| {
+                    (0..n[0]).map(move |i| {
+                        own[[
+                            (lo[0] + i) as isize,
+                            (lo[1] + j) as isize,
+                            (lo[2] + k) as isize,
+                        ]]
+                    })
+                })
+            });
+            body.set(lo, n, values);
+            let phi = state.phi.as_mut().unwrap();
+            for (p, q) in phi.data_mut().iter_mut().zip(own.data()) {
+                *p += q;
+            }
+            // The sphere's probes alone, on a state holding it only.
+            let alone = state_with(&grid, own);
+            let mut want = Vec::new();
+            for p in [ProbeSpec::SolidVolume, ProbeSpec::SolidCentroid] {
+                evaluate(&p, &grid, &alone, (0.0, 0.0).into(), &[], &mut want);
+            }
+            all.bodies.push(body);
+            assert!((want[2] - c[1]).abs() < 0.01, "{want:?}");
+            state.resources.insert(all.clone());
+            let mut got = Vec::new();
+            for p in [ProbeSpec::SolidVolume, ProbeSpec::SolidCentroid] {
+                evaluate(&p, &grid, &state, (0.0, 0.0).into(), &[], &mut got);
+            }
+            // The last body's group: volume, then x, y, z.
+            let k = all.bodies.len() - 1;
+            let mine = [
+                got[k],
+                got[all.bodies.len() + 3 * k],
+                got[all.bodies.len() + 3 * k + 1],
+            ];
+            assert_eq!(mine, [want[0], want[1], want[2]], "{name}");
+        }
+        let names = ["a".to_string(), "b".to_string()];
+        assert_eq!(
+            columns(&ProbeSpec::SolidCentroid, Geometry::Cartesian3D, &names),
+            [
+                "a.solid_x",
+                "a.solid_y",
+                "a.solid_z",
+                "b.solid_x",
+                "b.solid_y",
+                "b.solid_z"
+            ]
+        );
+        let mut out = Vec::new();
+        for p in [ProbeSpec::SolidPieces, ProbeSpec::BodyContact] {
+            evaluate(&p, &grid, &state, (0.0, 0.0).into(), &[], &mut out);
+        }
+        assert_eq!(out[0], 1.0);
+        assert_eq!(out[2], 1.0);
+        assert_eq!(out[4..], [0.0, 0.0]);
     }
 
     /// The solid fraction of a sphere of radius `r` about `c` in each cell of `grid`, by

@@ -143,6 +143,20 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
     assert!(build(&with(&list(&[A, B]))).is_ok());
     // Touching (centres 0.2 apart) is not an overlap.
     assert!(build(&with(&list(&[A, &B.replace("0.7", "0.5")]))).is_ok());
+    // The pair measure needs a pair; the per-body probes run for one body as for several.
+    let probes = |b: &str, p: &str| {
+        with(b).replace(
+            "boundaries:",
+            &format!("output: (probes: [{p}]), boundaries:"),
+        )
+    };
+    let e = refused(&probes(&list(&[A]), "BodyContact"));
+    assert!(
+        e.contains("output.probes[0]") && e.contains("BodyContact measures pairs of bodies"),
+        "{e}"
+    );
+    assert!(build(&probes(&list(&[A, B]), "BodyContact, SolidOverlap")).is_ok());
+    assert!(build(&probes(&list(&[A]), "SolidCentroid, SolidOverlap")).is_ok());
     let law = B.replace(
         "3.0)",
         "3.0, law: (name: \"neo_hookean\", parameters: {\"G\": 100.0}))",
@@ -235,4 +249,129 @@ fn viscous_bodies_in_an_inviscid_fluid_schedule_the_viscous_stage() {
         let names = sim.pipeline().stage_names();
         assert!(names.contains(&"viscous"), "{bodies}: {names:?}");
     }
+}
+
+/// Two equal drops sent head-on at each other in a fluid at rest, `speed` each.
+fn approach(speed: f64) -> String {
+    format!(
+        r#"Scene(name: "approach",
+    domain: (x: (0.0, 2.0), y: (0.0, 1.0)),
+    grid: (nx: 64, ny: 32),
+    time: (end: 0.5, fixed_dt: 0.005),
+    fluid: (density: 1.0, viscosity: 0.01),
+    numerics: (projection: (tolerance: 1e-8)),
+    solids: [
+        (name: "left", shape: Disk(center: (0.6, 0.5), radius: 0.2), density: 4.0,
+         velocity: ({speed}, 0.0)),
+        (name: "right", shape: Disk(center: (1.4, 0.5), radius: 0.2), density: 4.0,
+         velocity: (-{speed}, 0.0)),
+    ],
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    output: (probe_every: 0.05, probes: [SolidVolume, SolidCentroid, SolidVelocity,
+        SolidPieces, SolidOverlap, BodyContact, ContactForce(wall: XMin)]),
+)"#
+    )
+}
+
+/// The scene's probes of the simulation's state, by column name (`probes.csv`'s row).
+fn probe_row(sim: &Simulation) -> std::collections::HashMap<String, f64> {
+    let o = efsi_run::output::spec::SceneOutput::output_spec(&sim.scene).unwrap();
+    let bodies = efsi_run::probes::body_names(&sim.scene);
+    let (mut names, mut values) = (Vec::new(), Vec::new());
+    for p in &o.probes {
+        names.extend(efsi_run::probes::columns(p, sim.grid.geometry, &bodies));
+        efsi_run::probes::evaluate(
+            p,
+            &sim.grid,
+            &sim.state,
+            sim.scene.gravity,
+            sim.pipeline().outputs(),
+            &mut values,
+        );
+    }
+    assert_eq!(names.len(), values.len(), "{names:?}");
+    names.into_iter().zip(values).collect()
+}
+
+/// Two drops sent head-on at each other (`approach(2.0)`): the probes per body (volume,
+/// centroid, velocity, pieces) are each body's own, and at every output each body keeps its
+/// volume to 1e-10 and is one piece, no cell holds more than one cell of bodies
+/// (`max_solid_fraction_sum ≤ 1 + 1e-12`), the motion is mirror-symmetric about x = 1 — and the
+/// fluid film between them, resolved on the grid, stops the drops and sends them apart again
+/// before they share a cell (`shared_volume` 0 throughout).
+#[test]
+fn two_drops_sent_head_on_stop_and_part_without_sharing_a_cell() {
+    let mut sim = build(&approach(2.0).replace("end: 0.5", "end: 0.8")).unwrap();
+    let g = sim.grid.clone();
+    let row = probe_row(&sim);
+    let v0 = [row["left.solid_volume"], row["right.solid_volume"]];
+    // The probes per body are the bodies' own: the volume of each window, equal bodies.
+    let start = windows(&sim, 2);
+    for (w, v) in start.iter().zip(v0) {
+        assert!(
+            (w.volume(&g) - v).abs() <= 1e-14 * v,
+            "{} vs {v}",
+            w.volume(&g)
+        );
+    }
+    assert_eq!(v0[0], v0[1]);
+    type Row = std::collections::HashMap<String, f64>;
+    let gap = |r: &Row| r["right.solid_x"] - r["left.solid_x"];
+    let mut gaps = vec![(0.0, gap(&row))];
+    let (end, every) = (0.8, 0.05);
+    let mut next = every;
+    while sim.state.t < end - 1e-12 {
+        let dt = sim.next_dt(next).unwrap();
+        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
+        if sim.state.t < next - 1e-12 {
+            continue;
+        }
+        next += every;
+        let r = probe_row(&sim);
+        let t = sim.state.t;
+        println!(
+            "t {t:.2} centroids {:.5} apart, left u {:.5}, shared {:e} ({} cells), max Σφ {:.15}, largest piece {:.7}",
+            gap(&r),
+            r["left.solid_u"],
+            r["left.right.shared_volume"],
+            r["left.right.shared_cells"],
+            r["max_solid_fraction_sum"],
+            r["left.solid_largest_piece"],
+        );
+        for (b, v0) in ["left", "right"].iter().zip(v0) {
+            let drift = (r[&format!("{b}.solid_volume")] - v0).abs() / v0;
+            assert!(drift <= 1e-10, "t = {t}: {b} volume drift {drift:e}");
+            assert_eq!(r[&format!("{b}.solid_pieces")], 1.0, "t = {t}: {b}");
+            // Flotsam of the transport (regions below 1e-3 of the body) is no piece.
+            let largest = r[&format!("{b}.solid_largest_piece")];
+            assert!(
+                largest > 1.0 - 1e-3 && largest <= 1.0 + 1e-12,
+                "t = {t}: {b} {largest}"
+            );
+        }
+        let most = r["max_solid_fraction_sum"];
+        assert!(most <= 1.0 + 1e-12, "t = {t}: max Σφ_k = {most}");
+        assert_eq!(r["solid_overlap_volume"], 0.0, "t = {t}");
+        assert_eq!(r["left.right.shared_volume"], 0.0, "t = {t}");
+        assert_eq!(r["left.right.shared_cells"], 0.0, "t = {t}");
+        // Mirror symmetry about x = 1 (the split sweeps alternate their order: to a tolerance).
+        let mirror = r["left.solid_x"] + r["right.solid_x"] - 2.0;
+        let speeds = r["left.solid_u"] + r["right.solid_u"];
+        assert!(
+            mirror.abs() < 1e-6 && speeds.abs() < 1e-6,
+            "t = {t}: {mirror:e} {speeds:e}"
+        );
+        gaps.push((t, gap(&r)));
+    }
+    assert_eq!(gaps.len(), 17);
+    // The closest approach is inside the run: the drops stop, then part.
+    let (k, &(t_min, closest)) = gaps
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.1.total_cmp(&b.1.1))
+        .unwrap();
+    println!("closest approach: centroids {closest:.5} apart at t = {t_min:.2}");
+    assert!(k > 0 && k + 1 < gaps.len(), "{gaps:?}");
+    assert!(closest < 0.4 && closest > 0.15, "{gaps:?}");
+    assert!(gaps[gaps.len() - 1].1 > closest + 0.01, "{gaps:?}");
 }

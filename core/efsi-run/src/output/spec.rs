@@ -227,6 +227,16 @@ pub enum ProbeSpec {
     /// `solid_spin_z` in a Cartesian3D one; refused in an axisymmetric scene, whose bodies
     /// turn about no out-of-plane axis.
     SolidSpin,
+    /// Whether bodies overlap: column `max_solid_fraction_sum`, the largest solid fraction of a
+    /// cell, `max Σ_k φ_k` over the bodies' fractions (at most 1 while no two bodies overlap; the
+    /// largest φ for one body), and `solid_overlap_volume`, the volume in excess of full cells,
+    /// `∫ max(0, Σ_k φ_k − 1) dV` (0 while none overlap). Of the whole scene.
+    SolidOverlap,
+    /// Whether two bodies of a scene of several meet: for each pair `(a, b)` in the scene's
+    /// order (`a` listed before `b`), `a.b.shared_volume`, `∫ min(φ_a, φ_b) dV` (0 while a cell
+    /// of fluid, at least, parts them), and `a.b.shared_cells`, the number of cells where both
+    /// fractions exceed 1e-3. Needs a scene of two bodies or more.
+    BodyContact,
     /// A quantity by name: the framework's ([`crate::probes::QUANTITIES`]: the variants above
     /// that take no argument, by their column's name, `solid_centroid`, `solid_velocity`,
     /// `solid_pieces` and `solid_spin` for the ones of several columns) or one a scheduled stage reports
@@ -250,8 +260,10 @@ impl ProbeSpec {
             ProbeSpec::ElasticEnergy => "elastic_energy",
             ProbeSpec::SolidPieces => "solid_pieces",
             ProbeSpec::SolidSpin => "solid_spin",
+            ProbeSpec::SolidOverlap => "solid_overlap",
             ProbeSpec::Quantity(name) => name,
-            ProbeSpec::Point { .. }
+            ProbeSpec::BodyContact
+            | ProbeSpec::Point { .. }
             | ProbeSpec::ContactForce { .. }
             | ProbeSpec::ContactRadius { .. }
             | ProbeSpec::SolidExtent { .. } => return None,
@@ -280,6 +292,51 @@ impl ProbeSpec {
         }
     }
 
+    /// Whether the probe is a property of one body ([`crate::probes::evaluate`] evaluates it
+    /// per body in a scene of several): the solid's volume, centroid, velocity, pieces, spin,
+    /// contact force and radius, and extent. Not the whole scene's quantities, nor a stage's
+    /// (`elastic_energy`), nor a point's value.
+    pub fn per_body(&self) -> bool {
+        match self {
+            ProbeSpec::ContactForce { .. }
+            | ProbeSpec::ContactRadius { .. }
+            | ProbeSpec::SolidExtent { .. } => true,
+            p => p
+                .quantity()
+                .and_then(crate::probes::framework_quantity)
+                .is_some_and(|q| q.per_body),
+        }
+    }
+
+    /// The probe's column names in a scene of `geometry` whose bodies are named `bodies` (the
+    /// `solids: [ … ]` list's names; none for the single `solid:`). **Naming:** a probe of one
+    /// body ([`Self::per_body`]) has its [`columns`](Self::columns) once per body, each
+    /// prefixed with the body's name and a dot, bodies in the scene's order
+    /// (`light.solid_x, light.solid_y, heavy.solid_x, …`; `light.contact_force`); a
+    /// [`ProbeSpec::BodyContact`] has `a.b.shared_volume, a.b.shared_cells` per pair;
+    /// every other probe, and every probe of a scene of the single `solid:`, the unprefixed
+    /// columns.
+    pub fn columns_for(&self, geometry: Geometry, bodies: &[String]) -> Vec<String> {
+        if *self == ProbeSpec::BodyContact {
+            let mut out = Vec::new();
+            for (k, a) in bodies.iter().enumerate() {
+                for b in &bodies[k + 1..] {
+                    out.push(format!("{a}.{b}.shared_volume"));
+                    out.push(format!("{a}.{b}.shared_cells"));
+                }
+            }
+            return out;
+        }
+        let own = self.columns(geometry);
+        if bodies.is_empty() || !self.per_body() {
+            return own;
+        }
+        bodies
+            .iter()
+            .flat_map(|b| own.iter().map(move |c| format!("{b}.{c}")))
+            .collect()
+    }
+
     /// Why the probe cannot run in a scene of `geometry`, if it cannot: `ElasticEnergy` in a
     /// Cartesian3D scene (the elastic stage's strain energy is two-dimensional) and a quantity
     /// without columns there (the spin in an axisymmetric scene). Every other probe runs in
@@ -305,6 +362,7 @@ impl ProbeSpec {
     pub fn needs_solid(&self) -> bool {
         match self {
             ProbeSpec::ElasticEnergy
+            | ProbeSpec::BodyContact
             | ProbeSpec::ContactForce { .. }
             | ProbeSpec::ContactRadius { .. }
             | ProbeSpec::SolidExtent { .. } => true,
@@ -533,6 +591,7 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
     // Every column of probes.csv is named once, `t` first, and a name is one CSV field.
     let mut columns: std::collections::HashMap<String, usize> =
         [("t".to_string(), usize::MAX)].into_iter().collect();
+    let bodies = crate::probes::body_names(scene);
     let has_law = scene
         .solid_spec()
         .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
@@ -556,7 +615,14 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         if let ProbeSpec::SolidExtent { at, z } = probe {
             solid_extent_line(&f, scene, *at, *z)?;
         }
-        claim_columns(probe, scene.geometry, k, &f, &mut columns)?;
+        if *probe == ProbeSpec::BodyContact && bodies.len() < 2 {
+            return err(
+                &f,
+                "BodyContact measures pairs of bodies: it needs a scene of two bodies or more \
+                 (`solids: [ … ]`)",
+            );
+        }
+        claim_columns(probe, scene.geometry, &bodies, k, &f, &mut columns)?;
         if let ProbeSpec::Point { field, at, .. } = probe {
             if field == "solid_fraction" && !scene.has_bodies() {
                 return err(
@@ -625,11 +691,12 @@ fn solid_extent_line(f: &str, scene: &Scene, at: f64, z: Option<f64>) -> Checked
 fn claim_columns(
     probe: &ProbeSpec,
     geometry: Geometry,
+    bodies: &[String],
     k: usize,
     f: &str,
     columns: &mut std::collections::HashMap<String, usize>,
 ) -> Checked {
-    for c in probe.columns(geometry) {
+    for c in probe.columns_for(geometry, bodies) {
         if c.is_empty() || c.contains([',', '"']) || c.chars().any(char::is_control) {
             return err(
                 &format!("{f}.name"),

@@ -86,10 +86,10 @@ pub(super) fn replace_earlier_run(
     })
 }
 
-pub(super) fn probe_header(probes: &[ProbeSpec], geometry: Geometry) -> String {
+pub(super) fn probe_header(probes: &[ProbeSpec], geometry: Geometry, bodies: &[String]) -> String {
     let mut header = vec!["t".to_string()];
     for p in probes {
-        header.extend(probes::columns(p, geometry));
+        header.extend(probes::columns(p, geometry, bodies));
     }
     header.join(",") + "\n"
 }

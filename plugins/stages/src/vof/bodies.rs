@@ -50,7 +50,8 @@
 //! `0 ≤ φ_k ≤ 1` and volume; it does not keep `Σ_k φ_k ≤ 1` in a cell that two bodies enter
 //! together (each reconstructs its own interface as if the rest of the cell were fluid): bodies
 //! must be kept a film apart, by the resolved fluid and, below a cell, by a contact force,
-//! which is not part of this module. The elastic stage keeps one deformation field, so a body
+//! which is not part of this module; the probe `SolidOverlap` (`max_solid_fraction_sum`) shows
+//! `max Σ_k φ_k` at every output, and `BodyContact` the cells two bodies share. The elastic stage keeps one deformation field, so a body
 //! with a law runs only alone (the scene check refuses a law among several bodies).
 //!
 //! # Plan for elastic bodies
@@ -65,6 +66,7 @@
 //! the bodies' interfaces (gap × stiffness, energy-bounded), a stage of its own.
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
+use efsi_core::body_fractions::BodyFraction;
 use efsi_core::{Field, G, Grid, Region, Stagger};
 
 /// Cells of margin a window keeps around its body's support when it is (re)placed.
@@ -370,6 +372,17 @@ impl BodyWindow {
             }
         }
         Ok((w, 6 + cells))
+    }
+
+    /// Copy the window and `φ_k` on it into `into` (the state's copy of the bodies' fractions,
+    /// [`efsi_core::body_fractions`]), reusing its storage.
+    pub fn publish(&self, into: &mut BodyFraction) {
+        let n = self.grid.n();
+        let phi = &self.phi;
+        let cells = (0..n[2] as isize).flat_map(move |k| {
+            (0..n[1] as isize).flat_map(move |j| (0..n[0] as isize).map(move |i| phi[[i, j, k]]))
+        });
+        into.set(self.lo, n, cells);
     }
 
     /// Cells of the window (its interior): the storage it scales with.

@@ -20,7 +20,9 @@
 //! `ρ = (1 − Σ φ_k) ρ_f + Σ φ_k ρ_k`, `μ` likewise. Each body's initial velocity is blended into
 //! the face velocities as for one body, the mixture's momentum over all materials of the face.
 //! The stage's record ([`Stage::save`]: the windows) carries the bodies through snapshots and
-//! checkpoints. A scene of one body (`solid:`, or a list of one) runs the one-field path above.
+//! checkpoints. After its initialization and every step the stage copies the windows into the
+//! state ([`efsi_core::body_fractions`]), where the probes per body and the VTK array
+//! `body_id` ([`BODY_ID`]) read them. A scene of one body (`solid:`, or a list of one) runs the one-field path above.
 //!
 //! **Initial state.** φ_s from the exact fractions of the scene's shape (the solid's initial
 //! velocity is set with the other initial conditions, in [`efsi_core::Simulation::new`]).
@@ -44,11 +46,12 @@ use super::bodies::BodyWindow;
 use super::shapes::fill_fraction;
 use crate::scratch::Scratch;
 use crate::solid::Shape;
+use efsi_core::body_fractions::{BodyFraction, BodyFractions};
 use efsi_core::operators::minus;
 use efsi_core::scene::{Boundary, Options, Side, Vector};
 use efsi_core::{
-    BoundarySet, Field, FieldId, Grid, Phase, Region, Scene, Stage, StageError, StagePlugin,
-    StageStats, Stagger, State, StepContext,
+    BoundarySet, Field, FieldId, Grid, OutputDecl, OutputKind, Phase, Region, Scene, Stage,
+    StageError, StagePlugin, StageStats, Stagger, State, StepContext,
 };
 use efsi_linalg::par::{self, REDUCE_CHUNK};
 
@@ -87,6 +90,10 @@ impl StagePlugin for Vof {
         options: &mut Options,
     ) -> efsi_core::validate::Checked {
         crate::solid::check(scene, options)
+    }
+    /// The VTK array `body_id` of a scene of several bodies ([`BODY_ID`]).
+    fn outputs(&self) -> &'static [OutputDecl] {
+        &[BODY_ID]
     }
     fn build(
         &self,
@@ -127,6 +134,7 @@ impl StagePlugin for Vof {
                 .list
                 .iter()
                 .map(|b| ManyBody {
+                    name: b.name.clone(),
                     rho: b.solid.density,
                     mu: b.solid.viscosity(&scene.fluid),
                     shape: b.solid.shape.clone(),
@@ -296,6 +304,7 @@ impl VofStage {
             &mut state.mu,
         );
         state.phi = Some(phi);
+        many.publish(state);
         self.keep_velocity(state);
         Ok(())
     }
@@ -333,8 +342,9 @@ struct Many {
     grid: Grid,
 }
 
-/// One body's material, shape and initial velocity.
+/// One body's name, material, shape and initial velocity.
 struct ManyBody {
+    name: String,
     rho: f64,
     mu: f64,
     shape: Shape,
@@ -407,6 +417,16 @@ impl Many {
         bc.fill_velocity3(grid, &mut state.u, &mut state.v, w, 0.0, false);
     }
 
+    /// Each body's window and `φ_k` into the state's [`BodyFractions`] (for the probes and
+    /// outputs per body).
+    fn publish(&self, state: &mut State) {
+        if let Some(all) = state.resources.get_mut::<BodyFractions>() {
+            for (w, b) in self.windows.iter().zip(&mut all.bodies) {
+                w.publish(b);
+            }
+        }
+    }
+
     /// `Σ_k φ_k` into `phi` (interior; the caller fills the ghosts).
     fn total(&self, phi: &mut Field) {
         phi.fill(0.0);
@@ -460,6 +480,20 @@ fn missing() -> StageError {
 }
 
 impl Stage for VofStage {
+    /// Several bodies: their fractions' copy in the state ([`BodyFractions`]), named, set by
+    /// [`Stage::initialize`] and every step.
+    fn init_state(&self, _grid: &Grid, state: &mut State) {
+        if let Some(many) = &self.many {
+            state.resources.insert(BodyFractions {
+                bodies: many
+                    .bodies
+                    .iter()
+                    .map(|b| BodyFraction::named(b.name.clone()))
+                    .collect(),
+            });
+        }
+    }
+
     fn initialize(
         &mut self,
         grid: &Grid,
@@ -568,6 +602,7 @@ impl Stage for VofStage {
                 &mut state.rho,
                 &mut state.mu,
             );
+            many.publish(state);
         } else {
             self.advector.fill_ghosts(&mut phi);
             self.mix(&phi, &mut state.rho, &mut state.mu);
@@ -591,6 +626,42 @@ impl Stage for VofStage {
         );
         Ok(StageStats::default())
     }
+}
+
+/// The smallest fraction of a body that names a cell in `body_id` (the probes' threshold of a
+/// cell holding solid, `efsi_run::probes::PIECE_PHI_MIN`).
+pub const BODY_ID_MIN: f64 = 1e-3;
+
+/// The VTK array `body_id` of a scene of several bodies: in each cell the number (1, 2, … in
+/// the scene's order of `solids`) of the body holding the largest fraction of it, among those
+/// holding more than [`BODY_ID_MIN`]; 0 where none does. One array whatever the number of
+/// bodies (a fraction array per body would grow the files with the grid times the bodies):
+/// with `solid_fraction` (`Σ_k φ_k`) it draws each body's interface (`efsi plot` colours them)
+/// and thresholds each body in ParaView. Absent from a scene of one body.
+pub const BODY_ID: OutputDecl = OutputDecl {
+    name: "body_id",
+    meaning: "the body holding the largest fraction of the cell, numbered 1, 2, … in the order of the scene's `solids` (0: no body holds more than 1e-3 of the cell); present with several bodies",
+    unit: "1",
+    kind: OutputKind::Array {
+        components: |_| vec!["k"],
+        values: body_id,
+    },
+};
+
+/// [`BODY_ID`]'s values, cell-major in VTK's order (x fastest); `None` without the bodies'
+/// fractions (a scene of one body).
+fn body_id(grid: &Grid, state: &State) -> Option<Vec<f64>> {
+    let all = state.resources.get::<BodyFractions>()?;
+    let [nx, ny, nz] = grid.n().map(|n| n as isize);
+    let mut out = Vec::with_capacity(grid.cells());
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                out.push(all.id_at([i, j, k], BODY_ID_MIN) as f64);
+            }
+        }
+    }
+    Some(out)
 }
 
 /// Sub-steps the interface transport may take in one time step before the stage gives up.

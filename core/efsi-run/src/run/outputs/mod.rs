@@ -133,7 +133,12 @@ impl Outputs {
         replace_earlier_run(dir, &earlier_outputs(dir)?, overwrite)?;
         let mut list = vec![Output::new(
             Schedule::every(o.probe_every),
-            probes::ProbesCsv::create(dir, &o.probes, sim.grid.geometry)?,
+            probes::ProbesCsv::create(
+                dir,
+                &o.probes,
+                sim.grid.geometry,
+                &crate::probes::body_names(&sim.scene),
+            )?,
         )];
         if let Some(every) = o.vtk_every {
             let writer = vtk::VtkSeries::create(dir, &o.vtk, Vec::new())?;
@@ -190,7 +195,12 @@ impl Outputs {
         }
         let mut list = vec![Output::new(
             probe_schedule,
-            probes::ProbesCsv::reopen(dir, &o.probes, sim.grid.geometry, state)?,
+            probes::ProbesCsv::reopen(
+                dir,
+                &o.probes,
+                (sim.grid.geometry, &crate::probes::body_names(&sim.scene)),
+                state,
+            )?,
         )];
         if state.profile_times.len() != o.profiles.len() {
             return Err(EfsiError::Checkpoint {

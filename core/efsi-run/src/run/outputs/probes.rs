@@ -35,14 +35,15 @@ pub struct ProbesCsv {
 
 impl ProbesCsv {
     /// A new `probes.csv` in `dir`, its header naming the columns of `probes` in a scene of
-    /// `geometry`.
+    /// `geometry` whose bodies are named `bodies` ([`probes::body_names`]).
     pub fn create(
         dir: &Path,
         probes: &[ProbeSpec],
         geometry: Geometry,
+        bodies: &[String],
     ) -> Result<ProbesCsv, EfsiError> {
         let path = dir.join("probes.csv");
-        let header = probe_header(probes, geometry);
+        let header = probe_header(probes, geometry, bodies);
         crate::output::atomic::write_bytes_atomically(&path, header.as_bytes())
             .map_err(|e| EfsiError::io(&path, e))?;
         Ok(ProbesCsv {
@@ -56,16 +57,17 @@ impl ProbesCsv {
     }
 
     /// The `probes.csv` of a run in `dir` that stopped at a checkpoint with bookkeeping
-    /// `state`, truncated to its length then; refused if its header is not `probes`' or its
-    /// rows are not the ones the checkpoint's run wrote.
+    /// `state`, truncated to its length then; refused if its header is not `probes`' (in a
+    /// scene with `bodies`, as [`Self::create`]) or its rows are not the ones the checkpoint's
+    /// run wrote.
     pub fn reopen(
         dir: &Path,
         probes: &[ProbeSpec],
-        geometry: Geometry,
+        (geometry, bodies): (Geometry, &[String]),
         state: &OutputState,
     ) -> Result<ProbesCsv, EfsiError> {
         let path = dir.join("probes.csv");
-        let header = probe_header(probes, geometry);
+        let header = probe_header(probes, geometry, bodies);
         let fail = |message: String| EfsiError::Checkpoint {
             what: path.display().to_string(),
             message,
