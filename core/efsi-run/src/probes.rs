@@ -1092,7 +1092,8 @@ mod tests {
             ["solid_x", "solid_y"]
         );
         assert!(ProbeSpec::SolidCentroid.refused_in(three).is_none());
-        assert!(ProbeSpec::ElasticEnergy.refused_in(three).is_some());
+        assert!(ProbeSpec::ElasticEnergy.refused_in(three).is_none());
+        assert_eq!(c(ProbeSpec::ElasticEnergy, three), ["elastic_energy"]);
         assert_eq!(c(ProbeSpec::SolidPieces, three).len(), 2);
     }
 

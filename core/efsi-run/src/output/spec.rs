@@ -337,25 +337,17 @@ impl ProbeSpec {
             .collect()
     }
 
-    /// Why the probe cannot run in a scene of `geometry`, if it cannot: `ElasticEnergy` in a
-    /// Cartesian3D scene (the elastic stage's strain energy is two-dimensional) and a quantity
-    /// without columns there (the spin in an axisymmetric scene). Every other probe runs in
-    /// every geometry.
+    /// Why the probe cannot run in a scene of `geometry`, if it cannot: a quantity without
+    /// columns there (the spin in an axisymmetric scene). Every other probe runs in every
+    /// geometry.
     pub fn refused_in(&self, geometry: Geometry) -> Option<&'static str> {
-        match self {
-            ProbeSpec::ElasticEnergy if geometry == Geometry::Cartesian3D => Some(
-                "the elastic stage's strain energy is two-dimensional: ElasticEnergy is refused \
-                 in a Cartesian3D scene",
-            ),
-            p => p
-                .quantity()
-                .and_then(crate::probes::framework_quantity)
-                .filter(|q| q.columns_in(geometry).is_empty())
-                .map(|_| {
-                    "SolidSpin is the turn about an axis out of the plane, which an \
-                     axisymmetric scene's bodies have not: it is refused there"
-                }),
-        }
+        self.quantity()
+            .and_then(crate::probes::framework_quantity)
+            .filter(|q| q.columns_in(geometry).is_empty())
+            .map(|_| {
+                "SolidSpin is the turn about an axis out of the plane, which an \
+                 axisymmetric scene's bodies have not: it is refused there"
+            })
     }
 
     /// Whether the probe needs a solid in the scene.
@@ -1046,8 +1038,8 @@ mod tests {
     }
 
     /// The solid probes run in a Cartesian3D scene (the extent's line needs its z there and
-    /// only there); `ElasticEnergy` is refused in 3-D and `SolidSpin` in an axisymmetric
-    /// scene, each by name.
+    /// only there), `ElasticEnergy` with a law; `SolidSpin` is refused in an axisymmetric
+    /// scene by name.
     #[test]
     fn the_solid_probes_are_checked_per_geometry_by_name() {
         let solid = "solid: (shape: Sphere(center: (0.5, 0.5, 0.5), radius: 0.2), density: 2.0, viscosity: 0.1),";
@@ -1106,6 +1098,15 @@ mod tests {
             ["solid_spin"]
         );
         assert!(with(&axi, "SolidExtent(at: 0.0), SolidPieces").is_ok());
+        let elastic = cube.replace(
+            "viscosity: 0.1),",
+            "viscosity: 0.1, law: (name: \"neo_hookean\", parameters: {\"G\": 1.0})),",
+        );
+        let o = with(&elastic, "MaxSpeed, ElasticEnergy").unwrap();
+        assert_eq!(
+            o.probes[1].columns(Geometry::Cartesian3D),
+            ["elastic_energy"]
+        );
         for (base, probes, needles) in [
             (
                 &cube,
@@ -1125,7 +1126,7 @@ mod tests {
             (
                 &cube,
                 "MaxSpeed, ElasticEnergy",
-                &["output.probes[1]", "ElasticEnergy is refused"],
+                &["output.probes[1]", "needs a solid with a law"],
             ),
             (
                 &axi,

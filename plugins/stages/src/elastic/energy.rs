@@ -76,7 +76,8 @@ fn rotate(q: [[f64; 3]; 3], d: [f64; 3]) -> [f64; 6] {
 }
 
 impl Kernels {
-    /// The strain energy `∫ W dV` of `b` (per radian when axisymmetric). A law gives only its
+    /// The strain energy `∫ W dV` of `b` (per radian when axisymmetric, per unit depth when
+    /// planar; a Cartesian3D cell's volume is `dx dy dz`). A law gives only its
     /// stress, but for an isotropic hyperelastic law `dW = ½ tr(τ B⁻¹ dB)`; along the isochoric
     /// path `B(s) = exp(s M)`, `M = log B`, this is `W(B) = ½ ∫₀¹ tr(τ(B(s)) M) ds`, taken with
     /// four-point Gauss–Legendre quadrature — the stress-free reference subtracted, as in the
@@ -117,7 +118,7 @@ impl Kernels {
                     *x = s.avg(n);
                 }
                 if let Some(p) = Principal::of(&x[..m]) {
-                    cells.push((w[n], p, g.cell_volume(l.index(n)[0])));
+                    cells.push((w[n], p, g.cell_volume(l.index(n)[0]) * g.dz));
                 }
             }
         }

@@ -744,3 +744,100 @@ fn the_edge_fractions_in_3d_are_the_exact_quarters_of_a_plane_interface() {
     assert!(cut >= 30, "{cut} cut cells");
     assert!(worst <= 1e-9, "quarter fractions off by {worst:e}");
 }
+
+/// The strain energy of a uniform B filling a 3-D box (periodic, φ = 1): for neo-Hookean the
+/// exact `∫ W dV = G/2 (tr B̄ − 3) V` with `B̄ = B / det(B)^{1/3}`; for Mooney–Rivlin (whose
+/// energy the four-point quadrature takes) the planar box's energy per unit area of the same
+/// in-plane deformation, rotated into an oblique frame in 3-D, times the box's depth — the
+/// law on the six-component tensor, principal axes by Jacobi rotations, against the closed
+/// form in two dimensions.
+#[test]
+fn the_strain_energy_of_a_uniform_b_in_3d_is_the_laws() {
+    let (g, bc) = box3(
+        [4, 3, 2],
+        [Boundary::Periodic, Boundary::Periodic, Boundary::Periodic],
+    );
+    let volume = 1.0 * 0.8 * 0.6;
+    let energy = |g: &Grid, bc: &BoundarySet, law: &dyn ConstitutiveLaw, b: &[f64]| {
+        let mut k = Kernels::new(g, bc, 1.0, 1.0);
+        k.set_weights(&Field::filled(g, 1.0));
+        let fields: Vec<Field> = b.iter().map(|&x| Field::filled(g, x)).collect();
+        k.strain_energy(law, &fields).unwrap()
+    };
+    let load = |name: &str, params: &[(&str, f64)]| {
+        let params = params.iter().map(|&(k, v)| (k.to_string(), v)).collect();
+        efsi_laws_host::load_law(name, &params, std::path::Path::new(".")).unwrap()
+    };
+    // B = F Fᵀ of a general F, in the components [11, 22, 33, 12, 23, 13].
+    let f = [[1.2, 0.3, 0.1], [0.0, 0.9, -0.2], [0.15, 0.05, 1.1]];
+    let fft = |i: usize, j: usize| (0..3).map(|k| f[i][k] * f[j][k]).sum::<f64>();
+    let b = [
+        fft(0, 0),
+        fft(1, 1),
+        fft(2, 2),
+        fft(0, 1),
+        fft(1, 2),
+        fft(0, 2),
+    ];
+    let det = b[0] * (b[1] * b[2] - b[4] * b[4]) - b[3] * (b[3] * b[2] - b[4] * b[5])
+        + b[5] * (b[3] * b[4] - b[1] * b[5]);
+    let gm = 2.0;
+    let want = 0.5 * gm * ((b[0] + b[1] + b[2]) / det.cbrt() - 3.0) * volume;
+    let got = energy(&g, &bc, &load("neo_hookean", &[("G", gm)]), &b);
+    assert!(want > 0.1, "{want}");
+    assert!(
+        (got - want).abs() <= 1e-10 * want,
+        "neo-Hookean: {got:e} against {want:e}"
+    );
+    // Mooney–Rivlin: a planar B (in-plane stretch and shear, its own out-of-plane stretch)
+    // rotated by R (about the axis (1, 2, 2)/3 by 40°) into every component.
+    let mr = load("mooney_rivlin", &[("C1", 0.7), ("C2", 0.2), ("C3", 0.4)]);
+    let p = [1.3, 0.85, 0.95, 0.2];
+    let planar = Grid::new(efsi_core::Geometry::Planar, 4, 3, (0.0, 1.0), (0.0, 0.8));
+    let sides = efsi_core::scene::Boundaries::planar(
+        Boundary::Periodic,
+        Boundary::Periodic,
+        Boundary::Periodic,
+        Boundary::Periodic,
+    );
+    let e2 = energy(&planar, &BoundarySet::new(&sides, &planar), &mr, &p);
+    let (axis, angle) = ([1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0], 40f64.to_radians());
+    let (c, s) = (angle.cos(), angle.sin());
+    let r = |i: usize, j: usize| {
+        let cross = match (i, j) {
+            (0, 1) => -axis[2],
+            (1, 0) => axis[2],
+            (0, 2) => axis[1],
+            (2, 0) => -axis[1],
+            (1, 2) => -axis[0],
+            (2, 1) => axis[0],
+            _ => 0.0,
+        };
+        let id = if i == j { 1.0 } else { 0.0 };
+        c * id + s * cross + (1.0 - c) * axis[i] * axis[j]
+    };
+    let m = [[p[0], p[3], 0.0], [p[3], p[1], 0.0], [0.0, 0.0, p[2]]];
+    let rot = |i: usize, j: usize| {
+        let mut x = 0.0;
+        for k in 0..3 {
+            for l in 0..3 {
+                x += r(i, k) * m[k][l] * r(j, l);
+            }
+        }
+        x
+    };
+    let b3 = [
+        rot(0, 0),
+        rot(1, 1),
+        rot(2, 2),
+        rot(0, 1),
+        rot(1, 2),
+        rot(0, 2),
+    ];
+    let e3 = energy(&g, &bc, &mr, &b3);
+    assert!(e2 > 0.01, "{e2}");
+    assert!(
+        (e3 - 0.6 * e2).abs() <= 1e-12 * e2,
+        "Mooney–Rivlin: 3-D {e3:e} against the planar {e2:e} × depth 0.6"
+    );
+}
