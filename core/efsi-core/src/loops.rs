@@ -108,6 +108,17 @@ impl Line {
         &v[o..o + self.len]
     }
 
+    /// This line moved `j` rows and `k` planes on, numbered `n` (`k` is 0 on a two-dimensional
+    /// grid, which has one plane).
+    #[inline(always)]
+    fn down(mut self, j: usize, k: usize, n: usize) -> Line {
+        self.start[1] += j as isize;
+        self.start[2] += k as isize;
+        self.n = n;
+        self.offset += j * self.stride + k * self.plane;
+        self
+    }
+
     /// The indices of the run, in order.
     pub fn indices(&self) -> impl Iterator<Item = Index> + '_ {
         (0..self.len).map(|n| self.index(n))
@@ -162,6 +173,7 @@ impl Region {
     }
 
     /// The same box with axis `a` restricted to `lo..hi` (which may reach into the ghosts).
+    #[inline(always)]
     pub fn range(self, a: usize, lo: isize, hi: isize) -> Self {
         let mut r = self;
         r.lo[a] = lo;
@@ -170,31 +182,37 @@ impl Region {
     }
 
     /// Lower corner (included).
+    #[inline(always)]
     pub fn lo(&self) -> Index {
         self.lo
     }
 
     /// Upper corner (excluded).
+    #[inline(always)]
     pub fn hi(&self) -> Index {
         self.hi
     }
 
     /// Number of indices along axis `a`.
+    #[inline(always)]
     pub fn len(&self, a: usize) -> usize {
         (self.hi[a] - self.lo[a]).max(0) as usize
     }
 
     /// Whether the box holds no index.
+    #[inline(always)]
     pub fn is_empty(&self) -> bool {
         (0..3).any(|a| self.len(a) == 0)
     }
 
     /// Number of indices.
+    #[inline(always)]
     pub fn size(&self) -> usize {
         self.len(0) * self.len(1) * self.len(2)
     }
 
     /// Number of lines (runs along the first axis).
+    #[inline(always)]
     pub fn lines(&self) -> usize {
         if self.is_empty() {
             0
@@ -207,15 +225,27 @@ impl Region {
     /// (e.g. filling the rows of a compact vector, [`efsi_linalg::par::rows`]).
     #[inline]
     pub fn line(&self, n: usize) -> Line {
+        let ny = self.len(1);
+        // One plane (every two-dimensional region): the line number is the row within it.
+        let (j, k) = if self.len(2) == 1 && n < ny {
+            (n, 0)
+        } else {
+            (n % ny, n / ny)
+        };
+        self.first_line().down(j, k, n)
+    }
+
+    /// Line 0 (the corner `lo`): the part of every line a loop computes once, before its lines
+    /// ([`Line::down`] moves it to the others).
+    #[inline(always)]
+    fn first_line(&self) -> Line {
         let stride = self.stride;
-        let (j, k) = (n % self.len(1), n / self.len(1));
-        let start = [self.lo[0], self.lo[1] + j as isize, self.lo[2] + k as isize];
-        let row = self.padded_row(start[1], start[2]);
+        let row = self.padded_row(self.lo[1], self.lo[2]);
         Line {
-            start,
+            start: self.lo,
             len: self.len(0),
-            n,
-            offset: row * stride + (start[0] + G) as usize,
+            n: 0,
+            offset: row * stride + (self.lo[0] + G) as usize,
             stride,
             plane: self.plane(),
             size: stride * self.rows * self.planes,
@@ -223,6 +253,7 @@ impl Region {
     }
 
     /// The plane size of the layout as a [`Line`] shifts by it (0 in two dimensions).
+    #[inline(always)]
     fn plane(&self) -> usize {
         if self.gz == 0 {
             0
@@ -237,15 +268,20 @@ impl Region {
         (k + self.gz as isize) as usize * self.rows + (j + G) as usize
     }
 
-    /// The line number of padded row `r` of the storage, if that row is one of the region's.
+    /// The line of padded row `r` of the storage, if that row is one of the region's: its rows
+    /// and planes from line 0 and its number, `(j, k, n)`.
     #[inline(always)]
-    fn line_of_row(&self, r: usize) -> Option<usize> {
+    fn line_of_row(&self, r: usize) -> Option<(usize, usize, usize)> {
         let (k, j) = (
             (r / self.rows) as isize - self.gz as isize,
             (r % self.rows) as isize - G,
         );
-        ((self.lo[1]..self.hi[1]).contains(&j) && (self.lo[2]..self.hi[2]).contains(&k))
-            .then(|| (k - self.lo[2]) as usize * self.len(1) + (j - self.lo[1]) as usize)
+        ((self.lo[1]..self.hi[1]).contains(&j) && (self.lo[2]..self.hi[2]).contains(&k)).then(
+            || {
+                let (j, k) = ((j - self.lo[1]) as usize, (k - self.lo[2]) as usize);
+                (j, k, k * self.len(1) + j)
+            },
+        )
     }
 
     /// Checks that the region fits the padded layout of a field (`stride × rows × planes`).
@@ -280,13 +316,16 @@ impl Region {
         let Some((lanes, x, r0)) = self.lanes(fields) else {
             return;
         };
-        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        let (rows, first) = (
+            par::rows(lanes, self.stride).work(self.len(0)),
+            self.first_line(),
+        );
         if self.len(2) == 1 {
-            rows.for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+            rows.for_each(|n, l| f(first.down(n, 0, n), l.sub(x.clone())));
         } else {
             rows.for_each(|m, l| {
-                if let Some(n) = self.line_of_row(r0 + m) {
-                    f(self.line(n), l.sub(x.clone()))
+                if let Some((j, k, n)) = self.line_of_row(r0 + m) {
+                    f(first.down(j, k, n), l.sub(x.clone()))
                 }
             });
         }
@@ -327,16 +366,23 @@ impl Region {
         let Some((lanes, x, r0)) = self.lanes(fields) else {
             return init;
         };
-        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        let (rows, first) = (
+            par::rows(lanes, self.stride).work(self.len(0)),
+            self.first_line(),
+        );
         if self.len(2) == 1 {
-            return rows.fold(init, |n, l| f(self.line(n), l.sub(x.clone())), combine);
+            return rows.fold(
+                init,
+                |n, l| f(first.down(n, 0, n), l.sub(x.clone())),
+                combine,
+            );
         }
         // Across planes a padded row between two planes' lines contributes nothing.
         rows.fold(
             init,
             |m, l| {
                 self.line_of_row(r0 + m)
-                    .map(|n| f(self.line(n), l.sub(x.clone())))
+                    .map(|(j, k, n)| f(first.down(j, k, n), l.sub(x.clone())))
             },
             |a, p| match p {
                 Some(p) => combine(a, p),
@@ -355,9 +401,17 @@ impl Region {
         combine: impl Fn(A, P) -> A,
     ) -> A {
         self.check();
+        if self.is_empty() {
+            return init;
+        }
+        let (first, ny) = (self.first_line(), self.len(1));
+        let line = |n: usize| match self.len(2) {
+            1 => first.down(n, 0, n),
+            _ => first.down(n % ny, n / ny, n),
+        };
         par::range(self.lines())
             .work(self.len(0))
-            .fold(init, |n| f(self.line(n)), combine)
+            .fold(init, |n| f(line(n)), combine)
     }
 
     /// `Σ f(line)` component-wise, `N` sums at once, lines added in order.

@@ -145,8 +145,8 @@ impl<'a> Stencil<'a> {
         let lo = std::array::from_fn(|d| minus(c)[d] + up[d]);
         Stencil {
             adv: [&vel[a].at(l, lo)[x.clone()], &vel[a].at(l, up)[x.clone()]],
-            m: [-2, -1, 0, 1].map(|k| &l.on(m, shift(k))[x.clone()]),
-            q: [-2, -1, 0, 1].map(|k| &vel[c].at(l, shift(k))[x.clone()]),
+            m: std::array::from_fn(|k| &l.on(m, shift(k as isize - 2))[x.clone()]),
+            q: std::array::from_fn(|k| &vel[c].at(l, shift(k as isize - 2))[x.clone()]),
         }
     }
 
@@ -154,8 +154,11 @@ impl<'a> Stencil<'a> {
     #[inline(always)]
     fn fluxes(&self, fm: &mut [f64], fq: &mut [f64]) {
         let n = fm.len();
-        let (fq, [a0, a1]) = (&mut fq[..n], self.adv.map(|s| &s[..n]));
-        let (ms, qs) = (self.m.map(|s| &s[..n]), self.q.map(|s| &s[..n]));
+        let (fq, [a0, a1]) = (&mut fq[..n], [&self.adv[0][..n], &self.adv[1][..n]]);
+        let (ms, qs): ([&[f64]; 4], [&[f64]; 4]) = (
+            std::array::from_fn(|k| &self.m[k][..n]),
+            std::array::from_fn(|k| &self.q[k][..n]),
+        );
         for i in 0..n {
             (fm[i], fq[i]) = flux(
                 0.5 * (a0[i] + a1[i]),
@@ -283,7 +286,7 @@ impl Balance<'_> {
                 .fluxes(&mut bm[..=w], &mut bq[..=w]);
             let o = (n - lines.start) * len + x.start;
             let (qt, mt) = (&mut qt[o..o + w], &mut mt[o..o + w]);
-            let [rm, rp, r] = self.radii.map(|s| &s[x.clone()]);
+            let [rm, rp, r]: [&[f64]; 3] = std::array::from_fn(|k| &self.radii[k][x.clone()]);
             let (m0, m1, q0, q1) = (&below.0[..w], &above.0[..w], &below.1[..w], &above.1[..w]);
             let (bm, bq, h) = (&bm[..=w], &bq[..=w], self.h);
             for i in 0..w {
