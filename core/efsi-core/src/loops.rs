@@ -96,7 +96,7 @@ impl Line {
     #[inline(always)]
     pub fn on<'a>(&self, data: &'a [f64], shift: Index) -> &'a [f64] {
         assert_eq!(data.len(), self.size, "an array of another grid");
-        &data[self.span(shift, self.stride, self.plane)]
+        &data[self.span(shift)]
     }
 
     /// The entries at the line's columns shifted by `di` of a per-column array (one value per
@@ -124,14 +124,22 @@ impl Line {
         (0..self.len).map(|n| self.index(n))
     }
 
-    /// The storage range of the run shifted by `s`, in a layout of row stride `stride` and
-    /// plane size `plane` (0 in two dimensions).
+    /// Checks that a field of row stride `stride` whose storage is `data` is laid out like the
+    /// line's grid: the same row stride and padded length (then the same rows per plane too,
+    /// unless a two-dimensional layout has as many rows as a three-dimensional one has rows
+    /// times planes). Two loads and two comparisons: it runs on every slice a kernel takes.
     #[inline(always)]
-    fn span(&self, s: Index, stride: usize, plane: usize) -> std::ops::Range<usize> {
+    fn check(&self, data: &[f64], stride: usize) {
         assert!(
-            stride == self.stride && plane == self.plane,
+            stride == self.stride && data.len() == self.size,
             "field of another grid"
         );
+    }
+
+    /// The storage range of the run shifted by `s` in the grid's layout.
+    #[inline(always)]
+    fn span(&self, s: Index) -> std::ops::Range<usize> {
+        let (stride, plane) = (self.stride, self.plane);
         assert!(
             s[2] == 0 || plane != 0,
             "a two-dimensional field has no third-axis neighbours"
@@ -523,19 +531,15 @@ impl Field {
     /// line's length (a shift may reach the ghost layers, not past them).
     #[inline(always)]
     pub fn at(&self, line: &Line, shift: Index) -> &[f64] {
-        &self.data()[line.span(shift, self.stride(), self.zstride())]
-    }
-
-    /// The plane size as a [`Line`] shifts by it: 0 on a two-dimensional grid.
-    #[inline(always)]
-    fn zstride(&self) -> usize {
-        if self.gz() == 0 { 0 } else { self.plane() }
+        line.check(self.data(), self.stride());
+        &self.data()[line.span(shift)]
     }
 
     /// [`Field::at`], mutable: for an output that a line owns but the loop was not given.
     #[inline(always)]
     pub fn at_mut(&mut self, line: &Line, shift: Index) -> &mut [f64] {
-        let r = line.span(shift, self.stride(), self.zstride());
+        line.check(self.data(), self.stride());
+        let r = line.span(shift);
         &mut self.data_mut()[r]
     }
 }

@@ -76,8 +76,11 @@ fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     let c = if pos { c0 } else { c1 };
     let d = if pos { c1 } else { c0 };
     let (p, q) = (c - up, d - c);
+    // The quotient is formed before the test (a select, not a branch, so the loops over faces
+    // vectorise); where `pq ≤ 0` it is discarded.
     let pq = p * q;
-    c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
+    let ratio = pq / (p + q);
+    c + if pq > 0.0 { ratio } else { 0.0 }
 }
 
 /// Flux `(a m̃, a m̃ q̃)` through a control-volume face with advecting velocity `a`, from the
