@@ -783,6 +783,52 @@ mod tests {
     }
 
     #[test]
+    fn every_loop_hands_its_kernel_the_lines_region_line_builds() {
+        let g3 = Grid::new_3d([9, 7, 6], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let g2 = Grid::new(Geometry::Planar, 5, 4, (0.0, 1.0), (0.0, 1.0));
+        let regions = [
+            (
+                &g3,
+                Region::of(&g3, Stagger::YFace)
+                    .range(1, 1, 6)
+                    .range(2, -1, 4),
+            ),
+            (&g2, Region::of(&g2, Stagger::XFace).range(1, 1, 3)),
+        ];
+        for (g, r) in regions {
+            let (f, [lo0, lo1, lo2], ny) = (Field::zeros(g), r.lo(), r.len(1));
+            for n in 0..r.lines() {
+                let l = r.line(n);
+                let j = lo1 + (n % ny) as isize;
+                assert_eq!(l.start, [lo0, j, lo2 + (n / ny) as isize]);
+                assert_eq!((l.n, l.len, l.linear(0)), (n, r.len(0), f.idx3(l.start)));
+            }
+            let seen = r.sum(|l| {
+                assert_eq!(l, r.line(l.n));
+                [1.0, l.n as f64]
+            });
+            let lines = r.lines();
+            assert_eq!(seen, [lines as f64, (lines * (lines - 1) / 2) as f64]);
+            let mut out = Field::zeros(g);
+            let written = r.fold_mut(
+                &mut out,
+                0,
+                |l, _| usize::from(l == r.line(l.n)),
+                |a, p| a + p,
+            );
+            assert_eq!(written, lines);
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "field of another grid")]
+    fn a_field_of_another_grid_is_refused() {
+        let g = Grid::new(Geometry::Planar, 4, 5, (0.0, 1.0), (0.0, 1.0));
+        let other = Field::zeros(&Grid::new(Geometry::Planar, 5, 4, (0.0, 1.0), (0.0, 1.0)));
+        let _ = other.at(&Region::of(&g, Stagger::Cell).line(0), [0; 3]);
+    }
+
+    #[test]
     fn three_dimensional_reductions_are_the_same_on_one_and_two_threads() {
         // Enough lines and planes for the parallel path and several rows between planes.
         let g = Grid::new_3d([61, 40, 30], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
