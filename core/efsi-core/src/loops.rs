@@ -125,9 +125,9 @@ impl Line {
     }
 
     /// Checks that a field of row stride `stride` whose storage is `data` is laid out like the
-    /// line's grid: the same row stride and padded length (then the same rows per plane too,
-    /// unless a two-dimensional layout has as many rows as a three-dimensional one has rows
-    /// times planes). Two loads and two comparisons: it runs on every slice a kernel takes.
+    /// line's grid: the same row stride and padded length. Two loads and two comparisons, as
+    /// it runs on every slice a kernel takes; a layout that differs only in how its rows split
+    /// into planes (a grid with `ny` and `nz` exchanged) passes it.
     #[inline(always)]
     fn check(&self, data: &[f64], stride: usize) {
         assert!(
