@@ -143,11 +143,13 @@ impl Field {
     }
 
     /// Number of padded planes (1 in two dimensions).
+    #[inline(always)]
     pub fn planes(&self) -> usize {
         self.planes
     }
 
     /// Number of ghost planes on each side along z (0 in two dimensions).
+    #[inline(always)]
     pub fn gz(&self) -> usize {
         self.gz
     }
@@ -165,6 +167,7 @@ impl Field {
     }
 
     /// Number of padded rows.
+    #[inline(always)]
     pub fn rows(&self) -> usize {
         self.rows
     }

@@ -96,7 +96,7 @@ impl Line {
     #[inline(always)]
     pub fn on<'a>(&self, data: &'a [f64], shift: Index) -> &'a [f64] {
         assert_eq!(data.len(), self.size, "an array of another grid");
-        &data[self.span(shift, self.stride, self.plane)]
+        &data[self.span(shift)]
     }
 
     /// The entries at the line's columns shifted by `di` of a per-column array (one value per
@@ -108,19 +108,38 @@ impl Line {
         &v[o..o + self.len]
     }
 
+    /// This line moved `j` rows and `k` planes on, numbered `n` (`k` is 0 on a two-dimensional
+    /// grid, which has one plane).
+    #[inline(always)]
+    fn down(mut self, j: usize, k: usize, n: usize) -> Line {
+        self.start[1] += j as isize;
+        self.start[2] += k as isize;
+        self.n = n;
+        self.offset += j * self.stride + k * self.plane;
+        self
+    }
+
     /// The indices of the run, in order.
     pub fn indices(&self) -> impl Iterator<Item = Index> + '_ {
         (0..self.len).map(|n| self.index(n))
     }
 
-    /// The storage range of the run shifted by `s`, in a layout of row stride `stride` and
-    /// plane size `plane` (0 in two dimensions).
+    /// Checks that a field of row stride `stride` whose storage is `data` is laid out like the
+    /// line's grid: the same row stride and padded length. Two loads and two comparisons, as
+    /// it runs on every slice a kernel takes; a layout that differs only in how its rows split
+    /// into planes (a grid with `ny` and `nz` exchanged) passes it.
     #[inline(always)]
-    fn span(&self, s: Index, stride: usize, plane: usize) -> std::ops::Range<usize> {
+    fn check(&self, data: &[f64], stride: usize) {
         assert!(
-            stride == self.stride && plane == self.plane,
+            stride == self.stride && data.len() == self.size,
             "field of another grid"
         );
+    }
+
+    /// The storage range of the run shifted by `s` in the grid's layout.
+    #[inline(always)]
+    fn span(&self, s: Index) -> std::ops::Range<usize> {
+        let (stride, plane) = (self.stride, self.plane);
         assert!(
             s[2] == 0 || plane != 0,
             "a two-dimensional field has no third-axis neighbours"
@@ -162,6 +181,7 @@ impl Region {
     }
 
     /// The same box with axis `a` restricted to `lo..hi` (which may reach into the ghosts).
+    #[inline(always)]
     pub fn range(self, a: usize, lo: isize, hi: isize) -> Self {
         let mut r = self;
         r.lo[a] = lo;
@@ -170,31 +190,37 @@ impl Region {
     }
 
     /// Lower corner (included).
+    #[inline(always)]
     pub fn lo(&self) -> Index {
         self.lo
     }
 
     /// Upper corner (excluded).
+    #[inline(always)]
     pub fn hi(&self) -> Index {
         self.hi
     }
 
     /// Number of indices along axis `a`.
+    #[inline(always)]
     pub fn len(&self, a: usize) -> usize {
         (self.hi[a] - self.lo[a]).max(0) as usize
     }
 
     /// Whether the box holds no index.
+    #[inline(always)]
     pub fn is_empty(&self) -> bool {
         (0..3).any(|a| self.len(a) == 0)
     }
 
     /// Number of indices.
+    #[inline(always)]
     pub fn size(&self) -> usize {
         self.len(0) * self.len(1) * self.len(2)
     }
 
     /// Number of lines (runs along the first axis).
+    #[inline(always)]
     pub fn lines(&self) -> usize {
         if self.is_empty() {
             0
@@ -207,15 +233,27 @@ impl Region {
     /// (e.g. filling the rows of a compact vector, [`efsi_linalg::par::rows`]).
     #[inline]
     pub fn line(&self, n: usize) -> Line {
+        let ny = self.len(1);
+        // One plane (every two-dimensional region): the line number is the row within it.
+        let (j, k) = if self.len(2) == 1 && n < ny {
+            (n, 0)
+        } else {
+            (n % ny, n / ny)
+        };
+        self.first_line().down(j, k, n)
+    }
+
+    /// Line 0 (the corner `lo`): the part of every line a loop computes once, before its lines
+    /// ([`Line::down`] moves it to the others).
+    #[inline(always)]
+    fn first_line(&self) -> Line {
         let stride = self.stride;
-        let (j, k) = (n % self.len(1), n / self.len(1));
-        let start = [self.lo[0], self.lo[1] + j as isize, self.lo[2] + k as isize];
-        let row = self.padded_row(start[1], start[2]);
+        let row = self.padded_row(self.lo[1], self.lo[2]);
         Line {
-            start,
+            start: self.lo,
             len: self.len(0),
-            n,
-            offset: row * stride + (start[0] + G) as usize,
+            n: 0,
+            offset: row * stride + (self.lo[0] + G) as usize,
             stride,
             plane: self.plane(),
             size: stride * self.rows * self.planes,
@@ -223,6 +261,7 @@ impl Region {
     }
 
     /// The plane size of the layout as a [`Line`] shifts by it (0 in two dimensions).
+    #[inline(always)]
     fn plane(&self) -> usize {
         if self.gz == 0 {
             0
@@ -237,15 +276,20 @@ impl Region {
         (k + self.gz as isize) as usize * self.rows + (j + G) as usize
     }
 
-    /// The line number of padded row `r` of the storage, if that row is one of the region's.
+    /// The line of padded row `r` of the storage, if that row is one of the region's: its rows
+    /// and planes from line 0 and its number, `(j, k, n)`.
     #[inline(always)]
-    fn line_of_row(&self, r: usize) -> Option<usize> {
+    fn line_of_row(&self, r: usize) -> Option<(usize, usize, usize)> {
         let (k, j) = (
             (r / self.rows) as isize - self.gz as isize,
             (r % self.rows) as isize - G,
         );
-        ((self.lo[1]..self.hi[1]).contains(&j) && (self.lo[2]..self.hi[2]).contains(&k))
-            .then(|| (k - self.lo[2]) as usize * self.len(1) + (j - self.lo[1]) as usize)
+        ((self.lo[1]..self.hi[1]).contains(&j) && (self.lo[2]..self.hi[2]).contains(&k)).then(
+            || {
+                let (j, k) = ((j - self.lo[1]) as usize, (k - self.lo[2]) as usize);
+                (j, k, k * self.len(1) + j)
+            },
+        )
     }
 
     /// Checks that the region fits the padded layout of a field (`stride × rows × planes`).
@@ -280,13 +324,16 @@ impl Region {
         let Some((lanes, x, r0)) = self.lanes(fields) else {
             return;
         };
-        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        let (rows, first) = (
+            par::rows(lanes, self.stride).work(self.len(0)),
+            self.first_line(),
+        );
         if self.len(2) == 1 {
-            rows.for_each(|n, l| f(self.line(n), l.sub(x.clone())));
+            rows.for_each(|n, l| f(first.down(n, 0, n), l.sub(x.clone())));
         } else {
             rows.for_each(|m, l| {
-                if let Some(n) = self.line_of_row(r0 + m) {
-                    f(self.line(n), l.sub(x.clone()))
+                if let Some((j, k, n)) = self.line_of_row(r0 + m) {
+                    f(first.down(j, k, n), l.sub(x.clone()))
                 }
             });
         }
@@ -327,16 +374,23 @@ impl Region {
         let Some((lanes, x, r0)) = self.lanes(fields) else {
             return init;
         };
-        let rows = par::rows(lanes, self.stride).work(self.len(0));
+        let (rows, first) = (
+            par::rows(lanes, self.stride).work(self.len(0)),
+            self.first_line(),
+        );
         if self.len(2) == 1 {
-            return rows.fold(init, |n, l| f(self.line(n), l.sub(x.clone())), combine);
+            return rows.fold(
+                init,
+                |n, l| f(first.down(n, 0, n), l.sub(x.clone())),
+                combine,
+            );
         }
         // Across planes a padded row between two planes' lines contributes nothing.
         rows.fold(
             init,
             |m, l| {
                 self.line_of_row(r0 + m)
-                    .map(|n| f(self.line(n), l.sub(x.clone())))
+                    .map(|(j, k, n)| f(first.down(j, k, n), l.sub(x.clone())))
             },
             |a, p| match p {
                 Some(p) => combine(a, p),
@@ -355,9 +409,17 @@ impl Region {
         combine: impl Fn(A, P) -> A,
     ) -> A {
         self.check();
+        if self.is_empty() {
+            return init;
+        }
+        let (first, ny) = (self.first_line(), self.len(1));
+        let line = |n: usize| match self.len(2) {
+            1 => first.down(n, 0, n),
+            _ => first.down(n % ny, n / ny, n),
+        };
         par::range(self.lines())
             .work(self.len(0))
-            .fold(init, |n| f(self.line(n)), combine)
+            .fold(init, |n| f(line(n)), combine)
     }
 
     /// `Σ f(line)` component-wise, `N` sums at once, lines added in order.
@@ -469,19 +531,15 @@ impl Field {
     /// line's length (a shift may reach the ghost layers, not past them).
     #[inline(always)]
     pub fn at(&self, line: &Line, shift: Index) -> &[f64] {
-        &self.data()[line.span(shift, self.stride(), self.zstride())]
-    }
-
-    /// The plane size as a [`Line`] shifts by it: 0 on a two-dimensional grid.
-    #[inline(always)]
-    fn zstride(&self) -> usize {
-        if self.gz() == 0 { 0 } else { self.plane() }
+        line.check(self.data(), self.stride());
+        &self.data()[line.span(shift)]
     }
 
     /// [`Field::at`], mutable: for an output that a line owns but the loop was not given.
     #[inline(always)]
     pub fn at_mut(&mut self, line: &Line, shift: Index) -> &mut [f64] {
-        let r = line.span(shift, self.stride(), self.zstride());
+        line.check(self.data(), self.stride());
+        let r = line.span(shift);
         &mut self.data_mut()[r]
     }
 }
@@ -722,6 +780,52 @@ mod tests {
                 assert_eq!((a.data()[n], b.data()[n]), (-1.0, 0.0), "[{i}, {j}, {k}]");
             }
         }
+    }
+
+    #[test]
+    fn every_loop_hands_its_kernel_the_lines_region_line_builds() {
+        let g3 = Grid::new_3d([9, 7, 6], (0.0, 1.0), (0.0, 1.0), (0.0, 1.0));
+        let g2 = Grid::new(Geometry::Planar, 5, 4, (0.0, 1.0), (0.0, 1.0));
+        let regions = [
+            (
+                &g3,
+                Region::of(&g3, Stagger::YFace)
+                    .range(1, 1, 6)
+                    .range(2, -1, 4),
+            ),
+            (&g2, Region::of(&g2, Stagger::XFace).range(1, 1, 3)),
+        ];
+        for (g, r) in regions {
+            let (f, [lo0, lo1, lo2], ny) = (Field::zeros(g), r.lo(), r.len(1));
+            for n in 0..r.lines() {
+                let l = r.line(n);
+                let j = lo1 + (n % ny) as isize;
+                assert_eq!(l.start, [lo0, j, lo2 + (n / ny) as isize]);
+                assert_eq!((l.n, l.len, l.linear(0)), (n, r.len(0), f.idx3(l.start)));
+            }
+            let seen = r.sum(|l| {
+                assert_eq!(l, r.line(l.n));
+                [1.0, l.n as f64]
+            });
+            let lines = r.lines();
+            assert_eq!(seen, [lines as f64, (lines * (lines - 1) / 2) as f64]);
+            let mut out = Field::zeros(g);
+            let written = r.fold_mut(
+                &mut out,
+                0,
+                |l, _| usize::from(l == r.line(l.n)),
+                |a, p| a + p,
+            );
+            assert_eq!(written, lines);
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "field of another grid")]
+    fn a_field_of_another_grid_is_refused() {
+        let g = Grid::new(Geometry::Planar, 4, 5, (0.0, 1.0), (0.0, 1.0));
+        let other = Field::zeros(&Grid::new(Geometry::Planar, 5, 4, (0.0, 1.0), (0.0, 1.0)));
+        let _ = other.at(&Region::of(&g, Stagger::Cell).line(0), [0; 3]);
     }
 
     #[test]

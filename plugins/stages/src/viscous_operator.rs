@@ -172,7 +172,8 @@ impl Coefficients {
             let lo = edge_cells(axes);
             Region::of(g, at).for_each(e, |l, gr| {
                 let len = l.len;
-                let [sw, se, nw, ne] = lo.map(|d| &mu.at(&l, d)[..len]);
+                let cell = |m: usize| &mu.at(&l, lo[m])[..len];
+                let [sw, se, nw, ne] = [cell(0), cell(1), cell(2), cell(3)];
                 let (r, gr) = (&edge_radius(g, at, &l)[..len], &mut gr[..len]);
                 let one = sw.first().copied().filter(|&m| {
                     [sw, se, nw, ne]
@@ -585,7 +586,8 @@ pub(crate) fn edge_viscosity(
 ) {
     let lo = edge_cells(axes);
     Region::of(grid, at).for_each(out, |l, o| {
-        let q = lo.map(|d| mu.at(&l, d));
+        let cell = |m: usize| mu.at(&l, lo[m]);
+        let q = [cell(0), cell(1), cell(2), cell(3)];
         for n in 0..l.len {
             o[n] = harmonic_mean([q[0][n], q[1][n], q[2][n], q[3][n]]);
         }

@@ -149,32 +149,40 @@ fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
         } else {
             pz.then(|| r0 + (nz - 1) * plane)
         };
-        for (i, y) in yr.iter_mut().enumerate() {
-            let (k, p) = (r0 + i, p0 + i);
-            let mut v = l.diag[p] * x[k];
-            if i + 1 < nx {
-                v -= l.ce[p] * x[k + 1];
-            } else if px {
-                v -= l.ce[p] * x[r0];
+        // Term after term, each over the whole row: every entry sees the same operations in
+        // the same order as a loop over the entries would apply them (so the same bits), and
+        // each pass is a loop over slices without branches or bounds checks.
+        let n = nx;
+        let yr = &mut yr[..n];
+        let (xr, d) = (&x[r0..r0 + n], &l.diag[p0..p0 + n]);
+        for i in 0..n {
+            yr[i] = d[i] * xr[i];
+        }
+        let (ce, cw) = (&l.ce[p0..p0 + n], &l.ce[p0 - 1..p0 - 1 + n]);
+        let (xe, xw) = (&x[r0 + 1..r0 + n], &x[r0..r0 + n - 1]);
+        for i in 0..n - 1 {
+            yr[i] -= ce[i] * xe[i];
+        }
+        if px {
+            yr[n - 1] -= ce[n - 1] * x[r0];
+            yr[0] -= cw[0] * x[r0 + n - 1];
+        }
+        for i in 1..n {
+            yr[i] -= cw[i] * xw[i - 1];
+        }
+        let faces = [
+            (north, &l.cn[p0..p0 + n]),
+            (south, &l.cn[p0 - s..p0 - s + n]),
+            (top, &l.ct[p0..p0 + n]),
+            (bottom, &l.ct[p0 - sp..p0 - sp + n]),
+        ];
+        for (at, c) in faces {
+            if let Some(o) = at {
+                let xo = &x[o..o + n];
+                for i in 0..n {
+                    yr[i] -= c[i] * xo[i];
+                }
             }
-            if i > 0 {
-                v -= l.ce[p - 1] * x[k - 1];
-            } else if px {
-                v -= l.ce[p - 1] * x[r0 + nx - 1];
-            }
-            if let Some(n) = north {
-                v -= l.cn[p] * x[n + i];
-            }
-            if let Some(q) = south {
-                v -= l.cn[p - s] * x[q + i];
-            }
-            if let Some(t) = top {
-                v -= l.ct[p] * x[t + i];
-            }
-            if let Some(b) = bottom {
-                v -= l.ct[p - sp] * x[b + i];
-            }
-            *y = v;
         }
     });
 }

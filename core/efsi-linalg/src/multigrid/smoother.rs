@@ -161,23 +161,34 @@ impl Level {
                 let o = base + ((colour + j + c) & 1);
                 let end = base + nx;
                 xs.check(base - 1 - sp..end + 1 + sp);
-                let mut k = o;
-                while k < end {
+                if o >= end {
+                    return;
+                }
+                // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
+                // exactly the length it touches, so that no index needs a bounds check (as in
+                // the two-dimensional `Rows::relax`).
+                let cnt = (end - o).div_ceil(2);
+                let len = 2 * cnt - 1;
+                let (bo, dinv) = (&b[o..o + len], &dinv[o..o + len]);
+                let (ce, cw) = (&ce[o..o + len], &ce[o - 1..o - 1 + len]);
+                let (cn, cs) = (&cn[o..o + len], &cn[o - s..o - s + len]);
+                let (ct, cb) = (&ct[o..o + len], &ct[o - sp..o - sp + len]);
+                for m in 0..cnt {
+                    let (t, k) = (2 * m, o + 2 * m);
                     // SAFETY: inside the span checked above; a half-sweep writes only cells
                     // of `colour`, each row its own, and reads cells of the other colour and
                     // ghosts, which no one writes during it.
                     unsafe {
-                        let v = (b[k]
-                            + ce[k] * xs.get(k + 1)
-                            + ce[k - 1] * xs.get(k - 1)
-                            + cn[k] * xs.get(k + s)
-                            + cn[k - s] * xs.get(k - s)
-                            + ct[k] * xs.get(k + sp)
-                            + ct[k - sp] * xs.get(k - sp))
-                            * dinv[k];
+                        let v = (bo[t]
+                            + ce[t] * xs.get(k + 1)
+                            + cw[t] * xs.get(k - 1)
+                            + cn[t] * xs.get(k + s)
+                            + cs[t] * xs.get(k - s)
+                            + ct[t] * xs.get(k + sp)
+                            + cb[t] * xs.get(k - sp))
+                            * dinv[t];
                         xs.set(k, v);
                     }
-                    k += 2;
                 }
             };
             if serial {

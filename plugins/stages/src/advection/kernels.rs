@@ -76,8 +76,11 @@ fn limited(a: f64, cm: f64, c0: f64, c1: f64, c2: f64) -> f64 {
     let c = if pos { c0 } else { c1 };
     let d = if pos { c1 } else { c0 };
     let (p, q) = (c - up, d - c);
+    // The quotient is formed before the test (a select, not a branch, so the loops over faces
+    // vectorise); where `pq ≤ 0` it is discarded.
     let pq = p * q;
-    c + if pq > 0.0 { pq / (p + q) } else { 0.0 }
+    let ratio = pq / (p + q);
+    c + if pq > 0.0 { ratio } else { 0.0 }
 }
 
 /// Flux `(a m̃, a m̃ q̃)` through a control-volume face with advecting velocity `a`, from the
@@ -129,33 +132,74 @@ struct Stencil<'a> {
     q: [&'a [f64]; 4],
 }
 
-impl<'a> Stencil<'a> {
+/// Where a [`Stencil`] reads: each array with the storage offset of its shift from a line's
+/// first index, the same for every line of a region (computed once per loop, so that a line's
+/// stencil costs one bounds-checked slice per array, not the shifts' arithmetic).
+struct Shape<'a> {
+    adv: [(&'a [f64], isize); 2],
+    m: [(&'a [f64], isize); 4],
+    q: [(&'a [f64], isize); 4],
+}
+
+impl<'a> Shape<'a> {
     /// The stencil of component `c` (velocity `vel`, face masses `m`) through the lower
-    /// `a`-faces of the control volumes `I + s·e_a`, `I` the columns `x` of line `l`.
+    /// `a`-faces of the control volumes `I + s·e_a`; `l` is a line of the region it serves
+    /// (whose grid the arrays are checked against).
     #[inline(always)]
-    fn new(
-        l: &Line,
-        [a, c, s]: [usize; 3],
-        vel: &[&'a Field],
-        m: &'a [f64],
-        x: Range<usize>,
-    ) -> Self {
+    fn new(l: &Line, [a, c, s]: [usize; 3], vel: &[&'a Field], m: &'a [f64]) -> Self {
+        let (ua, uc) = (vel[a], vel[c]);
+        // The layout checks of `Field::at` and `Line::on`, once for the loop.
+        let _ = (ua.at(l, [0; 3]), uc.at(l, [0; 3]), l.on(m, [0; 3]));
         let up = along(a, s as isize);
-        let shift = |k: isize| along(a, k + s as isize);
-        let lo = std::array::from_fn(|d| minus(c)[d] + up[d]);
-        Stencil {
-            adv: [&vel[a].at(l, lo)[x.clone()], &vel[a].at(l, up)[x.clone()]],
-            m: [-2, -1, 0, 1].map(|k| &l.on(m, shift(k))[x.clone()]),
-            q: [-2, -1, 0, 1].map(|k| &vel[c].at(l, shift(k))[x.clone()]),
+        let mc = minus(c);
+        let lo = [mc[0] + up[0], mc[1] + up[1], mc[2] + up[2]];
+        let shift = |k: isize| uc.offset(along(a, k + s as isize));
+        Shape {
+            adv: [(ua.data(), ua.offset(lo)), (ua.data(), ua.offset(up))],
+            m: [-2, -1, 0, 1].map(|k| (m, shift(k))),
+            q: [-2, -1, 0, 1].map(|k| (uc.data(), shift(k))),
         }
     }
 
+    /// The stencil on the columns `x` of line `l`.
+    #[inline(always)]
+    fn on(&self, l: &Line, x: Range<usize>) -> Stencil<'a> {
+        let o = l.linear(0) as isize;
+        let (m, q) = (&self.m, &self.q);
+        Stencil {
+            adv: [cols(self.adv[0], o, &x), cols(self.adv[1], o, &x)],
+            m: [
+                cols(m[0], o, &x),
+                cols(m[1], o, &x),
+                cols(m[2], o, &x),
+                cols(m[3], o, &x),
+            ],
+            q: [
+                cols(q[0], o, &x),
+                cols(q[1], o, &x),
+                cols(q[2], o, &x),
+                cols(q[3], o, &x),
+            ],
+        }
+    }
+}
+
+/// The columns `x` of the run at storage offset `o + off` of `data` (bounds-checked).
+#[inline(always)]
+fn cols<'a>((data, off): (&'a [f64], isize), o: isize, x: &Range<usize>) -> &'a [f64] {
+    let k = usize::try_from(o + off).expect("a shift below the storage");
+    &data[k + x.start..k + x.end]
+}
+
+impl<'a> Stencil<'a> {
     /// The mass and momentum fluxes `(fm, fq)` through the faces, one per entry of `fm`.
     #[inline(always)]
     fn fluxes(&self, fm: &mut [f64], fq: &mut [f64]) {
         let n = fm.len();
-        let (fq, [a0, a1]) = (&mut fq[..n], self.adv.map(|s| &s[..n]));
-        let (ms, qs) = (self.m.map(|s| &s[..n]), self.q.map(|s| &s[..n]));
+        let (fq, [a0, a1]) = (&mut fq[..n], [&self.adv[0][..n], &self.adv[1][..n]]);
+        let ([m0, m1, m2, m3], [q0, q1, q2, q3]) = (self.m, self.q);
+        let ms = [&m0[..n], &m1[..n], &m2[..n], &m3[..n]];
+        let qs = [&q0[..n], &q1[..n], &q2[..n], &q3[..n]];
         for i in 0..n {
             (fm[i], fq[i]) = flux(
                 0.5 * (a0[i] + a1[i]),
@@ -178,8 +222,12 @@ fn face_fluxes(
     fq: &mut [f64],
 ) {
     let faces = cv.range(a, cv.lo()[a], cv.hi()[a] + 1);
+    if faces.is_empty() {
+        return;
+    }
+    let shape = Shape::new(&faces.line(0), [a, c, 0], vel, m);
     faces.for_each((faces.storage(fm), faces.storage(fq)), |l, (fm, fq)| {
-        Stencil::new(&l, [a, c, 0], vel, m, 0..l.len).fluxes(fm, fq);
+        shape.on(&l, 0..l.len).fluxes(fm, fq);
     });
 }
 
@@ -271,19 +319,32 @@ impl Balance<'_> {
         let (mut below, mut above) = ((&mut ylo, &mut qlo), (&mut yhi, &mut qhi));
         let (mut bm, mut bq) = ([0.0; CHUNK + 1], [0.0; CHUNK + 1]);
         let last = self.further.is_empty();
+        if lines.is_empty() {
+            return;
+        }
+        let (vel, m, l0) = (self.vel, self.m, self.cv.line(lines.start));
+        let (lower, upper) = (
+            Shape::new(&l0, [1, c, 0], vel, m),
+            Shape::new(&l0, [1, c, 1], vel, m),
+        );
+        let across = Shape::new(&self.xs.line(lines.start), [0, c, 0], vel, m);
         for n in lines.clone() {
             let (l, xl) = (self.cv.line(n), self.xs.line(n));
             if n == lines.start || l.start[1] == self.cv.lo()[1] {
-                Stencil::new(&l, [1, c, 0], self.vel, self.m, x.clone())
+                lower
+                    .on(&l, x.clone())
                     .fluxes(&mut below.0[..w], &mut below.1[..w]);
             }
-            Stencil::new(&l, [1, c, 1], self.vel, self.m, x.clone())
+            upper
+                .on(&l, x.clone())
                 .fluxes(&mut above.0[..w], &mut above.1[..w]);
-            Stencil::new(&xl, [0, c, 0], self.vel, self.m, x.start..x.end + 1)
+            across
+                .on(&xl, x.start..x.end + 1)
                 .fluxes(&mut bm[..=w], &mut bq[..=w]);
             let o = (n - lines.start) * len + x.start;
             let (qt, mt) = (&mut qt[o..o + w], &mut mt[o..o + w]);
-            let [rm, rp, r] = self.radii.map(|s| &s[x.clone()]);
+            let [rm, rp, r] = self.radii;
+            let (rm, rp, r) = (&rm[x.clone()], &rp[x.clone()], &r[x.clone()]);
             let (m0, m1, q0, q1) = (&below.0[..w], &above.0[..w], &below.1[..w], &above.1[..w]);
             let (bm, bq, h) = (&bm[..=w], &bq[..=w], self.h);
             for i in 0..w {

@@ -54,6 +54,7 @@ pub(super) fn rest_stress(law: &dyn ConstitutiveLaw, m: usize) -> Result<[f64; 6
 /// `a · x` over the `x.len()` entries, summed in order from the first product.
 #[inline(always)]
 fn dot(a: &[f64], x: &[f64]) -> f64 {
+    let a = &a[..x.len()];
     let mut s = a[0] * x[0];
     for k in 1..x.len() {
         s += a[k] * x[k];
