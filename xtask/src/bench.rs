@@ -536,6 +536,34 @@ fn roofline_json(
     })
 }
 
+/// Each stage's ns per cell-step, with its solver iterations per step in brackets.
+fn stage_list(f: &Figures) -> String {
+    f.stages
+        .iter()
+        .map(|(n, ns, it)| {
+            if *it > 0.0 {
+                format!("{n} {ns:.0} ({it:.1})")
+            } else {
+                format!("{n} {ns:.0}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The peak resident memory, in total and per cell, where the run reported it.
+fn memory_note(f: &Figures, cells: usize) -> String {
+    if f.peak_rss.is_finite() {
+        format!(
+            "; peak {:.1} MB ({:.0} B/cell)",
+            f.peak_rss / 1e6,
+            f.peak_rss / cells as f64
+        )
+    } else {
+        String::new()
+    }
+}
+
 /// Print the table line of case `c` on `pools[k]` threads and return its JSON; `limits` are
 /// the triad bandwidths per pool size when `--roofline` measured them.
 fn report_case(
@@ -554,18 +582,7 @@ fn report_case(
         let (lo, hi) = range(&totals);
         (hi - lo) / f.total
     };
-    let stages = f
-        .stages
-        .iter()
-        .map(|(n, ns, it)| {
-            if *it > 0.0 {
-                format!("{n} {ns:.0} ({it:.1})")
-            } else {
-                format!("{n} {ns:.0}")
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(", ");
+    let stages = stage_list(&f);
     // The speed-up of each alternating pair of runs: on a VM whose second core comes and goes,
     // their spread says how far to trust the ratio of the medians.
     let pairs: Vec<f64> = runs[0]
@@ -586,15 +603,7 @@ fn report_case(
         .zip(free_fall)
         .map(|(z, ff)| format!("; fall {z:.4} (½gt² = {ff:.4})"))
         .unwrap_or_default();
-    let memory = if f.peak_rss.is_finite() {
-        format!(
-            "; peak {:.1} MB ({:.0} B/cell)",
-            f.peak_rss / 1e6,
-            f.peak_rss / c.cells as f64
-        )
-    } else {
-        String::new()
-    };
+    let memory = memory_note(&f, c.cells);
     println!(
         "{:<14} {:>3} {:>6.0} {:>10.1} {:>7.2}×  {stages}{fall}; wall {:.1} s{memory}{pair_note}",
         c.name,

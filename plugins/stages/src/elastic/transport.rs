@@ -539,17 +539,7 @@ impl Kernels {
         let (m, c) = (self.m, 3 + p);
         let [pa, pb] = SHEAR[p].0;
         let around = cells_of_edge(SHEAR[p].0);
-        // Three dimensions: the pairs (a, c) and (b, c) with the third axis c, and the shifts to
-        // their edges whose averages take this pair's edge (`I + {0, +e_c} × {0, −e_b}` and
-        // `I + {0, +e_c} × {0, −e_a}`).
-        let third = (self.grid.dims() == 3).then(|| {
-            let pc = 3 - pa - pb;
-            let shifts = |x: usize| {
-                let (ex, ec) = (minus(x), unit(pc));
-                [[0; 3], ex, ec, plus(ex, ec)]
-            };
-            [(PAIR[pa][pc], shifts(pb)), (PAIR[pb][pc], shifts(pa))]
-        });
+        let third = (self.grid.dims() == 3).then(|| third_axis_pairs(pa, pb));
         for l in (0..edges.lines()).map(|n| edges.line(n)) {
             for (n, at) in l.indices().enumerate() {
                 let rc = self.edge[p].rc[at];
@@ -597,6 +587,18 @@ impl Kernels {
         }
         Ok(())
     }
+}
+
+/// In three dimensions, for the shear pair of axes `(a, b)`: the pairs `(a, c)` and `(b, c)` with
+/// the third axis `c`, each with the shifts to its edges whose averages take the pair `(a, b)`'s
+/// edge (`I + {0, +e_c} × {0, −e_b}` and `I + {0, +e_c} × {0, −e_a}`).
+fn third_axis_pairs(pa: usize, pb: usize) -> [(usize, [Index; 4]); 2] {
+    let pc = 3 - pa - pb;
+    let shifts = |x: usize| {
+        let (ex, ec) = (minus(x), unit(pc));
+        [[0; 3], ex, ec, plus(ex, ec)]
+    };
+    [(PAIR[pa][pc], shifts(pb)), (PAIR[pb][pc], shifts(pa))]
 }
 
 /// `r` restricted to `to` along every axis.
