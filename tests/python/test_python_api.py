@@ -250,6 +250,40 @@ def test_the_same_bits_as_efsi_run(tmp_path):
     assert rows["contact_force"].max() > 0.0 and rows["solid_v"][-1] > rows["solid_v"].min()
 
 
+def test_a_scene_of_several_bodies_names_its_columns_per_body_as_efsi_run(tmp_path):
+    """`cases/two_drops.ron` to t = 0.25 by `efsi run` and by the package: the same columns,
+    named per body (`light.solid_y`, …, `light.heavy.shared_volume`), the same bits; each drop
+    keeps its volume to 1e-10, the two never share a cell, the heavy one falls faster."""
+    two = REPO / "cases/two_drops.ron"
+    out = tmp_path / "run"
+    subprocess.run(
+        [EFSI, "run", str(two), "--set", "time.end=0.25", "--out", str(out), "-q"],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    header, values = read_probes(out / "probes.csv")
+    scene = efsi.Scene.load(two)
+    scene.set("time.end", 0.25)
+    sim = efsi.Simulation(scene)
+    assert sim.advance_to(sim.end)
+    rows = sim.probes(frame=False)
+    assert list(rows) == header
+    for body in ("light", "heavy"):
+        for column in ("solid_volume", "solid_x", "solid_y", "solid_v", "solid_pieces"):
+            assert f"{body}.{column}" in header
+    assert "solid_y" not in header and "light.heavy.shared_volume" in header
+    mine = np.column_stack([rows[c] for c in header])
+    assert mine.shape == values.shape and np.array_equal(mine, values)
+    for body in ("light", "heavy"):
+        v = rows[f"{body}.solid_volume"]
+        assert np.max(np.abs(v / v[0] - 1.0)) <= 1e-10
+        assert np.all(rows[f"{body}.solid_pieces"] == 1.0)
+    assert np.max(rows["max_solid_fraction_sum"]) <= 1.0 + 1e-12
+    assert np.all(rows["light.heavy.shared_volume"] == 0.0)
+    fall = {b: rows[f"{b}.solid_y"][0] - rows[f"{b}.solid_y"][-1] for b in ("light", "heavy")}
+    assert fall["heavy"] > 2.0 * fall["light"] > 0.0
+
+
 def test_a_three_dimensional_scene_gives_w_z_and_the_same_bits_as_efsi_run(tmp_path):
     """The 3-D drop (cases/falling_drop_3d.ron, two symmetry planes) at 2 cells per radius,
     by `efsi run --set` and by the package with the same overrides: every probe value
