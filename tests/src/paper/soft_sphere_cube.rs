@@ -111,7 +111,7 @@ pub fn observed_order(h: [f64; 3], g: [f64; 2]) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The case: three grids to [`SoftSphereCube::end`].
+/// The case: three grids, to t = 4 (quick: t = 1).
 pub struct SoftSphereCube {
     end: f64,
 }

@@ -130,7 +130,8 @@ impl Kernels {
             let n = cells.len();
             super::stress::eval(law, m, &self.cb[..n * m], &mut self.ct[..n * m], None)
                 .map_err(|e| e.to_string())?;
-            for (n, &(w, p, vol)) in cells.iter().enumerate() {
+            // By reference: a cell's principal axes are not copied per quadrature point.
+            for (n, (w, p, vol)) in cells.iter().enumerate() {
                 let tr = p.work(&self.ct[n * m..(n + 1) * m], &r);
                 energy += 0.5 * wq * w * tr * vol;
             }

@@ -65,10 +65,11 @@ fn dot(a: &[f64], x: &[f64]) -> f64 {
 /// Swap the points `p` and `q` (`m` entries each) of a flat batch.
 #[inline(always)]
 fn swap(v: &mut [f64], m: usize, p: usize, q: usize) {
+    let (p, q) = (p.min(q), p.max(q));
     if p != q {
-        for c in 0..m {
-            v.swap(p * m + c, q * m + c);
-        }
+        // One block move each way (the blocks are disjoint: `p < q`).
+        let (lo, hi) = v.split_at_mut(q * m);
+        lo[p * m..(p + 1) * m].swap_with_slice(&mut hi[..m]);
     }
 }
 
