@@ -138,8 +138,10 @@ fn the_elastic_outputs_are_there_only_with_the_elastic_stage() {
         "",
         "dt_max: 0.001",
     );
+    // The elastic stage's three, and the VOF stage's `body_id` (values only with several
+    // bodies).
     let names: Vec<&str> = s.pipeline().outputs().iter().map(|o| o.name).collect();
-    assert_eq!(names, ["B", "stress", "elastic_energy"]);
+    assert_eq!(names, ["B", "stress", "elastic_energy", "body_id"]);
 }
 
 /// A test-only stage that imposes a velocity field every step (a kinematic driver).
