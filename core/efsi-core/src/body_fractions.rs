@@ -11,8 +11,10 @@
 //! bodies' extent, not with the grid times the number of bodies.
 //!
 //! It is a copy, not the stage's record: it holds no checkpointed array (the stage's own record
-//! carries the windows), so a state restored from a checkpoint holds the bodies' names and no
-//! values ([`BodyFraction::is_set`] false) until its first step. A snapshot (a step's rollback)
+//! carries the windows): a state restored from a checkpoint holds the bodies' names and no
+//! values ([`BodyFraction::is_set`] false) until the stage, restored from its record, publishes
+//! them again ([`crate::Stage::restored`]); the contact stage reads them at the start of the
+//! next step. A snapshot (a step's rollback)
 //! copies it with the rest of the state.
 
 use crate::field::Field;

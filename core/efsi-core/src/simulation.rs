@@ -229,7 +229,7 @@ impl Simulation {
 
     /// The stages' [`Stage::restored`](crate::Stage::restored) with the state just put back.
     pub(crate) fn stages_restored(&mut self) {
-        self.pipeline.restored(&self.state);
+        self.pipeline.restored(&mut self.state);
     }
 
     /// The private stepping data a snapshot carries: the last rate of change and the velocity

@@ -7,6 +7,7 @@
 pub mod advection;
 mod block_multigrid;
 pub mod body_force;
+pub mod contact;
 pub mod elastic;
 mod faces;
 pub mod projection;
@@ -51,6 +52,7 @@ pub fn builtin() -> Vec<&'static dyn StagePlugin> {
     vec![
         &advection::Advection,
         &body_force::BodyForce,
+        &contact::Contact,
         &projection::PressurePredictor,
         &viscous::Viscous,
         &elastic::Momentum,

@@ -153,8 +153,9 @@ pub trait Stage: Send {
 
     /// After a snapshot's data and state are back ([`restore`](Self::restore), then the
     /// state): a stage takes here what it keeps between steps as a copy of the state, instead of
-    /// saving it (default: nothing).
-    fn restored(&mut self, _state: &State) {}
+    /// saving it, and puts back into the state the copies it publishes there from its own
+    /// record (default: nothing).
+    fn restored(&mut self, _state: &mut State) {}
 
     /// Take back what [`save`](Self::save) returned (of a stage built from the same scene).
     /// The default accepts only nothing; the error says what does not fit.
@@ -893,7 +894,7 @@ impl Pipeline {
     }
 
     /// Each stage's [`Stage::restored`], once a snapshot's state is back.
-    pub fn restored(&mut self, state: &State) {
+    pub fn restored(&mut self, state: &mut State) {
         for e in &mut self.entries {
             e.stage.restored(state);
         }

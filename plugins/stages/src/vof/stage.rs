@@ -559,9 +559,13 @@ impl Stage for VofStage {
         Ok(())
     }
 
-    /// Vⁿ is the restored state's velocity.
-    fn restored(&mut self, state: &State) {
+    /// Vⁿ is the restored state's velocity; the bodies' fractions are published again from the
+    /// restored windows (a checkpoint does not carry the state's copy).
+    fn restored(&mut self, state: &mut State) {
         self.keep_velocity(state);
+        if let Some(many) = &self.many {
+            many.publish(state);
+        }
     }
 
     fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {

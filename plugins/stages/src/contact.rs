@@ -1,0 +1,799 @@
+//! Contact: a short-range repulsion that keeps separate bodies (and, on request, bodies and the
+//! walls) a film apart where the grid no longer resolves the fluid between them.
+//!
+//! # Why
+//!
+//! Each body's fraction `φ_k` is transported on its own ([`crate::vof`]): two bodies never
+//! merge, but the transport does not keep `Σ_k φ_k ≤ 1` in a cell two bodies enter together.
+//! While the film between them spans cells, the resolved flow keeps them apart (its pressure
+//! rises as it drains); below a cell it is no longer resolved. As the reference-map codes
+//! (Rycroft et al. 2020; Wang, Kamrin & Rycroft 2022) and the Eulerian red-blood-cell codes
+//! (Ii, Sugiyama et al. 2012) do, a short-range repulsion takes over there.
+//!
+//! # Rule
+//!
+//! Each body carries a halo, its fraction smoothed by a tent kernel `K` of half-width
+//! `range + 1` cells (per axis, normalised, a product over the axes),
+//!
+//! ```text
+//!     ψ_k = K * φ_k,     K(d) ∝ max(0, range + 1 − |d|)   (d in cells along each axis),
+//! ```
+//!
+//! which is 1 deep inside the body, falls to 0 within `range` cells outside its interface, and
+//! the repulsion is the force of the potential
+//!
+//! ```text
+//!     E_c = κ Σ_{k<l} ∫ φ_k ψ_l dV  (+ κ Σ_k ∫ φ_k ψ_w dV  with `walls`),
+//! ```
+//!
+//! the overlap of one body's volume with the other's halo (`∫ φ_k ψ_l = ∫ ψ_k φ_l`: `K` is
+//! symmetric), which is zero while the bodies are more than `range` cells apart and grows as
+//! they close. Moving body `k` changes it at the rate set by the force density on its material
+//!
+//! ```text
+//!     f_k = −κ φ_k Σ_{l≠k} ∇ψ_l   (− κ φ_k ∇ψ_w),
+//! ```
+//!
+//! which points away from the other bodies (and walls) and sums to zero over a pair
+//! (`∫ φ_k ∇ψ_l = −∫ φ_l ∇ψ_k`): the pair's momentum is kept. A wall's halo `ψ_w` is that of
+//! a body filling the space beyond the wall (no-slip, moving and free-slip sides; not a
+//! symmetry plane, whose mirror image of a body is the body itself, nor a periodic or outflow
+//! side). Being a potential force, the repulsion stores the energy `E_c` the bodies' approach
+//! gives it and returns it as they part: it never supplies energy of its own. The stage keeps
+//! `E_c` in the state ([`ContactEnergy`]), which the energy guard counts as stored energy.
+//!
+//! # Scheme
+//!
+//! The stage runs after the body force, on the predicted velocity `V*`, before the viscous,
+//! elastic and pressure steps (which see it as they see gravity): on every unknown face normal
+//! to axis `a`, between cells `c − e_a` and `c`,
+//!
+//! ```text
+//!     V*_a ← V*_a + Δt f_a / ρ_face,   f_a = −κ φ̄_k (ψ_l(c) − ψ_l(c − e_a)) / h_a,
+//! ```
+//!
+//! `φ̄_k` the two cells' mean and `ρ_face` the face density of the momentum equation
+//! ([`efsi_core::operators::face_density`]). On a uniform grid this sum of face forces over a
+//! pair is zero to round-off (summation by parts with the symmetric kernel), planar and
+//! three-dimensional; in axisymmetric geometry the cell volumes weight the axial sums and the
+//! pair's axial momentum is kept to the discretisation error. Each halo is evaluated on its
+//! body's window grown by the kernel's half-width, wrapped along periodic axes: the work and
+//! storage scale with the bodies' extent. The fractions are those the VOF stage published at
+//! the end of the last step ([`efsi_core::body_fractions`]).
+//!
+//! **Step limit.** The force is explicit: while two bodies (or a body and a wall) are within
+//! `range + 2` cells of each other, a step may not let it move the lightest material by more
+//! than a fraction of a cell, `Δt ≤ CFL · 2 / (C + √(C² + 4 a/h))` with the largest
+//! acceleration `a = κ K(0) / (h ρ_min)` and `C` the convective rate, as for the body force.
+//! Farther apart it sets no limit.
+//!
+//! # Parameters (`numerics.contact`)
+//!
+//! - `stiffness` `κ` (Pa, an energy per volume): by default `10 ρ_max U²`, `ρ_max` the densest
+//!   body and `U` the largest of the bodies' initial speeds, the moving walls' speeds and the
+//!   free-fall speed `√(2|g|L)` over the domain's longest side `L` — the halo then stores ten
+//!   times the kinetic energy per volume of a body arriving at that speed before the bodies
+//!   share a cell. A scene in which nothing sets a body moving (no gravity, no initial speed, no
+//!   moving wall) has no default: no repulsion unless it sets one.
+//! - `range` (cells, in `(0, 2]`, default 1): how far a halo reaches beyond its body's interface
+//!   (the gap below which the repulsion acts). At most 2: a body's window keeps two empty
+//!   cells beyond its support ([`crate::vof`]).
+//! - `walls` (default `false`): repel bodies from the walls too. Off, a body meets a wall through
+//!   the resolved film only (as a single body always does).
+//!
+//! The stage runs in scenes of several bodies, and in a scene of one body with `walls: true`.
+//!
+//! # Limits
+//!
+//! The repulsion acts between the bodies' volumes, not their surfaces: it has no friction and
+//! no adhesion, and its stiffness is the contact's, not the bodies' (a stiff `κ` and a soft body
+//! deform the body; a soft `κ` lets bodies share a cell's worth of their halos). `SolidOverlap`
+//! (`max Σ_k φ_k`) shows whether it kept the bodies apart.
+
+use efsi_core::body_fractions::{BodyFraction, BodyFractions};
+use efsi_core::operators::face_density;
+use efsi_core::scene::bodies::Bodies;
+use efsi_core::scene::options::StageOptions;
+use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
+use efsi_core::schedule::VELOCITY;
+use efsi_core::state::StateResource;
+use efsi_core::{
+    BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
+    State, StepContext,
+};
+use serde::{Deserialize, Serialize};
+
+/// The largest `range`: a body's window keeps two empty cells beyond its support.
+pub const MAX_RANGE: f64 = 2.0;
+
+/// The factor of the default stiffness over `ρ_max U²` (see the module docs).
+pub const STIFFNESS_FACTOR: f64 = 10.0;
+
+/// The contact's options (`numerics.contact`; see the module docs).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactOptions {
+    /// The repulsion's stiffness κ (Pa); by default `10 ρ_max U²` (module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// How far (cells) a body's halo reaches beyond its interface, in `(0, 2]` (default 1).
+    #[serde(default = "one")]
+    pub range: f64,
+    /// Whether the walls repel the bodies too (default `false`).
+    #[serde(default)]
+    pub walls: bool,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        ContactOptions {
+            stiffness: None,
+            range: 1.0,
+            walls: false,
+        }
+    }
+}
+
+impl StageOptions for ContactOptions {
+    const SECTION: &'static str = "contact";
+
+    fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
+        if let Some(k) = self.stiffness
+            && !(k.is_finite() && k >= 0.0)
+        {
+            return Err((
+                "stiffness",
+                format!(
+                    "must be a finite number ≥ 0 (Pa), got {}",
+                    efsi_core::scene::num(k)
+                ),
+            ));
+        }
+        if !(self.range > 0.0 && self.range <= MAX_RANGE) {
+            return Err((
+                "range",
+                format!(
+                    "must be in (0, {MAX_RANGE}] cells (a body's window keeps {MAX_RANGE} empty \
+                     cells beyond the body), got {}",
+                    efsi_core::scene::num(self.range)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn resolve(&mut self, scene: &Scene, options: &Options) {
+        if self.stiffness.is_none() {
+            self.stiffness = Some(default_stiffness(scene, options));
+        }
+    }
+}
+
+/// κ: the scene's `stiffness`, or its default.
+fn stiffness(o: &ContactOptions, scene: &Scene, options: &Options) -> f64 {
+    o.stiffness
+        .unwrap_or_else(|| default_stiffness(scene, options))
+}
+
+/// `10 ρ_max U²` (module docs); 0 where nothing sets a body moving.
+fn default_stiffness(scene: &Scene, options: &Options) -> f64 {
+    let Some(bodies) = options.get::<Bodies>() else {
+        return 0.0;
+    };
+    let rho = bodies
+        .list
+        .iter()
+        .map(|b| b.solid.density)
+        .fold(0.0, f64::max);
+    let body_speed = bodies
+        .list
+        .iter()
+        .filter_map(|b| b.solid.velocity.map(|v| v.norm()))
+        .fold(0.0, f64::max);
+    let sides = Side::of(if scene.domain.z.is_some() { 3 } else { 2 });
+    let wall_speed = sides
+        .iter()
+        .filter_map(|&s| match scene.boundaries.get(s) {
+            Boundary::MovingWall { speed, .. } => Some(speed.abs()),
+            _ => None,
+        })
+        .fold(0.0, f64::max);
+    let d = &scene.domain;
+    let longest = [Some(d.x), Some(d.y), d.z]
+        .into_iter()
+        .flatten()
+        .map(|(a, b)| b - a)
+        .fold(0.0, f64::max);
+    let fall = (2.0 * scene.gravity.norm() * longest).sqrt();
+    let u = body_speed.max(wall_speed).max(fall);
+    STIFFNESS_FACTOR * rho * u * u
+}
+
+/// The contact stage's plugin (module docs).
+pub struct Contact;
+
+impl StagePlugin for Contact {
+    /// Planar, axisymmetric and three-dimensional: one dimension-generic code path.
+    fn supports(&self, _geometry: efsi_core::Geometry) -> bool {
+        true
+    }
+    fn name(&self) -> &'static str {
+        "contact"
+    }
+    fn phase(&self) -> Phase {
+        Phase::BodyForce
+    }
+    fn after(&self) -> &'static [&'static str] {
+        &["body_force"]
+    }
+    fn reads(&self) -> &'static [FieldId] {
+        &VELOCITY
+    }
+    fn writes(&self) -> &'static [FieldId] {
+        &VELOCITY
+    }
+    fn limit_depends_on(&self) -> &'static str {
+        "numerics.contact.stiffness and the densities"
+    }
+    fn options(&self) -> Option<OptionsDecl> {
+        Some(OptionsDecl::of::<ContactOptions>())
+    }
+    fn needed(&self, scene: &Scene, options: &Options) -> bool {
+        let Some(bodies) = options.get::<Bodies>() else {
+            return false;
+        };
+        let o: ContactOptions = options.section_or_default(efsi_core::scene::Preset::Default);
+        stiffness(&o, scene, options) > 0.0 && (bodies.list.len() > 1 || o.walls)
+    }
+    fn build(
+        &self,
+        scene: &Scene,
+        options: &Options,
+        grid: &Grid,
+        bc: &BoundarySet,
+        _shared: &mut efsi_core::Resources,
+    ) -> Result<Box<dyn Stage>, String> {
+        let o = options.section::<ContactOptions>()?;
+        let bodies = options
+            .get::<Bodies>()
+            .ok_or_else(|| "the scene has no bodies".to_string())?;
+        let kappa = stiffness(o, scene, options);
+        let rho_min = bodies
+            .list
+            .iter()
+            .map(|b| b.solid.density)
+            .fold(scene.fluid.density, f64::min);
+        let mut walls = [[false; 2]; 3];
+        let mut periodic = [false; 3];
+        for (a, (w, p)) in walls.iter_mut().zip(&mut periodic).enumerate() {
+            if a >= grid.dims() {
+                break;
+            }
+            for (hi, wall) in w.iter_mut().enumerate() {
+                let b = scene.boundaries.get(Side::normal_to(a, hi == 1));
+                *wall = o.walls
+                    && matches!(
+                        b,
+                        Boundary::NoSlip | Boundary::MovingWall { .. } | Boundary::FreeSlip
+                    );
+                *p = matches!(b, Boundary::Periodic);
+            }
+        }
+        Ok(Box::new(ContactStage {
+            kappa,
+            kernel: Kernel::new(o.range),
+            walls,
+            periodic,
+            rho_min,
+            n: grid.n(),
+            dims: grid.dims(),
+            faces: std::array::from_fn(|a| {
+                if a < grid.dims() {
+                    let r = bc.normal_faces(a, grid.n()[a]);
+                    (r.lo, r.hi)
+                } else {
+                    (0, 0)
+                }
+            }),
+            halos: Vec::new(),
+        }))
+    }
+}
+
+/// The tent kernel of one axis: weights `K(d)`, `d = −m … m`, summing to 1.
+#[derive(Clone, Debug)]
+struct Kernel {
+    /// Half-width in cells, `⌈range⌉`.
+    m: usize,
+    /// `K(−m) … K(m)`.
+    w: Vec<f64>,
+}
+
+impl Kernel {
+    fn new(range: f64) -> Self {
+        let m = range.ceil() as usize;
+        let raw: Vec<f64> = (-(m as isize)..=m as isize)
+            .map(|d| (range + 1.0 - d.unsigned_abs() as f64).max(0.0))
+            .collect();
+        let s: f64 = raw.iter().sum();
+        Kernel {
+            m,
+            w: raw.into_iter().map(|x| x / s).collect(),
+        }
+    }
+
+    /// `K(d)`.
+    fn at(&self, d: isize) -> f64 {
+        let i = d + self.m as isize;
+        if i < 0 || i as usize >= self.w.len() {
+            0.0
+        } else {
+            self.w[i as usize]
+        }
+    }
+
+    /// A wall's halo at the cell `i` cells from it (0: the cell beside it): `Σ_{d > i} K(d)`.
+    fn wall(&self, i: usize) -> f64 {
+        ((i + 1)..=self.m).map(|d| self.at(d as isize)).sum()
+    }
+}
+
+/// A box of cells (first cell, cells per axis) holding values x fastest.
+#[derive(Clone, Debug, Default)]
+struct Halo {
+    lo: [isize; 3],
+    n: [usize; 3],
+    v: Vec<f64>,
+}
+
+impl Halo {
+    /// The value at grid cell `at` (already wrapped), 0 outside the box.
+    fn at(&self, at: [isize; 3]) -> f64 {
+        let mut index = 0;
+        for a in (0..3).rev() {
+            let i = at[a] - self.lo[a];
+            if i < 0 || i >= self.n[a] as isize {
+                return 0.0;
+            }
+            index = index * self.n[a] + i as usize;
+        }
+        self.v[index]
+    }
+}
+
+/// The energy the repulsion stores, `E_c` (module docs), as of the stage's last step.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ContactEnergy {
+    /// `E_c` (J; per unit depth in planar geometry, per radian in axisymmetric geometry).
+    pub energy: f64,
+}
+
+impl StateResource for ContactEnergy {
+    /// None: the stage sets it from the bodies' fractions every step.
+    fn arrays(&self) -> Vec<(String, &Field)> {
+        Vec::new()
+    }
+    fn arrays_mut(&mut self) -> Vec<(String, &mut Field)> {
+        Vec::new()
+    }
+    fn clone_box(&self) -> Box<dyn StateResource> {
+        Box::new(*self)
+    }
+    fn copy_from(&mut self, other: &dyn StateResource) -> bool {
+        match (other as &dyn std::any::Any).downcast_ref::<ContactEnergy>() {
+            Some(o) => {
+                *self = *o;
+                true
+            }
+            None => false,
+        }
+    }
+    fn stored_energy(&self) -> f64 {
+        self.energy
+    }
+}
+
+struct ContactStage {
+    kappa: f64,
+    kernel: Kernel,
+    /// Which sides repel (`[axis][low, high]`).
+    walls: [[bool; 2]; 3],
+    periodic: [bool; 3],
+    /// The least density of the materials (fluid and bodies), for the step limit.
+    rho_min: f64,
+    n: [usize; 3],
+    dims: usize,
+    /// The unknown faces along each axis (first, one past the last).
+    faces: [(isize, isize); 3],
+    /// Each body's halo `ψ_k`, reused between steps.
+    halos: Vec<Halo>,
+}
+
+/// The support of a body's fraction: its first and last cells with `φ_k ≠ 0`.
+fn support(b: &BodyFraction) -> Option<([isize; 3], [isize; 3])> {
+    let mut lo = [isize::MAX; 3];
+    let mut hi = [isize::MIN; 3];
+    for (at, f) in b.cells() {
+        if f != 0.0 {
+            for a in 0..3 {
+                lo[a] = lo[a].min(at[a]);
+                hi[a] = hi[a].max(at[a]);
+            }
+        }
+    }
+    (lo[0] <= hi[0]).then_some((lo, hi))
+}
+
+impl ContactStage {
+    /// `at` wrapped along the periodic axes.
+    fn wrap(&self, mut at: [isize; 3]) -> [isize; 3] {
+        for (a, x) in at.iter_mut().enumerate().take(self.dims) {
+            if self.periodic[a] {
+                *x = x.rem_euclid(self.n[a] as isize);
+            }
+        }
+        at
+    }
+
+    /// `ψ = K * φ` of body `b` on its window grown by the kernel's half-width (clipped to the
+    /// domain, the whole axis along a periodic one the window spans), into `halo`.
+    fn smooth(&self, b: &BodyFraction, halo: &mut Halo) {
+        let m = self.kernel.m as isize;
+        let mut lo = [0isize; 3];
+        let mut n = [1usize; 3];
+        for a in 0..self.dims {
+            let whole = self.n[a] as isize;
+            if self.periodic[a] && b.n[a] >= self.n[a] {
+                (lo[a], n[a]) = (0, self.n[a]);
+            } else {
+                let l = (b.lo[a] as isize - m).max(if self.periodic[a] { -m } else { 0 });
+                let h = (b.lo[a] as isize + b.n[a] as isize + m).min(if self.periodic[a] {
+                    whole + m
+                } else {
+                    whole
+                });
+                (lo[a], n[a]) = (l, (h - l) as usize);
+            }
+        }
+        // Separable: φ onto the box, then the kernel along each axis in turn.
+        let len: usize = n.iter().product();
+        let mut cur = vec![0.0; len];
+        let idx = |c: [usize; 3]| (c[2] * n[1] + c[1]) * n[0] + c[0];
+        for (at, f) in b.cells() {
+            let c: [isize; 3] = std::array::from_fn(|a| at[a] - lo[a]);
+            if c.iter().zip(&n).all(|(&c, &n)| c >= 0 && (c as usize) < n) {
+                cur[idx(c.map(|c| c as usize))] = f;
+            }
+        }
+        let mut next = vec![0.0; len];
+        for a in 0..self.dims {
+            let wrap_all = self.periodic[a] && n[a] == self.n[a] && lo[a] == 0;
+            for c2 in 0..n[2] {
+                for c1 in 0..n[1] {
+                    for c0 in 0..n[0] {
+                        let c = [c0, c1, c2];
+                        let mut s = 0.0;
+                        for d in -m..=m {
+                            let mut i = c[a] as isize + d;
+                            if wrap_all {
+                                i = i.rem_euclid(n[a] as isize);
+                            } else if i < 0 || i >= n[a] as isize {
+                                continue;
+                            }
+                            let mut e = c;
+                            e[a] = i as usize;
+                            s += self.kernel.at(d) * cur[idx(e)];
+                        }
+                        next[idx(c)] = s;
+                    }
+                }
+            }
+            std::mem::swap(&mut cur, &mut next);
+        }
+        halo.lo = lo;
+        halo.n = n;
+        halo.v = cur;
+    }
+
+    /// The halo of the walls at grid cell `at`, along axis `a`.
+    fn wall_halo(&self, a: usize, at: [isize; 3]) -> f64 {
+        let mut s = 0.0;
+        let i = at[a];
+        let n = self.n[a] as isize;
+        if self.walls[a][0] && (0..n).contains(&i) {
+            s += self.kernel.wall(i as usize);
+        }
+        if self.walls[a][1] && (0..n).contains(&i) {
+            s += self.kernel.wall((n - 1 - i) as usize);
+        }
+        s
+    }
+
+    /// `E_c` and the face forces `(axis, face, f_a)` of the bodies' fractions `all` (module
+    /// docs).
+    fn forces(&mut self, grid: &Grid, all: &BodyFractions) -> (f64, Vec<(usize, [isize; 3], f64)>) {
+        let mut halos = std::mem::take(&mut self.halos);
+        halos.resize_with(all.bodies.len(), Halo::default);
+        for (b, h) in all.bodies.iter().zip(&mut halos) {
+            self.smooth(b, h);
+        }
+        let h = grid.h();
+        // E_c: each pair once, and each body with the walls.
+        let mut energy = 0.0;
+        for (k, b) in all.bodies.iter().enumerate() {
+            for (at, f) in b.cells() {
+                if f == 0.0 {
+                    continue;
+                }
+                let mut psi: f64 = halos[k + 1..].iter().map(|l| l.at(at)).sum();
+                psi += (0..self.dims).map(|a| self.wall_halo(a, at)).sum::<f64>();
+                energy += self.kappa * f * psi * grid.cell_volume(at[0]) * h[2];
+            }
+        }
+        // The face forces: on body k's faces, from every other body's halo and the walls'.
+        let mut updates: Vec<(usize, [isize; 3], f64)> = Vec::new();
+        for (k, b) in all.bodies.iter().enumerate() {
+            let Some((lo, hi)) = support(b) else {
+                continue;
+            };
+            for a in 0..self.dims {
+                let (f_lo, f_hi) = self.faces[a];
+                let mut c = lo;
+                // Faces along a from the support's first cell to one past its last.
+                let mut end = hi;
+                end[a] += 1;
+                loop {
+                    if (f_lo..f_hi).contains(&c[a]) {
+                        let mut below = c;
+                        below[a] -= 1;
+                        let (c_w, b_w) = (self.wrap(c), self.wrap(below));
+                        let phi = 0.5 * (b.at(c_w) + b.at(b_w));
+                        if phi != 0.0 {
+                            let mut dpsi = 0.0;
+                            for (l, halo) in halos.iter().enumerate() {
+                                if l != k {
+                                    dpsi += halo.at(c_w) - halo.at(b_w);
+                                }
+                            }
+                            dpsi += self.wall_halo(a, c_w) - self.wall_halo(a, b_w);
+                            if dpsi != 0.0 {
+                                updates.push((a, c, -self.kappa * phi * dpsi / h[a]));
+                            }
+                        }
+                    }
+                    // Next face of the box, x fastest.
+                    let mut axis = 0;
+                    loop {
+                        if axis == 3 {
+                            break;
+                        }
+                        if c[axis] < end[axis] {
+                            c[axis] += 1;
+                            break;
+                        }
+                        c[axis] = lo[axis];
+                        axis += 1;
+                    }
+                    if axis == 3 {
+                        break;
+                    }
+                }
+            }
+        }
+        self.halos = halos;
+        (energy, updates)
+    }
+
+    /// Whether two bodies (or a body and a repelling wall) are within `range + 2` cells.
+    fn in_reach(&self, all: &BodyFractions) -> bool {
+        let reach = self.kernel.m as isize + 2;
+        let boxes: Vec<_> = all.bodies.iter().filter_map(support).collect();
+        for (k, (lo, hi)) in boxes.iter().enumerate() {
+            for a in 0..self.dims {
+                let n = self.n[a] as isize;
+                if (self.walls[a][0] && lo[a] < reach) || (self.walls[a][1] && hi[a] >= n - reach) {
+                    return true;
+                }
+            }
+            for (lo2, hi2) in &boxes[k + 1..] {
+                let near = (0..self.dims).all(|a| {
+                    let gap = (lo2[a] - hi[a]).max(lo[a] - hi2[a]);
+                    gap < reach || self.periodic[a]
+                });
+                if near {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Stage for ContactStage {
+    fn init_state(&self, _grid: &Grid, state: &mut State) {
+        if state.resources.get::<ContactEnergy>().is_none() {
+            state.resources.insert(ContactEnergy::default());
+        }
+    }
+
+    fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
+        let all = state.resources.get::<BodyFractions>()?;
+        if !self.in_reach(all) {
+            return None;
+        }
+        let (vel, dims) = crate::advection::velocity(grid, state);
+        let c = crate::advection::convective_rate(grid, &vel[..dims]);
+        let h = grid.h()[..dims]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let accel = self.kappa * self.kernel.at(0) / (h * self.rho_min);
+        Some(cfl * 2.0 / (c + (c * c + 4.0 * accel / h).sqrt()))
+    }
+
+    fn run(&mut self, ctx: &StepContext, state: &mut State) -> Result<StageStats, StageError> {
+        let Some(all) = state.resources.get::<BodyFractions>() else {
+            return Ok(StageStats::default());
+        };
+        if !self.in_reach(all) {
+            // No halo overlaps another body or a wall: no force, nothing stored.
+            if let Some(e) = state.resources.get_mut::<ContactEnergy>() {
+                e.energy = 0.0;
+            }
+            return Ok(StageStats::default());
+        }
+        if all.bodies.iter().any(|b| !b.is_set()) {
+            return Err(StageError {
+                stage: "contact".into(),
+                message: "the bodies' fractions are not set: the VOF stage publishes them".into(),
+            });
+        }
+        let (energy, updates) = self.forces(ctx.grid, all);
+        let State {
+            u,
+            v,
+            w,
+            rho,
+            resources,
+            ..
+        } = state;
+        for (a, c, force) in updates {
+            let mut below = c;
+            below[a] -= 1;
+            let below = self.wrap(below);
+            let field: &mut Field = match a {
+                0 => &mut *u,
+                1 => &mut *v,
+                _ => w.as_mut().expect("w on a three-dimensional grid"),
+            };
+            field[c] += ctx.dt * force / face_density(rho[below], rho[c]);
+        }
+        if let Some(e) = resources.get_mut::<ContactEnergy>() {
+            e.energy = energy;
+        }
+        Ok(StageStats::default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stage on `n` cells of size 1 (no periodic side), walls as given.
+    fn stage(n: [usize; 3], dims: usize, walls: bool) -> ContactStage {
+        ContactStage {
+            kappa: 3.0,
+            kernel: Kernel::new(1.5),
+            walls: std::array::from_fn(|a| [walls && a < dims; 2]),
+            periodic: [false; 3],
+            rho_min: 1.0,
+            n,
+            dims,
+            faces: std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) }),
+            halos: Vec::new(),
+        }
+    }
+
+    /// A body of pseudo-random fractions on the box `lo`, `n`.
+    fn body(name: &str, lo: [usize; 3], n: [usize; 3], seed: u64) -> BodyFraction {
+        let mut b = BodyFraction::named(name);
+        let mut x = seed;
+        let values = (0..n.iter().product::<usize>()).map(move |_| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        });
+        b.set(lo, n, values);
+        b
+    }
+
+    fn grid(n: [usize; 3], dims: usize) -> Grid {
+        let l = |a: usize| (0.0, n[a] as f64);
+        if dims == 3 {
+            Grid::new_3d(n, l(0), l(1), l(2))
+        } else {
+            Grid::new(efsi_core::Geometry::Planar, n[0], n[1], l(0), l(1))
+        }
+    }
+
+    #[test]
+    fn the_kernel_sums_to_one_and_a_walls_halo_is_a_bodys() {
+        for range in [0.5, 1.0, 1.5, 2.0] {
+            let k = Kernel::new(range);
+            let s: f64 = (-2..=2).map(|d| k.at(d)).sum();
+            assert!((s - 1.0).abs() < 1e-15, "{range}: {s}");
+            assert_eq!(k.at(3), 0.0);
+            // The wall is a body filling the cells beyond it: ψ at the cell i from it.
+            for i in 0..3usize {
+                let body: f64 = (1..=3).map(|j| k.at(i as isize + j)).sum();
+                assert!((k.wall(i) - body).abs() < 1e-15);
+            }
+        }
+    }
+
+    /// Between two bodies of arbitrary fractions the face forces sum to zero (the pair's
+    /// momentum is kept), planar and three-dimensional.
+    #[test]
+    fn a_pairs_forces_sum_to_zero() {
+        for dims in [2, 3] {
+            let n = [16, 12, if dims == 3 { 10 } else { 1 }];
+            let nz = if dims == 3 { 4 } else { 1 };
+            let g = grid(n, dims);
+            let mut s = stage(n, dims, false);
+            let all = BodyFractions {
+                bodies: vec![
+                    body("a", [2, 3, 1.min(n[2] - 1)], [6, 5, nz], 1),
+                    body("b", [7, 4, 2.min(n[2] - 1)], [6, 5, nz], 2),
+                ],
+            };
+            let (energy, updates) = s.forces(&g, &all);
+            assert!(energy > 0.0);
+            let mut sum = [0.0; 3];
+            let mut scale = 0.0;
+            for (a, _, f) in &updates {
+                sum[*a] += f;
+                scale += f.abs();
+            }
+            assert!(scale > 0.0);
+            for (a, total) in sum.iter().enumerate() {
+                assert!(
+                    total.abs() <= 1e-14 * scale,
+                    "{dims}-D axis {a}: {total:e} of {scale:e}"
+                );
+            }
+        }
+    }
+
+    /// The potential repels: moving two bodies apart lowers the stored energy, to zero beyond
+    /// the range; a wall's halo pushes a body beside it away from the wall.
+    #[test]
+    fn moving_bodies_apart_lowers_the_stored_energy_and_walls_repel() {
+        let n = [20, 10, 1];
+        let g = grid(n, 2);
+        let mut s = stage(n, 2, false);
+        let at = |x: usize| body("a", [x, 2, 0], [5, 5, 1], 7);
+        let mut prev = f64::INFINITY;
+        for gap in 0..4 {
+            let all = BodyFractions {
+                bodies: vec![at(3), body("b", [8 + gap, 2, 0], [5, 5, 1], 8)],
+            };
+            let (e, _) = s.forces(&g, &all);
+            assert!(e < prev || e == 0.0, "gap {gap}: {e} after {prev}");
+            prev = e;
+        }
+        assert_eq!(prev, 0.0, "beyond the range no energy");
+        let mut w = stage(n, 2, true);
+        let all = BodyFractions {
+            bodies: vec![body("a", [0, 3, 0], [3, 3, 1], 3)],
+        };
+        let (e, updates) = w.forces(&g, &all);
+        assert!(e > 0.0);
+        let fx: f64 = updates.iter().filter(|u| u.0 == 0).map(|u| u.2).sum();
+        assert!(fx > 0.0, "the x_min wall pushes the body along +x: {fx}");
+    }
+}

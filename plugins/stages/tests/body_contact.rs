@@ -1,0 +1,162 @@
+//! The contact stage ([`efsi_stages::contact`]): two bodies driven into each other are kept
+//! apart by the short-range repulsion, with the pair's momentum and mirror symmetry kept and
+//! no energy gained; without it the same bodies share cells.
+
+use efsi_core::body_fractions::BodyFractions;
+use efsi_core::{Scene, Simulation};
+use efsi_stages::contact::ContactEnergy;
+use std::path::Path;
+
+fn build(text: &str) -> Result<Simulation, String> {
+    let path = Path::new("contact.ron");
+    let scene = Scene::from_str_at(text, path).map_err(|e| e.to_string())?;
+    efsi_run::simulation(scene, path, &efsi_stages::builtin()).map_err(|e| e.to_string())
+}
+
+/// Two viscous disks (no law) thrown at each other at ±1 along x in a closed box at rest, no
+/// gravity; `contact` is the `numerics.contact` section's body.
+fn head_on(contact: &str) -> String {
+    format!(
+        r#"Scene(
+    name: "head_on",
+    domain: (x: (0.0, 2.0), y: (0.0, 1.0)),
+    grid: (nx: 64, ny: 32),
+    time: (end: 0.5, cfl: 0.4),
+    fluid: (density: 1.0, viscosity: 0.001),
+    numerics: (projection: (tolerance: 1e-10), contact: ({contact})),
+    solids: [
+        (name: "left", shape: Disk(center: (0.7, 0.5), radius: 0.2), density: 20.0,
+         viscosity: 20.0, velocity: (2.0, 0.0)),
+        (name: "right", shape: Disk(center: (1.3, 0.5), radius: 0.2), density: 20.0,
+         viscosity: 20.0, velocity: (-2.0, 0.0)),
+    ],
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+)"#
+    )
+}
+
+/// What one run of [`head_on`] shows: the largest `Σ_k φ_k` over cells and steps, the largest
+/// mirror asymmetry of the pair's centroids about x = 1, the largest rise of kinetic + contact
+/// energy above its start, and each body's x velocity (mass-weighted) at the end.
+struct Run {
+    overlap: f64,
+    asymmetry: f64,
+    rise: f64,
+    closest: f64,
+    shared: usize,
+    stored: f64,
+    velocity: [f64; 2],
+}
+
+fn run(contact: &str) -> Run {
+    run_scene(&head_on(contact), 0.5)
+}
+
+fn run_scene(text: &str, end: f64) -> Run {
+    let mut sim = build(text).unwrap_or_else(|e| panic!("{e}"));
+    let g = sim.grid.clone();
+    let energy = |sim: &Simulation| {
+        let ke = efsi_core::operators::kinetic_energy(&g, &sim.state.velocity(), &sim.state.rho);
+        let ec = sim
+            .state
+            .resources
+            .get::<ContactEnergy>()
+            .map_or(0.0, |e| e.energy);
+        ke + ec
+    };
+    let e0 = energy(&sim);
+    let mut out = Run {
+        overlap: 0.0,
+        asymmetry: 0.0,
+        rise: f64::NEG_INFINITY,
+        closest: f64::INFINITY,
+        shared: 0,
+        stored: 0.0,
+        velocity: [0.0; 2],
+    };
+    while sim.state.t < end - 1e-12 {
+        let dt = sim.next_dt(end).unwrap();
+        sim.step(dt)
+            .unwrap_or_else(|e| panic!("t = {}: {e}", sim.state.t));
+        let all = sim.state.resources.get::<BodyFractions>().unwrap();
+        let mut sum = std::collections::HashMap::new();
+        let mut cx = [0.0; 2];
+        let mut mom = [0.0; 2];
+        for (k, b) in all.bodies.iter().enumerate() {
+            let (mut m, mut v) = (0.0, 0.0);
+            for (at, f) in b.cells() {
+                *sum.entry(at).or_insert(0.0) += f;
+                m += f * g.xc(at[0]);
+                v += f;
+                // The body's x momentum: its fraction of the cell times the centre velocity.
+                let u = 0.5 * (sim.state.u[at] + sim.state.u[[at[0] + 1, at[1], at[2]]]);
+                mom[k] += f * u;
+            }
+            cx[k] = m / v;
+            mom[k] /= v;
+        }
+        out.overlap = sum.values().copied().fold(out.overlap, f64::max);
+        let shared = all.bodies[0]
+            .cells()
+            .filter(|&(at, f)| f > 0.0 && all.bodies[1].at(at) > 0.0)
+            .count();
+        out.shared = out.shared.max(shared);
+        out.asymmetry = out.asymmetry.max(((cx[0] - 1.0) + (cx[1] - 1.0)).abs());
+        out.closest = out.closest.min(cx[1] - cx[0]);
+        out.rise = out.rise.max(energy(&sim) - e0);
+        if let Some(e) = sim.state.resources.get::<ContactEnergy>() {
+            out.stored = out.stored.max(e.energy);
+        }
+        out.velocity = mom;
+    }
+    out
+}
+
+#[test]
+fn two_disks_thrown_together_stay_apart_symmetric_without_gaining_energy() {
+    let with = run("");
+    let without = run("stiffness: 0.0");
+    // Kept apart, mirror-symmetric to round-off, the pair's momentum zero, never above the
+    // starting energy (kinetic + the contact's stored energy), and the repulsion worked.
+    assert!(with.overlap <= 1.0 + 1e-12, "max Σφ {}", with.overlap);
+    assert_eq!(with.shared, 0, "cells both bodies hold");
+    assert!(
+        with.asymmetry <= 1e-12,
+        "centroids off the mirror by {:e}",
+        with.asymmetry
+    );
+    assert!(
+        with.rise <= 0.0,
+        "energy rose {:e} above its start",
+        with.rise
+    );
+    assert!(with.stored > 0.0, "the repulsion stored no energy");
+    let [left, right] = with.velocity;
+    assert!((left + right).abs() <= 1e-12, "momentum {:e}", left + right);
+    // The bodies part again: thrown at ±2, they leave at ∓0.024 (64 × 32 cells).
+    assert!(left < -0.01 && right > 0.01, "not parting: {left}, {right}");
+    // Without the repulsion the film alone stops them (0.0009): the rebound is the contact's.
+    assert!(
+        without.stored == 0.0 && without.velocity[0].abs() < 0.005,
+        "{:?}",
+        without.velocity
+    );
+}
+
+/// The contact's settings are checked, each refusal naming it.
+#[test]
+fn bad_contact_settings_are_refused_by_name() {
+    for (set, what) in [
+        ("range: 3.0", "numerics.contact.range"),
+        ("range: 0.0", "numerics.contact.range"),
+        ("stiffness: -1.0", "numerics.contact.stiffness"),
+        ("stiffness: 1e400", "numerics.contact"),
+        ("reach: 1.0", "reach"),
+    ] {
+        let e = match build(&head_on(set)) {
+            Ok(_) => panic!("{set}: not refused"),
+            Err(e) => e,
+        };
+        assert!(e.contains(what), "{set}: {e}");
+    }
+}
