@@ -61,11 +61,13 @@
 //! storage scale with the bodies' extent. The fractions are those the VOF stage published at
 //! the end of the last step ([`efsi_core::body_fractions`]).
 //!
-//! **Step limit.** The force is explicit: while two bodies (or a body and a wall) are within
-//! `range + 2` cells of each other, a step may not let it move the lightest material by more
-//! than a fraction of a cell, `Δt ≤ CFL · 2 / (C + √(C² + 4 a/h))` with the largest
-//! acceleration `a = κ K(0) / (h ρ_min)` and `C` the convective rate, as for the body force.
-//! Farther apart it sets no limit.
+//! **Step limit.** The force is explicit: while it acts (it stored energy in the last step), a
+//! step may not let it move the lightest body's material by more than a fraction of a cell,
+//! `Δt ≤ CFL · 2 / (C + √(C² + 4 a/h))` with the largest acceleration `a = κ K(0) / (h ρ_min)`
+//! (`ρ_min` the lightest body: a face's mixture density is at least `φ̄_k ρ_k`) and `C` the
+//! convective rate, as for the body force. Otherwise it sets no limit: in the step that brings
+//! a body into another's halo it moves less than a cell into it, where the force is the
+//! kernel's tail, and the limit holds from the next step on.
 //!
 //! # Parameters (`numerics.contact`)
 //!
@@ -266,7 +268,7 @@ impl StagePlugin for Contact {
             .list
             .iter()
             .map(|b| b.solid.density)
-            .fold(scene.fluid.density, f64::min);
+            .fold(f64::INFINITY, f64::min);
         let mut walls = [[false; 2]; 3];
         let mut periodic = [false; 3];
         for (a, (w, p)) in walls.iter_mut().zip(&mut periodic).enumerate() {
@@ -300,6 +302,9 @@ impl StagePlugin for Contact {
                 }
             }),
             halos: Vec::new(),
+            spare: Vec::new(),
+            near: Vec::new(),
+            updates: Vec::new(),
         }))
     }
 }
@@ -403,7 +408,8 @@ struct ContactStage {
     /// Which sides repel (`[axis][low, high]`).
     walls: [[bool; 2]; 3],
     periodic: [bool; 3],
-    /// The least density of the materials (fluid and bodies), for the step limit.
+    /// The least density of the bodies, for the step limit: the force on a face is
+    /// `κ φ̄_k ∇ψ_l` and its density `ρ_face ≥ φ̄_k ρ_k` (mixture), so `f/ρ_face ≤ κ|∇ψ_l|/ρ_k`.
     rho_min: f64,
     n: [usize; 3],
     dims: usize,
@@ -411,6 +417,12 @@ struct ContactStage {
     faces: [(isize, isize); 3],
     /// Each body's halo `ψ_k`, reused between steps.
     halos: Vec<Halo>,
+    /// The bodies near the one at hand (reused).
+    near: Vec<usize>,
+    /// The smoothing's second buffer.
+    spare: Vec<f64>,
+    /// The last step's face forces `(axis, face, f_a)`.
+    updates: Vec<(usize, [isize; 3], f64)>,
 }
 
 /// The support of a body's fraction: its first and last cells with `φ_k ≠ 0`.
@@ -441,7 +453,7 @@ impl ContactStage {
 
     /// `ψ = K * φ` of body `b` on its window grown by the kernel's half-width (clipped to the
     /// domain, the whole axis along a periodic one the window spans), into `halo`.
-    fn smooth(&self, b: &BodyFraction, halo: &mut Halo) {
+    fn smooth(&self, b: &BodyFraction, halo: &mut Halo, spare: &mut Vec<f64>) {
         let m = self.kernel.m as isize;
         let mut lo = [0isize; 3];
         let mut n = [1usize; 3];
@@ -461,7 +473,9 @@ impl ContactStage {
         }
         // Separable: φ onto the box, then the kernel along each axis in turn.
         let len: usize = n.iter().product();
-        let mut cur = vec![0.0; len];
+        let mut cur = std::mem::take(&mut halo.v);
+        cur.clear();
+        cur.resize(len, 0.0);
         let idx = |c: [usize; 3]| (c[2] * n[1] + c[1]) * n[0] + c[0];
         for (at, f) in b.cells() {
             let c: [isize; 3] = std::array::from_fn(|a| at[a] - lo[a]);
@@ -469,7 +483,9 @@ impl ContactStage {
                 cur[idx(c.map(|c| c as usize))] = f;
             }
         }
-        let mut next = vec![0.0; len];
+        let mut next = std::mem::take(spare);
+        next.clear();
+        next.resize(len, 0.0);
         for a in 0..self.dims {
             let wrap_all = self.periodic[a] && n[a] == self.n[a] && lo[a] == 0;
             for c2 in 0..n[2] {
@@ -497,6 +513,7 @@ impl ContactStage {
         halo.lo = lo;
         halo.n = n;
         halo.v = cur;
+        *spare = next;
     }
 
     /// The halo of the walls at grid cell `at`, along axis `a`.
@@ -514,32 +531,45 @@ impl ContactStage {
     }
 
     /// `E_c` and the face forces `(axis, face, f_a)` of the bodies' fractions `all` (module
-    /// docs).
+    /// docs); the caller gives the forces' vector back to `self.updates` for the next step.
     fn forces(&mut self, grid: &Grid, all: &BodyFractions) -> (f64, Vec<(usize, [isize; 3], f64)>) {
         let mut halos = std::mem::take(&mut self.halos);
         halos.resize_with(all.bodies.len(), Halo::default);
+        let mut spare = std::mem::take(&mut self.spare);
         for (b, h) in all.bodies.iter().zip(&mut halos) {
-            self.smooth(b, h);
+            self.smooth(b, h, &mut spare);
         }
+        self.spare = spare;
         let h = grid.h();
         // E_c: each pair once, and each body with the walls.
         let mut energy = 0.0;
+        let mut near = std::mem::take(&mut self.near);
         for (k, b) in all.bodies.iter().enumerate() {
+            let Some(support) = support(b) else {
+                continue;
+            };
+            self.near_halos(&halos, support, k, &mut near);
             for (at, f) in b.cells() {
                 if f == 0.0 {
                     continue;
                 }
-                let mut psi: f64 = halos[k + 1..].iter().map(|l| l.at(at)).sum();
+                let mut psi: f64 = near
+                    .iter()
+                    .filter(|&&l| l > k)
+                    .map(|&l| halos[l].at(at))
+                    .sum();
                 psi += (0..self.dims).map(|a| self.wall_halo(a, at)).sum::<f64>();
                 energy += self.kappa * f * psi * grid.cell_volume(at[0]) * h[2];
             }
         }
         // The face forces: on body k's faces, from every other body's halo and the walls'.
-        let mut updates: Vec<(usize, [isize; 3], f64)> = Vec::new();
+        let mut updates = std::mem::take(&mut self.updates);
+        updates.clear();
         for (k, b) in all.bodies.iter().enumerate() {
             let Some((lo, hi)) = support(b) else {
                 continue;
             };
+            self.near_halos(&halos, (lo, hi), k, &mut near);
             for a in 0..self.dims {
                 let (f_lo, f_hi) = self.faces[a];
                 let mut c = lo;
@@ -554,10 +584,8 @@ impl ContactStage {
                         let phi = 0.5 * (b.at(c_w) + b.at(b_w));
                         if phi != 0.0 {
                             let mut dpsi = 0.0;
-                            for (l, halo) in halos.iter().enumerate() {
-                                if l != k {
-                                    dpsi += halo.at(c_w) - halo.at(b_w);
-                                }
+                            for &l in &near {
+                                dpsi += halos[l].at(c_w) - halos[l].at(b_w);
                             }
                             dpsi += self.wall_halo(a, c_w) - self.wall_halo(a, b_w);
                             if dpsi != 0.0 {
@@ -585,21 +613,45 @@ impl ContactStage {
             }
         }
         self.halos = halos;
+        self.near = near;
         (energy, updates)
+    }
+
+    /// Into `near`, the bodies other than `k` whose halo boxes reach the box `support` grown by
+    /// a cell (a periodic axis counts as reached).
+    fn near_halos(
+        &self,
+        halos: &[Halo],
+        (lo, hi): ([isize; 3], [isize; 3]),
+        k: usize,
+        near: &mut Vec<usize>,
+    ) {
+        near.clear();
+        near.extend((0..halos.len()).filter(|&l| {
+            l != k
+                && (0..self.dims).all(|a| {
+                    let h = &halos[l];
+                    self.periodic[a]
+                        || (h.lo[a] <= hi[a] + 1 && lo[a] - 1 < h.lo[a] + h.n[a] as isize)
+                })
+        }));
     }
 
     /// Whether two bodies (or a body and a repelling wall) are within `range + 2` cells.
     fn in_reach(&self, all: &BodyFractions) -> bool {
         let reach = self.kernel.m as isize + 2;
-        let boxes: Vec<_> = all.bodies.iter().filter_map(support).collect();
-        for (k, (lo, hi)) in boxes.iter().enumerate() {
+        // Supports found anew per pair: no allocation in a step.
+        for (k, b) in all.bodies.iter().enumerate() {
+            let Some((lo, hi)) = support(b) else {
+                continue;
+            };
             for a in 0..self.dims {
                 let n = self.n[a] as isize;
                 if (self.walls[a][0] && lo[a] < reach) || (self.walls[a][1] && hi[a] >= n - reach) {
                     return true;
                 }
             }
-            for (lo2, hi2) in &boxes[k + 1..] {
+            for (lo2, hi2) in all.bodies[k + 1..].iter().filter_map(support) {
                 let near = (0..self.dims).all(|a| {
                     let gap = (lo2[a] - hi[a]).max(lo[a] - hi2[a]);
                     gap < reach || self.periodic[a]
@@ -621,8 +673,10 @@ impl Stage for ContactStage {
     }
 
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
-        let all = state.resources.get::<BodyFractions>()?;
-        if !self.in_reach(all) {
+        // Only while the repulsion acts (it stored energy in the last step): a body entering a
+        // halo in one step moves less than a cell into it, where the force is the kernel's tail.
+        let active = state.resources.get::<ContactEnergy>()?.energy > 0.0;
+        if !active {
             return None;
         }
         let (vel, dims) = crate::advection::velocity(grid, state);
@@ -661,7 +715,7 @@ impl Stage for ContactStage {
             resources,
             ..
         } = state;
-        for (a, c, force) in updates {
+        for &(a, c, force) in &updates {
             let mut below = c;
             below[a] -= 1;
             let below = self.wrap(below);
@@ -675,6 +729,7 @@ impl Stage for ContactStage {
         if let Some(e) = resources.get_mut::<ContactEnergy>() {
             e.energy = energy;
         }
+        self.updates = updates;
         Ok(StageStats::default())
     }
 }
@@ -695,6 +750,9 @@ mod tests {
             dims,
             faces: std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) }),
             halos: Vec::new(),
+            spare: Vec::new(),
+            near: Vec::new(),
+            updates: Vec::new(),
         }
     }
 

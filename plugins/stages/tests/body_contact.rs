@@ -115,6 +115,10 @@ fn run_scene(text: &str, end: f64) -> Run {
 #[test]
 fn two_disks_thrown_together_stay_apart_symmetric_without_gaining_energy() {
     let with = run("");
+    eprintln!(
+        "EXP with: ov {} shared {} rise {:e} stored {:e} u {:?} closest {}",
+        with.overlap, with.shared, with.rise, with.stored, with.velocity, with.closest
+    );
     let without = run("stiffness: 0.0");
     // Kept apart, mirror-symmetric to round-off, the pair's momentum zero, never above the
     // starting energy (kinetic + the contact's stored energy), and the repulsion worked.
