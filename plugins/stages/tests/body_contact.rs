@@ -115,10 +115,6 @@ fn run_scene(text: &str, end: f64) -> Run {
 #[test]
 fn two_disks_thrown_together_stay_apart_symmetric_without_gaining_energy() {
     let with = run("");
-    eprintln!(
-        "EXP with: ov {} shared {} rise {:e} stored {:e} u {:?} closest {}",
-        with.overlap, with.shared, with.rise, with.stored, with.velocity, with.closest
-    );
     let without = run("stiffness: 0.0");
     // Kept apart, mirror-symmetric to round-off, the pair's momentum zero, never above the
     // starting energy (kinetic + the contact's stored energy), and the repulsion worked.
@@ -139,7 +135,14 @@ fn two_disks_thrown_together_stay_apart_symmetric_without_gaining_energy() {
     assert!((left + right).abs() <= 1e-12, "momentum {:e}", left + right);
     // The bodies part again: thrown at ±2, they leave at ∓0.024 (64 × 32 cells).
     assert!(left < -0.01 && right > 0.01, "not parting: {left}, {right}");
-    // Without the repulsion the film alone stops them (0.0009): the rebound is the contact's.
+    // The repulsion keeps their centroids farther apart (0.3549 against 0.3502 at closest)…
+    assert!(
+        with.closest > without.closest + 0.002,
+        "{} vs {}",
+        with.closest,
+        without.closest
+    );
+    // …and without it the film alone stops them (0.0009): the rebound is the contact's.
     assert!(
         without.stored == 0.0 && without.velocity[0].abs() < 0.005,
         "{:?}",
