@@ -151,6 +151,13 @@ pub trait Stage: Send {
         *out = self.save();
     }
 
+    /// The number of values [`save`](Self::save) would return, without making them (what a
+    /// run sizes its checkpoint by): a stage that keeps full-grid data should override this
+    /// too (default: `self.save().len()`).
+    fn saved_len(&self) -> usize {
+        self.save().len()
+    }
+
     /// After a snapshot's data and state are back ([`restore`](Self::restore), then the
     /// state): a stage takes here what it keeps between steps as a copy of the state, instead of
     /// saving it (default: nothing).
@@ -817,6 +824,15 @@ impl Pipeline {
         self.entries
             .iter()
             .map(|e| (e.name.to_string(), e.stage.save()))
+            .collect()
+    }
+
+    /// The number of values each stage's carried-over data holds ([`Stage::saved_len`]), by
+    /// name, in execution order: [`save_stages`](Self::save_stages)' lengths, without the copy.
+    pub fn saved_lens(&self) -> Vec<(&'static str, usize)> {
+        self.entries
+            .iter()
+            .map(|e| (e.name, e.stage.saved_len()))
             .collect()
     }
 

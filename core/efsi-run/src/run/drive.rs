@@ -2,7 +2,7 @@
 //! checkpoints after every step, and what a stop request, a failed step or a failed output
 //! leaves behind (a checkpoint, the last good state, `run.json`'s `"Failed"`).
 
-use super::outputs::checkpoints::{checkpoint_of, save_checkpoint};
+use super::outputs::checkpoints::save_checkpoint;
 use super::room::Room;
 use super::{Outputs, Progress, RunOptions, RunOutcome, StopReason};
 use crate::checkpoint::{self, LawIdentity};
@@ -12,13 +12,13 @@ use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
 use std::time::Instant;
 
 /// Keep room on disk for the run's last checkpoint and `run.json` ([`super::room`]), sized by
-/// the checkpoint of the current state and the `run.json` written.
+/// the checkpoint of the current state (counted, no snapshot made) and the `run.json` written.
 pub(super) fn make_room(
     sim: &Simulation,
     law: &Option<LawIdentity>,
     out: &mut Outputs,
 ) -> Result<(), EfsiError> {
-    let bytes = checkpoint::encoded_len(&checkpoint_of(sim, law, out.state(), sim.snapshot()));
+    let bytes = checkpoint::encoded_len_of(sim, law, &out.state());
     let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
     let needed = Room::needed(bytes as u64, record);
     let room = Room::keep(&out.dir, needed).map_err(|e| {

@@ -706,6 +706,10 @@ impl Stage for ViscousStage {
         }
     }
 
+    fn saved_len(&self) -> usize {
+        3 + self.warm.history * self.warm.prev[0].len()
+    }
+
     /// Nothing (a snapshot without a history: the next solve starts from zero), or what
     /// [`save`](Stage::save) wrote.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {
