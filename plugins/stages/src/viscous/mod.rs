@@ -220,6 +220,9 @@ struct WarmStart {
     prev: [Vec<f64>; 2],
     prev_dt: [f64; 2],
     history: usize,
+    /// Steps remembered ([`WarmStart::remember`]) since the stage was built: tells
+    /// [`Stage::undo`] whether the step it undoes got that far.
+    remembered: u64,
 }
 
 /// Work vectors the stage takes from the pipeline's pool: the right-hand side, the diagonal,
@@ -632,6 +635,7 @@ impl WarmStart {
         self.prev.swap(0, 1);
         self.prev_dt = [dt, self.prev_dt[0]];
         self.history = (self.history + 1).min(2);
+        self.remembered += 1;
     }
 }
 
@@ -660,6 +664,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
                 prev: [vec![0.0; n], vec![0.0; n]],
                 prev_dt: [0.0; 2],
                 history: 0,
+                remembered: 0,
             },
             blocks: None,
         }
@@ -757,6 +762,49 @@ impl Stage for ViscousStage {
 
     fn saved_len(&self) -> usize {
         3 + self.warm.history * self.warm.prev[0].len()
+    }
+
+    /// `[remembered, count, Δt₁, Δt₂]`, then the older increment only: a step writes its guess
+    /// and its increment over that one (its guess reads it) and keeps the newer one, which it
+    /// only moves ([`WarmStart::remember`]).
+    fn keep_into(&self, out: &mut Vec<f64>) {
+        let w = &self.warm;
+        out.clear();
+        out.reserve(4 + w.prev[1].len());
+        out.extend_from_slice(&[
+            w.remembered as f64,
+            w.history as f64,
+            w.prev_dt[0],
+            w.prev_dt[1],
+        ]);
+        out.extend_from_slice(&w.prev[1]);
+    }
+
+    /// What [`keep_into`](Stage::keep_into) kept, back: the newer increment moved back if the
+    /// step remembered its own, the older one copied back.
+    fn undo(&mut self, kept: &[f64]) -> Result<(), String> {
+        let w = &mut self.warm;
+        let n = w.prev[1].len();
+        if kept.len() != 4 + n {
+            return Err(format!(
+                "expected the viscous warm start's start of step (4 and {n} values), got {} values",
+                kept.len()
+            ));
+        }
+        let remembered = kept[0] as u64;
+        if w.remembered == remembered + 1 {
+            w.prev.swap(0, 1);
+        } else if w.remembered != remembered {
+            return Err(format!(
+                "kept after {remembered} steps, undone after {}",
+                w.remembered
+            ));
+        }
+        w.remembered = remembered;
+        w.history = kept[1] as usize;
+        w.prev_dt = [kept[2], kept[3]];
+        w.prev[1].copy_from_slice(&kept[4..]);
+        Ok(())
     }
 
     /// Nothing (a snapshot without a history: the next solve starts from zero), or what
