@@ -31,7 +31,7 @@
 
 use efsi_core::{
     Advance, AdvanceError, Advanced, EfsiError, Flow, Grid, OverrideValue, Rollback, Scene,
-    Simulation, Snapshot, Stagger, StepInfo, due,
+    Simulation, Snapshot, Stagger, StepInfo, StepStart, due,
 };
 use efsi_run::SceneOverrides;
 use efsi_run::run::Schedule;
@@ -314,7 +314,7 @@ struct Driver {
     steady: bool,
     /// The state at the start of the step under way, put back when the step fails (the run
     /// loop's rollback; reused from step to step).
-    last_good: Option<Snapshot>,
+    last_good: Option<StepStart>,
     /// Why the simulation cannot be used any more: a failed step whose state could not be put
     /// back (cleared by `restore`).
     broken: Option<String>,

@@ -5,7 +5,7 @@ use efsi_core::scene::Options;
 use efsi_core::schedule::{FieldId, Phase, Stage, StagePlugin, VELOCITY};
 use efsi_core::{
     Advance, AdvanceError, Advanced, BoundarySet, EfsiError, Flow, Grid, Rollback, Scene,
-    Simulation, Snapshot, StageError, StageStats, State, StepContext, StepInfo,
+    Simulation, Snapshot, StageError, StageStats, State, StepContext, StepInfo, StepStart,
 };
 use efsi_tests::{sim, sim_with};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -247,7 +247,7 @@ fn a_failed_step_is_rolled_back_to_the_step_or_the_call_start() {
     // To the start of the failed step.
     let mut s = build();
     let mut reference = build();
-    let mut slot: Option<Snapshot> = None;
+    let mut slot: Option<StepStart> = None;
     let control = Advance {
         rollback: Rollback::Step(&mut slot),
         ..Advance::default()

@@ -504,6 +504,88 @@ fn a_non_finite_field_stops_the_run_and_saves_the_last_good_state() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The room a run keeps for its last checkpoint is counted from the simulation without a
+/// snapshot ([`checkpoint::encoded_len_of`]): exactly the bytes of the checkpoint written from a
+/// snapshot, with every stage's history filled (the viscous warm start, the advection's
+/// predictor, the elastic stages' data), in 2-D and 3-D.
+#[test]
+fn the_checkpoint_is_sized_exactly_without_a_snapshot() {
+    let dir = scratch("sized");
+    for (text, steps) in [(CAVITY, 3), (DISK, 3), (CUBE, 3), (DROP, 2), (SPHERE, 2)] {
+        let mut s = load(&dir, text);
+        for _ in 0..steps {
+            let dt = s.next_dt(s.scene.time.end).unwrap();
+            s.step(dt).unwrap();
+        }
+        let outputs = efsi_run::checkpoint::OutputState {
+            probe_count: 7,
+            run_id: "abc".into(),
+            ..Default::default()
+        };
+        let c = efsi_run::Checkpoint {
+            efsi_version: env!("CARGO_PKG_VERSION").into(),
+            scene_path: std::path::absolute(&s.scene_path).unwrap(),
+            scene_ron: s.scene.to_ron(),
+            overrides: s.scene.overrides.clone(),
+            law: None,
+            outputs: outputs.clone(),
+            snapshot: s.snapshot(),
+        };
+        let bytes = checkpoint::encode(&c).len();
+        assert!(bytes > 8 * s.state.u.data().len(), "{bytes}");
+        assert_eq!(checkpoint::encoded_len_of(&s, &None, &outputs), bytes);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The start of a step kept for a rollback ([`efsi_core::StepStart`]: the fields the stages
+/// write, the part of each stage's data a step overwrites) puts a simulation back as a whole
+/// snapshot does: after a step and its rewind, every array and every stage's data equal the
+/// snapshot's bit for bit, and two more steps give the same state as from the snapshot — in
+/// 2-D and 3-D, with one fluid, a drop (VOF) and elastic solids.
+#[test]
+fn a_kept_step_start_rewinds_a_step_as_a_snapshot_does() {
+    let dir = scratch("rewind");
+    for (text, steps) in [(CAVITY, 3), (DISK, 3), (CUBE, 3), (DROP, 2), (SPHERE, 2)] {
+        let mut s = load(&dir, text);
+        let mut fresh = load(&dir, text);
+        let mut start = None;
+        for _ in 0..steps {
+            s.keep_step_start(&mut start);
+            let dt = s.next_dt(s.scene.time.end).unwrap();
+            s.step(dt).unwrap();
+        }
+        let before = s.snapshot();
+        s.keep_step_start(&mut start);
+        let dt = s.next_dt(s.scene.time.end).unwrap();
+        s.step(dt).unwrap();
+        s.rewind(start.as_ref().unwrap()).unwrap();
+        let back = s.snapshot();
+        let arrays = |x: &efsi_core::Snapshot| -> Vec<(String, Vec<u64>)> {
+            (x.state.arrays().into_iter())
+                .map(|(n, f)| (n, f.data().iter().map(|v| v.to_bits()).collect()))
+                .collect()
+        };
+        let bits = |x: &efsi_core::Snapshot| -> Vec<(String, Vec<u64>)> {
+            (x.stages.iter())
+                .map(|(n, d)| (n.clone(), d.iter().map(|v| v.to_bits()).collect()))
+                .collect()
+        };
+        assert_eq!((back.t(), back.step()), (before.t(), before.step()));
+        assert!(arrays(&back) == arrays(&before), "{}: arrays", s.scene.name);
+        assert!(bits(&back) == bits(&before), "{}: stage data", s.scene.name);
+        fresh.restore(&before).unwrap();
+        for _ in 0..2 {
+            for sim in [&mut s, &mut fresh] {
+                let dt = sim.next_dt(sim.scene.time.end).unwrap();
+                sim.step(dt).unwrap();
+            }
+        }
+        assert_bit_identical(&s, &fresh);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Measured figures for the report: checkpoint size and write/read time of a 128² cavity.
 #[test]
 fn checkpoint_of_a_128_cavity_is_small_and_quick() {

@@ -19,14 +19,22 @@
 //!   at every solver step), which may end the call ([`Flow::Stop`]);
 //! - a rollback: the state at the start of every step, or of the call, kept in a slot the
 //!   caller owns (reused, so no allocation after the first step), and put back when a step
-//!   fails, the error returned with it ([`AdvanceError::Failed`]).
+//!   fails, the error returned with it ([`AdvanceError::Failed`]). The start of every step is
+//!   kept as a [`StepStart`]: only what a step can change — the fields the pipeline's stages
+//!   write (a scene of one fluid does not change its density and viscosity), the part of each
+//!   stage's carried-over data a step overwrites ([`crate::Stage::keep_into`]) — so the copy
+//!   taken before every step is no larger than undoing the step needs; the start of the call
+//!   is a whole [`Snapshot`].
 //!
 //! A target that is not a finite time at or after the current one is refused before anything
 //! changes ([`AdvanceError::Refused`]).
 
 use crate::error::EfsiError;
+use crate::field::Field;
+use crate::schedule::FieldId;
 use crate::simulation::Simulation;
 use crate::snapshot::Snapshot;
+use crate::state::StateResources;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Whether time `t` has reached `event`: it is at most 1e-9 of the event's size before it (the
@@ -44,9 +52,54 @@ pub enum Rollback<'a> {
     None,
     /// The state at the start of the failed step (the run loop's last good state), kept in the
     /// slot before every step.
-    Step(&'a mut Option<Snapshot>),
+    Step(&'a mut Option<StepStart>),
     /// The state at the start of the call (an FMU's communication point), kept in the slot once.
     Call(&'a mut Option<Snapshot>),
+}
+
+/// The start of a step, as far as undoing the step needs it ([`Rollback::Step`]): time, step
+/// count, previous Δt and the simulation's stepping data; a copy of each field a stage of the
+/// pipeline writes ([`crate::schedule::Pipeline::written`]; the others do not change in a
+/// step); the stages' resources if a stage writes a field of theirs; each stage's data as the
+/// step finds it ([`crate::Stage::keep_into`]) and each step check's record. Taken with
+/// [`Simulation::keep_step_start`] (into the same slot step after step: no allocation after the
+/// first) and put back with [`Simulation::rewind`].
+#[derive(Debug, Default)]
+pub struct StepStart {
+    t: f64,
+    step: u64,
+    dt_prev: f64,
+    frame_acceleration: (f64, f64),
+    last_change: f64,
+    velocity_scale: f64,
+    fields: Vec<(FieldId, Field)>,
+    resources: Option<StateResources>,
+    stages: Vec<(String, Vec<f64>)>,
+    checks: Vec<(&'static str, Vec<f64>)>,
+}
+
+impl StepStart {
+    /// Simulated time at the start of the step.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Steps completed at the start of the step.
+    pub fn step(&self) -> u64 {
+        self.step
+    }
+
+    /// The velocity the step started from, one field per component (`None` for `w` on a
+    /// two-dimensional grid), if the pipeline writes every component (else it is the state's).
+    fn velocity(&self) -> Option<[Option<&Field>; 3]> {
+        let get = |id| self.fields.iter().find(|(f, _)| *f == id).map(|(_, f)| f);
+        let (u, v, w) = (
+            get(FieldId::VelocityX)?,
+            get(FieldId::VelocityY)?,
+            get(FieldId::VelocityZ),
+        );
+        Some([Some(u), Some(v), w])
+    }
 }
 
 /// What the hook tells [`Simulation::advance_to`] after a step.
@@ -181,16 +234,17 @@ impl Simulation {
                 .next_dt(target)
                 .map_err(|error| AdvanceError::Failed { error, good: true })?;
             if let Rollback::Step(slot) = &mut rollback {
-                self.keep(slot);
+                self.keep_step_start(slot);
             }
-            // The snapshot just kept is the state the step starts from.
+            // The velocity just kept is the one the step starts from.
             let start = match &rollback {
-                Rollback::Step(Some(s)) => Some(&s.state),
+                Rollback::Step(Some(s)) => s.velocity(),
                 _ => None,
             };
             if let Err(error) = self.step_from(dt, start) {
                 let good = match &rollback {
-                    Rollback::Step(Some(s)) | Rollback::Call(Some(s)) => {
+                    Rollback::Step(Some(s)) => self.rewind(s).is_ok(),
+                    Rollback::Call(Some(s)) => {
                         self.put_back(s);
                         true
                     }
@@ -208,6 +262,67 @@ impl Simulation {
             }
         }
         Ok(Advanced::Reached)
+    }
+
+    /// Keep the start of the next step in `slot` ([`StepStart`]; reusing its storage once it
+    /// holds one of this simulation).
+    pub fn keep_step_start(&self, slot: &mut Option<StepStart>) {
+        let s = slot.get_or_insert_with(StepStart::default);
+        let written = || self.pipeline().written();
+        if s.fields.is_empty() {
+            s.fields = (written().into_iter())
+                .filter_map(|id| self.state.field(id).map(|f| (id, f.clone())))
+                .collect();
+            s.resources = written()
+                .iter()
+                .any(|id| matches!(id, FieldId::Stage(_)))
+                .then(|| self.state.resources.clone());
+        } else {
+            for (id, f) in &mut s.fields {
+                if let Some(now) = self.state.field(*id) {
+                    f.copy_from(now);
+                }
+            }
+            if let Some(r) = &mut s.resources
+                && !r.copy_from(&self.state.resources)
+            {
+                *r = self.state.resources.clone();
+            }
+        }
+        (s.t, s.step, s.dt_prev) = (self.state.t, self.state.step, self.state.dt_prev);
+        s.frame_acceleration = self.state.frame_acceleration;
+        (s.last_change, s.velocity_scale) = self.stepping();
+        self.pipeline().keep_stages_into(&mut s.stages);
+        self.save_checks_into(&mut s.checks);
+    }
+
+    /// Put the start of a step, kept by [`keep_step_start`](Self::keep_step_start) before it,
+    /// back: the simulation is then as it was before the step (after a failed step, or a step
+    /// whose outputs could not be written), bit for bit — as a [`Snapshot`] taken then would
+    /// have put it back. The error (a stage that refuses the data it kept, which only a bug
+    /// in the stage makes happen) names the stage; the state is then not a good one.
+    pub fn rewind(&mut self, s: &StepStart) -> Result<(), EfsiError> {
+        for (id, f) in &s.fields {
+            match self.state.field_mut(*id) {
+                Some(now) if now.data().len() == f.data().len() => now.copy_from(f),
+                _ => self.state.put_field(*id, f.clone()),
+            }
+        }
+        if let Some(r) = &s.resources
+            && !self.state.resources.copy_from(r)
+        {
+            self.state.resources = r.clone();
+        }
+        (self.state.t, self.state.step) = (s.t, s.step);
+        self.state.dt_prev = s.dt_prev;
+        self.state.frame_acceleration = s.frame_acceleration;
+        self.pipeline_mut()
+            .undo_stages(&s.stages)
+            .map_err(EfsiError::Stage)?;
+        self.stages_restored();
+        self.set_stepping(s.last_change, s.velocity_scale);
+        self.restore_checks(&s.checks);
+        Ok(())
     }
 
     /// Copy the current state into `slot` (reusing its storage once it holds one).

@@ -26,7 +26,7 @@ pub mod snapshot;
 pub mod state;
 pub mod validate;
 
-pub use advance::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
+pub use advance::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, StepStart, due};
 pub use bc::BoundarySet;
 pub use error::EfsiError;
 pub use field::{Field, Stagger};

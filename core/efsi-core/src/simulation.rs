@@ -334,10 +334,14 @@ impl Simulation {
         self.step_from(dt, None)
     }
 
-    /// [`step`](Self::step), told a copy of the state it starts from, `start` (the run loop's
-    /// rollback snapshot, [`crate::Rollback::Step`]): a scene that stops at steady state then
-    /// measures the step's change against its velocity instead of a copy of its own.
-    pub(crate) fn step_from(&mut self, dt: f64, start: Option<&State>) -> Result<(), EfsiError> {
+    /// [`step`](Self::step), told a copy of the velocity it starts from, `start` (the run
+    /// loop's rollback copy, [`crate::Rollback::Step`]): a scene that stops at steady state
+    /// then measures the step's change against it instead of a copy of its own.
+    pub(crate) fn step_from(
+        &mut self,
+        dt: f64,
+        start: Option<[Option<&Field>; 3]>,
+    ) -> Result<(), EfsiError> {
         let steady = self.scene.time.steady.is_some();
         if steady && start.is_none() {
             let now = velocity(&self.state);
@@ -370,7 +374,7 @@ impl Simulation {
             c.after(&self.scene, &ctx, &self.state)?;
         }
         let before = match (start, &self.previous) {
-            (Some(start), _) => Some(velocity(start)),
+            (Some(start), _) => Some(start),
             (None, Some([u, v, w])) => Some([u.as_ref(), v.as_ref(), w.as_ref()]),
             (None, None) => None,
         };

@@ -2,9 +2,9 @@
 //!
 //! [`Snapshot`] is the copy of a [`Simulation`]'s evolving data taken with
 //! [`Simulation::snapshot`] (or [`Simulation::snapshot_into`], allocation-free) and put back with
-//! [`Simulation::restore`]. It is what an FMU's get/set FMU state needs, what the run loop keeps
-//! of the start of every step so that a failed step can save the last good state, and what a
-//! checkpoint file stores (crate `efsi-run`). It holds: every [`State`] array with its ghosts
+//! [`Simulation::restore`]. It is what an FMU's get/set FMU state needs, what a failed run saves as
+//! its last good state (the run loop keeps less of the start of every step, only what the step
+//! can change: [`crate::StepStart`]) and what a checkpoint file stores (crate `efsi-run`). It holds: every [`State`] array with its ghosts
 //! (velocity, pressure — the projection's warm start —, density, viscosity, the solid fraction and
 //! the deformation tensors), time, step count and previous Δt; the simulation's private
 //! stepping data (the last rate of change, which decides steadiness, and the velocity scale of
@@ -95,7 +95,7 @@ impl Simulation {
     }
 
     /// Each step check's record into `out`, reusing its storage when it holds the same checks.
-    fn save_checks_into(&self, out: &mut Vec<(&'static str, Vec<f64>)>) {
+    pub(crate) fn save_checks_into(&self, out: &mut Vec<(&'static str, Vec<f64>)>) {
         let names = self.checks().iter().map(|c| c.name());
         if !out.iter().map(|(n, _)| *n).eq(names) {
             *out = self
@@ -146,10 +146,15 @@ impl Simulation {
         self.state.copy_from(&snap.state);
         self.stages_restored();
         self.set_stepping(snap.last_change, snap.velocity_scale);
+        self.restore_checks(&snap.checks);
+        Ok(())
+    }
+
+    /// Give each step check its record in `checks` (by name; none: an empty one).
+    pub(crate) fn restore_checks(&mut self, checks: &[(&'static str, Vec<f64>)]) {
         for c in self.checks_mut() {
-            let record = snap.checks.iter().find(|(n, _)| *n == c.name());
+            let record = checks.iter().find(|(n, _)| *n == c.name());
             c.restore(record.map_or(&[], |(_, r)| r.as_slice()));
         }
-        Ok(())
     }
 }

@@ -136,6 +136,21 @@ impl StateResources {
         }
     }
 
+    /// Copy `other` (the resources of a state of the same simulation) into these without
+    /// allocating; returns whether they fitted (else some may have been copied).
+    pub(crate) fn copy_from(&mut self, other: &StateResources) -> bool {
+        self.0.len() == other.0.len()
+            && self
+                .0
+                .iter_mut()
+                .zip(&other.0)
+                .all(|(a, b)| match (&mut a.1, &b.1) {
+                    (Some(a), Some(b)) => a.copy_from(&**b),
+                    (None, None) => true,
+                    _ => false,
+                })
+    }
+
     /// Every resource, in the order they were added.
     pub fn iter(&self) -> impl Iterator<Item = &dyn StateResource> {
         self.0.iter().filter_map(|(_, r)| r.as_deref())
@@ -305,6 +320,35 @@ impl State {
         self.dt_prev = other.dt_prev;
         self.frame_acceleration = other.frame_acceleration;
         true
+    }
+
+    /// Store `f` as the field of `id` (allocating an optional one; a stage's own field,
+    /// [`FieldId::Stage`], is in its resource: nothing happens).
+    pub(crate) fn put_field(&mut self, id: FieldId, f: Field) {
+        match id {
+            FieldId::VelocityX => self.u = f,
+            FieldId::VelocityY => self.v = f,
+            FieldId::VelocityZ => self.w = Some(f),
+            FieldId::Pressure => self.p = f,
+            FieldId::Density => self.rho = f,
+            FieldId::Viscosity => self.mu = f,
+            FieldId::SolidFraction => self.phi = Some(f),
+            FieldId::Stage(_) => {}
+        }
+    }
+
+    /// [`field`](Self::field), mutable.
+    pub(crate) fn field_mut(&mut self, id: FieldId) -> Option<&mut Field> {
+        match id {
+            FieldId::VelocityX => Some(&mut self.u),
+            FieldId::VelocityY => Some(&mut self.v),
+            FieldId::VelocityZ => self.w.as_mut(),
+            FieldId::Pressure => Some(&mut self.p),
+            FieldId::Density => Some(&mut self.rho),
+            FieldId::Viscosity => Some(&mut self.mu),
+            FieldId::SolidFraction => self.phi.as_mut(),
+            FieldId::Stage(_) => None,
+        }
     }
 
     /// The field stored for `id`, if allocated (a stage's own field, [`FieldId::Stage`], is

@@ -441,20 +441,70 @@ pub fn encoded_len(c: &Checkpoint) -> usize {
     with_body(c, |body| binary::encoded_len(body))
 }
 
-/// `f` of the body of `c`'s file, which borrows its arrays.
-fn with_body<R>(c: &Checkpoint, f: impl FnOnce(&Body) -> R) -> R {
-    let s = &c.snapshot;
-    let scene_path = c.scene_path.display().to_string();
-    let guard = s.checks.iter().find(|(n, _)| *n == crate::guard::NAME);
-    let body = Body {
-        header: Header {
-            efsi_version: Cow::Borrowed(&c.efsi_version),
-            scene_path: Cow::Owned(scene_path),
-            scene_ron: Cow::Borrowed(&c.scene_ron),
-            overrides: Cow::Borrowed(&c.overrides),
-            law: Cow::Borrowed(&c.law),
-        },
-        outputs: Cow::Borrowed(&c.outputs),
+/// The length of [`encode`]'s bytes for the checkpoint of `sim`'s current state with the
+/// law `law` and the output bookkeeping `outputs`, counted from the simulation itself: no
+/// snapshot is made (what a run keeps room on disk for). Each stage's data is counted by its
+/// length ([`efsi_core::Stage::saved_len`]): postcard writes a list of numbers as its length
+/// (a varint) and eight bytes per number.
+pub fn encoded_len_of(
+    sim: &efsi_core::simulation::Simulation,
+    law: &Option<LawIdentity>,
+    outputs: &OutputState,
+) -> usize {
+    let lens = sim.pipeline().saved_lens();
+    let stages: Vec<(String, Vec<f64>)> = lens
+        .iter()
+        .map(|(name, _)| (name.to_string(), Vec::new()))
+        .collect();
+    let mut guard = Vec::new();
+    if let Some(c) = sim.checks().iter().find(|c| c.name() == crate::guard::NAME) {
+        c.save_into(&mut guard);
+    }
+    let header = Header {
+        efsi_version: Cow::Borrowed(env!("CARGO_PKG_VERSION")),
+        scene_path: Cow::Owned(
+            std::path::absolute(&sim.scene_path)
+                .unwrap_or(sim.scene_path.clone())
+                .display()
+                .to_string(),
+        ),
+        scene_ron: Cow::Owned(sim.scene.to_ron()),
+        overrides: Cow::Borrowed(&sim.scene.overrides),
+        law: Cow::Borrowed(law),
+    };
+    // The stepping scalars are fixed-width: any value has their length.
+    let view = SnapshotView {
+        state: &sim.state,
+        last_change: 0.0,
+        velocity_scale: 0.0,
+        stages: &stages,
+        guard: &guard,
+    };
+    let empty = binary::encoded_len(&body(header, outputs, &view));
+    let data: usize = lens.iter().map(|&(_, n)| 8 * n + varint_len(n) - 1).sum();
+    empty + data
+}
+
+/// The bytes of `n` as a postcard varint (seven bits a byte).
+fn varint_len(n: usize) -> usize {
+    (usize::BITS - n.leading_zeros()).div_ceil(7).max(1) as usize
+}
+
+/// What the snapshot section of a checkpoint is made from, borrowed.
+struct SnapshotView<'a> {
+    state: &'a State,
+    last_change: f64,
+    velocity_scale: f64,
+    stages: &'a [(String, Vec<f64>)],
+    guard: &'a [f64],
+}
+
+/// The body of a checkpoint file of `header`, `outputs` and the snapshot `s`, borrowing its
+/// arrays.
+fn body<'a>(header: Header<'a>, outputs: &'a OutputState, s: &SnapshotView<'a>) -> Body<'a> {
+    Body {
+        header,
+        outputs: Cow::Borrowed(outputs),
         snapshot: SnapshotBody {
             t: s.state.t,
             step: s.state.step,
@@ -473,11 +523,31 @@ fn with_body<R>(c: &Checkpoint, f: impl FnOnce(&Body) -> R) -> R {
                 .into_iter()
                 .map(|(name, v)| (Cow::Borrowed(name), v))
                 .collect(),
-            stages: Cow::Borrowed(&s.stages),
-            guard: Cow::Borrowed(guard.map_or(&[], |(_, r)| r.as_slice())),
+            stages: Cow::Borrowed(s.stages),
+            guard: Cow::Borrowed(s.guard),
         },
+    }
+}
+
+/// `f` of the body of `c`'s file, which borrows its arrays.
+fn with_body<R>(c: &Checkpoint, f: impl FnOnce(&Body) -> R) -> R {
+    let s = &c.snapshot;
+    let guard = s.checks.iter().find(|(n, _)| *n == crate::guard::NAME);
+    let header = Header {
+        efsi_version: Cow::Borrowed(&c.efsi_version),
+        scene_path: Cow::Owned(c.scene_path.display().to_string()),
+        scene_ron: Cow::Borrowed(&c.scene_ron),
+        overrides: Cow::Borrowed(&c.overrides),
+        law: Cow::Borrowed(&c.law),
     };
-    f(&body)
+    let view = SnapshotView {
+        state: &s.state,
+        last_change: s.last_change,
+        velocity_scale: s.velocity_scale,
+        stages: &s.stages,
+        guard: guard.map_or(&[], |(_, r)| r.as_slice()),
+    };
+    f(&body(header, &c.outputs, &view))
 }
 
 /// Decode checkpoint bytes; `what` (the file) names it in errors.

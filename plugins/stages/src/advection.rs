@@ -394,6 +394,13 @@ impl Stage for AdvectionStage {
         v
     }
 
+    fn saved_len(&self) -> usize {
+        self.history
+            .as_ref()
+            .filter(|h| h.dt > 0.0)
+            .map_or(0, History::saved_len)
+    }
+
     /// Nothing (no history: the next step's second stage looks from advection alone), or what
     /// [`save`](Stage::save) wrote.
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {

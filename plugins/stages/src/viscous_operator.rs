@@ -84,6 +84,107 @@ fn add(p: Index, q: Index) -> Index {
     [p[0] + q[0], p[1] + q[1], p[2] + q[2]]
 }
 
+/// A coefficient on the cells, or on the edges of one shear pair: a field of the grid, or — in
+/// a [compact](Coefficients::compact) operator, while it holds one value everywhere — that
+/// value as one line, which every line of the grid reads (the same values, no array of the
+/// grid's size). The field is made the first time the values differ, and kept.
+struct Coef {
+    field: Option<Field>,
+    /// The one value, as many times as the longest line of the grid (empty: never uniform).
+    line: Vec<f64>,
+    uniform: bool,
+}
+
+impl Coef {
+    /// A field of `grid`, zero.
+    fn field(grid: &Grid) -> Self {
+        Coef {
+            field: Some(Field::zeros(grid)),
+            line: Vec::new(),
+            uniform: false,
+        }
+    }
+
+    /// Zero everywhere, as one line: a field only once the values differ.
+    fn compact(grid: &Grid) -> Self {
+        Coef {
+            field: None,
+            line: vec![0.0; longest_line(grid)],
+            uniform: true,
+        }
+    }
+
+    /// The values at `I + shift` for the indices `I` of `l` ([`Field::at`]).
+    #[inline(always)]
+    fn at(&self, l: &Line, shift: Index) -> &[f64] {
+        match &self.field {
+            Some(f) if !self.uniform => f.at(l, shift),
+            _ => &self.line[..l.len],
+        }
+    }
+
+    /// The field, to write every value of (made now if it was uniform so far).
+    fn field_mut(&mut self, grid: &Grid) -> &mut Field {
+        self.uniform = false;
+        self.field.get_or_insert_with(|| Field::zeros(grid))
+    }
+
+    /// `v` everywhere, if the coefficient may be uniform (returns whether it is now).
+    fn set_uniform(&mut self, v: f64) -> bool {
+        if self.line.is_empty() {
+            return false;
+        }
+        self.line.fill(v);
+        self.uniform = true;
+        true
+    }
+}
+
+/// The longest line of `grid`'s padded storage.
+fn longest_line(grid: &Grid) -> usize {
+    grid.padded().into_iter().max().unwrap_or(0)
+}
+
+/// Whether every value of `f` (ghosts included) has the bits of the first.
+fn uniform(f: &Field) -> Option<f64> {
+    let d = f.data();
+    let v = *d.first()?;
+    d.iter().all(|x| x.to_bits() == v.to_bits()).then_some(v)
+}
+
+/// A diagonal `d` of [`Coefficients::product`] and [`Coefficients::diagonal`]: one value per
+/// unknown face (compact, u then v then w), or one value for every face, given as one line of
+/// it (at least as long as the grid's longest line).
+#[derive(Clone, Copy)]
+pub(crate) enum Diag<'a> {
+    /// Per unknown face.
+    Faces(&'a [f64]),
+    /// The same value at every face, as one line.
+    Uniform(&'a [f64]),
+}
+
+impl<'a> Diag<'a> {
+    /// Its values on the faces of each axis, and whether each line reads the same line.
+    fn parts(self, faces: &UnknownFaces) -> ([&'a [f64]; 3], bool) {
+        match self {
+            Diag::Faces(d) => (faces.split(d), false),
+            Diag::Uniform(l) => ([l; 3], true),
+        }
+    }
+}
+
+impl<'a> From<&'a [f64]> for Diag<'a> {
+    fn from(d: &'a [f64]) -> Self {
+        Diag::Faces(d)
+    }
+}
+
+impl<'a> From<&'a Vec<f64>> for Diag<'a> {
+    fn from(d: &'a Vec<f64>) -> Self {
+        Diag::Faces(d)
+    }
+}
+
 /// The coefficients of `K_η` (see the module docs) for one grid and its unknown faces.
 pub(crate) struct Coefficients {
     faces: UnknownFaces,
@@ -93,7 +194,7 @@ pub(crate) struct Coefficients {
     /// The cell coefficient `η` (a copy, ghosts included): the normal-stress coefficient of
     /// axis `a` at a cell is `c_a = (s_a r) η`, formed where it is read ([`normal`](Self::normal))
     /// — one cell array instead of one per axis.
-    cells: Field,
+    cells: Coef,
     /// `s_a = 2 scale V/h_a²` (per unit radius factor) of each axis.
     normal_factor: [f64; 3],
     /// The grid's radius factors (`r` at cell centres for `c_a`).
@@ -101,35 +202,87 @@ pub(crate) struct Coefficients {
     /// Whether they are all ones (planar and three-dimensional grids).
     unit_metric: bool,
     /// The weight `g` of each shear pair ([`shear_pairs`]) on its edges.
-    edge: Vec<Field>,
-    /// The hoop term of each unknown face (zero off the u-faces and in planar geometry).
+    edge: Vec<Coef>,
+    /// The hoop term of each unknown face (zero off the u-faces and in planar geometry; not
+    /// stored, empty, in a compact operator off the axisymmetric geometry).
     hoop: Vec<f64>,
+    /// Zeros, one line long: the hoop term of a compact operator that stores none.
+    zeros: Vec<f64>,
 }
 
 impl Coefficients {
-    /// Zero coefficients (`K = 0`) for `grid` and its unknown `faces`.
+    /// Zero coefficients (`K = 0`) for `grid` and its unknown `faces`: a field per cell
+    /// coefficient and shear pair, the hoop term per unknown face.
     pub(crate) fn new(grid: &Grid, faces: UnknownFaces) -> Self {
+        Self::with(grid, faces, false)
+    }
+
+    /// [`new`](Self::new), storing no more than the coefficients need: where the viscosity
+    /// is uniform (ghosts included) on a grid whose radius factors are all ones (planar,
+    /// three-dimensional), the cell coefficient and each shear pair's weight are one value
+    /// each ([`Coef`]); off the axisymmetric geometry no hoop term is stored (it is zero:
+    /// [`hoop_diag`](Self::hoop_diag) gives zeros). The same products, bit for bit. Only
+    /// [`set_viscosity_weights`](Self::set_viscosity_weights) keeps its coefficients uniform.
+    pub(crate) fn compact(grid: &Grid, faces: UnknownFaces) -> Self {
+        Self::with(grid, faces, true)
+    }
+
+    fn with(grid: &Grid, faces: UnknownFaces, compact: bool) -> Self {
         let dims = grid.dims();
         let h = grid.h();
+        let unit_metric = !grid.is_axisymmetric();
+        let coef = |grid| {
+            if compact {
+                Coef::compact(grid)
+            } else {
+                Coef::field(grid)
+            }
+        };
         Coefficients {
-            hoop: vec![0.0; faces.len()],
+            hoop: vec![
+                0.0;
+                if compact && unit_metric {
+                    0
+                } else {
+                    faces.len()
+                }
+            ],
+            zeros: vec![0.0; if compact { longest_line(grid) } else { 0 }],
             faces,
             dims,
             ratio: std::array::from_fn(|a| std::array::from_fn(|b| h[a] / h[b])),
-            cells: Field::zeros(grid),
+            cells: coef(grid),
             normal_factor: [0.0; 3],
             metric: grid.metric.clone(),
-            unit_metric: !grid.is_axisymmetric(),
-            edge: shear_pairs(dims)
-                .iter()
-                .map(|_| Field::zeros(grid))
-                .collect(),
+            unit_metric,
+            edge: shear_pairs(dims).iter().map(|_| coef(grid)).collect(),
         }
     }
 
-    /// The hoop term per unknown face (compact; zero off the u-faces).
+    /// The hoop term per unknown face (compact; zero off the u-faces) of an operator made
+    /// with [`new`](Self::new).
     pub(crate) fn hoop(&self) -> &[f64] {
         &self.hoop
+    }
+
+    /// The hoop term as a diagonal of [`product`](Self::product): per unknown face, or zeros
+    /// where a [compact](Self::compact) operator stores none.
+    pub(crate) fn hoop_diag(&self) -> Diag<'_> {
+        if self.hoop.is_empty() && !self.zeros.is_empty() {
+            Diag::Uniform(&self.zeros)
+        } else {
+            Diag::Faces(&self.hoop)
+        }
+    }
+
+    /// Whether the hoop term is zero at every face (no hoop term is stored).
+    pub(crate) fn hoop_free(&self) -> bool {
+        self.hoop.is_empty() && !self.zeros.is_empty()
+    }
+
+    /// The longest line of the grid, for a uniform diagonal ([`Diag::Uniform`]).
+    pub(crate) fn line_len(&self) -> usize {
+        self.zeros.len()
     }
 
     /// The coefficients of `scale·K_μ` for the cell viscosities `mu` (ghosts filled); the edge
@@ -167,10 +320,18 @@ impl Coefficients {
     /// instead of per edge: the same value, without its divisions. Lines in parallel.
     pub(crate) fn set_viscosity_weights(&mut self, g: &Grid, mu: &Field, scale: f64) {
         self.set_cells(g, mu, scale);
+        // One viscosity everywhere and radius factors of one: each pair's weight is the one
+        // value every edge of it takes below (`s · 1 · mk`, the radius factor one).
+        let one = (self.cells.uniform && self.unit_metric).then(|| self.cells.line[0]);
         for (e, &(axes, at)) in self.edge.iter_mut().zip(shear_pairs(self.dims)) {
             let s = depth(g, axes, scale);
+            if let Some(m) = one
+                && e.set_uniform(s * harmonic_mean([m; 4]))
+            {
+                continue;
+            }
             let lo = edge_cells(axes);
-            Region::of(g, at).for_each(e, |l, gr| {
+            Region::of(g, at).for_each(e.field_mut(g), |l, gr| {
                 let len = l.len;
                 let cell = |m: usize| &mu.at(&l, lo[m])[..len];
                 let [sw, se, nw, ne] = [cell(0), cell(1), cell(2), cell(3)];
@@ -218,7 +379,7 @@ impl Coefficients {
     fn set_edge(&mut self, g: &Grid, p: usize, eta_e: &Field, scale: f64) {
         let (axes, at) = SHEAR[p];
         let s = depth(g, axes, scale);
-        Region::of(g, at).for_each(&mut self.edge[p], |l, gr| {
+        Region::of(g, at).for_each(self.edge[p].field_mut(g), |l, gr| {
             let (ek, r) = (eta_e.at(&l, [0; 3]), edge_radius(g, at, &l));
             for n in 0..l.len {
                 gr[n] = s * r[n] * ek[n];
@@ -237,7 +398,12 @@ impl Coefficients {
                 .fold(scale * 2.0, |s, b| s * h[b]);
             *ca = area / h[a];
         }
-        self.cells.copy_from(eta);
+        let one = (!self.cells.line.is_empty())
+            .then(|| uniform(eta))
+            .flatten();
+        if !one.is_some_and(|v| self.cells.set_uniform(v)) {
+            self.cells.field_mut(g).copy_from(eta);
+        }
     }
 
     /// What the normal-stress coefficient `c_a = (s_a r) η` of axis `a` at the cells of line
@@ -253,6 +419,9 @@ impl Coefficients {
 
     /// The hoop term of `scale·K_η` on each unknown u-face, from the cell coefficients.
     fn set_hoop(&mut self, g: &Grid, eta: &Field, scale: f64) {
+        if self.hoop_free() {
+            return;
+        }
         let (m, h) = (&g.metric, g.h());
         let faces = self.faces.u_region();
         let hoop = &mut self.hoop[..faces.size()];
@@ -275,8 +444,8 @@ impl Coefficients {
     /// `diag(dm) − K` away from the boundaries; beside a wall the wall's coupling counts once
     /// whatever its ghost rule (a reflected no-slip ghost doubles it in the matrix), which keeps
     /// the blocks diagonally dominant. Jacobi and the block multigrid use it. Lines in parallel.
-    pub(crate) fn diagonal(&self, dm: &[f64], diag: &mut [f64]) {
-        let dms = self.faces.split(dm);
+    pub(crate) fn diagonal<'d>(&self, dm: impl Into<Diag<'d>>, diag: &mut [f64]) {
+        let (dms, same) = dm.into().parts(&self.faces);
         for (a, dg) in self.faces.split_mut(diag).into_iter().enumerate() {
             let r = self.faces.region(a);
             if r.is_empty() {
@@ -285,7 +454,7 @@ impl Coefficients {
             let dm = dms[a];
             par::rows(dg, r.len(0)).for_each(|n, dgs| {
                 let l = r.line(n);
-                let dm = &dm[n * l.len..];
+                let dm = if same { dm } else { &dm[n * l.len..] };
                 let ((ca, ehi, rhi), (_, elo, rlo)) =
                     (self.normal(a, &l, 0), self.normal(a, &l, -1));
                 match (rhi, rlo) {
@@ -375,15 +544,15 @@ impl Coefficients {
     /// ghosts filled) and `x` its compact vector of unknowns, or the fields' own values when
     /// `None` (lines in parallel; each line writes its own entries). Returns `x·y`, summed by
     /// lines in order, component after component (the same on any number of threads).
-    pub(crate) fn product<F: Borrow<Field> + Sync>(
+    pub(crate) fn product<'d, F: Borrow<Field> + Sync>(
         &self,
         vel: &[F],
-        d: &[f64],
+        d: impl Into<Diag<'d>>,
         x: Option<&[f64]>,
         y: &mut [f64],
     ) -> f64 {
         assert_eq!(vel.len(), self.dims, "one velocity component per axis");
-        let ds = self.faces.split(d);
+        let (ds, same) = d.into().parts(&self.faces);
         let xs = x.map(|x| self.faces.split(x));
         let mut xy = [0.0; 3];
         for (a, y) in self.faces.split_mut(y).into_iter().enumerate() {
@@ -397,7 +566,7 @@ impl Coefficients {
                 0.0,
                 |j, y| {
                     let x = x.map(|x| &x[j * n..(j + 1) * n]);
-                    let (l, d) = (r.line(j), &d[j * n..]);
+                    let (l, d) = (r.line(j), if same { d } else { &d[j * n..] });
                     // The component, the grid's axis count and whether the metric is all ones
                     // count as constants: the shifts along the axes are then known to the
                     // compiler, which addresses the stencil's neighbours from fewer pointers.
@@ -1175,6 +1344,7 @@ mod tests {
         let mut slow = Coefficients::new(&grid, faces);
         slow.set_viscosity_edges(&grid, &mu, 0.3, &mut edges);
         for (f, s) in fast.edge.iter().zip(&slow.edge) {
+            let (f, s) = (f.field.as_ref().unwrap(), s.field.as_ref().unwrap());
             assert!(
                 f.data()
                     .iter()
@@ -1188,6 +1358,58 @@ mod tests {
                 .filter(|&&g| g > 0.0)
                 .fold((f64::MAX, 0.0f64), |(l, h), &g| (l.min(g), h.max(g)));
             assert!(lo < hi, "one weight only: {lo} {hi}");
+        }
+    }
+
+    /// A compact operator ([`Coefficients::compact`]) gives the full one's products and
+    /// diagonal bit for bit — with one viscosity everywhere (one value per coefficient, no
+    /// hoop term stored) and with two (fields made at the first call) — in three dimensions
+    /// and in the plane; it stores no array while the viscosity is uniform.
+    #[test]
+    fn the_compact_operator_gives_the_full_ones_bits() {
+        let planar = Grid::new(Geometry::Planar, 7, 5, (0.0, 1.0), (0.0, 0.8));
+        for grid in [box_grid([5, 4, 3]), planar] {
+            let walls = BoxGhosts {
+                periodic: [false, true, false],
+            };
+            let faces = UnknownFaces::with_ranges(&grid, &walls.ranges(&grid));
+            let n = faces.len();
+            let mut two = viscosity(&grid);
+            walls.fill_scalar(&grid, &mut two);
+            for mu in [Field::filled(&grid, 0.7), two] {
+                let mut full = Coefficients::new(&grid, faces);
+                let mut compact = Coefficients::compact(&grid, faces);
+                full.set_viscosity_weights(&grid, &mu, 0.3);
+                compact.set_viscosity_weights(&grid, &mu, 0.3);
+                let one = mu.data().iter().all(|&m| m == 0.7);
+                assert_eq!(compact.cells.field.is_none(), one);
+                assert!(compact.edge.iter().all(|e| e.field.is_none() == one));
+                assert!(compact.hoop.is_empty());
+                let mut vel: Vec<Field> = (0..grid.dims()).map(|_| Field::zeros(&grid)).collect();
+                let x: Vec<f64> = (0..n)
+                    .map(|c| ((c * 2654435761) % 1000) as f64 / 500.0 - 1.0)
+                    .collect();
+                faces.scatter_to(&x, &mut vel);
+                walls.fill(&grid, &mut vel, WallTime::Homogeneous);
+                let dm: Vec<f64> = (0..n).map(|c| 1.0 + (c % 7) as f64).collect();
+                let (mut y1, mut y2) = (vec![0.0; n], vec![0.0; n]);
+                let xy1 = full.product(&vel, &dm, Some(&x), &mut y1);
+                let xy2 = compact.product(&vel, &dm, Some(&x), &mut y2);
+                assert_eq!(xy1.to_bits(), xy2.to_bits());
+                assert!(y1.iter().zip(&y2).all(|(a, b)| a.to_bits() == b.to_bits()));
+                let (h1, h2) = (full.hoop().to_vec(), compact.hoop_diag());
+                full.product(&vel, &h1, None, &mut y1);
+                compact.product(&vel, h2, None, &mut y2);
+                assert!(y1.iter().zip(&y2).all(|(a, b)| a.to_bits() == b.to_bits()));
+                full.diagonal(&dm, &mut y1);
+                compact.diagonal(&dm, &mut y2);
+                assert!(y1.iter().zip(&y2).all(|(a, b)| a.to_bits() == b.to_bits()));
+                // A uniform diagonal as one line, against the same values per face.
+                let line = vec![2.5; compact.line_len()];
+                full.diagonal(&vec![2.5; n], &mut y1);
+                compact.diagonal(Diag::Uniform(&line), &mut y2);
+                assert!(y1.iter().zip(&y2).all(|(a, b)| a.to_bits() == b.to_bits()));
+            }
         }
     }
 }

@@ -151,6 +151,13 @@ pub trait Stage: Send {
         *out = self.save();
     }
 
+    /// The number of values [`save`](Self::save) would return, without making them (what a
+    /// run sizes its checkpoint by): a stage that keeps full-grid data should override this
+    /// too (default: `self.save().len()`).
+    fn saved_len(&self) -> usize {
+        self.save().len()
+    }
+
     /// After a snapshot's data and state are back ([`restore`](Self::restore), then the
     /// state): a stage takes here what it keeps between steps as a copy of the state, instead of
     /// saving it, and puts back into the state the copies it publishes there from its own
@@ -168,6 +175,23 @@ pub trait Stage: Send {
                 data.len()
             ))
         }
+    }
+
+    /// What undoing a step needs of the stage's carried-over data ([`save`](Self::save)) as
+    /// the step finds it, into `out` (its previous contents replaced, its allocation reused):
+    /// kept before every step of a run that puts a failed step back ([`crate::StepStart`])
+    /// and given back to [`undo`](Self::undo). A stage whose step overwrites only part of its
+    /// data keeps that part (the viscous stage: the older of its two increments). Default:
+    /// [`save_into`](Self::save_into).
+    fn keep_into(&self, out: &mut Vec<f64>) {
+        self.save_into(out);
+    }
+
+    /// Put the data back as it was at the start of the step `kept` was taken before
+    /// ([`keep_into`](Self::keep_into)), whether the stage ran in that step or not, completed
+    /// or failed. Default: [`restore`](Self::restore).
+    fn undo(&mut self, kept: &[f64]) -> Result<(), String> {
+        self.restore(kept)
     }
 }
 
@@ -819,6 +843,58 @@ impl Pipeline {
             .iter()
             .map(|e| (e.name.to_string(), e.stage.save()))
             .collect()
+    }
+
+    /// The number of values each stage's carried-over data holds ([`Stage::saved_len`]), by
+    /// name, in execution order: [`save_stages`](Self::save_stages)' lengths, without the copy.
+    pub fn saved_lens(&self) -> Vec<(&'static str, usize)> {
+        self.entries
+            .iter()
+            .map(|e| (e.name, e.stage.saved_len()))
+            .collect()
+    }
+
+    /// Each stage's [`Stage::keep_into`], by name, in execution order, into `out` (reusing its
+    /// allocations when it already holds this pipeline's stages).
+    pub fn keep_stages_into(&self, out: &mut Vec<(String, Vec<f64>)>) {
+        let same = out.len() == self.entries.len()
+            && out.iter().zip(&self.entries).all(|((n, _), e)| n == e.name);
+        if !same {
+            *out = (self.entries.iter())
+                .map(|e| (e.name.to_string(), Vec::new()))
+                .collect();
+        }
+        for ((_, data), e) in out.iter_mut().zip(&self.entries) {
+            e.stage.keep_into(data);
+        }
+    }
+
+    /// Each stage's [`Stage::undo`] with what [`keep_stages_into`](Self::keep_stages_into)
+    /// kept; the error names the stage that refuses its data.
+    pub fn undo_stages(&mut self, kept: &[(String, Vec<f64>)]) -> Result<(), StageError> {
+        for (e, (name, data)) in self.entries.iter_mut().zip(kept) {
+            let fail = |message: String| StageError {
+                stage: e.name.to_string(),
+                message,
+            };
+            if name != e.name {
+                return Err(fail(format!("kept as the data of `{name}`")));
+            }
+            e.stage.undo(data).map_err(fail)?;
+        }
+        Ok(())
+    }
+
+    /// The fields the stages write in a step ([`StagePlugin::writes`]), each once, in the order
+    /// they are first written: what a step can change of the state.
+    pub fn written(&self) -> Vec<FieldId> {
+        let mut out: Vec<FieldId> = Vec::new();
+        for id in self.entries.iter().flat_map(|e| e.writes) {
+            if !out.contains(id) {
+                out.push(*id);
+            }
+        }
+        out
     }
 
     /// [`save_stages`](Self::save_stages) into `out`, reusing its allocations when it already

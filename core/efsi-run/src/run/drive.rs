@@ -2,23 +2,23 @@
 //! checkpoints after every step, and what a stop request, a failed step or a failed output
 //! leaves behind (a checkpoint, the last good state, `run.json`'s `"Failed"`).
 
-use super::outputs::checkpoints::{checkpoint_of, save_checkpoint};
+use super::outputs::checkpoints::save_checkpoint;
 use super::room::Room;
 use super::{Outputs, Progress, RunOptions, RunOutcome, StopReason};
 use crate::checkpoint::{self, LawIdentity};
 use efsi_core::error::EfsiError;
 use efsi_core::simulation::Simulation;
-use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, due};
+use efsi_core::{Advance, AdvanceError, Advanced, Flow, Rollback, StepInfo, StepStart, due};
 use std::time::Instant;
 
 /// Keep room on disk for the run's last checkpoint and `run.json` ([`super::room`]), sized by
-/// the checkpoint of the current state and the `run.json` written.
+/// the checkpoint of the current state (counted, no snapshot made) and the `run.json` written.
 pub(super) fn make_room(
     sim: &Simulation,
     law: &Option<LawIdentity>,
     out: &mut Outputs,
 ) -> Result<(), EfsiError> {
-    let bytes = checkpoint::encoded_len(&checkpoint_of(sim, law, out.state(), sim.snapshot()));
+    let bytes = checkpoint::encoded_len_of(sim, law, &out.state());
     let record = std::fs::metadata(out.dir.join("run.json")).map_or(0, |m| m.len());
     let needed = Room::needed(bytes as u64, record);
     let room = Room::keep(&out.dir, needed).map_err(|e| {
@@ -47,7 +47,7 @@ pub(super) fn drive(
     let end = sim.scene.time.end;
     let first_step = sim.state.step;
     let mut stop = StopReason::EndTime;
-    let mut last_good = options.save_last_good.then(|| sim.snapshot());
+    let mut last_good = options.save_last_good.then(StepStart::default);
     let mut latest = None;
     while !due(sim.state.t, end) {
         let until = next_stop(out, sim.state.t, end);
@@ -91,7 +91,7 @@ pub(super) fn drive(
             // An output or a checkpoint could not be written after a good step: save the state
             // at the start of that step, whose outputs a resume writes again.
             Err(AdvanceError::Hook(error)) => {
-                save_before_failed_output(sim, out, law, last_good.take(), error)
+                save_before_failed_output(sim, out, law, last_good.as_ref(), error)
             }
             Err(e) => e.into(),
         };
@@ -151,20 +151,25 @@ fn next_stop(out: &Outputs, t: f64, end: f64) -> f64 {
 }
 
 /// An output or a checkpoint could not be written after a good step (a full disk or a
-/// file-size limit, most likely): free the room kept for this moment and save the state at the
-/// start of that step, `good`, whose outputs a resume writes again. Returns the error to
-/// report: [`EfsiError::Saved`] when the checkpoint was written, `error` itself otherwise.
+/// file-size limit, most likely): free the room kept for this moment, put the simulation back
+/// to the start of that step, `good` ([`Simulation::rewind`]), and save it, whose outputs a
+/// resume writes again. Returns the error to report: [`EfsiError::Saved`] when the checkpoint
+/// was written, `error` itself otherwise.
 fn save_before_failed_output(
-    sim: &Simulation,
+    sim: &mut Simulation,
     out: &mut Outputs,
     law: &Option<LawIdentity>,
-    good: Option<efsi_core::Snapshot>,
+    good: Option<&StepStart>,
     error: EfsiError,
 ) -> EfsiError {
     out.release_room();
     let Some(good) = good else {
         return error;
     };
+    if sim.rewind(good).is_err() {
+        return error;
+    }
+    let good = sim.snapshot();
     let (step, t) = (good.step(), good.t());
     match save_checkpoint(sim, law, out.state_before_emit(), good, &out.dir) {
         Ok(checkpoint) => EfsiError::Saved {

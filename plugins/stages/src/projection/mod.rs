@@ -282,7 +282,47 @@ pub(crate) struct Projector {
     /// one-fluid scene). `None` with multigrid and a second material: every step assembles
     /// and sets up only a matrix the multigrid does not hold already
     /// ([`Multigrid::is_set_up_for`]), no copy of the density kept (0.55 MB at 256²).
-    set_up_for: Option<Vec<f64>>,
+    set_up_for: Option<Density>,
+}
+
+/// A density as [`Projector::set_up_for`] keeps it: a copy, or — when every value (ghosts
+/// included) has the same bits, as in a scene of one fluid — that value and the count, no
+/// array. Either way it equals a density exactly when the density is bit for bit the one
+/// kept.
+#[derive(Default)]
+struct Density {
+    copy: Vec<f64>,
+    /// The bits of the one value and the count, if the density kept is uniform.
+    uniform: Option<(u64, usize)>,
+}
+
+impl Density {
+    /// Whether `rd` is bit for bit the density kept (never before the first [`keep`](Self::keep)).
+    fn is(&self, rd: &[f64]) -> bool {
+        match self.uniform {
+            Some((bits, len)) => rd.len() == len && rd.iter().all(|x| x.to_bits() == bits),
+            None => {
+                self.copy.len() == rd.len()
+                    && self
+                        .copy
+                        .iter()
+                        .zip(rd)
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+            }
+        }
+    }
+
+    /// Keep `rd`.
+    fn keep(&mut self, rd: &[f64]) {
+        let first = rd.first().map(|x| x.to_bits());
+        self.uniform = first
+            .filter(|&b| rd.iter().all(|x| x.to_bits() == b))
+            .map(|b| (b, rd.len()));
+        self.copy.clear();
+        if self.uniform.is_none() {
+            self.copy.extend_from_slice(rd);
+        }
+    }
 }
 
 impl Projector {
@@ -321,11 +361,12 @@ impl Projector {
             scratch: Scratch::reserve(shared, (WORK + pooled) * n),
             increment: increments.then(|| efsi_core::Field::zeros(grid)),
             gravity: scene.gravity.planar(),
-            // A copy of the density where it decides alone whether to assemble (assembling
-            // and setting up every step is dearer than the comparison); where a second
+            // A copy of the density (one value where it is uniform) where it decides alone
+            // whether to assemble (assembling and setting up every step is dearer than the
+            // comparison); where a second
             // material changes the density nearly every step, the multigrid's own matrix is
             // compared with the assembled one instead.
-            set_up_for: keep_density.then(Vec::new),
+            set_up_for: keep_density.then(Density::default),
         }
     }
 
@@ -614,9 +655,7 @@ impl Projector {
     /// it already (see [`Projector::set_up_for`]).
     fn set_up(&mut self, grid: &Grid, bc: &BoundarySet, rho: &efsi_core::Field) {
         let rd = rho.data();
-        let same = self.set_up_for.as_ref().is_some_and(|s| {
-            s.len() == rd.len() && s.iter().zip(rd).all(|(a, b)| a.to_bits() == b.to_bits())
-        });
+        let same = self.set_up_for.as_ref().is_some_and(|s| s.is(rd));
         if same {
             return;
         }
@@ -672,8 +711,7 @@ impl Projector {
             }
         }
         if let Some(s) = &mut self.set_up_for {
-            s.clear();
-            s.extend_from_slice(rd);
+            s.keep(rd);
         }
     }
 }

@@ -64,6 +64,16 @@
 //! ([`efsi_core::bc`]). Unconditionally stable for θ ∈ [½, 1]; θ = 1 damps the stiff modes of a
 //! very viscous solid, θ = ½ is second-order in time.
 //!
+//! **Memory.** Between steps the stage keeps the warm start's two increments (two vectors of
+//! unknown faces) and the search direction's fields (one per axis, where the stencil reads
+//! it); the right-hand side, the diagonal and the solver's vectors are the pipeline's pool's
+//! (`scratch`). The coefficients are stored no larger than they vary (the operator's
+//! `Coefficients::compact`): with one viscosity everywhere (a scene of one fluid) off the
+//! axisymmetric geometry the cell coefficient and each shear pair's edge weight are one value
+//! each, and with one density the mass `dm` of every face is one value; the hoop term is
+//! stored in axisymmetric geometry only. Where the viscosity or the density varies, that
+//! array is made at the first step that needs it (the same values, so the same bits).
+//!
 //! **Boundaries.** The stage fills velocity ghosts through one trait (`VelocityGhosts`): the
 //! run's [`BoundarySet`] (z sides included on a three-dimensional grid), or, in the tests,
 //! the ghosts of a periodic or walled box.
@@ -71,7 +81,7 @@
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
 use crate::scratch::{self, Scratch};
-use crate::viscous_operator::Coefficients;
+use crate::viscous_operator::{Coefficients, Diag};
 use efsi_core::operators::{face_density, minus};
 use efsi_core::scene::{Options, OptionsDecl};
 use efsi_core::schedule::VELOCITY;
@@ -210,6 +220,9 @@ struct WarmStart {
     prev: [Vec<f64>; 2],
     prev_dt: [f64; 2],
     history: usize,
+    /// Steps remembered ([`WarmStart::remember`]) since the stage was built: tells
+    /// [`Stage::undo`] whether the step it undoes got that far.
+    remembered: u64,
 }
 
 /// Work vectors the stage takes from the pipeline's pool: the right-hand side, the diagonal,
@@ -244,10 +257,13 @@ struct ViscousSystem<B: VelocityGhosts = BoundarySet> {
     /// The boundary conditions, for the homogeneous ghosts of the search direction.
     bc: B,
     faces: UnknownFaces,
-    /// `θΔt K`'s coefficients.
+    /// `θΔt K`'s coefficients ([`Coefficients::compact`]).
     k: Coefficients,
-    /// `mass + hoop`: the diagonal of `M − θΔt K` without the stencil's part.
+    /// `mass + hoop`: the diagonal of `M − θΔt K` without the stencil's part, per unknown
+    /// face; or, with `dm_uniform`, one value for every face, as one line of it (a uniform
+    /// density without a hoop term). Sized at the first step that needs it.
     dm: Vec<f64>,
+    dm_uniform: bool,
     theta_dt: f64,
     /// One field per axis, where the products read their argument (the search direction of
     /// [`ViscousSystem::solve_jacobi`]).
@@ -257,13 +273,13 @@ struct ViscousSystem<B: VelocityGhosts = BoundarySet> {
 impl<B: VelocityGhosts> ViscousSystem<B> {
     /// The system of `grid` on its unknown `faces` under `bc`, coefficients zero.
     fn new(grid: &Grid, bc: B, faces: UnknownFaces) -> Self {
-        let n = faces.len();
         ViscousSystem {
             grid: grid.clone(),
             bc,
-            k: Coefficients::new(grid, faces),
+            k: Coefficients::compact(grid, faces),
             faces,
-            dm: vec![0.0; n],
+            dm: Vec::new(),
+            dm_uniform: false,
             theta_dt: 0.0,
             p: (0..grid.dims()).map(|_| Field::zeros(grid)).collect(),
         }
@@ -274,8 +290,35 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
     /// and the diagonal of the full matrix into `diag` (rows in parallel).
     fn assemble(&mut self, mu: &Field, rho: &Field, diag: &mut [f64]) {
         self.k.set_viscosity_weights(&self.grid, mu, self.theta_dt);
+        self.set_mass(rho);
+        self.k.diagonal(self.dm(), diag);
+    }
+
+    /// `dm`, the face masses plus the hoop term, from the cell densities `rho`: one value
+    /// where `rho` is uniform (ghosts included) and there is no hoop term — each face's mass
+    /// is then that of the first (the same two densities, radius factor one), and the hoop
+    /// term adds zero.
+    fn set_mass(&mut self, rho: &Field) {
         let (g, faces) = (&self.grid, &self.faces);
-        let hoops = faces.split(self.k.hoop());
+        let first = (0..g.dims()).find(|&a| !faces.region(a).is_empty());
+        let rd = rho.data();
+        let same = rd.iter().all(|x| x.to_bits() == rd[0].to_bits());
+        if let Some(a) = first.filter(|_| same && self.k.hoop_free()) {
+            let l = faces.region(a).line(0);
+            self.dm.resize(self.k.line_len().max(l.len), 0.0);
+            mass(g, a, &l, rho, &mut self.dm);
+            let one = self.dm[0];
+            self.dm.fill(one);
+            self.dm_uniform = true;
+            return;
+        }
+        self.dm.resize(faces.len(), 0.0);
+        self.dm_uniform = false;
+        let hoops = self.k.hoop_diag();
+        let (hoops, same) = match hoops {
+            Diag::Faces(h) => (faces.split(h), false),
+            Diag::Uniform(z) => ([z; 3], true),
+        };
         for (a, dm) in faces.split_mut(&mut self.dm).into_iter().enumerate() {
             let (r, hoop) = (faces.region(a), hoops[a]);
             if r.is_empty() {
@@ -284,12 +327,21 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
             par::rows(dm, r.len(0)).for_each(|n, dms| {
                 let l = r.line(n);
                 mass(g, a, &l, rho, dms);
-                for (dm, h) in dms.iter_mut().zip(&hoop[n * l.len..]) {
+                let hoop = if same { hoop } else { &hoop[n * l.len..] };
+                for (dm, h) in dms.iter_mut().zip(hoop) {
                     *dm += h;
                 }
             });
         }
-        self.k.diagonal(&self.dm, diag);
+    }
+
+    /// `dm` as the diagonal of a product ([`Diag`]).
+    fn dm(&self) -> Diag<'_> {
+        if self.dm_uniform {
+            Diag::Uniform(&self.dm)
+        } else {
+            Diag::Faces(&self.dm)
+        }
     }
 
     /// The largest ratio of `diag` to the face mass, `Auto`'s choice of preconditioner (the
@@ -339,7 +391,7 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
     fn product(&mut self, x: &[f64], y: &mut [f64]) -> f64 {
         self.faces.scatter_to(x, &mut self.p);
         self.fill_search_ghosts();
-        self.k.product(&self.p, &self.dm, Some(x), y)
+        self.k.product(&self.p, self.dm(), Some(x), y)
     }
 
     /// The homogeneous boundary ghosts of the fields `p`.
@@ -411,7 +463,7 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
         let mut it = 0;
         while it < max_iter {
             self.fill_search_ghosts();
-            let pq = self.k.product(&self.p, &self.dm, None, q);
+            let pq = self.k.product(&self.p, self.dm(), None, q);
             if pq <= 0.0 || !pq.is_finite() {
                 break;
             }
@@ -583,6 +635,7 @@ impl WarmStart {
         self.prev.swap(0, 1);
         self.prev_dt = [dt, self.prev_dt[0]];
         self.history = (self.history + 1).min(2);
+        self.remembered += 1;
     }
 }
 
@@ -611,6 +664,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
                 prev: [vec![0.0; n], vec![0.0; n]],
                 prev_dt: [0.0; 2],
                 history: 0,
+                remembered: 0,
             },
             blocks: None,
         }
@@ -634,7 +688,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
         };
         walls.fill(&self.op.grid, vel, when);
         let k = &self.op.k;
-        k.product(vel, k.hoop(), None, rhs);
+        k.product(vel, k.hoop_diag(), None, rhs);
         let scale = -1.0 / self.theta;
         par::chunks(&mut *rhs).for_each(|_, row| {
             row.iter_mut().for_each(|r| *r *= scale);
@@ -704,6 +758,53 @@ impl Stage for ViscousStage {
         for p in &w.prev[..w.history] {
             out.extend_from_slice(p);
         }
+    }
+
+    fn saved_len(&self) -> usize {
+        3 + self.warm.history * self.warm.prev[0].len()
+    }
+
+    /// `[remembered, count, Δt₁, Δt₂]`, then the older increment only: a step writes its guess
+    /// and its increment over that one (its guess reads it) and keeps the newer one, which it
+    /// only moves ([`WarmStart::remember`]).
+    fn keep_into(&self, out: &mut Vec<f64>) {
+        let w = &self.warm;
+        out.clear();
+        out.reserve(4 + w.prev[1].len());
+        out.extend_from_slice(&[
+            w.remembered as f64,
+            w.history as f64,
+            w.prev_dt[0],
+            w.prev_dt[1],
+        ]);
+        out.extend_from_slice(&w.prev[1]);
+    }
+
+    /// What [`keep_into`](Stage::keep_into) kept, back: the newer increment moved back if the
+    /// step remembered its own, the older one copied back.
+    fn undo(&mut self, kept: &[f64]) -> Result<(), String> {
+        let w = &mut self.warm;
+        let n = w.prev[1].len();
+        if kept.len() != 4 + n {
+            return Err(format!(
+                "expected the viscous warm start's start of step (4 and {n} values), got {} values",
+                kept.len()
+            ));
+        }
+        let remembered = kept[0] as u64;
+        if w.remembered == remembered + 1 {
+            w.prev.swap(0, 1);
+        } else if w.remembered != remembered {
+            return Err(format!(
+                "kept after {remembered} steps, undone after {}",
+                w.remembered
+            ));
+        }
+        w.remembered = remembered;
+        w.history = kept[1] as usize;
+        w.prev_dt = [kept[2], kept[3]];
+        w.prev[1].copy_from_slice(&kept[4..]);
+        Ok(())
     }
 
     /// Nothing (a snapshot without a history: the next solve starts from zero), or what
