@@ -213,6 +213,30 @@ fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     out
 }
 
+/// Two viscous disks thrown at each other (no law): the contact stage's repulsion acts across
+/// the checkpoint, which carries its stored energy (its step limit) and the bodies' windows.
+const TWO_DISKS: &str = r#"Scene(
+    name: "two_disks",
+    domain: (x: (0.0, 2.0), y: (0.0, 1.0)),
+    grid: (nx: 32, ny: 16),
+    time: (end: 0.3, cfl: 0.4),
+    fluid: (density: 1.0, viscosity: 0.001),
+    numerics: (projection: (tolerance: 1e-10)),
+    solids: [
+        (name: "left", shape: Disk(center: (0.7, 0.5), radius: 0.2), density: 20.0,
+         viscosity: 20.0, velocity: (2.0, 0.0)),
+        (name: "right", shape: Disk(center: (1.3, 0.5), radius: 0.2), density: 20.0,
+         viscosity: 20.0, velocity: (-2.0, 0.0)),
+    ],
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+    output: (
+        vtk_every: 0.1,
+        probe_every: 0.02,
+        probes: [SolidCentroid, SolidVelocity, SolidOverlap, BodyContact],
+    ),
+)
+"#;
+
 fn check_resumed_run(name: &str, text: &str, stop_at: u64, steps: u64) {
     let dir = scratch(name);
     let ((a, out_a), (b, first, second)) = run_twice(&dir, text, stop_at);
@@ -260,6 +284,11 @@ fn a_resumed_3d_drop_run_is_bit_identical_to_an_uninterrupted_one() {
 #[test]
 fn a_resumed_3d_elastic_run_is_bit_identical_to_an_uninterrupted_one() {
     check_resumed_run("sphere", SPHERE, 17, 30);
+}
+
+#[test]
+fn a_resumed_run_of_bodies_in_contact_is_bit_identical_to_an_uninterrupted_one() {
+    check_resumed_run("two_disks", TWO_DISKS, 30, 78);
 }
 
 #[test]

@@ -304,6 +304,7 @@ impl StagePlugin for Contact {
             halos: Vec::new(),
             spare: Vec::new(),
             near: Vec::new(),
+            energy: 0.0,
             updates: Vec::new(),
         }))
     }
@@ -421,6 +422,9 @@ struct ContactStage {
     near: Vec<usize>,
     /// The smoothing's second buffer.
     spare: Vec<f64>,
+    /// `E_c` as of the last step: the stage's record (snapshots and checkpoints carry it), which
+    /// it publishes in the state ([`ContactEnergy`]).
+    energy: f64,
     /// The last step's face forces `(axis, face, f_a)`.
     updates: Vec<(usize, [isize; 3], f64)>,
 }
@@ -617,6 +621,13 @@ impl ContactStage {
         (energy, updates)
     }
 
+    /// `E_c` into the state's [`ContactEnergy`].
+    fn publish(&self, state: &mut State) {
+        if let Some(e) = state.resources.get_mut::<ContactEnergy>() {
+            e.energy = self.energy;
+        }
+    }
+
     /// Into `near`, the bodies other than `k` whose halo boxes reach the box `support` grown by
     /// a cell (a periodic axis counts as reached).
     fn near_halos(
@@ -672,11 +683,32 @@ impl Stage for ContactStage {
         }
     }
 
+    fn save(&self) -> Vec<f64> {
+        vec![self.energy]
+    }
+
+    fn restore(&mut self, data: &[f64]) -> Result<(), String> {
+        match data {
+            [e] => {
+                self.energy = *e;
+                Ok(())
+            }
+            _ => Err(format!(
+                "expected 1 value (the stored contact energy), got {}",
+                data.len()
+            )),
+        }
+    }
+
+    /// The stored energy back in the state.
+    fn restored(&mut self, state: &mut State) {
+        self.publish(state);
+    }
+
     fn max_dt(&self, grid: &Grid, state: &State, cfl: f64) -> Option<f64> {
         // Only while the repulsion acts (it stored energy in the last step): a body entering a
         // halo in one step moves less than a cell into it, where the force is the kernel's tail.
-        let active = state.resources.get::<ContactEnergy>()?.energy > 0.0;
-        if !active {
+        if self.energy <= 0.0 {
             return None;
         }
         let (vel, dims) = crate::advection::velocity(grid, state);
@@ -695,9 +727,8 @@ impl Stage for ContactStage {
         };
         if !self.in_reach(all) {
             // No halo overlaps another body or a wall: no force, nothing stored.
-            if let Some(e) = state.resources.get_mut::<ContactEnergy>() {
-                e.energy = 0.0;
-            }
+            self.energy = 0.0;
+            self.publish(state);
             return Ok(StageStats::default());
         }
         if all.bodies.iter().any(|b| !b.is_set()) {
@@ -729,6 +760,7 @@ impl Stage for ContactStage {
         if let Some(e) = resources.get_mut::<ContactEnergy>() {
             e.energy = energy;
         }
+        self.energy = energy;
         self.updates = updates;
         Ok(StageStats::default())
     }
@@ -752,6 +784,7 @@ mod tests {
             halos: Vec::new(),
             spare: Vec::new(),
             near: Vec::new(),
+            energy: 0.0,
             updates: Vec::new(),
         }
     }
