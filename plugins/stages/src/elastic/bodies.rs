@@ -97,8 +97,9 @@ pub(super) fn viscosities_of(scene: &Scene, b: &ElasticBody) -> (f64, f64) {
     (scene.fluid.viscosity, b.solid.viscosity(&scene.fluid))
 }
 
-/// The deformations of the elastic bodies of a scene of several, in the order of
-/// [`elastic_bodies`]: each body's [`Deformation`] with its name.
+/// The deformations of the elastic bodies of a scene of several (the bodies with a law, in the
+/// scene's order): each body's [`Deformation`] with its name, saved in checkpoints and snapshots
+/// under the names `B.<body>.<part>.<c>`.
 #[derive(Clone, Debug)]
 pub struct BodyDeformations {
     /// The bodies' names.
