@@ -32,6 +32,10 @@ pub struct BodyFraction {
     /// `φ_k` on the window's cells, x fastest, then y, then z (`n[0]·n[1]·n[2]` values; none
     /// before the stage has set them).
     pub phi: Vec<f64>,
+    /// The body's strain energy `∫ w_k W_k(B_k) dV` at the last step's end (per radian in
+    /// axisymmetric geometry), set by the elastic stage for a body with a law; 0 for a body
+    /// without one (it stores none).
+    pub elastic_energy: f64,
 }
 
 impl BodyFraction {
@@ -142,6 +146,7 @@ impl StateResource for BodyFractions {
         }
         for (a, b) in self.bodies.iter_mut().zip(&other.bodies) {
             a.set(b.lo, b.n, b.phi.iter().copied());
+            a.elastic_energy = b.elastic_energy;
         }
         true
     }

@@ -400,7 +400,9 @@ fn moments(p: &Probed) -> Option<SolidMoments> {
 /// the grid) in place of the state's `Σ_k φ_k` — one column group per body, named as
 /// [`columns`] names them (NaN before the VOF stage has set the fractions). Otherwise, and for
 /// a scene of one body, once on the state's solid fraction. [`ProbeSpec::BodyContact`] reads
-/// the bodies' fractions pair by pair ([`body_contact`]).
+/// the bodies' fractions pair by pair ([`body_contact`]); [`ProbeSpec::ElasticEnergy`] per
+/// body each body's strain energy as the elastic stage records it beside its fraction
+/// ([`efsi_core::body_fractions::BodyFraction::elastic_energy`]).
 pub fn evaluate(
     p: &ProbeSpec,
     grid: &Grid,
@@ -425,6 +427,14 @@ pub fn evaluate(
     }
     match bodies.filter(|_| p.per_body()) {
         None => evaluate_on(p, &probed, out),
+        // Each body's own strain energy, as the elastic stage left it.
+        Some(all) if *p == ProbeSpec::ElasticEnergy => {
+            let each = |b: &efsi_core::body_fractions::BodyFraction| match b.is_set() {
+                true => b.elastic_energy,
+                false => f64::NAN,
+            };
+            out.extend(all.bodies.iter().map(each));
+        }
         Some(all) => {
             let mut phi = Field::zeros(grid);
             for b in &all.bodies {
@@ -1155,6 +1165,8 @@ mod tests {
         );
         let mut b = BodyFraction::named("b");
         b.set([3, 1, 0], [2, 2, 1], [0.25, 0.0, 0.5, 0.0].into_iter());
+        // Their strain energies as the elastic stage records them.
+        (a.elastic_energy, b.elastic_energy) = (0.5, 0.25);
         let all = BodyFractions { bodies: vec![a, b] };
         let phi = state.phi.as_mut().unwrap();
         for body in &all.bodies {
@@ -1209,6 +1221,12 @@ mod tests {
             ["a.b.shared_volume", "a.b.shared_cells"]
         );
         assert_eq!(cols(ProbeSpec::KineticEnergy), ["kinetic_energy"]);
+        // Each body's own strain energy.
+        assert_eq!(
+            cols(ProbeSpec::ElasticEnergy),
+            ["a.elastic_energy", "b.elastic_energy"]
+        );
+        assert_eq!(values(&ProbeSpec::ElasticEnergy), vec![0.5, 0.25]);
         // Without names (the single `solid:`), the columns are the unprefixed ones.
         assert_eq!(
             columns(&ProbeSpec::SolidCentroid, planar, &[]),

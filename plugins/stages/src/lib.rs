@@ -33,7 +33,7 @@ pub(crate) fn second_material(scene: &efsi_core::Scene) -> bool {
 /// ([`elastic::Momentum`]: the elastic solve, the projection and the deformation update as its
 /// sub-steps), else the [`projection`] stage's.
 pub(crate) fn elastic_solid(options: &efsi_core::scene::Options) -> bool {
-    solid::solid(options).is_ok_and(|s| s.law.is_some())
+    elastic::any_elastic(options)
 }
 
 /// Whether a checked scene (`options`) runs the incremental pressure correction (its predictor

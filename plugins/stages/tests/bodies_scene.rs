@@ -196,9 +196,10 @@ fn a_scene_of_bodies_is_refused_naming_the_body_and_the_setting() {
             list(&[A, &B.replace("3.0)", "-3.0)")]),
             &["solids[1].density", "body \"b\""],
         ),
+        // A body's law is loaded as its own: a missing library is named by the body's path.
         (
-            list(&[A, &law]),
-            &["solids[1].law", "issue 42", "per-body deformation"],
+            list(&[A, &law.replace("neo_hookean", "no_such_law_xyz")]),
+            &["solids[1].law", "no_such_law_xyz"],
         ),
         // A misspelt setting: the message lists a body's settings (`solid:` without a name).
         (

@@ -12,7 +12,6 @@ use efsi_core::Geometry;
 use efsi_core::error::EfsiError;
 use efsi_core::scene::bodies::SceneBodies;
 use efsi_core::scene::solid::Axis;
-use efsi_core::scene::solid::SceneSolid;
 use efsi_core::scene::{MAX_EVENTS, Scene, Section, Side, TimeSpec, Vector, num};
 use efsi_core::validate::{Checked, err, positive};
 use efsi_core::{OutputKind, Pipeline};
@@ -174,7 +173,9 @@ pub enum ProbeSpec {
     /// Volume-weighted solid velocity `∫φ_s u dV / ∫φ_s dV`; columns `solid_u`, `solid_v`.
     SolidVelocity,
     /// Elastic (strain) energy stored in the solid, `∫ W(B̃) dV` from the law (per radian in
-    /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law.
+    /// axisymmetric geometry); column `elastic_energy`. Needs a solid with a law (a body with
+    /// one, among several). In a scene of several bodies, each body's own
+    /// (`<body>.elastic_energy`; 0 for a body without a law).
     ElasticEnergy,
     /// The normal force the solid presses on a wall with: `∫ (p − p_a − τ_nn) dA` over the
     /// wall's *contact cells*, per radian in axisymmetric geometry (×2π for the whole body);
@@ -294,11 +295,13 @@ impl ProbeSpec {
 
     /// Whether the probe is a property of one body ([`crate::probes::evaluate`] evaluates it
     /// per body in a scene of several): the solid's volume, centroid, velocity, pieces, spin,
-    /// contact force and radius, and extent. Not the whole scene's quantities, nor a stage's
-    /// (`elastic_energy`), nor a point's value.
+    /// contact force and radius, extent, and strain energy (`ElasticEnergy`: each body's own,
+    /// 0 for a body without a law). Not the whole scene's quantities, nor another stage's, nor
+    /// a point's value.
     pub fn per_body(&self) -> bool {
         match self {
-            ProbeSpec::ContactForce { .. }
+            ProbeSpec::ElasticEnergy
+            | ProbeSpec::ContactForce { .. }
             | ProbeSpec::ContactRadius { .. }
             | ProbeSpec::SolidExtent { .. } => true,
             p => p
@@ -585,8 +588,8 @@ fn validate_probes(o: &OutputSpec, scene: &Scene, space: &Space<'_>) -> Checked 
         [("t".to_string(), usize::MAX)].into_iter().collect();
     let bodies = crate::probes::body_names(scene);
     let has_law = scene
-        .solid_spec()
-        .is_ok_and(|s| s.is_some_and(|s| s.law.is_some()));
+        .bodies_spec()
+        .is_ok_and(|b| b.is_some_and(|b| b.list.iter().any(|b| b.solid.law.is_some())));
     for (k, probe) in o.probes.iter().enumerate() {
         let f = format!("output.probes[{k}]");
         if let Some(why) = probe.refused_in(scene.geometry) {

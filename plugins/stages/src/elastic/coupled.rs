@@ -277,7 +277,7 @@ impl LinearOperator for Saddle<'_> {
         let vel = super::velocity(&*self.a.xu, &*self.a.xv, self.a.xw.as_deref());
         outflux_per_volume(g, &vel, self.dt_vol, om, yc);
         to_field(g, self.bc, xp, self.q);
-        add_gradient(&self.a.op.k.faces, g, self.q, self.dt, yu);
+        add_gradient(&self.a.op.ks[0].faces, g, self.q, self.dt, yu);
     }
 }
 
@@ -357,7 +357,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &super::Deformation,
+        d: &[super::Deformation],
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {
@@ -374,7 +374,7 @@ impl ElasticStage {
         cp: &mut Coupling,
         ctx: &StepContext,
         state: &mut State,
-        d: &super::Deformation,
+        d: &[super::Deformation],
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {
@@ -448,9 +448,9 @@ impl ElasticStage {
         match sc.xw.as_mut() {
             Some(xw) => {
                 let vel = &mut [&mut sc.xu, &mut sc.xv, xw];
-                self.op.k.faces.scatter_to(&cp.ru, vel);
+                self.op.ks[0].faces.scatter_to(&cp.ru, vel);
             }
-            None => self.op.k.faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv),
+            None => self.op.ks[0].faces.scatter(&cp.ru, &mut sc.xu, &mut sc.xv),
         }
         bc.fill_velocity3(g, &mut sc.xu, &mut sc.xv, sc.xw.as_mut(), 0.0, true);
         let vel = super::velocity(&sc.xu, &sc.xv, sc.xw.as_ref());
@@ -465,7 +465,7 @@ impl ElasticStage {
         &mut self,
         cp: &mut Coupling,
         ctx: &StepContext,
-        d: &super::Deformation,
+        d: &[super::Deformation],
         tols: &Targets,
     ) -> (SolveStats, (f64, f64)) {
         let (g, bc, dt) = (ctx.grid, ctx.bc, ctx.dt);
@@ -481,7 +481,7 @@ impl ElasticStage {
             q: &mut cp.q,
             nf,
         };
-        let faces = saddle.a.op.k.faces;
+        let faces = saddle.a.op.ks[0].faces;
         let mut pre = BlockTriangular {
             a: match self.scheme.preconditioner {
                 ElasticPreconditioner::Jacobi => VelocityBlock::Jacobi(&self.diag),
@@ -572,7 +572,7 @@ impl ElasticStage {
     fn apply(&self, cp: &Coupling, g: &Grid, bc: &BoundarySet, state: &mut State) {
         let nf = self.delta.len();
         let (delta, p) = cp.x.split_at(nf);
-        let faces = &self.op.k.faces;
+        let faces = &self.op.ks[0].faces;
         match state.w.as_mut() {
             Some(w) => faces.add(delta, &mut [&mut state.u, &mut state.v, w]),
             None => faces.add(delta, &mut [&mut state.u, &mut state.v]),

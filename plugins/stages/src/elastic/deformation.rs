@@ -9,8 +9,12 @@ use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
 
 pub(super) struct DeformationStage {
-    pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
-    pub(super) k: Kernels,
+    /// The elastic bodies (one: the single solid), each one's law and kernels, in order.
+    pub(super) bodies: Vec<super::bodies::ElasticBody>,
+    pub(super) laws: Vec<std::sync::Arc<dyn ConstitutiveLaw>>,
+    pub(super) ks: Vec<Kernels>,
+    /// Each body's fraction (the state's own for the single solid).
+    pub(super) phis: super::bodies::Fractions,
     /// θ of B's stretching (`numerics.elastic.theta`) in a split step and in a coupled one.
     pub(super) thetas: [f64; 2],
     /// `numerics.elastic.coupling` (`Split` where the scene cannot couple).
@@ -27,9 +31,7 @@ pub(super) struct DeformationStage {
 impl DeformationStage {
     /// B and its history, shared with the elastic sub-step ([`Deformation`](super::Deformation)).
     pub(super) fn init_state(&self, grid: &Grid, state: &mut State) {
-        if state.resources.get::<super::Deformation>().is_none() {
-            state.resources.insert(super::Deformation::zeros(grid));
-        }
+        super::bodies::init_state(&self.bodies, grid, state);
     }
 
     /// The split step's wave limit, or the coupled step's with `Coupled`.
@@ -57,10 +59,10 @@ impl DeformationStage {
         if !lifted {
             return None;
         }
-        let strain = state
-            .resources
-            .get::<super::Deformation>()
-            .map_or(0.0, |d| d.elastic_energy);
+        let strain = super::bodies::deformations(state)
+            .iter()
+            .map(|d| d.elastic_energy)
+            .sum::<f64>();
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let kinetic = kinetic_energy(grid, &vel, &state.rho);
         (strain <= AUTO_STRAIN_SHARE * kinetic && !self.near_wall(grid, state, self.limits.coupled))
@@ -74,29 +76,47 @@ impl DeformationStage {
         state: &mut State,
         coupled: bool,
     ) -> Result<StageStats, StageError> {
-        let d = state
-            .resources
-            .get_mut::<super::Deformation>()
-            .ok_or_else(missing)?;
-        let k = &mut self.k;
+        let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
+        let r = self.update_held(ctx, state, held.all(), coupled);
+        held.put(state);
+        super::bodies::record_energies(&self.bodies, state);
+        r
+    }
+
+    /// [`run`](Self::run) on the bodies' deformations `ds`, held outside the state: each
+    /// body's update with its own weights, then its stress and strain energy.
+    fn update_held(
+        &mut self,
+        ctx: &StepContext,
+        state: &State,
+        ds: &mut [super::Deformation],
+        coupled: bool,
+    ) -> Result<StageStats, StageError> {
         let phi = state
             .phi
             .as_ref()
             .ok_or_else(|| err("deformation", "the solid fraction is not allocated".into()))?;
-        k.set_weights(phi);
+        let k0 = &self.ks[0];
+        self.phis
+            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .map_err(|m| err("deformation", m))?;
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
         // The Picard pass, except in a coupled step beyond the split step's wave limit, which
         // ends with B̃^{n+1} = B̃(V^{n+1}), the tensor its implicit stiffness was solved with
         // (see the module docs).
         let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
-        k.update(&vel, d, &mut self.first, a, picard);
-        // The end-of-step stress and the elastic energy.
-        k.evaluate(self.law.as_ref(), &d.b, &mut d.stress, false)
-            .map_err(|m| err("deformation", m))?;
-        d.elastic_energy = k
-            .strain_energy(self.law.as_ref(), &d.b)
-            .map_err(|m| err("deformation", m))?;
+        let parts = self.ks.iter_mut().zip(ds.iter_mut()).zip(&self.laws);
+        for (n, ((k, d), law)) in parts.enumerate() {
+            k.set_weights(self.phis.of(n, phi));
+            k.update(&vel, d, &mut self.first, a, picard);
+            // The end-of-step stress and the elastic energy.
+            k.evaluate(law.as_ref(), &d.b, &mut d.stress, false)
+                .map_err(|m| err("deformation", m))?;
+            d.elastic_energy = k
+                .strain_energy(law.as_ref(), &d.b)
+                .map_err(|m| err("deformation", m))?;
+        }
         Ok(StageStats::default())
     }
 
@@ -108,8 +128,11 @@ impl DeformationStage {
         };
         let (n, h, dims) = (grid.n().map(|n| n as isize), grid.h(), grid.dims());
         let last = |a: usize| if a < dims { n[a] - 1 } else { 0 };
-        // The solid's cells as of the last update; before the first one, every cell.
-        let c = match self.k.solid_c {
+        // The solids' cells as of the last update; before the first one, every cell.
+        let solid = self.ks[1..]
+            .iter()
+            .fold(self.ks[0].solid_c, |c, k| c.union(k.solid_c));
+        let c = match solid {
             c if c.points() > 0 => c,
             _ => super::Window::boxed([0; 3], std::array::from_fn(last)),
         };

@@ -44,3 +44,52 @@ pub(super) fn shared_law(
         .get_or_try_insert_with(|| resolve_law(scene, options).map(|l| SharedLaw(l.into())))?;
     Ok(law.0.clone())
 }
+
+/// The laws of the elastic bodies of a scene of several, one per body in the order of
+/// [`super::bodies::elastic_bodies`], loaded and checked once per pipeline.
+struct SharedLaws(Vec<std::sync::Arc<dyn ConstitutiveLaw>>);
+
+/// The law of each elastic body of `bodies`: the single solid's [`shared_law`], or each body's
+/// own (its `solids[k].law`), loaded by the first stage that asks.
+pub(super) fn shared_laws(
+    scene: &Scene,
+    options: &Options,
+    bodies: &[super::bodies::ElasticBody],
+    shared: &mut efsi_core::Resources,
+) -> Result<Vec<std::sync::Arc<dyn ConstitutiveLaw>>, String> {
+    if bodies.len() == 1 && bodies[0].index.is_none() {
+        return Ok(vec![shared_law(scene, options, shared)?]);
+    }
+    let laws = shared.get_or_try_insert_with(|| {
+        bodies
+            .iter()
+            .map(|b| body_law(scene, b).map(std::sync::Arc::from))
+            .collect::<Result<Vec<_>, String>>()
+            .map(SharedLaws)
+    })?;
+    Ok(laws.0.clone())
+}
+
+/// The law of one body of several, through the loader as [`resolve_law`]'s.
+fn body_law(
+    scene: &Scene,
+    b: &super::bodies::ElasticBody,
+) -> Result<Box<dyn ConstitutiveLaw>, String> {
+    let spec = b
+        .solid
+        .law
+        .as_ref()
+        .ok_or_else(|| format!("{}: the body has no law", b.path))?;
+    let dir = scene
+        .source_dir
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from("."));
+    let load = if scene.geometry == efsi_core::Geometry::Cartesian3D {
+        efsi_laws_host::load_law_3d
+    } else {
+        efsi_laws_host::load_law
+    };
+    let law =
+        load(&spec.name, &spec.parameters, &dir).map_err(|e| format!("{}.law: {e}", b.path))?;
+    Ok(Box::new(law))
+}

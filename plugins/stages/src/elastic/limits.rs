@@ -31,23 +31,39 @@ pub(super) struct WaveLimits {
     pub(super) wave_step: f64,
 }
 
-/// The scene's [`WaveLimits`], worked out once per pipeline and shared by the elastic and
-/// deformation sub-steps.
+/// The [`WaveLimits`] of the scene's elastic bodies (`laws` theirs, in order), worked out once
+/// per pipeline and shared by the elastic and deformation sub-steps: each body's limits
+/// ([`wave_limit_of`]), the smallest of each over the bodies (the fastest wave caps the step).
 pub(super) fn shared_wave_limits(
     scene: &Scene,
     options: &Options,
     grid: &Grid,
-    law: &dyn ConstitutiveLaw,
+    bodies: &[super::bodies::ElasticBody],
+    laws: &[std::sync::Arc<dyn ConstitutiveLaw>],
     shared: &mut efsi_core::Resources,
 ) -> Result<WaveLimits, String> {
     shared
-        .get_or_try_insert_with(|| wave_limit(scene, options, grid, law))
+        .get_or_try_insert_with(|| {
+            let mut all = bodies.iter().zip(laws).map(|(b, law)| {
+                wave_limit_of(scene, options, grid, law.as_ref(), &b.solid, &b.path)
+            });
+            let first = all.next().ok_or("the scene has no elastic body")??;
+            all.try_fold(first, |m, l| {
+                let l = l?;
+                Ok::<_, String>(WaveLimits {
+                    split: m.split.min(l.split),
+                    coupled: m.coupled.min(l.coupled),
+                    wave_step: m.wave_step.min(l.wave_step),
+                })
+            })
+        })
         .copied()
 }
 
 /// The [`WaveLimits`]. A `time.fixed_dt` above the larger one is refused here, before the run
 /// starts, naming the limit and what to change; so is a solid narrower than
 /// [`MIN_CELLS_ACROSS`].
+#[cfg(test)]
 pub(super) fn wave_limit(
     scene: &Scene,
     options: &Options,
@@ -55,15 +71,27 @@ pub(super) fn wave_limit(
     law: &dyn ConstitutiveLaw,
 ) -> Result<WaveLimits, String> {
     let solid = crate::solid::solid(options)?;
+    wave_limit_of(scene, options, grid, law, solid, "solid")
+}
+
+/// The [`WaveLimits`] of the body `solid` (its settings at `path`: `solid`, `solids[1]`).
+fn wave_limit_of(
+    scene: &Scene,
+    options: &Options,
+    grid: &Grid,
+    law: &dyn ConstitutiveLaw,
+    solid: &crate::solid::Solid,
+    path: &str,
+) -> Result<WaveLimits, String> {
     let m = super::Deformation::components(grid);
     let (mut b, mut tau, mut tangent) = ([0.0; 6], [0.0; 6], [0.0; 36]);
     b[..3].fill(1.0);
     super::stress::eval(law, m, &b[..m], &mut tau[..m], Some(&mut tangent[..m * m]))
-        .map_err(|e| format!("solid.law: at rest (B = I): {e}"))?;
+        .map_err(|e| format!("{path}.law: at rest (B = I): {e}"))?;
     let shear = tangent[3 * (m + 1)];
     if shear.is_nan() || shear <= 0.0 {
         return Err(format!(
-            "solid.law: its shear stiffness at rest (∂τ₁₂/∂B̃₁₂ at B̃ = I) is {shear:e} Pa, not \
+            "{path}.law: its shear stiffness at rest (∂τ₁₂/∂B̃₁₂ at B̃ = I) is {shear:e} Pa, not \
              positive: the material has no stable rest state (for Mooney–Rivlin, C1 + C2 must \
              be > 0)"
         ));
@@ -73,7 +101,7 @@ pub(super) fn wave_limit(
         .fold(0.0, f64::max);
     if !(g0.is_finite() && g0 > 0.0) {
         return Err(format!(
-            "solid.law: its stiffness at rest (the tangent's diagonal at B = I) is {g0}, not a \
+            "{path}.law: its stiffness at rest (the tangent's diagonal at B = I) is {g0}, not a \
              positive number"
         ));
     }
@@ -83,7 +111,7 @@ pub(super) fn wave_limit(
         // The staircase estimate of the width is within 8 % for a disk 3 cells across or more.
         if width / h < 0.9 * MIN_CELLS_ACROSS {
             return Err(format!(
-                "solid.shape: the solid is {:.1} cells across (its section's hydraulic diameter \
+                "{path}.shape: the solid is {:.1} cells across (its section's hydraulic diameter \
                  4A/P = {width:.4e} m over cells of {h:.4e} m); an elastic solid needs at least \
                  {MIN_CELLS_ACROSS} (narrower ones were measured to gain up to 12 % of their \
                  impact energy, `cargo xtask bench-paper --case stability`): refine the grid \

@@ -230,6 +230,16 @@
 //! sheared along `(cos 30°, 0, sin 30°)` (`cases/oscillating_couette_3d.ron`) gives the planar
 //! error along the wall's motion (`tests/tests/couette_3d.rs`).
 //!
+//! # Several bodies
+//!
+//! In a scene of several bodies each body with a law keeps its own B (weighted by its own
+//! fraction `φ_k`, reset to the identity outside it), its own law and its own interface
+//! weights; everything above holds per body, and the bodies' stresses and tangents add: the
+//! right-hand side is `Δt·vol·∇·Σ_k τ_k`, the implicit operator `Σ_k K_J,k` (each body's
+//! increment stretched by its own `B_kⁿ`), the preconditioners' stiffness the sum of the
+//! bodies'. The `bodies` module holds the rule, the storage ([`BodyDeformations`]) and the
+//! limits. A scene of one body runs exactly the single body's arithmetic.
+//!
 //! # Solve
 //!
 //! BiCGSTAB (van der Vorst 1992), right-preconditioned (`numerics.elastic.preconditioner`):
@@ -276,9 +286,10 @@
 
 use crate::faces::UnknownFaces;
 use crate::viscous_operator::{SHEAR, shear_pairs};
-use efsi_core::scene::{Boundary, Options, Side};
-use efsi_core::{BoundarySet, Field, FieldId, Grid, Index, Region, Scene, StageError};
+use efsi_core::scene::{Boundary, Side};
+use efsi_core::{BoundarySet, Field, FieldId, Grid, Index, Region, StageError};
 
+mod bodies;
 mod choice;
 mod coupled;
 mod deformation;
@@ -297,6 +308,8 @@ mod tests;
 mod transport;
 mod window;
 
+pub use bodies::BodyDeformations;
+pub(crate) use bodies::any_elastic;
 pub(crate) use choice::may_couple;
 use choice::{StepScheme, coupled_step, coupling};
 pub use law::resolve_law;
@@ -312,13 +325,6 @@ use window::{Four, Window, cells_of_edge, edges_of_cell, plus};
 
 /// The field the elastic stages own: the solid's tensor B and its history ([`Deformation`]).
 pub const B: FieldId = FieldId::Stage("B");
-
-/// The fluid's and the solid's viscosities, for the interface corners.
-fn viscosities(scene: &Scene, options: &Options) -> (f64, f64) {
-    let mu_f = scene.fluid.viscosity;
-    let mu_s = crate::solid::solid(options).map_or(mu_f, |s| s.viscosity(&scene.fluid));
-    (mu_f, mu_s)
-}
 
 /// Velocity gradients, stretching, advection, law batches and stress divergence on the
 /// staggered layout.

@@ -25,13 +25,14 @@
 //! coupled step will complete), and the run starts from the hydrostatic pressure in the
 //! incremental scheme and with `Coupled`.
 
+use super::bodies::{ElasticBody, Fractions, elastic_bodies, viscosities_of};
 use super::choice::{StepScheme, may_couple};
 use super::coupling;
 use super::deformation::DeformationStage;
-use super::law::shared_law;
+use super::law::shared_laws;
 use super::limits::shared_wave_limits;
 use super::solve::{ElasticOperator, ElasticStage, Scratch};
-use super::{B, ElasticCoupling, ElasticOptions, ElasticPreconditioner, Kernels, viscosities};
+use super::{B, ElasticCoupling, ElasticOptions, ElasticPreconditioner, Kernels};
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
 use crate::projection::{self, Projector};
@@ -159,12 +160,12 @@ fn elastic_stage(
     bc: &BoundarySet,
     shared: &mut efsi_core::Resources,
 ) -> Result<ElasticStage, String> {
-    let law = shared_law(scene, options, shared)?;
-    let (mu_f, mu_s) = viscosities(scene, options);
-    let k = Kernels::new(grid, bc, mu_f, mu_s);
-    let n = k.faces.len();
+    let bodies = elastic_bodies(options)?;
+    let laws = shared_laws(scene, options, &bodies, shared)?;
+    let ks = kernels(scene, grid, bc, &bodies);
+    let n = ks[0].faces.len();
     let o: &ElasticOptions = options.section()?;
-    let limits = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?;
+    let limits = shared_wave_limits(scene, options, grid, &bodies, &laws, shared)?;
     let periodic = Side::of(grid.dims())
         .iter()
         .any(|&s| matches!(scene.boundaries.get(s), Boundary::Periodic));
@@ -185,16 +186,18 @@ fn elastic_stage(
     let fields = |n: usize| (0..n).map(|_| Field::zeros(grid)).collect::<Vec<_>>();
     let tensor = || fields(super::Deformation::components(grid));
     let edges = || fields(super::Deformation::components(grid) - 3);
+    let per_body = || bodies.iter().map(|_| tensor()).collect::<Vec<_>>();
     Ok(ElasticStage {
         mode: coupling(options),
         split_dt: limits.split,
         wave_step: limits.wave_step,
         options: o.clone(),
-        law,
-        tau: tensor(),
-        tau_n: tensor(),
+        phis: Fractions::new(&bodies, grid),
+        laws,
+        tau: per_body(),
+        tau_n: per_body(),
         op: ElasticOperator {
-            k,
+            ks,
             db: tensor(),
             mass: vec![0.0; n],
             c: 0.0,
@@ -224,10 +227,22 @@ fn elastic_stage(
             xu: Field::zeros(grid),
             xv: Field::zeros(grid),
             xw: grid.is_3d().then(|| Field::zeros(grid)),
-            dtau: tensor(),
+            dtau: per_body(),
         },
         coupling: coupled_work,
+        bodies,
     })
+}
+
+/// One set of kernels per elastic body, each with its own solid viscosity.
+fn kernels(scene: &Scene, grid: &Grid, bc: &BoundarySet, bodies: &[ElasticBody]) -> Vec<Kernels> {
+    bodies
+        .iter()
+        .map(|b| {
+            let (mu_f, mu_s) = viscosities_of(scene, b);
+            Kernels::new(grid, bc, mu_f, mu_s)
+        })
+        .collect()
 }
 
 /// The split (`coupled` false) or coupled step's scheme from the options; `periodic` if the
@@ -269,13 +284,14 @@ fn deformation_stage(
     bc: &BoundarySet,
     shared: &mut efsi_core::Resources,
 ) -> Result<DeformationStage, String> {
-    let (mu_f, mu_s) = viscosities(scene, options);
-    let law = shared_law(scene, options, shared)?;
+    let bodies = elastic_bodies(options)?;
+    let laws = shared_laws(scene, options, &bodies, shared)?;
     let o: &ElasticOptions = options.section()?;
-    let limits = shared_wave_limits(scene, options, grid, law.as_ref(), shared)?;
+    let limits = shared_wave_limits(scene, options, grid, &bodies, &laws, shared)?;
     Ok(DeformationStage {
-        law,
-        k: Kernels::new(grid, bc, mu_f, mu_s),
+        laws,
+        ks: kernels(scene, grid, bc, &bodies),
+        phis: Fractions::new(&bodies, grid),
         mode: coupling(options),
         limits,
         walls: Side::of(grid.dims())
@@ -294,6 +310,7 @@ fn deformation_stage(
         first: (0..super::Deformation::components(grid))
             .map(|_| Field::zeros(grid))
             .collect(),
+        bodies,
     })
 }
 

@@ -1,8 +1,11 @@
 //! The implicit-momentum stage's outputs ([`StagePlugin::outputs`](efsi_core::StagePlugin::outputs)):
 //! the VTK arrays `B` (B̃ = φ^{1/2} B) and `stress` (the elastic extra stress), and the probe
-//! quantity `elastic_energy`, all from the [`Deformation`] resource.
+//! quantity `elastic_energy`, all from the [`Deformation`] resource — in a scene of several
+//! bodies from each elastic body's ([`super::BodyDeformations`]), summed over the bodies:
+//! `B̃ = Σ_k φ_k^{1/2} B_k`, the stress `Σ_k τ_k`, the energy `Σ_k ∫ w_k W_k dV`.
 
-use super::Deformation;
+use super::bodies::{BodyDeformations, deformations};
+use efsi_core::body_fractions::BodyFractions;
 use efsi_core::{Field, Geometry, Grid, OutputDecl, OutputKind, Region, Stagger, State};
 
 /// What the elastic plugin contributes.
@@ -18,8 +21,21 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
                 Geometry::Cartesian3D => vec!["B̃xx", "B̃yy", "B̃zz", "B̃xy", "B̃yz", "B̃xz"],
             },
             values: |grid, state| {
-                let d = state.resources.get::<Deformation>()?;
-                Some(tensor(grid, &d.b, Some(state.phi.as_ref()?)))
+                let phi = state.phi.as_ref()?;
+                let Some(many) = state.resources.get::<BodyDeformations>() else {
+                    let d = deformations(state).first()?;
+                    return Some(tensor(grid, &d.b, Some(phi)));
+                };
+                // Each body's B weighted by its own fraction, summed.
+                let all = state.resources.get::<BodyFractions>()?;
+                let mut f = efsi_core::Field::zeros(grid);
+                let mut out = vec![0.0; 6 * grid.cells()];
+                for (name, d) in many.names.iter().zip(&many.bodies) {
+                    let b = all.bodies.iter().find(|b| &b.name == name)?;
+                    b.fill(&mut f);
+                    add(&mut out, &tensor(grid, &d.b, Some(&f)));
+                }
+                Some(out)
             },
         },
     },
@@ -35,11 +51,12 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
             },
             values: |grid, state| {
                 state.phi.as_ref()?;
-                Some(tensor(
-                    grid,
-                    &state.resources.get::<Deformation>()?.stress,
-                    None,
-                ))
+                let ds = deformations(state);
+                let mut out = tensor(grid, &ds.first()?.stress, None);
+                for d in ds.iter().skip(1) {
+                    add(&mut out, &tensor(grid, &d.stress, None));
+                }
+                Some(out)
             },
         },
     },
@@ -51,12 +68,19 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
     },
 ];
 
-/// The strain energy of the last step's end (NaN without the resource).
+/// The strain energy of the last step's end, summed over the elastic bodies (NaN without the
+/// resource).
 fn elastic_energy(_grid: &Grid, state: &State) -> f64 {
-    state
-        .resources
-        .get::<Deformation>()
-        .map_or(f64::NAN, |d| d.elastic_energy)
+    let ds = deformations(state);
+    let first = ds.first().map_or(f64::NAN, |d| d.elastic_energy);
+    ds.iter().skip(1).fold(first, |e, d| e + d.elastic_energy)
+}
+
+/// `out += t`.
+fn add(out: &mut [f64], t: &[f64]) {
+    for (o, t) in out.iter_mut().zip(t) {
+        *o += t;
+    }
 }
 
 /// A staggered tensor (11, 22, 33 at centres, each shear on the edges of its pair) at the cell

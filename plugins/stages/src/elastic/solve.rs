@@ -12,7 +12,11 @@ use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
 
 pub(super) struct ElasticStage {
-    pub(super) law: std::sync::Arc<dyn ConstitutiveLaw>,
+    /// The elastic bodies (one: the single solid) and each one's law, in order.
+    pub(super) bodies: Vec<super::bodies::ElasticBody>,
+    pub(super) laws: Vec<std::sync::Arc<dyn ConstitutiveLaw>>,
+    /// Each body's fraction (the state's own for the single solid).
+    pub(super) phis: super::bodies::Fractions,
     /// θ of the viscous step, whose implicit operator joins the elastic system (0 if inviscid).
     pub(super) theta: f64,
     /// This step's scheme: θ of B's stretching (`numerics.elastic.theta`; 0.5: Crank–Nicolson
@@ -30,10 +34,11 @@ pub(super) struct ElasticStage {
     /// ([`super::ElasticOptions::split_stress_weight`]).
     pub(super) wave_step: f64,
     pub(super) options: super::ElasticOptions,
-    pub(super) tau: Vec<Field>,
-    /// τ(Bⁿ) with this step's weights: the old-time stress of a step whose stress weight α is
-    /// below 1 (evaluated only then).
-    pub(super) tau_n: Vec<Field>,
+    /// Per body, `τ^{n+1/3}`.
+    pub(super) tau: Vec<Vec<Field>>,
+    /// Per body, τ(Bⁿ) with this step's weights: the old-time stress of a step whose stress
+    /// weight α is below 1 (evaluated only then).
+    pub(super) tau_n: Vec<Vec<Field>>,
     pub(super) op: ElasticOperator,
     pub(super) rhs: Vec<f64>,
     pub(super) delta: Vec<f64>,
@@ -60,17 +65,19 @@ pub(super) struct ElasticStage {
 }
 
 /// The elastic operator's work space: the increment as fields (`xw` on a three-dimensional
-/// grid only), and Δτ (zero outside the solid).
+/// grid only), and per body Δτ (zero outside its solid).
 pub(super) struct Scratch {
     pub(super) xu: Field,
     pub(super) xv: Field,
     pub(super) xw: Option<Field>,
-    pub(super) dtau: Vec<Field>,
+    pub(super) dtau: Vec<Vec<Field>>,
 }
 
-/// `y = M x − θΔt K_v x − (Δt²/2) vol ∇·(J : H(x; B̃ⁿ))` on the compact unknown faces.
+/// `y = M x − θΔt K_v x − (Δt²/2) Σ_k vol ∇·(J_k : H(x; B̃_kⁿ))` on the compact unknown
+/// faces, summed over the elastic bodies.
 pub(super) struct ElasticOperator {
-    pub(super) k: Kernels,
+    /// Each elastic body's kernels (the unknown faces, grid and sides the same in all).
+    pub(super) ks: Vec<Kernels>,
     pub(super) db: Vec<Field>,
     pub(super) mass: Vec<f64>,
     /// `Δt²/2`.
@@ -90,25 +97,24 @@ pub(super) struct ElasticOperator {
 /// [`apply`](LinearOperator::apply), `xu`, `xv` (and `xw`) hold `x` scattered, ghosts filled.
 pub(super) struct OperatorCtx<'a> {
     pub(super) op: &'a mut ElasticOperator,
-    pub(super) start: &'a [Field],
-    pub(super) relax: &'a [Field],
+    /// The bodies' deformations (their `start` and `relax`), in the order of `op.ks`.
+    pub(super) d: &'a [super::Deformation],
     pub(super) xu: &'a mut Field,
     pub(super) xv: &'a mut Field,
     pub(super) xw: Option<&'a mut Field>,
-    pub(super) dtau: &'a mut [Field],
+    pub(super) dtau: &'a mut [Vec<Field>],
 }
 
 impl<'a> OperatorCtx<'a> {
-    /// The operator of this step's deformation `d`, working in `scratch`.
+    /// The operator of this step's deformations `d` (one per body), working in `scratch`.
     pub(super) fn new(
         op: &'a mut ElasticOperator,
         scratch: &'a mut Scratch,
-        d: &'a super::Deformation,
+        d: &'a [super::Deformation],
     ) -> Self {
         OperatorCtx {
             op,
-            start: &d.start,
-            relax: &d.relax,
+            d,
             xu: &mut scratch.xu,
             xv: &mut scratch.xv,
             xw: scratch.xw.as_mut(),
@@ -122,21 +128,24 @@ impl LinearOperator for OperatorCtx<'_> {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
         let mut xw = self.xw.as_deref_mut();
+        let k0 = &op.ks[0];
         match xw.as_deref_mut() {
-            Some(xw) => op.k.faces.scatter_to(x, &mut [&mut *xu, &mut *xv, xw]),
-            None => op.k.faces.scatter(x, xu, xv),
+            Some(xw) => k0.faces.scatter_to(x, &mut [&mut *xu, &mut *xv, xw]),
+            None => k0.faces.scatter(x, xu, xv),
         }
-        let g = &op.k.grid;
-        op.k.bc
-            .fill_velocity3(g, xu, xv, xw.as_deref_mut(), 0.0, true);
-        // The increment's stress lives in the solid: gradients, stretching and tangent there.
-        let cw = op.k.solid_c;
+        k0.bc
+            .fill_velocity3(&k0.grid, xu, xv, xw.as_deref_mut(), 0.0, true);
         let vel = super::velocity(xu, xv, xw.as_deref());
-        op.k.gradient_in(&vel, cw);
-        op.k.stretch_in(self.start, 1.0, None, Some(self.relax), &mut op.db, cw);
-        op.k.apply_tangent(&op.db, self.dtau);
         op.viscous.product(&vel, &op.dm, Some(x), y);
-        op.k.force_sub(self.dtau, op.c, y);
+        // The increment's stress lives in each body's solid: gradients, stretching and
+        // tangent there, each body's increment stretched by its own Bⁿ.
+        for ((k, d), dtau) in op.ks.iter_mut().zip(self.d).zip(self.dtau.iter_mut()) {
+            let cw = k.solid_c;
+            k.gradient_in(&vel, cw);
+            k.stretch_in(&d.start, 1.0, None, Some(&d.relax), &mut op.db, cw);
+            k.apply_tangent(&op.db, dtau);
+            k.force_sub(dtau, op.c, y);
+        }
     }
 }
 
@@ -144,29 +153,43 @@ impl ElasticStage {
     /// B = I and its rates from the initial velocity (the solid fraction set: the stages
     /// writing material fields initialise first).
     pub(super) fn initialize(&mut self, state: &mut State) -> Result<(), StageError> {
-        let d = state
-            .resources
-            .get_mut::<super::Deformation>()
-            .ok_or_else(missing)?;
-        d.set_identity();
-        for r in &mut d.relax {
-            r.fill(1.0);
-        }
-        let k = &mut self.op.k;
+        let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
+        let r = self.initialize_held(state, held.all());
+        held.put(state);
+        r
+    }
+
+    /// [`initialize`](Self::initialize) of the bodies' deformations `ds`, held outside the
+    /// state.
+    fn initialize_held(
+        &mut self,
+        state: &State,
+        ds: &mut [super::Deformation],
+    ) -> Result<(), StageError> {
         // The solid fraction is set: the stages writing material fields initialise first.
         let phi = state
             .phi
             .as_ref()
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
-        k.set_weights(phi);
-        k.fill_ghosts(&mut d.b);
+        let k0 = &self.op.ks[0];
+        self.phis
+            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .map_err(|m| err("elastic", m))?;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
-        k.gradient(&vel);
-        k.advect(&vel, &d.b, &mut d.advection);
-        for (p, a) in d.advection_prev.iter_mut().zip(&d.advection) {
-            p.copy_from(a);
+        for (n, (k, d)) in self.op.ks.iter_mut().zip(ds.iter_mut()).enumerate() {
+            d.set_identity();
+            for r in &mut d.relax {
+                r.fill(1.0);
+            }
+            k.set_weights(self.phis.of(n, phi));
+            k.fill_ghosts(&mut d.b);
+            k.gradient(&vel);
+            k.advect(&vel, &d.b, &mut d.advection);
+            for (p, a) in d.advection_prev.iter_mut().zip(&d.advection) {
+                p.copy_from(a);
+            }
+            k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
         }
-        k.stretch(&d.b, 1.0, None, None, &mut d.stretching);
         Ok(())
     }
 
@@ -179,12 +202,9 @@ impl ElasticStage {
         ctx: &StepContext,
         state: &mut State,
     ) -> Result<(StageStats, bool), StageError> {
-        let mut d = state
-            .resources
-            .take::<super::Deformation>()
-            .ok_or_else(missing)?;
-        let result = self.advance(ctx, state, &mut d);
-        state.resources.put(d);
+        let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
+        let result = self.advance(ctx, state, held.all());
+        held.put(state);
         result
     }
 
@@ -198,7 +218,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &mut super::Deformation,
+        d: &mut [super::Deformation],
     ) -> Result<(StageStats, bool), StageError> {
         let coupled =
             self.coupling.is_some() && super::coupled_step(self.mode, ctx.dt, self.split_dt);
@@ -215,8 +235,10 @@ impl ElasticStage {
                 // to Bⁿ). One split step above its wave cap does not pump energy in the way a
                 // run of them does, and the energy guard watches what follows.
                 Err(_) if self.mode == super::ElasticCoupling::Auto => {
-                    for (b, s) in d.b.iter_mut().zip(&d.start) {
-                        b.copy_from(s);
+                    for d in d.iter_mut() {
+                        for (b, s) in d.b.iter_mut().zip(&d.start) {
+                            b.copy_from(s);
+                        }
                     }
                     self.set_scheme(false, ctx.dt);
                     self.predict(ctx, state, d)?;
@@ -245,7 +267,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &State,
-        d: &mut super::Deformation,
+        ds: &mut [super::Deformation],
     ) -> Result<(), StageError> {
         let dt = ctx.dt;
         let r = if state.dt_prev > 0.0 {
@@ -257,33 +279,42 @@ impl ElasticStage {
             .phi
             .as_ref()
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
-        self.op.k.set_weights(phi);
-        self.op.k.reset_fluid(d);
-        d.begin_step(dt, r, self.scheme.theta);
-        let k = &mut self.op.k;
-        if self.scheme.alpha < 1.0 {
-            k.evaluate(self.law.as_ref(), &d.start, &mut self.tau_n, false)
+        let k0 = &self.op.ks[0];
+        self.phis
+            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .map_err(|m| err("elastic", m))?;
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        let (theta, alpha) = (self.scheme.theta, self.scheme.alpha);
+        let parts = self
+            .op
+            .ks
+            .iter_mut()
+            .zip(ds.iter_mut())
+            .zip(&self.laws)
+            .zip(self.tau.iter_mut().zip(self.tau_n.iter_mut()));
+        for (n, (((k, d), law), (tau, tau_n))) in parts.enumerate() {
+            k.set_weights(self.phis.of(n, phi));
+            k.reset_fluid(d);
+            d.begin_step(dt, r, theta);
+            if alpha < 1.0 {
+                k.evaluate(law.as_ref(), &d.start, tau_n, false)
+                    .map_err(|m| err("elastic", m))?;
+            }
+            k.relaxation(law.as_ref(), &d.start, dt, &mut d.explicit, &mut d.relax)
+                .map_err(|m| err("elastic", m))?;
+            k.gradient(&vel);
+            k.stretch(
+                &d.start,
+                theta * dt,
+                Some((&d.start[..], &d.explicit[..])),
+                Some(&d.relax),
+                &mut d.b,
+            );
+            k.fill_ghosts(&mut d.b);
+            k.evaluate(law.as_ref(), &d.b, tau, true)
                 .map_err(|m| err("elastic", m))?;
         }
-        k.relaxation(
-            self.law.as_ref(),
-            &d.start,
-            dt,
-            &mut d.explicit,
-            &mut d.relax,
-        )
-        .map_err(|m| err("elastic", m))?;
-        k.gradient(&super::velocity(&state.u, &state.v, state.w.as_ref()));
-        k.stretch(
-            &d.start,
-            self.scheme.theta * dt,
-            Some((&d.start[..], &d.explicit[..])),
-            Some(&d.relax),
-            &mut d.b,
-        );
-        k.fill_ghosts(&mut d.b);
-        k.evaluate(self.law.as_ref(), &d.b, &mut self.tau, true)
-            .map_err(|m| err("elastic", m))
+        Ok(())
     }
 
     /// The right-hand side `Δt·vol·∇·τ^{n+1/3}`, the mass, the viscous coefficients and the
@@ -292,12 +323,18 @@ impl ElasticStage {
     /// is not asked for more digits than its momentum has.
     fn assemble(&mut self, ctx: &StepContext, state: &State) -> (f64, f64) {
         let dt = ctx.dt;
-        let k = &mut self.op.k;
-        k.force(&self.tau, &mut self.rhs);
+        // The bodies' stresses summed: each vanishes outside its solid.
+        let ks = &self.op.ks;
+        ks[0].force(&self.tau[0], &mut self.rhs);
+        for (k, tau) in ks.iter().zip(&self.tau).skip(1) {
+            k.force_sub(tau, -1.0, &mut self.rhs);
+        }
         let alpha = self.scheme.alpha;
         if alpha < 1.0 {
             self.rhs.iter_mut().for_each(|r| *r *= alpha);
-            k.force_sub(&self.tau_n, alpha - 1.0, &mut self.rhs);
+            for (k, tau_n) in ks.iter().zip(&self.tau_n) {
+                k.force_sub(tau_n, alpha - 1.0, &mut self.rhs);
+            }
         }
         let g = ctx.grid;
         let c2 = if self.implicit {
@@ -334,7 +371,8 @@ impl ElasticStage {
         let m = &g.metric;
         let (h, dims) = (g.h(), g.dims());
         let (c2, td) = (self.op.c, self.op.theta_dt);
-        let k = &self.op.k;
+        let ks = &self.op.ks;
+        let k = &ks[0];
         let (mu, me) = (&self.op.mu, &self.op.mu_edges);
         let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
         let mm = k.m;
@@ -345,7 +383,7 @@ impl ElasticStage {
             &[0, 1, 2, 3, 4, 5]
         };
         // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
-        let stiff = |at: Index| {
+        let stiff_of = |k: &Kernels, at: Index| {
             if !k.solid_c.contains3(at) {
                 return 0.0;
             }
@@ -356,6 +394,11 @@ impl ElasticStage {
                 .fold(0.0_f64, |s, &c| s.max(jm[c * (mm + 1)].abs()));
             let b = (0..dims).fold(0.0_f64, |s, c| s.max(b[c].abs()));
             k.w[at] * j * b.max(1e-300)
+        };
+        // The bodies' stiffnesses summed (the mixture's tangent).
+        let stiff = |at: Index| {
+            let first = stiff_of(k, at);
+            ks[1..].iter().fold(first, |s, k| s + stiff_of(k, at))
         };
         let mut scale = 4.0 / (h[0] * h[0]);
         for a in 1..dims {
@@ -409,7 +452,7 @@ impl ElasticStage {
     fn momentum_norm(&self, state: &State) -> f64 {
         let mut pnorm = 0.0;
         let mut c = 0;
-        let faces = &self.op.k.faces;
+        let faces = &self.op.ks[0].faces;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         for (a, f) in vel.iter().enumerate() {
             let r = faces.region(a);
@@ -430,7 +473,7 @@ impl ElasticStage {
         &mut self,
         ctx: &StepContext,
         state: &mut State,
-        d: &super::Deformation,
+        d: &[super::Deformation],
         bnorm: f64,
         scale: f64,
     ) -> Result<SolveStats, StageError> {
@@ -472,7 +515,7 @@ impl ElasticStage {
                     ),
                 ));
             }
-            let faces = &self.op.k.faces;
+            let faces = &self.op.ks[0].faces;
             match state.w.as_mut() {
                 Some(w) => faces.add(&self.delta, &mut [&mut state.u, &mut state.v, w]),
                 None => faces.add(&self.delta, &mut [&mut state.u, &mut state.v]),
@@ -489,8 +532,8 @@ impl ElasticStage {
     /// unless Jacobi, the block multigrid set up with the effective viscosities `η = θΔt μ +
     /// (Δt²/2) G_eff` at centres and corners, on a window around the solid only, the Jacobi
     /// diagonal elsewhere (`ViscousBlocks::setup_in`; module docs).
-    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &super::Deformation) {
-        for f in &mut self.scratch.dtau {
+    pub(super) fn setup_preconditioner(&mut self, g: &Grid, d: &[super::Deformation]) {
+        for f in self.scratch.dtau.iter_mut().flatten() {
             f.fill(0.0);
         }
         if self.scheme.preconditioner != ElasticPreconditioner::Jacobi {
@@ -502,7 +545,10 @@ impl ElasticStage {
                 *dm = m + h;
             }
             pre.diagonal(&self.eta_dm, &mut self.eta_diag);
-            let c = op.k.solid_c;
+            // The bodies' solid windows' bounding box.
+            let c = op.ks[1..]
+                .iter()
+                .fold(op.ks[0].solid_c, |c, k| c.union(k.solid_c));
             let solid = (c.i0 <= c.i1).then_some(((c.i0, c.i1), (c.j0, c.j1)));
             self.blocks.setup_in(pre, &self.eta_diag, solid);
         }
@@ -510,7 +556,7 @@ impl ElasticStage {
 
     /// The effective viscosities `η = θΔt μ + (Δt²/2) G_eff` at the centres and corners
     /// (`eta`, `eta_k`): the block multigrid's, and the coupled step's preconditioner's.
-    pub(super) fn effective_viscosity(&mut self, d: &super::Deformation) {
+    pub(super) fn effective_viscosity(&mut self, d: &[super::Deformation]) {
         let op = &self.op;
         let (e, ek) = (&mut self.eta, &mut self.eta_k);
         if op.theta_dt > 0.0 {
@@ -529,14 +575,16 @@ impl ElasticStage {
                 ek.fill(0.0);
             }
         }
-        op.k.stiffness(&d.relax, op.c, e, ek);
+        for (k, d) in op.ks.iter().zip(d) {
+            k.stiffness(&d.relax, op.c, e, ek);
+        }
     }
 
     /// `A x = rhs` by BiCGSTAB to the absolute residual `tol`, with the scene's preconditioner
     /// (the block multigrid set up for this step, or the Jacobi diagonal).
     pub(super) fn solve_a(
         &mut self,
-        d: &super::Deformation,
+        d: &[super::Deformation],
         rhs: &[f64],
         x: &mut [f64],
         tol: f64,
@@ -556,11 +604,10 @@ impl ElasticStage {
 
     /// `B̃^{n+2/3} = B̃(V^{n+2/3})` with the corrected velocity (its boundary values at the
     /// step's end).
-    fn correct(&mut self, ctx: &StepContext, state: &mut State, d: &mut super::Deformation) {
+    fn correct(&mut self, ctx: &StepContext, state: &mut State, ds: &mut [super::Deformation]) {
         let g = ctx.grid;
         let dt = ctx.dt;
-        let k = &mut self.op.k;
-        k.bc.fill_velocity3(
+        self.op.ks[0].bc.fill_velocity3(
             g,
             &mut state.u,
             &mut state.v,
@@ -568,14 +615,17 @@ impl ElasticStage {
             ctx.t + dt,
             false,
         );
-        k.gradient(&super::velocity(&state.u, &state.v, state.w.as_ref()));
-        k.stretch(
-            &d.start,
-            self.scheme.theta * dt,
-            Some((&d.start[..], &d.explicit[..])),
-            Some(&d.relax),
-            &mut d.b,
-        );
-        k.fill_ghosts(&mut d.b);
+        let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
+        for (k, d) in self.op.ks.iter_mut().zip(ds.iter_mut()) {
+            k.gradient(&vel);
+            k.stretch(
+                &d.start,
+                self.scheme.theta * dt,
+                Some((&d.start[..], &d.explicit[..])),
+                Some(&d.relax),
+                &mut d.b,
+            );
+            k.fill_ghosts(&mut d.b);
+        }
     }
 }

@@ -1,6 +1,7 @@
 use super::limits::wave_limit;
 use super::*;
 use crate::solid::{SceneSolid, Shape};
+use efsi_core::Scene;
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::NeoHookeanReference;
 use efsi_laws_host::Sym;

@@ -89,6 +89,21 @@ impl Window {
         }
     }
 
+    /// The bounding box of `self` and `other` (either empty: the other).
+    pub(super) fn union(self, other: Window) -> Window {
+        match (self.points(), other.points()) {
+            (0, _) => other,
+            (_, 0) => self,
+            _ => {
+                let (a, b, c, d) = (self.lo(), self.hi(), other.lo(), other.hi());
+                Window::boxed(
+                    std::array::from_fn(|x| a[x].min(c[x])),
+                    std::array::from_fn(|x| b[x].max(d[x])),
+                )
+            }
+        }
+    }
+
     /// No point.
     pub(super) const EMPTY: Window = Window {
         i0: 0,

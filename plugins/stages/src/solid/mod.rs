@@ -15,7 +15,8 @@
 //!
 //! A solid without a law (a second fluid: a drop, a bubble) runs in every geometry; one with a
 //! law adds the implicit-momentum stage (`momentum`) and the deformation stage, which run in
-//! every geometry too.
+//! every geometry too, for one body or several (each elastic body with its own deformation and
+//! law).
 
 pub use efsi_core::scene::bodies::{Bodies, Body, SceneBodies};
 pub use efsi_core::scene::solid::{LawSpec, SceneSolid, Shape, Solid, checked_json, json};
@@ -39,9 +40,9 @@ pub(crate) fn solid(options: &Options) -> Result<&Solid, String> {
 /// that needs them, with the law loader ([`Laws`]); a scene of one body (`solid:`, or a
 /// `solids` list of one) also keeps it as the [`Solid`], which the elastic stages read.
 ///
-/// A scene of several bodies is further refused when a body covers no cell, when two bodies
-/// overlap at t = 0 ([`overlap`]), and when a body has a law: the elastic stage holds one
-/// deformation field, and per-body deformation (issue 42's second part) does not exist yet.
+/// A scene of several bodies is further refused when a body covers no cell and when two bodies
+/// overlap at t = 0 ([`overlap`]). Bodies with a law keep their own deformation each (the
+/// elastic stage's per-body deformation).
 pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
     let Some(bodies) = scene.bodies_spec()? else {
         return Ok(());
@@ -57,19 +58,6 @@ pub fn check(scene: &mut Scene, options: &mut Options) -> Checked {
             let at = Body::path(true, k);
             check_solid(scene, &body.solid, &at)
                 .map_err(|(f, m)| (f, format!("body \"{}\": {m}", body.name)))?;
-            if many && body.solid.law.is_some() {
-                return err(
-                    &format!("{at}.law"),
-                    format!(
-                        "body \"{}\" has a law, in a scene of {} bodies: an elastic body among \
-                         several needs its own deformation field, which the elastic stage does \
-                         not keep yet (issue 42, per-body deformation); bodies without a law \
-                         (drops, bubbles) run",
-                        body.name,
-                        bodies.list.len()
-                    ),
-                );
-            }
         }
         overlap(scene, &bodies.list)?;
         scene.set_bodies(&bodies.list);

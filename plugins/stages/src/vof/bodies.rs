@@ -51,19 +51,16 @@
 //! together (each reconstructs its own interface as if the rest of the cell were fluid): bodies
 //! must be kept a film apart, by the resolved fluid and, below a cell, by a contact force,
 //! which is not part of this module; the probe `SolidOverlap` (`max_solid_fraction_sum`) shows
-//! `max Σ_k φ_k` at every output, and `BodyContact` the cells two bodies share. The elastic stage keeps one deformation field, so a body
-//! with a law runs only alone (the scene check refuses a law among several bodies).
+//! `max Σ_k φ_k` at every output, and `BodyContact` the cells two bodies share.
 //!
-//! # Plan for elastic bodies
+//! # Elastic bodies
 //!
-//! Each elastic body keeps its deformation `B̃_k` on its own window, beside `φ_k` (the window
-//! moves carry it along), predicted and projected by the elastic stage's kernels over the
-//! window's region with the parent's metric, as the transport is here; its law is loaded once
-//! per distinct law and evaluated in batches over its window. The cell's stress is the mixture
-//! `τ = Σ_k τ_k(B̃_k)` (each `τ_k` carries its `φ_k` through `B̃_k = φ_k^{1/2} B_k`), and the
-//! implicit system's tangent `J = Σ_k J_k` — the per-body histories never mix, even where two
-//! bodies share a cell. Contact below a cell's gap is then a short-range repulsion between
-//! the bodies' interfaces (gap × stiffness, energy-bounded), a stage of its own.
+//! Each body with a law keeps its own deformation `B_k`, weighted by this module's `φ_k`
+//! (which the state's `BodyFractions` carries to the elastic stage), and its own law; the
+//! cell's stress is the sum of the bodies' and the implicit system's tangent the sum of theirs
+//! (the elastic stage's `bodies` module), so the histories of two bodies never mix, even where
+//! they share a cell. Contact below a cell's gap, a short-range repulsion between the bodies'
+//! interfaces, is not part of either module.
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
 use efsi_core::body_fractions::BodyFraction;
