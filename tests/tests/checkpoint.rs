@@ -289,6 +289,13 @@ fn a_resumed_3d_elastic_run_is_bit_identical_to_an_uninterrupted_one() {
 #[test]
 fn a_resumed_run_of_bodies_in_contact_is_bit_identical_to_an_uninterrupted_one() {
     check_resumed_run("two_disks", TWO_DISKS, 30, 78);
+    // The same disks elastic: each body's deformation is in the checkpoint, its fraction
+    // published again by the VOF stage on restore.
+    let soft = TWO_DISKS.replace(
+        "viscosity: 20.0,",
+        "viscosity: 0.02, law: (name: \"neo_hookean\", parameters: {\"G\": 50.0}),",
+    );
+    check_resumed_run("two_soft_disks", &soft, 30, 85);
 }
 
 #[test]

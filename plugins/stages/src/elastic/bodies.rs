@@ -34,9 +34,9 @@
 //! # Limits
 //!
 //! The bodies' fractions come from the state's [`BodyFractions`], which the VOF stage sets at
-//! its initialisation and after every step; a state restored from a checkpoint holds none
-//! before its first step, and the elastic step refuses it (a restart of a scene of several
-//! elastic bodies needs the VOF stage to publish its restored windows first). Two bodies sharing a cell add their stresses as two materials in parallel; a body's
+//! its initialisation, after every step and when a snapshot or checkpoint is restored
+//! ([`efsi_core::Stage::restored`]); the elastic step refuses a state that holds none. Two
+//! bodies sharing a cell add their stresses as two materials in parallel; a body's
 //! interface edge counts the other body's part of it as fluid. Keeping the bodies a film apart
 //! is the contact's job, not this module's.
 
@@ -261,9 +261,8 @@ impl Fractions {
             let k = b.index.expect("a body of several");
             let bf = all.bodies.get(k).filter(|f| f.is_set()).ok_or_else(|| {
                 format!(
-                    "body \"{}\" has no fraction in the state yet (a state restored from a \
-                         checkpoint holds none until the VOF stage's first step): its \
-                         deformation cannot be weighted",
+                    "body \"{}\" has no fraction in the state (the VOF stage publishes \
+                         them): its deformation cannot be weighted",
                     b.name
                 )
             })?;
