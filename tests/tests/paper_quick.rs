@@ -62,6 +62,11 @@ fn sphere_impact_3d_quick() {
 }
 
 #[test]
+fn sphere_oblique_3d_quick() {
+    quick("sphere_oblique_3d");
+}
+
+#[test]
 fn soft_wall_cavity_quick() {
     quick("soft_wall_cavity");
 }
@@ -106,6 +111,11 @@ fn stability_quick() {
     // Twice into one folder: a second `bench-paper` into the same `--out` failed every setting
     // (efsi refused to write over the first run's outputs) until the harness cleared the case.
     quick_runs("stability", 2);
+}
+
+#[test]
+fn stability_3d_quick() {
+    quick("stability_3d");
 }
 
 #[test]
