@@ -120,7 +120,7 @@ fn stability_quick() {
 /// same way with `Coupled` at G = 1e9 and 1e11 at every CFL. `cargo xtask bench-paper --quick
 /// --case stability_3d` shows the map.
 #[test]
-#[ignore = "the 3-D map's coupled elastic step fails at the contact (FGMRES stalls): not stable, not refused"]
+#[ignore = "the 3-D map's coupled elastic step stalls (FGMRES) at G ≥ 1e9: not stable, not refused"]
 fn stability_3d_quick() {
     quick("stability_3d");
 }
