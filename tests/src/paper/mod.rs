@@ -18,6 +18,7 @@ pub mod soft_sphere_cube;
 pub mod soft_wall;
 pub mod sphere;
 pub mod sphere_3d;
+pub mod sphere_oblique;
 pub mod stability;
 pub mod vof_transport_3d;
 
@@ -216,6 +217,7 @@ const fn entry<C: case::Case>() -> Entry {
 pub const CASES: &[Entry] = &[
     entry::<sphere::SphereImpact>(),
     entry::<sphere_3d::SphereImpact3d>(),
+    entry::<sphere_oblique::SphereOblique3d>(),
     entry::<soft_wall::SoftWall>(),
     entry::<disk_cavity::DiskCavity>(),
     entry::<soft_sphere_cube::SoftSphereCube>(),
@@ -228,6 +230,7 @@ pub const CASES: &[Entry] = &[
     entry::<falling_drop::FallingDrop>(),
     entry::<vof_transport_3d::VofTransport3d>(),
     entry::<stability::Stability>(),
+    entry::<stability::Stability3d>(),
 ];
 
 /// The workspace's `cases/` folder.

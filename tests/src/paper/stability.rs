@@ -1,7 +1,9 @@
 //! Stability at the extremes: the sphere-impact scene, reduced, over shear modulus ×
 //! density ratio × CFL number, and with solids only four and five cells across. Every run must either
 //! finish stable or be refused before it starts with a message naming the limit and the
-//! setting to change — no third outcome.
+//! setting to change — no third outcome. The map is made of the axisymmetric sphere
+//! ([`Stability`], `--case stability`) and of the three-dimensional one on a quarter box
+//! ([`Stability3d`], `--case stability_3d`, issue 41 case 5).
 //!
 //! # The runs
 //! `cases/sphere_impact.ron` at 8 cells per radius (6 in quick mode), the sphere released
@@ -11,6 +13,15 @@
 //! shrink the sphere to a diameter of 4 and 5 cells on the same grid. Expected to be refused:
 //! the solid 4 cells across (below [`MIN_CELLS_ACROSS`]), a `time.fixed_dt` above the
 //! elastic-wave limit, and a `numerics.elastic.wave_courant` above its allowed maximum.
+//!
+//! The three-dimensional map is the same over `cases/sphere_impact_3d.ron` (the Symmetry planes
+//! x = 0 and z = 0 through the sphere's axis, y vertical) at [`CPR_3D`] cells per radius
+//! ([`QUICK_CPR_3D`] in quick mode), each side of the scene's box rounded to whole cubic cells
+//! (7 × 14 × 7 cells at 3 cells per radius, 9 × 19 × 9 at 4): the same settings, the same
+//! criteria, the small solids 4 and 5 cells across their diameter (the width of
+//! [`MIN_CELLS_ACROSS`] is `6V/S` in three dimensions); the sphere is released 1.25 cells
+//! above the substrate (8 mm at 3 cells per radius, 6 mm at 4: the axisymmetric map's 4 mm
+//! is less than a cell there, and the sphere would start pressed on the wall).
 //!
 //! The map's runs are `Split`; `Coupled` (Δt·c/h ≤ 25) and `Auto` (≤ 200) run at G = 1e7,
 //! 1e9, 1e11 Pa × CFL 0.1, 0.5, 0.9, ratio 1e3 (quick: G = 1e9, CFL 0.9), their rebounds
@@ -47,6 +58,7 @@
 
 use super::case::{Case, Done, Harness, Plan, Verdict, stage_names};
 use super::plot::{self, Panel, Tone};
+use super::sphere_3d::Geometry;
 use super::{Check, Options, Run, execute_built, load_case, probes};
 use efsi_core::Scene;
 use efsi_run::{ProbeSpec, SceneOutput};
@@ -68,8 +80,16 @@ const CFLS: [f64; 3] = [0.1, 0.5, 0.9];
 const COUPLED_G: [f64; 3] = [1e7, 1e9, 1e11];
 /// Widths of the small solids, in cells: one below [`MIN_CELLS_ACROSS`] (refused), one at it.
 const ACROSS: [f64; 2] = [4.0, 5.0];
+/// Cells per radius of the 3-D map (quick version: [`QUICK_CPR_3D`]).
+pub const CPR_3D: f64 = 4.0;
+/// Cells per radius of the 3-D map's quick version.
+pub const QUICK_CPR_3D: f64 = 3.0;
 /// Gap between the sphere and the substrate at release (m).
 const GAP: f64 = 0.004;
+/// The 3-D map's least gap at release, in cells: the sphere clear of the substrate's row of
+/// cells. At 3 and 4 cells per radius [`GAP`] is less than a cell and the sphere would start
+/// in the wall's row, already pressed on it.
+const GAP_CELLS_3D: f64 = 1.25;
 /// End time (s): impact at ≈ 3 ms, rebound by ≈ 12 ms for the seed's stiffness.
 const END: f64 = 0.016;
 /// Largest relative drift of the solid volume.
@@ -185,21 +205,40 @@ impl Outcome {
     }
 }
 
-fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
-    let (mut scene, path) = load_case("sphere_impact.ron")?;
+/// The scene file of the map in `geometry`.
+fn file_of(geometry: Geometry) -> &'static str {
+    match geometry {
+        Geometry::Axisymmetric => "sphere_impact.ron",
+        Geometry::ThreeD => "sphere_impact_3d.ron",
+    }
+}
+
+/// The scene of a setting at `cpr` cells per radius: `cases/sphere_impact.ron` (axisymmetric),
+/// or `cases/sphere_impact_3d.ron` (3-D quarter box) with each side of its box rounded to
+/// whole cubic cells.
+fn scene_for(st: &Setting, cpr: f64, geometry: Geometry) -> Result<(Scene, PathBuf), String> {
+    let (mut scene, path) = load_case(file_of(geometry))?;
     let (lx, ly) = (
         scene.domain.x.1 - scene.domain.x.0,
         scene.domain.y.1 - scene.domain.y.0,
     );
     let mut solid = super::sphere::solid_of(&scene)?;
-    let Shape::Disk { radius, .. } = solid.shape else {
-        return Err("the solid is not a disk".into());
+    let radius = match (geometry, solid.shape) {
+        (Geometry::Axisymmetric, Shape::Disk { radius, .. })
+        | (Geometry::ThreeD, Shape::Sphere { radius, .. }) => radius,
+        _ => return Err(format!("{}: the solid is not a sphere", file_of(geometry))),
     };
     let h = radius / cpr;
     let r = st.across.map_or(radius, |n| 0.5 * n * h);
-    solid.shape = Shape::Disk {
-        center: (0.0, r + GAP),
-        radius: r,
+    solid.shape = match geometry {
+        Geometry::Axisymmetric => Shape::Disk {
+            center: (0.0, r + GAP),
+            radius: r,
+        },
+        Geometry::ThreeD => Shape::Sphere {
+            center: (0.0, r + GAP.max(GAP_CELLS_3D * h), 0.0),
+            radius: r,
+        },
     };
     let law = solid.law.as_mut().ok_or("the solid has no law")?;
     law.parameters.insert("G".into(), st.g);
@@ -207,6 +246,14 @@ fn scene_for(st: &Setting, cpr: f64) -> Result<(Scene, PathBuf), String> {
     scene.set_solid(&solid);
     scene.grid.nx = (lx / h).round() as usize;
     scene.grid.ny = (ly / h).round() as usize;
+    if geometry == Geometry::ThreeD {
+        let z = scene.domain.z.ok_or("the 3-D scene has no z extent")?;
+        let nz = ((z.1 - z.0) / h).round() as usize;
+        scene.domain.x = (0.0, scene.grid.nx as f64 * h);
+        scene.domain.y = (0.0, scene.grid.ny as f64 * h);
+        scene.domain.z = Some((0.0, nz as f64 * h));
+        scene.grid.nz = Some(nz);
+    }
     scene.time.end = END;
     scene.time.cfl = st.cfl;
     scene.time.fixed_dt = st.fixed_dt;
@@ -269,15 +316,16 @@ fn figures(dir: &std::path::Path) -> Result<Figures, String> {
 /// Run one setting.
 fn attempt(
     st: &Setting,
-    cpr: f64,
+    (cpr, geometry): (f64, Geometry),
     dir: &std::path::Path,
     opts: &Options,
 ) -> (Outcome, Option<Run>) {
     let label = st.label();
-    let (scene, path) = match scene_for(st, cpr).and_then(|(s, p)| Ok((opts.adjust(s)?, p))) {
-        Ok(s) => s,
-        Err(e) => return (Outcome::Failed(format!("scene: {e}")), None),
-    };
+    let (scene, path) =
+        match scene_for(st, cpr, geometry).and_then(|(s, p)| Ok((opts.adjust(s)?, p))) {
+            Ok(s) => s,
+            Err(e) => return (Outcome::Failed(format!("scene: {e}")), None),
+        };
     let sim = match efsi_run::simulation(scene, &path, &efsi_stages::builtin()) {
         Ok(sim) => sim,
         Err(e) => return (Outcome::Refused(e.to_string()), None),
@@ -327,30 +375,41 @@ fn sweep_python() -> Option<std::ffi::OsString> {
     usable.then_some(python)
 }
 
-/// The overrides of `cases/sphere_impact.ron` that make the scene of [`scene_for`], as JSON
+/// The overrides of the scene file ([`file_of`]) that make the scene of [`scene_for`], as JSON
 /// (a number, or RON text).
-fn overrides_for(st: &Setting, cpr: f64) -> Result<serde_json::Value, String> {
-    let (scene, _) = scene_for(st, cpr)?;
+fn overrides_for(
+    st: &Setting,
+    (cpr, geometry): (f64, Geometry),
+) -> Result<serde_json::Value, String> {
+    let (scene, _) = scene_for(st, cpr, geometry)?;
     let solid = super::sphere::solid_of(&scene)?;
-    let Shape::Disk { center, radius } = solid.shape else {
-        return Err("the solid is not a disk".into());
+    let shape = match solid.shape {
+        Shape::Disk { center, radius } => format!(
+            "Disk(center: ({:?}, {:?}), radius: {radius:?})",
+            center.0, center.1
+        ),
+        Shape::Sphere { center, radius } => format!(
+            "Sphere(center: ({:?}, {:?}, {:?}), radius: {radius:?})",
+            center.0, center.1, center.2
+        ),
+        _ => return Err("the solid is not a sphere".into()),
     };
     let mut o = serde_json::Map::new();
     let mut put = |k: &str, v: serde_json::Value| {
         o.insert(k.to_string(), v);
     };
-    put(
-        "solid.shape",
-        format!(
-            "Disk(center: ({:?}, {:?}), radius: {radius:?})",
-            center.0, center.1
-        )
-        .into(),
-    );
+    put("solid.shape", shape.into());
     put("solid.law.parameters.G", st.g.into());
     put("fluid.density", scene.fluid.density.into());
     put("grid.nx", scene.grid.nx.into());
     put("grid.ny", scene.grid.ny.into());
+    if let (Some(nz), Some(z)) = (scene.grid.nz, scene.domain.z) {
+        let range = |(a, b): (f64, f64)| format!("({a:?}, {b:?})");
+        put("grid.nz", nz.into());
+        put("domain.x", range(scene.domain.x).into());
+        put("domain.y", range(scene.domain.y).into());
+        put("domain.z", range(z).into());
+    }
     put("time.end", END.into());
     put("time.cfl", st.cfl.into());
     if let Some(dt) = st.fixed_dt {
@@ -381,16 +440,16 @@ fn overrides_for(st: &Setting, cpr: f64) -> Result<serde_json::Value, String> {
 fn through_sweep(
     python: &std::ffi::OsStr,
     settings: &[Setting],
-    cpr: f64,
+    at: (f64, Geometry),
     dir: &std::path::Path,
 ) -> Result<Vec<(Outcome, Option<Run>)>, String> {
-    let (_, scene_path) = load_case("sphere_impact.ron")?;
+    let (_, scene_path) = load_case(file_of(at.1))?;
     let sweep = dir.join("sweep");
     let _ = std::fs::remove_dir_all(&sweep);
     std::fs::create_dir_all(&sweep).map_err(|e| format!("{}: {e}", sweep.display()))?;
     let list = settings
         .iter()
-        .map(|st| overrides_for(st, cpr))
+        .map(|st| overrides_for(st, at))
         .collect::<Result<Vec<_>, _>>()?;
     let runs_file = sweep.join("runs.json");
     std::fs::write(&runs_file, serde_json::Value::Array(list).to_string())
@@ -440,13 +499,12 @@ fn through_sweep(
                 return (Outcome::Failed(format!("the run failed: {m}")), None);
             }
             let rdir = std::path::PathBuf::from(row["probes_dir"].as_str().unwrap_or_default());
-            let (nx, ny) = (
-                row["grid.nx"].as_u64().unwrap_or(0) as usize,
-                row["grid.ny"].as_u64().unwrap_or(0) as usize,
-            );
+            let n = |k: &str| row[k].as_u64().unwrap_or(0) as usize;
             let run = Run {
                 label: st.label(),
-                cells: nx * ny,
+                cells: n("grid.nx")
+                    * n("grid.ny")
+                    * row["grid.nz"].as_u64().map_or(1, |z| z as usize),
                 steps: row["steps"].as_u64().unwrap_or(0),
                 wall_seconds: row["wall_time"].as_f64().unwrap_or(f64::NAN),
                 error: None,
@@ -459,9 +517,11 @@ fn through_sweep(
         .collect())
 }
 
-/// The case: the map over G × ratio × CFL at 6 (quick) or 8 cells per radius, the small
-/// solids, the settings to be refused and (full mode) the coupled step's runs.
-pub struct Stability {
+/// The case: the map over G × ratio × CFL, the small solids, the settings to be refused and
+/// the coupled step's runs, on the axisymmetric sphere at 6 (quick) or 8 cells per radius
+/// ([`Stability`]), or on the 3-D sphere's quarter box ([`Stability3d`]) at
+/// [`QUICK_CPR_3D`] or [`CPR_3D`].
+pub struct Map<const THREE_D: bool> {
     quick: bool,
     cpr: f64,
     gs: &'static [f64],
@@ -470,7 +530,19 @@ pub struct Stability {
     small_ratios: &'static [f64],
 }
 
-impl Stability {
+/// The map of the axisymmetric sphere (`--case stability`).
+pub type Stability = Map<false>;
+/// The map of the 3-D sphere on a quarter box (`--case stability_3d`).
+pub type Stability3d = Map<true>;
+
+impl<const THREE_D: bool> Map<THREE_D> {
+    /// The scene's geometry.
+    const GEOMETRY: Geometry = if THREE_D {
+        Geometry::ThreeD
+    } else {
+        Geometry::Axisymmetric
+    };
+
     /// The map's settings, the small solids, the refusals, then the coupled step's runs.
     fn settings(&self) -> Vec<Setting> {
         let mut out = Vec::new();
@@ -517,19 +589,25 @@ impl Stability {
     }
 }
 
-impl Case for Stability {
-    const NAME: &'static str = "stability";
+impl<const THREE_D: bool> Case for Map<THREE_D> {
+    const NAME: &'static str = if THREE_D { "stability_3d" } else { "stability" };
     type Setting = Setting;
     type Measured = Outcome;
 
     fn plan(opts: &Options) -> Plan<Self> {
-        let (cpr, gs, ratios, cfls): (f64, &[f64], &[f64], &[f64]) = if opts.quick {
-            (6.0, &[1e3, 1e9], &[1.0, 1e4], &[0.1, 0.9])
+        let cpr = match (THREE_D, opts.quick) {
+            (false, true) => 6.0,
+            (false, false) => 8.0,
+            (true, true) => QUICK_CPR_3D,
+            (true, false) => CPR_3D,
+        };
+        let (gs, ratios, cfls): (&[f64], &[f64], &[f64]) = if opts.quick {
+            (&[1e3, 1e9], &[1.0, 1e4], &[0.1, 0.9])
         } else {
-            (8.0, &G_VALUES, &RATIOS, &CFLS)
+            (&G_VALUES, &RATIOS, &CFLS)
         };
         let small_ratios: &[f64] = if opts.quick { &[1e3] } else { &RATIOS };
-        let case = Stability {
+        let case = Map {
             quick: opts.quick,
             cpr,
             gs,
@@ -545,10 +623,10 @@ impl Case for Stability {
     fn runs(&self, h: &mut Harness, plan: Vec<(String, Setting)>) -> Result<Done<Self>, String> {
         let settings: Vec<Setting> = plan.into_iter().map(|(_, st)| st).collect();
         let attempts = match sweep_python() {
-            Some(python) => through_sweep(&python, &settings, self.cpr, &h.dir)?,
+            Some(python) => through_sweep(&python, &settings, (self.cpr, Self::GEOMETRY), &h.dir)?,
             None => settings
                 .iter()
-                .map(|st| attempt(st, self.cpr, &h.dir, h.opts))
+                .map(|st| attempt(st, (self.cpr, Self::GEOMETRY), &h.dir, h.opts))
                 .collect(),
         };
         let mut runs = Vec::new();
@@ -567,6 +645,10 @@ impl Case for Stability {
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let (cpr, gs, ratios, cfls, small_ratios) =
             (self.cpr, self.gs, self.ratios, self.cfls, self.small_ratios);
+        let sphere = match Self::GEOMETRY {
+            Geometry::Axisymmetric => "sphere",
+            Geometry::ThreeD => "3-D sphere, quarter box",
+        };
         let runs = &done.runs;
         let (coupled_results, results): (Vec<_>, Vec<_>) = done
             .measured
@@ -612,7 +694,7 @@ impl Case for Stability {
         };
         let mut panels = Vec::new();
         for &cfl in cfls {
-            panels.push(panel(format!("sphere, CFL {cfl}"), ratios, &|s| {
+            panels.push(panel(format!("{sphere}, CFL {cfl}"), ratios, &|s| {
                 s.across.is_none() && s.cfl == cfl
             })?);
         }
@@ -630,8 +712,8 @@ impl Case for Stability {
             &panels,
         ) {
             Ok(()) => h.plots.push((
-                "Stability map (sphere at reduced resolution)".to_string(),
-                "stability/stability_map.png".to_string(),
+                format!("Stability map ({sphere} at reduced resolution)"),
+                format!("{}/stability_map.png", Self::NAME),
             )),
             Err(e) => h.notes.push(format!("stability map not drawn: {e}")),
         }
@@ -724,10 +806,13 @@ impl Case for Stability {
                 lines.join("; ")
             ));
         }
-        h.notes.push(format!(
-            "The split step's elastic-wave limit Δt·c/h ≤ {MAX_WAVE_COURANT} keeps G = 1e7 and 1e9 \
-             stable at the cost of their step counts (without it, G = 1e9 gained 26 % of E_b)."
-        ));
+        if !THREE_D {
+            h.notes.push(format!(
+                "The split step's elastic-wave limit Δt·c/h ≤ {MAX_WAVE_COURANT} keeps G = 1e7 and \
+                 1e9 stable at the cost of their step counts (without it, G = 1e9 gained 26 % of \
+                 E_b)."
+            ));
+        }
         // The refusals' two settings and the small solids below the limit.
         let expected_refusals = done
             .measured
@@ -772,16 +857,18 @@ impl Case for Stability {
             target: "yes".into(),
             pass: names_setting && refused.len() == expected_refusals,
         });
-        h.schedule = match scene_for(&Setting::new(1.8e5, 1e3, 0.5), cpr).and_then(|(s, p)| {
-            efsi_run::simulation(s, &p, &efsi_stages::builtin()).map_err(|e| e.to_string())
-        }) {
+        h.schedule = match scene_for(&Setting::new(1.8e5, 1e3, 0.5), cpr, Self::GEOMETRY).and_then(
+            |(s, p)| {
+                efsi_run::simulation(s, &p, &efsi_stages::builtin()).map_err(|e| e.to_string())
+            },
+        ) {
             Ok(sim) => stage_names(&sim),
             Err(_) => Vec::new(),
         };
         Ok(Verdict {
             title: format!(
-                "Stability at the extremes: the sphere at {cpr} cells per radius over G × ρs/ρf × CFL, \
-                 and solids 4 and 5 cells across"
+                "Stability at the extremes: the {sphere} at {cpr} cells per radius over G × ρs/ρf \
+                 × CFL, and solids 4 and 5 cells across"
             ),
             reference: "issue 8's criteria: finish with finite fields, solid volume kept, energy \
                         bounded by its start plus the work of gravity (walls at rest do no work) — \
