@@ -49,8 +49,8 @@
 //! The window of a body that spans the domain is the domain. The transport keeps each body's
 //! `0 ≤ φ_k ≤ 1` and volume; it does not keep `Σ_k φ_k ≤ 1` in a cell that two bodies enter
 //! together (each reconstructs its own interface as if the rest of the cell were fluid): bodies
-//! must be kept a film apart, by the resolved fluid and, below a cell, by a contact force,
-//! which is not part of this module; the probe `SolidOverlap` (`max_solid_fraction_sum`) shows
+//! must be kept a film apart, by the resolved fluid and, below a cell, by the contact stage's
+//! repulsion ([`crate::contact`]); the probe `SolidOverlap` (`max_solid_fraction_sum`) shows
 //! `max Σ_k φ_k` at every output, and `BodyContact` the cells two bodies share.
 //!
 //! # Elastic bodies
@@ -59,8 +59,7 @@
 //! (which the state's `BodyFractions` carries to the elastic stage), and its own law; the
 //! cell's stress is the sum of the bodies' and the implicit system's tangent the sum of theirs
 //! (the elastic stage's `bodies` module), so the histories of two bodies never mix, even where
-//! they share a cell. Contact below a cell's gap, a short-range repulsion between the bodies'
-//! interfaces, is not part of either module.
+//! they share a cell. Contact below a cell's gap is the contact stage's ([`crate::contact`]).
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
 use efsi_core::body_fractions::BodyFraction;
