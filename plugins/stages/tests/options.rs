@@ -73,7 +73,10 @@ fn defaults_apply_where_the_scene_is_silent() {
     assert_eq!(get::<AdvectionOptions>(&s).predictor, None);
     // The checked scene holds every declared section with its settings in force.
     let names: Vec<&str> = s.numerics.sections().map(|(n, _)| n).collect();
-    assert_eq!(names, ["advection", "contact", "elastic", "projection", "viscous"]);
+    assert_eq!(
+        names,
+        ["advection", "contact", "elastic", "projection", "viscous"]
+    );
 }
 
 /// `numerics.preset: Strict` tightens every tolerance to its strict value, keeps a tighter one

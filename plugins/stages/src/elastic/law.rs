@@ -16,6 +16,17 @@ pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn Constitut
         .law
         .as_ref()
         .ok_or("the solid has no law")?;
+    load_spec(scene, spec, "solid")
+}
+
+/// The law `spec` of the body at `path` (`solid`, `solids[1]`) through the loader: the 3-D
+/// loader in a Cartesian3D scene, paths relative to the scene's folder; errors name
+/// `<path>.law`.
+fn load_spec(
+    scene: &Scene,
+    spec: &crate::solid::LawSpec,
+    path: &str,
+) -> Result<Box<dyn ConstitutiveLaw>, String> {
     let dir = scene
         .source_dir
         .clone()
@@ -25,7 +36,7 @@ pub fn resolve_law(scene: &Scene, options: &Options) -> Result<Box<dyn Constitut
     } else {
         efsi_laws_host::load_law
     };
-    let law = load(&spec.name, &spec.parameters, &dir).map_err(|e| format!("solid.law: {e}"))?;
+    let law = load(&spec.name, &spec.parameters, &dir).map_err(|e| format!("{path}.law: {e}"))?;
     Ok(Box::new(law))
 }
 
@@ -80,16 +91,5 @@ fn body_law(
         .law
         .as_ref()
         .ok_or_else(|| format!("{}: the body has no law", b.path))?;
-    let dir = scene
-        .source_dir
-        .clone()
-        .unwrap_or_else(|| std::path::PathBuf::from("."));
-    let load = if scene.geometry == efsi_core::Geometry::Cartesian3D {
-        efsi_laws_host::load_law_3d
-    } else {
-        efsi_laws_host::load_law
-    };
-    let law =
-        load(&spec.name, &spec.parameters, &dir).map_err(|e| format!("{}.law: {e}", b.path))?;
-    Ok(Box::new(law))
+    load_spec(scene, spec, &b.path)
 }
