@@ -570,55 +570,56 @@ impl ContactStage {
         let mut updates = std::mem::take(&mut self.updates);
         updates.clear();
         for (k, b) in all.bodies.iter().enumerate() {
-            let Some((lo, hi)) = support(b) else {
+            let Some(support) = support(b) else {
                 continue;
             };
-            self.near_halos(&halos, (lo, hi), k, &mut near);
+            self.near_halos(&halos, support, k, &mut near);
             for a in 0..self.dims {
-                let (f_lo, f_hi) = self.faces[a];
-                let mut c = lo;
-                // Faces along a from the support's first cell to one past its last.
-                let mut end = hi;
-                end[a] += 1;
-                loop {
-                    if (f_lo..f_hi).contains(&c[a]) {
-                        let mut below = c;
-                        below[a] -= 1;
-                        let (c_w, b_w) = (self.wrap(c), self.wrap(below));
-                        let phi = 0.5 * (b.at(c_w) + b.at(b_w));
-                        if phi != 0.0 {
-                            let mut dpsi = 0.0;
-                            for &l in &near {
-                                dpsi += halos[l].at(c_w) - halos[l].at(b_w);
-                            }
-                            dpsi += self.wall_halo(a, c_w) - self.wall_halo(a, b_w);
-                            if dpsi != 0.0 {
-                                updates.push((a, c, -self.kappa * phi * dpsi / h[a]));
-                            }
-                        }
-                    }
-                    // Next face of the box, x fastest.
-                    let mut axis = 0;
-                    loop {
-                        if axis == 3 {
-                            break;
-                        }
-                        if c[axis] < end[axis] {
-                            c[axis] += 1;
-                            break;
-                        }
-                        c[axis] = lo[axis];
-                        axis += 1;
-                    }
-                    if axis == 3 {
-                        break;
-                    }
-                }
+                self.face_forces(b, &halos, &near, support, a, h[a], &mut updates);
             }
         }
         self.halos = halos;
         self.near = near;
         (energy, updates)
+    }
+
+    /// The forces on body `b`'s faces normal to axis `a` (cell size `h_a`) from the halos
+    /// `near` of `halos` and the walls', into `updates`: the faces from the support's first
+    /// cell to one past its last, x fastest.
+    #[allow(clippy::too_many_arguments)]
+    fn face_forces(
+        &self,
+        b: &BodyFraction,
+        halos: &[Halo],
+        near: &[usize],
+        (lo, hi): ([isize; 3], [isize; 3]),
+        a: usize,
+        h_a: f64,
+        updates: &mut Vec<(usize, [isize; 3], f64)>,
+    ) {
+        let (f_lo, f_hi) = self.faces[a];
+        let mut end = hi;
+        end[a] += 1;
+        let cells = (lo[2]..=end[2]).flat_map(move |z| {
+            (lo[1]..=end[1]).flat_map(move |y| (lo[0]..=end[0]).map(move |x| [x, y, z]))
+        });
+        for c in cells.filter(|c| (f_lo..f_hi).contains(&c[a])) {
+            let mut below = c;
+            below[a] -= 1;
+            let (c_w, b_w) = (self.wrap(c), self.wrap(below));
+            let phi = 0.5 * (b.at(c_w) + b.at(b_w));
+            if phi == 0.0 {
+                continue;
+            }
+            let mut dpsi = 0.0;
+            for &l in near {
+                dpsi += halos[l].at(c_w) - halos[l].at(b_w);
+            }
+            dpsi += self.wall_halo(a, c_w) - self.wall_halo(a, b_w);
+            if dpsi != 0.0 {
+                updates.push((a, c, -self.kappa * phi * dpsi / h_a));
+            }
+        }
     }
 
     /// `E_c` into the state's [`ContactEnergy`].
