@@ -303,6 +303,7 @@ impl StagePlugin for Contact {
             }),
             halos: Vec::new(),
             spare: Vec::new(),
+            supports: Vec::new(),
             near: Vec::new(),
             energy: 0.0,
             updates: Vec::new(),
@@ -418,6 +419,8 @@ struct ContactStage {
     faces: [(isize, isize); 3],
     /// Each body's halo `ψ_k`, reused between steps.
     halos: Vec<Halo>,
+    /// Each body's support (first and last cells with `φ_k ≠ 0`), found once per step.
+    supports: Vec<Option<Bounds>>,
     /// The bodies near the one at hand (reused).
     near: Vec<usize>,
     /// The smoothing's second buffer.
@@ -429,8 +432,11 @@ struct ContactStage {
     updates: Vec<(usize, [isize; 3], f64)>,
 }
 
+/// A box of cells: its first and last cell.
+type Bounds = ([isize; 3], [isize; 3]);
+
 /// The support of a body's fraction: its first and last cells with `φ_k ≠ 0`.
-fn support(b: &BodyFraction) -> Option<([isize; 3], [isize; 3])> {
+fn support(b: &BodyFraction) -> Option<Bounds> {
     let mut lo = [isize::MAX; 3];
     let mut hi = [isize::MIN; 3];
     for (at, f) in b.cells() {
@@ -535,7 +541,8 @@ impl ContactStage {
     }
 
     /// `E_c` and the face forces `(axis, face, f_a)` of the bodies' fractions `all` (module
-    /// docs); the caller gives the forces' vector back to `self.updates` for the next step.
+    /// docs), their supports found ([`Self::find_supports`]); the caller gives the forces'
+    /// vector back to `self.updates` for the next step.
     fn forces(&mut self, grid: &Grid, all: &BodyFractions) -> (f64, Vec<(usize, [isize; 3], f64)>) {
         let mut halos = std::mem::take(&mut self.halos);
         halos.resize_with(all.bodies.len(), Halo::default);
@@ -549,7 +556,7 @@ impl ContactStage {
         let mut energy = 0.0;
         let mut near = std::mem::take(&mut self.near);
         for (k, b) in all.bodies.iter().enumerate() {
-            let Some(support) = support(b) else {
+            let Some(support) = self.supports[k] else {
                 continue;
             };
             self.near_halos(&halos, support, k, &mut near);
@@ -570,7 +577,7 @@ impl ContactStage {
         let mut updates = std::mem::take(&mut self.updates);
         updates.clear();
         for (k, b) in all.bodies.iter().enumerate() {
-            let Some(support) = support(b) else {
+            let Some(support) = self.supports[k] else {
                 continue;
             };
             self.near_halos(&halos, support, k, &mut near);
@@ -649,21 +656,25 @@ impl ContactStage {
         }));
     }
 
-    /// Whether two bodies (or a body and a repelling wall) are within `range + 2` cells.
-    fn in_reach(&self, all: &BodyFractions) -> bool {
+    /// Each body's support of `all` into `self.supports` (its storage reused).
+    fn find_supports(&mut self, all: &BodyFractions) {
+        self.supports.clear();
+        self.supports.extend(all.bodies.iter().map(support));
+    }
+
+    /// Whether two bodies (or a body and a repelling wall) are within `range + 2` cells, by
+    /// their supports ([`Self::find_supports`]).
+    fn in_reach(&self) -> bool {
         let reach = self.kernel.m as isize + 2;
-        // Supports found anew per pair: no allocation in a step.
-        for (k, b) in all.bodies.iter().enumerate() {
-            let Some((lo, hi)) = support(b) else {
-                continue;
-            };
+        let boxes = || self.supports.iter().flatten();
+        for (k, (lo, hi)) in boxes().enumerate() {
             for a in 0..self.dims {
                 let n = self.n[a] as isize;
                 if (self.walls[a][0] && lo[a] < reach) || (self.walls[a][1] && hi[a] >= n - reach) {
                     return true;
                 }
             }
-            for (lo2, hi2) in all.bodies[k + 1..].iter().filter_map(support) {
+            for (lo2, hi2) in boxes().skip(k + 1) {
                 let near = (0..self.dims).all(|a| {
                     let gap = (lo2[a] - hi[a]).max(lo[a] - hi2[a]);
                     gap < reach || self.periodic[a]
@@ -726,7 +737,8 @@ impl Stage for ContactStage {
         let Some(all) = state.resources.get::<BodyFractions>() else {
             return Ok(StageStats::default());
         };
-        if !self.in_reach(all) {
+        self.find_supports(all);
+        if !self.in_reach() {
             // No halo overlaps another body or a wall: no force, nothing stored.
             self.energy = 0.0;
             self.publish(state);
@@ -784,6 +796,7 @@ mod tests {
             faces: std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) }),
             halos: Vec::new(),
             spare: Vec::new(),
+            supports: Vec::new(),
             near: Vec::new(),
             energy: 0.0,
             updates: Vec::new(),
@@ -843,6 +856,7 @@ mod tests {
                     body("b", [7, 4, 2.min(n[2] - 1)], [6, 5, nz], 2),
                 ],
             };
+            s.find_supports(&all);
             let (energy, updates) = s.forces(&g, &all);
             assert!(energy > 0.0);
             let mut sum = [0.0; 3];
@@ -874,6 +888,7 @@ mod tests {
             let all = BodyFractions {
                 bodies: vec![at(3), body("b", [8 + gap, 2, 0], [5, 5, 1], 8)],
             };
+            s.find_supports(&all);
             let (e, _) = s.forces(&g, &all);
             assert!(e < prev || e == 0.0, "gap {gap}: {e} after {prev}");
             prev = e;
@@ -883,6 +898,7 @@ mod tests {
         let all = BodyFractions {
             bodies: vec![body("a", [0, 3, 0], [3, 3, 1], 3)],
         };
+        w.find_supports(&all);
         let (e, updates) = w.forces(&g, &all);
         assert!(e > 0.0);
         let fx: f64 = updates.iter().filter(|u| u.0 == 0).map(|u| u.2).sum();
