@@ -284,6 +284,36 @@ def test_a_scene_of_several_bodies_names_its_columns_per_body_as_efsi_run(tmp_pa
     assert fall["heavy"] > 2.0 * fall["light"] > 0.0
 
 
+def test_soft_bodies_by_the_package_give_the_bits_of_efsi_run_and_a_strain_energy_each(tmp_path):
+    """`cases/two_soft_disks.ron` (two neo-Hookean bodies, each with its own deformation) to
+    t = 0.3, through their first contact, by `efsi run` and by the package: the same columns
+    and bits, a strain energy per body (`left.elastic_energy`), equal for the mirror images and
+    rising as the disks press on each other; no shared cell."""
+    two = REPO / "cases/two_soft_disks.ron"
+    out = tmp_path / "run"
+    subprocess.run(
+        [EFSI, "run", str(two), "--set", "time.end=0.3", "--out", str(out), "-q"],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    header, values = read_probes(out / "probes.csv")
+    scene = efsi.Scene.load(two)
+    scene.set("time.end", 0.3)
+    sim = efsi.Simulation(scene)
+    assert sim.advance_to(sim.end)
+    rows = sim.probes(frame=False)
+    assert list(rows) == header
+    mine = np.column_stack([rows[c] for c in header])
+    assert mine.shape == values.shape and np.array_equal(mine, values)
+    assert "elastic_energy" not in header
+    left, right = rows["left.elastic_energy"], rows["right.elastic_energy"]
+    assert np.max(np.abs(left - right)) <= 1e-10 * np.max(left)
+    t = rows["t"]
+    assert abs(t[10] - 0.1) < 1e-12 and left[-1] > 5.0 * left[10] > 0.0
+    assert np.all(rows["left.right.shared_cells"] == 0.0)
+    assert np.max(rows["max_solid_fraction_sum"]) <= 1.0 + 1e-12
+
+
 def test_a_three_dimensional_scene_gives_w_z_and_the_same_bits_as_efsi_run(tmp_path):
     """The 3-D drop (cases/falling_drop_3d.ron, two symmetry planes) at 2 cells per radius,
     by `efsi run --set` and by the package with the same overrides: every probe value

@@ -97,6 +97,26 @@ fn soft_sphere_in_cube_quick() {
 }
 
 #[test]
+fn two_soft_disks_quick() {
+    quick("two_soft_disks");
+}
+
+#[test]
+fn spheres_on_axis_quick() {
+    quick("spheres_on_axis");
+}
+
+#[test]
+fn twenty_disks_quick() {
+    quick("twenty_disks");
+}
+
+#[test]
+fn disks_in_cavity_quick() {
+    quick("disks_in_cavity");
+}
+
+#[test]
 fn oscillating_disk_quick() {
     quick("oscillating_disk");
 }

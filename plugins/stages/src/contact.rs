@@ -65,8 +65,9 @@
 //! step may not let it move the lightest body's material by more than a fraction of a cell,
 //! `Δt ≤ CFL · 2 / (C + √(C² + 4 a/h))` with the largest acceleration `a = κ K(0) / (h ρ_min)`
 //! (`ρ_min` the lightest body: a face's mixture density is at least `φ̄_k ρ_k`) and `C` the
-//! convective rate, as for the body force. Otherwise it sets no limit: in the step that brings
-//! a body into another's halo it moves less than a cell into it, where the force is the
+//! convective rate, as for the body force. The first step's is that of the initial fractions
+//! (bodies may start within each other's halo). Otherwise it sets no limit: in the step that
+//! brings a body into another's halo it moves less than a cell into it, where the force is the
 //! kernel's tail, and the limit holds from the next step on.
 //!
 //! # Parameters (`numerics.contact`)
@@ -693,6 +694,27 @@ impl Stage for ContactStage {
         if state.resources.get::<ContactEnergy>().is_none() {
             state.resources.insert(ContactEnergy::default());
         }
+    }
+
+    /// `E_c` of the initial fractions (bodies may start within each other's halo): the energy
+    /// guard counts it as stored from the start, and the step limit holds from the first step.
+    fn initialize(
+        &mut self,
+        grid: &Grid,
+        _bc: &BoundarySet,
+        state: &mut State,
+    ) -> Result<(), StageError> {
+        self.energy = 0.0;
+        if let Some(all) = state.resources.get::<BodyFractions>()
+            && all.bodies.iter().all(|b| b.is_set())
+        {
+            self.find_supports(all);
+            if self.in_reach() {
+                self.energy = self.forces(grid, all).0;
+            }
+        }
+        self.publish(state);
+        Ok(())
     }
 
     fn save(&self) -> Vec<f64> {

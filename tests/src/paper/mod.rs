@@ -4,6 +4,7 @@
 //! `REPORT.md` and `summary.json`; the integration tests run the `--quick` versions and assert
 //! their checks.
 
+pub mod bodies;
 pub mod case;
 pub mod couette;
 pub mod couette_mr;
@@ -221,6 +222,10 @@ pub const CASES: &[Entry] = &[
     entry::<soft_wall::SoftWall>(),
     entry::<disk_cavity::DiskCavity>(),
     entry::<soft_sphere_cube::SoftSphereCube>(),
+    entry::<bodies::TwoSoftDisks>(),
+    entry::<bodies::SpheresOnAxis>(),
+    entry::<bodies::TwentyDisks>(),
+    entry::<bodies::DisksInCavity>(),
     entry::<oscillating_disk::OscillatingDisk>(),
     entry::<shear_rectangle::ShearRectangle>(),
     entry::<couette::Couette>(),
@@ -290,6 +295,11 @@ pub struct Probes {
 }
 
 impl Probes {
+    /// The columns' names, in file order.
+    pub fn header(&self) -> &[String] {
+        &self.header
+    }
+
     /// A column (panics-free: an unknown name gives an error).
     pub fn col(&self, name: &str) -> Result<&[f64], String> {
         self.header
