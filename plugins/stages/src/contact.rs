@@ -40,7 +40,10 @@
 //! symmetry plane, whose mirror image of a body is the body itself, nor a periodic or outflow
 //! side). Being a potential force, the repulsion stores the energy `E_c` the bodies' approach
 //! gives it and returns it as they part: it never supplies energy of its own. The stage keeps
-//! `E_c` in the state ([`ContactEnergy`]), which the energy guard counts as stored energy.
+//! `E_c` in the state ([`ContactEnergy`]), which the energy guard counts as stored energy. The
+//! discrete exchange (the force of the step's start applied explicitly) is first order in Δt:
+//! it may return a little more than `E_c` as the bodies part, a share that the step limit
+//! below keeps small.
 //!
 //! # Scheme
 //!
