@@ -308,7 +308,7 @@ mod tests;
 mod transport;
 mod window;
 
-pub use bodies::BodyDeformations;
+pub use bodies::{BodyDeformations, Place};
 pub(crate) use bodies::any_elastic;
 pub(crate) use choice::may_couple;
 use choice::{StepScheme, coupled_step, coupling};
