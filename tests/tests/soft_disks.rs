@@ -172,7 +172,10 @@ fn falling_disks(end: f64) -> Simulation {
 
 /// The windows of the bodies' deformations.
 fn windows(sim: &Simulation) -> Vec<efsi_stages::elastic::Place> {
-    let many = sim.state.resources.get::<efsi_stages::elastic::BodyDeformations>();
+    let many = sim
+        .state
+        .resources
+        .get::<efsi_stages::elastic::BodyDeformations>();
     many.expect("several bodies").places.clone()
 }
 
@@ -195,14 +198,27 @@ fn each_body_keeps_its_deformation_on_a_window_that_follows_it_and_is_undone_wit
     let last = seen.last().unwrap().clone();
     assert!((0..2).all(|k| last[k] != start[k]), "{seen:?}");
     let cells = |w: &efsi_stages::elastic::Place| w.n.iter().product::<usize>();
-    assert!(seen.iter().flatten().all(|w| cells(w) <= 64 * 64 / 2), "{seen:?}");
+    assert!(
+        seen.iter().flatten().all(|w| cells(w) <= 64 * 64 / 2),
+        "{seen:?}"
+    );
     // Back to the start across the moves (the snapshot's windows taken back), and the same
     // run again, bit for bit.
-    let after: Vec<Vec<f64>> = sim.state.arrays().iter().map(|(_, f)| f.data().to_vec()).collect();
+    let after: Vec<Vec<f64>> = sim
+        .state
+        .arrays()
+        .iter()
+        .map(|(_, f)| f.data().to_vec())
+        .collect();
     sim.restore(&snap).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(windows(&sim), start);
     run_until(&mut sim, end, |_, _| {});
     assert_eq!(windows(&sim), last);
-    let again: Vec<Vec<f64>> = sim.state.arrays().iter().map(|(_, f)| f.data().to_vec()).collect();
+    let again: Vec<Vec<f64>> = sim
+        .state
+        .arrays()
+        .iter()
+        .map(|(_, f)| f.data().to_vec())
+        .collect();
     assert!(after == again, "the run from the snapshot differs");
 }

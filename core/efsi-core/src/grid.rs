@@ -240,7 +240,11 @@ impl Grid {
             dx: self.dx,
             dy: self.dy,
             nz: if self.is_3d() { n[2] } else { 1 },
-            z0: if self.is_3d() { self.zf(lo[2] as isize) } else { self.z0 },
+            z0: if self.is_3d() {
+                self.zf(lo[2] as isize)
+            } else {
+                self.z0
+            },
             dz: self.dz,
             gz: self.gz,
             metric: Metric {

@@ -242,7 +242,9 @@ impl State {
         &mut self,
         recorded: &dyn Fn(&str) -> Option<Vec<f64>>,
     ) -> Result<(), String> {
-        self.resources.iter_mut().try_for_each(|r| r.reshape(recorded))
+        self.resources
+            .iter_mut()
+            .try_for_each(|r| r.reshape(recorded))
     }
 
     /// [`arrays`](Self::arrays), mutable, same names and order.

@@ -338,7 +338,12 @@ impl BodyDeformations {
 /// `to`).
 fn copy_shared(from: &Field, to: &mut Field, shift: Index) {
     let g = efsi_core::G;
-    let (fs, fr, fp, fz) = (from.stride(), from.rows(), from.planes(), from.gz() as isize);
+    let (fs, fr, fp, fz) = (
+        from.stride(),
+        from.rows(),
+        from.planes(),
+        from.gz() as isize,
+    );
     let (ts, tr, tp, tz) = (to.stride(), to.rows(), to.planes(), to.gz() as isize);
     let span = |n: usize, lo: isize, s: isize, m: usize, mlo: isize| {
         let a = lo.max(mlo - s);
@@ -375,7 +380,11 @@ impl StateResource for BodyDeformations {
 
     fn arrays_mut(&mut self) -> Vec<(String, &mut Field)> {
         let mut out = Vec::new();
-        let parts = self.names.iter().zip(&mut self.bodies).zip(&mut self.records);
+        let parts = self
+            .names
+            .iter()
+            .zip(&mut self.bodies)
+            .zip(&mut self.records);
         for ((name, d), r) in parts {
             out.push((format!("B.{name}.window"), r));
             for (a, f) in d.arrays_mut() {
@@ -502,7 +511,11 @@ pub(super) fn init_state(bodies: &[ElasticBody], grid: &Grid, state: &mut State)
 /// Each elastic body's deformation moved onto the window around its fraction's window
 /// ([`Place::around`]), if it is not there; nothing for the single solid. An error if the
 /// state holds no fraction of a body.
-pub(super) fn place_all(bodies: &[ElasticBody], grid: &Grid, state: &mut State) -> Result<(), String> {
+pub(super) fn place_all(
+    bodies: &[ElasticBody],
+    grid: &Grid,
+    state: &mut State,
+) -> Result<(), String> {
     let Some(mut many) = state.resources.take::<BodyDeformations>() else {
         return Ok(());
     };
@@ -666,10 +679,10 @@ pub(super) fn fit_kernels(
     sides: &Boundaries,
 ) {
     for (k, p) in ks.iter_mut().zip(places) {
-        if let Some(p) = *p {
-            if k.place != Some(p) {
-                *k = super::Kernels::windowed(parent, bc, sides, p, k.mu_f, k.mu_s);
-            }
+        if let Some(p) = *p
+            && k.place != Some(p)
+        {
+            *k = super::Kernels::windowed(parent, bc, sides, p, k.mu_f, k.mu_s);
         }
     }
 }

@@ -140,7 +140,9 @@ impl DeformationStage {
         // The solids' cells as of the last update; before the first one, every cell.
         let solid = self.ks[1..]
             .iter()
-            .fold(self.ks[0].solid_on_grid(), |c, k| c.union(k.solid_on_grid()));
+            .fold(self.ks[0].solid_on_grid(), |c, k| {
+                c.union(k.solid_on_grid())
+            });
         let c = match solid {
             c if c.points() > 0 => c,
             _ => super::Window::boxed([0; 3], std::array::from_fn(last)),

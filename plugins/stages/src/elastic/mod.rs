@@ -308,8 +308,8 @@ mod tests;
 mod transport;
 mod window;
 
-pub use bodies::{BodyDeformations, Place};
 pub(crate) use bodies::any_elastic;
+pub use bodies::{BodyDeformations, Place};
 pub(crate) use choice::may_couple;
 use choice::{StepScheme, coupled_step, coupling};
 pub use law::resolve_law;

@@ -190,7 +190,13 @@ fn elastic_stage(
     let per_body = || {
         bodies
             .iter()
-            .map(|b| if b.index.is_none() { tensor() } else { Vec::new() })
+            .map(|b| {
+                if b.index.is_none() {
+                    tensor()
+                } else {
+                    Vec::new()
+                }
+            })
             .collect::<Vec<_>>()
     };
     Ok(ElasticStage {
