@@ -216,6 +216,46 @@ impl Grid {
         }
     }
 
+    /// The sub-grid of the `n` cells whose first cell is this grid's cell `lo` (per axis; `n[2]`
+    /// and `lo[2]` ignored on a two-dimensional grid): the same cell sizes and, column by
+    /// column, the same radius factors (ghost columns included), so an operator on the window
+    /// computes what it computes on the same cells of this grid, bit for bit. Panics if the
+    /// window does not fit.
+    pub fn window(&self, lo: [usize; 3], n: [usize; 3]) -> Grid {
+        let dims = self.dims();
+        let pn = self.n();
+        assert!(
+            (0..dims).all(|a| n[a] >= 1 && lo[a] + n[a] <= pn[a]),
+            "a window of {n:?} cells at {lo:?} does not fit the grid of {pn:?} cells"
+        );
+        let cols = n[0] + 1 + 2 * GHOST;
+        let slice = |v: &[f64]| v[lo[0]..lo[0] + cols].to_vec();
+        let m = &self.metric;
+        Grid {
+            geometry: self.geometry,
+            nx: n[0],
+            ny: n[1],
+            x0: self.xf(lo[0] as isize),
+            y0: self.yf(lo[1] as isize),
+            dx: self.dx,
+            dy: self.dy,
+            nz: if self.is_3d() { n[2] } else { 1 },
+            z0: if self.is_3d() {
+                self.zf(lo[2] as isize)
+            } else {
+                self.z0
+            },
+            dz: self.dz,
+            gz: self.gz,
+            metric: Metric {
+                rc: slice(&m.rc),
+                rx: slice(&m.rx),
+                hoop_c: slice(&m.hoop_c),
+                hoop_x: slice(&m.hoop_x),
+            },
+        }
+    }
+
     /// Whether the grid has a third axis with ghost layers (see the ghost policy above).
     pub fn is_3d(&self) -> bool {
         self.gz > 0

@@ -126,11 +126,13 @@ impl Simulation {
                 names.join(", ")
             )));
         }
+        // The resources' arrays may change shape during a run (a body's window): they take
+        // the snapshot's with their values.
         let same_shape = self
             .state
-            .arrays()
+            .field_arrays()
             .iter()
-            .zip(snap.state.arrays())
+            .zip(snap.state.field_arrays())
             .all(|((_, f), (_, g))| f.data().len() == g.data().len());
         if !same_shape {
             return Err(fail(

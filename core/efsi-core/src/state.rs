@@ -60,10 +60,19 @@ pub trait StateResource: std::any::Any + Send + Sync + std::fmt::Debug {
     fn scalars_mut(&mut self) -> Vec<(&'static str, &mut f64)> {
         Vec::new()
     }
+    /// Take the shapes a checkpoint recorded before its arrays are read back into
+    /// [`arrays_mut`](Self::arrays_mut): `recorded(name)` gives the values recorded under
+    /// `name` (`None` if there are none). A resource whose arrays change shape during a run
+    /// (a body's window that follows it) takes its recorded shapes here; default: nothing,
+    /// the shapes are the grid's.
+    fn reshape(&mut self, _recorded: &dyn Fn(&str) -> Option<Vec<f64>>) -> Result<(), String> {
+        Ok(())
+    }
     /// A boxed copy.
     fn clone_box(&self) -> Box<dyn StateResource>;
-    /// Copy `other` (a value of the same type and shapes) into `self` without allocating;
-    /// returns whether it fitted (nothing is copied otherwise).
+    /// Copy `other` (a value of the same type) into `self`, without allocating where the shapes
+    /// agree; returns whether it fitted (nothing is copied otherwise). A resource whose arrays
+    /// change shape during a run takes `other`'s shapes.
     fn copy_from(&mut self, other: &dyn StateResource) -> bool;
     /// The first non-finite value in the interior, as (what, cell), checked after a stage that
     /// writes the resource's field (default: none).
@@ -207,6 +216,16 @@ impl State {
     /// `w` on a three-dimensional grid, then `phi` when allocated, then each resource's arrays ([`StateResource::arrays`]). What a
     /// checkpoint saves: with `t`, `step` and `dt_prev` this is the whole state, ghosts included.
     pub fn arrays(&self) -> Vec<(String, &Field)> {
+        let mut out = self.field_arrays();
+        for r in self.resources.iter() {
+            out.extend(r.arrays());
+        }
+        out
+    }
+
+    /// The state's own arrays of [`arrays`](Self::arrays), the resources' aside: the shapes
+    /// the grid fixes.
+    pub fn field_arrays(&self) -> Vec<(String, &Field)> {
         let base = [&self.u, &self.v, &self.p, &self.rho, &self.mu];
         let mut out: Vec<(String, &Field)> = ["u", "v", "p", "rho", "mu"]
             .into_iter()
@@ -215,10 +234,17 @@ impl State {
             .collect();
         out.extend(self.w.iter().map(|f| ("w".to_string(), f)));
         out.extend(self.phi.iter().map(|f| ("phi".to_string(), f)));
-        for r in self.resources.iter() {
-            out.extend(r.arrays());
-        }
         out
+    }
+
+    /// Each resource's [`StateResource::reshape`] to the shapes a checkpoint recorded.
+    pub fn reshape_resources(
+        &mut self,
+        recorded: &dyn Fn(&str) -> Option<Vec<f64>>,
+    ) -> Result<(), String> {
+        self.resources
+            .iter_mut()
+            .try_for_each(|r| r.reshape(recorded))
     }
 
     /// [`arrays`](Self::arrays), mutable, same names and order.

@@ -250,6 +250,12 @@ pub struct Checkpoint {
     pub snapshot: Snapshot,
 }
 
+/// The values recorded under `name` in `arrays`.
+fn recorded(arrays: &[(String, Vec<f64>)], name: &str) -> Option<Vec<f64>> {
+    let found = arrays.iter().find(|(n, _)| n == name);
+    found.map(|(_, d)| d.clone())
+}
+
 /// Raw content of a checkpoint file's snapshot section: named arrays, to be fitted into a
 /// simulation's own [`Snapshot`] ([`SnapshotRecord::into_snapshot`]).
 #[derive(Clone, Debug)]
@@ -284,6 +290,11 @@ impl SnapshotRecord {
             what: what.to_string(),
             message,
         };
+        let arrays = &self.arrays;
+        template
+            .state
+            .reshape_resources(&|name| recorded(arrays, name))
+            .map_err(fail)?;
         let mut theirs = self.arrays.into_iter();
         for (name, field) in template.state.arrays_mut() {
             let Some((rname, data)) = theirs.next() else {

@@ -24,12 +24,32 @@
 //!
 //! # Storage
 //!
-//! Each elastic body has its own kernels (weights, batches, gradients) and deformation on the
-//! whole grid; the work of each is restricted to its own solid's window (`Kernels::solid_c`,
-//! `near_c`), so a step costs the bodies' extent, but the storage is the grid's per elastic
-//! body. A scene of one body keeps the single [`Deformation`] resource (checkpoint names
-//! `B.<part>.<c>`) and runs the same arithmetic as before, bit for bit; a scene of several
-//! keeps [`BodyDeformations`] (names `B.<body>.<part>.<c>`).
+//! A scene of one body keeps the single [`Deformation`] resource on the whole grid (checkpoint
+//! names `B.<part>.<c>`). A scene of several keeps [`BodyDeformations`]: each elastic body's
+//! deformation, its kernels (weights, law batches, gradients) and its work arrays live on its
+//! own window ([`Place`]), the box of its fraction's window (the VOF stage's `BodyWindow`)
+//! grown by [`PAD`] cells on every side inside the domain; memory and work scale with the
+//! bodies' extent, not with the grid times their number. Outside its window a body's B is
+//! the identity and its rates, stress and weights zero (pure fluid). The kernels run on the
+//! window as a grid of its own ([`efsi_core::Grid::window`]: the parent's cell sizes and
+//! radii, its sides the domain's where it touches them, elsewhere even reflections); the
+//! velocities are copied in, and the body's force on the unknown faces, its stiffness for the
+//! preconditioners and its output tensors are added into the parent's at the same cells. The
+//! window moves with the fraction's: when the VOF window is placed anew, the deformation is
+//! copied onto the new box (identity and zero rates where the old one did not reach).
+//!
+//! **Why the window step is the full-grid step, bit for bit.** When the elastic step runs,
+//! the body's support lies at least two cells inside every inner side of its fraction's
+//! window (the VOF window's rule), so at least `2 + PAD` cells inside the elastic window's.
+//! The deformation is written within [`super::NEAR`] cells of the support (and the edges
+//! beside), read within three more (van Leer advection, gradient windows), and reset to the
+//! identity, its rates to zero, wherever the body has no solid; with `PAD` = 8 every cell
+//! written or read lies inside the window or in its ghosts, whose values (even reflections of
+//! the identity and of zero) are those the whole grid holds there. The force and the
+//! stiffness are added face by face and cell by cell in the bodies' order, as on the whole
+//! grid; sums over cells (the strain energy) run over the same cells in the same order. A
+//! checkpoint records each window (`B.<body>.window`: its first cell and its cells along each
+//! axis) with the arrays on it, and a restore takes the recorded windows.
 //!
 //! # Limits
 //!
@@ -41,9 +61,174 @@
 //! is the contact's job, not this module's.
 
 use super::Deformation;
-use efsi_core::body_fractions::BodyFractions;
-use efsi_core::scene::Options;
-use efsi_core::{BoundarySet, Field, Grid, Scene, State, StateResource};
+use efsi_core::body_fractions::{BodyFraction, BodyFractions};
+use efsi_core::scene::{Boundaries, Boundary, Options, Side};
+use efsi_core::{BoundarySet, Field, Geometry, Grid, Index, Scene, State, StateResource};
+
+/// Cells an elastic body's window keeps beyond its fraction's window on every side inside the
+/// domain (see "Storage" in the module docs for why 8 keeps the window step the full-grid
+/// step).
+pub(super) const PAD: usize = 8;
+
+/// The whole grid, its sides, and the scene's sides (what a body's window takes its own from).
+pub(super) struct Frame {
+    pub(super) grid: Grid,
+    pub(super) bc: BoundarySet,
+    pub(super) sides: Boundaries,
+}
+
+/// An elastic body's window: the grid cell of its first cell and its cells along each axis
+/// (1 along z in two dimensions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Place {
+    /// The grid cell of the window's cell `[0, 0, 0]`.
+    pub lo: [usize; 3],
+    /// Its cells along each axis.
+    pub n: [usize; 3],
+}
+
+impl Place {
+    /// The window of a body whose fraction's window is `bf` (set): that box grown by [`PAD`]
+    /// cells, clipped to `parent`.
+    pub(super) fn around(parent: &Grid, bf: &BodyFraction) -> Place {
+        let pn = parent.n();
+        let mut p = Place {
+            lo: [0; 3],
+            n: [1; 3],
+        };
+        for a in 0..parent.dims() {
+            p.lo[a] = bf.lo[a].saturating_sub(PAD);
+            p.n[a] = (bf.lo[a] + bf.n[a] + PAD).min(pn[a]) - p.lo[a];
+        }
+        p
+    }
+
+    /// A small window at the grid's first cell (a body's before its fraction is known).
+    pub(super) fn first(parent: &Grid) -> Place {
+        let pn = parent.n();
+        Place {
+            lo: [0; 3],
+            n: std::array::from_fn(|a| if a < parent.dims() { pn[a].min(2) } else { 1 }),
+        }
+    }
+
+    /// The grid index of the window's cell `[0, 0, 0]`.
+    pub(super) fn origin(&self) -> Index {
+        self.lo.map(|v| v as isize)
+    }
+
+    /// The window as a grid of its own ([`Grid::window`]).
+    pub(super) fn grid(&self, parent: &Grid) -> Grid {
+        parent.window(self.lo, self.n)
+    }
+
+    /// The sides of the window: the domain's where it touches them, elsewhere no-slip (whose
+    /// scalar and shear ghosts are even reflections).
+    pub(super) fn sides(&self, parent: &Grid, sides: &Boundaries) -> Boundaries {
+        let mut out = sides.clone();
+        let pn = parent.n();
+        for &side in Side::of(parent.dims()) {
+            let a = side.axis();
+            let high = side == Side::normal_to(a, true);
+            let touches = if high {
+                self.lo[a] + self.n[a] == pn[a]
+            } else {
+                self.lo[a] == 0
+            };
+            if touches {
+                continue;
+            }
+            let slot = match side {
+                Side::XMin => &mut out.x_min,
+                Side::XMax => &mut out.x_max,
+                Side::YMin => &mut out.y_min,
+                Side::YMax => &mut out.y_max,
+                Side::ZMin => out.z_min.get_or_insert(Boundary::NoSlip),
+                Side::ZMax => out.z_max.get_or_insert(Boundary::NoSlip),
+            };
+            *slot = Boundary::NoSlip;
+        }
+        out
+    }
+
+    /// The window's record in a checkpoint (`B.<body>.window`): its first cell and its cells
+    /// along each axis in the first six entries of a small field.
+    fn record(&self) -> Field {
+        let mut f = Field::zeros(&record_grid());
+        for (d, v) in f.data_mut().iter_mut().zip(self.lo.iter().chain(&self.n)) {
+            *d = *v as f64;
+        }
+        f
+    }
+
+    /// The window a record holds ([`Place::record`]); an error if it is not one of `parent`.
+    fn of_record(parent: &Grid, data: &[f64]) -> Result<Place, String> {
+        let int = |v: f64| {
+            (v >= 0.0 && v.fract() == 0.0 && v < 1e12)
+                .then_some(v as usize)
+                .ok_or_else(|| format!("{v} is not a cell index of a window"))
+        };
+        let head = data
+            .get(..6)
+            .ok_or("a body's window record is shorter than its six numbers")?;
+        let mut p = Place::first(parent);
+        for a in 0..3 {
+            p.lo[a] = int(head[a])?;
+            p.n[a] = int(head[3 + a])?;
+        }
+        let pn = parent.n();
+        let fits = (0..parent.dims()).all(|a| p.n[a] >= 1 && p.lo[a] + p.n[a] <= pn[a]);
+        if !fits {
+            return Err(format!(
+                "a window of {:?} cells at {:?} does not fit the grid of {pn:?} cells",
+                p.n, p.lo
+            ));
+        }
+        Ok(p)
+    }
+}
+
+/// The grid of a window's record: six cells along x.
+fn record_grid() -> Grid {
+    Grid::new(Geometry::Planar, 6, 1, (0.0, 1.0), (0.0, 1.0))
+}
+
+/// Whether `f` is shaped for `grid`.
+pub(super) fn shaped_for(f: &Field, grid: &Grid) -> bool {
+    [f.stride(), f.rows(), f.planes()] == grid.padded()
+}
+
+/// `fields` reshaped for `grid` if they are not (`count` zero fields).
+pub(super) fn reshape(fields: &mut Vec<Field>, grid: &Grid, count: usize) {
+    if fields.len() != count || fields.iter().any(|f| !shaped_for(f, grid)) {
+        *fields = (0..count).map(|_| Field::zeros(grid)).collect();
+    }
+}
+
+/// Copy the padded window of the parent field `from` whose cell `[0, 0, 0]` is the parent's
+/// `origin` into the window field `to` (ghosts included), row by row.
+pub(super) fn copy_in(from: &Field, to: &mut Field, origin: Index) {
+    let (stride, rows, planes, gz) = (to.stride(), to.rows(), to.planes(), to.gz() as isize);
+    let g = efsi_core::G;
+    for k in 0..planes as isize {
+        for j in 0..rows as isize {
+            let (kk, jj) = (k - gz, j - g);
+            let src = from.idx3([-g + origin[0], jj + origin[1], kk + origin[2]]);
+            let dst = to.idx3([-g, jj, kk]);
+            to.data_mut()[dst..dst + stride].copy_from_slice(&from.data()[src..src + stride]);
+        }
+    }
+}
+
+/// Copy the points `region` (of the window field `from`, a region of its grid) into the
+/// parent field `to` at the same cells (`origin` the parent index of the window's first cell).
+pub(super) fn copy_out(from: &Field, to: &mut Field, origin: Index, region: &efsi_core::Region) {
+    for l in (0..region.lines()).map(|n| region.line(n)) {
+        let at = super::plus(l.start, origin);
+        let dst = to.idx3(at);
+        to.data_mut()[dst..dst + l.len].copy_from_slice(from.at(&l, [0; 3]));
+    }
+}
 
 /// An elastic body of the scene: its index among the scene's bodies (`None` for the single
 /// solid of a scene of one body, whose fraction is the state's) and its settings.
@@ -98,20 +283,94 @@ pub(super) fn viscosities_of(scene: &Scene, b: &ElasticBody) -> (f64, f64) {
 }
 
 /// The deformations of the elastic bodies of a scene of several (the bodies with a law, in the
-/// scene's order): each body's [`Deformation`] with its name, saved in checkpoints and snapshots
-/// under the names `B.<body>.<part>.<c>`.
+/// scene's order): each body's [`Deformation`] on its window ([`Place`]), with its name, saved
+/// in checkpoints and snapshots under the names `B.<body>.window` (the window) and
+/// `B.<body>.<part>.<c>`.
 #[derive(Clone, Debug)]
 pub struct BodyDeformations {
     /// The bodies' names.
     pub names: Vec<String>,
-    /// Their deformations.
+    /// Their deformations, each on its window.
     pub bodies: Vec<Deformation>,
+    /// Their windows.
+    pub places: Vec<Place>,
+    /// Each window's record ([`Place::record`]).
+    records: Vec<Field>,
+    /// The grid the windows are boxes of.
+    parent: Grid,
+}
+
+impl BodyDeformations {
+    /// Body `k`'s deformation moved onto the window `to`: its values where the two windows
+    /// share cells (ghosts included), the identity and zero rates elsewhere.
+    pub(super) fn place(&mut self, k: usize, to: Place) {
+        let from = self.places[k];
+        if from == to {
+            return;
+        }
+        let grid = to.grid(&self.parent);
+        let mut moved = Deformation::zeros(&grid);
+        moved.set_identity();
+        for f in moved.start.iter_mut().take(3) {
+            f.fill(1.0);
+        }
+        let old = &self.bodies[k];
+        let shift: Index = std::array::from_fn(|a| from.lo[a] as isize - to.lo[a] as isize);
+        for ((_, dst), (_, src)) in moved.parts_mut().into_iter().zip(old.parts()) {
+            for (d, s) in dst.iter_mut().zip(src) {
+                copy_shared(s, d, shift);
+            }
+        }
+        moved.elastic_energy = old.elastic_energy;
+        self.bodies[k] = moved;
+        self.places[k] = to;
+        self.records[k] = to.record();
+    }
+
+    /// The window grid of body `k`.
+    pub(super) fn grid(&self, k: usize) -> Grid {
+        self.places[k].grid(&self.parent)
+    }
+}
+
+/// Copy the entries of the window field `from` into the window field `to` where they share a
+/// point; `shift` is `from`'s first cell less `to`'s (point `I` of `from` is `I + shift` of
+/// `to`).
+fn copy_shared(from: &Field, to: &mut Field, shift: Index) {
+    let g = efsi_core::G;
+    let (fs, fr, fp, fz) = (
+        from.stride(),
+        from.rows(),
+        from.planes(),
+        from.gz() as isize,
+    );
+    let (ts, tr, tp, tz) = (to.stride(), to.rows(), to.planes(), to.gz() as isize);
+    let span = |n: usize, lo: isize, s: isize, m: usize, mlo: isize| {
+        let a = lo.max(mlo - s);
+        let b = (lo + n as isize).min(mlo + m as isize - s);
+        (a, b)
+    };
+    let (i0, i1) = span(fs, -g, shift[0], ts, -g);
+    let (j0, j1) = span(fr, -g, shift[1], tr, -g);
+    let (k0, k1) = span(fp, -fz, shift[2], tp, -tz);
+    if i0 >= i1 {
+        return;
+    }
+    let len = (i1 - i0) as usize;
+    for k in k0..k1 {
+        for j in j0..j1 {
+            let src = from.idx3([i0, j, k]);
+            let dst = to.idx3([i0 + shift[0], j + shift[1], k + shift[2]]);
+            to.data_mut()[dst..dst + len].copy_from_slice(&from.data()[src..src + len]);
+        }
+    }
 }
 
 impl StateResource for BodyDeformations {
     fn arrays(&self) -> Vec<(String, &Field)> {
         let mut out = Vec::new();
-        for (name, d) in self.names.iter().zip(&self.bodies) {
+        for ((name, d), r) in self.names.iter().zip(&self.bodies).zip(&self.records) {
+            out.push((format!("B.{name}.window"), r));
             for (a, f) in d.arrays() {
                 out.push((format!("B.{name}{}", &a[1..]), f));
             }
@@ -121,12 +380,28 @@ impl StateResource for BodyDeformations {
 
     fn arrays_mut(&mut self) -> Vec<(String, &mut Field)> {
         let mut out = Vec::new();
-        for (name, d) in self.names.iter().zip(&mut self.bodies) {
+        let parts = self
+            .names
+            .iter()
+            .zip(&mut self.bodies)
+            .zip(&mut self.records);
+        for ((name, d), r) in parts {
+            out.push((format!("B.{name}.window"), r));
             for (a, f) in d.arrays_mut() {
                 out.push((format!("B.{name}{}", &a[1..]), f));
             }
         }
         out
+    }
+
+    fn reshape(&mut self, recorded: &dyn Fn(&str) -> Option<Vec<f64>>) -> Result<(), String> {
+        for k in 0..self.names.len() {
+            let name = format!("B.{}.window", self.names[k]);
+            let data = recorded(&name).ok_or_else(|| format!("the array `{name}` is missing"))?;
+            let to = Place::of_record(&self.parent, &data).map_err(|e| format!("`{name}`: {e}"))?;
+            self.place(k, to);
+        }
+        Ok(())
     }
 
     fn clone_box(&self) -> Box<dyn StateResource> {
@@ -140,18 +415,24 @@ impl StateResource for BodyDeformations {
         if self.names != other.names || self.bodies.len() != other.bodies.len() {
             return false;
         }
-        // The bodies' deformations are shaped alike (one grid): the first fits if all do, and
-        // a body that does not fit copies nothing.
-        self.bodies
-            .iter_mut()
-            .zip(&other.bodies)
-            .all(|(a, b)| a.copy_from(b))
+        // A body whose window differs takes the other's (one allocation); the others are
+        // copied in place.
+        for k in 0..self.bodies.len() {
+            if self.places[k] == other.places[k] && self.bodies[k].copy_from(&other.bodies[k]) {
+                continue;
+            }
+            self.bodies[k] = other.bodies[k].clone();
+            self.places[k] = other.places[k];
+            self.records[k] = other.records[k].clone();
+        }
+        true
     }
 
-    fn first_non_finite(&self, nx: usize, ny: usize) -> Option<(String, (usize, usize))> {
-        self.names.iter().zip(&self.bodies).find_map(|(name, d)| {
-            d.first_non_finite(nx, ny)
-                .map(|(c, at)| (format!("{name}.B{c}"), at))
+    fn first_non_finite(&self, _nx: usize, _ny: usize) -> Option<(String, (usize, usize))> {
+        let all = self.names.iter().zip(&self.bodies).zip(&self.places);
+        all.into_iter().find_map(|((name, d), p)| {
+            d.first_non_finite(p.n[0], p.n[1])
+                .map(|(c, (i, j))| (format!("{name}.B{c}"), (i + p.lo[0], j + p.lo[1])))
         })
     }
 
@@ -207,7 +488,7 @@ pub(super) fn deformations(state: &State) -> &[Deformation] {
 
 /// Add the deformation resource for `bodies` to the state, if it has none: the single
 /// [`Deformation`] for the single solid, [`BodyDeformations`] for the bodies of a scene of
-/// several.
+/// several (each on a small window until [`place_all`] places it around its fraction).
 pub(super) fn init_state(bodies: &[ElasticBody], grid: &Grid, state: &mut State) {
     let single = bodies.len() == 1 && bodies[0].index.is_none();
     if single {
@@ -215,39 +496,91 @@ pub(super) fn init_state(bodies: &[ElasticBody], grid: &Grid, state: &mut State)
             state.resources.insert(Deformation::zeros(grid));
         }
     } else if state.resources.get::<BodyDeformations>().is_none() {
+        let first = Place::first(grid);
+        let window = first.grid(grid);
         state.resources.insert(BodyDeformations {
             names: bodies.iter().map(|b| b.name.clone()).collect(),
-            bodies: bodies.iter().map(|_| Deformation::zeros(grid)).collect(),
+            bodies: bodies.iter().map(|_| Deformation::zeros(&window)).collect(),
+            places: bodies.iter().map(|_| first).collect(),
+            records: bodies.iter().map(|_| first.record()).collect(),
+            parent: grid.clone(),
         });
     }
 }
 
-/// Each elastic body's fraction as a field of the grid with its ghosts filled: the state's
-/// solid fraction for the single solid, else the body's `φ_k` from the state's
-/// [`BodyFractions`] (the VOF stage's copy of its windows).
+/// Each elastic body's deformation moved onto the window around its fraction's window
+/// ([`Place::around`]), if it is not there; nothing for the single solid. An error if the
+/// state holds no fraction of a body.
+pub(super) fn place_all(
+    bodies: &[ElasticBody],
+    grid: &Grid,
+    state: &mut State,
+) -> Result<(), String> {
+    let Some(mut many) = state.resources.take::<BodyDeformations>() else {
+        return Ok(());
+    };
+    let r = (|| {
+        let all = state
+            .resources
+            .get::<BodyFractions>()
+            .ok_or("the bodies' fractions are not in the state")?;
+        for (n, b) in bodies.iter().enumerate() {
+            let bf = fraction_of(all, b)?;
+            many.place(n, Place::around(grid, bf));
+        }
+        Ok(())
+    })();
+    state.resources.put(many);
+    r
+}
+
+/// Body `b`'s fraction in `all`, set; an error naming it if there is none.
+fn fraction_of<'a>(all: &'a BodyFractions, b: &ElasticBody) -> Result<&'a BodyFraction, String> {
+    let k = b.index.expect("a body of several");
+    all.bodies.get(k).filter(|f| f.is_set()).ok_or_else(|| {
+        format!(
+            "body \"{}\" has no fraction in the state (the VOF stage publishes them): its \
+             deformation cannot be weighted",
+            b.name
+        )
+    })
+}
+
+/// The windows of the state's deformations: `None` for the single solid's (the whole grid).
+pub(super) fn places(state: &State) -> Vec<Option<Place>> {
+    match state.resources.get::<BodyDeformations>() {
+        Some(many) => many.places.iter().map(|p| Some(*p)).collect(),
+        None => vec![None],
+    }
+}
+
+/// Each elastic body's fraction on its window with its ghosts filled: the state's solid
+/// fraction for the single solid, else the body's `φ_k` from the state's [`BodyFractions`]
+/// (the VOF stage's copy of its windows), written into a field of its kernels' window.
 pub(super) struct Fractions {
     fields: Vec<Field>,
 }
 
 impl Fractions {
-    /// Work fields for `bodies` (none for the single solid, which reads the state's).
-    pub(super) fn new(bodies: &[ElasticBody], grid: &Grid) -> Self {
+    /// Work fields for `bodies` (none for the single solid, which reads the state's), shaped
+    /// when first refreshed.
+    pub(super) fn new(bodies: &[ElasticBody]) -> Self {
         Fractions {
             fields: bodies
                 .iter()
                 .filter(|b| b.index.is_some())
-                .map(|_| Field::zeros(grid))
+                .map(|_| Field::default())
                 .collect(),
         }
     }
 
-    /// Refresh the bodies' fractions from `state`: each `φ_k` written into its field and its
-    /// ghosts filled as the state's solid fraction's (`bc`'s scalar sides).
+    /// Refresh the bodies' fractions from `state`: each `φ_k` written into a field of its
+    /// kernels' window (`ks`, one per body, placed) and its ghosts filled by the window's
+    /// sides.
     pub(super) fn refresh(
         &mut self,
         bodies: &[ElasticBody],
-        grid: &Grid,
-        bc: &BoundarySet,
+        ks: &[super::Kernels],
         state: &State,
     ) -> Result<(), String> {
         if self.fields.is_empty() {
@@ -257,17 +590,25 @@ impl Fractions {
             .resources
             .get::<BodyFractions>()
             .ok_or("the bodies' fractions are not in the state")?;
-        for (f, b) in self.fields.iter_mut().zip(bodies) {
-            let k = b.index.expect("a body of several");
-            let bf = all.bodies.get(k).filter(|f| f.is_set()).ok_or_else(|| {
-                format!(
-                    "body \"{}\" has no fraction in the state (the VOF stage publishes \
-                         them): its deformation cannot be weighted",
-                    b.name
-                )
-            })?;
-            bf.fill(f);
-            bc.fill_scalar(grid, f, false);
+        for ((f, b), k) in self.fields.iter_mut().zip(bodies).zip(ks) {
+            let bf = fraction_of(all, b)?;
+            if !shaped_for(f, &k.grid) {
+                *f = Field::zeros(&k.grid);
+            } else {
+                f.fill(0.0);
+            }
+            let o = k.origin;
+            let mut it = bf.phi.iter();
+            for kk in 0..bf.n[2] {
+                for j in 0..bf.n[1] {
+                    for i in 0..bf.n[0] {
+                        let at = [i + bf.lo[0], j + bf.lo[1], kk + bf.lo[2]];
+                        let v = *it.next().expect("a window's values");
+                        f[[0, 1, 2].map(|a| at[a] as isize - o[a])] = v;
+                    }
+                }
+            }
+            k.bc.fill_scalar(&k.grid, f, false);
         }
         Ok(())
     }
@@ -292,4 +633,56 @@ pub(super) fn record_energies(bodies: &[ElasticBody], state: &mut State) {
         }
     }
     state.resources.put(many);
+}
+
+impl super::Kernels {
+    /// `f` of the kernels and the velocity `vel` of the whole grid (one field per axis) as
+    /// they see it: itself on the whole grid, copied onto a window (ghosts included).
+    pub(super) fn with_velocity<R>(
+        &mut self,
+        vel: &[&Field],
+        f: impl FnOnce(&mut Self, &[&Field]) -> R,
+    ) -> R {
+        if self.place.is_none() {
+            return f(self, vel);
+        }
+        let mut w = std::mem::take(&mut self.vel);
+        for (w, v) in w.iter_mut().zip(vel) {
+            copy_in(v, w, self.origin);
+        }
+        let r = f(self, &super::velocity(&w[0], &w[1], w.get(2)));
+        self.vel = w;
+        r
+    }
+
+    /// The solid's centres ([`super::Kernels::solid_c`]) in the whole grid's indices.
+    pub(super) fn solid_on_grid(&self) -> super::Window {
+        let c = self.solid_c;
+        if c.points() == 0 {
+            return c;
+        }
+        super::Window::boxed(
+            super::plus(c.lo(), self.origin),
+            super::plus(c.hi(), self.origin),
+        )
+    }
+}
+
+/// Kernels `ks` on the windows `places` of the state's deformations (one per body; `None`:
+/// the whole grid): each rebuilt on its window where it is not there. `parent` is the whole
+/// grid, `bc` and `sides` its sides.
+pub(super) fn fit_kernels(
+    ks: &mut [super::Kernels],
+    places: &[Option<Place>],
+    parent: &Grid,
+    bc: &BoundarySet,
+    sides: &Boundaries,
+) {
+    for (k, p) in ks.iter_mut().zip(places) {
+        if let Some(p) = *p
+            && k.place != Some(p)
+        {
+            *k = super::Kernels::windowed(parent, bc, sides, p, k.mu_f, k.mu_s);
+        }
+    }
 }

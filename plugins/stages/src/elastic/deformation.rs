@@ -22,8 +22,11 @@ pub(super) struct DeformationStage {
     /// Which sides are walls (x min, x max, y min, y max, then z min, z max on a
     /// three-dimensional grid): `NoSlip`, `MovingWall`, `FreeSlip`, `Symmetry`.
     pub(super) walls: Vec<bool>,
-    /// The first pass of the update (the stretching evaluated on Bⁿ; see the module docs).
-    pub(super) first: Vec<Field>,
+    /// Per body, the first pass of the update (the stretching evaluated on Bⁿ; see the module
+    /// docs), on its kernels' grid.
+    pub(super) first: Vec<Vec<Field>>,
+    /// The whole grid and its sides.
+    pub(super) frame: super::bodies::Frame,
     /// The elastic-wave limits on Δt.
     pub(super) limits: super::limits::WaveLimits,
 }
@@ -76,6 +79,13 @@ impl DeformationStage {
         state: &mut State,
         coupled: bool,
     ) -> Result<StageStats, StageError> {
+        let f = &self.frame;
+        let places = super::bodies::places(state);
+        super::bodies::fit_kernels(&mut self.ks, &places, &f.grid, &f.bc, &f.sides);
+        for (first, k) in self.first.iter_mut().zip(&self.ks) {
+            let c = Deformation::components(&k.grid);
+            super::bodies::reshape(first, &k.grid, c);
+        }
         let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
         let r = self.update_held(ctx, state, held.all(), coupled);
         held.put(state);
@@ -96,9 +106,8 @@ impl DeformationStage {
             .phi
             .as_ref()
             .ok_or_else(|| err("deformation", "the solid fraction is not allocated".into()))?;
-        let k0 = &self.ks[0];
         self.phis
-            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .refresh(&self.bodies, &self.ks, state)
             .map_err(|m| err("deformation", m))?;
         let a = self.thetas[usize::from(coupled)] * ctx.dt;
         // The Picard pass, except in a coupled step beyond the split step's wave limit, which
@@ -107,9 +116,9 @@ impl DeformationStage {
         let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let parts = self.ks.iter_mut().zip(ds.iter_mut()).zip(&self.laws);
-        for (n, ((k, d), law)) in parts.enumerate() {
+        for (n, (((k, d), law), first)) in parts.zip(&mut self.first).enumerate() {
             k.set_weights(self.phis.of(n, phi));
-            k.update(&vel, d, &mut self.first, a, picard);
+            k.with_velocity(&vel, |k, vel| k.update(vel, d, first, a, picard));
             // The end-of-step stress and the elastic energy.
             k.evaluate(law.as_ref(), &d.b, &mut d.stress, false)
                 .map_err(|m| err("deformation", m))?;
@@ -131,7 +140,9 @@ impl DeformationStage {
         // The solids' cells as of the last update; before the first one, every cell.
         let solid = self.ks[1..]
             .iter()
-            .fold(self.ks[0].solid_c, |c, k| c.union(k.solid_c));
+            .fold(self.ks[0].solid_on_grid(), |c, k| {
+                c.union(k.solid_on_grid())
+            });
         let c = match solid {
             c if c.points() > 0 => c,
             _ => super::Window::boxed([0; 3], std::array::from_fn(last)),

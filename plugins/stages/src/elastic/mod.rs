@@ -308,8 +308,8 @@ mod tests;
 mod transport;
 mod window;
 
-pub use bodies::BodyDeformations;
 pub(crate) use bodies::any_elastic;
+pub use bodies::{BodyDeformations, Place};
 pub(crate) use choice::may_couple;
 use choice::{StepScheme, coupled_step, coupling};
 pub use law::resolve_law;
@@ -329,10 +329,21 @@ pub const B: FieldId = FieldId::Stage("B");
 /// Velocity gradients, stretching, advection, law batches and stress divergence on the
 /// staggered layout.
 struct Kernels {
+    /// The grid the kernels run on: the whole grid, or a body's window
+    /// ([`bodies::Place`]) as a grid of its own.
     grid: Grid,
+    /// Its sides.
     bc: BoundarySet,
-    /// The unknown faces and their compact order.
+    /// The unknown faces of the whole grid and their compact order.
     faces: UnknownFaces,
+    /// The whole grid's index of the kernels' cell `[0, 0, 0]` (zero on the whole grid).
+    origin: Index,
+    /// On a window, its place (`None` on the whole grid), and the velocity copied onto it (one
+    /// field per axis) and the stiffness it adds into the preconditioners' ([`Kernels::stiffness`],
+    /// centres then the edges of each shear pair).
+    place: Option<bodies::Place>,
+    vel: Vec<Field>,
+    eta: Vec<Field>,
     /// L₁₁, L₂₂, L₃₃ at centres.
     lc: [Field; 3],
     /// Per shear pair `[a, b]` ([`shear_pairs`]), the solid's `L_ab = ∂u_a/∂x_b` and
@@ -485,7 +496,32 @@ fn on<'a>(f: &'a Field, line: &efsi_core::Line) -> &'a [f64] {
 }
 
 impl Kernels {
+    /// Kernels on the whole grid.
     fn new(grid: &Grid, bc: &BoundarySet, mu_f: f64, mu_s: f64) -> Self {
+        Self::on(grid, bc, UnknownFaces::new(grid, bc), mu_f, mu_s)
+    }
+
+    /// Kernels on the window `place` of `parent` (sides `sides`, `bc` of them), with the
+    /// whole grid's unknown faces.
+    fn windowed(
+        parent: &Grid,
+        bc: &BoundarySet,
+        sides: &efsi_core::scene::Boundaries,
+        place: bodies::Place,
+        mu_f: f64,
+        mu_s: f64,
+    ) -> Self {
+        let grid = place.grid(parent);
+        let wbc = BoundarySet::new(&place.sides(parent, sides), &grid);
+        let mut k = Self::on(&grid, &wbc, UnknownFaces::new(parent, bc), mu_f, mu_s);
+        k.origin = place.origin();
+        k.place = Some(place);
+        k.vel = (0..grid.dims()).map(|_| Field::zeros(&grid)).collect();
+        k.eta = (0..k.edge.len() + 1).map(|_| Field::zeros(&grid)).collect();
+        k
+    }
+
+    fn on(grid: &Grid, bc: &BoundarySet, faces: UnknownFaces, mu_f: f64, mu_s: f64) -> Self {
         let n = grid.n();
         let nc: usize = (0..grid.dims()).map(|a| n[a] + 2).product();
         let pairs = shear_pairs(grid.dims()).len();
@@ -494,7 +530,11 @@ impl Kernels {
         Kernels {
             grid: grid.clone(),
             bc: bc.clone(),
-            faces: UnknownFaces::new(grid, bc),
+            faces,
+            origin: [0; 3],
+            place: None,
+            vel: Vec::new(),
+            eta: Vec::new(),
             lc: std::array::from_fn(|_| Field::zeros(grid)),
             lk: (0..pairs)
                 .map(|_| std::array::from_fn(|_| Field::zeros(grid)))
@@ -592,7 +632,10 @@ impl Kernels {
             ("(i, j)", "(x, y)")
         };
         let list = |v: &mut dyn Iterator<Item = String>| v.collect::<Vec<_>>().join(", ");
-        let shown = list(&mut at[..g.dims()].iter().map(|i| i.to_string()));
+        // The whole grid's index (the kernels' grid may be a body's window, whose positions
+        // are the grid's).
+        let on_grid = plus(at, self.origin);
+        let shown = list(&mut on_grid[..g.dims()].iter().map(|i| i.to_string()));
         let pos = |a: usize| {
             let nodal = edge.is_some_and(|p| SHEAR[p].1.nodal()[a] == 1);
             match (a, nodal) {

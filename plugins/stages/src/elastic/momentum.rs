@@ -186,19 +186,32 @@ fn elastic_stage(
     let fields = |n: usize| (0..n).map(|_| Field::zeros(grid)).collect::<Vec<_>>();
     let tensor = || fields(super::Deformation::components(grid));
     let edges = || fields(super::Deformation::components(grid) - 3);
-    let per_body = || bodies.iter().map(|_| tensor()).collect::<Vec<_>>();
+    // A body's on its window, shaped when the window is placed (`ElasticStage::fit`).
+    let per_body = || {
+        bodies
+            .iter()
+            .map(|b| {
+                if b.index.is_none() {
+                    tensor()
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect::<Vec<_>>()
+    };
     Ok(ElasticStage {
         mode: coupling(options),
         split_dt: limits.split,
         wave_step: limits.wave_step,
         options: o.clone(),
-        phis: Fractions::new(&bodies, grid),
+        phis: Fractions::new(&bodies),
         laws,
         tau: per_body(),
         tau_n: per_body(),
         op: ElasticOperator {
             ks,
-            db: tensor(),
+            frame: frame(scene, grid, bc),
+            db: per_body(),
             mass: vec![0.0; n],
             c: 0.0,
             theta_dt: 0.0,
@@ -220,6 +233,7 @@ fn elastic_stage(
         blocks: ViscousBlocks::new(grid, bc),
         eta: Field::zeros(grid),
         eta_k: edges(),
+        stiffness: Field::zeros(grid),
         eta_coefficients: Coefficients::new(grid, UnknownFaces::new(grid, bc)),
         eta_dm: vec![0.0; n],
         eta_diag: vec![0.0; n],
@@ -234,13 +248,29 @@ fn elastic_stage(
     })
 }
 
+/// The whole grid and its sides, for the bodies' windows.
+fn frame(scene: &Scene, grid: &Grid, bc: &BoundarySet) -> super::bodies::Frame {
+    super::bodies::Frame {
+        grid: grid.clone(),
+        bc: bc.clone(),
+        sides: scene.boundaries.clone(),
+    }
+}
+
 /// One set of kernels per elastic body, each with its own solid viscosity.
 fn kernels(scene: &Scene, grid: &Grid, bc: &BoundarySet, bodies: &[ElasticBody]) -> Vec<Kernels> {
     bodies
         .iter()
         .map(|b| {
             let (mu_f, mu_s) = viscosities_of(scene, b);
-            Kernels::new(grid, bc, mu_f, mu_s)
+            match b.index {
+                None => Kernels::new(grid, bc, mu_f, mu_s),
+                // Placed on the body's window when its fraction is known.
+                Some(_) => {
+                    let first = super::bodies::Place::first(grid);
+                    Kernels::windowed(grid, bc, &scene.boundaries, first, mu_f, mu_s)
+                }
+            }
         })
         .collect()
 }
@@ -291,7 +321,8 @@ fn deformation_stage(
     Ok(DeformationStage {
         laws,
         ks: kernels(scene, grid, bc, &bodies),
-        phis: Fractions::new(&bodies, grid),
+        frame: frame(scene, grid, bc),
+        phis: Fractions::new(&bodies),
         mode: coupling(options),
         limits,
         walls: Side::of(grid.dims())
@@ -307,8 +338,14 @@ fn deformation_stage(
             })
             .collect(),
         thetas: [o.stretch_theta(false), o.stretch_theta(true)],
-        first: (0..super::Deformation::components(grid))
-            .map(|_| Field::zeros(grid))
+        first: bodies
+            .iter()
+            .map(|b| match b.index {
+                None => (0..super::Deformation::components(grid))
+                    .map(|_| Field::zeros(grid))
+                    .collect(),
+                Some(_) => Vec::new(),
+            })
             .collect(),
         bodies,
     })

@@ -26,14 +26,22 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
                     let d = deformations(state).first()?;
                     return Some(tensor(grid, &d.b, Some(phi)));
                 };
-                // Each body's B weighted by its own fraction, summed.
+                // Each body's B weighted by its own fraction, on its window, summed.
                 let all = state.resources.get::<BodyFractions>()?;
-                let mut f = efsi_core::Field::zeros(grid);
                 let mut out = vec![0.0; 6 * grid.cells()];
-                for (name, d) in many.names.iter().zip(&many.bodies) {
+                for (k, (name, d)) in many.names.iter().zip(&many.bodies).enumerate() {
                     let b = all.bodies.iter().find(|b| &b.name == name)?;
-                    b.fill(&mut f);
-                    add(&mut out, &tensor(grid, &d.b, Some(&f)));
+                    let (place, window) = (many.places[k], many.grid(k));
+                    let mut f = efsi_core::Field::zeros(&window);
+                    let o = place.origin();
+                    for (at, v) in b.cells() {
+                        let w = [at[0] - o[0], at[1] - o[1], at[2] - o[2]];
+                        // Its support lies inside the window (module docs of `bodies`).
+                        if (0..3).all(|a| (0..place.n[a] as isize).contains(&w[a])) {
+                            f[w] = v;
+                        }
+                    }
+                    add_on(&mut out, grid, &tensor(&window, &d.b, Some(&f)), place);
                 }
                 Some(out)
             },
@@ -51,6 +59,15 @@ pub(super) const OUTPUTS: &[OutputDecl] = &[
             },
             values: |grid, state| {
                 state.phi.as_ref()?;
+                if let Some(many) = state.resources.get::<BodyDeformations>() {
+                    // Each body's on its window, summed.
+                    let mut out = vec![0.0; 6 * grid.cells()];
+                    for (k, d) in many.bodies.iter().enumerate() {
+                        let t = tensor(&many.grid(k), &d.stress, None);
+                        add_on(&mut out, grid, &t, many.places[k]);
+                    }
+                    return Some(out);
+                }
                 let ds = deformations(state);
                 let mut out = tensor(grid, &ds.first()?.stress, None);
                 for d in ds.iter().skip(1) {
@@ -80,6 +97,18 @@ fn elastic_energy(_grid: &Grid, state: &State) -> f64 {
 fn add(out: &mut [f64], t: &[f64]) {
     for (o, t) in out.iter_mut().zip(t) {
         *o += t;
+    }
+}
+
+/// `out += t` where `t` is a [`tensor`] of the window `place` of `grid` and `out` one of `grid`.
+fn add_on(out: &mut [f64], grid: &Grid, t: &[f64], place: super::bodies::Place) {
+    let (pn, (lo, n)) = (grid.n(), (place.lo, place.n));
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            let row = 6 * (j + n[1] * k) * n[0];
+            let at = 6 * (((k + lo[2]) * pn[1] + j + lo[1]) * pn[0] + lo[0]);
+            add(&mut out[at..at + 6 * n[0]], &t[row..row + 6 * n[0]]);
+        }
     }
 }
 

@@ -53,6 +53,9 @@ pub(super) struct ElasticStage {
     pub(super) blocks: ViscousBlocks,
     pub(super) eta: Field,
     pub(super) eta_k: Vec<Field>,
+    /// The bodies' elastic stiffness summed at the centres, for the Jacobi diagonal
+    /// ([`ElasticStage::face_terms`]).
+    pub(super) stiffness: Field,
     /// `K_η` of those, and the mass plus its hoop term and the diagonal of `M − K_η`.
     pub(super) eta_coefficients: Coefficients,
     pub(super) eta_dm: Vec<f64>,
@@ -76,9 +79,13 @@ pub(super) struct Scratch {
 /// `y = M x − θΔt K_v x − (Δt²/2) Σ_k vol ∇·(J_k : H(x; B̃_kⁿ))` on the compact unknown
 /// faces, summed over the elastic bodies.
 pub(super) struct ElasticOperator {
-    /// Each elastic body's kernels (the unknown faces, grid and sides the same in all).
+    /// Each elastic body's kernels (on the whole grid, or on the body's window; the unknown
+    /// faces the whole grid's in all).
     pub(super) ks: Vec<Kernels>,
-    pub(super) db: Vec<Field>,
+    /// The whole grid and its sides.
+    pub(super) frame: super::bodies::Frame,
+    /// Per body, the increment's stretching (on the body's kernels' grid).
+    pub(super) db: Vec<Vec<Field>>,
     pub(super) mass: Vec<f64>,
     /// `Δt²/2`.
     pub(super) c: f64,
@@ -128,22 +135,24 @@ impl LinearOperator for OperatorCtx<'_> {
         let op = &mut *self.op;
         let (xu, xv) = (&mut *self.xu, &mut *self.xv);
         let mut xw = self.xw.as_deref_mut();
-        let k0 = &op.ks[0];
+        let (k0, frame) = (&op.ks[0], &op.frame);
         match xw.as_deref_mut() {
             Some(xw) => k0.faces.scatter_to(x, &mut [&mut *xu, &mut *xv, xw]),
             None => k0.faces.scatter(x, xu, xv),
         }
-        k0.bc
-            .fill_velocity3(&k0.grid, xu, xv, xw.as_deref_mut(), 0.0, true);
+        frame
+            .bc
+            .fill_velocity3(&frame.grid, xu, xv, xw.as_deref_mut(), 0.0, true);
         let vel = super::velocity(xu, xv, xw.as_deref());
         op.viscous.product(&vel, &op.dm, Some(x), y);
         // The increment's stress lives in each body's solid: gradients, stretching and
         // tangent there, each body's increment stretched by its own Bⁿ.
-        for ((k, d), dtau) in op.ks.iter_mut().zip(self.d).zip(self.dtau.iter_mut()) {
+        let parts = op.ks.iter_mut().zip(self.d).zip(self.dtau.iter_mut());
+        for (((k, d), dtau), db) in parts.zip(op.db.iter_mut()) {
             let cw = k.solid_c;
-            k.gradient_in(&vel, cw);
-            k.stretch_in(&d.start, 1.0, None, Some(&d.relax), &mut op.db, cw);
-            k.apply_tangent(&op.db, dtau);
+            k.with_velocity(&vel, |k, vel| k.gradient_in(vel, cw));
+            k.stretch_in(&d.start, 1.0, None, Some(&d.relax), db, cw);
+            k.apply_tangent(db, dtau);
             k.force_sub(dtau, op.c, y);
         }
     }
@@ -153,6 +162,7 @@ impl ElasticStage {
     /// B = I and its rates from the initial velocity (the solid fraction set: the stages
     /// writing material fields initialise first).
     pub(super) fn initialize(&mut self, state: &mut State) -> Result<(), StageError> {
+        self.fit(state)?;
         let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
         let r = self.initialize_held(state, held.all());
         held.put(state);
@@ -171,9 +181,8 @@ impl ElasticStage {
             .phi
             .as_ref()
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
-        let k0 = &self.op.ks[0];
         self.phis
-            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .refresh(&self.bodies, &self.op.ks, state)
             .map_err(|m| err("elastic", m))?;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         for (n, (k, d)) in self.op.ks.iter_mut().zip(ds.iter_mut()).enumerate() {
@@ -183,8 +192,10 @@ impl ElasticStage {
             }
             k.set_weights(self.phis.of(n, phi));
             k.fill_ghosts(&mut d.b);
-            k.gradient(&vel);
-            k.advect(&vel, &d.b, &mut d.advection);
+            k.with_velocity(&vel, |k, vel| {
+                k.gradient(vel);
+                k.advect(vel, &d.b, &mut d.advection);
+            });
             for (p, a) in d.advection_prev.iter_mut().zip(&d.advection) {
                 p.copy_from(a);
             }
@@ -202,10 +213,33 @@ impl ElasticStage {
         ctx: &StepContext,
         state: &mut State,
     ) -> Result<(StageStats, bool), StageError> {
+        self.fit(state)?;
         let mut held = super::bodies::Held::take(state).ok_or_else(missing)?;
         let result = self.advance(ctx, state, held.all());
         held.put(state);
         result
+    }
+
+    /// The bodies' deformations on the windows around their fractions
+    /// ([`super::bodies::place_all`]), and the kernels and each body's work arrays on them.
+    fn fit(&mut self, state: &mut State) -> Result<(), StageError> {
+        let f = &self.op.frame;
+        super::bodies::place_all(&self.bodies, &f.grid, state).map_err(|m| err("elastic", m))?;
+        let places = super::bodies::places(state);
+        super::bodies::fit_kernels(&mut self.op.ks, &places, &f.grid, &f.bc, &f.sides);
+        let scratch = self
+            .tau
+            .iter_mut()
+            .zip(&mut self.tau_n)
+            .zip(&mut self.scratch.dtau)
+            .zip(&mut self.op.db);
+        for ((((tau, tau_n), dtau), db), k) in scratch.zip(&self.op.ks) {
+            let c = super::Deformation::components(&k.grid);
+            for t in [tau, tau_n, dtau, db] {
+                super::bodies::reshape(t, &k.grid, c);
+            }
+        }
+        Ok(())
     }
 
     /// One elastic step with B̃ (`d`) held outside the state: choose the split or the coupled
@@ -279,9 +313,8 @@ impl ElasticStage {
             .phi
             .as_ref()
             .ok_or_else(|| err("elastic", "the solid fraction is not allocated".into()))?;
-        let k0 = &self.op.ks[0];
         self.phis
-            .refresh(&self.bodies, &k0.grid, &k0.bc, state)
+            .refresh(&self.bodies, &self.op.ks, state)
             .map_err(|m| err("elastic", m))?;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let (theta, alpha) = (self.scheme.theta, self.scheme.alpha);
@@ -302,7 +335,7 @@ impl ElasticStage {
             }
             k.relaxation(law.as_ref(), &d.start, dt, &mut d.explicit, &mut d.relax)
                 .map_err(|m| err("elastic", m))?;
-            k.gradient(&vel);
+            k.with_velocity(&vel, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
                 theta * dt,
@@ -373,6 +406,7 @@ impl ElasticStage {
         let (c2, td) = (self.op.c, self.op.theta_dt);
         let ks = &self.op.ks;
         let k = &ks[0];
+        let stiffness = &mut self.stiffness;
         let (mu, me) = (&self.op.mu, &self.op.mu_edges);
         let (mass, diag, rhs) = (&mut self.op.mass, &mut self.diag, &mut self.rhs);
         let mm = k.m;
@@ -384,6 +418,8 @@ impl ElasticStage {
         };
         // Zero outside the solid's window (`w = 0`), where the batches hold nothing.
         let stiff_of = |k: &Kernels, at: Index| {
+            let o = k.origin;
+            let at = [at[0] - o[0], at[1] - o[1], at[2] - o[2]];
             if !k.solid_c.contains3(at) {
                 return 0.0;
             }
@@ -395,11 +431,18 @@ impl ElasticStage {
             let b = (0..dims).fold(0.0_f64, |s, c| s.max(b[c].abs()));
             k.w[at] * j * b.max(1e-300)
         };
-        // The bodies' stiffnesses summed (the mixture's tangent).
-        let stiff = |at: Index| {
-            let first = stiff_of(k, at);
-            ks[1..].iter().fold(first, |s, k| s + stiff_of(k, at))
-        };
+        // The bodies' stiffnesses summed at the centres (the mixture's tangent), each body's
+        // added over its solid's window in the bodies' order (zero elsewhere).
+        stiffness.fill(0.0);
+        for k in ks {
+            let c = k.solid_on_grid();
+            for q in 0..c.points() {
+                let at = c.point(q);
+                stiffness[at] += stiff_of(k, at);
+            }
+        }
+        let stiffness = &*stiffness;
+        let stiff = |at: Index| stiffness[at];
         let mut scale = 4.0 / (h[0] * h[0]);
         for a in 1..dims {
             scale += 4.0 / (h[a] * h[a]);
@@ -548,7 +591,7 @@ impl ElasticStage {
             // The bodies' solid windows' bounding box.
             let c = op.ks[1..]
                 .iter()
-                .fold(op.ks[0].solid_c, |c, k| c.union(k.solid_c));
+                .fold(op.ks[0].solid_on_grid(), |c, k| c.union(k.solid_on_grid()));
             let solid = (c.i0 <= c.i1).then_some(((c.i0, c.i1), (c.j0, c.j1)));
             self.blocks.setup_in(pre, &self.eta_diag, solid);
         }
@@ -557,7 +600,7 @@ impl ElasticStage {
     /// The effective viscosities `η = θΔt μ + (Δt²/2) G_eff` at the centres and corners
     /// (`eta`, `eta_k`): the block multigrid's, and the coupled step's preconditioner's.
     pub(super) fn effective_viscosity(&mut self, d: &[super::Deformation]) {
-        let op = &self.op;
+        let op = &mut self.op;
         let (e, ek) = (&mut self.eta, &mut self.eta_k);
         if op.theta_dt > 0.0 {
             let td = op.theta_dt;
@@ -575,7 +618,7 @@ impl ElasticStage {
                 ek.fill(0.0);
             }
         }
-        for (k, d) in op.ks.iter().zip(d) {
+        for (k, d) in op.ks.iter_mut().zip(d) {
             k.stiffness(&d.relax, op.c, e, ek);
         }
     }
@@ -607,7 +650,7 @@ impl ElasticStage {
     fn correct(&mut self, ctx: &StepContext, state: &mut State, ds: &mut [super::Deformation]) {
         let g = ctx.grid;
         let dt = ctx.dt;
-        self.op.ks[0].bc.fill_velocity3(
+        ctx.bc.fill_velocity3(
             g,
             &mut state.u,
             &mut state.v,
@@ -617,7 +660,7 @@ impl ElasticStage {
         );
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         for (k, d) in self.op.ks.iter_mut().zip(ds.iter_mut()) {
-            k.gradient(&vel);
+            k.with_velocity(&vel, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
                 self.scheme.theta * dt,

@@ -19,7 +19,10 @@
 
 use super::{Four, Kernels, PAIR, SHEAR, cells_of_edge, corner_weights, edges_of_cell, plus};
 use efsi_core::operators::minus;
-use efsi_core::{Field, Index, Line, Region, unit};
+use efsi_core::{Field, Index, Line, Region, Stagger, unit};
+
+/// The face location of each axis' normal velocity.
+const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_laws_host::LawError;
 
@@ -406,7 +409,36 @@ impl Kernels {
     /// times the interface factors of the shear in series (stress `1/κ`, shear rate `s`) and
     /// this step's relaxation divisor `relax` of the pair; negative values count zero.
     /// `eta_e` holds one field per shear pair.
-    pub(super) fn stiffness(&self, relax: &[Field], a: f64, eta: &mut Field, eta_e: &mut [Field]) {
+    pub(super) fn stiffness(
+        &mut self,
+        relax: &[Field],
+        a: f64,
+        eta: &mut Field,
+        eta_e: &mut [Field],
+    ) {
+        if self.place.is_none() {
+            return self.stiffness_here(relax, a, eta, eta_e);
+        }
+        // On a window: the grid's values there copied in, added to, and the points written
+        // copied back.
+        let o = self.origin;
+        let mut w = std::mem::take(&mut self.eta);
+        let (wc, we) = w.split_at_mut(1);
+        super::bodies::copy_in(eta, &mut wc[0], o);
+        for (w, f) in we.iter_mut().zip(&*eta_e) {
+            super::bodies::copy_in(f, w, o);
+        }
+        self.stiffness_here(relax, a, &mut wc[0], we);
+        let g = &self.grid;
+        super::bodies::copy_out(&wc[0], eta, o, &self.solid_c.region(g));
+        for ((w, f), k) in we.iter().zip(eta_e.iter_mut()).zip(&self.solid_k) {
+            super::bodies::copy_out(w, f, o, &k.region(g));
+        }
+        self.eta = w;
+    }
+
+    /// [`Kernels::stiffness`] into fields of the kernels' own grid.
+    fn stiffness_here(&self, relax: &[Field], a: f64, eta: &mut Field, eta_e: &mut [Field]) {
         if self.m == 6 {
             self.stiffness_m::<6>(relax, a, eta, eta_e);
         } else {
@@ -514,6 +546,11 @@ impl Kernels {
 
     /// Volume-weighted `∇·τ` on the unknown faces, into `out` (compact).
     pub(super) fn force(&self, tau: &[Field], out: &mut [f64]) {
+        if self.place.is_some() {
+            // On a window `tau` vanishes outside the solid, and so does the force.
+            out.fill(0.0);
+            return self.force_sub(tau, -1.0, out);
+        }
         for (a, o) in self.faces.split_mut(out).into_iter().enumerate() {
             let r = self.faces.region(a);
             for l in (0..r.lines()).map(|n| r.line(n)) {
@@ -533,8 +570,9 @@ impl Kernels {
         if cw.points() == 0 {
             return;
         }
-        let dims = self.grid.dims();
-        let (lo, hi) = (cw.lo(), cw.hi());
+        let (dims, o) = (self.grid.dims(), self.origin);
+        // The solid's centres in the whole grid's indices (the faces').
+        let (lo, hi) = (plus(cw.lo(), o), plus(cw.hi(), o));
         for (x, y) in self.faces.split_mut(y).into_iter().enumerate().take(dims) {
             let r = self.faces.region(x);
             let mut part = r;
@@ -547,8 +585,21 @@ impl Kernels {
                 };
                 part = part.range(b, l0.max(rl), (h0 + 1).min(rh));
             }
-            for l in (0..part.lines()).map(|n| part.line(n)) {
-                let row = &mut y[compact(&r, l.start)..][..l.len];
+            if self.place.is_none() {
+                for l in (0..part.lines()).map(|n| part.line(n)) {
+                    let row = &mut y[compact(&r, l.start)..][..l.len];
+                    self.force_on(tau, x, &l, |n, f| row[n] -= a * f);
+                }
+                continue;
+            }
+            // On a window: the same faces as the window's points, line for line.
+            let (pl, ph) = (part.lo(), part.hi());
+            let local = (0..3).fold(Region::of(&self.grid, FACES[x]), |r, b| {
+                r.range(b, pl[b] - o[b], ph[b] - o[b])
+            });
+            for n in 0..part.lines() {
+                let (lp, l) = (part.line(n), local.line(n));
+                let row = &mut y[compact(&r, lp.start)..][..l.len];
                 self.force_on(tau, x, &l, |n, f| row[n] -= a * f);
             }
         }

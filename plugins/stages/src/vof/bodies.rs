@@ -59,7 +59,10 @@
 //! (which the state's `BodyFractions` carries to the elastic stage), and its own law; the
 //! cell's stress is the sum of the bodies' and the implicit system's tangent the sum of theirs
 //! (the elastic stage's `bodies` module), so the histories of two bodies never mix, even where
-//! they share a cell. Contact below a cell's gap is the contact stage's ([`crate::contact`]).
+//! they share a cell. Its deformation lives on a window of its own that contains this one
+//! (this window grown by a margin: the elastic stage's `bodies` module, "Storage"), placed
+//! anew when this one moves. Contact below a cell's gap is the contact stage's
+//! ([`crate::contact`]).
 
 use super::advect::{AdvectStats, VofAdvector, VofBoundaries, VofSide};
 use efsi_core::body_fractions::BodyFraction;
