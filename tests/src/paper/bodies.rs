@@ -757,13 +757,15 @@ impl Case for SpheresOnAxis {
                 r.wall_seconds
             ));
         }
-        h.notes.push(format!(
-            "difference between successive grids' paths: {}; observed order {order:.2}",
-            gaps.iter()
-                .map(|g| format!("{g:.5}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
+        if !gaps.is_empty() {
+            h.notes.push(format!(
+                "difference between successive grids' paths: {}; observed order {order:.2}",
+                gaps.iter()
+                    .map(|g| format!("{g:.5}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
         Ok(Verdict {
             title: "a soft sphere falling onto another resting on the floor (axisymmetric)".into(),
             reference: "self-convergence; each body's volume and separation".into(),
