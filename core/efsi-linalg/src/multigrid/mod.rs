@@ -132,6 +132,9 @@ pub struct Multigrid {
     excess_scale: f64,
     /// The coarse matrices (levels 1, 2, …).
     mats: Vec<Stencil5>,
+    /// Whether a three-dimensional level of one coupling per axis holds its matrix as rows
+    /// (module `level`); off only in the tests that compare the two forms.
+    uniform_rows: bool,
     /// Behind a mutex, so that a multigrid can live in a structure other threads read (two
     /// blocks of a system, each with its own multigrid, applied in parallel). One application
     /// at a time: a second, concurrent one panics instead of waiting (it could deadlock on the
@@ -148,6 +151,7 @@ impl Multigrid {
             gamma: 2,
             excess_scale: 0.5,
             mats: Vec::new(),
+            uniform_rows: true,
             h: Mutex::new(Hierarchy::default()),
         }
     }
@@ -236,6 +240,7 @@ impl Multigrid {
         let n = h.n;
         for (l, lv) in h.levels[..n].iter_mut().enumerate() {
             lv.size_t(l, n, self.gamma);
+            lv.keep_arrays = l + 1 == n || !self.uniform_rows;
         }
         h.levels[0].load(a);
         let excess = self.excess_scale;
