@@ -66,6 +66,13 @@
 //! for later matrices of the same shape or smaller ones (a window of the first, set up each
 //! step where a solid moves: [`Stencil5::window_into`], [`Multigrid::apply_window`]); only a
 //! matrix larger than every earlier one allocates. [`Preconditioner::apply`] never allocates.
+//! A three-dimensional level whose matrix has one coupling per axis (zero across a closed
+//! side) and the sum of a cell's couplings on the diagonal — the projection's matrix for one
+//! density, and its Galerkin coarsenings where they stay so — holds it as one padded row of
+//! each coefficient instead of five arrays of the level's size (module `level`), on every
+//! level but the coarsest: the finest level then keeps only its two vectors, the unknowns and
+//! the right-hand side. The kernels read the same values either way, so the results are the
+//! same bits.
 
 use super::par;
 use super::pcg::Preconditioner;

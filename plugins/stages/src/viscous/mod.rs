@@ -1243,6 +1243,9 @@ mod tests {
         let bnorm = stage.right_hand_side(&walls, [0.0, 0.01], &mut moved, &mut b);
         let (mut ad, mut diag) = (vec![0.0; n], vec![0.0; n]);
         stage.op.assemble(&mu, &rho, &mut diag);
+        // The search direction's fields, which the product works in, from the pool.
+        let fields = stage.fields.clone();
+        fields.swap(&mut stage.op.p, true);
         stage.op.product(&delta, &mut ad);
         let r = ad
             .iter()
