@@ -362,6 +362,7 @@ impl Simulation {
             t: self.state.t,
             dt,
             step: self.state.step,
+            start_velocity: start,
         };
         for c in &mut self.checks {
             c.before(&self.scene, &ctx, &self.state);

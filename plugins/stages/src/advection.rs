@@ -62,12 +62,16 @@
 //! number of threads. Each face flux is computed once (a band's lower edge twice): along the
 //! lines' axis into a buffer of the line, along axis 1 into a buffer the band's next line
 //! reads, along any further axis into a full-grid array. The stage uses [`work`]`(dims)`
-//! full-grid arrays while it runs (7 in two dimensions, 12 in three: per component the
-//! momentum tendency, the start-of-step velocity and the current stage's face masses; one mass
-//! tendency, each component's in turn, whose masses and momenta advance as soon as its own
-//! tendencies are known; the fluxes along the third axis) — taken from the pipeline's pool of work vectors
-//! (`scratch`), which the later stages of the step reuse. It keeps from one step to the next
-//! only the `WholeStep` predictor's history, one array per component.
+//! full-grid arrays while it runs (5 in two dimensions, 9 in three: per component the
+//! momentum tendency and the current stage's face masses; one mass tendency, each component's
+//! in turn, whose masses and momenta advance as soon as its own tendencies are known; the
+//! fluxes along the third axis) — taken from the pipeline's pool of work vectors (`scratch`),
+//! which the later stages of the step reuse. The start-of-step velocity, which both Euler
+//! stages read, is the run's copy of the step's start where it keeps one for putting a failed
+//! step back (`StepContext::start_velocity`: the velocity as the stage finds it, bit for bit,
+//! as the advection is the step's first stage to write it); without such a copy the stage
+//! makes its own, one array per component, kept from then on. It keeps from one step to the
+//! next only the `WholeStep` predictor's history, one array per component.
 
 mod kernels;
 
@@ -178,6 +182,7 @@ impl StagePlugin for Advection {
         Ok(Box::new(AdvectionStage {
             history,
             scratch: Scratch::reserve(shared, work_len(grid)),
+            start: Vec::new(),
         }))
     }
 }
@@ -185,6 +190,21 @@ impl StagePlugin for Advection {
 /// Values of the work arrays [`advance`] needs on `grid` ([`work`] padded full-grid arrays).
 pub fn work_len(grid: &Grid) -> usize {
     work(grid.dims()) * grid.padded().iter().product::<usize>()
+}
+
+/// Values of the copy of the start-of-step velocity [`advance`] makes where the caller keeps
+/// none ([`Start::Copy`]): one padded array per component.
+pub fn start_len(grid: &Grid) -> usize {
+    grid.dims() * grid.padded().iter().product::<usize>()
+}
+
+/// The velocity at the start of the step, which both Euler stages read.
+pub enum Start<'a> {
+    /// The caller's copy (one field per component, bit for bit the velocity given to
+    /// [`advance`], ghosts included).
+    Kept(&'a [&'a Field]),
+    /// No copy: [`advance`] makes one in these [`start_len`] values.
+    Copy(&'a mut [f64]),
 }
 
 /// What the `WholeStep` predictor keeps from step to step: the velocity the stage left at the
@@ -231,10 +251,10 @@ fn control_volumes(grid: &Grid, bc: &BoundarySet) -> [Region; 3] {
 /// `vel` (one component per axis of `grid`, ghosts filled) with the cell densities `rho`
 /// (ghosts filled), on the control volumes `cv[c]` of each component (its unknown faces).
 /// `fill` fills the velocity's ghosts between the two Runge–Kutta stages; `history` is the
-/// `WholeStep` predictor's (updated), `None` for the `Advection` predictor. `pool` holds at
-/// least [`work_len`] values; on return its first `dims` arrays of the fields' padded length
-/// hold the control volumes' masses at the end of the step (the momentum is their product
-/// with the velocity).
+/// `WholeStep` predictor's (updated), `None` for the `Advection` predictor; `start` the
+/// start-of-step velocity's copy, or room for one. `pool` holds at least [`work_len`] values;
+/// on return its first `dims` arrays of the fields' padded length hold the control volumes'
+/// masses at the end of the step (the momentum is their product with the velocity).
 #[allow(clippy::too_many_arguments)]
 pub fn advance(
     grid: &Grid,
@@ -243,6 +263,7 @@ pub fn advance(
     vel: &mut [&mut Field],
     rho: &Field,
     pool: &mut [f64],
+    start: Start<'_>,
     history: Option<&mut History>,
     fill: &mut dyn FnMut(&mut [&mut Field]),
 ) {
@@ -251,11 +272,25 @@ pub fn advance(
     //   m* = ½m⁰ + ½(m¹ + Δt Lm(m¹, V¹)),  (m u)* = ½m⁰u⁰ + ½((m u)¹ + Δt Lq(m¹, V¹)).
     let dims = grid.dims();
     assert_eq!(vel.len(), dims, "one velocity component per axis");
-    let mut w = Work::cut(pool, dims, rho.data().len());
+    let len = rho.data().len();
+    let mut w = Work::cut(pool, dims, len);
     for c in 0..dims {
         kernels::face_masses(grid, rho, c, w.m[c]);
-        copy(w.x0[c], vel[c].data());
     }
+    let x0: [&[f64]; 3] = match start {
+        Start::Kept(f) => {
+            assert!(f.len() == dims, "one start velocity component per axis");
+            std::array::from_fn(|c| f.get(c).map_or(&[][..], |f| f.data()))
+        }
+        Start::Copy(copies) => {
+            let copies = &mut copies[..dims * len];
+            for (x0, v) in copies.chunks_exact_mut(len).zip(vel.iter()) {
+                copy(x0, v.data());
+            }
+            let copies = &*copies;
+            std::array::from_fn(|c| copies.get(c * len..(c + 1) * len).unwrap_or(&[]))
+        }
+    };
     // The other stages' increments of the last step, rescaled to this Δt (module docs).
     let (lag, y) = match history.as_deref() {
         Some(h) if h.dt > 0.0 => (dt / h.dt, Some(&h.vel)),
@@ -274,12 +309,12 @@ pub fn advance(
         for c in 0..dims {
             kernels::tendency(grid, cv[c], c, &view[..dims], &mut w);
             let y: &[f64] = y.map_or(&[], |y| &y[c]);
-            let Work { qt, mt, x0, m, .. } = &mut w;
-            step.advance_mass(cv[c], c, view[c], m[c], [&*x0[c], y], qt[c], mt);
+            let Work { qt, mt, m, .. } = &mut w;
+            step.advance_mass(cv[c], c, view[c], m[c], [x0[c], y], qt[c], mt);
         }
         for c in 0..dims {
             let y: &[f64] = y.map_or(&[], |y| &y[c]);
-            step.velocity(cv[c], vel[c], &*w.m[c], [&*w.x0[c], y], &*w.qt[c]);
+            step.velocity(cv[c], vel[c], &*w.m[c], [x0[c], y], &*w.qt[c]);
         }
         if stage == 0 {
             fill(vel);
@@ -335,6 +370,9 @@ struct AdvectionStage {
     history: Option<History>,
     /// The pipeline's work vectors ([`work_len`] values while the stage runs).
     scratch: Scratch,
+    /// The copy of the start-of-step velocity, in a run that keeps none of its own
+    /// ([`start_len`] values from the first such step on; empty before).
+    start: Vec<f64>,
 }
 
 impl Stage for AdvectionStage {
@@ -350,6 +388,25 @@ impl Stage for AdvectionStage {
         let scratch = self.scratch.clone();
         let mut pool = scratch.lock();
         let State { u, v, w, rho, .. } = state;
+        // The run's copy of the step's start, if it keeps one of every component.
+        let kept = ctx
+            .start_velocity
+            .filter(|s| s[..dims].iter().all(Option::is_some));
+        let fields: [&Field; 3];
+        let start = match kept {
+            Some(s) => {
+                // Past the grid's axes a placeholder, never read.
+                fields = std::array::from_fn(|c| s[c.min(dims - 1)].expect("checked above"));
+                Start::Kept(&fields[..dims])
+            }
+            None => {
+                let n = start_len(g);
+                if self.start.len() != n {
+                    self.start = vec![0.0; n];
+                }
+                Start::Copy(&mut self.start)
+            }
+        };
         let mut none = Field::default();
         let mut vel = [u, v, w.as_mut().unwrap_or(&mut none)];
         // Between the stages: the boundary conditions at the end of the step.
@@ -368,6 +425,7 @@ impl Stage for AdvectionStage {
             &mut vel[..dims],
             rho,
             &mut pool,
+            start,
             self.history.as_mut(),
             &mut fill,
         );

@@ -193,6 +193,7 @@ mod tests {
             t: 0.0,
             dt: 0.1,
             step: 0,
+            start_velocity: None,
         };
         stage.run(&ctx, &mut state).unwrap();
         let w = state.w.as_ref().unwrap();

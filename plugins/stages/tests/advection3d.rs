@@ -5,7 +5,9 @@
 //! `|w|/dz`. Ghosts are filled here by a periodic wrap (or sampled from the exact field).
 
 use efsi_core::{Field, Geometry, Grid, Region, Stagger};
-use efsi_stages::advection::{History, advance, advective_dt, tendencies, work_len};
+use efsi_stages::advection::{
+    History, Start, advance, advective_dt, start_len, tendencies, work_len,
+};
 use std::f64::consts::TAU;
 
 const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
@@ -102,6 +104,7 @@ fn periodic_velocity(g: &Grid, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<Field>
 fn run(g: &Grid, vel: &mut [Field], rho: &Field, dt: f64, steps: usize) -> Vec<f64> {
     let cv = periodic_faces(g);
     let mut pool = vec![0.0; work_len(g)];
+    let mut copies = vec![0.0; start_len(g)];
     let mut history = History::new(g);
     for _ in 0..steps {
         let mut v: Vec<&mut Field> = vel.iter_mut().collect();
@@ -113,6 +116,7 @@ fn run(g: &Grid, vel: &mut [Field], rho: &Field, dt: f64, steps: usize) -> Vec<f
             &mut v,
             rho,
             &mut pool,
+            Start::Copy(&mut copies),
             Some(&mut history),
             &mut fill,
         );

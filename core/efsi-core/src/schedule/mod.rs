@@ -19,6 +19,7 @@
 //! snapshots.
 
 use crate::bc::BoundarySet;
+use crate::field::Field;
 use crate::grid::{Geometry, Grid};
 use crate::scene::{Options, Scene};
 use crate::state::State;
@@ -37,6 +38,7 @@ pub use outputs::{OutputDecl, OutputKind};
 pub use resources::Resources;
 
 /// What a stage sees of the run besides the state.
+#[derive(Clone, Copy)]
 pub struct StepContext<'a> {
     /// The grid.
     pub grid: &'a Grid,
@@ -48,6 +50,13 @@ pub struct StepContext<'a> {
     pub dt: f64,
     /// Index of this step (0 for the first).
     pub step: u64,
+    /// The velocity at the start of the step (one field per component, `None` for `w` on a
+    /// two-dimensional grid), where the caller keeps a copy unchanged for the whole step (a run
+    /// that puts a failed step back keeps one anyway): [`Pipeline::run_step`] gives it to the
+    /// stages that run before any stage of the step writes the velocity — for them it is the
+    /// state's velocity bit for bit, ghosts included, so a stage that overwrites the velocity
+    /// needs no copy of its own — and `None` to the others.
+    pub start_velocity: Option<[Option<&'a Field>; 3]>,
 }
 
 /// Statistics a stage reports for one run (solver iterations and residual, if any).
@@ -689,6 +698,7 @@ impl Pipeline {
             t: 0.0,
             dt: grid.dx.min(grid.dy) / speed,
             step: 0,
+            start_velocity: None,
         };
         for e in &mut self.entries {
             for (k, s) in e.steps.iter().enumerate() {
@@ -817,21 +827,26 @@ impl Pipeline {
     /// what it wrote is checked to be finite: a NaN or infinity is reported with the stage (or
     /// sub-step), the field and the cell.
     pub fn run_step(&mut self, ctx: &StepContext, state: &mut State) -> Result<(), StageError> {
+        let mut ctx = *ctx;
         for e in &mut self.entries {
             for (k, s) in e.steps.iter_mut().enumerate() {
                 let t0 = Instant::now();
                 let stats = if e.by_sub_steps {
-                    e.stage.run_sub(k, ctx, state)?
+                    e.stage.run_sub(k, &ctx, state)?
                 } else {
-                    e.stage.run(ctx, state)?
+                    e.stage.run(&ctx, state)?
                 };
+                // The velocity of the step's start is the state's only until a stage writes it.
+                if s.writes.iter().any(|id| VELOCITY.contains(id)) {
+                    ctx.start_velocity = None;
+                }
                 s.time += t0.elapsed();
                 s.calls += 1;
                 if let Some(st) = stats.solve {
                     s.iterations += st.iterations as u64;
                 }
                 s.last = stats;
-                after_step(ctx, state, s.name, s.writes)?;
+                after_step(&ctx, state, s.name, s.writes)?;
             }
         }
         Ok(())

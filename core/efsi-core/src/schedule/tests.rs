@@ -177,6 +177,7 @@ mod sub_steps {
             t: 0.0,
             dt: 0.1,
             step: 0,
+            start_velocity: None,
         };
         p.run_step(&ctx, &mut state).unwrap();
         p.run_step(&ctx, &mut state).unwrap();

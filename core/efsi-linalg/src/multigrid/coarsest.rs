@@ -22,6 +22,10 @@ impl Coarsest {
     }
 
     pub(super) fn factor(&mut self, lv: &Level) {
+        assert!(
+            lv.uniform.is_none(),
+            "multigrid: the coarsest level keeps its matrix in arrays"
+        );
         if lv.is_3d() {
             self.assemble_3d(lv);
         } else {

@@ -109,7 +109,7 @@ impl LinearOperator for FineMatrix<'_> {
 /// top, bottom; a periodic neighbour across the wrap, whose coupling the ghost entry holds),
 /// so the same bits.
 fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
-    let (nx, ny, nz, s, sp) = (l.nx, l.ny, l.nz, l.s, l.sp);
+    let (nx, ny, nz) = (l.nx, l.ny, l.nz);
     let plane = nx * ny;
     assert_eq!(
         x.len(),
@@ -128,7 +128,6 @@ fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
     par::rows(y, nx).for_each(|r, yr| {
         let (j, c) = (r % ny, r / ny);
         let r0 = r * nx;
-        let p0 = l.p3(0, j, c);
         let north = if j + 1 < ny {
             Some(r0 + nx)
         } else {
@@ -154,11 +153,12 @@ fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
         // each pass is a loop over slices without branches or bounds checks.
         let n = nx;
         let yr = &mut yr[..n];
-        let (xr, d) = (&x[r0..r0 + n], &l.diag[p0..p0 + n]);
+        // The row's coefficients, cell i at index i + 1.
+        let [ce, cw, cn, cs, ct, cb, d, _] = l.row(j, c).run(1, n);
+        let xr = &x[r0..r0 + n];
         for i in 0..n {
             yr[i] = d[i] * xr[i];
         }
-        let (ce, cw) = (&l.ce[p0..p0 + n], &l.ce[p0 - 1..p0 - 1 + n]);
         let (xe, xw) = (&x[r0 + 1..r0 + n], &x[r0..r0 + n - 1]);
         for i in 0..n - 1 {
             yr[i] -= ce[i] * xe[i];
@@ -170,12 +170,7 @@ fn mul_3d(l: &super::level::Level, x: &[f64], y: &mut [f64]) {
         for i in 1..n {
             yr[i] -= cw[i] * xw[i - 1];
         }
-        let faces = [
-            (north, &l.cn[p0..p0 + n]),
-            (south, &l.cn[p0 - s..p0 - s + n]),
-            (top, &l.ct[p0..p0 + n]),
-            (bottom, &l.ct[p0 - sp..p0 - sp + n]),
-        ];
+        let faces = [(north, cn), (south, cs), (top, ct), (bottom, cb)];
         for (at, c) in faces {
             if let Some(o) = at {
                 let xo = &x[o..o + n];

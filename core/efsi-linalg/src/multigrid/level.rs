@@ -1,5 +1,13 @@
 //! One level of the hierarchy: its matrix in a padded layout (one ghost ring) with the work
 //! vectors, loaded from a [`Stencil5`](crate::Stencil5), its periodic ghosts and its residual.
+//!
+//! A three-dimensional matrix with one coupling per axis — the same value across every face
+//! normal to that axis, zero across a closed side — and the diagonal the sum of a cell's
+//! couplings (the projection's matrix of a fluid of one density on a uniform grid) is held as
+//! one padded row of each kind ([`Uniform`]) instead of five arrays of the level's size: every
+//! kernel reads a row's coefficients through [`Level::row`], the same values either way, so
+//! the same bits. The coarsest level, which its dense factor reads entry by entry, keeps the
+//! arrays.
 
 use super::W_LEVELS;
 use crate::par;
@@ -38,6 +46,134 @@ pub(super) struct Level {
     /// The first coarse correction while a W-cycle computes the second: allocated only on the
     /// levels a second correction is made on ([`Level::needs_t`]), empty elsewhere.
     pub(super) t: Vec<f64>,
+    /// A three-dimensional matrix of one coupling per axis (module docs): `diag`, `dinv`,
+    /// `ce`, `cn` and `ct` are then empty.
+    pub(super) uniform: Option<Uniform>,
+    /// Whether the level keeps a uniform matrix in arrays too: the coarsest, whose dense
+    /// factor reads them entry by entry (set by `Multigrid::setup_view` before loading).
+    pub(super) keep_arrays: bool,
+}
+
+/// A three-dimensional matrix whose couplings along each axis are one value `c[a]` (zero across
+/// a closed side, the wrap's across a periodic one) and whose diagonal is the sum of a cell's
+/// six couplings, added as the projection assembles it (east, north, top, west, south,
+/// bottom): one padded row of each coefficient (index 0 the west ghost, `i + 1` cell `i`).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Uniform {
+    c: [f64; 3],
+    /// `s + 1` values: a zero, then a row's east couplings (the west ghost's the wrap's or 0),
+    /// so that the west couplings are the same values one to the left.
+    east: Vec<f64>,
+    /// A row of the y coupling, of the z coupling and of zeros.
+    cy: Vec<f64>,
+    cz: Vec<f64>,
+    zero: Vec<f64>,
+    /// The diagonal and its inverse of a row for each of the 16 ways its cells are coupled
+    /// north, south, top and bottom ([`Level::class`]), `s` values each.
+    diag: Vec<f64>,
+    dinv: Vec<f64>,
+}
+
+/// The coefficients of one padded row of cells of a three-dimensional level, `s` values each:
+/// index 0 the west ghost, `i + 1` cell `i` ([`Level::row`]).
+pub(super) struct Row<'a> {
+    pub(super) ce: &'a [f64],
+    pub(super) cw: &'a [f64],
+    pub(super) cn: &'a [f64],
+    pub(super) cs: &'a [f64],
+    pub(super) ct: &'a [f64],
+    pub(super) cb: &'a [f64],
+    pub(super) diag: &'a [f64],
+    pub(super) dinv: &'a [f64],
+}
+
+impl<'a> Row<'a> {
+    /// The `n` coefficients of each kind from index `t0` of the row:
+    /// `[ce, cw, cn, cs, ct, cb, diag, dinv]`.
+    #[inline(always)]
+    pub(super) fn run(&self, t0: usize, n: usize) -> [&'a [f64]; 8] {
+        [
+            self.ce, self.cw, self.cn, self.cs, self.ct, self.cb, self.diag, self.dinv,
+        ]
+        .map(|v| &v[t0..t0 + n])
+    }
+}
+
+impl Uniform {
+    /// The couplings `[c_x, c_y, c_z]` of `a` if it is such a matrix (module docs), bit for bit:
+    /// every coupling [`Level::load`] keeps equal to its axis's first, and every diagonal
+    /// entry the sum of its cell's couplings in the assembly's order.
+    fn of(a: Stencil5View<'_>) -> Option<[f64; 3]> {
+        let (nx, ny, nz) = (a.nx, a.ny, a.nz);
+        let (px, py, pz) = (a.periodic_x, a.periodic_y, a.periodic_z);
+        let plane = nx * ny;
+        if plane * nz == 0 || a.top.len() != plane * nz {
+            return None;
+        }
+        let mut c: [Option<u64>; 3] = [None; 3];
+        let mut same = |ax: usize, v: &[f64]| {
+            v.iter().all(|x| {
+                let b = x.to_bits();
+                *c[ax].get_or_insert(b) == b
+            })
+        };
+        for r in 0..ny * nz {
+            let (j, k) = (r % ny, r / ny);
+            let o = r * nx;
+            let east = if px { nx } else { nx - 1 };
+            if !same(0, &a.east[o..o + east])
+                || ((j + 1 < ny || py) && !same(1, &a.north[o..o + nx]))
+                || ((k + 1 < nz || pz) && !same(2, &a.top[o..o + nx]))
+            {
+                return None;
+            }
+        }
+        let c = c.map(|b| b.map_or(0.0, f64::from_bits));
+        let (cx, cy, cz) = (c[0], c[1], c[2]);
+        let on = |yes: bool, v: f64| if yes { v } else { 0.0 };
+        let ok = (0..ny * nz).all(|r| {
+            let (j, k) = (r % ny, r / ny);
+            let (n, s) = (on(j + 1 < ny || py, cy), on(j > 0 || py, cy));
+            let (t, b) = (on(k + 1 < nz || pz, cz), on(k > 0 || pz, cz));
+            let d = &a.diag[r * nx..(r + 1) * nx];
+            (0..nx).all(|i| {
+                let (e, w) = (on(i + 1 < nx || px, cx), on(i > 0 || px, cx));
+                (e + n + t + w + s + b).to_bits() == d[i].to_bits()
+            })
+        });
+        ok.then_some(c)
+    }
+
+    /// The rows of the couplings `c` for rows of `nx` cells (`s = nx + 2`), `px` whether x wraps.
+    fn new(c: [f64; 3], nx: usize, px: bool) -> Self {
+        let s = nx + 2;
+        let on = |yes: bool, v: f64| if yes { v } else { 0.0 };
+        let mut east = vec![0.0; s + 1];
+        east[1] = on(px, c[0]);
+        for i in 0..nx {
+            east[i + 2] = on(i + 1 < nx || px, c[0]);
+        }
+        let (mut diag, mut dinv) = (vec![0.0; 16 * s], vec![0.0; 16 * s]);
+        for class in 0..16 {
+            let (n, so) = (on(class & 1 != 0, c[1]), on(class & 2 != 0, c[1]));
+            let (t, b) = (on(class & 4 != 0, c[2]), on(class & 8 != 0, c[2]));
+            for i in 0..nx {
+                let (e, w) = (east[i + 2], east[i + 1]);
+                let d = e + n + t + w + so + b;
+                diag[class * s + i + 1] = d;
+                dinv[class * s + i + 1] = if d > 0.0 { 1.0 / d } else { 0.0 };
+            }
+        }
+        Uniform {
+            c,
+            east,
+            cy: vec![c[1]; s],
+            cz: vec![c[2]; s],
+            zero: vec![0.0; s],
+            diag,
+            dinv,
+        }
+    }
 }
 
 impl Level {
@@ -70,17 +206,14 @@ impl Level {
         self.periodic_z = nz > 1 && periodic[2];
         let m = self.padded_len();
         self.ct.clear();
-        if nz > 1 {
-            self.ct.resize(m, 0.0);
+        self.uniform = None;
+        // A three-dimensional level's matrix is sized when it is loaded (arrays, or none).
+        let coefficients = if nz > 1 { 0 } else { m };
+        for v in [&mut self.diag, &mut self.dinv, &mut self.ce, &mut self.cn] {
+            v.clear();
+            v.resize(coefficients, 0.0);
         }
-        for v in [
-            &mut self.diag,
-            &mut self.dinv,
-            &mut self.ce,
-            &mut self.cn,
-            &mut self.x,
-            &mut self.b,
-        ] {
+        for v in [&mut self.x, &mut self.b] {
             v.clear();
             v.resize(m, 0.0);
         }
@@ -257,6 +390,12 @@ impl Level {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let (px, py, pz) = (a.periodic_x, a.periodic_y, a.periodic_z);
         let plane = nx * ny;
+        let uniform = (!self.keep_arrays).then(|| Uniform::of(a)).flatten();
+        let m = if uniform.is_some() {
+            0
+        } else {
+            self.padded_len()
+        };
         for v in [
             &mut self.ce,
             &mut self.cn,
@@ -264,7 +403,15 @@ impl Level {
             &mut self.diag,
             &mut self.dinv,
         ] {
-            v.fill(0.0);
+            v.clear();
+            v.resize(m, 0.0);
+            if m == 0 {
+                v.shrink_to_fit();
+            }
+        }
+        self.uniform = uniform.map(|c| Uniform::new(c, nx, px));
+        if self.uniform.is_some() {
+            return;
         }
         for c in 0..nz {
             for j in 0..ny {
@@ -301,6 +448,10 @@ impl Level {
 
     /// [`holds`](Self::holds) of a three-dimensional matrix of the level's shape.
     fn holds_3d(&self, a: Stencil5View<'_>) -> bool {
+        if let Some(u) = &self.uniform {
+            let bits = |c: [f64; 3]| c.map(f64::to_bits);
+            return Uniform::of(a).is_some_and(|c| bits(c) == bits(u.c));
+        }
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
         let east = if a.periodic_x {
@@ -351,10 +502,14 @@ impl Level {
         }
     }
 
-    /// [`residual_run`](Self::residual_run) on a three-dimensional level.
+    /// [`residual_run`](Self::residual_run) on a three-dimensional level (the run inside one row).
     #[inline(always)]
     pub(super) fn residual_run_3d(&self, k0: usize, out: &mut [f64]) {
         let (n, s, sp) = (out.len(), self.s, self.sp);
+        // The run's row (j, c) and its place in the padded row.
+        let q = k0 - self.zo;
+        let (c, j, t0) = (q / sp, (q % sp) / s - 1, q % s);
+        let row = self.row(j, c);
         let x = &self.x[k0 - sp..k0 + sp + n];
         let (xc, xe, xw) = (
             &x[sp..sp + n],
@@ -363,10 +518,8 @@ impl Level {
         );
         let (xn, xs) = (&x[sp + s..sp + s + n], &x[sp - s..sp - s + n]);
         let (xt, xb) = (&x[2 * sp..2 * sp + n], &x[..n]);
-        let (b, d) = (&self.b[k0..k0 + n], &self.diag[k0..k0 + n]);
-        let (ce, cw) = (&self.ce[k0..k0 + n], &self.ce[k0 - 1..k0 - 1 + n]);
-        let (cn, cs) = (&self.cn[k0..k0 + n], &self.cn[k0 - s..k0 - s + n]);
-        let (ct, cb) = (&self.ct[k0..k0 + n], &self.ct[k0 - sp..k0 - sp + n]);
+        let [ce, cw, cn, cs, ct, cb, d, _] = row.run(t0, n);
+        let b = &self.b[k0..k0 + n];
         for t in 0..n {
             out[t] = b[t] - d[t] * xc[t]
                 + ce[t] * xe[t]
@@ -375,6 +528,50 @@ impl Level {
                 + cs[t] * xs[t]
                 + ct[t] * xt[t]
                 + cb[t] * xb[t];
+        }
+    }
+
+    /// Which of the north, south, top and bottom couplings of the cells of row `(j, c)` are
+    /// not across a closed side (bits 0–3).
+    #[inline(always)]
+    fn class(&self, j: usize, c: usize) -> usize {
+        let (py, pz) = (self.periodic_y, self.periodic_z);
+        usize::from(j + 1 < self.ny || py)
+            | usize::from(j > 0 || py) << 1
+            | usize::from(c + 1 < self.nz || pz) << 2
+            | usize::from(c > 0 || pz) << 3
+    }
+
+    /// The coefficients of the padded row of cells `(j, c)` of a three-dimensional level
+    /// ([`Row`]), from the arrays or the [`Uniform`] rows: the same values.
+    #[inline(always)]
+    pub(super) fn row(&self, j: usize, c: usize) -> Row<'_> {
+        let (s, sp) = (self.s, self.sp);
+        let Some(u) = &self.uniform else {
+            let q = self.p3(0, j, c) - 1;
+            return Row {
+                ce: &self.ce[q..q + s],
+                cw: &self.ce[q - 1..q - 1 + s],
+                cn: &self.cn[q..q + s],
+                cs: &self.cn[q - s..q],
+                ct: &self.ct[q..q + s],
+                cb: &self.ct[q - sp..q - sp + s],
+                diag: &self.diag[q..q + s],
+                dinv: &self.dinv[q..q + s],
+            };
+        };
+        let class = self.class(j, c);
+        let (y, z, zero) = (&u.cy[..s], &u.cz[..s], &u.zero[..s]);
+        let k = class * s;
+        Row {
+            ce: &u.east[1..=s],
+            cw: &u.east[..s],
+            cn: if class & 1 != 0 { y } else { zero },
+            cs: if class & 2 != 0 { y } else { zero },
+            ct: if class & 4 != 0 { z } else { zero },
+            cb: if class & 8 != 0 { z } else { zero },
+            diag: &u.diag[k..k + s],
+            dinv: &u.dinv[k..k + s],
         }
     }
 }

@@ -66,6 +66,13 @@
 //! for later matrices of the same shape or smaller ones (a window of the first, set up each
 //! step where a solid moves: [`Stencil5::window_into`], [`Multigrid::apply_window`]); only a
 //! matrix larger than every earlier one allocates. [`Preconditioner::apply`] never allocates.
+//! A three-dimensional level whose matrix has one coupling per axis (zero across a closed
+//! side) and the sum of a cell's couplings on the diagonal — the projection's matrix for one
+//! density, and its Galerkin coarsenings where they stay so — holds it as one padded row of
+//! each coefficient instead of five arrays of the level's size (module `level`), on every
+//! level but the coarsest: the finest level then keeps only its two vectors, the unknowns and
+//! the right-hand side. The kernels read the same values either way, so the results are the
+//! same bits.
 
 use super::par;
 use super::pcg::Preconditioner;
@@ -132,6 +139,9 @@ pub struct Multigrid {
     excess_scale: f64,
     /// The coarse matrices (levels 1, 2, …).
     mats: Vec<Stencil5>,
+    /// Whether a three-dimensional level of one coupling per axis holds its matrix as rows
+    /// (module `level`); off only in the tests that compare the two forms.
+    uniform_rows: bool,
     /// Behind a mutex, so that a multigrid can live in a structure other threads read (two
     /// blocks of a system, each with its own multigrid, applied in parallel). One application
     /// at a time: a second, concurrent one panics instead of waiting (it could deadlock on the
@@ -148,6 +158,7 @@ impl Multigrid {
             gamma: 2,
             excess_scale: 0.5,
             mats: Vec::new(),
+            uniform_rows: true,
             h: Mutex::new(Hierarchy::default()),
         }
     }
@@ -236,6 +247,7 @@ impl Multigrid {
         let n = h.n;
         for (l, lv) in h.levels[..n].iter_mut().enumerate() {
             lv.size_t(l, n, self.gamma);
+            lv.keep_arrays = l + 1 == n || !self.uniform_rows;
         }
         h.levels[0].load(a);
         let excess = self.excess_scale;

@@ -152,9 +152,11 @@ impl Level {
         for colour in [first, 1 - first] {
             self.fill_ghosts();
             let zo = self.zo;
-            let xs = SharedSlice::new(&mut self.x);
-            let (b, dinv) = (&self.b[..], &self.dinv[..]);
-            let (ce, cn, ct) = (&self.ce[..], &self.cn[..], &self.ct[..]);
+            // The unknowns out of the level while the rows read its matrix.
+            let mut x = std::mem::take(&mut self.x);
+            let xs = SharedSlice::new(&mut x);
+            let lv = &*self;
+            let b = &lv.b[..];
             let row = |r: usize| {
                 let (j, c) = (r % ny, r / ny);
                 let base = zo + c * sp + (j + 1) * s + 1;
@@ -166,13 +168,14 @@ impl Level {
                 }
                 // The row's cells of `colour` are o, o + 2, …: a counted loop over slices of
                 // exactly the length it touches, so that no index needs a bounds check (as in
-                // the two-dimensional `Rows::relax`).
+                // the two-dimensional `Rows::relax`). The coefficients are the row's
+                // (`Level::row`, index 0 the west ghost at `base − 1`).
                 let cnt = (end - o).div_ceil(2);
                 let len = 2 * cnt - 1;
-                let (bo, dinv) = (&b[o..o + len], &dinv[o..o + len]);
-                let (ce, cw) = (&ce[o..o + len], &ce[o - 1..o - 1 + len]);
-                let (cn, cs) = (&cn[o..o + len], &cn[o - s..o - s + len]);
-                let (ct, cb) = (&ct[o..o + len], &ct[o - sp..o - sp + len]);
+                let coef = lv.row(j, c);
+                let t0 = o - (base - 1);
+                let [ce, cw, cn, cs, ct, cb, _, dinv] = coef.run(t0, len);
+                let bo = &b[o..o + len];
                 for m in 0..cnt {
                     let (t, k) = (2 * m, o + 2 * m);
                     // SAFETY: inside the span checked above; a half-sweep writes only cells
@@ -196,6 +199,7 @@ impl Level {
             } else {
                 par::range(ny * nz).work(nx).for_each(row);
             }
+            self.x = x;
         }
     }
 }

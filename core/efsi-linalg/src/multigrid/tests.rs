@@ -479,3 +479,87 @@ fn a_matrix_set_up_already_is_recognised_bit_for_bit() {
     a.north[k] *= 2.0;
     assert!(!mg.is_set_up_for(a.view()));
 }
+
+/// A seven-point matrix of one coupling per axis (`c`), zero across closed sides, its diagonal
+/// summed as the projection assembles it (east, north, top, west, south, bottom).
+fn uniform_3d(n: [usize; 3], periodic: [bool; 3], c: [f64; 3]) -> Stencil5 {
+    let [nx, ny, nz] = n;
+    let mut a = Stencil5::new_3d(nx, ny, nz, periodic);
+    let on = |yes: bool, v: f64| if yes { v } else { 0.0 };
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let q = (k * ny + j) * nx + i;
+                a.east[q] = on(i + 1 < nx || periodic[0], c[0]);
+                a.north[q] = on(j + 1 < ny || periodic[1], c[1]);
+                a.top[q] = on(k + 1 < nz || periodic[2], c[2]);
+            }
+        }
+    }
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let q = (k * ny + j) * nx + i;
+                let w = on(i > 0 || periodic[0], c[0]);
+                let s = on(j > 0 || periodic[1], c[1]);
+                let b = on(k > 0 || periodic[2], c[2]);
+                a.diag[q] = a.east[q] + a.north[q] + a.top[q] + w + s + b;
+            }
+        }
+    }
+    a
+}
+
+/// A three-dimensional matrix of one coupling per axis is held as rows, not arrays, on every
+/// level but the coarsest, and the preconditioner and the product give the same bits as with
+/// the arrays; a matrix that differs in one coupling keeps the arrays.
+#[test]
+fn a_uniform_3d_matrix_is_held_as_rows_with_the_same_bits() {
+    let c = [0.7, 1.3, 0.45];
+    for n in [[9, 7, 6], [16, 16, 16], [5, 12, 8]] {
+        for m in 0..8 {
+            let periodic = [m & 1 != 0, m & 2 != 0, m & 4 != 0];
+            let a = uniform_3d(n, periodic, c);
+            let len = a.len();
+            let mut rng = Rng(7 + m as u64);
+            let r: Vec<f64> = (0..len).map(|_| rng.next() - 0.5).collect();
+            let run = |rows: bool| {
+                let mut mg = Multigrid::new(2);
+                mg.uniform_rows = rows;
+                mg.setup(&a);
+                let (mut z, mut y) = (vec![0.0; len], vec![0.0; len]);
+                mg.apply(&r, &mut z);
+                mg.fine_matrix().mul(&r, &mut y);
+                let h = mg.lock();
+                let held = h.levels[..h.n]
+                    .iter()
+                    .map(|l| (l.uniform.is_some(), l.diag.len() + l.ce.len() + l.ct.len()))
+                    .collect::<Vec<_>>();
+                drop(h);
+                (z, y, held, mg.is_set_up_for(a.view()))
+            };
+            let (z, y, held, set) = run(true);
+            let (z0, y0, held0, set0) = run(false);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&z), bits(&z0), "{n:?} {periodic:?}: preconditioner");
+            assert_eq!(bits(&y), bits(&y0), "{n:?} {periodic:?}: product");
+            assert!(set && set0, "{n:?} {periodic:?}");
+            let last = held.len() - 1;
+            assert!(last > 0, "{n:?}: one level");
+            for (l, &(rows, arrays)) in held.iter().enumerate() {
+                assert_eq!(arrays == 0, rows, "{n:?} {periodic:?} level {l}");
+            }
+            assert!(held[0].0 && !held[last].0, "{n:?} {periodic:?}: {held:?}");
+            assert!(held0.iter().all(|&(rows, _)| !rows));
+            // One coupling (and its cells' diagonals) changed: arrays.
+            let mut b = a.clone();
+            b.east[0] *= 2.0;
+            b.diag[0] += a.east[0];
+            b.diag[1] += a.east[0];
+            let mut mg = Multigrid::new(2);
+            mg.setup(&b);
+            assert!(mg.lock().levels[0].uniform.is_none(), "{n:?} {periodic:?}");
+            assert!(!mg.is_set_up_for(a.view()) && mg.is_set_up_for(b.view()));
+        }
+    }
+}

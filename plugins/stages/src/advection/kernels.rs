@@ -35,13 +35,14 @@ use std::ops::Range;
 pub(crate) const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 
 /// Full-grid work arrays of a step on a grid of `dims` axes: per component the momentum
-/// tendency, the start-of-step velocity and the current stage's face masses (3); one mass
-/// tendency, which each component uses in turn (its masses and momenta advance as soon as its
-/// own tendencies are known: no other component reads its masses); and the mass and momentum
-/// fluxes along each axis beyond the second, shared by the components (2 per axis):
-/// `5·dims − 3` (7 in two dimensions, 12 in three).
+/// tendency and the current stage's face masses (2); one mass tendency, which each component
+/// uses in turn (its masses and momenta advance as soon as its own tendencies are known: no
+/// other component reads its masses); and the mass and momentum fluxes along each axis beyond
+/// the second, shared by the components (2 per axis): `4·dims − 3` (5 in two dimensions, 9 in
+/// three). The start-of-step velocity is read from the caller's copy where it keeps one, else
+/// copied into `dims` more arrays.
 pub const fn work(dims: usize) -> usize {
-    5 * dims - 3
+    4 * dims - 3
 }
 
 /// A shift by `k` along axis `a`.
@@ -385,8 +386,6 @@ pub(crate) struct Work<'a> {
     pub(crate) qt: [&'a mut [f64]; 3],
     /// The mass tendency of the component at hand (compact on its control volumes).
     pub(crate) mt: &'a mut [f64],
-    /// Start-of-step velocity per component.
-    pub(crate) x0: [&'a mut [f64]; 3],
     /// The current stage's face masses per component.
     pub(crate) m: [&'a mut [f64]; 3],
     /// Mass and momentum fluxes along axis 2 (three dimensions only).
@@ -407,19 +406,11 @@ impl<'a> Work<'a> {
             }
         };
         let m = std::array::from_fn(|k| take(dims, k));
-        let x0 = std::array::from_fn(|k| take(dims, k));
         let qt = std::array::from_fn(|k| take(dims, k));
         let mt = take(1, 0);
         let fm = std::array::from_fn(|k| take(dims - 2, k));
         let fq = std::array::from_fn(|k| take(dims - 2, k));
-        Work {
-            qt,
-            mt,
-            x0,
-            m,
-            fm,
-            fq,
-        }
+        Work { qt, mt, m, fm, fq }
     }
 }
 

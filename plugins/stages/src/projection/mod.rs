@@ -66,7 +66,7 @@
 //! fixed order, so the result is bit-identical on any number of threads. Nothing is allocated
 //! after the first step.
 
-use crate::scratch::{self, Scratch};
+use crate::scratch::{self, FieldScratch, Scratch};
 use efsi_core::operators;
 use efsi_core::scene::{Boundary, Options, OptionsDecl, Side};
 use efsi_core::{
@@ -241,7 +241,8 @@ impl Stage for PredictorStage {
 const WORK: usize = 6;
 
 /// Vectors of one value per cell that the matrix takes in the pool while it is assembled for
-/// multigrid (its diagonal and couplings).
+/// multigrid (its diagonal and couplings; one more, the top couplings, in three dimensions),
+/// before the solve takes the [`WORK`] vectors in the same place.
 const MATRIX: usize = 3;
 
 /// The preconditioner the scene chose; incomplete Cholesky with the matrix, which multigrid
@@ -266,13 +267,18 @@ pub(crate) struct Projector {
     max_iter: usize,
     precond: Precond,
     /// The pipeline's work vectors: [`WORK`] of one value per cell while the stage runs (the
-    /// right-hand side, the pressure solved for, the residual weights and the solver's three),
-    /// then, with multigrid, the [`MATRIX`] vectors of the matrix being assembled.
+    /// right-hand side, the pressure solved for, the residual weights and the solver's three);
+    /// before them, with multigrid, the [`MATRIX`] vectors of the matrix being assembled in
+    /// the same place.
     scratch: Scratch,
     /// The pressure increment of a projection that completes a pressure already applied (the
     /// incremental scheme's predictor's, or the coupled elastic step's): solved for from zero,
-    /// applied to the velocity and added to that pressure. `None` where no projection is one.
+    /// applied to the velocity and added to that pressure. `None` where no projection is one;
+    /// else a field of the pipeline's pool of work fields (`fields`) while such a projection
+    /// runs, an empty placeholder between.
     increment: Option<efsi_core::Field>,
+    /// The pipeline's work fields, of which the increment borrows one.
+    fields: FieldScratch,
     /// Gravity, whose hydrostatic pressure (in the grid's frame) a run may start from
     /// ([`Projector::initialize`]).
     gravity: (f64, f64),
@@ -339,7 +345,7 @@ impl Projector {
     ) -> Projector {
         let n = grid.cells();
         // Multigrid's matrix is assembled in the pool, beside the work vectors.
-        let (precond, pooled) = match o.solver {
+        let (precond, matrix) = match o.solver {
             PressureSolver::Multigrid => (
                 Precond::Multigrid(Multigrid::new(2)),
                 MATRIX + usize::from(grid.is_3d()),
@@ -358,8 +364,9 @@ impl Projector {
             tol: o.tolerance_in(scene),
             max_iter: o.max_iterations,
             precond,
-            scratch: Scratch::reserve(shared, (WORK + pooled) * n),
-            increment: increments.then(|| efsi_core::Field::zeros(grid)),
+            scratch: Scratch::reserve(shared, WORK.max(matrix) * n),
+            increment: increments.then(efsi_core::Field::default),
+            fields: FieldScratch::reserve(shared, grid, usize::from(increments)),
             gravity: scene.gravity.planar(),
             // A copy of the density (one value where it is uniform) where it decides alone
             // whether to assemble (assembling and setting up every step is dearer than the
@@ -576,6 +583,7 @@ impl Projector {
             t: 0.0,
             dt: 1.0,
             step: 0,
+            start_velocity: None,
         };
         let tol = 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy);
         let solved = self.project(&ctx, state, tol, self.increment.is_some());
@@ -643,7 +651,15 @@ impl Projector {
             let mean = x.iter().sum::<f64>() / x.len() as f64;
             par::chunks(&mut *x).for_each(|_, x| x.iter_mut().for_each(|p| *p -= mean));
         }
+        // The increment's field from the pool, zeroed, for the correction.
+        let lent = self.increment.as_mut().filter(|_| incremental);
+        if let Some(f) = lent {
+            self.fields.swap(std::slice::from_mut(f), true);
+        }
         correct(&mut self.increment, ctx, state, x, incremental);
+        if let Some(f) = self.increment.as_mut().filter(|_| incremental) {
+            self.fields.swap(std::slice::from_mut(f), false);
+        }
         drop(pool);
         if cfg!(debug_assertions) {
             check_divergence(ctx, state, tol);
@@ -662,8 +678,7 @@ impl Projector {
         match &mut self.precond {
             Precond::Multigrid(mg) if grid.is_3d() => {
                 let mut pool = self.scratch.lock();
-                let (_, matrix) = pool.split_at_mut(WORK * grid.cells());
-                let [diag, east, north, top] = scratch::take::<4>(matrix, grid.cells());
+                let [diag, east, north, top] = scratch::take::<4>(&mut pool, grid.cells());
                 let periodic = three_d::periodic_axes(bc, grid);
                 three_d::assemble_3d_into([diag, east, north, top], grid, periodic, rho);
                 let a = Stencil5View {
@@ -684,8 +699,7 @@ impl Projector {
             }
             Precond::Multigrid(mg) => {
                 let mut pool = self.scratch.lock();
-                let (_, matrix) = pool.split_at_mut(WORK * grid.cells());
-                let [diag, east, north] = scratch::take::<MATRIX>(matrix, grid.cells());
+                let [diag, east, north] = scratch::take::<MATRIX>(&mut pool, grid.cells());
                 assemble_into([diag, east, north], grid, bc, rho);
                 let a = Stencil5View {
                     nx: grid.nx,

@@ -65,9 +65,10 @@
 //! very viscous solid, θ = ½ is second-order in time.
 //!
 //! **Memory.** Between steps the stage keeps the warm start's two increments (two vectors of
-//! unknown faces) and the search direction's fields (one per axis, where the stencil reads
-//! it); the right-hand side, the diagonal and the solver's vectors are the pipeline's pool's
-//! (`scratch`). The coefficients are stored no larger than they vary (the operator's
+//! unknown faces); the right-hand side, the diagonal and the solver's two vectors are the
+//! pipeline's pool's (`scratch`), and so are the search direction's fields (one per axis,
+//! where the stencil reads it; the pool's work fields, shared with the projection's pressure
+//! increment). The coefficients are stored no larger than they vary (the operator's
 //! `Coefficients::compact`): with one viscosity everywhere (a scene of one fluid) off the
 //! axisymmetric geometry the cell coefficient and each shear pair's edge weight are one value
 //! each, and with one density the mass `dm` of every face is one value; the hoop term is
@@ -80,7 +81,7 @@
 
 use crate::block_multigrid::ViscousBlocks;
 use crate::faces::UnknownFaces;
-use crate::scratch::{self, Scratch};
+use crate::scratch::{self, FieldScratch, Scratch};
 use crate::viscous_operator::{Coefficients, Diag};
 use efsi_core::operators::{face_density, minus};
 use efsi_core::scene::{Options, OptionsDecl};
@@ -200,8 +201,11 @@ struct ViscousStage<B: VelocityGhosts = BoundarySet> {
     max_iter: usize,
     op: ViscousSystem<B>,
     /// The pipeline's work vectors: [`WORK`] of the system's length while the stage runs
-    /// (the right-hand side, the diagonal and the solver's three).
+    /// (the right-hand side, the diagonal and the solver's two).
     scratch: Scratch,
+    /// The pipeline's work fields: the search direction's, one per axis, while the stage runs
+    /// (in `op.p`; empty placeholders there between runs).
+    fields: FieldScratch,
     /// Block multigrid on the diagonal blocks, the operator's diagonal kept (`None` with
     /// the Jacobi preconditioner, which never uses it).
     blocks: Option<ViscousBlocks>,
@@ -226,8 +230,9 @@ struct WarmStart {
 }
 
 /// Work vectors the stage takes from the pipeline's pool: the right-hand side, the diagonal,
-/// and conjugate gradient's three.
-const WORK: usize = 5;
+/// and conjugate gradient's two (the block multigrid's conjugate gradient takes the
+/// diagonal's place as its third once its blocks are set up from it).
+const WORK: usize = 4;
 
 /// Above this largest diagonal-to-mass ratio `Auto` switches from Jacobi to block multigrid.
 const AUTO_MULTIGRID_RATIO: f64 = 40.0;
@@ -423,8 +428,9 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
     /// quarter of the update pass's time without AVX). The search direction `p` lives in the fields `p`,
     /// where the stencil reads it, instead of a compact vector copied into them before every
     /// product: one copy pass and one read of `p` fewer per iteration (the step is bound by
-    /// memory traffic). `work` holds `r`, `q` (which holds `A p`, then `z`) and a spare
-    /// vector that keeps `p` while a true residual borrows the fields. With `start` the
+    /// memory traffic). `work` holds `r` and `q` (which holds `A p`, then `z`); while a true
+    /// residual borrows the fields, `p` waits in `r` (whose recursive value the true residual
+    /// replaces) and the true residual is formed in `q`, the two then trading places. With `start` the
     /// caller has already formed `r = b − A x` (and `q = A x`, the fields holding `x`,
     /// [`residual`](Self::residual)) for this `x`, and the solve starts from it instead of
     /// forming it again. Rows in parallel, partial sums added in row order: the same bits on
@@ -432,7 +438,7 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
     #[allow(clippy::too_many_arguments)]
     fn solve_jacobi(
         &mut self,
-        [r, q, spare]: [&mut [f64]; 3],
+        [mut r, mut q]: [&mut [f64]; 2],
         dinv: &[f64],
         b: &[f64],
         x: &mut [f64],
@@ -471,9 +477,16 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
             res = rr.sqrt();
             it += 1;
             if res <= tol {
-                // Confirm with the true residual; keep p aside while it uses the fields.
-                self.faces.gather(&self.p, spare);
-                res = true_residual(self, x, r, q);
+                // Confirm with the true residual, formed in q; p waits in r meanwhile.
+                self.faces.gather(&self.p, r);
+                self.product(x, q);
+                par::chunks(&mut *q).for_each(|o, q| {
+                    let n = q.len();
+                    for (q, b) in q.iter_mut().zip(&b[o..o + n]) {
+                        *q = b - *q;
+                    }
+                });
+                res = Norm::L2.of(q);
                 if res <= tol {
                     return SolveStats {
                         iterations: it,
@@ -481,7 +494,8 @@ impl<B: VelocityGhosts> ViscousSystem<B> {
                         converged: true,
                     };
                 }
-                self.faces.scatter_to(spare, &mut self.p);
+                std::mem::swap(&mut r, &mut q);
+                self.faces.scatter_to(q, &mut self.p);
                 rz_new = precondition(r, q);
             }
             let beta = rz_new / rz;
@@ -652,13 +666,17 @@ impl<B: VelocityGhosts> ViscousStage<B> {
         shared: &mut efsi_core::Resources,
     ) -> Self {
         let n = faces.len();
+        let mut op = ViscousSystem::new(grid, bc, faces);
+        // The search direction's fields are the pipeline's, lent for each run.
+        op.p.iter_mut().for_each(|f| *f = Field::default());
         ViscousStage {
             preconditioner: o.preconditioner,
             theta: o.theta,
             tol: o.tolerance,
             max_iter: o.max_iterations,
-            op: ViscousSystem::new(grid, bc, faces),
+            op,
             scratch: Scratch::reserve(shared, WORK * n),
+            fields: FieldScratch::reserve(shared, grid, grid.dims()),
             warm: WarmStart {
                 settle: steady.map(|steady| (SETTLE * o.tolerance, steady)),
                 prev: [vec![0.0; n], vec![0.0; n]],
@@ -848,8 +866,25 @@ impl Stage for ViscousStage {
 impl<B: VelocityGhosts> ViscousStage<B> {
     /// One viscous step `[t, t + dt]` (`time`) of the velocity `vel` (one field per axis) with
     /// the cell viscosities `mu` and densities `rho` (ghosts filled) under the boundary
-    /// conditions `walls`: the system assembled, the warm start, the solve, `vel += δ`.
+    /// conditions `walls`: the system assembled, the warm start, the solve, `vel += δ`; the
+    /// search direction's fields borrowed from the pipeline's pool for it, zeroed.
     fn step<F: BorrowMut<Field> + Sync>(
+        &mut self,
+        walls: &B,
+        time: [f64; 2],
+        vel: &mut [F],
+        mu: &Field,
+        rho: &Field,
+    ) -> Result<SolveStats, StageError> {
+        let fields = self.fields.clone();
+        fields.swap(&mut self.op.p, true);
+        let stats = self.step_in(walls, time, vel, mu, rho);
+        fields.swap(&mut self.op.p, false);
+        stats
+    }
+
+    /// [`step`](Self::step) with the search direction's fields in place.
+    fn step_in<F: BorrowMut<Field> + Sync>(
         &mut self,
         walls: &B,
         [t, dt]: [f64; 2],
@@ -859,7 +894,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
     ) -> Result<SolveStats, StageError> {
         let scratch = self.scratch.clone();
         let mut pool = scratch.lock();
-        let [rhs, diag, r, p, q] = scratch::take::<WORK>(&mut pool, self.op.faces.len());
+        let [rhs, diag, r, q] = scratch::take::<WORK>(&mut pool, self.op.faces.len());
         self.op.theta_dt = self.theta * dt;
         self.op.assemble(mu, rho, diag);
         let bnorm = self.right_hand_side(walls, [t, dt], vel, rhs);
@@ -887,8 +922,9 @@ impl<B: VelocityGhosts> ViscousStage<B> {
             let delta = &mut self.warm.prev[1];
             let st = if let Some(blocks) = blocks {
                 blocks.setup(&op.k, diag);
+                // The blocks hold the diagonal now: its vector is the solver's third.
                 solve_norm_in(
-                    [r, p, q],
+                    [r, diag, q],
                     op,
                     &*blocks,
                     rhs,
@@ -900,7 +936,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
             } else {
                 // The reciprocal of the diagonal, in place.
                 par::chunks(&mut *diag).for_each(|_, d| d.iter_mut().for_each(|d| *d = 1.0 / *d));
-                op.solve_jacobi([r, q, p], diag, rhs, delta, tol, self.max_iter, start)
+                op.solve_jacobi([r, q], diag, rhs, delta, tol, self.max_iter, start)
             };
             // A solve short of the tighter stop near a steady state but within the tolerance
             // is converged.
@@ -988,7 +1024,7 @@ mod tests {
         );
         let dinv: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
         let mut x2 = vec![0.0; n];
-        let work = [&mut r[..], &mut q[..], &mut p[..]];
+        let work = [&mut r[..], &mut q[..]];
         let s2 = sys.solve_jacobi(work, &dinv, &rhs, &mut x2, tol, 500, Start::Guess);
         assert!(s1.converged && s2.converged, "{s1:?} {s2:?}");
         assert!(s1.iterations.abs_diff(s2.iterations) <= 1, "{s1:?} {s2:?}");
@@ -1024,20 +1060,12 @@ mod tests {
         let guess: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 * 0.1).collect();
         let tol = 1e-9 * dot(&rhs, &rhs).sqrt();
         let mut solve = |start: Start| {
-            let (mut r, mut q, mut p) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let (mut r, mut q) = (vec![0.0; n], vec![0.0; n]);
             let mut x = guess.clone();
             if start == Start::Residual {
                 sys.residual(&rhs, &x, &mut r, &mut q);
             }
-            let st = sys.solve_jacobi(
-                [&mut r, &mut q, &mut p],
-                &dinv,
-                &rhs,
-                &mut x,
-                tol,
-                500,
-                start,
-            );
+            let st = sys.solve_jacobi([&mut r, &mut q], &dinv, &rhs, &mut x, tol, 500, start);
             (st, x)
         };
         let (s1, x1) = solve(Start::Guess);
@@ -1215,6 +1243,9 @@ mod tests {
         let bnorm = stage.right_hand_side(&walls, [0.0, 0.01], &mut moved, &mut b);
         let (mut ad, mut diag) = (vec![0.0; n], vec![0.0; n]);
         stage.op.assemble(&mu, &rho, &mut diag);
+        // The search direction's fields, which the product works in, from the pool.
+        let fields = stage.fields.clone();
+        fields.swap(&mut stage.op.p, true);
         stage.op.product(&delta, &mut ad);
         let r = ad
             .iter()
