@@ -110,9 +110,14 @@ fn wave_limit_of(
         let h = hs[1..dims].iter().fold(hs[0], |s, &h| s.max(h));
         // The staircase estimate of the width is within 8 % for a disk 3 cells across or more.
         if width / h < 0.9 * MIN_CELLS_ACROSS {
+            let measure = if dims == 3 {
+                "its volume-to-surface measure 6V/S"
+            } else {
+                "its section's hydraulic diameter 4A/P"
+            };
             return Err(format!(
-                "{path}.shape: the solid is {:.1} cells across (its section's hydraulic diameter \
-                 4A/P = {width:.4e} m over cells of {h:.4e} m); an elastic solid needs at least \
+                "{path}.shape: the solid is {:.1} cells across ({measure} = {width:.4e} m over \
+                 cells of {h:.4e} m); an elastic solid needs at least \
                  {MIN_CELLS_ACROSS} (narrower ones were measured to gain up to 12 % of their \
                  impact energy, `cargo xtask bench-paper --case stability`): refine the grid \
                  (grid: nx, ny{} — nr, nz when axisymmetric) to cells of at most {:.4e} m, or widen the solid",
