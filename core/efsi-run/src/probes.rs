@@ -844,8 +844,17 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
     let cells = n[0] * n[1] * n[2];
     let index =
         |c: usize| -> [isize; 3] { std::array::from_fn(|a| ((c / stride[a]) % n[a]) as isize) };
-    let at = |c: usize| phi[index(c)];
-    let volume = |c: usize| cell_volume(grid, index(c)[0]);
+    // φ of the cells in their compact order (x fastest) and the volumes of a row's cells.
+    let mut phis = Vec::with_capacity(cells);
+    for k in 0..n[2] as isize {
+        for j in 0..n[1] as isize {
+            let at = phi.idx3([0, j, k]);
+            phis.extend_from_slice(&phi.data()[at..at + n[0]]);
+        }
+    }
+    let volumes_x: Vec<f64> = (0..n[0] as isize).map(|i| cell_volume(grid, i)).collect();
+    let at = |c: usize| phis[c];
+    let volume = |c: usize| volumes_x[c % n[0]];
     let total = (0..cells).fold(0.0, |t, c| t + at(c).clamp(0.0, 1.0) * volume(c));
     let mut seen = vec![false; cells];
     let mut stack = Vec::new();
