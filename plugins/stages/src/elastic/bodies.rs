@@ -256,9 +256,11 @@ pub(super) fn copy_out(from: &Field, to: &mut Field, origin: Index, region: &efs
     }
 }
 
-/// How far beyond its centres `c` [`super::Kernels::gradient_in`] reads the velocity along
-/// each axis: its gradient window is `c` and one cell more, the edges' two-point gradients
-/// read one cell below an edge, the bulk stencil two below and one above.
+/// How far beyond its centres `c` [`super::Kernels::gradient_in`] and
+/// [`super::Kernels::advect`] read the velocity along each axis: the gradient window is `c`
+/// and one cell more, the edges' two-point gradients read one cell below an edge, the bulk
+/// stencil two below and one above; the advection reads the faces of `c`'s cells and of its
+/// edges' boxes, one cell about an edge.
 const READS: isize = 3;
 
 /// An elastic body of the scene: its index among the scene's bodies (`None` for the single
@@ -687,8 +689,9 @@ impl super::Kernels {
     }
 
     /// [`Self::with_velocity`] for `f` reading the velocity only within [`READS`] cells of the
-    /// centres `c` (the velocity gradients [`super::Kernels::gradient_in`] of `c`): on a
-    /// window only those points are copied in (the rest of the window's copy is not read).
+    /// centres `c` (the velocity gradients [`super::Kernels::gradient_in`] of `c`, the
+    /// advection at `c`): on a window only those points are copied in (the rest of the
+    /// window's copy is not read).
     pub(super) fn with_velocity_near<R>(
         &mut self,
         vel: &[&Field],
