@@ -436,10 +436,19 @@ pub fn evaluate(
             out.extend(all.bodies.iter().map(each));
         }
         Some(all) => {
+            // Each body's φ_k on the grid, zero elsewhere: the last body's window cleared and
+            // this one's written (the field as `BodyFraction::fill` leaves it).
             let mut phi = Field::zeros(grid);
+            let mut last: Option<&efsi_core::body_fractions::BodyFraction> = None;
             for b in &all.bodies {
                 if b.is_set() {
-                    b.fill(&mut phi);
+                    for (at, _) in last.iter().flat_map(|l| l.cells()) {
+                        phi[at] = 0.0;
+                    }
+                    for (at, f) in b.cells() {
+                        phi[at] = f;
+                    }
+                    last = Some(b);
                     let on = Probed {
                         phi: Some(&phi),
                         ..probed
