@@ -436,10 +436,19 @@ pub fn evaluate(
             out.extend(all.bodies.iter().map(each));
         }
         Some(all) => {
+            // Each body's φ_k on the grid, zero elsewhere: the last body's window cleared and
+            // this one's written (the field as `BodyFraction::fill` leaves it).
             let mut phi = Field::zeros(grid);
+            let mut last: Option<&efsi_core::body_fractions::BodyFraction> = None;
             for b in &all.bodies {
                 if b.is_set() {
-                    b.fill(&mut phi);
+                    for (at, _) in last.iter().flat_map(|l| l.cells()) {
+                        phi[at] = 0.0;
+                    }
+                    for (at, f) in b.cells() {
+                        phi[at] = f;
+                    }
+                    last = Some(b);
                     let on = Probed {
                         phi: Some(&phi),
                         ..probed
@@ -493,14 +502,24 @@ pub fn body_contact(grid: &Grid, all: &BodyFractions, out: &mut Vec<f64>) {
                 out.extend([f64::NAN, f64::NAN]);
                 continue;
             }
+            // Only the cells of both windows can hold both (elsewhere `min(φ_a, φ_b)` is
+            // at most 0): those of a's window that lie in b's, in a's order.
+            let (lo, hi): ([usize; 3], [usize; 3]) = (
+                std::array::from_fn(|x| a.lo[x].max(b.lo[x])),
+                std::array::from_fn(|x| (a.lo[x] + a.n[x]).min(b.lo[x] + b.n[x])),
+            );
             let (mut shared, mut cells) = (0.0, 0usize);
-            for (at, fa) in a.cells() {
-                let fb = b.at(at);
-                let m = fa.min(fb);
-                if m > 0.0 {
-                    shared += m * cell_volume(grid, at[0]);
+            for k in lo[2]..hi[2] {
+                for j in lo[1]..hi[1] {
+                    for i in lo[0]..hi[0] {
+                        let at = [i, j, k].map(|v| v as isize);
+                        let m = a.at(at).min(b.at(at));
+                        if m > 0.0 {
+                            shared += m * cell_volume(grid, at[0]);
+                        }
+                        cells += usize::from(m > PIECE_PHI_MIN);
+                    }
                 }
-                cells += usize::from(m > PIECE_PHI_MIN);
             }
             out.extend([shared, cells as f64]);
         }
@@ -844,9 +863,23 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
     let cells = n[0] * n[1] * n[2];
     let index =
         |c: usize| -> [isize; 3] { std::array::from_fn(|a| ((c / stride[a]) % n[a]) as isize) };
-    let at = |c: usize| phi[index(c)];
-    let volume = |c: usize| cell_volume(grid, index(c)[0]);
-    let total = (0..cells).fold(0.0, |t, c| t + at(c).clamp(0.0, 1.0) * volume(c));
+    // φ of the cells in their compact order (x fastest) and the volumes of a row's cells.
+    let mut phis = Vec::with_capacity(cells);
+    for k in 0..n[2] as isize {
+        for j in 0..n[1] as isize {
+            let at = phi.idx3([0, j, k]);
+            phis.extend_from_slice(&phi.data()[at..at + n[0]]);
+        }
+    }
+    let volumes_x: Vec<f64> = (0..n[0] as isize).map(|i| cell_volume(grid, i)).collect();
+    let at = |c: usize| phis[c];
+    let volume = |c: usize| volumes_x[c % n[0]];
+    // Σ φ dV over the cells in their order, row by row.
+    let total = phis.chunks_exact(n[0]).fold(0.0, |t, row| {
+        row.iter()
+            .zip(&volumes_x)
+            .fold(t, |t, (f, v)| t + f.clamp(0.0, 1.0) * v)
+    });
     let mut seen = vec![false; cells];
     let mut stack = Vec::new();
     let mut volumes = Vec::new();

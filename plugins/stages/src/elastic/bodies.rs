@@ -220,6 +220,32 @@ pub(super) fn copy_in(from: &Field, to: &mut Field, origin: Index) {
     }
 }
 
+/// [`copy_in`] of the window's points `lo ≤ I ≤ hi` only (window indices, clipped to the
+/// window field's storage, ghosts included), row by row.
+pub(super) fn copy_box_in(from: &Field, to: &mut Field, origin: Index, lo: Index, hi: Index) {
+    let g = efsi_core::G;
+    let gz = to.gz() as isize;
+    let top = [
+        to.stride() as isize - g,
+        to.rows() as isize - g,
+        to.planes() as isize - gz,
+    ];
+    let bottom = [-g, -g, -gz];
+    let lo: Index = std::array::from_fn(|a| lo[a].max(bottom[a]));
+    let hi: Index = std::array::from_fn(|a| hi[a].min(top[a] - 1));
+    if (0..3).any(|a| lo[a] > hi[a]) {
+        return;
+    }
+    let len = (hi[0] - lo[0] + 1) as usize;
+    for k in lo[2]..=hi[2] {
+        for j in lo[1]..=hi[1] {
+            let src = from.idx3([lo[0] + origin[0], j + origin[1], k + origin[2]]);
+            let dst = to.idx3([lo[0], j, k]);
+            to.data_mut()[dst..dst + len].copy_from_slice(&from.data()[src..src + len]);
+        }
+    }
+}
+
 /// Copy the points `region` (of the window field `from`, a region of its grid) into the
 /// parent field `to` at the same cells (`origin` the parent index of the window's first cell).
 pub(super) fn copy_out(from: &Field, to: &mut Field, origin: Index, region: &efsi_core::Region) {
@@ -229,6 +255,13 @@ pub(super) fn copy_out(from: &Field, to: &mut Field, origin: Index, region: &efs
         to.data_mut()[dst..dst + l.len].copy_from_slice(from.at(&l, [0; 3]));
     }
 }
+
+/// How far beyond its centres `c` [`super::Kernels::gradient_in`] and
+/// [`super::Kernels::advect`] read the velocity along each axis: the gradient window is `c`
+/// and one cell more, the edges' two-point gradients read one cell below an edge, the bulk
+/// stencil two below and one above; the advection reads the faces of `c`'s cells and of its
+/// edges' boxes, one cell about an edge.
+const READS: isize = 3;
 
 /// An elastic body of the scene: its index among the scene's bodies (`None` for the single
 /// solid of a scene of one body, whose fraction is the state's) and its settings.
@@ -649,6 +682,36 @@ impl super::Kernels {
         let mut w = std::mem::take(&mut self.vel);
         for (w, v) in w.iter_mut().zip(vel) {
             copy_in(v, w, self.origin);
+        }
+        let r = f(self, &super::velocity(&w[0], &w[1], w.get(2)));
+        self.vel = w;
+        r
+    }
+
+    /// [`Self::with_velocity`] for `f` reading the velocity only within [`READS`] cells of the
+    /// centres `c` (the velocity gradients [`super::Kernels::gradient_in`] of `c`, the
+    /// advection at `c`): on a window only those points are copied in (the rest of the
+    /// window's copy is not read).
+    pub(super) fn with_velocity_near<R>(
+        &mut self,
+        vel: &[&Field],
+        c: super::Window,
+        f: impl FnOnce(&mut Self, &[&Field]) -> R,
+    ) -> R {
+        if self.place.is_none() {
+            return f(self, vel);
+        }
+        let dims = self.grid.dims();
+        let grow = |x: isize, s: isize, a: usize| if a < dims { x + s * READS } else { x };
+        let (lo, hi): (Index, Index) = (
+            std::array::from_fn(|a| grow(c.lo()[a], -1, a)),
+            std::array::from_fn(|a| grow(c.hi()[a], 1, a)),
+        );
+        let mut w = std::mem::take(&mut self.vel);
+        if c.points() > 0 {
+            for (w, v) in w.iter_mut().zip(vel) {
+                copy_box_in(v, w, self.origin, lo, hi);
+            }
         }
         let r = f(self, &super::velocity(&w[0], &w[1], w.get(2)));
         self.vel = w;

@@ -118,7 +118,7 @@ impl DeformationStage {
         let parts = self.ks.iter_mut().zip(ds.iter_mut()).zip(&self.laws);
         for (n, (((k, d), law), first)) in parts.zip(&mut self.first).enumerate() {
             k.set_weights(self.phis.of(n, phi));
-            k.with_velocity(&vel, |k, vel| k.update(vel, d, first, a, picard));
+            k.with_velocity_near(&vel, k.near_c, |k, vel| k.update(vel, d, first, a, picard));
             // The end-of-step stress and the elastic energy.
             k.evaluate(law.as_ref(), &d.b, &mut d.stress, false)
                 .map_err(|m| err("deformation", m))?;

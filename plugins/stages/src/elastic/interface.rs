@@ -63,18 +63,33 @@ impl Kernels {
         };
         // Edges none of whose cells holds solid: no weight, no series factors, the plain
         // average, and a normal of no consequence (it multiplies a zero extra shear rate).
-        for e in &mut self.edge {
-            for f in [&mut e.wc, &mut e.wk, &mut e.ks, &mut e.rc] {
-                f.fill(0.0);
-            }
-            e.sf.fill(1.0);
-            e.share.fill(0.5);
-            for f in &mut e.kwt {
-                f.fill(0.25);
+        // Everywhere the first time; then only on the edges the last call set from the solid
+        // (elsewhere the fields still hold these values).
+        let set = self.edges_set.take();
+        for (p, e) in self.edge.iter_mut().enumerate() {
+            let fields = [
+                (&mut e.wc, 0.0),
+                (&mut e.wk, 0.0),
+                (&mut e.ks, 0.0),
+                (&mut e.rc, 0.0),
+                (&mut e.sf, 1.0),
+                (&mut e.share, 0.5),
+            ];
+            let [k0, k1, k2, k3] = &mut e.kwt;
+            let quarters = [(k0, 0.25), (k1, 0.25), (k2, 0.25), (k3, 0.25)];
+            for (f, v) in fields.into_iter().chain(quarters) {
+                match set {
+                    None => f.fill(v),
+                    Some(set) if set[p].points() > 0 => {
+                        set[p].region(g).for_each(f, |_, row| row.fill(v));
+                    }
+                    Some(_) => {}
+                }
             }
         }
         let c = self.solid_c;
         if c.i0 > c.i1 {
+            self.edges_set = Some([Window::EMPTY; 3]);
             return;
         }
         self.set_quarters(phi);
@@ -82,18 +97,20 @@ impl Kernels {
         // in the fields' storage).
         let whole = Region::whole(&self.grid);
         let (lo, hi) = (whole.lo(), whole.hi());
+        let mut set = [Window::EMPTY; 3];
         for (p, &(axes, at)) in shear_pairs(dims).iter().enumerate() {
             let nodal = at.nodal();
             let (cl, ch) = (c.lo(), c.hi());
-            let edges = Window::boxed(
+            set[p] = Window::boxed(
                 std::array::from_fn(|a| cl[a].max(lo[a] + nodal[a] as isize)),
                 std::array::from_fn(|a| (ch[a] + nodal[a] as isize).min(hi[a] - 1)),
-            )
-            .region(&self.grid);
+            );
+            let edges = set[p].region(&self.grid);
             for l in (0..edges.lines()).map(|n| edges.line(n)) {
                 self.set_edges(phi, p, axes, &l);
             }
         }
+        self.edges_set = Some(set);
     }
 
     /// The bounding boxes of the solid (`w > 0`) and of any material (`φ > 0`) among the

@@ -368,6 +368,10 @@ struct Kernels {
     /// increment vanishes (it is weighted by `w`, `w_k`), so the elastic operator skips them.
     solid_c: Window,
     solid_k: [Window; 3],
+    /// Per shear pair, the edges whose weights the last [`Kernels::set_weights`] set from the
+    /// solid (`None` until the first, or after the fields were made): outside them the edge
+    /// weights hold their no-solid values, so the next call resets these edges only.
+    edges_set: Option<[Window; 3]>,
     /// The centres within [`NEAR`] cells of any material (`φ > 0`, flotsam included), set by
     /// [`Kernels::set_weights`], and the edges touching them ([`Window::edges`]): the
     /// deformation is transported there only. Elsewhere B stays the identity and its rates
@@ -548,6 +552,7 @@ impl Kernels {
             mu_s,
             solid_c: Window::EMPTY,
             solid_k: [Window::EMPTY; 3],
+            edges_set: None,
             near_c: Window::EMPTY,
             energy_cells: Vec::new(),
             area: std::array::from_fn(|a| {

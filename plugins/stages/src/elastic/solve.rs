@@ -150,7 +150,7 @@ impl LinearOperator for OperatorCtx<'_> {
         let parts = op.ks.iter_mut().zip(self.d).zip(self.dtau.iter_mut());
         for (((k, d), dtau), db) in parts.zip(op.db.iter_mut()) {
             let cw = k.solid_c;
-            k.with_velocity(&vel, |k, vel| k.gradient_in(vel, cw));
+            k.with_velocity_near(&vel, cw, |k, vel| k.gradient_in(vel, cw));
             k.stretch_in(&d.start, 1.0, None, Some(&d.relax), db, cw);
             k.apply_tangent(db, dtau);
             k.force_sub(dtau, op.c, y);
@@ -335,7 +335,7 @@ impl ElasticStage {
             }
             k.relaxation(law.as_ref(), &d.start, dt, &mut d.explicit, &mut d.relax)
                 .map_err(|m| err("elastic", m))?;
-            k.with_velocity(&vel, |k, vel| k.gradient(vel));
+            k.with_velocity_near(&vel, k.near_c, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
                 theta * dt,
@@ -660,7 +660,7 @@ impl ElasticStage {
         );
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         for (k, d) in self.op.ks.iter_mut().zip(ds.iter_mut()) {
-            k.with_velocity(&vel, |k, vel| k.gradient(vel));
+            k.with_velocity_near(&vel, k.near_c, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
                 self.scheme.theta * dt,
