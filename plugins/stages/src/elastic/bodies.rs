@@ -580,11 +580,13 @@ fn fraction_of<'a>(all: &'a BodyFractions, b: &ElasticBody) -> Result<&'a BodyFr
 }
 
 /// The windows of the state's deformations: `None` for the single solid's (the whole grid).
-pub(super) fn places(state: &State) -> Vec<Option<Place>> {
-    match state.resources.get::<BodyDeformations>() {
-        Some(many) => many.places.iter().map(|p| Some(*p)).collect(),
-        None => vec![None],
-    }
+/// An iterator, so that a step allocates nothing.
+pub(super) fn places(state: &State) -> impl Iterator<Item = Option<Place>> + '_ {
+    let many = state.resources.get::<BodyDeformations>();
+    let single = many.is_none().then_some(None);
+    many.into_iter()
+        .flat_map(|m| m.places.iter().map(|p| Some(*p)))
+        .chain(single)
 }
 
 /// Each elastic body's fraction on its window with its ghosts filled: the state's solid
@@ -736,13 +738,13 @@ impl super::Kernels {
 /// grid, `bc` and `sides` its sides.
 pub(super) fn fit_kernels(
     ks: &mut [super::Kernels],
-    places: &[Option<Place>],
+    places: impl IntoIterator<Item = Option<Place>>,
     parent: &Grid,
     bc: &BoundarySet,
     sides: &Boundaries,
 ) {
     for (k, p) in ks.iter_mut().zip(places) {
-        if let Some(p) = *p
+        if let Some(p) = p
             && k.place != Some(p)
         {
             *k = super::Kernels::windowed(parent, bc, sides, p, k.mu_f, k.mu_s);

@@ -81,7 +81,7 @@ impl DeformationStage {
     ) -> Result<StageStats, StageError> {
         let f = &self.frame;
         let places = super::bodies::places(state);
-        super::bodies::fit_kernels(&mut self.ks, &places, &f.grid, &f.bc, &f.sides);
+        super::bodies::fit_kernels(&mut self.ks, places, &f.grid, &f.bc, &f.sides);
         for (first, k) in self.first.iter_mut().zip(&self.ks) {
             let c = Deformation::components(&k.grid);
             super::bodies::reshape(first, &k.grid, c);

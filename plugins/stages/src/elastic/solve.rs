@@ -226,7 +226,7 @@ impl ElasticStage {
         let f = &self.op.frame;
         super::bodies::place_all(&self.bodies, &f.grid, state).map_err(|m| err("elastic", m))?;
         let places = super::bodies::places(state);
-        super::bodies::fit_kernels(&mut self.op.ks, &places, &f.grid, &f.bc, &f.sides);
+        super::bodies::fit_kernels(&mut self.op.ks, places, &f.grid, &f.bc, &f.sides);
         let scratch = self
             .tau
             .iter_mut()
