@@ -15,9 +15,10 @@
 //! Every figure is read from the runs' probes (`<body>.solid_x`, …, `max_solid_fraction_sum`,
 //! `<a>.<b>.shared_cells`, `kinetic_energy`), sampled at the scenes' `probe_every`.
 
-use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, xy};
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, drift, drift_check, grid_study, largest_ratio, xy,
+};
 use super::plot::Scale;
-use super::soft_sphere_cube::observed_order;
 use super::{Check, Options, Probes, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
 use efsi_run::SceneOutput;
@@ -272,22 +273,13 @@ impl Case for TwoSoftDisks {
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
-        if let Some((_, finest)) = done.measured.last() {
-            let e = rebound(finest).restitution;
-            for (r, (_, b)) in done.runs.iter_mut().zip(&done.measured) {
-                r.error = Some((rebound(b).restitution - e).abs());
-            }
-        }
+        let (diffs, order) = grid_study(done, |a, b| {
+            (rebound(a).restitution - rebound(b).restitution).abs()
+        });
         let runs = paired(done);
         let all: Vec<&Bodies> = runs.iter().map(|(_, b)| *b).collect();
         let reb: Vec<Rebound> = all.iter().map(|b| rebound(b)).collect();
         let e: Vec<f64> = reb.iter().map(|r| r.restitution).collect();
-        let diffs: Vec<f64> = e.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-        let hs: Vec<f64> = done.measured.iter().map(|(n, _)| 1.0 / *n as f64).collect();
-        let order = match (hs.as_slice(), diffs.as_slice()) {
-            ([h1, h2, h3], [g1, g2]) => observed_order([*h1, *h2, *h3], [*g1, *g2]),
-            _ => f64::NAN,
-        };
         let mut checks = separation_checks(&all);
         checks.push(Check::at_most(
             "mirror symmetry about x = 1: largest |x_l + x_r − 2|, |y_l − y_r|, |u_l + u_r|",
@@ -507,19 +499,9 @@ impl Case for DisksInCavity {
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let end = self.end;
-        if let Some((_, finest)) = done.measured.last() {
-            for (r, (_, b)) in done.runs.iter_mut().zip(&done.measured) {
-                r.error = Some(paths_gap(b, finest));
-            }
-        }
+        let (gaps, order) = grid_study(done, paths_gap);
         let runs = paired(done);
         let all: Vec<&Bodies> = runs.iter().map(|(_, b)| *b).collect();
-        let gaps: Vec<f64> = all.windows(2).map(|w| paths_gap(w[1], w[0])).collect();
-        let hs: Vec<f64> = done.measured.iter().map(|(n, _)| 1.0 / *n as f64).collect();
-        let order = match (hs.as_slice(), gaps.as_slice()) {
-            ([h1, h2, h3], [g1, g2]) => observed_order([*h1, *h2, *h3], [*g1, *g2]),
-            _ => f64::NAN,
-        };
         let mut checks = separation_checks(&all);
         checks.push(Check::at_most(
             "paths converge: ratio of successive grid pairs' path differences (mean distance \
@@ -690,21 +672,11 @@ impl Case for SpheresOnAxis {
     }
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
-        if let Some((_, finest)) = done.measured.last() {
-            for (r, (_, b)) in done.runs.iter_mut().zip(&done.measured) {
-                r.error = Some(paths_gap(b, finest));
-            }
-        }
+        let (gaps, order) = grid_study(done, paths_gap);
         let runs = paired(done);
         let all: Vec<&Bodies> = runs.iter().map(|(_, b)| *b).collect();
         let hits: Vec<Impact> = all.iter().map(|b| impact(b, SPHERE_RADIUS)).collect();
         let e: Vec<f64> = hits.iter().map(|i| i.restitution).collect();
-        let gaps: Vec<f64> = all.windows(2).map(|w| paths_gap(w[1], w[0])).collect();
-        let hs: Vec<f64> = done.measured.iter().map(|(n, _)| 1.0 / *n as f64).collect();
-        let order = match (hs.as_slice(), gaps.as_slice()) {
-            ([h1, h2, h3], [g1, g2]) => observed_order([*h1, *h2, *h3], [*g1, *g2]),
-            _ => f64::NAN,
-        };
         let mut checks = separation_checks(&all);
         checks.push(Check::at_most(
             "cells the two spheres share, every output",

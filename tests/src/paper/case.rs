@@ -302,3 +302,63 @@ pub fn deviation(xs: &[f64], ys: &[f64], (rx, ry): (&[f64], &[f64])) -> f64 {
         .map(|(&x, &y)| (y - crate::interp(rx, ry, x)).abs());
     d.fold(0.0, f64::max)
 }
+
+/// The observed order p of three grids' successive differences `g = [g12, g23]` on spacings
+/// `h = [h1, h2, h3]`: the root of (h1^p − h2^p)/(h2^p − h3^p) = g12/g23 in (0, 8], found by
+/// bisection (the ratio grows with p); NaN if there is none there.
+pub fn observed_order(h: [f64; 3], g: [f64; 2]) -> f64 {
+    let f = |p: f64| (h[0].powf(p) - h[1].powf(p)) / (h[1].powf(p) - h[2].powf(p)) - g[0] / g[1];
+    let (mut lo, mut hi) = (1e-6, 8.0);
+    if !(f(lo) < 0.0 && f(hi) > 0.0) {
+        return f64::NAN;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// A grid study of a case whose settings are grid sizes `n` (spacing `1/n`): each run's error
+/// is `gap` from the finest run's figures, and the differences between successive grids,
+/// `gap(finer, coarser)`, come back with their observed order ([`observed_order`]; NaN
+/// unless there are three grids).
+pub fn grid_study<C: Case<Setting = usize>>(
+    done: &mut Done<C>,
+    gap: impl Fn(&C::Measured, &C::Measured) -> f64,
+) -> (Vec<f64>, f64) {
+    if let Some((_, finest)) = done.measured.last() {
+        for (r, (_, m)) in done.runs.iter_mut().zip(&done.measured) {
+            r.error = Some(gap(m, finest));
+        }
+    }
+    let measured: Vec<&C::Measured> = done.measured.iter().map(|(_, m)| m).collect();
+    let diffs: Vec<f64> = measured.windows(2).map(|w| gap(w[1], w[0])).collect();
+    let hs: Vec<f64> = done.measured.iter().map(|(n, _)| 1.0 / *n as f64).collect();
+    let order = match (hs.as_slice(), diffs.as_slice()) {
+        ([h1, h2, h3], [g1, g2]) => observed_order([*h1, *h2, *h3], [*g1, *g2]),
+        _ => f64::NAN,
+    };
+    (diffs, order)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::observed_order;
+
+    /// The order of exact power-law differences is recovered, for unequal refinement ratios.
+    #[test]
+    fn observed_order_of_a_power_law() {
+        for p in [0.8, 1.0, 2.0] {
+            let h = [1.0 / 16.0, 1.0 / 20.0, 1.0 / 24.0];
+            let e = |h: f64| 3.0 * h.powf(p);
+            let g = [e(h[0]) - e(h[1]), e(h[1]) - e(h[2])];
+            assert!((observed_order(h, g) - p).abs() < 1e-9, "p = {p}");
+        }
+        assert!(observed_order([0.1, 0.05, 0.025], [1.0, 2.0]).is_nan());
+    }
+}

@@ -12,7 +12,9 @@
 //! The full version runs 16³, 24³ and 32³ (3.2, 4.8 and 6.4 cells per radius) to t = 4, the
 //! quick one 16³, 20³ and 24³ to t = 1.
 
-use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check, largest_ratio, xy};
+use super::case::{
+    Case, Done, Harness, Plan, Verdict, drift, drift_check, grid_study, largest_ratio, xy,
+};
 use super::plot::Scale;
 use super::{Check, Options, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
@@ -91,26 +93,6 @@ fn path_gap(a: &Path3, b: &Path3) -> f64 {
     }
 }
 
-/// The observed order p of three grids' successive differences `g = [g12, g23]` on spacings
-/// `h = [h1, h2, h3]`: the root of (h1^p − h2^p)/(h2^p − h3^p) = g12/g23 in (0, 8], found by
-/// bisection (the ratio grows with p); NaN if there is none there.
-pub fn observed_order(h: [f64; 3], g: [f64; 2]) -> f64 {
-    let f = |p: f64| (h[0].powf(p) - h[1].powf(p)) / (h[1].powf(p) - h[2].powf(p)) - g[0] / g[1];
-    let (mut lo, mut hi) = (1e-6, 8.0);
-    if !(f(lo) < 0.0 && f(hi) > 0.0) {
-        return f64::NAN;
-    }
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) < 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
 /// The case: three grids, to t = 4 (quick: t = 1).
 pub struct SoftSphereCube {
     end: f64,
@@ -160,22 +142,12 @@ impl Case for SoftSphereCube {
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let end = self.end;
         // Each run's error: its path's distance from the finest grid's.
-        if let Some((_, finest)) = done.measured.last() {
-            for (r, (_, a)) in done.runs.iter_mut().zip(&done.measured) {
-                r.error = Some(path_gap(a, finest));
-            }
-        }
+        let (gaps, order) = grid_study(done, path_gap);
         let runs: Vec<(&Run, &Path3)> = done
             .runs
             .iter()
             .zip(done.measured.iter().map(|(_, a)| a))
             .collect();
-        let gaps: Vec<f64> = runs.windows(2).map(|w| path_gap(w[1].1, w[0].1)).collect();
-        let hs: Vec<f64> = done.measured.iter().map(|(n, _)| 1.0 / *n as f64).collect();
-        let order = match (hs.as_slice(), gaps.as_slice()) {
-            ([h1, h2, h3], [g1, g2]) => observed_order([*h1, *h2, *h3], [*g1, *g2]),
-            _ => f64::NAN,
-        };
         let checks = vec![
             Check::at_most(
                 "paths converge: largest ratio of successive grid pairs' path differences (mean \
@@ -274,22 +246,5 @@ impl Case for SoftSphereCube {
                 gaps.last().map_or("—".into(), |g| format!("{g:.4}"))
             ),
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::observed_order;
-
-    /// The order of exact power-law differences is recovered, for unequal refinement ratios.
-    #[test]
-    fn observed_order_of_a_power_law() {
-        for p in [0.8, 1.0, 2.0] {
-            let h = [1.0 / 16.0, 1.0 / 20.0, 1.0 / 24.0];
-            let e = |h: f64| 3.0 * h.powf(p);
-            let g = [e(h[0]) - e(h[1]), e(h[1]) - e(h[2])];
-            assert!((observed_order(h, g) - p).abs() < 1e-9, "p = {p}");
-        }
-        assert!(observed_order([0.1, 0.05, 0.025], [1.0, 2.0]).is_nan());
     }
 }

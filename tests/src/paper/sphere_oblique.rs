@@ -26,9 +26,9 @@
 //! drag turns the sphere (`ω_z < 0`) with `|ω_z R / u| ≤ 0.2` (it mostly slides on the air
 //! film), one piece throughout and the solid's volume kept to 1e-10.
 
+use super::case::observed_order;
 use super::case::{Case, Done, Harness, Plan, Verdict, drift, drift_check};
 use super::plot::Scale;
-use super::soft_sphere_cube::observed_order;
 use super::sphere::solid_of;
 use super::{Check, Options, Run, format_num, load_case, probes};
 use efsi_core::{Scene, Simulation};
