@@ -280,3 +280,49 @@ impl LawLoader for Loader {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use efsi_core::Geometry;
+
+    #[test]
+    fn a_shapes_box_holds_it_and_its_cells_are_those_the_box_meets_and_one_more() {
+        let disk = |x: f64, y: f64| Shape::Disk {
+            center: (x, y),
+            radius: 0.125,
+        };
+        let (a, b) = (disk(0.25, 0.25), disk(0.75, 0.625));
+        let all = (f64::NEG_INFINITY, f64::INFINITY);
+        let union = bounds(&Shape::Union(vec![a.clone(), b.clone()]));
+        assert_eq!(union, [(0.125, 0.875), (0.125, 0.75), all]);
+        let both = bounds(&Shape::Intersection(vec![a.clone(), b.clone()]));
+        assert!(both[0].0 >= both[0].1, "{both:?}");
+        let cut = Shape::Difference(Box::new(a.clone()), Box::new(b.clone()));
+        assert_eq!(bounds(&cut), bounds(&a));
+        let half = Shape::HalfPlane {
+            normal: (1.0, 0.0),
+            offset: 0.5,
+        };
+        assert_eq!(bounds(&half), [all; 3]);
+        let c = Shape::Cylinder {
+            axis: efsi_core::scene::solid::Axis::Y,
+            center: (0.5, 0.5, 0.5),
+            radius: 0.125,
+            length: 0.5,
+        };
+        assert_eq!(bounds(&c), [(0.375, 0.625), (0.25, 0.75), (0.375, 0.625)]);
+        // On 16 × 16 cells of 1/16: x in (0.125, 0.875) meets cells 2..=13, y in (0.125,
+        // 0.75) cells 2..=11; a cell more on every side.
+        let grid = Grid::new(Geometry::Planar, 16, 16, (0.0, 1.0), (0.0, 1.0));
+        assert_eq!(cells_of(&grid, &union), Some(([1, 1, 0], [14, 12, 1])));
+        // Clipped to the grid; none for an empty box or one beside the domain.
+        let whole = [all; 3];
+        assert_eq!(cells_of(&grid, &whole), Some(([0; 3], [16, 16, 1])));
+        assert_eq!(cells_of(&grid, &both), None);
+        assert_eq!(cells_of(&grid, &[(1.5, 2.0), (0.0, 1.0), all]), None);
+        // The largest fraction on the box's cells is the whole grid's: a full cell inside.
+        assert_eq!(largest_fraction(&grid, &union, || a.clone()), Some(1.0));
+        assert_eq!(largest_fraction(&grid, &both, || a.clone()), None);
+    }
+}
