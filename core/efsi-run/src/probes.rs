@@ -194,6 +194,28 @@ pub struct Probed<'a> {
     /// The solid fraction the solid quantities read: the state's (`Σ_k φ_k`), or one body's
     /// `φ_k` when a probe is evaluated per body ([`evaluate`]).
     pub phi: Option<&'a Field>,
+    /// The cells outside which `phi` is zero, as a body's window (its first cell and its cells
+    /// along each axis): the solid quantities sum over them only; `None`, the whole grid.
+    pub window: Option<([usize; 3], [usize; 3])>,
+}
+
+impl Probed<'_> {
+    /// The cells the solid quantities visit: [`Probed::window`], or the whole grid.
+    fn cells(&self) -> Region {
+        window_region(self.grid, self.window)
+    }
+}
+
+/// The cells of `grid` in `window` (its first cell and its cells along each axis; `None`, the
+/// whole grid).
+fn window_region(grid: &Grid, window: Option<([usize; 3], [usize; 3])>) -> Region {
+    let cells = Region::of(grid, Stagger::Cell);
+    match window {
+        None => cells,
+        Some((lo, n)) => (0..3).fold(cells, |r, a| {
+            r.range(a, lo[a] as isize, (lo[a] + n[a]) as isize)
+        }),
+    }
 }
 
 /// A quantity of the framework: one or more columns of `probes.csv`, declared as the stages
@@ -303,7 +325,7 @@ pub const QUANTITIES: &[Quantity] = &[
         per_body: true,
         eval: |p, out| match p.phi {
             Some(phi) => {
-                let s = solid_pieces(p.grid, phi);
+                let s = pieces_in(p.grid, phi, p.window);
                 out.extend([s.count as f64, s.largest]);
             }
             None => out.extend([f64::NAN, f64::NAN]),
@@ -317,9 +339,9 @@ pub const QUANTITIES: &[Quantity] = &[
         needs_solid: true,
         per_body: true,
         eval: |p, out| {
-            let spin = p
-                .phi
-                .map_or([f64::NAN; 3], |phi| solid_spin(p.grid, p.state, phi));
+            let spin = p.phi.map_or([f64::NAN; 3], |phi| {
+                spin_in(p.grid, p.state, phi, p.cells())
+            });
             // Three components in three dimensions; ω_z, the only one, in two.
             out.extend(&spin[if p.grid.is_3d() { 0 } else { 2 }..]);
         },
@@ -387,7 +409,7 @@ fn max_speed(grid: &Grid, state: &State) -> f64 {
 
 /// The solid's moments, if the state has a solid.
 fn moments(p: &Probed) -> Option<SolidMoments> {
-    p.phi.map(|phi| solid_moments(p.grid, p.state, phi))
+    p.phi.map(|phi| moments_in(p.grid, p.state, phi, p.cells()))
 }
 
 /// Append the probe's values to `out`; `gravity` is the scene's, `outputs` the scheduled
@@ -417,6 +439,7 @@ pub fn evaluate(
         gravity,
         outputs,
         phi: state.phi.as_ref(),
+        window: None,
     };
     let bodies = state.resources.get::<BodyFractions>();
     if *p == ProbeSpec::BodyContact {
@@ -442,15 +465,16 @@ pub fn evaluate(
             let mut last: Option<&efsi_core::body_fractions::BodyFraction> = None;
             for b in &all.bodies {
                 if b.is_set() {
-                    for (at, _) in last.iter().flat_map(|l| l.cells()) {
-                        phi[at] = 0.0;
+                    if let Some(l) = last {
+                        write_window(&mut phi, l, false);
                     }
-                    for (at, f) in b.cells() {
-                        phi[at] = f;
-                    }
+                    write_window(&mut phi, b, true);
                     last = Some(b);
+                    // φ_k is zero outside its window: the sums over the window's cells, in
+                    // the grid's order, are those over the grid bit for bit.
                     let on = Probed {
                         phi: Some(&phi),
+                        window: Some((b.lo, b.n)),
                         ..probed
                     };
                     evaluate_on(p, &on, out);
@@ -458,6 +482,23 @@ pub fn evaluate(
                     let n = p.columns(grid.geometry).len();
                     out.extend(std::iter::repeat_n(f64::NAN, n));
                 }
+            }
+        }
+    }
+}
+
+/// Write the values of body `b`'s fraction into its window's cells of `phi` (a field of the
+/// grid), or zero there (`values` false), row by row.
+fn write_window(phi: &mut Field, b: &efsi_core::body_fractions::BodyFraction, values: bool) {
+    let [nx, ny, nz] = b.n;
+    let lo = b.lo.map(|v| v as isize);
+    for k in 0..nz {
+        for j in 0..ny {
+            let at = phi.idx3([lo[0], lo[1] + j as isize, lo[2] + k as isize]);
+            let row = &mut phi.data_mut()[at..at + nx];
+            match values {
+                true => row.copy_from_slice(&b.phi[(k * ny + j) * nx..][..nx]),
+                false => row.fill(0.0),
             }
         }
     }
@@ -561,11 +602,15 @@ pub struct SolidMoments {
 /// The moments of `phi` over the grid, in two or three dimensions (lines in parallel, summed
 /// in line order: the same bits on any number of threads).
 pub fn solid_moments(grid: &Grid, state: &State, phi: &Field) -> SolidMoments {
+    moments_in(grid, state, phi, Region::of(grid, Stagger::Cell))
+}
+
+/// [`solid_moments`] over the cells `cells` (those outside are taken as holding no solid).
+fn moments_in(grid: &Grid, state: &State, phi: &Field, cells: Region) -> SolidMoments {
     /// The faces normal to `a` on either side of the line's cells.
     fn faces<'f>(c: &'f Field, line: &Line, a: usize) -> (&'f [f64], &'f [f64]) {
         (c.at(line, [0; 3]), c.at(line, unit(a)))
     }
-    let cells = Region::of(grid, Stagger::Cell);
     let w_faces = state.w.as_ref().filter(|_| grid.is_3d());
     let [v, mx, my, mz, mu, mv, mw] = cells.sum(|line| {
         let mut s = [0.0; 7];
@@ -858,7 +903,16 @@ fn cell_volume(grid: &Grid, i: isize) -> f64 {
 /// periodic sides not wrapped), flood-filled into regions whose volumes `∫φ dV` are compared
 /// with the whole solid's.
 pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
-    let (n, dims) = (grid.n(), grid.dims());
+    pieces_in(grid, phi, None)
+}
+
+/// [`solid_pieces`] of the cells in `window` (its first cell and its cells along each axis;
+/// `None`, the whole grid), those outside taken as holding no solid: the same pieces, found in
+/// the same order, as on the whole grid when `phi` is zero outside.
+fn pieces_in(grid: &Grid, phi: &Field, window: Option<([usize; 3], [usize; 3])>) -> SolidPieces {
+    let (lo, n) = window.unwrap_or(([0; 3], grid.n()));
+    let dims = grid.dims();
+    let lo = lo.map(|v| v as isize);
     let stride = [1, n[0], n[0] * n[1]];
     let cells = n[0] * n[1] * n[2];
     let index =
@@ -867,11 +921,13 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
     let mut phis = Vec::with_capacity(cells);
     for k in 0..n[2] as isize {
         for j in 0..n[1] as isize {
-            let at = phi.idx3([0, j, k]);
+            let at = phi.idx3([lo[0], j + lo[1], k + lo[2]]);
             phis.extend_from_slice(&phi.data()[at..at + n[0]]);
         }
     }
-    let volumes_x: Vec<f64> = (0..n[0] as isize).map(|i| cell_volume(grid, i)).collect();
+    let volumes_x: Vec<f64> = (0..n[0] as isize)
+        .map(|i| cell_volume(grid, i + lo[0]))
+        .collect();
     let at = |c: usize| phis[c];
     let volume = |c: usize| volumes_x[c % n[0]];
     // Σ φ dV over the cells in their order, row by row.
@@ -929,8 +985,12 @@ pub fn solid_pieces(grid: &Grid, phi: &Field) -> SolidPieces {
 /// A rigid rotation `u = U + ω × (x − c)` gives `ω` exactly (to round-off): the mean of two
 /// faces is exact for a velocity linear in x. NaN without solid.
 pub fn solid_spin(grid: &Grid, state: &State, phi: &Field) -> [f64; 3] {
-    let c = solid_moments(grid, state, phi).centroid;
-    let cells = Region::of(grid, Stagger::Cell);
+    spin_in(grid, state, phi, Region::of(grid, Stagger::Cell))
+}
+
+/// [`solid_spin`] over the cells `cells` (those outside are taken as holding no solid).
+fn spin_in(grid: &Grid, state: &State, phi: &Field, cells: Region) -> [f64; 3] {
+    let c = moments_in(grid, state, phi, cells).centroid;
     let w_faces = state.w.as_ref().filter(|_| grid.is_3d());
     // L (3), then I: xx, yy, zz, xy, yz, xz.
     let s: [f64; 9] = cells.sum(|line| {
