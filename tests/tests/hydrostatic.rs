@@ -131,7 +131,7 @@ fn a_fluid_at_rest_under_gravity_stays_at_rest_in_the_seeds_scheme() {
 
 /// A soft neo-Hookean disk (the twenty disks' soft material: density 1.5, G = 1) released at
 /// rest 1.3 cells above the floor of a closed box settles on it and the flow comes to rest: the
-/// kinetic energy at t = 4 is below 1e-3 of its peak (measured 9e-5 at 32²; before the split the
+/// kinetic energy after t = 3.5 stays below 1e-3 of its peak (before the split the
 /// viscous step's shear of the carrier's `gΔt` at the walls kept a circulation of 0.6 of the
 /// peak).
 #[test]
