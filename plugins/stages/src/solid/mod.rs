@@ -198,11 +198,7 @@ fn bounds(shape: &Shape) -> Bounds {
             radius,
             length,
         } => {
-            let along = match axis {
-                efsi_core::scene::solid::Axis::X => 0,
-                efsi_core::scene::solid::Axis::Y => 1,
-                efsi_core::scene::solid::Axis::Z => 2,
-            };
+            let along = axis.index();
             let c = [center.0, center.1, center.2];
             std::array::from_fn(|a| around(c[a], if a == along { 0.5 * length } else { *radius }))
         }
