@@ -104,7 +104,7 @@ pub const OVERLAP_TOLERANCE: f64 = 1e-9;
 /// some cell. This is a geometric test (resolved to the fractions' accuracy, not to the
 /// grid): bodies that share a cell without overlapping pass, and their fractions then sum to
 /// at most 1 in every cell (to round-off), the bound the transport keeps. The fractions are
-/// those of the cells of the two shapes' common bounding box ([`bounds`], a cell more on every
+/// those of the cells of the two shapes' common bounding box (`bounds`, a cell more on every
 /// side); a pair whose boxes share no cell of the grid cannot overlap in one.
 pub fn overlap(scene: &Scene, bodies: &[Body]) -> Checked {
     let grid = scene.build_grid();
