@@ -459,6 +459,16 @@ impl Case for TwentyDisks {
 /// bodies to count as settled.
 const REST: f64 = 0.05;
 
+/// The note of a grid study of paths: the differences between successive grids' paths and
+/// their observed order.
+fn path_note(gaps: &[f64], order: f64) -> String {
+    let gaps: Vec<String> = gaps.iter().map(|g| format!("{g:.5}")).collect();
+    format!(
+        "difference between successive grids' paths: {}; observed order {order:.2}",
+        gaps.join(", ")
+    )
+}
+
 /// Case 4: three disks carried round the lid-driven cavity, on three grids.
 pub struct DisksInCavity {
     end: f64,
@@ -554,13 +564,7 @@ impl Case for DisksInCavity {
                 r.wall_seconds
             ));
         }
-        h.notes.push(format!(
-            "difference between successive grids' paths: {}; observed order {order:.2}",
-            gaps.iter()
-                .map(|g| format!("{g:.5}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
+        h.notes.push(path_note(&gaps, order));
         let finest = runs.last().map_or(String::new(), |(r, _)| r.label.clone());
         Ok(Verdict {
             title: "three soft disks in the lid-driven cavity (Re = 100)".into(),
@@ -730,13 +734,7 @@ impl Case for SpheresOnAxis {
             ));
         }
         if !gaps.is_empty() {
-            h.notes.push(format!(
-                "difference between successive grids' paths: {}; observed order {order:.2}",
-                gaps.iter()
-                    .map(|g| format!("{g:.5}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
+            h.notes.push(path_note(&gaps, order));
         }
         Ok(Verdict {
             title: "a soft sphere falling onto another resting on the floor (axisymmetric)".into(),
