@@ -5,26 +5,38 @@
 //! inertial one ([`State::frame_acceleration`], zero unless set between steps, e.g. by the
 //! FMU's base-acceleration input): in the frame of a shaking table the fictitious
 //! (d'Alembert) force `−a` adds to gravity. The acceleration is uniform, so the step is exact;
-//! it runs after advection. Its gradient part (a hydrostatic pressure where the density is
-//! layered) is balanced by the last step's pressure, which the incremental projection's
-//! predictor subtracts right after this stage (`projection`), so the viscous step never sees
-//! it; in the seed's non-incremental scheme the projection removes it after the viscous step. In axisymmetric geometry only the axial component
-//! is allowed (the scene and [`FrameAcceleration::set_frame_acceleration`] check it).
+//! it runs after advection. In axisymmetric geometry only the axial component is allowed (the
+//! scene and [`FrameAcceleration::set_frame_acceleration`] check it).
 //!
-//! On a three-dimensional grid `g` and `a` have three components and the stage adds `Δt (g − a)_c`
-//! to every unknown face of each velocity component `c`, the same loop for every axis.
+//! **Hydrostatic part.** Where the density is layered, part of `ρ(g − a)` is a gradient that a
+//! pressure balances, and the viscous step must not see it (at no-slip walls its implicit step
+//! shears the increment into vorticity the projection cannot remove). In the incremental scheme
+//! the last step's pressure balances it: the predictor subtracts it right after this stage
+//! (`projection`). In the seed's non-incremental scheme (the default with an elastic solid) the
+//! stage adds only the excess weight over the carrier fluid, `Δt (1 − ρ_f/ρ_face)(g − a)`, on
+//! the components that take part in the split (`projection::hydrostatic`: every non-periodic
+//! axis unless an Outflow side lies along it), with `ρ_f` the scene's fluid density and `ρ_face`
+//! the projection's face density, and subtracts the carrier's hydrostatic pressure
+//! `p_h = ρ_f (g − a)·(x − x_ref)` from the pressure, which the projection adds back after its
+//! solve: during the step `p` holds the excess pressure, between steps the whole one. The
+//! other components are added whole.
+//!
+//! On a three-dimensional grid `g` and `a` have three components and the stage adds
+//! `Δt (g − a)_c` (times the excess factor on a split axis) to every unknown face of each
+//! velocity component `c`, the same loop for every axis.
 //!
 //! **Step limit.** An explicit body force must not move the fluid more than a fraction of a cell
 //! per step: with the convective rate `C = max(|u|/dx + |v|/dy (+ |w|/dz))`
 //! ([`crate::advection::convective_rate`]) and `h` the smallest cell size, the stage allows
 //! `Δt ≤ CFL · 2 / (C + √(C² + 4|g − a|/h))` (Kang, Fedkiw & Liu 2000), which equals the
-//! advective limit when `g − a = 0` and `CFL·√(h/|g − a|)` from rest.
+//! advective limit when `g − a = 0` and `CFL·√(h/|g − a|)` from rest (the whole `g − a`, split or
+//! not: a light body in a heavy fluid rises at it).
 
+use crate::projection::hydrostatic::Hydrostatic;
 use efsi_core::scene::Options;
-use efsi_core::schedule::VELOCITY;
 use efsi_core::{
     BoundarySet, EfsiError, FieldId, Grid, Phase, Region, Scene, Simulation, Stage, StageError,
-    StagePlugin, StageStats, Stagger, State, StepContext,
+    StagePlugin, StageStats, Stagger, State, StepContext, operators,
 };
 
 /// The scene's gravity as three components (z = 0 in a two-dimensional scene).
@@ -32,16 +44,27 @@ fn gravity(scene: &Scene) -> [f64; 3] {
     scene.gravity.xyz()
 }
 
-/// The frame acceleration of `state` as three components ([`State::frame_acceleration`]).
-fn frame_acceleration(state: &State) -> [f64; 3] {
-    [state.frame_acceleration.0, state.frame_acceleration.1, 0.0]
-}
-
 /// The location of velocity component `c`.
 const FACES: [Stagger; 3] = [Stagger::XFace, Stagger::YFace, Stagger::ZFace];
 
 /// The body-force stage plugin.
 pub struct BodyForce;
+
+/// What the stage reads: the velocity and the density.
+const READS: [FieldId; 4] = [
+    FieldId::VelocityX,
+    FieldId::VelocityY,
+    FieldId::VelocityZ,
+    FieldId::Density,
+];
+
+/// What the stage writes: the velocity and the pressure.
+const WRITES: [FieldId; 4] = [
+    FieldId::VelocityX,
+    FieldId::VelocityY,
+    FieldId::VelocityZ,
+    FieldId::Pressure,
+];
 
 /// The acceleration of a simulation's frame, the body force's input.
 pub trait FrameAcceleration {
@@ -101,11 +124,13 @@ impl StagePlugin for BodyForce {
     fn phase(&self) -> Phase {
         Phase::BodyForce
     }
+    /// The density for the excess weight of the seed's scheme (module docs).
     fn reads(&self) -> &'static [FieldId] {
-        &VELOCITY
+        &READS
     }
+    /// The pressure: the carrier's hydrostatic part leaves it for the step (module docs).
     fn writes(&self) -> &'static [FieldId] {
-        &VELOCITY
+        &WRITES
     }
     fn needed(&self, scene: &Scene, _options: &Options) -> bool {
         gravity(scene) != [0.0; 3]
@@ -113,24 +138,33 @@ impl StagePlugin for BodyForce {
     fn build(
         &self,
         scene: &Scene,
-        _options: &Options,
-        _grid: &Grid,
-        _bc: &BoundarySet,
-        _shared: &mut efsi_core::Resources,
+        options: &Options,
+        grid: &Grid,
+        bc: &BoundarySet,
+        shared: &mut efsi_core::Resources,
     ) -> Result<Box<dyn Stage>, String> {
-        Ok(Box::new(BodyForceStage { g: gravity(scene) }))
+        // Kept for the projection built after (`projection::Projector::new`), which adds back
+        // what this stage takes from the pressure.
+        let split = *shared.get_or_try_insert_with(|| {
+            Ok::<_, String>(Hydrostatic::of(scene, options, grid, bc))
+        })?;
+        Ok(Box::new(BodyForceStage {
+            g: gravity(scene),
+            split,
+        }))
     }
 }
 
 struct BodyForceStage {
     g: [f64; 3],
+    /// The split of gravity of the seed's scheme (module docs), if the scene makes one.
+    split: Option<Hydrostatic>,
 }
 
 impl BodyForceStage {
     /// `g − a`: gravity in the (possibly accelerating) frame of the grid.
     fn effective(&self, state: &State) -> [f64; 3] {
-        let a = frame_acceleration(state);
-        std::array::from_fn(|c| self.g[c] - a[c])
+        Hydrostatic::effective(self.g, state)
     }
 }
 
@@ -149,16 +183,34 @@ impl Stage for BodyForceStage {
         let grid = ctx.grid;
         let n = grid.n();
         let g = self.effective(state);
-        let State { u, v, w, .. } = state;
+        let State { u, v, w, rho, .. } = state;
+        let rho = &*rho;
         let vel = [Some(u), Some(v), w.as_mut()];
         // The unknown faces of each velocity component.
         for (c, f) in vel.into_iter().enumerate().take(grid.dims()) {
             let f = f.expect("w on a three-dimensional grid");
             let r = ctx.bc.normal_faces(c, n[c]);
             let gc = g[c] * ctx.dt;
-            Region::of(grid, FACES[c])
-                .range(c, r.lo, r.hi)
-                .for_each(f, |_, f| f.iter_mut().for_each(|f| *f += gc));
+            let faces = Region::of(grid, FACES[c]).range(c, r.lo, r.hi);
+            match self.split.filter(|s| s.splits(c)) {
+                // The excess weight over the carrier, ρ_face as the projection's.
+                Some(s) => {
+                    let rf = s.density();
+                    let mut below = [0; 3];
+                    below[c] = -1;
+                    faces.for_each(f, |line, f| {
+                        let (ra, rb) = (rho.at(&line, [0; 3]), rho.at(&line, below));
+                        for (t, f) in f.iter_mut().enumerate() {
+                            *f += gc * (1.0 - rf / operators::face_density(ra[t], rb[t]));
+                        }
+                    });
+                }
+                None => faces.for_each(f, |_, f| f.iter_mut().for_each(|f| *f += gc)),
+            }
+        }
+        // The carrier's hydrostatic pressure leaves the pressure until the projection.
+        if let Some(s) = &self.split {
+            s.add(grid, ctx.bc, g, &mut state.p, -1.0);
         }
         Ok(StageStats::default())
     }
@@ -182,6 +234,7 @@ mod tests {
         state.frame_acceleration = (0.5, 0.25);
         let mut stage = BodyForceStage {
             g: [1.0, -2.0, 3.0],
+            split: None,
         };
         // From rest the limit is CFL·√(h/|g − a|), h the smallest cell (0.2).
         let e = (0.5f64 * 0.5 + 2.25 * 2.25 + 3.0 * 3.0).sqrt();

@@ -675,8 +675,11 @@ impl Pipeline {
         state: &mut State,
     ) -> Result<(), StageError> {
         self.initialize_stages(grid, bc, state)?;
-        // The stages' starting pressure (the incremental projection's hydrostatic one) stays
-        // after the initial velocity is projected.
+        // The stages' starting pressure (the hydrostatic one of the incremental projection or
+        // of the seed's scheme's split of gravity) stays after the initial velocity is
+        // projected; the projection itself starts from zero, so the projected velocity does not
+        // depend on gravity or the frame (a frame acceleration set before the first step
+        // initialises the stages again, not this projection).
         let p0 = state.p.clone();
         let before = (state.u.clone(), state.v.clone());
         // The projection's tolerance is on max|∇·u|·Δt: judge it with the step the flow allows
@@ -711,6 +714,7 @@ impl Pipeline {
                 if !projects {
                     continue;
                 }
+                state.p.fill(0.0);
                 e.stage.run_sub(k, &ctx, state)?;
                 bc.fill_velocity3(
                     grid,

@@ -33,6 +33,18 @@
 //! pressure of a coupled elastic step (an increment on it) or finds the whole pressure; a
 //! strategy that may couple never runs the incremental scheme.
 //!
+//! **Gravity in the seed's scheme** (the `hydrostatic` module). Without the predictor the
+//! carrier fluid's hydrostatic pressure `p_h = ρ_f (g − a)·(x − x_ref)` is carried by the
+//! pressure rather than by the body force: the body force adds only the excess weight
+//! `Δt (1 − ρ_f/ρ_face)(g − a)` and takes `p_h` from the pressure for the step; the projection
+//! solves for the excess pressure (the same matrix; warm-started from the last step's excess
+//! pressure, or the coupled elastic step's increment on it) and adds `p_h` back, so between steps
+//! `p` is the whole pressure. `p_h` is zero on every Outflow face (the axes that take part are
+//! chosen so, `hydrostatic`), so the solve's Dirichlet condition keeps its meaning, and in a
+//! closed box its mean over the cells is zero to round-off, as the whole pressure's was. The run
+//! starts from `p = p_h`. The viscous and elastic steps then never see the carrier's hydrostatic
+//! part: a fluid at rest in a closed box under gravity stays at rest to the last bit.
+//!
 //! **Solver.** Conjugate gradient warm-started from the previous pressure (from zero for an
 //! increment), preconditioned by
 //! the geometric multigrid W-cycle of [`efsi_linalg::Multigrid`] (default: iterations
@@ -78,6 +90,7 @@ use efsi_linalg::{
     IncompleteCholesky, Multigrid, Norm, SolveStats, Stencil5, Stencil5View, pcg::solve_norm_in,
 };
 
+pub(crate) mod hydrostatic;
 mod options;
 pub(crate) mod three_d;
 pub use options::{INTERFACE_TOLERANCE, ONE_FLUID_TOLERANCE, PressureSolver, ProjectionOptions};
@@ -282,6 +295,12 @@ pub(crate) struct Projector {
     /// Gravity, whose hydrostatic pressure (in the grid's frame) a run may start from
     /// ([`Projector::initialize`]).
     gravity: (f64, f64),
+    /// Gravity's three components, for the carrier's hydrostatic pressure.
+    gravity3: [f64; 3],
+    /// The seed's scheme's split of gravity, as the body force makes it ([`hydrostatic`]): the
+    /// carrier's hydrostatic pressure, which the body force takes from the pressure and each
+    /// projection adds back after its solve.
+    hydrostatic: Option<hydrostatic::Hydrostatic>,
     /// The density (with its ghosts) the matrix and its preconditioner were last set up for;
     /// empty before the first solve. They depend on nothing else that changes during a run, so
     /// a step whose density is bit for bit the last one's reuses them (every step of a
@@ -368,6 +387,12 @@ impl Projector {
             increment: increments.then(efsi_core::Field::default),
             fields: FieldScratch::reserve(shared, grid, usize::from(increments)),
             gravity: scene.gravity.planar(),
+            gravity3: scene.gravity.xyz(),
+            // The body force, built before, decides.
+            hydrostatic: shared
+                .get::<Option<hydrostatic::Hydrostatic>>()
+                .copied()
+                .flatten(),
             // A copy of the density (one value where it is uniform) where it decides alone
             // whether to assemble (assembling and setting up every step is dearer than the
             // comparison); where a second
@@ -525,9 +550,10 @@ impl Projector {
     /// The starting pressure: with `hydrostatic` (the incremental scheme, and the coupled
     /// elastic step's `Coupled`) the one that balances gravity, `p⁰` with `g − ∇p⁰/ρ`
     /// divergence-free (the hydrostatic pressure where the density is layered), so that the
-    /// first step's predictor already cancels what gravity cannot move; else, or without
-    /// gravity, zero. The solve is an increment's where this projector's are
-    /// ([`Projector::new`]), as the first step's will be.
+    /// first step's predictor already cancels what gravity cannot move; else the carrier's
+    /// hydrostatic pressure where the seed's scheme splits gravity ([`hydrostatic`]: the
+    /// excess pressure starts from zero), or zero. The solve is an increment's where this
+    /// projector's are ([`Projector::new`]), as the first step's will be.
     pub(crate) fn initialize(
         &mut self,
         grid: &Grid,
@@ -539,6 +565,13 @@ impl Projector {
         // Gravity in the grid's frame (a frame acceleration set before the first step counts).
         let a = state.frame_acceleration;
         let (gx, gy) = (self.gravity.0 - a.0, self.gravity.1 - a.1);
+        if let Some(h) = self.hydrostatic.filter(|_| !hydrostatic) {
+            // The seed's scheme with the split: the carrier's hydrostatic pressure, the excess
+            // pressure zero.
+            let e = hydrostatic::Hydrostatic::effective(self.gravity3, state);
+            h.add(grid, bc, e, &mut state.p, 1.0);
+            return Ok(());
+        }
         if !hydrostatic || (gx, gy) == (0.0, 0.0) {
             return Ok(());
         }
@@ -586,7 +619,7 @@ impl Projector {
             start_velocity: None,
         };
         let tol = 1e-12 * gx.hypot(gy) / grid.dx.min(grid.dy);
-        let solved = self.project(&ctx, state, tol, self.increment.is_some());
+        let solved = self.solve(&ctx, state, tol, self.increment.is_some());
         state.u.copy_from(&u0);
         state.v.copy_from(&v0);
         if let (Some(w), Some(w0)) = (state.w.as_mut(), w0.as_ref()) {
@@ -602,11 +635,29 @@ impl Projector {
 }
 
 impl Projector {
-    /// The projection with the divergence tolerance `tol` (the scene's in a step; a stricter
-    /// one for the starting pressure of [`Projector::initialize`]): the whole pressure from the
-    /// last step's, or with `increment` (the incremental scheme, a coupled elastic step) the
-    /// increment on the pressure already applied.
+    /// The projection with the divergence tolerance `tol` (the scene's): the whole pressure
+    /// from the last step's, or with `increment` (the incremental scheme, a coupled elastic
+    /// step) the increment on the pressure already applied. With the seed's scheme's split of
+    /// gravity ([`hydrostatic`]) the pressure solved for is the excess over the carrier's
+    /// hydrostatic pressure, which is then added back.
     pub(crate) fn project(
+        &mut self,
+        ctx: &StepContext,
+        state: &mut State,
+        tol: f64,
+        increment: bool,
+    ) -> Result<StageStats, StageError> {
+        let stats = self.solve(ctx, state, tol, increment)?;
+        if let Some(h) = &self.hydrostatic {
+            let e = hydrostatic::Hydrostatic::effective(self.gravity3, state);
+            h.add(ctx.grid, ctx.bc, e, &mut state.p, 1.0);
+        }
+        Ok(stats)
+    }
+
+    /// [`Projector::project`] without adding the carrier's hydrostatic pressure back (also
+    /// the starting pressure's solve of [`Projector::initialize`], with a stricter `tol`).
+    fn solve(
         &mut self,
         ctx: &StepContext,
         state: &mut State,
