@@ -12,6 +12,18 @@
 //! that also measures the residual (with a [`Norm`], [`Pcg::solve_norm`]), and operators and
 //! preconditioners may return their dot product from their own pass
 //! ([`LinearOperator::apply_dot`], [`Preconditioner::apply_dot`]; Jacobi does).
+//!
+//! **Singular systems.** A pressure Poisson problem without a Dirichlet side is singular, its
+//! null space the constants. In exact arithmetic the iteration never leaves the range; in
+//! floating point the preconditioner (a multigrid's pinned coarsest solve, say) adds a constant
+//! to the preconditioned residual wherever round-off leaves the residual's sum nonzero, the
+//! iterate accumulates it, and once `A x` is computed with an error above the tolerance the
+//! solve stalls or breaks down (`pᵀAp ≤ 0`). Told that the null space is the constants
+//! ([`solve_singular_norm_in`]), the solver takes each preconditioned residual off it (zero
+//! mean: `P M⁻¹` with `P` the projection off the constants, the same as `P M⁻¹ P` on the range,
+//! where the residual lies) — what PETSc does for a matrix with a null space attached. On a
+//! breakdown it restarts from the true residual (at most three times; a singular system's
+//! iterate taken off the constants first).
 
 /// A symmetric linear operator `y = A x` on vectors of a fixed length.
 pub trait LinearOperator {
@@ -215,6 +227,7 @@ impl Pcg {
             tol,
             max_iter,
             Measure::Closure(&measure),
+            false,
         )
     }
 
@@ -232,7 +245,17 @@ impl Pcg {
         norm: Norm,
     ) -> SolveStats {
         let Pcg { r, p, q } = self;
-        run([r, p, q], a, m, b, x, tol, max_iter, Measure::Norm(norm))
+        run(
+            [r, p, q],
+            a,
+            m,
+            b,
+            x,
+            tol,
+            max_iter,
+            Measure::Norm(norm),
+            false,
+        )
     }
 }
 
@@ -250,14 +273,55 @@ pub fn solve_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     max_iter: usize,
     norm: Norm,
 ) -> SolveStats {
-    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm))
+    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm), false)
+}
+
+/// [`solve_norm_in`] for a singular system whose null space is the constant vectors and whose
+/// right-hand side `b` sums to zero (the caller projects it): every preconditioned residual is
+/// taken off the null space (module docs, "Singular systems").
+#[allow(clippy::too_many_arguments)]
+pub fn solve_singular_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+    work: [&mut [f64]; 3],
+    a: &mut A,
+    m: &M,
+    b: &[f64],
+    x: &mut [f64],
+    tol: f64,
+    max_iter: usize,
+    norm: Norm,
+) -> SolveStats {
+    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm), true)
+}
+
+/// Subtract the mean of `v` (summed in fixed chunks in order: the same bits on any number of
+/// threads).
+fn remove_mean(v: &mut [f64]) {
+    if v.is_empty() {
+        return;
+    }
+    let sum: f64 = v
+        .chunks(par::REDUCE_CHUNK)
+        .map(|c| par::sum4(c.len(), |k| c[k]))
+        .sum();
+    let mean = sum / v.len() as f64;
+    par::chunks(v).for_each(|_, v| v.iter_mut().for_each(|x| *x -= mean));
+}
+
+/// `z ← M⁻¹ r` and `r·z`; with `deflate`, `z` is taken off the constants (zero mean).
+fn precondition<M: Preconditioner + ?Sized>(m: &M, r: &[f64], z: &mut [f64], deflate: bool) -> f64 {
+    if !deflate {
+        return m.apply_dot(r, z);
+    }
+    m.apply(r, z);
+    remove_mean(z);
+    dot(r, z)
 }
 
 /// The most restarts from the true residual after a breakdown (`pᵀAp ≤ 0`) in one solve.
 const MAX_RESTARTS: usize = 3;
 
 /// The iteration, on the work vectors `[r, p, q]`; `q` holds `A p`, then `z = M⁻¹ r` once `r`
-/// is updated.
+/// is updated. `singular`: the null space is the constants (module docs, "Singular systems").
 #[allow(clippy::too_many_arguments)]
 fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     [r, p, q]: [&mut [f64]; 3],
@@ -268,6 +332,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     tol: f64,
     max_iter: usize,
     measure: Measure,
+    singular: bool,
 ) -> SolveStats {
     let n = b.len();
     assert!(
@@ -290,7 +355,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     if res == 0.0 {
         return converged(0, res);
     }
-    let mut rz = m.apply_dot(r, q);
+    let mut rz = precondition(m, r, q, singular);
     p.copy_from_slice(q);
     let mut restarts = 0;
     while it < max_iter {
@@ -304,16 +369,20 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
                 break;
             }
             restarts += 1;
+            if singular {
+                remove_mean(x);
+            }
             res = true_residual(a, b, x, r, q, measure);
             if res <= tol {
                 return converged(it, res);
             }
-            rz = m.apply_dot(r, q);
+            rz = precondition(m, r, q, singular);
             p.copy_from_slice(q);
             continue;
         }
         let mut rz_fused;
-        (res, rz_fused) = update(x, r, q, p, rz / pq, measure, m.jacobi_diagonal());
+        let jacobi = m.jacobi_diagonal().filter(|_| !singular);
+        (res, rz_fused) = update(x, r, q, p, rz / pq, measure, jacobi);
         it += 1;
         if res <= tol {
             // Confirm with the true residual (which replaces r, so a fused r·z is stale).
@@ -323,7 +392,7 @@ fn run<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
                 return converged(it, res);
             }
         }
-        let rz_new = rz_fused.unwrap_or_else(|| m.apply_dot(r, q));
+        let rz_new = rz_fused.unwrap_or_else(|| precondition(m, r, q, singular));
         new_direction(p, q, rz_new / rz);
         rz = rz_new;
     }
@@ -456,6 +525,101 @@ mod tests {
                 y[k] = 2.0 * x[k] - l - r;
             }
         }
+    }
+
+    /// A 1-D Neumann operator `−(k u')'` with face coefficients `k` (one fewer than the
+    /// unknowns): singular, its null space the constants.
+    struct Neumann(Vec<f64>);
+    impl LinearOperator for Neumann {
+        fn apply(&mut self, x: &[f64], y: &mut [f64]) {
+            y.fill(0.0);
+            for (f, k) in self.0.iter().enumerate() {
+                let flux = k * (x[f + 1] - x[f]);
+                y[f] -= flux;
+                y[f + 1] += flux;
+            }
+        }
+    }
+
+    /// Jacobi plus `α 1 1ᵀ`: symmetric positive definite, but it adds a large constant to every
+    /// preconditioned residual whose sum round-off leaves nonzero.
+    struct ConstantHeavy(Vec<f64>, f64);
+    impl Preconditioner for ConstantHeavy {
+        fn apply(&self, r: &[f64], z: &mut [f64]) {
+            let s: f64 = r.iter().sum();
+            for ((z, r), d) in z.iter_mut().zip(r).zip(&self.0) {
+                *z = r / d + self.1 * s;
+            }
+        }
+    }
+
+    /// A singular system whose preconditioned residual picks up constants stalls (the
+    /// iterate's constant grows until `A x` is computed with an error above the tolerance);
+    /// told the null space, the solver keeps off it and converges.
+    #[test]
+    fn a_singular_system_is_kept_off_its_null_space() {
+        let n = 400;
+        // Coefficients over four orders of magnitude, as a density ratio of 1e4 makes them.
+        let k: Vec<f64> = (0..n - 1)
+            .map(|f| if (f / 50) % 2 == 0 { 1e4 } else { 1.0 })
+            .collect();
+        let mut d = vec![0.0; n];
+        for (f, k) in k.iter().enumerate() {
+            d[f] += k;
+            d[f + 1] += k;
+        }
+        let mut b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+        let mean = b.iter().sum::<f64>() / n as f64;
+        b.iter_mut().for_each(|b| *b -= mean);
+        let m = ConstantHeavy(d, 1e12);
+        let tol = 1e-10 * dot(&b, &b).sqrt();
+        let solve = |singular: bool| {
+            let (mut r, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let mut x = vec![0.0; n];
+            let work = [&mut r[..], &mut p[..], &mut q[..]];
+            let s = if singular {
+                solve_singular_norm_in(
+                    work,
+                    &mut Neumann(k.clone()),
+                    &m,
+                    &b,
+                    &mut x,
+                    tol,
+                    4000,
+                    Norm::L2,
+                )
+            } else {
+                solve_norm_in(
+                    work,
+                    &mut Neumann(k.clone()),
+                    &m,
+                    &b,
+                    &mut x,
+                    tol,
+                    4000,
+                    Norm::L2,
+                )
+            };
+            (s, x)
+        };
+        let (plain, _) = solve(false);
+        let (kept, x) = solve(true);
+        eprintln!("plain {plain:?}, kept {kept:?}");
+        assert!(
+            !plain.converged,
+            "the plain solve was expected to stall: {plain:?}"
+        );
+        assert!(kept.converged, "{kept:?}");
+        // The residual of the answer, recomputed.
+        let mut ax = vec![0.0; n];
+        Neumann(k.clone()).apply(&x, &mut ax);
+        let r = ax
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(r <= tol * (1.0 + 1e-6), "true residual {r:e}");
     }
 
     #[test]

@@ -10,7 +10,9 @@
 //! axisymmetric only: the seven-point matrix of a 3-D box has no Dirichlet face, and the stage
 //! refuses a 3-D scene with an Outflow side when it is built). Without an
 //! outflow side the system is singular (p up to a constant): the right-hand side is projected on
-//! the range (zero sum) and the mean pressure set to zero.
+//! the range (zero sum), the conjugate gradient keeps its iteration off the constants (else
+//! round-off along the null space stalls it at large density ratios and tight tolerances:
+//! [`efsi_linalg::pcg`], "Singular systems") and the mean pressure is set to zero.
 //!
 //! **Incremental pressure correction** (`numerics.projection.incremental`; by default on,
 //! except in scenes with an elastic solid). The predictor stage `pressure_predictor` (phase
@@ -87,7 +89,9 @@ use efsi_core::{
 };
 use efsi_linalg::par;
 use efsi_linalg::{
-    IncompleteCholesky, Multigrid, Norm, SolveStats, Stencil5, Stencil5View, pcg::solve_norm_in,
+    IncompleteCholesky, LinearOperator, Multigrid, Norm, Preconditioner, SolveStats, Stencil5,
+    Stencil5View,
+    pcg::{solve_norm_in, solve_singular_norm_in},
 };
 
 pub(crate) mod hydrostatic;
@@ -687,7 +691,7 @@ impl Projector {
         let norm = Norm::MaxWeighted(weight);
         let st = self
             .precond
-            .solve([r, pw, q], b, x, tol, self.max_iter, norm);
+            .solve([r, pw, q], b, x, tol, self.max_iter, norm, singular);
         if !st.converged {
             return Err(StageError {
                 stage: "projection".into(),
@@ -856,7 +860,9 @@ fn copy_pressure(grid: &Grid, p: &efsi_core::Field, x: &mut [f64]) {
 impl Precond {
     /// Solve the projection's system for `x` (from its initial guess) by the conjugate
     /// gradient with this preconditioner, to `tol` in `norm`, in at most `max_iter`
-    /// iterations; `work` holds the solver's vectors.
+    /// iterations; `work` holds the solver's vectors. `singular`: no side fixes the pressure,
+    /// so the null space is the constants, which the solver keeps its iteration off
+    /// ([`efsi_linalg::pcg::solve_singular_norm_in`]).
     fn solve(
         &mut self,
         work: [&mut [f64]; 3],
@@ -865,14 +871,34 @@ impl Precond {
         tol: f64,
         max_iter: usize,
         norm: Norm<'_>,
+        singular: bool,
     ) -> SolveStats {
+        /// The conjugate gradient for the system's kind.
+        #[allow(clippy::too_many_arguments)]
+        fn cg<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
+            singular: bool,
+            work: [&mut [f64]; 3],
+            a: &mut A,
+            m: &M,
+            b: &[f64],
+            x: &mut [f64],
+            tol: f64,
+            max_iter: usize,
+            norm: Norm<'_>,
+        ) -> SolveStats {
+            if singular {
+                solve_singular_norm_in(work, a, m, b, x, tol, max_iter, norm)
+            } else {
+                solve_norm_in(work, a, m, b, x, tol, max_iter, norm)
+            }
+        }
         match self {
             Precond::Multigrid(mg) => {
                 let a = &mut mg.fine_matrix();
-                solve_norm_in(work, a, &*mg, b, x, tol, max_iter, norm)
+                cg(singular, work, a, &*mg, b, x, tol, max_iter, norm)
             }
             Precond::IncompleteCholesky(ic, a) => {
-                solve_norm_in(work, a, &*ic, b, x, tol, max_iter, norm)
+                cg(singular, work, a, &*ic, b, x, tol, max_iter, norm)
             }
         }
     }
