@@ -663,11 +663,11 @@ impl Pipeline {
     /// fields first, see `Pipeline::initialize_stages`), then make the initial velocity
     /// divergence-free: a solid's initial velocity blended into fluid at rest is not, and a
     /// stage that integrates velocity gradients (the elastic stage) would take the spurious
-    /// compression at the interface for deformation. The projecting stage runs once, with the
-    /// step of Courant number 1 (its pressure is then reset to zero) and, if the velocity
-    /// changed, every stage is
-    /// initialised again from the projected velocity (the densities it needs come from the
-    /// first pass).
+    /// compression at the interface for deformation. The projecting stage runs once, from zero
+    /// pressure with the step of Courant number 1 (the stages' starting pressure is restored
+    /// after), so the projected velocity depends neither on gravity nor on the frame; if the
+    /// velocity changed, every stage is initialised again from it (the densities it needs come
+    /// from the first pass).
     pub fn initialize(
         &mut self,
         grid: &Grid,
