@@ -19,7 +19,7 @@
 //! to the preconditioned residual wherever round-off leaves the residual's sum nonzero, the
 //! iterate accumulates it, and once `A x` is computed with an error above the tolerance the
 //! solve stalls or breaks down (`pᵀAp ≤ 0`). Told that the null space is the constants
-//! ([`solve_singular_norm_in`]), the solver takes each preconditioned residual off it (zero
+//! ([`NullSpace::Constants`]), the solver takes each preconditioned residual off it (zero
 //! mean: `P M⁻¹` with `P` the projection off the constants, the same as `P M⁻¹ P` on the range,
 //! where the residual lies) — what PETSc does for a matrix with a null space attached. On a
 //! breakdown it restarts from the true residual (at most three times; a singular system's
@@ -261,7 +261,10 @@ impl Pcg {
 
 /// [`Pcg::solve_norm`] on borrowed work vectors — `work` holds three slices of the system's
 /// length (`r`, `p`, `q`; their contents on entry do not matter) — for callers that share one
-/// pool of vectors between several solves. The same iterates, bit for bit.
+/// pool of vectors between several solves; with [`NullSpace::None`] the same iterates, bit for
+/// bit. With [`NullSpace::Constants`] the system is singular, its null space the constant
+/// vectors, and `b` sums to zero (the caller projects it): every preconditioned residual is
+/// taken off the null space (module docs, "Singular systems").
 #[allow(clippy::too_many_arguments)]
 pub fn solve_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     work: [&mut [f64]; 3],
@@ -272,25 +275,29 @@ pub fn solve_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
     tol: f64,
     max_iter: usize,
     norm: Norm,
+    null: NullSpace,
 ) -> SolveStats {
-    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm), false)
+    let singular = null == NullSpace::Constants;
+    run(
+        work,
+        a,
+        m,
+        b,
+        x,
+        tol,
+        max_iter,
+        Measure::Norm(norm),
+        singular,
+    )
 }
 
-/// [`solve_norm_in`] for a singular system whose null space is the constant vectors and whose
-/// right-hand side `b` sums to zero (the caller projects it): every preconditioned residual is
-/// taken off the null space (module docs, "Singular systems").
-#[allow(clippy::too_many_arguments)]
-pub fn solve_singular_norm_in<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
-    work: [&mut [f64]; 3],
-    a: &mut A,
-    m: &M,
-    b: &[f64],
-    x: &mut [f64],
-    tol: f64,
-    max_iter: usize,
-    norm: Norm,
-) -> SolveStats {
-    run(work, a, m, b, x, tol, max_iter, Measure::Norm(norm), true)
+/// The null space of the operator, which [`solve_norm_in`] keeps the iteration off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NullSpace {
+    /// None (or none the solver is told of): a positive definite system.
+    None,
+    /// The constant vectors: a Poisson problem with no Dirichlet side.
+    Constants,
 }
 
 /// Subtract the mean of `v` (summed in fixed chunks in order: the same bits on any number of
@@ -573,37 +580,16 @@ mod tests {
         b.iter_mut().for_each(|b| *b -= mean);
         let m = ConstantHeavy(d, 1e12);
         let tol = 1e-10 * dot(&b, &b).sqrt();
-        let solve = |singular: bool| {
+        let solve = |null: NullSpace| {
             let (mut r, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
             let mut x = vec![0.0; n];
             let work = [&mut r[..], &mut p[..], &mut q[..]];
-            let s = if singular {
-                solve_singular_norm_in(
-                    work,
-                    &mut Neumann(k.clone()),
-                    &m,
-                    &b,
-                    &mut x,
-                    tol,
-                    4000,
-                    Norm::L2,
-                )
-            } else {
-                solve_norm_in(
-                    work,
-                    &mut Neumann(k.clone()),
-                    &m,
-                    &b,
-                    &mut x,
-                    tol,
-                    4000,
-                    Norm::L2,
-                )
-            };
+            let mut a = Neumann(k.clone());
+            let s = solve_norm_in(work, &mut a, &m, &b, &mut x, tol, 4000, Norm::L2, null);
             (s, x)
         };
-        let (plain, _) = solve(false);
-        let (kept, x) = solve(true);
+        let (plain, _) = solve(NullSpace::None);
+        let (kept, x) = solve(NullSpace::Constants);
         eprintln!("plain {plain:?}, kept {kept:?}");
         assert!(
             !plain.converged,

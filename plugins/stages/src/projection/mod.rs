@@ -89,9 +89,8 @@ use efsi_core::{
 };
 use efsi_linalg::par;
 use efsi_linalg::{
-    IncompleteCholesky, LinearOperator, Multigrid, Norm, Preconditioner, SolveStats, Stencil5,
-    Stencil5View,
-    pcg::{solve_norm_in, solve_singular_norm_in},
+    IncompleteCholesky, Multigrid, Norm, SolveStats, Stencil5, Stencil5View,
+    pcg::{NullSpace, solve_norm_in},
 };
 
 pub(crate) mod hydrostatic;
@@ -862,7 +861,7 @@ impl Precond {
     /// gradient with this preconditioner, to `tol` in `norm`, in at most `max_iter`
     /// iterations; `work` holds the solver's vectors. `singular`: no side fixes the pressure,
     /// so the null space is the constants, which the solver keeps its iteration off
-    /// ([`efsi_linalg::pcg::solve_singular_norm_in`]).
+    /// ([`efsi_linalg::pcg::NullSpace`]).
     fn solve(
         &mut self,
         work: [&mut [f64]; 3],
@@ -873,32 +872,18 @@ impl Precond {
         norm: Norm<'_>,
         singular: bool,
     ) -> SolveStats {
-        /// The conjugate gradient for the system's kind.
-        #[allow(clippy::too_many_arguments)]
-        fn cg<A: LinearOperator + ?Sized, M: Preconditioner + ?Sized>(
-            singular: bool,
-            work: [&mut [f64]; 3],
-            a: &mut A,
-            m: &M,
-            b: &[f64],
-            x: &mut [f64],
-            tol: f64,
-            max_iter: usize,
-            norm: Norm<'_>,
-        ) -> SolveStats {
-            if singular {
-                solve_singular_norm_in(work, a, m, b, x, tol, max_iter, norm)
-            } else {
-                solve_norm_in(work, a, m, b, x, tol, max_iter, norm)
-            }
-        }
+        let null = if singular {
+            NullSpace::Constants
+        } else {
+            NullSpace::None
+        };
         match self {
             Precond::Multigrid(mg) => {
                 let a = &mut mg.fine_matrix();
-                cg(singular, work, a, &*mg, b, x, tol, max_iter, norm)
+                solve_norm_in(work, a, &*mg, b, x, tol, max_iter, norm, null)
             }
             Precond::IncompleteCholesky(ic, a) => {
-                cg(singular, work, a, &*ic, b, x, tol, max_iter, norm)
+                solve_norm_in(work, a, &*ic, b, x, tol, max_iter, norm, null)
             }
         }
     }

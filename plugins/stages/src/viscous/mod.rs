@@ -91,7 +91,10 @@ use efsi_core::{
     StageStats, State, StepContext, bc::WallTime,
 };
 use efsi_linalg::par::{self, dot};
-use efsi_linalg::{LinearOperator, Norm, SolveStats, pcg::solve_norm_in};
+use efsi_linalg::{
+    LinearOperator, Norm, SolveStats,
+    pcg::{NullSpace, solve_norm_in},
+};
 use std::borrow::BorrowMut;
 
 #[cfg(test)]
@@ -932,6 +935,7 @@ impl<B: VelocityGhosts> ViscousStage<B> {
                     tol,
                     self.max_iter,
                     Norm::L2,
+                    NullSpace::None,
                 )
             } else {
                 // The reciprocal of the diagonal, in place.
@@ -1021,6 +1025,7 @@ mod tests {
             tol,
             500,
             Norm::L2,
+            NullSpace::None,
         );
         let dinv: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
         let mut x2 = vec![0.0; n];
