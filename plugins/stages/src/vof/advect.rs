@@ -73,9 +73,13 @@
 //! Courant number reported in [`AdvectStats::cfl`] is the flux form `max |U_f| / V_upwind`,
 //! which equals `max_d |u_d|Δt/Δx_d` in Cartesian geometry and is larger than `|u|Δt/Δr` for
 //! outward radial flow next to the axis (up to 2× in the first column). After each sweep φ is
-//! clipped to `[0, 1]`; the largest clipped amount and the volume it added are reported, so a
-//! caller can check that the clipping stayed at round-off (excursions ≤ 1e-12 at Courant ≤ ½),
-//! and the clipped volume is given back to the interface cells.
+//! clipped to `[0, 1]`, and a value within [`WISP`] of 0 or 1 — round-off of a sweep (values of
+//! 1e-38 to 1e-17 left beside an interface that passed), not a resolvable sliver — is set to
+//! it: such wisps would otherwise stay, and a body's window, which covers every cell where its
+//! fraction is not zero, would grow around them. The largest clipped amount and the volume it
+//! added are reported, so a caller can check that the clipping stayed at round-off (excursions
+//! ≤ 1e-12 at Courant ≤ ½), and the clipped volume is given back to the interface cells: volume
+//! stays conserved to round-off.
 //!
 //! # Limits
 //!
@@ -220,6 +224,10 @@ impl AdvectStats {
 
 /// The cell geometries of the kernels (a const-generic parameter): what a cell's interface is
 /// and how a slab of it is cut.
+/// A fraction within this of 0 or 1 after a sweep is round-off and is set to 0 or 1 (its volume
+/// given back to the interface cells; module docs, "Stability and boundedness").
+pub(crate) const WISP: f64 = 1e-12;
+
 const PLANAR: u8 = 0;
 const AXI: u8 = 1;
 const CUBE: u8 = 2;
@@ -720,7 +728,13 @@ impl VofAdvector {
                     div[n] += d;
                 }
                 debug_assert!(val.is_finite(), "VOF: non-finite φ at {:?}", l.index(n));
-                let clipped = val.clamp(0.0, 1.0);
+                let clipped = if val < WISP {
+                    0.0
+                } else if val > 1.0 - WISP {
+                    1.0
+                } else {
+                    val
+                };
                 if clipped != val {
                     st.max_clipped = st.max_clipped.max((clipped - val).abs());
                     st.volume += (clipped - val) / iv[n];
