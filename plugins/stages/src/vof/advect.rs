@@ -73,10 +73,10 @@
 //! Courant number reported in [`AdvectStats::cfl`] is the flux form `max |U_f| / V_upwind`,
 //! which equals `max_d |u_d|Δt/Δx_d` in Cartesian geometry and is larger than `|u|Δt/Δr` for
 //! outward radial flow next to the axis (up to 2× in the first column). After each sweep φ is
-//! clipped to `[0, 1]`, and a value within [`WISP`] of 0 or 1 — round-off of a sweep (values of
-//! 1e-38 to 1e-17 left beside an interface that passed), not a resolvable sliver — is set to
-//! it: such wisps would otherwise stay, and a body's window, which covers every cell where its
-//! fraction is not zero, would grow around them. The largest clipped amount and the volume it
+//! clipped to `[0, 1]`, and a value within `WISP` = 1e-12 of 0 or 1 — round-off of a sweep
+//! (values of 1e-38 to 1e-17 left beside an interface that passed), not a resolvable sliver —
+//! is set to it: such wisps would otherwise stay, and a body's window, which covers every cell
+//! where its fraction is not zero, would grow around them. The largest clipped amount and the volume it
 //! added are reported, so a caller can check that the clipping stayed at round-off (excursions
 //! ≤ 1e-12 at Courant ≤ ½), and the clipped volume is given back to the interface cells: volume
 //! stays conserved to round-off.
