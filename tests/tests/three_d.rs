@@ -109,10 +109,10 @@ fn the_lid_driven_cube_is_mirror_symmetric_about_its_mid_plane() {
 /// substrate. At every 0.2 ms (the scene's probe interval, on which the steps land) the solid
 /// is one piece: its largest connected piece holds at least 99.9 % of its volume and no second
 /// piece holds more than 1e-3 of it. Where the surface is oblique to the grid along an edge
-/// family (the diagonal x = z, whose normal lies half along the y-edges) the edges joining
-/// the surface cells to the bulk take the closure of their midpoint sections ("Edges in three
-/// dimensions" in the elastic stage's docs); a surface left without shear to the bulk stays
-/// behind on the substrate as a ligament.
+/// family (the diagonal x = z, whose normal lies half along the edges parallel to x and to
+/// z), the edges joining the surface cells to the bulk take the closure of their midpoint
+/// sections ("Edges in three dimensions" in the elastic stage's docs); a surface left without
+/// shear to the bulk stays behind on the substrate as a ligament.
 #[test]
 fn the_sphere_in_three_dimensions_stays_one_piece_through_its_rebound() {
     use efsi_run::probes::solid_pieces;
