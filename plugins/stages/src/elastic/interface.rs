@@ -1,5 +1,6 @@
 //! The interface weights: `φ^{1/2}` at centres, the edges' solid fraction from the PLIC
-//! quarter cells (lines in two dimensions, planes in three) and their series factors, the
+//! quarter cells (lines in two dimensions, the planes' traces in the edges' midpoint sections
+//! in three) and their series factors, the
 //! solid bounding box, and the reset of pure-fluid cells.
 
 use super::{Four, Kernels, NEAR, PHI_MIN, SHEAR, Window, cells_of_edge, plus, shear_pairs};
@@ -222,9 +223,10 @@ impl Kernels {
     /// ([`Kernels::quarter`]): in a cut cell of the solid's window (within `[−1, n]` along each
     /// axis), the share of the quarter below the cell's interface as the VOF step reconstructs
     /// it — on a two-dimensional grid the PLIC line (Youngs normal, the line cutting the cell's
-    /// φ off a `dx × dy` cell), on a three-dimensional one the PLIC plane (mixed Youngs–centred
-    /// normal, the plane cutting φ off the `dx × dy × dz` cell) and for the pair `(a, b)` the
-    /// quarter the whole cell long along the third axis; elsewhere φ (clamped to `[0, 1]`).
+    /// φ off a `dx × dy` cell), on a three-dimensional one the trace of the PLIC plane (mixed
+    /// Youngs–centred normal, the plane cutting φ off the `dx × dy × dz` cell) in the cell's
+    /// section through its centre along the third axis, for the pair `(a, b)` the a–b section
+    /// ("Edges in three dimensions" in the module docs); elsewhere φ (clamped to `[0, 1]`).
     pub(super) fn set_quarters(&mut self, phi: &Field) {
         let c = self.solid_c;
         let whole = Region::whole(&self.grid);
@@ -286,8 +288,12 @@ impl Kernels {
     }
 
     /// The quarters of the cut cell `at` of a three-dimensional grid in the plane of each
-    /// shear pair (see [`Kernels::set_quarters`]).
+    /// shear pair (see [`Kernels::set_quarters`]): for the pair `(a, b)`, the solid share of
+    /// each quarter square of the cell's section through its centre along the third axis `c`
+    /// (the section through the midpoints of the cell's `(a, b)`-edges), below the trace of the
+    /// PLIC plane `n·ξ ≤ α` there, the line `n_a ξ_a + n_b ξ_b ≤ α − n_c h_c/2`.
     fn cut_quarters_3d(&mut self, phi: &Field, at: Index) {
+        use crate::vof::plic::rect_fraction;
         use crate::vof::plic3d::{Block, Plane, myc_normal};
         let d = self.grid.h();
         let block: Block = std::array::from_fn(|k| {
@@ -298,14 +304,17 @@ impl Kernels {
                 })
             })
         });
-        let plane = Plane::new(myc_normal(&block, d), phi[at], d);
+        let Plane { n: m, alpha } = Plane::new(myc_normal(&block, d), phi[at], d);
         for (p, &([a, b], _)) in SHEAR.iter().enumerate() {
+            let c = 3 - a - b;
+            // The trace's constant in the section ξ_c = h_c/2.
+            let section = alpha - m[c] * 0.5 * d[c];
+            let (ha, hb) = (0.5 * d[a], 0.5 * d[b]);
             for n in 0..4 {
-                let (mut lo, mut hi) = ([0.0; 3], d);
-                let (ha, hb) = (0.5 * d[a], 0.5 * d[b]);
-                (lo[a], hi[a]) = if n % 2 == 0 { (0.0, ha) } else { (ha, d[a]) };
-                (lo[b], hi[b]) = if n < 2 { (0.0, hb) } else { (hb, d[b]) };
-                self.quarter[p][n][at] = plane.box_fraction(lo, hi).clamp(0.0, 1.0);
+                let la = if n % 2 == 0 { 0.0 } else { ha };
+                let lb = if n < 2 { 0.0 } else { hb };
+                let f = rect_fraction(m[a], m[b], section - m[a] * la - m[b] * lb, ha, hb);
+                self.quarter[p][n][at] = f.clamp(0.0, 1.0);
             }
         }
     }

@@ -137,7 +137,7 @@
 //!   for `φ < ¼`.)
 //! - **Shear, at corners: in series** ("Interface corners" below): the law sees the solid's
 //!   normal components as the **solid-weighted** average of the four cells' (each weighted by
-//!   the PLIC volume of solid in its quarter next to the corner), and its shear stress counts
+//!   the PLIC share of solid in its quarter next to the corner), and its shear stress counts
 //!   with the series weight `a/(aκ)`.
 //!
 //! So the stress applied anywhere on the interface is the law's stress at the solid's own
@@ -192,6 +192,20 @@
 //! viscosity) lets elasticity and viscosity both act over the whole corner: an O(1) error in
 //! the interface shear, first order overall (Sugiyama's Couette test, `cases/oscillating_couette*`).
 //!
+//! **Edges in three dimensions: the midpoint section.** An `(a, b)`-edge is a corner extruded
+//! along the third axis `c`. Across the interface solid and fluid shear in series, but along
+//! the edge the sections `ξ_c = const` lie side by side: in parallel, each with the series
+//! closure of its own solid fraction, the edge's stress their average along it. The edge takes
+//! that average at its midpoint (one point): `a` is the solid area of the four quarter squares
+//! around the edge in the a–b section through its midpoint (the cells' centres along `c`),
+//! each cut by the trace of its cell's PLIC plane, `n_a ξ_a + n_b ξ_b ≤ α − n_c h_c/2`. The
+//! quarter cells' volume instead (each the whole cell long along `c`) is cut wherever the
+//! surface is oblique along the edge (`n_c ≠ 0`), though the edge's own section may be solid:
+//! every edge joining the surface cells of such a surface to the bulk would then be in series,
+//! their elastic shear relaxed within a step, and the surface cells held to the bulk by
+//! nothing but the normal stresses. A field uniform along `c` has the same fraction either
+//! way: a planar interface extruded along the third axis gives the planar corners.
+//!
 //! # Space discretisation
 //!
 //! Staggered like the viscous stress: `B̃₁₁, B̃₂₂, B̃₃₃` and `τ₁₁, τ₂₂, τ₃₃` at cell centres,
@@ -220,9 +234,10 @@
 //! divergence on the faces normal to `a` is `Σ_b A_b Δ_b τ_ab` (`A_b` the face area across
 //! `b`), the implicit operator and both preconditioners act on u, v and w, and the coupled step
 //! uses the seven-point Poisson operator of the projection. "Interface corners" holds on every
-//! edge family in its own plane: an `(a, b)`-edge's solid fraction is the solid volume of its
-//! four quarter cells (each the whole cell long along the third axis), cut by the cell's PLIC
-//! plane (the mixed Youngs–centred normal, as the VOF step reconstructs), its interface normal's
+//! edge family in its own plane: an `(a, b)`-edge's solid fraction is the solid area of its
+//! four quarter squares in its midpoint section ("Edges in three dimensions" above), cut by the
+//! trace of the cell's PLIC plane (the mixed Youngs–centred normal, as the VOF step
+//! reconstructs), its interface normal's
 //! share `n_b²/(n_a² + n_b²)`, and its shear relaxes as the corners' does; the relaxation's
 //! change of the solid's `L_ab` (`L_ba`) stretches, besides the normal components, the shear of
 //! the pair `(a, c)` (`(b, c)`) on the four edges around, `Ḃ_ac = L_ab B_bc`. The strain energy
@@ -355,9 +370,9 @@ struct Kernels {
     /// Per shear pair, the interface weights of its edges.
     edge: Vec<EdgeWeights>,
     /// Per shear pair `[a, b]`, per centre, the solid fraction of each quarter of the cell in
-    /// the a–b plane (the whole cell along the third axis) cut by its PLIC line or plane
-    /// (lower-left, lower-right, upper-left, upper-right; `φ` itself in uncut cells and beyond
-    /// the batch).
+    /// the a–b plane (on a three-dimensional grid in the section through the cell's centre
+    /// along the third axis) cut by its PLIC line or plane's trace (lower-left, lower-right,
+    /// upper-left, upper-right; `φ` itself in uncut cells and beyond the batch).
     quarter: Vec<[Field; 4]>,
     /// The fluid's and the solid's viscosities (scene values).
     mu_f: f64,
