@@ -73,7 +73,7 @@
 //! Courant number reported in [`AdvectStats::cfl`] is the flux form `max |U_f| / V_upwind`,
 //! which equals `max_d |u_d|Δt/Δx_d` in Cartesian geometry and is larger than `|u|Δt/Δr` for
 //! outward radial flow next to the axis (up to 2× in the first column). After each sweep φ is
-//! clipped to `[0, 1]`, and a value within `WISP` = 1e-12 of 0 or 1 — round-off of a sweep
+//! clipped to `[0, 1]`, and a value within `WISP` = 1e-14 of 0 or 1 — round-off of a sweep
 //! (values of 1e-38 to 1e-17 left beside an interface that passed), not a resolvable sliver —
 //! is set to it: such wisps would otherwise stay, and a body's window, which covers every cell
 //! where its fraction is not zero, would grow around them. The largest clipped amount and the volume it
@@ -225,8 +225,11 @@ impl AdvectStats {
 /// The cell geometries of the kernels (a const-generic parameter): what a cell's interface is
 /// and how a slab of it is cut.
 /// A fraction within this of 0 or 1 after a sweep is round-off and is set to 0 or 1 (its volume
-/// given back to the interface cells; module docs, "Stability and boundedness").
-pub(crate) const WISP: f64 = 1e-12;
+/// given back to the interface cells; module docs, "Stability and boundedness"): some fifty
+/// ulps of 1, above the round-off of a sweep's sums of order-one fluxes and far below a
+/// resolvable sliver. A larger threshold would magnify round-off differences between mirrored
+/// cells (one cleaned, its mirror not) into an asymmetry of its own size.
+pub(crate) const WISP: f64 = 1e-14;
 
 const PLANAR: u8 = 0;
 const AXI: u8 = 1;
