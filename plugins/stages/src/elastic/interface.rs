@@ -1,7 +1,7 @@
 //! The interface weights: `φ^{1/2}` at centres, the edges' solid fraction from the PLIC
 //! quarter cells (lines in two dimensions, the planes' traces in the edges' midpoint sections
-//! in three) and their series factors, the
-//! solid bounding box, and the reset of pure-fluid cells.
+//! in three) and their series factors, the solid bounding box, and the reset of pure-fluid
+//! cells.
 
 use super::{Four, Kernels, NEAR, PHI_MIN, SHEAR, Window, cells_of_edge, plus, shear_pairs};
 use efsi_core::{Field, Index, Line, Region};

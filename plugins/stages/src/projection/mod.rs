@@ -688,9 +688,14 @@ impl Projector {
             b.iter_mut().for_each(|b| *b -= mean);
         }
         let norm = Norm::MaxWeighted(weight);
+        let null = if singular {
+            NullSpace::Constants
+        } else {
+            NullSpace::None
+        };
         let st = self
             .precond
-            .solve([r, pw, q], b, x, tol, self.max_iter, norm, singular);
+            .solve([r, pw, q], b, x, tol, self.max_iter, norm, null);
         if !st.converged {
             return Err(StageError {
                 stage: "projection".into(),
@@ -859,9 +864,8 @@ fn copy_pressure(grid: &Grid, p: &efsi_core::Field, x: &mut [f64]) {
 impl Precond {
     /// Solve the projection's system for `x` (from its initial guess) by the conjugate
     /// gradient with this preconditioner, to `tol` in `norm`, in at most `max_iter`
-    /// iterations; `work` holds the solver's vectors. `singular`: no side fixes the pressure,
-    /// so the null space is the constants, which the solver keeps its iteration off
-    /// ([`efsi_linalg::pcg::NullSpace`]).
+    /// iterations; `work` holds the solver's vectors; `null` the system's null space (the
+    /// constants where no side fixes the pressure), which the solver keeps its iteration off.
     fn solve(
         &mut self,
         work: [&mut [f64]; 3],
@@ -870,13 +874,8 @@ impl Precond {
         tol: f64,
         max_iter: usize,
         norm: Norm<'_>,
-        singular: bool,
+        null: NullSpace,
     ) -> SolveStats {
-        let null = if singular {
-            NullSpace::Constants
-        } else {
-            NullSpace::None
-        };
         match self {
             Precond::Multigrid(mg) => {
                 let a = &mut mg.fine_matrix();

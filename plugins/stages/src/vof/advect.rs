@@ -76,10 +76,10 @@
 //! clipped to `[0, 1]`, and a value within `WISP` = 1e-14 of 0 or 1 — round-off of a sweep
 //! (values of 1e-38 to 1e-17 left beside an interface that passed), not a resolvable sliver —
 //! is set to it: such wisps would otherwise stay, and a body's window, which covers every cell
-//! where its fraction is not zero, would grow around them. The largest clipped amount and the volume it
-//! added are reported, so a caller can check that the clipping stayed at round-off (excursions
-//! ≤ 1e-12 at Courant ≤ ½), and the clipped volume is given back to the interface cells: volume
-//! stays conserved to round-off.
+//! where its fraction is not zero, would grow around them. The largest clipped amount and the
+//! volume it added are reported, so a caller can check that the clipping stayed at round-off
+//! (excursions ≤ 1e-12 at Courant ≤ ½), and the clipped volume is given back to the interface
+//! cells: volume stays conserved to round-off.
 //!
 //! # Limits
 //!
@@ -222,15 +222,15 @@ impl AdvectStats {
     }
 }
 
-/// The cell geometries of the kernels (a const-generic parameter): what a cell's interface is
-/// and how a slab of it is cut.
 /// A fraction within this of 0 or 1 after a sweep is round-off and is set to 0 or 1 (its volume
 /// given back to the interface cells; module docs, "Stability and boundedness"): some fifty
 /// ulps of 1, above the round-off of a sweep's sums of order-one fluxes and far below a
 /// resolvable sliver. A larger threshold would magnify round-off differences between mirrored
 /// cells (one cleaned, its mirror not) into an asymmetry of its own size.
-pub(crate) const WISP: f64 = 1e-14;
+const WISP: f64 = 1e-14;
 
+/// The cell geometries of the kernels (a const-generic parameter): what a cell's interface is
+/// and how a slab of it is cut.
 const PLANAR: u8 = 0;
 const AXI: u8 = 1;
 const CUBE: u8 = 2;
