@@ -1,7 +1,8 @@
 //! `cargo xtask docs [--check]`: render the generated section of `docs/benchmarks.md` from the
 //! committed benchmark snapshots, or only check that it is what they render
-//! ([`xtask::bench_page`]); and the `--write-docs` of `cargo xtask bench` and `bench-paper`,
-//! which replace a snapshot by a fresh run's JSON before rendering.
+//! ([`xtask::bench_page`]); and the `--write-docs` of `cargo xtask bench`, which replaces its
+//! snapshot by a fresh run's JSON, and of `bench-paper`, which merges the run's cases into its
+//! snapshot ([`xtask::bench_page::merge_paper`]), before rendering.
 
 use crate::root;
 use std::path::Path;
@@ -30,5 +31,25 @@ pub(crate) fn snapshot(src: &Path, rel: &str) -> Result<(), String> {
     std::fs::copy(src, &to).map_err(|e| format!("{} → {}: {e}", src.display(), to.display()))?;
     bench_page::write(&root())?;
     eprintln!("{rel} and {}: written", bench_page::PAGE);
+    Ok(())
+}
+
+/// Merge the cases of a `bench-paper` run's `summary.json` `src` into the snapshot
+/// [`bench_page::PAPER_JSON`] ([`bench_page::merge_paper`]) and render the page again.
+pub(crate) fn merge_paper_snapshot(src: &Path) -> Result<(), String> {
+    let read = |path: &Path| -> Result<serde_json::Value, String> {
+        let s = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&s).map_err(|e| format!("{}: {e}", path.display()))
+    };
+    let to = root().join(bench_page::PAPER_JSON);
+    let merged = bench_page::merge_paper(&read(&to)?, &read(src)?)?;
+    let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
+    std::fs::write(&to, text + "\n").map_err(|e| format!("{}: {e}", to.display()))?;
+    bench_page::write(&root())?;
+    eprintln!(
+        "{} and {}: written",
+        bench_page::PAPER_JSON,
+        bench_page::PAGE
+    );
     Ok(())
 }

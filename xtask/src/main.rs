@@ -30,7 +30,8 @@
 //! - `cargo xtask bench-paper [--quick] [--case NAME]… [--out DIR] [--set PATH=VALUE]…
 //!   [--write-docs]`: build the workspace in release and run the paper's cases
 //!   (`tests/src/paper/`), writing `DIR/REPORT.md` and `DIR/summary.json` (default
-//!   `target/bench-paper`); `--write-docs` copies `summary.json` to `docs/bench/paper.json` and
+//!   `target/bench-paper`); `--write-docs` merges the run's cases into `docs/bench/paper.json`
+//!   (each replaces its namesake, with the command, commit and machine that measured it) and
 //!   renders `docs/benchmarks.md` again.
 //! - `cargo xtask docs [--check]`: render the generated section of `docs/benchmarks.md` from
 //!   `docs/bench/*.json` ([`xtask::bench_page`]), or only check that it is in sync.
@@ -126,8 +127,8 @@ fn main() -> ExitCode {
 /// `cargo xtask bench-paper [--quick] [--case NAME…] [--out DIR] [--set PATH=VALUE]…
 /// [--write-docs]`: build the workspace (release, so the law libraries exist) and run the
 /// paper's cases (`tests/src/paper/`). Exits with the runner's status (1 if a check failed);
-/// with `--write-docs`, a run that finished (its checks passed or not) becomes the page's
-/// snapshot.
+/// with `--write-docs`, the cases of a run that finished (their checks passed or not) replace
+/// their namesakes in the page's snapshot.
 fn bench_paper(args: &[String]) -> Result<(), String> {
     let write_docs = args.iter().any(|a| a == "--write-docs");
     let args: Vec<&String> = args.iter().filter(|a| *a != "--write-docs").collect();
@@ -146,7 +147,7 @@ fn bench_paper(args: &[String]) -> Result<(), String> {
             .windows(2)
             .find(|w| *w[0] == "--out")
             .map_or_else(|| root().join("target/bench-paper"), |w| root().join(w[1]));
-        docs::snapshot(&out.join("summary.json"), xtask::bench_page::PAPER_JSON)?;
+        docs::merge_paper_snapshot(&out.join("summary.json"))?;
     }
     if status.success() {
         Ok(())
