@@ -102,6 +102,11 @@ fn two_soft_disks_quick() {
 }
 
 #[test]
+fn contact_map_quick() {
+    quick("contact_map");
+}
+
+#[test]
 fn spheres_on_axis_quick() {
     quick("spheres_on_axis");
 }

@@ -4,6 +4,8 @@
 //! - [`TwoSoftDisks`] (case 1, `cases/two_soft_disks.ron`): two identical neo-Hookean disks in
 //!   head-on approach; the mirror symmetry about x = 1, no overlap, each body's volume and one
 //!   piece at every output, the bodies part again, and the restitution over three grids.
+//! - [`ContactMap`] (case 1's contact model): the same two disks over the repulsion's range ×
+//!   stiffness, its effect on the restitution, with the same checks and no energy gained.
 //! - [`SpheresOnAxis`] (case 2, `cases/spheres_on_axis.ron`): a soft sphere falls onto
 //!   another resting on the floor, axisymmetric; the same checks, the rebound over three grids.
 //! - [`TwentyDisks`] (case 3, `cases/twenty_disks.ron`): twenty disks of two materials settle
@@ -21,7 +23,7 @@ use super::case::{
 use super::plot::Scale;
 use super::{Check, Options, Probes, Run, load_case, probes};
 use efsi_core::{Scene, Simulation};
-use efsi_run::SceneOutput;
+use efsi_run::{SceneOutput, SceneOverrides};
 use std::path::PathBuf;
 
 /// Largest `Σ_k φ_k` of a cell allowed at any output (the issue's no-overlap bound).
@@ -345,6 +347,190 @@ impl Case for TwoSoftDisks {
                 "the finest grid: restitution {}",
                 e.last().map_or("—".into(), |e| format!("{e:.4}"))
             ),
+        })
+    }
+}
+
+/// The contact model's map on case 1: the two soft disks of [`TwoSoftDisks`] at the scene's
+/// grid (and, in the full version, twice as fine) over the repulsion's `range` (cells) ×
+/// `stiffness` κ (`numerics.contact`, `efsi_stages::contact`), κ from 0 (the resolved film
+/// alone) through the scene's default `10 ρ_max U²` = 50 to ten times it. Each run must keep the
+/// bodies apart and whole, mirror-symmetric, and never gain energy: its kinetic plus strain
+/// energy stays at most its start's (the repulsion stores `E_c ≥ 0` and gives it back; the
+/// energy guard, which counts `E_c`, would stop a run that gained).
+pub struct ContactMap {
+    end: f64,
+}
+
+/// One run of the map: grid cells across, the halo's range (cells) and κ (Pa).
+#[derive(Clone, Copy, Debug)]
+pub struct MapRun {
+    /// Cells across the box.
+    pub n: usize,
+    /// `numerics.contact.range`.
+    pub range: f64,
+    /// `numerics.contact.stiffness`.
+    pub stiffness: f64,
+}
+
+/// What a run of the map shows: its bodies and the largest kinetic plus strain energy over its
+/// start's.
+pub struct MapMeasured {
+    /// The bodies' probes.
+    pub bodies: Bodies,
+    /// Largest `(E_k + Σ_k W_k) / E_k(0)` over the samples.
+    pub energy_ratio: f64,
+}
+
+/// The map's stiffnesses (Pa): 0, a tenth of, equal to and ten times the scene's default 50.
+const MAP_STIFFNESS: [f64; 4] = [0.0, 5.0, 50.0, 500.0];
+
+impl Case for ContactMap {
+    const NAME: &'static str = "contact_map";
+    type Setting = MapRun;
+    type Measured = MapMeasured;
+
+    fn plan(opts: &Options) -> Plan<Self> {
+        let (grids, ranges, kappas, end): (&[usize], &[f64], &[f64], f64) = if opts.quick {
+            (&[64], &[1.0, 2.0], &[0.0, 50.0], 0.7)
+        } else {
+            (&[64, 128], &[0.5, 1.0, 2.0], &MAP_STIFFNESS, 1.0)
+        };
+        let mut plan = Vec::new();
+        for &n in grids {
+            for &range in ranges {
+                for &stiffness in kappas {
+                    plan.push((
+                        format!("{n}², range {range}, κ {stiffness}"),
+                        MapRun {
+                            n,
+                            range,
+                            stiffness,
+                        },
+                    ));
+                }
+            }
+        }
+        Ok((ContactMap { end }, plan))
+    }
+
+    fn folder(&self, _: &str, r: &MapRun) -> String {
+        format!("N{}_range{}_k{}", r.n, r.range, r.stiffness)
+    }
+
+    fn scene(&self, r: &MapRun) -> Result<(Scene, PathBuf), String> {
+        let (mut scene, path) = square("two_soft_disks.ron", r.n, Some(self.end))?;
+        scene
+            .set("numerics.contact.range", r.range)
+            .and_then(|()| scene.set("numerics.contact.stiffness", r.stiffness))
+            .map_err(|e| e.to_string())?;
+        Ok((scene, path))
+    }
+
+    fn measure(&self, _: &MapRun, _: &Simulation, run: &mut Run) -> Result<MapMeasured, String> {
+        let bodies = read(run)?;
+        let p = probes(&run.dir)?;
+        let mut energy = bodies.kinetic.clone();
+        for n in &bodies.names {
+            for (e, w) in energy
+                .iter_mut()
+                .zip(p.col(&format!("{n}.elastic_energy"))?)
+            {
+                *e += w;
+            }
+        }
+        let start = energy.first().copied().unwrap_or(f64::NAN);
+        let energy_ratio = energy.iter().map(|e| e / start).fold(0.0, f64::max);
+        let r = rebound(&bodies);
+        run.metrics = vec![
+            ("restitution".into(), r.restitution),
+            ("mirror".into(), r.mirror),
+            ("overlap".into(), bodies.overlap),
+            ("shared_cells".into(), bodies.shared_cells),
+            ("energy_ratio".into(), energy_ratio),
+        ];
+        Ok(MapMeasured {
+            bodies,
+            energy_ratio,
+        })
+    }
+
+    fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
+        let all: Vec<&Bodies> = done.measured.iter().map(|(_, m)| &m.bodies).collect();
+        let reb: Vec<Rebound> = all.iter().map(|b| rebound(b)).collect();
+        let mut checks = separation_checks(&all);
+        checks.push(Check::at_most(
+            "mirror symmetry about x = 1: largest |x_l + x_r − 2|, |y_l − y_r|, |u_l + u_r|, \
+             every run",
+            reb.iter().map(|r| r.mirror).fold(0.0, f64::max),
+            1e-10,
+            "e",
+        ));
+        checks.push(Check::at_least(
+            "the disks part again: least rebound speed −u_l after contact, every run",
+            reb.iter().map(|r| -r.rebound).fold(f64::INFINITY, f64::min),
+            0.1,
+            "3",
+        ));
+        checks.push(Check::at_most(
+            "no energy gained: largest (kinetic + strain energy) ÷ its start, every run",
+            done.measured
+                .iter()
+                .map(|(_, m)| m.energy_ratio)
+                .fold(0.0, f64::max),
+            1.0,
+            "6",
+        ));
+        // The map, one line per grid and range.
+        let mut lines: Vec<(usize, f64)> = Vec::new();
+        for (r, _) in &done.measured {
+            if !lines.contains(&(r.n, r.range)) {
+                lines.push((r.n, r.range));
+            }
+        }
+        for &(n, range) in &lines {
+            let cells: Vec<String> = done
+                .measured
+                .iter()
+                .zip(&reb)
+                .filter(|((r, _), _)| r.n == n && r.range == range)
+                .map(|((r, m), rb)| {
+                    format!(
+                        "κ {} → {:.4} (shared cells {})",
+                        r.stiffness, rb.restitution, m.bodies.shared_cells
+                    )
+                })
+                .collect();
+            h.notes.push(format!(
+                "{n}², range {range} (cells): restitution {}",
+                cells.join(", ")
+            ));
+        }
+        let series: Vec<_> = lines
+            .iter()
+            .map(|&(n, range)| {
+                let pts = done
+                    .measured
+                    .iter()
+                    .zip(&reb)
+                    .filter(|((r, _), _)| r.n == n && r.range == range)
+                    .map(|((r, _), rb)| (r.stiffness, rb.restitution))
+                    .collect();
+                (format!("{n}², range {range}"), pts)
+            })
+            .collect();
+        h.figure(
+            "restitution_map",
+            ("Restitution over the contact stiffness κ", "κ (Pa)", "e"),
+            &series,
+            Scale::Linear,
+        );
+        Ok(Verdict {
+            title: "the contact model's range × stiffness on two soft disks head-on".into(),
+            reference: "the film alone (κ = 0) and the mirror symmetry; no energy gained".into(),
+            error_metric: "none".into(),
+            checks,
+            recommendation: "the defaults: range 1 cell, κ = 10 ρ_max U² (50 here)".into(),
         })
     }
 }

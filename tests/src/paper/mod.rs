@@ -223,6 +223,7 @@ pub const CASES: &[Entry] = &[
     entry::<disk_cavity::DiskCavity>(),
     entry::<soft_sphere_cube::SoftSphereCube>(),
     entry::<bodies::TwoSoftDisks>(),
+    entry::<bodies::ContactMap>(),
     entry::<bodies::SpheresOnAxis>(),
     entry::<bodies::TwentyDisks>(),
     entry::<bodies::DisksInCavity>(),
