@@ -1,6 +1,7 @@
-//! `cargo xtask docs [--check]`: render the generated section of `docs/benchmarks.md` from the
-//! committed benchmark snapshots, or only check that it is what they render
-//! ([`xtask::bench_page`]); and the `--write-docs` of `cargo xtask bench`, which replaces its
+//! `cargo xtask docs [--check | --merge SUMMARY_JSON]`: render the generated section of
+//! `docs/benchmarks.md` from the committed benchmark snapshots, or only check that it is what
+//! they render ([`xtask::bench_page`]), or first merge the cases of a `bench-paper` run's
+//! `summary.json` into the paper snapshot (a run made elsewhere, e.g. in another worktree); and the `--write-docs` of `cargo xtask bench`, which replaces its
 //! snapshot by a fresh run's JSON, and of `bench-paper`, which merges the run's cases into its
 //! snapshot ([`xtask::bench_page::merge_paper`]), before rendering.
 
@@ -20,7 +21,8 @@ pub(crate) fn docs(args: &[String]) -> Result<(), String> {
             Ok(())
         }
         [a] if a == "--check" => bench_page::check(&root()),
-        _ => Err("usage: cargo xtask docs [--check]".into()),
+        [a, path] if a == "--merge" => merge_paper_snapshot(Path::new(path)),
+        _ => Err("usage: cargo xtask docs [--check | --merge SUMMARY_JSON]".into()),
     }
 }
 

@@ -33,8 +33,10 @@
 //!   `target/bench-paper`); `--write-docs` merges the run's cases into `docs/bench/paper.json`
 //!   (each replaces its namesake, with the command, commit and machine that measured it) and
 //!   renders `docs/benchmarks.md` again.
-//! - `cargo xtask docs [--check]`: render the generated section of `docs/benchmarks.md` from
-//!   `docs/bench/*.json` ([`xtask::bench_page`]), or only check that it is in sync.
+//! - `cargo xtask docs [--check | --merge SUMMARY_JSON]`: render the generated section of
+//!   `docs/benchmarks.md` from `docs/bench/*.json` ([`xtask::bench_page`]), only check that it
+//!   is in sync, or first merge the cases of a `bench-paper` run's `summary.json` into
+//!   `docs/bench/paper.json` (as `--write-docs` does).
 //! - `cargo xtask fmu [SCENE [--parameter PATH[=UNIT]] [--input NAME[=UNIT]]
 //!   [--output PROBE[=UNIT]] [--range NAME=MIN..MAX]…]`: build the FMU library and the shipped
 //!   laws (profile `fmu-release`: release code, stripped) and package the scene as
