@@ -235,6 +235,26 @@ fn rebound(b: &Bodies) -> Rebound {
     }
 }
 
+/// Each run's [`Rebound`] and the checks of two disks head-on in every run: the separation
+/// checks, the mirror symmetry about x = 1 and that the disks part again.
+fn head_on_checks(all: &[&Bodies]) -> (Vec<Rebound>, Vec<Check>) {
+    let reb: Vec<Rebound> = all.iter().map(|b| rebound(b)).collect();
+    let mut checks = separation_checks(all);
+    checks.push(Check::at_most(
+        "mirror symmetry about x = 1: largest |x_l + x_r − 2|, |y_l − y_r|, |u_l + u_r|",
+        reb.iter().map(|r| r.mirror).fold(0.0, f64::max),
+        1e-10,
+        "e",
+    ));
+    checks.push(Check::at_least(
+        "the disks part again: least rebound speed −u_l after contact, every run",
+        reb.iter().map(|r| -r.rebound).fold(f64::INFINITY, f64::min),
+        0.1,
+        "3",
+    ));
+    (reb, checks)
+}
+
 impl Case for TwoSoftDisks {
     const NAME: &'static str = "two_soft_disks";
     type Setting = usize;
@@ -280,21 +300,8 @@ impl Case for TwoSoftDisks {
         });
         let runs = paired(done);
         let all: Vec<&Bodies> = runs.iter().map(|(_, b)| *b).collect();
-        let reb: Vec<Rebound> = all.iter().map(|b| rebound(b)).collect();
+        let (reb, mut checks) = head_on_checks(&all);
         let e: Vec<f64> = reb.iter().map(|r| r.restitution).collect();
-        let mut checks = separation_checks(&all);
-        checks.push(Check::at_most(
-            "mirror symmetry about x = 1: largest |x_l + x_r − 2|, |y_l − y_r|, |u_l + u_r|",
-            reb.iter().map(|r| r.mirror).fold(0.0, f64::max),
-            1e-10,
-            "e",
-        ));
-        checks.push(Check::at_least(
-            "the disks part again: least rebound speed −u_l after contact, every run",
-            reb.iter().map(|r| -r.rebound).fold(f64::INFINITY, f64::min),
-            0.1,
-            "3",
-        ));
         checks.push(Check::at_most(
             "restitution converges: ratio of successive grids' differences",
             if diffs.len() >= 2 {
@@ -457,21 +464,7 @@ impl Case for ContactMap {
 
     fn conclude(&self, h: &mut Harness, done: &mut Done<Self>) -> Result<Verdict, String> {
         let all: Vec<&Bodies> = done.measured.iter().map(|(_, m)| &m.bodies).collect();
-        let reb: Vec<Rebound> = all.iter().map(|b| rebound(b)).collect();
-        let mut checks = separation_checks(&all);
-        checks.push(Check::at_most(
-            "mirror symmetry about x = 1: largest |x_l + x_r − 2|, |y_l − y_r|, |u_l + u_r|, \
-             every run",
-            reb.iter().map(|r| r.mirror).fold(0.0, f64::max),
-            1e-10,
-            "e",
-        ));
-        checks.push(Check::at_least(
-            "the disks part again: least rebound speed −u_l after contact, every run",
-            reb.iter().map(|r| -r.rebound).fold(f64::INFINITY, f64::min),
-            0.1,
-            "3",
-        ));
+        let (reb, mut checks) = head_on_checks(&all);
         checks.push(Check::at_most(
             "no energy gained: largest (kinetic + strain energy) ÷ its start, every run",
             done.measured
