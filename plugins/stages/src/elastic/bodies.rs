@@ -650,15 +650,15 @@ impl Fractions {
             } else {
                 f.fill(0.0);
             }
+            // The fraction's window, row by row (x fastest).
             let o = k.origin;
-            let mut it = bf.phi.iter();
+            let mut rows = bf.phi.chunks_exact(bf.n[0]);
             for kk in 0..bf.n[2] {
                 for j in 0..bf.n[1] {
-                    for i in 0..bf.n[0] {
-                        let at = [i + bf.lo[0], j + bf.lo[1], kk + bf.lo[2]];
-                        let v = *it.next().expect("a window's values");
-                        f[[0, 1, 2].map(|a| at[a] as isize - o[a])] = v;
-                    }
+                    let at = [bf.lo[0], j + bf.lo[1], kk + bf.lo[2]];
+                    let to = f.idx3([0, 1, 2].map(|a| at[a] as isize - o[a]));
+                    let row = rows.next().expect("a window's values");
+                    f.data_mut()[to..to + bf.n[0]].copy_from_slice(row);
                 }
             }
             k.bc.fill_scalar(&k.grid, f, false);

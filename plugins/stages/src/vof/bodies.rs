@@ -217,8 +217,11 @@ impl BodyWindow {
         let o = self.lo.map(|v| v as isize);
         for k in 0..nz as isize {
             for j in 0..ny as isize {
-                for i in 0..nx as isize {
-                    out[[i + o[0], j + o[1], k + o[2]]] += scale * self.phi[[i, j, k]];
+                let from = self.phi.idx3([0, j, k]);
+                let to = out.idx3([o[0], j + o[1], k + o[2]]);
+                let row = &self.phi.data()[from..from + nx];
+                for (t, f) in out.data_mut()[to..to + nx].iter_mut().zip(row) {
+                    *t += scale * f;
                 }
             }
         }
