@@ -353,7 +353,13 @@ pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
     if grid.is_3d() {
         return super::shapes3d::fill_fraction(grid, shape, phi);
     }
-    fill_cells(grid, shape, [0, grid.nx as isize], [0, grid.ny as isize], phi);
+    fill_cells(
+        grid,
+        shape,
+        [0, grid.nx as isize],
+        [0, grid.ny as isize],
+        phi,
+    );
 }
 
 /// [`fill_fraction`] on the cells `i0 ≤ i < i1`, `j0 ≤ j < j1` (`is`, `js`): zero at once where
@@ -403,9 +409,19 @@ pub fn section_width(grid: &Grid, shape: &Shape) -> Option<f64> {
     fill_fraction(grid, shape, &mut phi);
     let (nx, ny) = (grid.nx as isize, grid.ny as isize);
     let at = |i: isize, j: isize| phi[(i.clamp(0, nx - 1), j.clamp(0, ny - 1))];
-    let (mut area, mut perimeter) = (0.0, 0.0);
+    // The cells within one of a cell holding the shape: elsewhere both terms are zero, and
+    // adding a zero leaves the sums (taken in the same order) as they are.
+    let (mut lo, mut hi) = ((nx, ny), (-1, -1));
     for j in 0..ny {
         for i in 0..nx {
+            if phi[(i, j)] != 0.0 {
+                (lo, hi) = ((lo.0.min(i), lo.1.min(j)), (hi.0.max(i), hi.1.max(j)));
+            }
+        }
+    }
+    let (mut area, mut perimeter) = (0.0, 0.0);
+    for j in (lo.1 - 1).max(0)..(hi.1 + 2).min(ny) {
+        for i in (lo.0 - 1).max(0)..(hi.0 + 2).min(nx) {
             area += phi[(i, j)];
             let gx = (at(i + 1, j) - at(i - 1, j)) / (2.0 * grid.dx);
             let gy = (at(i, j + 1) - at(i, j - 1)) / (2.0 * grid.dy);
