@@ -39,16 +39,25 @@
 //! copied onto the new box (identity and zero rates where the old one did not reach).
 //!
 //! **Why the window step is the full-grid step, bit for bit.** When the elastic step runs,
-//! the body's support lies at least two cells inside every inner side of its fraction's
-//! window (the VOF window's rule), so at least `2 + PAD` cells inside the elastic window's.
-//! The deformation is written within [`super::NEAR`] cells of the support (and the edges
-//! beside), read within three more (van Leer advection, gradient windows), and reset to the
-//! identity, its rates to zero, wherever the body has no solid; with `PAD` = 8 every cell
-//! written or read lies inside the window or in its ghosts, whose values (even reflections of
-//! the identity and of zero) are those the whole grid holds there. The force and the
-//! stiffness are added face by face and cell by cell in the bodies' order, as on the whole
-//! grid; sums over cells (the strain energy) run over the same cells in the same order. A
-//! checkpoint records each window (`B.<body>.window`: its first cell and its cells along each
+//! the body's support (its cells with `φ_k ≠ 0`) lies at least `vof::NEAR − 1` = 2 cells
+//! inside every inner side of its fraction's window (the VOF window's rule: `NEAR` before the
+//! VOF step, which grows the support by at most one cell), so at least `d = 2 + PAD` cells
+//! inside the elastic window's. The deformation is written at the centres within
+//! [`super::NEAR`] = 4 cells of the support and on the edges touching them: all in the
+//! window's interior once `d ≥ 4`, so the window clips none of them where the whole grid would
+//! not. B is read at most two cells (or edges) beyond those (the van Leer fluxes of the
+//! advection; the stretching's four cells and edges are nearer): with `d ≥ 6` within the
+//! interior and the window's boundary edges, never in its ghosts. The velocity, copied in
+//! from the whole grid with the ghosts, is read at most [`READS`] cells beyond the centres it
+//! serves: within the ghosts once `d + G ≥ 4 + 3`. Wherever B is read but not written it is
+//! the identity and its rates zero, in the window as on the whole grid (reset wherever the body
+//! has no solid); the fraction and its weights vanish within `d` cells of every inner side, so
+//! their ghosts (even reflections) hold the zeros the grid holds there. `PAD` = 4 is the fewest
+//! cells that give `d ≥ 6` (with `d = 5` the lowest written edge would be read through the
+//! ghost edge that reflects it); a compile-time assertion ties it to the constants. The force
+//! and the stiffness are added face by face and cell by cell in the bodies' order, as on the
+//! whole grid; sums over cells (the strain energy) run over the same cells in the same order.
+//! A checkpoint records each window (`B.<body>.window`: its first cell and its cells along each
 //! axis) with the arrays on it, and a restore takes the recorded windows.
 //!
 //! # Limits
@@ -66,9 +75,18 @@ use efsi_core::scene::{Boundaries, Boundary, Options, Side};
 use efsi_core::{BoundarySet, Field, Geometry, Grid, Index, Scene, State, StateResource};
 
 /// Cells an elastic body's window keeps beyond its fraction's window on every side inside the
-/// domain (see "Storage" in the module docs for why 8 keeps the window step the full-grid
-/// step).
-pub(super) const PAD: usize = 8;
+/// domain: the fewest that keep the window step the full-grid step ("Storage" in the module
+/// docs).
+pub(super) const PAD: usize = 4;
+
+// The support lies `vof::NEAR − 1 + PAD` cells inside an inner side of the window when the
+// elastic step runs: at least the deformation's reach (`NEAR`) and the advection's two cells
+// beyond it, and within the ghosts of the velocity's reach (`NEAR + READS`).
+const _: () = {
+    let inside = (crate::vof::bodies::NEAR - 1 + PAD) as isize;
+    assert!(inside >= super::NEAR + 2);
+    assert!(inside + efsi_core::G >= super::NEAR + READS);
+};
 
 /// The whole grid, its sides, and the scene's sides (what a body's window takes its own from).
 pub(super) struct Frame {
@@ -632,15 +650,15 @@ impl Fractions {
             } else {
                 f.fill(0.0);
             }
+            // The fraction's window, row by row (x fastest).
             let o = k.origin;
-            let mut it = bf.phi.iter();
+            let mut rows = bf.phi.chunks_exact(bf.n[0]);
             for kk in 0..bf.n[2] {
                 for j in 0..bf.n[1] {
-                    for i in 0..bf.n[0] {
-                        let at = [i + bf.lo[0], j + bf.lo[1], kk + bf.lo[2]];
-                        let v = *it.next().expect("a window's values");
-                        f[[0, 1, 2].map(|a| at[a] as isize - o[a])] = v;
-                    }
+                    let at = [bf.lo[0], j + bf.lo[1], kk + bf.lo[2]];
+                    let to = f.idx3([0, 1, 2].map(|a| at[a] as isize - o[a]));
+                    let row = rows.next().expect("a window's values");
+                    f.data_mut()[to..to + bf.n[0]].copy_from_slice(row);
                 }
             }
             k.bc.fill_scalar(&k.grid, f, false);

@@ -353,19 +353,49 @@ pub fn fill_fraction(grid: &Grid, shape: &Shape, phi: &mut Field) {
     if grid.is_3d() {
         return super::shapes3d::fill_fraction(grid, shape, phi);
     }
+    fill_cells(
+        grid,
+        shape,
+        [0, grid.nx as isize],
+        [0, grid.ny as isize],
+        phi,
+    );
+}
+
+/// [`fill_fraction`] on the cells `i0 ≤ i < i1`, `j0 ≤ j < j1` (`is`, `js`): zero at once where
+/// the shape's [`cover`] of their box is wholly out — then it is of every cell in it, each
+/// cover test being monotone as a box shrinks — else the box split in two across its longer
+/// side, down to single cells (so the work follows the shape's boundary, not the grid).
+fn fill_cells(grid: &Grid, shape: &Shape, is: [isize; 2], js: [isize; 2], phi: &mut Field) {
     let axi = grid.is_axisymmetric();
-    for j in 0..grid.ny as isize {
-        for i in 0..grid.nx as isize {
-            let r = Rect {
-                x0: grid.xf(i),
-                x1: grid.xf(i + 1),
-                y0: grid.yf(j),
-                y1: grid.yf(j + 1),
-            };
-            let mut budget = MAX_SPLITS;
-            let v = volume(shape, r, axi, MAX_DEPTH, &mut budget);
-            phi[(i, j)] = (v / r.volume(axi)).clamp(0.0, 1.0);
+    let (ni, nj) = (is[1] - is[0], js[1] - js[0]);
+    if ni <= 0 || nj <= 0 {
+        return;
+    }
+    let r = Rect {
+        x0: grid.xf(is[0]),
+        x1: grid.xf(is[1]),
+        y0: grid.yf(js[0]),
+        y1: grid.yf(js[1]),
+    };
+    if ni == 1 && nj == 1 {
+        let mut budget = MAX_SPLITS;
+        let v = volume(shape, r, axi, MAX_DEPTH, &mut budget);
+        phi[(is[0], js[0])] = (v / r.volume(axi)).clamp(0.0, 1.0);
+    } else if matches!(cover(shape, r, axi), Cover::Out) {
+        for j in js[0]..js[1] {
+            for i in is[0]..is[1] {
+                phi[(i, j)] = 0.0;
+            }
         }
+    } else if ni >= nj {
+        let m = is[0] + ni / 2;
+        fill_cells(grid, shape, [is[0], m], js, phi);
+        fill_cells(grid, shape, [m, is[1]], js, phi);
+    } else {
+        let m = js[0] + nj / 2;
+        fill_cells(grid, shape, is, [js[0], m], phi);
+        fill_cells(grid, shape, is, [m, js[1]], phi);
     }
 }
 
@@ -379,9 +409,19 @@ pub fn section_width(grid: &Grid, shape: &Shape) -> Option<f64> {
     fill_fraction(grid, shape, &mut phi);
     let (nx, ny) = (grid.nx as isize, grid.ny as isize);
     let at = |i: isize, j: isize| phi[(i.clamp(0, nx - 1), j.clamp(0, ny - 1))];
-    let (mut area, mut perimeter) = (0.0, 0.0);
+    // The cells within one of a cell holding the shape: elsewhere both terms are zero, and
+    // adding a zero leaves the sums (taken in the same order) as they are.
+    let (mut lo, mut hi) = ((nx, ny), (-1, -1));
     for j in 0..ny {
         for i in 0..nx {
+            if phi[(i, j)] != 0.0 {
+                (lo, hi) = ((lo.0.min(i), lo.1.min(j)), (hi.0.max(i), hi.1.max(j)));
+            }
+        }
+    }
+    let (mut area, mut perimeter) = (0.0, 0.0);
+    for j in (lo.1 - 1).max(0)..(hi.1 + 2).min(ny) {
+        for i in (lo.0 - 1).max(0)..(hi.0 + 2).min(nx) {
             area += phi[(i, j)];
             let gx = (at(i + 1, j) - at(i - 1, j)) / (2.0 * grid.dx);
             let gy = (at(i, j + 1) - at(i, j - 1)) / (2.0 * grid.dy);

@@ -393,13 +393,18 @@ impl Many {
             .filter_map(|(a, vel)| vel.map(|vel| (a, vel)))
         {
             Region::of(grid, faces[a]).for_each(vel, |l, vel| {
-                let f: Vec<(&[f64], &[f64])> = phis
+                // The bodies with a fraction beside the line's faces, in order: the others'
+                // terms are zeros, which leave the sums as they are.
+                let f: Vec<(&ManyBody, &[f64], &[f64])> = self
+                    .bodies
                     .iter()
-                    .map(|p| (p.at(&l, minus(a)), p.at(&l, [0; 3])))
+                    .zip(&phis)
+                    .map(|(b, p)| (b, p.at(&l, minus(a)), p.at(&l, [0; 3])))
+                    .filter(|(_, lo, hi)| lo.iter().chain(*hi).any(|&x| x != 0.0))
                     .collect();
                 for (n, v) in vel.iter_mut().enumerate() {
                     let (mut m, mut p, mut s) = (0.0, 0.0, 0.0);
-                    for (b, (lo, hi)) in self.bodies.iter().zip(&f) {
+                    for (b, lo, hi) in &f {
                         let phi = 0.5 * (lo[n] + hi[n]);
                         let vb = b.velocity.map_or(*v, |vb| vb.xyz()[a]);
                         s += phi;
