@@ -355,8 +355,9 @@ fn paper_overview(summary: &Value) -> String {
 /// snapshot's case of the same name or, when it has none, is appended; the snapshot's other
 /// cases stay as they are, each with the run that measured it. So cases can be measured in
 /// separate runs (a full run of every case takes hours) and the page still says, per case,
-/// which command, commit and machine gave its figures. A snapshot case without `"measured"`
-/// is refused: the page could not say where its figures come from.
+/// which command, commit and machine gave its figures. Refused: a snapshot case without
+/// `"measured"` (the page could not say where its figures come from), a run without a
+/// `"cases"` list (not a `summary.json`) or with a case without a `"name"`.
 pub fn merge_paper(snapshot: &Value, run: &Value) -> Result<Value, String> {
     let mut cases: Vec<Value> = snapshot["cases"].as_array().cloned().unwrap_or_default();
     if let Some(c) = cases.iter().find(|c| !c["measured"].is_object()) {
@@ -370,7 +371,13 @@ pub fn merge_paper(snapshot: &Value, run: &Value) -> Result<Value, String> {
         "provenance": run["provenance"],
         "mode": run["mode"],
     });
-    for case in run["cases"].as_array().map_or(&[][..], Vec::as_slice) {
+    let Some(run_cases) = run["cases"].as_array() else {
+        return Err("the bench-paper run has no \"cases\" list: is it a summary.json?".into());
+    };
+    for case in run_cases {
+        if !case["name"].is_string() {
+            return Err("a case of the bench-paper run has no \"name\"".into());
+        }
         let mut case = case.clone();
         case["measured"] = measured.clone();
         match cases.iter_mut().find(|c| c["name"] == case["name"]) {
@@ -614,5 +621,10 @@ mod tests {
         let bare = json!({"cases": [{"name": "a", "checks": []}]});
         let e = merge_paper(&bare, &run("ccc", &["b"], true)).unwrap_err();
         assert!(e.contains("case `a`") && e.contains("measured"), "{e}");
+        // A file that is not a run's summary, or a case without a name, is refused.
+        let e = merge_paper(&first, &json!({"command": "x"})).unwrap_err();
+        assert!(e.contains("\"cases\""), "{e}");
+        let e = merge_paper(&first, &json!({"cases": [{"checks": []}]})).unwrap_err();
+        assert!(e.contains("\"name\""), "{e}");
     }
 }

@@ -44,7 +44,8 @@ pub(crate) fn merge_paper_snapshot(src: &Path) -> Result<(), String> {
         serde_json::from_str(&s).map_err(|e| format!("{}: {e}", path.display()))
     };
     let to = root().join(bench_page::PAPER_JSON);
-    let merged = bench_page::merge_paper(&read(&to)?, &read(src)?)?;
+    let merged = bench_page::merge_paper(&read(&to)?, &read(src)?)
+        .map_err(|e| format!("{} into {}: {e}", src.display(), to.display()))?;
     let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
     std::fs::write(&to, text + "\n").map_err(|e| format!("{}: {e}", to.display()))?;
     bench_page::write(&root())?;
