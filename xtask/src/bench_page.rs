@@ -8,9 +8,9 @@
 //! [`merge_paper`]). `--write-docs` on `bench` copies its JSON there, on `bench-paper` merges
 //! the run's cases in, and either renders the page again; `cargo xtask docs` renders it from
 //! the snapshots and `cargo xtask docs --check` (and the test `tests/tests/docs.rs`) fails when
-//! the page is not what they render. The rendering is a function of the JSON alone — the date, the commit and
-//! the machine come from its `"provenance"` ([`crate::provenance`]) — so the same snapshot
-//! always gives the same page.
+//! the page is not what they render. The rendering is a function of the JSON alone — the date,
+//! the commit and the machine come from its `"provenance"` ([`crate::provenance`]) — so the
+//! same snapshot always gives the same page.
 
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -47,23 +47,25 @@ fn fixed(x: f64, decimals: usize) -> String {
     }
 }
 
+/// A commit as the page shows it: its first 12 hex digits, without the `-dirty` mark.
+fn short_commit(c: &str) -> String {
+    c.trim_end_matches("-dirty").chars().take(12).collect()
+}
+
 /// The provenance of a JSON document (`"command"`, `"provenance"`) as one sentence.
 pub fn provenance_line(doc: &Value) -> String {
     let p = &doc["provenance"];
     let m = &p["machine"];
     let commit = match p["commit"].as_str() {
-        Some(c) => {
-            let dirty = c.ends_with("-dirty");
-            let hash: String = c.trim_end_matches("-dirty").chars().take(12).collect();
-            format!(
-                "commit {hash}{}",
-                if dirty {
-                    " with uncommitted changes"
-                } else {
-                    ""
-                }
-            )
-        }
+        Some(c) => format!(
+            "commit {}{}",
+            short_commit(c),
+            if c.ends_with("-dirty") {
+                " with uncommitted changes"
+            } else {
+                ""
+            }
+        ),
         None => "an unknown commit".into(),
     };
     let mut machine = vec![m["cpu"].as_str().unwrap_or("unknown processor").to_string()];
@@ -336,12 +338,7 @@ fn paper_overview(summary: &Value) -> String {
         );
         if measured {
             let p = &r["measured"]["provenance"];
-            let commit: String = p["commit"]
-                .as_str()
-                .unwrap_or("—")
-                .chars()
-                .take(12)
-                .collect();
+            let commit = p["commit"].as_str().map_or("—".into(), short_commit);
             let date = p["date"].as_str().unwrap_or("—");
             let _ = write!(s, " {commit}, {} |", date.split('T').next().unwrap_or(date));
         }
@@ -442,9 +439,24 @@ pub fn splice(page: &str, section: &str) -> Result<String, String> {
 
 /// A JSON file of the workspace at `root`.
 fn read_json(root: &Path, rel: &str) -> Result<Value, String> {
-    let path = root.join(rel);
-    let s = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    read_json_at(&root.join(rel))
+}
+
+/// The JSON file at `path`.
+fn read_json_at(path: &Path) -> Result<Value, String> {
+    let s = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     serde_json::from_str(&s).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Merge the cases of the `bench-paper` run's `summary.json` at `src` into the snapshot
+/// [`PAPER_JSON`] of the workspace at `root` ([`merge_paper`]) and render the page again.
+pub fn merge_into_snapshot(root: &Path, src: &Path) -> Result<(), String> {
+    let to = root.join(PAPER_JSON);
+    let merged = merge_paper(&read_json(root, PAPER_JSON)?, &read_json_at(src)?)
+        .map_err(|e| format!("{} into {}: {e}", src.display(), to.display()))?;
+    let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
+    std::fs::write(&to, text + "\n").map_err(|e| format!("{}: {e}", to.display()))?;
+    write(root).map(|_| ())
 }
 
 /// The page as it is and as the snapshots render it.

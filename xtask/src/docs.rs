@@ -1,9 +1,10 @@
 //! `cargo xtask docs [--check | --merge SUMMARY_JSON]`: render the generated section of
 //! `docs/benchmarks.md` from the committed benchmark snapshots, or only check that it is what
 //! they render ([`xtask::bench_page`]), or first merge the cases of a `bench-paper` run's
-//! `summary.json` into the paper snapshot (a run made elsewhere, e.g. in another worktree); and the `--write-docs` of `cargo xtask bench`, which replaces its
-//! snapshot by a fresh run's JSON, and of `bench-paper`, which merges the run's cases into its
-//! snapshot ([`xtask::bench_page::merge_paper`]), before rendering.
+//! `summary.json` into the paper snapshot (a run made elsewhere, e.g. in another worktree);
+//! and the `--write-docs` of `cargo xtask bench`, which replaces its snapshot by a fresh run's
+//! JSON, and of `bench-paper`, which merges the run's cases into its snapshot
+//! ([`xtask::bench_page::merge_paper`]), before rendering.
 
 use crate::root;
 use std::path::Path;
@@ -37,18 +38,9 @@ pub(crate) fn snapshot(src: &Path, rel: &str) -> Result<(), String> {
 }
 
 /// Merge the cases of a `bench-paper` run's `summary.json` `src` into the snapshot
-/// [`bench_page::PAPER_JSON`] ([`bench_page::merge_paper`]) and render the page again.
+/// [`bench_page::PAPER_JSON`] ([`bench_page::merge_into_snapshot`]) and render the page again.
 pub(crate) fn merge_paper_snapshot(src: &Path) -> Result<(), String> {
-    let read = |path: &Path| -> Result<serde_json::Value, String> {
-        let s = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        serde_json::from_str(&s).map_err(|e| format!("{}: {e}", path.display()))
-    };
-    let to = root().join(bench_page::PAPER_JSON);
-    let merged = bench_page::merge_paper(&read(&to)?, &read(src)?)
-        .map_err(|e| format!("{} into {}: {e}", src.display(), to.display()))?;
-    let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
-    std::fs::write(&to, text + "\n").map_err(|e| format!("{}: {e}", to.display()))?;
-    bench_page::write(&root())?;
+    bench_page::merge_into_snapshot(&root(), src)?;
     eprintln!(
         "{} and {}: written",
         bench_page::PAPER_JSON,
