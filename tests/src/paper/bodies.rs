@@ -389,6 +389,10 @@ pub struct MapMeasured {
     pub energy_ratio: f64,
 }
 
+/// A line of the map: the grid's cells across and the range, and each of its runs' κ,
+/// restitution and most shared cells.
+type MapLine = ((usize, f64), Vec<(f64, f64, f64)>);
+
 /// The map's stiffnesses (Pa): 0, a tenth of, equal to and ten times the scene's default 50.
 const MAP_STIFFNESS: [f64; 4] = [0.0, 5.0, 50.0, 500.0];
 
@@ -474,44 +478,28 @@ impl Case for ContactMap {
             1.0,
             "6",
         ));
-        // The map, one line per grid and range.
-        let mut lines: Vec<(usize, f64)> = Vec::new();
-        for (r, _) in &done.measured {
-            if !lines.contains(&(r.n, r.range)) {
-                lines.push((r.n, r.range));
+        // The map, one line per grid and range: each run's κ, restitution and shared cells.
+        let mut lines: Vec<MapLine> = Vec::new();
+        for ((r, m), rb) in done.measured.iter().zip(&reb) {
+            let point = (r.stiffness, rb.restitution, m.bodies.shared_cells);
+            match lines.iter_mut().find(|(key, _)| *key == (r.n, r.range)) {
+                Some((_, points)) => points.push(point),
+                None => lines.push(((r.n, r.range), vec![point])),
             }
         }
-        for &(n, range) in &lines {
-            let cells: Vec<String> = done
-                .measured
+        let mut series = Vec::new();
+        for ((n, range), points) in &lines {
+            let cells: Vec<String> = points
                 .iter()
-                .zip(&reb)
-                .filter(|((r, _), _)| r.n == n && r.range == range)
-                .map(|((r, m), rb)| {
-                    format!(
-                        "κ {} → {:.4} (shared cells {})",
-                        r.stiffness, rb.restitution, m.bodies.shared_cells
-                    )
-                })
+                .map(|(k, e, shared)| format!("κ {k} → {e:.4} (shared cells {shared})"))
                 .collect();
             h.notes.push(format!(
                 "{n}², range {range} (cells): restitution {}",
                 cells.join(", ")
             ));
+            let pts = points.iter().map(|&(k, e, _)| (k, e)).collect();
+            series.push((format!("{n}², range {range}"), pts));
         }
-        let series: Vec<_> = lines
-            .iter()
-            .map(|&(n, range)| {
-                let pts = done
-                    .measured
-                    .iter()
-                    .zip(&reb)
-                    .filter(|((r, _), _)| r.n == n && r.range == range)
-                    .map(|((r, _), rb)| (r.stiffness, rb.restitution))
-                    .collect();
-                (format!("{n}², range {range}"), pts)
-            })
-            .collect();
         h.figure(
             "restitution_map",
             ("Restitution over the contact stiffness κ", "κ (Pa)", "e"),
