@@ -56,13 +56,23 @@
 //! ```
 //!
 //! `φ̄_k` the two cells' mean and `ρ_face` the face density of the momentum equation
-//! ([`efsi_core::operators::face_density`]). On a uniform grid this sum of face forces over a
-//! pair is zero to round-off (summation by parts with the symmetric kernel), planar and
-//! three-dimensional; in axisymmetric geometry the cell volumes weight the axial sums and the
-//! pair's axial momentum is kept to the discretisation error. Each halo is evaluated on its
-//! body's window grown by the kernel's half-width, wrapped along periodic axes: the work and
-//! storage scale with the bodies' extent. The fractions are those the VOF stage published at
-//! the end of the last step ([`efsi_core::body_fractions`]).
+//! ([`efsi_core::operators::face_density`]). The stored energy is summed on the same faces,
+//!
+//! ```text
+//!     E_c = κ / d Σ_a Σ_faces φ̄_k ψ̄_l V_face   (d axes; each pair from both bodies, halved),
+//! ```
+//!
+//! `ψ̄_l` the two cells' mean: a face that pushes has `φ̄_k ≠ 0` and a halo on one side, so it
+//! stores energy. The cells' sum `Σ_c φ_k ψ_l V_c` would not: it is zero while the face between
+//! a body's last cell and the first cell of the other's halo already pushes, a push that no
+//! stored energy pays for, that the step limit below misses and that the energy guard flags.
+//!
+//! On a uniform grid the sum of face forces over a pair is zero to round-off (summation by parts
+//! with the symmetric kernel), planar and three-dimensional; in axisymmetric geometry the cell
+//! volumes weight the axial sums and the pair's axial momentum is kept to the discretisation error.
+//! Each halo is evaluated on its body's window grown by the kernel's half-width, wrapped along
+//! periodic axes: the work and storage scale with the bodies' extent. The fractions are those the
+//! VOF stage published at the end of the last step ([`efsi_core::body_fractions`]).
 //!
 //! **Step limit.** The force is explicit: while it acts (it stored energy in the last step), a
 //! step may not let it move the lightest body's material by more than a fraction of a cell,
@@ -556,28 +566,10 @@ impl ContactStage {
         }
         self.spare = spare;
         let h = grid.h();
-        // E_c: each pair once, and each body with the walls.
+        // The face forces on body k's faces, from every other body's halo and the walls', and
+        // E_c on the same faces (each pair's from both of its bodies, halved).
         let mut energy = 0.0;
         let mut near = std::mem::take(&mut self.near);
-        for (k, b) in all.bodies.iter().enumerate() {
-            let Some(support) = self.supports[k] else {
-                continue;
-            };
-            self.near_halos(&halos, support, k, &mut near);
-            for (at, f) in b.cells() {
-                if f == 0.0 {
-                    continue;
-                }
-                let mut psi: f64 = near
-                    .iter()
-                    .filter(|&&l| l > k)
-                    .map(|&l| halos[l].at(at))
-                    .sum();
-                psi += (0..self.dims).map(|a| self.wall_halo(a, at)).sum::<f64>();
-                energy += self.kappa * f * psi * grid.cell_volume(at[0]) * h[2];
-            }
-        }
-        // The face forces: on body k's faces, from every other body's halo and the walls'.
         let mut updates = std::mem::take(&mut self.updates);
         updates.clear();
         for (k, b) in all.bodies.iter().enumerate() {
@@ -586,17 +578,19 @@ impl ContactStage {
             };
             self.near_halos(&halos, support, k, &mut near);
             for a in 0..self.dims {
-                self.face_forces(b, &halos, &near, support, a, h[a], &mut updates);
+                energy += self.face_forces(b, &halos, &near, support, a, grid, &mut updates);
             }
         }
         self.halos = halos;
         self.near = near;
-        (energy, updates)
+        (self.kappa * energy / self.dims as f64 * h[2], updates)
     }
 
-    /// The forces on body `b`'s faces normal to axis `a` (cell size `h_a`) from the halos
-    /// `near` of `halos` and the walls', into `updates`: the faces from the support's first
-    /// cell to one past its last, x fastest.
+    /// The forces on body `b`'s faces normal to axis `a` from the halos `near` of `halos` and
+    /// the walls', into `updates`: the faces from the support's first cell to one past its
+    /// last, x fastest. Returns the faces' share of `E_c / κ` before the `1 / dims` (module
+    /// docs: `φ̄_k ψ̄` times the face's volume, half of it for another body's halo, all of it
+    /// for the walls').
     #[allow(clippy::too_many_arguments)]
     fn face_forces(
         &self,
@@ -605,9 +599,11 @@ impl ContactStage {
         near: &[usize],
         (lo, hi): ([isize; 3], [isize; 3]),
         a: usize,
-        h_a: f64,
+        grid: &Grid,
         updates: &mut Vec<(usize, [isize; 3], f64)>,
-    ) {
+    ) -> f64 {
+        let h_a = grid.h()[a];
+        let mut energy = 0.0;
         let (f_lo, f_hi) = self.faces[a];
         let mut end = hi;
         end[a] += 1;
@@ -622,15 +618,22 @@ impl ContactStage {
             if phi == 0.0 {
                 continue;
             }
-            let mut dpsi = 0.0;
+            let (mut dpsi, mut psi) = (0.0, 0.0);
             for &l in near {
-                dpsi += halos[l].at(c_w) - halos[l].at(b_w);
+                let (p1, p0) = (halos[l].at(c_w), halos[l].at(b_w));
+                dpsi += p1 - p0;
+                psi += 0.25 * (p1 + p0);
             }
-            dpsi += self.wall_halo(a, c_w) - self.wall_halo(a, b_w);
+            let (w1, w0) = (self.wall_halo(a, c_w), self.wall_halo(a, b_w));
+            dpsi += w1 - w0;
+            psi += 0.5 * (w1 + w0);
             if dpsi != 0.0 {
                 updates.push((a, c, -self.kappa * phi * dpsi / h_a));
             }
+            let volume = 0.5 * (grid.cell_volume(c_w[0]) + grid.cell_volume(b_w[0]));
+            energy += phi * psi * volume;
         }
+        energy
     }
 
     /// `E_c` into the state's [`ContactEnergy`].
@@ -895,6 +898,50 @@ mod tests {
                 assert!(
                     total.abs() <= 1e-14 * scale,
                     "{dims}-D axis {a}: {total:e} of {scale:e}"
+                );
+            }
+        }
+    }
+
+    /// Wherever the repulsion pushes, it has stored energy: two bodies (and a body and a wall)
+    /// swept from sharing cells to out of reach, planar and three-dimensional, never give a face
+    /// force with `E_c = 0` (the step limit and the energy guard both key on `E_c`). The
+    /// cells' overlap `Σ φ_k ψ_l` is zero one cell before the faces' forces vanish.
+    #[test]
+    fn a_force_always_comes_with_stored_energy() {
+        for dims in [2, 3] {
+            let n = [24, 10, if dims == 3 { 8 } else { 1 }];
+            let nz = if dims == 3 { 4 } else { 1 };
+            let g = grid(n, dims);
+            for walls in [false, true] {
+                let mut s = stage(n, dims, walls);
+                let mut reached = [false; 2];
+                let mut ahead = false;
+                for gap in 0..8 {
+                    let all = BodyFractions {
+                        bodies: vec![
+                            body("a", [2, 3, 2.min(n[2] - 1)], [5, 4, nz], 3),
+                            body("b", [7 + gap, 3, 2.min(n[2] - 1)], [5, 4, nz], 4),
+                        ],
+                    };
+                    s.find_supports(&all);
+                    let (e, updates) = s.forces(&g, &all);
+                    let pushing = updates.iter().any(|u| u.2 != 0.0);
+                    assert!(
+                        !pushing || e > 0.0,
+                        "{dims}-D, walls {walls}, gap {gap}: a force with E_c = {e}"
+                    );
+                    reached[usize::from(pushing)] = true;
+                    let cells: f64 = all.bodies[0]
+                        .cells()
+                        .map(|(at, f)| f * s.halos[1].at(at))
+                        .sum();
+                    ahead |= !walls && pushing && cells == 0.0;
+                }
+                assert_eq!(reached, [!walls, true], "{dims}-D, walls {walls}");
+                assert_eq!(
+                    ahead, !walls,
+                    "{dims}-D: the gap where the cells' overlap is 0"
                 );
             }
         }
