@@ -105,6 +105,15 @@
 //! no adhesion, and its stiffness is the contact's, not the bodies' (a stiff `κ` and a soft body
 //! deform the body; a soft `κ` lets bodies share a cell's worth of their halos). `SolidOverlap`
 //! (`max Σ_k φ_k`) shows whether it kept the bodies apart.
+//!
+//! The face force is the exact variation of `E_c` for a transport whose face fraction is `φ̄_k`
+//! (a central one); the VOF stage's PLIC transport moves a sharper interface. Over a body that
+//! slides or turns while in contact the two differ by a small tangential push that does work:
+//! a steady torque on a body held in contact (the elastic stage adds a smaller one). A disk on
+//! the floor with another resting on its shoulder keeps turning instead of coming to rest, and a
+//! pile of such bodies settles to a slow steady turning. Upwinding `φ_k` at the face reduces the
+//! torque but breaks the pair's momentum balance (`Σ f = 0` above); a transport-consistent face
+//! fraction that keeps the balance is the open fix.
 
 use efsi_core::body_fractions::{BodyFraction, BodyFractions};
 use efsi_core::operators::face_density;
