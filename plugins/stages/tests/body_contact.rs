@@ -168,80 +168,84 @@ fn bad_contact_settings_are_refused_by_name() {
     }
 }
 
+/// [`head_on`]'s two disks at rest, `gap` cells apart (h = 2/64), with the repulsion's
+/// `stiffness` and steps of at most `dt_max`.
+fn at_rest(stiffness: f64, gap: f64, dt_max: f64) -> String {
+    let h = 2.0 / 64.0;
+    let text = head_on(&format!("stiffness: {stiffness:?}"))
+        .replace(
+            "center: (1.3, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (-2.0, 0.0)",
+            &format!(
+                "center: ({}, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (0.0, 0.0)",
+                0.7 + 0.4 + gap * h
+            ),
+        )
+        .replace("velocity: (2.0, 0.0)", "velocity: (0.0, 0.0)")
+        .replace("cfl: 0.4)", &format!("cfl: 0.4, dt_max: {dt_max:?})"));
+    assert!(text.contains("velocity: (0.0, 0.0)),\n    ],"), "{text}");
+    text
+}
+
+/// The stored energy of a scene at its start, and its first step held to the repulsion's limit
+/// (at rest, nothing else limits the step below `dt_max` = 0.05).
+fn stored_and_limited(text: &str) -> f64 {
+    let sim = build(text).unwrap_or_else(|e| panic!("{e}"));
+    let stored = sim.state.resources.get::<ContactEnergy>().unwrap().energy;
+    assert!(stored > 0.0, "stored energy at the start {stored}");
+    let dt = sim.next_dt(0.5).unwrap();
+    assert!(dt < 0.02, "first step {dt}");
+    stored
+}
+
+/// The disks of a run of [`at_rest`] moving apart, the run's energy above its start at most
+/// `share` of the `stored` energy.
+fn pushed_apart(r: &Run, stored: f64, share: f64, what: &str) {
+    assert!(
+        r.rise <= share * stored,
+        "{what}: energy rose by {} (stored {stored})",
+        r.rise
+    );
+    assert!(
+        r.velocity[0] < 0.0 && r.velocity[1] > 0.0,
+        "{what}: {:?}",
+        r.velocity
+    );
+}
+
 /// Two disks at rest that start within each other's halo (a gap of half a cell): the stored
 /// energy is counted from the start, the first step is held to the repulsion's limit, and
 /// pushing them apart gains at most a small part of it (the energy guard, which counts the
 /// stored energy as supplied, lets the run through).
 #[test]
 fn bodies_starting_within_reach_store_energy_from_the_start_and_limit_the_first_step() {
-    let h = 2.0 / 64.0;
-    let text = head_on("stiffness: 50.0").replace(
-        "center: (1.3, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (-2.0, 0.0)",
-        &format!(
-            "center: ({}, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (0.0, 0.0)",
-            0.7 + 0.4 + 0.5 * h
-        ),
-    )
-    .replace("velocity: (2.0, 0.0)", "velocity: (0.0, 0.0)")
-    .replace("cfl: 0.4)", "cfl: 0.4, dt_max: 0.05)");
-    assert!(text.contains("velocity: (0.0, 0.0)),\n    ],"), "{text}");
-    let sim = build(&text).unwrap_or_else(|e| panic!("{e}"));
-    let stored = sim.state.resources.get::<ContactEnergy>().unwrap().energy;
-    assert!(stored > 0.0, "stored energy at the start {stored}");
-    // At rest, nothing else limits the step below `dt_max`; the repulsion does.
-    let dt = sim.next_dt(0.5).unwrap();
-    assert!(dt < 0.02, "first step {dt}");
+    let text = at_rest(50.0, 0.5, 0.05);
+    let stored = stored_and_limited(&text);
     let r = run_scene(&text, 0.2);
     // The explicit exchange of stored and kinetic energy is first order in Δt: a rise of a
     // small part of the stored energy, well inside the guard's (which allows the stored energy
     // itself).
-    assert!(
-        r.rise <= 1e-3 * stored,
-        "energy rose by {} (stored {stored})",
-        r.rise
-    );
-    assert!(
-        r.velocity[0] < 0.0 && r.velocity[1] > 0.0,
-        "{:?}",
-        r.velocity
-    );
+    pushed_apart(&r, stored, 1e-3, "dt_max 0.05");
     assert_eq!(r.shared, 0);
 }
 
 /// Two disks at rest a cell and a half apart, where the repulsion's face forces already act but
-/// no cell of one body lies in the other's halo (`Σ φ_k ψ_l = 0` over cells): the stored energy counts those faces
-/// from the start, so the push they give is paid for (the energy guard lets the run through at
-/// any step size) and the first step is held to the repulsion's limit.
+/// no cell of one body lies in the other's halo (`Σ φ_k ψ_l = 0` over cells): the stored energy
+/// counts those faces from the start, so the first step is held to the repulsion's limit and
+/// the push is paid for (the energy guard lets the run through at any step size).
 #[test]
 fn a_push_across_the_last_empty_cell_is_paid_for_by_stored_energy() {
-    let h = 2.0 / 64.0;
+    // The stored energy at the start does not depend on the step.
+    let stored = stored_and_limited(&at_rest(150.0, 1.5, 0.05));
     for dt_max in [1e-4, 0.05] {
-        let text = head_on("stiffness: 150.0")
-            .replace(
-                "center: (1.3, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (-2.0, 0.0)",
-                &format!(
-                    "center: ({}, 0.5), radius: 0.2), density: 20.0,\n         viscosity: 20.0, velocity: (0.0, 0.0)",
-                    0.7 + 0.4 + 1.5 * h
-                ),
-            )
-            .replace("velocity: (2.0, 0.0)", "velocity: (0.0, 0.0)")
-            .replace("cfl: 0.4)", &format!("cfl: 0.4, dt_max: {dt_max})"));
-        assert!(text.contains("velocity: (0.0, 0.0)),\n    ],"), "{text}");
-        let sim = build(&text).unwrap_or_else(|e| panic!("{e}"));
-        let stored = sim.state.resources.get::<ContactEnergy>().unwrap().energy;
-        let r = run_scene(&text, 0.05);
+        let text = at_rest(150.0, 1.5, dt_max);
         // The faces' energy and the transport's are not the same to O(h) at the first empty
         // cell: a few per cent of the stored energy may come back as kinetic, well inside the
         // guard's allowance (all of it).
-        assert!(
-            r.rise <= 5e-2 * stored,
-            "dt_max {dt_max}: energy rose by {} (stored {stored})",
-            r.rise
-        );
-        assert!(
-            r.velocity[0] < 0.0 && r.velocity[1] > 0.0,
-            "{:?}",
-            r.velocity
+        pushed_apart(
+            &run_scene(&text, 0.05),
+            stored,
+            5e-2,
+            &format!("dt_max {dt_max}"),
         );
     }
 }
