@@ -58,6 +58,8 @@ pub struct Bodies {
     pub shared_cells: f64,
     /// The scene's kinetic energy per sample.
     pub kinetic: Vec<f64>,
+    /// Per body, its spin per sample (rad/s), where the scene probes `SolidSpin`; else empty.
+    pub spin: Vec<Vec<f64>>,
 }
 
 /// The largest of a column over its samples.
@@ -109,6 +111,9 @@ pub fn read(run: &Run) -> Result<Bodies, String> {
     }
     for h in p.header().iter().filter(|h| h.ends_with(".shared_cells")) {
         b.shared_cells = b.shared_cells.max(most(&p, h)?);
+    }
+    if p.header().iter().any(|h| h.ends_with(".solid_spin")) {
+        b.spin = per("solid_spin")?;
     }
     b.t = t;
     b.names = names;
@@ -611,6 +616,7 @@ impl Case for TwentyDisks {
                 r.steps,
                 r.wall_seconds
             ));
+            h.notes.push(format!("{}: at the end, {}", r.label, end_motion(b)));
         }
         Ok(Verdict {
             title: "twenty soft disks of two materials settling in a closed box".into(),
@@ -619,6 +625,29 @@ impl Case for TwentyDisks {
             checks,
             recommendation: "the scene's grid (9 cells per radius)".into(),
         })
+    }
+}
+
+/// How the bodies move at the last sample: the fastest centroid and the fastest turning body
+/// (where the scene probes `SolidSpin`), which show whether what is left of the motion is the
+/// bodies' drift or their turning in place.
+fn end_motion(b: &Bodies) -> String {
+    let last = |q: &[f64]| q.last().copied().unwrap_or(f64::NAN);
+    let speed = (0..b.names.len())
+        .map(|k| last(&b.u[k]).hypot(last(&b.v[k])))
+        .fold(0.0, f64::max);
+    let turning = b
+        .spin
+        .iter()
+        .enumerate()
+        .map(|(k, w)| (last(w).abs(), k))
+        .fold((0.0, usize::MAX), |a, x| if x.0 > a.0 { x } else { a });
+    match b.names.get(turning.1) {
+        Some(name) => format!(
+            "fastest centroid {speed:.2e}; fastest turning {name} at {:.3} rad/s",
+            turning.0
+        ),
+        None => format!("fastest centroid {speed:.2e}"),
     }
 }
 
