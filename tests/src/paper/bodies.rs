@@ -616,7 +616,8 @@ impl Case for TwentyDisks {
                 r.steps,
                 r.wall_seconds
             ));
-            h.notes.push(format!("{}: at the end, {}", r.label, end_motion(b)));
+            h.notes
+                .push(format!("{}: at the end, {}", r.label, end_motion(b)));
         }
         Ok(Verdict {
             title: "twenty soft disks of two materials settling in a closed box".into(),
