@@ -639,8 +639,10 @@ impl ContactStage {
             if dpsi != 0.0 {
                 updates.push((a, c, -self.kappa * phi * dpsi / h_a));
             }
-            let volume = 0.5 * (grid.cell_volume(c_w[0]) + grid.cell_volume(b_w[0]));
-            energy += phi * psi * volume;
+            if psi != 0.0 {
+                let volume = 0.5 * (grid.cell_volume(c_w[0]) + grid.cell_volume(b_w[0]));
+                energy += phi * psi * volume;
+            }
         }
         energy
     }

@@ -60,6 +60,9 @@ pub struct Bodies {
     pub kinetic: Vec<f64>,
     /// Per body, its spin per sample (rad/s), where the scene probes `SolidSpin`; else empty.
     pub spin: Vec<Vec<f64>>,
+    /// Per body, its strain energy per sample, where the scene probes `ElasticEnergy`; else
+    /// empty.
+    pub strain: Vec<Vec<f64>>,
 }
 
 /// The largest of a column over its samples.
@@ -112,9 +115,13 @@ pub fn read(run: &Run) -> Result<Bodies, String> {
     for h in p.header().iter().filter(|h| h.ends_with(".shared_cells")) {
         b.shared_cells = b.shared_cells.max(most(&p, h)?);
     }
-    if p.header().iter().any(|h| h.ends_with(".solid_spin")) {
-        b.spin = per("solid_spin")?;
-    }
+    // Columns a scene may not probe: empty where it does not.
+    let optional = |q: &str| -> Result<Vec<Vec<f64>>, String> {
+        let probed = p.header().iter().any(|h| h.ends_with(&format!(".{q}")));
+        if probed { per(q) } else { Ok(Vec::new()) }
+    };
+    b.spin = optional("solid_spin")?;
+    b.strain = optional("elastic_energy")?;
     b.t = t;
     b.names = names;
     Ok(b)
@@ -445,13 +452,15 @@ impl Case for ContactMap {
 
     fn measure(&self, _: &MapRun, _: &Simulation, run: &mut Run) -> Result<MapMeasured, String> {
         let bodies = read(run)?;
-        let p = probes(&run.dir)?;
+        if bodies.strain.is_empty() {
+            return Err(format!(
+                "{}: the scene does not probe ElasticEnergy",
+                run.label
+            ));
+        }
         let mut energy = bodies.kinetic.clone();
-        for n in &bodies.names {
-            for (e, w) in energy
-                .iter_mut()
-                .zip(p.col(&format!("{n}.elastic_energy"))?)
-            {
+        for w in &bodies.strain {
+            for (e, w) in energy.iter_mut().zip(w) {
                 *e += w;
             }
         }
@@ -640,14 +649,13 @@ fn end_motion(b: &Bodies) -> String {
     let turning = b
         .spin
         .iter()
-        .enumerate()
-        .map(|(k, w)| (last(w).abs(), k))
-        .fold((0.0, usize::MAX), |a, x| if x.0 > a.0 { x } else { a });
-    match b.names.get(turning.1) {
-        Some(name) => format!(
-            "fastest centroid {speed:.2e}; fastest turning {name} at {:.3} rad/s",
-            turning.0
-        ),
+        .map(|w| last(w).abs())
+        .zip(&b.names)
+        .max_by(|x, y| x.0.total_cmp(&y.0));
+    match turning {
+        Some((w, name)) => {
+            format!("fastest centroid {speed:.2e}; fastest turning {name} at {w:.3} rad/s")
+        }
         None => format!("fastest centroid {speed:.2e}"),
     }
 }
