@@ -1,0 +1,343 @@
+//! The contact's frictionless projection: each pair's force along the contact normal, acting at
+//! the contact point (see the module docs of [`super`], "Frictionless").
+//!
+//! The face forces of a pair are summed per body into a [`PairLoad`] (net force, moment about
+//! the body's centroid, and the `|f|`-weighted position of the pushed faces). The pair's
+//! contact normal comes from the two bodies' own interface normals over the contact patch,
+//! [`patch_normal`]; the difference between the pair's loads and their normal, contact-point
+//! form is then put back on each body as a rigid load ([`RigidLoad`]): a uniform acceleration
+//! plus an angular one about the centroid, of the body's material, sized on the faces so that
+//! the applied net force and moment are exact.
+
+use efsi_core::Grid;
+use efsi_core::body_fractions::BodyFraction;
+
+/// `a × b`.
+pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    a.map(|x| x * s)
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// The centre of grid cell `c` (`z = 0` on a planar or axisymmetric grid).
+pub(super) fn centre(grid: &Grid, c: [isize; 3]) -> [f64; 3] {
+    [
+        grid.xc(c[0]),
+        grid.yc(c[1]),
+        if grid.is_3d() { grid.zc(c[2]) } else { 0.0 },
+    ]
+}
+
+/// The centre of the face normal to axis `a` on the low side of cell `c`.
+pub(super) fn face_centre(grid: &Grid, a: usize, c: [isize; 3]) -> [f64; 3] {
+    let mut x = centre(grid, c);
+    x[a] -= 0.5 * grid.h()[a];
+    x
+}
+
+/// What the faces of one body received from one other body's halo.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PairLoad {
+    /// The body pushed.
+    pub k: usize,
+    /// The body whose halo pushes.
+    pub l: usize,
+    /// `Σ f V` over the faces.
+    pub force: [f64; 3],
+    /// `Σ (x − x_k) × f V`, about the body's centroid `x_k`.
+    pub moment: [f64; 3],
+    /// `Σ |f| V`.
+    pub weight: f64,
+    /// `Σ |f| V (x − x_k)`.
+    pub at: [f64; 3],
+}
+
+impl PairLoad {
+    /// The force `f` along axis `a` on the face at `r` from the centroid, of volume `v`.
+    pub fn add(&mut self, r: [f64; 3], a: usize, f: f64, v: f64) {
+        let mut fv = [0.0; 3];
+        fv[a] = f * v;
+        self.force[a] += fv[a];
+        self.moment = add(self.moment, cross(r, fv));
+        self.weight += fv[a].abs();
+        self.at = add(self.at, scale(r, fv[a].abs()));
+    }
+}
+
+/// The weights of the Youngs normal's transverse stencil: `Π_{b≠a} (2 − |o_b|)`.
+fn youngs_weight(o: [isize; 3], a: usize, dims: usize) -> f64 {
+    (0..dims)
+        .filter(|&b| b != a)
+        .map(|b| (2 - o[b].abs()) as f64)
+        .product()
+}
+
+/// The Youngs gradient of `φ` at cell `c` (central differences, smoothed across by `1 2 1`),
+/// `phi` giving the fraction at a grid cell.
+fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], dims: usize) -> [f64; 3] {
+    let mut g = [0.0; 3];
+    for (a, ga) in g.iter_mut().enumerate().take(dims) {
+        let span = |b: usize| if b != a && b < dims { -1..=1 } else { 0..=0 };
+        for o2 in span(2) {
+            for o1 in span(1) {
+                for o0 in span(0) {
+                    let o = [o0, o1, o2];
+                    let w = youngs_weight(o, a, dims);
+                    let mut hi = [c[0] + o0, c[1] + o1, c[2] + o2];
+                    let mut lo = hi;
+                    hi[a] += 1;
+                    lo[a] -= 1;
+                    *ga += w * (phi(hi) - phi(lo));
+                }
+            }
+        }
+    }
+    g
+}
+
+/// The contact normal of bodies `k` (fractions `bk`) and `l` (`bl`), pointing from `k` to `l`:
+/// the mean of their unit interface normals (Youngs) over the patch where each body's material
+/// lies in the other's halo, weighted by `φ_k ψ_l` (and `φ_l ψ_k`). `None` where there is no
+/// patch. `halo_l`/`halo_k` give a halo at a grid cell, `wrap` wraps a cell along the periodic
+/// axes.
+pub(super) fn patch_normal(
+    bk: &BodyFraction,
+    bl: &BodyFraction,
+    halo_k: impl Fn([isize; 3]) -> f64,
+    halo_l: impl Fn([isize; 3]) -> f64,
+    wrap: impl Fn([isize; 3]) -> [isize; 3],
+    dims: usize,
+) -> Option<[f64; 3]> {
+    let mut n = [0.0; 3];
+    for (b, halo, sign) in [(bk, &halo_l as &dyn Fn(_) -> f64, -1.0), (bl, &halo_k, 1.0)] {
+        let phi = |c: [isize; 3]| b.at(wrap(c));
+        for (c, f) in b.cells() {
+            if f == 0.0 {
+                continue;
+            }
+            let psi = halo(wrap(c));
+            if psi == 0.0 {
+                continue;
+            }
+            // ∇φ points into the body: out of k (−) and into l (+) both point from k to l.
+            let g = youngs(&phi, c, dims);
+            let norm = dot(g, g).sqrt();
+            if norm > 0.0 {
+                n = add(n, scale(g, sign * f * psi / norm));
+            }
+        }
+    }
+    let norm = dot(n, n).sqrt();
+    (norm > 0.0).then(|| scale(n, 1.0 / norm))
+}
+
+/// The normal, contact-point form of one pair's loads: the changes of the net force and moment
+/// (about each body's centroid) that make `on_k` (body `k`'s load from `l`'s halo) and `on_l`
+/// act along the normal `n` at one contact point. Returns `(δF_k, δM_k, δF_l, δM_l)`.
+/// `image` takes a displacement from `k`'s frame to the nearest image (periodic axes).
+pub(super) fn to_normal(
+    on_k: &PairLoad,
+    on_l: &PairLoad,
+    centroids: (&[f64; 3], &[f64; 3]),
+    n: [f64; 3],
+    image: impl Fn([f64; 3]) -> [f64; 3],
+) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
+    let (xk, xl) = centroids;
+    // l's frame onto k's: l's nearest image beside k (periodic axes).
+    let shift = sub(add(*xk, image(sub(*xl, *xk))), *xl);
+    // The contact point, in k's frame: the pushed faces' |f|-weighted centre of both bodies.
+    let w = on_k.weight + on_l.weight;
+    if w == 0.0 {
+        return ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+    }
+    let c_in_k = scale(
+        add(
+            add(scale(*xk, on_k.weight), on_k.at),
+            add(scale(add(*xl, shift), on_l.weight), on_l.at),
+        ),
+        1.0 / w,
+    );
+    let c_in_l = sub(c_in_k, shift);
+    let fk = scale(n, dot(on_k.force, n));
+    let fl = scale(n, dot(on_l.force, n));
+    (
+        sub(fk, on_k.force),
+        sub(cross(sub(c_in_k, *xk), fk), on_k.moment),
+        sub(fl, on_l.force),
+        sub(cross(sub(c_in_l, *xl), fl), on_l.moment),
+    )
+}
+
+/// A rigid load on one body's material: force density `ρ_k φ̄_k (a + α × (x − x_k))` on its
+/// faces, `(a, α)` sized so that its net force and moment are given ones.
+pub(super) struct RigidLoad {
+    /// `a` (translation) then `α` (rotation), in the modes of [`RigidLoad::modes`].
+    s: [f64; 6],
+    dims: usize,
+}
+
+impl RigidLoad {
+    /// The modes: the `dims` translations, then the rotations (about z only in two dimensions).
+    fn modes(dims: usize) -> usize {
+        if dims == 3 { 6 } else { 3 }
+    }
+
+    /// Mode `m`'s acceleration at `r` from the centroid.
+    fn mode(m: usize, r: [f64; 3], dims: usize) -> [f64; 3] {
+        let mut e = [0.0; 3];
+        if m < dims {
+            e[m] = 1.0;
+            e
+        } else {
+            e[if dims == 3 { m - 3 } else { 2 }] = 1.0;
+            cross(e, r)
+        }
+    }
+
+    /// The net force and moment components a mode's load gives: forces along the `dims` axes,
+    /// then the moments (about z only in two dimensions).
+    fn equation(dims: usize, force: [f64; 3], moment: [f64; 3]) -> [f64; 6] {
+        let mut e = [0.0; 6];
+        e[..dims].copy_from_slice(&force[..dims]);
+        if dims == 3 {
+            e[3..6].copy_from_slice(&moment);
+        } else {
+            e[2] = moment[2];
+        }
+        e
+    }
+
+    /// The load whose net force is `force` and moment about the centroid `moment`, over the
+    /// faces `faces` (`(axis, r from the centroid, ρ_k φ̄_k V)` each); `None` where the faces
+    /// cannot carry it (a body too small to turn).
+    pub fn solve(
+        faces: impl Iterator<Item = (usize, [f64; 3], f64)> + Clone,
+        force: [f64; 3],
+        moment: [f64; 3],
+        dims: usize,
+    ) -> Option<Self> {
+        let n = Self::modes(dims);
+        // A[eq][mode]: the net force and moment of each mode's load, summed on the faces.
+        let mut a = [[0.0; 7]; 6];
+        for (axis, r, w) in faces {
+            for m in 0..n {
+                let g = Self::mode(m, r, dims)[axis] * w;
+                if g == 0.0 {
+                    continue;
+                }
+                let mut f = [0.0; 3];
+                f[axis] = g;
+                let e = Self::equation(dims, f, cross(r, f));
+                for (row, v) in a.iter_mut().zip(e).take(n) {
+                    row[m] += v;
+                }
+            }
+        }
+        for (row, v) in a.iter_mut().zip(Self::equation(dims, force, moment)) {
+            row[6] = v;
+        }
+        // Gaussian elimination with partial pivoting; a pivot below 1e-12 of the diagonal's
+        // largest is a mode the faces cannot carry.
+        let big = (0..n).map(|i| a[i][i].abs()).fold(0.0, f64::max);
+        if big == 0.0 {
+            return None;
+        }
+        for col in 0..n {
+            let p = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+            if a[p][col].abs() <= 1e-12 * big {
+                return None;
+            }
+            a.swap(col, p);
+            for row in col + 1..n {
+                let q = a[row][col] / a[col][col];
+                for j in col..7 {
+                    a[row][j] -= q * a[col][j];
+                }
+            }
+        }
+        let mut s = [0.0; 6];
+        for i in (0..n).rev() {
+            let rest: f64 = (i + 1..n).map(|j| a[i][j] * s[j]).sum();
+            s[i] = (a[i][6] - rest) / a[i][i];
+        }
+        Some(RigidLoad { s, dims })
+    }
+
+    /// The load's acceleration along `axis` at `r` from the centroid.
+    pub fn at(&self, axis: usize, r: [f64; 3]) -> f64 {
+        (0..Self::modes(self.dims))
+            .map(|m| self.s[m] * Self::mode(m, r, self.dims)[axis])
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rigid load sized on a ring of faces gives back the asked force and moment.
+    #[test]
+    fn a_rigid_load_carries_the_asked_force_and_moment() {
+        for dims in [2, 3] {
+            let faces: Vec<(usize, [f64; 3], f64)> = (0..200)
+                .map(|i| {
+                    let t = i as f64 * 0.37;
+                    let z = if dims == 3 { (t * 1.7).sin() } else { 0.0 };
+                    (
+                        i % dims,
+                        [t.cos() * 2.0, t.sin() * 1.5, z],
+                        1.0 + 0.3 * t.sin(),
+                    )
+                })
+                .collect();
+            let force = [0.3, -0.2, if dims == 3 { 0.1 } else { 0.0 }];
+            let moment = if dims == 3 {
+                [0.05, -0.4, 0.7]
+            } else {
+                [0.0, 0.0, 0.7]
+            };
+            let load = RigidLoad::solve(faces.iter().copied(), force, moment, dims).unwrap();
+            let (mut f, mut m) = ([0.0; 3], [0.0; 3]);
+            for &(a, r, w) in &faces {
+                let mut fv = [0.0; 3];
+                fv[a] = load.at(a, r) * w;
+                f = add(f, fv);
+                m = add(m, cross(r, fv));
+            }
+            for i in 0..3 {
+                assert!((f[i] - force[i]).abs() < 1e-12, "{dims}-D force {i}: {f:?}");
+                assert!(
+                    (m[i] - moment[i]).abs() < 1e-12,
+                    "{dims}-D moment {i}: {m:?}"
+                );
+            }
+        }
+    }
+
+    /// A single face cannot carry a moment: no load.
+    #[test]
+    fn a_body_too_small_to_turn_gets_no_load() {
+        let faces = [(0usize, [0.0; 3], 1.0), (1, [0.0; 3], 1.0)];
+        assert!(
+            RigidLoad::solve(faces.iter().copied(), [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 2).is_none()
+        );
+    }
+}
