@@ -158,6 +158,9 @@ fn bad_contact_settings_are_refused_by_name() {
         ("range: 0.0", "numerics.contact.range"),
         ("stiffness: -1.0", "numerics.contact.stiffness"),
         ("stiffness: 1e400", "numerics.contact"),
+        ("friction: -0.5", "numerics.contact.friction"),
+        ("friction: -1e-300", "numerics.contact.friction"),
+        ("friction: 1e400", "numerics.contact"),
         ("reach: 1.0", "reach"),
     ] {
         let e = match build(&head_on(set)) {
@@ -166,6 +169,28 @@ fn bad_contact_settings_are_refused_by_name() {
         };
         assert!(e.contains(what), "{set}: {e}");
     }
+    // Friction in axisymmetric geometry would do nothing: refused, naming it.
+    let axi = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/spheres_on_axis.ron"),
+    )
+    .unwrap();
+    let with = axi.replace(
+        "numerics: (projection: (tolerance: 1e-10)),",
+        "numerics: (projection: (tolerance: 1e-10), contact: (friction: 0.3)),",
+    );
+    assert_ne!(with, axi);
+    let e = build(&with)
+        .err()
+        .expect("friction in an axisymmetric scene: not refused");
+    assert!(
+        e.contains("numerics.contact.friction") && e.contains("axisymmetric"),
+        "{e}"
+    );
+    build(&axi.replace(
+        "numerics: (projection: (tolerance: 1e-10)),",
+        "numerics: (projection: (tolerance: 1e-10), contact: (friction: 0.0)),",
+    ))
+    .unwrap();
 }
 
 /// [`head_on`]'s two disks at rest, `gap` cells apart (h = 2/64), with the repulsion's
@@ -248,4 +273,37 @@ fn a_push_across_the_last_empty_cell_is_paid_for_by_stored_energy() {
             &format!("dt_max {dt_max}"),
         );
     }
+}
+
+/// Two disks of [`head_on`] meeting off-centre (their centres 0.18 apart across the line of
+/// approach), without and with Coulomb's friction: the pair gains no energy either way and
+/// never overlaps, and friction changes how they pass each other.
+#[test]
+fn a_glancing_contact_gains_no_energy_with_or_without_friction() {
+    let glancing = |mu: f64| {
+        head_on(&format!("friction: {mu:?}"))
+            .replace("center: (0.7, 0.5)", "center: (0.7, 0.41)")
+            .replace("center: (1.3, 0.5)", "center: (1.3, 0.59)")
+    };
+    let free = run_scene(&glancing(0.0), 0.5);
+    let rough = run_scene(&glancing(1.0), 0.5);
+    for (r, what) in [(&free, "frictionless"), (&rough, "μ = 1")] {
+        assert!(r.rise <= 0.0, "{what}: energy rose {:e}", r.rise);
+        assert!(r.overlap <= 1.0 + 1e-12, "{what}: max Σφ {}", r.overlap);
+        assert!(r.stored > 0.0, "{what}: no contact");
+        let [left, right] = r.velocity;
+        assert!(
+            (left + right).abs() <= 1e-9,
+            "{what}: x momentum {:e}",
+            left + right
+        );
+        assert!(left > 0.1, "{what}: not passing each other ({left})");
+    }
+    // Measured: the left disk leaves at 0.4625 along x, 0.5050 with friction.
+    assert!(
+        rough.velocity[0] > 1.05 * free.velocity[0],
+        "friction did not act: {:?} vs {:?}",
+        rough.velocity,
+        free.velocity
+    );
 }

@@ -5,7 +5,7 @@
 //! the body's centroid, and the `|f|`-weighted position of the pushed faces). The pair's
 //! contact normal comes from the two bodies' own interface normals over the contact patch,
 //! [`patch_normal`]; the difference between the pair's loads and their normal, contact-point
-//! form is then put back on each body as a rigid load ([`RigidLoad`]): a uniform acceleration
+//! form is then put back on each body as a rigid load ([`Rigid::load`]): a uniform acceleration
 //! plus an angular one about the centroid, of the body's material, sized on the faces so that
 //! the applied net force and moment are exact.
 
@@ -149,24 +149,36 @@ pub(super) fn patch_normal(
     (norm > 0.0).then(|| scale(n, 1.0 / norm))
 }
 
-/// The normal, contact-point form of one pair's loads: the changes of the net force and moment
-/// (about each body's centroid) that make `on_k` (body `k`'s load from `l`'s halo) and `on_l`
-/// act along the normal `n` at one contact point. Returns `(δF_k, δM_k, δF_l, δM_l)`.
-/// `image` takes a displacement from `k`'s frame to the nearest image (periodic axes).
+/// One pair's contact in its normal, contact-point form (from [`to_normal`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Contact {
+    /// The contact point from body `k`'s centroid, and from `l`'s (each in its own frame).
+    pub r: [[f64; 3]; 2],
+    /// The normal force on `k` and on `l`.
+    pub force: [[f64; 3]; 2],
+    /// The changes of net force on `k` and on `l` that the projection makes.
+    pub change: [[f64; 3]; 2],
+    /// The changes of moment about each body's centroid.
+    pub moment_change: [[f64; 3]; 2],
+}
+
+/// The normal, contact-point form of one pair's loads: `on_k` (body `k`'s load from `l`'s
+/// halo) and `on_l` made to act along the normal `n` at one contact point, the centre of both
+/// bodies' pushed faces weighted by `|f|`. `None` where neither body is pushed. `image` takes a
+/// displacement from `k`'s frame to the nearest image (periodic axes).
 pub(super) fn to_normal(
     on_k: &PairLoad,
     on_l: &PairLoad,
     centroids: (&[f64; 3], &[f64; 3]),
     n: [f64; 3],
     image: impl Fn([f64; 3]) -> [f64; 3],
-) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
+) -> Option<Contact> {
     let (xk, xl) = centroids;
     // l's frame onto k's: l's nearest image beside k (periodic axes).
     let shift = sub(add(*xk, image(sub(*xl, *xk))), *xl);
-    // The contact point, in k's frame: the pushed faces' |f|-weighted centre of both bodies.
     let w = on_k.weight + on_l.weight;
     if w == 0.0 {
-        return ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+        return None;
     }
     let c_in_k = scale(
         add(
@@ -175,87 +187,129 @@ pub(super) fn to_normal(
         ),
         1.0 / w,
     );
-    let c_in_l = sub(c_in_k, shift);
-    let fk = scale(n, dot(on_k.force, n));
-    let fl = scale(n, dot(on_l.force, n));
-    (
-        sub(fk, on_k.force),
-        sub(cross(sub(c_in_k, *xk), fk), on_k.moment),
-        sub(fl, on_l.force),
-        sub(cross(sub(c_in_l, *xl), fl), on_l.moment),
-    )
+    let r = [sub(c_in_k, *xk), sub(sub(c_in_k, shift), *xl)];
+    let force = [on_k, on_l].map(|p| scale(n, dot(p.force, n)));
+    Some(Contact {
+        r,
+        force,
+        change: [sub(force[0], on_k.force), sub(force[1], on_l.force)],
+        moment_change: [
+            sub(cross(r[0], force[0]), on_k.moment),
+            sub(cross(r[1], force[1]), on_l.moment),
+        ],
+    })
 }
 
-/// A rigid load on one body's material: force density `ρ_k φ̄_k (a + α × (x − x_k))` on its
-/// faces, `(a, α)` sized so that its net force and moment are given ones.
-pub(super) struct RigidLoad {
-    /// `a` (translation) then `α` (rotation), in the modes of [`RigidLoad::modes`].
+/// The friction force on body `k` of a pair in contact (`−` it on `l`): Coulomb's, at most
+/// `μ |F_n|`, against the bodies' relative sliding at the contact point, and never more than
+/// the force that stops the sliding within the step `dt` (the bodies then stick). `bodies`
+/// gives each body's rigid modes and rigid motion; `n` is the contact normal.
+pub(super) fn friction(
+    contact: &Contact,
+    n: [f64; 3],
+    mu: f64,
+    dt: f64,
+    bodies: [(&Rigid, &Motion); 2],
+) -> Option<[f64; 3]> {
+    let [(rk, mk), (rl, ml)] = bodies;
+    let [ck, cl] = contact.r;
+    let slide = sub(ml.vector(cl), mk.vector(ck));
+    let slide = sub(slide, scale(n, dot(slide, n)));
+    let speed = dot(slide, slide).sqrt();
+    let normal = dot(contact.force[0], contact.force[0]).sqrt();
+    if speed == 0.0 || normal == 0.0 || mu == 0.0 {
+        return None;
+    }
+    let t = scale(slide, 1.0 / speed);
+    // How fast a unit force along t on k (and −t on l) at the contact point changes the sliding.
+    let on_k = rk.load(t, cross(ck, t))?.vector(ck);
+    let on_l = rl
+        .load(scale(t, -1.0), cross(cl, scale(t, -1.0)))?
+        .vector(cl);
+    let compliance = dot(sub(on_k, on_l), t);
+    if compliance <= 0.0 {
+        return None;
+    }
+    Some(scale(t, (mu * normal).min(speed / (dt * compliance))))
+}
+
+/// One body's rigid modes on its faces: the `dims` translations, then the rotations about the
+/// centroid (about z only in two dimensions), and their Gram matrix over the faces weighted by
+/// `ρ_k φ̄_k V` (each face carrying its own axis' component). The same matrix maps a rigid
+/// load's `(a, α)` to its net force and moment, and a rigid motion's `(v, ω)` to its momentum
+/// and angular momentum.
+pub(super) struct Rigid {
+    /// The Gram matrix (the first `modes` rows and columns).
+    g: [[f64; 6]; 6],
+    dims: usize,
+}
+
+/// A rigid field `a + α × r` (an acceleration, a velocity) in the modes of [`Rigid`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Motion {
     s: [f64; 6],
     dims: usize,
 }
 
-impl RigidLoad {
-    /// The modes: the `dims` translations, then the rotations (about z only in two dimensions).
-    fn modes(dims: usize) -> usize {
-        if dims == 3 { 6 } else { 3 }
-    }
+/// The number of rigid modes: the `dims` translations, then the rotations.
+fn modes(dims: usize) -> usize {
+    if dims == 3 { 6 } else { 3 }
+}
 
-    /// Mode `m`'s acceleration at `r` from the centroid.
-    fn mode(m: usize, r: [f64; 3], dims: usize) -> [f64; 3] {
-        let mut e = [0.0; 3];
-        if m < dims {
-            e[m] = 1.0;
-            e
-        } else {
-            e[if dims == 3 { m - 3 } else { 2 }] = 1.0;
-            cross(e, r)
-        }
-    }
-
-    /// The net force and moment components a mode's load gives: forces along the `dims` axes,
-    /// then the moments (about z only in two dimensions).
-    fn equation(dims: usize, force: [f64; 3], moment: [f64; 3]) -> [f64; 6] {
-        let mut e = [0.0; 6];
-        e[..dims].copy_from_slice(&force[..dims]);
-        if dims == 3 {
-            e[3..6].copy_from_slice(&moment);
-        } else {
-            e[2] = moment[2];
-        }
+/// Mode `m`'s field at `r` from the centroid.
+fn mode(m: usize, r: [f64; 3], dims: usize) -> [f64; 3] {
+    let mut e = [0.0; 3];
+    if m < dims {
+        e[m] = 1.0;
         e
+    } else {
+        e[if dims == 3 { m - 3 } else { 2 }] = 1.0;
+        cross(e, r)
     }
+}
 
-    /// The load whose net force is `force` and moment about the centroid `moment`, over the
-    /// faces `faces` (`(axis, r from the centroid, ρ_k φ̄_k V)` each); `None` where the faces
-    /// cannot carry it (a body too small to turn).
-    pub fn solve(
-        faces: impl Iterator<Item = (usize, [f64; 3], f64)> + Clone,
-        force: [f64; 3],
-        moment: [f64; 3],
-        dims: usize,
-    ) -> Option<Self> {
-        let n = Self::modes(dims);
-        // A[eq][mode]: the net force and moment of each mode's load, summed on the faces.
-        let mut a = [[0.0; 7]; 6];
+/// A force and moment as the modes' right-hand side: the forces along the `dims` axes, then
+/// the moments (about z only in two dimensions).
+fn load(dims: usize, force: [f64; 3], moment: [f64; 3]) -> [f64; 6] {
+    let mut e = [0.0; 6];
+    e[..dims].copy_from_slice(&force[..dims]);
+    if dims == 3 {
+        e[3..6].copy_from_slice(&moment);
+    } else {
+        e[2] = moment[2];
+    }
+    e
+}
+
+impl Rigid {
+    /// The modes on the faces `faces` (`(axis, r from the centroid, ρ_k φ̄_k V)` each).
+    pub fn new(faces: impl Iterator<Item = (usize, [f64; 3], f64)>, dims: usize) -> Self {
+        let n = modes(dims);
+        let mut g = [[0.0; 6]; 6];
         for (axis, r, w) in faces {
-            for m in 0..n {
-                let g = Self::mode(m, r, dims)[axis] * w;
-                if g == 0.0 {
-                    continue;
-                }
-                let mut f = [0.0; 3];
-                f[axis] = g;
-                let e = Self::equation(dims, f, cross(r, f));
-                for (row, v) in a.iter_mut().zip(e).take(n) {
-                    row[m] += v;
+            let m: [f64; 6] =
+                std::array::from_fn(|i| if i < n { mode(i, r, dims)[axis] } else { 0.0 });
+            for i in 0..n {
+                if m[i] != 0.0 {
+                    for j in 0..n {
+                        g[i][j] += w * m[i] * m[j];
+                    }
                 }
             }
         }
-        for (row, v) in a.iter_mut().zip(Self::equation(dims, force, moment)) {
-            row[6] = v;
+        Rigid { g, dims }
+    }
+
+    /// `G s = rhs` by Gaussian elimination with partial pivoting; `None` where a pivot falls
+    /// below 1e-12 of the diagonal's largest (a mode the faces cannot carry: a body too small
+    /// to turn).
+    fn solve(&self, rhs: [f64; 6]) -> Option<Motion> {
+        let n = modes(self.dims);
+        let mut a = [[0.0; 7]; 6];
+        for i in 0..n {
+            a[i][..n].copy_from_slice(&self.g[i][..n]);
+            a[i][6] = rhs[i];
         }
-        // Gaussian elimination with partial pivoting; a pivot below 1e-12 of the diagonal's
-        // largest is a mode the faces cannot carry.
         let big = (0..n).map(|i| a[i][i].abs()).fold(0.0, f64::max);
         if big == 0.0 {
             return None;
@@ -278,14 +332,44 @@ impl RigidLoad {
             let rest: f64 = (i + 1..n).map(|j| a[i][j] * s[j]).sum();
             s[i] = (a[i][6] - rest) / a[i][i];
         }
-        Some(RigidLoad { s, dims })
+        Some(Motion { s, dims: self.dims })
     }
 
-    /// The load's acceleration along `axis` at `r` from the centroid.
+    /// The rigid load (an acceleration of the body's material) whose net force is `force` and
+    /// moment about the centroid `moment`, summed on the faces.
+    pub fn load(&self, force: [f64; 3], moment: [f64; 3]) -> Option<Motion> {
+        self.solve(load(self.dims, force, moment))
+    }
+
+    /// The rigid motion of the body: the least-squares fit of `v + ω × r` to its faces'
+    /// velocities, `faces` giving `(axis, r, ρ_k φ̄_k V, u_axis)` (the same faces as
+    /// [`Rigid::new`]'s).
+    pub fn motion(
+        &self,
+        faces: impl Iterator<Item = (usize, [f64; 3], f64, f64)>,
+    ) -> Option<Motion> {
+        let n = modes(self.dims);
+        let mut b = [0.0; 6];
+        for (axis, r, w, u) in faces {
+            for (m, bm) in b.iter_mut().enumerate().take(n) {
+                *bm += w * u * mode(m, r, self.dims)[axis];
+            }
+        }
+        self.solve(b)
+    }
+}
+
+impl Motion {
+    /// The field along `axis` at `r` from the centroid.
     pub fn at(&self, axis: usize, r: [f64; 3]) -> f64 {
-        (0..Self::modes(self.dims))
-            .map(|m| self.s[m] * Self::mode(m, r, self.dims)[axis])
+        (0..modes(self.dims))
+            .map(|m| self.s[m] * mode(m, r, self.dims)[axis])
             .sum()
+    }
+
+    /// The field at `r` from the centroid.
+    pub fn vector(&self, r: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|a| if a < self.dims { self.at(a, r) } else { 0.0 })
     }
 }
 
@@ -314,7 +398,9 @@ mod tests {
             } else {
                 [0.0, 0.0, 0.7]
             };
-            let load = RigidLoad::solve(faces.iter().copied(), force, moment, dims).unwrap();
+            let load = Rigid::new(faces.iter().copied(), dims)
+                .load(force, moment)
+                .unwrap();
             let (mut f, mut m) = ([0.0; 3], [0.0; 3]);
             for &(a, r, w) in &faces {
                 let mut fv = [0.0; 3];
@@ -337,7 +423,9 @@ mod tests {
     fn a_body_too_small_to_turn_gets_no_load() {
         let faces = [(0usize, [0.0; 3], 1.0), (1, [0.0; 3], 1.0)];
         assert!(
-            RigidLoad::solve(faces.iter().copied(), [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 2).is_none()
+            Rigid::new(faces.iter().copied(), 2)
+                .load([1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+                .is_none()
         );
     }
 }

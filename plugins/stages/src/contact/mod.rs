@@ -100,6 +100,23 @@
 //! in axisymmetric geometry a body's rigid motion is along the axis only: neither is projected.
 //! The projection is not a potential force: the stored energy `E_c` stays that of the faces.
 //!
+//! **Friction.** With `friction` `μ > 0` a pair in contact also feels Coulomb's friction at the
+//! contact point: a force on `k` (and its opposite on `l`) along the bodies' relative sliding
+//! `s_t`, the tangential part of `(v_l + ω_l × (x_c − x_l)) − (v_k + ω_k × (x_c − x_k))`,
+//! `(v, ω)` each body's rigid motion (the least-squares fit to its faces' velocities, on the
+//! same weights as the rigid loads), of size
+//!
+//! ```text
+//!     min(μ |F_n|, |s_t| / (Δt C)),     C = t · (a_k(t) − a_l(−t)),
+//! ```
+//!
+//! `F_n` the pair's normal force and `C` how fast a unit force along `t = s_t / |s_t|` at the
+//! contact point changes the sliding (the bodies' rigid loads' accelerations there): below
+//! Coulomb's bound the force stops the sliding within the step and the bodies stick; it never
+//! reverses it, so friction only takes energy. It acts between bodies (not between a body and
+//! a wall), in planar and three-dimensional scenes (an axisymmetric scene that sets it is
+//! refused), and it is put on each body as a rigid load, like the projection's change.
+//!
 //! **Step limit.** The force is explicit: while it acts (it stored energy in the last step), a
 //! step may not let it move the lightest body's material by more than a fraction of a cell,
 //! `Δt ≤ CFL · 2 / (C + √(C² + 4 a/h))` with the largest acceleration `a = κ K(0) / (h ρ_min)`
@@ -122,6 +139,7 @@
 //!   cells beyond its support ([`crate::vof`]).
 //! - `walls` (default `false`): repel bodies from the walls too. Off, a body meets a wall through
 //!   the resolved film only (as a single body always does).
+//! - `friction` `μ` (default 0): Coulomb's friction between bodies in contact (see below).
 //!
 //! The stage runs in scenes of several bodies, and in a scene of one body with `walls: true`.
 //!
@@ -153,7 +171,7 @@ use efsi_core::{
     BoundarySet, Field, FieldId, Grid, Phase, Scene, Stage, StageError, StagePlugin, StageStats,
     State, StepContext,
 };
-use frictionless::{PairLoad, RigidLoad};
+use frictionless::{Motion, PairLoad, Rigid};
 use serde::{Deserialize, Serialize};
 
 /// The largest `range`: a body's window keeps two empty cells beyond its support.
@@ -175,6 +193,9 @@ pub struct ContactOptions {
     /// Whether the walls repel the bodies too (default `false`).
     #[serde(default)]
     pub walls: bool,
+    /// Coulomb's friction coefficient between bodies in contact (default 0: frictionless).
+    #[serde(default)]
+    pub friction: f64,
 }
 
 fn one() -> f64 {
@@ -187,6 +208,7 @@ impl Default for ContactOptions {
             stiffness: None,
             range: 1.0,
             walls: false,
+            friction: 0.0,
         }
     }
 }
@@ -194,7 +216,7 @@ impl Default for ContactOptions {
 impl StageOptions for ContactOptions {
     const SECTION: &'static str = "contact";
 
-    fn validate(&self, _scene: &Scene) -> Result<(), (&'static str, String)> {
+    fn validate(&self, scene: &Scene) -> Result<(), (&'static str, String)> {
         if let Some(k) = self.stiffness
             && !(k.is_finite() && k >= 0.0)
         {
@@ -204,6 +226,23 @@ impl StageOptions for ContactOptions {
                     "must be a finite number ≥ 0 (Pa), got {}",
                     efsi_core::scene::num(k)
                 ),
+            ));
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err((
+                "friction",
+                format!(
+                    "must be a finite number ≥ 0 (Coulomb's coefficient), got {}",
+                    efsi_core::scene::num(self.friction)
+                ),
+            ));
+        }
+        if self.friction > 0.0 && scene.geometry == efsi_core::Geometry::Axisymmetric {
+            return Err((
+                "friction",
+                "has no effect in axisymmetric geometry (a body's rigid motion is along the axis \
+                 only): leave it 0"
+                    .into(),
             ));
         }
         if !(self.range > 0.0 && self.range <= MAX_RANGE) {
@@ -341,6 +380,7 @@ impl StagePlugin for Contact {
             rho_min,
             densities,
             frictionless: !grid.is_axisymmetric(),
+            friction: o.friction,
             n: grid.n(),
             dims: grid.dims(),
             faces: std::array::from_fn(|a| {
@@ -360,6 +400,7 @@ impl StagePlugin for Contact {
             centroids: Vec::new(),
             pairs: Vec::new(),
             changes: Vec::new(),
+            rigid: Vec::new(),
         }))
     }
 }
@@ -470,6 +511,8 @@ struct ContactStage {
     densities: Vec<f64>,
     /// Whether pairs' forces are made frictionless (module docs; not in axisymmetric geometry).
     frictionless: bool,
+    /// Coulomb's coefficient between bodies (`friction`).
+    friction: f64,
     n: [usize; 3],
     dims: usize,
     /// The unknown faces along each axis (first, one past the last).
@@ -493,6 +536,16 @@ struct ContactStage {
     pairs: Vec<PairLoad>,
     /// Each body's change of net force and moment from the frictionless projection (reused).
     changes: Vec<([f64; 3], [f64; 3])>,
+    /// Each body's rigid modes and, with friction, its rigid motion, where a pair needs them
+    /// (reused).
+    rigid: Vec<Option<(Rigid, Option<Motion>)>>,
+}
+
+/// The velocity a step's friction sees (the predicted velocity the stage acts on) and the step.
+#[derive(Clone, Copy)]
+struct Flow<'a> {
+    velocity: [Option<&'a Field>; 3],
+    dt: f64,
 }
 
 /// A box of cells: its first and last cell.
@@ -606,7 +659,12 @@ impl ContactStage {
     /// `E_c` and the face forces `(axis, face, f_a)` of the bodies' fractions `all` (module
     /// docs), their supports found ([`Self::find_supports`]); the caller gives the forces'
     /// vector back to `self.updates` for the next step.
-    fn forces(&mut self, grid: &Grid, all: &BodyFractions) -> (f64, Vec<(usize, [isize; 3], f64)>) {
+    fn forces(
+        &mut self,
+        grid: &Grid,
+        all: &BodyFractions,
+        flow: Option<Flow>,
+    ) -> (f64, Vec<(usize, [isize; 3], f64)>) {
         let mut halos = std::mem::take(&mut self.halos);
         halos.resize_with(all.bodies.len(), Halo::default);
         let mut spare = std::mem::take(&mut self.spare);
@@ -659,7 +717,7 @@ impl ContactStage {
             }
         }
         if self.frictionless {
-            self.project(grid, all, &halos, &pairs, &mut updates);
+            self.project(grid, all, (&halos, &pairs), flow, &mut updates);
         }
         self.halos = halos;
         self.near = near;
@@ -668,18 +726,23 @@ impl ContactStage {
     }
 
     /// The frictionless projection (module docs): each pair's loads `pairs` made normal and
-    /// acting at one contact point, the change put on each body as a rigid load, into `updates`.
+    /// acting at one contact point, with Coulomb's friction where `friction > 0` and the step's
+    /// `flow` is given, the change put on each body as a rigid load, into `updates`.
     fn project(
         &mut self,
         grid: &Grid,
         all: &BodyFractions,
-        halos: &[Halo],
-        pairs: &[PairLoad],
+        (halos, pairs): (&[Halo], &[PairLoad]),
+        flow: Option<Flow>,
         updates: &mut Vec<(usize, [isize; 3], f64)>,
     ) {
         let mut changes = std::mem::take(&mut self.changes);
+        let mut rigid = std::mem::take(&mut self.rigid);
         changes.clear();
         changes.resize(all.bodies.len(), ([0.0; 3], [0.0; 3]));
+        rigid.clear();
+        rigid.resize_with(all.bodies.len(), || None);
+        let flow = flow.filter(|_| self.friction > 0.0);
         let (dims, n, h, periodic) = (self.dims, self.n, grid.h(), self.periodic);
         let image = |d: [f64; 3]| -> [f64; 3] {
             std::array::from_fn(|a| {
@@ -690,6 +753,11 @@ impl ContactStage {
                     d[a]
                 }
             })
+        };
+        let mut add = |body: usize, f: [f64; 3], m: [f64; 3]| {
+            let (cf, cm) = &mut changes[body];
+            *cf = std::array::from_fn(|a| cf[a] + f[a]);
+            *cm = std::array::from_fn(|a| cm[a] + m[a]);
         };
         for on_k in pairs.iter().filter(|p| p.k < p.l) {
             let (k, l) = (on_k.k, on_k.l);
@@ -710,36 +778,52 @@ impl ContactStage {
             ) else {
                 continue;
             };
-            let (fk, mk, fl, ml) = frictionless::to_normal(
-                on_k,
-                &on_l,
-                (&self.centroids[k], &self.centroids[l]),
-                normal,
-                image,
-            );
-            for (body, f, m) in [(k, fk, mk), (l, fl, ml)] {
-                let (cf, cm) = &mut changes[body];
-                *cf = std::array::from_fn(|a| cf[a] + f[a]);
-                *cm = std::array::from_fn(|a| cm[a] + m[a]);
+            let centroids = (&self.centroids[k], &self.centroids[l]);
+            let Some(contact) = frictionless::to_normal(on_k, &on_l, centroids, normal, image)
+            else {
+                continue;
+            };
+            for (i, body) in [k, l].into_iter().enumerate() {
+                add(body, contact.change[i], contact.moment_change[i]);
+            }
+            let Some(flow) = flow else {
+                continue;
+            };
+            for body in [k, l] {
+                if rigid[body].is_none() {
+                    rigid[body] = Some(self.rigid_of(grid, &all.bodies[body], body, Some(flow)));
+                }
+            }
+            let (Some((rk, Some(mk))), Some((rl, Some(ml)))) = (&rigid[k], &rigid[l]) else {
+                continue;
+            };
+            let bodies = [(rk, mk), (rl, ml)];
+            if let Some(f) =
+                frictionless::friction(&contact, normal, self.friction, flow.dt, bodies)
+            {
+                let [ck, cl] = contact.r;
+                let g = f.map(|x| -x);
+                add(k, f, frictionless::cross(ck, f));
+                add(l, g, frictionless::cross(cl, g));
             }
         }
         for (k, (force, moment)) in changes.iter().enumerate() {
             if force.iter().chain(moment).all(|&x| x == 0.0) {
                 continue;
             }
+            if rigid[k].is_none() {
+                rigid[k] = Some(self.rigid_of(grid, &all.bodies[k], k, None));
+            }
+            let Some((modes, _)) = &rigid[k] else {
+                continue;
+            };
+            let Some(load) = modes.load(*force, *moment) else {
+                continue;
+            };
             let Some(support) = self.supports[k] else {
                 continue;
             };
             let (b, rho, x) = (&all.bodies[k], self.densities[k], self.centroids[k]);
-            let faces = (0..dims).flat_map(|a| {
-                self.faces_of(grid, b, support, a).map(move |(c, phi, v)| {
-                    let r = frictionless::face_centre(grid, a, c);
-                    (a, std::array::from_fn(|i| r[i] - x[i]), rho * phi * v)
-                })
-            });
-            let Some(load) = RigidLoad::solve(faces.clone(), *force, *moment, dims) else {
-                continue;
-            };
             for a in 0..dims {
                 for (c, phi, _) in self.faces_of(grid, b, support, a) {
                     let r = frictionless::face_centre(grid, a, c);
@@ -749,6 +833,35 @@ impl ContactStage {
             }
         }
         self.changes = changes;
+        self.rigid = rigid;
+    }
+
+    /// Body `k`'s rigid modes on its faces and, given the step's `flow`, its rigid motion.
+    fn rigid_of(
+        &self,
+        grid: &Grid,
+        b: &BodyFraction,
+        k: usize,
+        flow: Option<Flow>,
+    ) -> (Rigid, Option<Motion>) {
+        let (rho, x) = (self.densities[k], self.centroids[k]);
+        let faces = |a: usize| {
+            self.supports[k].into_iter().flat_map(move |support| {
+                self.faces_of(grid, b, support, a).map(move |(c, phi, v)| {
+                    let r = frictionless::face_centre(grid, a, c);
+                    (a, c, std::array::from_fn(|i| r[i] - x[i]), rho * phi * v)
+                })
+            })
+        };
+        let all = || (0..self.dims).flat_map(faces);
+        let modes = Rigid::new(all().map(|(a, _, r, w)| (a, r, w)), self.dims);
+        let motion = flow.and_then(|flow| {
+            modes.motion(all().map(|(a, c, r, w)| {
+                let u = flow.velocity[a].map_or(0.0, |field| field[c]);
+                (a, r, w, u)
+            }))
+        });
+        (modes, motion)
     }
 
     /// Body `b`'s faces normal to axis `a` where it has material: the unknown faces from its
@@ -914,7 +1027,7 @@ impl Stage for ContactStage {
         {
             self.find_supports(all);
             if self.in_reach() {
-                self.energy = self.forces(grid, all).0;
+                self.energy = self.forces(grid, all, None).0;
             }
         }
         self.publish(state);
@@ -976,7 +1089,11 @@ impl Stage for ContactStage {
                 message: "the bodies' fractions are not set: the VOF stage publishes them".into(),
             });
         }
-        let (energy, updates) = self.forces(ctx.grid, all);
+        let flow = Flow {
+            velocity: [Some(&state.u), Some(&state.v), state.w.as_ref()],
+            dt: ctx.dt,
+        };
+        let (energy, updates) = self.forces(ctx.grid, all, Some(flow));
         let State {
             u,
             v,
@@ -1019,6 +1136,7 @@ mod tests {
             rho_min: 1.0,
             densities: vec![1.0; 2],
             frictionless: true,
+            friction: 0.0,
             n,
             dims,
             faces: std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) }),
@@ -1031,6 +1149,7 @@ mod tests {
             centroids: Vec::new(),
             pairs: Vec::new(),
             changes: Vec::new(),
+            rigid: Vec::new(),
         }
     }
 
@@ -1088,7 +1207,7 @@ mod tests {
                 ],
             };
             s.find_supports(&all);
-            let (energy, updates) = s.forces(&g, &all);
+            let (energy, updates) = s.forces(&g, &all, None);
             assert!(energy > 0.0);
             let mut sum = [0.0; 3];
             let mut scale = 0.0;
@@ -1128,7 +1247,7 @@ mod tests {
                         ],
                     };
                     s.find_supports(&all);
-                    let (e, updates) = s.forces(&g, &all);
+                    let (e, updates) = s.forces(&g, &all, None);
                     let pushing = updates.iter().any(|u| u.2 != 0.0);
                     assert!(
                         !pushing || e > 0.0,
@@ -1191,7 +1310,7 @@ mod tests {
             };
             let mut s = stage(n, 2, false);
             s.find_supports(&all);
-            let (e, updates) = s.forces(&g, &all);
+            let (e, updates) = s.forces(&g, &all, None);
             assert!(e > 0.0, "gap {gap}: no contact");
             // The whole: the pair's net force and moment about the origin, from the faces.
             let (mut total, mut total_moment, mut size) = ([0.0; 2], 0.0, 0.0);
@@ -1240,6 +1359,172 @@ mod tests {
         }
     }
 
+    /// A ball's fractions on cells of size 1: centre `c`, radius `r`, sampled 8³ per cell.
+    fn ball(name: &str, c: [f64; 3], r: f64) -> BodyFraction {
+        let lo = c.map(|c| (c - r - 3.0) as usize);
+        let n = [(2.0 * r) as usize + 7; 3];
+        let s = 8;
+        let values = (0..n[0] * n[1] * n[2]).map(|i| {
+            let at = [i % n[0], (i / n[0]) % n[1], i / (n[0] * n[1])];
+            let mut inside = 0;
+            for p in 0..s * s * s {
+                let q = [p % s, (p / s) % s, p / (s * s)];
+                let d: f64 = (0..3)
+                    .map(|a| {
+                        let x = (lo[a] + at[a]) as f64 + (q[a] as f64 + 0.5) / s as f64 - c[a];
+                        x * x
+                    })
+                    .sum();
+                inside += usize::from(d < r * r);
+            }
+            inside as f64 / (s * s * s) as f64
+        });
+        let mut b = BodyFraction::named(name);
+        b.set(lo, n, values);
+        b
+    }
+
+    /// [`Self::an_oblique_contact_pushes_along_the_line_of_centres_without_turning`] in 3-D:
+    /// two balls whose line of centres is oblique to all three axes.
+    #[test]
+    fn an_oblique_contact_of_balls_pushes_along_the_line_of_centres_without_turning() {
+        let n = [32, 28, 28];
+        let g = grid(n, 3);
+        let r = 6.0;
+        let dir = {
+            let d = [0.62_f64, 0.55, 0.43];
+            let l = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            d.map(|x| x / l)
+        };
+        for gap in [0.4, 0.9] {
+            let a = [9.37, 8.81, 9.13];
+            let b: [f64; 3] = std::array::from_fn(|i| a[i] + (2.0 * r + gap) * dir[i]);
+            let all = BodyFractions {
+                bodies: vec![ball("a", a, r), ball("b", b, r)],
+            };
+            let mut s = stage(n, 3, false);
+            s.find_supports(&all);
+            let (e, updates) = s.forces(&g, &all, None);
+            assert!(e > 0.0, "gap {gap}: no contact");
+            let (mut total, mut moment, mut size) = ([0.0; 3], [0.0; 3], 0.0);
+            for &(axis, c, force) in &updates {
+                let x = frictionless::face_centre(&g, axis, c);
+                let mut f = [0.0; 3];
+                f[axis] = force;
+                total[axis] += force;
+                size += force.abs();
+                let m = frictionless::cross(x, f);
+                moment = std::array::from_fn(|i| moment[i] + m[i]);
+            }
+            assert!(total.iter().all(|t| t.abs() <= 1e-13 * size), "{total:?}");
+            assert!(
+                moment.iter().all(|m| m.abs() <= 1e-13 * size * 32.0),
+                "{moment:?}"
+            );
+            for p in &s.pairs {
+                let (df, dm) = s.changes[p.k];
+                let sign = if p.k == 0 { -1.0 } else { 1.0 };
+                let f: [f64; 3] = std::array::from_fn(|i| p.force[i] + df[i]);
+                let along: f64 = sign * (0..3).map(|i| f[i] * dir[i]).sum::<f64>();
+                let across: f64 = (0..3)
+                    .map(|i| (f[i] - sign * along * dir[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(along > 0.0, "gap {gap}: body {} pulled", p.k);
+                assert!(
+                    across <= 0.015 * along,
+                    "gap {gap}: body {} pushed {:.2}° off the line of centres",
+                    p.k,
+                    across.atan2(along).to_degrees()
+                );
+                let m: f64 = (0..3)
+                    .map(|i| (p.moment[i] + dm[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                // Before the projection: 1.3–1.9° and 0.021–0.031 |F| R.
+                assert!(
+                    m <= 0.015 * along * r,
+                    "gap {gap}: body {} turned, {m:e}",
+                    p.k
+                );
+            }
+        }
+    }
+
+    /// Two disks in contact along x, the left one sliding along +y past the right one at rest:
+    /// friction pulls the left one back and the right one along, `μ |F_n|` while that does not
+    /// stop the sliding within the step and the sticking force beyond, and keeps the pair's
+    /// momentum and angular momentum.
+    #[test]
+    fn friction_opposes_sliding_up_to_coulombs_bound_and_sticks_beyond() {
+        let n = [48, 32, 1];
+        let g = grid(n, 2);
+        let (a, b) = ([14.37, 15.81], [14.37 + 18.6, 15.81]);
+        let all = BodyFractions {
+            bodies: vec![disk("a", a, 9.0), disk("b", b, 9.0)],
+        };
+        let mut v = Field::zeros(&g);
+        for j in 0..n[1] as isize {
+            for i in 0..24 {
+                v[[i, j, 0]] = 1.0;
+            }
+        }
+        let u = Field::zeros(&g);
+        let dt = 1e-3;
+        let flow = Flow {
+            velocity: [Some(&u), Some(&v), None],
+            dt,
+        };
+        // The friction: the change over the frictionless projection's.
+        let run = |mu: f64| {
+            let mut s = stage(n, 2, false);
+            s.friction = mu;
+            s.find_supports(&all);
+            let (_, updates) = s.forces(&g, &all, Some(flow));
+            let (mut total, mut moment, mut size) = ([0.0; 2], 0.0, 0.0);
+            for &(axis, c, f) in &updates {
+                let x = frictionless::face_centre(&g, axis, c);
+                total[axis] += f;
+                size += f.abs();
+                moment += if axis == 0 { -x[1] * f } else { x[0] * f };
+            }
+            assert!(
+                total.iter().all(|t| t.abs() <= 1e-13 * size),
+                "μ {mu}: {total:?}"
+            );
+            assert!(moment.abs() <= 1e-13 * size * 48.0, "μ {mu}: {moment:e}");
+            let normal = s.pairs[0].force[0] + s.changes[0].0[0];
+            (s.changes.clone(), normal.abs())
+        };
+        let (none, normal) = run(0.0);
+        assert!(normal > 0.0);
+        let friction = |mu: f64| {
+            let (c, _) = run(mu);
+            [0, 1].map(|k| c[k].0[1] - none[k].0[1])
+        };
+        let [on_a, on_b] = friction(0.1);
+        assert!(on_a < 0.0 && on_b > 0.0, "{on_a:e}, {on_b:e}");
+        assert!(
+            (on_a + 0.1 * normal).abs() <= 1e-9 * normal,
+            "{on_a:e} vs {:e}",
+            0.1 * normal
+        );
+        assert!((on_a + on_b).abs() <= 1e-12 * normal);
+        // A large μ: the force that stops the sliding (1 between the rigid motions) in one
+        // step, below μ |F_n| and the same for any larger μ.
+        let [stick, _] = friction(1e6);
+        assert!(stick < 0.0 && -stick < 1e6 * normal, "{stick:e}");
+        // Two rigid disks of mass M = π R² (ρ = 1), turned about their centres by a force at
+        // r = 9.3 from each: the sliding changes by 2 (1/M + r²/I) dt per unit force.
+        let (m, r) = (std::f64::consts::PI * 81.0, 9.3);
+        let stops = 1.0 / (dt * 2.0 * (1.0 / m + r * r / (0.5 * m * 81.0)));
+        assert!(
+            (-stick / stops - 1.0).abs() < 0.01,
+            "{stick:e} vs {stops:e}"
+        );
+        assert_eq!(friction(1e7)[0], stick);
+    }
+
     /// The potential repels: moving two bodies apart lowers the stored energy, to zero beyond
     /// the range; a wall's halo pushes a body beside it away from the wall.
     #[test]
@@ -1254,7 +1539,7 @@ mod tests {
                 bodies: vec![at(3), body("b", [8 + gap, 2, 0], [5, 5, 1], 8)],
             };
             s.find_supports(&all);
-            let (e, _) = s.forces(&g, &all);
+            let (e, _) = s.forces(&g, &all, None);
             assert!(e < prev || e == 0.0, "gap {gap}: {e} after {prev}");
             prev = e;
         }
@@ -1264,7 +1549,7 @@ mod tests {
             bodies: vec![body("a", [0, 3, 0], [3, 3, 1], 3)],
         };
         w.find_supports(&all);
-        let (e, updates) = w.forces(&g, &all);
+        let (e, updates) = w.forces(&g, &all, None);
         assert!(e > 0.0);
         let fx: f64 = updates.iter().filter(|u| u.0 == 0).map(|u| u.2).sum();
         assert!(fx > 0.0, "the x_min wall pushes the body along +x: {fx}");
