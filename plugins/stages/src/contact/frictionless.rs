@@ -90,9 +90,9 @@ fn youngs_weight(o: [isize; 3], a: usize, dims: usize) -> f64 {
         .product()
 }
 
-/// The Youngs gradient of `φ` at cell `c` (central differences, smoothed across by `1 2 1`),
-/// `phi` giving the fraction at a grid cell.
-fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], dims: usize) -> [f64; 3] {
+/// The Youngs gradient of `φ` at cell `c` (central differences, smoothed across by `1 2 1`,
+/// up to a common factor), `phi` giving the fraction at a grid cell and `h` the cells' sides.
+fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], h: [f64; 3], dims: usize) -> [f64; 3] {
     let mut g = [0.0; 3];
     for (a, ga) in g.iter_mut().enumerate().take(dims) {
         let span = |b: usize| if b != a && b < dims { -1..=1 } else { 0..=0 };
@@ -105,7 +105,7 @@ fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], dims: usize) -> [f64;
                     let mut lo = hi;
                     hi[a] += 1;
                     lo[a] -= 1;
-                    *ga += w * (phi(hi) - phi(lo));
+                    *ga += w * (phi(hi) - phi(lo)) / h[a];
                 }
             }
         }
@@ -117,13 +117,13 @@ fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], dims: usize) -> [f64;
 /// the mean of their unit interface normals (Youngs) over the patch where each body's material
 /// lies in the other's halo, weighted by `φ_k ψ_l` (and `φ_l ψ_k`). `None` where there is no
 /// patch. `halo_l`/`halo_k` give a halo at a grid cell, `wrap` wraps a cell along the periodic
-/// axes.
+/// axes; `h` is the cells' sides.
 pub(super) fn patch_normal(
-    bk: &BodyFraction,
-    bl: &BodyFraction,
+    (bk, bl): (&BodyFraction, &BodyFraction),
     halo_k: impl Fn([isize; 3]) -> f64,
     halo_l: impl Fn([isize; 3]) -> f64,
     wrap: impl Fn([isize; 3]) -> [isize; 3],
+    h: [f64; 3],
     dims: usize,
 ) -> Option<[f64; 3]> {
     let mut n = [0.0; 3];
@@ -138,7 +138,7 @@ pub(super) fn patch_normal(
                 continue;
             }
             // ∇φ points into the body: out of k (−) and into l (+) both point from k to l.
-            let g = youngs(&phi, c, dims);
+            let g = youngs(&phi, c, h, dims);
             let norm = dot(g, g).sqrt();
             if norm > 0.0 {
                 n = add(n, scale(g, sign * f * psi / norm));
