@@ -358,7 +358,6 @@ impl StagePlugin for Contact {
             .ok_or_else(|| "the scene has no bodies".to_string())?;
         let kappa = stiffness(o, scene, options);
         let densities: Vec<f64> = bodies.list.iter().map(|b| b.solid.density).collect();
-        let rho_min = densities.iter().copied().fold(f64::INFINITY, f64::min);
         let mut walls = [[false; 2]; 3];
         let mut periodic = [false; 3];
         for (a, (w, p)) in walls.iter_mut().zip(&mut periodic).enumerate() {
@@ -375,36 +374,20 @@ impl StagePlugin for Contact {
                 *p = matches!(b, Boundary::Periodic);
             }
         }
-        Ok(Box::new(ContactStage {
-            kappa,
-            kernel: Kernel::new(o.range),
-            walls,
-            periodic,
-            rho_min,
-            densities,
-            frictionless: !grid.is_axisymmetric(),
-            friction: o.friction,
-            n: grid.n(),
-            dims: grid.dims(),
-            faces: std::array::from_fn(|a| {
-                if a < grid.dims() {
-                    let r = bc.normal_faces(a, grid.n()[a]);
-                    (r.lo, r.hi)
-                } else {
-                    (0, 0)
-                }
-            }),
-            halos: Vec::new(),
-            spare: Vec::new(),
-            supports: Vec::new(),
-            near: Vec::new(),
-            energy: 0.0,
-            updates: Vec::new(),
-            centroids: Vec::new(),
-            pairs: Vec::new(),
-            changes: Vec::new(),
-            rigid: Vec::new(),
-        }))
+        let faces = std::array::from_fn(|a| {
+            if a < grid.dims() {
+                let r = bc.normal_faces(a, grid.n()[a]);
+                (r.lo, r.hi)
+            } else {
+                (0, 0)
+            }
+        });
+        let mut stage = ContactStage::new(kappa, Kernel::new(o.range), densities, faces, grid);
+        stage.walls = walls;
+        stage.periodic = periodic;
+        stage.frictionless = !grid.is_axisymmetric();
+        stage.friction = o.friction;
+        Ok(Box::new(stage))
     }
 }
 
@@ -570,6 +553,41 @@ fn support(b: &BodyFraction) -> Option<Bounds> {
 }
 
 impl ContactStage {
+    /// A stage of stiffness `kappa` and `kernel` for bodies of `densities` on `grid`, whose
+    /// unknown faces along each axis are `faces`: no repelling wall, no periodic side,
+    /// frictionless pairs without friction (the caller sets these), its buffers empty.
+    fn new(
+        kappa: f64,
+        kernel: Kernel,
+        densities: Vec<f64>,
+        faces: [(isize, isize); 3],
+        grid: &Grid,
+    ) -> Self {
+        ContactStage {
+            kappa,
+            kernel,
+            walls: [[false; 2]; 3],
+            periodic: [false; 3],
+            rho_min: densities.iter().copied().fold(f64::INFINITY, f64::min),
+            densities,
+            frictionless: true,
+            friction: 0.0,
+            n: grid.n(),
+            dims: grid.dims(),
+            faces,
+            halos: Vec::new(),
+            spare: Vec::new(),
+            supports: Vec::new(),
+            near: Vec::new(),
+            energy: 0.0,
+            updates: Vec::new(),
+            centroids: Vec::new(),
+            pairs: Vec::new(),
+            changes: Vec::new(),
+            rigid: Vec::new(),
+        }
+    }
+
     /// `at` wrapped along the periodic axes.
     fn wrap(&self, mut at: [isize; 3]) -> [isize; 3] {
         for (a, x) in at.iter_mut().enumerate().take(self.dims) {
@@ -1131,29 +1149,10 @@ mod tests {
 
     /// A stage on `n` cells of size 1 (no periodic side), walls as given.
     fn stage(n: [usize; 3], dims: usize, walls: bool) -> ContactStage {
-        ContactStage {
-            kappa: 3.0,
-            kernel: Kernel::new(1.5),
-            walls: std::array::from_fn(|a| [walls && a < dims; 2]),
-            periodic: [false; 3],
-            rho_min: 1.0,
-            densities: vec![1.0; 2],
-            frictionless: true,
-            friction: 0.0,
-            n,
-            dims,
-            faces: std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) }),
-            halos: Vec::new(),
-            spare: Vec::new(),
-            supports: Vec::new(),
-            near: Vec::new(),
-            energy: 0.0,
-            updates: Vec::new(),
-            centroids: Vec::new(),
-            pairs: Vec::new(),
-            changes: Vec::new(),
-            rigid: Vec::new(),
-        }
+        let faces = std::array::from_fn(|a| if a < dims { (1, n[a] as isize) } else { (0, 0) });
+        let mut s = ContactStage::new(3.0, Kernel::new(1.5), vec![1.0; 2], faces, &grid(n, dims));
+        s.walls = std::array::from_fn(|a| [walls && a < dims; 2]);
+        s
     }
 
     /// A body of pseudo-random fractions on the box `lo`, `n`.
