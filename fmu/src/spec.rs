@@ -326,12 +326,21 @@ const VR_OUTPUTS: u32 = 2000;
 pub const DEFAULT_MAX_SOLVER_STEPS: i32 = 10_000;
 
 impl Spec {
-    /// A spec from the command line's flags, checked against the scene at `path`: every
+    /// A spec from the command line's flags, checked against the scene at `path` (which must be
+    /// one a simulation accepts: its ranges and every stage's options): every
     /// parameter path exists (its start value read from the scene), every input is one the
     /// scene can take, every output a probe column of the scene, every range names one of them.
     pub fn from_args(path: &Path, args: &[String]) -> Result<Spec, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let scene = Scene::from_str_at(&text, path).map_err(|e| e.to_string())?;
+        let mut scene = Scene::from_str_at(&text, path).map_err(|e| e.to_string())?;
+        // The scene as a simulation checks it (its ranges, then every stage's options), so a
+        // scene the FMU could not set up is refused here, not at the importer's initialisation.
+        scene
+            .validate()
+            .map_err(|(field, message)| format!("{}: {field}: {message}", path.display()))?;
+        scene
+            .check_options(path, &efsi_stages::builtin())
+            .map_err(|e| e.to_string())?;
         let ([parameters, inputs, outputs], ranges) = parse_flags(args)?;
         let mut spec = Spec {
             name: scene.name.clone(),
@@ -814,6 +823,48 @@ mod tests {
         other.outputs.pop();
         assert_ne!(other.token(), spec.token());
         assert_eq!(Spec::from_ron(&spec.to_ron()).unwrap(), spec);
+    }
+
+    /// A scene a simulation would refuse is refused when packaged, naming the setting: a stage's
+    /// option out of range (the contact's friction, ten orders smaller too) and a range of the
+    /// scene itself, not at the importer's initialisation.
+    #[test]
+    fn a_scene_a_simulation_refuses_is_refused_when_packaged() {
+        let dir = std::env::temp_dir().join(format!("efsi-fmu-refuse-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let base = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../cases/two_soft_disks.ron"),
+        )
+        .unwrap();
+        let numerics = "numerics: (projection: (tolerance: 1e-13), elastic: (tolerance: 1e-12)),";
+        assert!(base.contains(numerics));
+        let with = |mu: &str| {
+            format!(
+                "numerics: (projection: (tolerance: 1e-13), elastic: (tolerance: 1e-12), \
+                 contact: (friction: {mu})),"
+            )
+        };
+        for (edit, what) in [
+            (
+                base.replace(numerics, &with("-0.5")),
+                "numerics.contact.friction",
+            ),
+            (
+                base.replace(numerics, &with("-1e-11")),
+                "numerics.contact.friction",
+            ),
+            (base.replace("cfl: 0.4", "cfl: -0.4"), "time.cfl"),
+        ] {
+            assert_ne!(edit, base);
+            let path = dir.join("scene.ron");
+            std::fs::write(&path, &edit).unwrap();
+            let e = Spec::from_args(&path, &[]).unwrap_err();
+            assert!(e.contains(what), "{what}: {e}");
+        }
+        let path = dir.join("scene.ron");
+        std::fs::write(&path, &base).unwrap();
+        Spec::from_args(&path, &[]).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A scene of several bodies (`cases/two_drops.ron`): its outputs are the probe columns
