@@ -82,35 +82,37 @@ impl PairLoad {
     }
 }
 
-/// The weights of the Youngs normal's transverse stencil: `Π_{b≠a} (2 − |o_b|)`.
-fn youngs_weight(o: [isize; 3], a: usize, dims: usize) -> f64 {
-    (0..dims)
-        .filter(|&b| b != a)
-        .map(|b| (2 - o[b].abs()) as f64)
-        .product()
-}
-
-/// The Youngs gradient of `φ` at cell `c` (central differences, smoothed across by `1 2 1`,
-/// up to a common factor), `phi` giving the fraction at a grid cell and `h` the cells' sides.
-fn youngs(phi: &impl Fn([isize; 3]) -> f64, c: [isize; 3], h: [f64; 3], dims: usize) -> [f64; 3] {
-    let mut g = [0.0; 3];
-    for (a, ga) in g.iter_mut().enumerate().take(dims) {
-        let span = |b: usize| if b != a && b < dims { -1..=1 } else { 0..=0 };
-        for o2 in span(2) {
-            for o1 in span(1) {
-                for o0 in span(0) {
-                    let o = [o0, o1, o2];
-                    let w = youngs_weight(o, a, dims);
-                    let mut hi = [c[0] + o0, c[1] + o1, c[2] + o2];
-                    let mut lo = hi;
-                    hi[a] += 1;
-                    lo[a] -= 1;
-                    *ga += w * (phi(hi) - phi(lo)) / h[a];
-                }
-            }
+/// The unit interface normal of `φ` at cell `c`, pointing into the body: the VOF stage's Youngs
+/// normal ([`crate::vof::plic::youngs_normal`], [`crate::vof::plic3d::youngs_normal`]) of the
+/// 3×3(×3) block around `c`, `phi` giving the fraction at a grid cell and `h` the cells' sides.
+/// `None` for a block without gradient (which has no normal).
+fn interface_normal(
+    phi: &impl Fn([isize; 3]) -> f64,
+    c: [isize; 3],
+    h: [f64; 3],
+    dims: usize,
+) -> Option<[f64; 3]> {
+    let at = |a: isize, b: isize, z: isize| phi([c[0] + a - 1, c[1] + b - 1, c[2] + z - 1]);
+    let out = if dims == 3 {
+        let block: crate::vof::plic3d::Block = std::array::from_fn(|z| {
+            std::array::from_fn(|b| std::array::from_fn(|a| at(a as isize, b as isize, z as isize)))
+        });
+        let flat = block.iter().flatten().flatten();
+        if flat.clone().all(|&v| v == block[0][0][0]) {
+            return None;
         }
-    }
-    g
+        crate::vof::plic3d::youngs_normal(&block, h)
+    } else {
+        let block: [[f64; 3]; 3] =
+            std::array::from_fn(|b| std::array::from_fn(|a| at(a as isize, b as isize, 1)));
+        if block.iter().flatten().all(|&v| v == block[0][0]) {
+            return None;
+        }
+        let (nx, ny) = crate::vof::plic::youngs_normal(&block, h[0], h[1]);
+        [nx, ny, 0.0]
+    };
+    let norm = dot(out, out).sqrt();
+    (norm > 0.0).then(|| scale(out, -1.0 / norm))
 }
 
 /// The contact normal of bodies `k` (fractions `bk`) and `l` (`bl`), pointing from `k` to `l`:
@@ -137,11 +139,9 @@ pub(super) fn patch_normal(
             if psi == 0.0 {
                 continue;
             }
-            // ∇φ points into the body: out of k (−) and into l (+) both point from k to l.
-            let g = youngs(&phi, c, h, dims);
-            let norm = dot(g, g).sqrt();
-            if norm > 0.0 {
-                n = add(n, scale(g, sign * f * psi / norm));
+            // Into the body: out of k (−) and into l (+) both point from k to l.
+            if let Some(m) = interface_normal(&phi, c, h, dims) {
+                n = add(n, scale(m, sign * f * psi));
             }
         }
     }

@@ -694,16 +694,20 @@ impl ContactStage {
         }
         self.spare = spare;
         let h = grid.h();
+        // The bodies' centroids, which only the frictionless projection uses.
         self.centroids.clear();
-        self.centroids.extend(all.bodies.iter().map(|b| {
-            let (mut m, mut x) = (0.0, [0.0; 3]);
-            for (c, f) in b.cells() {
-                let v = f * grid.cell_volume(c[0]);
-                m += v;
-                x = std::array::from_fn(|a| x[a] + v * frictionless::centre(grid, c)[a]);
-            }
-            if m > 0.0 { x.map(|x| x / m) } else { x }
-        }));
+        if self.frictionless {
+            self.centroids.extend(all.bodies.iter().map(|b| {
+                let (mut m, mut x) = (0.0, [0.0; 3]);
+                for (c, f) in b.cells().filter(|&(_, f)| f != 0.0) {
+                    let v = f * grid.cell_volume(c[0]);
+                    let at = frictionless::centre(grid, c);
+                    m += v;
+                    x = std::array::from_fn(|a| x[a] + v * at[a]);
+                }
+                if m > 0.0 { x.map(|x| x / m) } else { x }
+            }));
+        }
         // The face forces on body k's faces, from every other body's halo and the walls', and
         // E_c on the same faces (each pair's from both of its bodies, halved).
         let mut energy = 0.0;
@@ -1271,25 +1275,43 @@ mod tests {
         }
     }
 
-    /// A disk's fractions on cells of sides `h` from the origin: centre `c`, radius `r`,
-    /// sampled 32 × 32 per cell.
-    fn disk(name: &str, c: [f64; 2], r: f64, h: [f64; 2]) -> BodyFraction {
-        let lo: [usize; 2] = std::array::from_fn(|a| ((c[a] - r) / h[a]) as usize - 3);
-        let n: [usize; 2] = std::array::from_fn(|a| (2.0 * r / h[a]) as usize + 7);
-        let s = 32;
-        let values = (0..n[0] * n[1]).map(|i| {
-            let (x0, y0) = ((lo[0] + i % n[0]) as f64, (lo[1] + i / n[0]) as f64);
-            let mut inside = 0;
-            for p in 0..s * s {
-                let x = (x0 + ((p % s) as f64 + 0.5) / s as f64) * h[0] - c[0];
-                let y = (y0 + ((p / s) as f64 + 0.5) / s as f64) * h[1] - c[1];
-                inside += usize::from(x * x + y * y < r * r);
+    /// A disk (`dims` 2) or ball (3)'s fractions on cells of size 1: centre `c`, radius `r`,
+    /// sampled `s` times per cell along each axis.
+    fn round(name: &str, c: [f64; 3], r: f64, dims: usize, s: usize) -> BodyFraction {
+        let lo: [usize; 3] = std::array::from_fn(|a| {
+            if a < dims {
+                (c[a] - r - 3.0) as usize
+            } else {
+                0
             }
-            inside as f64 / (s * s) as f64
+        });
+        let n: [usize; 3] =
+            std::array::from_fn(|a| if a < dims { (2.0 * r) as usize + 7 } else { 1 });
+        let samples = s.pow(dims as u32);
+        let values = (0..n[0] * n[1] * n[2]).map(move |i| {
+            let at = [i % n[0], (i / n[0]) % n[1], i / (n[0] * n[1])];
+            let inside = (0..samples)
+                .filter(|p| {
+                    let q = [p % s, (p / s) % s, p / (s * s)];
+                    let d: f64 = (0..dims)
+                        .map(|a| {
+                            let x = (lo[a] + at[a]) as f64 + (q[a] as f64 + 0.5) / s as f64 - c[a];
+                            x * x
+                        })
+                        .sum();
+                    d < r * r
+                })
+                .count();
+            inside as f64 / samples as f64
         });
         let mut b = BodyFraction::named(name);
-        b.set([lo[0], lo[1], 0], [n[0], n[1], 1], values);
+        b.set(lo, n, values);
         b
+    }
+
+    /// A disk of [`round`] sampled 32 × 32 per cell.
+    fn disk(name: &str, c: [f64; 2], r: f64) -> BodyFraction {
+        round(name, [c[0], c[1], 0.0], r, 2, 32)
     }
 
     /// Two disks in oblique contact (the line of centres at 57° to the grid, off the cells'
@@ -1301,100 +1323,66 @@ mod tests {
     /// normal itself is 2.4° off at a gap of 1.2: module docs, "Limits".)
     #[test]
     fn an_oblique_contact_pushes_along_the_line_of_centres_without_turning() {
-        let cases = [(0.6, 57.0_f64), (1.2, 57.0), (0.9, 33.0), (0.3, 71.0)];
-        for ((gap, turn), h) in cases.into_iter().map(|c| (c, [1.0, 1.0])) {
-            let n = [48, (48.0 / h[1]) as usize, 1];
-            let g = Grid::new(
-                efsi_core::Geometry::Planar,
-                n[0],
-                n[1],
-                (0.0, 48.0),
-                (0.0, 48.0),
-            );
-            let r = 9.0;
-            {
-                let (s_, c_) = turn.to_radians().sin_cos();
-                let a = [14.37, 12.81];
-                let d = 2.0 * r + gap;
-                let b = [a[0] + d * c_, a[1] + d * s_];
-                let all = BodyFractions {
-                    bodies: vec![disk("a", a, r, h), disk("b", b, r, h)],
+        let n = [48, 48, 1];
+        let g = grid(n, 2);
+        let r = 9.0;
+        for (gap, turn) in [(0.6, 57.0_f64), (1.2, 57.0), (0.9, 33.0), (0.3, 71.0)] {
+            let (s_, c_) = turn.to_radians().sin_cos();
+            let a = [14.37, 12.81];
+            let d = 2.0 * r + gap;
+            let b = [a[0] + d * c_, a[1] + d * s_];
+            let all = BodyFractions {
+                bodies: vec![disk("a", a, r), disk("b", b, r)],
+            };
+            let mut s = stage(n, 2, false);
+            s.find_supports(&all);
+            let (e, updates) = s.forces(&g, &all, None);
+            assert!(e > 0.0, "gap {gap}: no contact");
+            // The whole: the pair's net force and moment about the origin, from the faces.
+            let (mut total, mut total_moment, mut size) = ([0.0; 2], 0.0, 0.0);
+            for &(axis, c, force) in &updates {
+                let x = frictionless::face_centre(&g, axis, c);
+                total[axis] += force;
+                size += force.abs();
+                total_moment += if axis == 0 {
+                    -x[1] * force
+                } else {
+                    x[0] * force
                 };
-                let mut s = stage(n, 2, false);
-                s.find_supports(&all);
-                let (e, updates) = s.forces(&g, &all, None);
-                assert!(e > 0.0, "gap {gap}: no contact");
-                // The whole: the pair's net force and moment about the origin, from the faces.
-                let (mut total, mut total_moment, mut size) = ([0.0; 2], 0.0, 0.0);
-                for &(axis, c, force) in &updates {
-                    let x = frictionless::face_centre(&g, axis, c);
-                    total[axis] += force;
-                    size += force.abs();
-                    total_moment += if axis == 0 {
-                        -x[1] * force
-                    } else {
-                        x[0] * force
-                    };
-                }
-                assert!(total.iter().all(|t| t.abs() <= 1e-13 * size), "{total:?}");
+            }
+            assert!(total.iter().all(|t| t.abs() <= 1e-13 * size), "{total:?}");
+            assert!(
+                total_moment.abs() <= 1e-13 * size * 48.0,
+                "{total_moment:e}"
+            );
+            // Each body's: its load from the other's halo with the projection's change (the
+            // rigid load carries that change exactly: `frictionless` tests).
+            for p in &s.pairs {
+                let (df, dm) = s.changes[p.k];
+                let f = [p.force[0] + df[0], p.force[1] + df[1]];
+                let sign = if p.k == 0 { -1.0 } else { 1.0 };
+                let along = sign * (f[0] * c_ + f[1] * s_);
+                let across = -f[0] * s_ + f[1] * c_;
+                let was = (-p.force[0] * s_ + p.force[1] * c_)
+                    .atan2(sign * (p.force[0] * c_ + p.force[1] * s_));
+                assert!(along > 0.0, "gap {gap}, {turn}°: body {} pulled", p.k);
                 assert!(
-                    total_moment.abs() <= 1e-13 * size * 48.0,
-                    "{total_moment:e}"
+                    across.abs() <= 0.03 * along,
+                    "gap {gap}, {turn}°: body {} pushed {:.2}° off the line of centres \
+                     (before the projection {:.2}°)",
+                    p.k,
+                    across.atan2(along).to_degrees(),
+                    was.to_degrees()
                 );
-                // Each body's: its load from the other's halo with the projection's change (the
-                // rigid load carries that change exactly: `frictionless` tests).
-                for p in &s.pairs {
-                    let (df, dm) = s.changes[p.k];
-                    let f = [p.force[0] + df[0], p.force[1] + df[1]];
-                    let sign = if p.k == 0 { -1.0 } else { 1.0 };
-                    let along = sign * (f[0] * c_ + f[1] * s_);
-                    let across = -f[0] * s_ + f[1] * c_;
-                    let was = (-p.force[0] * s_ + p.force[1] * c_)
-                        .atan2(sign * (p.force[0] * c_ + p.force[1] * s_));
-                    assert!(along > 0.0, "gap {gap}, {turn}°: body {} pulled", p.k);
-                    assert!(
-                        across.abs() <= 0.03 * along,
-                        "gap {gap}, {turn}°, h {h:?}: body {} pushed {:.2}° off the line of \
-                     centres (before the projection {:.2}°)",
-                        p.k,
-                        across.atan2(along).to_degrees(),
-                        was.to_degrees()
-                    );
-                    let moment = p.moment[2] + dm[2];
-                    assert!(
-                        moment.abs() <= 0.03 * along * r,
-                        "gap {gap}, {turn}°: body {} turned, moment {moment:e} of {:e}",
-                        p.k,
-                        along * r
-                    );
-                }
+                let moment = p.moment[2] + dm[2];
+                assert!(
+                    moment.abs() <= 0.03 * along * r,
+                    "gap {gap}, {turn}°: body {} turned, moment {moment:e} of {:e}",
+                    p.k,
+                    along * r
+                );
             }
         }
-    }
-
-    /// A ball's fractions on cells of size 1: centre `c`, radius `r`, sampled 8³ per cell.
-    fn ball(name: &str, c: [f64; 3], r: f64) -> BodyFraction {
-        let lo = c.map(|c| (c - r - 3.0) as usize);
-        let n = [(2.0 * r) as usize + 7; 3];
-        let s = 8;
-        let values = (0..n[0] * n[1] * n[2]).map(|i| {
-            let at = [i % n[0], (i / n[0]) % n[1], i / (n[0] * n[1])];
-            let mut inside = 0;
-            for p in 0..s * s * s {
-                let q = [p % s, (p / s) % s, p / (s * s)];
-                let d: f64 = (0..3)
-                    .map(|a| {
-                        let x = (lo[a] + at[a]) as f64 + (q[a] as f64 + 0.5) / s as f64 - c[a];
-                        x * x
-                    })
-                    .sum();
-                inside += usize::from(d < r * r);
-            }
-            inside as f64 / (s * s * s) as f64
-        });
-        let mut b = BodyFraction::named(name);
-        b.set(lo, n, values);
-        b
     }
 
     /// [`Self::an_oblique_contact_pushes_along_the_line_of_centres_without_turning`] in 3-D:
@@ -1413,7 +1401,7 @@ mod tests {
             let a = [9.37, 8.81, 9.13];
             let b: [f64; 3] = std::array::from_fn(|i| a[i] + (2.0 * r + gap) * dir[i]);
             let all = BodyFractions {
-                bodies: vec![ball("a", a, r), ball("b", b, r)],
+                bodies: vec![round("a", a, r, 3, 8), round("b", b, r, 3, 8)],
             };
             let mut s = stage(n, 3, false);
             s.find_supports(&all);
@@ -1474,7 +1462,7 @@ mod tests {
         let g = grid(n, 2);
         let (a, b) = ([14.37, 15.81], [14.37 + 18.6, 15.81]);
         let all = BodyFractions {
-            bodies: vec![disk("a", a, 9.0, [1.0, 1.0]), disk("b", b, 9.0, [1.0, 1.0])],
+            bodies: vec![disk("a", a, 9.0), disk("b", b, 9.0)],
         };
         let mut v = Field::zeros(&g);
         for j in 0..n[1] as isize {
