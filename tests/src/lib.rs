@@ -169,4 +169,25 @@ pub mod scenes {
     ),
     boundaries: (r_min: Axis, r_max: NoSlip, z_min: NoSlip, z_max: NoSlip),
     )"#;
+
+    /// Three soft disks of two materials, two of them within the contact's reach of each other and
+    /// one of the floor, at 64²: every body's window, the contact's halos, pairs and frictionless
+    /// projection.
+    pub const DISKS: &str = r#"Scene(
+    name: "disks",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 64, ny: 64),
+    time: (end: 1.0, cfl: 0.4),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -1.0),
+    solids: [
+        (name: "a", shape: Disk(center: (0.3, 0.125), radius: 0.12), density: 1.5, viscosity: 0.01,
+         law: (name: "neo_hookean", parameters: {"G": 1.0})),
+        (name: "b", shape: Disk(center: (0.55, 0.14), radius: 0.12), density: 2.0, viscosity: 0.01,
+         law: (name: "neo_hookean", parameters: {"G": 4.0})),
+        (name: "c", shape: Disk(center: (0.45, 0.6), radius: 0.1), density: 1.5, viscosity: 0.01,
+         velocity: (0.0, -1.0), law: (name: "neo_hookean", parameters: {"G": 1.0})),
+    ],
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+)"#;
 }

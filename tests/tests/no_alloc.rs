@@ -3,13 +3,14 @@
 //! projection), of a two-phase axisymmetric drop without a solid law (advection, body force,
 //! viscous, projection, VOF), at 128² so that the parallel (rayon) paths run, and of the sphere
 //! impact touching down (all of those, and the elastic and deformation stages with the plugin
-//! law), stepped inside a
+//! law), and of three soft disks, two of them in contact (each body on its own window, the
+//! contact stage, the bodies stepped in parallel), stepped inside a
 //! two-thread and a one-thread pool (as `efsi run` does: called from outside a pool, rayon
 //! queues each job through its global injector, which allocates a block every 63 jobs). Each
 //! step is preceded, as in the run loop, by the snapshot of the last good state (into the
 //! same snapshot: it reuses its arrays and the stages' saved data).
 
-use efsi_tests::scenes::{CAVITY, DROP, SPHERE};
+use efsi_tests::scenes::{CAVITY, DISKS, DROP, SPHERE};
 use efsi_tests::sim;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -93,6 +94,16 @@ fn no_allocation_after_the_first_step() {
         "deformation",
         "vof",
     ];
+    let bodies = [
+        "advection",
+        "body_force",
+        "contact",
+        "viscous",
+        "elastic",
+        "projection",
+        "deformation",
+        "vof",
+    ];
     for (name, text, stages) in [
         (
             "cavity",
@@ -102,6 +113,7 @@ fn no_allocation_after_the_first_step() {
         ("drop", DROP, &two_phase[..]),
         ("drop-mg", &drop_mg, &two_phase[..]),
         ("sphere", SPHERE, &solid[..]),
+        ("disks", DISKS, &bodies[..]),
     ] {
         assert_eq!(sim(text).pipeline().stage_names(), stages);
         let count = |threads| {

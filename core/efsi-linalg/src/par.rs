@@ -26,6 +26,29 @@ pub const REDUCE_CHUNK: usize = 4096;
 /// (`tests/tests/parallel.rs`).
 pub const PAR_MIN: usize = 2048;
 
+/// `f(n, item)` for every item of `items` (`n` its position), the items in parallel (rayon's
+/// own split: for a handful of independent tasks, each writing only its own data — the bodies
+/// of a scene); the error of the first item in the items' order that fails, whichever thread
+/// saw it first. Allocates nothing of its own.
+pub fn try_each<I, E, F>(items: I, f: F) -> Result<(), E>
+where
+    I: IndexedParallelIterator,
+    E: Send,
+    F: Fn(usize, I::Item) -> Result<(), E> + Sync + Send,
+{
+    let first = items
+        .enumerate()
+        .map(|(n, x)| f(n, x).err().map(|e| (n, e)))
+        .reduce(
+            || None,
+            |a, b| match (a, b) {
+                (Some(a), Some(b)) => Some(if a.0 <= b.0 { a } else { b }),
+                (a, b) => a.or(b),
+            },
+        );
+    first.map_or(Ok(()), |(_, e)| Err(e))
+}
+
 /// Four-lane dot product of two equal-length slices (vectorises).
 #[inline]
 pub(crate) fn dot_serial(a: &[f64], b: &[f64]) -> f64 {

@@ -71,8 +71,10 @@
 //! with the symmetric kernel), planar and three-dimensional; in axisymmetric geometry the cell
 //! volumes weight the axial sums and the pair's axial momentum is kept to the discretisation error.
 //! Each halo is evaluated on its body's window grown by the kernel's half-width, wrapped along
-//! periodic axes: the work and storage scale with the bodies' extent. The fractions are those the
-//! VOF stage published at the end of the last step ([`efsi_core::body_fractions`]).
+//! periodic axes: the work and storage scale with the bodies' extent. The halos, and each body's
+//! face forces, are made for the bodies in parallel and gathered in the bodies' order (the
+//! serial loop's sums). The fractions are those the VOF stage published at the end of the last
+//! step ([`efsi_core::body_fractions`]).
 //!
 //! **Frictionless.** Summed over a body, the face forces of a pair are not quite normal to the
 //! contact: where a body rests on another's halo, its last cells meet the halo's tail, whose
@@ -175,6 +177,7 @@ use efsi_core::{
     State, StepContext,
 };
 use frictionless::{Motion, PairLoad, Rigid};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The largest `range`: a body's window keeps two empty cells beyond its support.
@@ -435,6 +438,18 @@ struct Halo {
     lo: [isize; 3],
     n: [usize; 3],
     v: Vec<f64>,
+    /// The smoothing's second buffer (reused).
+    spare: Vec<f64>,
+}
+
+/// What one body's faces gather in a step (reused): the bodies near it, its loads from each of
+/// them (`pairs`), its face forces `(axis, face, f_a)` and each axis' share of `E_c / κ`.
+#[derive(Clone, Debug, Default)]
+struct Pushed {
+    near: Vec<usize>,
+    pairs: Vec<PairLoad>,
+    updates: Vec<(usize, [isize; 3], f64)>,
+    energy: [f64; 3],
 }
 
 impl Halo {
@@ -507,10 +522,8 @@ struct ContactStage {
     halos: Vec<Halo>,
     /// Each body's support (first and last cells with `φ_k ≠ 0`), found once per step.
     supports: Vec<Option<Bounds>>,
-    /// The bodies near the one at hand (reused).
-    near: Vec<usize>,
-    /// The smoothing's second buffer.
-    spare: Vec<f64>,
+    /// What each body's faces gathered in the last step.
+    pushed: Vec<Pushed>,
     /// `E_c` as of the last step: the stage's record (snapshots and checkpoints carry it), which
     /// it publishes in the state ([`ContactEnergy`]).
     energy: f64,
@@ -576,9 +589,8 @@ impl ContactStage {
             dims: grid.dims(),
             faces,
             halos: Vec::new(),
-            spare: Vec::new(),
             supports: Vec::new(),
-            near: Vec::new(),
+            pushed: Vec::new(),
             energy: 0.0,
             updates: Vec::new(),
             centroids: Vec::new(),
@@ -600,7 +612,7 @@ impl ContactStage {
 
     /// `ψ = K * φ` of body `b` on its window grown by the kernel's half-width (clipped to the
     /// domain, the whole axis along a periodic one the window spans), into `halo`.
-    fn smooth(&self, b: &BodyFraction, halo: &mut Halo, spare: &mut Vec<f64>) {
+    fn smooth(&self, b: &BodyFraction, halo: &mut Halo) {
         let m = self.kernel.m as isize;
         let mut lo = [0isize; 3];
         let mut n = [1usize; 3];
@@ -630,7 +642,7 @@ impl ContactStage {
                 cur[idx(c.map(|c| c as usize))] = f;
             }
         }
-        let mut next = std::mem::take(spare);
+        let mut next = std::mem::take(&mut halo.spare);
         next.clear();
         next.resize(len, 0.0);
         for a in 0..self.dims {
@@ -660,7 +672,7 @@ impl ContactStage {
         halo.lo = lo;
         halo.n = n;
         halo.v = cur;
-        *spare = next;
+        halo.spare = next;
     }
 
     /// The halo of the walls at grid cell `at`, along axis `a`.
@@ -686,66 +698,82 @@ impl ContactStage {
         all: &BodyFractions,
         flow: Option<Flow>,
     ) -> (f64, Vec<(usize, [isize; 3], f64)>) {
+        // Each body's halo, centroid and faces on their own: the bodies in parallel.
         let mut halos = std::mem::take(&mut self.halos);
         halos.resize_with(all.bodies.len(), Halo::default);
-        let mut spare = std::mem::take(&mut self.spare);
-        for (b, h) in all.bodies.iter().zip(&mut halos) {
-            self.smooth(b, h, &mut spare);
-        }
-        self.spare = spare;
+        (halos.par_iter_mut())
+            .zip(all.bodies.par_iter())
+            .for_each(|(h, b)| self.smooth(b, h));
         let h = grid.h();
         // The bodies' centroids, which only the frictionless projection uses.
         self.centroids.clear();
         if self.frictionless {
-            self.centroids.extend(all.bodies.iter().map(|b| {
-                let (mut m, mut x) = (0.0, [0.0; 3]);
-                for (c, f) in b.cells().filter(|&(_, f)| f != 0.0) {
-                    let v = f * grid.cell_volume(c[0]);
-                    let at = frictionless::centre(grid, c);
-                    m += v;
-                    x = std::array::from_fn(|a| x[a] + v * at[a]);
-                }
-                if m > 0.0 { x.map(|x| x / m) } else { x }
-            }));
+            (all.bodies.par_iter())
+                .map(|b| {
+                    let (mut m, mut x) = (0.0, [0.0; 3]);
+                    for (c, f) in b.cells().filter(|&(_, f)| f != 0.0) {
+                        let v = f * grid.cell_volume(c[0]);
+                        let at = frictionless::centre(grid, c);
+                        m += v;
+                        x = std::array::from_fn(|a| x[a] + v * at[a]);
+                    }
+                    if m > 0.0 { x.map(|x| x / m) } else { x }
+                })
+                .collect_into_vec(&mut self.centroids);
         }
         // The face forces on body k's faces, from every other body's halo and the walls', and
         // E_c on the same faces (each pair's from both of its bodies, halved).
+        let mut pushed = std::mem::take(&mut self.pushed);
+        pushed.resize_with(all.bodies.len(), Pushed::default);
+        let this = &*self;
+        (pushed.par_iter_mut())
+            .zip(all.bodies.par_iter())
+            .enumerate()
+            .for_each(|(k, (p, b))| {
+                p.near.clear();
+                p.pairs.clear();
+                p.updates.clear();
+                let Some(support) = this.supports[k] else {
+                    return;
+                };
+                this.near_halos(&halos, support, k, &mut p.near);
+                if this.frictionless {
+                    p.pairs.extend(p.near.iter().map(|&l| PairLoad {
+                        k,
+                        l,
+                        ..PairLoad::default()
+                    }));
+                }
+                for a in 0..this.dims {
+                    p.energy[a] = this.face_forces(
+                        b,
+                        &halos,
+                        (&p.near, &mut p.pairs),
+                        support,
+                        a,
+                        grid,
+                        &mut p.updates,
+                    );
+                }
+            });
+        // Gathered in the bodies' order, each body's axes in order: the serial loop's sums.
         let mut energy = 0.0;
-        let mut near = std::mem::take(&mut self.near);
         let mut updates = std::mem::take(&mut self.updates);
         let mut pairs = std::mem::take(&mut self.pairs);
         updates.clear();
         pairs.clear();
-        for (k, b) in all.bodies.iter().enumerate() {
-            let Some(support) = self.supports[k] else {
-                continue;
-            };
-            self.near_halos(&halos, support, k, &mut near);
-            let first = pairs.len();
-            if self.frictionless {
-                pairs.extend(near.iter().map(|&l| PairLoad {
-                    k,
-                    l,
-                    ..PairLoad::default()
-                }));
-            }
-            for a in 0..self.dims {
-                energy += self.face_forces(
-                    b,
-                    &halos,
-                    (&near, &mut pairs[first..]),
-                    support,
-                    a,
-                    grid,
-                    &mut updates,
-                );
+        for (p, support) in pushed.iter().zip(&self.supports) {
+            if support.is_some() {
+                energy = p.energy[..self.dims].iter().fold(energy, |e, x| e + x);
+                updates.extend_from_slice(&p.updates);
+                pairs.extend_from_slice(&p.pairs);
             }
         }
+        self.pushed = pushed;
         if self.frictionless {
             self.project(grid, all, (&halos, &pairs), flow, &mut updates);
         }
         self.halos = halos;
-        self.near = near;
         self.pairs = pairs;
         (self.kappa * energy / self.dims as f64 * h[2], updates)
     }
@@ -1061,6 +1089,11 @@ impl Stage for ContactStage {
 
     fn save(&self) -> Vec<f64> {
         vec![self.energy]
+    }
+
+    fn save_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.push(self.energy);
     }
 
     fn restore(&mut self, data: &[f64]) -> Result<(), String> {

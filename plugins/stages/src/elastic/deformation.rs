@@ -7,6 +7,7 @@ use super::{
 };
 use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
+use rayon::prelude::*;
 
 pub(super) struct DeformationStage {
     /// The elastic bodies (one: the single solid), each one's law and kernels, in order.
@@ -115,9 +116,13 @@ impl DeformationStage {
         // (see the module docs).
         let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
-        let parts = self.ks.iter_mut().zip(ds.iter_mut()).zip(&self.laws);
-        for (n, (((k, d), law), first)) in parts.zip(&mut self.first).enumerate() {
-            k.set_weights(self.phis.of(n, phi));
+        let phis = &self.phis;
+        let parts = (self.ks.par_iter_mut())
+            .zip(ds.par_iter_mut())
+            .zip(self.laws.par_iter())
+            .zip(self.first.par_iter_mut());
+        efsi_linalg::par::try_each(parts, |n, (((k, d), law), first)| {
+            k.set_weights(phis.of(n, phi));
             k.with_velocity_near(&vel, k.near_c, |k, vel| k.update(vel, d, first, a, picard));
             // The end-of-step stress and the elastic energy.
             k.evaluate(law.as_ref(), &d.b, &mut d.stress, false)
@@ -125,7 +130,8 @@ impl DeformationStage {
             d.elastic_energy = k
                 .strain_energy(law.as_ref(), &d.b)
                 .map_err(|m| err("deformation", m))?;
-        }
+            Ok(())
+        })?;
         Ok(StageStats::default())
     }
 

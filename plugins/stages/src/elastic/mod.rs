@@ -580,7 +580,7 @@ impl Kernels {
             cb: vec![0.0; m * nc],
             ct: vec![0.0; m * nc],
             cj: vec![0.0; m * m * nc],
-            mask: Vec::new(),
+            mask: Vec::with_capacity(nc),
             kb: batch(m * nc),
             kt: batch(m * nc),
             kj: batch(m * m * nc),

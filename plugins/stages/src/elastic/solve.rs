@@ -10,6 +10,7 @@ use efsi_core::operators::minus;
 use efsi_core::{Field, Grid, Index, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
 use efsi_linalg::{BiCgStab, LinearOperator, SolveStats};
+use rayon::prelude::*;
 
 pub(super) struct ElasticStage {
     /// The elastic bodies (one: the single solid) and each one's law, in order.
@@ -146,13 +147,19 @@ impl LinearOperator for OperatorCtx<'_> {
         let vel = super::velocity(xu, xv, xw.as_deref());
         op.viscous.product(&vel, &op.dm, Some(x), y);
         // The increment's stress lives in each body's solid: gradients, stretching and
-        // tangent there, each body's increment stretched by its own Bⁿ.
-        let parts = op.ks.iter_mut().zip(self.d).zip(self.dtau.iter_mut());
-        for (((k, d), dtau), db) in parts.zip(op.db.iter_mut()) {
+        // tangent there, each body's increment stretched by its own Bⁿ (the bodies in
+        // parallel), then the forces summed in the bodies' order.
+        let parts = (op.ks.par_iter_mut())
+            .zip(self.d.par_iter())
+            .zip(self.dtau.par_iter_mut())
+            .zip(op.db.par_iter_mut());
+        parts.for_each(|(((k, d), dtau), db)| {
             let cw = k.solid_c;
             k.with_velocity_near(&vel, cw, |k, vel| k.gradient_in(vel, cw));
             k.stretch_in(&d.start, 1.0, None, Some(&d.relax), db, cw);
             k.apply_tangent(db, dtau);
+        });
+        for (k, dtau) in op.ks.iter().zip(self.dtau.iter()) {
             k.force_sub(dtau, op.c, y);
         }
     }
@@ -318,15 +325,13 @@ impl ElasticStage {
             .map_err(|m| err("elastic", m))?;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let (theta, alpha) = (self.scheme.theta, self.scheme.alpha);
-        let parts = self
-            .op
-            .ks
-            .iter_mut()
-            .zip(ds.iter_mut())
-            .zip(&self.laws)
-            .zip(self.tau.iter_mut().zip(self.tau_n.iter_mut()));
-        for (n, (((k, d), law), (tau, tau_n))) in parts.enumerate() {
-            k.set_weights(self.phis.of(n, phi));
+        let phis = &self.phis;
+        let parts = (self.op.ks.par_iter_mut())
+            .zip(ds.par_iter_mut())
+            .zip(self.laws.par_iter())
+            .zip(self.tau.par_iter_mut().zip(self.tau_n.par_iter_mut()));
+        efsi_linalg::par::try_each(parts, |n, (((k, d), law), (tau, tau_n))| {
+            k.set_weights(phis.of(n, phi));
             k.reset_fluid(d);
             d.begin_step(dt, r, theta);
             if alpha < 1.0 {
@@ -345,9 +350,8 @@ impl ElasticStage {
             );
             k.fill_ghosts(&mut d.b);
             k.evaluate(law.as_ref(), &d.b, tau, true)
-                .map_err(|m| err("elastic", m))?;
-        }
-        Ok(())
+                .map_err(|m| err("elastic", m))
+        })
     }
 
     /// The right-hand side `Δt·vol·∇·τ^{n+1/3}`, the mass, the viscous coefficients and the
@@ -659,16 +663,18 @@ impl ElasticStage {
             false,
         );
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
-        for (k, d) in self.op.ks.iter_mut().zip(ds.iter_mut()) {
+        let a = self.scheme.theta * dt;
+        let parts = self.op.ks.par_iter_mut().zip(ds.par_iter_mut());
+        parts.for_each(|(k, d)| {
             k.with_velocity_near(&vel, k.near_c, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
-                self.scheme.theta * dt,
+                a,
                 Some((&d.start[..], &d.explicit[..])),
                 Some(&d.relax),
                 &mut d.b,
             );
             k.fill_ghosts(&mut d.b);
-        }
+        });
     }
 }

@@ -26,8 +26,8 @@
 //! `φ_k` is held on a box of cells, its window ([`BodyWindow`]): the cells where `φ_k ≠ 0`
 //! (its support) and a margin of [`MARGIN`] cells around them, clipped to the domain, and the
 //! whole axis along a periodic axis. Memory and work scale with the bodies' extent, not with
-//! the grid times the number of bodies; the work arrays of a step are the stage's one pool,
-//! sized for the grid. Before every (sub-)step the window is moved — a new box around the
+//! the grid times the number of bodies; each window holds the work arrays of its step, sized
+//! for the window, so the bodies step in parallel. Before every (sub-)step the window is moved — a new box around the
 //! support, the values copied — when the support comes within [`NEAR`] cells of a window
 //! side that is not a side of the domain.
 //!
@@ -93,6 +93,9 @@ pub struct BodyWindow {
     phi: Field,
     /// The face velocities copied onto the window, one per axis.
     vel: Vec<Field>,
+    /// The advector's work arrays, sized for the window ([`super::advect::work_len`]): each
+    /// body's own, so the bodies step in parallel.
+    work: Vec<f64>,
     /// The sides of the parent grid.
     bounds: VofBoundaries,
 }
@@ -200,6 +203,7 @@ impl BodyWindow {
             lo: wlo,
             phi: Field::zeros(&grid),
             vel: (0..dims).map(|_| Field::zeros(&grid)).collect(),
+            work: Vec::new(),
             advector,
             grid,
             bounds,
@@ -286,11 +290,9 @@ impl BodyWindow {
     }
 
     /// Advance `φ_k` by `dt` on the parent's face velocities `vel` (one per axis), moving the
-    /// window first if the body nears its side; `work` is the pool of [`super::advect`]
-    /// (at least the parent's work length), `step_index` the sweep order.
-    pub(crate) fn step_in(
+    /// window first if the body nears its side; `step_index` selects the sweep order.
+    pub fn step(
         &mut self,
-        work: &mut [f64],
         parent: &Grid,
         vel: &[&Field],
         dt: f64,
@@ -300,24 +302,17 @@ impl BodyWindow {
         for (w, v) in self.vel.iter_mut().zip(vel) {
             copy_padded(v, w, self.lo);
         }
-        let vel: Vec<&Field> = self.vel.iter().collect();
-        Ok(self
-            .advector
-            .step_in(work, &self.grid, &mut self.phi, &vel, dt, step_index))
-    }
-
-    /// Advance `φ_k` by `dt` on the parent's face velocities `vel` (one per axis), moving the
-    /// window first if the body nears its side; `step_index` selects the sweep order. With
-    /// work arrays of its own (tests, benchmarks; the stage lends its pool).
-    pub fn step(
-        &mut self,
-        parent: &Grid,
-        vel: &[&Field],
-        dt: f64,
-        step_index: u64,
-    ) -> Result<AdvectStats, String> {
-        let mut work = vec![0.0; super::advect::work_len(parent)];
-        self.step_in(&mut work, parent, vel, dt, step_index)
+        self.work.resize(super::advect::work_len(&self.grid), 0.0);
+        let dims = self.vel.len();
+        let vel: [&Field; 3] = std::array::from_fn(|a| &self.vel[a.min(dims - 1)]);
+        Ok(self.advector.step_in(
+            &mut self.work,
+            &self.grid,
+            &mut self.phi,
+            &vel[..dims],
+            dt,
+            step_index,
+        ))
     }
 
     /// The phase volume `Σ φ_k V` (per radian in axisymmetric geometry), summed in the

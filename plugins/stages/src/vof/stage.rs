@@ -54,6 +54,7 @@ use efsi_core::{
     StageError, StagePlugin, StageStats, Stagger, State, StepContext,
 };
 use efsi_linalg::par::{self, REDUCE_CHUNK};
+use rayon::prelude::*;
 
 /// The VOF stage plugin.
 pub struct Vof;
@@ -142,6 +143,7 @@ impl StagePlugin for Vof {
                 })
                 .collect(),
             windows: Vec::new(),
+            stats: Vec::new(),
             bounds,
             grid: grid.clone(),
         });
@@ -208,17 +210,24 @@ impl VofStage {
             st.max_clipped = st.max_clipped.max(s.max_clipped);
             st.clipped_volume += s.clipped_volume;
         };
-        let mut pool = self.scratch.lock();
         let dims = self.adv.len();
         let vel: [&Field; 3] = std::array::from_fn(|a| &self.adv[a.min(dims - 1)]);
         let dt = ctx.dt / n as f64;
         if let Some(many) = &mut self.many {
-            for w in &mut many.windows {
+            // The bodies in parallel, each on its own window and work arrays; the statistics
+            // gathered in the bodies' order.
+            many.stats.resize_with(many.windows.len(), Vec::new);
+            let parts = many.windows.par_iter_mut().zip(many.stats.par_iter_mut());
+            par::try_each(parts, |_, (w, stats)| {
+                stats.clear();
                 for k in 0..n {
-                    add(w.step_in(&mut pool, ctx.grid, &vel[..dims], dt, ctx.step * n + k)?);
+                    stats.push(w.step(ctx.grid, &vel[..dims], dt, ctx.step * n + k)?);
                 }
-            }
+                Ok::<(), String>(())
+            })?;
+            many.stats.iter().flatten().copied().for_each(&mut add);
         } else {
+            let mut pool = self.scratch.lock();
             for k in 0..n {
                 let s = self.advector.step_in(
                     &mut pool,
@@ -336,6 +345,8 @@ struct Many {
     bodies: Vec<ManyBody>,
     /// One per body, in the scene's order (made by [`Stage::initialize`]).
     windows: Vec<BodyWindow>,
+    /// Each body's statistics of its last step's sub-steps (reused).
+    stats: Vec<Vec<super::AdvectStats>>,
     /// The sides of the grid.
     bounds: VofBoundaries,
     /// The grid (the windows' parent).
