@@ -32,7 +32,7 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
     let bad = || {
         format!(
             "unknown case `{name}`: expected cavity<N> or drop<N>, optionally -ic, -vmg; sphere, \
-             optionally -ej; cube<N>, drop3d, sphere3d or softcube"
+             optionally -ej; cube<N>, drop3d, sphere3d, softcube, disks20 or disk1"
         )
     };
     if name == "sphere3d" {
@@ -46,6 +46,9 @@ fn case(name: &str, quick: bool) -> Result<Case, String> {
     }
     if name == "softcube" {
         return softcube_case(quick);
+    }
+    if name == "disks20" || name == "disk1" {
+        return disks_case(name, quick);
     }
     if let Some(n) = name.strip_prefix("cube") {
         return match n.parse::<usize>() {
@@ -197,6 +200,55 @@ fn softcube_case(quick: bool) -> Result<Case, String> {
         block_multigrid: &["elastic"],
         three_d: true,
     })
+}
+
+/// The twenty soft disks of `cases/twenty_disks.ron` (`disks20`) or its first disk alone
+/// (`disk1`: the same scene, `solids` cut to its first entry), on the same 128² grid at the
+/// same step (Δt ≤ 8e-4, the contact's own limit in the twenty's pile), t ∈ [0, 0.2] (quick:
+/// [0, 0.05]), with the same probes: the cost of twenty bodies against one body, per
+/// cell-step and in peak memory. The scene unedited, changed by overrides.
+fn disks_case(name: &str, quick: bool) -> Result<Case, String> {
+    let scene = shipped("twenty_disks.ron")?;
+    let end = if quick { 0.05 } else { 0.2 };
+    let mut sets = vec![
+        format!("time.end={end}"),
+        "time.dt_max=8e-4".into(),
+        format!("output.vtk_every={end}"),
+        "output.probes=[SolidCentroid, SolidVelocity, SolidVolume, KineticEnergy]".into(),
+    ];
+    if name == "disk1" {
+        sets.push(format!("solids=[{}]", first_solid(&scene)?));
+    }
+    Ok(Case {
+        name: name.into(),
+        scene,
+        sets,
+        drop: false,
+        cells: 128 * 128,
+        block_multigrid: &["elastic"],
+        three_d: false,
+    })
+}
+
+/// The text of the first entry of the scene's `solids: [ … ]` list (its balanced parentheses).
+fn first_solid(scene: &str) -> Result<String, String> {
+    let missing = || "cases/twenty_disks.ron: no `solids: [ ( … ) ]` list".to_string();
+    let list = scene.find("solids:").ok_or_else(missing)?;
+    let open = list + scene[list..].find('(').ok_or_else(missing)?;
+    let mut depth = 0usize;
+    for (i, c) in scene[open..].char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Ok(scene[open..=open + i].to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    Err(missing())
 }
 
 /// Steps of the cube benchmark (quick: a quarter).
@@ -735,6 +787,8 @@ mod tests {
             "drop3d",
             "sphere3d",
             "softcube",
+            "disks20",
+            "disk1",
         ] {
             case(name, false).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
@@ -751,6 +805,15 @@ mod tests {
             ["numerics.elastic.preconditioner=Jacobi"]
         );
         assert!(case("sphere-x", false).is_err() && case("cube4", false).is_err());
+        // The one disk is the twenty's first, with the same overrides otherwise.
+        let (twenty, one) = (case("disks20", true).unwrap(), case("disk1", true).unwrap());
+        assert_eq!(one.sets[..one.sets.len() - 1], twenty.sets[..]);
+        let solids = one.sets.last().unwrap();
+        assert!(
+            solids.starts_with("solids=[(name: \"soft_00\"") && solids.ends_with("}))]"),
+            "{solids}"
+        );
+        assert_eq!(solids.matches("shape:").count(), 1, "{solids}");
         // The 3-D drop is the shipped scene with overrides; the cube takes its steps at ½h.
         let d = case("drop3d", true).unwrap();
         assert!(d.three_d && d.drop && d.cells == 32 * 64 * 32);
