@@ -461,7 +461,8 @@ fn parse(args: &[String]) -> Result<Request, String> {
         if quick {
             "cavity128,drop128,cube64,drop3d".into()
         } else {
-            "cavity128,cavity256,drop128,drop256,sphere,cube64,drop3d,sphere3d,softcube".into()
+            "cavity128,cavity256,drop128,drop256,sphere,cube64,drop3d,sphere3d,softcube,disk1,disks20"
+                .into()
         }
     });
     let cases = names
