@@ -56,8 +56,9 @@
 //! cells that give `d ≥ 6` (with `d = 5` the lowest written edge would be read through the
 //! ghost edge that reflects it); a compile-time assertion ties it to the constants. Each body's
 //! kernels run on their own window and deformation, the bodies in parallel
-//! ([`efsi_linalg::par::try_each`]); the force and the stiffness are then added face by face and
-//! cell by cell in the bodies' order, as on the whole grid; sums over cells (the strain energy) run over the same cells in the same order.
+//! ([`efsi_linalg::par::try_each`]); the force and the stiffness are then added face by face
+//! and cell by cell in the bodies' order, as on the whole grid; sums over cells (the strain
+//! energy) run over the same cells in the same order.
 //! A checkpoint records each window (`B.<body>.window`: its first cell and its cells along each
 //! axis) with the arrays on it, and a restore takes the recorded windows.
 //!

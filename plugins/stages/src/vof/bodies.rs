@@ -27,9 +27,9 @@
 //! (its support) and a margin of [`MARGIN`] cells around them, clipped to the domain, and the
 //! whole axis along a periodic axis. Memory and work scale with the bodies' extent, not with
 //! the grid times the number of bodies; each window holds the work arrays of its step, sized
-//! for the window, so the bodies step in parallel. Before every (sub-)step the window is moved — a new box around the
-//! support, the values copied — when the support comes within [`NEAR`] cells of a window
-//! side that is not a side of the domain.
+//! for the window, so the bodies step in parallel. Before every (sub-)step the window is moved
+//! — a new box around the support, the values copied — when the support comes within
+//! [`NEAR`] cells of a window side that is not a side of the domain.
 //!
 //! **Why a window step is the full-grid step, bit for bit.** One sweep at Courant number ≤ ½
 //! moves phase only into the next cell along its axis, so a step of `d` sweeps grows the
