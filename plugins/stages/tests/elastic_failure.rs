@@ -97,3 +97,73 @@ fn a_failed_elastic_step_leaves_the_state_restorable() {
     assert_eq!(again, message);
     assert_eq!(sim.state.step, good.step());
 }
+
+/// Three disks falling, each with the `test_nan` law: `a` never fails, `b` and `c` fail as soon
+/// as they deform (stress NaN past b11 = 1.0001), in the same step.
+fn three_disks(law: &Path) -> Scene {
+    let disk = |name: &str, x: f64, y: f64, limit: f64| {
+        format!(
+            r#"(name: "{name}", shape: Disk(center: ({x}, {y}), radius: 0.1), density: 1.5,
+            viscosity: 0.01, velocity: (0.0, -1.0),
+            law: (name: "{}", parameters: {{"G": 1.0, "limit": {limit}}}))"#,
+            law.display()
+        )
+    };
+    let text = format!(
+        r#"Scene(
+    name: "three_disks",
+    domain: (x: (0.0, 1.0), y: (0.0, 1.0)),
+    grid: (nx: 64, ny: 64),
+    time: (end: 1.0, cfl: 0.4),
+    fluid: (density: 1.0, viscosity: 0.01),
+    gravity: (0.0, -1.0),
+    solids: [{}, {}, {}],
+    boundaries: (x_min: NoSlip, x_max: NoSlip, y_min: NoSlip, y_max: NoSlip),
+)"#,
+        disk("a", 0.2, 0.5, 100.0),
+        disk("b", 0.5, 0.5, 1.0001),
+        disk("c", 0.8, 0.5, 1.0001)
+    );
+    Scene::from_str_at(&text, Path::new("three_disks.ron")).unwrap()
+}
+
+#[test]
+fn a_failing_body_among_several_is_named_the_same_on_one_and_two_threads() {
+    let law = nan_law();
+    let fail = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut sim = Simulation::new(
+                    three_disks(&law),
+                    Path::new("x.ron"),
+                    &efsi_stages::builtin(),
+                )
+                .unwrap();
+                let (good, message) = run_to_failure(&mut sim);
+                // Every body's B̃ is back in the state: the step's start restores into it.
+                let bodies = sim
+                    .state
+                    .resources
+                    .get::<efsi_stages::elastic::BodyDeformations>()
+                    .map(|b| b.bodies.len());
+                assert_eq!(bodies, Some(3), "the bodies' B̃ were not put back");
+                sim.restore(&good).unwrap_or_else(|e| panic!("{e}"));
+                assert!(same_bits(&sim.snapshot(), &good));
+                (good.step(), message)
+            })
+    };
+    let (one, two) = (fail(1), fail(2));
+    // `b` and `c` fail in the same step, whichever thread sees `c` first: the first of them in
+    // the scene's order is named.
+    assert!(
+        one.1
+            .contains("body `b` (solids[1]): law `test_nan`: non-finite stress"),
+        "{}",
+        one.1
+    );
+    assert!(!one.1.contains("body `c`"), "{}", one.1);
+    assert_eq!(one, two);
+}

@@ -3,7 +3,7 @@
 
 use super::{
     AUTO_COUPLED_GAIN, AUTO_STRAIN_SHARE, AUTO_WALL_CELLS, Deformation, ElasticCoupling, Kernels,
-    err, missing,
+    body_err, err, missing,
 };
 use efsi_core::{Field, Grid, StageError, StageStats, State, StepContext, unit};
 use efsi_laws_host::ConstitutiveLaw;
@@ -116,7 +116,7 @@ impl DeformationStage {
         // (see the module docs).
         let picard = !(coupled && ctx.dt > self.limits.split * (1.0 + 1e-6));
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
-        let phis = &self.phis;
+        let (phis, bodies) = (&self.phis, &self.bodies);
         let parts = (self.ks.par_iter_mut())
             .zip(ds.par_iter_mut())
             .zip(self.laws.par_iter())
@@ -126,10 +126,10 @@ impl DeformationStage {
             k.with_velocity_near(&vel, k.near_c, |k, vel| k.update(vel, d, first, a, picard));
             // The end-of-step stress and the elastic energy.
             k.evaluate(law.as_ref(), &d.b, &mut d.stress, false)
-                .map_err(|m| err("deformation", m))?;
+                .map_err(|m| body_err("deformation", &bodies[n], m))?;
             d.elastic_energy = k
                 .strain_energy(law.as_ref(), &d.b)
-                .map_err(|m| err("deformation", m))?;
+                .map_err(|m| body_err("deformation", &bodies[n], m))?;
             Ok(())
         })?;
         Ok(StageStats::default())

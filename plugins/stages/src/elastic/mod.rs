@@ -767,3 +767,12 @@ fn err(stage: &str, message: String) -> StageError {
         message,
     }
 }
+
+/// [`err`] of body `b`'s law or kernels: in a scene of several bodies the message names the
+/// body and its place in the scene (several may share a law).
+fn body_err(stage: &str, b: &bodies::ElasticBody, message: String) -> StageError {
+    match b.index {
+        Some(_) => err(stage, format!("body `{}` ({}): {message}", b.name, b.path)),
+        None => err(stage, message),
+    }
+}

@@ -2,7 +2,7 @@
 //! `M − θ_v Δt K_v − αθΔt² K_J` (see the module docs of [`super`]) and the elastic sub-step.
 
 use super::ElasticPreconditioner;
-use super::{Kernels, err, missing, plus};
+use super::{Kernels, body_err, err, missing, plus};
 use crate::block_multigrid::ViscousBlocks;
 use crate::viscous_operator::Coefficients;
 use efsi_core::operators::face_density;
@@ -325,7 +325,7 @@ impl ElasticStage {
             .map_err(|m| err("elastic", m))?;
         let vel = super::velocity(&state.u, &state.v, state.w.as_ref());
         let (theta, alpha) = (self.scheme.theta, self.scheme.alpha);
-        let phis = &self.phis;
+        let (phis, bodies) = (&self.phis, &self.bodies);
         let parts = (self.op.ks.par_iter_mut())
             .zip(ds.par_iter_mut())
             .zip(self.laws.par_iter())
@@ -336,10 +336,10 @@ impl ElasticStage {
             d.begin_step(dt, r, theta);
             if alpha < 1.0 {
                 k.evaluate(law.as_ref(), &d.start, tau_n, false)
-                    .map_err(|m| err("elastic", m))?;
+                    .map_err(|m| body_err("elastic", &bodies[n], m))?;
             }
             k.relaxation(law.as_ref(), &d.start, dt, &mut d.explicit, &mut d.relax)
-                .map_err(|m| err("elastic", m))?;
+                .map_err(|m| body_err("elastic", &bodies[n], m))?;
             k.with_velocity_near(&vel, k.near_c, |k, vel| k.gradient(vel));
             k.stretch(
                 &d.start,
@@ -350,7 +350,7 @@ impl ElasticStage {
             );
             k.fill_ghosts(&mut d.b);
             k.evaluate(law.as_ref(), &d.b, tau, true)
-                .map_err(|m| err("elastic", m))
+                .map_err(|m| body_err("elastic", &bodies[n], m))
         })
     }
 
