@@ -53,6 +53,12 @@ pub(super) fn face_centre(grid: &Grid, a: usize, c: [isize; 3]) -> [f64; 3] {
     x
 }
 
+/// The centre of the face normal to axis `a` on the low side of cell `c`, from the point `x`
+/// (a body's centroid): the arm of the face's force.
+pub(super) fn arm(grid: &Grid, a: usize, c: [isize; 3], x: [f64; 3]) -> [f64; 3] {
+    sub(face_centre(grid, a, c), x)
+}
+
 /// What the faces of one body received from one other body's halo.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PairLoad {

@@ -531,8 +531,6 @@ struct ContactStage {
     updates: Vec<(usize, [isize; 3], f64)>,
     /// Each body's centroid (reused).
     centroids: Vec<[f64; 3]>,
-    /// The pairs' loads, by body pushed then body pushing (reused).
-    pairs: Vec<PairLoad>,
     /// Each body's change of net force and moment from the frictionless projection (reused).
     changes: Vec<([f64; 3], [f64; 3])>,
     /// Each body's rigid modes and, with friction, its rigid motion, where a pair needs them
@@ -594,7 +592,6 @@ impl ContactStage {
             energy: 0.0,
             updates: Vec::new(),
             centroids: Vec::new(),
-            pairs: Vec::new(),
             changes: Vec::new(),
             rigid: Vec::new(),
         }
@@ -759,33 +756,30 @@ impl ContactStage {
         // Gathered in the bodies' order, each body's axes in order: the serial loop's sums.
         let mut energy = 0.0;
         let mut updates = std::mem::take(&mut self.updates);
-        let mut pairs = std::mem::take(&mut self.pairs);
         updates.clear();
-        pairs.clear();
         for (p, support) in pushed.iter().zip(&self.supports) {
             if support.is_some() {
                 energy = p.energy[..self.dims].iter().fold(energy, |e, x| e + x);
                 updates.extend_from_slice(&p.updates);
-                pairs.extend_from_slice(&p.pairs);
             }
         }
-        self.pushed = pushed;
         if self.frictionless {
-            self.project(grid, all, (&halos, &pairs), flow, &mut updates);
+            self.project(grid, all, (&halos, &pushed), flow, &mut updates);
         }
+        self.pushed = pushed;
         self.halos = halos;
-        self.pairs = pairs;
         (self.kappa * energy / self.dims as f64 * h[2], updates)
     }
 
-    /// The frictionless projection (module docs): each pair's loads `pairs` made normal and
+    /// The frictionless projection (module docs): each pair's loads (`pushed`, each body's from
+    /// the bodies near it, in the bodies' order) made normal and
     /// acting at one contact point, with Coulomb's friction where `friction > 0` and the step's
     /// `flow` is given, the change put on each body as a rigid load, into `updates`.
     fn project(
         &mut self,
         grid: &Grid,
         all: &BodyFractions,
-        (halos, pairs): (&[Halo], &[PairLoad]),
+        (halos, pushed): (&[Halo], &[Pushed]),
         flow: Option<Flow>,
         updates: &mut Vec<(usize, [isize; 3], f64)>,
     ) {
@@ -812,11 +806,13 @@ impl ContactStage {
             *cf = std::array::from_fn(|a| cf[a] + f[a]);
             *cm = std::array::from_fn(|a| cm[a] + m[a]);
         };
-        for on_k in pairs.iter().filter(|p| p.k < p.l) {
+        let pairs = pushed.iter().flat_map(|p| &p.pairs);
+        for on_k in pairs.filter(|p| p.k < p.l) {
             let (k, l) = (on_k.k, on_k.l);
-            let on_l = pairs
-                .binary_search_by_key(&(l, k), |p| (p.k, p.l))
-                .map(|i| pairs[i])
+            let of_l = &pushed[l].pairs;
+            let on_l = of_l
+                .binary_search_by_key(&k, |p| p.l)
+                .map(|i| of_l[i])
                 .unwrap_or_default();
             if on_k.weight == 0.0 && on_l.weight == 0.0 {
                 continue;
@@ -873,16 +869,9 @@ impl ContactStage {
             let Some(load) = modes.load(*force, *moment) else {
                 continue;
             };
-            let Some(support) = self.supports[k] else {
-                continue;
-            };
-            let (b, rho, x) = (&all.bodies[k], self.densities[k], self.centroids[k]);
-            for a in 0..dims {
-                for (c, phi, _) in self.faces_of(grid, b, support, a) {
-                    let r = frictionless::face_centre(grid, a, c);
-                    let r = std::array::from_fn(|i| r[i] - x[i]);
-                    updates.push((a, c, rho * phi * load.at(a, r)));
-                }
+            let rho = self.densities[k];
+            for (a, c, r, phi, _) in self.arms(grid, &all.bodies[k], k) {
+                updates.push((a, c, rho * phi * load.at(a, r)));
             }
         }
         self.changes = changes;
@@ -897,24 +886,36 @@ impl ContactStage {
         k: usize,
         flow: Option<Flow>,
     ) -> (Rigid, Option<Motion>) {
-        let (rho, x) = (self.densities[k], self.centroids[k]);
-        let faces = |a: usize| {
-            self.supports[k].into_iter().flat_map(move |support| {
-                self.faces_of(grid, b, support, a).map(move |(c, phi, v)| {
-                    let r = frictionless::face_centre(grid, a, c);
-                    (a, c, std::array::from_fn(|i| r[i] - x[i]), rho * phi * v)
-                })
-            })
-        };
-        let all = || (0..self.dims).flat_map(faces);
-        let modes = Rigid::new(all().map(|(a, _, r, w)| (a, r, w)), self.dims);
+        let rho = self.densities[k];
+        let all = || self.arms(grid, b, k);
+        let modes = Rigid::new(
+            all().map(|(a, _, r, phi, v)| (a, r, rho * phi * v)),
+            self.dims,
+        );
         let motion = flow.and_then(|flow| {
-            modes.motion(all().map(|(a, c, r, w)| {
+            modes.motion(all().map(|(a, c, r, phi, v)| {
                 let u = flow.velocity[a].map_or(0.0, |field| field[c]);
-                (a, r, w, u)
+                (a, r, rho * phi * v, u)
             }))
         });
         (modes, motion)
+    }
+
+    /// Body `k`'s faces with material ([`Self::faces_of`], the axes in turn), each
+    /// `(axis, face, arm from the body's centroid, φ̄_k, V_face)`: none without a support.
+    fn arms<'a>(
+        &'a self,
+        grid: &'a Grid,
+        b: &'a BodyFraction,
+        k: usize,
+    ) -> impl Iterator<Item = (usize, [isize; 3], [f64; 3], f64, f64)> + 'a {
+        let x = self.centroids[k];
+        self.supports[k].into_iter().flat_map(move |support| {
+            (0..self.dims).flat_map(move |a| {
+                (self.faces_of(grid, b, support, a))
+                    .map(move |(c, phi, v)| (a, c, frictionless::arm(grid, a, c, x), phi, v))
+            })
+        })
     }
 
     /// Body `b`'s faces normal to axis `a` where it has material: the unknown faces from its
@@ -973,10 +974,7 @@ impl ContactStage {
             below[a] -= 1;
             let (c_w, b_w) = (self.wrap(c), self.wrap(below));
             let (mut dpsi, mut psi) = (0.0, 0.0);
-            let r = centroid.map(|x| {
-                let f = frictionless::face_centre(grid, a, c);
-                std::array::from_fn(|i| f[i] - x[i])
-            });
+            let r = centroid.map(|x| frictionless::arm(grid, a, c, x));
             for (i, &l) in near.iter().enumerate() {
                 let (p1, p0) = (halos[l].at(c_w), halos[l].at(b_w));
                 dpsi += p1 - p0;
@@ -1390,7 +1388,7 @@ mod tests {
             );
             // Each body's: its load from the other's halo with the projection's change (the
             // rigid load carries that change exactly: `frictionless` tests).
-            for p in &s.pairs {
+            for p in s.pushed.iter().flat_map(|p| &p.pairs) {
                 let (df, dm) = s.changes[p.k];
                 let f = [p.force[0] + df[0], p.force[1] + df[1]];
                 let sign = if p.k == 0 { -1.0 } else { 1.0 };
@@ -1455,7 +1453,7 @@ mod tests {
                 moment.iter().all(|m| m.abs() <= 1e-13 * size * 32.0),
                 "{moment:?}"
             );
-            for p in &s.pairs {
+            for p in s.pushed.iter().flat_map(|p| &p.pairs) {
                 let (df, dm) = s.changes[p.k];
                 let sign = if p.k == 0 { -1.0 } else { 1.0 };
                 let f: [f64; 3] = std::array::from_fn(|i| p.force[i] + df[i]);
@@ -1527,7 +1525,7 @@ mod tests {
                 "μ {mu}: {total:?}"
             );
             assert!(moment.abs() <= 1e-13 * size * 48.0, "μ {mu}: {moment:e}");
-            let normal = s.pairs[0].force[0] + s.changes[0].0[0];
+            let normal = s.pushed[0].pairs[0].force[0] + s.changes[0].0[0];
             (s.changes.clone(), normal.abs())
         };
         let (none, normal) = run(0.0);
